@@ -1,0 +1,85 @@
+"""Helpers shared by the sub-commands: unit-aware argument types, output."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+from typing import Any, Callable
+
+from .._files import atomic_path, atomic_write_bytes, atomic_write_text  # noqa: F401  (re-export)
+from ..errors import UnitError
+from ..units import format_quantity, parse_quantity
+
+
+def quantity(dimension: str, flag: str) -> Callable[[str], float]:
+    """An argparse ``type=`` that parses ``200nm`` style values into SI floats."""
+
+    def convert(text: str) -> float:
+        try:
+            return parse_quantity(text, dimension, flag)
+        except UnitError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    convert.__name__ = dimension  # argparse uses it in messages
+    return convert
+
+
+def add_quantity(parser: argparse.ArgumentParser, flag: str, dimension: str, default, help: str,
+                 unit: str = "", **kw) -> None:
+    """Add a ``--flag`` taking a value with units (SI default shown in help)."""
+    shown = "" if default is None else f" (default {format_quantity(default, unit) if unit else default})"
+    parser.add_argument(flag, type=quantity(dimension, flag), default=default,
+                        help=help + shown, metavar="VALUE", **kw)
+
+
+def to_jsonable(obj: Any) -> Any:
+    """Convert dataclasses/numpy values into JSON-friendly Python objects (NaN -> null)."""
+    import dataclasses
+
+    import numpy as np
+
+    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
+        if hasattr(obj, "to_dict"):
+            return to_jsonable(obj.to_dict())
+        return {f.name: to_jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
+    if isinstance(obj, dict):
+        return {str(k): to_jsonable(v) for k, v in obj.items()}
+    if isinstance(obj, (list, tuple)):
+        return [to_jsonable(v) for v in obj]
+    if isinstance(obj, np.ndarray):
+        return [to_jsonable(v) for v in obj.tolist()]
+    if isinstance(obj, (np.floating, float)):
+        v = float(obj)
+        return None if not math.isfinite(v) else v
+    if isinstance(obj, (np.integer,)):
+        return int(obj)
+    if isinstance(obj, (np.bool_,)):
+        return bool(obj)
+    return obj
+
+
+def print_json(obj: Any) -> None:
+    """Print one JSON object (SI values) on stdout."""
+    print(json.dumps(to_jsonable(obj), indent=2, sort_keys=False))
+
+
+def print_table(rows: list[tuple[str, Any, str]], title: str | None = None) -> None:
+    """Print ``(label, SI value, unit)`` rows as an aligned table with units."""
+    if title:
+        print(title)
+    width = max((len(r[0]) for r in rows), default=0)
+    for label, value, unit in rows:
+        if isinstance(value, str):
+            text = value
+        elif value is None:
+            text = "-"
+        else:
+            text = format_quantity(float(value), unit)
+        print(f"  {label:<{width}}  {text}")
+
+
+def eprint(msg: str) -> None:
+    """Print one line on stderr."""
+    print(msg, file=sys.stderr)

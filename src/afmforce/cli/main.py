@@ -1,0 +1,75 @@
+"""Entry point of the ``afmforce`` command.
+
+Each sub-command lives in its own module of this package with a
+``register(subparsers)`` function that adds its parser and sets ``func``
+(a callable ``func(args) -> int``). Errors raised on purpose
+(:class:`~afmforce.errors.AfmforceError`) become one line on stderr and exit
+status 2 (bad input) unless the command says otherwise; ``--debug`` shows the
+traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+import importlib.util
+import sys
+
+from ..errors import AfmforceError
+
+#: Sub-command modules, in the order ``afmforce --help`` lists them.
+COMMANDS = ("demo", "statics", "diagnose", "simulate", "analyze", "sweep", "reproduce")
+
+EXIT_USAGE = 2
+
+
+class _Parser(argparse.ArgumentParser):
+    """ArgumentParser whose errors are one line: ``error: <what is wrong>``."""
+
+    def error(self, message: str):  # noqa: D401
+        if message.startswith("argument ") and ": " in message:
+            head, rest = message.split(": ", 1)
+            if " expects " in rest:
+                message = rest
+            else:
+                message = f"{head[len('argument '):]}: {rest}"
+        self.exit(EXIT_USAGE, f"error: {message}\n")
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """Build the full argument parser with every available sub-command."""
+    parser = _Parser(
+        prog="afmforce",
+        description="Dynamic surface force measurement with the atomic force microscope.",
+    )
+    parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
+    for name in COMMANDS:
+        modname = f"{__package__}.{name}"
+        if importlib.util.find_spec(modname) is None:
+            continue  # command not built yet
+        importlib.import_module(modname).register(sub)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the command line; returns the exit status."""
+    parser = build_parser()
+    args = parser.parse_args(argv)
+    if not getattr(args, "func", None):
+        parser.print_help()
+        return EXIT_USAGE
+    try:
+        return int(args.func(args) or 0)
+    except AfmforceError as exc:
+        if args.debug:
+            raise
+        print(f"error: {exc}", file=sys.stderr)
+        return EXIT_USAGE
+    except KeyboardInterrupt:
+        print("error: interrupted", file=sys.stderr)
+        return 130
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

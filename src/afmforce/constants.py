@@ -1,0 +1,40 @@
+"""Physical constants and the paper's parameter sets.
+
+Published values live here as module-level data with their source, and are
+passed to functions as keyword arguments (pvlib style). All values are SI.
+
+Source: Attard, Carambassis & Rutland, Langmuir 15, 553 (1999), referred to as
+"the paper"; equation and figure numbers are the paper's. Decisions where the
+paper is ambiguous are those of ``shared/spec/physics.md``.
+"""
+
+from __future__ import annotations
+
+import math
+
+#: Hamaker constant [J] (paper section 2.1, below eq 2).
+HAMAKER = 5e-19
+#: Soft-wall repulsion length [m] (paper section 2.1, below eq 2).
+Z0 = 0.35e-9
+#: Viscosity of air [Pa s] (paper, after eq 1).
+ETA_AIR = 1.8e-5
+
+#: Fig 1: simple spring with a colloid probe (section 2.1).
+FIG1 = dict(mass=1e-8, spring_constant=0.21, radius=100e-9, velocities=(10e-6, 5e-6, 1e-6))
+
+#: Fig 3 geometry (section 2.2): L0, L1, L2 [m], theta0 [rad], k0 [N/m]; mu [N].
+FIG3 = dict(L0=200e-6, L1=2e-6, L2=4e-6, theta0=math.radians(-15.0), k0=0.13)
+FIG3_MU = 5e-9
+#: Fig 4: friction proportional to load, Fy = +-lambda Fz.
+FIG4_LAMBDA = 2.0
+
+#: Figs 5-6 (section 2.3). Decision (spec section 5): B = 3.5e-13 N m^2, not the
+#: printed 3.5e-12, so that k0 = 3B/L0^3 = 0.13 N/m and the resonance is 4 kHz.
+FIG5 = dict(
+    L0=200e-6, L1=2e-6, L2=4e-6, theta0=math.radians(-15.0), B=3.5e-13,
+    m_joint=1e-10, m_base=1e-10, radius=100e-9, hamaker=HAMAKER, z0=Z0, viscosity=ETA_AIR,
+    xi=0.1, velocity=0.1e-6, start=-40e-9, turn=20e-9, end=-230e-9,
+)
+
+#: Figs 9-10 theory (section 3): silicon ultralever on glass in air.
+FIG9 = dict(hamaker=HAMAKER, spring_constant=0.21, radius=220e-9, jump_out=200e-9, mass=1e-9)
