@@ -1,0 +1,103 @@
+"""The raw force curve: what an instrument records (or the virtual AFM emulates).
+
+A :class:`RawCurve` is the common currency between the virtual AFM
+(:mod:`afmforce.instrument`), the file readers (:mod:`afmforce.io`) and the
+analysis pipeline (:mod:`afmforce.pipeline`).
+
+Conventions (spec section 1)
+----------------------------
+* ``piezo_nominal`` and ``piezo_measured`` are the substrate position z [m],
+  increasing as the substrate moves *towards* the probe (the inward run,
+  ``segment == 0``, has z increasing). Readers of vendor files convert their
+  height/Z channels to this convention.
+* ``deflection_signal`` is the photodiode signal in ``deflection_unit``:
+  ``"V"`` (raw volts), ``"m"`` (a deflection already calibrated by the
+  instrument) or ``"N"`` (a force; some vendors store only force). Positive
+  deflection is *up* (away from the substrate); an attraction gives a negative
+  deflection.
+* ``segment`` is 0 on the inward (approach) run and 1 on the outward
+  (retract) run; a dwell, if any, carries 2.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from .errors import FileFormatError
+
+__all__ = ["RawCurve", "SEGMENT_APPROACH", "SEGMENT_RETRACT", "SEGMENT_DWELL", "DEFLECTION_UNITS"]
+
+SEGMENT_APPROACH = 0
+SEGMENT_RETRACT = 1
+SEGMENT_DWELL = 2
+DEFLECTION_UNITS = ("V", "m", "N")
+
+
+@dataclass(frozen=True)
+class RawCurve:
+    """One force curve as recorded.
+
+    Attributes
+    ----------
+    time : ndarray
+        Time since the start of the curve [s].
+    piezo_nominal : ndarray
+        Commanded substrate position z (piezo voltage times its nominal gain) [m].
+    piezo_measured : ndarray or None
+        Position read by the scanner's position detector [m], if the instrument has one.
+    deflection_signal : ndarray
+        Photodiode signal [V], or deflection [m], or force [N]: see ``deflection_unit``.
+    segment : ndarray of int8
+        0 inward (approach), 1 outward (retract), 2 dwell.
+    metadata : mapping
+        SI values with keys such as ``spring_constant`` [N/m], ``sensitivity``
+        [m/V] (InvOLS), ``velocity`` [m/s], ``sample_rate`` [Hz], ``instrument``,
+        ``source_file``. Unknown keys are kept.
+    truth : mapping or None
+        Ground truth for simulated curves (arrays and values of the underlying
+        trajectory and instrument); ``None`` for measured curves.
+    deflection_unit : str
+        ``"V"``, ``"m"`` or ``"N"``.
+    """
+
+    time: np.ndarray
+    piezo_nominal: np.ndarray
+    deflection_signal: np.ndarray
+    segment: np.ndarray
+    piezo_measured: np.ndarray | None = None
+    metadata: Mapping[str, Any] = field(default_factory=dict)
+    truth: Mapping[str, Any] | None = None
+    deflection_unit: str = "V"
+
+    def __post_init__(self) -> None:
+        n = len(self.time)
+        cols = {"time": self.time, "piezo_nominal": self.piezo_nominal,
+                "deflection_signal": self.deflection_signal, "segment": self.segment}
+        if self.piezo_measured is not None:
+            cols["piezo_measured"] = self.piezo_measured
+        for name, col in cols.items():
+            arr = np.asarray(col)
+            if arr.ndim != 1 or len(arr) != n:
+                raise FileFormatError(
+                    f"column {name!r} has shape {arr.shape}, expected ({n},) like 'time'")
+        if n < 2:
+            raise FileFormatError("a force curve needs at least two samples")
+        if self.deflection_unit not in DEFLECTION_UNITS:
+            raise FileFormatError(
+                f"deflection_unit must be one of {DEFLECTION_UNITS}, got {self.deflection_unit!r}")
+
+    def __len__(self) -> int:
+        return len(self.time)
+
+    @property
+    def approach(self) -> np.ndarray:
+        """Boolean mask of the inward (approach) samples."""
+        return np.asarray(self.segment) == SEGMENT_APPROACH
+
+    @property
+    def retract(self) -> np.ndarray:
+        """Boolean mask of the outward (retract) samples."""
+        return np.asarray(self.segment) == SEGMENT_RETRACT
