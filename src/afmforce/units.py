@@ -109,7 +109,7 @@ def _parse_with_pint(s: str, si: str, word: str, name: str, original) -> float:
 
 
 _PRETTY = {
-    "length": [(1e-3, "mm"), (1e-6, "um"), (1e-9, "nm"), (1e-12, "pm")],
+    "length": [(1e-3, "mm"), (1e-6, "um"), (1e-9, "nm")],
     "force": [(1e-3, "mN"), (1e-6, "uN"), (1e-9, "nN"), (1e-12, "pN")],
 }
 

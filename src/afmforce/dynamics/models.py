@@ -1,0 +1,283 @@
+"""Vector fields and analytic Jacobians of the two dynamical models (compiled).
+
+Spec sections 3 and 5; paper eqs 1 and 22-28.
+
+Both models are first-order systems ``y' = f(t, y)`` integrated segment by
+segment of a piecewise-linear drive ``z(t) = z_a + v (t - t_a)`` (see
+:mod:`afmforce.dynamics.drive`), so the drive speed ``v`` is a constant inside
+one call.
+
+* **spring** (eq 1): ``y = (x, x')``, ``m x'' = -k x + Fd(h, h') + Fs(h)`` with
+  ``h = x - z(t)``.
+* **beam** (eqs 22-28): ``y = (q_alpha, q_beta, q_alpha', q_beta')`` with
+  ``q_alpha = x`` (end deflection of the flexible beam) and
+  ``q_beta = L1 theta + 3x/2``; ``m_i q_i'' = sum_j A_ij q_j + Fz dh/dq_i + Fy dy2/dq_i``,
+  ``A = -T^T K T`` (spec section 5), ``Fz = Fs(h) + Fd(h, h')`` and
+  ``Fy = -(xi + zeta Fz^2) y2'`` (eq 28 and the load-dependent form after it).
+  As the paper says ("for technical reasons"), drainage and friction enter as
+  if derived from potentials: they act through ``dh/dq`` and ``dy2/dq`` like
+  the conservative surface force.
+
+The parameters are packed into one float64 vector ``p`` (layout below) so that
+the integrator can be compiled once for both models. ``p[H_GUARD]`` is the
+smallest separation the force law accepts: a trial state with ``h`` below it
+(for instance a Newton iterate overshooting into the substrate, where eq 2
+turns attractive again) makes :func:`rhs` return ``False`` and the integrator
+rejects the trial step.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+MODEL_SPRING = 0
+MODEL_BEAM = 1
+MODEL_IDS = {"spring": MODEL_SPRING, "beam": MODEL_BEAM}
+
+# --- layout of the parameter vector p -------------------------------------
+AR = 0          # Hamaker constant x radius [J m]
+Z0 = 1          # soft-wall length [m]
+CD = 2          # drainage coefficient 6 pi eta R^2 / 4 [kg m]  (Fd = -CD h'/h)
+H_GUARD = 3     # smallest admissible separation [m]
+XI = 4          # friction coefficient xi [kg/s]            (beam only)
+ZETA = 5        # load-dependent friction zeta [kg/(s N^2)] (beam only)
+# spring
+K = 6           # spring constant [N/m]
+INV_M = 7       # 1/m [1/kg]
+# beam
+A00, A01, A10, A11 = 6, 7, 8, 9   # dynamical matrix A = -T^T K T [N/m]
+INV_MA, INV_MB = 10, 11           # 1/m_alpha, 1/m_beta [1/kg]
+HQA, HQB = 12, 13                 # dh/dq_alpha, dh/dq_beta [-]
+YQA, YQB = 14, 15                 # dy2/dq_alpha, dy2/dq_beta [-]
+TH_A, TH_B = 16, 17               # dtheta/dq_alpha, dtheta/dq_beta [rad/m]
+P_SIZE = 18
+
+#: Number of monitored observables returned by :func:`observe`.
+N_OBS = 9
+# indices into the observable vector
+O_H, O_HDOT, O_DEFL, O_THETA, O_FZ, O_Y2, O_Y2DOT, O_FY, O_Z = range(N_OBS)
+
+
+def state_size(model: int) -> int:
+    """Number of first-order state variables of ``model``."""
+    return 2 if model == MODEL_SPRING else 4
+
+
+@njit(cache=True, inline="always")
+def surface_force(h, ar, z0):
+    """Fs(h) and Fs'(h) of eq 2 [N, N/m]."""
+    ih2 = 1.0 / (h * h)
+    r6 = (z0 * z0 * ih2) ** 3
+    fs = -(ar / 12.0) * ih2 * (1.0 - 0.25 * r6)
+    dfs = (ar / 6.0) * ih2 / h * (1.0 - r6)
+    return fs, dfs
+
+
+@njit(cache=True)
+def rhs(model, p, zd, vd, y, out):
+    """Evaluate ``out = f(t, y)`` at drive position ``zd`` and speed ``vd``.
+
+    Returns ``False`` (and leaves ``out`` undefined) when the separation is
+    below ``p[H_GUARD]``: the trial state is inadmissible.
+    """
+    ar = p[AR]
+    z0 = p[Z0]
+    cd = p[CD]
+    if model == MODEL_SPRING:
+        x = y[0]
+        xd = y[1]
+        h = x - zd
+        if not h > p[H_GUARD]:
+            return False
+        hd = xd - vd
+        fs, _ = surface_force(h, ar, z0)
+        fz = fs - cd * hd / h
+        out[0] = xd
+        out[1] = p[INV_M] * (-p[K] * x + fz)
+        return True
+    qa = y[0]
+    qb = y[1]
+    va = y[2]
+    vb = y[3]
+    hqa = p[HQA]
+    hqb = p[HQB]
+    yqa = p[YQA]
+    yqb = p[YQB]
+    h = hqa * qa + hqb * qb - zd
+    if not h > p[H_GUARD]:
+        return False
+    hd = hqa * va + hqb * vb - vd
+    fs, _ = surface_force(h, ar, z0)
+    fz = fs - cd * hd / h
+    yd = yqa * va + yqb * vb
+    fy = -(p[XI] + p[ZETA] * fz * fz) * yd
+    out[0] = va
+    out[1] = vb
+    out[2] = p[INV_MA] * (p[A00] * qa + p[A01] * qb + fz * hqa + fy * yqa)
+    out[3] = p[INV_MB] * (p[A10] * qa + p[A11] * qb + fz * hqb + fy * yqb)
+    return True
+
+
+@njit(cache=True)
+def jac(model, p, zd, vd, y, J):
+    """Analytic Jacobian ``J = df/dy`` (same arguments as :func:`rhs`)."""
+    ar = p[AR]
+    z0 = p[Z0]
+    cd = p[CD]
+    if model == MODEL_SPRING:
+        h = y[0] - zd
+        if not h > p[H_GUARD]:
+            return False
+        hd = y[1] - vd
+        _, dfs = surface_force(h, ar, z0)
+        im = p[INV_M]
+        J[0, 0] = 0.0
+        J[0, 1] = 1.0
+        J[1, 0] = im * (-p[K] + dfs + cd * hd / (h * h))
+        J[1, 1] = -im * cd / h
+        return True
+    qa = y[0]
+    qb = y[1]
+    va = y[2]
+    vb = y[3]
+    hqa = p[HQA]
+    hqb = p[HQB]
+    yqa = p[YQA]
+    yqb = p[YQB]
+    h = hqa * qa + hqb * qb - zd
+    if not h > p[H_GUARD]:
+        return False
+    hd = hqa * va + hqb * vb - vd
+    fs, dfs = surface_force(h, ar, z0)
+    fz = fs - cd * hd / h
+    dfz_dh = dfs + cd * hd / (h * h)      # dFz/dh
+    dfz_dhd = -cd / h                     # dFz/dh'
+    yd = yqa * va + yqb * vb
+    xi_eff = p[XI] + p[ZETA] * fz * fz
+    dfy_dfz = -2.0 * p[ZETA] * fz * yd    # dFy/dFz
+    ima = p[INV_MA]
+    imb = p[INV_MB]
+    for i in range(4):
+        J[0, i] = 0.0
+        J[1, i] = 0.0
+    J[0, 2] = 1.0
+    J[1, 3] = 1.0
+    # d(generalised force_i)/dq_j = A_ij + (hq_i + yq_i dFy/dFz) dFz/dh hq_j
+    ga = hqa + yqa * dfy_dfz
+    gb = hqb + yqb * dfy_dfz
+    J[2, 0] = ima * (p[A00] + ga * dfz_dh * hqa)
+    J[2, 1] = ima * (p[A01] + ga * dfz_dh * hqb)
+    J[3, 0] = imb * (p[A10] + gb * dfz_dh * hqa)
+    J[3, 1] = imb * (p[A11] + gb * dfz_dh * hqb)
+    # velocities: through Fd (hq_j dFz/dh') and friction (-xi_eff yq_j)
+    J[2, 2] = ima * (ga * dfz_dhd * hqa - xi_eff * yqa * yqa)
+    J[2, 3] = ima * (ga * dfz_dhd * hqb - xi_eff * yqa * yqb)
+    J[3, 2] = imb * (gb * dfz_dhd * hqa - xi_eff * yqb * yqa)
+    J[3, 3] = imb * (gb * dfz_dhd * hqb - xi_eff * yqb * yqb)
+    return True
+
+
+@njit(cache=True)
+def observe(model, p, zd, vd, y, o):
+    """Fill ``o`` with the observables of state ``y`` (indices ``O_*``).
+
+    separation h, dh/dt, deflection z2, angle theta (0 for the spring),
+    normal force Fz, lateral position y2, dy2/dt, friction force Fy, drive z.
+    Does not guard h: call only on accepted states.
+    """
+    ar = p[AR]
+    z0 = p[Z0]
+    cd = p[CD]
+    if model == MODEL_SPRING:
+        defl = y[0]
+        hd = y[1] - vd
+        theta = 0.0
+        y2 = 0.0
+        y2d = 0.0
+    else:
+        defl = p[HQA] * y[0] + p[HQB] * y[1]
+        hd = p[HQA] * y[2] + p[HQB] * y[3] - vd
+        theta = p[TH_A] * y[0] + p[TH_B] * y[1]
+        y2 = p[YQA] * y[0] + p[YQB] * y[1]
+        y2d = p[YQA] * y[2] + p[YQB] * y[3]
+    h = defl - zd
+    fs, _ = surface_force(h, ar, z0)
+    fz = fs - cd * hd / h
+    o[O_H] = h
+    o[O_HDOT] = hd
+    o[O_DEFL] = defl
+    o[O_THETA] = theta
+    o[O_FZ] = fz
+    o[O_Y2] = y2
+    o[O_Y2DOT] = y2d
+    if model == MODEL_SPRING:
+        o[O_FY] = 0.0
+    else:
+        o[O_FY] = -(p[XI] + p[ZETA] * fz * fz) * y2d
+    o[O_Z] = zd
+
+
+@njit(cache=True)
+def observe_array(model, p, zd, vd, Y):
+    """:func:`observe` for every row of ``Y`` (drive ``zd``, ``vd`` per row)."""
+    n = Y.shape[0]
+    out = np.empty((n, N_OBS))
+    for i in range(n):
+        observe(model, p, zd[i], vd[i], Y[i], out[i])
+    return out
+
+
+def pack_spring(*, spring_constant, mass, radius, hamaker, z0, viscosity, h_guard) -> np.ndarray:
+    """Parameter vector of the simple-spring model (eq 1)."""
+    p = np.zeros(P_SIZE)
+    p[AR] = hamaker * radius
+    p[Z0] = z0
+    p[CD] = 6.0 * math.pi * viscosity * radius**2 / 4.0
+    p[H_GUARD] = h_guard
+    p[K] = spring_constant
+    p[INV_M] = 1.0 / mass
+    return p
+
+
+def beam_matrices(cantilever, m_joint: float, m_base: float):
+    """Dynamical matrix ``A = -T^T K T`` and the masses (m_alpha, m_beta) (spec section 5).
+
+    ``m_alpha = m_joint + m_base/4``, ``m_beta = m_base/3``.
+    """
+    L1 = cantilever.L1
+    T = np.array([[1.0, 0.0], [-1.5 / L1, 1.0 / L1]])
+    A = -T.T @ cantilever.beam_stiffness @ T
+    return A, (m_joint + m_base / 4.0, m_base / 3.0)
+
+
+def beam_couplings(cantilever):
+    """(dh/dq, dy2/dq, dtheta/dq) as 2-vectors (eqs 24-27)."""
+    c, s = math.cos(cantilever.theta0), math.sin(cantilever.theta0)
+    a, b, L1 = cantilever.a, cantilever.b, cantilever.L1
+    hq = np.array([c - 1.5 * a / L1, a / L1])
+    yq = np.array([s - 1.5 * b / L1, b / L1])
+    tq = np.array([-1.5 / L1, 1.0 / L1])
+    return hq, yq, tq
+
+
+def pack_beam(cantilever, *, m_joint, m_base, radius, hamaker, z0, viscosity, xi, zeta,
+              h_guard) -> np.ndarray:
+    """Parameter vector of the inclined-beam model (eqs 22-28)."""
+    A, (ma, mb) = beam_matrices(cantilever, m_joint, m_base)
+    hq, yq, tq = beam_couplings(cantilever)
+    p = np.zeros(P_SIZE)
+    p[AR] = hamaker * radius
+    p[Z0] = z0
+    p[CD] = 6.0 * math.pi * viscosity * radius**2 / 4.0
+    p[H_GUARD] = h_guard
+    p[XI] = xi
+    p[ZETA] = zeta
+    p[A00], p[A01], p[A10], p[A11] = A[0, 0], A[0, 1], A[1, 0], A[1, 1]
+    p[INV_MA], p[INV_MB] = 1.0 / ma, 1.0 / mb
+    p[HQA], p[HQB] = hq
+    p[YQA], p[YQB] = yq
+    p[TH_A], p[TH_B] = tq
+    return p

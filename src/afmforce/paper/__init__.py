@@ -1,0 +1,8 @@
+"""The paper, reproduced: its recomputable numbers (and, later, its figures).
+
+Attard, Carambassis & Rutland, Langmuir 15, 553 (1999).
+"""
+
+from .numbers import CHECKS, PaperCheck, CheckResult, evaluate_checks
+
+__all__ = ["CHECKS", "PaperCheck", "CheckResult", "evaluate_checks"]

@@ -1,0 +1,373 @@
+"""What a sweep runs: grids, random and Latin-hypercube samples of parameters.
+
+A :class:`SweepSpec` turns into a parameter table (:meth:`SweepSpec.table`),
+one row per run, whose columns are the keyword arguments of the function the
+sweep calls. Values are SI floats (or text, e.g. ``model = "spring"``); the
+command line and TOML files accept units through
+:func:`afmforce.units.parse_quantity`.
+
+Text forms (command line and TOML)::
+
+    velocity=0.1um/s:10um/s:20:log     grid: 20 log-spaced values from lo to hi
+    xi=0.001:0.1:10                    grid: 10 linearly spaced values
+    model=spring,beam                  grid: the listed values
+    m_joint=1e-11kg:1e-9kg:log         range sampled by --sample random|lhs
+    start=-20nm                        fixed setting (--set)
+"""
+
+from __future__ import annotations
+
+import hashlib
+import itertools
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from ..errors import ParameterError
+from ..units import parse_quantity
+
+__all__ = [
+    "GridAxis",
+    "SampledRange",
+    "SweepSpec",
+    "SAMPLERS",
+    "parse_grid",
+    "parse_range",
+    "parse_setting",
+    "build_spec",
+    "chunk_size_from_config",
+]
+
+#: Parameter name -> dimension for :func:`afmforce.units.parse_quantity`, or
+#: ``None`` for a text parameter. A sweep over an unlisted name is refused.
+Dimensions = Mapping[str, "str | None"]
+
+
+def _uniform_random(n: int, d: int, seed: int) -> np.ndarray:
+    return np.random.default_rng(seed).random((n, d))
+
+
+def _latin_hypercube(n: int, d: int, seed: int) -> np.ndarray:
+    from scipy.stats import qmc
+
+    return qmc.LatinHypercube(d=d, rng=np.random.default_rng(seed)).random(n)
+
+
+#: Samplers of the unit hypercube, ``(n, d, seed) -> array (n, d)`` in [0, 1).
+SAMPLERS: dict[str, Callable[[int, int, int], np.ndarray]] = {
+    "random": _uniform_random,
+    "lhs": _latin_hypercube,  # McKay, Beckman & Conover, Technometrics 21, 239 (1979)
+}
+
+
+@dataclass(frozen=True)
+class GridAxis:
+    """One axis of a grid: a parameter and the values it takes.
+
+    Parameters
+    ----------
+    name : str
+        Keyword argument of the swept function (e.g. ``velocity``).
+    values : tuple
+        Values in SI units (floats) or text.
+    log : bool
+        Whether the values are log-spaced (used for plot axes).
+    """
+
+    name: str
+    values: tuple
+    log: bool = False
+
+    def __post_init__(self) -> None:
+        if not self.values:
+            raise ParameterError(f"grid axis {self.name!r} has no values")
+        object.__setattr__(self, "values", tuple(self.values))
+
+    @classmethod
+    def spaced(cls, name: str, lo: float, hi: float, n: int, log: bool = False) -> "GridAxis":
+        """``n`` values from ``lo`` to ``hi`` inclusive, linear or logarithmic."""
+        if int(n) != n or n < 1:
+            raise ParameterError(f"grid {name}: the number of values must be a positive integer, got {n}")
+        if log and (lo <= 0 or hi <= 0):
+            raise ParameterError(f"grid {name}: log spacing needs positive bounds, got {lo:g} and {hi:g}")
+        values = np.geomspace(lo, hi, int(n)) if log else np.linspace(lo, hi, int(n))
+        return cls(name, tuple(float(v) for v in values), log)
+
+
+@dataclass(frozen=True)
+class SampledRange:
+    """A parameter drawn between ``lo`` and ``hi`` [SI], uniformly or in log."""
+
+    name: str
+    lo: float
+    hi: float
+    log: bool = False
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.lo) and math.isfinite(self.hi)) or self.lo == self.hi:
+            raise ParameterError(f"range {self.name}: need two different finite bounds, got {self.lo:g} and {self.hi:g}")
+        if self.log and (self.lo <= 0 or self.hi <= 0):
+            raise ParameterError(f"range {self.name}: log sampling needs positive bounds")
+
+    def scale(self, u: np.ndarray) -> np.ndarray:
+        """Map unit-interval samples onto the range."""
+        if self.log:
+            a, b = math.log(self.lo), math.log(self.hi)
+            return np.exp(a + u * (b - a))
+        return self.lo + u * (self.hi - self.lo)
+
+
+@dataclass(frozen=True)
+class SweepSpec:
+    """A sweep: grid axes, sampled ranges and fixed settings.
+
+    The runs are the grid's points (first axis slowest) crossed with ``n``
+    samples of the ranges drawn by ``sample`` (a key of :data:`SAMPLERS`,
+    reproducible through ``seed``). Every run also gets the ``fixed`` settings.
+
+    Parameters
+    ----------
+    grid : tuple of GridAxis
+    ranges : tuple of SampledRange
+    sample : str or None
+        ``"random"`` or ``"lhs"``; required when ``ranges`` are given.
+    n : int
+        Number of samples.
+    seed : int
+        Seed of the sampler.
+    fixed : tuple of (name, value)
+        Settings shared by every run.
+    """
+
+    grid: tuple[GridAxis, ...] = ()
+    ranges: tuple[SampledRange, ...] = ()
+    sample: str | None = None
+    n: int = 0
+    seed: int = 0
+    fixed: tuple[tuple[str, Any], ...] = field(default=())
+
+    def __post_init__(self) -> None:
+        names = [a.name for a in self.grid] + [r.name for r in self.ranges] + [k for k, _ in self.fixed]
+        dup = sorted({x for x in names if names.count(x) > 1})
+        if dup:
+            raise ParameterError(f"parameter(s) {', '.join(dup)} given more than once (grid, range or --set)")
+        if self.ranges:
+            if self.sample not in SAMPLERS:
+                raise ParameterError(f"ranges need a sampler: --sample {' or '.join(SAMPLERS)} (got {self.sample!r})")
+            if self.n < 1:
+                raise ParameterError(f"--sample {self.sample} needs --n, a positive number of samples")
+        elif self.sample is not None:
+            raise ParameterError(f"--sample {self.sample} needs at least one --range name=lo:hi")
+        if not self.grid and not self.ranges:
+            raise ParameterError("nothing to sweep: give at least one --grid or --range")
+
+    @property
+    def is_grid(self) -> bool:
+        """True when the runs form a full grid (no sampled ranges)."""
+        return not self.ranges
+
+    @property
+    def shape(self) -> tuple[int, ...]:
+        """Grid shape (axis lengths), ``()`` without grid axes."""
+        return tuple(len(a.values) for a in self.grid)
+
+    @property
+    def n_runs(self) -> int:
+        """Number of runs."""
+        return math.prod(self.shape) * (self.n if self.ranges else 1)
+
+    def table(self):
+        """Parameter table: a pandas DataFrame, one row per run, index ``run``."""
+        import pandas as pd
+
+        cols: dict[str, Any] = {}
+        points = list(itertools.product(*(a.values for a in self.grid))) or [()]
+        reps = self.n if self.ranges else 1
+        for i, axis in enumerate(self.grid):
+            cols[axis.name] = np.repeat([p[i] for p in points], reps)
+        if self.ranges:
+            u = SAMPLERS[self.sample](self.n, len(self.ranges), self.seed)
+            for j, r in enumerate(self.ranges):
+                cols[r.name] = np.tile(r.scale(u[:, j]), len(points))
+        for name, value in self.fixed:
+            cols[name] = [value] * self.n_runs
+        frame = pd.DataFrame(cols)
+        frame.index.name = "run"
+        return frame
+
+    def to_dict(self) -> dict:
+        """JSON-friendly description (used for the store key and ``spec.json``)."""
+        return {
+            "grid": [{"name": a.name, "values": list(a.values), "log": a.log} for a in self.grid],
+            "ranges": [{"name": r.name, "lo": r.lo, "hi": r.hi, "log": r.log} for r in self.ranges],
+            "sample": self.sample,
+            "n": self.n,
+            "seed": self.seed,
+            "fixed": {k: v for k, v in self.fixed},
+        }
+
+    def fingerprint(self) -> str:
+        """Hex digest identifying the runs of this spec."""
+        text = json.dumps(self.to_dict(), sort_keys=True, default=repr)
+        return hashlib.sha256(text.encode()).hexdigest()
+
+
+def _value(name: str, text: Any, dimensions: Dimensions | None, where: str):
+    """Parse one value of parameter ``name`` into SI (or keep text)."""
+    if dimensions is not None and name not in dimensions:
+        known = ", ".join(sorted(dimensions))
+        raise ParameterError(f"{where}: unknown parameter {name!r}; known parameters: {known}")
+    dim = dimensions.get(name, "dimensionless") if dimensions is not None else None
+    if dimensions is not None and dim is None:
+        return str(text)  # a text parameter such as model
+    if isinstance(text, bool):
+        return text
+    if isinstance(text, (int, float)):
+        return float(text)
+    if dim is None:  # generic use without a dimension table: a plain number or text
+        try:
+            return float(text)
+        except ValueError:
+            return str(text).strip()
+    return parse_quantity(str(text).strip(), dim, f"{where} {name}")
+
+
+def _split(item: str, flag: str) -> tuple[str, str]:
+    name, sep, rest = str(item).partition("=")
+    if not sep or not name.strip() or not rest.strip():
+        raise ParameterError(f"{flag} expects name=value, got {item!r}")
+    return name.strip(), rest.strip()
+
+
+def _grid_from_text(name: str, rest: str, dimensions: Dimensions | None, flag: str) -> GridAxis:
+    if "," in rest or ":" not in rest:
+        values = [_value(name, v, dimensions, flag) for v in rest.split(",") if v.strip()]
+        return GridAxis(name, tuple(values))
+    parts = rest.split(":")
+    log = parts[-1].strip().lower() in ("log", "lin")
+    spacing = parts.pop().strip().lower() if log else "lin"
+    if len(parts) != 3:
+        raise ParameterError(f"{flag} expects name=lo:hi:n[:log] or name=v1,v2,..., got {name}={rest}")
+    lo, hi = (_value(name, p, dimensions, flag) for p in parts[:2])
+    try:
+        n = int(parts[2])
+    except ValueError:
+        raise ParameterError(f"{flag} {name}: the number of values must be an integer, got {parts[2]!r}") from None
+    if isinstance(lo, str) or isinstance(hi, str):
+        raise ParameterError(f"{flag} {name}: a spaced grid needs numeric bounds")
+    return GridAxis.spaced(name, lo, hi, n, log=spacing == "log")
+
+
+def parse_grid(item: str, dimensions: Dimensions | None = None) -> GridAxis:
+    """Parse ``name=lo:hi:n[:log]`` or ``name=v1,v2,...`` into a :class:`GridAxis`."""
+    name, rest = _split(item, "--grid")
+    return _grid_from_text(name, rest, dimensions, "--grid")
+
+
+def parse_range(item: str, dimensions: Dimensions | None = None) -> SampledRange:
+    """Parse ``name=lo:hi[:log]`` into a :class:`SampledRange`."""
+    name, rest = _split(item, "--range")
+    parts = [p.strip() for p in rest.split(":")]
+    log = parts[-1].lower() in ("log", "lin") and parts.pop().lower() == "log"
+    if len(parts) != 2:
+        raise ParameterError(f"--range expects name=lo:hi[:log], got {item!r}")
+    lo, hi = (_value(name, p, dimensions, "--range") for p in parts)
+    if isinstance(lo, str) or isinstance(hi, str):
+        raise ParameterError(f"--range {name}: needs numeric bounds")
+    return SampledRange(name, lo, hi, log)
+
+
+def parse_setting(item: str, dimensions: Dimensions | None = None) -> tuple[str, Any]:
+    """Parse ``name=value`` into ``(name, SI value)``."""
+    name, rest = _split(item, "--set")
+    return name, _value(name, rest, dimensions, "--set")
+
+
+def _from_toml(path: Path, dimensions: Dimensions | None) -> dict:
+    """Read a sweep file: ``[sweep]`` options, ``[grid]``, ``[range]``, ``[set]`` tables."""
+    try:
+        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        raise ParameterError(f"--config {path}: no such file") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise ParameterError(f"--config {path}: not valid TOML ({exc})") from None
+    unknown = set(data) - {"sweep", "grid", "range", "set"}
+    if unknown:
+        raise ParameterError(f"--config {path}: unknown table(s) {sorted(unknown)}; use [sweep], [grid], [range], [set]")
+    out: dict[str, Any] = dict(data.get("sweep", {}))
+    grid = []
+    for name, v in data.get("grid", {}).items():
+        if isinstance(v, list):
+            grid.append(GridAxis(name, tuple(_value(name, x, dimensions, "[grid]") for x in v)))
+        elif isinstance(v, dict):
+            lo, hi = (_value(name, v[k], dimensions, "[grid]") for k in ("lo", "hi"))
+            grid.append(GridAxis.spaced(name, lo, hi, v.get("n", 1), bool(v.get("log", False))))
+        else:
+            grid.append(_grid_from_text(name, str(v), dimensions, "[grid]"))
+    ranges = []
+    for name, v in data.get("range", {}).items():
+        if isinstance(v, dict):
+            lo, hi = (_value(name, v[k], dimensions, "[range]") for k in ("lo", "hi"))
+            ranges.append(SampledRange(name, lo, hi, bool(v.get("log", False))))
+        else:
+            ranges.append(parse_range(f"{name}={v}", dimensions))
+    fixed = [(k, _value(k, v, dimensions, "[set]")) for k, v in data.get("set", {}).items()]
+    out.update(grid=grid, ranges=ranges, fixed=fixed)
+    return out
+
+
+def _merge(first: list, second: list, key: Callable) -> list:
+    """Entries of ``second`` replace those of ``first`` with the same name."""
+    names = {key(x) for x in second}
+    return [x for x in first if key(x) not in names] + list(second)
+
+
+def build_spec(
+    grid: list[str] = (),
+    ranges: list[str] = (),
+    sets: list[str] = (),
+    *,
+    sample: str | None = None,
+    n: int | None = None,
+    seed: int | None = None,
+    config: str | Path | None = None,
+    dimensions: Dimensions | None = None,
+) -> SweepSpec:
+    """Build a :class:`SweepSpec` from text forms and an optional TOML file.
+
+    Flags given here add to the file's entries and replace those of the same name.
+    """
+    base: dict[str, Any] = _from_toml(config, dimensions) if config else {}
+    unknown = set(base) - {"grid", "ranges", "fixed", "sample", "n", "seed", "chunk_size"}
+    if unknown:
+        raise ParameterError(f"--config {config}: unknown [sweep] option(s) {sorted(unknown)}")
+    axes = _merge(base.get("grid", []), [parse_grid(g, dimensions) for g in grid], lambda a: a.name)
+    rngs = _merge(base.get("ranges", []), [parse_range(r, dimensions) for r in ranges], lambda r: r.name)
+    fixed = _merge(base.get("fixed", []), [parse_setting(s, dimensions) for s in sets], lambda f: f[0])
+    sample = sample if sample is not None else base.get("sample")
+    if rngs and sample is None:
+        sample = "lhs"
+    return SweepSpec(
+        grid=tuple(axes),
+        ranges=tuple(rngs),
+        sample=sample,
+        n=int(n if n is not None else base.get("n", 0)),
+        seed=int(seed if seed is not None else base.get("seed", 0)),
+        fixed=tuple(fixed),
+    )
+
+
+def chunk_size_from_config(config: str | Path | None) -> int | None:
+    """The ``[sweep] chunk_size`` of a TOML sweep file, if any."""
+    if not config:
+        return None
+    try:
+        value = tomllib.loads(Path(config).read_text(encoding="utf-8")).get("sweep", {}).get("chunk_size")
+    except (OSError, tomllib.TOMLDecodeError):
+        return None  # build_spec reports unreadable files
+    return None if value is None else int(value)
