@@ -3,6 +3,6 @@
 Attard, Carambassis & Rutland, Langmuir 15, 553 (1999).
 """
 
-from .numbers import CHECKS, PaperCheck, CheckResult, evaluate_checks
+from .numbers import CHECKS, CheckResult, PaperCheck, all_checks, evaluate_checks
 
-__all__ = ["CHECKS", "PaperCheck", "CheckResult", "evaluate_checks"]
+__all__ = ["CHECKS", "PaperCheck", "CheckResult", "all_checks", "evaluate_checks"]

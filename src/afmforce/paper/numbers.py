@@ -26,7 +26,7 @@ from ..statics import (
     viscous_friction_force,
 )
 
-__all__ = ["PaperCheck", "CheckResult", "CHECKS", "evaluate_checks"]
+__all__ = ["PaperCheck", "CheckResult", "CHECKS", "all_checks", "evaluate_checks"]
 
 
 @dataclass(frozen=True)
@@ -179,14 +179,28 @@ CHECKS: tuple[PaperCheck, ...] = (
 )
 
 
-def evaluate_checks(checks=CHECKS, groups: set[str] | None = None) -> list[CheckResult]:
-    """Compute every check and compare with the paper (and our reference)."""
+def all_checks() -> tuple[PaperCheck, ...]:
+    """Static and dynamic checks together (the dynamic ones run simulations)."""
+    from .numbers_dynamic import DYNAMIC_CHECKS
+
+    return CHECKS + DYNAMIC_CHECKS
+
+
+def evaluate_checks(checks=None, groups: set[str] | None = None) -> list[CheckResult]:
+    """Compute every check and compare with the paper (and our reference).
+
+    ``checks`` defaults to :func:`all_checks`; ``groups`` selects among
+    "forces", "inertia", "statics", "dynamics".
+    """
+    if checks is None:
+        checks = all_checks()
     out = []
     for c in checks:
         if groups is not None and c.group not in groups:
             continue
         ours = float(c.compute())
         ref_ok = math.isclose(ours, c.reference, rel_tol=c.reference_tolerance) if c.reference else True
+        ref_ok = ref_ok and math.isfinite(ours)
         if c.paper is not None:
             rel = (ours - c.paper) / abs(c.paper)
             passed = abs(rel) <= c.tolerance and ref_ok

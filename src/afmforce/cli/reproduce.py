@@ -1,0 +1,62 @@
+"""``afmforce reproduce``: the paper's figures and numbers into a folder."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+
+
+def register(sub) -> None:
+    p = sub.add_parser("reproduce", help="reproduce the paper's figures and numbers (report.md, PNG)",
+                       description="Write every figure of the paper that afmforce reproduces, with "
+                                   "report.md and report.json (paper value, ours, difference, tolerance).")
+    p.add_argument("--out", default="afmforce-paper", help="output folder (default ./afmforce-paper)")
+    p.add_argument("--only", default=None,
+                   help="comma-separated figures: fig1,fig3,fig4,fig5,fig6,fig7,fig9")
+    p.add_argument("--fast", action="store_true", help="quicker, lower-resolution run")
+    p.add_argument("--svg", action="store_true", help="also write SVG figures")
+    p.set_defaults(func=run)
+
+
+def run_reproduce(out: str, only, fast: bool, svg: bool):
+    """Run :func:`afmforce.paper.reproduce.reproduce` with a progress bar on a terminal."""
+    from ..paper.reproduce import reproduce
+
+    bar = None
+    if sys.stderr.isatty():
+        from tqdm import tqdm
+
+        bar = tqdm(total=100, desc="reproduce", unit="%", leave=False)
+
+    def progress(frac, what):
+        if bar is not None:
+            bar.n = int(100 * frac)
+            bar.set_postfix_str(what)
+            bar.refresh()
+
+    try:
+        return reproduce(out, only=only, fast=fast, svg=svg, progress=progress)
+    finally:
+        if bar is not None:
+            bar.close()
+
+
+def summarize(res) -> str:
+    """Short text summary of a reproduce run."""
+    n_ok = sum(c.passed for c in res.checks)
+    lines = [f"wrote {sum(len(v) for v in res.figures.values())} figure files, report.md and report.json "
+             f"to {res.out_dir}/ in {res.wall_time:.1f} s",
+             f"numbers: {n_ok} of {len(res.checks)} agree with the paper within tolerance"]
+    for c in res.checks:
+        if not c.passed:
+            lines.append(f"  FAILED: {c.quantity}: ours {c.ours:.4g} {c.unit}, paper {c.paper}, ref {c.reference}")
+    for k, msg in res.failed_figures.items():
+        lines.append(f"  figure {k} not written: {msg}")
+    return "\n".join(lines)
+
+
+def run(args: argparse.Namespace) -> int:
+    only = [s.strip() for s in args.only.split(",") if s.strip()] if args.only else None
+    res = run_reproduce(args.out, only, args.fast, args.svg)
+    print(summarize(res))
+    return 0 if res.passed else 1

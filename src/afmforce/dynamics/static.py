@@ -1,0 +1,146 @@
+"""Quasi-static deflection curves, including the unstable branch (spec sections 2-3).
+
+The static (infinitely slow, friction-free) measurement obeys Hooke's law
+``k z2 = Fs(h)`` with ``h = z2 - z``. Parametrised by the separation it is
+explicit: ``z2 = Fs(h)/k``, ``z = z2 - h = Fs(h)/k - h``. A branch point is stable
+where ``Fs'(h) < k``; the static jump-in is the largest ``h`` where
+``Fs'(h) = k`` (the paper's Fig 1 and Fig 6 show the unstable part dashed).
+
+For the inclined cantilever without friction the same holds with the
+force-measuring spring constant of eq 13.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike
+
+from .._validate import positive
+from ..constants import HAMAKER, Z0
+from ..errors import ParameterError
+from ..forces import static_jump_in_separation, vdw_force, vdw_force_gradient
+
+__all__ = ["StaticCurve", "static_curve", "static_deflection", "static_jump_in"]
+
+
+@dataclass(frozen=True)
+class StaticCurve:
+    """A static deflection curve, parametrised by the separation.
+
+    Attributes
+    ----------
+    separation : ndarray
+        h [m], increasing.
+    piezo_position : ndarray
+        Drive position z = z2 - h = Fs(h)/k - h [m] (h = z2 - z, spec 1).
+    deflection : ndarray
+        z2 = Fs(h)/k [m].
+    force : ndarray
+        Fs(h) [N].
+    stable : ndarray of bool
+        ``Fs'(h) < k``: the branch a slow measurement follows.
+    jump_in_separation, jump_in_position, jump_in_deflection : float
+        The static jump-in point (largest h with Fs' = k) [m]; NaN when the
+        spring is stiffer than the steepest attraction.
+    spring_constant : float
+        k [N/m].
+    """
+
+    separation: np.ndarray
+    piezo_position: np.ndarray
+    deflection: np.ndarray
+    force: np.ndarray
+    stable: np.ndarray
+    jump_in_separation: float
+    jump_in_position: float
+    jump_in_deflection: float
+    spring_constant: float
+
+
+def static_jump_in(spring_constant: float, radius: float, hamaker: float = HAMAKER,
+                   z0: float = Z0) -> tuple[float, float, float]:
+    """Static jump-in point ``(h_J, z_J, z2_J)`` [m] (spec section 2).
+
+    ``h_J`` is the largest separation with ``Fs'(h) = k``; the drive position
+    there is ``z_J = Fs(h_J)/k - h_J`` and the deflection ``Fs(h_J)/k``.
+    All NaN when there is no mechanical instability.
+    """
+    k = positive("spring_constant", spring_constant, "N/m")
+    hj = float(static_jump_in_separation(k, radius, hamaker, z0))
+    if not math.isfinite(hj):
+        return math.nan, math.nan, math.nan
+    dj = float(vdw_force(hj, radius, hamaker, z0)) / k
+    return hj, dj - hj, dj
+
+
+def static_curve(spring_constant: float, radius: float, hamaker: float = HAMAKER, z0: float = Z0,
+                 separation: ArrayLike | None = None, h_max: float = 60e-9,
+                 n: int = 2000) -> StaticCurve:
+    """The static deflection curve with both stable and unstable parts.
+
+    Parameters
+    ----------
+    spring_constant : float
+        k [N/m] (for the inclined beam: eq 13).
+    radius, hamaker, z0 : float
+        Surface-force parameters of eq 2 [m, J, m].
+    separation : array_like, optional
+        Separations to evaluate [m]; default ``n`` points from ``0.8 z0``
+        (inside the contact branch) to ``h_max``, denser near contact.
+    """
+    k = positive("spring_constant", spring_constant, "N/m")
+    positive("radius", radius, "m")
+    if separation is None:
+        h = np.geomspace(0.8 * z0, max(h_max, 2 * z0), n)
+    else:
+        h = np.sort(np.asarray(separation, dtype=float).ravel())
+        if h.size == 0 or np.any(h <= 0):
+            raise ParameterError("separation values must be positive [m]")
+    f = np.asarray(vdw_force(h, radius, hamaker, z0))
+    d = f / k
+    stable = np.asarray(vdw_force_gradient(h, radius, hamaker, z0)) < k
+    hj, zj, dj = static_jump_in(k, radius, hamaker, z0)
+    return StaticCurve(h, d - h, d, f, stable, hj, zj, dj, k)
+
+
+def static_deflection(piezo_position: ArrayLike, spring_constant: float, radius: float,
+                      hamaker: float = HAMAKER, z0: float = Z0):
+    """Deflection on the out-of-contact stable branch at drive position z [m].
+
+    Solves ``h + z - Fs(h)/k = 0`` for the largest root (the branch an approach
+    follows before it jumps in). NaN where that branch no longer exists
+    (``z >= z_J``). Without an instability (spring stiffer than any attractive
+    gradient) the curve is single-valued and defined everywhere.
+
+    Returns
+    -------
+    numeric
+        z2 [m] (negative: attraction), same shape as ``piezo_position``.
+    """
+    k = positive("spring_constant", spring_constant, "N/m")
+    z = np.asarray(piezo_position, dtype=float)
+    hj, zj, _ = static_jump_in(k, radius, hamaker, z0)
+    lo_h = hj if math.isfinite(hj) else 0.5 * z0
+    lo = np.full(z.shape, lo_h)
+    hi = lo_h + np.abs(z) + (abs(zj) if math.isfinite(zj) else 0.0) + abs(
+        float(vdw_force(z0, radius, hamaker, z0))) / k + 1e-9
+    hi = np.broadcast_to(hi, z.shape).copy()
+
+    def g(h):
+        return h + z - np.asarray(vdw_force(h, radius, hamaker, z0)) / k
+
+    for _ in range(200):
+        mid = 0.5 * (lo + hi)
+        pos = g(mid) > 0
+        hi = np.where(pos, mid, hi)
+        lo = np.where(pos, lo, mid)
+        if np.all(hi - lo <= 1e-15 * np.maximum(1.0, hi) + 1e-18):
+            break
+    h = 0.5 * (lo + hi)
+    d = h + z
+    if math.isfinite(zj):
+        d = np.where(z < zj, d, np.nan)
+    return d[()] if d.ndim == 0 else d
