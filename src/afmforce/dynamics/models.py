@@ -29,6 +29,7 @@ rejects the trial step.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
@@ -53,7 +54,10 @@ INV_MA, INV_MB = 10, 11           # 1/m_alpha, 1/m_beta [1/kg]
 HQA, HQB = 12, 13                 # dh/dq_alpha, dh/dq_beta [-]
 YQA, YQB = 14, 15                 # dy2/dq_alpha, dy2/dq_beta [-]
 TH_A, TH_B = 16, 17               # dtheta/dq_alpha, dtheta/dq_beta [rad/m]
-P_SIZE = 18
+# both models
+MOBILITY = 18   # dh-direction inverse mass: 1/m (spring), hq.M^-1.hq (beam) [1/kg]
+K_EFF = 19      # force-measuring spring constant k (eq 13 for the beam) [N/m]
+P_SIZE = 20
 
 #: Number of monitored observables returned by :func:`observe`.
 N_OBS = 9
@@ -66,7 +70,7 @@ def state_size(model: int) -> int:
     return 2 if model == MODEL_SPRING else 4
 
 
-@njit(cache=True, inline="always")
+@njit(cache=True, error_model="numpy")
 def surface_force(h, ar, z0):
     """Fs(h) and Fs'(h) of eq 2 [N, N/m]."""
     ih2 = 1.0 / (h * h)
@@ -76,7 +80,7 @@ def surface_force(h, ar, z0):
     return fs, dfs
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def rhs(model, p, zd, vd, y, out):
     """Evaluate ``out = f(t, y)`` at drive position ``zd`` and speed ``vd``.
 
@@ -121,7 +125,7 @@ def rhs(model, p, zd, vd, y, out):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def jac(model, p, zd, vd, y, J):
     """Analytic Jacobian ``J = df/dy`` (same arguments as :func:`rhs`)."""
     ar = p[AR]
@@ -180,7 +184,7 @@ def jac(model, p, zd, vd, y, J):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
 def observe(model, p, zd, vd, y, o):
     """Fill ``o`` with the observables of state ``y`` (indices ``O_*``).
 
@@ -220,7 +224,24 @@ def observe(model, p, zd, vd, y, o):
     o[O_Z] = zd
 
 
-@njit(cache=True)
+@njit(cache=True, error_model="numpy")
+def contact_frequency(model, p, zd, y):
+    """Angular frequency of the contact mode, ``sqrt((k - Fs'(h)) * mobility)`` [rad/s].
+
+    Also returns the contact stiffness ``kappa = -Fs'(h)`` [N/m] (positive in
+    the repulsive wall, zero at the strongest attraction h = z0).
+    """
+    if model == MODEL_SPRING:
+        h = y[0] - zd
+    else:
+        h = p[HQA] * y[0] + p[HQB] * y[1] - zd
+    _, dfs = surface_force(h, p[AR], p[Z0])
+    kappa = -dfs
+    w2 = (kappa + p[K_EFF]) * p[MOBILITY]
+    return math.sqrt(w2) if w2 > 0.0 else 0.0, kappa
+
+
+@njit(cache=True, error_model="numpy")
 def observe_array(model, p, zd, vd, Y):
     """:func:`observe` for every row of ``Y`` (drive ``zd``, ``vd`` per row)."""
     n = Y.shape[0]
@@ -239,6 +260,8 @@ def pack_spring(*, spring_constant, mass, radius, hamaker, z0, viscosity, h_guar
     p[H_GUARD] = h_guard
     p[K] = spring_constant
     p[INV_M] = 1.0 / mass
+    p[MOBILITY] = 1.0 / mass
+    p[K_EFF] = spring_constant
     return p
 
 
@@ -280,4 +303,82 @@ def pack_beam(cantilever, *, m_joint, m_base, radius, hamaker, z0, viscosity, xi
     p[HQA], p[HQB] = hq
     p[YQA], p[YQB] = yq
     p[TH_A], p[TH_B] = tq
+    p[MOBILITY] = hq[0] ** 2 / ma + hq[1] ** 2 / mb
+    p[K_EFF] = cantilever.spring_constant
     return p
+
+
+# --- friction registry ------------------------------------------------------
+@dataclass(frozen=True)
+class FrictionLaw:
+    """One lateral friction law on the probe tip (beam model only).
+
+    Attributes
+    ----------
+    key : str
+        Identifier used by ``SimulationConfig.friction`` and ``--friction``.
+    name : str
+        Human-readable name.
+    formula : str
+        The law, with its source.
+    parameters : tuple of str
+        Config fields it uses (``xi`` [kg/s], ``zeta`` [kg/(s N^2)]).
+    """
+
+    key: str
+    name: str
+    formula: str
+    parameters: tuple[str, ...]
+
+    def coefficients(self, xi: float, zeta: float) -> tuple[float, float]:
+        """(xi, zeta) as used by the compiled force law ``Fy = -(xi + zeta Fz^2) y2'``."""
+        return (xi if "xi" in self.parameters else 0.0,
+                zeta if "zeta" in self.parameters else 0.0)
+
+
+#: Friction laws selectable with ``friction=`` / ``--friction``.
+FRICTION_LAWS: dict[str, FrictionLaw] = {
+    law.key: law
+    for law in (
+        FrictionLaw("none", "no friction", "Fy = 0", ()),
+        FrictionLaw("viscous", "viscous (Newtonian)", "Fy = -xi dy2/dt  (eq 28)", ("xi",)),
+        FrictionLaw("load", "viscous, load dependent",
+                    "Fy = -(xi + zeta Fz^2) dy2/dt  (paper, after eq 28)", ("xi", "zeta")),
+    )
+}
+
+
+@dataclass(frozen=True)
+class RingingTreatment:
+    """How the nearly undamped in-contact mode is integrated (see docs/dynamics.md).
+
+    Attributes
+    ----------
+    key, name, description : str
+    damp_cycles : float
+        0: resolve the ringing under normal error control; > 0: in contact
+        (after the jump-in transient) take steps of at least
+        ``damp_cycles / omega_c`` so that Radau's L-stability damps it.
+    """
+
+    key: str
+    name: str
+    description: str
+    damp_cycles: float
+
+
+#: In-contact ringing treatments selectable with ``ringing=`` / ``--ringing``.
+RINGING: dict[str, RingingTreatment] = {
+    r.key: r
+    for r in (
+        RingingTreatment(
+            "damp", "damped numerically",
+            "after the jump-in transient (spike_window after contact) the contact mode is "
+            "damped by L-stable Radau steps of >= 50/omega_c; the quasi-static contact "
+            "is followed exactly", 50.0),
+        RingingTreatment(
+            "resolve", "resolved",
+            "the contact mode is followed under normal error control until it decays below "
+            "the tolerance (costly: ~1e7 steps per simulated second while it rings)", 0.0),
+    )
+}

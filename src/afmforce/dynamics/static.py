@@ -132,12 +132,29 @@ def static_deflection(piezo_position: ArrayLike, spring_constant: float, radius:
     def g(h):
         return h + z - np.asarray(vdw_force(h, radius, hamaker, z0)) / k
 
+    if z.ndim == 0:  # scalar: Brent's method on the same bracket
+        from scipy.optimize import brentq
+
+        zs = float(z)
+
+        def gs(h):
+            r6 = (z0 / h) ** 6
+            return h + zs + (hamaker * radius / (12.0 * h * h)) * (1.0 - 0.25 * r6) / k
+
+        lo_s, hi_s = float(lo), float(hi)
+        if gs(lo_s) >= 0.0:   # only possible at the fold itself
+            h = lo_s
+        else:
+            h = brentq(gs, lo_s, hi_s, xtol=1e-24, rtol=4 * np.finfo(float).eps, maxiter=200)
+        d = h + zs
+        return d if not math.isfinite(zj) or zs < zj else math.nan
+
     for _ in range(200):
         mid = 0.5 * (lo + hi)
         pos = g(mid) > 0
         hi = np.where(pos, mid, hi)
         lo = np.where(pos, lo, mid)
-        if np.all(hi - lo <= 1e-15 * np.maximum(1.0, hi) + 1e-18):
+        if np.all(hi - lo <= 4e-16 * hi):
             break
     h = 0.5 * (lo + hi)
     d = h + z

@@ -1,0 +1,300 @@
+"""``afmforce simulate``: one dynamic approach-retract cycle (paper section 2.3).
+
+Every flag defaults to the paper's Figs 5-6 values, so ``afmforce simulate``
+alone runs Fig 5. Values take units (``--velocity 1um/s``, ``--theta0 -15deg``).
+
+Extending the command (e.g. the virtual instrument): append a function
+``(parser) -> None`` to :data:`ARGUMENT_GROUPS` that adds an argument group,
+the ``dest`` of any output-file flag to :data:`OUTPUT_FLAGS` (so ``--force``
+protects it), and a function ``(args, trajectory) -> None`` to
+:data:`POST_HOOKS`; hooks run after the trajectory outputs are written.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import sys
+from pathlib import Path
+from typing import Callable
+
+from .._files import atomic_path, check_writable
+from ..errors import FileFormatError, ParameterError
+from .common import add_quantity, print_json, print_table
+
+__all__ = ["register", "run", "ARGUMENT_GROUPS", "OUTPUT_FLAGS", "POST_HOOKS", "config_from_args"]
+
+
+def _defaults():
+    from ..dynamics import SimulationConfig
+
+    return {f.name: f.default for f in dataclasses.fields(SimulationConfig)}
+
+
+def _q(group, flag, dim, unit, help_, dest=None, default_text=None):
+    """A quantity flag whose default (None: take the config's) is shown in the help."""
+    d = _defaults()
+    name = dest or flag.lstrip("-").replace("-", "_")
+    shown = default_text
+    if shown is None and d.get(name) is not None:
+        from ..units import format_quantity
+
+        shown = format_quantity(d[name], unit) if unit else f"{d[name]:g}"
+    text = help_ + (f" (default {shown})" if shown else "")
+    kw = {"dest": dest} if dest else {}
+    add_quantity(group, flag, dim, None, text, unit=unit, **kw)
+
+
+def _model_group(parser):
+    g = parser.add_argument_group("model")
+    g.add_argument("--model", choices=("beam", "spring"), default=None,
+                   help="beam: inclined cantilever with friction (eqs 22-28); "
+                        "spring: mass on a spring (eq 1) (default beam)")
+
+
+def _beam_group(parser):
+    g = parser.add_argument_group("inclined cantilever (beam model; Fig 2)")
+    _q(g, "--L0", "length", "m", "beam length")
+    _q(g, "--L1", "length", "m", "base length")
+    _q(g, "--L2", "length", "m", "probe length")
+    _q(g, "--theta0", "angle", "rad", "inclination", default_text="-15deg")
+    _q(g, "--k0", "stiffness", "N/m", "intrinsic spring constant (or give --B)")
+    _q(g, "--B", "rigidity", "N*m^2", "flexural rigidity", default_text="3.5e-13 N m^2")
+    _q(g, "--m-joint", "mass", "kg", "point mass at the beam-base joint", dest="m_joint")
+    _q(g, "--m-base", "mass", "kg", "mass spread along the base", dest="m_base")
+
+
+def _spring_group(parser):
+    g = parser.add_argument_group("simple spring (spring model; eq 1)")
+    _q(g, "--spring-constant", "stiffness", "N/m", "spring constant k", dest="spring_constant")
+    _q(g, "--mass", "mass", "kg", "effective mass m", default_text="10 ug")
+
+
+def _surface_group(parser):
+    g = parser.add_argument_group("surfaces (eq 2, drainage)")
+    _q(g, "--radius", "length", "m", "effective radius R")
+    _q(g, "--hamaker", "energy", "J", "Hamaker constant A")
+    _q(g, "--z0", "length", "m", "soft-wall length")
+    _q(g, "--viscosity", "viscosity", "Pa*s", "fluid viscosity (drainage)")
+
+
+def _friction_group(parser):
+    from ..dynamics import FRICTION_LAWS
+
+    g = parser.add_argument_group("tip friction (beam model; eq 28)")
+    g.add_argument("--friction", choices=tuple(FRICTION_LAWS), default=None,
+                   help="; ".join(f"{k}: {v.formula}" for k, v in FRICTION_LAWS.items())
+                   + " (default viscous)")
+    _q(g, "--xi", "damping", "kg/s", "friction coefficient xi")
+    _q(g, "--zeta", "friction_per_force2", "kg/(s N^2)", "load-dependent coefficient zeta")
+
+
+def _drive_group(parser):
+    g = parser.add_argument_group("drive (substrate position z, up = towards the probe)")
+    _q(g, "--velocity", "velocity", "m/s", "approach speed")
+    _q(g, "--retract-velocity", "velocity", "m/s", "retract speed (default: --velocity)",
+       dest="retract_velocity")
+    _q(g, "--start", "length", "m", "start position (out of contact)")
+    _q(g, "--turn", "length", "m", "turn position (limit when turning at a load)")
+    _q(g, "--turn-force", "force", "N", "turn when the normal force reaches this",
+       dest="turn_force")
+    _q(g, "--turn-deflection", "length", "m", "turn when the deflection reaches this",
+       dest="turn_deflection")
+    _q(g, "--dwell", "time", "s", "pause at the turn")
+    _q(g, "--end", "length", "m", "end position of the retract")
+
+
+def _solver_group(parser):
+    from ..dynamics import RINGING
+
+    g = parser.add_argument_group("sampling and solver")
+    _q(g, "--sample-rate", "frequency", "Hz", "instrument sample rate", dest="sample_rate")
+    _q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
+    _q(g, "--atol", "length", "m", "absolute tolerance on positions")
+    g.add_argument("--ringing", choices=tuple(RINGING), default=None,
+                   help="in-contact ringing: " + "; ".join(
+                       f"{k}: {v.name}" for k, v in RINGING.items()) + " (default damp)")
+    g.add_argument("--max-steps", type=int, default=None, dest="max_steps",
+                   help="step budget (default 2000000)")
+
+
+def _output_group(parser):
+    g = parser.add_argument_group("output")
+    g.add_argument("--out", metavar="FILE", help="write the trajectory (.csv with units or .h5)")
+    g.add_argument("--plot", metavar="FILE.png",
+                   help="plot deflection vs separation (apparent and actual) with the static curve")
+    g.add_argument("--json", action="store_true", help="print the summary as JSON (SI units)")
+    g.add_argument("--force", action="store_true", help="overwrite existing output files")
+    g.add_argument("--no-progress", action="store_true", help="no progress bar")
+
+
+#: Functions ``(parser) -> None`` adding the argument groups, in help order.
+ARGUMENT_GROUPS: list[Callable[[argparse.ArgumentParser], None]] = [
+    _model_group, _beam_group, _spring_group, _surface_group, _friction_group, _drive_group,
+    _solver_group, _output_group,
+]
+#: ``dest`` names of output-file flags that --force protects.
+OUTPUT_FLAGS: list[str] = ["out", "plot"]
+#: Functions ``(args, trajectory) -> None`` run after the outputs are written.
+POST_HOOKS: list[Callable[[argparse.Namespace, object], None]] = []
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``simulate`` sub-command."""
+    p = subparsers.add_parser(
+        "simulate", help="simulate a dynamic approach-retract cycle (spring or inclined beam)",
+        description="Simulate one approach-(dwell-)retract cycle with the compiled stiff "
+                    "integrator. Defaults: the paper's Fig 5 (beam, xi = 0.1 kg/s, 0.1 um/s, "
+                    "start -40 nm, turn +20 nm, end -230 nm).")
+    for add in ARGUMENT_GROUPS:
+        add(p)
+    p.set_defaults(func=run)
+    return p
+
+
+def config_from_args(args: argparse.Namespace):
+    """The :class:`~afmforce.dynamics.SimulationConfig` given by the flags."""
+    from ..dynamics import SimulationConfig
+
+    names = {f.name for f in dataclasses.fields(SimulationConfig)}
+    overrides = {k: v for k, v in vars(args).items() if k in names and v is not None}
+    if "theta0" in overrides and abs(overrides["theta0"]) > 1.5708:
+        raise ParameterError(
+            f"--theta0 {overrides['theta0']:g} rad is not an inclination; give degrees with a "
+            "unit, e.g. --theta0 -15deg")
+    return SimulationConfig(**overrides)
+
+
+def _progress_bar(args):
+    if args.no_progress or args.json or not sys.stderr.isatty():
+        return None, None
+    from tqdm import tqdm
+
+    bar = tqdm(total=1000, desc="simulate", unit="‰", leave=False, file=sys.stderr)
+
+    def update(frac):
+        bar.n = int(1000 * frac)
+        bar.refresh()
+
+    return bar, update
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the command; returns the exit status."""
+    import warnings
+
+    from ..dynamics import DynamicsWarning, simulate
+
+    for dest in OUTPUT_FLAGS:
+        path = getattr(args, dest, None)
+        if path:
+            check_writable(path, args.force)
+    if args.out and Path(args.out).suffix.lower() not in (".csv", ".h5", ".hdf5"):
+        raise FileFormatError(f"cannot write {args.out}: --out takes a .csv or .h5 file")
+    if args.plot and Path(args.plot).suffix.lower() != ".png":
+        raise FileFormatError(f"cannot write {args.plot}: --plot takes a .png file")
+    cfg = config_from_args(args)
+    bar, update = _progress_bar(args)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", DynamicsWarning)
+        try:
+            traj = simulate(cfg, progress=update)
+        finally:
+            if bar is not None:
+                bar.close()
+    for w in caught:
+        print(f"warning: {w.message}", file=sys.stderr)
+    if args.out:
+        traj.write(args.out, force=args.force)
+    if args.plot:
+        plot_trajectory(traj, args.plot, force=args.force)
+    for hook in POST_HOOKS:
+        hook(args, traj)
+    if args.json:
+        print_json(traj.summary())
+    else:
+        _print_summary(traj)
+    return 0
+
+
+def _print_summary(traj) -> None:
+    e, s = traj.events, traj.solver
+    rows = [
+        ("model", traj.config.model, ""),
+        ("spring constant k", f"{traj.spring_constant:.5g} N/m", ""),
+        ("calibration factor (eq 15)", f"{traj.calibration_factor * 1e9:.5g} nm/rad", ""),
+        ("jump-in", e.jump_in_note, ""),
+        ("jump-in position z", e.jump_in_position, "m"),
+        ("jump-in separation h", e.jump_in_separation, "m"),
+        ("contact position z", e.contact_position, "m"),
+        ("min deflection before contact", e.min_deflection, "m"),
+        ("min apparent deflection before contact", e.min_apparent_deflection, "m"),
+        ("apparent-deflection spike", e.spike_height, "m"),
+        ("compliance offset z_in - z_out", e.hysteresis_offset, "m"),
+        ("simulated calibration slope", f"{e.compliance_slope * 1e9:.5g} nm/rad", ""),
+        ("pull-off position z", e.pull_off_position, "m"),
+        ("pull-off force", e.pull_off_force, "N"),
+        ("solver", f"{s.status}: {s.steps} steps ({s.rejected} rejected), "
+                   f"{s.rhs_evaluations} f-evals, {s.wall_time:.3g} s", ""),
+    ]
+    print_table(rows, title="afmforce simulate")
+
+
+def plot_trajectory(traj, path, force: bool = False):
+    """Deflection vs separation (actual and apparent) with the static curve, as a PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+
+    from ..dynamics import static_curve
+
+    cfg = traj.config
+    nm = 1e9
+    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 4.5))
+    for seg, name, color in ((0, "approach", "C0"), (1, "retract", "C3")):
+        m = traj.segment == seg
+        ax0.plot(traj.piezo_position[m] * nm, traj.deflection[m] * nm, color=color, lw=1,
+                 label=f"{name}: actual $z_2$")
+        ax1.plot(traj.separation[m] * nm, traj.deflection[m] * nm, color=color, lw=1,
+                 label=f"{name}: actual")
+        if cfg.model == "beam":
+            ax0.plot(traj.piezo_position[m] * nm, traj.apparent_deflection[m] * nm, color=color,
+                     lw=1, ls="--", label=rf"{name}: apparent $\beta\theta$")
+            ax1.plot(traj.apparent_separation[m] * nm, traj.apparent_deflection[m] * nm,
+                     color=color, lw=1, ls="--", label=f"{name}: apparent")
+    sc = static_curve(traj.spring_constant, cfg.radius, cfg.hamaker, cfg.z0, h_max=40e-9)
+    stable = np.where(sc.stable, sc.deflection, np.nan)
+    unstable = np.where(~sc.stable, sc.deflection, np.nan)
+    ax1.plot(sc.separation * nm, stable * nm, "k", lw=2, label="static")
+    ax1.plot(sc.separation * nm, unstable * nm, "k:", lw=1.5, label="static (unstable)")
+    ax0.set_xlabel("piezo position z [nm]")
+    ax0.set_ylabel("deflection [nm]")
+    ax0.set_title("full cycle")
+    ax1.set_xlabel("separation [nm]")
+    ax1.set_ylabel("deflection [nm]")
+    ax1.set_title("near contact")
+    ax1.set_xlim(-2, 12)
+    lo = np.nanmin([traj.events.min_deflection, traj.events.min_apparent_deflection,
+                    sc.jump_in_deflection]) * nm
+    top = max(1.0, -0.8 * lo)
+    if np.isfinite(traj.events.spike_height):
+        top = max(top, 1.15 * traj.events.spike_height * nm)
+    ax1.set_ylim(min(-1.0, 1.6 * lo), top)
+    ax1.axhline(0, color="0.7", lw=0.5)
+    ax1.legend(fontsize=7)
+    ax0.legend(fontsize=7)
+    fig.tight_layout()
+    with atomic_path(path, force) as tmp:
+        fig.savefig(tmp, dpi=120, format="png")
+    plt.close(fig)
+    return path
+
+
+# Virtual instrument (issue 4; afmforce.cli._instrument_opts): --instrument, --seed, --raw, ...
+from ._instrument_opts import add_instrument_arguments, record_from_args  # noqa: E402
+
+ARGUMENT_GROUPS.append(add_instrument_arguments)
+OUTPUT_FLAGS.append("raw")
+POST_HOOKS.append(record_from_args)

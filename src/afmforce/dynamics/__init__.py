@@ -1,0 +1,43 @@
+"""Dynamics engine: simulate a dynamic AFM force measurement (spec sections 3 and 5).
+
+Public API::
+
+    from afmforce.dynamics import simulate, SimulationConfig
+    traj = simulate()                      # the paper's Fig 5 (beam, xi = 0.1 kg/s, 0.1 um/s)
+    traj = simulate(xi=0.01, velocity=1e-6)
+    traj = simulate(model="spring", mass=1e-8, spring_constant=0.21, velocity=10e-6)
+    traj.summary(); traj.events; traj.write("run.csv")
+
+Modules: :mod:`.models` (vector fields, Jacobians, friction registry),
+:mod:`.drive` (protocols), :mod:`.radau` (compiled Radau IIA integrator),
+:mod:`.events`, :mod:`.trajectory`, :mod:`.simulate`, :mod:`.static`
+(quasi-static curves), :mod:`.reference` (a plain scipy implementation used as
+an independent cross-check).
+"""
+
+from .config import DEFAULT_B, MODELS, SimulationConfig
+from .events import Events
+from .models import FRICTION_LAWS, RINGING, FrictionLaw, RingingTreatment
+from .simulate import DynamicsWarning, simulate
+from .static import StaticCurve, static_curve, static_deflection, static_jump_in
+from .trajectory import COLUMNS, SolverStats, Trajectory
+
+__all__ = [
+    "simulate",
+    "SimulationConfig",
+    "Trajectory",
+    "Events",
+    "SolverStats",
+    "DynamicsWarning",
+    "FRICTION_LAWS",
+    "FrictionLaw",
+    "RINGING",
+    "RingingTreatment",
+    "MODELS",
+    "DEFAULT_B",
+    "COLUMNS",
+    "StaticCurve",
+    "static_curve",
+    "static_deflection",
+    "static_jump_in",
+]

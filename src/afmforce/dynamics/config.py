@@ -1,0 +1,266 @@
+"""The configuration of one simulated approach-retract cycle.
+
+Every default is a value of the paper's Figs 5-6 (``afmforce.constants.FIG5``;
+spec section 5), so ``simulate()`` with no argument runs Fig 5. The simple
+spring model defaults to the Fig 1 spring (``FIG1``).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, fields
+
+from .._validate import finite, non_negative, positive
+from ..cantilever import InclinedCantilever, SimpleSpring
+from ..constants import FIG1, FIG5
+from ..errors import ParameterError
+from .models import FRICTION_LAWS, RINGING
+
+__all__ = ["SimulationConfig", "DEFAULT_B", "MODELS"]
+
+#: Flexural rigidity used when neither k0 nor B is given [N m^2] (spec section 5 decision).
+DEFAULT_B = FIG5["B"]
+#: Dynamical models selectable with ``model=`` / ``--model``.
+MODELS = {
+    "beam": "inclined cantilever with base, probe and tip friction (eqs 22-28)",
+    "spring": "mass on a spring moving vertically (eq 1)",
+}
+
+
+@dataclass(frozen=True)
+class SimulationConfig:
+    """Parameters of one simulated force measurement (SI units).
+
+    Model
+    -----
+    model : {"beam", "spring"}
+        ``beam``: the inclined cantilever of Fig 2 (eqs 22-28);
+        ``spring``: the simple spring of eq 1 (no lateral motion, no friction).
+
+    Inclined cantilever (beam model)
+    --------------------------------
+    L0, L1, L2 : float
+        Beam, base and probe lengths [m].
+    theta0 : float
+        Inclination [rad] (negative: -15 deg in the paper).
+    k0 : float or None
+        Intrinsic spring constant [N/m]; or give ``B``.
+    B : float or None
+        Flexural rigidity [N m^2]; when neither k0 nor B is given, 3.5e-13
+        (spec section 5 decision: the paper prints 3.5e-12).
+    m_joint, m_base : float
+        Point mass at the beam-base joint and mass spread along the base [kg]
+        (``m_alpha = m_joint + m_base/4``, ``m_beta = m_base/3``).
+
+    Simple spring (spring model)
+    ----------------------------
+    spring_constant : float
+        k [N/m] (default: Fig 1, 0.21).
+    mass : float
+        m [kg] (default: Fig 1, 10 ug).
+
+    Surfaces
+    --------
+    radius : float
+        Effective radius R [m].
+    hamaker : float
+        Hamaker constant A [J].
+    z0 : float
+        Soft-wall length [m].
+    viscosity : float
+        Fluid viscosity for drainage [Pa s] (0 switches drainage off).
+
+    Friction (beam model)
+    ---------------------
+    friction : {"viscous", "load", "none"}
+        Law from :data:`afmforce.dynamics.FRICTION_LAWS`.
+    xi : float
+        Viscous friction coefficient [kg/s].
+    zeta : float
+        Load-dependent coefficient [kg/(s N^2)] (``friction="load"``).
+
+    Drive
+    -----
+    velocity : float
+        Approach speed [m/s], > 0.
+    retract_velocity : float or None
+        Retract speed [m/s]; default: ``velocity``.
+    start : float
+        Drive position at t = 0 [m]; the cantilever starts at static
+        equilibrium there (no friction at rest). Must be out of contact.
+    turn : float
+        Drive position where the approach turns [m]. With ``turn_force`` or
+        ``turn_deflection`` it is the farthest the approach may go.
+    turn_force : float or None
+        Turn when the load ``k z2`` first reaches this value [N] (k of eq 13
+        for the beam): the trigger of an instrument, which sees the deflection;
+        the contact force Fz itself rings at jump-in.
+    turn_deflection : float or None
+        Turn when the deflection z2 first reaches this value [m].
+    dwell : float
+        Pause at the turn point [s].
+    end : float
+        Drive position where the retract ends [m].
+
+    Output and solver
+    -----------------
+    sample_rate : float
+        Instrument sampling rate of the returned trajectory [Hz].
+    rtol : float
+        Relative tolerance of the integrator on velocities; also sets the
+        Newton tolerance.
+    atol : float
+        Absolute tolerance on positions [m] (positions have no relative
+        tolerance: the forces depend on h, a small difference of two large
+        positions in contact); velocities use ``atol * 2 pi * 10 MHz``
+        (see docs/dynamics.md).
+    contact_separation : float
+        Separation below which the surfaces count as in contact [m]
+        (contact and pull-off events; spec section 7 uses 1 nm).
+    jump_factor : float
+        Jump-in criterion: the first time ``dh/dt < -jump_factor * dz/dt``
+        on the approach before contact.
+    spike_window : float
+        The jump-in transient: the apparent-deflection spike is searched from
+        jump-in (or contact) to this long after contact, and the in-contact
+        ringing is resolved at least this long [s].
+    ringing : {"damp", "resolve"}
+        Treatment of the nearly undamped in-contact mode
+        (:data:`afmforce.dynamics.RINGING`; docs/dynamics.md): ``damp`` lets
+        the L-stable integrator damp it after ``spike_window``; ``resolve``
+        follows it under normal error control.
+    max_steps : int
+        Step budget; exceeding it raises :class:`~afmforce.errors.SolverError`.
+    """
+
+    model: str = "beam"
+    L0: float = FIG5["L0"]
+    L1: float = FIG5["L1"]
+    L2: float = FIG5["L2"]
+    theta0: float = FIG5["theta0"]
+    k0: float | None = None
+    B: float | None = None
+    m_joint: float = FIG5["m_joint"]
+    m_base: float = FIG5["m_base"]
+    spring_constant: float = FIG1["spring_constant"]
+    mass: float = FIG1["mass"]
+    radius: float = FIG5["radius"]
+    hamaker: float = FIG5["hamaker"]
+    z0: float = FIG5["z0"]
+    viscosity: float = FIG5["viscosity"]
+    friction: str = "viscous"
+    xi: float = FIG5["xi"]
+    zeta: float = 0.0
+    velocity: float = FIG5["velocity"]
+    retract_velocity: float | None = None
+    start: float = FIG5["start"]
+    turn: float = FIG5["turn"]
+    turn_force: float | None = None
+    turn_deflection: float | None = None
+    dwell: float = 0.0
+    end: float = FIG5["end"]
+    sample_rate: float = 10e3
+    rtol: float = 1e-4
+    atol: float = 1e-12
+    contact_separation: float = 1e-9
+    jump_factor: float = 2.0
+    spike_window: float = 2e-3
+    ringing: str = "damp"
+    max_steps: int = 2_000_000
+
+    def __post_init__(self) -> None:
+        set_ = lambda n, v: object.__setattr__(self, n, v)  # noqa: E731
+        if self.model not in MODELS:
+            raise ParameterError(f"model must be one of {sorted(MODELS)}, got {self.model!r}")
+        if self.ringing not in RINGING:
+            raise ParameterError(
+                f"ringing must be one of {sorted(RINGING)}, got {self.ringing!r}")
+        if self.friction not in FRICTION_LAWS:
+            raise ParameterError(
+                f"friction must be one of {sorted(FRICTION_LAWS)}, got {self.friction!r}")
+        for name, unit in (("m_joint", "kg"), ("m_base", "kg"), ("spring_constant", "N/m"),
+                           ("mass", "kg"), ("radius", "m"), ("hamaker", "J"), ("z0", "m"),
+                           ("velocity", "m/s"), ("sample_rate", "Hz"), ("atol", "m"),
+                           ("contact_separation", "m"), ("jump_factor", ""),
+                           ("spike_window", "s")):
+            set_(name, positive(name, getattr(self, name), unit))
+        for name, unit in (("viscosity", "Pa s"), ("xi", "kg/s"), ("zeta", "kg/(s N^2)"),
+                           ("dwell", "s")):
+            set_(name, non_negative(name, getattr(self, name), unit))
+        for name in ("start", "turn", "end"):
+            set_(name, finite(name, getattr(self, name), "m"))
+        if self.retract_velocity is not None:
+            set_("retract_velocity", positive("retract_velocity", self.retract_velocity, "m/s"))
+        if self.turn_force is not None and self.turn_deflection is not None:
+            raise ParameterError("give at most one of turn_force [N] or turn_deflection [m]")
+        if self.turn_force is not None:   # a repulsive load: the turn is in contact
+            set_("turn_force", positive("turn_force", self.turn_force, "N"))
+        if self.turn_deflection is not None:
+            set_("turn_deflection", positive("turn_deflection", self.turn_deflection, "m"))
+        rtol = finite("rtol", self.rtol)
+        if not 1e-12 <= rtol <= 0.1:
+            raise ParameterError(f"rtol must lie between 1e-12 and 0.1, got {self.rtol!r}")
+        set_("rtol", rtol)
+        if int(self.max_steps) < 1:
+            raise ParameterError(f"max_steps must be a positive integer, got {self.max_steps!r}")
+        set_("max_steps", int(self.max_steps))
+        if self.turn <= self.start:
+            raise ParameterError(
+                f"turn ({self.turn:.4g} m) must lie above start ({self.start:.4g} m): "
+                "the approach moves the substrate up (z increasing)")
+        if self.end >= self.turn:
+            raise ParameterError(
+                f"end ({self.end:.4g} m) must lie below turn ({self.turn:.4g} m): "
+                "the retract moves the substrate down")
+        n_app = (self.turn - self.start) / self.velocity * self.sample_rate
+        if n_app < 10:
+            raise ParameterError(
+                f"sample_rate {self.sample_rate:.4g} Hz gives only {n_app:.1f} samples on the "
+                "approach; raise it (at least 10 samples per run)")
+        if self.model == "beam":
+            self.cantilever  # validates the geometry  # noqa: B018
+        else:
+            SimpleSpring(self.spring_constant, self.mass)
+        from .drive import start_deflection
+
+        # raises if the start is already in contact; kept for initial_state()
+        object.__setattr__(self, "_start_deflection", start_deflection(self))
+
+    # --- derived -----------------------------------------------------------
+    @property
+    def cantilever(self) -> InclinedCantilever:
+        """The :class:`~afmforce.cantilever.InclinedCantilever` of the beam model."""
+        if self.k0 is not None and self.B is not None:
+            raise ParameterError("give at most one of k0 [N/m] or B [N m^2]")
+        if self.k0 is not None:
+            return InclinedCantilever(self.L0, self.L1, self.L2, self.theta0, k0=self.k0)
+        return InclinedCantilever(self.L0, self.L1, self.L2, self.theta0,
+                                  B=DEFAULT_B if self.B is None else self.B)
+
+    @property
+    def force_constant(self) -> float:
+        """Force-measuring spring constant k [N/m] (eq 13 for the beam, k for the spring)."""
+        return self.cantilever.spring_constant if self.model == "beam" else self.spring_constant
+
+    @property
+    def calibration_factor(self) -> float:
+        """beta = dz2/dtheta of eq 15 [m/rad] (NaN for the spring model: it does not tilt)."""
+        return self.cantilever.calibration_factor if self.model == "beam" else math.nan
+
+    @property
+    def retract_speed(self) -> float:
+        """Retract speed [m/s]."""
+        return self.velocity if self.retract_velocity is None else self.retract_velocity
+
+    def replace(self, **changes) -> "SimulationConfig":
+        """A copy with some fields changed (validated again)."""
+        unknown = set(changes) - {f.name for f in fields(self)}
+        if unknown:
+            raise ParameterError(
+                f"unknown simulation parameter(s) {sorted(unknown)}; "
+                f"known: {', '.join(f.name for f in fields(self))}")
+        return SimulationConfig(**{**asdict(self), **changes})
+
+    def to_dict(self) -> dict:
+        """The fields as a plain dict (SI values)."""
+        return asdict(self)

@@ -1,0 +1,147 @@
+"""Events of a simulated cycle: jump-in, contact, pull-off, spike, compliance offset.
+
+Most events are located inside the integrator, on the dense output of every
+accepted step (see :func:`afmforce.dynamics.radau._events`), so they do not
+depend on the sampling rate:
+
+* **jump-in** (criterion, stated once here): the first time on the approach,
+  before contact, that the separation closes faster than twice the drive
+  speed, ``dh/dt < -jump_factor * dz/dt`` with ``jump_factor = 2``. Quasi-
+  statically ``dh/dt = -dz/dt (1 + O(Fs'/k))``; during the mechanical
+  instability the tip accelerates towards the substrate and ``dh/dt`` drops far
+  below ``-2 dz/dt``. When friction holds the tip back (large xi * v, spec
+  section 7) the separation never closes that fast: the tip creeps into
+  contact, and the event says so (``jumped = False``) instead of inventing
+  a jump.
+* **contact**: the first time the separation drops below
+  ``contact_separation`` (1 nm, spec section 7) on the approach.
+* **pull-off**: the first time the separation rises above
+  ``contact_separation`` on the retract; the pull-off force is the most
+  negative normal force Fz in contact on the retract (the adhesion).
+* **minimum (apparent) deflection** before contact: the largest measured
+  attraction (spec section 7, column 3).
+* **spike**: the largest apparent deflection ``beta theta`` from jump-in (or
+  contact, when creeping) to ``spike_window`` after contact (Fig 5: the
+  positive apparent deflection while the tip cannot slide).
+
+From the sampled trajectory (:func:`compliance_lines`): straight-line fits
+``z = c0 + c1 * d~`` of drive position against apparent deflection in the
+constant-compliance region of the inward and the outward run (over the
+middle half of the drive range in contact); ``c1`` is the simulated
+calibration slope (dz/dtheta per unit beta), and the offset of the two lines
+at a fixed angle is ``z_inward - z_outward`` (eq 16; spec section 7).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .radau import APPROACH, RETRACT
+
+__all__ = ["Events", "compliance_lines"]
+
+
+@dataclass(frozen=True)
+class Events:
+    """Events of one approach-retract cycle (NaN where an event did not occur).
+
+    Attributes
+    ----------
+    jumped : bool or None
+        True: a jump-in by the criterion above; False: the tip crept into
+        contact without a jump; None: no contact at all.
+    jump_in_note : str
+        A sentence saying which case occurred.
+    jump_in_time, jump_in_position, jump_in_separation : float
+        At the jump-in: time [s], drive position z [m], separation h [m].
+    contact_time, contact_position : float
+        First h < contact_separation on the approach [s, m].
+    pull_off_time, pull_off_position : float
+        First h > contact_separation on the retract [s, m].
+    pull_off_force : float
+        Most negative normal force in contact on the retract [N].
+    min_deflection, min_deflection_position : float
+        Smallest deflection z2 before contact on the approach, and where [m].
+    min_apparent_deflection, min_apparent_deflection_position : float
+        Smallest apparent deflection beta*theta before contact, and where [m]
+        (the deflection itself for the spring model).
+    spike_height, spike_time, spike_position : float
+        Largest apparent deflection from jump-in to ``spike_window`` after
+        contact [m], when [s], where [m] (NaN for the spring model).
+    hysteresis_offset : float
+        ``z_inward - z_outward`` of the constant-compliance lines at a fixed
+        angle [m] (NaN without two usable contact lines).
+    compliance_slope : float
+        dz/dtheta of the constant-compliance lines [m/rad]: the calibration
+        factor an experimenter would measure (beam model; NaN otherwise).
+    turn_time, turn_position : float
+        Where the approach turned [s, m].
+    """
+
+    jumped: bool | None
+    jump_in_note: str
+    jump_in_time: float
+    jump_in_position: float
+    jump_in_separation: float
+    contact_time: float
+    contact_position: float
+    pull_off_time: float
+    pull_off_position: float
+    pull_off_force: float
+    min_deflection: float
+    min_deflection_position: float
+    min_apparent_deflection: float
+    min_apparent_deflection_position: float
+    spike_height: float
+    spike_time: float
+    spike_position: float
+    hysteresis_offset: float
+    compliance_slope: float
+    turn_time: float
+    turn_position: float
+
+    def to_dict(self) -> dict:
+        """Plain dict of the fields (SI)."""
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+def compliance_lines(piezo_position, apparent_deflection, separation, segment,
+                     contact_separation: float, contact_position: float, turn_position: float,
+                     beta: float):
+    """Fit the inward and outward constant-compliance lines.
+
+    Uses in-contact samples (h < contact_separation) with z in the middle
+    half of ``[contact_position, turn_position]`` on each run; fits
+    ``z = c0 + c1 * d~`` by least squares.
+
+    Returns
+    -------
+    offset : float
+        ``z_in - z_out`` at the apparent deflection in the middle of the common
+        fitted range [m].
+    slope : float
+        ``beta * mean(c1)``: dz/dtheta [m/rad] (NaN when beta is NaN).
+    """
+    z = np.asarray(piezo_position)
+    d = np.asarray(apparent_deflection)
+    h = np.asarray(separation)
+    seg = np.asarray(segment)
+    if not (math.isfinite(contact_position) and turn_position > contact_position):
+        return math.nan, math.nan
+    span = turn_position - contact_position
+    lo, hi = contact_position + 0.25 * span, turn_position - 0.25 * span
+    fits = []
+    for kind in (APPROACH, RETRACT):
+        m = (seg == kind) & (h < contact_separation) & (z >= lo) & (z <= hi)
+        if np.count_nonzero(m) < 5:
+            return math.nan, math.nan
+        c1, c0 = np.polyfit(d[m], z[m], 1)
+        fits.append((c0, c1, d[m].min(), d[m].max()))
+    (a0, a1, alo, ahi), (b0, b1, blo, bhi) = fits
+    dmid = 0.5 * (max(alo, blo) + min(ahi, bhi))
+    offset = (a0 + a1 * dmid) - (b0 + b1 * dmid)
+    slope = beta * 0.5 * (a1 + b1) if math.isfinite(beta) else math.nan
+    return float(offset), float(slope)

@@ -1,0 +1,281 @@
+"""``simulate()``: run one dynamic approach-retract cycle."""
+
+from __future__ import annotations
+
+import math
+import time
+import warnings
+from typing import Callable
+
+import numpy as np
+
+from ..errors import SolverError
+from . import radau as R
+from .config import SimulationConfig
+from .drive import approach_segment, initial_state, segments
+from .events import Events, compliance_lines
+from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
+                     O_Y2, observe_array, pack_beam, pack_spring, state_size)
+from .trajectory import SolverStats, Trajectory
+
+__all__ = ["simulate", "DynamicsWarning", "H_GUARD_FRACTION", "VELOCITY_ATOL_FREQUENCY"]
+
+#: Trial states with a separation below this fraction of z0 are rejected by the
+#: force law (eq 2 would turn attractive again at h -> 0; at 0.2 z0 the
+#: soft-wall repulsion of the default parameters is already ~3 mN).
+H_GUARD_FRACTION = 0.2
+#: The absolute tolerance on velocities is ``atol * 2 pi * VELOCITY_ATOL_FREQUENCY``
+#: [Hz]: a velocity error counts like a position error over one period at this
+#: frequency. 1 MHz lies above every mode that must be resolved (the free beam,
+#: 4-65 kHz), so such modes are followed; see docs/dynamics.md for the
+#: in-contact ringing.
+VELOCITY_ATOL_FREQUENCY = 1e7
+#: Relative tolerance on positions = rtol * this factor (0: positions are
+#: controlled by atol alone; see docs/dynamics.md).
+POSITION_RTOL_FACTOR = 0.0
+#: First trial step at the start of every drive segment [s].
+INITIAL_STEP = 1e-9
+#: Steps between progress callbacks.
+PROGRESS_CHUNK = 5000
+#: Drive travel allowed per step: max(HMAX_FRACTION * h, HMAX_TRAVEL * z0).
+HMAX_FRACTION = 0.1
+HMAX_TRAVEL = 3.0
+
+
+#: Damping steps only where the contact stiffness -Fs'(h) exceeds this multiple
+#: of k: well inside the repulsive wall, away from the pull-off fold (h = z0).
+DAMP_KAPPA_RATIO = 100.0
+
+
+class DynamicsWarning(UserWarning):
+    """A simulation ran but its protocol did not do what was asked (no contact, no pull-off)."""
+
+
+def _known(overrides) -> bool:
+    return set(overrides) <= set(SimulationConfig.__dataclass_fields__)
+
+
+def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
+    """Packed model parameters for the compiled vector field."""
+    guard = H_GUARD_FRACTION * cfg.z0
+    if cfg.model == "spring":
+        return pack_spring(spring_constant=cfg.spring_constant, mass=cfg.mass, radius=cfg.radius,
+                           hamaker=cfg.hamaker, z0=cfg.z0, viscosity=cfg.viscosity, h_guard=guard)
+    xi, zeta = FRICTION_LAWS[cfg.friction].coefficients(cfg.xi, cfg.zeta)
+    return pack_beam(cfg.cantilever, m_joint=cfg.m_joint, m_base=cfg.m_base, radius=cfg.radius,
+                     hamaker=cfg.hamaker, z0=cfg.z0, viscosity=cfg.viscosity, xi=xi, zeta=zeta,
+                     h_guard=guard)
+
+
+def simulate(config: SimulationConfig | None = None, *,
+             progress: Callable[[float], None] | None = None, **overrides) -> Trajectory:
+    """Simulate one approach-dwell-retract cycle (spec sections 3 and 5).
+
+    Parameters
+    ----------
+    config : SimulationConfig, optional
+        The run; default: the paper's Fig 5 (beam, xi = 0.1 kg/s, 0.1 um/s).
+    progress : callable, optional
+        Called with the fraction of simulated time done (0..1) now and then.
+    **overrides
+        Fields of :class:`SimulationConfig` to change, e.g. ``xi=0.01``.
+
+    Returns
+    -------
+    Trajectory
+        Sampled at ``config.sample_rate``, with events and solver statistics.
+
+    Raises
+    ------
+    ParameterError
+        Bad configuration (also: start already in contact).
+    SolverError
+        The integrator failed (step size underflow, step budget, non-finite
+        state); never returns a truncated trajectory.
+
+    Warns
+    -----
+    DynamicsWarning
+        The approach never reached contact, or the retract ended in contact.
+    """
+    wall0 = time.perf_counter()
+    if config is None:
+        cfg = SimulationConfig(**overrides) if _known(overrides) else None
+    else:
+        cfg = config.replace(**overrides) if overrides else config
+    if cfg is None:
+        cfg = SimulationConfig().replace(**overrides)   # raises on the unknown names
+    model = MODEL_IDS[cfg.model]
+    n = state_size(model)
+    p = parameter_vector(cfg)
+    y = initial_state(cfg)
+    atol = np.full(n, cfg.atol)
+    atol[n // 2:] = cfg.atol * 2.0 * math.pi * VELOCITY_ATOL_FREQUENCY
+    rtolv = np.full(n, cfg.rtol)
+    rtolv[: n // 2] = cfg.rtol * POSITION_RTOL_FACTOR
+
+    app = approach_segment(cfg)
+    plan = segments(cfg)
+    t_total_max = plan[-1].t_end
+    dt = 1.0 / cfg.sample_rate
+    nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
+    ybuf = np.full((nbuf, n), np.nan)
+    s_next = np.zeros(1, dtype=np.int64)
+
+    ev = np.full(R.E_SIZE, np.nan)
+    ev[R.E_IN_CONTACT] = 0.0
+    ev[R.E_H_CONTACT] = cfg.contact_separation
+    ev[R.E_SPIKE_WINDOW] = cfg.spike_window
+    ev[R.E_JUMP_FACTOR] = cfg.jump_factor
+    work = np.zeros(R.W_SIZE)
+    Q = np.zeros((n, 3))
+    y_old = np.zeros(n)
+    J = np.zeros((n, n))
+    stats = np.zeros(R.S_SIZE, dtype=np.int64)
+    chunk = PROGRESS_CHUNK if progress is not None else 2**62
+    hmax_dz = HMAX_TRAVEL * cfg.z0
+    damp_cycles = RINGING[cfg.ringing].damp_cycles
+
+    if cfg.turn_force is not None:
+        # the load an instrument triggers on: k z2, not the ringing contact force Fz
+        term_kind, term_level = R.TERM_DEFLECTION, cfg.turn_force / cfg.force_constant
+    elif cfg.turn_deflection is not None:
+        term_kind, term_level = R.TERM_DEFLECTION, cfg.turn_deflection
+    else:
+        term_kind, term_level = R.TERM_NONE, 0.0
+
+    def run(seg, term_kind, term_level, t_total):
+        work[R.W_T] = seg.t_start
+        work[R.W_H] = INITIAL_STEP
+        work[R.W_H_OLD] = 0.0
+        work[R.W_ERR_OLD] = 0.0
+        work[R.W_HAS_SOL] = 0.0
+        work[R.W_HAVE_JAC] = 0.0
+        first = int(s_next[0])
+        while True:
+            status = R.integrate_segment(
+                model, p, seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end, y,
+                cfg.rtol, rtolv, atol, HMAX_FRACTION, hmax_dz, damp_cycles, DAMP_KAPPA_RATIO,
+                term_kind, term_level,
+                0.0, dt, s_next, ybuf, ev, work, Q, y_old, J, stats, cfg.max_steps, chunk, 0.0)
+            if status == R.PAUSED:
+                progress(min(1.0, work[R.W_T] / t_total))
+                continue
+            break
+        if status < 0:
+            t = work[R.W_T]
+            raise SolverError(
+                f"integration failed ({R.STATUS[status]}) at t = {t:.6g} s, "
+                f"z = {seg.position(t) * 1e9:.4g} nm in the {('approach', 'retract', 'dwell')[seg.kind]}"
+                f" after {stats[R.S_STEPS]} steps; try a tighter rtol/atol or a larger max_steps")
+        return status, first, int(s_next[0])
+
+    labels = []
+    status, a, b = run(app, term_kind, term_level, t_total_max)
+    labels.append((app.kind, a, b))
+    turned_at_load = status == R.TERMINAL
+    if turned_at_load:
+        t_turn = float(ev[R.E_TERM_T])
+        plan = segments(cfg, t_turn, float(app.position(t_turn)))
+    else:
+        plan = segments(cfg)
+    t_total = plan[-1].t_end
+    for seg in plan[1:]:
+        _, a, b = run(seg, R.TERM_NONE, 0.0, t_total)
+        labels.append((seg.kind, a, b))
+    if progress is not None:
+        progress(1.0)
+    n_samp = int(s_next[0])
+    Y = ybuf[:n_samp]
+    if not np.all(np.isfinite(Y)):
+        raise SolverError("the sampled trajectory contains non-finite values; "
+                          "try a tighter rtol/atol")
+
+    # --- columns
+    tt = np.arange(n_samp) * dt
+    seg_code = np.empty(n_samp, dtype=np.int8)
+    zd = np.empty(n_samp)
+    vd = np.empty(n_samp)
+    for (kind, a, b), seg in zip(labels, plan):
+        seg_code[a:b] = kind
+        zd[a:b] = seg.position(tt[a:b])
+        vd[a:b] = seg.velocity
+    obs = observe_array(model, p, zd, vd, Y)
+    beta = cfg.calibration_factor
+    deflection = obs[:, O_DEFL]
+    if model == MODEL_BEAM:
+        angle = obs[:, O_THETA]
+        apparent = beta * angle
+    else:
+        angle = np.full(n_samp, np.nan)
+        apparent = deflection.copy()
+    separation = obs[:, O_H]
+
+    events = _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code)
+    if not math.isfinite(events.contact_time):
+        warnings.warn(
+            f"the approach never reached contact (h < {cfg.contact_separation * 1e9:.3g} nm) "
+            f"before turning at z = {events.turn_position * 1e9:.4g} nm; raise turn",
+            DynamicsWarning, stacklevel=2)
+    elif ev[R.E_IN_CONTACT] == 1.0:
+        warnings.warn(
+            f"the retract ended in contact at z = {cfg.end * 1e9:.4g} nm (no pull-off); "
+            "lower end", DynamicsWarning, stacklevel=2)
+    if cfg.turn_force is not None or cfg.turn_deflection is not None:
+        if not turned_at_load:
+            what = "turn_force" if cfg.turn_force is not None else "turn_deflection"
+            warnings.warn(f"{what} was not reached before the turn limit "
+                          f"z = {cfg.turn * 1e9:.4g} nm; turned there", DynamicsWarning,
+                          stacklevel=2)
+
+    solver = SolverStats(
+        status="success", method="Radau IIA (order 5), compiled, analytic Jacobian",
+        steps=int(stats[R.S_STEPS]), accepted=int(stats[R.S_ACCEPTED]),
+        rejected=int(stats[R.S_REJECTED]), rhs_evaluations=int(stats[R.S_NFEV]),
+        jacobian_evaluations=int(stats[R.S_NJEV]), lu_decompositions=int(stats[R.S_NLU]),
+        damping_steps=int(stats[R.S_DAMPED]), newton_failures=int(stats[R.S_NEWTON_FAIL]),
+        wall_time=time.perf_counter() - wall0)
+    return Trajectory(
+        time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
+        separation=separation, apparent_separation=apparent - zd, angle=angle,
+        lateral_position=obs[:, O_Y2], normal_force=obs[:, O_FZ], friction_force=obs[:, O_FY],
+        segment=seg_code, calibration_factor=beta, spring_constant=cfg.force_constant,
+        config=cfg, events=events, solver=solver)
+
+
+def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code) -> Events:
+    contact = math.isfinite(ev[R.E_CONTACT_T])
+    jump = math.isfinite(ev[R.E_JUMP_T])
+    if not contact:
+        jumped, note = None, "no contact: the approach turned before the surfaces touched"
+    elif jump:
+        jumped, note = True, (f"jump-in: dh/dt < -{cfg.jump_factor:g} dz/dt at "
+                              f"h = {ev[R.E_JUMP_H] * 1e9:.4g} nm")
+    else:
+        jumped, note = False, ("no jump: crept into contact (dh/dt never fell below "
+                               f"-{cfg.jump_factor:g} dz/dt before contact)")
+    turn = plan[0]
+    offset, slope = (math.nan, math.nan)
+    if contact:
+        offset, slope = compliance_lines(zd, apparent, separation, seg_code,
+                                         cfg.contact_separation, ev[R.E_CONTACT_Z],
+                                         turn.z_end, beta if model == MODEL_BEAM else math.nan)
+    if model == MODEL_BEAM:
+        min_app, min_app_z = beta * ev[R.E_MIN_THETA], ev[R.E_MIN_THETA_Z]
+        spike, spike_t, spike_z = beta * ev[R.E_SPIKE_THETA], ev[R.E_SPIKE_T], ev[R.E_SPIKE_Z]
+    else:
+        min_app, min_app_z = ev[R.E_MIN_DEFL], ev[R.E_MIN_DEFL_Z]
+        spike = spike_t = spike_z = math.nan
+    f = float
+    return Events(
+        jumped=jumped, jump_in_note=note,
+        jump_in_time=f(ev[R.E_JUMP_T]), jump_in_position=f(ev[R.E_JUMP_Z]),
+        jump_in_separation=f(ev[R.E_JUMP_H]),
+        contact_time=f(ev[R.E_CONTACT_T]), contact_position=f(ev[R.E_CONTACT_Z]),
+        pull_off_time=f(ev[R.E_PULL_T]), pull_off_position=f(ev[R.E_PULL_Z]),
+        pull_off_force=f(ev[R.E_MIN_FZ]) if contact else math.nan,
+        min_deflection=f(ev[R.E_MIN_DEFL]), min_deflection_position=f(ev[R.E_MIN_DEFL_Z]),
+        min_apparent_deflection=f(min_app), min_apparent_deflection_position=f(min_app_z),
+        spike_height=f(spike), spike_time=f(spike_t), spike_position=f(spike_z),
+        hysteresis_offset=f(offset), compliance_slope=f(slope),
+        turn_time=f(turn.t_end), turn_position=f(turn.z_end))

@@ -1,0 +1,140 @@
+"""The compiled Radau IIA integrator: order, agreement with scipy, failure handling."""
+
+from __future__ import annotations
+
+import math
+import sys
+
+import numpy as np
+import pytest
+
+from afmforce.dynamics import SimulationConfig, simulate
+from afmforce.dynamics import models as M
+from afmforce.dynamics import radau as R
+from afmforce.dynamics.drive import initial_state
+from afmforce.dynamics.reference import reference_solve
+from afmforce.errors import SolverError
+
+SIM = sys.modules["afmforce.dynamics.simulate"]
+
+
+def _fixed_step(cfg, t1, nsteps):
+    """State at t1 from fixed-step Radau IIA on the approach from rest at cfg.start."""
+    model = M.MODEL_IDS[cfg.model]
+    p = SIM.parameter_vector(cfg)
+    y = initial_state(cfg)
+    n = y.size
+    atol = np.full(n, 1e-19)
+    atol[n // 2:] = 1e-19 * 1e4
+    rtolv = np.zeros(n)
+    ev = np.full(R.E_SIZE, np.nan)
+    ev[R.E_IN_CONTACT] = 0.0
+    ev[R.E_H_CONTACT] = 1e-9
+    ev[R.E_SPIKE_WINDOW] = 1e-3
+    ev[R.E_JUMP_FACTOR] = 2.0
+    work = np.zeros(R.W_SIZE)
+    h = t1 / nsteps
+    work[R.W_H] = h
+    stats = np.zeros(R.S_SIZE, dtype=np.int64)
+    status = R.integrate_segment(
+        model, p, R.APPROACH, 0.0, cfg.start, cfg.velocity, t1, y, 1e-12, rtolv, atol,
+        0.0, 1.0, 0.0, 0.0, R.TERM_NONE, 0.0, 0.0, 1.0, np.zeros(1, dtype=np.int64),
+        np.zeros((0, n)), ev, work, np.zeros((n, 3)), np.zeros(n), np.zeros((n, n)), stats,
+        10**7, 2**62, h)
+    assert status == R.DONE
+    assert stats[R.S_ACCEPTED] == nsteps
+    return y
+
+
+def test_convergence_order_is_five_on_a_smooth_window():
+    """Radau IIA has order 5 (Hairer & Wanner IV.5): halving the step divides the error by ~32.
+
+    Window: the Fig 1 spring (m = 10 ug, k = 0.21 N/m) released at rest at z = -12 nm while
+    the drive moves at 10 um/s, for 0.6 ms (the 730 Hz mode is excited: a smooth,
+    non-trivial solution).
+    """
+    cfg = SimulationConfig(model="spring", velocity=10e-6, start=-12e-9, turn=0.0, end=-100e-9)
+    t1 = 0.6e-3
+    ref = _fixed_step(cfg, t1, 1024)
+    ns = (4, 8, 16, 32)
+    err = [abs(_fixed_step(cfg, t1, n)[0] - ref[0]) for n in ns]
+    slopes = [math.log2(err[i] / err[i + 1]) for i in range(len(ns) - 1)]
+    assert all(4.5 < s < 5.6 for s in slopes), (err, slopes)
+
+
+def test_fig5_approach_matches_scipy_radau_at_rtol_1e8(sim):
+    """Approach of Fig 5 through the jump-in: sampled deflection and angle, and the events,
+    against scipy solve_ivp(Radau, rtol 1e-8) of an independent implementation."""
+    tr = sim(sample_rate=20e3)
+    t = tr.time[(tr.time < tr.events.contact_time)]
+    ref = reference_solve(SimulationConfig(), rtol=1e-8, atol=1e-15,
+                          t_stop=tr.events.contact_time + 1e-4, sample_times=t)
+    np.testing.assert_allclose(tr.deflection[: t.size], ref.deflection, rtol=0, atol=2e-12)
+    beta = tr.calibration_factor
+    np.testing.assert_allclose(tr.apparent_deflection[: t.size], beta * ref.angle, rtol=0,
+                               atol=2e-12)
+    e = tr.events
+    assert e.jump_in_position == pytest.approx(ref.jump_in_position, abs=0.002e-9)
+    assert e.contact_position == pytest.approx(ref.contact_position, abs=0.002e-9)
+    assert e.min_apparent_deflection == pytest.approx(ref.min_apparent_deflection, abs=0.002e-9)
+    assert e.min_deflection == pytest.approx(ref.min_deflection, abs=0.002e-9)
+
+
+def test_fig1_spring_approach_matches_scipy_radau_at_rtol_1e8(sim):
+    """Fig 1 spring at 10 um/s (inertia matters) up to contact, against scipy (rtol 1e-8)."""
+    kw = dict(model="spring", velocity=10e-6, start=-30e-9, turn=2e-9, end=-150e-9,
+              sample_rate=1e6)
+    tr = sim(**kw)
+    t = tr.time[tr.time < tr.events.contact_time]
+    ref = reference_solve(SimulationConfig(**kw), rtol=1e-8, atol=1e-16,
+                          t_stop=tr.events.contact_time + 1e-6, sample_times=t)
+    np.testing.assert_allclose(tr.deflection[: t.size], ref.deflection, rtol=0, atol=5e-12)
+    assert tr.events.jump_in_position == pytest.approx(ref.jump_in_position, abs=0.005e-9)
+
+
+def test_full_cycle_matches_tight_reference(fig5, fig5_tight):
+    """Default tolerances against the same integrator at a 100x tighter atol (whole cycle)."""
+    a, b = fig5.events, fig5_tight.events
+    for name, tol in (("min_apparent_deflection", 0.01e-9), ("jump_in_position", 0.01e-9),
+                      ("contact_position", 0.01e-9), ("hysteresis_offset", 0.002e-9),
+                      ("spike_height", 0.02e-9), ("pull_off_position", 0.5e-9),
+                      ("pull_off_force", 0.01e-9)):
+        assert getattr(a, name) == pytest.approx(getattr(b, name), abs=tol), name
+    # sampled curves before contact (no ringing there) agree too
+    m = fig5.time < fig5.events.contact_time
+    np.testing.assert_allclose(fig5.deflection[m], fig5_tight.deflection[m], atol=0.01e-9)
+    np.testing.assert_allclose(fig5.apparent_deflection[m], fig5_tight.apparent_deflection[m],
+                               atol=0.01e-9)
+
+
+def test_ringing_damp_and_resolve_agree(sim):
+    """Numerical damping of the in-contact ringing leaves the measured quantities unchanged."""
+    a = sim(atol=1e-13).events
+    b = sim(atol=1e-13, ringing="resolve").events
+    for name in ("min_apparent_deflection", "jump_in_position", "hysteresis_offset",
+                 "spike_height", "pull_off_position"):
+        assert getattr(a, name) == pytest.approx(getattr(b, name), abs=0.005e-9), name
+
+
+def test_progress_pauses_do_not_change_the_result(monkeypatch, sim):
+    """Pausing for progress reports resumes the integrator exactly (same steps, same samples)."""
+    monkeypatch.setattr(SIM, "PROGRESS_CHUNK", 97)
+    seen = []
+    a = simulate(xi=0.01, velocity=1e-6, progress=seen.append)
+    b = sim(xi=0.01, velocity=1e-6)
+    assert a.solver.steps == b.solver.steps
+    np.testing.assert_array_equal(a.deflection, b.deflection)
+    assert len(seen) > 10 and seen[-1] == 1.0 and all(np.diff(seen) >= 0)
+
+
+def test_failed_solve_raises_instead_of_returning():
+    """A truncated solve never returns quietly (step budget exhausted -> SolverError)."""
+    with pytest.raises(SolverError, match="max_steps"):
+        simulate(max_steps=50)
+
+
+def test_solver_statistics_are_reported(fig5):
+    s = fig5.solver
+    assert s.status == "success"
+    assert s.accepted + s.rejected == s.steps
+    assert s.rhs_evaluations > s.steps and s.jacobian_evaluations > 0 and s.wall_time > 0
