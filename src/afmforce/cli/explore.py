@@ -1,0 +1,42 @@
+"""``afmforce explore``: write the interactive page (one self-contained HTML file)."""
+
+from __future__ import annotations
+
+import argparse
+
+from .._files import check_writable
+from .common import quantity
+
+
+def _list(dimension: str, flag: str):
+    conv = quantity(dimension, flag)
+
+    def parse(text: str) -> tuple[float, ...]:
+        return tuple(conv(t) for t in text.split(",") if t.strip())
+
+    return parse
+
+
+def register(sub) -> None:
+    p = sub.add_parser("explore", help="write an interactive HTML page: speed x friction on the Fig 5-6 run",
+                       description="Simulate a grid of the paper's Fig 5-6 runs (speeds x friction "
+                                   "coefficients) and write one self-contained HTML page with sliders.")
+    p.add_argument("--out", default="afmforce-explore.html", help="output HTML file")
+    p.add_argument("--velocities", type=_list("velocity", "--velocities"), default=None,
+                   help="comma-separated speeds (default 0.1,0.3,1,3,10 um/s), e.g. 0.1um/s,1um/s")
+    p.add_argument("--xis", type=_list("damping", "--xis"), default=None,
+                   help="comma-separated friction coefficients (default 0.001,0.01,0.1 kg/s)")
+    p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..explore import build_page, compute_grid
+    from ..explore.page import DEFAULT_VELOCITIES, DEFAULT_XIS
+
+    check_writable(args.out, args.force)
+    grid = compute_grid(args.velocities or DEFAULT_VELOCITIES, args.xis or DEFAULT_XIS)
+    path = build_page(args.out, grid, force=args.force)
+    print(f"wrote {path} ({len(grid.runs)} simulated runs: {len(grid.velocities)} speeds x "
+          f"{len(grid.xis)} friction coefficients); open it in a browser")
+    return 0
