@@ -1,0 +1,217 @@
+"""Where the chunks of a sweep run: in this process, or on a Dask cluster.
+
+Both executors offer the same method, :meth:`imap_unordered`, that runs
+``fn(*args)`` for each task and yields ``Outcome`` records as tasks finish. An
+exception raised by a task is returned in its outcome, not raised, so that the
+other tasks go on; ``KeyboardInterrupt`` stops everything.
+"""
+
+from __future__ import annotations
+
+import itertools
+import logging
+import os
+import traceback
+from dataclasses import dataclass
+from typing import Any, Callable, Hashable, Iterable, Iterator
+
+from ..errors import ParameterError
+
+__all__ = ["Outcome", "SerialExecutor", "DaskExecutor", "make_executor", "available_cores"]
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """Result of one task: its key, and either its value or the error it raised."""
+
+    key: Hashable
+    value: Any = None
+    error: BaseException | None = None
+    traceback: str = ""
+
+
+def available_cores() -> int:
+    """CPU cores this process may use."""
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:  # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+class SerialExecutor:
+    """Run tasks one after the other in this process (tests, debugging, tiny sweeps)."""
+
+    n_workers = 1
+    description = "serial (in this process)"
+
+    def imap_unordered(self, fn: Callable, tasks: Iterable[tuple[Hashable, tuple]]) -> Iterator[Outcome]:
+        for key, args in tasks:
+            try:
+                value = fn(*args)
+            except Exception as exc:  # recorded; KeyboardInterrupt propagates
+                yield Outcome(key, error=exc, traceback=traceback.format_exc())
+            else:
+                yield Outcome(key, value)
+
+    def close(self) -> None:
+        """Nothing to release."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+class DaskExecutor:
+    """Run tasks on a ``dask.distributed`` cluster.
+
+    Without ``scheduler`` or ``client`` a :class:`distributed.LocalCluster` of
+    ``workers`` single-threaded processes (default: one per available core) is
+    started on the loopback interface when first needed and closed by
+    :meth:`close`. ``scheduler="tcp://host:port"`` connects to a running
+    cluster instead; ``client`` uses an existing :class:`distributed.Client`
+    (which is left open).
+
+    At most ``window`` tasks are in flight at once (default: three per worker
+    thread), so that a long iterable of tasks is never held in memory whole.
+    """
+
+    def __init__(self, workers: int | None = None, scheduler: str | None = None, client=None,
+                 window: int | None = None) -> None:
+        if workers is not None and int(workers) < 1:
+            raise ParameterError(f"--workers must be at least 1, got {workers}")
+        if client is not None and scheduler is not None:
+            raise ParameterError("give a scheduler address or a client, not both")
+        self.workers = None if workers is None else int(workers)
+        self.scheduler = scheduler
+        self._client = client
+        self._own_client = client is None
+        self._cluster = None
+        self._window = window
+
+    @property
+    def client(self):
+        """The :class:`distributed.Client`, started on first use."""
+        if self._client is None:
+            from distributed import Client, LocalCluster
+
+            if self.scheduler:
+                try:
+                    self._client = Client(self.scheduler, timeout="20s")
+                except (OSError, TimeoutError) as exc:
+                    raise ParameterError(
+                        f"--scheduler {self.scheduler}: cannot reach the Dask scheduler ({exc}); "
+                        "check the address or start one with `dask scheduler`"
+                    ) from None
+            else:
+                import dask
+
+                # no dashboard, so no statistical profiler either: it samples the
+                # task thread every 10 ms and slows short compiled runs measurably
+                with dask.config.set({"distributed.worker.profile.enabled": False}):
+                    self._cluster = LocalCluster(
+                        n_workers=self.workers or available_cores(), threads_per_worker=1, processes=True,
+                        host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR,
+                    )
+                self._client = Client(self._cluster)
+        return self._client
+
+    @property
+    def n_workers(self) -> int:
+        """Number of worker threads in the cluster."""
+        return max(1, sum(self.client.nthreads().values()))
+
+    @property
+    def description(self) -> str:
+        if self.scheduler:
+            return f"Dask cluster at {self.scheduler} ({self.n_workers} worker threads)"
+        if not self._own_client:
+            return f"Dask client {self.client.scheduler.address} ({self.n_workers} worker threads)"
+        return f"local Dask cluster ({self.n_workers} worker processes)"
+
+    def imap_unordered(self, fn: Callable, tasks: Iterable[tuple[Hashable, tuple]]) -> Iterator[Outcome]:
+        from distributed import as_completed
+
+        pending = iter(tasks)
+        try:
+            first = next(pending)
+        except StopIteration:
+            return  # nothing to run: do not start a cluster
+        pending = itertools.chain([first], pending)
+        client = self.client
+        window = self._window or 3 * self.n_workers
+        keys: dict[str, Hashable] = {}
+        done = as_completed()
+
+        def submit_next() -> bool:
+            try:
+                key, args = next(pending)
+            except StopIteration:
+                return False
+            future = client.submit(fn, *args, pure=False)
+            keys[future.key] = key
+            done.add(future)
+            return True
+
+        for _ in range(window):
+            if not submit_next():
+                break
+        try:
+            for future in done:
+                key = keys.pop(future.key)
+                try:
+                    value = future.result()
+                except Exception as exc:
+                    tb = future.traceback()
+                    text = "".join(traceback.format_tb(tb)) if tb is not None else ""
+                    yield Outcome(key, error=exc, traceback=text + f"{type(exc).__name__}: {exc}\n")
+                else:
+                    yield Outcome(key, value)
+                finally:
+                    future.release()
+                submit_next()
+        finally:
+            for future in list(done.futures):
+                future.cancel()
+
+    def close(self) -> None:
+        """Close the client and the local cluster this executor started."""
+        if self._own_client and self._client is not None:
+            self._client.close()
+            self._client = None
+        if self._cluster is not None:
+            self._cluster.close()
+            self._cluster = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+
+def make_executor(executor=None, *, workers: int | None = None, scheduler: str | None = None):
+    """Resolve an executor argument; returns ``(executor, owned)``.
+
+    ``executor`` may be an executor object, ``"serial"``, ``"dask"``/``"local"``/None
+    (a Dask cluster: local unless ``scheduler`` is given) or a
+    :class:`distributed.Client`. ``owned`` says whether the caller must close it.
+    """
+    if workers is not None and scheduler:
+        raise ParameterError("--workers sizes the local cluster; a --scheduler cluster has its own workers")
+    if executor is None or executor in ("dask", "local"):
+        return DaskExecutor(workers=workers, scheduler=scheduler), True
+    if executor == "serial":
+        if scheduler:
+            raise ParameterError("--serial and --scheduler exclude each other")
+        return SerialExecutor(), True
+    if hasattr(executor, "imap_unordered"):
+        return executor, False
+    try:
+        from distributed import Client
+    except ImportError:  # pragma: no cover - dask is a dependency
+        Client = ()
+    if isinstance(executor, Client):
+        return DaskExecutor(client=executor), False
+    raise ParameterError(f"unknown executor {executor!r}; use 'serial', 'dask' or a distributed.Client")
