@@ -97,9 +97,3 @@ def test_bad_input_one_line_exit_2(capsys, argv, fragment):
     assert fragment in err
     assert len(err.strip().splitlines()) == 1
     assert "Traceback" not in err
-
-
-def test_demo_table(capsys):
-    code, out, _ = run(capsys, ["demo"])
-    assert code == 0
-    assert "1.3e+05" in out and "nm/rad" in out
