@@ -1,0 +1,198 @@
+"""Compiled numerical kernels shared by the analysis steps and the batch core.
+
+numba-compiled (``cache=True``) loops over one curve; :mod:`.batch` calls the
+same kernels for many curves. Every kernel is O(n).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+__all__ = ["running_mean", "two_line_split", "line_fit", "robust_line", "largest_step", "mad_sigma"]
+
+
+@njit(cache=True)
+def running_mean(x: np.ndarray, window: int) -> np.ndarray:
+    """Centered running average of ``window`` points (odd), shrinking symmetrically at the ends.
+
+    The shrinking window keeps a straight line exactly straight, so a linear
+    ramp is unchanged and a digitization staircase becomes a line (the paper's
+    11-point smoothing of the position detector, section 3.1).
+    """
+    n = x.size
+    half = window // 2
+    c = np.empty(n + 1)
+    c[0] = 0.0
+    for i in range(n):
+        c[i + 1] = c[i] + x[i]
+    out = np.empty(n)
+    for i in range(n):
+        h = min(half, i, n - 1 - i)
+        out[i] = (c[i + h + 1] - c[i - h]) / (2 * h + 1)
+    return out
+
+
+@njit(cache=True)
+def two_line_split(x: np.ndarray, y: np.ndarray, min_points: int) -> int:
+    """Index k minimising the summed squared residuals of two independent lines.
+
+    Lines are fitted to ``[0, k)`` and ``[k, n)``; both parts hold at least
+    ``min_points`` samples. Returns -1 if the curve is too short. Data are
+    centred and scaled first, so metres and volts do not lose precision.
+    """
+    n = x.size
+    if n < 2 * min_points:
+        return -1
+    mx = x.mean()
+    my = y.mean()
+    sx = 0.0
+    sy = 0.0
+    for i in range(n):
+        sx = max(sx, abs(x[i] - mx))
+        sy = max(sy, abs(y[i] - my))
+    sx = sx if sx > 0 else 1.0
+    sy = sy if sy > 0 else 1.0
+    c = np.zeros((n + 1, 5))  # cumulative sums of x, y, xx, xy, yy
+    for i in range(n):
+        u = (x[i] - mx) / sx
+        v = (y[i] - my) / sy
+        c[i + 1, 0] = c[i, 0] + u
+        c[i + 1, 1] = c[i, 1] + v
+        c[i + 1, 2] = c[i, 2] + u * u
+        c[i + 1, 3] = c[i, 3] + u * v
+        c[i + 1, 4] = c[i, 4] + v * v
+    best = np.inf
+    kbest = -1
+    for k in range(min_points, n - min_points + 1):
+        sse = 0.0
+        for part in range(2):
+            if part == 0:
+                m = k
+                s0, s1, s2, s3, s4 = c[k, 0], c[k, 1], c[k, 2], c[k, 3], c[k, 4]
+            else:
+                m = n - k
+                s0 = c[n, 0] - c[k, 0]
+                s1 = c[n, 1] - c[k, 1]
+                s2 = c[n, 2] - c[k, 2]
+                s3 = c[n, 3] - c[k, 3]
+                s4 = c[n, 4] - c[k, 4]
+            sxx = s2 - s0 * s0 / m
+            sxy = s3 - s0 * s1 / m
+            syy = s4 - s1 * s1 / m
+            r = syy - (sxy * sxy / sxx if sxx > 1e-300 else 0.0)
+            sse += max(r, 0.0)
+        if sse < best:
+            best = sse
+            kbest = k
+    return kbest
+
+
+@njit(cache=True)
+def line_fit(x: np.ndarray, y: np.ndarray, w: np.ndarray):
+    """Weighted least-squares line ``y = a + b x``; returns ``(a, b)`` (NaN if degenerate)."""
+    sw = 0.0
+    sx = 0.0
+    sy = 0.0
+    for i in range(x.size):
+        sw += w[i]
+        sx += w[i] * x[i]
+        sy += w[i] * y[i]
+    if sw <= 0:
+        return np.nan, np.nan
+    mx = sx / sw
+    my = sy / sw
+    sxx = 0.0
+    sxy = 0.0
+    for i in range(x.size):
+        dx = x[i] - mx
+        sxx += w[i] * dx * dx
+        sxy += w[i] * dx * (y[i] - my)
+    if sxx <= 0:
+        return my, np.nan
+    b = sxy / sxx
+    return my - b * mx, b
+
+
+@njit(cache=True)
+def mad_sigma(r: np.ndarray) -> float:
+    """Robust standard deviation ``1.4826 * median(|r - median(r)|)``."""
+    if r.size == 0:
+        return np.nan
+    med = np.median(r)
+    return 1.4826 * np.median(np.abs(r - med))
+
+
+@njit(cache=True)
+def robust_line(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
+    """Line fit with Tukey bisquare weights (IRLS), robust to spikes and transients.
+
+    Returns
+    -------
+    a, b : float
+        Intercept and slope of ``y = a + b x``.
+    se_a, se_b : float
+        Standard errors (from the weighted residual variance).
+    sigma : float
+        Robust scale of the residuals.
+    n_used : int
+        Number of samples with non-zero weight.
+    """
+    n = x.size
+    w = np.ones(n)
+    a, b = line_fit(x, y, w)
+    sigma = np.nan
+    for _ in range(n_iter):
+        r = y - (a + b * x)
+        med = np.median(r)  # outliers pull least squares off: recentre on the bulk first
+        a += med
+        r -= med
+        sigma = mad_sigma(r)
+        if not sigma > 0:
+            break
+        w_new = np.empty(n)
+        for i in range(n):
+            u = r[i] / (tuning * sigma)
+            w_new[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
+        if w_new.sum() <= 2.0:
+            break
+        w = w_new
+        a2, b2 = line_fit(x, y, w)
+        if not (np.isfinite(a2) and np.isfinite(b2)):
+            break
+        a, b = a2, b2
+    # standard errors of the weighted fit
+    sw = 0.0
+    sx = 0.0
+    n_used = 0
+    for i in range(n):
+        sw += w[i]
+        sx += w[i] * x[i]
+        if w[i] > 0:
+            n_used += 1
+    mx = sx / sw if sw > 0 else np.nan
+    sxx = 0.0
+    ssr = 0.0
+    for i in range(n):
+        sxx += w[i] * (x[i] - mx) ** 2
+        ssr += w[i] * (y[i] - a - b * x[i]) ** 2
+    dof = max(n_used - 2, 1)
+    s2 = ssr / max(sw, 1e-300) * n_used / dof
+    se_b = np.sqrt(s2 / sxx) if sxx > 0 else np.nan
+    se_a = np.sqrt(s2 * (1.0 / max(n_used, 1) + mx * mx / sxx)) if sxx > 0 else np.nan
+    if not sigma > 0:
+        sigma = np.sqrt(s2)
+    return a, b, se_a, se_b, sigma, n_used
+
+
+@njit(cache=True)
+def largest_step(d: np.ndarray, lo: int, hi: int, sign: float) -> int:
+    """Index i in [lo, hi-1) maximising ``sign * (d[i+1] - d[i])`` (-1 if empty)."""
+    best = -np.inf
+    ib = -1
+    for i in range(max(lo, 0), min(hi, d.size) - 1):
+        s = sign * (d[i + 1] - d[i])
+        if s > best:
+            best = s
+            ib = i
+    return ib

@@ -1,0 +1,274 @@
+"""Constant compliance: robust lines, calibration factor, run shift, friction signature.
+
+* The constant-compliance line of each run (signal against position in contact)
+  is fitted robustly (Tukey bisquare, :func:`~._numeric.robust_line`).
+* Its slope calibrates the deflection: for a signal in volts the calibration
+  factor (InvOLS) is ``1 / slope`` [m/V] (paper section 3.1: the optical lever
+  is calibrated by the constant-compliance slope; the calibration factor beta
+  of eq 15 is the same number per radian).
+* The inward run is shifted along z to overlay the outward line (Fig 9: "+2,
+  +4, +7 nm"; Fig 7C: "+57 nm"); the shift is the hysteresis.
+* The two lines carry friction's signature (sections 2.2.2-2.2.4): a parallel
+  offset (constant friction, eq 16), different slopes (friction proportional to
+  load, eqs 18-19), a negative slope (pinned tip, eqs 20-21), or none.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..errors import AnalysisError, ParameterError
+from ._numeric import robust_line
+from .regions import RunRegions
+
+__all__ = ["ComplianceLine", "ComplianceResult", "fit_compliance", "CalibrationResult", "calibrate",
+           "ShiftResult", "compliance_shift", "FrictionSignature", "friction_signature"]
+
+
+@dataclass(frozen=True)
+class ComplianceLine:
+    """Constant-compliance line ``s = intercept + slope z`` of one run.
+
+    Attributes
+    ----------
+    intercept : float  [unit]
+    slope : float  [unit/m]
+    intercept_se, slope_se : float  standard errors [unit], [unit/m]
+    sigma : float  robust residual scale [unit]
+    n_points : int  samples with non-zero weight [-]
+    z_min, z_max : float  position range fitted [m]
+    s_min, s_max : float  signal range fitted [unit]
+    """
+
+    intercept: float
+    slope: float
+    intercept_se: float
+    slope_se: float
+    sigma: float
+    n_points: int
+    z_min: float
+    z_max: float
+    s_min: float
+    s_max: float
+
+    def position_at(self, s: float) -> float:
+        """Position [m] where the line reaches signal ``s``."""
+        return (s - self.intercept) / self.slope
+
+    def position_se(self) -> float:
+        """Standard error of the line's position at its centre [m]."""
+        return self.sigma / (abs(self.slope) * math.sqrt(max(self.n_points, 1)))
+
+
+@dataclass(frozen=True)
+class ComplianceResult:
+    """Both constant-compliance lines (before any shift) and the signal unit."""
+
+    approach: ComplianceLine
+    retract: ComplianceLine
+    unit: str
+
+
+def _fit_line(z: np.ndarray, s: np.ndarray, run: RunRegions) -> ComplianceLine:
+    idx = run.index[run.compliance & ~run.saturated]
+    if idx.size < 3:
+        raise AnalysisError(f"the {run.kind} constant-compliance region has {idx.size} samples; need 3")
+    x, y = z[idx], s[idx]
+    xm = x.mean()
+    a, b, se_a, se_b, sigma, n_used = robust_line(x - xm, y)
+    if not np.isfinite(b) or b == 0:
+        raise AnalysisError(f"the {run.kind} constant-compliance line is degenerate (zero or undefined slope)")
+    return ComplianceLine(intercept=float(a - b * xm), slope=float(b),
+                          intercept_se=float(math.hypot(se_a, se_b * xm)), slope_se=float(se_b),
+                          sigma=float(sigma), n_points=int(n_used), z_min=float(x.min()),
+                          z_max=float(x.max()), s_min=float(y.min()), s_max=float(y.max()))
+
+
+def fit_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract: RunRegions,
+                   unit: str) -> ComplianceResult:
+    """Fit the constant-compliance line of both runs."""
+    return ComplianceResult(approach=_fit_line(z, s, approach), retract=_fit_line(z, s, retract), unit=unit)
+
+
+@dataclass(frozen=True)
+class CalibrationResult:
+    """Deflection calibration: deflection [m] = signal x ``factor``.
+
+    Attributes
+    ----------
+    factor : float
+        Calibration factor used [m per signal unit] (m/V for volts: the InvOLS).
+    factor_fit : float
+        ``1 / compliance slope`` [m per signal unit] (hard contact assumed).
+    factor_metadata : float
+        From the file or the user (sensitivity [m/V], or 1/k [m/N]); NaN if unknown.
+    source : str
+        ``"fit"`` or ``"metadata"``: which factor is used.
+    compliance_slope : float
+        Slope used for ``factor_fit`` [signal unit/m].
+    slope_ratio : float
+        Approach slope / retract slope [-].
+    spring_constant_from_slope : float
+        For force signals: the slope itself [N/m] (NaN otherwise).
+    unit : str
+    """
+
+    factor: float
+    factor_fit: float
+    factor_metadata: float
+    source: str
+    compliance_slope: float
+    slope_ratio: float
+    spring_constant_from_slope: float
+    unit: str
+
+
+def _metadata_factor(unit: str, metadata: Mapping[str, Any]) -> float:
+    if unit == "V":
+        return float(metadata.get("sensitivity", math.nan))
+    if unit == "m":
+        return 1.0
+    k = metadata.get("spring_constant")
+    return 1.0 / float(k) if k else math.nan
+
+
+def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, source: str = "auto",
+              run: str = "approach") -> CalibrationResult:
+    """Calibration factor from the compliance slope and/or the metadata.
+
+    ``source="auto"`` uses the file's or user's calibration when there is one
+    (sensitivity for volts; none needed for metres; 1/k for newtons) and the
+    fitted slope otherwise. ``run`` picks the slope: ``"approach"``,
+    ``"retract"`` or ``"both"`` (inverse-variance mean).
+    """
+    if source not in ("auto", "fit", "metadata"):
+        raise ParameterError(f"calibration source must be auto, fit or metadata, got {source!r}")
+    a, r = compliance.approach, compliance.retract
+    if run == "approach":
+        slope = a.slope
+    elif run == "retract":
+        slope = r.slope
+    elif run == "both":
+        wa = 1.0 / a.slope_se**2 if a.slope_se > 0 else 1.0
+        wr = 1.0 / r.slope_se**2 if r.slope_se > 0 else 1.0
+        slope = (wa * a.slope + wr * r.slope) / (wa + wr)
+    else:
+        raise ParameterError(f"calibration run must be approach, retract or both, got {run!r}")
+    unit = compliance.unit
+    f_fit = 1.0 / slope
+    f_meta = _metadata_factor(unit, metadata)
+    if source == "metadata" and not math.isfinite(f_meta):
+        raise AnalysisError("no calibration in the file: give the sensitivity (--sensitivity) "
+                            "or use the fitted compliance slope (source='fit')")
+    use_meta = source == "metadata" or (source == "auto" and math.isfinite(f_meta))
+    return CalibrationResult(factor=f_meta if use_meta else f_fit, factor_fit=f_fit, factor_metadata=f_meta,
+                             source="metadata" if use_meta else "fit", compliance_slope=slope,
+                             slope_ratio=a.slope / r.slope,
+                             spring_constant_from_slope=slope if unit == "N" else math.nan, unit=unit)
+
+
+@dataclass(frozen=True)
+class ShiftResult:
+    """Shift of the inward run along z that overlays the compliance lines.
+
+    Attributes
+    ----------
+    shift : float
+        Added to the inward positions [m] (``z_out - z_in`` at equal signal).
+    shift_se : float
+        Standard error [m].
+    reference_signal : float
+        Signal level where the lines are compared [signal unit].
+    applied : bool
+        Whether the inward run was moved.
+    """
+
+    shift: float
+    shift_se: float
+    reference_signal: float
+    applied: bool
+
+
+def compliance_shift(compliance: ComplianceResult, applied: bool = True) -> ShiftResult:
+    """``z_out(s*) - z_in(s*)`` at the middle ``s*`` of the signal range both lines share."""
+    a, r = compliance.approach, compliance.retract
+    lo, hi = max(a.s_min, r.s_min), min(a.s_max, r.s_max)
+    if hi < lo:
+        lo, hi = min(a.s_min, r.s_min), max(a.s_max, r.s_max)
+    s_ref = 0.5 * (lo + hi)
+    shift = r.position_at(s_ref) - a.position_at(s_ref)
+    se = math.hypot(a.position_se(), r.position_se())
+    return ShiftResult(shift=float(shift), shift_se=float(se), reference_signal=float(s_ref), applied=applied)
+
+
+@dataclass(frozen=True)
+class FrictionSignature:
+    """What the two compliance lines say about friction (paper sections 2.2.2-2.2.4).
+
+    Attributes
+    ----------
+    kind : str
+        ``"none"``, ``"constant"`` (parallel, inward line at larger z), ``"opposite"``
+        (parallel, inward line at smaller z: an instrument artefact, Fig 7B),
+        ``"load-proportional"`` (slopes differ) or ``"pinned"`` (negative slope).
+    offset : float
+        ``z_in - z_out`` at equal deflection [m] (friction makes it positive, spec 7).
+    offset_se : float  [m]
+    slope_ratio : float
+        Approach / retract compliance slope [-].
+    slope_ratio_se : float  [-]
+    verdict : str
+        Plain words.
+    """
+
+    kind: str
+    offset: float
+    offset_se: float
+    slope_ratio: float
+    slope_ratio_se: float
+    verdict: str
+
+
+def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsigma: float = 3.0,
+                       slope_tolerance: float = 0.02, offset_tolerance: float = 0.2e-9) -> FrictionSignature:
+    """Classify the pair of compliance lines.
+
+    Parameters
+    ----------
+    nsigma : float
+        Significance in standard errors [-].
+    slope_tolerance : float
+        Relative slope difference below which lines count as parallel [-].
+    offset_tolerance : float
+        Offset below which parallel lines count as coincident [m].
+    """
+    a, r = compliance.approach, compliance.retract
+    ratio = a.slope / r.slope
+    ratio_se = abs(ratio) * math.hypot(a.slope_se / a.slope, r.slope_se / r.slope)
+    offset, off_se = -shift.shift, shift.shift_se
+    if a.slope < 0 and r.slope < 0:
+        kind = "pinned"
+        verdict = ("negative calibration slope: a pinned tip (eqs 20-21) would make a precontact "
+                   "attraction look repulsive; check the photodiode sign before trusting forces")
+    elif abs(ratio - 1.0) > max(nsigma * ratio_se, slope_tolerance):
+        kind = "load-proportional"
+        verdict = (f"compliance lines are not parallel (slope ratio {ratio:.4f}): friction proportional "
+                   "to load (eqs 18-19), or a nonlinear contact")
+    elif abs(offset) > max(nsigma * off_se, offset_tolerance):
+        if offset > 0:
+            kind = "constant"
+            verdict = (f"parallel lines, inward {offset * 1e9:.3g} nm to the right of outward: constant "
+                       "friction (eq 16) or piezo/detector hysteresis; only interferometry can tell")
+        else:
+            kind = "opposite"
+            verdict = (f"parallel lines, inward {-offset * 1e9:.3g} nm to the left of outward: opposite to "
+                       "friction, an instrument artefact (backlash or piezo hysteresis, Fig 7B)")
+    else:
+        kind = "none"
+        verdict = "compliance lines coincide: no sign of friction"
+    return FrictionSignature(kind=kind, offset=float(offset), offset_se=float(off_se), slope_ratio=float(ratio),
+                             slope_ratio_se=float(ratio_se), verdict=verdict)

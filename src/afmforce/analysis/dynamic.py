@@ -1,0 +1,176 @@
+"""Dynamic diagnosis of a measured curve: is it quasi-static? (paper section 2.1, 3.2).
+
+For the curve's speed, spring constant and deflection resolution:
+
+* inertia parameter ``R = v |Fs'| / (4 f k dx)`` (eq 3) at the jump into
+  contact, where the static gradient equals k (so ``R = v / (4 f dx)``);
+  inertia is measurable when R > 1;
+* inertial lag ``dx = v / (4 f)`` (eq 4);
+* the jump-in separation against the static one predicted by the fitted van der
+  Waals law: jumping in from farther out is the paper's evidence of dynamics or
+  of an extra attraction (section 3.2, "too large by at least 1 nm");
+* friction's signature on the compliance lines: a parallel offset in the
+  friction direction (viscous friction's, proportional to xi v, spec section 7)
+  goes with an underestimated precontact attraction (section 2.3, Figs 5-6) --
+  or the instrument's hysteresis mimics it (section 3.1); the data alone cannot
+  tell. Non-parallel lines (friction proportional to load, or a soft contact)
+  are reported, not flagged;
+* the precontact attraction against the adhesion: for the law of eq 2 the
+  pull-off force of a rigid contact is the largest attraction
+  ``-A R / (16 z0^2)``, so ``A R`` fitted on the approach should match
+  ``16 z0^2 |F_pull|``; a much weaker approach attraction is what friction
+  does (spec section 7: -0.94 instead of -1.96 nm at 1e-9 N) -- or an extra
+  adhesion (capillarity, deformation) beyond van der Waals.
+
+A run judged dynamic is *flagged*: its van der Waals fit is marked unreliable.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..constants import Z0
+from ._numeric import robust_line
+
+__all__ = ["DynamicDiagnosis", "diagnose_curve", "run_velocity"]
+
+
+@dataclass(frozen=True)
+class DynamicDiagnosis:
+    """Plain-words dynamic diagnosis with the numbers behind it.
+
+    Attributes
+    ----------
+    velocity : float  approach speed [m/s]
+    spring_constant : float  [N/m]
+    resonance_frequency : float  [Hz] (NaN if unknown)
+    resolution : float  deflection resolution [m]
+    force_gradient : float  |Fs'| at jump-in (= k, static instability) [N/m]
+    inertia_parameter : float  eq 3 [-]
+    inertial_lag : float  eq 4 [m]
+    jump_in_separation : float  measured [m]
+    static_jump_in_separation : float  from the fitted law [m]
+    jump_excess : float  measured - static [m]
+    attraction_ratio : float  fitted A R / (16 z0^2 |F_pull|) [-]
+    dynamic : bool  flagged as dynamic
+    verdict : str
+    """
+
+    velocity: float
+    spring_constant: float
+    resonance_frequency: float
+    resolution: float
+    force_gradient: float
+    inertia_parameter: float
+    inertial_lag: float
+    jump_in_separation: float
+    static_jump_in_separation: float
+    jump_excess: float
+    attraction_ratio: float
+    dynamic: bool
+    verdict: str
+
+
+def run_velocity(t: np.ndarray, z: np.ndarray) -> float:
+    """Speed of a run [m/s]: robust slope of position against time."""
+    if t.size < 3 or np.ptp(t) == 0:
+        return math.nan
+    _, b, *_ = robust_line(t - t[0], z)
+    return float(abs(b))
+
+
+def _inertia(velocity, gradient, f, k, dx):
+    try:
+        from ..diagnostics import inertia_parameter, inertial_lag
+    except ImportError:  # pragma: no cover - diagnostics is part of the package
+        return (abs(velocity) * abs(gradient) / (4 * f * k * dx), abs(velocity) / (4 * f))
+    return float(inertia_parameter(velocity, gradient, f, k, dx)), float(inertial_lag(velocity, f))
+
+
+def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequency: float | None,
+                   resolution: float, jump_in_separation: float = math.nan,
+                   static_jump_in_separation: float = math.nan, jump_tolerance: float = 1e-9,
+                   jump_fraction: float = 0.25, sample_step: float = 0.0, friction: str | None = None,
+                   friction_verdict: str = "", hamaker_radius: float = math.nan,
+                   pull_off_force: float = math.nan, contact_separation: float = math.nan,
+                   attraction_ratio: float = 0.75) -> DynamicDiagnosis:
+    """Combine eq 3, eq 4 and the jump-in distance into a verdict.
+
+    Parameters
+    ----------
+    velocity : float  [m/s]
+    spring_constant : float  [N/m]
+    resonance_frequency : float or None  [Hz]
+    resolution : float  [m]
+    jump_in_separation, static_jump_in_separation : float  [m]
+    jump_tolerance : float
+        Excess over the static jump-in separation that counts [m] ...
+    jump_fraction : float
+        ... and as a fraction of the static value [-] (both must be exceeded).
+    sample_step : float
+        Position step between samples [m], added to ``jump_tolerance`` (the last
+        sample before the jump may lie up to one step outside the static point).
+    friction, friction_verdict : str
+        Kind and words of the :class:`~.compliance.FrictionSignature`.
+    hamaker_radius : float
+        A R of the approach fit [J m].
+    pull_off_force : float
+        [N] (negative).
+    contact_separation : float
+        z0 of eq 2 [m] (NaN or 0: 0.35 nm).
+    attraction_ratio : float
+        Flag when fitted A R < this x ``16 z0^2 |F_pull|`` [-].
+    """
+    nan = math.nan
+    f = nan if resonance_frequency is None else float(resonance_frequency)
+    k = float(spring_constant)
+    words = []
+    dynamic = False
+    r_par, lag, grad = nan, nan, k
+    if not (math.isfinite(velocity) and velocity > 0):
+        words.append("speed unknown (no time base): inertia not assessed")
+    elif not (math.isfinite(f) and f > 0):
+        words.append("resonance frequency unknown (give --resonance-frequency): inertia not assessed")
+    elif not (math.isfinite(resolution) and resolution > 0):
+        words.append("deflection resolution unknown: inertia not assessed")
+    else:
+        kk = k if math.isfinite(k) and k > 0 else 1.0
+        r_par, lag = _inertia(velocity, kk, f, kk, resolution)
+        if r_par > 1:
+            dynamic = True
+            words.append(f"dynamic: inertia parameter {r_par:.3g} > 1 (eq 3), lag about {lag * 1e9:.3g} nm "
+                         "(eq 4): the static force law is distorted near the jump")
+        else:
+            words.append(f"quasi-static: inertia parameter {r_par:.3g} < 1 (eq 3), lag about "
+                         f"{lag * 1e9:.3g} nm (eq 4)")
+    excess = jump_in_separation - static_jump_in_separation
+    if (math.isfinite(excess) and excess > jump_tolerance + abs(sample_step)
+            and excess > jump_fraction * static_jump_in_separation):
+        dynamic = True
+        words.append(f"jump-in at {jump_in_separation * 1e9:.3g} nm, {excess * 1e9:.3g} nm farther out than "
+                     f"the static {static_jump_in_separation * 1e9:.3g} nm of the fitted law: dynamic "
+                     "effects (friction, inertia) or an extra attraction (capillarity)")
+    if friction == "constant":  # viscous friction's offset grows with xi v (spec section 7)
+        dynamic = True
+        words.append(f"friction signature ({friction_verdict}): friction underestimates the precontact "
+                     "attraction (Figs 5-6) unless the offset is the instrument's hysteresis")
+    elif friction == "load-proportional":
+        words.append(f"{friction_verdict} (static friction changes k and beta, eqs 18-19)")
+    elif friction == "opposite":
+        words.append("compliance lines offset against friction's direction: an instrument artefact")
+    elif friction == "pinned":
+        dynamic = True
+        words.append("negative compliance slope: pinned tip, forces of the wrong sign (eqs 20-21)")
+    z0 = contact_separation if math.isfinite(contact_separation) and contact_separation > 0 else Z0
+    ar_pull = 16.0 * z0 * z0 * abs(pull_off_force) if math.isfinite(pull_off_force) else math.nan
+    ratio = hamaker_radius / ar_pull if math.isfinite(ar_pull) and ar_pull > 0 else math.nan
+    if math.isfinite(ratio) and ratio < attraction_ratio:
+        dynamic = True
+        words.append(f"the approach attraction is {ratio:.2f} x what the pull-off implies (A R = 16 z0^2 |F|): "
+                     "underestimated by friction or speed, or an extra adhesion (capillarity)")
+    return DynamicDiagnosis(float(velocity), k, f, float(resolution), grad, float(r_par), float(lag),
+                            float(jump_in_separation), float(static_jump_in_separation), float(excess),
+                            float(ratio), dynamic, "; ".join(words))

@@ -1,0 +1,128 @@
+"""Working state carried through the pipeline steps (internal).
+
+A frozen dataclass replaced (never mutated) by each step; arrays are new
+arrays, never edited in place, so the input :class:`~afmforce.raw.RawCurve`
+is untouched.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any, Mapping
+
+import numpy as np
+
+from ..errors import AnalysisError
+from ..raw import RawCurve
+from .regions import RunRegions, run_indices
+
+__all__ = ["State", "prepare", "ContactSummary", "SmoothResult"]
+
+
+@dataclass(frozen=True)
+class ContactSummary:
+    """Where contact starts and ends (indices into the curve) and region sizes [-]."""
+
+    contact_index: int
+    pull_off_region_end: int
+    zero_force_approach: int
+    zero_force_retract: int
+    compliance_approach: int
+    compliance_retract: int
+    saturated: int
+
+
+@dataclass(frozen=True)
+class SmoothResult:
+    """Running average of the position channel.
+
+    Attributes
+    ----------
+    window : int  points [-]
+    channel : str
+    max_change : float  largest change of a position [m]
+    """
+
+    window: int
+    channel: str
+    max_change: float
+
+
+@dataclass(frozen=True)
+class State:
+    """Arrays and results of the steps so far (SI; ``signal`` in ``unit``)."""
+
+    curve: RawCurve
+    time: np.ndarray
+    z: np.ndarray
+    signal: np.ndarray
+    unit: str
+    channel: str
+    time_known: bool
+    approach: RunRegions | None = None
+    retract: RunRegions | None = None
+    noise: float = math.nan
+    factor: float = math.nan
+    deflection: np.ndarray | None = None
+    separation: np.ndarray | None = None
+    position: np.ndarray | None = None
+    force: np.ndarray | None = None
+    spring_constant: float = math.nan
+    details: Mapping[str, Any] = field(default_factory=dict)
+    warnings: tuple[str, ...] = ()
+
+    @property
+    def metadata(self) -> Mapping[str, Any]:
+        return self.curve.metadata
+
+    def update(self, step: str | None = None, detail: Any = None, warn: str | None = None, **changes) -> "State":
+        """A new state with ``changes``, ``detail`` stored under ``step`` and ``warn`` appended."""
+        if step is not None:
+            changes["details"] = {**self.details, step: detail}
+        if warn:
+            changes["warnings"] = self.warnings + (warn,)
+        return dataclasses.replace(self, **changes)
+
+    def require(self, *names: str, step: str) -> None:
+        """Raise AnalysisError if a needed intermediate result is missing."""
+        for name in names:
+            if getattr(self, name) is None:
+                raise AnalysisError(f"step {step!r} needs {name}, computed by an earlier step")
+
+
+def prepare(curve: RawCurve, channel: str = "auto") -> State:
+    """Check the curve and choose the position channel.
+
+    Parameters
+    ----------
+    channel : str
+        ``"auto"`` (measured if recorded, else nominal), ``"measured"`` or ``"nominal"``.
+
+    Raises
+    ------
+    AnalysisError
+        Non-finite samples, a missing run, or a requested channel that is absent.
+    """
+    if channel not in ("auto", "measured", "nominal"):
+        raise AnalysisError(f"position channel must be auto, measured or nominal, got {channel!r}")
+    if channel == "measured" and curve.piezo_measured is None:
+        raise AnalysisError("the curve has no measured position channel; use the nominal one")
+    use_measured = curve.piezo_measured is not None and channel != "nominal"
+    z = np.array(curve.piezo_measured if use_measured else curve.piezo_nominal, dtype=float)
+    s = np.array(curve.deflection_signal, dtype=float)
+    t = np.array(curve.time, dtype=float)
+    for name, arr in (("position", z), ("deflection signal", s), ("time", t)):
+        bad = ~np.isfinite(arr)
+        if bad.any():
+            raise AnalysisError(f"the {name} has {int(bad.sum())} NaN or infinite samples "
+                                f"(first at {int(np.argmax(bad))}); clean the data first")
+    seg = np.asarray(curve.segment)
+    for which, word in ((0, "approach"), (1, "retract")):
+        if run_indices(seg, which).size == 0:
+            raise AnalysisError(f"the curve has no {word} segment (one segment only); the analysis needs "
+                                "both runs: split the curve at its turning point")
+    return State(curve=curve, time=t, z=z, signal=s, unit=curve.deflection_unit,
+                 channel="measured" if use_measured else "nominal",
+                 time_known=not bool(curve.metadata.get("time_is_sample_index", False)))

@@ -1,0 +1,346 @@
+"""The pipeline steps: each takes a :class:`~.state.State` and options, returns a new State.
+
+The registry that names them, gives their options and requirements lives in
+:mod:`afmforce.pipeline`. Each function stores its result dataclass under its
+step identifier in ``state.details``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..constants import HAMAKER, Z0
+from ..errors import AnalysisError, ParameterError
+from . import compliance as cc
+from ._numeric import robust_line, running_mean
+from .drift import remove_drift
+from .dynamic import diagnose_curve, run_velocity
+from .fringes import FringeResult, fit_fringes, fringe_signal, loop_width, position_map
+from .jumps import adhesion, find_jump_in, find_pull_off
+from .oscillation import OscillationResult, find_peak, oscillation_origin
+from .regions import find_run_regions, run_indices, saturated_mask
+from .separation import effective_spring_constant, zero_of_separation
+from .state import ContactSummary, SmoothResult, State
+from .vdw import fit_vdw
+
+__all__ = ["smooth", "contact", "drift", "fringes", "compliance", "calibration", "shift", "zero", "force",
+           "jumps", "adhesion_step", "vdw", "oscillation", "friction", "diagnosis"]
+
+
+def _staircase_window(z: np.ndarray, minimum: int = 11) -> int:
+    """Odd window covering two digitization steps of a stepped position channel (at least ``minimum``)."""
+    same = np.diff(z) == 0
+    if same.mean() < 0.3:  # no staircase
+        return minimum
+    edges = np.flatnonzero(np.diff(np.concatenate([[False], same, [False]]).astype(np.int8)))
+    runs = edges[1::2] - edges[::2] + 1  # samples per plateau
+    step = int(np.median(runs)) if runs.size else 1
+    return max(minimum, 2 * step + 1)
+
+
+def smooth(st: State, *, window: int | str = "auto") -> State:
+    """Running average of the position channel, each run separately (Fig 7C).
+
+    ``window="auto"``: the paper's 11 points, or two digitization steps of a
+    stepped (digitized) channel if those are longer, so that the average
+    interpolates linearly between levels as in the paper.
+    """
+    if window == "auto":
+        window = _staircase_window(st.z)
+    try:
+        window = int(window)
+    except (TypeError, ValueError):
+        raise ParameterError(f"smoothing window must be 'auto' or an odd number of points, got {window!r}") from None
+    if window < 1 or window % 2 == 0:
+        raise ParameterError(f"smoothing window must be a positive odd number of points, got {window}")
+    z = st.z.copy()
+    for which in (0, 1, 2):
+        idx = run_indices(st.curve.segment, which)
+        if idx.size:
+            z[idx] = running_mean(st.z[idx], window)
+    change = float(np.max(np.abs(z - st.z))) if z.size else 0.0
+    return st.update("smooth", SmoothResult(window, st.channel, change), z=z)
+
+
+def contact(st: State, *, min_points: int = 5, baseline_fraction: float = 0.7,
+            compliance_fraction: float = 0.5) -> State:
+    """Contact, constant-compliance and zero-force regions of both runs."""
+    if not (0 < baseline_fraction <= 1 and 0 < compliance_fraction <= 1):
+        raise ParameterError("baseline_fraction and compliance_fraction must lie in (0, 1]")
+    sat = saturated_mask(st.signal)
+    kw = dict(saturated=sat, min_points=int(min_points), baseline_fraction=baseline_fraction,
+              compliance_fraction=compliance_fraction)
+    app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach", **kw)
+    ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
+    summary = ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
+                             int(app.zero_force.sum()), int(ret.zero_force.sum()), int(app.compliance.sum()),
+                             int(ret.compliance.sum()), int(sat.sum()))
+    warn = None
+    if sat.any():
+        warn = f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits"
+    # noise of the signal from sample-to-sample differences in the approach's free part: blind to
+    # slow structure (drift, fringes), so it measures the resolution the jump tests need
+    return st.update("contact", summary, warn=warn, approach=app, retract=ret, noise=app.noise)
+
+
+def drift(st: State, *, order: int = 1, tail: bool = True) -> State:
+    """Subtract a baseline line in time fitted in each run's zero-force region."""
+    st.require("approach", step="drift")
+    if order not in (0, 1):
+        raise ParameterError(f"drift order must be 0 (offset) or 1 (line), got {order}")
+    signal, res = remove_drift(st.time, st.signal, st.curve.segment, st.approach, st.retract, st.unit, order,
+                               z=st.z if tail else None)
+    warn = ("retract baseline too short or too noisy after the pull-off (free ringing?): the approach "
+            "baseline was used for both runs") if res.retract_from_approach else None
+    return st.update("drift", res, warn=warn, signal=signal)
+
+
+def fringes(st: State, *, apply: str = "auto", period: float | None = None, order: int | str = "auto",
+            in_contact: str = "hold", margin: float = 0.1) -> State:
+    """Fit interference fringes in the baseline; remove them, remap nominal positions.
+
+    ``apply="auto"``: when both runs show fringes, subtract them from the signal,
+    and remap the positions if they are the piezo's *nominal* ones (a measured
+    position is taken as linear, as the paper found for its detector, Fig 7B);
+    ``"always"``: subtract and remap; ``"never"``: report only.
+    """
+    st.require("approach", step="fringes")
+    if apply not in ("auto", "always", "never") or in_contact not in ("hold", "follow"):
+        raise ParameterError("fringes: apply must be auto/always/never and in_contact hold/follow")
+    runs = {}
+    for run in (st.approach, st.retract):
+        idx = run.index[~run.contact & ~run.saturated]
+        zf = st.z[idx]
+        z_split = st.z[run.index[min(run.split, run.index.size - 1)]]
+        far = np.abs(zf - z_split) > margin * np.ptp(zf)  # leave the attraction near contact out
+        runs[run.kind] = fit_fringes(zf[far], st.signal[idx][far], period=period, order=order)
+    fa, fr = runs["approach"], runs["retract"]
+    # real fringes are periodic in the true position: both runs show the same period
+    both = fa.found and fr.found and abs(fa.period - fr.period) < 0.05 * 0.5 * (fa.period + fr.period)
+    z_contact = _zero_deflection_position(st)
+    z, s = st.z.copy(), st.signal.copy()
+    remove = apply == "always" or (apply == "auto" and both)
+    remap = apply == "always" or (apply == "auto" and both and st.channel == "nominal")
+    for run, fit in ((st.approach, fa), (st.retract, fr)):
+        if not (remove and math.isfinite(fit.period)):
+            continue
+        idx = run.index
+        term = fringe_signal(st.z[idx], fit)
+        if in_contact == "hold":
+            term = np.where(run.contact, fringe_signal(np.array([z_contact]), fit)[0], term)
+        s[idx] = st.signal[idx] - term
+        if remap:
+            z[idx] = position_map(st.z[idx], fit)
+    applied = remap
+    width = loop_width(fa, fr, st.z[np.concatenate([st.approach.index, st.retract.index])])
+    if both:
+        verdict = (f"fringes of period {0.5 * (fa.period + fr.period) * 1e9:.4g} nm; position nonlinearity "
+                   f"{max(fa.nonlinearity, fr.nonlinearity) * 100:.3g} %; loop width {width * 1e9:.3g} nm "
+                   "(modulo one period)")
+    elif fa.found or fr.found:
+        verdict = "periodic baseline on one run only, or periods that differ: not fringes; nothing changed"
+    else:
+        verdict = "no interference fringes detected in the baseline"
+    res = FringeResult(fa, fr, width, applied, verdict)
+    return st.update("fringes", res, z=z, signal=s)
+
+
+def _zero_deflection_position(st: State) -> float:
+    """Where the approach contact line crosses zero signal: contact at zero load.
+
+    Interference depends on the separation, constant in contact: its value there
+    is the free-branch fringe at this position.
+    """
+    run = st.approach
+    idx = run.index[run.contact & ~run.saturated]
+    z_first = float(st.z[run.index[run.split]])
+    if idx.size < 3:
+        return z_first
+    x0 = st.z[idx].mean()
+    a, b, *_ = robust_line(st.z[idx] - x0, st.signal[idx])
+    return float(x0 - a / b) if np.isfinite(b) and b != 0 else z_first
+
+
+def compliance(st: State) -> State:
+    """Robust constant-compliance line of each run."""
+    st.require("approach", step="compliance")
+    return st.update("compliance", cc.fit_compliance(st.z, st.signal, st.approach, st.retract, st.unit))
+
+
+def calibration(st: State, *, source: str = "auto", run: str = "approach") -> State:
+    """Calibration factor (InvOLS) and the deflection in metres."""
+    comp = st.details.get("compliance")
+    if comp is None:
+        raise AnalysisError("step 'calibration' needs the compliance lines")
+    res = cc.calibrate(comp, st.metadata, source=source, run=run)
+    warn = None
+    if res.source == "metadata" and math.isfinite(res.factor_fit) and res.factor_fit > 0:
+        ratio = res.factor_fit / res.factor
+        if abs(ratio - 1) > 0.1:
+            warn = (f"the compliance slope gives a calibration {ratio:.3g} x the file's: a soft contact, or a "
+                    "stale sensitivity (calibration source 'fit', --calibration fit, uses the slope)")
+    if not (math.isfinite(res.factor) and res.factor != 0):
+        raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
+    return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
+
+
+def shift(st: State, *, apply: bool = True) -> State:
+    """Shift the inward run to overlay the outward compliance line (Fig 9)."""
+    comp = st.details.get("compliance")
+    if comp is None:
+        raise AnalysisError("step 'shift' needs the compliance lines")
+    res = cc.compliance_shift(comp, applied=bool(apply))
+    if not apply:
+        return st.update("shift", res)
+    z = st.z.copy()
+    z[st.approach.index] += res.shift
+    return st.update("shift", res, z=z)
+
+
+def zero(st: State, *, contact_separation: float = Z0, run: str = "auto") -> State:
+    """Zero of separation: the compliance line at h = contact_separation.
+
+    ``run="auto"``: the outward (retract) line as in the paper, unless the
+    retract had no baseline of its own (drift step), then the inward line.
+    """
+    st.require("deflection", step="zero")
+    if run not in ("auto", "approach", "retract"):
+        raise ParameterError(f"zero: run must be auto, approach or retract, got {run!r}")
+    if run == "auto":
+        dr = st.details.get("drift")
+        run = "approach" if dr is not None and dr.retract_from_approach else "retract"
+    regions = st.retract if run == "retract" else st.approach
+    h, pos, res = zero_of_separation(st.z, st.deflection, regions, contact_separation)
+    return st.update("zero", res, separation=h, position=pos)
+
+
+def force(st: State, *, spring_constant: float | None = None, theta0: float | None = None,
+          L0: float | None = None, L1: float | None = None, L2: float | None = None) -> State:
+    """Force = k x deflection, tilt-corrected (eq 13/14) when theta0 is given."""
+    st.require("deflection", step="force")
+    md = st.metadata
+    k = spring_constant if spring_constant is not None else md.get("spring_constant")
+    theta0 = theta0 if theta0 is not None else md.get("theta0")
+    cal = st.details.get("calibration")
+    slope_k = cal.spring_constant_from_slope if cal is not None else math.nan
+    conv = effective_spring_constant(k, theta0=theta0, L0=L0, L1=L1, L2=L2, from_slope=slope_k)
+    warn = None
+    if conv.method == "none":
+        warn = "no spring constant (give --spring-constant): forces not computed"
+    elif conv.method == "compliance slope":
+        warn = "spring constant taken from the compliance slope of the force signal (rigid contact assumed)"
+    return st.update("force", conv, warn=warn, spring_constant=conv.spring_constant,
+                     force=st.deflection * conv.spring_constant)
+
+
+def jumps(st: State, *, nsigma: float = 5.0, window: int = 3) -> State:
+    """Jump into contact and pull-off, near each run's contact split."""
+    st.require("separation", step="jumps")
+    noise = abs(st.noise * st.factor)
+    k = st.spring_constant
+    ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window)
+    po = find_pull_off(st.deflection, st.position, st.retract, noise, k, nsigma, window)
+    warn = []
+    if not ji.found:
+        warn.append("no jump into contact: the tip crept into contact (or the attraction is below the noise)")
+    if not po.found:
+        warn.append("no pull-off found on the retract run")
+    elif po.saturated:
+        warn.append("photodiode saturated at pull-off: the pull-off force is a lower bound")
+    return st.update("jumps", {"jump_in": ji, "pull_off": po}, warn="; ".join(warn) or None)
+
+
+def adhesion_step(st: State, *, radius: float | None = None, model: str = "jkr", hamaker: float = HAMAKER,
+                  z0: float = Z0) -> State:
+    """Surface energy from the pull-off and R, and R from the jump-out distance."""
+    j = st.details.get("jumps")
+    if j is None:
+        raise AnalysisError("step 'adhesion' needs the jumps")
+    radius = radius if radius is not None else st.metadata.get("radius")
+    return st.update("adhesion", adhesion(j["pull_off"], st.spring_constant, radius=radius, model=model,
+                                          hamaker=hamaker, z0=z0))
+
+
+def vdw(st: State, *, radius: float | None = None, z0: float = Z0, max_separation: float = 30e-9,
+        baseline: str = "line", fit_separation_offset: bool = False) -> State:
+    """van der Waals fit of the approach before the jump (eq 2)."""
+    j = st.details.get("jumps")
+    if j is None:
+        raise AnalysisError("step 'vdw' needs the jumps")
+    radius = radius if radius is not None else st.metadata.get("radius")
+    idx = st.approach.index
+    ji = j["jump_in"]
+    end = int(np.searchsorted(idx, ji.index)) + 1 if ji.found else st.approach.split
+    pre = idx[:end]
+    res = fit_vdw(st.separation[pre], st.force[pre], spring_constant=st.spring_constant, radius=radius, z0=z0,
+                  max_separation=max_separation, baseline=baseline,
+                  fit_separation_offset=fit_separation_offset)
+    warn = None if res.status == "ok" else f"van der Waals fit: {res.status}"
+    return st.update("vdw", res, warn=warn)
+
+
+def oscillation(st: State, *, false_alarm: float = 1e-3, min_cycles: float = 3.0) -> State:
+    """Post-contact oscillation of each run; temporal versus spatial origin."""
+    st.require("deflection", step="oscillation")
+    peaks = {}
+    for run in (st.approach, st.retract):
+        idx = run.index[run.compliance & ~run.saturated]
+        v = run_velocity(st.time[run.index], st.z[run.index]) if st.time_known else math.nan
+        if not st.time_known or idx.size < 8:
+            peaks[run.kind] = find_peak(np.array([]), np.array([]), v, run.kind)
+            continue
+        x = st.z[idx] - st.z[idx].mean()
+        a, b, *_ = robust_line(x, st.deflection[idx])
+        resid = st.deflection[idx] - (a + b * x)
+        peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=min_cycles,
+                                    false_alarm=false_alarm)
+    found = [p for p in peaks.values() if p.found]
+    origin, verdict = oscillation_origin([p.frequency for p in found], [p.velocity for p in found])
+    return st.update("oscillation", OscillationResult(peaks["approach"], peaks["retract"], origin, verdict))
+
+
+def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
+             offset_tolerance: float = 0.2e-9) -> State:
+    """Friction signature of the two compliance lines (before the shift)."""
+    comp = st.details.get("compliance")
+    if comp is None:
+        raise AnalysisError("step 'friction' needs the compliance lines")
+    sh = st.details.get("shift") or cc.compliance_shift(comp, applied=False)
+    return st.update("friction", cc.friction_signature(comp, sh, nsigma=nsigma, slope_tolerance=slope_tolerance,
+                                                       offset_tolerance=offset_tolerance))
+
+
+def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution: float | None = None,
+              min_resolution: float = 0.01e-9, attraction_ratio: float = 0.75) -> State:
+    """Dynamic diagnosis: eq 3, eq 4, jump-in distance, friction and adhesion consistency.
+
+    Flags the van der Waals fit as unreliable when the run is judged dynamic.
+    """
+    j = st.details.get("jumps")
+    if j is None:
+        raise AnalysisError("step 'diagnosis' needs the jumps")
+    idx = st.approach.index
+    v = run_velocity(st.time[idx], st.z[idx]) if st.time_known else math.nan
+    f = resonance_frequency if resonance_frequency is not None else st.metadata.get("resonance_frequency")
+    dx = resolution if resolution is not None else max(abs(st.noise * st.factor), min_resolution)
+    fit = st.details.get("vdw")
+    h_static = fit.static_jump_in_separation if fit is not None else math.nan
+    step = float(np.median(np.abs(np.diff(st.z[idx])))) if idx.size > 1 else 0.0
+    fr = st.details.get("friction")
+    z0 = st.details["zero"].contact_separation if "zero" in st.details else math.nan
+    res = diagnose_curve(velocity=v, spring_constant=st.spring_constant, resonance_frequency=f, resolution=dx,
+                         jump_in_separation=j["jump_in"].separation, static_jump_in_separation=h_static,
+                         sample_step=step, friction=None if fr is None else fr.kind,
+                         friction_verdict="" if fr is None else fr.verdict,
+                         hamaker_radius=fit.hamaker_radius if fit is not None else math.nan,
+                         pull_off_force=j["pull_off"].force, contact_separation=z0,
+                         attraction_ratio=attraction_ratio)
+    new = st.update("diagnosis", res)
+    if res.dynamic and fit is not None:
+        import dataclasses
+
+        new = new.update("vdw", dataclasses.replace(fit, reliable=False),
+                         warn="dynamic run: the van der Waals fit is NOT a static force law (see diagnosis)")
+    return new

@@ -1,0 +1,135 @@
+"""Quasi-static synthetic force curves with known truth (for tests, docs and benchmarks).
+
+The tip follows static equilibrium on the stable branch (spec sections 1-2):
+``k z2 = Fs(h)`` with ``h = z2 - z`` and eq 2 for ``Fs``. On the approach the
+tip stays on the far branch until it disappears (jump into contact), on the
+retract it stays in contact until that branch disappears (pull-off). The
+photodiode signal is ``z2 / sensitivity`` plus offset, drift, noise and
+optionally interference fringes ``I0 cos(2 pi D / P)`` with ``D = z - z2`` the
+substrate-cantilever distance (constant in contact); the nominal position may
+be bent by a quadratic piezo nonlinearity that differs between runs. No
+dynamics: for dynamic runs use :mod:`afmforce.dynamics` and
+:mod:`afmforce.instrument`.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .. import forces
+from ..constants import HAMAKER, Z0
+from ..raw import RawCurve
+
+__all__ = ["static_separation", "static_curve"]
+
+
+def _bisect(g, lo, hi, n_iter=80):
+    glo = g(lo)
+    for _ in range(n_iter):
+        mid = 0.5 * (lo + hi)
+        gm = g(mid)
+        left = np.sign(gm) == np.sign(glo)
+        lo = np.where(left, mid, lo)
+        glo = np.where(left, gm, glo)
+        hi = np.where(left, hi, mid)
+    return 0.5 * (lo + hi)
+
+
+def static_separation(z: np.ndarray, segment: np.ndarray, *, spring_constant: float, radius: float,
+                      hamaker: float = HAMAKER, z0: float = Z0) -> np.ndarray:
+    """Separation h [m] of the static tip for substrate positions z [m] (approach then retract).
+
+    Solves ``Fs(h) = k (h + z)`` on the stable branch the tip is on (see module docstring).
+    """
+    z = np.asarray(z, float)
+    k, ar = spring_constant, hamaker * radius
+    grid = np.geomspace(0.5 * z0, max(1e-6, 2 * float(np.max(np.abs(z))) + 1e-7), 3000)
+    h_peak = 3 ** (1 / 6) * z0  # steepest attraction: separates contact and free branches
+
+    def g_of(h, zz):
+        return forces.vdw_force(h, 1.0, hamaker=ar, z0=z0) - k * (h + zz)
+
+    G = g_of(grid[None, :], z[:, None])
+    change = np.signbit(G[:, :-1]) != np.signbit(G[:, 1:])
+    has_free = (change & (grid[None, 1:] > h_peak)).any(axis=1)
+    has_contact = (change & (grid[None, :-1] < h_peak)).any(axis=1)
+    last = change.shape[1] - 1 - np.argmax(change[:, ::-1], axis=1)  # largest root's bracket
+    first = np.argmax(change, axis=1)  # smallest root's bracket
+    on_contact = np.zeros(z.size, bool)
+    state = False
+    for i in range(z.size):  # follow the branch: jumps only when the branch ends
+        if segment[i] == 0:
+            state = state or not has_free[i]
+        else:
+            state = state and has_contact[i]
+        on_contact[i] = state
+    j = np.where(on_contact, first, last)
+    return _bisect(lambda h: g_of(h, z), grid[j], grid[j + 1])
+
+
+def static_curve(*, spring_constant: float = 0.21, radius: float = 220e-9, hamaker: float = HAMAKER,
+                 z0: float = Z0, velocity: float = 0.5e-6, sample_rate: float = 2000.0, start: float = -60e-9,
+                 turn: float = 30e-9, end: float | None = None, sensitivity: float = 50e-9,
+                 offset: float = 0.3, drift: float = 0.0, noise: float = 0.0, fringe_amplitude: float = 0.0,
+                 fringe_period: float = 320e-9, piezo_quadratic: tuple[float, float] = (0.0, 0.0),
+                 seed: int | None = 0) -> RawCurve:
+    """A quasi-static approach-retract curve with ground truth.
+
+    Parameters
+    ----------
+    spring_constant : float  k [N/m]
+    radius, hamaker, z0 : float  eq 2 parameters [m], [J], [m]
+    velocity : float  driving speed, both runs [m/s]
+    sample_rate : float  [Hz]
+    start, turn, end : float
+        Substrate positions [m] (z = 0: contact with the undeflected spring); ``end``
+        defaults to 1.3 x the pull-off position plus 40 nm.
+    sensitivity : float  InvOLS [m/V]
+    offset : float  photodiode offset [V]
+    drift : float  photodiode drift [V/s]
+    noise : float  white deflection noise [m]
+    fringe_amplitude, fringe_period : float  interference I0 [V] and period [m]
+    piezo_quadratic : (float, float)
+        Quadratic bend of the nominal position over each run (approach, retract):
+        ``z_nominal = z + q (z - z_mid)^2 / half_range`` [-].
+    seed : int or None  noise seed
+
+    Returns
+    -------
+    RawCurve
+        Volts against nominal (and exact measured) position; ``truth`` holds
+        ``separation``, ``deflection``, ``position``, ``jump_in_index``,
+        ``pull_off_index``, ``sensitivity``, ``hamaker_radius``.
+    """
+    k = spring_constant
+    if end is None:
+        end = -1.3 * float(abs(forces.max_attraction_force(radius, hamaker, z0))) / k - 40e-9
+    step = velocity / sample_rate
+    z_app = np.arange(start, turn, step)
+    z_ret = np.arange(turn, end, -step)
+    z = np.concatenate([z_app, z_ret])
+    seg = np.concatenate([np.zeros(z_app.size, np.int8), np.ones(z_ret.size, np.int8)])
+    h = static_separation(z, seg, spring_constant=k, radius=radius, hamaker=hamaker, z0=z0)
+    z2 = h + z
+    t = np.arange(z.size) / sample_rate
+    rng = np.random.default_rng(seed)
+    defl_meas = z2 + noise * rng.standard_normal(z.size)
+    fringe = fringe_amplitude * np.cos(2 * math.pi * (z - z2) / fringe_period)
+    volts = defl_meas / sensitivity + offset + drift * t + fringe
+    z_nom = z.copy()
+    for which, q in enumerate(piezo_quadratic):
+        m = seg == which
+        mid, half = 0.5 * (z[m].max() + z[m].min()), 0.5 * np.ptp(z[m])
+        z_nom[m] = z[m] + q * (z[m] - mid) ** 2 / half
+    on_contact_app = np.flatnonzero((seg == 0) & (h < 3 ** (1 / 6) * z0))
+    on_contact_ret = np.flatnonzero((seg == 1) & (h < 3 ** (1 / 6) * z0))
+    truth = dict(separation=h, deflection=z2, position=z, sensitivity=sensitivity,
+                 hamaker_radius=hamaker * radius, spring_constant=k, fringe_period=fringe_period,
+                 jump_in_index=int(on_contact_app[0] - 1) if on_contact_app.size else -1,
+                 pull_off_index=int(on_contact_ret[-1]) if on_contact_ret.size else -1)
+    meta = dict(spring_constant=k, sample_rate=sample_rate, velocity=velocity,
+                source_file="synthetic quasi-static curve")
+    return RawCurve(time=t, piezo_nominal=z_nom, piezo_measured=None if any(piezo_quadratic) else z.copy(),
+                    deflection_signal=volts, segment=seg, metadata=meta, truth=truth, deflection_unit="V")

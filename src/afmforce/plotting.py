@@ -1,0 +1,172 @@
+"""Figures of an analysed force curve.
+
+Every function takes ``ax=None`` (a new figure is made) and returns the axes.
+Figures are built with :class:`matplotlib.figure.Figure`, never pyplot, so
+nothing here changes the user's backend or global state; ``fig.savefig`` uses
+Agg. Units on the axes: nm, nN, V, Hz.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from . import forces
+from .analysis.result import AnalysisResult
+from .raw import RawCurve
+
+__all__ = ["plot_raw", "plot_force_separation", "plot_residuals", "plot_spectrum", "plot_summary"]
+
+_RUNS = ((0, "inward (approach)", "C0", "-"), (1, "outward (retract)", "C3", ":"))
+
+
+def _new_ax(ax):
+    if ax is not None:
+        return ax
+    from matplotlib.figure import Figure
+
+    return Figure(figsize=(6, 4.5), layout="constrained").add_subplot()
+
+
+def plot_raw(curve: RawCurve, ax=None, channel: str = "auto"):
+    """Raw deflection signal against position (both runs), as recorded."""
+    ax = _new_ax(ax)
+    use_measured = curve.piezo_measured is not None and channel != "nominal"
+    z = np.asarray(curve.piezo_measured if use_measured else curve.piezo_nominal)
+    s = np.asarray(curve.deflection_signal)
+    scale, unit = (1e9, "nm") if curve.deflection_unit in ("m", "N") else (1.0, curve.deflection_unit)
+    if curve.deflection_unit == "N":
+        unit = "nN"
+    for seg, label, color, ls in _RUNS:
+        m = np.asarray(curve.segment) == seg
+        ax.plot(z[m] * 1e9, s[m] * scale, ls, color=color, lw=1, label=label)
+    ax.set_xlabel(f"{'measured' if use_measured else 'nominal'} position z [nm]")
+    ax.set_ylabel(f"deflection signal [{unit}]")
+    ax.set_title("raw signal")
+    ax.legend(fontsize="small")
+    return ax
+
+
+def _vdw_curve(result: AnalysisResult, h: np.ndarray):
+    fit = result.details.get("vdw")
+    if fit is None or not math.isfinite(fit.hamaker_radius):
+        return None
+    z0 = result.contact_separation if math.isfinite(result.contact_separation) and result.contact_separation > 0 \
+        else 0.35e-9
+    return forces.vdw_force(h, 1.0, hamaker=fit.hamaker_radius, z0=z0)
+
+
+def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float = 40e-9,
+                          theory: bool = True):
+    """Force against separation near contact, with the van der Waals fit and its static theory.
+
+    The fitted law is drawn solid where the static tip is stable and dashed where
+    it is not (``Fs' > k``, the paper's convention in Fig 9).
+    """
+    ax = _new_ax(ax)
+    h, f = result.separation, result.force
+    if not np.isfinite(f).any():
+        f, ylabel = result.deflection, "deflection [nm]"
+    else:
+        ylabel = "force [nN]"
+    for seg, label, color, ls in _RUNS:
+        m = (result.segment == seg) & (h < max_separation)
+        ax.plot(h[m] * 1e9, f[m] * 1e9, ls, marker=".", ms=3, color=color, lw=0.8, label=label)
+    if theory:
+        hh = np.linspace(max(0.5e-9, np.nanmin(h[h > 0]) if np.any(h > 0) else 0.5e-9), max_separation, 400)
+        law = _vdw_curve(result, hh)
+        if law is not None:
+            k = result.spring_constant
+            grad = forces.vdw_force_gradient(hh, 1.0, hamaker=result.details["vdw"].hamaker_radius)
+            stable = grad < k if math.isfinite(k) else np.ones_like(hh, bool)
+            ax.plot(hh[stable] * 1e9, law[stable] * 1e9, "k-", lw=1.5, label="van der Waals fit (eq 2)")
+            ax.plot(hh[~stable] * 1e9, law[~stable] * 1e9, "k--", lw=1)
+    ji = result.details.get("jumps", {}).get("jump_in") if "jumps" in result.details else None
+    if ji is not None and ji.found and math.isfinite(ji.force_before):
+        ax.plot([ji.separation * 1e9], [ji.force_before * 1e9], "v", color="C2", ms=8, label="jump-in")
+    ax.axhline(0, color="0.6", lw=0.5)
+    ax.set_xlim(-1, max_separation * 1e9)
+    app = f[(result.segment == 0) & (h < max_separation) & (h > 0) & np.isfinite(f)]
+    if app.size:  # the approach's attraction sets the scale (Fig 9 shows part of the outward run)
+        lo = min(float(app.min()), -1e-12)
+        ax.set_ylim(lo * 1e9 * 1.4, abs(lo) * 1e9 * 1.0)
+    ax.set_xlabel("separation h [nm]")
+    ax.set_ylabel(ylabel)
+    ax.set_title("force vs separation")
+    ax.legend(fontsize="small")
+    return ax
+
+
+def plot_residuals(result: AnalysisResult, ax=None):
+    """Residual of the van der Waals fit on the approach before the jump."""
+    ax = _new_ax(ax)
+    fit = result.details.get("vdw")
+    ax.set_xlabel("separation h [nm]")
+    ax.set_ylabel("force - fit [pN]")
+    ax.set_title("fit residuals")
+    if fit is None or not math.isfinite(fit.hamaker_radius):
+        ax.text(0.5, 0.5, "no van der Waals fit", ha="center", va="center", transform=ax.transAxes)
+        return ax
+    h, f = result.separation, result.force
+    m = (result.segment == 0) & (h >= fit.separation_min) & (h <= fit.separation_max)
+    ji = result.details["jumps"]["jump_in"]
+    if ji.found:
+        m &= np.arange(h.size) <= ji.index
+    model = _vdw_curve(result, h[m]) + fit.force_offset + fit.force_slope * (
+        h[m] - 0.5 * (fit.separation_min + fit.separation_max))
+    ax.plot(h[m] * 1e9, (f[m] - model) * 1e12, ".", ms=3, color="C0")
+    ax.axhline(0, color="k", lw=0.8)
+    return ax
+
+
+def plot_spectrum(result: AnalysisResult, ax=None):
+    """Power spectrum of the post-contact residual (oscillations, section 3.2)."""
+    ax = _new_ax(ax)
+    ax.set_xlabel("frequency [Hz]")
+    ax.set_ylabel("power [nm$^2$]")
+    ax.set_title("post-contact spectrum")
+    osc = result.details.get("oscillation")
+    for seg, label, color, _ in _RUNS:
+        m = (result.segment == seg) & (result.separation < 1e-9)
+        if m.sum() < 32 or not np.all(np.isfinite(result.time[m])):
+            continue
+        t, d, z = result.time[m], result.deflection[m], result.position[m]
+        resid = d - np.polyval(np.polyfit(z, d, 1), z)
+        dt = float(np.median(np.diff(t)))
+        spec = np.abs(np.fft.rfft((resid - resid.mean()) * np.hanning(resid.size))) ** 2
+        freq = np.fft.rfftfreq(resid.size, dt)
+        ax.semilogy(freq[1:], spec[1:] * 1e18 + 1e-30, color=color, lw=0.8, label=label)
+    if osc is not None:
+        for peak in (osc.approach, osc.retract):
+            if peak.found:
+                ax.axvline(peak.frequency, color="k", ls="--", lw=0.8)
+        ax.set_title(f"post-contact spectrum ({osc.origin})")
+    if ax.lines:
+        ax.legend(fontsize="small")
+    return ax
+
+
+def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None):
+    """Four panels: raw signal, force vs separation with fit and theory, residuals, spectrum."""
+    if fig is None:
+        from matplotlib.figure import Figure
+
+        fig = Figure(figsize=(11, 8), layout="constrained")
+    axes = fig.subplots(2, 2)
+    if curve is not None:
+        plot_raw(curve, axes[0, 0])
+    else:
+        ax = axes[0, 0]
+        for seg, label, color, ls in _RUNS:
+            m = result.segment == seg
+            ax.plot(result.position[m] * 1e9, result.deflection[m] * 1e9, ls, color=color, label=label)
+        ax.set_xlabel("position [nm]")
+        ax.set_ylabel("deflection [nm]")
+        ax.legend(fontsize="small")
+    plot_force_separation(result, axes[0, 1])
+    plot_residuals(result, axes[1, 0])
+    plot_spectrum(result, axes[1, 1])
+    name = result.source.rsplit("/", 1)[-1] if result.source else "force curve"
+    fig.suptitle(f"{name}: {'DYNAMIC - ' if result.dynamic else ''}{result.friction or ''}", fontsize="medium")
+    return fig

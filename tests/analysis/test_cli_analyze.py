@@ -1,0 +1,90 @@
+"""``afmforce analyze``: a folder of files, outputs written atomically, bad files listed."""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+
+from afmforce.cli.main import main
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+FILES = ["asylum-mfp3d_SiN-tip_air.ibw", "jpk_calibration-curve_raw-volts.jpk-force",
+         "bruker-nanoscope_synthetic.txt"]
+
+
+@pytest.fixture()
+def folder(tmp_path):
+    d = tmp_path / "curves"
+    d.mkdir()
+    for name in FILES:
+        shutil.copy(DATA / name, d / name)
+    return d
+
+
+def _digests(folder):
+    return {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in folder.iterdir()}
+
+
+def test_folder_analysis_writes_outputs_and_keeps_inputs(folder, tmp_path, capsys):
+    before = _digests(folder)
+    out = tmp_path / "out"
+    assert main(["analyze", str(folder), "--out", str(out), "--no-plot"]) == 0
+    assert _digests(folder) == before  # inputs untouched
+    text = capsys.readouterr().out
+    assert "pull-off F [nN]" in text and "asylum-mfp3d_SiN-tip_air.ibw" in text
+    for name in FILES:
+        result = json.loads((out / f"{name}.afmforce.json").read_text())
+        assert result["units"]["jump_in_force"] == "N"
+        assert (out / f"{name}.afmforce.csv").read_text().splitlines()[1].startswith("segment,time [s]")
+    assert not list(out.glob(".*"))  # no temporary files left behind
+    # outputs exist: without --force every file fails (exit 1), with --force all pass
+    assert main(["analyze", str(folder), "--out", str(out), "--no-plot"]) == 1
+    assert "pass --force" in capsys.readouterr().err
+    assert main(["analyze", str(folder), "--out", str(out), "--no-plot", "--force"]) == 0
+
+
+def test_figure_is_written(folder, tmp_path):
+    out = tmp_path / "fig"
+    assert main(["analyze", str(folder / FILES[0]), "--out", str(out)]) == 0
+    assert (out / f"{FILES[0]}.afmforce.png").read_bytes()[:4] == b"\x89PNG"
+
+
+def test_bad_files_are_listed_and_the_rest_analysed(folder, tmp_path, capsys):
+    (folder / "broken.ibw").write_bytes(b"not an igor wave")
+    (folder / "gel.txt").write_bytes((DATA / "ntmdt_gel-in-water.txt").read_bytes())  # needs k, s
+    code = main(["analyze", str(folder), "--json"])
+    captured = capsys.readouterr()
+    assert code == 1
+    payload = json.loads(captured.out)
+    assert set(payload["results"]) == set(FILES)
+    failed = {Path(f["file"]).name for f in payload["failed"]}
+    assert failed == {"broken.ibw", "gel.txt"}
+    assert "broken.ibw" in captured.err and "2 of 5" in captured.err
+
+
+def test_user_metadata_flags(capsys):
+    code = main(["analyze", str(DATA / "ntmdt_gel-in-water.txt"), "--spring-constant", "0.05N/m",
+                 "--sensitivity", "61nm/V", "--json"])
+    assert code == 0
+    res = json.loads(capsys.readouterr().out)["results"]["ntmdt_gel-in-water.txt"]
+    assert res["spring_constant"] == pytest.approx(0.05) and res["calibration_factor"] == pytest.approx(61e-9)
+
+
+def test_tilt_correction_flag(capsys):
+    code = main(["analyze", str(DATA / FILES[0]), "--theta0", "-15deg", "--json"])
+    assert code == 0
+    res = json.loads(capsys.readouterr().out)["results"][FILES[0]]
+    assert res["spring_constant"] == pytest.approx(1.1841 * 1.0718, rel=1e-3)  # eq 14
+
+
+@pytest.mark.parametrize("argv", [["analyze"], ["analyze", "x.ibw", "--steps", "nope"],
+                                  ["analyze", "x.ibw", "--spring-constant", "3 nm"]])
+def test_usage_errors_exit_2(argv, capsys):
+    with pytest.raises(SystemExit) as exc:
+        code = main(argv)
+        raise SystemExit(code)
+    assert exc.value.code == 2
