@@ -13,6 +13,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from .._files import atomic_write_text
+from .._json import to_jsonable
 
 __all__ = ["AnalysisResult", "SUMMARY_FIELDS"]
 
@@ -152,7 +153,7 @@ class AnalysisResult:
         for f in dataclasses.fields(self):
             if f.name in self.ARRAYS and not arrays:
                 continue
-            out[f.name] = _jsonable(getattr(self, f.name))
+            out[f.name] = to_jsonable(getattr(self, f.name), use_to_dict=False)
         units = dict(self.UNITS)
         if self.deflection_unit != "V":
             units["calibration_factor"] = units["calibration_factor_fit"] = f"m/{self.deflection_unit}"
@@ -188,22 +189,3 @@ class AnalysisResult:
         rows.append(("friction", self.friction or "-", ""))
         rows.append(("diagnosis", self.verdict or "-", ""))
         return rows
-
-
-def _jsonable(obj: Any) -> Any:
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        return {f.name: _jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
-    if isinstance(obj, Mapping):
-        return {str(k): _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return [_jsonable(v) for v in obj.tolist()]
-    if isinstance(obj, (bool, np.bool_)):
-        return bool(obj)
-    if isinstance(obj, (int, np.integer)):
-        return int(obj)
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    return obj

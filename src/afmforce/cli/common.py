@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import argparse
 import json
-import math
 import sys
 from typing import Any, Callable
 
+from .._json import to_jsonable  # noqa: F401  (re-export)
 from .._files import atomic_path, atomic_write_bytes, atomic_write_text  # noqa: F401  (re-export)
 from ..errors import UnitError
 from ..units import format_quantity, parse_quantity
@@ -32,32 +32,6 @@ def add_quantity(parser: argparse.ArgumentParser, flag: str, dimension: str, def
     shown = "" if default is None else f" (default {format_quantity(default, unit) if unit else default})"
     parser.add_argument(flag, type=quantity(dimension, flag), default=default,
                         help=help + shown, metavar="VALUE", **kw)
-
-
-def to_jsonable(obj: Any) -> Any:
-    """Convert dataclasses/numpy values into JSON-friendly Python objects (NaN -> null)."""
-    import dataclasses
-
-    import numpy as np
-
-    if dataclasses.is_dataclass(obj) and not isinstance(obj, type):
-        if hasattr(obj, "to_dict"):
-            return to_jsonable(obj.to_dict())
-        return {f.name: to_jsonable(getattr(obj, f.name)) for f in dataclasses.fields(obj)}
-    if isinstance(obj, dict):
-        return {str(k): to_jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (list, tuple)):
-        return [to_jsonable(v) for v in obj]
-    if isinstance(obj, np.ndarray):
-        return [to_jsonable(v) for v in obj.tolist()]
-    if isinstance(obj, (np.floating, float)):
-        v = float(obj)
-        return None if not math.isfinite(v) else v
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    return obj
 
 
 def print_json(obj: Any) -> None:

@@ -4,13 +4,13 @@ from __future__ import annotations
 
 import io
 import json
-import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .._json import to_jsonable
 from .._files import atomic_path, atomic_write_text, check_writable
 from ..errors import FileFormatError, MissingDependencyError
 from .config import SimulationConfig
@@ -204,7 +204,7 @@ class Trajectory:
                 with h5py.File(tmp, "w") as f:
                     f.attrs["format"] = "afmforce trajectory 1"
                     for key, value in self._metadata().items():
-                        f.attrs[key] = json.dumps(_jsonable(value))
+                        f.attrs[key] = json.dumps(to_jsonable(value))
                     for name, unit in COLUMNS.items():
                         ds = f.create_dataset(name, data=getattr(self, name))
                         ds.attrs["unit"] = unit
@@ -217,23 +217,10 @@ class Trajectory:
         buf.write(f"# calibration_factor: {self.calibration_factor!r} m/rad\n")
         buf.write(f"# spring_constant: {self.spring_constant!r} N/m\n")
         buf.write(f"# model: {self.config.model}\n")
-        buf.write(f"# events: {json.dumps(_jsonable(self.events.to_dict()))}\n")
-        buf.write(f"# solver: {json.dumps(_jsonable(self.solver.to_dict()))}\n")
-        buf.write(f"# config: {json.dumps(_jsonable(self.config.to_dict()))}\n")
+        buf.write(f"# events: {json.dumps(to_jsonable(self.events.to_dict()))}\n")
+        buf.write(f"# solver: {json.dumps(to_jsonable(self.solver.to_dict()))}\n")
+        buf.write(f"# config: {json.dumps(to_jsonable(self.config.to_dict()))}\n")
         buf.write(",".join(f"{n} [{u}]" for n, u in COLUMNS.items()) + "\n")
         data = np.column_stack([getattr(self, n).astype(float) for n in COLUMNS])
         np.savetxt(buf, data, delimiter=",", fmt=["%.10g"] * (len(COLUMNS) - 1) + ["%d"])
         return buf.getvalue()
-
-
-def _jsonable(obj):
-    if isinstance(obj, dict):
-        return {k: _jsonable(v) for k, v in obj.items()}
-    if isinstance(obj, (float, np.floating)):
-        v = float(obj)
-        return v if math.isfinite(v) else None
-    if isinstance(obj, (np.integer,)):
-        return int(obj)
-    if isinstance(obj, (np.bool_,)):
-        return bool(obj)
-    return obj

@@ -22,8 +22,6 @@ __all__ = ["FIGURES", "ReproduceResult", "reproduce", "report_markdown"]
 
 def _fig(name):
     def make(fast: bool):
-        import matplotlib.pyplot as plt
-
         from . import figures_dynamic as D
         from . import figures_static as S
 
