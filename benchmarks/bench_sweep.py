@@ -1,7 +1,8 @@
 """Benchmark of sweeps and batches (issue 7). One command::
 
-    python benchmarks/bench_sweep.py            # ~1 minute: timed sub-grid, extrapolated
+    python benchmarks/bench_sweep.py            # ~3 minutes: timed sub-grid (extrapolated), the map
     python benchmarks/bench_sweep.py --full     # the full 100 x 100 grid (10,000 runs)
+    python benchmarks/bench_sweep.py --map-only --map-workers 0 2   # only the map, serial and 2 workers
 
 Prints three figures:
 
@@ -14,13 +15,16 @@ Prints three figures:
 2. **Speed-up of 2 workers over 1** on that grid (both clusters warm: numba
    caches loaded in every worker before timing). Target >= 1.8x. The machine is
    shared, so the load average is printed beside it.
-3. **Memory of a 128 x 128 map** streamed through ``run_batch``: 16,384 synthetic
-   2,000-point curves drawn from a generator, analysed chunk by chunk, results
-   written to the store as they arrive (in a fresh process, so that its peak RSS
-   is its own). Target peak RSS < 1 GB; the curves alone would take 0.8 GB.
-   Each curve goes through ``afmforce.pipeline.analyze`` with the core steps
-   (drift, compliance, calibration, zero, jumps), or, where the pipeline is
-   missing, a numpy stand-in (baseline, noise, minimum, contact, slope).
+3. **Memory of a 128 x 128 map** analysed by ``afmforce analyze`` itself (the
+   command's code, run in a fresh process so that its peak RSS is its own):
+   16,384 synthetic 2,000-point curves (jump-in and pull-off, adhesion in a
+   checkerboard) are first written to an afmforce map file (``afmforce.rawmap``,
+   curve by curve), then ``afmforce analyze MAP --out DIR --serial --steps
+   drift,compliance,calibration,zero,jumps`` reads them a chunk of curves at a time,
+   stores each chunk's summary as it finishes, writes the summary table and the
+   adhesion image. Target peak RSS < 1 GB; the curves alone take 0.8 GB.
+   ``--map-workers 0 2`` also runs it on a local cluster of 2 workers (each
+   worker's peak RSS is printed).
 """
 
 from __future__ import annotations
@@ -113,80 +117,119 @@ def bench_sweeps(n_side: int, full: bool, speedup: bool, repeat: int) -> None:
 
 
 # --- 3: 128 x 128 map memory ------------------------------------------------------------
-def synthetic_curve(pixel: int, n: int = CURVE_POINTS):
-    """A cheap approach-retract curve: baseline, attractive dip, constant compliance, noise."""
+def synthetic_curve(pixel: int, n: int = CURVE_POINTS, side: int = MAP_SIDE):
+    """A cheap approach-retract curve with a jump into contact and a pull-off (deflection in m).
+
+    Approach: an attractive tail ``-0.5 nm (3 nm / (c - z + 1 nm))^2`` until 2 nm before
+    the contact position c, then a jump down to the constant-compliance line ``z - c``;
+    retract: on that line until the pull-off, 6 or 10 nm below it (a checkerboard of
+    16 x 16 pixel squares over the map), then back to the tail. Noise 0.05 nm.
+    """
     from afmforce.raw import RawCurve
 
     rng = np.random.default_rng(pixel)
+    x, y = pixel % side, pixel // side
     half = n // 2
     z_in = np.linspace(-100e-9, 20e-9, half)
     z = np.concatenate([z_in, z_in[::-1]])
-    contact = rng.normal(0.0, 2e-9)
-    d = np.where(z > contact, z - contact, -1.5e-9 * np.exp((z - contact) / 2e-9))
-    d = d + rng.normal(0.0, 0.05e-9, n)
     segment = np.repeat(np.array([0, 1], dtype=np.int8), [half, n - half])
+    contact = rng.normal(0.0, 2e-9)
+    pull_off = (6e-9 if (x // 16 + y // 16) % 2 else 10e-9)
+    tail = -0.5e-9 * (3e-9 / np.maximum(contact - z + 1e-9, 1e-10)) ** 2
+    on_line = np.where(segment == 0, z >= contact - 2e-9, z >= contact - pull_off)
+    d = np.where(on_line, z - contact, tail) + rng.normal(0.0, 0.05e-9, n)
     return RawCurve(time=np.arange(n) / 2000.0, piezo_nominal=z, deflection_signal=d, segment=segment,
                     metadata={"spring_constant": 0.1, "velocity": 1e-6, "sample_rate": 2000.0,
                               "pixel": pixel}, deflection_unit="m")
-
-
-def standin_analysis(curve) -> dict:
-    """Summary of one curve without the analysis pipeline (numpy only)."""
-    z, d = curve.piezo_nominal, curve.deflection_signal
-    app = curve.approach
-    za, da = z[app], d[app]
-    base = da[: len(da) // 3]
-    offset, noise = float(base.mean()), float(base.std())
-    dd = da - offset
-    contact = int(np.argmax(dd > 5 * noise + (dd.max() - 5 * noise) * 0.05)) if dd.max() > 5 * noise else -1
-    top = slice(int(0.9 * len(za)), None)
-    slope = float(np.polyfit(za[top], dd[top], 1)[0])
-    return {"baseline": offset, "noise": noise, "min_deflection": float(dd.min()),
-            "contact_position": float(za[contact]) if contact >= 0 else np.nan, "compliance_slope": slope}
 
 
 #: The pipeline's core steps (issue 5's throughput benchmark: no fits).
 CORE_STEPS = ["drift", "compliance", "calibration", "zero", "jumps"]
 
 
-def _analysis():
+def _peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+
+
+def map_write_child(side: int, path: str) -> None:
+    """Fresh process: write the synthetic map file, curve by curve (afmforce map format)."""
+    from afmforce.rawmap import write_map
+
+    t = time.perf_counter()
+    write_map((synthetic_curve(p, side=side) for p in range(side * side)), path, shape=(side, side))
+    print(f"   map file written in {time.perf_counter() - t:.1f} s: {os.path.getsize(path) / 1e6:.0f} MB "
+          f"({side * side} curves x {CURVE_POINTS} points; writer peak RSS {_peak_mb():.0f} MB)")
+
+
+def map_analyze_child(path: str, out: str, workers: int) -> None:
+    """Fresh process: ``afmforce analyze MAP --out DIR`` (the command's own code), then its peak RSS.
+
+    ``workers`` 0: ``--serial`` (everything in this process, so that its peak RSS is the
+    whole run's); otherwise a local cluster of that many workers, whose peak RSS is
+    asked from each worker after the run.
+    """
+    import contextlib
+    import io
+
+    from afmforce.cli.main import main
+
+    rss0 = _peak_mb()
+    argv = ["analyze", path, "--out", out, "--steps", ",".join(CORE_STEPS), "--map-quantity", "adhesion"]
+    worker_peaks: list[float] = []
+    if workers:
+        from afmforce.sweep import executors
+
+        class Measured(executors.DaskExecutor):  # the command's executor, asked for peaks before closing
+            def close(self):
+                if self._client is not None:
+                    worker_peaks.extend(self._client.run(_peak_mb).values())
+                super().close()
+
+        executors_original = executors.DaskExecutor
+        executors.DaskExecutor = Measured
+        argv += ["--workers", str(workers)]
+    else:
+        argv += ["--serial"]
+    text = io.StringIO()
+    t = time.perf_counter()
     try:
-        from afmforce.pipeline import analyze  # noqa: F401
-    except ImportError:
-        return standin_analysis, "stand-in summary (afmforce.pipeline not available)"
-    return pipeline_analysis, f"afmforce.pipeline.analyze, steps {'+'.join(CORE_STEPS)}"
+        with contextlib.redirect_stdout(text):
+            code = main(argv)
+    finally:
+        if workers:
+            executors.DaskExecutor = executors_original
+    elapsed = time.perf_counter() - t
+    lines = text.getvalue().splitlines()
+    head = " ".join(line.strip() for line in lines if "chunks run on" in line)
+    import glob
+
+    import pandas as pd
+
+    (summary,) = glob.glob(os.path.join(out, "batch-*", "summary.parquet"))
+    pull_off = pd.read_parquet(summary, columns=["pull_off_force"])["pull_off_force"]
+    found = f"{int(pull_off.notna().sum())} of {len(pull_off)}"
+    where = "serial, in this process" if not workers else f"local Dask cluster of {workers} workers"
+    print(f"   afmforce analyze ({where}): {elapsed:.1f} s, exit {code}; {head}; pull-off found in {found} curves")
+    peak = _peak_mb()
+    print(f"   peak RSS: command process {peak:.0f} MB (after imports {rss0:.0f} MB)"
+          + (f", workers {', '.join(f'{w:.0f}' for w in worker_peaks)} MB" if worker_peaks else "")
+          + f"  (target < 1024 MB each: {'met' if max([peak, *worker_peaks]) < 1024 else 'NOT met'})")
 
 
-def pipeline_analysis(curve) -> dict:
-    """The summary fields of the pipeline's analysis of one curve (one map pixel)."""
-    from afmforce.analysis.result import SUMMARY_FIELDS
-    from afmforce.pipeline import analyze
+def bench_map(side: int, workers: list[int]) -> None:
+    from afmforce.sweep import default_chunk_size
 
-    result = analyze(curve, steps=CORE_STEPS)
-    return {name: getattr(result, name) for name, _, _ in SUMMARY_FIELDS}
-
-
-def bench_map_child(side: int) -> None:
-    """Run in a fresh process: stream the map through run_batch and print peak RSS."""
-    from afmforce.sweep import run_batch
-
-    func, name = _analysis()
-    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
-    curves = (synthetic_curve(p) for p in range(side * side))
-    with tempfile.TemporaryDirectory() as store:
-        t = time.perf_counter()
-        result = run_batch(curves, func, executor="serial", store=store, key=f"map-{side}", chunk_size=256)
-        out = result.write(os.path.join(store, "map.parquet"))
-        elapsed = time.perf_counter() - t
-        rows = sum(len(f) for f in result.iter_tables())
-        errors = sum(int(f["error"].notna().sum()) for f in result.iter_tables())
-        size = os.path.getsize(out)
-    peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     per_curve = synthetic_curve(0).time.nbytes * 3 + CURVE_POINTS
-    print(f"3. {side} x {side} map ({side * side} curves of {CURVE_POINTS} points, {name}): "
-          f"{elapsed:.1f} s, {rows} rows ({errors} errors), table {size / 1e6:.1f} MB")
-    print(f"   peak RSS {peak:.0f} MB (after imports {rss0:.0f} MB; all curves at once would be "
-          f"{per_curve * side * side / 1e6:.0f} MB)  (target < 1024 MB: {'met' if peak < 1024 else 'NOT met'})")
+    print(f"3. {side} x {side} force map ({side * side} curves of {CURVE_POINTS} points; all at once would be "
+          f"{per_curve * side * side / 1e6:.0f} MB) through `afmforce analyze` (steps {'+'.join(CORE_STEPS)}, "
+          f"chunks of {default_chunk_size(side * side)} curves read from the map file, summaries stored as chunks "
+          "finish)")
+    with tempfile.TemporaryDirectory() as tmp:
+        path = os.path.join(tmp, f"map{side}.h5")
+        subprocess.run([sys.executable, __file__, "--map-write", str(side), path], check=True)
+        for w in workers:
+            out = os.path.join(tmp, f"out-{w}")
+            subprocess.run([sys.executable, __file__, "--map-analyze", path, out, str(w)], check=True)
 
 
 def main(argv=None) -> int:
@@ -197,14 +240,22 @@ def main(argv=None) -> int:
     p.add_argument("--no-speedup", action="store_true", help="skip the 1-worker run")
     p.add_argument("--no-map", action="store_true", help="skip the 128 x 128 map")
     p.add_argument("--map-side", type=int, default=MAP_SIDE, help="pixels per side of the map (default 128)")
-    p.add_argument("--map-child", type=int, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--map-workers", type=int, nargs="+", default=[0],
+                   help="map runs: 0 for --serial (default), N for a local cluster of N workers")
+    p.add_argument("--map-only", action="store_true", help="only the map (figure 3)")
+    p.add_argument("--map-write", nargs=2, default=None, help=argparse.SUPPRESS)
+    p.add_argument("--map-analyze", nargs=3, default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
-    if args.map_child:
-        bench_map_child(args.map_child)
+    if args.map_write:
+        map_write_child(int(args.map_write[0]), args.map_write[1])
         return 0
-    bench_sweeps(args.n_side, args.full, not args.no_speedup, args.repeat)
+    if args.map_analyze:
+        map_analyze_child(args.map_analyze[0], args.map_analyze[1], int(args.map_analyze[2]))
+        return 0
+    if not args.map_only:
+        bench_sweeps(args.n_side, args.full, not args.no_speedup, args.repeat)
     if not args.no_map:
-        subprocess.run([sys.executable, __file__, "--map-child", str(args.map_side)], check=True)
+        bench_map(args.map_side, args.map_workers)
     return 0
 
 

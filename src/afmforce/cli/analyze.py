@@ -1,11 +1,16 @@
-"""``afmforce analyze``: analyse force-curve files (or folders of them).
+"""``afmforce analyze``: analyse force-curve files, folders of them and force maps.
 
 For each curve: calibrated force against separation, jump-in, pull-off, the
-van der Waals fit, the instrument's artefacts and the dynamic diagnosis. With
-``--out DIR`` each curve gets ``<name>.afmforce.json`` (result, SI units),
-``<name>.afmforce.csv`` (force-vs-separation table with units) and
-``<name>.afmforce.png`` (figure), written atomically; input files are only read.
-Bad files are reported and skipped; the exit status is 1 if any failed,
+van der Waals fit, the instrument's artefacts and the dynamic diagnosis.
+Curves are analysed in chunks through the sweep engine: a few curves (fewer
+than 64) in this process, more on a local Dask cluster (or --workers N,
+--scheduler, --serial). With --out DIR: one summary table for the batch
+(DIR/batch-<hash>/summary.parquet and summary.csv, with units), a heat map of
+--map-quantity per force map, and, for small runs, each curve's JSON, CSV
+table and figure (<name>.afmforce.json/.csv/.png); larger runs store their
+chunks as they finish, so that rerunning the same command resumes. Outputs
+are written atomically, input files are only read. Bad files and curves are
+listed while the others are analysed; the exit status is 1 if any failed,
 2 for usage errors.
 """
 
@@ -14,32 +19,56 @@ from __future__ import annotations
 import argparse
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
-from ..errors import AfmforceError, OutputExistsError, ParameterError
-from .common import add_quantity, atomic_path, atomic_write_text, eprint
+from .. import errors as _errors
+from ..errors import ParameterError
+from .common import add_quantity, eprint
 
 SUFFIX = ".afmforce"
+#: Runs with at least this many curves are batches: Dask, resumable store, summary statistics.
+BATCH_CURVES = 64
+#: Map image written when maps are analysed and no --map-quantity is given.
+DEFAULT_MAP_QUANTITY = "adhesion"
+_MAX_LISTED = 20
+_BATCH_FOLDER = re.compile(r"batch-[0-9a-f]{12}")  # our summary tables are not inputs
 
 
 def register(sub) -> None:
+    from ..analysis.mapping import MAP_QUANTITIES
     from ..pipeline import STEPS
 
-    p = sub.add_parser("analyze", help="analyse force-curve files: force vs separation, jumps, fits, diagnosis",
-                       description=__doc__.split("\n\n")[1].replace("\n", " "))
-    p.add_argument("files", nargs="+", metavar="FILE", help="force-curve files or folders (searched recursively)")
+    p = sub.add_parser("analyze", help="analyse force-curve files and force maps: force vs separation, jumps, "
+                       "fits, diagnosis", description=__doc__.split("\n\n")[1].replace("\n", " "))
+    p.add_argument("files", nargs="+", metavar="FILE", help="force-curve files, force maps or folders "
+                   "(searched recursively)")
     p.add_argument("--out", metavar="DIR", type=Path, default=None,
-                   help="write JSON, CSV table and figure of each curve into DIR")
+                   help="write the summary table, map images and (small runs) each curve's outputs into DIR")
     p.add_argument("--json", action="store_true", help="print the results as JSON (SI) instead of a table")
-    p.add_argument("--force", action="store_true", help="overwrite existing output files")
+    p.add_argument("--force", action="store_true", help="overwrite existing per-curve output files")
     p.add_argument("--steps", default=None, metavar="A,B,...",
                    help="analysis steps to run (their requirements are added): " + ", ".join(STEPS))
     p.add_argument("--format", default=None, metavar="ID", help="reader to use instead of detection "
                    "(see docs/analysis.md), e.g. jpk-zip for raw volts")
     p.add_argument("--channel", choices=("auto", "measured", "nominal"), default="auto",
                    help="position channel (default: measured if recorded)")
-    p.add_argument("--no-plot", action="store_true", help="with --out: skip the figures")
+    p.add_argument("--no-plot", action="store_true", help="with --out: skip the per-curve figures")
+    p.add_argument("--map-quantity", action="append", default=[], metavar="Q", choices=list(MAP_QUANTITIES),
+                   help=f"quantity drawn as a heat map per force map (repeatable; default {DEFAULT_MAP_QUANTITY}): "
+                        + ", ".join(MAP_QUANTITIES))
+    p.add_argument("--per-curve", action="store_true",
+                   help=f"with --out: write each curve's JSON, CSV and figure also in runs of {BATCH_CURVES} "
+                        "curves or more")
+    r = p.add_argument_group("where it runs (batches of many curves)")
+    r.add_argument("--workers", type=int, default=None, metavar="N", help="worker processes of the local Dask cluster "
+                   "(default: one per core)")
+    r.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use a running Dask cluster")
+    r.add_argument("--serial", action="store_true", help="run in this process, one curve after the other")
+    r.add_argument("--chunk-size", type=int, default=None, metavar="N",
+                   help="curves per chunk (default: about 64 chunks, at most 256 curves each); "
+                        "makes the run a resumable batch")
     g = p.add_argument_group("instrument and probe (values with units, e.g. 0.21N/m, 45nm/V, -15deg, 220nm)")
     add_quantity(g, "--spring-constant", "stiffness", None,
                  "spring constant k (with --theta0: the intrinsic k0, corrected by eq 13/14)", "N/m")
@@ -66,7 +95,7 @@ def _inputs(names: list[str]) -> list[Path]:
         path = Path(name)
         if path.is_dir():
             found = sorted(p for p in path.rglob("*") if p.is_file() and p.name.lower().endswith(suffixes)
-                           and SUFFIX not in p.name)
+                           and SUFFIX not in p.name and not _BATCH_FOLDER.fullmatch(p.parent.name))
             out.extend(found)
         else:
             out.append(path)
@@ -74,112 +103,185 @@ def _inputs(names: list[str]) -> list[Path]:
 
 
 def _options(args: argparse.Namespace) -> dict:
-    opts: dict = {"zero": {"contact_separation": args.contact_separation},
-                  "calibration": {"source": args.calibration},
-                  "force": {"spring_constant": args.spring_constant, "theta0": args.theta0,
-                            "L0": args.L0, "L1": args.L1, "L2": args.L2},
-                  "adhesion": {"radius": args.radius}, "vdw": {"radius": args.radius},
-                  "diagnosis": {"resonance_frequency": args.resonance_frequency}}
-    return opts
+    return {"zero": {"contact_separation": args.contact_separation},
+            "calibration": {"source": args.calibration},
+            "force": {"spring_constant": args.spring_constant, "theta0": args.theta0,
+                      "L0": args.L0, "L1": args.L1, "L2": args.L2},
+            "adhesion": {"radius": args.radius}, "vdw": {"radius": args.radius},
+            "diagnosis": {"resonance_frequency": args.resonance_frequency}}
 
 
-def _outputs(out: Path, stem: str) -> dict[str, Path]:
-    return {ext: out / f"{stem}{SUFFIX}.{ext}" for ext in ("json", "csv", "png")}
-
-
-def _write(result, curve, paths: dict[str, Path], force: bool, plot: bool) -> None:
-    for key, path in paths.items():
-        if key == "png" and not plot:
-            continue
-        if path.exists() and not force:
-            raise OutputExistsError(f"{path} exists; pass --force to overwrite")
-    atomic_write_text(paths["json"], result.to_json(), force=force)
-    result.write_table(paths["csv"], force=force)
-    if plot:
-        from ..plotting import plot_summary
-
-        fig = plot_summary(result, curve)
-        with atomic_path(paths["png"], force=force) as tmp:
-            fig.savefig(tmp, dpi=100, format="png")
-
-
-def run(args: argparse.Namespace) -> int:
-    from ..analysis.oscillation import oscillation_origin
-    from ..io import load
-    from ..pipeline import analyze, resolve_steps
+def _check(args: argparse.Namespace) -> list[str] | None:
+    """Usage errors (exit 2) before any work; returns the steps."""
+    from ..io import FORMATS
+    from ..pipeline import resolve_steps
 
     steps = None if args.steps is None else [s.strip() for s in args.steps.split(",") if s.strip()]
     resolve_steps(steps)  # unknown step: ParameterError -> exit 2
+    if args.format is not None and args.format not in FORMATS:
+        raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")
     if args.out is not None and args.out.exists() and not args.out.is_dir():
         raise ParameterError(f"--out {args.out} exists and is not a folder")
+    if args.serial and (args.workers is not None or args.scheduler):
+        raise ParameterError("--serial runs in this process; drop --workers/--scheduler")
+    if args.workers is not None and args.scheduler:
+        raise ParameterError("--workers sizes the local cluster; a --scheduler cluster has its own workers")
+    if args.workers is not None and args.workers < 1:
+        raise ParameterError(f"--workers must be at least 1, got {args.workers}")
+    if args.chunk_size is not None and args.chunk_size < 1:
+        raise ParameterError(f"--chunk-size must be a positive integer, got {args.chunk_size}")
+    return steps
+
+
+def _progress_bar(total: int):
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, unit="chunk", desc="analyze", disable=total < 2 or not sys.stderr.isatty(),
+               file=sys.stderr, dynamic_ncols=True, leave=False)
+
+    def update(p) -> None:
+        bar.total = p.chunks_total
+        bar.n = p.chunks_done
+        if p.chunks_failed:
+            bar.set_postfix(failed=p.chunks_failed, refresh=False)
+        bar.refresh()
+
+    return bar, update
+
+
+def run(args: argparse.Namespace) -> int:
+    from ..sweep.analysis import CurveAnalysis, analysis_key, analyze_files, plan_curves
+    from ..sweep.engine import default_chunk_size
+
+    steps = _check(args)
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
-    inputs = {p.resolve() for p in files if p.exists()}
+    refs = plan_curves(files, args.format)
+    n = len(refs)
+    batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
+    local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)
+    per_curve = args.out is not None and (not batch or args.per_curve)
     meta = {k: v for k, v in (("spring_constant", args.spring_constant), ("sensitivity", args.sensitivity))
             if v is not None}
-    opts = _options(args)
-    results, failed = [], []
-    bar = _progress(len(files))
-    for path in files:
-        try:
-            curves = load(path, meta_override=meta, format=args.format)
-            for i, curve in enumerate(curves):
-                res = analyze(curve, steps=steps, options=opts, channel=args.channel)
-                name = path.name if len(curves) == 1 else f"{path.name}#{i}"
-                results.append((name, res))
-                if args.out is not None:
-                    stem = path.name if len(curves) == 1 else f"{path.name}_{i:04d}"
-                    paths = _outputs(args.out, stem)
-                    if any(p.resolve() in inputs for p in paths.values()):
-                        raise OutputExistsError(f"an output would replace an input file ({stem}); choose --out")
-                    _write(res, curve, paths, args.force, not args.no_plot)
-        except AfmforceError as exc:
-            failed.append((str(path), str(exc)))
-        except (OSError, ValueError, RuntimeError, FloatingPointError, IndexError) as exc:
-            failed.append((str(path), f"unexpected {type(exc).__name__}: {exc}"))
-        bar(path)
-    bar(None)
-    peaks = [(r.details["oscillation"], r) for _, r in results if "oscillation" in r.details]
-    freqs = [p.frequency for o, _ in peaks for p in (o.approach, o.retract) if p.found]
-    vels = [p.velocity for o, _ in peaks for p in (o.approach, o.retract) if p.found]
-    origin = oscillation_origin(freqs, vels) if len(results) > 1 else None
+    analysis = CurveAnalysis(
+        steps=None if steps is None else tuple(steps), options=_options(args), meta_override=meta,
+        format=args.format, channel=args.channel, keep_json=args.json,
+        out=str(args.out) if per_curve else None, force=args.force, plot=not args.no_plot,
+        protect=tuple(str(p.resolve()) for p in files if p.exists()) if per_curve else ())
+    chunk_size = args.chunk_size if batch else 1
+    n_chunks = math.ceil(n / (chunk_size or default_chunk_size(n)))
+    if batch and not args.json:
+        maps = len({r.path for r in refs if r.index is not None})
+        print(f"afmforce analyze: {n} items ({len(files)} file(s), {maps} of them force maps) in {n_chunks} chunks",
+              flush=True)
+    bar, update = _progress_bar(n_chunks)
+    try:
+        result = analyze_files(refs, analysis, chunk_size=chunk_size, executor="serial" if local else None,
+                               workers=args.workers, scheduler=args.scheduler,
+                               store=args.out if batch and args.out is not None else None, progress=update)
+    finally:
+        bar.close()
+    folder = None
+    if result.store is not None:
+        folder = result.store.root
+    elif args.out is not None:  # a small run stores nothing: its summary goes where a batch's would
+        folder = args.out / f"batch-{analysis_key(refs, analysis)[:12]}"
+    return _report(args, result, refs, folder, batch)
+
+
+def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
+    from ..sweep.analysis import failures, summary_table, write_summary
+
+    table = summary_table(result, with_json=args.json)
+    ok = table[table["error"].isna()]
+    failed = failures(result)
+    written = {}
+    if folder is not None:
+        written = write_summary(result, folder)
+        written.update(_write_maps(table, folder, args.map_quantity))
     if args.json:
-        payload = {"results": {name: r.to_dict() for name, r in results},
-                   "failed": [{"file": f, "error": e} for f, e in failed]}
-        if origin is not None:
-            payload["oscillation_origin"] = {"origin": origin[0], "verdict": origin[1]}
-        print(json.dumps(payload, indent=2, allow_nan=False))
+        _print_json(ok, failed)
     else:
-        _print_summary(results)
+        if len(ok) <= BATCH_CURVES:
+            _print_rows(ok)
+        else:
+            _print_stats(ok)
+        origin = _oscillation_origin(ok)
         if origin is not None and origin[0] != "none":
             print(f"oscillations across files: {origin[1]}")
-    for f, e in failed:
-        eprint(f"failed: {e}" if e.startswith(f) else f"failed: {f}: {e}")
+        if batch:
+            if result.chunks_run:
+                print(f"  {result.chunks_run} of {result.chunks_total} chunks run on {result.executor} in "
+                      f"{result.wall_time:.1f} s; {result.chunks_skipped} were already stored")
+            else:
+                print(f"  all {result.chunks_total} chunks were already stored in {folder} "
+                      "(delete that folder to recompute)")
+        if written:
+            print(f"summary in {folder}/: " + ", ".join(p.name for p in written.values()))
+    for name, error in failed[:_MAX_LISTED if batch else None]:
+        error = _clean(error)
+        eprint(f"failed: {error}" if error.startswith(name) else f"failed: {name}: {error}")
     if failed:
-        eprint(f"{len(failed)} of {len(files)} file(s) failed")
+        if batch and len(failed) > _MAX_LISTED:
+            eprint(f"  ... and {len(failed) - _MAX_LISTED} more" + (f" (all in {written['errors']})"
+                                                                      if "errors" in written else ""))
+        kind = "file(s)" if all(r.index is None for r in refs) else "curve(s) or file(s)"
+        eprint(f"{len(failed)} of {len(refs)} {kind} failed")
     return 1 if failed else 0
 
 
-def _progress(n: int):
-    """A tqdm bar over files on a terminal (stderr), silent otherwise."""
-    if n < 2 or not sys.stderr.isatty():
-        return lambda path: None
-    from tqdm import tqdm
-
-    bar = tqdm(total=n, unit="file", file=sys.stderr, leave=False)
-
-    def step(path):
-        if path is None:
-            bar.close()
-        else:
-            bar.set_postfix_str(Path(path).name[-30:])
-            bar.update(1)
-
-    return step
+def _clean(error: str) -> str:
+    """``FileFormatError: msg`` -> ``msg``; other exception types are marked unexpected."""
+    name, sep, rest = error.partition(": ")
+    cls = getattr(_errors, name, None)
+    if sep and isinstance(cls, type) and issubclass(cls, _errors.AfmforceError):
+        return rest
+    if sep and re.fullmatch(r"\w+(Error|Exception)", name):
+        return f"unexpected {error}"
+    return error
 
 
-_COLUMNS = (  # attribute, header, scale
+def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
+    from ..analysis.mapping import map_images, write_map_png
+
+    out = {}
+    for q in dict.fromkeys(quantities or [DEFAULT_MAP_QUANTITY]):
+        for image in map_images(table, q):
+            out[f"map {image.source} {q}"] = write_map_png(image, folder / f"{image.name}.{q}.png")
+    return out
+
+
+def _print_json(ok, failed) -> None:
+    payload = {"results": {row["name"]: json.loads(row["json"]) for _, row in ok.iterrows()},
+               "failed": []}
+    for name, error in failed:
+        file, _, curve = name.rpartition("#") if re.search(r"#\d+$", name) else (name, "", "")
+        entry = {"file": file}
+        if curve:
+            entry["curve"] = int(curve)
+        payload["failed"].append({**entry, "error": _clean(error)})
+    origin = _oscillation_origin(ok)
+    if origin is not None:
+        payload["oscillation_origin"] = {"origin": origin[0], "verdict": origin[1]}
+    print(json.dumps(payload, indent=2, allow_nan=False))
+
+
+def _oscillation_origin(ok):
+    from ..analysis.oscillation import oscillation_origin
+
+    if len(ok) < 2:
+        return None
+    freqs, vels = [], []
+    for run in ("approach", "retract"):
+        f, v = ok[f"oscillation_{run}_frequency"].to_numpy(float), ok[f"oscillation_{run}_velocity"].to_numpy(float)
+        found = [i for i in range(len(f)) if math.isfinite(f[i])]
+        freqs += [f[i] for i in found]
+        vels += [v[i] for i in found]
+    return oscillation_origin(freqs, vels)
+
+
+_COLUMNS = (  # column, header, scale
     ("spring_constant", "k [N/m]", 1.0),
     ("calibration_factor", "InvOLS [nm/V]", 1e9),
     ("shift", "shift [nm]", 1e9),
@@ -195,21 +297,37 @@ def _fmt(v: float) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.4g}"
 
 
-def _print_summary(results) -> None:
-    if not results:
+def _print_rows(ok) -> None:
+    """One line per curve (small runs)."""
+    if not len(ok):
         return
     heads = ["file"] + [h for _, h, _ in _COLUMNS] + ["friction", "dynamic"]
     rows = []
-    for name, r in results:
-        vals = [getattr(r, a) * s for a, _, s in _COLUMNS]
-        if r.deflection_unit != "V":
+    for _, r in ok.iterrows():
+        vals = [float(r[c]) * s for c, _, s in _COLUMNS]
+        if r["deflection_unit"] != "V":
             vals[1] = math.nan  # vendor-calibrated signal: no InvOLS
-        rows.append([name] + [_fmt(v) for v in vals]
-                    + [r.friction or "-", "yes" if r.dynamic else "no"])
+        rows.append([r["name"]] + [_fmt(v) for v in vals] + [r["friction"] or "-", "yes" if r["dynamic"] else "no"])
     widths = [max(len(h), *(len(row[i]) for row in rows)) for i, h in enumerate(heads)]
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths)))
     for row in rows:
         print("  ".join(c.ljust(w) for c, w in zip(row, widths)))
-    for name, r in results:
-        if r.warnings or r.verdict:
-            print(f"{name}: {r.verdict}" + ("".join(f"\n  warning: {w}" for w in r.warnings)))
+    for _, r in ok.iterrows():
+        warnings = [w for w in (r["warnings"] or "").split(" | ") if w]
+        if warnings or r["verdict"]:
+            print(f"{r['name']}: {r['verdict']}" + "".join(f"\n  warning: {w}" for w in warnings))
+
+
+def _print_stats(ok) -> None:
+    """Minimum, median and maximum of the main columns (large runs)."""
+    import numpy as np
+
+    print(f"{len(ok)} curves analysed; {int(ok['dynamic'].fillna(False).sum())} flagged dynamic")
+    print(f"  {'quantity':<16}  {'min':>10}  {'median':>10}  {'max':>10}  {'found':>7}")
+    volts = (ok["deflection_unit"] == "V").to_numpy()
+    for col, head, scale in _COLUMNS:
+        v = ok[col].to_numpy(float) * scale
+        v = v[np.isfinite(v) & (volts if col == "calibration_factor" else True)]  # InvOLS: raw volts only
+        if len(v):
+            print(f"  {head:<16}  {_fmt(v.min()):>10}  {_fmt(float(np.median(v))):>10}  {_fmt(v.max()):>10}  "
+                  f"{len(v):>7}")

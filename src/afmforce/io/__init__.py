@@ -127,6 +127,47 @@ def _load_rawfile(path: Path, *, meta_override: Mapping[str, Any], callback=None
     return [curve]
 
 
+def _detect_raw_map(path: Path) -> bool:
+    """HDF5 signature and the root attribute ``format = "afmforce-map"``."""
+    if not _rawfile_available():
+        return False
+    from afmforce.rawmap import is_map
+
+    return is_map(path)
+
+
+def _load_rawmap(path: Path, *, meta_override: Mapping[str, Any], callback=None,
+                 indices: list[int] | None = None, reader=None) -> list[RawCurve]:
+    """afmforce force map (HDF5, many curves on a grid), written by :mod:`afmforce.rawmap`.
+
+    ``indices`` reads only those curves and ``reader`` (an open
+    :class:`~afmforce.rawmap.MapReader` of ``path``) saves opening the file:
+    the batch analysis reads a map a chunk at a time.
+    """
+    import dataclasses
+
+    from afmforce.rawmap import MapReader
+
+    own = reader is None
+    reader = MapReader(path) if own else reader
+    try:
+        indices = list(range(len(reader))) if indices is None else list(indices)
+        out = []
+        for i in indices:
+            curve = reader.read(i)
+            meta = {**dict(curve.metadata), **dict(meta_override), "reader": "afmforce-map", "map_index": int(i)}
+            if meta.get("source_file") not in (None, str(path)):
+                meta["recorded_source"] = meta["source_file"]
+            meta["source_file"] = str(path)
+            out.append(dataclasses.replace(curve, metadata=meta))
+            if callback is not None:
+                callback(len(out) / len(indices))
+    finally:
+        if own:
+            reader.close()
+    return out
+
+
 def _always(path: Path) -> bool:
     return True
 
@@ -137,6 +178,8 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  _load_rawfile, via="afmforce", deflection="V, m or N"),
     ReaderFormat("afmforce-hdf5", "afmforce raw HDF5", (".h5", ".hdf5", ".hdf"), _detect_raw_hdf5,
                  _load_rawfile, via="afmforce", deflection="V, m or N"),
+    ReaderFormat("afmforce-map", "afmforce force map (HDF5, curves on a grid)", (".h5", ".hdf5", ".hdf"),
+                 _detect_raw_map, _load_rawmap, via="afmforce", deflection="V, m or N"),
     ReaderFormat("bruker-ascii", "Bruker NanoScope ASCII export", (".txt", ".asc", ".csv"),
                  _lazy("bruker", "detect_bruker_ascii"), _lazy("bruker", "load_bruker_ascii"),
                  via="afmforce", deflection="V, m or N"),

@@ -1,0 +1,283 @@
+"""Batch analysis of force-curve files and force maps on the sweep engine.
+
+The work is split into items: one per curve of a force map (an afmforce map
+file, or a JPK ``.jpk-force-map``/``.jpk-qi-data``, whose curves can be
+counted without reading them), one per other file (all its curves).
+:func:`analyze_files` runs :class:`CurveAnalysis` over the items with
+:func:`~afmforce.sweep.run_batch`: chunks of curves, in this process or on
+Dask, stored as they finish (resumable), failures recorded with the curve's
+name. Each curve gives one summary row (:data:`SUMMARY_COLUMNS`, SI units in
+:data:`SUMMARY_UNITS`); :func:`write_summary` streams them into one Parquet
+and one CSV table.
+
+>>> from afmforce.sweep.analysis import CurveAnalysis, analyze_files, summary_table
+>>> result = analyze_files(["map.h5", "a.ibw"], CurveAnalysis(steps=("jumps",)),
+...                        executor="serial", store="results")     # doctest: +SKIP
+>>> summary_table(result)                                          # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Callable, Iterable, Mapping
+
+from .._files import atomic_path, atomic_write_text
+from ..errors import FileFormatError, OutputExistsError
+from .batch import run_batch
+from .results import BatchResult
+from .summary import SUMMARY_COLUMNS, SUMMARY_UNITS, failures, summary_row, summary_table, write_summary
+
+__all__ = ["CurveRef", "CurveAnalysis", "plan_curves", "analyze_files", "analysis_key", "summary_row",
+           "summary_table", "write_summary", "failures", "SUMMARY_COLUMNS", "SUMMARY_UNITS", "OUTPUT_SUFFIX"]
+
+#: Per-curve output files: ``<name><OUTPUT_SUFFIX>.{json,csv,png}``.
+OUTPUT_SUFFIX = ".afmforce"
+_MAP_SUFFIXES = (".jpk-force-map", ".jpk-qi-data")
+
+
+@dataclass(frozen=True)
+class CurveRef:
+    """One work item: a curve of a file (``index``), or every curve of it (``index`` None).
+
+    Attributes
+    ----------
+    path : str
+        As given (shown in messages); workers read :attr:`location`.
+    index : int or None
+        Position of the curve in the file.
+    format : str or None
+        Reader identifier found when planning (None: detect when loading).
+    """
+
+    path: str
+    index: int | None = None
+    format: str | None = None
+
+    @property
+    def location(self) -> Path:
+        """The absolute path (workers may run in another folder)."""
+        return Path(self.path).absolute()
+
+    @property
+    def label(self) -> str:
+        """``path`` or ``path#index``: the name a failure is reported under."""
+        return self.path if self.index is None else f"{self.path}#{self.index}"
+
+
+def _count_curves(path: Path, fmt) -> int | None:
+    """Curves in a multi-curve file, counted without reading them (None: not a map, or unknown)."""
+    if fmt.identifier == "afmforce-map":
+        from ..rawmap import map_info
+
+        return map_info(path).n_curves
+    if fmt.identifier == "jpk-force" and path.name.lower().endswith(_MAP_SUFFIXES):
+        from afmformats.formats.fmt_jpk.jpk_reader import JPKReader
+
+        return len(JPKReader(path))
+    return None
+
+
+def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None) -> list[CurveRef]:
+    """Work items for ``paths``: one per curve of a force map, one per other file.
+
+    Never raises for a bad file: it becomes one item, whose analysis reports the error.
+    """
+    from ..io import FORMATS, find_format
+
+    refs: list[CurveRef] = []
+    for p in paths:
+        path = Path(p)
+        n, ident = None, format
+        try:
+            fmt = FORMATS[format] if format else find_format(path)
+            ident = fmt.identifier
+            n = _count_curves(path, fmt)
+        except Exception:  # unreadable, unknown, damaged: analysed (and reported) as a whole file
+            pass
+        if n:
+            refs.extend(CurveRef(str(path), i, ident) for i in range(n))
+        else:
+            refs.append(CurveRef(str(path), None, ident))
+    return refs
+
+
+# One open file per worker process, reused by consecutive items of the same file:
+# an afmforce map reader, or the curves of a multi-curve vendor file read whole.
+_OPEN: dict[str, Any] = {}
+
+
+def _identity(path: Path, *extra) -> tuple:
+    st = path.stat()
+    return (str(path.resolve()), st.st_size, st.st_mtime_ns, *extra)
+
+
+def _map_reader(path: Path):
+    from ..rawmap import MapReader
+
+    ident = _identity(path, "map")
+    if _OPEN.get("id") != ident:
+        _close_open()
+        _OPEN.update(id=ident, value=MapReader(path))
+    return _OPEN["value"]
+
+
+def _load_cached(path: Path, meta: Mapping[str, Any], format: str | None) -> list:
+    from ..io import load
+
+    ident = _identity(path, json.dumps(dict(meta), sort_keys=True), format)
+    if _OPEN.get("id") != ident:
+        _close_open()
+        _OPEN.update(id=ident, value=load(path, meta_override=meta, format=format))
+    return _OPEN["value"]
+
+
+def _close_open() -> None:
+    value = _OPEN.pop("value", None)
+    _OPEN.clear()
+    if hasattr(value, "close"):
+        value.close()
+
+
+@dataclass(frozen=True)
+class CurveAnalysis:
+    """The function a batch runs on each item: load, :func:`~afmforce.pipeline.analyze`, summarise.
+
+    Picklable (Dask workers run it). Returns one summary row per curve of the
+    item; a curve that cannot be read or analysed raises, and the batch records
+    the error under the item's name.
+
+    Attributes
+    ----------
+    steps : tuple of str or None
+        Analysis steps (None: all).
+    options : mapping
+        ``{step: {option: value}}`` in SI.
+    meta_override : mapping
+        Metadata replacing the files' (``spring_constant`` [N/m], ``sensitivity`` [m/V]).
+    format : str or None
+        Reader identifier (None: detect).
+    channel : str
+        Position channel.
+    keep_json : bool
+        Add each full result as JSON (column ``json``).
+    out : str or None
+        Folder for per-curve outputs (``<name>.afmforce.json/.csv/.png``); None: none.
+    force : bool
+        Overwrite existing per-curve outputs.
+    plot : bool
+        Write the per-curve figure.
+    protect : tuple of str
+        Resolved input paths that per-curve outputs must never replace.
+    """
+
+    steps: tuple[str, ...] | None = None
+    options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    meta_override: Mapping[str, Any] = field(default_factory=dict)
+    format: str | None = None
+    channel: str = "auto"
+    keep_json: bool = False
+    out: str | None = None
+    force: bool = False
+    plot: bool = True
+    protect: tuple[str, ...] = ()
+
+    def key_fields(self) -> dict[str, Any]:
+        """What determines the results (and so the store they resume from)."""
+        return {"steps": self.steps, "options": self.options, "meta": self.meta_override,
+                "format": self.format, "channel": self.channel, "json": self.keep_json}
+
+    def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
+        """``(index in the file, RawCurve)`` of the item's curves."""
+        from ..io import FORMATS, load
+        from ..io._meta import check_meta_override
+
+        path = ref.location
+        if ref.index is None:
+            return list(enumerate(load(path, meta_override=self.meta_override, format=self.format)))
+        if ref.format == "afmforce-map":
+            meta = check_meta_override(self.meta_override)
+            reader = _map_reader(path)
+            return [(ref.index, FORMATS["afmforce-map"].loader(path, meta_override=meta, indices=[ref.index],
+                                                              reader=reader)[0])]
+        curves = _load_cached(path, self.meta_override, self.format)
+        if not 0 <= ref.index < len(curves):
+            raise FileFormatError(f"{path}: no curve {ref.index} (the file holds {len(curves)})")
+        return [(ref.index, curves[ref.index])]
+
+    def __call__(self, ref: CurveRef) -> list[dict[str, Any]]:
+        from ..pipeline import analyze
+
+        pairs = self.load(ref)
+        several = ref.index is not None or len(pairs) > 1
+        base = Path(ref.path).name
+        rows = []
+        for index, curve in pairs:
+            res = analyze(curve, steps=self.steps, options=self.options, channel=self.channel)
+            row = summary_row(res, curve, file=ref.path, index=index,
+                              name=f"{base}#{index}" if several else base)
+            if self.keep_json:
+                row["json"] = res.to_json(indent=None)
+            if self.out is not None:
+                self.write_outputs(res, curve, f"{base}_{index:04d}" if several else base)
+            rows.append(row)
+        return rows
+
+    def write_outputs(self, result, curve, stem: str) -> dict[str, Path]:
+        """Write ``<stem>.afmforce.{json,csv,png}`` into :attr:`out`, atomically."""
+        paths = {ext: Path(self.out) / f"{stem}{OUTPUT_SUFFIX}.{ext}" for ext in ("json", "csv", "png")}
+        if not self.plot:
+            paths.pop("png")
+        for path in paths.values():
+            if str(path.resolve()) in self.protect:
+                raise OutputExistsError(f"an output would replace an input file ({path}); choose another --out")
+            if path.exists() and not self.force:
+                raise OutputExistsError(f"{path} exists; pass --force to overwrite")
+        atomic_write_text(paths["json"], result.to_json())
+        result.write_table(paths["csv"])
+        if self.plot:
+            from ..plotting import plot_summary
+
+            fig = plot_summary(result, curve)
+            with atomic_path(paths["png"]) as tmp:
+                fig.savefig(tmp, dpi=100, format="png")
+        return paths
+
+
+def analysis_key(refs: list[CurveRef], analysis: CurveAnalysis) -> str:
+    """Hash of the analysis settings and of every item (file path, size, modification time, curve)."""
+    h = hashlib.sha256(b"afmforce-analyze/1\n")
+    h.update(json.dumps(analysis.key_fields(), sort_keys=True, default=repr).encode())
+    stats: dict[str, str] = {}
+    for ref in refs:
+        if ref.path not in stats:
+            path = Path(ref.path).resolve()
+            st = path.stat() if path.exists() else None
+            stats[ref.path] = f"{path}|{st.st_size if st else -1}|{st.st_mtime_ns if st else -1}"
+        h.update(f"{stats[ref.path]}|{ref.index}\n".encode())
+    return h.hexdigest()
+
+
+def analyze_files(items: Iterable, analysis: CurveAnalysis | None = None, *, chunk_size: int | None = None,
+                  executor=None, workers: int | None = None, scheduler: str | None = None, store=None,
+                  progress: Callable | None = None) -> BatchResult:
+    """Analyse files (paths, planned with :func:`plan_curves`) or :class:`CurveRef` items in chunks.
+
+    Arguments as in :func:`~afmforce.sweep.run_batch` (default executor: a local
+    Dask cluster; ``"serial"`` runs here). With ``store`` (a parent folder) the
+    results go to ``<store>/batch-<hash>/`` chunk by chunk and a rerun with the
+    same files and settings resumes; the hash is :func:`analysis_key`.
+    """
+    analysis = analysis or CurveAnalysis()
+    items = list(items)
+    refs = items if all(isinstance(i, CurveRef) for i in items) else plan_curves(items, analysis.format)
+    key = analysis_key(refs, analysis) if store is not None else None
+    try:
+        return run_batch(refs, analysis, chunk_size=chunk_size, executor=executor, workers=workers,
+                         scheduler=scheduler, store=store, key=key, progress=progress,
+                         label=lambda ref, i: ref.label)
+    finally:
+        _close_open()  # what the serial executor opened in this process

@@ -1,0 +1,179 @@
+"""The summary table of a batch analysis: one row per curve, SI units.
+
+Rows come from :func:`summary_row` (called on the workers by
+:class:`~afmforce.sweep.analysis.CurveAnalysis`); :func:`summary_table` gathers
+a batch's rows with fixed columns and types (:data:`SUMMARY_COLUMNS`, units in
+:data:`SUMMARY_UNITS`), :func:`write_summary` streams them chunk by chunk into
+Parquet and CSV, :func:`failures` lists the items that failed.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from pathlib import Path
+from typing import Any, Mapping
+
+from .._files import atomic_path
+from .results import BatchResult
+
+__all__ = ["SUMMARY_COLUMNS", "SUMMARY_UNITS", "summary_row", "summary_table", "write_summary", "failures"]
+
+#: Result fields copied into the summary (floats, SI).
+_FLOATS = ("calibration_factor", "calibration_factor_fit", "spring_constant", "shift", "contact_separation",
+           "jump_in_separation", "jump_in_force", "jump_in_deflection", "pull_off_force", "pull_off_position",
+           "jump_out_distance", "surface_energy", "radius", "hamaker_radius", "hamaker_radius_se", "hamaker",
+           "hamaker_se", "oscillation_frequency", "velocity", "inertia_parameter")
+_OSC = tuple(f"oscillation_{run}_{what}" for run in ("approach", "retract") for what in ("frequency", "velocity"))
+
+#: Columns of the summary table and their types (``int``: -1 where not a map).
+SUMMARY_COLUMNS: dict[str, str] = {
+    "item": "int", "source": "str", "name": "str", "file": "str", "curve": "int",
+    "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "deflection_unit": "str",
+    **{name: "float" for name in _FLOATS + _OSC},
+    "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str", "error": "str",
+}
+
+
+def _units() -> dict[str, str]:
+    from ..analysis.result import AnalysisResult
+
+    units = {name: AnalysisResult.UNITS[name] for name in _FLOATS}
+    units.update({n: ("Hz" if n.endswith("frequency") else "m/s") for n in _OSC})
+    units["calibration_factor"] = units["calibration_factor_fit"] = "m/V"  # m per deflection_unit
+    return units
+
+
+#: SI unit of each numeric summary column (calibration factors: metres per ``deflection_unit``).
+SUMMARY_UNITS: dict[str, str] = _units()
+
+
+def _grid(meta: Mapping[str, Any]) -> tuple[int, int, int, int]:
+    """(map_x, map_y, map_nx, map_ny) from afmforce map or afmformats (JPK map) metadata;
+    -1 for what is unknown (no indices: not a map; no shape: the image takes the largest indices)."""
+    keys = (("map_x", "afmformats:grid index x"), ("map_y", "afmformats:grid index y"),
+            ("map_nx", "afmformats:grid shape x"), ("map_ny", "afmformats:grid shape y"))
+    out = []
+    for ours, theirs in keys:
+        try:
+            out.append(int(meta.get(ours, meta.get(theirs))))
+        except (TypeError, ValueError):
+            out.append(-1)
+    if min(out[:2]) < 0:
+        return -1, -1, -1, -1
+    return tuple(out)  # type: ignore[return-value]
+
+
+def summary_row(result, curve, *, file: str, index: int, name: str) -> dict[str, Any]:
+    """The summary of one analysed curve (see :data:`SUMMARY_COLUMNS`)."""
+    mx, my, nx, ny = _grid(curve.metadata)
+    row: dict[str, Any] = {"name": name, "file": file, "curve": int(index), "map_x": mx, "map_y": my,
+                           "map_nx": nx, "map_ny": ny, "deflection_unit": result.deflection_unit}
+    row.update({f: float(getattr(result, f)) for f in _FLOATS})
+    osc = result.details.get("oscillation")
+    for run in ("approach", "retract"):
+        peak = getattr(osc, run, None)
+        found = peak is not None and peak.found
+        row[f"oscillation_{run}_frequency"] = float(peak.frequency) if found else math.nan
+        row[f"oscillation_{run}_velocity"] = float(peak.velocity) if found else math.nan
+    row.update(friction=result.friction, dynamic=bool(result.dynamic), verdict=result.verdict,
+               warnings=" | ".join(result.warnings))
+    return row
+
+
+
+def _normalise(frame, extra: tuple[str, ...] = ()):
+    """A chunk's rows with the summary columns, in order and with fixed types."""
+    import pandas as pd
+
+    frame = frame.reindex(columns=list(SUMMARY_COLUMNS) + list(extra))
+    for name, kind in SUMMARY_COLUMNS.items():
+        col = frame[name]
+        if kind == "int":
+            frame[name] = pd.to_numeric(col, errors="coerce").astype("Int64")
+        elif kind == "float":
+            if col.dtype != float:
+                frame[name] = pd.to_numeric(col, errors="coerce").astype(float)
+        elif kind == "bool":
+            frame[name] = col.astype("boolean")
+        elif col.dtype != object or col.isna().any():
+            frame[name] = col.astype(object).where(col.notna(), None)
+    return frame
+
+
+def _extra(result: BatchResult) -> tuple[str, ...]:
+    for frame in result.iter_tables():
+        return ("json",) if "json" in frame.columns else ()
+    return ()
+
+
+def summary_table(result: BatchResult, *, with_json: bool = False):
+    """All summary rows of a batch in item order (pandas DataFrame; the ``json``
+    column only with ``with_json``)."""
+    import pandas as pd
+
+    extra = _extra(result) if with_json else ()
+    frames = [_normalise(f, extra) for f in result.iter_tables()]
+    if not frames:
+        return _normalise(pd.DataFrame(), extra)
+    return pd.concat(frames, ignore_index=True)
+
+
+def _csv_header() -> list[str]:
+    return [f"{c} [{SUMMARY_UNITS[c]}]" if SUMMARY_UNITS.get(c) else c for c in SUMMARY_COLUMNS]
+
+
+def write_summary(result: BatchResult, folder: str | os.PathLike) -> dict[str, Path]:
+    """Stream the batch's rows into ``summary.parquet`` (units in the schema metadata
+    key ``afmforce.units``) and ``summary.csv`` (units in the header), a chunk at a
+    time, plus ``errors.csv`` (items that failed, with their error) when any did.
+    Returns the paths by kind."""
+    import pandas as pd
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    paths = {"parquet": folder / "summary.parquet", "csv": folder / "summary.csv"}
+    types = {"int": pa.int64(), "float": pa.float64(), "bool": pa.bool_(), "str": pa.string()}
+    schema = pa.schema([(c, types[k]) for c, k in SUMMARY_COLUMNS.items()],
+                       metadata={b"afmforce.units": json.dumps(SUMMARY_UNITS).encode()})
+    errors = []
+    with atomic_path(paths["parquet"]) as ptmp, atomic_path(paths["csv"]) as ctmp:
+        writer = pq.ParquetWriter(ptmp, schema)
+        try:
+            with open(ctmp, "w", encoding="utf-8", newline="") as fh:
+                fh.write(",".join(_csv_header()) + "\n")
+                for frame in result.iter_tables():
+                    frame = _normalise(frame)
+                    writer.write_table(pa.Table.from_pandas(frame, schema=schema, preserve_index=False))
+                    frame.to_csv(fh, header=False, index=False)
+                    bad = frame[frame["error"].notna()]
+                    errors.extend(zip(bad["source"], bad["error"]))
+        finally:
+            writer.close()
+    errors.extend(_chunk_failures(result))
+    if errors:
+        paths["errors"] = folder / "errors.csv"
+        with atomic_path(paths["errors"]) as tmp:
+            pd.DataFrame(errors, columns=["source", "error"]).to_csv(tmp, index=False)
+    else:  # a resumed batch that now has none
+        (folder / "errors.csv").unlink(missing_ok=True)
+    return paths
+
+
+def _chunk_failures(result: BatchResult) -> list[tuple[str, str]]:
+    return [(str(p.get("source", i)), f"chunk failed: {f.error}")
+            for f in result.failures for i, p in zip(f.items, f.parameters)]
+
+
+def failures(result: BatchResult) -> list[tuple[str, str]]:
+    """``(item name, error)`` of every item that failed: rows with an error, then
+    items of chunks that failed as a whole."""
+    out = []
+    for frame in result.iter_tables():
+        if "error" in frame.columns:
+            bad = frame[frame["error"].notna()]
+            out.extend(zip(bad["source"].astype(str), bad["error"].astype(str)))
+    return out + _chunk_failures(result)
