@@ -61,7 +61,8 @@ STEPS: dict[str, Step] = {s.identifier: s for s in (
     Step("smooth", "Digitization smoothing of the position (running average)", S.smooth,
          {"window": "auto"}, (), "section 3.1, Fig 7C"),
     Step("contact", "Contact, constant-compliance and zero-force regions", S.contact,
-         {"min_points": 5, "baseline_fraction": 0.7, "compliance_fraction": 0.5}, ()),
+         {"min_points": 5, "baseline_fraction": 0.7, "compliance_fraction": 0.5, "flat_ratio": 0.05,
+          "max_slope_ratio": "auto"}, (), "section 3.1, Fig 7"),
     Step("drift", "Thermal drift: line in time in the zero-force region, per run", S.drift,
          {"order": 1, "tail": True}, ("contact",), "section 3.1, Fig 7"),
     Step("fringes", "Interferometric calibration from baseline fringes", S.fringes,
@@ -74,11 +75,13 @@ STEPS: dict[str, Step] = {s.identifier: s for s in (
     Step("shift", "Inward/outward shift overlaying the compliance lines", S.shift,
          {"apply": True}, ("compliance",), "section 3.2, Fig 9; Fig 7C"),
     Step("zero", "Zero of separation at the compliance line", S.zero,
-         {"contact_separation": Z0, "run": "auto"}, ("calibration",), "section 3.2, Fig 9"),
+         {"contact_separation": Z0, "run": "auto", "parallel_tolerance": 0.25}, ("calibration",),
+         "section 3.2, Fig 9"),
     Step("force", "Deflection to force (tilt-corrected spring constant)", S.force,
          {"spring_constant": None, "theta0": None, "L0": None, "L1": None, "L2": None},
          ("calibration",), "eqs 13, 14"),
-    Step("jumps", "Jump into contact and pull-off", S.jumps, {"nsigma": 5.0, "window": 3}, ("zero", "force"),
+    Step("jumps", "Jump into contact and pull-off", S.jumps, {"nsigma": 5.0, "window": 3, "onset_tolerance": 3e-9},
+         ("zero", "force"),
          "section 2.1, Fig 9"),
     Step("adhesion", "Surface energy and radius from the pull-off (JKR/DMT)", S.adhesion_step,
          {"radius": None, "model": "jkr", "hamaker": HAMAKER, "z0": Z0}, ("jumps",), "section 2.1"),
@@ -181,9 +184,13 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
         kw["contact_separation"] = d["zero"].contact_separation
     if "jumps" in d:
         ji, po = d["jumps"]["jump_in"], d["jumps"]["pull_off"]
-        kw.update(jump_in_separation=ji.separation, jump_in_force=ji.force_after,
-                  jump_in_deflection=ji.deflection_after, pull_off_force=po.force,
-                  pull_off_position=po.position, jump_out_distance=po.jump_out_distance)
+        kw.update(contact_onset_separation=ji.separation, pull_off_force=po.force,
+                  pull_off_position=po.position, jump_out_distance=po.jump_out_distance,
+                  pull_off_saturated=po.saturated, pull_off_force_extrapolated=(
+                      po.deflection_extrapolated * d["force"].spring_constant if "force" in d else nan))
+        if ji.found:  # without a significant jump the tip crept in: only the onset of contact
+            kw.update(jump_in_separation=ji.separation, jump_in_force=ji.force_after,
+                      jump_in_deflection=ji.deflection_after)
     if "adhesion" in d:
         kw.update(surface_energy=d["adhesion"].surface_energy, radius=d["adhesion"].radius)
     if "vdw" in d:

@@ -10,10 +10,11 @@ from .compliance import (CalibrationResult, ComplianceLine, ComplianceResult, Fr
                          calibrate, compliance_shift, fit_compliance, friction_signature)
 from .drift import DriftResult, fit_baseline, remove_drift
 from .dynamic import DynamicDiagnosis, diagnose_curve, run_velocity
-from .fringes import FringeResult, FringeRun, fit_fringes, fringe_signal, loop_width, position_map
-from .jumps import AdhesionResult, JumpIn, PullOff, adhesion, find_jump_in, find_pull_off
+from .fringes import FringeResult, FringeRun, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
+from .jumps import (AdhesionResult, JumpIn, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings,
+                    pull_off_estimate)
 from .oscillation import OscillationPeak, OscillationResult, find_peak, oscillation_origin
-from .regions import RunRegions, find_run_regions, saturated_mask
+from .regions import RunRegions, check_compliance, contact_slopes, find_run_regions, saturated_mask
 from .result import AnalysisResult
 from .separation import ForceConversion, ZeroResult, effective_spring_constant, zero_of_separation
 from .vdw import VdwFit, fit_vdw
@@ -22,8 +23,9 @@ __all__ = [
     "AdhesionResult", "AnalysisResult", "CalibrationResult", "ComplianceLine", "ComplianceResult",
     "DriftResult", "DynamicDiagnosis", "ForceConversion", "FrictionSignature", "FringeResult", "FringeRun",
     "JumpIn", "OscillationPeak", "OscillationResult", "PullOff", "RunRegions", "ShiftResult", "VdwFit",
-    "ZeroResult", "adhesion", "calibrate", "compliance_shift", "diagnose_curve", "effective_spring_constant",
-    "find_jump_in", "find_peak", "find_pull_off", "find_run_regions", "fit_baseline", "fit_compliance",
-    "fit_fringes", "fit_vdw", "friction_signature", "fringe_signal", "loop_width", "oscillation_origin",
-    "position_map", "remove_drift", "run_velocity", "saturated_mask", "zero_of_separation",
+    "ZeroResult", "adhesion", "calibrate", "check_compliance", "compliance_shift", "contact_slopes",
+    "diagnose_curve", "effective_spring_constant", "find_jump_in", "find_peak", "find_pull_off",
+    "find_run_regions", "fit_baseline", "fit_compliance", "fit_fringes", "fit_vdw", "friction_signature",
+    "fringe_baseline", "fringe_signal", "jump_warnings", "loop_width", "oscillation_origin", "position_map",
+    "pull_off_estimate", "remove_drift", "run_velocity", "saturated_mask", "zero_of_separation",
 ]

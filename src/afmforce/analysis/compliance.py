@@ -55,6 +55,17 @@ class ComplianceLine:
     s_min: float
     s_max: float
 
+    @property
+    def found(self) -> bool:
+        """The run had a constant-compliance region (False: NaN line)."""
+        return self.n_points > 0 and math.isfinite(self.slope)
+
+    @classmethod
+    def missing(cls) -> "ComplianceLine":
+        """The line of a run without a constant-compliance region (all NaN)."""
+        nan = math.nan
+        return cls(nan, nan, nan, nan, nan, 0, nan, nan, nan, nan)
+
     def position_at(self, s: float) -> float:
         """Position [m] where the line reaches signal ``s``."""
         return (s - self.intercept) / self.slope
@@ -74,6 +85,8 @@ class ComplianceResult:
 
 
 def _fit_line(z: np.ndarray, s: np.ndarray, run: RunRegions) -> ComplianceLine:
+    if not run.has_compliance:
+        return ComplianceLine.missing()
     idx = run.index[run.compliance & ~run.saturated]
     if idx.size < 3:
         raise AnalysisError(f"the {run.kind} constant-compliance region has {idx.size} samples; need 3")
@@ -90,7 +103,7 @@ def _fit_line(z: np.ndarray, s: np.ndarray, run: RunRegions) -> ComplianceLine:
 
 def fit_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract: RunRegions,
                    unit: str) -> ComplianceResult:
-    """Fit the constant-compliance line of both runs."""
+    """Fit the constant-compliance line of both runs (a NaN line for a run without one)."""
     return ComplianceResult(approach=_fit_line(z, s, approach), retract=_fit_line(z, s, retract), unit=unit)
 
 
@@ -147,7 +160,11 @@ def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, sour
     """
     if source not in ("auto", "fit", "metadata"):
         raise ParameterError(f"calibration source must be auto, fit or metadata, got {source!r}")
+    if run not in ("approach", "retract", "both"):
+        raise ParameterError(f"calibration run must be approach, retract or both, got {run!r}")
     a, r = compliance.approach, compliance.retract
+    if not (a.found and r.found):  # one line only: that one
+        run = "approach" if a.found else "retract"
     if run == "approach":
         slope = a.slope
     elif run == "retract":
@@ -178,7 +195,8 @@ class ShiftResult:
     Attributes
     ----------
     shift : float
-        Added to the inward positions [m] (``z_out - z_in`` at equal signal).
+        Added to the inward positions [m] (``z_out - z_in`` at equal signal); NaN when
+        a run has no constant-compliance line.
     shift_se : float
         Standard error [m].
     reference_signal : float
@@ -196,6 +214,9 @@ class ShiftResult:
 def compliance_shift(compliance: ComplianceResult, applied: bool = True) -> ShiftResult:
     """``z_out(s*) - z_in(s*)`` at the middle ``s*`` of the signal range both lines share."""
     a, r = compliance.approach, compliance.retract
+    if not (a.found and r.found):
+        nan = math.nan
+        return ShiftResult(shift=nan, shift_se=nan, reference_signal=nan, applied=False)
     lo, hi = max(a.s_min, r.s_min), min(a.s_max, r.s_max)
     if hi < lo:
         lo, hi = min(a.s_min, r.s_min), max(a.s_max, r.s_max)
@@ -214,7 +235,10 @@ class FrictionSignature:
     kind : str
         ``"none"``, ``"constant"`` (parallel, inward line at larger z), ``"opposite"``
         (parallel, inward line at smaller z: an instrument artefact, Fig 7B),
-        ``"load-proportional"`` (slopes differ) or ``"pinned"`` (negative slope).
+        ``"load-proportional"`` (slopes differ by up to ``friction_slope_limit``),
+        ``"nonlinear"`` (slopes differ by more than friction makes: the position channel
+        or a soft contact), ``"pinned"`` (negative slope) or ``"undetermined"`` (one
+        line only).
     offset : float
         ``z_in - z_out`` at equal deflection [m] (friction makes it positive, spec 7).
     offset_se : float  [m]
@@ -234,7 +258,8 @@ class FrictionSignature:
 
 
 def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsigma: float = 3.0,
-                       slope_tolerance: float = 0.02, offset_tolerance: float = 0.2e-9) -> FrictionSignature:
+                       slope_tolerance: float = 0.02, offset_tolerance: float = 0.2e-9,
+                       friction_slope_limit: float = 0.25, channel: str = "") -> FrictionSignature:
     """Classify the pair of compliance lines.
 
     Parameters
@@ -245,8 +270,21 @@ def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsig
         Relative slope difference below which lines count as parallel [-].
     offset_tolerance : float
         Offset below which parallel lines count as coincident [m].
+    friction_slope_limit : float
+        Largest relative slope difference friction proportional to load explains [-]
+        (Fig 4: 7 % for lambda = 2, spec section 4.2); beyond it the kind is ``"nonlinear"``.
+    channel : str
+        Position channel (``"nominal"``: a creeping piezo changes the slopes).
     """
     a, r = compliance.approach, compliance.retract
+    nan = math.nan
+    if not (a.found and r.found):
+        missing = "approach" if not a.found else "retract"
+        return FrictionSignature("undetermined", nan, nan, nan, nan, (
+            f"one constant-compliance line only (the {missing} run's contact is clipped or absent): "
+            "friction cannot be judged"))
+    instrument = ("the nonlinear, creeping piezo of the nominal position channel (section 3.1, Fig 7A)"
+                  if channel == "nominal" else "a nonlinear position channel")
     ratio = a.slope / r.slope
     ratio_se = abs(ratio) * math.hypot(a.slope_se / a.slope, r.slope_se / r.slope)
     offset, off_se = -shift.shift, shift.shift_se
@@ -254,10 +292,15 @@ def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsig
         kind = "pinned"
         verdict = ("negative calibration slope: a pinned tip (eqs 20-21) would make a precontact "
                    "attraction look repulsive; check the photodiode sign before trusting forces")
+    elif abs(ratio - 1.0) > max(nsigma * ratio_se, slope_tolerance, friction_slope_limit):
+        kind = "nonlinear"
+        verdict = (f"compliance lines are not parallel (slope ratio {ratio:.4g}), by more than friction "
+                   f"proportional to load makes (a few per cent, eqs 18-19, Fig 4): the instrument "
+                   f"({instrument}) or a soft, nonlinear contact, not friction")
     elif abs(ratio - 1.0) > max(nsigma * ratio_se, slope_tolerance):
         kind = "load-proportional"
         verdict = (f"compliance lines are not parallel (slope ratio {ratio:.4f}): friction proportional "
-                   "to load (eqs 18-19), or a nonlinear contact")
+                   f"to load (eqs 18-19), or the instrument ({instrument}), or a nonlinear contact")
     elif abs(offset) > max(nsigma * off_se, offset_tolerance):
         if offset > 0:
             kind = "constant"

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._numeric import mad_sigma, robust_line
+from ._numeric import mad_sigma
 from .regions import RunRegions
 
 __all__ = ["DriftResult", "fit_baseline", "remove_drift"]

@@ -161,6 +161,8 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
         words.append(f"{friction_verdict} (static friction changes k and beta, eqs 18-19)")
     elif friction == "opposite":
         words.append("compliance lines offset against friction's direction: an instrument artefact")
+    elif friction in ("nonlinear", "undetermined"):
+        words.append(friction_verdict)
     elif friction == "pinned":
         dynamic = True
         words.append("negative compliance slope: pinned tip, forces of the wrong sign (eqs 20-21)")

@@ -11,7 +11,9 @@ Model, per run, on the zero-force samples: with ``x = (z - z_mid) / L``,
 ``u(z) = z_mid + c1 L (x + a2 x^2 + a3 x^3)``,
 ``r = p cos(2 pi u / P) + q sin(2 pi u / P) + e0 + e1 x``
 
-fitted by variable projection (the linear p, q, e0, e1 solved inside
+(or ``e0 + e1 (t - t_mid)`` when the sample times are given: the baseline
+left by the drift step is a line in time, and over many fringes the drift line
+fitted alone is pulled by the fringes) fitted by variable projection (the linear p, q, e0, e1 solved inside
 ``scipy.optimize.least_squares`` on the nonlinear ones). If the fringe period
 ``P = 2 pi Delta`` is known, ``c1`` is fitted (the map gets the absolute scale);
 otherwise ``c1 = 1`` and ``P`` is fitted (the map corrects the nonlinearity
@@ -28,7 +30,8 @@ import numpy as np
 from scipy.optimize import least_squares
 from scipy.signal import lombscargle
 
-__all__ = ["FringeRun", "FringeResult", "fit_fringes", "position_map", "fringe_signal", "loop_width"]
+__all__ = ["FringeRun", "FringeResult", "fit_fringes", "position_map", "fringe_signal", "fringe_baseline",
+           "loop_width"]
 
 
 @dataclass(frozen=True)
@@ -48,6 +51,10 @@ class FringeRun:
     explained : float  fraction of the baseline variance the fit explains [-]
     cycles : float  fringes in the fitted range [-]
     residual : float  rms residual [signal unit]
+    baseline_offset : float  e0 [signal unit]
+    baseline_slope : float  e1 [signal unit per s, or per m with ``baseline_variable="position"``]
+    baseline_origin : float  t_mid [s] or z_mid [m]
+    baseline_variable : str  ``"time"`` or ``"position"``
     """
 
     found: bool
@@ -63,6 +70,10 @@ class FringeRun:
     explained: float
     cycles: float
     residual: float
+    baseline_offset: float = 0.0
+    baseline_slope: float = 0.0
+    baseline_origin: float = 0.0
+    baseline_variable: str = "position"
 
 
 @dataclass(frozen=True)
@@ -103,16 +114,26 @@ def fringe_signal(z: np.ndarray, fr: FringeRun) -> np.ndarray:
     return fr.amplitude * np.cos(2 * math.pi * position_map(z, fr) / fr.period + fr.phase)
 
 
-def _design(z, zm, L, P, c1, a2, a3):
+def fringe_baseline(t: np.ndarray, z: np.ndarray, fr: FringeRun) -> np.ndarray:
+    """The baseline line fitted with the fringes, ``e0 + e1 (t - t_mid)`` (or in position) [signal unit]."""
+    v = np.asarray(t if fr.baseline_variable == "time" else z, float)
+    return fr.baseline_offset + fr.baseline_slope * (v - fr.baseline_origin)
+
+
+def _design(z, zm, L, P, c1, a2, a3, xt=None):
     x = (z - zm) / L
     u = zm + c1 * L * (x + a2 * x**2 + a3 * x**3)
     th = 2 * math.pi * u / P
-    return np.column_stack([np.cos(th), np.sin(th), np.ones_like(x), x]), x, u
+    return np.column_stack([np.cos(th), np.sin(th), np.ones_like(x), x if xt is None else xt]), x, u
 
 
-def _initial_period(z: np.ndarray, r: np.ndarray) -> float:
+def _initial_period(z: np.ndarray, r: np.ndarray, max_points: int = 4000) -> float:
+    """Strongest period of a Lomb-Scargle periodogram (on at most ``max_points`` samples, evenly thinned)."""
     span = float(np.ptp(z))
     step = float(np.median(np.abs(np.diff(np.sort(z))))) or span / z.size
+    if z.size > max_points:  # a starting value only: thin the samples, the search grid stays the same
+        keep = np.linspace(0, z.size - 1, max_points).astype(np.int64)
+        z, r = z[keep], r[keep]
     p_min, p_max = max(4 * step, span / 400), span / 1.5
     periods = np.geomspace(p_min, p_max, 800)
     zz = z - z.mean()
@@ -122,7 +143,7 @@ def _initial_period(z: np.ndarray, r: np.ndarray) -> float:
 
 
 def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = None, order: int | str = "auto",
-                min_explained: float = 0.3, min_cycles: float = 1.0) -> FringeRun:
+                min_explained: float = 0.3, min_cycles: float = 1.0, t: np.ndarray | None = None) -> FringeRun:
     """Fit the fringe model to the baseline residual ``r`` against position ``z``.
 
     Parameters
@@ -136,27 +157,39 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = None, or
     order : int or "auto"
         Polynomial order of the map (1, 2 or 3); ``"auto"`` takes the order
         with the lowest Bayesian information criterion ``n ln(SSR/n) + p ln n``.
+    t : ndarray, optional
+        Sample times [s]: the baseline line is fitted in time instead of position.
     """
+    z = np.asarray(z, float)
+    r = np.asarray(r, float)
+    p0 = None if period or z.size < 16 or np.var(r) == 0 else _initial_period(z, r)
     if order == "auto":
-        fits = [_fit_order(z, r, period, o, min_explained, min_cycles) for o in (1, 2, 3)]
+        fits = [_fit_order(z, r, period, o, min_explained, min_cycles, t, p0) for o in (1, 2, 3)]
         n = max(np.asarray(z).size, 1)
         bic = [n * math.log(max(f.residual, 1e-300) ** 2) + (o + 3) * math.log(n) if math.isfinite(f.residual)
                else math.inf for o, f in zip((1, 2, 3), fits)]
         return fits[int(np.argmin(bic))]
-    return _fit_order(z, r, period, int(order), min_explained, min_cycles)
+    return _fit_order(z, r, period, int(order), min_explained, min_cycles, t, p0)
 
 
-def _fit_order(z, r, period, order, min_explained, min_cycles) -> FringeRun:
+def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=None) -> FringeRun:
     """:func:`fit_fringes` for one map order."""
     z = np.asarray(z, float)
     r = np.asarray(r, float)
     nan = math.nan
+    if z.size < 16:
+        return FringeRun(False, nan, 0.0, 0.0, 1.0, 0.0, 0.0, nan, 1.0, 0.0, 0.0, 0.0, nan)
     zm = 0.5 * (z.max() + z.min())
     L = 0.5 * float(np.ptp(z)) or 1.0
+    xt = None
+    if t is not None:
+        t = np.asarray(t, float)
+        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
+        xt = (t - tm) / tL
     var0 = float(np.var(r))
     if z.size < 16 or var0 == 0:
         return FringeRun(False, nan, 0.0, 0.0, 1.0, 0.0, 0.0, zm, L, 0.0, 0.0, 0.0, nan)
-    P0 = float(period) if period else _initial_period(z, r)
+    P0 = float(period) if period else (p_start if p_start else _initial_period(z, r))
     n_map = max(0, min(order, 3) - 1)
 
     def unpack(q):
@@ -169,7 +202,7 @@ def _fit_order(z, r, period, order, min_explained, min_cycles) -> FringeRun:
         return P, c1, a2, a3
 
     def resid(q):
-        X, _, _ = _design(z, zm, L, *unpack(q))
+        X, _, _ = _design(z, zm, L, *unpack(q), xt)
         coef, *_ = np.linalg.lstsq(X, r, rcond=None)
         return X @ coef - r
 
@@ -184,7 +217,7 @@ def _fit_order(z, r, period, order, min_explained, min_cycles) -> FringeRun:
         if best is None or sol.cost < best.cost:
             best = sol
     P, c1, a2, a3 = unpack(best.x)
-    X, x, u = _design(z, zm, L, P, c1, a2, a3)
+    X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
     coef, *_ = np.linalg.lstsq(X, r, rcond=None)
     res = X @ coef - r
     amp = float(math.hypot(coef[0], coef[1]))
@@ -194,8 +227,12 @@ def _fit_order(z, r, period, order, min_explained, min_cycles) -> FringeRun:
     explained = 1.0 - float(np.var(res)) / var0
     cycles = float(np.ptp(u) / P)
     found = explained >= min_explained and cycles >= min_cycles
+    if xt is None:
+        base = (float(coef[2]), float(coef[3]) / L, float(zm), "position")
+    else:
+        base = (float(coef[2]), float(coef[3]) / tL, float(tm), "time")
     return FringeRun(bool(found), float(P), amp, phase, float(c1), float(a2), float(a3), float(zm), float(L),
-                     nonlin, float(explained), cycles, float(np.sqrt(np.mean(res**2))))
+                     nonlin, float(explained), cycles, float(np.sqrt(np.mean(res**2))), *base)
 
 
 def loop_width(fa: FringeRun, fr: FringeRun, z: np.ndarray) -> float:

@@ -4,11 +4,16 @@
   ``window`` samples of the contact split (the two-line boundary of
   :mod:`.regions`); significant if it exceeds ``nsigma`` times the step noise.
   ``index`` is the last sample before the jump (the last one on the free branch).
+  Without a significant step (the tip crept into contact, or the jump is below
+  the noise) ``found`` is False and the numbers describe the onset of contact:
+  the last sample before the split.
 * Pull-off: the last retract sample on the contact line (see
   :func:`find_pull_off`); its force is the most negative deflection up to it
   (the adhesion), its jump-out distance that deflection as a positive length
   (Fig 9: 200 nm). A free cantilever ringing after the pull-off (sampled slower
-  than it rings) is not taken for the jump.
+  than it rings) is not taken for the jump. When the photodiode clipped the
+  bottom of the pull-off, the deflection is a lower bound; the contact line
+  extrapolated to the pull-off position estimates the real one.
 * Adhesion: JKR ``F = -3 pi gamma R / 4`` (or DMT ``-pi gamma R``) gives gamma
   from a known radius, and R from gamma (``R = 4 k d_out / (3 pi gamma)``, the
   paper's way to fix R = 220 nm).
@@ -27,7 +32,8 @@ from ..errors import ParameterError
 from ._numeric import largest_step, robust_line
 from .regions import RunRegions
 
-__all__ = ["JumpIn", "PullOff", "find_jump_in", "find_pull_off", "AdhesionResult", "adhesion"]
+__all__ = ["JumpIn", "PullOff", "find_jump_in", "find_pull_off", "jump_warnings", "pull_off_estimate",
+           "AdhesionResult", "adhesion"]
 
 
 @dataclass(frozen=True)
@@ -36,7 +42,8 @@ class JumpIn:
 
     Attributes
     ----------
-    found : bool  a significant jump exists (False: the tip crept into contact)
+    found : bool  a significant jump exists (False: the tip crept into contact, and the
+        numbers below describe the onset of contact)
     index : int  last sample before the jump (-1 if none) [-]
     position : float  position relative to contact [m]
     separation : float  separation just before the jump [m]
@@ -70,6 +77,9 @@ class PullOff:
     jump_out_distance : float  |deflection| at pull-off [m]
     significance : float  [-]
     saturated : bool  the photodiode clipped at the bottom: force is a lower bound
+    deflection_extrapolated : float
+        The contact line at the pull-off position [m]: the deflection the clipped
+        photodiode did not show (NaN when not clipped or no line)
     """
 
     found: bool
@@ -80,6 +90,7 @@ class PullOff:
     jump_out_distance: float
     significance: float
     saturated: bool
+    deflection_extrapolated: float = math.nan
 
 
 def _nan_jump_in() -> JumpIn:
@@ -100,11 +111,14 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
         return _nan_jump_in()
     step = dr[i] - dr[i + 1]
     sig = step / (math.sqrt(2.0) * noise) if noise > 0 else math.inf
-    if not sig > nsigma:
-        return _nan_jump_in()
+    found = bool(sig > nsigma)
+    if not found:  # no jump: the onset of contact, the last sample before the two-line split
+        i = run.split - 1
+        if not (0 <= i < idx.size - 1) or not run.has_compliance or run.saturated[i + 1]:
+            return _nan_jump_in()
     g = idx[i]
     k = spring_constant
-    return JumpIn(True, int(g), float(position[g]), float(separation[g]), float(dr[i]), float(dr[i + 1]),
+    return JumpIn(found, int(g), float(position[g]), float(separation[g]), float(dr[i]), float(dr[i + 1]),
                   float(k * dr[i]), float(k * dr[i + 1]), float(sig))
 
 
@@ -126,29 +140,72 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
     thr = nsigma * math.sqrt(2.0) * noise if noise > 0 else 0.0
     comp = np.flatnonzero(run.compliance & ~run.saturated)
     i = -1
+    line = None
+    rise = -math.inf
     if comp.size >= 3:
         x = position[idx]
         x0 = x[comp].mean()
         a, b, *_ = robust_line(x[comp] - x0, dr[comp])
+        line = lambda j: float(a + b * (x[j] - x0))  # noqa: E731
         r = dr - (a + b * (x - x0))
         above = (r > thr) & ~run.saturated  # a clipped signal leaves the line without leaving contact
         start = int(comp.max())
         cand = np.flatnonzero(above[start:-1] & above[start + 1:]) + start
         if cand.size and cand[0] > start:
             i = int(cand[0]) - 1
+            rise = float(r[i + 1])  # height above the line: a clipped contact has no step of its own
     if i < 0:  # fall back on the largest step near the end of contact
         i = largest_step(dr, max(run.split - window, 0), min(run.split + window, idx.size), +1.0)
     if i < 0 or i + 1 >= idx.size:
         return PullOff(False, -1, nan, nan, nan, nan, 0.0, False)
-    step = dr[i + 1] - dr[i]
+    step = max(dr[i + 1] - dr[i], rise)
     sig = step / (math.sqrt(2.0) * noise) if noise > 0 else math.inf
     if not sig > nsigma:
         return PullOff(False, -1, nan, nan, nan, nan, float(sig), False)
     j = int(np.argmin(dr[: i + 1]))
     dmin = float(dr[j])
-    sat = bool(run.saturated[: i + 1].any() and run.saturated[j])
+    lo = int(comp.max()) if comp.size else 0
+    # clipped at the bottom between the compliance region and the pull-off (the top clip is positive)
+    sat = bool(np.any(run.saturated[lo: i + 1] & (dr[lo: i + 1] < 0)))
+    d_ext = math.nan
+    if sat and line is not None and line(i) < dmin:  # the line goes on below the clip
+        d_ext = line(i)
     return PullOff(True, int(idx[i]), float(position[idx[i]]), dmin, float(spring_constant * dmin),
-                   abs(dmin), float(sig), sat)
+                   abs(dmin), float(sig), sat, float(d_ext))
+
+
+def pull_off_estimate(po: PullOff, spring_constant: float) -> float:
+    """Pull-off force [N]: extrapolated along the contact line where the photodiode clipped it."""
+    if po.saturated and math.isfinite(po.deflection_extrapolated):
+        return spring_constant * po.deflection_extrapolated
+    return po.force
+
+
+def jump_warnings(ji: JumpIn, po: PullOff, spring_constant: float, clipped: bool = False) -> list[str]:
+    """Plain-words warnings on what the jumps could not give (``clipped``: the retract's contact is)."""
+    k = spring_constant
+    warn = []
+    if not ji.found and ji.index >= 0:
+        warn.append(f"no significant jump into contact (step {ji.significance:.2g} x the step noise): the tip "
+                    f"crept into contact, or the jump is below the noise; contact begins at h = "
+                    f"{ji.separation * 1e9:.3g} nm")
+    elif not ji.found:
+        warn.append("no jump into contact: the tip crept into contact (or the attraction is below the noise)")
+    if clipped:
+        warn.append("pull-off not in the record: the photodiode was saturated over the whole contact of the "
+                    "retract run, so the tip left the surface while the signal was clipped; no pull-off "
+                    "force, no adhesion")
+    elif not po.found:
+        warn.append("no pull-off found on the retract run")
+    elif po.saturated and math.isfinite(k):
+        f_ext = k * po.deflection_extrapolated
+        ext = (f", about {f_ext * 1e9:.3g} nN from the contact line extrapolated to the pull-off position"
+               if math.isfinite(f_ext) else "")
+        warn.append(f"photodiode saturated at pull-off: the pull-off force is a lower bound "
+                    f"(|F| > {abs(po.force) * 1e9:.3g} nN){ext}")
+    elif po.saturated:
+        warn.append("photodiode saturated at pull-off: the pull-off force is a lower bound")
+    return warn
 
 
 @dataclass(frozen=True)

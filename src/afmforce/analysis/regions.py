@@ -8,18 +8,32 @@ for the baseline, leaving the attraction near contact out); the near part is
 the contact region (its ``compliance_fraction`` nearest the turning point is
 used for the constant-compliance line). Saturated samples (the photodiode
 clipped at its extreme value) are left out of both.
+
+A contact region found this way is not necessarily a constant-compliance line:
+when the photodiode is saturated over the whole contact of a run (the tip
+leaves the surface while the signal is clipped, Fig 7) the two lines split a
+free cantilever that is still relaxing. :func:`check_compliance` rejects such
+a region of a run clipped at its turning point: a compliance line must be much
+steeper than the run's own free part (which is flat: drift and fringes only),
+and, on a linear position channel, about as steep as the other run's
+(friction changes the slope by a few per cent, eqs 18-19 and Fig 4). A run
+that is not clipped at its turning point keeps its contact region: the
+contact begins there.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..errors import AnalysisError
-from ._numeric import mad_sigma, two_line_split
+from ._numeric import mad_sigma, robust_line, two_line_split
 
-__all__ = ["RunRegions", "find_run_regions", "saturated_mask", "run_indices"]
+__all__ = ["RunRegions", "find_run_regions", "saturated_mask", "run_indices", "check_compliance",
+           "contact_slopes"]
 
 
 @dataclass(frozen=True)
@@ -39,6 +53,14 @@ class RunRegions:
         In contact; used for the baseline; used for the compliance line; clipped.
     noise : float
         Robust noise of the free part's signal [signal unit].
+    has_compliance : bool
+        The contact region is a constant-compliance line (see :func:`check_compliance`);
+        False: the run's contact is not in the record (clipped) and ``compliance`` is empty.
+    note : str
+        Why the contact region was rejected (empty if it was not).
+    reason : str
+        ``""``, ``"unsettled"`` (the free part is not flat: the cantilever was still
+        relaxing) or ``"shallow"`` (much shallower than the other run's line).
     """
 
     kind: str
@@ -49,6 +71,9 @@ class RunRegions:
     compliance: np.ndarray
     saturated: np.ndarray
     noise: float = float("nan")
+    has_compliance: bool = True
+    note: str = ""
+    reason: str = ""
 
 
 def run_indices(segment: np.ndarray, which: int) -> np.ndarray:
@@ -140,3 +165,95 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
         compliance[near] = True
     return RunRegions(kind=kind, index=index, split=split, contact=contact, zero_force=zero_force,
                       compliance=compliance, saturated=sat, noise=own)
+
+
+def _slope(z: np.ndarray, s: np.ndarray) -> float:
+    if z.size < 3 or np.ptp(z) == 0:
+        return math.nan
+    return float(robust_line(z - z.mean(), s)[1])
+
+
+def contact_slopes(z: np.ndarray, s: np.ndarray, run: RunRegions) -> tuple[float, float]:
+    """Robust slopes [signal unit/m] of a run's compliance region and of its zero-force region."""
+    near = run.index[run.compliance & ~run.saturated]
+    far = run.index[run.zero_force & ~run.saturated]
+    return _slope(z[near], s[near]), _slope(z[far], s[far])
+
+
+def _without_compliance(run: RunRegions, note: str, reason: str) -> RunRegions:
+    """The run with its contact reduced to the clipped samples next to the turning point.
+
+    The unclipped rest is a free cantilever that has not settled: no baseline either.
+    """
+    n = run.index.size
+    sat = run.saturated
+    order = np.arange(n) if run.kind == "retract" else np.arange(n)[::-1]  # from the turning point
+    stop = np.flatnonzero(~sat[order])
+    m = int(stop[0]) if stop.size else n  # clipped samples contiguous with the turning point
+    contact = np.zeros(n, bool)
+    contact[order[:m]] = True
+    split = m if run.kind == "retract" else n - m
+    split = min(max(split, 0), n - 1)
+    empty = np.zeros(n, bool)
+    return dataclasses.replace(run, split=split, contact=contact, compliance=empty, zero_force=empty,
+                               has_compliance=False, note=note, reason=reason)
+
+
+def check_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract: RunRegions, *,
+                     flat_ratio: float = 0.05, max_slope_ratio: float = 2.0) -> tuple[RunRegions, RunRegions]:
+    """Reject a contact region that is not a constant-compliance line.
+
+    Only a run whose photodiode is clipped at its turning point (the last
+    approach sample, the first retract sample) can hide its contact in the
+    clip; the other keeps its region whatever its slopes.
+
+    Parameters
+    ----------
+    z, s : ndarray
+        Position [m] and deflection signal [unit] of the whole curve.
+    flat_ratio : float
+        The free part's slope must stay below this fraction of the contact
+        slope [-] (drift and fringes give well under 1 %; a cantilever still
+        relaxing after the pull-off, tens of per cent).
+    max_slope_ratio : float
+        The steeper run's contact slope may exceed the other's by at most this
+        factor [-] (``inf`` to skip: a creeping piezo on the nominal channel
+        changes the local gain by a factor of 2-4 between runs).
+
+    Returns
+    -------
+    approach, retract : RunRegions
+        Unchanged, or with ``has_compliance=False`` and a ``note``.
+
+    Raises
+    ------
+    AnalysisError
+        Neither run has a constant-compliance line.
+    """
+    runs = {"approach": approach, "retract": retract}
+    slopes = {}
+    # only a run clipped where it turns can hide its contact in the saturated samples
+    clipped = {"approach": bool(approach.saturated[-1]), "retract": bool(retract.saturated[0])}
+    for kind, run in runs.items():
+        near, far = contact_slopes(z, s, run)
+        slopes[kind] = near
+        if not clipped[kind]:
+            continue
+        if math.isfinite(near) and math.isfinite(far) and abs(far) > flat_ratio * abs(near):
+            runs[kind] = _without_compliance(run, (
+                f"the {kind} run has no unclipped constant-compliance region: its contact part is only "
+                f"{abs(near / far):.2g} x steeper than its free part (a free cantilever still relaxing, "
+                "the contact hidden in the saturated samples)"), "unsettled")
+    a, r = slopes["approach"], slopes["retract"]
+    if runs["approach"].has_compliance and runs["retract"].has_compliance and math.isfinite(a * r) and a * r != 0:
+        ratio = abs(a / r)
+        kind, other = ("retract", "approach") if ratio > 1 else ("approach", "retract")
+        if clipped[kind] and (max(ratio, 1 / ratio) > max_slope_ratio or a * r < 0):  # opposite signs: no line
+            runs[kind] = _without_compliance(runs[kind], (
+                f"the {kind} run has no unclipped constant-compliance region: its contact slope is "
+                f"{max(ratio, 1 / ratio):.3g} x shallower than the {other}'s (friction changes it by a few "
+                "per cent, eqs 18-19)"), "shallow")
+    if not (runs["approach"].has_compliance or runs["retract"].has_compliance):
+        raise AnalysisError("no constant-compliance region on either run: " + runs["approach"].note
+                            + "; " + runs["retract"].note)
+    return runs["approach"], runs["retract"]

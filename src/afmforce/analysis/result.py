@@ -62,13 +62,22 @@ class AnalysisResult:
     contact_separation : float
         Separation given to the compliance line [m].
     jump_in_separation : float
-        Separation just before the jump into contact [m].
+        Separation just before the jump into contact [m] (NaN without a significant jump).
     jump_in_force : float
         Force the tip jumps to, relative to the baseline [N].
     jump_in_deflection : float
         Deflection the tip jumps to [m].
+    contact_onset_separation : float
+        Separation at the last sample before contact, jump or not [m] (a tip that
+        creeps in, or jumps by less than the noise, has only this).
     pull_off_force : float
-        Most negative force before pull-off, relative to the baseline [N].
+        Most negative force before pull-off, relative to the baseline [N]; a lower
+        bound when ``pull_off_saturated``.
+    pull_off_saturated : bool
+        The photodiode clipped the bottom of the pull-off.
+    pull_off_force_extrapolated : float
+        With a clipped pull-off: the compliance line extrapolated to the pull-off
+        position, times k [N] (NaN otherwise).
     pull_off_position : float
         Position at pull-off relative to contact [m].
     jump_out_distance : float
@@ -114,7 +123,10 @@ class AnalysisResult:
     jump_in_separation: float = math.nan
     jump_in_force: float = math.nan
     jump_in_deflection: float = math.nan
+    contact_onset_separation: float = math.nan
     pull_off_force: float = math.nan
+    pull_off_saturated: bool = False
+    pull_off_force_extrapolated: float = math.nan
     pull_off_position: float = math.nan
     jump_out_distance: float = math.nan
     surface_energy: float = math.nan
@@ -141,7 +153,8 @@ class AnalysisResult:
     ARRAYS = ("time", "position", "separation", "deflection", "force", "segment")
     UNITS = {"calibration_factor": "m/V", "calibration_factor_fit": "m/V", "spring_constant": "N/m",
              "shift": "m", "contact_separation": "m", "jump_in_separation": "m", "jump_in_force": "N",
-             "jump_in_deflection": "m", "pull_off_force": "N", "pull_off_position": "m",
+             "jump_in_deflection": "m", "contact_onset_separation": "m", "pull_off_force": "N",
+             "pull_off_force_extrapolated": "N", "pull_off_position": "m",
              "jump_out_distance": "m", "surface_energy": "J/m^2", "radius": "m", "hamaker_radius": "J m",
              "hamaker_radius_se": "J m", "hamaker": "J", "hamaker_se": "J", "oscillation_frequency": "Hz",
              "velocity": "m/s", "inertia_parameter": "", "time": "s", "position": "m", "separation": "m",

@@ -2,6 +2,9 @@
 
 * Separation ``h = z2 - z`` (spec section 1) up to a constant: the constant is
   chosen so that the constant-compliance line lies at ``h = contact_separation``
+  where it crosses zero deflection (zero load; the line's slope is one in
+  deflection against position unless the position channel or the calibration
+  is off, and the contact point is where the separation matters)
   (the paper uses ``z0 = 0.35 nm``, consistent with the van der Waals law; 0 is
   the common alternative).
 * The position axis is also given relative to the contact: ``position = 0``
@@ -22,7 +25,8 @@ import numpy as np
 
 from ..cantilever import InclinedCantilever
 from ..constants import Z0
-from ..errors import ParameterError
+from ..errors import AnalysisError, ParameterError
+from ._numeric import robust_line
 from .regions import RunRegions
 
 __all__ = ["ZeroResult", "zero_of_separation", "ForceConversion", "effective_spring_constant"]
@@ -69,9 +73,15 @@ def zero_of_separation(z: np.ndarray, d: np.ndarray, run: RunRegions,
     if not np.isfinite(contact_separation) or contact_separation < 0:
         raise ParameterError(f"contact separation must be >= 0 [m], got {contact_separation!r}")
     idx = run.index[run.compliance & ~run.saturated]
+    if idx.size < 3:
+        raise AnalysisError(f"the {run.kind} run has no constant-compliance region to put the zero of separation on")
     u = d[idx] - z[idx]
     c0 = float(np.median(u))
-    scatter = float(1.4826 * np.median(np.abs(u - c0)))
+    zm = float(z[idx].mean())
+    a, b, *_ = robust_line(z[idx] - zm, d[idx])
+    if np.isfinite(b) and b > 0:  # anchor at zero load: d - z at the line's zero deflection
+        c0 = float(-(zm - a / b))  # (equal to the median of d - z when the slope is one)
+    scatter = float(1.4826 * np.median(np.abs(u - np.median(u))))
     separation = d - z - c0 + contact_separation
     contact_position = -c0  # where d = 0 on the line d = z + c0
     position = z - contact_position

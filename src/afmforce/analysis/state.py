@@ -10,7 +10,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -77,12 +77,15 @@ class State:
     def metadata(self) -> Mapping[str, Any]:
         return self.curve.metadata
 
-    def update(self, step: str | None = None, detail: Any = None, warn: str | None = None, **changes) -> "State":
-        """A new state with ``changes``, ``detail`` stored under ``step`` and ``warn`` appended."""
+    def update(self, step: str | None = None, detail: Any = None, warn: str | Sequence[str] | None = None,
+               **changes) -> "State":
+        """A new state with ``changes``, ``detail`` stored under ``step`` and ``warn`` (one or several) appended."""
         if step is not None:
             changes["details"] = {**self.details, step: detail}
-        if warn:
-            changes["warnings"] = self.warnings + (warn,)
+        new = (warn,) if isinstance(warn, str) else tuple(warn or ())
+        new = tuple(w for w in new if w)
+        if new:
+            changes["warnings"] = self.warnings + new
         return dataclasses.replace(self, **changes)
 
     def require(self, *names: str, step: str) -> None:

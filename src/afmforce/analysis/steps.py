@@ -7,6 +7,7 @@ step identifier in ``state.details``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -17,10 +18,10 @@ from . import compliance as cc
 from ._numeric import robust_line, running_mean
 from .drift import remove_drift
 from .dynamic import diagnose_curve, run_velocity
-from .fringes import FringeResult, fit_fringes, fringe_signal, loop_width, position_map
-from .jumps import adhesion, find_jump_in, find_pull_off
+from .fringes import FringeResult, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
+from .jumps import PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings, pull_off_estimate
 from .oscillation import OscillationResult, find_peak, oscillation_origin
-from .regions import find_run_regions, run_indices, saturated_mask
+from .regions import check_compliance, find_run_regions, run_indices, saturated_mask
 from .separation import effective_spring_constant, zero_of_separation
 from .state import ContactSummary, SmoothResult, State
 from .vdw import fit_vdw
@@ -65,21 +66,41 @@ def smooth(st: State, *, window: int | str = "auto") -> State:
 
 
 def contact(st: State, *, min_points: int = 5, baseline_fraction: float = 0.7,
-            compliance_fraction: float = 0.5) -> State:
-    """Contact, constant-compliance and zero-force regions of both runs."""
+            compliance_fraction: float = 0.5, flat_ratio: float = 0.05,
+            max_slope_ratio: float | str = "auto") -> State:
+    """Contact, constant-compliance and zero-force regions of both runs.
+
+    A run clipped at its turning point whose contact region is no
+    constant-compliance line (see :func:`~.regions.check_compliance`: not
+    ``1 / flat_ratio`` times steeper than its free part, or, on the measured
+    channel, ``max_slope_ratio`` times shallower than the other run's;
+    ``"auto"``: 2 on the measured channel, no limit on the nominal one, whose
+    creep changes the local gain) keeps no compliance line; later steps use
+    the other run's and say what could not be measured.
+    """
     if not (0 < baseline_fraction <= 1 and 0 < compliance_fraction <= 1):
         raise ParameterError("baseline_fraction and compliance_fraction must lie in (0, 1]")
+    if max_slope_ratio == "auto":
+        max_slope_ratio = 2.0 if st.channel == "measured" else math.inf
+    try:
+        max_slope_ratio = float(max_slope_ratio)
+    except (TypeError, ValueError):
+        raise ParameterError(f"max_slope_ratio must be 'auto' or a number > 1, got {max_slope_ratio!r}") from None
+    if not (max_slope_ratio > 1 and flat_ratio > 0):
+        raise ParameterError("contact: max_slope_ratio must exceed 1 and flat_ratio must be positive")
     sat = saturated_mask(st.signal)
     kw = dict(saturated=sat, min_points=int(min_points), baseline_fraction=baseline_fraction,
               compliance_fraction=compliance_fraction)
     app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach", **kw)
     ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
+    app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
     summary = ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
                              int(app.zero_force.sum()), int(ret.zero_force.sum()), int(app.compliance.sum()),
                              int(ret.compliance.sum()), int(sat.sum()))
-    warn = None
+    warn = []
     if sat.any():
-        warn = f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits"
+        warn.append(f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits")
+    warn += [r.note for r in (app, ret) if r.note]
     # noise of the signal from sample-to-sample differences in the approach's free part: blind to
     # slow structure (drift, fringes), so it measures the resolution the jump tests need
     return st.update("contact", summary, warn=warn, approach=app, retract=ret, noise=app.noise)
@@ -92,8 +113,13 @@ def drift(st: State, *, order: int = 1, tail: bool = True) -> State:
         raise ParameterError(f"drift order must be 0 (offset) or 1 (line), got {order}")
     signal, res = remove_drift(st.time, st.signal, st.curve.segment, st.approach, st.retract, st.unit, order,
                                z=st.z if tail else None)
-    warn = ("retract baseline too short or too noisy after the pull-off (free ringing?): the approach "
-            "baseline was used for both runs") if res.retract_from_approach else None
+    warn = None
+    if res.retract_from_approach and not st.retract.has_compliance:
+        warn = ("the retract run has no baseline of its own (its free cantilever had not settled): the approach "
+                "baseline was used for both runs")
+    elif res.retract_from_approach:
+        warn = ("retract baseline too short or too noisy after the pull-off (free ringing?): the approach "
+                "baseline was used for both runs")
     return st.update("drift", res, warn=warn, signal=signal)
 
 
@@ -105,21 +131,26 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
     and remap the positions if they are the piezo's *nominal* ones (a measured
     position is taken as linear, as the paper found for its detector, Fig 7B);
     ``"always"``: subtract and remap; ``"never"``: report only.
+
+    The fit carries a line in time (what the drift step's line, pulled by the
+    fringes, left of the baseline); it is subtracted with the fringes. In
+    contact the fringe term is held at its value where the run's own contact
+    line crosses zero signal (the separation no longer changes there).
     """
     st.require("approach", step="fringes")
     if apply not in ("auto", "always", "never") or in_contact not in ("hold", "follow"):
         raise ParameterError("fringes: apply must be auto/always/never and in_contact hold/follow")
     runs = {}
     for run in (st.approach, st.retract):
-        idx = run.index[~run.contact & ~run.saturated]
+        idx = run.index[run.zero_force & ~run.saturated]  # the baseline: not the attraction, nor a settling tail
         zf = st.z[idx]
         z_split = st.z[run.index[min(run.split, run.index.size - 1)]]
-        far = np.abs(zf - z_split) > margin * np.ptp(zf)  # leave the attraction near contact out
-        runs[run.kind] = fit_fringes(zf[far], st.signal[idx][far], period=period, order=order)
+        far = np.abs(zf - z_split) > margin * (np.ptp(zf) if zf.size else 0.0)  # not the attraction near contact
+        runs[run.kind] = fit_fringes(zf[far], st.signal[idx][far], period=period, order=order,
+                                     t=st.time[idx][far] if st.time_known else None)
     fa, fr = runs["approach"], runs["retract"]
     # real fringes are periodic in the true position: both runs show the same period
     both = fa.found and fr.found and abs(fa.period - fr.period) < 0.05 * 0.5 * (fa.period + fr.period)
-    z_contact = _zero_deflection_position(st)
     z, s = st.z.copy(), st.signal.copy()
     remove = apply == "always" or (apply == "auto" and both)
     remap = apply == "always" or (apply == "auto" and both and st.channel == "nominal")
@@ -129,8 +160,9 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
         idx = run.index
         term = fringe_signal(st.z[idx], fit)
         if in_contact == "hold":
+            z_contact = _zero_deflection_position(st, run if run.has_compliance else st.approach)
             term = np.where(run.contact, fringe_signal(np.array([z_contact]), fit)[0], term)
-        s[idx] = st.signal[idx] - term
+        s[idx] = st.signal[idx] - term - fringe_baseline(st.time[idx], st.z[idx], fit)
         if remap:
             z[idx] = position_map(st.z[idx], fit)
     applied = remap
@@ -147,13 +179,13 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
     return st.update("fringes", res, z=z, signal=s)
 
 
-def _zero_deflection_position(st: State) -> float:
-    """Where the approach contact line crosses zero signal: contact at zero load.
+def _zero_deflection_position(st: State, run=None) -> float:
+    """Where a run's (default: the approach's) contact line crosses zero signal: contact at zero load.
 
     Interference depends on the separation, constant in contact: its value there
     is the free-branch fringe at this position.
     """
-    run = st.approach
+    run = st.approach if run is None else run
     idx = run.index[run.contact & ~run.saturated]
     z_first = float(st.z[run.index[run.split]])
     if idx.size < 3:
@@ -175,12 +207,16 @@ def calibration(st: State, *, source: str = "auto", run: str = "approach") -> St
     if comp is None:
         raise AnalysisError("step 'calibration' needs the compliance lines")
     res = cc.calibrate(comp, st.metadata, source=source, run=run)
-    warn = None
+    warn = []
+    if not (comp.approach.found and comp.retract.found):
+        used = "approach" if comp.approach.found else "retract"
+        if run != used:
+            warn.append(f"calibration from the {used} run's compliance line (the only one)")
     if res.source == "metadata" and math.isfinite(res.factor_fit) and res.factor_fit > 0:
         ratio = res.factor_fit / res.factor
         if abs(ratio - 1) > 0.1:
-            warn = (f"the compliance slope gives a calibration {ratio:.3g} x the file's: a soft contact, or a "
-                    "stale sensitivity (calibration source 'fit', --calibration fit, uses the slope)")
+            warn.append(f"the compliance slope gives a calibration {ratio:.3g} x the file's: a soft contact, or a "
+                        "stale sensitivity (calibration source 'fit', --calibration fit, uses the slope)")
     if not (math.isfinite(res.factor) and res.factor != 0):
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
     return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
@@ -192,6 +228,11 @@ def shift(st: State, *, apply: bool = True) -> State:
     if comp is None:
         raise AnalysisError("step 'shift' needs the compliance lines")
     res = cc.compliance_shift(comp, applied=bool(apply))
+    if not math.isfinite(res.shift):
+        missing = "retract" if comp.approach.found else "approach"
+        return st.update("shift", res, warn=(
+            f"inward/outward shift (hysteresis) not measured: the {missing} run has no unclipped "
+            "constant-compliance line; the runs are not overlaid"))
     if not apply:
         return st.update("shift", res)
     z = st.z.copy()
@@ -199,21 +240,39 @@ def shift(st: State, *, apply: bool = True) -> State:
     return st.update("shift", res, z=z)
 
 
-def zero(st: State, *, contact_separation: float = Z0, run: str = "auto") -> State:
+def zero(st: State, *, contact_separation: float = Z0, run: str = "auto", parallel_tolerance: float = 0.25) -> State:
     """Zero of separation: the compliance line at h = contact_separation.
 
     ``run="auto"``: the outward (retract) line as in the paper, unless the
-    retract had no baseline of its own (drift step), then the inward line.
+    retract had no baseline of its own (drift step) or no compliance line, or
+    the two lines' slopes differ by more than ``parallel_tolerance``, more than
+    friction makes (a creeping piezo on the nominal channel, a soft contact):
+    then the inward line, which carries the jump-in and the van der Waals
+    attraction.
     """
     st.require("deflection", step="zero")
     if run not in ("auto", "approach", "retract"):
         raise ParameterError(f"zero: run must be auto, approach or retract, got {run!r}")
+    warn = []
     if run == "auto":
         dr = st.details.get("drift")
+        comp = st.details.get("compliance")
         run = "approach" if dr is not None and dr.retract_from_approach else "retract"
+        if comp is not None and comp.approach.found and comp.retract.found:
+            ratio = comp.approach.slope / comp.retract.slope
+            if abs(ratio - 1) > parallel_tolerance:
+                run = "approach"
+                warn.append(f"compliance lines not parallel (slope ratio {ratio:.3g}): zero of separation from "
+                            "the inward line; the outward run's separations are approximate")
     regions = st.retract if run == "retract" else st.approach
+    if not regions.has_compliance:  # that run's contact is clipped: the other line
+        regions = st.approach if run == "retract" else st.retract
+    if not (st.approach.has_compliance and st.retract.has_compliance):
+        warn.append(f"zero of separation from the {regions.kind} run's compliance line alone: friction or "
+                    f"hysteresis between the runs would offset it by up to half their distance (not measured), "
+                    f"and the other run's separations are not corrected for the shift")
     h, pos, res = zero_of_separation(st.z, st.deflection, regions, contact_separation)
-    return st.update("zero", res, separation=h, position=pos)
+    return st.update("zero", res, warn=warn, separation=h, position=pos)
 
 
 def force(st: State, *, spring_constant: float | None = None, theta0: float | None = None,
@@ -235,21 +294,32 @@ def force(st: State, *, spring_constant: float | None = None, theta0: float | No
                      force=st.deflection * conv.spring_constant)
 
 
-def jumps(st: State, *, nsigma: float = 5.0, window: int = 3) -> State:
-    """Jump into contact and pull-off, near each run's contact split."""
+def jumps(st: State, *, nsigma: float = 5.0, window: int = 3, onset_tolerance: float = 3e-9) -> State:
+    """Jump into contact and pull-off, near each run's contact split.
+
+    Warns when the first contact sample lies more than ``onset_tolerance`` (or
+    ``nsigma`` noise) off the compliance line the zero of separation was put on.
+    """
     st.require("separation", step="jumps")
     noise = abs(st.noise * st.factor)
     k = st.spring_constant
     ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window)
-    po = find_pull_off(st.deflection, st.position, st.retract, noise, k, nsigma, window)
-    warn = []
-    if not ji.found:
-        warn.append("no jump into contact: the tip crept into contact (or the attraction is below the noise)")
-    if not po.found:
-        warn.append("no pull-off found on the retract run")
-    elif po.saturated:
-        warn.append("photodiode saturated at pull-off: the pull-off force is a lower bound")
-    return st.update("jumps", {"jump_in": ji, "pull_off": po}, warn="; ".join(warn) or None)
+    ret = st.retract
+    clipped = not ret.has_compliance and bool(ret.contact.any())  # its whole contact is clipped
+    if clipped:  # the pull-off is not in the record
+        po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
+    else:
+        po = find_pull_off(st.deflection, st.position, ret, noise, k, nsigma, window)
+    warn = jump_warnings(ji, po, k, clipped)
+    z0 = st.details["zero"].contact_separation if "zero" in st.details else Z0
+    if 0 <= ji.index < st.separation.size - 1:
+        # at a rigid contact the first contact sample lies on the compliance line (h = z0)
+        off = float(st.separation[ji.index + 1] - z0)
+        if abs(off) > max(nsigma * noise, onset_tolerance):
+            warn.append(f"the first contact sample lies {off * 1e9:.3g} nm off the compliance line: a soft or "
+                        "nonlinear contact, or a line displaced by friction or hysteresis (dynamic run); "
+                        "separations near contact are uncertain by about that much")
+    return st.update("jumps", {"jump_in": ji, "pull_off": po}, warn=warn)
 
 
 def adhesion_step(st: State, *, radius: float | None = None, model: str = "jkr", hamaker: float = HAMAKER,
@@ -309,7 +379,7 @@ def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
         raise AnalysisError("step 'friction' needs the compliance lines")
     sh = st.details.get("shift") or cc.compliance_shift(comp, applied=False)
     return st.update("friction", cc.friction_signature(comp, sh, nsigma=nsigma, slope_tolerance=slope_tolerance,
-                                                       offset_tolerance=offset_tolerance))
+                                                       offset_tolerance=offset_tolerance, channel=st.channel))
 
 
 def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution: float | None = None,
@@ -331,16 +401,23 @@ def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution
     fr = st.details.get("friction")
     z0 = st.details["zero"].contact_separation if "zero" in st.details else math.nan
     res = diagnose_curve(velocity=v, spring_constant=st.spring_constant, resonance_frequency=f, resolution=dx,
-                         jump_in_separation=j["jump_in"].separation, static_jump_in_separation=h_static,
+                         jump_in_separation=j["jump_in"].separation if j["jump_in"].found else math.nan,
+                         static_jump_in_separation=h_static,
                          sample_step=step, friction=None if fr is None else fr.kind,
                          friction_verdict="" if fr is None else fr.verdict,
                          hamaker_radius=fit.hamaker_radius if fit is not None else math.nan,
-                         pull_off_force=j["pull_off"].force, contact_separation=z0,
+                         pull_off_force=pull_off_estimate(j["pull_off"], st.spring_constant), contact_separation=z0,
                          attraction_ratio=attraction_ratio)
+    ret = st.retract
+    if ret is not None and not ret.has_compliance and ret.contact.any() and bool(
+            np.all(st.signal[ret.index[ret.contact]] > 0)):
+        # static pull-off needs adhesion (negative deflection): leaving while pushed is dynamics
+        res = dataclasses.replace(res, dynamic=True, verdict=res.verdict + "; " + (
+            "the tip left the surface while the cantilever was still pushed (deflection above the photodiode's "
+            "saturation on the whole retract contact), where a static pull-off needs adhesion: drag or friction "
+            "held the cantilever bent -- a dynamic run, not a static force curve"))
     new = st.update("diagnosis", res)
     if res.dynamic and fit is not None:
-        import dataclasses
-
         new = new.update("vdw", dataclasses.replace(fit, reliable=False),
                          warn="dynamic run: the van der Waals fit is NOT a static force law (see diagnosis)")
     return new
