@@ -2,6 +2,8 @@
 
 from pathlib import Path
 
+import pytest
+
 from afmforce.pipeline import steps_table
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
@@ -25,7 +27,7 @@ def test_readme_raw_text_example_reads(tmp_path):
     path = tmp_path / "example.txt"
     path.write_text(block)
     curve = read_raw(path)
-    assert list(curve.time) == [0.0, 0.5e-3]
-    assert curve.piezo_nominal[0] == -500e-9
+    assert list(curve.time) == pytest.approx([0.0, 0.5e-3], rel=1e-12)
+    assert curve.piezo_nominal[0] == pytest.approx(-500e-9, rel=1e-12)
     assert abs(curve.metadata["sensitivity"] - 45e-9) < 1e-20
     assert curve.deflection_unit == "V"
