@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import argparse
 import importlib
-import importlib.util
 import re
 import sys
 
@@ -46,10 +45,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
     for name in COMMANDS:
-        modname = f"{__package__}.{name}"
-        if importlib.util.find_spec(modname) is None:
-            continue  # command not built yet
-        importlib.import_module(modname).register(sub)
+        importlib.import_module(f"{__package__}.{name}").register(sub)
     return parser
 
 
