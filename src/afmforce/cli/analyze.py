@@ -20,12 +20,11 @@ import argparse
 import json
 import math
 import re
-import sys
 from pathlib import Path
 
 from .. import errors as _errors
 from ..errors import ParameterError
-from .common import add_quantity, eprint
+from .common import add_quantity, chunk_progress_bar, eprint
 
 SUFFIX = ".afmforce"
 #: Runs with at least this many curves are batches: Dask, resumable store, summary statistics.
@@ -133,22 +132,6 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     return steps
 
 
-def _progress_bar(total: int):
-    from tqdm import tqdm
-
-    bar = tqdm(total=total, unit="chunk", desc="analyze", disable=total < 2 or not sys.stderr.isatty(),
-               file=sys.stderr, dynamic_ncols=True, leave=False)
-
-    def update(p) -> None:
-        bar.total = p.chunks_total
-        bar.n = p.chunks_done
-        if p.chunks_failed:
-            bar.set_postfix(failed=p.chunks_failed, refresh=False)
-        bar.refresh()
-
-    return bar, update
-
-
 def run(args: argparse.Namespace) -> int:
     from ..sweep.analysis import CurveAnalysis, analysis_key, analyze_files, plan_curves
     from ..sweep.engine import default_chunk_size
@@ -175,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
         maps = len({r.path for r in refs if r.index is not None})
         print(f"afmforce analyze: {n} items ({len(files)} file(s), {maps} of them force maps) in {n_chunks} chunks",
               flush=True)
-    bar, update = _progress_bar(n_chunks)
+    bar, update = chunk_progress_bar("analyze", n_chunks, min_total=2, leave=False)
     try:
         result = analyze_files(refs, analysis, chunk_size=chunk_size, executor="serial" if local else None,
                                workers=args.workers, scheduler=args.scheduler,

@@ -57,3 +57,25 @@ def print_table(rows: list[tuple[str, Any, str]], title: str | None = None) -> N
 def eprint(msg: str) -> None:
     """Print one line on stderr."""
     print(msg, file=sys.stderr)
+
+
+def chunk_progress_bar(desc: str, total: int, *, min_total: int = 1, leave: bool = True):
+    """A tqdm bar over chunks on a terminal and the engine callback that drives it.
+
+    Returns ``(bar, update)``; ``update(progress)`` takes the engine's progress
+    record (``chunks_total``, ``chunks_done``, ``chunks_failed``). The bar is
+    disabled off a terminal or for fewer than ``min_total`` chunks.
+    """
+    from tqdm import tqdm
+
+    bar = tqdm(total=total, unit="chunk", desc=desc, disable=total < min_total or not sys.stderr.isatty(),
+               file=sys.stderr, dynamic_ncols=True, leave=leave)
+
+    def update(p) -> None:
+        bar.total = p.chunks_total
+        bar.n = p.chunks_done
+        if p.chunks_failed:
+            bar.set_postfix(failed=p.chunks_failed, refresh=False)
+        bar.refresh()
+
+    return bar, update

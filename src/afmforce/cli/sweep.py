@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..units import format_quantity
+from .common import chunk_progress_bar
 
 #: Output columns summarised on the terminal, in this order.
 SUMMARY_METRICS = (
@@ -72,22 +73,6 @@ def _list_parameters() -> int:
             text = repr(default)
         print(f"  {f.name:<20} {units[f.name] or ('text' if dims[f.name] is None else '-'):<12} {text}")
     return 0
-
-
-def _progress_bar(total_hint: int):
-    from tqdm import tqdm
-
-    bar = tqdm(total=total_hint, unit="chunk", desc="sweep", disable=not sys.stderr.isatty(),
-               file=sys.stderr, dynamic_ncols=True)
-
-    def update(p) -> None:
-        bar.total = p.chunks_total
-        bar.n = p.chunks_done
-        if p.chunks_failed:
-            bar.set_postfix(failed=p.chunks_failed, refresh=False)
-        bar.refresh()
-
-    return bar, update
 
 
 def _describe(spec) -> str:
@@ -154,7 +139,7 @@ def run(args: argparse.Namespace) -> int:
     n_chunks = math.ceil(spec.n_runs / (chunk_size or default_chunk_size(spec.n_runs)))
     executor = "serial" if args.serial or (n_chunks <= 1 and not args.scheduler) else None
     print(f"afmforce sweep: {spec.n_runs} runs, {_describe(spec)}", flush=True)
-    bar, update = _progress_bar(n_chunks)
+    bar, update = chunk_progress_bar("sweep", n_chunks)
     try:
         result = run_sweep(simulate_run, spec, chunk_size=chunk_size, executor=executor, workers=args.workers,
                            scheduler=args.scheduler, store=args.out, progress=update)
