@@ -59,14 +59,14 @@ from typing import Any
 import numpy as np
 
 from ._files import atomic_path
-from .errors import FileFormatError, MissingDependencyError, ParameterError
+from .errors import FileFormatError, ParameterError
+from ._rawcommon import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _json
+from ._rawhdf5 import _read_hdf5, _write_hdf5, read_curve_group, write_curve_group
 from .raw import DEFLECTION_UNITS, RawCurve
 
 __all__ = ["write_raw", "read_raw", "write_curve_group", "read_curve_group", "FORMAT", "VERSION", "METADATA_UNITS",
            "TRUTH_UNITS", "HDF5_SUFFIXES"]
 
-FORMAT = "afmforce-raw"
-VERSION = 1
 HDF5_SUFFIXES = (".h5", ".hdf5", ".hdf")
 
 #: SI unit of each known metadata key ("" for plain values).
@@ -75,17 +75,7 @@ METADATA_UNITS: dict[str, str] = {
     "sample_rate": "Hz", "dwell_time": "s", "temperature": "K",
     "seed": "", "instrument": "", "source": "", "source_file": "", "comment": "",
 }
-#: SI unit of each known truth entry.
-TRUTH_UNITS: dict[str, str] = {
-    "piezo_position": "m", "deflection": "m", "apparent_deflection": "m", "separation": "m",
-    "apparent_separation": "m", "angle": "rad", "lateral_position": "m", "normal_force": "N",
-    "friction_force": "N", "interference": "V", "drift": "V", "backlash_offset": "m",
-    "calibration_factor": "m/rad", "spring_constant": "N/m", "trajectory_sample_rate": "Hz",
-    "fringe_period": "m", "run_speeds": "m/s", "drift_rates": "V/s", "backlash_widths": "m",
-    "piezo_loop_width": "m", "instrument": "",
-}
 _COLUMNS = {"time": "s", "piezo_nominal": "m", "piezo_measured": "m", "deflection_signal": None, "segment": "1"}
-_REQUIRED = ("time", "piezo_nominal", "deflection_signal", "segment")
 _DIMENSIONLESS = {"", "1", "-"}
 _END = "# end"
 _FORMAT_KEYS = ("format", "version", "rows")
@@ -170,12 +160,7 @@ def format_text(curve: RawCurve) -> str:
     return buf.getvalue()
 
 
-def _json(value: Any, key: str) -> str:
-    try:
-        return json.dumps(_plain(value), ensure_ascii=False, allow_nan=True)
-    except (TypeError, ValueError) as exc:
-        raise ParameterError(f"raw-file header value {key!r} cannot be stored ({exc}); "
-                             "use numbers, strings, lists or dicts") from None
+
 
 
 def _header_line(key: str, value: Any, unit: str) -> str:
@@ -354,141 +339,3 @@ def _text_quantity(text: str, si: str, where: str) -> float:
     except Exception:
         raise FileFormatError(f"{where}: expected a number in {si} (or with a unit convertible to it), "
                               f"got {text!r}") from None
-
-
-def _plain(value):
-    if isinstance(value, dict):
-        return {str(k): _plain(v) for k, v in value.items()}
-    if isinstance(value, (list, tuple)):
-        return [_plain(v) for v in value]
-    if isinstance(value, np.ndarray):
-        if value.ndim == 0:
-            return _plain(value[()])
-        raise TypeError("arrays are not allowed here")
-    if isinstance(value, np.integer):
-        return int(value)
-    if isinstance(value, np.floating):
-        return float(value)
-    if isinstance(value, np.bool_):
-        return bool(value)
-    return value
-
-
-# --- HDF5 -----------------------------------------------------------------------
-def _h5py():
-    try:
-        import h5py
-    except ImportError as exc:  # pragma: no cover - h5py is a dependency
-        raise MissingDependencyError("HDF5 raw files need h5py: pip install h5py") from exc
-    return h5py
-
-
-def _write_hdf5(curve: RawCurve, path: Path, force: bool) -> None:
-    h5py = _h5py()
-    with atomic_path(path, force) as tmp:
-        with h5py.File(tmp, "w") as f:
-            f.attrs["format"] = FORMAT
-            f.attrs["version"] = VERSION
-            write_curve_group(f, curve)
-
-
-def write_curve_group(group, curve: RawCurve) -> None:
-    """Write ``curve`` into an open h5py File or Group: the layout of a raw HDF5
-    file without its ``format``/``version`` attributes (also used by :mod:`afmforce.rawmap`).
-
-    Raises
-    ------
-    ParameterError
-        Metadata or truth values that cannot be stored.
-    """
-    n = len(curve)
-    meta_json = _json(dict(curve.metadata), "metadata")
-    scalars: dict[str, Any] = {}
-    arrays: dict[str, np.ndarray] = {}
-    for key, value in (curve.truth or {}).items():
-        if isinstance(value, np.ndarray):
-            if value.ndim != 1 or value.size != n:
-                raise ParameterError(f"truth array {key!r} has shape {value.shape}; only 1-D arrays of the "
-                                     f"curve's length ({n}) can be stored")
-            arrays[key] = value
-        else:
-            scalars[key] = value
-    scalars_json = _json(scalars, "truth")
-    f = group
-    f.attrs["deflection_unit"] = curve.deflection_unit
-    f.attrs["metadata"] = meta_json
-    cols = {"time": ("s", curve.time), "piezo_nominal": ("m", curve.piezo_nominal),
-            "deflection_signal": (curve.deflection_unit, curve.deflection_signal),
-            "segment": ("1", curve.segment)}
-    if curve.piezo_measured is not None:
-        cols["piezo_measured"] = ("m", curve.piezo_measured)
-    for name, (unit, values) in cols.items():
-        dtype = np.int8 if name == "segment" else np.float64
-        ds = f.create_dataset(name, data=np.asarray(values, dtype=dtype))
-        ds.attrs["unit"] = unit
-    if curve.truth is not None:
-        g = f.create_group("truth")
-        g.attrs["scalars"] = scalars_json
-        for key, values in arrays.items():
-            ds = g.create_dataset(key, data=np.asarray(values, dtype=np.float64))
-            ds.attrs["unit"] = TRUTH_UNITS.get(key, "")
-
-
-def _read_hdf5(path: Path) -> RawCurve:
-    h5py = _h5py()
-    try:
-        f = h5py.File(path, "r")
-    except (OSError, ValueError) as exc:
-        raise FileFormatError(f"cannot read {path} as HDF5: {exc}") from exc
-    with f:
-        try:
-            fmt = _attr_str(f.attrs.get("format"))
-            if fmt != FORMAT:
-                raise FileFormatError(f"{path} is not an afmforce raw HDF5 file (format attribute {fmt!r})")
-            if f.attrs.get("version") is None:
-                raise FileFormatError(f"{path}: attribute 'version' is missing")
-            if int(f.attrs["version"]) != VERSION:
-                raise FileFormatError(f"{path}: raw format version {int(f.attrs['version'])} is not supported")
-        except (KeyError, ValueError, TypeError, OSError) as exc:
-            raise FileFormatError(f"{path}: malformed afmforce raw HDF5 file ({exc})") from exc
-        return read_curve_group(f, str(path))
-
-
-def read_curve_group(group, where: str) -> RawCurve:
-    """Read a curve written by :func:`write_curve_group` (``where`` names it in errors).
-
-    Raises
-    ------
-    FileFormatError
-        Missing datasets or malformed attributes.
-    """
-    f = group
-    try:
-        missing = [c for c in _REQUIRED if c not in f]
-        if missing:
-            raise FileFormatError(f"{where}: dataset(s) {', '.join(missing)} missing")
-        dunit = _attr_str(f.attrs.get("deflection_unit", "V"))
-        metadata = json.loads(_attr_str(f.attrs.get("metadata", "{}")))
-        truth = None
-        if "truth" in f:
-            g = f["truth"]
-            truth = json.loads(_attr_str(g.attrs.get("scalars", "{}")))
-            for key in g:
-                truth[key] = np.asarray(g[key][()], dtype=np.float64)
-        measured = np.asarray(f["piezo_measured"][()], np.float64) if "piezo_measured" in f else None
-        return RawCurve(time=np.asarray(f["time"][()], np.float64),
-                        piezo_nominal=np.asarray(f["piezo_nominal"][()], np.float64),
-                        deflection_signal=np.asarray(f["deflection_signal"][()], np.float64),
-                        segment=np.asarray(f["segment"][()]).astype(np.int8),
-                        piezo_measured=measured, metadata=metadata, truth=truth, deflection_unit=dunit)
-    except FileFormatError:
-        raise
-    except (KeyError, ValueError, TypeError, OSError, json.JSONDecodeError) as exc:
-        raise FileFormatError(f"{where}: malformed afmforce raw HDF5 file ({exc})") from exc
-
-
-def _attr_str(value) -> str | None:
-    if isinstance(value, bytes):
-        return value.decode("utf-8")
-    return None if value is None else str(value)
-

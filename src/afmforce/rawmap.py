@@ -34,7 +34,8 @@ from typing import Any, Iterable, Iterator, Mapping, Sequence
 from ._files import atomic_path
 from .errors import FileFormatError, ParameterError
 from .raw import RawCurve
-from .rawfile import _attr_str, _h5py, _json, read_curve_group, write_curve_group
+from ._rawcommon import _json
+from ._rawhdf5 import _attr_str, _h5py, read_curve_group, write_curve_group
 
 __all__ = ["MAP_FORMAT", "MAP_VERSION", "MapInfo", "MapReader", "write_map", "read_map", "iter_map", "map_info",
            "is_map"]
