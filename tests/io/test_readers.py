@@ -9,6 +9,7 @@ metadata (shared/data/real/README.md), never from our own output.
 from __future__ import annotations
 
 import hashlib
+import json
 import zipfile
 from pathlib import Path
 
@@ -25,8 +26,11 @@ NTMDT_META = {"spring_constant": 0.05, "sensitivity": 61e-9}
 FILES = sorted(p for p in DATA.iterdir() if p.suffix in (".ibw", ".csv", ".txt", ".jpk-force"))
 
 
+OVERRIDES = json.loads((DATA / "meta_override.json").read_text())  # for files that store no k / sensitivity
+
+
 def _load(path: Path):
-    return load(path, meta_override=NTMDT_META if "ntmdt" in path.name else None)
+    return load(path, meta_override=OVERRIDES.get(path.name))
 
 
 def _digest(path: Path) -> str:

@@ -18,14 +18,14 @@ from __future__ import annotations
 import importlib.util
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 from ..errors import AfmforceError, FileFormatError, ParameterError
 from ..raw import RawCurve
-from ._meta import METADATA, check_meta_override
+from ._meta import METADATA, check_meta_override, require_metadata
 
 __all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA",
-           "supported_suffixes"]
+           "supported_suffixes", "require_metadata"]
 
 Loader = Callable[..., list]
 
@@ -234,7 +234,8 @@ def find_format(path: str | Path) -> ReaderFormat:
 
 
 def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
-         callback: Callable[[float], None] | None = None, format: str | None = None) -> list[RawCurve]:
+         callback: Callable[[float], None] | None = None, format: str | None = None,
+         require: Sequence[str] = ()) -> list[RawCurve]:
     """Read every force curve in ``path``.
 
     Parameters
@@ -248,6 +249,10 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
         Called with the fraction done, a float in [0, 1].
     format : str, optional
         Identifier of a format in :data:`FORMATS`, skipping detection.
+    require : sequence of str, optional
+        Metadata every curve must carry, e.g. ``("spring_constant", "sensitivity")``
+        for an analysis in force: ``spring_constant`` is required of a deflection in
+        V or m, ``sensitivity`` of one in V (a force in N needs neither).
 
     Returns
     -------
@@ -256,7 +261,10 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
     Raises
     ------
     FileFormatError
-        Missing, unknown, truncated or damaged file, or metadata the format needs.
+        Missing, unknown, truncated or damaged file.
+    MissingMetadataError
+        (a FileFormatError) The file lacks metadata the format or ``require`` needs;
+        the message names the command-line flag (``--spring-constant``, ...) that gives it.
     ParameterError
         Invalid ``meta_override`` or unknown ``format``.
     """
@@ -281,6 +289,8 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
         raise FileFormatError(f"{path}: cannot read as {fmt.name} ({type(exc).__name__}: {text})") from None
     if not curves:
         raise FileFormatError(f"{path}: no force curve in the file")
+    for curve in curves:
+        require_metadata(curve, tuple(require), str(path))
     return curves
 
 
