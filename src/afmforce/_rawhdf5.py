@@ -81,13 +81,16 @@ def _read_hdf5(path: Path) -> RawCurve:
         raise FileFormatError(f"cannot read {path} as HDF5: {exc}") from exc
     with f:
         try:
-            fmt = _attr_str(f.attrs.get("format"))
+            fmt = _attr_str(safe_attr(f, "format"))
             if fmt != FORMAT:
                 raise FileFormatError(f"{path} is not an afmforce raw HDF5 file (format attribute {fmt!r})")
-            if f.attrs.get("version") is None:
+            version = safe_attr(f, "version")
+            if version is None:
                 raise FileFormatError(f"{path}: attribute 'version' is missing")
-            if int(f.attrs["version"]) != VERSION:
-                raise FileFormatError(f"{path}: raw format version {int(f.attrs['version'])} is not supported")
+            if int(version) != VERSION:
+                raise FileFormatError(f"{path}: raw format version {int(version)} is not supported")
+        except FileFormatError as exc:
+            raise FileFormatError(f"{path}: {exc}" if not str(exc).startswith(str(path)) else str(exc)) from None
         except (KeyError, ValueError, TypeError, OSError) as exc:
             raise FileFormatError(f"{path}: malformed afmforce raw HDF5 file ({exc})") from exc
         return read_curve_group(f, str(path))
@@ -106,12 +109,12 @@ def read_curve_group(group, where: str) -> RawCurve:
         missing = [c for c in _REQUIRED if c not in f]
         if missing:
             raise FileFormatError(f"{where}: dataset(s) {', '.join(missing)} missing")
-        dunit = _attr_str(f.attrs.get("deflection_unit", "V"))
-        metadata = json.loads(_attr_str(f.attrs.get("metadata", "{}")))
+        dunit = _attr_str(safe_attr(f, "deflection_unit", "V"))
+        metadata = json.loads(_attr_str(safe_attr(f, "metadata", "{}")))
         truth = None
         if "truth" in f:
             g = f["truth"]
-            truth = json.loads(_attr_str(g.attrs.get("scalars", "{}")))
+            truth = json.loads(_attr_str(safe_attr(g, "scalars", "{}")))
             for key in g:
                 truth[key] = np.asarray(g[key][()], dtype=np.float64)
         measured = np.asarray(f["piezo_measured"][()], np.float64) if "piezo_measured" in f else None
@@ -120,10 +123,42 @@ def read_curve_group(group, where: str) -> RawCurve:
                         deflection_signal=np.asarray(f["deflection_signal"][()], np.float64),
                         segment=np.asarray(f["segment"][()]).astype(np.int8),
                         piezo_measured=measured, metadata=metadata, truth=truth, deflection_unit=dunit)
-    except FileFormatError:
-        raise
+    except FileFormatError as exc:
+        raise FileFormatError(str(exc) if str(exc).startswith(where) else f"{where}: {exc}") from None
     except (KeyError, ValueError, TypeError, OSError, json.JSONDecodeError) as exc:
         raise FileFormatError(f"{where}: malformed afmforce raw HDF5 file ({exc})") from exc
+
+
+#: Largest attribute afmforce reads [bytes]; a larger declared size means a damaged file.
+ATTR_LIMIT = 16 * 2**20
+
+
+def safe_attr(obj, name: str, default=None, limit: int = ATTR_LIMIT):
+    """Attribute ``name`` of an h5py object, read only after its declared size was checked.
+
+    A damaged attribute header can declare gigabytes, or make h5py spin; its
+    dataspace and datatype are checked first. Raises FileFormatError when they are
+    implausible; returns ``default`` when there is no such attribute.
+    """
+    h5py = _h5py()
+    key = name.encode()
+    try:
+        if not h5py.h5a.exists(obj.id, key):
+            return default
+        aid = h5py.h5a.open(obj.id, key)
+        space = aid.get_space()
+        if space.get_simple_extent_type() not in (h5py.h5s.SCALAR, h5py.h5s.SIMPLE):
+            raise FileFormatError(f"attribute {name!r} has an unsupported dataspace")
+        npoints = space.get_simple_extent_npoints()
+        tid = aid.get_type()
+        size = tid.get_size()
+        if npoints < 0 or size <= 0 or npoints > limit or npoints * size > limit or aid.get_storage_size() > limit:
+            raise FileFormatError(f"attribute {name!r} declares {npoints} x {size} bytes; damaged file")
+    except FileFormatError:
+        raise
+    except Exception as exc:  # h5py raises KeyError, OSError, RuntimeError on damaged headers
+        raise FileFormatError(f"attribute {name!r} unreadable ({type(exc).__name__}: {str(exc)[:120]})") from None
+    return obj.attrs[name]
 
 
 def _attr_str(value) -> str | None:

@@ -35,7 +35,7 @@ from ._files import atomic_path
 from .errors import FileFormatError, ParameterError
 from .raw import RawCurve
 from ._rawcommon import _json
-from ._rawhdf5 import _attr_str, _h5py, read_curve_group, write_curve_group
+from ._rawhdf5 import _attr_str, _h5py, read_curve_group, safe_attr, write_curve_group
 
 __all__ = ["MAP_FORMAT", "MAP_VERSION", "MapInfo", "MapReader", "write_map", "read_map", "iter_map", "map_info",
            "is_map"]
@@ -154,18 +154,18 @@ def _open(path: Path):
     except (OSError, ValueError) as exc:
         raise FileFormatError(f"cannot read {path} as HDF5: {exc}") from None
     try:
-        fmt = _attr_str(f.attrs.get("format"))
+        fmt = _attr_str(safe_attr(f, "format"))
         if fmt != MAP_FORMAT:
             raise FileFormatError(f"{path} is not an afmforce map file (format attribute {fmt!r})")
-        version = f.attrs.get("version")
+        version = safe_attr(f, "version")
         if version is None or int(version) != MAP_VERSION:
             raise FileFormatError(f"{path}: map format version {version!r} is not supported "
                                   f"(this afmforce reads version {MAP_VERSION})")
         if _GROUP not in f:
             raise FileFormatError(f"{path}: the group '{_GROUP}' is missing")
-    except FileFormatError:
+    except FileFormatError as exc:
         f.close()
-        raise
+        raise FileFormatError(str(exc) if str(exc).startswith(str(path)) else f"{path}: {exc}") from None
     except (KeyError, ValueError, TypeError, OSError) as exc:
         f.close()
         raise FileFormatError(f"{path}: malformed afmforce map file ({exc})") from None
@@ -174,11 +174,11 @@ def _open(path: Path):
 
 def _info(f, path: Path) -> MapInfo:
     try:
-        shape = tuple(int(v) for v in f.attrs["map_shape"])
-        meta = json.loads(_attr_str(f.attrs.get("metadata", "{}")))
+        shape = tuple(int(v) for v in safe_attr(f, "map_shape", (), limit=64))
+        meta = json.loads(_attr_str(safe_attr(f, "metadata", "{}")))
         stored = len(f[_GROUP])
-        n = int(f.attrs.get("n_curves", stored))
-    except (KeyError, ValueError, TypeError, json.JSONDecodeError) as exc:
+        n = int(safe_attr(f, "n_curves", stored, limit=64))
+    except (KeyError, ValueError, TypeError, FileFormatError, json.JSONDecodeError) as exc:
         raise FileFormatError(f"{path}: malformed afmforce map file ({exc})") from None
     if len(shape) != 2 or min(shape) < 1 or not isinstance(meta, dict):
         raise FileFormatError(f"{path}: malformed afmforce map file (map_shape {shape}, metadata {type(meta)})")
@@ -270,6 +270,6 @@ def is_map(path: str | os.PathLike) -> bool:
             if fh.read(8) != b"\x89HDF\r\n\x1a\n":
                 return False
         with _h5py().File(path, "r") as f:
-            return _attr_str(f.attrs.get("format")) == MAP_FORMAT
+            return _attr_str(safe_attr(f, "format", limit=256)) == MAP_FORMAT
     except Exception:  # any failure means: not a map we can read
         return False

@@ -65,6 +65,8 @@ def register(sub) -> None:
                    "(default: one per core)")
     r.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use a running Dask cluster")
     r.add_argument("--serial", action="store_true", help="run in this process, one curve after the other")
+    add_quantity(r, "--file-timeout", "time", 300.0, "time budget for reading one file; a file past it "
+                 "is reported and skipped", "s")
     r.add_argument("--chunk-size", type=int, default=None, metavar="N",
                    help="curves per chunk (default: about 64 chunks, at most 256 curves each); "
                         "makes the run a resumable batch")
@@ -139,7 +141,9 @@ def run(args: argparse.Namespace) -> int:
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
-    refs = plan_curves(files, args.format)
+    if not args.file_timeout > 0:
+        raise ParameterError(f"--file-timeout must be positive, got {args.file_timeout} s")
+    refs = plan_curves(files, args.format, timeout=args.file_timeout)
     n = len(refs)
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)
@@ -150,7 +154,8 @@ def run(args: argparse.Namespace) -> int:
         steps=None if steps is None else tuple(steps), options=_options(args), meta_override=meta,
         format=args.format, channel=args.channel, keep_json=args.json,
         out=str(args.out) if per_curve else None, force=args.force, plot=not args.no_plot,
-        protect=tuple(str(p.resolve()) for p in files if p.exists()) if per_curve else ())
+        protect=tuple(str(p.resolve()) for p in files if p.exists()) if per_curve else (),
+        file_timeout=args.file_timeout)
     chunk_size = args.chunk_size if batch else 1
     n_chunks = math.ceil(n / (chunk_size or default_chunk_size(n)))
     if batch and not args.json:

@@ -26,7 +26,7 @@ from ..raw import RawCurve
 from ._meta import METADATA, check_meta_override, require_metadata
 
 __all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA",
-           "supported_suffixes", "is_supported", "require_metadata"]
+           "supported_suffixes", "is_supported", "require_metadata", "formats_markdown"]
 
 Loader = Callable[..., list]
 
@@ -49,6 +49,10 @@ class ReaderFormat:
         ``loader(path, *, meta_override, callback) -> list[RawCurve]``.
     via : str
         ``"afmformats"`` or ``"afmforce"`` (our own reader).
+    signature : str
+        What the content must look like (checked by ``detect``).
+    supplies : tuple of str
+        Metadata keys (:data:`METADATA`) the reader takes from the file when present.
     pattern : str
         Regular expression for endings that are not fixed (``\\.\\d{3}$``: numbered files).
     requires : tuple of str
@@ -66,6 +70,8 @@ class ReaderFormat:
     requires: tuple[str, ...] = field(default=())
     deflection: str = "N"
     pattern: str = ""
+    signature: str = ""
+    supplies: tuple[str, ...] = field(default=())
 
     def claims(self, name: str) -> bool:
         """Does the file name (any case) end in one of this format's endings?"""
@@ -111,8 +117,10 @@ def _detect_raw_hdf5(path: Path) -> bool:
                 return False
         import h5py
 
+        from afmforce._rawhdf5 import safe_attr
+
         with h5py.File(path, "r") as f:
-            fmt = f.attrs.get("format")
+            fmt = safe_attr(f, "format", limit=256)  # sizes checked before reading: a damaged file must not hang
         return (fmt.decode() if isinstance(fmt, bytes) else str(fmt)) == "afmforce-raw"
     except Exception:  # any h5py failure means: not ours
         return False
@@ -124,13 +132,15 @@ def _load_rawfile(path: Path, *, meta_override: Mapping[str, Any], callback=None
 
     from afmforce.rawfile import read_raw  # lazy: written by the instrument module
 
+    from ._meta import finalize_curve
+
     curve = read_raw(path)
     reader = "afmforce-hdf5" if path.suffix.lower() in (".h5", ".hdf5", ".hdf") else "afmforce-raw"
     meta = {**dict(curve.metadata), **dict(meta_override), "reader": reader}
     if meta.get("source_file") not in (None, str(path)):
         meta["recorded_source"] = meta["source_file"]
     meta["source_file"] = str(path)
-    curve = dataclasses.replace(curve, metadata=meta)
+    curve = finalize_curve(dataclasses.replace(curve, metadata=meta), str(path))
     if callback is not None:
         callback(1.0)
     return [curve]
@@ -157,6 +167,8 @@ def _load_rawmap(path: Path, *, meta_override: Mapping[str, Any], callback=None,
 
     from afmforce.rawmap import MapReader
 
+    from ._meta import finalize_curve
+
     own = reader is None
     reader = MapReader(path) if own else reader
     try:
@@ -168,7 +180,7 @@ def _load_rawmap(path: Path, *, meta_override: Mapping[str, Any], callback=None,
             if meta.get("source_file") not in (None, str(path)):
                 meta["recorded_source"] = meta["source_file"]
             meta["source_file"] = str(path)
-            out.append(dataclasses.replace(curve, metadata=meta))
+            out.append(finalize_curve(dataclasses.replace(curve, metadata=meta), f"{path}#{i}"))
             if callback is not None:
                 callback(len(out) / len(indices))
     finally:
@@ -181,36 +193,68 @@ def _always(path: Path) -> bool:
     return True
 
 
+_CAL = ("spring_constant", "sensitivity")
+
 #: The registered formats, in the order they are tried for a shared suffix.
 FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("afmforce-raw", "afmforce raw text", (".txt", ".tsv", ".raw"), _detect_raw_text,
-                 _load_rawfile, via="afmforce", deflection="V, m or N"),
+                 _load_rawfile, via="afmforce", deflection="V, m or N",
+                 signature='"# format: afmforce-raw" header (or "#" lines and a deflection_signal column)',
+                 supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency", "theta0")),
     ReaderFormat("afmforce-hdf5", "afmforce raw HDF5", (".h5", ".hdf5", ".hdf"), _detect_raw_hdf5,
-                 _load_rawfile, via="afmforce", deflection="V, m or N"),
+                 _load_rawfile, via="afmforce", deflection="V, m or N",
+                 signature='HDF5, root attribute format = "afmforce-raw"',
+                 supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency", "theta0")),
     ReaderFormat("afmforce-map", "afmforce force map (HDF5, curves on a grid)", (".h5", ".hdf5", ".hdf"),
-                 _detect_raw_map, _load_rawmap, via="afmforce", deflection="V, m or N"),
-    ReaderFormat("bruker-ascii", "Bruker NanoScope ASCII export", (".txt", ".asc", ".csv"),
-                 _lazy("bruker", "detect_bruker_ascii"), _lazy("bruker", "load_bruker_ascii"),
-                 via="afmforce", deflection="V, m or N"),
+                 _detect_raw_map, _load_rawmap, via="afmforce", deflection="V, m or N",
+                 signature='HDF5, root attribute format = "afmforce-map"',
+                 supplies=(*_CAL, "velocity", "sample_rate")),
+    ReaderFormat("afmformats-hdf5", "afmformats HDF5 export", (".h5",),
+                 _lazy("_afmformats", "detect_afmformats_hdf5"), _lazy("_afmformats", "load_generic"),
+                 via="afmformats", signature='HDF5, root attribute software = "afmformats"',
+                 supplies=(*_CAL, "velocity", "sample_rate")),
+    ReaderFormat("afmformats-tab", "afmformats tab-separated export", (".tab",),
+                 _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_generic"),
+                 via="afmformats", signature='first line "# afmformats <version>", JSON metadata block',
+                 supplies=(*_CAL, "velocity", "sample_rate")),
     ReaderFormat("bruker-nanoscope", "Bruker NanoScope binary force file (v5-v9)", (".spm", ".pfc"),
                  _lazy("nanoscope", "detect_nanoscope"), _lazy("nanoscope", "load_nanoscope"),
-                 via="afmforce", deflection="V", pattern=r"\.\d{3}$"),
-    ReaderFormat("jpk-force", "JPK force curve / force map (calibrated)",
+                 via="afmforce", deflection="V", pattern=r"\.\d{3}$",
+                 signature="first line \\*Force file list; header, then int16/int32 data",
+                 supplies=(*_CAL, "velocity", "sample_rate")),
+    ReaderFormat("bruker-ascii", "Bruker NanoScope ASCII export", (".txt", ".asc", ".csv"),
+                 _lazy("bruker", "detect_bruker_ascii"), _lazy("bruker", "load_bruker_ascii"),
+                 via="afmforce", deflection="V, m or N",
+                 signature="\\* header lines, then tab-separated <Name>_<unit>_<Ex or Rt> columns",
+                 supplies=(*_CAL, "sample_rate")),
+    ReaderFormat("jpk-force", "JPK force curve / force map / QI data (calibrated)",
                  (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series"),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_jpk"),
-                 via="afmformats", deflection="N (V if uncalibrated)"),
-    ReaderFormat("jpk-zip", "JPK force archive read directly (raw volts)", (".jpk-force",),
+                 via="afmformats", deflection="N (V if uncalibrated)",
+                 signature="zip archive with header.properties and segment headers",
+                 supplies=(*_CAL, "velocity", "sample_rate")),
+    ReaderFormat("jpk-zip", "JPK force archive read directly (raw volts, pause segments)", (".jpk-force",),
                  _lazy("jpk_zip", "detect_jpk_zip"), _lazy("jpk_zip", "load_jpk_zip"),
-                 via="afmforce", deflection="V"),
+                 via="afmforce", deflection="V",
+                 signature="zip archive with header.properties and a segments/ folder",
+                 supplies=(*_CAL, "sample_rate")),
     ReaderFormat("asylum-ibw", "Asylum Research Igor binary wave", (".ibw",),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_ibw"),
-                 via="afmformats"),
+                 via="afmformats", signature="Igor binary wave (version 5 header), wave note with calibration",
+                 supplies=(*_CAL, "sample_rate")),
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_workshop"),
-                 via="afmformats"),
+                 via="afmformats", deflection="N (V for T-B(V) files)",
+                 signature='first line "Force-Distance Curve", then Z-Sense and Force or T-B(V) columns',
+                 requires=_CAL),
     ReaderFormat("ntmdt-txt", "NT-MDT Nova text export", (".txt",),
-                 _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_ntmdt"),
-                 via="afmformats", requires=("spring_constant", "sensitivity"), deflection="V"),
+                 _lazy("_afmformats", "detect_ntmdt"), _lazy("_afmformats", "load_ntmdt"),
+                 via="afmformats", requires=_CAL, deflection="V",
+                 signature="three tab-separated numeric columns (decimal commas)"),
+    ReaderFormat("chiaro-txt", "Optics11 Chiaro indenter text export", (".txt",),
+                 _lazy("_afmformats", "detect_chiaro"), _lazy("_afmformats", "load_generic"),
+                 via="afmformats", signature="Optics11 header and Time/Load/Indentation columns",
+                 supplies=(*_CAL,)),
 )}
 
 
@@ -235,6 +279,8 @@ def find_format(path: str | Path) -> ReaderFormat:
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"{path}: no such file")
+    if path.stat().st_size == 0:
+        raise FileFormatError(f"{path}: empty file (0 bytes)")
     candidates = [f for f in FORMATS.values() if f.claims(path.name)]
     if not candidates:
         raise FileFormatError(
@@ -251,7 +297,7 @@ def find_format(path: str | Path) -> ReaderFormat:
 
 def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
          callback: Callable[[float], None] | None = None, format: str | None = None,
-         require: Sequence[str] = ()) -> list[RawCurve]:
+         require: Sequence[str] = (), timeout: float | None = None) -> list[RawCurve]:
     """Read every force curve in ``path``.
 
     Parameters
@@ -269,6 +315,9 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
         Metadata every curve must carry, e.g. ``("spring_constant", "sensitivity")``
         for an analysis in force: ``spring_constant`` is required of a deflection in
         V or m, ``sensitivity`` of one in V (a force in N needs neither).
+    timeout : float, optional
+        Time budget [s] for detecting and reading the file (run in a child
+        process that is killed when the budget is spent); None: no limit.
 
     Returns
     -------
@@ -281,9 +330,16 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
     MissingMetadataError
         (a FileFormatError) The file lacks metadata the format or ``require`` needs;
         the message names the command-line flag (``--spring-constant``, ...) that gives it.
+    FileTimeoutError
+        (a FileFormatError) Reading took longer than ``timeout``.
     ParameterError
         Invalid ``meta_override`` or unknown ``format``.
     """
+    if timeout is not None:
+        from ._guard import run_with_timeout
+
+        return run_with_timeout(load, path, timeout=timeout, path=str(path), meta_override=meta_override,
+                                callback=None, format=format, require=require)
     path = Path(path)
     meta = check_meta_override(meta_override)
     if format is not None:
@@ -311,7 +367,19 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
 
 
 def formats_table() -> list[dict[str, str]]:
-    """One row per format (for the docs and ``afmforce analyze --help``)."""
-    return [{"identifier": f.identifier, "name": f.name, "suffixes": " ".join(f.suffixes),
-             "via": f.via, "deflection": f.deflection, "requires": ", ".join(f.requires) or "-"}
+    """One row per format (``afmforce formats``, docs/formats.md, the README)."""
+    return [{"identifier": f.identifier, "name": f.name,
+             "suffixes": " ".join(f.suffixes) + (" .000-.999" if f.pattern else ""),
+             "signature": f.signature, "via": f.via, "deflection": f.deflection,
+             "supplies": ", ".join(f.supplies) or "-",
+             "requires": ", ".join(f"{k} ({METADATA[k].flag})" for k in f.requires) or "-"}
             for f in FORMATS.values()]
+
+
+def formats_markdown() -> str:
+    """The formats table in Markdown (docs/formats.md and the README hold this text)."""
+    head = ("| identifier | format | file endings | content | via | deflection | from the file | "
+            "user must give |\n|---|---|---|---|---|---|---|---|\n")
+    return head + "".join(
+        f"| `{r['identifier']}` | {r['name']} | {r['suffixes']} | {r['signature']} | {r['via']} | "
+        f"{r['deflection']} | {r['supplies']} | {r['requires']} |\n" for r in formats_table())

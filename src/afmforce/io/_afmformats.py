@@ -296,6 +296,57 @@ def load_workshop(path: Path, *, meta_override: Mapping[str, Any], callback: Cal
                                                deflection_unit="V"), str(path)) for c in curves]
 
 
+def load_generic(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
+    """Any other afmformats format (its HDF5 and tab exports, Optics11 Chiaro): force [N]."""
+    return load_afmformats(path, meta_override=meta_override, callback=callback, reader="afmformats")
+
+
+def detect_afmformats_hdf5(path: Path) -> bool:
+    """HDF5 signature and the root attribute ``software = "afmformats"`` (size-checked)."""
+    try:
+        with open(path, "rb") as fh:
+            if fh.read(8) != b"\x89HDF\r\n\x1a\n":
+                return False
+        import h5py
+
+        from .._rawhdf5 import safe_attr
+
+        with h5py.File(path, "r") as f:
+            value = safe_attr(f, "software", limit=256)
+        return (value.decode() if isinstance(value, bytes) else str(value)) == "afmformats"
+    except Exception:  # any failure means: not an afmformats export
+        return False
+
+
+def detect_chiaro(path: Path) -> bool:
+    """afmformats' own Optics11 Chiaro detector (header and numeric columns)."""
+    try:
+        from afmformats.formats.fmt_chiaro_txt import detect_txt
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return bool(detect_txt(path))
+    except _afm_errors():
+        return False
+
+
+def detect_ntmdt(path: Path) -> bool:
+    """NT-MDT Nova text export: rows of three tab-separated numbers (decimal commas allowed)."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(4096).decode("latin-1")
+    except OSError:
+        return False
+    rows = [ln for ln in head.splitlines()[:5] if ln.strip()]
+    if not rows:
+        return False
+    try:
+        return all(len(cells := ln.split("\t")) == 3 and all(float(c.replace(",", ".")) is not None for c in cells)
+                   for ln in rows[:-1] or rows)
+    except ValueError:
+        return False
+
+
 def detect_afmformats(path: Path) -> bool:
     """True if afmformats recognises the file (suffix and its own detector)."""
     from afmformats import formats

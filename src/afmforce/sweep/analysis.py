@@ -81,22 +81,29 @@ def _count_curves(path: Path, fmt) -> int | None:
     return None
 
 
-def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None) -> list[CurveRef]:
+def _plan_one(path: Path, format: str | None) -> tuple[str, int | None]:
+    from ..io import FORMATS, find_format
+
+    fmt = FORMATS[format] if format else find_format(path)
+    return fmt.identifier, _count_curves(path, fmt)
+
+
+def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None,
+                timeout: float | None = None) -> list[CurveRef]:
     """Work items for ``paths``: one per curve of a force map, one per other file.
 
     Never raises for a bad file: it becomes one item, whose analysis reports the error.
+    ``timeout`` [s] bounds the detection of each file (see :func:`afmforce.io.load`).
     """
-    from ..io import FORMATS, find_format
+    from ..io._guard import run_with_timeout
 
     refs: list[CurveRef] = []
     for p in paths:
         path = Path(p)
         n, ident = None, format
         try:
-            fmt = FORMATS[format] if format else find_format(path)
-            ident = fmt.identifier
-            n = _count_curves(path, fmt)
-        except Exception:  # unreadable, unknown, damaged: analysed (and reported) as a whole file
+            ident, n = run_with_timeout(_plan_one, path, format, timeout=timeout, path=str(path))
+        except Exception:  # unreadable, unknown, damaged, too slow: analysed (and reported) as a whole file
             pass
         if n:
             refs.extend(CurveRef(str(path), i, ident) for i in range(n))
@@ -125,13 +132,13 @@ def _map_reader(path: Path):
     return _OPEN["value"]
 
 
-def _load_cached(path: Path, meta: Mapping[str, Any], format: str | None) -> list:
+def _load_cached(path: Path, meta: Mapping[str, Any], format: str | None, timeout: float | None = None) -> list:
     from ..io import load
 
     ident = _identity(path, json.dumps(dict(meta), sort_keys=True), format)
     if _OPEN.get("id") != ident:
         _close_open()
-        _OPEN.update(id=ident, value=load(path, meta_override=meta, format=format))
+        _OPEN.update(id=ident, value=load(path, meta_override=meta, format=format, timeout=timeout))
     return _OPEN["value"]
 
 
@@ -172,6 +179,8 @@ class CurveAnalysis:
         Write the per-curve figure.
     protect : tuple of str
         Resolved input paths that per-curve outputs must never replace.
+    file_timeout : float or None
+        Time budget [s] for reading one file (None: no limit); a file past it fails alone.
     """
 
     steps: tuple[str, ...] | None = None
@@ -184,6 +193,7 @@ class CurveAnalysis:
     force: bool = False
     plot: bool = True
     protect: tuple[str, ...] = ()
+    file_timeout: float | None = None
 
     def key_fields(self) -> dict[str, Any]:
         """What determines the results (and so the store they resume from)."""
@@ -197,13 +207,14 @@ class CurveAnalysis:
 
         path = ref.location
         if ref.index is None:
-            return list(enumerate(load(path, meta_override=self.meta_override, format=self.format)))
+            return list(enumerate(load(path, meta_override=self.meta_override, format=self.format,
+                                       timeout=self.file_timeout)))
         if ref.format == "afmforce-map":
             meta = check_meta_override(self.meta_override)
             reader = _map_reader(path)
             return [(ref.index, FORMATS["afmforce-map"].loader(path, meta_override=meta, indices=[ref.index],
                                                               reader=reader)[0])]
-        curves = _load_cached(path, self.meta_override, self.format)
+        curves = _load_cached(path, self.meta_override, self.format, self.file_timeout)
         if not 0 <= ref.index < len(curves):
             raise FileFormatError(f"{path}: no curve {ref.index} (the file holds {len(curves)})")
         return [(ref.index, curves[ref.index])]
