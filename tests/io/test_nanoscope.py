@@ -130,3 +130,55 @@ def test_damaged_files_are_named(tmp_path):
         load(nohead)
     with pytest.raises(FileFormatError, match="not a NanoScope force file"):
         parse_header(b"\\*File list\r\n\\*File list end\r\n", "x")
+
+
+# --- NanoScope ASCII exports as NanoScope Analysis writes them (issue 14 item 2) -------------------
+ASCII = DATA / "bruker-nanoscope_synthetic.txt"
+
+
+def _variant(text: str, kind: str) -> str:
+    header, _, rest = text.partition("\\*File list end\n")
+    names, _, rows = rest.partition("\n")
+    if kind == "quoted-crcrlf":
+        head = "".join(f'"{ln}"\r\r\n' for ln in (header + "\\*File list end").split("\n"))
+        return head + names + "\r\r\n" + rows.replace("\n", "\r\r\n")
+    if kind == "names":
+        new = {"Calc_Ramp_Ex_nm": "Ramp_nm_Ex", "Calc_Ramp_Rt_nm": "Ramp_nm_Rt",
+               "Defl_V_Ex": "Deflection Error (V) Extend", "Defl_V_Rt": "Deflection Error (V) Retract",
+               "PF_Z_Sensor_nm_Ex": "Height_Sensor_nm_Ex", "PF_Z_Sensor_nm_Rt": "Height_Sensor_nm_Rt"}
+        names = "\t".join(new.get(n, n) for n in names.split("\t"))
+    if kind == "comma":
+        names, rows = names.replace("\t", ","), rows.replace("\t", ",")
+    return header + "\\*File list end\n" + names + "\n" + rows
+
+
+@pytest.mark.parametrize("kind", ["quoted-crcrlf", "names", "comma"])
+def test_ascii_variants_read_like_the_plain_export(tmp_path, kind):
+    ref = load(ASCII)[0]
+    path = tmp_path / "variant.txt"
+    path.write_bytes(_variant(ASCII.read_text(), kind).encode())
+    c = load(path)[0]
+    np.testing.assert_array_equal(c.deflection_signal, ref.deflection_signal)
+    np.testing.assert_array_equal(c.piezo_nominal, ref.piezo_nominal)
+    np.testing.assert_array_equal(c.segment, ref.segment)
+    assert c.metadata["spring_constant"] == 0.21 and c.metadata["sensitivity"] == pytest.approx(45e-9)
+
+
+def test_ascii_several_blocks(tmp_path):
+    ref = load(ASCII)[0]
+    text = ASCII.read_text()
+    path = tmp_path / "two.txt"
+    path.write_text(text + _variant(text, "names"))
+    curves = load(path)
+    assert len(curves) == 2 and [c.metadata["curve_index"] for c in curves] == [0, 1]
+    for c in curves:
+        np.testing.assert_array_equal(c.deflection_signal, ref.deflection_signal)
+
+
+@pytest.mark.parametrize("name,expected", [("Defl_V Ex", ("Defl", "V", "Ex")),
+                                           ("Deflection Error (nm) Retract", ("Deflection_Error", "nm", "Rt")),
+                                           ('"Height_Sensor_um_Ex"', ("Height_Sensor", "um", "Ex"))])
+def test_ascii_column_name_variants(name, expected):
+    from afmforce.io.bruker import parse_column_name
+
+    assert parse_column_name(name) == expected

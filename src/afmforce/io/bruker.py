@@ -35,6 +35,7 @@ Conventions chosen here (documented because exports differ between versions):
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
@@ -47,7 +48,7 @@ from ._meta import finalize_curve
 
 __all__ = ["load_bruker_ascii", "detect_bruker_ascii", "parse_column_name"]
 
-_UNITS = {"nm": 1e-9, "um": 1e-6, "m": 1.0, "V": 1.0, "mV": 1e-3, "pN": 1e-12, "nN": 1e-9,
+_UNITS = {"nm": 1e-9, "um": 1e-6, "µm": 1e-6, "m": 1.0, "V": 1.0, "mV": 1e-3, "pN": 1e-12, "nN": 1e-9,
           "s": 1.0, "ms": 1e-3, "Lsb": None}
 _MEASURED = ("Height_Sensor", "PF_Z_Sensor", "ZSensor", "Z_Sensor")
 _NOMINAL = ("Calc_Ramp", "Z", "Ramp")
@@ -62,18 +63,61 @@ def detect_bruker_ascii(path: Path) -> bool:
             head = fh.read(64)
     except OSError:
         return False
-    return head.lstrip(b"\xef\xbb\xbf").startswith(b"\\*")
+    return head.lstrip(b"\xef\xbb\xbf").lstrip().lstrip(b'"').startswith(b"\\*")
+
+
+_RUNS = {"ex": "Ex", "extend": "Ex", "approach": "Ex", "trace": "Ex", "rt": "Rt", "retract": "Rt",
+         "retrace": "Rt", "withdraw": "Rt"}
+#: Column base names seen in NanoScope versions -> the name this reader uses.
+_BASES = {"defl": "Defl", "deflection": "Defl", "deflectionerror": "Defl", "verticaldeflection": "Defl",
+          "calcramp": "Calc_Ramp", "ramp": "Calc_Ramp", "z": "Calc_Ramp", "zramp": "Calc_Ramp",
+          "heightsensor": "Height_Sensor", "pfzsensor": "PF_Z_Sensor", "zsensor": "ZSensor", "time": "Time"}
 
 
 def parse_column_name(name: str) -> tuple[str, str, str] | None:
-    """``'Defl_nm_Ex'`` -> ``('Defl', 'nm', 'Ex')``; None if not a run column."""
-    parts = name.strip().split("_")
-    run = next((p for p in parts if p in ("Ex", "Rt")), None)
-    unit = next((p for p in reversed(parts) if p in _UNITS), None)
+    """``'Defl_nm_Ex'`` -> ``('Defl', 'nm', 'Ex')``; None if not a run column.
+
+    Also ``Defl_V Ex``, ``Deflection (nm) Retract``, ``Calc_Ramp_Ex_nm``: parts
+    separated by ``_`` or spaces, the unit maybe in parentheses, the run spelt out.
+    """
+    text = name.strip().strip('"').strip()
+    paren = re.search(r"\(([^)]*)\)", text)
+    parts = [p for p in re.split(r"[_\s]+", re.sub(r"\([^)]*\)", " ", text)) if p]
+    run = next((_RUNS[p.lower()] for p in parts if p.lower() in _RUNS), None)
+    unit = paren.group(1).strip() if paren and paren.group(1).strip() in _UNITS else None
+    if unit is None:
+        unit = next((p for p in reversed(parts) if p in _UNITS), None)
     if run is None or unit is None:
         return None
-    base = "_".join(p for p in parts if p not in (run, unit))
+    base = "_".join(p for p in parts if p.lower() not in _RUNS and p != unit)
     return base, unit, run
+
+
+def canonical_base(base: str) -> str:
+    """The reader's name for a column base (``'Deflection Error'`` -> ``'Defl'``)."""
+    return _BASES.get(re.sub(r"[_\s]+", "", base).lower(), base)
+
+
+def _blocks(text: str) -> list[str]:
+    r"""Force-curve blocks: each starts at a ``\*Force file list`` line (several may follow each other)."""
+    lines = text.split("\n")
+    starts = [i for i, ln in enumerate(lines) if ln.startswith("\\*Force file list")]
+    if len(starts) <= 1:
+        return [text]
+    starts[0] = 0
+    return ["\n".join(lines[a:b]) for a, b in zip(starts, starts[1:] + [len(lines)])]
+
+
+def _normalise(text: str) -> str:
+    r"""Line ends ``\r\r\n``, ``\r\n``, ``\r`` -> ``\n``; double quotes around whole lines removed."""
+    text = text.replace("\r\r\n", "\n").replace("\r\n", "\n").replace("\r", "\n")
+    out = []
+    for line in text.split("\n"):
+        t = line.strip()
+        if len(t) >= 3 and t.startswith('"\\') and t.endswith('"'):
+            line = t[1:-1]
+        out.append(line)
+    return "\n".join(out)
 
 
 def _header_value(header: dict[str, str], key: str) -> float | None:
@@ -88,7 +132,7 @@ def _parse(text: str, where: str):
     lines = text.splitlines()
     header: dict[str, str] = {}
     i = 0
-    while i < len(lines) and lines[i].startswith("\\"):
+    while i < len(lines) and (lines[i].startswith("\\") or not lines[i].strip()):
         line = lines[i][1:]
         if not line.startswith("*") and ":" in line:
             key, value = line.split(":", 1)
@@ -98,12 +142,13 @@ def _parse(text: str, where: str):
         i += 1
     if i >= len(lines):
         raise FileFormatError(f"{where}: header without column names or data")
-    names = lines[i].rstrip("\r\n").split("\t")
+    sep = "\t" if "\t" in lines[i] else ("," if "," in lines[i] else None)
+    names = [n.strip().strip('"') for n in lines[i].rstrip("\r\n").split(sep)]
     rows = []
     for j, line in enumerate(lines[i + 1:], start=i + 2):
         if not line.strip():
             continue
-        cells = line.rstrip("\r\n").split("\t")
+        cells = line.rstrip("\r\n").split(sep)
         if len(cells) > len(names):
             raise FileFormatError(f"{where}: line {j} has {len(cells)} cells for {len(names)} columns")
         try:
@@ -142,17 +187,39 @@ def load_bruker_ascii(path: Path, *, meta_override: Mapping[str, Any] | None = N
     path = Path(path)
     where = str(path)
     try:
-        text = path.read_bytes().decode("utf-8-sig", errors="strict")
+        raw = path.read_bytes()
+        try:
+            text = raw.decode("utf-8-sig", errors="strict")
+        except UnicodeDecodeError:  # older exports: Windows-1252 (a µ in a unit)
+            text = raw.decode("cp1252", errors="strict")
     except UnicodeDecodeError:
         raise FileFormatError(f"{where}: not a text file (NanoScope ASCII export expected)") from None
     except OSError as exc:
         raise FileFormatError(f"{where}: cannot read ({exc})") from None
+    if "\0" in text:
+        raise FileFormatError(f"{where}: binary content; a NanoScope binary file needs the ending .spm, .pfc or .000")
+    blocks = _blocks(_normalise(text))
+    out = []
+    for b, block in enumerate(blocks):
+        label = where if len(blocks) == 1 else f"{where} (block {b + 1})"
+        curve = _curve(block, label, where, meta_override)
+        if len(blocks) > 1:
+            curve = replace(curve, metadata={**curve.metadata, "curve_index": b})
+        out.append(curve)
+        if callback is not None:
+            callback((b + 1) / len(blocks))
+    return out
+
+
+def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
+    """One force-curve block."""
     header, names, data = _parse(text, where)
     table = {}
     for k, name in enumerate(names):
         parsed = parse_column_name(name)
         if parsed is not None:
-            table[parsed] = data[:, k]
+            base, unit, run = parsed
+            table.setdefault((canonical_base(base), unit, run), data[:, k])
     runs = {}
     unit_out = None
     for run in ("Ex", "Rt"):
@@ -213,13 +280,11 @@ def load_bruker_ascii(path: Path, *, meta_override: Mapping[str, Any] | None = N
     zm = None if ex["zm"] is None or rt["zm"] is None else np.concatenate([ex["zm"], rt["zm"]])
     zn, zm, sign = orient(np.concatenate([ex["zn"], rt["zn"]]), zm, seg)
     meta.update(dict(meta_override or {}))
-    meta.update(source_file=where, reader="bruker-ascii", format="Bruker NanoScope ASCII export",
+    meta.update(source_file=source, reader="bruker-ascii", format="Bruker NanoScope ASCII export",
                 position_sign=sign)
     if "Note" in header:
         meta["note"] = header["Note"]
     curve = RawCurve(time=time, piezo_nominal=zn, piezo_measured=zm,
                      deflection_signal=np.concatenate([ex["defl"], rt["defl"]]), segment=seg,
                      metadata=meta, deflection_unit=unit_out)
-    if callback is not None:
-        callback(1.0)
-    return [finalize_curve(curve, where)]
+    return finalize_curve(curve, where)
