@@ -279,6 +279,18 @@ def find_format(path: str | Path) -> ReaderFormat:
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"{path}: no such file")
+    if path.suffix.lower() in HDF5_SUFFIXES:
+        from ._guard import run_with_timeout
+
+        return FORMATS[run_with_timeout(_find_format_id, path, timeout=HDF5_TIMEOUT, path=str(path))]
+    return _find_format(path)
+
+
+def _find_format_id(path: Path) -> str:
+    return _find_format(path).identifier  # a ReaderFormat holds closures: only its name crosses processes
+
+
+def _find_format(path: Path) -> ReaderFormat:
     if path.stat().st_size == 0:
         raise FileFormatError(f"{path}: empty file (0 bytes)")
     candidates = [f for f in FORMATS.values() if f.claims(path.name)]
@@ -335,11 +347,22 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
     ParameterError
         Invalid ``meta_override`` or unknown ``format``.
     """
+    if timeout is None and Path(path).suffix.lower() in HDF5_SUFFIXES:
+        timeout = HDF5_TIMEOUT  # h5py can spin forever on a damaged heap: always read HDF5 with a budget
     if timeout is not None:
         from ._guard import run_with_timeout
 
-        return run_with_timeout(load, path, timeout=timeout, path=str(path), meta_override=meta_override,
+        return run_with_timeout(_load, path, timeout=timeout, path=str(path), meta_override=meta_override,
                                 callback=None, format=format, require=require)
+    return _load(path, meta_override=meta_override, callback=callback, format=format, require=require)
+
+
+#: Endings of HDF5 files, read in a child process with a time budget (:data:`HDF5_TIMEOUT` [s]).
+HDF5_SUFFIXES = (".h5", ".hdf5", ".hdf")
+HDF5_TIMEOUT = 120.0
+
+
+def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
     path = Path(path)
     meta = check_meta_override(meta_override)
     if format is not None:
