@@ -210,3 +210,17 @@ def test_every_shared_real_file_loads_or_names_the_flag(path):
     for c in curves:
         assert np.isfinite(c.deflection_signal).all() and np.all(np.diff(c.time) > 0)
         assert c.approach.any() and c.retract.any()
+
+
+def test_other_metadata_overrides_reach_the_readers():
+    """--meta sample_rate=2kHz gives a time base to a file without one (AFM Workshop)."""
+    from afmforce.io._meta import parse_meta_args
+
+    meta = parse_meta_args(["sample_rate=2kHz", "velocity=1um/s", "instrument=AFMW"])
+    assert meta == {"sample_rate": 2000.0, "velocity": pytest.approx(1e-6), "instrument": "AFMW"}
+    c = load(DATA / "afm-workshop_single.csv", meta_override=meta)[0]
+    assert c.time[1] - c.time[0] == pytest.approx(1 / 2000) and not c.metadata.get("time_is_sample_index")
+    assert c.metadata["velocity"] == pytest.approx(1e-6)
+    for bad in (["colour=red"], ["sample_rate"], ["sample_rate=2m"], ["velocity=-1um/s"]):
+        with pytest.raises(ParameterError):
+            parse_meta_args(bad)

@@ -74,6 +74,9 @@ def register(sub) -> None:
     add_quantity(g, "--spring-constant", "stiffness", None,
                  "spring constant k (with --theta0: the intrinsic k0, corrected by eq 13/14)", "N/m")
     add_quantity(g, "--sensitivity", "sensitivity", None, "deflection sensitivity (InvOLS)", "m/V")
+    g.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
+                   help="any other file metadata to give or replace, with units (repeatable), e.g. "
+                        "sample_rate=6kHz, velocity=1um/s (afmforce formats lists the keys)")
     add_quantity(g, "--theta0", "angle", None, "cantilever inclination for the tilt correction", "rad")
     add_quantity(g, "--L0", "length", None, "beam length (with --L1, --L2: eq 13 instead of eq 14)", "m")
     add_quantity(g, "--L1", "length", None, "rigid base length", "m")
@@ -148,8 +151,10 @@ def run(args: argparse.Namespace) -> int:
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)
     per_curve = args.out is not None and (not batch or args.per_curve)
-    meta = {k: v for k, v in (("spring_constant", args.spring_constant), ("sensitivity", args.sensitivity))
-            if v is not None}
+    from ..io._meta import parse_meta_args
+
+    meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
+                                                              ("sensitivity", args.sensitivity)) if v is not None}}
     analysis = CurveAnalysis(
         steps=None if steps is None else tuple(steps), options=_options(args), meta_override=meta,
         format=args.format, channel=args.channel, keep_json=args.json,

@@ -229,7 +229,7 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  supplies=(*_CAL, "sample_rate")),
     ReaderFormat("jpk-force", "JPK force curve / force map / QI data (calibrated)",
                  (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series"),
-                 _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_jpk"),
+                 _lazy("jpk_zip", "detect_jpk"), _lazy("_afmformats", "load_jpk"),
                  via="afmformats", deflection="N (V if uncalibrated)",
                  signature="zip archive with header.properties and segment headers",
                  supplies=(*_CAL, "velocity", "sample_rate")),

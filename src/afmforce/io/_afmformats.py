@@ -169,6 +169,10 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
                                    styles=lambda dd: segment_styles(arc, dd.metadata.get("enum"), str(path)))
         except MissingMetadataError:
             return load_jpk_zip(path, meta_override=meta_override, callback=callback)
+        except FileFormatError:  # e.g. CellHesion pause segments: afmformats cannot, our zip reader can
+            if not any(n.startswith("segments/") for n in arc.namelist()):
+                raise
+            return load_jpk_zip(path, meta_override=meta_override, callback=callback)
 
 
 def _ibw_segments(path: Path, z: np.ndarray) -> np.ndarray:
@@ -176,10 +180,8 @@ def _ibw_segments(path: Path, z: np.ndarray) -> np.ndarray:
     ``0,turn,end`` for approach and retract, ``0,a,b,end`` with a dwell between), else the extreme of z."""
     n = len(z)
     try:
-        from igor2 import binarywave
-
-        note = str(binarywave.load(path)["wave"]["note"])
-        for line in note.replace("\\r", "\r").split("\r"):
+        note = _ibw_note(path)
+        for line in note.replace("\\r", "\r").replace("\n", "\r").split("\r"):
             if line.startswith("Indexes:"):
                 idx = [int(float(v)) for v in line.split(":", 1)[1].split(",") if v.strip()]
                 if len(idx) == 3 and 0 < idx[1] < n - 1:
@@ -190,6 +192,22 @@ def _ibw_segments(path: Path, z: np.ndarray) -> np.ndarray:
         pass
     turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
     return np.where(np.arange(n) < turn, 0, 1).astype(np.int8)
+
+
+def _ibw_note(path: Path) -> str:
+    """The wave note of a version-5 Igor binary wave, read from its header sizes (no igor2 parse)."""
+    import struct
+
+    with open(path, "rb") as fh:
+        head = fh.read(64)
+        order = "<" if struct.unpack("<h", head[:2])[0] in (1, 2, 3, 5) else ">"
+        if struct.unpack(order + "h", head[:2])[0] != 5:
+            from igor2 import binarywave
+
+            return str(binarywave.load(path)["wave"]["note"])
+        wfm, formula, note = struct.unpack(order + "iii", head[4:16])
+        fh.seek(64 + wfm + formula)
+        return fh.read(max(0, min(note, 1 << 20))).decode("latin-1")
 
 
 def check_ibw_header(path: Path) -> None:

@@ -18,7 +18,7 @@ from ..errors import FileFormatError, MissingMetadataError, ParameterError
 from ..raw import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
 
 __all__ = ["MetaField", "METADATA", "check_meta_override", "finalize_curve", "segment_code",
-           "missing_metadata", "require_metadata", "orient", "afmformats_override"]
+           "missing_metadata", "require_metadata", "orient", "afmformats_override", "parse_meta_args"]
 
 
 def _positive(value: Any) -> float:
@@ -74,6 +74,31 @@ AFMFORMATS_KEYS = {
     "rate approach": "sample_rate",
     "instrument": "instrument",
 }
+
+
+_DIMENSION = {"N/m": "stiffness", "m/V": "sensitivity", "m/s": "velocity", "Hz": "frequency", "rad": "angle",
+              "m": "length"}
+
+
+def parse_meta_args(items) -> dict[str, Any]:
+    """``["sample_rate=6kHz", "instrument=MFP-3D"]`` (``--meta KEY=VALUE``) -> SI metadata.
+
+    Values with units are parsed in the key's unit (:data:`METADATA`); a plain
+    number is taken as SI. Raises ParameterError for an unknown key or a bad value.
+    """
+    from ..units import parse_quantity
+
+    out: dict[str, Any] = {}
+    for item in items or ():
+        key, sep, value = str(item).partition("=")
+        key = key.strip()
+        if not sep or not key:
+            raise ParameterError(f"--meta {item!r}: expected KEY=VALUE, e.g. sample_rate=6kHz")
+        if key not in METADATA:
+            raise ParameterError(f"--meta {key}: unknown metadata key; known keys: {', '.join(sorted(METADATA))}")
+        dim = _DIMENSION.get(METADATA[key].unit)
+        out[key] = parse_quantity(value.strip(), dim, f"--meta {key}") if dim else value.strip()
+    return check_meta_override(out)
 
 
 def check_meta_override(meta_override: Mapping[str, Any] | None) -> dict[str, Any]:

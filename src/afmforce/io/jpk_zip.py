@@ -62,6 +62,15 @@ def parse_properties(text: str) -> dict[str, str]:
     return props
 
 
+def detect_jpk(path: Path) -> bool:
+    """True for a zip archive with ``header.properties`` (JPK curves, maps, QI data)."""
+    try:
+        with zipfile.ZipFile(path) as arc:
+            return "header.properties" in arc.namelist()
+    except (zipfile.BadZipFile, OSError, ValueError):
+        return False
+
+
 def detect_jpk_zip(path: Path) -> bool:
     """True for a zip archive with ``header.properties`` and a ``segments/`` folder."""
     try:
