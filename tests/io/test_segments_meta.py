@@ -224,3 +224,38 @@ def test_other_metadata_overrides_reach_the_readers():
     for bad in (["colour=red"], ["sample_rate"], ["sample_rate=2m"], ["velocity=-1um/s"]):
         with pytest.raises(ParameterError):
             parse_meta_args(bad)
+
+
+def _chiaro(path: Path, micro: bytes) -> np.ndarray:
+    """A SYNTHETIC Optics11 Chiaro export in the layout afmformats' reader parses; returns its table."""
+    n = 200
+    t = np.arange(2 * n) * 0.01
+    piezo = np.concatenate([np.linspace(0, 2000, n), np.linspace(2000, 0, n)])  # nm, into the sample
+    load_un = np.clip(piezo - 1500, 0, None) * 1e-3  # uN, contact after 1500 nm
+    load_un[n:] -= 0.05 * np.exp(-((piezo[n:] - 1400) / 30) ** 2)  # a small adhesion dip on the retract
+    cant = load_un * 1e-6 / 0.5 * 1e9  # nm, k = 0.5 N/m
+    table = np.round(np.column_stack([t, load_un, piezo - cant, cant, piezo, np.zeros_like(t)]), 6)
+    head = ("Date\t2024-01-01\nTime\t10:00:00\nDevice:\tChiaro\nSoftware version\t3.0\n"
+            "k (N/m)\t0.5\nMax load (\u00b5N)\t0.5\nPiezo position (nm) (Measured)\t2000\n"
+            "Piezo speed  (\u00b5m/s)\t2\n\n"
+            "Time (s)\tLoad (uN)\tIndentation (nm)\tCantilever (nm)\tPiezo (nm)\tAuxiliary\n")
+    body = "".join("\t".join(f"{v:.6f}" for v in row) + "\n" for row in table)
+    path.write_bytes((head + body).encode("latin-1").replace(b"\xb5", micro))
+    return table
+
+
+@pytest.mark.parametrize("micro", [b"\xb5", b"\xc2\xb5", b"\xce\xbc"], ids=["latin-1", "utf-8", "greek-mu"])
+def test_chiaro_any_micro_sign(tmp_path, micro):
+    """afmformats fails on a UTF-8 micro sign (KeyError); we transcode a temporary copy."""
+    path = tmp_path / "indent.txt"
+    table = _chiaro(path, micro)
+    before = path.read_bytes()
+    c = load(path)[0]
+    assert path.read_bytes() == before
+    assert c.metadata["reader"] == "chiaro-txt" and c.metadata["source_file"] == str(path)
+    assert c.metadata["spring_constant"] == 0.5 and c.metadata["velocity"] == pytest.approx(2e-6)
+    np.testing.assert_allclose(c.deflection_signal, table[:, 1] * 1e-6, atol=1e-15)  # load [uN] -> N
+    np.testing.assert_allclose(np.abs(c.piezo_nominal), table[:, 4] * 1e-9, rtol=1e-9)
+    assert c.piezo_measured is None
+    app = c.piezo_nominal[c.approach]
+    assert app[-1] > app[0]

@@ -252,9 +252,9 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  via="afmformats", requires=_CAL, deflection="V",
                  signature="three tab-separated numeric columns (decimal commas)"),
     ReaderFormat("chiaro-txt", "Optics11 Chiaro indenter text export", (".txt",),
-                 _lazy("_afmformats", "detect_chiaro"), _lazy("_afmformats", "load_generic"),
-                 via="afmformats", signature="Optics11 header and Time/Load/Indentation columns",
-                 supplies=(*_CAL,)),
+                 _lazy("_afmformats", "detect_chiaro"), _lazy("_afmformats", "load_chiaro"),
+                 via="afmformats", supplies=("spring_constant", "velocity"),
+                 signature="Device: Chiaro header line, Time (s)/Load/Indentation/Cantilever/Piezo columns"),
 )}
 
 
