@@ -33,7 +33,7 @@ from ..errors import FileFormatError, MissingMetadataError
 from ..raw import RawCurve
 from ._meta import AFMFORMATS_KEYS, afmformats_override, finalize_curve, missing_metadata, orient, segment_code
 
-__all__ = ["load_afmformats", "load_ibw", "load_jpk", "load_ntmdt", "load_workshop", "orient"]
+__all__ = ["load_afmformats", "load_jpk", "load_ntmdt", "load_workshop", "orient"]
 
 # afmformats and igor2 log loader failures with tracebacks and whole byte buffers; keep them out of
 # the user's terminal (the error we raise says what is wrong).
@@ -175,104 +175,6 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
             return load_jpk_zip(path, meta_override=meta_override, callback=callback)
 
 
-def _ibw_segments(path: Path, z: np.ndarray) -> np.ndarray:
-    """Segments of a one-segment Igor wave from the note's ``Indexes`` (ends of the segments:
-    ``0,turn,end`` for approach and retract, ``0,a,b,end`` with a dwell between), else the extreme of z."""
-    n = len(z)
-    try:
-        note = _ibw_note(path)
-        for line in note.replace("\\r", "\r").replace("\n", "\r").split("\r"):
-            if line.startswith("Indexes:"):
-                idx = [int(float(v)) for v in line.split(":", 1)[1].split(",") if v.strip()]
-                if len(idx) == 3 and 0 < idx[1] < n - 1:
-                    return np.where(np.arange(n) < idx[1], 0, 1).astype(np.int8)
-                if len(idx) == 4 and 0 < idx[1] < idx[2] < n - 1:  # approach, dwell, retract
-                    return np.select([np.arange(n) < idx[1], np.arange(n) < idx[2]], [0, 2], 1).astype(np.int8)
-    except Exception:  # the note is optional; fall back on the data
-        pass
-    turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
-    return np.where(np.arange(n) < turn, 0, 1).astype(np.int8)
-
-
-def _ibw_note(path: Path) -> str:
-    """The wave note of a version-5 Igor binary wave, read from its header sizes (no igor2 parse)."""
-    import struct
-
-    with open(path, "rb") as fh:
-        head = fh.read(64)
-        order = "<" if struct.unpack("<h", head[:2])[0] in (1, 2, 3, 5) else ">"
-        if struct.unpack(order + "h", head[:2])[0] != 5:
-            from igor2 import binarywave
-
-            return str(binarywave.load(path)["wave"]["note"])
-        wfm, formula, note = struct.unpack(order + "iii", head[4:16])
-        fh.seek(64 + wfm + formula)
-        return fh.read(max(0, min(note, 1 << 20))).decode("latin-1")
-
-
-def check_ibw_header(path: Path) -> None:
-    """Reject an Igor binary wave whose header declares more bytes than the file holds.
-
-    igor2 builds struct formats from these sizes; a damaged size makes it spend
-    minutes before failing. Version 5 header (BinHeader5, 64 bytes): version,
-    checksum, then the sizes of the wave, formula, note, units, labels and
-    indices sections (int32), in the file's byte order.
-    """
-    import struct
-
-    with open(path, "rb") as fh:
-        head = fh.read(64)
-        size = fh.seek(0, 2)
-    if len(head) < 8:
-        raise FileFormatError(f"{path}: too short for an Igor binary wave ({size} bytes)")
-    order = "<" if struct.unpack("<h", head[:2])[0] in (1, 2, 3, 5) else ">"
-    version = struct.unpack(order + "h", head[:2])[0]
-    if version not in (1, 2, 3, 5):
-        raise FileFormatError(f"{path}: not an Igor binary wave (version field {version})")
-    if version == 5:
-        if len(head) < 64:
-            raise FileFormatError(f"{path}: truncated Igor header")
-        sizes = struct.unpack(order + "i" * 15, head[4:64])
-        if min(sizes) < 0 or 64 + sum(sizes) > size:
-            raise FileFormatError(f"{path}: damaged or truncated Igor binary wave (its header declares "
-                                  f"{64 + sum(sizes)} bytes, the file has {size})")
-
-
-def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
-    """Asylum ``.ibw`` force curve: one wave, split into approach and retract."""
-    check_ibw_header(path)
-    data = _load_data(path, {}, callback)  # afmformats' Igor reader takes no meta_override
-    out = []
-    for dd in data:
-        height = dd["height (measured)"] if "height (measured)" in dd.columns else dd["height (piezo)"]
-        z = -np.asarray(height, dtype=float)
-        seg = np.asarray(dd["segment"]).astype(np.int8)
-        if np.all(seg == 0):
-            seg = _ibw_segments(path, z)
-        force = np.asarray(dd["force"], dtype=float) * _rescale(path, dd.metadata, meta_override)
-        out.append(_curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg, signal=force))
-    return out
-
-
-def _rescale(path: Path, md, meta_override: Mapping[str, Any]) -> float:
-    """Factor that turns a force computed with the file's k and sensitivity into one with the user's.
-
-    Asylum stores the deflection in metres (volts x the file's InvOLS); force = k x deflection.
-    """
-    factor = 1.0
-    for ours, theirs in (("spring_constant", "spring constant"), ("sensitivity", "sensitivity")):
-        if ours in meta_override:
-            try:
-                old = float(md[theirs])
-            except _afm_errors():  # afmformats' missing-metadata error is a BaseException
-                raise FileFormatError(f"{path}: the file stores no {theirs}, so its force cannot be "
-                                      f"recomputed with the given {ours}") from None
-            if not (np.isfinite(old) and old > 0):
-                raise FileFormatError(f"{path}: the file's {theirs} is {old!r}; cannot rescale to the given {ours}")
-            factor *= float(meta_override[ours]) / old
-    return factor
-
-
 def load_ntmdt(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
     """NT-MDT Nova text export; needs ``spring_constant`` and ``sensitivity`` from the user."""
     from afmformats import errors as afe
@@ -334,57 +236,6 @@ def detect_afmformats_hdf5(path: Path) -> bool:
         return (value.decode() if isinstance(value, bytes) else str(value)) == "afmformats"
     except Exception:  # any failure means: not an afmformats export
         return False
-
-
-def detect_chiaro(path: Path) -> bool:
-    """Optics11 Chiaro text export: a ``Device:<TAB>Chiaro`` line and a ``Time (s)<TAB>Load`` header."""
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(65536)
-    except OSError:
-        return False
-    return b"Device:\tChiaro" in head and b"Time (s)\tLoad" in head
-
-
-#: UTF-8 spellings of the micro sign that afmformats (reading ISO-8859-1) does not find in its keys.
-_MICRO = (b"\xc2\xb5", b"\xce\xbc")
-
-
-def load_chiaro(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
-    """Optics11 Chiaro indenter export: load [N] vs piezo position.
-
-    afmformats reads the file as ISO-8859-1 and looks up keys such as
-    ``Max load (µN)``; a file saved in UTF-8 (µ as two bytes, or the Greek mu)
-    fails there with a KeyError. Such a file is transcoded to ISO-8859-1 in a
-    temporary copy first (the input is never changed). The Chiaro "Indentation"
-    column is not a position: z is the piezo column only.
-    """
-    import shutil
-    import tempfile
-
-    data = path.read_bytes()
-    if not any(m in data for m in _MICRO):
-        curves = load_afmformats(path, meta_override=meta_override, callback=callback, reader="chiaro-txt")
-    else:
-        for m in _MICRO:
-            data = data.replace(m, b"\xb5")
-        tmp = Path(tempfile.mkdtemp(prefix="afmforce-chiaro-"))
-        try:
-            copy = tmp / path.name
-            copy.write_bytes(data)
-            curves = load_afmformats(copy, meta_override=meta_override, callback=callback, reader="chiaro-txt")
-        finally:
-            shutil.rmtree(tmp, ignore_errors=True)
-        curves = [dataclasses.replace(c, metadata={**c.metadata, "source_file": str(path),
-                                                   "note": "micro sign transcoded from UTF-8"}) for c in curves]
-    out = []
-    for c in curves:
-        meta = dict(c.metadata)
-        for key in ("velocity", "retract_velocity"):  # afmformats 0.18 passes the file's um/s on as m/s
-            if key in meta and key not in meta_override:
-                meta[key] = float(meta[key]) * 1e-6
-        out.append(finalize_curve(dataclasses.replace(c, piezo_measured=None, metadata=meta), str(path)))
-    return out
 
 
 def detect_ntmdt(path: Path) -> bool:

@@ -1,0 +1,241 @@
+"""Asylum Research Igor binary waves (``.ibw``): one wave with all channels (via afmformats),
+or one wave per channel (``...Point0000Defl.ibw`` with ``...Point0000ZSnsr.ibw``, read here).
+
+afmformats returns one segment for an ``.ibw`` curve: it is split at the turning point
+(the wave note's ``Indexes``: ``0,turn,end``, or ``0,a,b,end`` with a dwell), else at the
+extreme of z. afmformats' Igor reader ignores ``meta_override``: a user's spring constant or
+sensitivity rescales the force here (force = k x volts x InvOLS).
+"""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from ..errors import FileFormatError
+from ..raw import RawCurve
+from ._afmformats import _afm_errors, _curve_from_afmdata, _load_data
+from ._meta import finalize_curve, missing_metadata, orient
+
+__all__ = ["load_ibw", "check_ibw_header", "CHANNELS"]
+
+#: Per-channel wave name endings: deflection [m] or raw photodiode [V]; position [m].
+CHANNELS = {"Defl": "m", "Raw": "V"}
+POSITIONS = ("ZSnsr", "LVDT", "Height")
+
+
+def _ibw_segments(path: Path, z: np.ndarray) -> np.ndarray:
+    """Segments of a one-segment Igor wave from the note's ``Indexes`` (ends of the segments:
+    ``0,turn,end`` for approach and retract, ``0,a,b,end`` with a dwell between), else the extreme of z."""
+    n = len(z)
+    try:
+        note = _ibw_note(path)
+        for line in note.replace("\\r", "\r").replace("\n", "\r").split("\r"):
+            if line.startswith("Indexes:"):
+                idx = [int(float(v)) for v in line.split(":", 1)[1].split(",") if v.strip()]
+                if len(idx) == 3 and 0 < idx[1] < n - 1:
+                    return np.where(np.arange(n) < idx[1], 0, 1).astype(np.int8)
+                if len(idx) == 4 and 0 < idx[1] < idx[2] < n - 1:  # approach, dwell, retract
+                    return np.select([np.arange(n) < idx[1], np.arange(n) < idx[2]], [0, 2], 1).astype(np.int8)
+    except Exception:  # the note is optional; fall back on the data
+        pass
+    turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
+    return np.where(np.arange(n) < turn, 0, 1).astype(np.int8)
+
+
+def _ibw_note(path: Path) -> str:
+    """The wave note of a version-5 Igor binary wave, read from its header sizes (no igor2 parse)."""
+    with open(path, "rb") as fh:
+        head = fh.read(64)
+        order = "<" if struct.unpack("<h", head[:2])[0] in (1, 2, 3, 5) else ">"
+        if struct.unpack(order + "h", head[:2])[0] != 5:
+            from igor2 import binarywave
+
+            return str(binarywave.load(path)["wave"]["note"])
+        wfm, formula, note = struct.unpack(order + "iii", head[4:16])  # noqa: F841 (sizes in file order)
+        fh.seek(64 + wfm + formula)
+        return fh.read(max(0, min(note, 1 << 20))).decode("latin-1")
+
+
+def check_ibw_header(path: Path) -> None:
+    """Reject an Igor binary wave whose header declares more bytes than the file holds.
+
+    igor2 builds struct formats from these sizes; a damaged size makes it spend
+    minutes before failing. Version 5 header (BinHeader5, 64 bytes): version,
+    checksum, then the sizes of the wave, formula, note, units, labels and
+    indices sections (int32), in the file's byte order.
+    """
+    with open(path, "rb") as fh:
+        head = fh.read(64)
+        size = fh.seek(0, 2)
+    if len(head) < 8:
+        raise FileFormatError(f"{path}: too short for an Igor binary wave ({size} bytes)")
+    order = "<" if struct.unpack("<h", head[:2])[0] in (1, 2, 3, 5) else ">"
+    version = struct.unpack(order + "h", head[:2])[0]
+    if version not in (1, 2, 3, 5):
+        raise FileFormatError(f"{path}: not an Igor binary wave (version field {version})")
+    if version == 5:
+        if len(head) < 64:
+            raise FileFormatError(f"{path}: truncated Igor header")
+        sizes = struct.unpack(order + "i" * 15, head[4:64])
+        if min(sizes) < 0 or 64 + sum(sizes) > size:
+            raise FileFormatError(f"{path}: damaged or truncated Igor binary wave (its header declares "
+                                  f"{64 + sum(sizes)} bytes, the file has {size})")
+
+
+def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
+    """Asylum ``.ibw`` force curve: one wave, split into approach and retract (or a per-channel pair)."""
+    check_ibw_header(path)
+    if _is_one_channel(path):
+        return [load_channel_pair(path, meta_override=meta_override)]
+    data = _load_data(path, {}, callback)  # afmformats' Igor reader takes no meta_override
+    out = []
+    for dd in data:
+        height = dd["height (measured)"] if "height (measured)" in dd.columns else dd["height (piezo)"]
+        z = -np.asarray(height, dtype=float)
+        seg = np.asarray(dd["segment"]).astype(np.int8)
+        if np.all(seg == 0):
+            seg = _ibw_segments(path, z)
+        force = np.asarray(dd["force"], dtype=float) * _rescale(path, dd.metadata, meta_override)
+        out.append(_curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg, signal=force))
+    return out
+
+
+def _rescale(path: Path, md, meta_override: Mapping[str, Any]) -> float:
+    """Factor that turns a force computed with the file's k and sensitivity into one with the user's.
+
+    Asylum stores the deflection in metres (volts x the file's InvOLS); force = k x deflection.
+    """
+    factor = 1.0
+    for ours, theirs in (("spring_constant", "spring constant"), ("sensitivity", "sensitivity")):
+        if ours in meta_override:
+            try:
+                old = float(md[theirs])
+            except _afm_errors():  # afmformats' missing-metadata error is a BaseException
+                raise FileFormatError(f"{path}: the file stores no {theirs}, so its force cannot be "
+                                      f"recomputed with the given {ours}") from None
+            if not (np.isfinite(old) and old > 0):
+                raise FileFormatError(f"{path}: the file's {theirs} is {old!r}; cannot rescale to the given {ours}")
+            factor *= float(meta_override[ours]) / old
+    return factor
+
+
+
+
+def _is_one_channel(path: Path) -> bool:
+    """A version-5 wave with one dimension (``nDim[1] == 0``): one channel per file."""
+    with open(path, "rb") as fh:
+        head = fh.read(64 + 148)
+    if len(head) < 64 + 148:
+        return False
+    order = "<" if struct.unpack("<h", head[:2])[0] in (1, 2, 3, 5) else ">"
+    if struct.unpack(order + "h", head[:2])[0] != 5:
+        return False
+    ndim = struct.unpack(order + "4i", head[64 + 68:64 + 84])
+    return ndim[0] > 0 and ndim[1] == 0
+
+
+def _wave(path: Path) -> tuple[np.ndarray, dict[str, str], float]:
+    """(data, note entries, x step [s]) of a one-dimensional Igor wave."""
+    from igor2 import binarywave
+
+    try:
+        w = binarywave.load(path)["wave"]
+    except Exception as exc:  # igor2 raises anything on a damaged wave
+        raise FileFormatError(f"{path}: damaged Igor binary wave ({type(exc).__name__}: {str(exc)[:120]})") from None
+    note = w.get("note", b"")
+    note = note.decode("latin-1") if isinstance(note, bytes) else str(note)
+    entries = {}
+    for line in note.replace("\n", "\r").split("\r"):
+        if ":" in line:
+            key, value = line.split(":", 1)
+            entries[key.strip()] = value.strip()
+    step = float(w["wave_header"]["sfA"][0])
+    return np.asarray(w["wData"], dtype=float).ravel(), entries, step
+
+
+def _note_float(entries: Mapping[str, str], key: str) -> float | None:
+    try:
+        v = float(entries[key])
+    except (KeyError, ValueError):
+        return None
+    return v if np.isfinite(v) and v > 0 else None
+
+
+def _split_name(path: Path) -> tuple[str, str] | None:
+    stem = path.name[: -len(path.suffix)] if path.suffix else path.name
+    for ch in (*CHANNELS, *POSITIONS):
+        if stem.endswith(ch):
+            return stem[: -len(ch)], ch
+    return None
+
+
+def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCurve:
+    """An Asylum curve saved as one wave per channel: ``<prefix>Defl.ibw`` (or ``Raw``) with
+    ``<prefix>ZSnsr.ibw`` (or ``LVDT``, ``Height``) in the same folder, read as one curve.
+
+    The deflection ``Defl`` is in metres (computed by the instrument with the note's
+    InvOLS; a user's sensitivity rescales it), ``Raw`` in volts. Spring constant and
+    InvOLS come from the note (``SpringConstant``, ``InvOLS``) or the user.
+    """
+    where = str(path)
+    split = _split_name(path)
+    if split is None:
+        raise FileFormatError(f"{where}: a one-channel Igor wave whose name does not end in a channel name "
+                              f"({', '.join((*CHANNELS, *POSITIONS))}); cannot tell what it holds")
+    prefix, _ = split
+    sig_ch = next((c for c in CHANNELS if (path.parent / f"{prefix}{c}{path.suffix}").is_file()), None)
+    pos_ch = next((c for c in POSITIONS if (path.parent / f"{prefix}{c}{path.suffix}").is_file()), None)
+    if sig_ch is None or pos_ch is None:
+        raise FileFormatError(f"{where}: one channel of a per-channel Asylum curve; keep {prefix}Defl{path.suffix} "
+                              f"and {prefix}ZSnsr{path.suffix} together in one folder")
+    signal, note, step = _wave(path.parent / f"{prefix}{sig_ch}{path.suffix}")
+    z, znote, _ = _wave(path.parent / f"{prefix}{pos_ch}{path.suffix}")
+    if signal.size != z.size or signal.size < 4:
+        raise FileFormatError(f"{where}: the {sig_ch} and {pos_ch} waves differ in length "
+                              f"({signal.size}, {z.size})")
+    note = {**znote, **note}
+    unit = CHANNELS[sig_ch]
+    meta: dict[str, Any] = {"instrument": "Asylum Research", "channels": f"{sig_ch}+{pos_ch}"}
+    for key, ours in (("SpringConstant", "spring_constant"), ("InvOLS", "sensitivity"),
+                      ("NumPtsPerSec", "sample_rate"), ("ThermalFrequency", "resonance_frequency")):
+        value = _note_float(note, key)
+        if value is not None:
+            meta[ours] = value
+    if "sample_rate" not in meta and step > 0:
+        meta["sample_rate"] = 1.0 / step
+    if unit == "m" and "sensitivity" in meta_override and "sensitivity" in meta:
+        signal = signal * float(meta_override["sensitivity"]) / meta["sensitivity"]
+    meta.update(meta_override)
+    need = ["spring_constant"] + (["sensitivity"] if unit == "V" else [])
+    missing = [k for k in need if k not in meta]
+    if missing:
+        raise missing_metadata(where, missing, what="the wave note stores")
+    rate = meta.get("sample_rate")
+    time = np.arange(signal.size) / rate if rate else np.arange(signal.size, dtype=float)
+    if not rate:
+        meta["time_is_sample_index"] = True
+    seg = _segments_from_note(note.get("Indexes", ""), z)
+    zn, _, sign = orient(z, None, seg)
+    meta.update(source_file=where, reader="asylum-ibw", format="Asylum Igor binary waves (one per channel)",
+                position_sign=sign, position_channel=pos_ch)
+    curve = RawCurve(time=time, piezo_nominal=zn, deflection_signal=signal, segment=seg, metadata=meta,
+                     deflection_unit=unit)
+    return finalize_curve(curve, where)
+
+
+def _segments_from_note(indexes: str, z: np.ndarray) -> np.ndarray:
+    n = len(z)
+    try:
+        idx = [int(float(v)) for v in indexes.split(",") if v.strip()]
+    except ValueError:
+        idx = []
+    if len(idx) == 3 and 0 < idx[1] < n - 1:
+        return np.where(np.arange(n) < idx[1], 0, 1).astype(np.int8)
+    if len(idx) == 4 and 0 < idx[1] < idx[2] < n - 1:
+        return np.select([np.arange(n) < idx[1], np.arange(n) < idx[2]], [0, 2], 1).astype(np.int8)
+    turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
+    return np.where(np.arange(n) < turn, 0, 1).astype(np.int8)
