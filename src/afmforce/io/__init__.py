@@ -23,6 +23,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 from ..errors import AfmforceError, FileFormatError, ParameterError
 from ..raw import RawCurve
+from . import native
 from ._meta import METADATA, check_meta_override, require_metadata
 
 __all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA",
@@ -91,122 +92,20 @@ def _lazy(module: str, func: str) -> Callable:
     return call
 
 
-def _rawfile_available() -> bool:
-    return importlib.util.find_spec("afmforce.rawfile") is not None
-
-
-def _detect_raw_text(path: Path) -> bool:
-    """afmforce raw text: ``# format: "afmforce-raw"`` header, or ``#`` lines and a deflection_signal column."""
-    if not _rawfile_available():
-        return False
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(16384).decode("utf-8", errors="replace")
-    except OSError:
-        return False
-    return head.startswith("#") and ("afmforce-raw" in head or "deflection_signal" in head)
-
-
-def _detect_raw_hdf5(path: Path) -> bool:
-    """HDF5 signature and the root attribute ``format = "afmforce-raw"``."""
-    if not _rawfile_available():
-        return False
-    try:
-        with open(path, "rb") as fh:
-            if fh.read(8) != b"\x89HDF\r\n\x1a\n":
-                return False
-        import h5py
-
-        from afmforce._rawhdf5 import safe_attr
-
-        with h5py.File(path, "r") as f:
-            fmt = safe_attr(f, "format", limit=256)  # sizes checked before reading: a damaged file must not hang
-        return (fmt.decode() if isinstance(fmt, bytes) else str(fmt)) == "afmforce-raw"
-    except Exception:  # any h5py failure means: not ours
-        return False
-
-
-def _load_rawfile(path: Path, *, meta_override: Mapping[str, Any], callback=None) -> list[RawCurve]:
-    """afmforce raw text / HDF5, written by :mod:`afmforce.rawfile`."""
-    import dataclasses
-
-    from afmforce.rawfile import read_raw  # lazy: written by the instrument module
-
-    from ._meta import finalize_curve
-
-    curve = read_raw(path)
-    reader = "afmforce-hdf5" if path.suffix.lower() in (".h5", ".hdf5", ".hdf") else "afmforce-raw"
-    meta = {**dict(curve.metadata), **dict(meta_override), "reader": reader}
-    if meta.get("source_file") not in (None, str(path)):
-        meta["recorded_source"] = meta["source_file"]
-    meta["source_file"] = str(path)
-    curve = finalize_curve(dataclasses.replace(curve, metadata=meta), str(path))
-    if callback is not None:
-        callback(1.0)
-    return [curve]
-
-
-def _detect_raw_map(path: Path) -> bool:
-    """HDF5 signature and the root attribute ``format = "afmforce-map"``."""
-    if not _rawfile_available():
-        return False
-    from afmforce.rawmap import is_map
-
-    return is_map(path)
-
-
-def _load_rawmap(path: Path, *, meta_override: Mapping[str, Any], callback=None,
-                 indices: list[int] | None = None, reader=None) -> list[RawCurve]:
-    """afmforce force map (HDF5, many curves on a grid), written by :mod:`afmforce.rawmap`.
-
-    ``indices`` reads only those curves and ``reader`` (an open
-    :class:`~afmforce.rawmap.MapReader` of ``path``) saves opening the file:
-    the batch analysis reads a map a chunk at a time.
-    """
-    import dataclasses
-
-    from afmforce.rawmap import MapReader
-
-    from ._meta import finalize_curve
-
-    own = reader is None
-    reader = MapReader(path) if own else reader
-    try:
-        indices = list(range(len(reader))) if indices is None else list(indices)
-        out = []
-        for i in indices:
-            curve = reader.read(i)
-            meta = {**dict(curve.metadata), **dict(meta_override), "reader": "afmforce-map", "map_index": int(i)}
-            if meta.get("source_file") not in (None, str(path)):
-                meta["recorded_source"] = meta["source_file"]
-            meta["source_file"] = str(path)
-            out.append(finalize_curve(dataclasses.replace(curve, metadata=meta), f"{path}#{i}"))
-            if callback is not None:
-                callback(len(out) / len(indices))
-    finally:
-        if own:
-            reader.close()
-    return out
-
-
-def _always(path: Path) -> bool:
-    return True
-
-
 _CAL = ("spring_constant", "sensitivity")
 
 #: The registered formats, in the order they are tried for a shared suffix.
 FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
-    ReaderFormat("afmforce-raw", "afmforce raw text", (".txt", ".tsv", ".raw"), _detect_raw_text,
-                 _load_rawfile, via="afmforce", deflection="V, m or N",
+    ReaderFormat("afmforce-raw", "afmforce raw text", (".txt", ".tsv", ".raw"), native.detect_raw_text,
+                 native.load_rawfile, via="afmforce", deflection="V, m or N",
                  signature='"# format: afmforce-raw" header (or "#" lines and a deflection_signal column)',
                  supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency", "theta0")),
-    ReaderFormat("afmforce-hdf5", "afmforce raw HDF5", (".h5", ".hdf5", ".hdf"), _detect_raw_hdf5,
-                 _load_rawfile, via="afmforce", deflection="V, m or N",
+    ReaderFormat("afmforce-hdf5", "afmforce raw HDF5", (".h5", ".hdf5", ".hdf"), native.detect_raw_hdf5,
+                 native.load_rawfile, via="afmforce", deflection="V, m or N",
                  signature='HDF5, root attribute format = "afmforce-raw"',
                  supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency", "theta0")),
     ReaderFormat("afmforce-map", "afmforce force map (HDF5, curves on a grid)", (".h5", ".hdf5", ".hdf"),
-                 _detect_raw_map, _load_rawmap, via="afmforce", deflection="V, m or N",
+                 native.detect_raw_map, native.load_rawmap, via="afmforce", deflection="V, m or N",
                  signature='HDF5, root attribute format = "afmforce-map"',
                  supplies=(*_CAL, "velocity", "sample_rate")),
     ReaderFormat("afmformats-hdf5", "afmformats HDF5 export", (".h5",),
