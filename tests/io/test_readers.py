@@ -192,3 +192,15 @@ def test_damaged_igor_header_is_rejected_up_front(tmp_path):
     bad.write_bytes(data[:15] + b"\x1a\x04\xa8\xcf\xf4\x02\xf6h" + data[15:])  # shifts the size fields
     with pytest.raises(FileFormatError, match="declares"):
         load(bad)
+
+
+def test_asylum_resonance_frequency_from_the_note():
+    """README (shared/data/real): ForceMetric wave note: SpringConstant 0.98415 N/m, InvOLS 29.757 nm/V,
+    ThermalFrequency 35614 Hz, 10 kHz. afmformats drops the frequency; we read it from the note."""
+    c = load(DATA / "asylum-mfp3d_ForceMetric_X60_3_x4_0100.ibw")[0]
+    assert c.metadata["resonance_frequency"] == pytest.approx(35614.0)
+    assert c.metadata["spring_constant"] == pytest.approx(0.98415)
+    assert c.metadata["sensitivity"] == pytest.approx(29.757e-9)
+    assert c.metadata["sample_rate"] == pytest.approx(10000.0)
+    assert load(DATA / "asylum-mfp3d_ForceMetric_X60_3_x4_0100.ibw",
+                meta_override={"resonance_frequency": 1e5})[0].metadata["resonance_frequency"] == 1e5

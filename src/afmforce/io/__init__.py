@@ -141,7 +141,7 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  _lazy("_afmformats", "detect_afmformats"), _lazy("igor", "load_ibw"),
                  via="afmformats", deflection="N (m or V for per-channel waves)",
                  signature="Igor binary wave v5: all channels in one wave, or one per channel (...Defl + ...ZSnsr)",
-                 supplies=(*_CAL, "sample_rate")),
+                 supplies=(*_CAL, "sample_rate", "resonance_frequency")),
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_workshop"),
                  via="afmformats", deflection="N (V for T-B(V) files)",

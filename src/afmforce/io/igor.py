@@ -9,6 +9,7 @@ sensitivity rescales the force here (force = k x volts x InvOLS).
 
 from __future__ import annotations
 
+import dataclasses
 import struct
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -100,8 +101,28 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
         if np.all(seg == 0):
             seg = _ibw_segments(path, z)
         force = np.asarray(dd["force"], dtype=float) * _rescale(path, dd.metadata, meta_override)
-        out.append(_curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg, signal=force))
+        curve = _curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg, signal=force)
+        f0 = _thermal_frequency(path)  # afmformats does not pass the note's resonance frequency on
+        if f0 is not None and "resonance_frequency" not in meta_override:
+            curve = dataclasses.replace(curve, metadata={**curve.metadata, "resonance_frequency": f0})
+        out.append(curve)
     return out
+
+
+def _thermal_frequency(path: Path) -> float | None:
+    """``ThermalFrequency`` [Hz] of the wave note (the cantilever's thermal resonance), if positive."""
+    try:
+        note = _ibw_note(path)
+    except Exception:  # the note is optional
+        return None
+    for line in note.replace("\\r", "\r").replace("\n", "\r").split("\r"):
+        if line.startswith("ThermalFrequency:"):
+            try:
+                value = float(line.split(":", 1)[1])
+            except ValueError:
+                return None
+            return value if np.isfinite(value) and value > 0 else None
+    return None
 
 
 def _rescale(path: Path, md, meta_override: Mapping[str, Any]) -> float:
