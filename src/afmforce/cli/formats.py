@@ -12,7 +12,8 @@ import argparse
 
 def register(sub) -> None:
     p = sub.add_parser("formats", help="list the force-curve file formats afmforce reads",
-                       description=__doc__.split("\n\n")[0])
+                       description="The force-curve file formats afmforce reads (from its reader registry): "
+                                   "endings, content, what each takes from the file and what the user must give.")
     p.add_argument("--json", action="store_true", help="print the table as JSON")
     p.add_argument("--markdown", action="store_true", help="print the table in Markdown (docs/formats.md)")
     p.set_defaults(func=run)
