@@ -4,8 +4,10 @@ Every reader is a record in :data:`FORMATS` (identifier, name, suffixes, a
 ``detect(path)`` function and a ``loader``); :func:`load` picks the first record
 whose suffix matches and whose detector accepts the file, and returns a list of
 :class:`~afmforce.raw.RawCurve` in afmforce's conventions (z increasing towards
-the probe, approach = segment 0, deflection positive = up). Input files are
-only ever opened for reading.
+the probe, segments by type: approach 0, retract 1, dwell 2; deflection positive
+= up). Input files are only ever opened for reading; HDF5 files (and any file with
+``timeout=``) are read in a child process with a time budget. ``afmforce formats``
+and docs/formats.md show the table.
 
 >>> from afmforce.io import load
 >>> curves = load("curve.jpk-force")                        # doctest: +SKIP

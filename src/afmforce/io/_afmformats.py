@@ -1,4 +1,5 @@
-"""Readers that go through afmformats: JPK, Asylum (.ibw), NT-MDT text, AFM Workshop CSV.
+"""Readers that go through afmformats: JPK, NT-MDT text, AFM Workshop CSV, its own exports
+(Asylum ``.ibw``: :mod:`afmforce.io.igor`; Optics11 Chiaro: :mod:`afmforce.io.chiaro`).
 
 afmformats returns force [N] against a "height" that *decreases* towards the
 sample. These readers turn each curve into a :class:`~afmforce.raw.RawCurve`:
@@ -8,14 +9,17 @@ calibration), time from the file or from the sample rate.
 
 Gaps of afmformats filled here:
 
-* ``.ibw`` curves come as one segment: split at the turning point (the wave
-  note's ``Indexes`` entry when present, otherwise the extreme of z).
+* segments are numbered in file order by afmformats: JPK segments are mapped by
+  their header type (extend 0, retract 1, pause 2; :func:`afmforce.io._meta.segment_code`).
+* the user's spring constant and sensitivity are passed on (``meta_override``);
+  a file lacking them raises :class:`~afmforce.errors.MissingMetadataError` naming the flags.
 * NT-MDT text files carry no spring constant or sensitivity; the user must give
   both (``meta_override``). The file's deflection column (nA in Nova's export) is
   kept as a raw signal with ``deflection_unit = "V"``: deflection [m] = signal x
   sensitivity [m per signal unit, shown by Nova as nm/V].
-* JPK files without calibration (afmformats raises ``MissingMetaDataError``) are
-  read by :mod:`afmforce.io.jpk_zip` in raw volts instead.
+* JPK files without calibration (afmformats raises ``MissingMetaDataError``), or with
+  segments afmformats cannot read (CellHesion pauses), are read by
+  :mod:`afmforce.io.jpk_zip` in raw volts instead.
 """
 
 from __future__ import annotations
