@@ -150,7 +150,7 @@ def test_saturated_photodiode_is_reported_not_fatal():
 # --- real instrument files ----------------------------------------------------------------------
 @pytest.mark.parametrize("path", REAL, ids=lambda p: p.name)
 def test_every_real_file_analyses(path):
-    curves = load(path, meta_override=NTMDT_META if "ntmdt" in path.name else None)
+    curves = load(path, meta_override=json.loads((DATA / "meta_override.json").read_text()).get(path.name))
     res = analyze(curves[0])
     assert res.steps_run == DEFAULT_STEPS
     assert np.isfinite(res.calibration_factor) and np.isfinite(res.separation).all()

@@ -13,6 +13,7 @@ __all__ = [
     "UnitError",
     "SolverError",
     "FileFormatError",
+    "MissingMetadataError",
     "AnalysisError",
     "OutputExistsError",
     "MissingDependencyError",
@@ -37,6 +38,18 @@ class SolverError(AfmforceError, RuntimeError):
 
 class FileFormatError(AfmforceError):
     """An input file is unreadable, truncated or not in the expected format."""
+
+
+class MissingMetadataError(FileFormatError):
+    """A file lacks metadata (spring constant, sensitivity, ...) that the user must give.
+
+    ``keys`` lists the metadata keys and ``flags`` the command-line options that supply them.
+    """
+
+    def __init__(self, message: str, keys: tuple[str, ...] = (), flags: tuple[str, ...] = ()) -> None:
+        super().__init__(message)
+        self.keys = tuple(keys)
+        self.flags = tuple(flags)
 
 
 class AnalysisError(AfmforceError):

@@ -9,6 +9,7 @@ metadata (shared/data/real/README.md), never from our own output.
 from __future__ import annotations
 
 import hashlib
+import json
 import zipfile
 from pathlib import Path
 
@@ -16,17 +17,20 @@ import numpy as np
 import pytest
 
 from afmforce.errors import FileFormatError, ParameterError
-from afmforce.io import FORMATS, find_format, formats_table, load, supported_suffixes
+from afmforce.io import FORMATS, find_format, formats_table, is_supported, load, supported_suffixes
 from afmforce.io.bruker import parse_column_name
 from afmforce.io.jpk_zip import parse_properties
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 NTMDT_META = {"spring_constant": 0.05, "sensitivity": 61e-9}
-FILES = sorted(p for p in DATA.iterdir() if p.suffix in (".ibw", ".csv", ".txt", ".jpk-force"))
+FILES = sorted(p for p in DATA.iterdir() if is_supported(p))
+
+
+OVERRIDES = json.loads((DATA / "meta_override.json").read_text())  # for files that store no k / sensitivity
 
 
 def _load(path: Path):
-    return load(path, meta_override=NTMDT_META if "ntmdt" in path.name else None)
+    return load(path, meta_override=OVERRIDES.get(path.name))
 
 
 def _digest(path: Path) -> str:

@@ -86,14 +86,13 @@ def register(sub) -> None:
 
 
 def _inputs(names: list[str]) -> list[Path]:
-    from ..io import supported_suffixes
+    from ..io import is_supported
 
-    suffixes = tuple(supported_suffixes())
     out: list[Path] = []
     for name in names:
         path = Path(name)
         if path.is_dir():
-            found = sorted(p for p in path.rglob("*") if p.is_file() and p.name.lower().endswith(suffixes)
+            found = sorted(p for p in path.rglob("*") if p.is_file() and is_supported(p)
                            and SUFFIX not in p.name and not _BATCH_FOLDER.fullmatch(p.parent.name))
             out.extend(found)
         else:

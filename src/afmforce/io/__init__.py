@@ -16,16 +16,17 @@ only ever opened for reading.
 from __future__ import annotations
 
 import importlib.util
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Mapping
+from typing import Any, Callable, Mapping, Sequence
 
 from ..errors import AfmforceError, FileFormatError, ParameterError
 from ..raw import RawCurve
-from ._meta import METADATA, check_meta_override
+from ._meta import METADATA, check_meta_override, require_metadata
 
 __all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA",
-           "supported_suffixes"]
+           "supported_suffixes", "is_supported", "require_metadata"]
 
 Loader = Callable[..., list]
 
@@ -48,6 +49,8 @@ class ReaderFormat:
         ``loader(path, *, meta_override, callback) -> list[RawCurve]``.
     via : str
         ``"afmformats"`` or ``"afmforce"`` (our own reader).
+    pattern : str
+        Regular expression for endings that are not fixed (``\\.\\d{3}$``: numbered files).
     requires : tuple of str
         Metadata the user must give because the file lacks it.
     deflection : str
@@ -62,6 +65,12 @@ class ReaderFormat:
     via: str
     requires: tuple[str, ...] = field(default=())
     deflection: str = "N"
+    pattern: str = ""
+
+    def claims(self, name: str) -> bool:
+        """Does the file name (any case) end in one of this format's endings?"""
+        name = name.lower()
+        return any(name.endswith(s) for s in self.suffixes) or bool(self.pattern and re.search(self.pattern, name))
 
 
 def _lazy(module: str, func: str) -> Callable:
@@ -183,6 +192,9 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("bruker-ascii", "Bruker NanoScope ASCII export", (".txt", ".asc", ".csv"),
                  _lazy("bruker", "detect_bruker_ascii"), _lazy("bruker", "load_bruker_ascii"),
                  via="afmforce", deflection="V, m or N"),
+    ReaderFormat("bruker-nanoscope", "Bruker NanoScope binary force file (v5-v9)", (".spm", ".pfc"),
+                 _lazy("nanoscope", "detect_nanoscope"), _lazy("nanoscope", "load_nanoscope"),
+                 via="afmforce", deflection="V", pattern=r"\.\d{3}$"),
     ReaderFormat("jpk-force", "JPK force curve / force map (calibrated)",
                  (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series"),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_jpk"),
@@ -203,8 +215,13 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
 
 
 def supported_suffixes() -> list[str]:
-    """Every file ending some reader accepts."""
+    """Every fixed file ending some reader accepts (see also :func:`is_supported`)."""
     return sorted({s for f in FORMATS.values() for s in f.suffixes})
+
+
+def is_supported(path: str | Path) -> bool:
+    """Does some reader claim this file name (fixed endings and numbered ``.000``-``.999``)?"""
+    return any(f.claims(Path(path).name) for f in FORMATS.values())
 
 
 def find_format(path: str | Path) -> ReaderFormat:
@@ -218,11 +235,10 @@ def find_format(path: str | Path) -> ReaderFormat:
     path = Path(path)
     if not path.is_file():
         raise FileFormatError(f"{path}: no such file")
-    name = path.name.lower()
-    candidates = [f for f in FORMATS.values() if any(name.endswith(s) for s in f.suffixes)]
+    candidates = [f for f in FORMATS.values() if f.claims(path.name)]
     if not candidates:
         raise FileFormatError(
-            f"{path}: unknown file type; supported endings: {', '.join(supported_suffixes())}")
+            f"{path}: unknown file type; supported endings: {', '.join(supported_suffixes())}, .000-.999")
     for fmt in candidates:
         try:
             if fmt.detect(path):
@@ -234,7 +250,8 @@ def find_format(path: str | Path) -> ReaderFormat:
 
 
 def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
-         callback: Callable[[float], None] | None = None, format: str | None = None) -> list[RawCurve]:
+         callback: Callable[[float], None] | None = None, format: str | None = None,
+         require: Sequence[str] = ()) -> list[RawCurve]:
     """Read every force curve in ``path``.
 
     Parameters
@@ -248,6 +265,10 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
         Called with the fraction done, a float in [0, 1].
     format : str, optional
         Identifier of a format in :data:`FORMATS`, skipping detection.
+    require : sequence of str, optional
+        Metadata every curve must carry, e.g. ``("spring_constant", "sensitivity")``
+        for an analysis in force: ``spring_constant`` is required of a deflection in
+        V or m, ``sensitivity`` of one in V (a force in N needs neither).
 
     Returns
     -------
@@ -256,7 +277,10 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
     Raises
     ------
     FileFormatError
-        Missing, unknown, truncated or damaged file, or metadata the format needs.
+        Missing, unknown, truncated or damaged file.
+    MissingMetadataError
+        (a FileFormatError) The file lacks metadata the format or ``require`` needs;
+        the message names the command-line flag (``--spring-constant``, ...) that gives it.
     ParameterError
         Invalid ``meta_override`` or unknown ``format``.
     """
@@ -281,6 +305,8 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
         raise FileFormatError(f"{path}: cannot read as {fmt.name} ({type(exc).__name__}: {text})") from None
     if not curves:
         raise FileFormatError(f"{path}: no force curve in the file")
+    for curve in curves:
+        require_metadata(curve, tuple(require), str(path))
     return curves
 
 

@@ -20,16 +20,18 @@ Gaps of afmformats filled here:
 
 from __future__ import annotations
 
+import dataclasses
 import logging
 import warnings
+import zipfile
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..errors import FileFormatError
+from ..errors import FileFormatError, MissingMetadataError
 from ..raw import RawCurve
-from ._meta import AFMFORMATS_KEYS, finalize_curve
+from ._meta import AFMFORMATS_KEYS, afmformats_override, finalize_curve, missing_metadata, orient, segment_code
 
 __all__ = ["load_afmformats", "load_ibw", "load_jpk", "load_ntmdt", "load_workshop", "orient"]
 
@@ -70,19 +72,10 @@ def _load_data(path: Path, meta: Mapping[str, Any], callback) -> list:
         raise FileFormatError(f"{path}: afmformats cannot read it ({type(exc).__name__}: {_short(exc)})") from None
 
 
-def orient(z_nominal: np.ndarray, z_measured: np.ndarray | None, segment: np.ndarray):
-    """Flip the sign of the position channels if z decreases on the approach run."""
-    zref = z_measured if z_measured is not None else z_nominal
-    app = np.flatnonzero(segment == 0)
-    sign = 1.0
-    if app.size >= 2 and zref[app[-1]] < zref[app[0]]:
-        sign = -1.0
-    return sign * z_nominal, (None if z_measured is None else sign * z_measured), sign
-
-
 def _curve_from_afmdata(dd, path: Path, reader: str, meta_override: Mapping[str, Any],
                         signal: np.ndarray | None = None, unit: str = "N",
-                        segment: np.ndarray | None = None) -> RawCurve:
+                        segment: np.ndarray | None = None,
+                        segment_styles: list[str] | None = None) -> RawCurve:
     cols = dd.columns
     md = dict(dd.metadata)
     n = len(dd)
@@ -104,7 +97,20 @@ def _curve_from_afmdata(dd, path: Path, reader: str, meta_override: Mapping[str,
                 pass
         elif isinstance(value, (int, float, str)):
             meta[f"afmformats:{key}"] = value
+    for ours, theirs in (("map_x", "grid index x"), ("map_y", "grid index y"),
+                         ("map_nx", "grid shape x"), ("map_ny", "grid shape y")):
+        if isinstance(md.get(theirs), (int, np.integer)):
+            meta[ours] = int(md[theirs])
+    for ours, theirs in (("position_x", "position x"), ("position_y", "position y")):
+        if isinstance(md.get(theirs), (float, int)):
+            meta[ours] = float(md[theirs])  # [m]
     meta.update(meta_override)
+    if segment_styles is not None:  # vendor segment types, in file order -> afmforce codes
+        codes = np.array([segment_code(style) for style in segment_styles], dtype=np.int8)
+        if seg.size and int(seg.max()) >= codes.size:
+            raise FileFormatError(f"{path}: segment {int(seg.max())} has no header")
+        seg = codes[seg]
+        meta["segment_types"] = list(segment_styles)
     if "time" in cols:
         time = np.asarray(dd["time"], dtype=float)
     elif meta.get("sample_rate"):
@@ -123,28 +129,52 @@ def _curve_from_afmdata(dd, path: Path, reader: str, meta_override: Mapping[str,
     return finalize_curve(curve, str(path))
 
 
-def load_afmformats(path: Path, *, meta_override: Mapping[str, Any], callback, reader: str) -> list[RawCurve]:
-    """Generic afmformats reader: every curve of the file, force in N."""
-    data = _load_data(path, {}, callback)
-    if not data:
-        raise FileFormatError(f"{path}: the file holds no force-distance curve")
-    return [_curve_from_afmdata(dd, path, reader, meta_override) for dd in data]
+def load_afmformats(path: Path, *, meta_override: Mapping[str, Any], callback, reader: str,
+                    styles: Callable | None = None) -> list[RawCurve]:
+    """Generic afmformats reader: every curve of the file, force in N.
 
-
-def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
-    """JPK ``.jpk-force`` and maps; uncalibrated files fall back to raw volts."""
+    The user's spring constant and sensitivity go to afmformats (``meta_override``),
+    which computes the force with them. ``styles(dd)`` gives the vendor segment types
+    of a curve in file order (afmformats numbers segments in file order).
+    """
     from afmformats import errors as afe
 
     try:
-        return load_afmformats(path, meta_override=meta_override, callback=callback, reader="jpk-force")
+        data = _load_data(path, afmformats_override(meta_override), callback)
     except afe.MissingMetaDataError:
-        from .jpk_zip import load_jpk_zip
+        raise missing_metadata(str(path), [k for k in ("spring_constant", "sensitivity")
+                                           if k not in meta_override]) from None
+    if not data:
+        raise FileFormatError(f"{path}: the file holds no force-distance curve")
+    return [_curve_from_afmdata(dd, path, reader, meta_override,
+                                segment_styles=None if styles is None else styles(dd)) for dd in data]
 
-        return load_jpk_zip(path, meta_override=meta_override, callback=callback)
+
+def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
+    """JPK ``.jpk-force``, maps and QI data; segments by their type (extend, retract, pause).
+
+    A file afmformats refuses for missing calibration (no spring constant, or no
+    sensitivity, and none given by the user) is read in raw volts by
+    :mod:`afmforce.io.jpk_zip`; so are files with pause segments afmformats cannot read.
+    """
+    from .jpk_zip import load_jpk_zip, segment_styles
+
+    try:
+        arc = zipfile.ZipFile(path)
+    except (zipfile.BadZipFile, OSError, ValueError) as exc:
+        raise FileFormatError(f"{path}: not a JPK zip archive ({exc})") from None
+    with arc:
+        try:
+            return load_afmformats(path, meta_override=meta_override, callback=callback, reader="jpk-force",
+                                   styles=lambda dd: segment_styles(arc, dd.metadata.get("enum"), str(path)))
+        except MissingMetadataError:
+            return load_jpk_zip(path, meta_override=meta_override, callback=callback)
 
 
-def _ibw_turning_index(path: Path, z: np.ndarray) -> int:
-    """Turning sample of a one-segment Igor wave: note ``Indexes`` or the extreme of z."""
+def _ibw_segments(path: Path, z: np.ndarray) -> np.ndarray:
+    """Segments of a one-segment Igor wave from the note's ``Indexes`` (ends of the segments:
+    ``0,turn,end`` for approach and retract, ``0,a,b,end`` with a dwell between), else the extreme of z."""
+    n = len(z)
     try:
         from igor2 import binarywave
 
@@ -152,11 +182,14 @@ def _ibw_turning_index(path: Path, z: np.ndarray) -> int:
         for line in note.replace("\\r", "\r").split("\r"):
             if line.startswith("Indexes:"):
                 idx = [int(float(v)) for v in line.split(":", 1)[1].split(",") if v.strip()]
-                if len(idx) == 3 and 0 < idx[1] < len(z) - 1:
-                    return idx[1]
+                if len(idx) == 3 and 0 < idx[1] < n - 1:
+                    return np.where(np.arange(n) < idx[1], 0, 1).astype(np.int8)
+                if len(idx) == 4 and 0 < idx[1] < idx[2] < n - 1:  # approach, dwell, retract
+                    return np.select([np.arange(n) < idx[1], np.arange(n) < idx[2]], [0, 2], 1).astype(np.int8)
     except Exception:  # the note is optional; fall back on the data
         pass
-    return int(np.argmax(z)) if z[len(z) // 2] > z[0] else int(np.argmin(z))
+    turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
+    return np.where(np.arange(n) < turn, 0, 1).astype(np.int8)
 
 
 def check_ibw_header(path: Path) -> None:
@@ -190,17 +223,36 @@ def check_ibw_header(path: Path) -> None:
 def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
     """Asylum ``.ibw`` force curve: one wave, split into approach and retract."""
     check_ibw_header(path)
-    data = _load_data(path, {}, callback)
+    data = _load_data(path, {}, callback)  # afmformats' Igor reader takes no meta_override
     out = []
     for dd in data:
         height = dd["height (measured)"] if "height (measured)" in dd.columns else dd["height (piezo)"]
         z = -np.asarray(height, dtype=float)
         seg = np.asarray(dd["segment"]).astype(np.int8)
         if np.all(seg == 0):
-            turn = _ibw_turning_index(path, z)
-            seg = np.where(np.arange(len(z)) < turn, 0, 1).astype(np.int8)
-        out.append(_curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg))
+            seg = _ibw_segments(path, z)
+        force = np.asarray(dd["force"], dtype=float) * _rescale(path, dd.metadata, meta_override)
+        out.append(_curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg, signal=force))
     return out
+
+
+def _rescale(path: Path, md, meta_override: Mapping[str, Any]) -> float:
+    """Factor that turns a force computed with the file's k and sensitivity into one with the user's.
+
+    Asylum stores the deflection in metres (volts x the file's InvOLS); force = k x deflection.
+    """
+    factor = 1.0
+    for ours, theirs in (("spring_constant", "spring constant"), ("sensitivity", "sensitivity")):
+        if ours in meta_override:
+            try:
+                old = float(md[theirs])
+            except _afm_errors():  # afmformats' missing-metadata error is a BaseException
+                raise FileFormatError(f"{path}: the file stores no {theirs}, so its force cannot be "
+                                      f"recomputed with the given {ours}") from None
+            if not (np.isfinite(old) and old > 0):
+                raise FileFormatError(f"{path}: the file's {theirs} is {old!r}; cannot rescale to the given {ours}")
+            factor *= float(meta_override[ours]) / old
+    return factor
 
 
 def load_ntmdt(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
@@ -209,9 +261,7 @@ def load_ntmdt(path: Path, *, meta_override: Mapping[str, Any], callback: Callab
 
     missing = [k for k in ("spring_constant", "sensitivity") if k not in meta_override]
     if missing:
-        raise FileFormatError(
-            f"{path}: NT-MDT text files store no {' and no '.join(missing)}; give them "
-            "(--spring-constant, --sensitivity on the command line, or meta_override)")
+        raise missing_metadata(str(path), missing, what="NT-MDT text files store")
     k, sens = float(meta_override["spring_constant"]), float(meta_override["sensitivity"])
     # afmformats: force = column * 1e-9 * sensitivity[m/A] * k; the column is the raw signal
     try:
@@ -226,8 +276,24 @@ def load_ntmdt(path: Path, *, meta_override: Mapping[str, Any], callback: Callab
 
 
 def load_workshop(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
-    """AFM Workshop CSV export (single curves): force [N] vs Z-sense."""
-    return load_afmformats(path, meta_override=meta_override, callback=callback, reader="afm-workshop-csv")
+    """AFM Workshop CSV export (single curves): force [N] or deflection [V] (``T-B(V)``) vs Z-sense.
+
+    A file in volts needs the spring constant and the sensitivity from the user
+    (afmformats will not read it otherwise); its deflection is returned in volts.
+    """
+    with open(path, "rb") as fh:
+        head = fh.read(4096).decode("latin-1")
+    volts = "T-B(V)" in head and "Force(" not in head
+    if volts:
+        missing = [k for k in ("spring_constant", "sensitivity") if k not in meta_override]
+        if missing:
+            raise missing_metadata(str(path), missing, what="this AFM Workshop file (deflection in volts) stores")
+    curves = load_afmformats(path, meta_override=meta_override, callback=callback, reader="afm-workshop-csv")
+    if not volts:
+        return curves
+    kv = float(meta_override["spring_constant"]) * float(meta_override["sensitivity"])
+    return [finalize_curve(dataclasses.replace(c, deflection_signal=c.deflection_signal / kv,
+                                               deflection_unit="V"), str(path)) for c in curves]
 
 
 def detect_afmformats(path: Path) -> bool:

@@ -14,10 +14,11 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..errors import FileFormatError, ParameterError
-from ..raw import RawCurve
+from ..errors import FileFormatError, MissingMetadataError, ParameterError
+from ..raw import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
 
-__all__ = ["MetaField", "METADATA", "check_meta_override", "finalize_curve"]
+__all__ = ["MetaField", "METADATA", "check_meta_override", "finalize_curve", "segment_code",
+           "missing_metadata", "require_metadata", "orient", "afmformats_override"]
 
 
 def _positive(value: Any) -> float:
@@ -45,16 +46,17 @@ class MetaField:
     label: str
     unit: str
     validate: Callable[[Any], Any]
+    flag: str = ""
 
 
 #: The metadata keys afmforce understands (SI values).
 METADATA: dict[str, MetaField] = {
-    "spring_constant": MetaField("Spring constant", "N/m", _positive),
-    "sensitivity": MetaField("Deflection sensitivity (InvOLS)", "m/V", _positive),
-    "velocity": MetaField("Approach speed", "m/s", _positive),
-    "retract_velocity": MetaField("Retract speed", "m/s", _positive),
-    "sample_rate": MetaField("Sample rate", "Hz", _positive),
-    "resonance_frequency": MetaField("Resonance frequency", "Hz", _positive),
+    "spring_constant": MetaField("Spring constant", "N/m", _positive, "--spring-constant"),
+    "sensitivity": MetaField("Deflection sensitivity (InvOLS)", "m/V", _positive, "--sensitivity"),
+    "velocity": MetaField("Approach speed", "m/s", _positive, "--meta velocity=..."),
+    "retract_velocity": MetaField("Retract speed", "m/s", _positive, "--meta retract_velocity=..."),
+    "sample_rate": MetaField("Sample rate", "Hz", _positive, "--meta sample_rate=..."),
+    "resonance_frequency": MetaField("Resonance frequency", "Hz", _positive, "--resonance-frequency"),
     "theta0": MetaField("Cantilever inclination", "rad", _finite),
     "radius": MetaField("Probe radius", "m", _positive),
     "instrument": MetaField("Instrument", "", _text),
@@ -96,6 +98,81 @@ def check_meta_override(meta_override: Mapping[str, Any] | None) -> dict[str, An
     return out
 
 
+#: Vendor segment words -> afmforce segment code (raw.py: 0 approach, 1 retract, 2 dwell).
+SEGMENT_WORDS: dict[str, int] = {
+    "extend": SEGMENT_APPROACH, "approach": SEGMENT_APPROACH, "trace": SEGMENT_APPROACH,
+    "ex": SEGMENT_APPROACH, "retract": SEGMENT_RETRACT, "retrace": SEGMENT_RETRACT,
+    "rt": SEGMENT_RETRACT, "withdraw": SEGMENT_RETRACT, "pause": SEGMENT_DWELL,
+    "dwell": SEGMENT_DWELL, "hold": SEGMENT_DWELL, "wait": SEGMENT_DWELL,
+}
+
+
+def segment_code(style: str) -> int:
+    """afmforce segment code of a vendor's segment type (``"extend"``, ``"retract"``, ``"pause"``...).
+
+    Anything that is neither an approach nor a retract (pause, dwell, modulation,
+    an unknown word) is a dwell (2): it is kept, but never taken as approach or retract.
+    """
+    return SEGMENT_WORDS.get(str(style).strip().lower(), SEGMENT_DWELL)
+
+
+def orient(z_nominal: np.ndarray, z_measured: np.ndarray | None, segment: np.ndarray):
+    """Flip the sign of the position channels if z decreases on the approach run."""
+    zref = z_measured if z_measured is not None else z_nominal
+    app = np.flatnonzero(segment == SEGMENT_APPROACH)
+    sign = 1.0
+    if app.size >= 2 and zref[app[-1]] < zref[app[0]]:
+        sign = -1.0
+    return sign * z_nominal, (None if z_measured is None else sign * z_measured), sign
+
+
+def afmformats_override(meta: Mapping[str, Any]) -> dict[str, float]:
+    """The part of a (checked) ``meta_override`` that afmformats understands, in its keys and units."""
+    out = {}
+    if "spring_constant" in meta:
+        out["spring constant"] = float(meta["spring_constant"])
+    if "sensitivity" in meta:
+        out["sensitivity"] = float(meta["sensitivity"])
+    return out
+
+
+def _needed(curve: RawCurve, key: str) -> bool:
+    """Is ``key`` needed to turn this curve's deflection signal into a force?"""
+    if key == "spring_constant":
+        return curve.deflection_unit in ("V", "m")
+    if key == "sensitivity":
+        return curve.deflection_unit == "V"
+    return True
+
+
+def missing_metadata(path: str, keys, what: str = "the file stores") -> MissingMetadataError:
+    """The one-line error for metadata a user must give: names the keys, units and CLI flags."""
+    keys = tuple(keys)
+    fields = [METADATA[k] for k in keys]
+    names = " and no ".join(f"{f.label[0].lower()}{f.label[1:]} [{f.unit}]" for f in fields)
+    flags = tuple(f.flag or f"--meta {k}=..." for k, f in zip(keys, fields))
+    example = ", ".join(f"{k!r}: ..." for k in keys)
+    return MissingMetadataError(
+        f"{path}: {what} no {names}; give {' and '.join(flags)} "
+        f"(Python: load(..., meta_override={{{example}}}))", keys=keys, flags=flags)
+
+
+def require_metadata(curve: RawCurve, keys=("spring_constant", "sensitivity"), path: str | None = None) -> None:
+    """Raise :class:`~afmforce.errors.MissingMetadataError` if ``curve`` lacks a key it needs.
+
+    ``spring_constant`` is needed for a deflection in V or m, ``sensitivity`` for
+    one in V (a force in N needs neither); any other key is needed as such.
+    """
+    path = path or str(curve.metadata.get("source_file", "<curve>"))
+    unknown = [k for k in keys if k not in METADATA]
+    if unknown:
+        raise ParameterError(f"unknown metadata key(s) {', '.join(map(repr, unknown))}; "
+                             f"known keys: {', '.join(sorted(METADATA))}")
+    missing = [k for k in keys if _needed(curve, k) and curve.metadata.get(k) is None]
+    if missing:
+        raise missing_metadata(path, missing)
+
+
 def finalize_curve(curve: RawCurve, path: str) -> RawCurve:
     """Check that a freshly read curve is usable: finite columns, monotonic time.
 
@@ -117,4 +194,20 @@ def finalize_curve(curve: RawCurve, path: str) -> RawCurve:
                 f"{int(np.argmax(bad))}); the file is damaged or padded: remove those rows")
     if not np.any(curve.approach):
         raise FileFormatError(f"{path}: no approach (extend) segment found")
+    if not curve.metadata.get("time_is_sample_index"):
+        step = np.diff(np.asarray(curve.time, dtype=float))
+        if step.size and not np.all(step > 0):
+            j = int(np.argmax(~(step > 0)))
+            raise FileFormatError(f"{path}: time does not increase at sample {j + 1} "
+                                  f"({curve.time[j]!r} s then {curve.time[j + 1]!r} s); the file is damaged")
+    for key, value in curve.metadata.items():
+        field = METADATA.get(key)
+        if field is None or value is None:
+            continue
+        try:
+            field.validate(value)
+        except (TypeError, ValueError) as exc:
+            raise FileFormatError(f"{path}: metadata {key} [{field.unit}] {exc}, got {value!r}; "
+                                  f"the file is damaged, give the right value ({field.flag or 'meta_override'})"
+                                  ) from None
     return curve

@@ -28,15 +28,13 @@ import numpy as np
 
 from ..errors import FileFormatError
 from ..raw import RawCurve
-from ._afmformats import orient
-from ._meta import finalize_curve
+from ._meta import finalize_curve, orient, segment_code
 
-__all__ = ["load_jpk_zip", "detect_jpk_zip", "parse_properties"]
+__all__ = ["load_jpk_zip", "detect_jpk_zip", "parse_properties", "segment_styles"]
 
 _DTYPES = {"signedshort": ">i2", "unsignedshort": ">u2", "signedinteger": ">i4",
            "unsignedinteger": ">u4", "signedlong": ">i8", "float": ">f4", "double": ">f8"}
 _MEASURED = ("measuredHeight", "capacitiveSensorHeight", "strainGaugeHeight")
-_SEGMENT_STYLES = {"extend": 0, "retract": 1, "pause": 2}
 _ESCAPE = re.compile(r"\\(u[0-9a-fA-F]{4}|.)")
 
 
@@ -72,6 +70,42 @@ def detect_jpk_zip(path: Path) -> bool:
     except (zipfile.BadZipFile, OSError, ValueError):
         return False
     return "header.properties" in names and any(n.startswith("segments/") for n in names)
+
+
+def _style(props: Mapping[str, str], index: int) -> str:
+    """A segment's type: ``extend``, ``retract`` or ``pause`` (JPK ``settings.style``)."""
+    style = props.get("force-segment-header.settings.style")
+    if style is None:  # older files: only the segment settings' type, e.g. "z-extend-height"
+        kind = props.get("force-segment-header.settings.segment-settings.type", "")
+        style = next((w for w in ("extend", "retract", "pause") if w in kind), None)
+    if style is None:
+        style = "extend" if index == 0 else "retract"
+    return style
+
+
+def _identifier(props: Mapping[str, str]) -> str:
+    return props.get("force-segment-header.settings.segment-settings.identifier.name", "")
+
+
+def segment_styles(arc: zipfile.ZipFile, enum: int | None, where: str) -> list[str]:
+    """Segment types of one curve, in file order (``index/<enum>/`` in maps and QI data)."""
+    names = set(arc.namelist())
+    prefix = "" if "segments/0/segment-header.properties" in names or enum is None else f"index/{int(enum)}/"
+    out = []
+    for j in range(10_000):
+        name = f"{prefix}segments/{j}/segment-header.properties"
+        if name not in names:
+            break
+        out.append(_style(_read_props(arc, name), j))
+    if not out:
+        raise FileFormatError(f"{where}: no segment headers for curve {enum}")
+    return out
+
+
+def _time_order(seg_ids: list[int], props: dict[int, dict[str, str]]) -> list[int]:
+    """Segments in time order: a CellHesion ``pause-at-start`` segment, stored last, comes first."""
+    first = [s for s in seg_ids if "pause-at-start" in _identifier(props[s])]
+    return first + [s for s in seg_ids if s not in first]
 
 
 def _channel_props(seg: dict[str, str], shared: dict[str, str], name: str) -> dict[str, str]:
@@ -181,12 +215,15 @@ def _read_archive(arc: zipfile.ZipFile, where: str, meta_override: dict, callbac
     if not seg_ids:
         raise FileFormatError(f"{where}: no segments in the archive (a force map? use the jpk-force reader)")
     cols: dict[str, list[np.ndarray]] = {"t": [], "zn": [], "zm": [], "s": [], "seg": []}
-    meta: dict[str, Any] = {}
+    meta: dict[str, Any] = {"segment_types": []}
     t0 = 0.0
+    headers = {sid: _read_props(arc, f"segments/{sid}/segment-header.properties") for sid in seg_ids}
+    seg_ids = _time_order(seg_ids, headers)
     for i, sid in enumerate(seg_ids):
         seg_dir = f"segments/{sid}"
-        props = _read_props(arc, f"{seg_dir}/segment-header.properties")
-        style = props.get("force-segment-header.settings.style", "extend" if i == 0 else "retract")
+        props = headers[sid]
+        style = _style(props, sid)
+        meta["segment_types"].append(_identifier(props) or style)
         chans = props.get("channels.list", "").split()
         if "vDeflection" not in chans:
             raise FileFormatError(f"{where}: segment {sid} has no vDeflection channel")
@@ -222,14 +259,14 @@ def _read_archive(arc: zipfile.ZipFile, where: str, meta_override: dict, callbac
         if not np.isfinite(dt):
             meta["time_is_sample_index"] = True
             dt = 1.0
-        elif i == 0:
+        elif "sample_rate" not in meta and segment_code(style) == 0:
             meta["sample_rate"] = 1.0 / dt
         cols["t"].append(t0 + dt * np.arange(n))
         t0 += dt * n
         cols["zn"].append(-height)
         cols["zm"].append(None if measured is None else -measured)
         cols["s"].append(volts)
-        cols["seg"].append(np.full(n, _SEGMENT_STYLES.get(style, 2), dtype=np.int8))
+        cols["seg"].append(np.full(n, segment_code(style), dtype=np.int8))
         if callback is not None:
             callback((i + 1) / len(seg_ids))
     zm = None if any(m is None for m in cols["zm"]) else np.concatenate(cols["zm"])

@@ -1,0 +1,244 @@
+r"""Reader of Bruker NanoScope binary force files (``.spm``, ``.pfc``, ``.000``-``.999``).
+
+A NanoScope file (versions 5 to 9) is a text header followed by binary data::
+
+    \*Force file list                 first line (files of images start \*File list)
+    \Version: 0x0920B046
+    \Data length: 80960               the header's length [bytes]
+    \*Scanner list ... \@Sens. Zsens: V 13.20300 nm/V
+    \*Ciao scan list ... \@Sens. DeflSens: V 27.39000      (nm/V; v5: \@Sens. Deflection)
+    \*Ciao force list
+    \Scan rate: 1.01725               ramps per second
+    \Forward vel.: 462.282            [V/s] of the Z piezo (x Zsens = m/s)
+    \Samps/line: 1024 1024            points of the approach and the retract
+    \*Ciao force image list           one per channel
+    \Data offset: 80960               where the channel's numbers start [bytes]
+    \Data length: 8192                [bytes], all curves of the channel
+    \Spring Constant: 0.1332          [N/m]
+    \@4:Image Data: S [DeflectionError] "Deflection Error"
+    \@4:Z scale: V [Sens. DeflSens] (0.0003750000 V/LSB) 2.500000 V
+    \@4:Ramp Size: V [Sens. Zsens] (0.006713765 V/LSB) 227.2211 V
+    \*File list end
+
+Each channel holds, per curve, the approach then the retract as little-endian
+integers of ``Data length / (curves x points)`` bytes (2, or 4 from version 9 on,
+whatever ``Bytes/pixel`` says); value [V] = integer x the channel's ``V/LSB``;
+deflection [m] = value x DeflSens. Both runs are indexed from the turning point
+(the piezo's extended end): the approach is reversed into time order. Z is the
+nominal ramp (``Ramp Size`` [V] x Zsens, evenly spaced), or the Z-sensor channel
+(``ZSensor``, value x ZsensSens) when recorded. Time comes from the ramp size and
+the forward/reverse velocities, else from the scan rate.
+
+The reader returns the deflection in volts with ``sensitivity`` = DeflSens and
+``spring_constant`` from the header (the user's ``meta_override`` wins).
+"""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from ..errors import FileFormatError
+from ..raw import RawCurve
+from ._meta import finalize_curve
+
+__all__ = ["load_nanoscope", "detect_nanoscope", "parse_header", "MAX_HEADER"]
+
+#: Headers longer than this are not NanoScope force files (v9 headers are ~40-90 kB).
+MAX_HEADER = 4 * 2**20
+_NUMBER = r"[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?"
+_SCALE = re.compile(rf"\[(?:Sens\.\s*)?([^\]]*)\]\s*\(({_NUMBER})\s*([^)/]*)/LSB\)\s*({_NUMBER})?")
+_PLAIN = re.compile(rf"\(({_NUMBER})\s*([^)/]*)/LSB\)\s*({_NUMBER})?")
+_ENTRY = re.compile(r"^\\@?((?:\d+:)?[^:]*):\s*(.*)$")  # \@4:Z scale: V ... -> ("4:Z scale", "V ...")
+_UNITS = {"nm": 1e-9, "um": 1e-6, "µm": 1e-6, "m": 1.0, "pm": 1e-12, "V": 1.0, "mV": 1e-3}
+
+
+def detect_nanoscope(path: Path) -> bool:
+    r"""True if the file starts with ``\*Force file list`` (a NanoScope force file)."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(64)
+    except OSError:
+        return False
+    return head.lstrip(b"\"\xef\xbb\xbf").startswith(b"\\*Force file list")
+
+
+def parse_header(data: bytes, where: str) -> list[tuple[str, dict[str, str]]]:
+    r"""Sections of the header: ``[(name, {key: value})]`` in file order (``\*Name`` opens one)."""
+    end = data.find(b"\\*File list end")
+    if end < 0:
+        raise FileFormatError(f"{where}: NanoScope header without '\\*File list end' (truncated?)")
+    if end > MAX_HEADER:
+        raise FileFormatError(f"{where}: NanoScope header longer than {MAX_HEADER} bytes; damaged file")
+    sections: list[tuple[str, dict[str, str]]] = []
+    for raw in data[:end].decode("latin-1").split("\n"):
+        line = raw.strip().strip('"').strip()
+        if not line.startswith("\\"):
+            continue
+        if line.startswith("\\*"):
+            sections.append((line[2:].strip(), {}))
+        elif sections and (m := _ENTRY.match(line)) is not None:
+            sections[-1][1].setdefault(m.group(1).strip(), m.group(2).strip())
+    if not sections or sections[0][0].lower() != "force file list":
+        raise FileFormatError(f"{where}: not a NanoScope force file (no '\\*Force file list')")
+    return sections
+
+
+def _number(text: str | None, where: str, key: str, index: int = -1) -> float:
+    nums = re.findall(_NUMBER, text or "")
+    if not nums:
+        raise FileFormatError(f"{where}: NanoScope header entry {key!r} missing or not a number ({text!r})")
+    return float(nums[index])
+
+
+def _find(sections, key: str, section: str | None = None) -> str | None:
+    for name, entries in sections:
+        if section is None or name.lower() == section.lower():
+            for k, v in entries.items():
+                if k.lower() == key.lower():
+                    return v
+    return None
+
+
+def _sens(sections, name: str) -> tuple[float, str] | None:
+    r"""``\@Sens. NAME: V 27.39 nm/V`` -> (27.39, 'nm'); unit of the numerator."""
+    text = _find(sections, f"Sens. {name}")
+    if text is None:
+        return None
+    m = re.search(rf"({_NUMBER})\s*([^\s/]*)", text.split(" ", 1)[1] if text.startswith("V ") else text)
+    if m is None:
+        return None
+    return float(m.group(1)), m.group(2)
+
+
+def _channel_scale(entries: dict[str, str], sections, where: str) -> tuple[float, float, str]:
+    """(V per LSB, sensitivity in SI per V, sensitivity name) of one channel."""
+    text = entries.get("4:Z scale") or entries.get("Z scale")
+    if text is None:
+        raise FileFormatError(f"{where}: channel without a 'Z scale' entry")
+    m = _SCALE.search(text)
+    if m is None:
+        p = _PLAIN.search(text)
+        if p is None:
+            raise FileFormatError(f"{where}: cannot read the channel scale {text!r}")
+        return float(p.group(1)) * _UNITS.get(p.group(2).strip(), 1.0), 1.0, ""
+    name = m.group(1).strip()
+    vlsb = float(m.group(2)) * _UNITS.get(m.group(3).strip(), 1.0)
+    sens = _sens(sections, name)
+    factor = sens[0] * _UNITS.get(sens[1], 1.0) if sens and sens[1] in _UNITS else (
+        sens[0] * 1e-9 if sens else 1.0)  # DeflSens is written without its unit (nm/V) in v9
+    return vlsb, factor, name
+
+
+def _channels(sections) -> list[dict[str, str]]:
+    return [entries for name, entries in sections if name.lower() == "ciao force image list"]
+
+
+def _channel_name(entries: dict[str, str]) -> str:
+    text = entries.get("4:Image Data") or entries.get("Image Data") or ""
+    m = re.search(r"\[([^\]]*)\]", text)
+    return m.group(1) if m else text.strip().strip('"')
+
+
+def load_nanoscope(path: Path, *, meta_override: Mapping[str, Any] | None = None,
+                   callback: Callable | None = None) -> list[RawCurve]:
+    """Read every force curve of a NanoScope binary force file (see module docstring)."""
+    path = Path(path)
+    where = str(path)
+    try:
+        data = path.read_bytes()
+    except OSError as exc:
+        raise FileFormatError(f"{where}: cannot read ({exc})") from None
+    sections = parse_header(data, where)
+    chans = _channels(sections)
+    if not chans:
+        raise FileFormatError(f"{where}: no '\\*Ciao force image list' (no curve data) in the header")
+    samps = _find(sections, "Samps/line", "Ciao force list") or _find(sections, "Samps/line", "Ciao force image list")
+    counts = [int(float(v)) for v in re.findall(_NUMBER, samps or "")]
+    if not counts or min(counts) < 2 or max(counts) > 10**7:
+        raise FileFormatError(f"{where}: NanoScope header 'Samps/line' missing or invalid ({samps!r})")
+    n_app, n_ret = (counts[0], counts[1]) if len(counts) >= 2 else (counts[0], counts[0])
+    defl = next((c for c in chans if "defl" in _channel_name(c).lower()), chans[0])
+    zsen = next((c for c in chans if _channel_name(c).lower() in ("zsensor", "height sensor", "heightsensor")), None)
+
+    def read(entries) -> tuple[np.ndarray, float, float]:
+        offset = int(_number(entries.get("Data offset"), where, "Data offset"))
+        length = int(_number(entries.get("Data length"), where, "Data length"))
+        per = n_app + n_ret
+        if length <= 0 or offset < 0 or offset + length > len(data):
+            raise FileFormatError(f"{where}: channel data ({length} bytes at {offset}) lies outside the file "
+                                  f"({len(data)} bytes); truncated or damaged")
+        for bpp in (4, 2):
+            if length % (per * bpp) == 0:
+                break
+        else:
+            raise FileFormatError(f"{where}: channel length {length} bytes is not a whole number of curves "
+                                  f"of {per} points")
+        ints = np.frombuffer(data, dtype=f"<i{bpp}", count=length // bpp, offset=offset).astype(float)
+        vlsb, sens, _ = _channel_scale(entries, sections, where)
+        return ints.reshape(-1, per), vlsb, sens
+
+    d_ints, d_vlsb, defl_sens = read(defl)
+    z_ints = None
+    if zsen is not None:
+        z_ints, z_vlsb, z_sens = read(zsen)
+        if z_ints.shape != d_ints.shape:
+            z_ints = None
+    meta: dict[str, Any] = {"instrument": _find(sections, "Microscope") or "Bruker NanoScope",
+                            "nanoscope_version": _find(sections, "Version") or ""}
+    k = _find(sections, "Spring Constant")
+    if k is not None and _number(k, where, "Spring Constant") > 0:
+        meta["spring_constant"] = _number(k, where, "Spring Constant")
+    sens = _sens(sections, "DeflSens") or _sens(sections, "Deflection")
+    if sens is not None and sens[0] > 0:
+        meta["sensitivity"] = sens[0] * 1e-9  # [nm/V]
+    corr = _find(sections, "Deflection Sensitivity Correction")
+    if corr is not None:
+        meta["nanoscope_deflection_sensitivity_correction"] = _number(corr, where, "Deflection Sensitivity Correction")
+    zsens = _sens(sections, "Zsens") or _sens(sections, "Zscan")
+    ramp = defl.get("4:Ramp Size") or defl.get("Ramp Size") or _find(sections, "4:Ramp Size Zsweep")
+    if zsens is None or ramp is None:
+        raise FileFormatError(f"{where}: NanoScope header lacks the Z sensitivity or the ramp size")
+    ramp_m = _number(ramp, where, "Ramp Size") * zsens[0] * 1e-9  # [V] x [nm/V]
+    if not (0 < ramp_m < 1e-3):
+        raise FileFormatError(f"{where}: ramp size {ramp_m!r} m is not plausible; damaged header")
+    fwd, rev = _find(sections, "Forward vel."), _find(sections, "Reverse vel.")
+    if fwd is not None and rev is not None and _number(fwd, where, "Forward vel.") > 0 \
+            and _number(rev, where, "Reverse vel.") > 0:
+        v_app = _number(fwd, where, "Forward vel.") * zsens[0] * 1e-9  # [V/s] x [nm/V]
+        v_ret = _number(rev, where, "Reverse vel.") * zsens[0] * 1e-9
+    else:
+        rate = _number(_find(sections, "Scan rate"), where, "Scan rate")
+        if not rate > 0:
+            raise FileFormatError(f"{where}: no velocity and no scan rate in the header")
+        v_app = v_ret = 2 * ramp_m * rate
+    meta.update(velocity=v_app, retract_velocity=v_ret, sample_rate=v_app * n_app / ramp_m)
+    dt_app, dt_ret = ramp_m / (v_app * n_app), ramp_m / (v_ret * n_ret)
+    time = np.concatenate([dt_app * np.arange(n_app), dt_app * n_app + dt_ret * np.arange(n_ret)])
+    z_app = np.linspace(0.0, ramp_m, n_app, endpoint=False) + ramp_m / n_app  # towards the sample
+    z_ret = ramp_m - np.arange(n_ret) * (ramp_m / n_ret)
+    seg = np.concatenate([np.zeros(n_app, np.int8), np.ones(n_ret, np.int8)])
+    meta.update(dict(meta_override or {}))
+    meta.update(source_file=where, reader="bruker-nanoscope", format="Bruker NanoScope binary force file",
+                position_sign=1.0)
+    out = []
+    for i, row in enumerate(d_ints):
+        volts = row * d_vlsb
+        signal = np.concatenate([volts[:n_app][::-1], volts[n_app:]])  # both runs start at the turning point
+        zm = None
+        if z_ints is not None:
+            zr = z_ints[i] * z_vlsb * z_sens
+            zm = np.concatenate([zr[:n_app][::-1], zr[n_app:]])
+            if zm[n_app - 1] < zm[0]:
+                zm = -zm
+        curve = RawCurve(time=time, piezo_nominal=np.concatenate([z_app, z_ret]), piezo_measured=zm,
+                         deflection_signal=signal, segment=seg,
+                         metadata={**meta, "curve_index": i} if len(d_ints) > 1 else dict(meta),
+                         deflection_unit="V")
+        out.append(finalize_curve(curve, where))
+        if callback is not None:
+            callback((i + 1) / len(d_ints))
+    return out

@@ -1,0 +1,132 @@
+"""Bruker NanoScope binary force files: the shared real file against its own header, and
+synthetic files written here with known content (versions 5 and 9 layouts)."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from afmforce.errors import FileFormatError
+from afmforce.io import find_format, is_supported, load
+from afmforce.io.nanoscope import parse_header
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+REAL = DATA / "bruker-nanoscope_PyFMlab_Egel4_00025.spm"
+
+
+def test_real_v9_file_matches_its_header():
+    """Header: Spring Constant 0.1332 N/m, DeflSens 27.39 nm/V, Samps/line 1024 1024, ramp
+    227.2211 V x Zsens 13.203 nm/V = 3.000 um, Forward vel. 462.282 V/s x 13.203 nm/V, Effective
+    BW 2083.33 Hz (the sample rate), relative trigger at 1.2 V (the approach rises about that much
+    above its baseline); data: 2048 little-endian int32 at offset 80960, x 0.000375 V/LSB."""
+    c = load(REAL)[0]
+    assert find_format(REAL).identifier == "bruker-nanoscope"
+    md = c.metadata
+    assert md["spring_constant"] == 0.1332 and md["sensitivity"] == pytest.approx(27.39e-9)
+    assert c.deflection_unit == "V" and len(c) == 2048
+    assert (c.approach.sum(), c.retract.sum()) == (1024, 1024)
+    assert md["sample_rate"] == pytest.approx(2083.33, rel=1e-5)
+    assert md["velocity"] == pytest.approx(462.282 * 13.203e-9, rel=1e-6)
+    assert c.piezo_nominal.max() - c.piezo_nominal.min() == pytest.approx(227.2211 * 13.203e-9, rel=2e-3)
+    raw = np.frombuffer(REAL.read_bytes(), "<i4", count=2048, offset=80960) * 0.000375
+    np.testing.assert_allclose(c.deflection_signal[c.approach], raw[:1024][::-1], rtol=1e-12)
+    np.testing.assert_allclose(c.deflection_signal[c.retract], raw[1024:], rtol=1e-12)
+    a = c.deflection_signal[c.approach]
+    assert a.max() - np.median(a[:200]) == pytest.approx(1.2, rel=0.05)  # relative trigger threshold
+    assert np.all(np.diff(c.time) > 0)
+
+
+def _write(path: Path, app: np.ndarray, ret: np.ndarray, *, version: str = "0x09200000", bpp: int = 4,
+           quoted: bool = False, eol: str = "\r\n", old_keys: bool = False, zsensor=None) -> None:
+    """A NanoScope force file: header sections and each channel's int data after the header."""
+    n_app, n_ret = len(app), len(ret)
+    sens_key = "Deflection" if old_keys else "DeflSens"
+    channels = [("DeflectionError", sens_key, 0.000375, np.concatenate([app, ret]))]
+    if zsensor is not None:
+        channels.append(("ZSensor", "ZsensSens", 0.0001, zsensor))
+    lines = ["\\*Force file list", f"\\Version: {version}", "\\Data length: HEADER",
+             "\\*Scanner list", "\\@Sens. Zsens: V 10.00000 nm/V", "\\*Ciao scan list",
+             f"\\@Sens. {sens_key}: V 50.00000 {'nm/V' if old_keys else ''}", "\\@Sens. ZsensSens: V 900.0 nm/V",
+             "\\*Ciao force list", "\\Scan rate: 0.25", "\\Forward vel.: 50", "\\Reverse vel.: 100",
+             f"\\Samps/line: {n_app} {n_ret}" if not old_keys else f"\\Samps/line: {n_app}"]
+    blocks = []
+    for name, sens, vlsb, ints in channels:
+        blocks.append(["\\*Ciao force image list", "\\Data offset: OFFSET", f"\\Data length: {ints.size * bpp}",
+                       "\\Bytes/pixel: 2", ("\\Spring constant: 0.2" if old_keys else "\\Spring Constant: 0.2"),
+                       f'\\@4:Image Data: S [{name}] "{name}"',
+                       f"\\@4:Z scale: V [Sens. {sens}] ({vlsb:.10f} V/LSB) 2.5 V",
+                       "\\@4:Ramp Size: V [Sens. Zsens] (0.006713765 V/LSB) 100.0 V"])
+    tail = ["\\*File list end"]
+
+    def text(offsets):
+        out = list(lines)
+        for block, off in zip(blocks, offsets):
+            out += [ln.replace("OFFSET", str(off)) for ln in block]
+        out += tail
+        out = [f'"{ln}"' if quoted else ln for ln in out]
+        return (eol.join(out) + eol).replace("HEADER", "0000000")
+
+    head_len = len(text([0] * len(blocks)).encode("latin-1")) + 32 * len(blocks)
+    body, offsets = b"", []
+    for _, _, _, ints in channels:
+        offsets.append(head_len + len(body))
+        body += np.asarray(ints, dtype=f"<i{bpp}").tobytes()
+    head = text(offsets).encode("latin-1")
+    head += b"\0" * (head_len - len(head))
+    path.write_bytes(head + body)
+
+
+@pytest.mark.parametrize("variant", [dict(), dict(version="0x05120000", bpp=2, old_keys=True),
+                                     dict(quoted=True, eol="\r\r\n"), dict(bpp=2)])
+def test_synthetic_file_with_known_content(tmp_path, variant):
+    n = 200
+    rng = np.random.default_rng(4)
+    app = rng.integers(-3000, 3000, n)  # stored from the turning point back to the start
+    ret = rng.integers(-3000, 3000, n)
+    path = tmp_path / "curve.001"
+    _write(path, app, ret, **variant)
+    assert is_supported(path) and find_format(path).identifier == "bruker-nanoscope"
+    c = load(path)[0]
+    np.testing.assert_allclose(c.deflection_signal[c.approach], app[::-1] * 0.000375, rtol=1e-12)
+    np.testing.assert_allclose(c.deflection_signal[c.retract], ret * 0.000375, rtol=1e-12)
+    assert c.metadata["spring_constant"] == 0.2 and c.metadata["sensitivity"] == pytest.approx(50e-9)
+    ramp = 100.0 * 10e-9  # 100 V x 10 nm/V
+    assert c.metadata["velocity"] == pytest.approx(50 * 10e-9)
+    assert c.metadata["retract_velocity"] == pytest.approx(100 * 10e-9)
+    t = c.time
+    assert t[c.approach][-1] - t[0] == pytest.approx(ramp / 0.5e-6 * (n - 1) / n)  # 2 s over n points
+    assert t[-1] - t[c.retract][0] == pytest.approx(ramp / 1e-6 * (n - 1) / n)
+    z = c.piezo_nominal
+    assert z[c.approach][-1] == pytest.approx(ramp) and z[c.approach][0] < z[c.approach][-1]
+
+
+def test_zsensor_channel_is_the_measured_position(tmp_path):
+    n = 100
+    app, ret = np.arange(n)[::-1] * 3, np.arange(n)[::-1] * 3
+    zs = np.concatenate([np.arange(n)[::-1], np.arange(n)[::-1]]) * 50  # from the turning point
+    path = tmp_path / "curve.spm"
+    _write(path, app, ret, zsensor=zs)
+    c = load(path)[0]
+    zm = c.piezo_measured
+    assert zm is not None
+    np.testing.assert_allclose(np.abs(zm[c.approach]), np.arange(n) * 50 * 0.0001 * 900e-9, rtol=1e-9)
+    assert zm[c.approach][-1] > zm[c.approach][0]
+
+
+def test_damaged_files_are_named(tmp_path):
+    n = 50
+    path = tmp_path / "c.spm"
+    _write(path, np.arange(n), np.arange(n))
+    data = path.read_bytes()
+    cut = tmp_path / "cut.spm"
+    cut.write_bytes(data[:-10])
+    with pytest.raises(FileFormatError, match="cut.spm.*outside the file"):
+        load(cut)
+    nohead = tmp_path / "nohead.spm"
+    nohead.write_bytes(data[: data.find(b"\\*File list end")])
+    with pytest.raises(FileFormatError, match="nohead.spm"):
+        load(nohead)
+    with pytest.raises(FileFormatError, match="not a NanoScope force file"):
+        parse_header(b"\\*File list\r\n\\*File list end\r\n", "x")

@@ -1,0 +1,170 @@
+"""Segments taken by their type, and the user's metadata reaching every reader (issues 13.5, 13.6, 14).
+
+Expected values come from the files themselves (segment headers read with zipfile, CSV
+columns read with numpy), from shared/data/real/README.md, or from afmformats (an
+independent reader), never from our own output.
+"""
+
+from __future__ import annotations
+
+import itertools
+import json
+import zipfile
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from afmforce.errors import MissingMetadataError, ParameterError
+from afmforce.io import load, require_metadata
+from afmforce.io._meta import segment_code
+from afmforce.io.jpk_zip import parse_properties
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+REAL = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real"
+OVERRIDES = json.loads((DATA / "meta_override.json").read_text())
+
+
+def _runs(segment: np.ndarray) -> list[tuple[int, int]]:
+    return [(int(k), len(list(g))) for k, g in itertools.groupby(segment)]
+
+
+def _real(name: str) -> Path:
+    path = REAL / name
+    if not path.is_file():
+        pytest.skip(f"{path} not available (shared data folder beside the repository)")
+    return path
+
+
+@pytest.mark.parametrize("style,code", [("extend", 0), ("Retract", 1), ("pause", 2), ("dwell", 2),
+                                        ("modulation", 2), ("approach", 0)])
+def test_segment_words(style, code):
+    assert segment_code(style) == code
+
+
+def test_stress_relaxation_segments_by_type():
+    """prep pause (256), extend (2048), dwell pause (7680), retract (1951): file order 0..3 from
+    afmformats becomes dwell, approach, dwell, retract; sizes and styles from the segment headers."""
+    path = DATA / "afmformats_jpk-sr_cell1-0008.jpk-force"
+    with zipfile.ZipFile(path) as arc:
+        heads = [parse_properties(arc.read(f"segments/{i}/segment-header.properties").decode()) for i in range(4)]
+    styles = [h["force-segment-header.settings.style"] for h in heads]
+    sizes = [int(h["force-segment-header.num-points"]) for h in heads]
+    assert styles == ["pause", "extend", "pause", "retract"]
+    c = load(path)[0]
+    assert _runs(c.segment) == list(zip([2, 0, 2, 1], sizes))
+    assert c.metadata["segment_types"] == styles
+    assert c.metadata["spring_constant"] == pytest.approx(1.0677)
+    assert c.metadata["sensitivity"] == pytest.approx(110.28e-9)
+    assert c.metadata["sample_rate"] == pytest.approx(2048.0)  # the approach's rate, not the prep's
+    z = c.piezo_measured if c.piezo_measured is not None else c.piezo_nominal
+    app = np.flatnonzero(c.approach)
+    assert z[app[-1]] > z[app[0]]
+    assert np.all(np.diff(c.time) > 0)
+
+
+def test_cellhesion_pause_segments_via_jpk_zip():
+    """README: k = 0.0233316 N/m, 65.363 nm/V, 6 kHz; 60000 extend, 30000 pause, 60000 retract,
+    and a 2-point pause-at-start stored last, put first in time."""
+    c = load(_real("jpkfile_force-save-2016.06.15-13.17.08.jpk-force"))[0]
+    assert c.metadata["reader"] == "jpk-zip" and c.deflection_unit == "V"
+    assert _runs(c.segment) == [(2, 2), (0, 60000), (2, 30000), (1, 60000)]
+    assert c.metadata["segment_types"][0] == "pause-at-start-cellhesion200"
+    assert c.metadata["spring_constant"] == pytest.approx(0.0233316, rel=1e-5)
+    assert c.metadata["sensitivity"] == pytest.approx(65.363e-9, rel=1e-4)
+    assert c.metadata["sample_rate"] == pytest.approx(6000.0)
+    assert np.all(np.diff(c.time) > 0)
+
+
+def test_jpk_map_grid_positions():
+    """The 2x2 extract of a 10x10 JPK map: grid indices (0,0), (9,0), (9,9), (0,9), k and sensitivity
+    from README (0.015482 N/m, 64.26 nm/V)."""
+    path = _real("afmformats_jpk-fd_map2x2_extracted.jpk-force-map")
+    curves = load(path)
+    with zipfile.ZipFile(path) as arc:
+        sizes = [[int(parse_properties(arc.read(f"index/{i}/segments/{j}/segment-header.properties").decode())
+                      ["force-segment-header.num-points"]) for j in (0, 1)] for i in range(4)]
+    assert [(c.metadata["map_x"], c.metadata["map_y"]) for c in curves] == [(0, 0), (9, 0), (9, 9), (0, 9)]
+    assert {(c.metadata["map_nx"], c.metadata["map_ny"]) for c in curves} == {(10, 10)}
+    for c, (n_ext, n_ret) in zip(curves, sizes):
+        assert c.metadata["spring_constant"] == pytest.approx(0.015482, rel=1e-4)
+        assert c.metadata["sensitivity"] == pytest.approx(64.26e-9, rel=1e-4)
+        assert _runs(c.segment) == [(0, n_ext), (1, n_ret)]
+
+
+def test_jpk_without_spring_constant_uses_the_flag():
+    """afmformats with meta_override k = 12 N/m gives force[0] = -5.2617e-7 N (README); so must we.
+    Without k the curve is read in volts and asking for k names --spring-constant."""
+    path = _real("afmformats_jpk-fd_single-modified_2023.jpk-force")
+    volts = load(path)[0]
+    assert volts.deflection_unit == "V" and "spring_constant" not in volts.metadata
+    assert volts.metadata["sensitivity"] == pytest.approx(89.32e-9, rel=1e-4)
+    with pytest.raises(MissingMetadataError, match="--spring-constant") as err:
+        load(path, require=("spring_constant", "sensitivity"))
+    assert str(path) in str(err.value) and "--sensitivity" not in str(err.value)
+    c = load(path, meta_override={"spring_constant": 12.0})[0]
+    assert c.deflection_unit == "N" and c.metadata["spring_constant"] == 12.0
+    assert c.deflection_signal[0] == pytest.approx(-5.2617e-7, rel=1e-4)
+    # independent: the volts times the file's sensitivity times the user's k
+    np.testing.assert_allclose(c.deflection_signal, volts.deflection_signal * volts.metadata["sensitivity"] * 12,
+                               rtol=1e-9)
+
+
+def test_workshop_volts_csv_needs_both_flags_and_then_loads():
+    path = DATA / "afmformats_afm-workshop-fd_single_2018-08-01.csv"
+    with pytest.raises(MissingMetadataError, match="--spring-constant and --sensitivity") as err:
+        load(path)
+    assert str(path) in str(err.value) and "\n" not in str(err.value)
+    c = load(path, meta_override=OVERRIDES[path.name])[0]
+    rows = np.array([[float(v) for v in ln.split(",")] for ln in path.read_text().splitlines()
+                     if ln[:1].isdigit()])
+    assert c.deflection_unit == "V"
+    np.testing.assert_allclose(c.deflection_signal[c.approach], rows[:, 1], rtol=1e-9)  # Extend T-B(V)
+    z = c.piezo_nominal[c.approach]  # Z-sense [nm], oriented to increase on the approach
+    np.testing.assert_allclose(np.abs(z), rows[:, 0] * 1e-9, rtol=1e-9)
+    assert z[-1] > z[0]
+    assert c.metadata["spring_constant"] == 0.1 and c.metadata["sensitivity"] == 50e-9
+
+
+def test_ibw_override_rescales_the_force():
+    """afmformats' Igor reader ignores meta_override: we rescale (force = k x volts x InvOLS)."""
+    path = DATA / "asylum-mfp3d_SiN-tip_air.ibw"
+    a = load(path)[0]
+    b = load(path, meta_override={"spring_constant": 2.0, "sensitivity": 50e-9})[0]
+    np.testing.assert_allclose(b.deflection_signal, a.deflection_signal * (2.0 / 1.1841) * (50 / 44.99), rtol=1e-9)
+    assert b.metadata["spring_constant"] == 2.0 and b.metadata["sensitivity"] == 50e-9
+
+
+def test_jpk_override_recomputes_the_force():
+    """afmformats recomputes a JPK force from volts with the user's k and sensitivity."""
+    path = DATA / "jpk_cellhesion_spot3.jpk-force"
+    volts = load(path, format="jpk-zip")[0]
+    c = load(path, meta_override={"spring_constant": 0.1, "sensitivity": 80e-9})[0]
+    np.testing.assert_allclose(c.deflection_signal, volts.deflection_signal * 0.1 * 80e-9, rtol=1e-9)
+
+
+@pytest.mark.parametrize("name", ["bruker-nanoscope_synthetic.txt", "jpk_calibration-curve_raw-volts.jpk-force"])
+def test_override_reaches_our_own_readers(name):
+    c = load(DATA / name, meta_override={"spring_constant": 3.0, "sensitivity": 7e-9})[0]
+    assert c.metadata["spring_constant"] == 3.0 and c.metadata["sensitivity"] == 7e-9
+
+
+def test_require_metadata_rules(tmp_path):
+    c = load(DATA / "jpk_calibration-curve_raw-volts.jpk-force")[0]  # volts, neither k nor sensitivity
+    with pytest.raises(MissingMetadataError) as err:
+        require_metadata(c)
+    assert err.value.flags == ("--spring-constant", "--sensitivity")
+    with pytest.raises(ParameterError, match="unknown metadata"):
+        require_metadata(c, ("colour",))
+    forces = load(DATA / "afm-workshop_single.csv")[0]  # force in N: needs neither
+    require_metadata(forces)
+
+
+def test_cli_names_the_flag_and_exits_2(capsys):
+    from afmforce.cli.main import main
+
+    code = main(["analyze", str(DATA / "afmformats_afm-workshop-fd_single_2018-08-01.csv"), "--json"])
+    out = capsys.readouterr()
+    assert "--spring-constant" in out.out + out.err
+    assert "Traceback" not in out.err
+    assert code != 0
