@@ -74,7 +74,7 @@ STEPS: dict[str, Step] = {s.identifier: s for s in (
          {"source": "auto", "run": "approach"}, ("compliance",), "section 3.1; eq 15"),
     Step("kind", "Contact kind (hard: jump-in or straight line; soft: curved) and a soft contact point",
          S.kind, {"nsigma": 5.0, "min_stiffness": 0.7, "max_curvature": 1.6, "method": "hertz_local",
-                  "force_fraction": 0.6, "window": 0.15}, ("calibration",),
+                  "force_fraction": 0.55, "window": 0.15}, ("calibration",),
          "afmforce (Hertz term as in nanite's fit_line_polynomial piecewise model)"),
     Step("shift", "Inward/outward shift overlaying the compliance lines", S.shift,
          {"apply": True}, ("kind",), "section 3.2, Fig 9; Fig 7C"),

@@ -15,7 +15,7 @@ Contact kinds (:func:`classify_contact`):
 
 Soft contact point (:func:`soft_contact_point`, method ``"hertz_local"``): the
 approach up to its largest deflection, cut where the deflection reaches
-``force_fraction`` of its range (the start of the indentation, where the shape
+``force_fraction`` (0.55) of its range (the start of the indentation, where the shape
 of the indenter matters least), block-averaged to at most ``max_points``
 points, is fitted by a baseline line plus a Hertz term,
 ``d = a + b z + c (z - z_c)_+^{3/2}`` (c >= 0), for every ``z_c`` on a grid of
@@ -72,8 +72,24 @@ def _block(x: np.ndarray, n: int) -> np.ndarray:
     return x[:k * m].reshape(k, m).mean(1)
 
 
+def _fit_grid(x: np.ndarray, y: np.ndarray, cands: np.ndarray, exponent: float) -> tuple[np.ndarray, np.ndarray]:
+    """Least squares of ``y = a + b x + c (x - x_c)_+^p`` for each candidate ``x_c``: coefficients, residual sums."""
+    g = np.clip(x[None, :] - cands[:, None], 0.0, None) ** exponent
+    n, sx, sxx, sy, sxy = x.size, x.sum(), (x * x).sum(), y.sum(), (x * y).sum()
+    sg, sgg, sxg, syg = g.sum(1), (g * g).sum(1), (g * x).sum(1), (g * y).sum(1)
+    m = np.empty((cands.size, 3, 3))
+    m[:, 0, 0], m[:, 0, 1], m[:, 1, 0], m[:, 1, 1] = n, sx, sx, sxx
+    m[:, 0, 2] = m[:, 2, 0] = sg
+    m[:, 1, 2] = m[:, 2, 1] = sxg
+    m[:, 2, 2] = sgg
+    v = np.stack([np.full(cands.size, sy), np.full(cands.size, sxy), syg], -1)
+    coef = np.linalg.solve(m + 1e-12 * np.eye(3), v[..., None])[..., 0]
+    rss = (y * y).sum() - (coef * v).sum(-1)
+    return coef, np.where(coef[:, 2] > 0, rss, np.inf)
+
+
 def soft_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, *, exponent: float = 1.5,
-                       force_fraction: float = 0.6, window: float = 0.15, grid: int = 121,
+                       force_fraction: float = 0.55, window: float = 0.15, grid: int = 121,
                        max_points: int = 500) -> SoftContactPoint:
     """Contact point of the approach run ``index`` (time order) by the Hertz-local method.
 
@@ -114,18 +130,11 @@ def soft_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, *, expon
     straight = np.linspace(0.0, 1.0, x.size)
     x_init = float(x[int(np.argmin(y - straight))])
     cands = np.linspace(max(x_init - window, 0.0), min(x_init + window, 1.0), grid)
-    g = np.clip(x[None, :] - cands[:, None], 0.0, None) ** exponent
-    n, sx, sxx, sy, sxy = x.size, x.sum(), (x * x).sum(), y.sum(), (x * y).sum()
-    sg, sgg, sxg, syg = g.sum(1), (g * g).sum(1), (g * x).sum(1), (g * y).sum(1)
-    m = np.empty((cands.size, 3, 3))
-    m[:, 0, 0], m[:, 0, 1], m[:, 1, 0], m[:, 1, 1] = n, sx, sx, sxx
-    m[:, 0, 2] = m[:, 2, 0] = sg
-    m[:, 1, 2] = m[:, 2, 1] = sxg
-    m[:, 2, 2] = sgg
-    v = np.stack([np.full(cands.size, sy), np.full(cands.size, sxy), syg], -1)
-    coef = np.linalg.solve(m + 1e-12 * np.eye(3), v[..., None])[..., 0]
-    rss = (y * y).sum() - (coef * v).sum(-1)
-    rss = np.where(coef[:, 2] > 0, rss, np.inf)
+    coef, rss = _fit_grid(x, y, cands, exponent)
+    j = int(np.argmin(rss))
+    step = cands[1] - cands[0]  # refine: a finer grid over the neighbouring cells
+    cands = np.linspace(max(cands[j] - step, 0.0), min(cands[j] + step, 1.0), 41)
+    coef, rss = _fit_grid(x, y, cands, exponent)
     j = int(np.argmin(rss))
     zc = float(zb[0] + cands[j] * span)
     k = int(np.searchsorted(zr, zc)) if np.all(np.diff(zr) >= 0) else int(np.argmin(np.abs(zr - zc)))
@@ -171,9 +180,12 @@ def _slope(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.polyfit(x - x.mean(), y, 1)[0])
 
 
-def curvature_ratio(z: np.ndarray, d: np.ndarray, contact: np.ndarray) -> float:
-    """Slope of the last third of a contact region over the slope of its first third [-]."""
-    if contact.size < 9:
+def curvature_ratio(z: np.ndarray, d: np.ndarray, contact: np.ndarray, min_points: int = 30) -> float:
+    """Slope of the last third of a contact region over the slope of its first third [-].
+
+    NaN with fewer than ``min_points`` contact samples (too few to see a curvature).
+    """
+    if contact.size < min_points:
         return math.nan
     order = contact[np.argsort(z[contact], kind="stable")]
     n3 = order.size // 3
@@ -212,5 +224,9 @@ def classify_contact(*, jump_significance: float, stiffness_ratio: float, curvat
         return ContactKind("soft", "no jump into contact; " + "; ".join(words), jump_significance,
                            stiffness_ratio, curvature)
     s = f", deflection per position {stiffness_ratio:.3g}" if math.isfinite(stiffness_ratio) else ""
+    if not math.isfinite(curvature):
+        return ContactKind("hard", f"no jump into contact; too few contact samples to see a curvature{s}: "
+                           "taken as a hard contact (a calibration curve)", jump_significance, stiffness_ratio,
+                           curvature)
     return ContactKind("hard", f"no jump into contact, but a straight contact line (slope ratio late/early "
                        f"{curvature:.3g}{s})", jump_significance, stiffness_ratio, curvature)

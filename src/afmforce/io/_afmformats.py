@@ -232,7 +232,28 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
         if np.all(seg == 0):
             seg = _ibw_segments(path, z)
         force = np.asarray(dd["force"], dtype=float) * _rescale(path, dd.metadata, meta_override)
-        out.append(_curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg, signal=force))
+        curve = _curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg, signal=force)
+        thermal = _ibw_thermal(path)  # the user's values (already in the metadata) win
+        out.append(dataclasses.replace(curve, metadata={**thermal, **dict(curve.metadata)}))
+    return out
+
+
+def _ibw_thermal(path: Path) -> dict[str, float]:
+    """The wave note's thermal tune: ``ThermalFrequency`` [Hz] -> ``resonance_frequency``, ``ThermalQ`` -> ``quality_factor``."""
+    out: dict[str, float] = {}
+    try:
+        from igor2 import binarywave
+
+        note = binarywave.load(path)["wave"]["note"]
+        note = note.decode("latin-1") if isinstance(note, bytes) else str(note)
+        for line in note.replace("\r", "\n").split("\n"):
+            key, sep, value = line.partition(":")
+            if sep and key.strip() in ("ThermalFrequency", "ThermalQ"):
+                v = float(value.strip())
+                if np.isfinite(v) and v > 0:
+                    out["resonance_frequency" if key.strip() == "ThermalFrequency" else "quality_factor"] = v
+    except Exception:  # the note is optional
+        pass
     return out
 
 

@@ -104,18 +104,12 @@ def _normalise(frame, extra: tuple[str, ...] = ()):
     return frame
 
 
-def _extra(result: BatchResult) -> tuple[str, ...]:
-    for frame in result.iter_tables():
-        return ("json",) if "json" in frame.columns else ()
-    return ()
-
-
 def summary_table(result: BatchResult, *, with_json: bool = False):
     """All summary rows of a batch in item order (pandas DataFrame; the ``json``
     column only with ``with_json``)."""
     import pandas as pd
 
-    extra = _extra(result) if with_json else ()
+    extra = ("json",) if with_json else ()  # present even when the first chunk failed (no rows)
     frames = [_normalise(f, extra) for f in result.iter_tables()]
     if not frames:
         return _normalise(pd.DataFrame(), extra)
