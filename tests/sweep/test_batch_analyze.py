@@ -119,7 +119,7 @@ def test_serial_and_dask_give_identical_tables_with_the_static_pull_off(map_file
     assert t["error"].isna().all() and list(zip(t["map_x"], t["map_y"])) == POSITIONS
     radius = np.array([_radius(x, y) for x, y in POSITIONS])
     np.testing.assert_allclose(t["pull_off_force"], forces.max_attraction_force(radius), rtol=0.02)  # eq 2
-    np.testing.assert_allclose(t["calibration_factor"], SENSITIVITY, rtol=0.01)
+    np.testing.assert_allclose(t["sensitivity_fit"], SENSITIVITY, rtol=0.01)
     assert list(t["name"]) == [f"map.h5#{i}" for i in range(14)]
 
 
@@ -205,7 +205,7 @@ def test_cli_batch_resume_outputs_and_exit_codes(map_file, serial_table, tmp_pat
     broken.write_bytes(b"not an igor wave")
     out = tmp_path / "out"
     argv = ["analyze", str(map_file), str(broken), "--out", str(out), "--serial", "--chunk-size", "4",
-            "--steps", "jumps", "--map-quantity", "adhesion", "--map-quantity", "calibration_factor"]
+            "--steps", "jumps", "--map-quantity", "adhesion", "--map-quantity", "sensitivity_fit"]
     code, text, err = _run(argv, capsys)
     assert code == 1 and f"failed: {broken}" in err and "1 of 15" in err
     assert "4 of 4 chunks run" in text
@@ -216,7 +216,7 @@ def test_cli_batch_resume_outputs_and_exit_codes(map_file, serial_table, tmp_pat
     table = pd.read_parquet(folder / "summary.parquet")
     assert json.loads(pq.read_schema(folder / "summary.parquet").metadata[b"afmforce.units"])["pull_off_force"] == "N"
     np.testing.assert_array_equal(table["pull_off_force"].to_numpy()[:14], serial_table["pull_off_force"])
-    assert {p.name for p in folder.glob("*.png")} == {"map.h5.adhesion.png", "map.h5.calibration_factor.png"}
+    assert {p.name for p in folder.glob("*.png")} == {"map.h5.adhesion.png", "map.h5.sensitivity_fit.png"}
     assert "broken.ibw" in (folder / "errors.csv").read_text()
     # rerun: every chunk is stored; remove one and only that one runs again
     code, text, _ = _run(argv, capsys)

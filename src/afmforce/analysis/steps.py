@@ -489,8 +489,12 @@ def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
             if not run.has_compliance:
                 continue
             idx = run.index[run.compliance & ~run.saturated]
-            c = curvature_ratio(st.z, st.signal, idx)
-            if math.isfinite(c) and not (1 / max_curvature <= c <= max_curvature):
+            c = curvature_ratio(st.z, st.signal, idx, min_points=12)
+            if not math.isfinite(c):
+                why = (f"not assessed: the {run.kind} compliance region has {idx.size} samples, too few to tell "
+                       "a straight line from a curved one")
+                break
+            if not (1 / max_curvature <= c <= max_curvature):
                 why = (f"not assessed: the {run.kind} compliance line is not straight (late/early slope ratio "
                        f"{c:.3g}, outside {1 / max_curvature:.3g}-{max_curvature:.3g})")
                 break
