@@ -34,7 +34,7 @@ from afmforce.sweep.summary import _grid
 NX, NY = 5, 3
 EMPTY = (2, 1)  # grid point without a curve
 SENSITIVITY = 50e-9  # static_curve's default [m/V]
-STEPS = ("jumps",)  # contact, drift, compliance, calibration, zero, force, jumps
+STEPS = ("jumps", "adhesion")  # contact, drift, compliance, calibration, zero, force, jumps
 
 
 def _radius(x: int, y: int) -> float:
@@ -158,12 +158,14 @@ def test_bad_file_and_bad_curve_are_reported_while_the_others_finish(tmp_path):
     assert [r.label for r in refs] == [str(files[0])] + [f"{files[1]}#{i}" for i in range(3)] + [str(files[2])]
     result = analyze_files(refs, CurveAnalysis(steps=STEPS), executor="serial", chunk_size=2, store=tmp_path / "s")
     failed = dict(failures(result))
-    assert set(failed) == {str(files[0]), f"{files[1]}#1"}
-    assert "Igor" in failed[str(files[0])] and "no contact region" in failed[f"{files[1]}#1"]
+    assert set(failed) == {str(files[0])}  # the flat curve is a result: contact kind "none" (issue 13)
+    assert "Igor" in failed[str(files[0])]
     t = summary_table(result)
     ok = t[t["error"].isna()]
-    assert list(ok["name"]) == ["m.h5#0", "m.h5#2", "single.h5"]
-    np.testing.assert_allclose(ok["pull_off_force"], forces.max_attraction_force(100e-9), rtol=0.02)
+    assert list(ok["name"]) == ["m.h5#0", "m.h5#1", "m.h5#2", "single.h5"]
+    assert list(ok["contact_kind"]) == ["hard", "none", "hard", "hard"]
+    hard = ok[ok["contact_kind"] == "hard"]
+    np.testing.assert_allclose(hard["pull_off_force"], forces.max_attraction_force(100e-9), rtol=0.02)
     paths = write_summary(result, tmp_path / "out")
     errors = pd.read_csv(paths["errors"])
     assert set(errors["source"]) == set(failed)
