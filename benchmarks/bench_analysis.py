@@ -111,7 +111,7 @@ def main(argv=None) -> int:
     truth = base.truth
     ok_ji = np.mean(np.abs(res.jump_in_index - truth["jump_in_index"]) <= 1)
     ok_po = np.mean(np.abs(res.pull_off_index - truth["pull_off_index"]) <= 1)
-    cal = np.median(np.abs(res.calibration_factor / SENSITIVITY - 1))
+    cal = np.median(np.abs(res.sensitivity / SENSITIVITY - 1))
     print(f"  accuracy: jump-in within one sample {ok_ji:.1%}, pull-off {ok_po:.1%}, "
           f"median calibration error {cal:.2%}")
     best_wall = max(r[0] for r in rates.values())

@@ -42,7 +42,7 @@ def test_registry_records_are_complete_and_ordered():
 
 
 def test_requirements_are_added_in_order():
-    assert resolve_steps(["zero"]) == ["contact", "drift", "compliance", "calibration", "zero"]
+    assert resolve_steps(["zero"]) == ["contact", "drift", "compliance", "calibration", "kind", "zero"]
     with pytest.raises(ParameterError, match="unknown analysis step"):
         resolve_steps(["nope"])
 
@@ -125,8 +125,8 @@ def test_flat_curve(curve):
 def test_no_contact_region(curve):
     rng = np.random.default_rng(0)
     noise_only = 0.3 + 1e-3 * rng.standard_normal(len(curve))
-    with pytest.raises(AnalysisError, match="no contact region"):
-        analyze(_replace(curve, deflection_signal=noise_only))
+    res = analyze(_replace(curve, deflection_signal=noise_only))  # issue 13: a kind, not a failure
+    assert res.contact_kind == "none" and "no contact reached" in res.verdict and res.steps_run == ("contact",)
 
 
 def test_too_short(curve):
@@ -144,7 +144,7 @@ def test_saturated_photodiode_is_reported_not_fatal():
     res = analyze(_replace(c, deflection_signal=s))
     assert any("saturated" in w for w in res.warnings)
     assert res.details["jumps"]["pull_off"].saturated
-    assert res.calibration_factor_fit == pytest.approx(c.truth["sensitivity"], rel=0.01)
+    assert res.sensitivity_fit == pytest.approx(c.truth["sensitivity"], rel=0.01)
 
 
 # --- real instrument files ----------------------------------------------------------------------
@@ -153,7 +153,9 @@ def test_every_real_file_analyses(path):
     curves = load(path, meta_override=json.loads((DATA / "meta_override.json").read_text()).get(path.name))
     res = analyze(curves[0])
     assert res.steps_run == DEFAULT_STEPS
-    assert np.isfinite(res.calibration_factor) and np.isfinite(res.separation).all()
+    assert (np.isfinite(res.sensitivity) or np.isfinite(res.sensitivity_fit) or res.deflection_unit == "N")
+    assert np.isfinite(res.separation).all()
+    assert res.contact_kind in ("hard", "soft") and not res.adhesion_force > 0
     json.loads(res.to_json())
 
 
@@ -182,6 +184,6 @@ def test_jpk_calibration_curve_gives_an_invols():
     assert res.details["calibration"].source == "fit" and res.deflection_unit == "V"
     app = np.flatnonzero(c.segment == 0)[-5:]
     slope = np.polyfit(c.piezo_measured[app], c.deflection_signal[app], 1)[0]
-    assert res.calibration_factor == pytest.approx(1 / slope, rel=0.25)
-    assert 1e-7 < res.calibration_factor < 5e-6  # m/V, the range of real optical levers
+    assert res.sensitivity_fit == pytest.approx(1 / slope, rel=0.25) and np.isnan(res.sensitivity)
+    assert 1e-7 < res.sensitivity_fit < 5e-6  # m/V, the range of real optical levers
     assert np.isnan(res.spring_constant) and any("spring constant" in w for w in res.warnings)

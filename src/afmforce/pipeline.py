@@ -20,7 +20,7 @@ from typing import Any, Callable, Mapping, Sequence
 
 from .analysis import steps as S
 from .analysis.result import AnalysisResult
-from .analysis.state import State, prepare
+from .analysis.state import NoContact, State, prepare
 from .constants import HAMAKER, Z0
 from .errors import ParameterError
 from .raw import RawCurve
@@ -70,12 +70,16 @@ STEPS: dict[str, Step] = {s.identifier: s for s in (
          "section 3.1, Fig 7A; spec section 6"),
     Step("compliance", "Constant-compliance lines (robust fit)", S.compliance, {}, ("drift",),
          "section 3.1"),
-    Step("calibration", "Calibration factor (InvOLS) from the compliance slope", S.calibration,
+    Step("calibration", "Deflection sensitivity (InvOLS): the file's, or from the compliance slope", S.calibration,
          {"source": "auto", "run": "approach"}, ("compliance",), "section 3.1; eq 15"),
+    Step("kind", "Contact kind (hard: jump-in or straight line; soft: curved) and a soft contact point",
+         S.kind, {"nsigma": 5.0, "min_stiffness": 0.7, "max_curvature": 1.6, "method": "hertz_local",
+                  "force_fraction": 0.55, "window": 0.15}, ("calibration",),
+         "afmforce (Hertz term as in nanite's fit_line_polynomial piecewise model)"),
     Step("shift", "Inward/outward shift overlaying the compliance lines", S.shift,
-         {"apply": True}, ("compliance",), "section 3.2, Fig 9; Fig 7C"),
+         {"apply": True}, ("kind",), "section 3.2, Fig 9; Fig 7C"),
     Step("zero", "Zero of separation at the compliance line", S.zero,
-         {"contact_separation": Z0, "run": "auto", "parallel_tolerance": 0.25}, ("calibration",),
+         {"contact_separation": Z0, "run": "auto", "parallel_tolerance": 0.25}, ("kind",),
          "section 3.2, Fig 9"),
     Step("force", "Deflection to force (tilt-corrected spring constant)", S.force,
          {"spring_constant": None, "theta0": None, "L0": None, "L1": None, "L2": None},
@@ -83,19 +87,21 @@ STEPS: dict[str, Step] = {s.identifier: s for s in (
     Step("jumps", "Jump into contact and pull-off", S.jumps, {"nsigma": 5.0, "window": 3, "onset_tolerance": 3e-9},
          ("zero", "force"),
          "section 2.1, Fig 9"),
-    Step("adhesion", "Surface energy and radius from the pull-off (JKR/DMT)", S.adhesion_step,
+    Step("adhesion", "Adhesion: deepest retract dip below its own baseline, last rupture, unbinding steps",
+         S.adhesion_step, {"nsigma": 5.0}, ("zero", "force"), "afmforce (every contact kind)"),
+    Step("surface_energy", "Surface energy and radius from the pull-off (JKR/DMT; hard contacts)", S.surface_energy,
          {"radius": None, "model": "jkr", "hamaker": HAMAKER, "z0": Z0}, ("jumps",), "section 2.1"),
     Step("vdw", "van der Waals fit before the jump (A R or A)", S.vdw,
          {"radius": None, "z0": Z0, "max_separation": 30e-9, "baseline": "line",
           "fit_separation_offset": False}, ("jumps",), "eq 2"),
     Step("oscillation", "Post-contact oscillation: frequency, temporal or spatial", S.oscillation,
          {"false_alarm": 1e-3, "min_cycles": 3.0}, ("calibration",), "section 3.2"),
-    Step("friction", "Friction signature of the compliance lines", S.friction,
-         {"nsigma": 3.0, "slope_tolerance": 0.02, "offset_tolerance": 0.2e-9}, ("compliance",),
+    Step("friction", "Friction signature of the compliance lines (hard contacts, straight lines)", S.friction,
+         {"nsigma": 3.0, "slope_tolerance": 0.02, "offset_tolerance": 0.2e-9, "max_curvature": 1.25}, ("kind",),
          "sections 2.2.2-2.2.4, eqs 16-21"),
     Step("diagnosis", "Dynamic diagnosis: inertia parameter, lag, jump-in distance", S.diagnosis,
          {"resonance_frequency": None, "resolution": None, "min_resolution": 0.01e-9, "attraction_ratio": 0.75},
-         ("jumps", "vdw", "friction"), "eqs 3, 4; sections 2.3, 3.2"),
+         ("jumps", "adhesion", "vdw", "friction"), "eqs 3, 4; sections 2.3, 3.2"),
 )}
 
 #: Steps run when none are named: all of them.
@@ -166,8 +172,25 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None,
     st = prepare(curve, channel)
     for name in order:
         step = STEPS[name]
-        st = step.func(st, **{**step.options, **opts.get(name, {})})
+        try:
+            st = step.func(st, **{**step.options, **opts.get(name, {})})
+        except NoContact as exc:  # a curve that never touches: contact kind "none", not a failure
+            return _no_contact(st, tuple(order), str(exc))
     return _result(st, tuple(order))
+
+
+def _no_contact(st: State, order: tuple[str, ...], why: str) -> AnalysisResult:
+    nan = st.z * math.nan
+    md = st.metadata
+    k = float(md.get("spring_constant", math.nan) or math.nan)
+    return AnalysisResult(
+        source=str(md.get("source_file", "")), steps_run=("contact",), deflection_unit=st.unit,
+        position_channel=st.channel, contact_kind="none", contact_kind_reason=why,
+        sensitivity=float(md.get("sensitivity", math.nan) or math.nan), spring_constant=k,
+        verdict=f"no contact reached ({why}): nothing to analyse beyond the baseline",
+        warnings=st.warnings + (why,), time=st.time, position=st.z, separation=nan, deflection=nan, force=nan,
+        segment=st.curve.segment.astype("int8"), details={"skipped": {s: "no contact reached" for s in order
+                                                                       if s not in ("smooth", "contact")}})
 
 
 def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
@@ -175,14 +198,19 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
     nan = math.nan
     kw: dict[str, Any] = {}
     if "calibration" in d:
-        kw.update(calibration_factor=d["calibration"].factor, calibration_factor_fit=d["calibration"].factor_fit)
+        c = d["calibration"]
+        kw.update(sensitivity=c.sensitivity, sensitivity_fit=c.sensitivity_fit, calibration_source=c.source)
+    if "kind" in d:
+        kw.update(contact_kind=d["kind"].kind, contact_kind_reason=d["kind"].reason)
+    if "contact_point" in d:
+        kw["indentation"] = d["contact_point"].indentation
     if "force" in d:
         kw["spring_constant"] = d["force"].spring_constant
     if "shift" in d:
         kw["shift"] = d["shift"].shift
     if "zero" in d:
         kw["contact_separation"] = d["zero"].contact_separation
-    if "jumps" in d:
+    if "jumps" in d and "jumps" not in d.get("skipped", {}):
         ji, po = d["jumps"]["jump_in"], d["jumps"]["pull_off"]
         kw.update(contact_onset_separation=ji.separation, pull_off_force=po.force,
                   pull_off_position=po.position, jump_out_distance=po.jump_out_distance,
@@ -192,19 +220,30 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
             kw.update(jump_in_separation=ji.separation, jump_in_force=ji.force_after,
                       jump_in_deflection=ji.deflection_after)
     if "adhesion" in d:
-        kw.update(surface_energy=d["adhesion"].surface_energy, radius=d["adhesion"].radius)
-    if "vdw" in d:
+        a = d["adhesion"]
+        kw.update(adhesion_force=a.force, adhesion_deflection=a.deflection, adhesion_distance=a.distance,
+                  adhesion_noise=a.noise, rupture_distance=a.rupture_distance, unbinding_steps=len(a.steps),
+                  adhesion_verdict=a.verdict)
+    if "surface_energy" in d:
+        kw.update(surface_energy=d["surface_energy"].surface_energy, radius=d["surface_energy"].radius)
+    if "vdw" in d and "vdw" not in d.get("skipped", {}):
         v = d["vdw"]
         kw.update(hamaker_radius=v.hamaker_radius, hamaker_radius_se=v.hamaker_radius_se, hamaker=v.hamaker,
                   hamaker_se=v.hamaker_se)
     if "oscillation" in d:
         o = d["oscillation"]
-        kw["oscillation_frequency"] = o.approach.frequency if o.approach.found else o.retract.frequency
+        if o.origin != "none" and o.approach.found and o.retract.found:
+            kw["oscillation_frequency"] = 0.5 * (o.approach.frequency + o.retract.frequency)
+        kw["oscillation_verdict"] = o.verdict
     if "friction" in d:
         kw["friction"] = d["friction"].kind
     if "diagnosis" in d:
         g = d["diagnosis"]
-        kw.update(velocity=g.velocity, inertia_parameter=g.inertia_parameter, dynamic=g.dynamic, verdict=g.verdict)
+        kw.update(velocity=g.velocity, inertia_parameter=g.inertia_parameter, force_gradient=g.force_gradient,
+                  resonance_frequency=g.resonance_frequency, dynamic=g.dynamic, verdict=g.verdict)
+    if "friction" in d:
+        kw["friction_verdict"] = d["friction"].verdict
+    kw["not_applicable"] = dict(d.get("skipped", {}))
     full = lambda a: a if a is not None else st.z * nan  # noqa: E731
     return AnalysisResult(
         source=str(st.metadata.get("source_file", "")), steps_run=order, deflection_unit=st.unit,

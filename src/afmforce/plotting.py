@@ -57,43 +57,81 @@ def _vdw_curve(result: AnalysisResult, h: np.ndarray):
     return forces.vdw_force(h, 1.0, hamaker=fit.hamaker_radius, z0=z0)
 
 
-def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float = 40e-9,
-                          theory: bool = True):
-    """Force against separation near contact, with the van der Waals fit and its static theory.
+def _say(ax, text: str):
+    """Write why a panel cannot be drawn, inside it."""
+    import textwrap
 
-    The fitted law is drawn solid where the static tip is stable and dashed where
-    it is not (``Fs' > k``, the paper's convention in Fig 9).
+    ax.text(0.5, 0.5, "\n".join(textwrap.wrap(text, 48)), ha="center", va="center", transform=ax.transAxes,
+            fontsize="small", color="0.3")
+    return ax
+
+
+def _window(result: AnalysisResult, max_separation: float | None) -> tuple[float, float]:
+    """Separation range [m] that shows the contact region and the adhesion dip."""
+    h = result.separation[np.isfinite(result.separation)]
+    lo = float(np.min(h)) if h.size else -1e-9
+    if result.contact_kind == "soft":
+        lo = -1.05 * (result.indentation if math.isfinite(result.indentation) else -lo)
+    else:
+        lo = max(lo, -5e-9)
+    reach = [40e-9 if result.contact_kind != "soft" else 0.5 * abs(lo)]
+    for v in (result.rupture_distance, result.adhesion_distance, result.jump_in_separation):
+        if math.isfinite(v) and v > 0:
+            reach.append(1.3 * v)
+    hi = max(reach) if max_separation is None else max_separation
+    return lo, min(hi, float(np.max(h)) if h.size else hi)
+
+
+def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float | None = None,
+                          theory: bool = True):
+    """Force against separation around contact, axes scaled to the curve.
+
+    The window spans the indentation (soft) or the contact line (hard) and
+    reaches past the adhesion dip and the last rupture; the y-limits follow the
+    data inside it. The van der Waals fit (hard contacts) is drawn solid where
+    the static tip is stable and dashed where it is not (``Fs' > k``, Fig 9).
     """
     ax = _new_ax(ax)
+    ax.set_xlabel("separation h [nm]")
+    ax.set_title(f"force vs separation ({result.contact_kind or '?'} contact)")
     h, f = result.separation, result.force
+    if not np.isfinite(h).any():
+        ax.set_ylabel("force [nN]")
+        return _say(ax, f"no separation: {result.contact_kind_reason or 'the zero of separation was not found'}")
     if not np.isfinite(f).any():
         f, ylabel = result.deflection, "deflection [nm]"
     else:
         ylabel = "force [nN]"
+    lo, hi = _window(result, max_separation)
+    inside = np.isfinite(f) & (h >= lo) & (h <= hi)
     for seg, label, color, ls in _RUNS:
-        m = (result.segment == seg) & (h < max_separation)
-        ax.plot(h[m] * 1e9, f[m] * 1e9, ls, marker=".", ms=3, color=color, lw=0.8, label=label)
-    if theory:
-        hh = np.linspace(max(0.5e-9, np.nanmin(h[h > 0]) if np.any(h > 0) else 0.5e-9), max_separation, 400)
+        m = (result.segment == seg) & inside
+        ax.plot(h[m] * 1e9, f[m] * 1e9, ls, marker=".", ms=2, color=color, lw=0.7, label=label)
+    if theory and result.contact_kind != "soft":
+        hh = np.linspace(max(0.5e-9, lo), max(hi, 1e-9), 400)
         law = _vdw_curve(result, hh)
         if law is not None:
             k = result.spring_constant
             grad = forces.vdw_force_gradient(hh, 1.0, hamaker=result.details["vdw"].hamaker_radius)
             stable = grad < k if math.isfinite(k) else np.ones_like(hh, bool)
-            ax.plot(hh[stable] * 1e9, law[stable] * 1e9, "k-", lw=1.5, label="van der Waals fit (eq 2)")
-            ax.plot(hh[~stable] * 1e9, law[~stable] * 1e9, "k--", lw=1)
+            ax.plot(hh[stable] * 1e9, law[stable] * 1e9, "k-", lw=1.2, label="van der Waals fit (eq 2)")
+            ax.plot(hh[~stable] * 1e9, law[~stable] * 1e9, "k--", lw=0.8)
+    ad = result.details.get("adhesion")
+    if ad is not None and ad.found and 0 <= ad.index < h.size and math.isfinite(f[ad.index]):
+        ax.plot([h[ad.index] * 1e9], [f[ad.index] * 1e9], "^", color="C1", ms=8,
+                label=f"adhesion {ad.force * 1e9:.3g} nN" if math.isfinite(ad.force) else "adhesion")
     ji = result.details.get("jumps", {}).get("jump_in") if "jumps" in result.details else None
     if ji is not None and ji.found and math.isfinite(ji.force_before):
         ax.plot([ji.separation * 1e9], [ji.force_before * 1e9], "v", color="C2", ms=8, label="jump-in")
     ax.axhline(0, color="0.6", lw=0.5)
-    ax.set_xlim(-1, max_separation * 1e9)
-    app = f[(result.segment == 0) & (h < max_separation) & (h > 0) & np.isfinite(f)]
-    if app.size:  # the approach's attraction sets the scale (Fig 9 shows part of the outward run)
-        lo = min(float(app.min()), -1e-12)
-        ax.set_ylim(lo * 1e9 * 1.4, abs(lo) * 1e9 * 1.0)
-    ax.set_xlabel("separation h [nm]")
+    ax.axvline(0, color="0.6", lw=0.5)
+    ax.set_xlim(lo * 1e9, hi * 1e9)
+    y = f[inside] * 1e9
+    if y.size:
+        ylo, yhi = float(np.min(y)), float(np.max(y))
+        pad = 0.08 * max(yhi - ylo, 1e-6)
+        ax.set_ylim(ylo - pad, yhi + pad)
     ax.set_ylabel(ylabel)
-    ax.set_title("force vs separation")
     ax.legend(fontsize="small")
     return ax
 
@@ -105,9 +143,10 @@ def plot_residuals(result: AnalysisResult, ax=None):
     ax.set_xlabel("separation h [nm]")
     ax.set_ylabel("force - fit [pN]")
     ax.set_title("fit residuals")
-    if fit is None or not math.isfinite(fit.hamaker_radius):
-        ax.text(0.5, 0.5, "no van der Waals fit", ha="center", va="center", transform=ax.transAxes)
-        return ax
+    if fit is None or not hasattr(fit, "hamaker_radius") or not math.isfinite(fit.hamaker_radius):
+        why = result.not_applicable.get("vdw") or (f"no van der Waals fit: {fit.status}" if fit is not None and
+                                                   hasattr(fit, "status") else "the vdw step did not run")
+        return _say(ax, why)
     h, f = result.separation, result.force
     m = (result.segment == 0) & (h >= fit.separation_min) & (h <= fit.separation_max)
     ji = result.details["jumps"]["jump_in"]
@@ -127,6 +166,11 @@ def plot_spectrum(result: AnalysisResult, ax=None):
     ax.set_ylabel("power [nm$^2$]")
     ax.set_title("post-contact spectrum")
     osc = result.details.get("oscillation")
+    if not np.all(np.isfinite(result.time)) or (osc is not None and math.isnan(osc.approach.nyquist)
+                                                and math.isnan(osc.retract.nyquist)):
+        return _say(ax, "no time base in the file: no spectrum")
+    if result.contact_kind == "none":
+        return _say(ax, "no contact reached: no post-contact spectrum")
     for seg, label, color, _ in _RUNS:
         m = (result.segment == seg) & (result.separation < 1e-9)
         if m.sum() < 32 or not np.all(np.isfinite(result.time[m])):
@@ -138,12 +182,14 @@ def plot_spectrum(result: AnalysisResult, ax=None):
         freq = np.fft.rfftfreq(resid.size, dt)
         ax.semilogy(freq[1:], spec[1:] * 1e18 + 1e-30, color=color, lw=0.8, label=label)
     if osc is not None:
-        for peak in (osc.approach, osc.retract):
-            if peak.found:
+        if osc.origin != "none":
+            for peak in (osc.approach, osc.retract):
                 ax.axvline(peak.frequency, color="k", ls="--", lw=0.8)
-        ax.set_title(f"post-contact spectrum ({osc.origin})")
+        ax.set_title(f"post-contact spectrum (oscillation: {osc.origin})", fontsize="medium")
     if ax.lines:
         ax.legend(fontsize="small")
+    else:
+        _say(ax, "fewer than 32 samples in contact: no spectrum")
     return ax
 
 
@@ -168,5 +214,8 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
     plot_residuals(result, axes[1, 0])
     plot_spectrum(result, axes[1, 1])
     name = result.source.rsplit("/", 1)[-1] if result.source else "force curve"
-    fig.suptitle(f"{name}: {'DYNAMIC - ' if result.dynamic else ''}{result.friction or ''}", fontsize="medium")
+    adh = (f"adhesion {result.adhesion_force * 1e9:.3g} nN" if math.isfinite(result.adhesion_force)
+           else "no adhesion above the noise")
+    fig.suptitle(f"{name}: {result.contact_kind or '?'} contact; {adh}; friction {result.friction or '-'}"
+                 f"{'; DYNAMIC' if result.dynamic else ''}", fontsize="medium")
     return fig

@@ -41,10 +41,43 @@ def test_folder_analysis_writes_outputs_and_keeps_inputs(folder, tmp_path, capsy
         assert result["units"]["jump_in_force"] == "N"
         assert (out / f"{name}.afmforce.csv").read_text().splitlines()[1].startswith("segment,time [s]")
     assert not list(out.glob(".*"))  # no temporary files left behind
-    # outputs exist: without --force every file fails (exit 1), with --force all pass
-    assert main(["analyze", str(folder), "--out", str(out), "--no-plot"]) == 1
-    assert "pass --force" in capsys.readouterr().err
+    # finding 8: a rerun resumes (nothing recomputed, same tables), --force recomputes
+    (table,) = out.glob("batch-*/summary.csv")
+    first = table.read_text()
+    stamps = {p.name: p.stat().st_mtime_ns for p in out.glob("*.afmforce.*")}
+    assert main(["analyze", str(folder), "--out", str(out), "--no-plot"]) == 0
+    assert table.read_text() == first and "failed" not in capsys.readouterr().err
+    assert {p.name: p.stat().st_mtime_ns for p in out.glob("*.afmforce.*")} == stamps  # skipped
     assert main(["analyze", str(folder), "--out", str(out), "--no-plot", "--force"]) == 0
+    assert all(p.stat().st_mtime_ns > stamps[p.name] for p in out.glob("*.afmforce.*"))  # recomputed
+    assert table.read_text() == first
+
+
+def test_a_missing_input_creates_no_output_folder(tmp_path, capsys):
+    out = tmp_path / "never"
+    assert main(["analyze", str(tmp_path / "typo.ibw"), "--out", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert not out.exists() and "no such file" in err and len(err.strip().splitlines()) == 1
+
+
+def test_json_is_one_object_when_the_first_file_fails(tmp_path, capsys):
+    bad = tmp_path / "aaa.ibw"  # sorted first: its chunk has no rows
+    bad.write_bytes(b"not an igor wave")
+    code = main(["analyze", str(bad), str(DATA / "asylum-mfp3d_SiN-tip_air.ibw"), "--json"])
+    payload = json.loads(capsys.readouterr().out)
+    assert code == 1 and list(payload["results"]) == ["asylum-mfp3d_SiN-tip_air.ibw"]
+    assert payload["failed"][0]["file"] == str(bad)
+    res = payload["results"]["asylum-mfp3d_SiN-tip_air.ibw"]
+    assert res["contact_kind"] == "hard" and res["adhesion_force"] < 0 and res["units"]["sensitivity"] == "m/V"
+
+
+def test_shipped_examples_run(capsys):
+    assert main(["analyze", "--example", "list"]) == 0
+    assert "jpk-cell" in capsys.readouterr().out
+    assert main(["analyze", "--example", "jpk-cell", "--json"]) == 0
+    (res,) = json.loads(capsys.readouterr().out)["results"].values()
+    assert res["contact_kind"] == "soft" and res["adhesion_force"] < 0
+    assert main(["analyze", "--example", "nope"]) == 2
 
 
 def test_figure_is_written(folder, tmp_path):
@@ -71,7 +104,7 @@ def test_user_metadata_flags(capsys):
                  "--sensitivity", "61nm/V", "--json"])
     assert code == 0
     res = json.loads(capsys.readouterr().out)["results"]["ntmdt_gel-in-water.txt"]
-    assert res["spring_constant"] == pytest.approx(0.05) and res["calibration_factor"] == pytest.approx(61e-9)
+    assert res["spring_constant"] == pytest.approx(0.05) and res["sensitivity"] == pytest.approx(61e-9)
 
 
 def test_tilt_correction_flag(capsys):

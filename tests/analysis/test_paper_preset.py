@@ -86,7 +86,7 @@ def test_fig7_protocol_calibration_shift_and_zero(name):
     t = raw.truth
     assert res.position_channel == "measured"
     # the constant compliance above the clip calibrates the photodiode (section 3.1)
-    assert res.calibration_factor_fit == pytest.approx(S, rel=0.02)
+    assert res.sensitivity_fit == pytest.approx(S, rel=0.02)
     # Figs 7B-C, 8: the shift that overlays the runs is the detector's backlash (+57, +27, ~0 nm
     # at 17, 6.6, 0.4 um/s; the preset's law gives 57.5, 26.5, 2.7 nm), less a friction offset
     # under 1 nm (spec section 7, xi v < 2e-8 N)
@@ -137,7 +137,7 @@ def test_fig7_protocol_nominal_channel():
     the zero still puts the onset of contact at a small positive separation."""
     raw, res = _analysed(17e-6, 20e3, "fig7", 7, channel="nominal")
     t = raw.truth
-    d_ref = res.details["shift"].reference_signal * res.calibration_factor
+    d_ref = res.details["shift"].reference_signal * res.details["calibration"].factor
 
     def nominal_at(seg):
         m = (raw.segment == seg) & (t["separation"] < CONTACT_H) & (np.abs(raw.deflection_signal) < CLIP)
@@ -162,7 +162,7 @@ def test_issue_run_with_the_contact_hidden_in_the_clip():
     left = ret[np.argmax(t["separation"][ret] > CONTACT_H)]
     assert t["apparent_deflection"][left] > CLIP * S  # the premise: it left while clipped
     # what is there: the approach's compliance line calibrates
-    assert res.calibration_factor_fit == pytest.approx(S, rel=0.03)
+    assert res.sensitivity_fit == pytest.approx(S, rel=0.03)
     assert not res.details["contact"].compliance_retract
     # what is not: said so, no numbers made up
     assert math.isnan(res.shift) and math.isnan(res.pull_off_force)

@@ -85,7 +85,7 @@ def test_quasi_static_round_trip(name):
     v, ikw = QUASI_STATIC[name]
     tr, cfg, raw, res = _run(v, ikw)
     truth = raw.truth
-    assert res.calibration_factor_fit == pytest.approx(S, rel=0.01)  # beta within 1 %
+    assert res.sensitivity_fit == pytest.approx(S, rel=0.01)  # beta within 1 %
     h = truth["separation"]
     free = (raw.segment == 0) & (h > 1e-9) & (h < 30e-9)
     assert abs(np.median(res.separation[free] - h[free])) < 0.3e-9  # zero of separation
@@ -107,7 +107,7 @@ def test_backlash_shift_is_recovered():
     true_shift = np.median(err[contact & (raw.segment == 1)]) - np.median(err[contact & (raw.segment == 0)])
     assert abs(true_shift) > 20e-9  # the artefact is there
     assert res.shift == pytest.approx(true_shift, abs=2e-9)
-    assert res.calibration_factor_fit == pytest.approx(S, rel=0.01)
+    assert res.sensitivity_fit == pytest.approx(S, rel=0.01)
     assert res.hamaker_radius == pytest.approx(5e-19 * cfg["radius"], rel=0.10)
     _within_one_sample(raw, res, tr, v)
 
@@ -129,7 +129,7 @@ def test_piezo_hysteresis_on_the_nominal_axis():
     top = np.flatnonzero(raw.segment == 0)[-40:]  # the approach's compliance region
     gain = np.polyfit(truth["piezo_position"][top], raw.piezo_nominal[top], 1)[0]
     assert abs(gain - 1) > 0.03  # a real distortion ...
-    assert res.calibration_factor_fit == pytest.approx(S * gain, rel=0.01)  # ... seen exactly
+    assert res.sensitivity_fit == pytest.approx(S * gain, rel=0.01)  # ... seen exactly
 
 
 def test_fringes_do_not_spoil_the_round_trip():
@@ -138,13 +138,13 @@ def test_fringes_do_not_spoil_the_round_trip():
     tr, cfg, raw, res = _run(1e-6, {"photodiode": {"interference_amplitude": 0.4e-9 / S}}, start=-800e-9)
     fringe = res.details["fringes"].approach
     assert fringe.found and fringe.period == pytest.approx(raw.truth["fringe_period"], rel=0.15)
-    assert res.calibration_factor_fit == pytest.approx(S, rel=0.01)
+    assert res.sensitivity_fit == pytest.approx(S, rel=0.01)
     assert res.hamaker_radius == pytest.approx(5e-19 * cfg["radius"], rel=0.10)
 
 
 def test_beam_without_friction_is_quasi_static():
     tr, cfg, raw, res = _run(1e-6, model="beam", friction="none")
-    assert res.calibration_factor_fit == pytest.approx(S, rel=0.01)
+    assert res.sensitivity_fit == pytest.approx(S, rel=0.01)
     assert res.hamaker_radius == pytest.approx(5e-19 * 100e-9, rel=0.10)
     _within_one_sample(raw, res, tr, 1e-6)
     assert not res.dynamic, res.verdict

@@ -106,7 +106,7 @@ def test_quasi_static_round_trip(seed):
     c = static_curve(noise=0.05e-9, drift=0.01, offset=0.3, seed=seed)
     res = analyze(c)
     t = c.truth
-    assert res.calibration_factor_fit == pytest.approx(t["sensitivity"], rel=0.01)
+    assert res.sensitivity_fit == pytest.approx(t["sensitivity"], rel=0.01)
     free = (c.segment == 0) & (t["separation"] > 1e-9)
     assert abs(np.median(res.separation[free] - t["separation"][free])) < 0.3e-9
     assert res.hamaker_radius == pytest.approx(A * R, rel=0.10)
@@ -208,13 +208,18 @@ def test_diagnosis_inertia_parameter_and_lag():
     """Spec section 3, Fig 1 (f = 0.73 kHz, dx = 0.5 nm): lag v/(4f) = 3.4 nm at 10 um/s and
     0.34 nm at 1 um/s; at the jump Fs' = k so R = v / (4 f dx): 6.8 (dynamic) and 0.68."""
     f = math.sqrt(0.21 / 1e-8) / (2 * math.pi)
-    fast = diagnose_curve(velocity=10e-6, spring_constant=0.21, resonance_frequency=f, resolution=0.5e-9)
-    slow = diagnose_curve(velocity=1e-6, spring_constant=0.21, resonance_frequency=f, resolution=0.5e-9)
+    fast = diagnose_curve(velocity=10e-6, spring_constant=0.21, resonance_frequency=f, resolution=0.5e-9,
+                          force_gradient=0.21)
+    slow = diagnose_curve(velocity=1e-6, spring_constant=0.21, resonance_frequency=f, resolution=0.5e-9,
+                          force_gradient=0.21)
     assert fast.inertial_lag == pytest.approx(3.4e-9, rel=0.02) and slow.inertial_lag == pytest.approx(0.34e-9, rel=0.02)
     assert fast.inertia_parameter == pytest.approx(10e-6 / (4 * f * 0.5e-9)) and fast.dynamic
     assert slow.inertia_parameter < 1 and not slow.dynamic
     unknown = diagnose_curve(velocity=1e-6, spring_constant=0.21, resonance_frequency=None, resolution=0.5e-9)
     assert not unknown.dynamic and "unknown" in unknown.verdict
+    # issue 13: never a default stand-in for the gradient: without a measured one, not assessed
+    blind = diagnose_curve(velocity=10e-6, spring_constant=0.21, resonance_frequency=f, resolution=0.5e-9)
+    assert math.isnan(blind.inertia_parameter) and "force gradient not measured" in blind.verdict
 
 
 def test_diagnosis_flags_a_weak_attraction():

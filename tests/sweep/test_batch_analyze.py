@@ -34,7 +34,7 @@ from afmforce.sweep.summary import _grid
 NX, NY = 5, 3
 EMPTY = (2, 1)  # grid point without a curve
 SENSITIVITY = 50e-9  # static_curve's default [m/V]
-STEPS = ("jumps",)  # contact, drift, compliance, calibration, zero, force, jumps
+STEPS = ("jumps", "adhesion")  # contact, drift, compliance, calibration, zero, force, jumps
 
 
 def _radius(x: int, y: int) -> float:
@@ -119,7 +119,7 @@ def test_serial_and_dask_give_identical_tables_with_the_static_pull_off(map_file
     assert t["error"].isna().all() and list(zip(t["map_x"], t["map_y"])) == POSITIONS
     radius = np.array([_radius(x, y) for x, y in POSITIONS])
     np.testing.assert_allclose(t["pull_off_force"], forces.max_attraction_force(radius), rtol=0.02)  # eq 2
-    np.testing.assert_allclose(t["calibration_factor"], SENSITIVITY, rtol=0.01)
+    np.testing.assert_allclose(t["sensitivity_fit"], SENSITIVITY, rtol=0.01)
     assert list(t["name"]) == [f"map.h5#{i}" for i in range(14)]
 
 
@@ -158,12 +158,14 @@ def test_bad_file_and_bad_curve_are_reported_while_the_others_finish(tmp_path):
     assert [r.label for r in refs] == [str(files[0])] + [f"{files[1]}#{i}" for i in range(3)] + [str(files[2])]
     result = analyze_files(refs, CurveAnalysis(steps=STEPS), executor="serial", chunk_size=2, store=tmp_path / "s")
     failed = dict(failures(result))
-    assert set(failed) == {str(files[0]), f"{files[1]}#1"}
-    assert "Igor" in failed[str(files[0])] and "no contact region" in failed[f"{files[1]}#1"]
+    assert set(failed) == {str(files[0])}  # the flat curve is a result: contact kind "none" (issue 13)
+    assert "Igor" in failed[str(files[0])]
     t = summary_table(result)
     ok = t[t["error"].isna()]
-    assert list(ok["name"]) == ["m.h5#0", "m.h5#2", "single.h5"]
-    np.testing.assert_allclose(ok["pull_off_force"], forces.max_attraction_force(100e-9), rtol=0.02)
+    assert list(ok["name"]) == ["m.h5#0", "m.h5#1", "m.h5#2", "single.h5"]
+    assert list(ok["contact_kind"]) == ["hard", "none", "hard", "hard"]
+    hard = ok[ok["contact_kind"] == "hard"]
+    np.testing.assert_allclose(hard["pull_off_force"], forces.max_attraction_force(100e-9), rtol=0.02)
     paths = write_summary(result, tmp_path / "out")
     errors = pd.read_csv(paths["errors"])
     assert set(errors["source"]) == set(failed)
@@ -205,7 +207,7 @@ def test_cli_batch_resume_outputs_and_exit_codes(map_file, serial_table, tmp_pat
     broken.write_bytes(b"not an igor wave")
     out = tmp_path / "out"
     argv = ["analyze", str(map_file), str(broken), "--out", str(out), "--serial", "--chunk-size", "4",
-            "--steps", "jumps", "--map-quantity", "adhesion", "--map-quantity", "calibration_factor"]
+            "--steps", "jumps", "--map-quantity", "adhesion", "--map-quantity", "sensitivity_fit"]
     code, text, err = _run(argv, capsys)
     assert code == 1 and f"failed: {broken}" in err and "1 of 15" in err
     assert "4 of 4 chunks run" in text
@@ -216,7 +218,7 @@ def test_cli_batch_resume_outputs_and_exit_codes(map_file, serial_table, tmp_pat
     table = pd.read_parquet(folder / "summary.parquet")
     assert json.loads(pq.read_schema(folder / "summary.parquet").metadata[b"afmforce.units"])["pull_off_force"] == "N"
     np.testing.assert_array_equal(table["pull_off_force"].to_numpy()[:14], serial_table["pull_off_force"])
-    assert {p.name for p in folder.glob("*.png")} == {"map.h5.adhesion.png", "map.h5.calibration_factor.png"}
+    assert {p.name for p in folder.glob("*.png")} == {"map.h5.adhesion.png", "map.h5.sensitivity_fit.png"}
     assert "broken.ibw" in (folder / "errors.csv").read_text()
     # rerun: every chunk is stored; remove one and only that one runs again
     code, text, _ = _run(argv, capsys)

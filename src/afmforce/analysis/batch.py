@@ -32,7 +32,7 @@ class BatchResult:
 
     Attributes
     ----------
-    calibration_factor : ndarray  [m per signal unit]
+    sensitivity : ndarray  deflection per signal unit from the compliance slope [m/V for volts]
     shift : ndarray  inward shift [m]
     contact_index : ndarray of int  first approach sample in contact [-]
     jump_in_index : ndarray of int  last sample before the jump (-1: none) [-]
@@ -44,7 +44,7 @@ class BatchResult:
     ok : ndarray of bool  the curve had a contact region
     """
 
-    calibration_factor: np.ndarray
+    sensitivity: np.ndarray
     shift: np.ndarray
     contact_index: np.ndarray
     jump_in_index: np.ndarray
@@ -356,6 +356,6 @@ def analyze_batch(time: np.ndarray, position: np.ndarray, signal: np.ndarray, n_
     run = _batch_parallel if parallel and nc > 1 else _batch_serial
     run(t, z, s, n_app, int(min_points), float(baseline_fraction), float(compliance_fraction),
            float(contact_separation), float(nsigma), int(window), out_f, out_i, ok)
-    return BatchResult(calibration_factor=out_f[:, 0], shift=out_f[:, 1], contact_index=out_i[:, 0],
+    return BatchResult(sensitivity=out_f[:, 0], shift=out_f[:, 1], contact_index=out_i[:, 0],
                        jump_in_index=out_i[:, 1], jump_in_separation=out_f[:, 2], jump_in_deflection=out_f[:, 3],
                        pull_off_index=out_i[:, 2], pull_off_deflection=out_f[:, 4], noise=out_f[:, 5], ok=ok)

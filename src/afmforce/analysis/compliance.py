@@ -111,16 +111,27 @@ def fit_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract: 
 class CalibrationResult:
     """Deflection calibration: deflection [m] = signal x ``factor``.
 
+    ``calibration_factor`` is *not* used here: in afmforce it means beta of
+    eq 15 [m/rad] only. The optical-lever sensitivity (InvOLS) is
+    ``sensitivity`` (the file's or user's) and ``sensitivity_fit`` (from the
+    compliance slope), both [m/V], as afmformats and the vendors name them.
+
     Attributes
     ----------
     factor : float
-        Calibration factor used [m per signal unit] (m/V for volts: the InvOLS).
+        Metres of deflection per signal unit used [m/V, m/m or m/N].
     factor_fit : float
         ``1 / compliance slope`` [m per signal unit] (hard contact assumed).
-    factor_metadata : float
-        From the file or the user (sensitivity [m/V], or 1/k [m/N]); NaN if unknown.
+    factor_given : float
+        From the file or the user (sensitivity [m/V], 1 [m/m], or 1/k [m/N]); NaN if unknown.
     source : str
         ``"fit"`` or ``"metadata"``: which factor is used.
+    sensitivity : float
+        The file's or user's sensitivity [m/V] (NaN if none).
+    sensitivity_fit : float
+        The sensitivity the compliance slope implies [m/V]: ``1 / slope`` for a
+        signal in volts, ``sensitivity / (deflection slope)`` for a signal the
+        instrument calibrated (NaN without a sensitivity to scale).
     compliance_slope : float
         Slope used for ``factor_fit`` [signal unit/m].
     slope_ratio : float
@@ -132,8 +143,10 @@ class CalibrationResult:
 
     factor: float
     factor_fit: float
-    factor_metadata: float
+    factor_given: float
     source: str
+    sensitivity: float
+    sensitivity_fit: float
     compliance_slope: float
     slope_ratio: float
     spring_constant_from_slope: float
@@ -142,7 +155,7 @@ class CalibrationResult:
 
 def _metadata_factor(unit: str, metadata: Mapping[str, Any]) -> float:
     if unit == "V":
-        return float(metadata.get("sensitivity", math.nan))
+        return float(metadata.get("sensitivity", math.nan) or math.nan)
     if unit == "m":
         return 1.0
     k = metadata.get("spring_constant")
@@ -169,12 +182,10 @@ def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, sour
         slope = a.slope
     elif run == "retract":
         slope = r.slope
-    elif run == "both":
+    else:
         wa = 1.0 / a.slope_se**2 if a.slope_se > 0 else 1.0
         wr = 1.0 / r.slope_se**2 if r.slope_se > 0 else 1.0
         slope = (wa * a.slope + wr * r.slope) / (wa + wr)
-    else:
-        raise ParameterError(f"calibration run must be approach, retract or both, got {run!r}")
     unit = compliance.unit
     f_fit = 1.0 / slope
     f_meta = _metadata_factor(unit, metadata)
@@ -182,8 +193,16 @@ def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, sour
         raise AnalysisError("no calibration in the file: give the sensitivity (--sensitivity) "
                             "or use the fitted compliance slope (source='fit')")
     use_meta = source == "metadata" or (source == "auto" and math.isfinite(f_meta))
-    return CalibrationResult(factor=f_meta if use_meta else f_fit, factor_fit=f_fit, factor_metadata=f_meta,
-                             source="metadata" if use_meta else "fit", compliance_slope=slope,
+    sens = float(metadata.get("sensitivity", math.nan) or math.nan)
+    if unit == "V":
+        sens_fit = f_fit
+    elif math.isfinite(f_meta):  # deflection per position on the line, times the file's sensitivity
+        sens_fit = sens / (slope * f_meta)
+    else:
+        sens_fit = math.nan
+    return CalibrationResult(factor=f_meta if use_meta else f_fit, factor_fit=f_fit, factor_given=f_meta,
+                             source="metadata" if use_meta else "fit", sensitivity=sens,
+                             sensitivity_fit=float(sens_fit), compliance_slope=slope,
                              slope_ratio=a.slope / r.slope,
                              spring_constant_from_slope=slope if unit == "N" else math.nan, unit=unit)
 

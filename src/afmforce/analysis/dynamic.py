@@ -48,7 +48,8 @@ class DynamicDiagnosis:
     spring_constant : float  [N/m]
     resonance_frequency : float  [Hz] (NaN if unknown)
     resolution : float  deflection resolution [m]
-    force_gradient : float  |Fs'| at jump-in (= k, static instability) [N/m]
+    force_gradient : float  measured |dF/dh| where the tip meets the surface [N/m] (NaN: not measured)
+    force_gradient_method : str  how it was measured
     inertia_parameter : float  eq 3 [-]
     inertial_lag : float  eq 4 [m]
     jump_in_separation : float  measured [m]
@@ -64,6 +65,7 @@ class DynamicDiagnosis:
     resonance_frequency: float
     resolution: float
     force_gradient: float
+    force_gradient_method: str
     inertia_parameter: float
     inertial_lag: float
     jump_in_separation: float
@@ -91,7 +93,8 @@ def _inertia(velocity, gradient, f, k, dx):
 
 
 def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequency: float | None,
-                   resolution: float, jump_in_separation: float = math.nan,
+                   resolution: float, force_gradient: float = math.nan, force_gradient_method: str = "",
+                   jump_in_separation: float = math.nan,
                    static_jump_in_separation: float = math.nan, jump_tolerance: float = 1e-9,
                    jump_fraction: float = 0.25, sample_step: float = 0.0, friction: str | None = None,
                    friction_verdict: str = "", hamaker_radius: float = math.nan,
@@ -105,6 +108,10 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
     spring_constant : float  [N/m]
     resonance_frequency : float or None  [Hz]
     resolution : float  [m]
+    force_gradient : float
+        Measured |dF/dh| [N/m] (eq 3 needs it; never replaced by a default).
+    force_gradient_method : str
+        How it was measured (or why not).
     jump_in_separation, static_jump_in_separation : float  [m]
     jump_tolerance : float
         Excess over the static jump-in separation that counts [m] ...
@@ -129,22 +136,28 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
     k = float(spring_constant)
     words = []
     dynamic = False
-    r_par, lag, grad = nan, nan, k
+    r_par, lag, grad = nan, nan, float(force_gradient)
     if not (math.isfinite(velocity) and velocity > 0):
-        words.append("speed unknown (no time base): inertia not assessed")
+        words.append("inertia not assessed: speed unknown (no time base)")
     elif not (math.isfinite(f) and f > 0):
-        words.append("resonance frequency unknown (give --resonance-frequency): inertia not assessed")
+        words.append("inertia not assessed: resonance frequency unknown (not in the file; give "
+                     "--resonance-frequency)")
     elif not (math.isfinite(resolution) and resolution > 0):
-        words.append("deflection resolution unknown: inertia not assessed")
+        words.append("inertia not assessed: deflection resolution unknown")
+    elif not (math.isfinite(k) and k > 0):
+        words.append("inertia not assessed: spring constant unknown")
+    elif not (math.isfinite(grad) and grad > 0):
+        words.append(f"inertia not assessed: force gradient not measured ({force_gradient_method or 'unknown'})")
     else:
-        kk = k if math.isfinite(k) and k > 0 else 1.0
-        r_par, lag = _inertia(velocity, kk, f, kk, resolution)
+        r_par, lag = _inertia(velocity, grad, f, k, resolution)
+        nums = (f"v = {velocity * 1e9:.3g} nm/s, |F'| = {grad:.3g} N/m ({force_gradient_method}), f = {f:.4g} Hz, "
+                f"k = {k:.3g} N/m, dx = {resolution * 1e12:.3g} pm")
         if r_par > 1:
             dynamic = True
-            words.append(f"dynamic: inertia parameter {r_par:.3g} > 1 (eq 3), lag about {lag * 1e9:.3g} nm "
-                         "(eq 4): the static force law is distorted near the jump")
+            words.append(f"dynamic: inertia parameter {r_par:.3g} > 1 (eq 3; {nums}), lag about {lag * 1e9:.3g} nm "
+                         "(eq 4): the static force law is distorted near contact")
         else:
-            words.append(f"quasi-static: inertia parameter {r_par:.3g} < 1 (eq 3), lag about "
+            words.append(f"quasi-static: inertia parameter {r_par:.3g} < 1 (eq 3; {nums}), lag about "
                          f"{lag * 1e9:.3g} nm (eq 4)")
     excess = jump_in_separation - static_jump_in_separation
     if (math.isfinite(excess) and excess > jump_tolerance + abs(sample_step)
@@ -161,7 +174,7 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
         words.append(f"{friction_verdict} (static friction changes k and beta, eqs 18-19)")
     elif friction == "opposite":
         words.append("compliance lines offset against friction's direction: an instrument artefact")
-    elif friction in ("nonlinear", "undetermined"):
+    elif friction in ("nonlinear", "undetermined", "not assessed"):
         words.append(friction_verdict)
     elif friction == "pinned":
         dynamic = True
@@ -173,6 +186,6 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
         dynamic = True
         words.append(f"the approach attraction is {ratio:.2f} x what the pull-off implies (A R = 16 z0^2 |F|): "
                      "underestimated by friction or speed, or an extra adhesion (capillarity)")
-    return DynamicDiagnosis(float(velocity), k, f, float(resolution), grad, float(r_par), float(lag),
+    return DynamicDiagnosis(float(velocity), k, f, float(resolution), grad, force_gradient_method, float(r_par), float(lag),
                             float(jump_in_separation), float(static_jump_in_separation), float(excess),
                             float(ratio), dynamic, "; ".join(words))

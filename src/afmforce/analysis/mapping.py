@@ -62,11 +62,9 @@ class MapQuantity:
 
 #: The registry: the named map quantities, then every numeric summary field by its own name.
 MAP_QUANTITIES: dict[str, MapQuantity] = {q.identifier: q for q in (
-    MapQuantity("adhesion", "pull_off_force", "adhesion (minus the pull-off force)", "N", -1.0),
+    MapQuantity("adhesion", "adhesion_force", "adhesion (depth of the retract dip below its baseline)", "N", -1.0),
     MapQuantity("jump_in_distance", "jump_in_separation", "jump-in distance (separation before the jump)", "m"),
-    MapQuantity("calibration_factor", "calibration_factor", "calibration factor (InvOLS)", "m/V"),
-    *(MapQuantity(name, name, label, unit) for name, label, unit in SUMMARY_FIELDS
-      if name not in ("calibration_factor",)),
+    *(MapQuantity(name, name, label, unit) for name, label, unit in SUMMARY_FIELDS),
     MapQuantity("jump_in_deflection", "jump_in_deflection", "jump-in deflection", "m"),
 )}
 

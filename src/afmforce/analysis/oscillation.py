@@ -5,10 +5,15 @@ The paper saw oscillations after contact at 640 Hz (1.36 um/s) and 670 Hz
 instrument or stick-slip, not to surface corrugation (which would keep the same
 *spatial* frequency). Here the residual of each run's constant-compliance line
 (less a cubic trend: a curved contact is no oscillation) is searched for a
-spectral peak (Hann-windowed periodogram); a peak counts when its power exceeds
-the running median of its neighbourhood by the factor a white-noise periodogram
-reaches with probability ``false_alarm`` over the band (the power of white noise
-is exponential, so ``P(X > x median) = 2^-x``).
+spectral peak: the Lomb-Scargle periodogram (for evenly sampled data the
+classical periodogram, computed by FFT) normalised by the local noise level
+(the running median of the power over its neighbourhood divided by ln 2, so
+coloured noise is not taken for a line). The normalised power ``z`` of noise is
+exponential, so the false-alarm probability of the highest of ``M`` independent
+frequencies is ``1 - (1 - exp(-z))^M``; a peak counts when it is below
+``false_alarm`` (1e-3) and lies below ``max_nyquist_fraction`` (0.8) of the
+Nyquist frequency (near Nyquist, aliasing and the anti-alias filter make
+lines). An oscillation is reported only when *both* runs show such a peak.
 """
 
 from __future__ import annotations
@@ -20,7 +25,8 @@ from typing import Sequence
 import numpy as np
 from scipy.ndimage import median_filter
 
-__all__ = ["OscillationPeak", "OscillationResult", "find_peak", "oscillation_origin"]
+__all__ = ["OscillationPeak", "OscillationResult", "find_peak", "oscillation_origin", "false_alarm_probability",
+           "both_runs"]
 
 
 @dataclass(frozen=True)
@@ -38,6 +44,8 @@ class OscillationPeak:
     significance : float  peak power / median power [-]
     threshold : float  the significance needed [-]
     velocity : float  run speed [m/s]
+    false_alarm : float  probability that noise makes a peak this high [-]
+    nyquist : float  Nyquist frequency of the run [Hz] (NaN without a time base)
     """
 
     run: str
@@ -49,6 +57,8 @@ class OscillationPeak:
     significance: float
     threshold: float
     velocity: float
+    false_alarm: float = math.nan
+    nyquist: float = math.nan
 
 
 @dataclass(frozen=True)
@@ -68,13 +78,20 @@ class OscillationResult:
     verdict: str
 
 
-def _no_peak(run: str, velocity: float, significance: float = 0.0, threshold: float = math.nan) -> OscillationPeak:
+def _no_peak(run: str, velocity: float, significance: float = 0.0, threshold: float = math.nan,
+             false_alarm: float = math.nan, nyquist: float = math.nan, frequency: float = math.nan) -> OscillationPeak:
     nan = math.nan
-    return OscillationPeak(run, False, nan, nan, nan, nan, significance, threshold, velocity)
+    return OscillationPeak(run, False, frequency, nan, nan, nan, significance, threshold, velocity, false_alarm,
+                           nyquist)
+
+
+def false_alarm_probability(z: float, m: int) -> float:
+    """``1 - (1 - exp(-z))^m``: chance that the highest of ``m`` noise powers exceeds ``z`` [-]."""
+    return float(-np.expm1(m * np.log1p(-math.exp(-z)))) if z > 0 else 1.0
 
 
 def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cycles: float = 3.0,
-              false_alarm: float = 1e-3, min_points: int = 32) -> OscillationPeak:
+              false_alarm: float = 1e-3, min_points: int = 32, max_nyquist_fraction: float = 0.8) -> OscillationPeak:
     """Strongest line in the periodogram of ``r`` sampled at times ``t`` [s].
 
     Parameters
@@ -94,12 +111,13 @@ def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cy
         return _no_peak(run, velocity)
     tt = (t - t[0]) / max(t[-1] - t[0], dt)
     x = r - np.polyval(np.polyfit(tt, r, 3), tt)  # a curved (nonlinear) contact is not an oscillation
-    w = np.hanning(n)
+    w = np.hanning(n)  # leakage of what the cubic trend left would raise the noise floor
     spec = np.abs(np.fft.rfft(x * w)) ** 2
     freq = np.fft.rfftfreq(n, dt)
-    band = (freq >= min_cycles / (n * dt)) & (np.arange(freq.size) < freq.size - 1)
+    nyq = 0.5 / dt
+    band = (freq >= min_cycles / (n * dt)) & (freq <= max_nyquist_fraction * nyq)
     if band.sum() < 16:
-        return _no_peak(run, velocity)
+        return _no_peak(run, velocity, nyquist=nyq)
     p = spec[band]
     f = freq[band]
     width = max(9, 2 * (p.size // 20) + 1)
@@ -108,8 +126,9 @@ def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cy
     threshold = math.log2(band.sum() / false_alarm)
     k = int(np.argmax(ratio))
     sig = float(ratio[k])
-    if not sig > threshold:
-        return _no_peak(run, velocity, sig, threshold)
+    fap = false_alarm_probability(sig * math.log(2.0), int(band.sum()))
+    if not fap < false_alarm:
+        return _no_peak(run, velocity, sig, threshold, fap, nyq, float(f[k]))
     fk = f[k]
     if 0 < k < p.size - 1:  # parabolic refinement on log power
         y0, y1, y2 = np.log(p[k - 1:k + 2])
@@ -120,7 +139,7 @@ def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cy
     v = abs(velocity)
     sf = fk / v if v > 0 else math.nan
     return OscillationPeak(run, True, float(fk), float(sf), float(1.0 / sf) if sf > 0 else math.nan,
-                           float(amp), sig, float(threshold), float(velocity))
+                           float(amp), sig, float(threshold), float(velocity), fap, nyq)
 
 
 def oscillation_origin(frequencies: Sequence[float], velocities: Sequence[float], *,
@@ -163,3 +182,36 @@ def oscillation_origin(frequencies: Sequence[float], velocities: Sequence[float]
         return "spatial", (f"same wavelength ({np.mean(lam) * 1e9:.4g} nm) at different speeds: "
                            "a spatial feature (surface corrugation)")
     return "undetermined", "frequencies and wavelengths both vary: origin undetermined"
+
+
+def both_runs(approach: OscillationPeak, retract: OscillationPeak, *, tolerance: float = 0.15) -> tuple[str, str, float]:
+    """Verdict on one curve: an oscillation needs a significant peak in both runs at one frequency.
+
+    Returns
+    -------
+    origin : str  ``"temporal"``, ``"spatial"``, ``"undetermined"`` or ``"none"``
+    verdict : str  with the numbers (frequencies, false-alarm probabilities)
+    frequency : float  [Hz] (NaN unless an oscillation is confirmed)
+    """
+    def words(p: OscillationPeak) -> str:
+        if math.isnan(p.nyquist):
+            return f"{p.run}: no time base"
+        f = f"{p.frequency:.4g} Hz" if math.isfinite(p.frequency) else "no peak"
+        fap = f"false alarm {p.false_alarm:.2g}" if math.isfinite(p.false_alarm) else "too few samples"
+        return f"{p.run}: {f}, {fap} (Nyquist {p.nyquist:.4g} Hz)"
+
+    evidence = "; ".join(words(p) for p in (approach, retract))
+    if math.isnan(approach.nyquist) and math.isnan(retract.nyquist):
+        return "none", "oscillation not assessed: no time base", math.nan
+    if not (approach.found and retract.found):
+        return "none", f"no post-contact oscillation (needs a peak with false alarm < 1e-3 in both runs: {evidence})", \
+            math.nan
+    fa, fr = approach.frequency, retract.frequency
+    if abs(fa - fr) <= tolerance * 0.5 * (fa + fr):
+        origin, verdict = oscillation_origin([fa, fr], [approach.velocity, retract.velocity], tolerance=tolerance)
+        return origin, f"{verdict} ({evidence})", 0.5 * (fa + fr)
+    la, lr = approach.wavelength, retract.wavelength
+    if math.isfinite(la * lr) and abs(la - lr) <= tolerance * 0.5 * (la + lr):
+        return "spatial", (f"same wavelength ({0.5 * (la + lr) * 1e9:.4g} nm) in both runs at different speeds: a "
+                           f"spatial feature ({evidence})"), math.nan
+    return "none", f"peaks in both runs at unrelated frequencies: not one oscillation ({evidence})", math.nan

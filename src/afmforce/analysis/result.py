@@ -19,8 +19,13 @@ __all__ = ["AnalysisResult", "SUMMARY_FIELDS"]
 
 #: Summary fields shown in tables: (attribute, label, SI unit).
 SUMMARY_FIELDS: tuple[tuple[str, str, str], ...] = (
-    ("calibration_factor", "calibration factor", "m/V"),
+    ("sensitivity", "sensitivity (file or user)", "m/V"),
+    ("sensitivity_fit", "sensitivity from the compliance slope", "m/V"),
     ("spring_constant", "spring constant", "N/m"),
+    ("adhesion_force", "adhesion (deepest retract dip)", "N"),
+    ("adhesion_distance", "adhesion position from contact", "m"),
+    ("rupture_distance", "last rupture from contact", "m"),
+    ("indentation", "indentation (soft contact)", "m"),
     ("shift", "inward shift", "m"),
     ("jump_in_separation", "jump-in separation", "m"),
     ("jump_in_force", "jump-in force", "N"),
@@ -35,6 +40,7 @@ SUMMARY_FIELDS: tuple[tuple[str, str, str], ...] = (
     ("hamaker", "Hamaker constant", "J"),
     ("oscillation_frequency", "oscillation", "Hz"),
     ("velocity", "approach speed", "m/s"),
+    ("force_gradient", "force gradient at contact", "N/m"),
     ("inertia_parameter", "inertia parameter", ""),
 )
 
@@ -53,10 +59,19 @@ class AnalysisResult:
         Unit of the raw deflection signal (``"V"``, ``"m"``, ``"N"``).
     position_channel : str
         ``"measured"`` or ``"nominal"``.
-    calibration_factor : float
-        Deflection per signal unit used [m/V] (m/m or m/N for other units).
-    calibration_factor_fit : float
-        From the constant-compliance slope [m/V].
+    contact_kind : str
+        ``"hard"`` (jump-in, or a straight compliance line), ``"soft"`` (curved: the
+        tip indents) or ``"none"`` (no contact reached); the steps that fit it ran.
+    contact_kind_reason : str
+        The evidence for the kind, with its numbers.
+    not_applicable : mapping
+        Step -> why it did not apply to this curve (e.g. the van der Waals fit on a soft contact).
+    sensitivity : float
+        Deflection sensitivity (InvOLS) the file or the user gives [m/V] (NaN if none).
+    sensitivity_fit : float
+        Sensitivity implied by the constant-compliance slope [m/V] (rigid contact assumed).
+    calibration_source : str
+        ``"metadata"`` (the file's or user's calibration) or ``"fit"`` (the compliance slope).
     spring_constant : float
         Force-measuring spring constant used [N/m].
     shift : float
@@ -84,6 +99,16 @@ class AnalysisResult:
         Position at pull-off relative to contact [m].
     jump_out_distance : float
         |deflection| at pull-off [m].
+    adhesion_force : float
+        Deepest retract force below the retract's own baseline [N], always <= 0; NaN
+        unless it exceeds the stated multiple of the noise (every contact kind).
+    adhesion_deflection : float  the same as a deflection [m]
+    adhesion_distance : float  its distance from the contact point [m]
+    adhesion_noise : float  baseline noise of the retract [N]
+    rupture_distance : float  distance from contact of the last rupture [m]
+    unbinding_steps : int  unbinding steps found between the deepest point and the last rupture [-]
+    adhesion_verdict : str  plain words with the numbers
+    indentation : float  soft contact: indentation at the turning point [m]
     surface_energy : float
         gamma from the pull-off and the given radius [J/m^2].
     radius : float
@@ -94,12 +119,21 @@ class AnalysisResult:
         A for a given R [J].
     oscillation_frequency : float
         Post-contact oscillation (approach run, else retract) [Hz].
+    oscillation_verdict : str
+        Plain words with the false-alarm probabilities of both runs.
     velocity : float
         Approach speed [m/s].
+    force_gradient : float
+        Measured |dF/dh| where the tip meets the surface [N/m].
+    resonance_frequency : float
+        Used for eq 3 [Hz] (from the file or the user).
     inertia_parameter : float
-        eq 3 at jump-in [-].
+        eq 3 at contact [-].
     friction : str
-        Friction signature of the compliance lines.
+        Friction signature of the compliance lines (``"not assessed"`` unless the contact is
+        hard with straight lines in both runs).
+    friction_verdict : str
+        Plain words, with the reason when not assessed.
     dynamic : bool
         The run is flagged as dynamic (the static fit is not trustworthy).
     verdict : str
@@ -117,9 +151,20 @@ class AnalysisResult:
     steps_run: tuple[str, ...]
     deflection_unit: str
     position_channel: str
-    calibration_factor: float = math.nan
-    calibration_factor_fit: float = math.nan
+    contact_kind: str = ""
+    contact_kind_reason: str = ""
+    sensitivity: float = math.nan
+    sensitivity_fit: float = math.nan
+    calibration_source: str = ""
     spring_constant: float = math.nan
+    adhesion_force: float = math.nan
+    adhesion_deflection: float = math.nan
+    adhesion_distance: float = math.nan
+    adhesion_noise: float = math.nan
+    rupture_distance: float = math.nan
+    unbinding_steps: int = 0
+    adhesion_verdict: str = ""
+    indentation: float = math.nan
     shift: float = math.nan
     contact_separation: float = math.nan
     jump_in_separation: float = math.nan
@@ -138,12 +183,17 @@ class AnalysisResult:
     hamaker: float = math.nan
     hamaker_se: float = math.nan
     oscillation_frequency: float = math.nan
+    oscillation_verdict: str = ""
     velocity: float = math.nan
+    force_gradient: float = math.nan
+    resonance_frequency: float = math.nan
     inertia_parameter: float = math.nan
     friction: str = ""
+    friction_verdict: str = ""
     dynamic: bool = False
     verdict: str = ""
     warnings: tuple[str, ...] = ()
+    not_applicable: Mapping[str, str] = field(default_factory=dict)
     time: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     position: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     separation: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
@@ -153,7 +203,9 @@ class AnalysisResult:
     details: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
     ARRAYS = ("time", "position", "separation", "deflection", "force", "segment")
-    UNITS = {"calibration_factor": "m/V", "calibration_factor_fit": "m/V", "spring_constant": "N/m",
+    UNITS = {"sensitivity": "m/V", "sensitivity_fit": "m/V", "spring_constant": "N/m", "adhesion_force": "N",
+             "adhesion_deflection": "m", "adhesion_distance": "m", "adhesion_noise": "N", "rupture_distance": "m",
+             "unbinding_steps": "", "indentation": "m", "force_gradient": "N/m", "resonance_frequency": "Hz",
              "shift": "m", "contact_separation": "m", "jump_in_separation": "m", "jump_in_force": "N",
              "jump_in_deflection": "m", "contact_onset_separation": "m", "pull_off_force": "N",
              "pull_off_force_extrapolated": "N", "pull_off_position": "m",
@@ -169,10 +221,7 @@ class AnalysisResult:
             if f.name in self.ARRAYS and not arrays:
                 continue
             out[f.name] = to_jsonable(getattr(self, f.name), use_to_dict=False)
-        units = dict(self.UNITS)
-        if self.deflection_unit != "V":
-            units["calibration_factor"] = units["calibration_factor_fit"] = f"m/{self.deflection_unit}"
-        out["units"] = units
+        out["units"] = dict(self.UNITS)
         return out
 
     def to_json(self, arrays: bool = False, indent: int | None = 2) -> str:
@@ -197,10 +246,11 @@ class AnalysisResult:
     def summary_rows(self) -> list[tuple[str, Any, str]]:
         """``(label, SI value, unit)`` rows for a printed summary."""
         rows = []
+        rows.append(("contact kind", f"{self.contact_kind or '-'}: {self.contact_kind_reason}", ""))
         for attr, label, unit in SUMMARY_FIELDS:
-            if attr == "calibration_factor" and self.deflection_unit != "V":
-                unit = f"m/{self.deflection_unit}"
             rows.append((label, getattr(self, attr), unit))
-        rows.append(("friction", self.friction or "-", ""))
+        rows.append(("adhesion", self.adhesion_verdict or "-", ""))
+        rows.append(("oscillation", self.oscillation_verdict or "-", ""))
+        rows.append(("friction", f"{self.friction or '-'}: {self.friction_verdict}", ""))
         rows.append(("diagnosis", self.verdict or "-", ""))
         return rows

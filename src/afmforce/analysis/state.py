@@ -18,7 +18,11 @@ from ..errors import AnalysisError
 from ..raw import RawCurve
 from .regions import RunRegions, run_indices
 
-__all__ = ["State", "prepare", "ContactSummary", "SmoothResult"]
+__all__ = ["State", "prepare", "ContactSummary", "SmoothResult", "NoContact"]
+
+
+class NoContact(AnalysisError):
+    """The approach never reaches the surface (contact kind ``"none"``): not a failure of the analysis."""
 
 
 @dataclass(frozen=True)

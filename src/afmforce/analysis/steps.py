@@ -19,15 +19,30 @@ from ._numeric import robust_line, running_mean
 from .drift import remove_drift
 from .dynamic import diagnose_curve, run_velocity
 from .fringes import FringeResult, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
-from .jumps import PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings, pull_off_estimate
-from .oscillation import OscillationResult, find_peak, oscillation_origin
+from .contact_point import CONTACT_POINT_METHODS, classify_contact, curvature_ratio
+from .jumps import JumpIn, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings, pull_off_estimate
+from .oscillation import OscillationResult, both_runs, find_peak
 from .regions import check_compliance, find_run_regions, run_indices, saturated_mask
-from .separation import effective_spring_constant, zero_of_separation
-from .state import ContactSummary, SmoothResult, State
+from .separation import ZeroResult, effective_spring_constant, zero_of_separation
+from .state import ContactSummary, NoContact, SmoothResult, State
+from .unbinding import retract_adhesion
 from .vdw import fit_vdw
 
-__all__ = ["smooth", "contact", "drift", "fringes", "compliance", "calibration", "shift", "zero", "force",
-           "jumps", "adhesion_step", "vdw", "oscillation", "friction", "diagnosis"]
+__all__ = ["smooth", "contact", "drift", "fringes", "compliance", "calibration", "kind", "shift", "zero", "force",
+           "jumps", "adhesion_step", "surface_energy", "vdw", "oscillation", "friction", "diagnosis"]
+
+
+def _kind(st: State) -> str:
+    """``"hard"``, ``"soft"`` (or ``"hard"`` when the kind step did not run)."""
+    k = st.details.get("kind")
+    return k.kind if k is not None else "hard"
+
+
+def _skip(st: State, step: str, why: str, detail=None) -> State:
+    """Record that ``step`` does not apply to this curve, and why."""
+    skipped = {**st.details.get("skipped", {}), step: why}
+    new = st.update("skipped", skipped)
+    return new.update(step, detail) if detail is not None else new
 
 
 def _staircase_window(z: np.ndarray, minimum: int = 11) -> int:
@@ -91,7 +106,21 @@ def contact(st: State, *, min_points: int = 5, baseline_fraction: float = 0.7,
     sat = saturated_mask(st.signal)
     kw = dict(saturated=sat, min_points=int(min_points), baseline_fraction=baseline_fraction,
               compliance_fraction=compliance_fraction)
-    app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach", **kw)
+    try:
+        app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach", **kw)
+    except AnalysisError as exc:
+        if not str(exc).startswith("no contact region"):
+            raise
+        app = None
+        try:  # a stiff lever barely deflects on the approach: the retract's adhesion shows the contact
+            find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", **kw)
+            app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach",
+                                   min_contrast=5.0, **kw)
+        except AnalysisError:
+            pass
+        if app is None:
+            raise NoContact(str(exc).replace("no contact region found on the approach run", "no contact reached")
+                            ) from None
     ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
     app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
     summary = ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
@@ -222,11 +251,50 @@ def calibration(st: State, *, source: str = "auto", run: str = "approach") -> St
     return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
 
 
+def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curvature: float = 1.6,
+         method: str = "hertz_local", force_fraction: float = 0.55, window: float = 0.15) -> State:
+    """Contact kind (hard with jump-in or straight line / soft curved) and a soft contact's contact point.
+
+    See :mod:`~afmforce.analysis.contact_point`: hard when the approach jumps
+    into contact (above ``nsigma`` step noise) or its contact is a straight line
+    the deflection follows (late/early slope ratio at most ``max_curvature``,
+    deflection per position at least ``min_stiffness`` when the calibration is
+    the file's); soft otherwise, with the contact point by ``method``.
+    """
+    st.require("deflection", step="kind")
+    if method not in CONTACT_POINT_METHODS:
+        raise ParameterError(f"contact point method {method!r} unknown; choose from {', '.join(CONTACT_POINT_METHODS)}")
+    noise = abs(st.noise * st.factor)
+    app = st.approach
+    ji = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma)
+    sig = ji.significance if ji.index >= 0 else 0.0
+    cal = st.details["calibration"]
+    comp = st.details["compliance"]
+    stiff = (comp.approach.slope * cal.factor if cal.source == "metadata" and comp.approach.found else math.nan)
+    contact_idx = app.index[app.contact & ~app.saturated]
+    curv = curvature_ratio(st.z, st.deflection, contact_idx)
+    res = classify_contact(jump_significance=sig, stiffness_ratio=stiff, curvature=curv, nsigma=nsigma,
+                           min_stiffness=min_stiffness, max_curvature=max_curvature)
+    new = st.update("kind", res)
+    if res.kind == "soft":
+        cp = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=force_fraction,
+                                           window=window)
+        if cp.index < 0:
+            raise AnalysisError("soft contact: no contact point found on the approach (too few samples before "
+                                "the largest deflection)")
+        new = new.update("contact_point", cp)
+    return new
+
+
 def shift(st: State, *, apply: bool = True) -> State:
     """Shift the inward run to overlay the outward compliance line (Fig 9)."""
     comp = st.details.get("compliance")
     if comp is None:
         raise AnalysisError("step 'shift' needs the compliance lines")
+    if _kind(st) == "soft":
+        nan = math.nan
+        return _skip(st, "shift", "soft contact: no constant-compliance lines to overlay",
+                     cc.ShiftResult(nan, nan, nan, False))
     res = cc.compliance_shift(comp, applied=bool(apply))
     if not math.isfinite(res.shift):
         missing = "retract" if comp.approach.found else "approach"
@@ -251,6 +319,12 @@ def zero(st: State, *, contact_separation: float = Z0, run: str = "auto", parall
     attraction.
     """
     st.require("deflection", step="zero")
+    if _kind(st) == "soft":
+        cp = st.details["contact_point"]
+        c0 = cp.deflection - cp.position
+        sep = st.deflection - st.z - c0
+        res = ZeroResult(0.0, cp.position, "approach", math.nan)
+        return st.update("zero", res, separation=sep, position=st.z - cp.position)
     if run not in ("auto", "approach", "retract"):
         raise ParameterError(f"zero: run must be auto, approach or retract, got {run!r}")
     warn = []
@@ -301,6 +375,11 @@ def jumps(st: State, *, nsigma: float = 5.0, window: int = 3, onset_tolerance: f
     ``nsigma`` noise) off the compliance line the zero of separation was put on.
     """
     st.require("separation", step="jumps")
+    if _kind(st) == "soft":
+        nan = math.nan
+        return _skip(st, "jumps", "soft contact: no jump into contact and no single pull-off jump (see adhesion)",
+                     {"jump_in": JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
+                      "pull_off": PullOff(False, -1, nan, nan, nan, nan, 0.0, False)})
     noise = abs(st.noise * st.factor)
     k = st.spring_constant
     ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window)
@@ -322,15 +401,30 @@ def jumps(st: State, *, nsigma: float = 5.0, window: int = 3, onset_tolerance: f
     return st.update("jumps", {"jump_in": ji, "pull_off": po}, warn=warn)
 
 
-def adhesion_step(st: State, *, radius: float | None = None, model: str = "jkr", hamaker: float = HAMAKER,
-                  z0: float = Z0) -> State:
-    """Surface energy from the pull-off and R, and R from the jump-out distance."""
+def adhesion_step(st: State, *, nsigma: float = 5.0) -> State:
+    """Adhesion for every contact kind: the retract's deepest dip below its own baseline (<= 0).
+
+    See :mod:`~afmforce.analysis.unbinding`; the dip counts above ``nsigma``
+    baseline noise, with its position, the last rupture and the unbinding steps.
+    """
+    st.require("position", step="adhesion")
+    res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=nsigma)
+    return st.update("adhesion", res)
+
+
+def surface_energy(st: State, *, radius: float | None = None, model: str = "jkr", hamaker: float = HAMAKER,
+                   z0: float = Z0) -> State:
+    """Surface energy from the pull-off and R, and R from the jump-out distance (hard contacts)."""
     j = st.details.get("jumps")
     if j is None:
-        raise AnalysisError("step 'adhesion' needs the jumps")
+        raise AnalysisError("step 'surface_energy' needs the jumps")
+    if _kind(st) == "soft":
+        return _skip(st, "surface_energy", "soft contact: JKR/DMT from a pull-off jump need a rigid contact")
+    if not j["pull_off"].found:
+        return _skip(st, "surface_energy", "no pull-off found")
     radius = radius if radius is not None else st.metadata.get("radius")
-    return st.update("adhesion", adhesion(j["pull_off"], st.spring_constant, radius=radius, model=model,
-                                          hamaker=hamaker, z0=z0))
+    return st.update("surface_energy", adhesion(j["pull_off"], st.spring_constant, radius=radius, model=model,
+                                                hamaker=hamaker, z0=z0))
 
 
 def vdw(st: State, *, radius: float | None = None, z0: float = Z0, max_separation: float = 30e-9,
@@ -339,6 +433,8 @@ def vdw(st: State, *, radius: float | None = None, z0: float = Z0, max_separatio
     j = st.details.get("jumps")
     if j is None:
         raise AnalysisError("step 'vdw' needs the jumps")
+    if _kind(st) == "soft":
+        return _skip(st, "vdw", "soft contact: the van der Waals law of eq 2 is for a rigid contact with a jump")
     radius = radius if radius is not None else st.metadata.get("radius")
     idx = st.approach.index
     ji = j["jump_in"]
@@ -359,27 +455,80 @@ def oscillation(st: State, *, false_alarm: float = 1e-3, min_cycles: float = 3.0
         idx = run.index[run.compliance & ~run.saturated]
         v = run_velocity(st.time[run.index], st.z[run.index]) if st.time_known else math.nan
         if not st.time_known or idx.size < 8:
-            peaks[run.kind] = find_peak(np.array([]), np.array([]), v, run.kind)
+            nyq = math.nan
+            if st.time_known and run.index.size > 1:
+                nyq = 0.5 / float(np.median(np.diff(st.time[run.index])))
+            peaks[run.kind] = dataclasses.replace(find_peak(np.array([]), np.array([]), v, run.kind), nyquist=nyq)
             continue
         x = st.z[idx] - st.z[idx].mean()
         a, b, *_ = robust_line(x, st.deflection[idx])
         resid = st.deflection[idx] - (a + b * x)
         peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=min_cycles,
                                     false_alarm=false_alarm)
-    found = [p for p in peaks.values() if p.found]
-    origin, verdict = oscillation_origin([p.frequency for p in found], [p.velocity for p in found])
+    origin, verdict, _ = both_runs(peaks["approach"], peaks["retract"])
     return st.update("oscillation", OscillationResult(peaks["approach"], peaks["retract"], origin, verdict))
 
 
 def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
-             offset_tolerance: float = 0.2e-9) -> State:
-    """Friction signature of the two compliance lines (before the shift)."""
+             offset_tolerance: float = 0.2e-9, max_curvature: float = 1.25) -> State:
+    """Friction signature of the two compliance lines (before the shift).
+
+    Assessed only on a hard contact whose two compliance regions are straight
+    lines (late/early slope ratio within ``max_curvature``); otherwise the
+    signature is ``"not assessed"`` with the reason and its numbers.
+    """
     comp = st.details.get("compliance")
     if comp is None:
         raise AnalysisError("step 'friction' needs the compliance lines")
+    nan = math.nan
+    why = None
+    if _kind(st) == "soft":
+        why = "not assessed: soft contact (curved; friction's signature needs straight compliance lines)"
+    else:
+        for run in (st.approach, st.retract):
+            if not run.has_compliance:
+                continue
+            idx = run.index[run.compliance & ~run.saturated]
+            c = curvature_ratio(st.z, st.signal, idx, min_points=12)
+            if not math.isfinite(c):
+                why = (f"not assessed: the {run.kind} compliance region has {idx.size} samples, too few to tell "
+                       "a straight line from a curved one")
+                break
+            if not (1 / max_curvature <= c <= max_curvature):
+                why = (f"not assessed: the {run.kind} compliance line is not straight (late/early slope ratio "
+                       f"{c:.3g}, outside {1 / max_curvature:.3g}-{max_curvature:.3g})")
+                break
+    if why is not None:
+        return _skip(st, "friction", why, cc.FrictionSignature("not assessed", nan, nan, nan, nan, why))
     sh = st.details.get("shift") or cc.compliance_shift(comp, applied=False)
     return st.update("friction", cc.friction_signature(comp, sh, nsigma=nsigma, slope_tolerance=slope_tolerance,
                                                        offset_tolerance=offset_tolerance, channel=st.channel))
+
+
+def _force_gradient(st: State, window: int = 5) -> tuple[float, str]:
+    """Measured |dF/dh| [N/m] where the tip meets the surface, and how it was measured."""
+    if st.force is None or not math.isfinite(st.spring_constant):
+        return math.nan, "no force (spring constant unknown)"
+    idx = st.approach.index
+    h, f = st.separation[idx], st.force[idx]
+    if _kind(st) == "soft":
+        cp = st.details["contact_point"]
+        k = int(np.searchsorted(idx, cp.index))
+        stop = np.flatnonzero((np.arange(idx.size) > k) & (h < -0.1 * max(cp.indentation, 0.0)))
+        end = int(stop[0]) if stop.size else idx.size
+        sel = slice(k, max(end, k + 3))
+        what = "contact stiffness over the first 10 % of the indentation"
+    else:
+        ji = st.details["jumps"]["jump_in"]
+        if not ji.found:
+            return math.nan, "no jump into contact: the attraction's gradient is below the noise"
+        k = int(np.searchsorted(idx, ji.index))
+        sel = slice(max(k - window + 1, 0), k + 1)
+        what = f"attraction over the last {window} samples before the jump"
+    hs, fs = h[sel], f[sel]
+    if hs.size < 3 or np.ptp(hs) == 0:
+        return math.nan, "too few samples to measure the force gradient"
+    return float(abs(np.polyfit(hs - hs.mean(), fs, 1)[0])), what
 
 
 def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution: float | None = None,
@@ -396,11 +545,14 @@ def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution
     f = resonance_frequency if resonance_frequency is not None else st.metadata.get("resonance_frequency")
     dx = resolution if resolution is not None else max(abs(st.noise * st.factor), min_resolution)
     fit = st.details.get("vdw")
+    fit = fit if fit is not None and hasattr(fit, "static_jump_in_separation") else None
     h_static = fit.static_jump_in_separation if fit is not None else math.nan
     step = float(np.median(np.abs(np.diff(st.z[idx])))) if idx.size > 1 else 0.0
     fr = st.details.get("friction")
     z0 = st.details["zero"].contact_separation if "zero" in st.details else math.nan
+    grad, grad_how = _force_gradient(st)
     res = diagnose_curve(velocity=v, spring_constant=st.spring_constant, resonance_frequency=f, resolution=dx,
+                         force_gradient=grad, force_gradient_method=grad_how,
                          jump_in_separation=j["jump_in"].separation if j["jump_in"].found else math.nan,
                          static_jump_in_separation=h_static,
                          sample_step=step, friction=None if fr is None else fr.kind,

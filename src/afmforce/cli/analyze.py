@@ -41,12 +41,16 @@ def register(sub) -> None:
 
     p = sub.add_parser("analyze", help="analyse force-curve files and force maps: force vs separation, jumps, "
                        "fits, diagnosis", description=__doc__.split("\n\n")[1].replace("\n", " "))
-    p.add_argument("files", nargs="+", metavar="FILE", help="force-curve files, force maps or folders "
+    p.add_argument("files", nargs="*", metavar="FILE", help="force-curve files, force maps or folders "
                    "(searched recursively)")
+    p.add_argument("--example", action="append", default=[], metavar="NAME",
+                   help="analyse a sample file shipped with afmforce (repeatable; 'list' lists them): "
+                        + ", ".join(_example_names()))
     p.add_argument("--out", metavar="DIR", type=Path, default=None,
                    help="write the summary table, map images and (small runs) each curve's outputs into DIR")
     p.add_argument("--json", action="store_true", help="print the results as JSON (SI) instead of a table")
-    p.add_argument("--force", action="store_true", help="overwrite existing per-curve output files")
+    p.add_argument("--force", action="store_true", help="with --out: recompute every curve and overwrite its "
+                   "outputs (default: a rerun skips curves whose outputs exist and keeps the tables)")
     p.add_argument("--steps", default=None, metavar="A,B,...",
                    help="analysis steps to run (their requirements are added): " + ", ".join(STEPS))
     p.add_argument("--format", default=None, metavar="ID", help="reader to use instead of detection "
@@ -90,6 +94,12 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+def _example_names() -> list[str]:
+    from ..datasets import DATASETS
+
+    return list(DATASETS)
+
+
 def _inputs(names: list[str]) -> list[Path]:
     from ..io import is_supported
 
@@ -110,7 +120,7 @@ def _options(args: argparse.Namespace) -> dict:
             "calibration": {"source": args.calibration},
             "force": {"spring_constant": args.spring_constant, "theta0": args.theta0,
                       "L0": args.L0, "L1": args.L1, "L2": args.L2},
-            "adhesion": {"radius": args.radius}, "vdw": {"radius": args.radius},
+            "surface_energy": {"radius": args.radius}, "vdw": {"radius": args.radius},
             "diagnosis": {"resonance_frequency": args.resonance_frequency}}
 
 
@@ -119,6 +129,19 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     from ..io import FORMATS
     from ..pipeline import resolve_steps
 
+    from ..datasets import DATASETS, path as example_path
+
+    if "list" in args.example:
+        return None
+    for name in args.example:
+        if name not in DATASETS:
+            raise ParameterError(f"--example {name}: unknown; choose one of {', '.join(DATASETS)} (or 'list')")
+    args.files = list(args.files) + [str(example_path(n)) for n in args.example]
+    if not args.files:
+        raise ParameterError("give force-curve files or folders, or --example NAME (--example list shows them)")
+    missing = [f for f in args.files if not Path(f).exists()]
+    if missing:  # before any work: no output folder for a typo
+        raise ParameterError(f"no such file or folder: {', '.join(missing)}")
     steps = None if args.steps is None else [s.strip() for s in args.steps.split(",") if s.strip()]
     resolve_steps(steps)  # unknown step: ParameterError -> exit 2
     if args.format is not None and args.format not in FORMATS:
@@ -141,6 +164,12 @@ def run(args: argparse.Namespace) -> int:
     from ..sweep.engine import default_chunk_size
 
     steps = _check(args)
+    if "list" in args.example:
+        from ..datasets import DATASETS
+
+        for name, d in DATASETS.items():
+            print(f"{name:<14} {d.description}")
+        return 0
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
@@ -275,7 +304,11 @@ def _oscillation_origin(ok):
 
 _COLUMNS = (  # column, header, scale
     ("spring_constant", "k [N/m]", 1.0),
-    ("calibration_factor", "InvOLS [nm/V]", 1e9),
+    ("sensitivity", "sensitivity [nm/V]", 1e9),
+    ("sensitivity_fit", "sens. fit [nm/V]", 1e9),
+    ("adhesion_force", "adhesion [nN]", 1e9),
+    ("rupture_distance", "rupture [nm]", 1e9),
+    ("indentation", "indent. [nm]", 1e9),
     ("shift", "shift [nm]", 1e9),
     ("jump_in_separation", "jump-in h [nm]", 1e9),
     ("jump_in_force", "jump-in F [nN]", 1e9),
@@ -293,13 +326,12 @@ def _print_rows(ok) -> None:
     """One line per curve (small runs)."""
     if not len(ok):
         return
-    heads = ["file"] + [h for _, h, _ in _COLUMNS] + ["friction", "dynamic"]
+    heads = ["file", "contact"] + [h for _, h, _ in _COLUMNS] + ["friction", "dynamic"]
     rows = []
     for _, r in ok.iterrows():
         vals = [float(r[c]) * s for c, _, s in _COLUMNS]
-        if r["deflection_unit"] != "V":
-            vals[1] = math.nan  # vendor-calibrated signal: no InvOLS
-        rows.append([r["name"]] + [_fmt(v) for v in vals] + [r["friction"] or "-", "yes" if r["dynamic"] else "no"])
+        rows.append([r["name"], r["contact_kind"] or "-"] + [_fmt(v) for v in vals]
+                    + [r["friction"] or "-", "yes" if r["dynamic"] else "no"])
     widths = [max(len(h), *(len(row[i]) for row in rows)) for i, h in enumerate(heads)]
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths)))
     for row in rows:
@@ -316,10 +348,9 @@ def _print_stats(ok) -> None:
 
     print(f"{len(ok)} curves analysed; {int(ok['dynamic'].fillna(False).sum())} flagged dynamic")
     print(f"  {'quantity':<16}  {'min':>10}  {'median':>10}  {'max':>10}  {'found':>7}")
-    volts = (ok["deflection_unit"] == "V").to_numpy()
     for col, head, scale in _COLUMNS:
         v = ok[col].to_numpy(float) * scale
-        v = v[np.isfinite(v) & (volts if col == "calibration_factor" else True)]  # InvOLS: raw volts only
+        v = v[np.isfinite(v)]
         if len(v):
             print(f"  {head:<16}  {_fmt(v.min()):>10}  {_fmt(float(np.median(v))):>10}  {_fmt(v.max()):>10}  "
                   f"{len(v):>7}")

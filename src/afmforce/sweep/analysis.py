@@ -174,7 +174,8 @@ class CurveAnalysis:
     out : str or None
         Folder for per-curve outputs (``<name>.afmforce.json/.csv/.png``); None: none.
     force : bool
-        Overwrite existing per-curve outputs.
+        Recompute every curve and overwrite its outputs (otherwise a curve whose outputs are complete
+        is skipped: its summary row is read back from its JSON).
     plot : bool
         Write the per-curve figure.
     protect : tuple of str
@@ -227,27 +228,58 @@ class CurveAnalysis:
         base = Path(ref.path).name
         rows = []
         for index, curve in pairs:
+            stem = f"{base}_{index:04d}" if several else base
+            if self.out is not None and not self.force:
+                row = self.finished(stem)
+                if row is not None:  # a rerun resumes: this curve's outputs are complete
+                    rows.append(row)
+                    continue
             res = analyze(curve, steps=self.steps, options=self.options, channel=self.channel)
             row = summary_row(res, curve, file=ref.path, index=index,
                               name=f"{base}#{index}" if several else base)
             if self.keep_json:
                 row["json"] = res.to_json(indent=None)
             if self.out is not None:
-                self.write_outputs(res, curve, f"{base}_{index:04d}" if several else base)
+                self.write_outputs(res, curve, stem, row)
             rows.append(row)
         return rows
 
-    def write_outputs(self, result, curve, stem: str) -> dict[str, Path]:
-        """Write ``<stem>.afmforce.{json,csv,png}`` into :attr:`out`, atomically."""
+    def _settings(self) -> str:
+        fields = {k: v for k, v in self.key_fields().items() if k != "json"}
+        return json.dumps(fields, sort_keys=True, default=repr)
+
+    def _paths(self, stem: str) -> dict[str, Path]:
         paths = {ext: Path(self.out) / f"{stem}{OUTPUT_SUFFIX}.{ext}" for ext in ("json", "csv", "png")}
         if not self.plot:
             paths.pop("png")
+        return paths
+
+    def finished(self, stem: str) -> dict[str, Any] | None:
+        """The summary row stored with a curve's complete outputs (None: analyse it)."""
+        paths = self._paths(stem)
+        if not all(p.exists() for p in paths.values()):
+            return None
+        try:
+            stored = json.loads(paths["json"].read_text())
+            row = dict(stored.pop("summary_row"))
+            settings = stored.pop("analysis_settings")
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+        if settings != self._settings():  # written with other steps, options or metadata: recompute
+            return None
+        if self.keep_json:
+            row["json"] = json.dumps(stored, allow_nan=False)
+        return row
+
+    def write_outputs(self, result, curve, stem: str, row: Mapping[str, Any] | None = None) -> dict[str, Path]:
+        """Write ``<stem>.afmforce.{json,csv,png}`` into :attr:`out`, atomically (the JSON last: it marks
+        the curve finished, with its summary row for a rerun)."""
+        from .._json import to_jsonable
+
+        paths = self._paths(stem)
         for path in paths.values():
             if str(path.resolve()) in self.protect:
                 raise OutputExistsError(f"an output would replace an input file ({path}); choose another --out")
-            if path.exists() and not self.force:
-                raise OutputExistsError(f"{path} exists; pass --force to overwrite")
-        atomic_write_text(paths["json"], result.to_json())
         result.write_table(paths["csv"])
         if self.plot:
             from ..plotting import plot_summary
@@ -255,6 +287,11 @@ class CurveAnalysis:
             fig = plot_summary(result, curve)
             with atomic_path(paths["png"]) as tmp:
                 fig.savefig(tmp, dpi=100, format="png")
+        payload = result.to_dict()
+        if row is not None:
+            payload["summary_row"] = to_jsonable({k: v for k, v in row.items() if k != "json"}, use_to_dict=False)
+            payload["analysis_settings"] = self._settings()
+        atomic_write_text(paths["json"], json.dumps(payload, indent=2, allow_nan=False))
         return paths
 
 

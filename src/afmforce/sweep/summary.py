@@ -21,7 +21,9 @@ from .results import BatchResult
 __all__ = ["SUMMARY_COLUMNS", "SUMMARY_UNITS", "summary_row", "summary_table", "write_summary", "failures"]
 
 #: Result fields copied into the summary (floats, SI).
-_FLOATS = ("calibration_factor", "calibration_factor_fit", "spring_constant", "shift", "contact_separation",
+_FLOATS = ("sensitivity", "sensitivity_fit", "spring_constant", "adhesion_force", "adhesion_distance",
+           "adhesion_noise", "rupture_distance", "unbinding_steps", "indentation", "force_gradient",
+           "resonance_frequency", "shift", "contact_separation",
            "jump_in_separation", "jump_in_force", "jump_in_deflection", "pull_off_force", "pull_off_position",
            "jump_out_distance", "surface_energy", "radius", "hamaker_radius", "hamaker_radius_se", "hamaker",
            "hamaker_se", "oscillation_frequency", "velocity", "inertia_parameter")
@@ -32,7 +34,7 @@ SUMMARY_COLUMNS: dict[str, str] = {
     "item": "int", "source": "str", "name": "str", "file": "str", "curve": "int",
     "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "deflection_unit": "str",
     **{name: "float" for name in _FLOATS + _OSC},
-    "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str", "error": "str",
+    "contact_kind": "str", "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str", "error": "str",
 }
 
 
@@ -41,11 +43,10 @@ def _units() -> dict[str, str]:
 
     units = {name: AnalysisResult.UNITS[name] for name in _FLOATS}
     units.update({n: ("Hz" if n.endswith("frequency") else "m/s") for n in _OSC})
-    units["calibration_factor"] = units["calibration_factor_fit"] = "m/V"  # m per deflection_unit
     return units
 
 
-#: SI unit of each numeric summary column (calibration factors: metres per ``deflection_unit``).
+#: SI unit of each numeric summary column.
 SUMMARY_UNITS: dict[str, str] = _units()
 
 
@@ -72,13 +73,14 @@ def summary_row(result, curve, *, file: str, index: int, name: str) -> dict[str,
                            "map_nx": nx, "map_ny": ny, "deflection_unit": result.deflection_unit}
     row.update({f: float(getattr(result, f)) for f in _FLOATS})
     osc = result.details.get("oscillation")
+    confirmed = osc is not None and osc.origin != "none"  # a peak in both runs (see oscillation.both_runs)
     for run in ("approach", "retract"):
         peak = getattr(osc, run, None)
-        found = peak is not None and peak.found
+        found = confirmed and peak is not None and peak.found
         row[f"oscillation_{run}_frequency"] = float(peak.frequency) if found else math.nan
         row[f"oscillation_{run}_velocity"] = float(peak.velocity) if found else math.nan
-    row.update(friction=result.friction, dynamic=bool(result.dynamic), verdict=result.verdict,
-               warnings=" | ".join(result.warnings))
+    row.update(contact_kind=result.contact_kind, friction=result.friction, dynamic=bool(result.dynamic),
+               verdict=result.verdict, warnings=" | ".join(result.warnings))
     return row
 
 
@@ -102,18 +104,12 @@ def _normalise(frame, extra: tuple[str, ...] = ()):
     return frame
 
 
-def _extra(result: BatchResult) -> tuple[str, ...]:
-    for frame in result.iter_tables():
-        return ("json",) if "json" in frame.columns else ()
-    return ()
-
-
 def summary_table(result: BatchResult, *, with_json: bool = False):
     """All summary rows of a batch in item order (pandas DataFrame; the ``json``
     column only with ``with_json``)."""
     import pandas as pd
 
-    extra = _extra(result) if with_json else ()
+    extra = ("json",) if with_json else ()  # present even when the first chunk failed (no rows)
     frames = [_normalise(f, extra) for f in result.iter_tables()]
     if not frames:
         return _normalise(pd.DataFrame(), extra)

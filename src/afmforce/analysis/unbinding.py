@@ -1,0 +1,154 @@
+"""Adhesion for every contact kind: the retract's dip below its own baseline.
+
+The adhesion of a curve is the deepest retract force below the retract's own
+zero-force baseline (a robust line through the retract's free part, against
+position: a tilted baseline is followed), so it is always <= 0. It is reported
+(``found``) only when it exceeds ``nsigma`` times the baseline noise (the robust
+standard deviation of the free part about that line, which includes the slow
+noise a sample-to-sample estimate misses). With it come its position, the last
+rupture (where the retract comes back to the baseline for good, as a distance
+from the contact point) and the unbinding steps: upward steps of the smoothed
+retract between the deepest point and the last rupture, each larger than
+``nsigma`` noise.
+
+This is the adhesion of soft and biological samples (unbinding, tethers) as well
+as of rigid ones; the paper's hard-contact pull-off (:mod:`.jumps`) stays for
+hard contacts, where it is the same dip ending in one jump.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.ndimage import median_filter
+
+from ._numeric import mad_sigma, robust_line
+from .regions import RunRegions
+
+__all__ = ["UnbindingStep", "Adhesion", "retract_adhesion"]
+
+
+@dataclass(frozen=True)
+class UnbindingStep:
+    """One upward step of the retract (a bond or tether letting go).
+
+    Attributes
+    ----------
+    index : int  sample of the curve just after the step [-]
+    distance : float  distance from the contact point [m]
+    force : float  height of the step [N] (> 0; deflection [m] when k is unknown)
+    """
+
+    index: int
+    distance: float
+    force: float
+
+
+@dataclass(frozen=True)
+class Adhesion:
+    """Adhesion of the retract run.
+
+    Attributes
+    ----------
+    found : bool  the dip exceeds ``nsigma`` noise
+    force : float  deepest force below the retract baseline [N] (<= 0; NaN without k)
+    deflection : float  the same in deflection [m] (<= 0)
+    index : int  sample of the deepest point [-]
+    distance : float  its distance from the contact point [m]
+    noise : float  baseline noise [N] (deflection noise x k)
+    nsigma : float  multiple of the noise a dip must exceed [-]
+    rupture_distance : float  distance from the contact point of the last rupture [m]
+    steps : tuple of UnbindingStep
+    verdict : str
+    """
+
+    found: bool
+    force: float
+    deflection: float
+    index: int
+    distance: float
+    noise: float
+    nsigma: float
+    rupture_distance: float
+    steps: tuple[UnbindingStep, ...]
+    verdict: str
+
+
+def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, spring_constant: float, *,
+                     nsigma: float = 5.0, smooth: int | None = None) -> Adhesion:
+    """The retract's deepest dip below its own baseline, last rupture and unbinding steps.
+
+    Parameters
+    ----------
+    d : ndarray
+        Deflection [m] of the whole curve.
+    position : ndarray
+        Position relative to the contact point [m] (0 at contact, negative away from the sample).
+    run : RunRegions
+        The retract run (``zero_force`` marks its free part).
+    spring_constant : float
+        [N/m]; NaN gives forces as NaN (deflections stay).
+    nsigma : float
+        Multiple of the baseline noise [-].
+    smooth : int, optional
+        Running-median window for the steps [samples] (default: about 1/400 of the run, at least 3).
+    """
+    idx = run.index
+    k = spring_constant if math.isfinite(spring_constant) else math.nan
+    x, y = position[idx], d[idx]
+    free = run.zero_force & ~run.saturated
+    if free.sum() < 10:  # no free part found: the farthest 30 % of the run
+        far = x <= np.quantile(x, 0.3)
+        free = far & ~run.saturated
+    xf = x[free]
+    xm = float(xf.mean())
+    a, b, *_ = robust_line(xf - xm, y[free])
+    if not math.isfinite(b):
+        a, b = float(np.median(y[free])), 0.0
+    u = y - (a + b * (x - xm))
+    sigma = float(1.4826 * np.median(np.abs(u[free] - np.median(u[free]))))
+    if not sigma > 0:
+        sigma = float(mad_sigma(np.diff(u[free])) / math.sqrt(2.0))
+    ok = ~run.saturated | (u < 0)  # a clipped bottom is still a dip (a lower bound)
+    j = int(np.argmin(np.where(ok, u, np.inf)))
+    depth = min(float(u[j]), 0.0)
+    thr = nsigma * sigma
+    found = -depth > thr
+    w = smooth or max(3, (idx.size // 400) | 1)
+    us = median_filter(u, size=w, mode="nearest")
+    steps: list[UnbindingStep] = []
+    rupture = math.nan
+    if found:
+        below = np.flatnonzero(us[j:] < -thr) + j
+        last = int(below[-1]) if below.size else j
+        rupture = float(-x[min(last + 1, x.size - 1)])
+        seg = us[j: min(last + w + 1, us.size)]
+        if seg.size > w:
+            rise = seg[w:] - seg[:-w]
+            cand = np.flatnonzero(rise > thr)
+            i = 0
+            while i < cand.size:  # one step per run of candidates: its largest rise
+                group = [cand[i]]
+                while i + 1 < cand.size and cand[i + 1] - cand[i] <= w:
+                    i += 1
+                    group.append(cand[i])
+                g = max(group, key=lambda q: rise[q])
+                s_idx = j + g + w
+                steps.append(UnbindingStep(int(idx[min(s_idx, idx.size - 1)]),
+                                           float(-x[min(s_idx, x.size - 1)]),
+                                           float(rise[g] * (k if math.isfinite(k) else 1.0))))
+                i += 1
+    force = depth * k
+    unit, scale, val = ("nN", 1e9, force) if math.isfinite(k) else ("nm", 1e9, depth)
+    noise_v = sigma * (k if math.isfinite(k) else 1.0)
+    if found:
+        verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
+                   f"{noise_v * scale:.2g} {unit}) at {-x[j] * 1e9:.4g} nm from contact; last rupture at "
+                   f"{rupture * 1e9:.4g} nm; {len(steps)} unbinding step(s)")
+    else:
+        verdict = (f"no adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): the "
+                   f"deepest dip is {-depth / sigma if sigma > 0 else 0:.2g} x the noise")
+    return Adhesion(bool(found), float(force) if found else math.nan, float(depth) if found else math.nan, int(idx[j]), float(-x[j]), float(noise_v), float(nsigma),
+                    float(rupture), tuple(steps), verdict)
