@@ -115,7 +115,7 @@ def _solver_group(parser):
                    help="in-contact ringing: " + "; ".join(
                        f"{k}: {v.name}" for k, v in RINGING.items()) + " (default damp)")
     g.add_argument("--max-steps", type=int, default=None, dest="max_steps",
-                   help="step budget (default 2000000)")
+                   help="step budget (default: sized from the run, max(2e6, 60 f_max T))")
 
 
 def _output_group(parser):
