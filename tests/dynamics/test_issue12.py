@@ -109,3 +109,69 @@ def test_tight_tolerance_finishes_within_the_default_budget():
     b = _sim(rtol=1e-8).events
     assert b.hysteresis_offset == pytest.approx(a.hysteresis_offset, abs=0.002 * nm)
     assert b.pull_off_position == pytest.approx(a.pull_off_position, abs=0.5 * nm)
+
+
+# --- convergence guard ----------------------------------------------------------------------
+def test_guard_warns_on_the_load_friction_case_and_can_raise():
+    """Finding 2 is no longer silent: check="auto" re-solves (stiff friction is risky) and warns
+    with the hysteresis difference; check="raise" raises it; the estimate is in solver."""
+    from afmforce.dynamics import ConvergenceWarning
+
+    with pytest.warns(ConvergenceWarning, match="hysteresis_offset"):
+        tr = simulate(**CASES["load_friction"], check="auto")
+    assert tr.solver.event_errors["hysteresis_offset"] > 0.1 * nm
+    assert "NOT converged" in tr.solver.check
+    with pytest.raises(SolverError, match="not converged"):
+        simulate(**CASES["load_friction"], check="raise")
+
+
+def test_guard_skips_safe_runs_and_reports_errors_when_asked(fig5):
+    assert fig5.solver.event_errors == {} and fig5.solver.check == "not checked"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        a = simulate(check="auto")
+        b = simulate(check="always", end=-190e-9)
+    assert "not a risky regime" in a.solver.check
+    assert b.solver.event_errors["hysteresis_offset"] < 0.002 * nm
+    assert b.solver.event_errors["jump_in_position"] < 0.002 * nm
+
+
+def test_guard_rejects_an_unknown_mode():
+    from afmforce.errors import ParameterError
+
+    with pytest.raises(ParameterError, match="check must be one of"):
+        simulate(check="sometimes")
+
+
+hypothesis = pytest.importorskip("hypothesis")
+from hypothesis import HealthCheck, given, settings  # noqa: E402
+from hypothesis import strategies as st  # noqa: E402
+
+
+@settings(max_examples=6, deadline=None, derandomize=True,
+          suppress_health_check=[HealthCheck.too_slow])
+@given(log_m=st.floats(-11, -8), k=st.floats(0.05, 0.5), r=st.floats(50e-9, 300e-9),
+       log_v=st.floats(-6, -4.7), beam=st.booleans(), log_xi=st.floats(-2.5, -1))
+def test_default_agrees_with_100x_tighter_or_warns(log_m, k, r, log_v, beam, log_xi):
+    """Property (issue 12): over plausible random parameters, the default result agrees with a
+    100x tighter run on jump-in, pull-off and hysteresis to 1 % or 0.5 nm, or the run warns."""
+    from afmforce.dynamics import ConvergenceWarning
+
+    if beam:
+        kw = dict(xi=10**log_xi, velocity=10**log_v / 10, radius=r, start=-40e-9, turn=20e-9,
+                  end=-250e-9)
+    else:
+        kw = dict(model="spring", mass=10**log_m, spring_constant=k, radius=r,
+                  velocity=10**log_v, start=-40e-9, turn=10e-9, end=-300e-9, sample_rate=1e5)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        a = simulate(**kw, check="auto").events
+    warned = any(issubclass(w.category, ConvergenceWarning) for w in caught)
+    b = _sim(**kw, rtol=1e-6, atol=1e-14).events
+    ok = True
+    for name in ("jump_in_position", "pull_off_position", "hysteresis_offset"):
+        x, y = getattr(a, name), getattr(b, name)
+        if math.isnan(x) and math.isnan(y):
+            continue
+        ok &= abs(x - y) <= max(0.5 * nm, 0.01 * abs(y))
+    assert ok or warned

@@ -89,7 +89,8 @@ def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
 
 
 def simulate(config: SimulationConfig | None = None, *,
-             progress: Callable[[float], None] | None = None, **overrides) -> Trajectory:
+             progress: Callable[[float], None] | None = None, check: str = "off",
+             **overrides) -> Trajectory:
     """Simulate one approach-dwell-retract cycle (spec sections 3 and 5).
 
     Parameters
@@ -98,6 +99,15 @@ def simulate(config: SimulationConfig | None = None, *,
         The run; default: the paper's Fig 5 (beam, xi = 0.1 kg/s, 0.1 um/s).
     progress : callable, optional
         Called with the fraction of simulated time done (0..1) now and then.
+    check : {"off", "auto", "always", "raise"}
+        Convergence guard (:mod:`afmforce.dynamics.guard`): ``"auto"`` re-solves
+        at 10x tighter tolerances when the run is in a risky regime (low
+        damping ratio, stiff load-dependent friction) and warns with
+        :class:`~afmforce.dynamics.guard.ConvergenceWarning` when a key event
+        moved beyond its tolerance; ``"always"`` checks every run;
+        ``"raise"`` checks and raises :class:`SolverError` instead. The
+        differences are in ``solver.event_errors``. Default "off" (the CLI
+        uses "auto").
     **overrides
         Fields of :class:`SimulationConfig` to change, e.g. ``xi=0.01``.
 
@@ -262,13 +272,21 @@ def simulate(config: SimulationConfig | None = None, *,
                           f"z = {cfg.turn * 1e9:.4g} nm; turned there", DynamicsWarning,
                           stacklevel=2)
 
+    from .guard import run_check
+
+    def _resolve(tight):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return simulate(tight).events
+
+    event_errors, check_note = run_check(check, cfg, events, _resolve)
     solver = SolverStats(
         status="success", method="Radau IIA (order 5), compiled, analytic Jacobian",
         steps=int(stats[R.S_STEPS]), accepted=int(stats[R.S_ACCEPTED]),
         rejected=int(stats[R.S_REJECTED]), rhs_evaluations=int(stats[R.S_NFEV]),
         jacobian_evaluations=int(stats[R.S_NJEV]), lu_decompositions=int(stats[R.S_NLU]),
         damping_steps=int(stats[R.S_DAMPED]), newton_failures=int(stats[R.S_NEWTON_FAIL]),
-        wall_time=time.perf_counter() - wall0)
+        wall_time=time.perf_counter() - wall0, event_errors=event_errors, check=check_note)
     return Trajectory(
         time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
         separation=separation, apparent_separation=apparent - zd, angle=angle,
