@@ -53,3 +53,24 @@ def test_report_numbers_come_from_the_library():
 def test_unknown_figure_is_a_usage_error(capsys, tmp_path):
     assert main(["reproduce", "--out", str(tmp_path), "--only", "fig99"]) == 2
     assert "unknown figure" in capsys.readouterr().err
+
+
+def test_fig6_shows_every_spike_unclipped():
+    """Issue 12: every dashed Fig 6 curve shows its spike (peak from the dense output, located
+    by the integrator), and the y range is not clipped below the highest spike."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from afmforce.paper.figures_dynamic import fig6
+    from afmforce.paper.runs import FIG5_RUN
+
+    axes = fig6()
+    for ax, xi in zip(axes, (0.01, 0.1)):
+        peaks = sorted(ln.get_ydata()[0] for ln in ax.lines if ln.get_marker() == "^")
+        want = sorted(run(xi=xi, velocity=v, **FIG5_RUN).events.spike_height * 1e9
+                      for v in (0.1e-6, 1e-6))
+        assert peaks == pytest.approx(want)
+        assert ax.get_ylim()[1] > max(want)
+    plt.close("all")

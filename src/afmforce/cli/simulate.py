@@ -115,7 +115,10 @@ def _solver_group(parser):
                    help="in-contact ringing: " + "; ".join(
                        f"{k}: {v.name}" for k, v in RINGING.items()) + " (default damp)")
     g.add_argument("--max-steps", type=int, default=None, dest="max_steps",
-                   help="step budget (default 2000000)")
+                   help="step budget (default: sized from the run, max(2e6, 60 f_max T))")
+    g.add_argument("--check", choices=("off", "auto", "always", "raise"), default="auto",
+                   help="convergence guard: re-solve 10x tighter in risky regimes (auto, "
+                        "default), always, never (off), or fail instead of warning (raise)")
 
 
 def _output_group(parser):
@@ -184,6 +187,7 @@ def run(args: argparse.Namespace) -> int:
     import warnings
 
     from ..dynamics import DynamicsWarning, simulate
+    from ..dynamics.guard import ConvergenceWarning
 
     for dest in OUTPUT_FLAGS:
         path = getattr(args, dest, None)
@@ -197,8 +201,9 @@ def run(args: argparse.Namespace) -> int:
     bar, update = _progress_bar(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DynamicsWarning)
+        warnings.simplefilter("always", ConvergenceWarning)
         try:
-            traj = simulate(cfg, progress=update)
+            traj = simulate(cfg, progress=update, check=getattr(args, "check", "auto"))
         finally:
             if bar is not None:
                 bar.close()
@@ -236,6 +241,7 @@ def _print_summary(traj) -> None:
         ("pull-off force", e.pull_off_force, "N"),
         ("solver", f"{s.status}: {s.steps} steps ({s.rejected} rejected), "
                    f"{s.rhs_evaluations} f-evals, {s.wall_time:.3g} s", ""),
+        ("convergence check", s.check, ""),
     ]
     print_table(rows, title="afmforce simulate")
 

@@ -18,6 +18,7 @@ an independent cross-check).
 from .config import DEFAULT_B, MODELS, SimulationConfig
 from .events import Events
 from .models import FRICTION_LAWS, RINGING, FrictionLaw, RingingTreatment
+from .guard import ConvergenceWarning
 from .simulate import DynamicsWarning, simulate
 from .static import StaticCurve, static_curve, static_deflection, static_jump_in
 from .trajectory import COLUMNS, SolverStats, Trajectory
@@ -29,6 +30,7 @@ __all__ = [
     "Events",
     "SolverStats",
     "DynamicsWarning",
+    "ConvergenceWarning",
     "FRICTION_LAWS",
     "FrictionLaw",
     "RINGING",

@@ -1,10 +1,14 @@
 """Compiled event location on the dense output of accepted steps.
 
 Called by :func:`afmforce.dynamics.radau.integrate_segment` after every accepted
-step: evaluates the observables (:func:`afmforce.dynamics.models.observe`) at
-``NSUB`` points of the step's collocation polynomial, locates crossings by
-bisection on that polynomial, and keeps the running extrema. The meaning of
-every event is documented in :mod:`afmforce.dynamics.events`.
+step. The observables (:func:`afmforce.dynamics.models.observe`) are scanned at
+``NSUB`` points of the step's collocation polynomial; every crossing found is
+then located by bisection on that polynomial (to 1e-13 of the step), and every
+new running extremum by a golden-section search on the polynomial around the
+best scan point (to 1e-9 of the step), so neither depends on ``NSUB`` beyond
+the rule that a crossing pair or an extremum narrower than a quarter step could
+be missed (steps are far shorter than any event feature, see the step bound).
+The meaning of every event is documented in :mod:`afmforce.dynamics.events`.
 """
 
 from __future__ import annotations
@@ -16,7 +20,7 @@ from numba import njit
 from .models import N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z, observe
 
 # --- events array layout (float, NaN = not found) ---------------------------
-E_JUMP_T, E_JUMP_Z, E_JUMP_H = 0, 1, 2
+E_JUMP_T, E_JUMP_Z, E_JUMP_H = 0, 1, 2     # leaves the static branch (h < h_s)
 E_CONTACT_T, E_CONTACT_Z = 3, 4
 E_PULL_T, E_PULL_Z = 5, 6
 E_MIN_DEFL, E_MIN_DEFL_Z = 7, 8            # min deflection before contact (approach)
@@ -27,16 +31,20 @@ E_IN_CONTACT = 16                          # 1 while in contact
 E_TERM_T = 17                              # time of the terminal event
 E_H_CONTACT = 18                           # contact threshold separation [m] (input)
 E_SPIKE_WINDOW = 19                        # spike search window after contact [s] (input)
-E_JUMP_FACTOR = 20                         # jump-in criterion: h' < -factor * z' (input)
+E_JUMP_FACTOR = 20                         # fast-approach criterion h' < -factor z' (input)
 E_LAST_OUT = 21                            # last time h > contact separation (bounce) in contact
-E_SIZE = 22
+E_H_STATIC = 22                            # static instability separation h_s [m] (input)
+E_FAST_T, E_FAST_Z = 23, 24                # first h' < -factor z' before contact
+E_RING_AMP = 25                            # ringing amplitude below which damping is allowed (input)
+E_SIZE = 26
 
 # segment kinds (= Trajectory.segment codes)
 APPROACH, RETRACT, DWELL = 0, 1, 2
 # terminal events
 TERM_NONE, TERM_FORCE, TERM_DEFLECTION = 0, 1, 2
 
-NSUB = 4            # dense-output points per step for extrema and crossings
+NSUB = 4            # scan points per step (then bisection / golden section)
+_GOLD = 0.3819660112501051
 
 
 @njit(cache=True, error_model="numpy")
@@ -72,82 +80,194 @@ def _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, level, sign
 
 
 @njit(cache=True, error_model="numpy")
+def _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, sign, ytmp, o):
+    """Golden-section search for the minimum of sign*obs[idx] on [s_lo, s_hi].
+
+    Returns (s, value of obs[idx]); ``o`` holds the observables there.
+    """
+    a = s_lo
+    b = s_hi
+    c = b - (1.0 - _GOLD) * (b - a)
+    d = a + (1.0 - _GOLD) * (b - a)
+    _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, c, ytmp, o)
+    fc = sign * o[idx]
+    _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, d, ytmp, o)
+    fd = sign * o[idx]
+    for _ in range(60):
+        if b - a < 1e-9:
+            break
+        if fc < fd:
+            b = d
+            d = c
+            fd = fc
+            c = b - (1.0 - _GOLD) * (b - a)
+            _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, c, ytmp, o)
+            fc = sign * o[idx]
+        else:
+            a = c
+            c = d
+            fc = fd
+            d = a + (1.0 - _GOLD) * (b - a)
+            _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, d, ytmp, o)
+            fd = sign * o[idx]
+    s = c if fc < fd else d
+    _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
+    return s, o[idx]
+
+
+@njit(cache=True, error_model="numpy")
+def _scan_extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, best,
+                   ytmp, o):
+    """Extremum of sign*obs[idx] over [s_a, s_b] if it beats ``sign*best`` (else NaN, NaN).
+
+    Scans NSUB + 1 points, then refines around the best interior one.
+    """
+    kbest = -1
+    vbest = sign * best if not math.isnan(best) else math.inf
+    vals_s = s_a
+    for k in range(NSUB + 1):
+        s = s_a + (s_b - s_a) * k / NSUB
+        _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
+        if sign * o[idx] < vbest:
+            vbest = sign * o[idx]
+            kbest = k
+            vals_s = s
+    if kbest < 0:
+        return math.nan, math.nan
+    ds = (s_b - s_a) / NSUB
+    lo = max(s_a, vals_s - ds)
+    hi = min(s_b, vals_s + ds)
+    s, val = _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, lo, hi, idx, sign, ytmp, o)
+    if sign * val > vbest:        # the scan point itself is better (end of the interval)
+        s = vals_s
+        _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
+        val = o[idx]
+    return s, val
+
+
+@njit(cache=True, error_model="numpy")
+def _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, e_val, e_pos,
+                e_time, ev, ytmp, o):
+    """Running extremum (min of sign*obs[idx]) over [s_a, s_b] into ev[e_val], ev[e_pos]."""
+    s, val = _scan_extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign,
+                            ev[e_val], ytmp, o)
+    if not math.isnan(s):
+        ev[e_val] = val
+        ev[e_pos] = o[O_Z]
+        if e_time >= 0:
+            ev[e_time] = t0 + s * h
+
+
+@njit(cache=True, error_model="numpy")
 def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
     """Update the event record with the accepted step [t0, t0 + h]."""
     hc = ev[E_H_CONTACT]
     jf = ev[E_JUMP_FACTOR]
-    _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, ytmp, oprev)
-    for k in range(1, NSUB + 1):
-        s = k / NSUB
-        t = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
-        s_prev = (k - 1) / NSUB
-        if kind == APPROACH:
-            if ev[E_IN_CONTACT] == 0.0:
-                # jump-in criterion: first h' < -jf * z' before contact
-                if math.isnan(ev[E_JUMP_T]) and o[O_HDOT] + jf * v < 0.0:
-                    if oprev[O_HDOT] + jf * v >= 0.0:
+    hs = ev[E_H_STATIC]
+    if kind == APPROACH:
+        s_end = 1.0
+        if ev[E_IN_CONTACT] == 0.0:
+            # contact inside this step?
+            _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, ytmp, oprev)
+            s_prev = 0.0
+            sc = math.nan
+            for k in range(1, NSUB + 1):
+                s = k / NSUB
+                _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
+                # leaves the static branch: first h < h_s
+                if math.isnan(ev[E_JUMP_T]) and o[O_H] < hs:
+                    if oprev[O_H] >= hs:
                         sj = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
-                                     O_HDOT, -jf * v, -1.0, ytmp, o)
+                                     O_H, hs, -1.0, ytmp, o)
                     else:
                         sj = s_prev
                     tj = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, sj, ytmp, o)
                     ev[E_JUMP_T] = tj
                     ev[E_JUMP_Z] = z_a + v * (tj - t_a)
                     ev[E_JUMP_H] = o[O_H]
-                    ev[E_SPIKE_THETA] = o[O_THETA]
-                    ev[E_SPIKE_T] = tj
-                    ev[E_SPIKE_Z] = ev[E_JUMP_Z]
-                    t = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
+                    if math.isnan(ev[E_SPIKE_T]):
+                        ev[E_SPIKE_THETA] = o[O_THETA]
+                        ev[E_SPIKE_T] = tj
+                        ev[E_SPIKE_Z] = ev[E_JUMP_Z]
+                    _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
+                # fast approach: first h' < -jf z'
+                if math.isnan(ev[E_FAST_T]) and o[O_HDOT] + jf * v < 0.0:
+                    if oprev[O_HDOT] + jf * v >= 0.0:
+                        sf = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
+                                     O_HDOT, -jf * v, -1.0, ytmp, o)
+                    else:
+                        sf = s_prev
+                    tf = t0 + sf * h
+                    ev[E_FAST_T] = tf
+                    ev[E_FAST_Z] = z_a + v * (tf - t_a)
+                    _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
                 if o[O_H] < hc:
                     sc = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
                                  O_H, hc, -1.0, ytmp, o)
-                    tc = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, sc, ytmp, o)
-                    if not o[O_DEFL] >= ev[E_MIN_DEFL]:
-                        ev[E_MIN_DEFL] = o[O_DEFL]
-                        ev[E_MIN_DEFL_Z] = o[O_Z]
-                    if not o[O_THETA] >= ev[E_MIN_THETA]:
-                        ev[E_MIN_THETA] = o[O_THETA]
-                        ev[E_MIN_THETA_Z] = o[O_Z]
-                    ev[E_CONTACT_T] = tc
-                    ev[E_CONTACT_Z] = z_a + v * (tc - t_a)
-                    ev[E_IN_CONTACT] = 1.0
-                    ev[E_LAST_OUT] = tc
-                    if math.isnan(ev[E_SPIKE_T]):
-                        ev[E_SPIKE_THETA] = o[O_THETA]
-                        ev[E_SPIKE_T] = tc
-                        ev[E_SPIKE_Z] = ev[E_CONTACT_Z]
-                    t = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
-                else:
-                    if not o[O_DEFL] >= ev[E_MIN_DEFL]:
-                        ev[E_MIN_DEFL] = o[O_DEFL]
-                        ev[E_MIN_DEFL_Z] = o[O_Z]
-                    if not o[O_THETA] >= ev[E_MIN_THETA]:
-                        ev[E_MIN_THETA] = o[O_THETA]
-                        ev[E_MIN_THETA_Z] = o[O_Z]
-            elif o[O_H] > hc:
-                ev[E_LAST_OUT] = t      # bounced out of contact
-            # spike: largest angle from jump-in (or contact) to contact + window
-            if not math.isnan(ev[E_SPIKE_T]):
-                if math.isnan(ev[E_CONTACT_T]) or t <= ev[E_CONTACT_T] + ev[E_SPIKE_WINDOW]:
-                    if o[O_THETA] > ev[E_SPIKE_THETA]:
-                        ev[E_SPIKE_THETA] = o[O_THETA]
-                        ev[E_SPIKE_T] = t
-                        ev[E_SPIKE_Z] = o[O_Z]
-        elif kind == DWELL:
-            if ev[E_IN_CONTACT] == 1.0 and o[O_H] > hc:
-                ev[E_LAST_OUT] = t
-        elif kind == RETRACT:
-            if ev[E_IN_CONTACT] == 1.0:
+                    break
+                for i in range(N_OBS):
+                    oprev[i] = o[i]
+                s_prev = s
+            s_end = 1.0 if math.isnan(sc) else sc
+            # minima before contact
+            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_DEFL, 1.0,
+                        E_MIN_DEFL, E_MIN_DEFL_Z, -1, ev, ytmp, o)
+            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_THETA, 1.0,
+                        E_MIN_THETA, E_MIN_THETA_Z, -1, ev, ytmp, o)
+            if not math.isnan(sc):
+                tc = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, sc, ytmp, o)
+                ev[E_CONTACT_T] = tc
+                ev[E_CONTACT_Z] = z_a + v * (tc - t_a)
+                ev[E_IN_CONTACT] = 1.0
+                ev[E_LAST_OUT] = tc
+                if math.isnan(ev[E_SPIKE_T]):
+                    ev[E_SPIKE_THETA] = o[O_THETA]
+                    ev[E_SPIKE_T] = tc
+                    ev[E_SPIKE_Z] = ev[E_CONTACT_Z]
+        else:
+            _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o)
+        # spike: largest angle from jump-in (or contact) to contact + window
+        if not math.isnan(ev[E_SPIKE_T]):
+            s_hi = 1.0
+            if not math.isnan(ev[E_CONTACT_T]):
+                s_hi = min(1.0, (ev[E_CONTACT_T] + ev[E_SPIKE_WINDOW] - t0) / h)
+            s_lo = max(0.0, (ev[E_SPIKE_T] - t0) / h)
+            if s_hi > s_lo:
+                _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, O_THETA,
+                            -1.0, E_SPIKE_THETA, E_SPIKE_Z, E_SPIKE_T, ev, ytmp, o)
+    elif kind == DWELL:
+        if ev[E_IN_CONTACT] == 1.0:
+            _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o)
+    elif kind == RETRACT:
+        if ev[E_IN_CONTACT] == 1.0:
+            _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, ytmp, oprev)
+            sp = math.nan
+            s_prev = 0.0
+            for k in range(1, NSUB + 1):
+                s = k / NSUB
+                _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
                 if o[O_H] > hc:
                     sp = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
                                  O_H, hc, 1.0, ytmp, o)
-                    tp = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, sp, ytmp, o)
-                    ev[E_PULL_T] = tp
-                    ev[E_PULL_Z] = z_a + v * (tp - t_a)
-                    ev[E_IN_CONTACT] = 0.0
-                    t = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
-                elif not o[O_FZ] >= ev[E_MIN_FZ]:
-                    ev[E_MIN_FZ] = o[O_FZ]
-                    ev[E_MIN_FZ_Z] = o[O_Z]
-        for i in range(N_OBS):
-            oprev[i] = o[i]
+                    break
+                s_prev = s
+            s_end = 1.0 if math.isnan(sp) else sp
+            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_FZ, 1.0,
+                        E_MIN_FZ, E_MIN_FZ_Z, -1, ev, ytmp, o)
+            if not math.isnan(sp):
+                tp = t0 + sp * h
+                ev[E_PULL_T] = tp
+                ev[E_PULL_Z] = z_a + v * (tp - t_a)
+                ev[E_IN_CONTACT] = 0.0
+
+
+@njit(cache=True, error_model="numpy")
+def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o):
+    """In contact: remember the last time the tip bounced out (h > hc)."""
+    for k in range(NSUB, -1, -1):
+        s = k / NSUB
+        t = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
+        if o[O_H] > hc:
+            if t > ev[E_LAST_OUT]:
+                ev[E_LAST_OUT] = t
+            return

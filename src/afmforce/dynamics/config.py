@@ -112,8 +112,9 @@ class SimulationConfig:
     atol : float
         Absolute tolerance on positions [m] (positions have no relative
         tolerance: the forces depend on h, a small difference of two large
-        positions in contact); velocities use ``atol * 2 pi * 10 MHz``
-        (see docs/dynamics.md).
+        positions in contact); velocities use ``atol * 10 * w`` with w the
+        model's own free or contact frequency at the current state
+        (:func:`afmforce.dynamics.models.error_frequency`; docs/dynamics.md).
     contact_separation : float
         Separation below which the surfaces count as in contact [m]
         (contact and pull-off events; spec section 7 uses 1 nm).
@@ -129,8 +130,11 @@ class SimulationConfig:
         (:data:`afmforce.dynamics.RINGING`; docs/dynamics.md): ``damp`` lets
         the L-stable integrator damp it after ``spike_window``; ``resolve``
         follows it under normal error control.
-    max_steps : int
+    max_steps : int or None
         Step budget; exceeding it raises :class:`~afmforce.errors.SolverError`.
+        None (default): sized from the run, ``max(2e6, 60 f_max T)`` with
+        ``f_max`` the highest free mode and ``T`` the simulated time, so a
+        slow run that must follow a free oscillation for minutes finishes.
     """
 
     model: str = "beam"
@@ -166,7 +170,7 @@ class SimulationConfig:
     jump_factor: float = 2.0
     spike_window: float = 2e-3
     ringing: str = "damp"
-    max_steps: int = 2_000_000
+    max_steps: int | None = None
 
     def __post_init__(self) -> None:
         set_ = lambda n, v: object.__setattr__(self, n, v)  # noqa: E731
@@ -201,9 +205,11 @@ class SimulationConfig:
         if not 1e-12 <= rtol <= 0.1:
             raise ParameterError(f"rtol must lie between 1e-12 and 0.1, got {self.rtol!r}")
         set_("rtol", rtol)
-        if int(self.max_steps) < 1:
-            raise ParameterError(f"max_steps must be a positive integer, got {self.max_steps!r}")
-        set_("max_steps", int(self.max_steps))
+        if self.max_steps is not None:
+            if int(self.max_steps) < 1:
+                raise ParameterError(
+                    f"max_steps must be a positive integer, got {self.max_steps!r}")
+            set_("max_steps", int(self.max_steps))
         if self.turn <= self.start:
             raise ParameterError(
                 f"turn ({self.turn:.4g} m) must lie above start ({self.start:.4g} m): "

@@ -4,15 +4,20 @@ Most events are located inside the integrator, on the dense output of every
 accepted step (see :func:`afmforce.dynamics.radau._events`), so they do not
 depend on the sampling rate:
 
-* **jump-in** (criterion, stated once here): the first time on the approach,
-  before contact, that the separation closes faster than twice the drive
-  speed, ``dh/dt < -jump_factor * dz/dt`` with ``jump_factor = 2``. Quasi-
-  statically ``dh/dt = -dz/dt (1 + O(Fs'/k))``; during the mechanical
-  instability the tip accelerates towards the substrate and ``dh/dt`` drops far
-  below ``-2 dz/dt``. When friction holds the tip back (large xi * v, spec
-  section 7) the separation never closes that fast: the tip creeps into
-  contact, and the event says so (``jumped = False``) instead of inventing
-  a jump.
+* **jump-in** (criterion, stated once here): where the trajectory leaves
+  the static branch, i.e. the first time on the approach, before contact,
+  that the separation falls below ``h_s``, the separation of the static
+  instability ``Fs'(h_s) = k`` (spec section 2). Quasi-statically this is
+  exactly the static jump-in ``z_s`` (also reported); dynamically the tip
+  reaches ``h_s`` later, at ``z > z_s``: the difference is the dynamic lag.
+  Whether the tip then *jumps* is a second question: it does when the
+  separation closes faster than ``jump_factor`` (2) times the drive speed,
+  ``dh/dt < -2 dz/dt``, before contact (``jumped = True``). When friction
+  holds the tip back (large xi * v, spec section 7) it never closes that
+  fast: it creeps into contact, and the event says so (``jumped = False``)
+  instead of inventing a jump. (The speed criterion alone fires
+  quasi-statically where ``Fs' = k/2``, a factor 2^(1/3) farther out than the
+  instability, so it is not used for the position.)
 * **contact**: the first time the separation drops below
   ``contact_separation`` (1 nm, spec section 7) on the approach.
 * **pull-off**: the first time the separation rises above
@@ -56,7 +61,12 @@ class Events:
     jump_in_note : str
         A sentence saying which case occurred.
     jump_in_time, jump_in_position, jump_in_separation : float
-        At the jump-in: time [s], drive position z [m], separation h [m].
+        Where the trajectory leaves the static branch (first h < h_s on the
+        approach): time [s], drive position z [m], separation h [m] (= h_s).
+    static_jump_in_position, static_jump_in_separation : float
+        The static instability Fs'(h_s) = k: drive position z_s [m] and h_s [m]
+        (the quasi-static limit of the jump-in; the dynamic one lies beyond
+        it by the lag).
     contact_time, contact_position : float
         First h < contact_separation on the approach [s, m].
     pull_off_time, pull_off_position : float
@@ -86,6 +96,8 @@ class Events:
     jump_in_time: float
     jump_in_position: float
     jump_in_separation: float
+    static_jump_in_position: float
+    static_jump_in_separation: float
     contact_time: float
     contact_position: float
     pull_off_time: float

@@ -38,11 +38,12 @@ from numba import njit
 from ._linalg import _lu_factor, _lu_solve, _rms
 from ._locate import (  # noqa: F401  (re-exported: the event layout used by simulate)
     APPROACH, DWELL, E_CONTACT_T, E_CONTACT_Z, E_H_CONTACT, E_IN_CONTACT, E_JUMP_FACTOR,
-    E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL, E_MIN_DEFL_Z, E_MIN_FZ, E_MIN_FZ_Z,
+    E_FAST_T, E_FAST_Z, E_H_STATIC, E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL, E_MIN_DEFL_Z, E_MIN_FZ, E_MIN_FZ_Z,
     E_MIN_THETA, E_MIN_THETA_Z, E_PULL_T, E_PULL_Z, E_SIZE, E_SPIKE_T, E_SPIKE_THETA,
-    E_SPIKE_WINDOW, E_SPIKE_Z, E_TERM_T, RETRACT, TERM_DEFLECTION, TERM_FORCE, TERM_NONE,
+    E_RING_AMP, E_SPIKE_WINDOW, E_SPIKE_Z, E_TERM_T, RETRACT, TERM_DEFLECTION, TERM_FORCE, TERM_NONE,
     _bisect, _dense, _eval_obs, _events)
-from .models import HQA, HQB, K_EFF, N_OBS, O_DEFL, O_FZ, contact_frequency, jac, observe, rhs
+from .models import (HQA, HQB, K_EFF, N_OBS, O_DEFL, O_FZ, contact_frequency, error_frequency,
+                     jac, observe, rhs, ringing_amplitude)
 
 # --- return codes -----------------------------------------------------------
 DONE = 0            # reached the end of the segment
@@ -72,7 +73,8 @@ W_T_OLD = 5
 W_H_LAST = 6
 W_CUR_JAC = 7      # 1 if J was evaluated at the current state
 W_HAVE_JAC = 8     # 1 if J holds any Jacobian
-W_SIZE = 9
+W_VFAC = 9         # velocity tolerance = atol * W_VFAC * error_frequency (0: atol[n-1] only)
+W_SIZE = 10
 
 # --- statistics (int) -------------------------------------------------------
 S_STEPS, S_ACCEPTED, S_REJECTED, S_NFEV, S_NJEV, S_NLU, S_DAMPED, S_NEWTON_FAIL = range(8)
@@ -187,6 +189,7 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
     oprev = np.empty(N_OBS)
     have_lu = False
     lu_h = 0.0
+    av = atol[n - 1]
 
     newton_tol = max(10.0 * EPS / rtol, min(0.03, math.sqrt(rtol)))
     t = work[W_T]
@@ -248,7 +251,8 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 t >= ev[E_LAST_OUT] + ev[E_SPIKE_WINDOW]:
             zt = z_a + v * (t - t_a)
             wc, kappa = contact_frequency(model, p, zt, y)
-            if kappa >= damp_kappa * p[K_EFF] and wc > 0.0:
+            if kappa >= damp_kappa * p[K_EFF] and wc > 0.0 and \
+                    ringing_amplitude(model, p, v, y, fcur, wc) <= ev[E_RING_AMP]:
                 h_damp = min(damp_cycles / wc, max_step, t_end - t)
                 if h_abs < h_damp:
                     h_abs = h_damp
@@ -281,8 +285,13 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 for st in range(3):
                     for i in range(n):
                         Z0[st, i] = 0.0
+            zt = z_a + v * (t - t_a)
+            av = atol[n - 1]
+            if work[W_VFAC] > 0.0:
+                av = min(av, atol[0] * work[W_VFAC] * error_frequency(model, p, zt, v, y))
             for i in range(n):
-                scale[i] = atol[i] + abs(y[i]) * rtolv[i]
+                ai = atol[i] if i < n // 2 else av
+                scale[i] = ai + abs(y[i]) * rtolv[i]
             converged = False
             while not converged:
                 if not have_lu or lu_h != h:
@@ -323,7 +332,8 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 mr = MU_REAL / h
                 mcr = MU_CR / h
                 mci = MU_CI / h
-                for k in range(NEWTON_MAXITER):
+                nmax = 4 * NEWTON_MAXITER if forced else NEWTON_MAXITER
+                for k in range(nmax):
                     n_iter = k + 1
                     good = True
                     for st in range(3):
@@ -362,7 +372,7 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                     if dw_old >= 0.0:
                         rate = dwn / dw_old
                     if rate >= 0.0 and (rate >= 1.0 or
-                                        rate ** (NEWTON_MAXITER - k) / (1.0 - rate) * dwn > newton_tol):
+                                        rate ** (nmax - k) / (1.0 - rate) * dwn > newton_tol):
                         break
                     for st in range(3):
                         for i in range(n):
@@ -399,7 +409,8 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 ze = (E1 * Z[0, i] + E2 * Z[1, i] + E3 * Z[2, i]) / h
                 ytmp[i] = y[i] + Z[2, i]
                 err[i] = fcur[i] + ze
-                scale[i] = atol[i] + max(abs(y[i]), abs(ytmp[i])) * rtolv[i]
+                ai = atol[i] if i < n // 2 else av
+                scale[i] = ai + max(abs(y[i]), abs(ytmp[i])) * rtolv[i]
             _lu_solve(LUr, pivr, err)
             err_norm = _rms(err, scale)
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)

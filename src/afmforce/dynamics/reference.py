@@ -19,6 +19,7 @@ import numpy as np
 from ..forces import drainage_force, vdw_force, vdw_force_gradient
 from .config import SimulationConfig
 from .drive import initial_state, segments
+from .static import static_jump_in
 
 __all__ = ["ReferenceSolution", "reference_solve", "ReferenceModel"]
 
@@ -113,7 +114,7 @@ class ReferenceSolution:
     time, piezo_position, deflection, angle, separation : ndarray
         Samples on the requested grid (up to ``t_stop``).
     jump_in_time, jump_in_position : float
-        First ``dh/dt < -jump_factor dz/dt`` on the approach.
+        First ``h < h_s`` (static instability separation) on the approach.
     contact_time, contact_position : float
         First ``h < contact_separation`` on the approach.
     pull_off_position : float
@@ -171,6 +172,7 @@ def reference_solve(cfg: SimulationConfig | None = None, *, rtol: float = 1e-8,
     atol_v[n // 2:] = atol * 2 * math.pi * 1e7
     beta = cfg.calibration_factor if model.beam else 1.0
     hc = cfg.contact_separation
+    h_s = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)[0]
     plan = segments(cfg)
     t_stop = plan[-1].t_end if t_stop is None else t_stop
     ts_req = None if sample_times is None else np.asarray(sample_times, float)
@@ -188,8 +190,8 @@ def reference_solve(cfg: SimulationConfig | None = None, *, rtol: float = 1e-8,
         def g_contact(t, y, zf, v):
             return model.separation(y, zf(t), v)[0] - hc
 
-        def g_jump(t, y, zf, v):
-            return model.separation(y, zf(t), v)[1] + cfg.jump_factor * v
+        def g_jump(t, y, zf, v):      # leaves the static branch: h < h_s
+            return model.separation(y, zf(t), v)[0] - h_s
 
         events = [g_contact, g_jump]
         for g in events:

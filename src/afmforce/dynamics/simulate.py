@@ -14,6 +14,7 @@ from . import radau as R
 from .config import SimulationConfig
 from .drive import approach_segment, initial_state, segments
 from .events import Events, compliance_lines
+from .static import static_jump_in
 from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
                      O_Y2, observe_array, pack_beam, pack_spring, state_size)
 from .trajectory import SolverStats, Trajectory
@@ -29,7 +30,11 @@ H_GUARD_FRACTION = 0.2
 #: frequency. 1 MHz lies above every mode that must be resolved (the free beam,
 #: 4-65 kHz), so such modes are followed; see docs/dynamics.md for the
 #: in-contact ringing.
-VELOCITY_ATOL_FREQUENCY = 1e7
+VELOCITY_ATOL_FREQUENCY = 1e7   # upper bound only: see models.error_frequency
+#: Velocity tolerance = atol * this * (the model's own rate, models.error_frequency).
+#: 10: at 1 the Fig-5 cycle needs 2.3x the steps for no change of any event
+#: (< 2 pm); at 100 a bouncing probe's turn-around is no longer resolved.
+VELOCITY_TOLERANCE_FACTOR = 10.0
 #: Relative tolerance on positions = rtol * this factor (0: positions are
 #: controlled by atol alone; see docs/dynamics.md).
 POSITION_RTOL_FACTOR = 0.0
@@ -42,6 +47,11 @@ HMAX_FRACTION = 0.1
 HMAX_TRAVEL = 3.0
 
 
+#: Numerical damping of the contact mode only while its amplitude in h,
+#: sqrt((h'/w_c)^2 + (h''/w_c^2)^2), is below this [m]: the most the damping may
+#: change the separation (see docs/dynamics.md, "The in-contact ringing").
+RING_AMPLITUDE = 0.1e-9
+
 #: Damping steps only where the contact stiffness -Fs'(h) exceeds this multiple
 #: of k: well inside the repulsive wall, away from the pull-off fold (h = z0).
 DAMP_KAPPA_RATIO = 100.0
@@ -49,6 +59,17 @@ DAMP_KAPPA_RATIO = 100.0
 
 class DynamicsWarning(UserWarning):
     """A simulation ran but its protocol did not do what was asked (no contact, no pull-off)."""
+
+
+def free_frequency_max(p, model) -> float:
+    """Highest free (out-of-contact) mode frequency [Hz] of the packed model."""
+    from . import models as M
+    if model == M.MODEL_SPRING:
+        w2 = p[M.K] * p[M.INV_M]
+    else:
+        A = np.array([[p[M.A00], p[M.A01]], [p[M.A10], p[M.A11]]])
+        w2 = float(np.max(np.abs(np.linalg.eigvals(-np.diag([p[M.INV_MA], p[M.INV_MB]]) @ A))))
+    return math.sqrt(w2) / (2.0 * math.pi)
 
 
 def _known(overrides) -> bool:
@@ -68,7 +89,8 @@ def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
 
 
 def simulate(config: SimulationConfig | None = None, *,
-             progress: Callable[[float], None] | None = None, **overrides) -> Trajectory:
+             progress: Callable[[float], None] | None = None, check: str = "off",
+             **overrides) -> Trajectory:
     """Simulate one approach-dwell-retract cycle (spec sections 3 and 5).
 
     Parameters
@@ -77,6 +99,15 @@ def simulate(config: SimulationConfig | None = None, *,
         The run; default: the paper's Fig 5 (beam, xi = 0.1 kg/s, 0.1 um/s).
     progress : callable, optional
         Called with the fraction of simulated time done (0..1) now and then.
+    check : {"off", "auto", "always", "raise"}
+        Convergence guard (:mod:`afmforce.dynamics.guard`): ``"auto"`` re-solves
+        at 10x tighter tolerances when the run is in a risky regime (low
+        damping ratio, stiff load-dependent friction) and warns with
+        :class:`~afmforce.dynamics.guard.ConvergenceWarning` when a key event
+        moved beyond its tolerance; ``"always"`` checks every run;
+        ``"raise"`` checks and raises :class:`SolverError` instead. The
+        differences are in ``solver.event_errors``. Default "off" (the CLI
+        uses "auto").
     **overrides
         Fields of :class:`SimulationConfig` to change, e.g. ``xi=0.01``.
 
@@ -127,6 +158,9 @@ def simulate(config: SimulationConfig | None = None, *,
     ev[R.E_H_CONTACT] = cfg.contact_separation
     ev[R.E_SPIKE_WINDOW] = cfg.spike_window
     ev[R.E_JUMP_FACTOR] = cfg.jump_factor
+    h_s, z_s, _ = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)
+    ev[R.E_H_STATIC] = h_s if math.isfinite(h_s) else -math.inf
+    ev[R.E_RING_AMP] = RING_AMPLITUDE
     work = np.zeros(R.W_SIZE)
     Q = np.zeros((n, 3))
     y_old = np.zeros(n)
@@ -144,6 +178,10 @@ def simulate(config: SimulationConfig | None = None, *,
     else:
         term_kind, term_level = R.TERM_NONE, 0.0
 
+    f_max = free_frequency_max(p, model)
+    budget = cfg.max_steps if cfg.max_steps is not None else max(
+        2_000_000, int(60.0 * f_max * t_total_max))
+
     def run(seg, term_kind, term_level, t_total):
         work[R.W_T] = seg.t_start
         work[R.W_H] = INITIAL_STEP
@@ -151,23 +189,29 @@ def simulate(config: SimulationConfig | None = None, *,
         work[R.W_ERR_OLD] = 0.0
         work[R.W_HAS_SOL] = 0.0
         work[R.W_HAVE_JAC] = 0.0
+        work[R.W_VFAC] = VELOCITY_TOLERANCE_FACTOR
         first = int(s_next[0])
         while True:
             status = R.integrate_segment(
                 model, p, seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end, y,
                 cfg.rtol, rtolv, atol, HMAX_FRACTION, hmax_dz, damp_cycles, DAMP_KAPPA_RATIO,
                 term_kind, term_level,
-                0.0, dt, s_next, ybuf, ev, work, Q, y_old, J, stats, cfg.max_steps, chunk, 0.0)
+                0.0, dt, s_next, ybuf, ev, work, Q, y_old, J, stats, budget, chunk, 0.0)
             if status == R.PAUSED:
                 progress(min(1.0, work[R.W_T] / t_total))
                 continue
             break
         if status < 0:
             t = work[R.W_T]
-            raise SolverError(
-                f"integration failed ({R.STATUS[status]}) at t = {t:.6g} s, "
-                f"z = {seg.position(t) * 1e9:.4g} nm in the {('approach', 'retract', 'dwell')[seg.kind]}"
-                f" after {stats[R.S_STEPS]} steps; try a tighter rtol/atol or a larger max_steps")
+            where = (f"at t = {t:.6g} s, z = {seg.position(t) * 1e9:.4g} nm in the "
+                     f"{('approach', 'retract', 'dwell')[seg.kind]} after {stats[R.S_STEPS]} steps")
+            if status == R.MAX_STEPS:
+                advice = (f"the step budget max_steps = {budget} is spent; raise max_steps "
+                          f"(this run follows modes up to {f_max / 1e3:.3g} kHz over "
+                          f"{t_total:.4g} s; a tighter rtol/atol needs more steps, not fewer)")
+            else:
+                advice = "a tighter rtol/atol may get past it"
+            raise SolverError(f"integration failed ({R.STATUS[status]}) {where}; {advice}")
         return status, first, int(s_next[0])
 
     labels = []
@@ -211,7 +255,7 @@ def simulate(config: SimulationConfig | None = None, *,
         apparent = deflection.copy()
     separation = obs[:, O_H]
 
-    events = _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code)
+    events = _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code, h_s, z_s)
     if not math.isfinite(events.contact_time):
         warnings.warn(
             f"the approach never reached contact (h < {cfg.contact_separation * 1e9:.3g} nm) "
@@ -228,13 +272,21 @@ def simulate(config: SimulationConfig | None = None, *,
                           f"z = {cfg.turn * 1e9:.4g} nm; turned there", DynamicsWarning,
                           stacklevel=2)
 
+    from .guard import run_check
+
+    def _resolve(tight):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            return simulate(tight).events
+
+    event_errors, check_note = run_check(check, cfg, events, _resolve)
     solver = SolverStats(
         status="success", method="Radau IIA (order 5), compiled, analytic Jacobian",
         steps=int(stats[R.S_STEPS]), accepted=int(stats[R.S_ACCEPTED]),
         rejected=int(stats[R.S_REJECTED]), rhs_evaluations=int(stats[R.S_NFEV]),
         jacobian_evaluations=int(stats[R.S_NJEV]), lu_decompositions=int(stats[R.S_NLU]),
         damping_steps=int(stats[R.S_DAMPED]), newton_failures=int(stats[R.S_NEWTON_FAIL]),
-        wall_time=time.perf_counter() - wall0)
+        wall_time=time.perf_counter() - wall0, event_errors=event_errors, check=check_note)
     return Trajectory(
         time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
         separation=separation, apparent_separation=apparent - zd, angle=angle,
@@ -243,17 +295,21 @@ def simulate(config: SimulationConfig | None = None, *,
         config=cfg, events=events, solver=solver)
 
 
-def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code) -> Events:
+def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code, h_s, z_s) -> Events:
     contact = math.isfinite(ev[R.E_CONTACT_T])
-    jump = math.isfinite(ev[R.E_JUMP_T])
+    left = math.isfinite(ev[R.E_JUMP_T])
+    fast = math.isfinite(ev[R.E_FAST_T]) and (not contact or ev[R.E_FAST_T] <= ev[R.E_CONTACT_T])
+    where = (f"left the static branch (h < h_s = {h_s * 1e9:.4g} nm) at "
+             f"z = {ev[R.E_JUMP_Z] * 1e9:.4g} nm; static instability at z = {z_s * 1e9:.4g} nm"
+             if left else "")
     if not contact:
         jumped, note = None, "no contact: the approach turned before the surfaces touched"
-    elif jump:
-        jumped, note = True, (f"jump-in: dh/dt < -{cfg.jump_factor:g} dz/dt at "
-                              f"h = {ev[R.E_JUMP_H] * 1e9:.4g} nm")
+    elif fast:
+        jumped, note = True, f"jump-in: {where}; then dh/dt < -{cfg.jump_factor:g} dz/dt"
     else:
         jumped, note = False, ("no jump: crept into contact (dh/dt never fell below "
-                               f"-{cfg.jump_factor:g} dz/dt before contact)")
+                               f"-{cfg.jump_factor:g} dz/dt before contact)"
+                               + (f"; {where}" if left else ""))
     turn = plan[0]
     offset, slope = (math.nan, math.nan)
     if contact:
@@ -271,6 +327,7 @@ def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code) -> E
         jumped=jumped, jump_in_note=note,
         jump_in_time=f(ev[R.E_JUMP_T]), jump_in_position=f(ev[R.E_JUMP_Z]),
         jump_in_separation=f(ev[R.E_JUMP_H]),
+        static_jump_in_position=f(z_s), static_jump_in_separation=f(h_s),
         contact_time=f(ev[R.E_CONTACT_T]), contact_position=f(ev[R.E_CONTACT_Z]),
         pull_off_time=f(ev[R.E_PULL_T]), pull_off_position=f(ev[R.E_PULL_Z]),
         pull_off_force=f(ev[R.E_MIN_FZ]) if contact else math.nan,

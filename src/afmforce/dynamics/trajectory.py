@@ -55,6 +55,11 @@ class SolverStats:
         tried a state with h below the force-law guard).
     wall_time : float
         Wall-clock time of the whole simulation [s].
+    event_errors : dict
+        Estimated error of each key event [m, N for the force]: its difference
+        to a 10x tighter second solve (``check=``; empty when not checked).
+    check : str
+        What the convergence guard did.
     """
 
     status: str
@@ -68,6 +73,8 @@ class SolverStats:
     damping_steps: int
     newton_failures: int
     wall_time: float
+    event_errors: dict = field(default_factory=dict)
+    check: str = "not checked"
 
     def to_dict(self) -> dict:
         """Plain dict of the fields."""

@@ -1,0 +1,127 @@
+"""Convergence guard: compare the key events with a second, tighter solve.
+
+``simulate(..., check="auto")`` re-runs a cycle at a 10x tighter rtol and atol
+when it lies in a risky regime (see :func:`risky`) and compares the events
+that users read off a force curve. A difference above the tolerances of
+:data:`EVENT_TOLERANCES` warns with :class:`ConvergenceWarning` (``"auto"``,
+``"always"``) or raises :class:`~afmforce.errors.SolverError` (``"raise"``),
+saying which event moved and by how much; either way the differences are in
+``Trajectory.solver.event_errors`` (an estimate of each event's error).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+from ..errors import ParameterError, SolverError
+
+__all__ = ["CHECKS", "EVENT_TOLERANCES", "ConvergenceWarning", "risky", "compare_events"]
+
+#: Accepted values of ``check=``.
+CHECKS = ("off", "auto", "always", "raise")
+
+#: Event -> (absolute [SI], relative) tolerance: a difference counts when it exceeds
+#: both (positions [m], force [N]).
+EVENT_TOLERANCES = {
+    "jump_in_position": (0.05e-9, 0.01),
+    "contact_position": (0.05e-9, 0.01),
+    "pull_off_position": (0.5e-9, 0.01),
+    "hysteresis_offset": (0.01e-9, 0.01),
+    "spike_height": (0.05e-9, 0.01),
+    "pull_off_force": (0.1e-9, 0.01),
+}
+
+#: Damping ratio of the free mode below which a run is risky (bounces, ringing).
+RISKY_DAMPING_RATIO = 0.05
+#: Load-dependent friction at or above this zeta [kg/(s N^2)] is risky (stiff friction).
+RISKY_ZETA = 1e12
+
+
+class ConvergenceWarning(UserWarning):
+    """Events of the run moved under a tighter second solve by more than their tolerance."""
+
+
+def damping_ratio(cfg) -> float:
+    """Damping ratio of the free mode from lateral friction at rest [-] (0 for the spring).
+
+    Drainage is not counted: far from the surface it vanishes.
+    """
+    if cfg.model == "spring" or cfg.friction == "none":
+        return 0.0
+    from .models import beam_couplings, beam_matrices
+    import numpy as np
+
+    A, (ma, mb) = beam_matrices(cfg.cantilever, cfg.m_joint, cfg.m_base)
+    _, yq, _ = beam_couplings(cfg.cantilever)
+    minv = np.array([1.0 / ma, 1.0 / mb])
+    w2 = np.linalg.eigvals(-minv[:, None] * A).real
+    w = math.sqrt(float(np.min(w2[w2 > 0])))
+    mob_y = float(yq @ (minv * yq))
+    return cfg.xi * mob_y / (2.0 * w)
+
+
+def risky(cfg) -> str:
+    """Why the run is in a risky regime ('' when it is not)."""
+    why = []
+    zr = damping_ratio(cfg)
+    if zr < RISKY_DAMPING_RATIO:
+        why.append(f"free-mode damping ratio {zr:.3g} < {RISKY_DAMPING_RATIO}")
+    if cfg.model == "beam" and cfg.friction == "load" and cfg.zeta >= RISKY_ZETA:
+        why.append(f"stiff load-dependent friction (zeta {cfg.zeta:.3g} kg/(s N^2))")
+    return "; ".join(why)
+
+
+def compare_events(a, b) -> dict[str, float]:
+    """|a - b| for every event of :data:`EVENT_TOLERANCES` finite in both (SI)."""
+    out = {}
+    for name in EVENT_TOLERANCES:
+        x, y = getattr(a, name), getattr(b, name)
+        if math.isfinite(x) and math.isfinite(y):
+            out[name] = abs(x - y)
+        elif math.isfinite(x) != math.isfinite(y):
+            out[name] = math.inf
+    return out
+
+
+def exceeded(errors: dict[str, float], b) -> list[str]:
+    """Events whose difference exceeds both tolerances (b: the tighter run's events)."""
+    bad = []
+    for name, d in errors.items():
+        atol, rtol = EVENT_TOLERANCES[name]
+        ref = abs(getattr(b, name))
+        if d > atol and not (math.isfinite(ref) and d <= rtol * ref):
+            bad.append(name)
+    return bad
+
+
+def run_check(check: str, cfg, events, resolve):
+    """Apply the guard; ``resolve(cfg)`` runs the second solve and returns its events.
+
+    Returns (event_errors, note).
+    """
+    if check not in CHECKS:
+        raise ParameterError(f"check must be one of {CHECKS}, got {check!r}")
+    if check == "off":
+        return {}, "not checked"
+    why = risky(cfg)
+    if check == "auto" and not why:
+        return {}, "not checked (not a risky regime)"
+    tight = cfg.replace(rtol=max(cfg.rtol / 10.0, 1e-12), atol=cfg.atol / 10.0)
+    b = resolve(tight)
+    errors = compare_events(events, b)
+    bad = exceeded(errors, b)
+    note = f"checked against rtol {tight.rtol:.3g}, atol {tight.atol:.3g} m" + (
+        f" ({why})" if why else "")
+    if bad:
+        unit = lambda n: ("nN", 1e9) if n == "pull_off_force" else ("nm", 1e9)  # noqa: E731
+        diffs = ", ".join(
+            f"{n} {getattr(events, n) * unit(n)[1]:.4g} vs {getattr(b, n) * unit(n)[1]:.4g} "
+            f"{unit(n)[0]}" for n in bad)
+        msg = (f"the events are not converged at rtol {cfg.rtol:.3g}, atol {cfg.atol:.3g} m: "
+               f"{diffs} (default vs 10x tighter); trust the tighter run or tighten further")
+        if check == "raise":
+            raise SolverError(msg)
+        warnings.warn(msg, ConvergenceWarning, stacklevel=3)
+        note += "; NOT converged: " + ", ".join(bad)
+    return errors, note
