@@ -21,6 +21,10 @@ __all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "S
 SPEED_DEPENDENT = ("xi", "zeta", "viscosity", "mass", "m_joint")
 #: Starting values of xi scanned before the local fits [kg/s].
 XI_SCAN = (0.0, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1)
+#: Factors on the static guess of A (or R) scanned with xi.
+AR_SCAN = (1.0, 1.6, 2.5)
+#: A local fit with a reduced chi-square above this counts as stuck: try the next start.
+STUCK_REDCHI = 1.5
 
 
 class IdentifiabilityError(ParameterError):
@@ -88,19 +92,27 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
     return g
 
 
-def _starts(problem: Problem, guess: dict, shifts, n_starts: int) -> list[np.ndarray]:
-    """Starting vectors: a scan of xi (where free) ranked by chi-square."""
+def _starts(problem: Problem, guess: dict, shifts) -> list[np.ndarray]:
+    """Starting vectors ranked by chi-square: a scan of xi x (A or R) where xi is free.
+
+    The static guess of A*R comes from the slowest curve's smallest deflection,
+    which friction lowers: the scan also tries larger A*R.
+    """
     x = problem.pack(guess, shifts)
-    if "xi" not in problem.free or n_starts < 1:
+    if "xi" not in problem.free:
         return [x]
     j = problem.free.index("xi")
+    ar = [problem.free.index(n) for n in ("hamaker", "radius") if n in problem.free]
     trials = []
-    for xi in XI_SCAN:
-        xt = x.copy()
-        xt[j] = max(xi, PARAMETERS["xi"].abs_step) / PARAMETERS["xi"].scale
-        trials.append((problem.chi2(xt), xt))
+    for f in AR_SCAN if ar else (1.0,):
+        for xi in XI_SCAN:
+            xt = x.copy()
+            xt[j] = max(xi, PARAMETERS["xi"].abs_step) / PARAMETERS["xi"].scale
+            if ar:
+                xt[ar[0]] *= f
+            trials.append((problem.chi2(xt), xt))
     trials.sort(key=lambda t: t[0])
-    return [t[1] for t in trials[:n_starts]]
+    return [t[1] for t in trials]
 
 
 def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
@@ -140,7 +152,9 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     drift : bool
         Fit a linear drift per curve.
     starts : int
-        Local fits started from the best points of a scan in xi (multi-start).
+        Local fits started from the best points of a scan in xi and A*R
+        (multi-start); up to ``2 starts + 2`` while the best fit looks stuck
+        (reduced chi-square > 1.5).
     level : float
         Confidence level of the intervals and of the friction test.
     profile : sequence of str, optional
@@ -185,16 +199,18 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     prob = Problem(ev, free)
     guess = _guess_globals(fc, base, free)
     shifts0 = [c.guess["shift"] for c in fc]
+    n_data = sum(int(c.mask.sum()) for c in fc)
+    n_par = len(shifts0) + len(free) + ev.n_linear() * len(fc)
+    dof = max(n_data - n_par, 1)
     best = None
-    for x0 in _starts(prob, guess, shifts0, starts):
+    for k, x0 in enumerate(_starts(prob, guess, shifts0)[: 2 * max(starts, 1) + 2]):
+        if k >= max(starts, 1) and best[0] / dof < STUCK_REDCHI:
+            break    # multi-start: `starts` local fits, more while they look stuck
         x, res = local_fit(prob, x0, max_nfev)
         chi2 = prob.chi2(x)
         if best is None or chi2 < best[0]:
             best = (chi2, x, res)
     chi2, x, res = best
-    n_data = sum(int(c.mask.sum()) for c in fc)
-    n_par = len(x) + ev.n_linear() * len(fc)
-    dof = max(n_data - n_par, 1)
     redchi = chi2 / dof
     J = prob.jacobian(x)
     cov = _covariance(J, max(redchi, 1.0))

@@ -83,9 +83,12 @@ def _meta_value(curve: RawCurve, key: str, override, name: str, unit: str) -> fl
     return value
 
 
-def _robust_sigma(y: np.ndarray) -> float:
-    d = np.diff(y)
-    return float(1.4826 * np.median(np.abs(d - np.median(d))) / math.sqrt(2.0))
+def _noise_sigma(y: np.ndarray) -> float:
+    """White-noise rms from second differences (var = 6 sigma^2), outliers beyond 4 MADs dropped."""
+    d = np.diff(y, 2)
+    mad = 1.4826 * np.median(np.abs(d - np.median(d)))
+    d = d[np.abs(d - np.median(d)) < 4 * mad] if mad > 0 else d
+    return float(np.std(d) / math.sqrt(6.0))
 
 
 def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | None = None,
@@ -125,14 +128,13 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
             f"{name}: no contact on the approach (deflection vs position slope {a:.3g} at the end "
             "of the approach, expected ~1 in constant compliance); the fit needs curves that "
             "reach contact")
-    head = slice(0, max(10, int(0.3 * n)))
-    sigma = max(_robust_sigma(y[head]), 1e-15)
     dy = np.diff(y)
     # jump-in: the largest drop before the compliance region
     lim = max(int(0.85 * n) - 1, 2)
     j = int(np.argmin(dy[:lim])) + 1
-    if -dy[j - 1] < 5 * sigma:          # no resolved jump: crept into contact
+    if -dy[j - 1] < 5 * _noise_sigma(y[: max(12, int(0.3 * n))]):   # crept into contact
         j = int(np.argmin(np.gradient(np.gradient(y[:lim])))) + 1
+    sigma = max(_noise_sigma(y[: max(12, int(0.8 * j))]), 1e-15)
     win = int(math.ceil(jump_window * fs))
     mask = np.ones(n, bool)
     mask[max(j - 2, 0): min(j + win + 2, n)] = False
