@@ -75,3 +75,19 @@ def test_null_no_friction():
     assert 0 < hi < 0.2 * XI
     assert "not detected" in res.comparison.verdict
     assert abs(res.derived["hamaker_radius"].value / AR - 1) < 0.05
+
+
+def test_stderr_matches_plan(cli_result):
+    """The fit's standard error of xi against the Fisher information of afmforce.fit.plan."""
+    import numpy as np
+
+    from afmforce.fit.core import base_config
+    from afmforce.fit.plan import curve_information
+    from fit_virtual import DRIVE, NOISE, SPEEDS
+
+    res, curves, _ = cli_result
+    base = base_config("beam", xi=XI, radius=100e-9, **DRIVE)
+    infos = curve_information(base, SPEEDS, [c["sample_rate"] for c in res["curves"]], NOISE)
+    sd = np.sqrt(np.diag(np.linalg.inv(sum(infos))))
+    assert res["parameters"]["xi"]["stderr"] == pytest.approx(sd[1], rel=0.3)
+    assert res["parameters"]["hamaker"]["stderr"] == pytest.approx(sd[0], rel=0.3)
