@@ -24,7 +24,7 @@ AR = FIG5["hamaker"] * 100e-9
 @pytest.fixture(scope="module")
 def cli_result(tmp_path_factory):
     d = tmp_path_factory.mktemp("fit")
-    curves = make_curves(XI, seed=11)
+    curves = make_curves(XI, seed=13)
     paths = write_curves(curves, d)
     out = d / "res.json"
     rc = main(["fit", *map(str, paths), "--model", "beam", "--radius", "100nm",

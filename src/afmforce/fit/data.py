@@ -120,28 +120,36 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     n = len(t)
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
         raise FileFormatError(f"{name}: the approach contains NaN or infinite values")
-    # constant compliance at the end of the approach: the deflection follows z
-    tail = slice(int(0.85 * n), n)
-    a, _ = np.polyfit(z[tail], y[tail], 1)
+    # constant compliance: the rising tail where the deflection follows z
+    dy, dz = np.diff(y), np.diff(z)
+    i_c = n - 1
+    while i_c > 0 and dy[i_c - 1] > 0.5 * dz[i_c - 1]:
+        i_c -= 1
+    n_tail = n - i_c
+    a = np.polyfit(z[i_c + n_tail // 3:], y[i_c + n_tail // 3:], 1)[0] if n_tail >= 3 else 0.0
     if not 0.5 < a < 2.0:
         raise AnalysisError(
-            f"{name}: no contact on the approach (deflection vs position slope {a:.3g} at the end "
-            "of the approach, expected ~1 in constant compliance); the fit needs curves that "
-            "reach contact")
-    dy = np.diff(y)
-    # jump-in: the largest drop before the compliance region
-    lim = max(int(0.85 * n) - 1, 2)
-    j = int(np.argmin(dy[:lim])) + 1
-    if -dy[j - 1] < 5 * _noise_sigma(y[: max(12, int(0.3 * n))]):   # crept into contact
-        j = int(np.argmin(np.gradient(np.gradient(y[:lim])))) + 1
+            f"{name}: no contact on the approach (no constant-compliance region at its end, "
+            f"where the deflection should follow the position with slope ~1; found "
+            f"{n_tail} rising samples, slope {a:.3g}); the fit needs curves that reach contact")
+    # jump-in: the largest change before the compliance region (a drop, or the spike of
+    # the apparent deflection of a tilting beam held back by friction)
+    j = int(np.argmax(np.abs(dy[: max(i_c, 1)]))) + 1 if i_c > 1 else 1
+    j = min(j, i_c)
     sigma = max(_noise_sigma(y[: max(12, int(0.8 * j))]), 1e-15)
+    j_drop = int(np.argmin(dy[: max(j, 1)])) + 1
+    if j_drop < j and -dy[j_drop - 1] > 8 * sigma and j - j_drop <= 3 + jump_window * fs:
+        j = j_drop          # the drop of the jump-in came first, then the spike
     win = int(math.ceil(jump_window * fs))
     mask = np.ones(n, bool)
-    mask[max(j - 2, 0): min(j + win + 2, n)] = False
+    mask[max(j - 2, 0): min(max(j, i_c) + win + 2, n)] = False
+    if mask.sum() < 20:
+        raise AnalysisError(f"{name}: only {int(mask.sum())} samples left outside the jump-in "
+                            "window; record a longer approach or a higher sample rate")
     base = slice(0, max(10, int(0.6 * j)))
     drift, offset = np.polyfit(t[base], y[base], 1)
     ybl = y - offset - drift * t
-    post = slice(min(j + win + 2, n - 5), n)
+    post = slice(min(max(j, i_c) + win + 2, n - 3), n)
     shift = float(np.median(z[post] - ybl[post]))
     return FitCurve(name=name, time=t, position=z, deflection=y, velocity=v, sample_rate=fs,
                     sigma=sigma, jump_index=j, mask=mask,
