@@ -40,8 +40,9 @@ def test_no_contact():
 
 
 def test_volts_refused(two):
-    volts = dataclasses.replace(two[0], deflection_unit="V")
-    with pytest.raises(FileFormatError, match="calibrated deflection in metres"):
+    meta = {k: v for k, v in two[0].metadata.items() if k != "sensitivity"}
+    volts = dataclasses.replace(two[0], deflection_unit="V", metadata=meta)
+    with pytest.raises(FileFormatError, match="no sensitivity"):
         fit_dynamic([volts, two[1]], "beam", free=("hamaker",))
 
 
@@ -60,3 +61,18 @@ def test_cli_one_line_exit_2(two, tmp_path, capsys):
     assert err.startswith("error: ") and err.count("\n") == 1 and "one driving speed" in err
     # the input files are untouched
     assert paths[0].read_text().count("# end") == 1
+
+
+def test_force_and_volts_calibrated_with_the_files_own_constants(two):
+    """A force [N] is divided by the file's spring constant, volts multiplied by its sensitivity."""
+    from afmforce.fit import prepare_curves
+
+    c = two[0]
+    k, s = c.metadata["spring_constant"], c.metadata["sensitivity"]
+    as_n = dataclasses.replace(c, deflection_signal=np.asarray(c.deflection_signal) * k,
+                               deflection_unit="N")
+    as_v = dataclasses.replace(c, deflection_signal=np.asarray(c.deflection_signal) / s,
+                               deflection_unit="V")
+    ref, fn, fv = prepare_curves([c, as_n, as_v])
+    np.testing.assert_allclose(fn.deflection, ref.deflection, rtol=1e-12)
+    np.testing.assert_allclose(fv.deflection, ref.deflection, rtol=1e-12)

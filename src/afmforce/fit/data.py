@@ -102,10 +102,15 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     AnalysisError
         Too few approach samples, or no contact (no constant-compliance region).
     """
-    if curve.deflection_unit != "m":
+    meta = curve.metadata or {}
+    unit = curve.deflection_unit
+    need = {"N": "spring_constant", "V": "sensitivity"}.get(unit)
+    if unit != "m" and (need is None or not meta.get(need)):
         raise FileFormatError(
-            f"{name}: the deflection is in {curve.deflection_unit}, the fit needs a calibrated "
-            "deflection in metres (deflection_signal [m]); calibrate it first")
+            f"{name}: the deflection is in {unit} and the file has no {need}; the fit needs a "
+            "calibrated deflection in metres (deflection_signal [m]); calibrate it first")
+    # force / k or volts x sensitivity: the file's own calibration
+    scale = 1.0 if unit == "m" else (1.0 / float(meta[need]) if unit == "N" else float(meta[need]))
     v = _meta_value(curve, "velocity", velocity, name, "m/s")
     fs = _meta_value(curve, "sample_rate", sample_rate, name, "Hz")
     app = np.asarray(curve.segment) == 0
@@ -115,7 +120,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     idx = idx[: np.flatnonzero(np.diff(idx) != 1)[0] + 1] if np.any(np.diff(idx) != 1) else idx
     t = np.asarray(curve.time, float)[idx]
     z = np.asarray(curve.piezo_nominal, float)[idx]
-    y = np.asarray(curve.deflection_signal, float)[idx]
+    y = np.asarray(curve.deflection_signal, float)[idx] * scale
     t = t - t[0]
     n = len(t)
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
@@ -125,8 +130,15 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     i_c = n - 1
     while i_c > 0 and dy[i_c - 1] > 0.5 * dz[i_c - 1]:
         i_c -= 1
+    if n - i_c < 5:     # noisy positions break the chain: the last 10 % of the approach
+        i_c = int(0.9 * n)
     n_tail = n - i_c
     a = np.polyfit(z[i_c + n_tail // 3:], y[i_c + n_tail // 3:], 1)[0] if n_tail >= 3 else 0.0
+    if 0.05 < a <= 0.5 or a >= 2.0:
+        raise AnalysisError(
+            f"{name}: in contact the deflection follows the position with slope {a:.3g}, not ~1: "
+            "a deformable sample or a wrong deflection calibration; the dynamic model assumes "
+            "rigid surfaces (eq 2), so this curve cannot be fitted")
     if not 0.5 < a < 2.0:
         raise AnalysisError(
             f"{name}: no contact on the approach (no constant-compliance region at its end, "
