@@ -18,7 +18,8 @@ import sys
 from ..errors import AfmforceError
 
 #: Sub-command modules, in the order ``afmforce --help`` lists them.
-COMMANDS = ("demo", "statics", "diagnose", "simulate", "analyze", "formats", "sweep", "reproduce", "explore")
+COMMANDS = ("demo", "statics", "diagnose", "simulate", "analyze", "formats", "sweep", "reproduce", "explore",
+            "fit", "plan")
 
 EXIT_USAGE = 2
 

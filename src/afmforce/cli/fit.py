@@ -1,0 +1,147 @@
+"""``afmforce fit``: fit the dynamic model jointly to curves measured at several speeds.
+
+Model flags and defaults are those of ``afmforce simulate`` (the beam defaults
+to the paper's Fig 5 lever); each curve's speed and sample rate come from its
+file (``velocity``, ``sample_rate``) or from ``--velocities``/``--sample-rates``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import warnings
+from pathlib import Path
+
+from .._files import atomic_write_text, check_writable
+from ..errors import AfmforceError, ParameterError
+from .common import eprint, print_json, quantity
+
+__all__ = ["register", "run", "model_config", "add_model_flags"]
+
+
+def add_model_flags(parser: argparse.ArgumentParser) -> None:
+    """The model flags of ``afmforce simulate`` (model, beam, spring, surfaces, friction)."""
+    from . import simulate as S
+
+    for add in (S._model_group, S._beam_group, S._spring_group, S._surface_group,
+                S._friction_group):
+        add(parser)
+    g = parser.add_argument_group("solver")
+    S._q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
+    S._q(g, "--atol", "length", "m", "absolute tolerance on positions")
+
+
+def model_config(args: argparse.Namespace):
+    """The SimulationConfig of the model flags (drive fields are set per curve)."""
+    from .simulate import config_from_args
+
+    return config_from_args(args)
+
+
+def _list(dimension: str, flag: str):
+    conv = quantity(dimension, flag)
+
+    def parse(text: str) -> list[float]:
+        return [conv(t) for t in text.split(",") if t.strip()]
+
+    parse.__name__ = f"comma-separated {dimension}s"
+    return parse
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``fit`` sub-command."""
+    from ..fit import PARAMETERS
+
+    p = subparsers.add_parser(
+        "fit", help="fit the dynamic model to curves at several driving speeds (friction, A*R)",
+        description="Fit the dynamic model (afmforce simulate) jointly to calibrated approach "
+                    "curves measured at several driving speeds: global parameters (--free), and "
+                    "per curve the zero of position, the baseline offset and drift. Reports "
+                    "standard errors, profile-likelihood intervals and whether friction is "
+                    "detected (likelihood ratio, AIC/BIC). See docs/fit.md.")
+    p.add_argument("curves", nargs="+", metavar="CURVE",
+                   help="force-curve files with a calibrated deflection [m]")
+    g = p.add_argument_group("fit")
+    g.add_argument("--free", default="hamaker,xi",
+                   help=f"global parameters to fit, comma-separated, among {', '.join(PARAMETERS)} "
+                        "(default hamaker,xi)")
+    g.add_argument("--velocities", type=_list("velocity", "--velocities"), default=None,
+                   metavar="V1,V2,..", help="driving speed of each curve (default: from the files)")
+    g.add_argument("--sample-rates", type=_list("frequency", "--sample-rates"), default=None,
+                   metavar="F1,F2,..", help="sample rate of each curve (default: from the files)")
+    g.add_argument("--no-drift", action="store_true", help="fit no drift slope per curve")
+    g.add_argument("--level", type=float, default=0.95,
+                   help="confidence level of intervals and friction test (default 0.95)")
+    g.add_argument("--starts", type=int, default=2,
+                   help="local fits from the best points of a scan in xi (default 2)")
+    g.add_argument("--no-compare", action="store_true",
+                   help="skip the model comparison (static / no friction / friction)")
+    g.add_argument("--no-profile", action="store_true",
+                   help="Wald intervals only (skip the profile likelihood)")
+    g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=2e-3,
+                   metavar="TIME", help="left out after the jump-in (default 2 ms)")
+    add_model_flags(p)
+    o = p.add_argument_group("output")
+    o.add_argument("--json", action="store_true", help="print the result as JSON (SI units)")
+    o.add_argument("--out", metavar="FILE.json", help="write the JSON result")
+    o.add_argument("--report", metavar="FILE.md", help="write a Markdown summary")
+    o.add_argument("--plots", metavar="DIR",
+                   help="write a figure per curve (data, model, residuals) and the profiles")
+    o.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    p.set_defaults(func=run)
+    return p
+
+
+def _load(paths):
+    from ..io import load
+
+    curves, names = [], []
+    for path in paths:
+        got = load(path)
+        if len(got) != 1:
+            raise ParameterError(f"{path} holds {len(got)} curves; give files with one curve each")
+        curves.append(got[0])
+        names.append(Path(path).name)
+    return curves, names
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the command; returns the exit status."""
+    from ..fit import fit_dynamic
+    from ..fit.figures import plot_curves, plot_profiles
+
+    for path in (args.out, args.report):
+        if path:
+            check_writable(path, args.force)
+    if not 0.5 < args.level < 1:
+        raise ParameterError(f"--level must lie between 0.5 and 1, got {args.level}")
+    for flag, vals in (("--velocities", args.velocities), ("--sample-rates", args.sample_rates)):
+        if vals is not None and len(vals) != len(args.curves):
+            raise ParameterError(f"{flag} has {len(vals)} values for {len(args.curves)} curves")
+    cfg = model_config(args)
+    curves, names = _load(args.curves)
+    with warnings.catch_warnings(record=True):
+        warnings.simplefilter("ignore")
+        res = fit_dynamic(curves, cfg, free=args.free.split(","), names=names,
+                          velocities=args.velocities, sample_rates=args.sample_rates,
+                          drift=not args.no_drift, starts=args.starts, level=args.level,
+                          profile=() if args.no_profile else None,
+                          compare=not args.no_compare, jump_window=args.jump_window)
+    d = res.to_dict()
+    if args.plots:
+        written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)
+        prof = plot_profiles(res, Path(args.plots) / "fit_profiles.png", force=True)
+        d["figures"] = [str(p) for p in written] + ([str(prof)] if prof else [])
+    if args.out:
+        from .common import to_jsonable
+        import json
+
+        atomic_write_text(args.out, json.dumps(to_jsonable(d), indent=2) + "\n", force=args.force)
+    if args.report:
+        atomic_write_text(args.report, res.markdown(), force=args.force)
+    if args.json:
+        print_json(d)
+    else:
+        print(res.markdown())
+    for w in res.warnings:
+        eprint(f"warning: {w}")
+    return 0

@@ -1,0 +1,72 @@
+"""``afmforce plan``: which driving speeds and sample rates determine friction best.
+
+See :mod:`afmforce.fit.plan` and docs/fit.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from .._files import atomic_write_text, check_writable
+from .common import add_quantity, print_json, quantity
+
+__all__ = ["register", "run"]
+
+
+def register(subparsers) -> argparse.ArgumentParser:
+    """Add the ``plan`` sub-command."""
+    from .fit import _list, add_model_flags
+
+    p = subparsers.add_parser(
+        "plan", help="design a multi-speed measurement: speeds and sample rates that fix xi best",
+        description="For a probe (model flags as in afmforce simulate, --xi the friction to "
+                    "determine): predicted standard error of xi per candidate speed and sample "
+                    "rate (Fisher information of the fit), the best set of --curves speeds, and "
+                    "the fastest speed at which the static analysis stays within --force-error.")
+    g = p.add_argument_group("design")
+    g.add_argument("--speeds", type=_list("velocity", "--speeds"),
+                   default=[0.2e-6, 0.5e-6, 1e-6, 2e-6, 5e-6, 10e-6, 20e-6], metavar="V1,V2,..",
+                   help="candidate driving speeds (default 0.2,0.5,1,2,5,10,20 um/s)")
+    g.add_argument("--sample-rates", type=_list("frequency", "--sample-rates"), default=None,
+                   metavar="F1,F2,..", help="sample rate of each candidate speed "
+                                            "(default: --points-per-nm x speed)")
+    g.add_argument("--points-per-nm", type=float, default=2.0,
+                   help="samples per nm of drive travel when no rates are given (default 2)")
+    add_quantity(g, "--noise", "length", 0.05e-9, "deflection noise rms", unit="m")
+    g.add_argument("--curves", type=int, default=4, help="curves in a design (default 4)")
+    add_quantity(g, "--force-error", "force", None,
+                 "allowed error of the static pull-in force (default 10 %% of it)", unit="N")
+    g.add_argument("--start", type=quantity("length", "--start"), default=None, metavar="VALUE",
+                   help="start of each approach (default -40 nm)")
+    g.add_argument("--turn", type=quantity("length", "--turn"), default=None, metavar="VALUE",
+                   help="turn of each approach (default +20 nm)")
+    add_model_flags(p)
+    o = p.add_argument_group("output")
+    o.add_argument("--json", action="store_true", help="print the plan as JSON (SI units)")
+    o.add_argument("--report", metavar="FILE.md", help="write the Markdown summary")
+    o.add_argument("--force", action="store_true", help="overwrite existing outputs")
+    p.set_defaults(func=run)
+    return p
+
+
+def run(args: argparse.Namespace) -> int:
+    """Run the command; returns the exit status."""
+    from ..fit.plan import plan_experiment
+    from .fit import model_config
+
+    if args.report:
+        check_writable(args.report, args.force)
+    drive = {"start": -40e-9 if args.start is None else args.start,
+             "turn": 20e-9 if args.turn is None else args.turn}
+    args.start = args.turn = None
+    cfg = model_config(args).replace(**drive)
+    plan = plan_experiment(cfg, noise=args.noise, speeds=args.speeds,
+                           sample_rates=args.sample_rates, points_per_nm=args.points_per_nm,
+                           n_curves=args.curves, force_error=args.force_error)
+    if args.report:
+        atomic_write_text(args.report, plan.markdown(), force=args.force)
+    if args.json:
+        print_json(plan.to_dict())
+    else:
+        print(plan.markdown())
+    return 0

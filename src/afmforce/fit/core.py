@@ -1,0 +1,275 @@
+"""``fit_dynamic``: fit the dynamic model jointly to curves measured at several speeds."""
+
+from __future__ import annotations
+
+import math
+import time
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ..errors import ParameterError
+from .data import FitCurve, prepare_curves
+from .model import Evaluator
+from .params import PARAMETERS, check_free
+from .problem import Problem
+from .result import CurveFit, Estimate, FitResult, wald_interval
+
+__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT"]
+
+#: Parameters whose effect depends on the driving speed: not identifiable from one speed.
+SPEED_DEPENDENT = ("xi", "zeta", "viscosity", "mass", "m_joint")
+#: Starting values of xi scanned before the local fits [kg/s].
+XI_SCAN = (0.0, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1)
+#: Factors on the static guess of A (or R) scanned with xi.
+AR_SCAN = (1.0, 1.6, 2.5)
+#: A local fit with a reduced chi-square above this counts as stuck: try the next start.
+STUCK_REDCHI = 1.5
+
+
+class IdentifiabilityError(ParameterError):
+    """The data cannot determine a free parameter (e.g. friction from one speed)."""
+
+
+def base_config(model="beam", **fields):
+    """A :class:`~afmforce.dynamics.SimulationConfig` from a model name, a config or a dict."""
+    from ..dynamics import SimulationConfig
+
+    if isinstance(model, SimulationConfig):
+        return model.replace(**fields) if fields else model
+    if isinstance(model, Mapping):
+        return SimulationConfig(**{**dict(model), **fields})
+    return SimulationConfig(model=str(model), **fields)
+
+
+def local_fit(problem: Problem, x0: np.ndarray, max_nfev: int = 40):
+    """Bounded least squares from ``x0`` with lmfit (scipy ``least_squares``, TRF).
+
+    Returns ``(x, lmfit result)``; ``x`` is the scaled parameter vector.
+    """
+    import lmfit
+
+    params = lmfit.Parameters()
+    names = problem.names
+    for name, v in zip(names, x0):
+        if name in PARAMETERS:
+            p = PARAMETERS[name]
+            lo, hi = p.lower / p.scale, p.upper / p.scale
+            params.add(name, value=float(np.clip(v, lo, hi)), min=lo, max=hi)
+        else:
+            params.add(name, value=float(v))
+
+    def vec(p):
+        return np.array([p[n].value for n in names])
+
+    res = lmfit.minimize(lambda p: problem.residual(vec(p)), params, method="least_squares",
+                         jac=lambda p, *a, **k: problem.jacobian(vec(p)), x_scale="jac",
+                         max_nfev=max_nfev, scale_covar=True)
+    return vec(res.params), res
+
+
+def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
+    """Static first guesses: A (or R) from the static jump-in deflection of the slowest curve."""
+    from ..dynamics import static_jump_in
+
+    g = {n: float(getattr(base, n)) for n in free}
+    slow = min(curves, key=lambda c: c.velocity)
+    target = slow.guess["min_deflection"]
+    k = base.force_constant
+    for name in ("hamaker", "radius"):
+        if name not in free or not (target < 0):
+            continue
+        lo, hi = math.log(PARAMETERS[name].lower), math.log(PARAMETERS[name].upper)
+        for _ in range(60):   # |static jump deflection| grows with A*R
+            mid = 0.5 * (lo + hi)
+            vals = {"hamaker": base.hamaker, "radius": base.radius, name: math.exp(mid)}
+            dj = static_jump_in(k, vals["radius"], vals["hamaker"], base.z0)[2]
+            lo, hi = (mid, hi) if dj > target else (lo, mid)
+        g[name] = math.exp(0.5 * (lo + hi))
+    for name in ("xi", "zeta"):
+        if name in free:
+            g[name] = max(g[name], PARAMETERS[name].abs_step)
+    return g
+
+
+def _starts(problem: Problem, guess: dict, shifts) -> list[np.ndarray]:
+    """Starting vectors ranked by chi-square: a scan of xi x (A or R) where xi is free.
+
+    The static guess of A*R comes from the slowest curve's smallest deflection,
+    which friction lowers: the scan also tries larger A*R.
+    """
+    x = problem.pack(guess, shifts)
+    if "xi" not in problem.free:
+        return [x]
+    j = problem.free.index("xi")
+    ar = [problem.free.index(n) for n in ("hamaker", "radius") if n in problem.free]
+    trials = []
+    for f in AR_SCAN if ar else (1.0,):
+        for xi in XI_SCAN:
+            xt = x.copy()
+            xt[j] = max(xi, PARAMETERS["xi"].abs_step) / PARAMETERS["xi"].scale
+            if ar:
+                xt[ar[0]] *= f
+            trials.append((problem.chi2(xt), xt))
+    trials.sort(key=lambda t: t[0])
+    return [t[1] for t in trials]
+
+
+def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
+    JTJ = J.T @ J
+    try:
+        return np.linalg.pinv(JTJ, rcond=1e-12) * scale
+    except np.linalg.LinAlgError:
+        return np.full(JTJ.shape, np.nan)
+
+
+def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker", "xi"),
+                fixed: Mapping[str, float] | None = None, *, names: Sequence[str] | None = None,
+                velocities: Sequence[float] | None = None,
+                sample_rates: Sequence[float] | None = None, drift: bool = True,
+                starts: int = 2, level: float = 0.95, profile: Sequence[str] | None = None,
+                compare: bool = True, jump_window: float = 2e-3,
+                max_nfev: int = 40) -> FitResult:
+    """Fit the dynamic model jointly to approach curves measured at several speeds.
+
+    Parameters
+    ----------
+    curves : sequence of RawCurve or FitCurve
+        Calibrated curves (deflection in metres) with ``velocity`` [m/s] and
+        ``sample_rate`` [Hz] in their metadata (or given here).
+    model : str, SimulationConfig or dict
+        ``"beam"`` / ``"spring"`` with the defaults of ``afmforce simulate``,
+        or a configuration holding every fixed parameter.
+    free : sequence of str
+        Global parameters to fit (:data:`afmforce.fit.PARAMETERS`). The zero
+        of position, baseline offset and drift of every curve are always fitted.
+    fixed : mapping, optional
+        Values [SI] of global parameters held fixed (override ``model``).
+    names : sequence of str, optional
+        Curve labels.
+    velocities, sample_rates : sequence of float, optional
+        Override the metadata [m/s], [Hz].
+    drift : bool
+        Fit a linear drift per curve.
+    starts : int
+        Local fits started from the best points of a scan in xi and A*R
+        (multi-start); up to ``2 starts + 2`` while the best fit looks stuck
+        (reduced chi-square > 1.5).
+    level : float
+        Confidence level of the intervals and of the friction test.
+    profile : sequence of str, optional
+        Parameters with profile-likelihood intervals; default: the free ones
+        among ``hamaker``, ``radius`` and ``xi``.
+    compare : bool
+        Fit the static and the friction-free model too (model comparison).
+    jump_window : float
+        Samples this long after the jump-in are left out [s] (the jump and the
+        landing transient are timing, not shape; see docs/fit.md).
+    max_nfev : int
+        Iteration budget of each local fit.
+
+    Returns
+    -------
+    FitResult
+
+    Raises
+    ------
+    ParameterError, IdentifiabilityError, FileFormatError, AnalysisError
+        Bad parameters, a speed-dependent parameter with all curves at one
+        speed, uncalibrated or inconsistent curves, a curve without contact.
+    """
+    from .uncertainty import compare_models, profile_interval
+
+    t0 = time.perf_counter()
+    if not 0.5 < level < 1.0:
+        raise ParameterError(f"level must lie between 0.5 and 1, got {level!r}")
+    base = base_config(model, **dict(fixed or {}))
+    free = check_free(free, base.model)
+    fc = prepare_curves(curves, names, velocities=velocities, sample_rates=sample_rates,
+                        jump_window=jump_window)
+    speeds = sorted({round(c.velocity, 15) for c in fc})
+    dep = [n for n in free if n in SPEED_DEPENDENT]
+    if dep and (len(speeds) < 2 or speeds[-1] / speeds[0] < 1.2):
+        raise IdentifiabilityError(
+            f"{', '.join(dep)} cannot be determined from curves at one driving speed "
+            f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
+            "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
+            "(ideally a factor >= 4 apart) or fix " + ", ".join(dep))
+    ev = Evaluator(fc, base, "dynamic", drift)
+    prob = Problem(ev, free)
+    guess = _guess_globals(fc, base, free)
+    shifts0 = [c.guess["shift"] for c in fc]
+    n_data = sum(int(c.mask.sum()) for c in fc)
+    n_par = len(shifts0) + len(free) + ev.n_linear() * len(fc)
+    dof = max(n_data - n_par, 1)
+    best = None
+    for k, x0 in enumerate(_starts(prob, guess, shifts0)[: 2 * max(starts, 1) + 2]):
+        if k >= max(starts, 1) and best[0] / dof < STUCK_REDCHI:
+            break    # multi-start: `starts` local fits, more while they look stuck
+        x, res = local_fit(prob, x0, max_nfev)
+        chi2 = prob.chi2(x)
+        if best is None or chi2 < best[0]:
+            best = (chi2, x, res)
+    chi2, x, res = best
+    redchi = chi2 / dof
+    J = prob.jacobian(x)
+    cov = _covariance(J, max(redchi, 1.0))
+    sd = np.sqrt(np.clip(np.diag(cov), 0, None)) * prob.scale()
+    values, shifts = prob.unpack(x)
+    warns = []
+    if ev.failures:
+        warns.append(f"{ev.failures} trial simulations failed during the fit (last: {ev.last_error})")
+    if redchi > 2.0:
+        warns.append(f"reduced chi-square {redchi:.3g} > 2: the model does not describe the "
+                     "data within their noise; intervals are scaled by it but may be optimistic")
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov)))
+    g = len(free)
+    correlations = {f"{a}:{b}": float(corr[i, j]) for i, a in enumerate(free)
+                    for j, b in enumerate(free) if j > i}
+    for k_, r in correlations.items():
+        if abs(r) > 0.98:
+            warns.append(f"{k_.replace(':', ' and ')} are nearly not identifiable separately "
+                         f"(correlation {r:.3f}); add curves at more different speeds or fix one")
+    params = {}
+    for j, name in enumerate(free):
+        p = PARAMETERS[name]
+        params[name] = Estimate(values[name], float(sd[j]),
+                                wald_interval(values[name], float(sd[j]), level, p.lower, p.upper),
+                                "wald", p.unit)
+    profiles = {}
+    todo = [n for n in (profile if profile is not None else ("hamaker", "radius", "xi"))
+            if n in free]
+    for name in todo:
+        lo, hi, pts = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
+                                       max(redchi, 1.0), level)
+        params[name].interval, params[name].interval_method = (lo, hi), "profile"
+        profiles[name] = pts
+    derived = {}
+    if "hamaker" in free or "radius" in free:
+        name = "hamaker" if "hamaker" in free else "radius"
+        other = base.radius if name == "hamaker" else base.hamaker
+        e = params[name]
+        derived["hamaker_radius"] = Estimate(e.value * other, e.stderr * other,
+                                             (e.interval[0] * other, e.interval[1] * other),
+                                             e.interval_method, "J m")
+    comparison = None
+    if compare:
+        comparison = compare_models(prob, x, chi2, fc, base, drift, level, max_nfev, warns,
+                                    max(redchi, 1.0))
+    coefs = prob.linear_coefficients(x)
+    cfits = []
+    for i, c in enumerate(fc):
+        r = ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
+        cfits.append(CurveFit(c.name, c.velocity, c.sample_rate, c.n, int(c.mask.sum()), c.sigma,
+                              float(shifts[i]), float(sd[g + i]), float(coefs[i][0]),
+                              float(coefs[i][1]), float(r @ r),
+                              float(np.sqrt(np.mean(r ** 2))) * c.sigma))
+    cfg = {k: v for k, v in base.to_dict().items()
+           if k not in ("velocity", "sample_rate", "start", "turn", "end")}
+    return FitResult(model=base.model, free=free, parameters=params, derived=derived,
+                     correlations=correlations, curves=cfits, chi2=chi2, dof=dof, redchi=redchi,
+                     n_data=n_data, level=level, comparison=comparison, profiles=profiles,
+                     warnings=warns, model_evaluations=ev.simulations,
+                     wall_time=time.perf_counter() - t0, success=bool(res.success),
+                     message=str(res.message), config=cfg, _problem=prob, _x=x)

@@ -1,0 +1,100 @@
+"""Registry of the global parameters the dynamic fit can free (``--free``).
+
+Each entry maps a user name to a :class:`~afmforce.dynamics.SimulationConfig`
+field, with its unit, bounds, the scale used inside the optimiser and the
+finite-difference step of the Jacobian. Per-curve nuisance parameters (the zero
+of the piezo position ``shift``, the baseline ``offset`` and the ``drift``
+slope) are always fitted and are not in this registry.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from ..errors import ParameterError
+
+__all__ = ["FitParameter", "PARAMETERS", "check_free"]
+
+
+@dataclass(frozen=True)
+class FitParameter:
+    """A global parameter of the dynamic model that can be fitted.
+
+    Attributes
+    ----------
+    name : str
+        User name (``--free`` key) and SimulationConfig field.
+    unit : str
+        SI unit.
+    lower, upper : float
+        Bounds [unit].
+    scale : float
+        Typical size [unit]; the optimiser works in units of ``scale``.
+    rel_step, abs_step : float
+        Forward-difference step ``max(rel_step |value|, abs_step)`` [unit].
+    models : tuple of str
+        Models in which the parameter has an effect.
+    meaning : str
+        What it is.
+    """
+
+    name: str
+    unit: str
+    lower: float
+    upper: float
+    scale: float
+    rel_step: float
+    abs_step: float
+    models: tuple[str, ...]
+    meaning: str
+
+    def step(self, value: float) -> float:
+        """Forward-difference step at ``value`` [unit]."""
+        return max(self.rel_step * abs(value), self.abs_step)
+
+
+#: Parameters that ``fit_dynamic(free=...)`` and ``afmforce fit --free`` accept.
+PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
+    FitParameter("hamaker", "J", 1e-22, 1e-16, 1e-19, 0.01, 1e-23, ("beam", "spring"),
+                 "Hamaker constant A (the data fix A*R; R is given)"),
+    FitParameter("radius", "m", 1e-9, 1e-4, 1e-7, 0.01, 1e-11, ("beam", "spring"),
+                 "effective radius R (the data fix A*R; A is given)"),
+    FitParameter("xi", "kg/s", 0.0, 10.0, 1e-2, 0.02, 2e-4, ("beam",),
+                 "viscous tip friction coefficient (eq 28)"),
+    FitParameter("zeta", "kg/(s N^2)", 0.0, 1e20, 1e14, 0.02, 1e12, ("beam",),
+                 "load-proportional friction coefficient (friction='load')"),
+    FitParameter("z0", "m", 0.1e-9, 2e-9, 1e-9, 0.005, 1e-13, ("beam", "spring"),
+                 "soft-wall length of eq 2"),
+    FitParameter("viscosity", "Pa s", 0.0, 1.0, 1e-4, 0.02, 1e-6, ("beam", "spring"),
+                 "fluid viscosity (drainage)"),
+    FitParameter("mass", "kg", 1e-15, 1e-5, 1e-9, 0.02, 1e-16, ("spring",),
+                 "effective mass of the simple spring (inertia)"),
+    FitParameter("m_joint", "kg", 1e-15, 1e-5, 1e-10, 0.02, 1e-16, ("beam",),
+                 "point mass at the beam-base joint (inertia)"),
+)}
+
+
+def check_free(free, model: str) -> tuple[str, ...]:
+    """Validate the free parameter names for ``model``; returns them as a tuple.
+
+    Raises
+    ------
+    ParameterError
+        Unknown name, a parameter without effect in this model, or both
+        ``hamaker`` and ``radius`` (only their product is determined).
+    """
+    names = tuple(dict.fromkeys(n.strip() for n in free if n.strip()))
+    if not names:
+        raise ParameterError(f"give at least one free parameter; known: {', '.join(PARAMETERS)}")
+    for n in names:
+        if n not in PARAMETERS:
+            raise ParameterError(f"unknown free parameter {n!r}; known: {', '.join(PARAMETERS)}")
+        if model not in PARAMETERS[n].models:
+            why = " (the spring model has no lateral motion, hence no friction)" \
+                if n in ("xi", "zeta") else ""
+            raise ParameterError(f"{n} has no effect in the {model} model{why}; "
+                                 f"use --model {PARAMETERS[n].models[0]} or drop it from --free")
+    if "hamaker" in names and "radius" in names:
+        raise ParameterError("hamaker and radius cannot both be free: the van der Waals force "
+                             "fixes only A*R; free one and give the other")
+    return names

@@ -1,0 +1,121 @@
+"""The least-squares problem of a joint fit: parameter vector, residuals, block Jacobian.
+
+The vector holds the free global parameters (in units of their registry
+``scale``) and then the per-curve zero of position ``shift_i`` (in nm). A
+global parameter changes every curve; ``shift_i`` only curve *i*, so the
+forward-difference Jacobian costs one simulation per curve per global
+parameter plus one per curve for the shifts (not ``n_par x n_curves``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from .model import Evaluator
+from .params import PARAMETERS
+
+__all__ = ["Problem", "SHIFT_SCALE", "SHIFT_STEP"]
+
+#: Shifts are handled in nm inside the optimiser.
+SHIFT_SCALE = 1e-9
+#: Forward-difference step of a shift [m].
+SHIFT_STEP = 0.02e-9
+
+
+class Problem:
+    """Residuals and Jacobian of the joint fit.
+
+    Parameters
+    ----------
+    evaluator : Evaluator
+    free : tuple of str
+        Free global parameters (registry names).
+    fixed : dict
+        Values of global parameters held fixed [SI] (override the base config).
+    """
+
+    def __init__(self, evaluator: Evaluator, free: tuple[str, ...], fixed: dict | None = None):
+        self.ev = evaluator
+        self.free = tuple(free)
+        self.fixed = dict(fixed or {})
+        self.n_curves = len(evaluator.curves)
+        self._cache: dict = {}
+
+    # --- vector <-> values ----------------------------------------------------------
+    @property
+    def names(self) -> list[str]:
+        return list(self.free) + [f"shift_{i}" for i in range(self.n_curves)]
+
+    def scale(self) -> np.ndarray:
+        return np.array([PARAMETERS[n].scale for n in self.free] + [SHIFT_SCALE] * self.n_curves)
+
+    def unpack(self, x: np.ndarray) -> tuple[dict, np.ndarray]:
+        """Scaled vector -> (SI values of the globals incl. fixed ones, shifts [m])."""
+        x = np.asarray(x, float) * self.scale()
+        g = len(self.free)
+        values = {**self.fixed, **{n: float(v) for n, v in zip(self.free, x[:g])}}
+        return values, x[g:]
+
+    def pack(self, values: dict, shifts) -> np.ndarray:
+        g = [values[n] for n in self.free]
+        return np.concatenate([g, np.asarray(shifts, float)]) / self.scale()
+
+    # --- residuals -------------------------------------------------------------------
+    def curve_prediction(self, i: int, values: dict, shift: float):
+        key = (i, tuple(sorted(values.items())), float(shift))
+        if key not in self._cache:
+            if len(self._cache) > 64 * self.n_curves:
+                self._cache.clear()
+            self._cache[key] = self.ev.predict(i, values, float(shift))
+        return self._cache[key]
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        values, shifts = self.unpack(x)
+        return np.concatenate([self.ev.project(i, self.curve_prediction(i, values, shifts[i]))[0]
+                               for i in range(self.n_curves)])
+
+    def chi2(self, x: np.ndarray) -> float:
+        r = self.residual(x)
+        return float(r @ r)
+
+    def jacobian(self, x: np.ndarray) -> np.ndarray:
+        """Forward-difference Jacobian of :meth:`residual` w.r.t. the scaled vector."""
+        values, shifts = self.unpack(x)
+        base = [self.ev.project(i, self.curve_prediction(i, values, shifts[i]))[0]
+                for i in range(self.n_curves)]
+        sizes = [len(b) for b in base]
+        offs = np.concatenate([[0], np.cumsum(sizes)])
+        J = np.zeros((offs[-1], len(self.free) + self.n_curves))
+        for j, name in enumerate(self.free):
+            p = PARAMETERS[name]
+            h = p.step(values[name])
+            if values[name] + h > p.upper:
+                h = -h
+            v2 = {**values, name: values[name] + h}
+            for i in range(self.n_curves):
+                r2 = self.ev.project(i, self.curve_prediction(i, v2, shifts[i]))[0]
+                J[offs[i]:offs[i + 1], j] = (r2 - base[i]) / (h / p.scale)
+        g = len(self.free)
+        for i in range(self.n_curves):
+            r2 = self.ev.project(i, self.curve_prediction(i, values, shifts[i] + SHIFT_STEP))[0]
+            J[offs[i]:offs[i + 1], g + i] = (r2 - base[i]) / (SHIFT_STEP / SHIFT_SCALE)
+        return J
+
+    def linear_coefficients(self, x: np.ndarray) -> list[np.ndarray]:
+        """Per curve ``(offset [m], drift [m/s])`` at ``x``."""
+        values, shifts = self.unpack(x)
+        return [self.ev.project(i, self.curve_prediction(i, values, shifts[i]))[1]
+                for i in range(self.n_curves)]
+
+    def predictions(self, x: np.ndarray) -> list[np.ndarray | None]:
+        """Model deflection of every curve incl. offset and drift [m] at ``x``."""
+        values, shifts = self.unpack(x)
+        out = []
+        for i, c in enumerate(self.ev.curves):
+            m = self.curve_prediction(i, values, shifts[i])
+            if m is None:
+                out.append(None)
+                continue
+            coef = self.ev.project(i, m)[1]
+            out.append(m + coef[0] + coef[1] * c.time)
+        return out

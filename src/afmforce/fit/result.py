@@ -1,0 +1,184 @@
+"""Results of a dynamic fit: dataclasses with units, JSON and a Markdown summary."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field
+
+import numpy as np
+
+__all__ = ["Estimate", "CurveFit", "ModelComparison", "FitResult"]
+
+
+@dataclass
+class Estimate:
+    """One fitted parameter.
+
+    Attributes
+    ----------
+    value, stderr : float
+        Best estimate and standard error from the Jacobian (scaled by the
+        reduced chi-square when it exceeds 1) [unit].
+    interval : (float, float)
+        Profile-likelihood interval at ``level`` where computed, else
+        ``value +- z stderr`` clipped to the bounds [unit].
+    interval_method : str
+        ``"profile"`` or ``"wald"``.
+    unit : str
+    """
+
+    value: float
+    stderr: float
+    interval: tuple[float, float]
+    interval_method: str
+    unit: str
+
+
+@dataclass
+class CurveFit:
+    """Per-curve result: nuisance parameters and goodness of fit (SI)."""
+
+    name: str
+    velocity: float
+    sample_rate: float
+    n_points: int
+    n_used: int
+    sigma: float
+    shift: float
+    shift_stderr: float
+    offset: float
+    drift: float
+    chi2: float
+    rms_residual: float
+
+
+@dataclass
+class ModelComparison:
+    """Static vs dynamic without friction vs dynamic with friction.
+
+    ``chi2``, ``n_parameters``, ``aic``, ``bic`` per model name; the
+    likelihood-ratio statistic of friction (``lr``) and its p-value (boundary
+    case xi >= 0: half a chi-square with one degree of freedom).
+    """
+
+    chi2: dict
+    n_parameters: dict
+    aic: dict
+    bic: dict
+    lr: float
+    p_value: float
+    level: float
+    friction_detected: bool
+    verdict: str
+    best_by_aic: str
+    best_by_bic: str
+
+
+@dataclass
+class FitResult:
+    """Everything a joint dynamic fit found (SI units; see :meth:`to_dict`)."""
+
+    model: str
+    free: tuple
+    parameters: dict
+    derived: dict
+    correlations: dict
+    curves: list
+    chi2: float
+    dof: int
+    redchi: float
+    n_data: int
+    level: float
+    comparison: ModelComparison | None
+    profiles: dict
+    warnings: list
+    model_evaluations: int
+    wall_time: float
+    success: bool
+    message: str
+    config: dict = field(default_factory=dict)
+    _problem: object = field(default=None, repr=False, compare=False)
+    _x: object = field(default=None, repr=False, compare=False)
+
+    @property
+    def friction_detected(self) -> bool | None:
+        return None if self.comparison is None else self.comparison.friction_detected
+
+    @property
+    def p_value(self) -> float:
+        return math.nan if self.comparison is None else self.comparison.p_value
+
+    def predictions(self) -> list:
+        """Best-fit model deflection of every curve incl. offset and drift [m]."""
+        return self._problem.predictions(self._x)
+
+    def to_dict(self) -> dict:
+        """JSON-able dictionary (SI values, units given next to them)."""
+        d = {
+            "model": self.model,
+            "free": list(self.free),
+            "parameters": {k: {**asdict(v), "interval": list(v.interval)}
+                           for k, v in self.parameters.items()},
+            "derived": {k: {**asdict(v), "interval": list(v.interval)}
+                        for k, v in self.derived.items()},
+            "friction_detected": self.friction_detected,
+            "p_value": self.p_value,
+            "comparison": None if self.comparison is None else asdict(self.comparison),
+            "correlations": self.correlations,
+            "curves": [asdict(c) for c in self.curves],
+            "units": {"shift": "m", "offset": "m", "drift": "m/s", "sigma": "m", "velocity": "m/s",
+                      "sample_rate": "Hz", "rms_residual": "m"},
+            "chi2": self.chi2, "dof": self.dof, "redchi": self.redchi, "n_data": self.n_data,
+            "level": self.level,
+            "profiles": {k: {kk: list(map(float, vv)) for kk, vv in p.items()}
+                         for k, p in self.profiles.items()},
+            "warnings": list(self.warnings),
+            "model_evaluations": self.model_evaluations,
+            "wall_time": self.wall_time, "success": self.success, "message": self.message,
+            "config": self.config,
+        }
+        return d
+
+    def markdown(self) -> str:
+        """A Markdown summary: parameters, verdict, model comparison, curves."""
+        from ..units import format_quantity as fq
+
+        L = [f"# Dynamic fit ({self.model} model, {len(self.curves)} curves)", ""]
+        L += [f"| parameter | value | std. error | {self.level:.0%} interval |", "|---|---|---|---|"]
+        for name, e in {**self.parameters, **self.derived}.items():
+            L.append(f"| {name} | {fq(e.value, e.unit)} | {fq(e.stderr, e.unit)} | "
+                     f"[{fq(e.interval[0], e.unit)}, {fq(e.interval[1], e.unit)}] "
+                     f"({e.interval_method}) |")
+        L.append("")
+        if self.comparison is not None:
+            c = self.comparison
+            L += [f"**{c.verdict}** (likelihood ratio {c.lr:.3g}, p = {c.p_value:.3g})", "",
+                  "| model | chi2 | parameters | AIC | BIC |", "|---|---|---|---|---|"]
+            for m in c.chi2:
+                L.append(f"| {m} | {c.chi2[m]:.1f} | {c.n_parameters[m]} | {c.aic[m]:.1f} | "
+                         f"{c.bic[m]:.1f} |")
+            L += ["", f"Best by AIC: {c.best_by_aic}; by BIC: {c.best_by_bic}.", ""]
+        L += [f"chi2 = {self.chi2:.1f} for {self.dof} degrees of freedom (reduced "
+              f"{self.redchi:.3g}); {self.model_evaluations} model evaluations, "
+              f"{self.wall_time:.1f} s.", "",
+              "| curve | speed | sample rate | points used | noise | shift | offset | drift | rms residual |",
+              "|---|---|---|---|---|---|---|---|---|"]
+        for c in self.curves:
+            L.append(f"| {c.name} | {fq(c.velocity, 'm/s')} | {fq(c.sample_rate, 'Hz')} | "
+                     f"{c.n_used}/{c.n_points} | {fq(c.sigma, 'm')} | {fq(c.shift, 'm')} | "
+                     f"{fq(c.offset, 'm')} | {fq(c.drift, 'm/s')} | {fq(c.rms_residual, 'm')} |")
+        if self.warnings:
+            L += ["", "Warnings:", ""] + [f"- {w}" for w in self.warnings]
+        return "\n".join(L) + "\n"
+
+
+def wald_interval(value: float, stderr: float, level: float, lower: float,
+                  upper: float) -> tuple[float, float]:
+    """``value +- z stderr`` clipped to ``[lower, upper]``."""
+    from scipy.stats import norm
+
+    z = float(norm.ppf(0.5 + level / 2))
+    if not math.isfinite(stderr):
+        return (lower, upper)
+    return (float(np.clip(value - z * stderr, lower, upper)),
+            float(np.clip(value + z * stderr, lower, upper)))

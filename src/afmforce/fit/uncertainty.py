@@ -1,0 +1,134 @@
+"""Profile-likelihood intervals and the model comparison (friction detected or not).
+
+With Gaussian noise of known rms the log-likelihood is ``-chi2/2``, so the
+profile-likelihood interval at level ``1 - alpha`` holds the values where the
+re-minimised chi-square exceeds the minimum by less than
+``chi2_1^-1(1 - alpha)`` (3.84 at 95 %), and the likelihood-ratio statistic of
+two nested fits is their chi-square difference. When the fit's reduced
+chi-square ``s2`` exceeds 1 the noise was underestimated and every difference
+is divided by ``s2``. Friction ``xi >= 0`` is tested on the boundary of its
+range: the null distribution of the statistic is an equal mixture of 0 and
+chi-square with one degree of freedom (Self & Liang, JASA 82, 605 (1987)), so
+``p = chi2_1.sf(LR) / 2``.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.stats import chi2 as chi2_dist
+
+from .model import Evaluator
+from .params import PARAMETERS
+from .problem import Problem
+from .result import ModelComparison
+
+__all__ = ["profile_interval", "compare_models", "PROFILE_STEPS"]
+
+#: Profile points at these multiples of the standard error on each side (until the threshold).
+PROFILE_STEPS = (1.0, 2.0, 3.0, 4.5, 6.5, 9.0, 13.0)
+
+
+def _sub_problem(prob: Problem, name: str, value: float) -> Problem:
+    free = tuple(n for n in prob.free if n != name)
+    return Problem(prob.ev, free, {**prob.fixed, name: value})
+
+
+def _drop(x: np.ndarray, j: int) -> np.ndarray:
+    return np.delete(np.asarray(x, float), j)
+
+
+def _refit(sub: Problem, x0: np.ndarray, max_nfev: int) -> tuple[float, np.ndarray]:
+    from .core import local_fit
+
+    if len(x0) == 0:
+        return sub.chi2(x0), x0
+    x, _ = local_fit(sub, x0, max_nfev)
+    return sub.chi2(x), x
+
+
+def profile_interval(prob: Problem, x: np.ndarray, chi2_min: float, name: str, stderr: float,
+                     s2: float, level: float, max_nfev: int = 15):
+    """Profile-likelihood interval of ``name`` at ``level``.
+
+    Returns ``(lower, upper, points)``; ``points`` holds the profiled values
+    (``value`` [unit]) and ``delta_chi2`` (already divided by ``s2``). A side
+    that reaches the parameter's bound without crossing the threshold ends
+    at the bound (for xi: the interval is an upper bound).
+    """
+    p = PARAMETERS[name]
+    j = prob.free.index(name)
+    best = float(prob.unpack(x)[0][name])
+    thr = float(chi2_dist.ppf(level, 1))
+    step = stderr if math.isfinite(stderr) and stderr > 0 else 0.2 * max(abs(best), p.abs_step)
+    pts = {best: 0.0}
+    ends = []
+    for sign in (-1.0, 1.0):
+        xs = _drop(x, j)
+        prev_v, prev_d = best, 0.0
+        end = p.lower if sign < 0 else p.upper
+        for k in PROFILE_STEPS:
+            v = best + sign * k * step
+            at_bound = (v <= p.lower) if sign < 0 else (v >= p.upper)
+            v = min(max(v, p.lower), p.upper)
+            c2, xs = _refit(_sub_problem(prob, name, v), xs, max_nfev)
+            d = max((c2 - chi2_min) / s2, 0.0)
+            pts[v] = d
+            if d >= thr:   # interpolate the signed root sqrt(d), ~linear in the parameter
+                a, b = math.sqrt(prev_d), math.sqrt(d)
+                end = prev_v + (v - prev_v) * (math.sqrt(thr) - a) / max(b - a, 1e-300)
+                break
+            prev_v, prev_d = v, d
+            if at_bound:
+                break
+        ends.append(end)
+    keys = sorted(pts)
+    return ends[0], ends[1], {"value": keys, "delta_chi2": [pts[k] for k in keys]}
+
+
+def compare_models(prob: Problem, x: np.ndarray, chi2_full: float, curves, base, drift: bool,
+                   level: float, max_nfev: int, warns: list, s2: float) -> ModelComparison:
+    """Fit the static and the friction-free dynamic models and compare with the full fit."""
+    from .core import SPEED_DEPENDENT, local_fit
+
+    n = sum(int(c.mask.sum()) for c in curves)
+    n_lin = (2 if drift else 1) * len(curves)
+    chi2, npar = {}, {}
+    values, shifts = prob.unpack(x)
+    # static: no inertia, drainage or friction; only the speed-independent parameters
+    free_s = tuple(f for f in prob.free if f not in SPEED_DEPENDENT)
+    if free_s:
+        ev_s = Evaluator(curves, base.replace(**{k: v for k, v in values.items()
+                                                 if k not in SPEED_DEPENDENT}), "static", drift)
+        ps = Problem(ev_s, free_s)
+        xs, _ = local_fit(ps, ps.pack(values, shifts), max_nfev)
+        chi2["static"], npar["static"] = ps.chi2(xs), len(xs) + n_lin
+        prob.ev.simulations += ev_s.simulations
+        static_values, static_shifts = ps.unpack(xs)
+    fric = [f for f in ("xi", "zeta") if f in prob.free]
+    if fric:
+        sub = Problem(prob.ev, tuple(f for f in prob.free if f not in fric),
+                      {**prob.fixed, **{f: 0.0 for f in fric}})
+        x0 = np.array([xx for nm, xx in zip(prob.names, x) if nm not in fric])
+        c2, _ = _refit(sub, x0, max_nfev)
+        if free_s:   # a second start: the static fit (without friction the jump moves out)
+            c2 = min(c2, _refit(sub, sub.pack({**values, **static_values}, static_shifts),
+                                max_nfev)[0])
+        chi2["dynamic, no friction"], npar["dynamic, no friction"] = c2, len(x0) + n_lin
+        chi2["dynamic, friction"], npar["dynamic, friction"] = chi2_full, len(x) + n_lin
+        lr = max((c2 - chi2_full) / s2, 0.0)
+        p = 1.0 if lr <= 0 else 0.5 * float(chi2_dist.sf(lr, 1))
+        detected = p < 1.0 - level
+        verdict = (f"friction {'detected' if detected else 'not detected'} at the "
+                   f"{level:.0%} level")
+    else:
+        chi2["dynamic"], npar["dynamic"] = chi2_full, len(x) + n_lin
+        lr, p, detected = math.nan, math.nan, False
+        verdict = "friction not tested (xi is not free" + (
+            "; the spring model has no friction)" if base.model == "spring" else ")")
+    aic = {m: chi2[m] / s2 + 2 * npar[m] for m in chi2}
+    bic = {m: chi2[m] / s2 + npar[m] * math.log(n) for m in chi2}
+    return ModelComparison(chi2=chi2, n_parameters=npar, aic=aic, bic=bic, lr=lr, p_value=p,
+                           level=level, friction_detected=bool(detected), verdict=verdict,
+                           best_by_aic=min(aic, key=aic.get), best_by_bic=min(bic, key=bic.get))

@@ -1,0 +1,78 @@
+"""Bad input to the dynamic fit: one clear message each (library and CLI)."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from afmforce.cli.main import main
+from afmforce.errors import AnalysisError, FileFormatError, ParameterError
+from afmforce.fit import IdentifiabilityError, fit_dynamic
+from afmforce.rawfile import write_raw
+
+from fit_virtual import make_curves, write_curves
+
+
+@pytest.fixture(scope="module")
+def two():
+    return make_curves(0.005, seed=3, speeds=(1e-6, 4e-6), spacing=0.5e-9)
+
+
+def test_one_speed_not_identifiable(two):
+    same = [two[0], dataclasses.replace(two[0])]
+    with pytest.raises(IdentifiabilityError, match="one driving speed"):
+        fit_dynamic(same, "beam", free=("hamaker", "xi"))
+
+
+def test_inconsistent_calibrations(two):
+    other = dataclasses.replace(two[1], metadata={**two[1].metadata, "spring_constant": 0.3})
+    with pytest.raises(ParameterError, match="inconsistent calibrations: spring_constant"):
+        fit_dynamic([two[0], other], "beam", free=("hamaker", "xi"))
+
+
+def test_no_contact():
+    far = make_curves(0.005, seed=4, speeds=(1e-6, 4e-6), spacing=0.5e-9, start=-60e-9,
+                      turn=-10e-9, end=-70e-9)
+    with pytest.raises(AnalysisError, match="no contact"):
+        fit_dynamic(far, "beam", free=("hamaker", "xi"))
+
+
+def test_volts_refused(two):
+    meta = {k: v for k, v in two[0].metadata.items() if k != "sensitivity"}
+    volts = dataclasses.replace(two[0], deflection_unit="V", metadata=meta)
+    with pytest.raises(FileFormatError, match="no sensitivity"):
+        fit_dynamic([volts, two[1]], "beam", free=("hamaker",))
+
+
+def test_free_parameter_checks(two):
+    with pytest.raises(ParameterError, match="no effect in the spring model"):
+        fit_dynamic(two, "spring", free=("xi",))
+    with pytest.raises(ParameterError, match="unknown free parameter"):
+        fit_dynamic(two, "beam", free=("friction",))
+
+
+def test_cli_one_line_exit_2(two, tmp_path, capsys):
+    paths = write_curves([two[0], dataclasses.replace(two[0])], tmp_path)
+    rc = main(["fit", *map(str, paths), "--free", "hamaker,xi", "--json"])
+    err = capsys.readouterr().err
+    assert rc == 2
+    assert err.startswith("error: ") and err.count("\n") == 1 and "one driving speed" in err
+    # the input files are untouched
+    assert paths[0].read_text().count("# end") == 1
+
+
+def test_force_and_volts_calibrated_with_the_files_own_constants(two):
+    """A force [N] is divided by the file's spring constant, volts multiplied by its sensitivity."""
+    from afmforce.fit import prepare_curves
+
+    c = two[0]
+    k, s = c.metadata["spring_constant"], c.metadata["sensitivity"]
+    as_n = dataclasses.replace(c, deflection_signal=np.asarray(c.deflection_signal) * k,
+                               deflection_unit="N")
+    as_v = dataclasses.replace(c, deflection_signal=np.asarray(c.deflection_signal) / s,
+                               deflection_unit="V")
+    ref, fn, fv = prepare_curves([c, as_n, as_v])
+    np.testing.assert_allclose(fn.deflection, ref.deflection, rtol=1e-12)
+    np.testing.assert_allclose(fv.deflection, ref.deflection, rtol=1e-12)

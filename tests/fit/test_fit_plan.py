@@ -1,0 +1,51 @@
+"""Experiment design: Fisher-information predictions against an actual fit, static-error scan."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from afmforce.cli.main import main
+from afmforce.dynamics import static_jump_in
+from afmforce.fit.plan import plan_experiment
+
+
+@pytest.fixture(scope="module")
+def plan():
+    return plan_experiment("beam", xi=0.005, noise=0.01e-9, speeds=(0.2e-6, 1e-6, 5e-6),
+                           n_curves=3, start=-30e-9, turn=10e-9)
+
+
+def test_plan_information(plan):
+    alone = {c["speed"]: c["sigma_xi_alone"] for c in plan.candidates}
+    paired = {c["speed"]: c["sigma_xi_paired"] for c in plan.candidates}
+    # pairing a fast curve with the slowest one (which pins A*R) beats either alone
+    assert paired[5e-6] < alone[5e-6] and paired[5e-6] < alone[0.2e-6]
+    b = plan.best_design
+    assert len(set(b["speeds"])) >= 2
+    assert 0 < b["sigma_xi"] <= paired[5e-6] * 1.0001
+    assert b["detect_z"] == pytest.approx(0.005 / b["sigma_xi"])
+
+
+def test_static_scan(plan):
+    from afmforce.dynamics import SimulationConfig
+
+    k = SimulationConfig().force_constant
+    f_static = k * static_jump_in(k, 100e-9)[2]
+    errs = [s["error"] for s in plan.static_scan]
+    assert all(s["force_static"] == pytest.approx(f_static) for s in plan.static_scan)
+    assert errs[-1] > errs[0]          # friction x speed lowers the apparent attraction
+    ok = [s["speed"] for s in plan.static_scan if s["error"] <= plan.force_error]
+    assert (max(ok) if ok else math.nan) == plan.fastest_static_speed or not ok
+
+
+def test_plan_cli_json(capsys):
+    rc = main(["plan", "--xi", "0.005kg/s", "--speeds", "0.5um/s,5um/s", "--curves", "2",
+               "--noise", "0.01nm", "--json"])
+    assert rc == 0
+    import json
+
+    d = json.loads(capsys.readouterr().out)
+    assert d["best_design"]["speeds"] == pytest.approx([0.5e-6, 5e-6])
+    assert d["best_design"]["sigma_xi"] > 0
