@@ -68,6 +68,8 @@ def show(value: float | None, unit: str, display: str = "") -> str:
         return "none"
     if isinstance(value, str):
         return value
+    if isinstance(value, int) and not isinstance(value, bool) and not unit:
+        return str(value)
     v = float(value)
     if display and display in _DISPLAY:
         return f"{_num(v / _DISPLAY[display])} {display}"
@@ -150,7 +152,7 @@ class FieldSpec:
         default ``name``; ``typed`` the text they typed (default: the value in
         the display unit). The message::
 
-            --radius -5 nm is out of range: radius (effective radius R) must lie in (0, 1 mm]
+            --radius -5nm is out of range: radius, the effective radius R, must lie in (0, 1 mm]
         """
         if value is None or isinstance(value, str) or not self.bounded:
             return value
@@ -160,7 +162,7 @@ class FieldSpec:
             return value
         shown = typed if typed is not None else self.show(value)
         head = f"{where} {shown}" if where else f"{name} = {shown}"
-        raise ParameterError(f"{head} is out of range: {name} ({self.help}) must lie in {self.range_text()}")
+        raise ParameterError(f"{head} is out of range: {name}, the {self.help}, must lie in {self.range_text()}")
 
 
 def meta(dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,

@@ -17,6 +17,7 @@ Nothing here imports numpy, numba, dask or matplotlib.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import os
 import tempfile
 from pathlib import Path
@@ -68,6 +69,7 @@ def field_type(spec: FieldSpec, name: str, flag: str) -> Callable[[str], Any]:
             raise argparse.ArgumentTypeError(str(exc)) from None
 
     convert.__name__ = spec.dimension  # argparse names it in some messages
+    convert.spec = spec
     return convert
 
 
@@ -92,7 +94,8 @@ def add_field(group, name: str, *, flag: str | None = None, dest: str | None = N
     """
     spec = spec or QUANTITIES[name]
     flag = flag or "--" + name.replace("_", "-")
-    text = (help or spec.help) + (f" [{spec.unit}]" if spec.unit and spec.unit not in (help or "") else "")
+    text = help or spec.help
+    text += f" [{spec.unit}]" if spec.unit and f"[{spec.unit}]" not in text else ""
 
     def tail() -> str:
         parts = []
@@ -202,3 +205,129 @@ def check_beam(L0: float, L1: float, L2: float, *, k0: float | None = None, B: f
             raise ParameterError(
                 f"{prefix}B {QUANTITIES['B'].show(B)} with {prefix}L0 {QUANTITIES['L0'].show(L0)} gives "
                 f"k0 = 3B/L0^3 = {spec.show(k)}, out of range: k0 must lie in {spec.range_text()}")
+
+
+#: The most samples one simulated cycle may have (a real force curve has at most ~1e6).
+MAX_SAMPLES = 10_000_000
+#: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
+_BYTES_PER_SAMPLE = 88
+
+_BEAM_ONLY = ("L0", "L1", "L2", "theta0", "k0", "B", "m_joint", "m_base", "friction", "xi", "zeta")
+_SPRING_ONLY = ("spring_constant", "mass")
+
+
+def _flag(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def check_simulation_options(args: argparse.Namespace, overrides: dict) -> None:
+    """Refuse options the chosen model ignores (``simulate``; see :func:`refuse_ignored`).
+
+    Beam-only flags with ``--model spring`` and spring-only flags with the
+    beam; friction coefficients the friction law does not use; virtual-AFM
+    options without ``--raw`` (the recorded curve would go nowhere).
+    """
+    from ..dynamics import FRICTION_LAWS
+
+    check_choices(overrides, "--")
+    model = overrides.get("model", "beam")
+    by_model = f"by --model {model}" + ("" if "model" in overrides else " (the default)")
+    rules = [(d, _flag(d), model == "beam", by_model) for d in _BEAM_ONLY]
+    rules += [(d, _flag(d), model == "spring", by_model) for d in _SPRING_ONLY]
+    law = FRICTION_LAWS[overrides.get("friction", "viscous")]
+    if model == "beam":
+        by_law = f"by --friction {law.key}" + ("" if "friction" in overrides else " (the default)")
+        rules += [(d, _flag(d), d in law.parameters, by_law) for d in ("xi", "zeta")]
+    refuse_ignored(args, rules)
+    if not getattr(args, "raw", None):
+        used = [d for d in vars(args) if d.startswith("instrument_param__") or d in ("instrument", "instrument_config")]
+        used += ["seed"] if "raw" in vars(args) else []
+        for dest in used:
+            if given(args, dest):
+                flag = ("--" + dest.split("__", 1)[1].replace("__", "-").replace("_", "-")
+                        if dest.startswith("instrument_param__") else _flag(dest))
+                raise ParameterError(f"{flag} is ignored without a virtual-instrument output: add --raw FILE "
+                                     "(and --instrument ideal|typical|paper), or drop it")
+
+
+def simulation_samples(start: float, turn: float, end: float, velocity: float,
+                       retract_velocity: float | None, dwell: float, sample_rate: float) -> float:
+    """Samples of one cycle: (approach + retract) / speed + dwell, times the sample rate."""
+    retract = velocity if retract_velocity is None else retract_velocity
+    return ((turn - start) / velocity + (turn - end) / retract + dwell) * sample_rate
+
+
+def check_samples(n: float, where: str = "") -> None:
+    """Refuse a cycle of more than :data:`MAX_SAMPLES` samples before anything is allocated."""
+    if n > MAX_SAMPLES:
+        size = n * _BYTES_PER_SAMPLE
+        mem = next(f"{size / f:.3g} {u}" for f, u in ((1e15, "PB"), (1e12, "TB"), (1e9, "GB"), (1e6, "MB"))
+                   if size >= f or u == "MB")
+        raise ParameterError(
+            f"{where}the cycle would have about {n:.3g} samples ({mem} of trajectory), more than the "
+            f"{MAX_SAMPLES:.0e} a run may have; lower --sample-rate, raise --velocity or shorten the drive")
+
+
+def check_simulation_config(cfg) -> None:
+    """Checks of a built :class:`~afmforce.dynamics.SimulationConfig` before it is run:
+    the beam is a cantilever (:func:`check_beam`) and the sample count is sane."""
+    if cfg.model == "beam":
+        check_beam(cfg.L0, cfg.L1, cfg.L2, k0=cfg.k0, B=cfg.B if cfg.B is not None or cfg.k0 is not None
+                   else None)
+    check_samples(simulation_samples(cfg.start, cfg.turn, cfg.end, cfg.velocity, cfg.retract_velocity,
+                                     cfg.dwell, cfg.sample_rate))
+
+
+def _registries() -> dict[str, dict]:
+    from ..dynamics import FRICTION_LAWS, MODELS, RINGING
+
+    return {"model": MODELS, "friction": FRICTION_LAWS, "ringing": RINGING}
+
+
+def check_choices(values: dict, prefix: str = "--") -> None:
+    """Refuse unknown names of the simulation's registries (model, friction, ringing)."""
+    for name, registry in _registries().items():
+        if name in values and values[name] not in registry:
+            raise ParameterError(f"{prefix}{name} {values[name]}: unknown; choose one of {', '.join(registry)}")
+
+
+#: Sweeps of more runs than this need ``--yes``.
+CONFIRM_RUNS = 100_000
+
+_SAMPLE_WORST = {"start": min, "turn": max, "end": min, "velocity": min, "retract_velocity": min,
+                 "dwell": max, "sample_rate": max}
+
+
+def check_simulation_sweep(spec, *, yes: bool) -> None:
+    """Checks of a simulation sweep before anything is dispatched.
+
+    The number of runs (more than :data:`CONFIRM_RUNS` needs ``yes``), every
+    value of every grid axis, range bound and ``--set`` against the field's
+    valid range and the registries, and the sample count of the most
+    demanding combination (slowest speeds, longest drive, highest rate).
+    """
+    from .._fields import check as check_value
+    from ..dynamics import SimulationConfig
+
+    confirm_size(spec.n_runs, CONFIRM_RUNS, yes=yes, what="this sweep")
+    values: dict[str, list] = {}
+    for axis in spec.grid:
+        values.setdefault(axis.name, []).extend((v, f"--grid {axis.name}") for v in axis.values)
+    for r in spec.ranges:
+        values.setdefault(r.name, []).extend(((r.lo, f"--range {r.name}"), (r.hi, f"--range {r.name}")))
+    for name, value in spec.fixed:
+        values.setdefault(name, []).append((value, f"--set {name}"))
+    for name, entries in values.items():
+        for value, where in entries:
+            if name in _registries():
+                check_choices({name: value}, prefix=where[: -len(name)])
+            else:
+                check_value(name, value, where)
+    defaults = {f.name: f.default for f in dataclasses.fields(SimulationConfig)}
+    worst = {}
+    for name, pick in _SAMPLE_WORST.items():
+        candidates = [v for v, _ in values.get(name, []) if v is not None] or [defaults[name]]
+        worst[name] = pick(candidates) if None not in candidates else None
+    n = simulation_samples(**worst)
+    if n > MAX_SAMPLES:
+        check_samples(n, where="the most demanding run of this sweep: ")
