@@ -151,3 +151,15 @@ def test_top_level_help_loads_nothing_heavy():
 def test_registering_a_command_loads_no_numba_dask_matplotlib_dynamics(command):
     heavy = _modules_after(f"build_parser({command!r})")
     assert not set(heavy) & {"numba", "dask", "matplotlib", "afmforce.dynamics", "afmforce.pipeline"}, heavy
+
+
+def test_sweep_lists_parameters_in_the_users_units(capsys):
+    from afmforce.sweep.simulation import parameter_units, simulation_dimensions
+
+    assert main(["sweep", "--list-parameters"]) == 0
+    out = capsys.readouterr().out
+    assert "10 ug" in out and "-15 deg" in out and "0.1 um/s" in out and "[-89 deg, 89 deg]" in out
+    # the sweep's dimensions and units are the field metadata
+    dims = simulation_dimensions()
+    assert dims["velocity"] == "velocity" and dims["model"] is None and dims["max_steps"] == "dimensionless"
+    assert parameter_units(["B", "zeta", "theta0"]) == {"B": "N m^2", "zeta": "kg/(s N^2)", "theta0": "rad"}

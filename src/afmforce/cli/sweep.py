@@ -60,21 +60,16 @@ def register(sub) -> None:
 def _list_parameters() -> int:
     from dataclasses import fields
 
+    from .._fields import spec_of
     from ..dynamics import SimulationConfig
-    from ..sweep.simulation import parameter_units, simulation_dimensions
 
-    dims = simulation_dimensions()
-    units = parameter_units(dims)
-    print("parameters (SimulationConfig fields) and their Fig 5 defaults:")
+    print("parameters (SimulationConfig fields): SI unit, Fig 5 default, valid range")
     for f in fields(SimulationConfig):
-        default = f.default
-        if isinstance(default, float) and units[f.name] == "rad":
-            text = f"{math.degrees(default):.4g} deg"
-        elif isinstance(default, float) and units[f.name]:
-            text = format_quantity(default, units[f.name])
+        spec = spec_of(f)
+        if spec is None:
+            print(f"  {f.name:<20} {'text':<12} {f.default!r}")
         else:
-            text = repr(default)
-        print(f"  {f.name:<20} {units[f.name] or ('text' if dims[f.name] is None else '-'):<12} {text}")
+            print(f"  {f.name:<20} {spec.unit or '-':<12} {spec.show(f.default):<12} {spec.range_text()}")
     return 0
 
 
