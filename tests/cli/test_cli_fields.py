@@ -163,3 +163,11 @@ def test_sweep_lists_parameters_in_the_users_units(capsys):
     dims = simulation_dimensions()
     assert dims["velocity"] == "velocity" and dims["model"] is None and dims["max_steps"] == "dimensionless"
     assert parameter_units(["B", "zeta", "theta0"]) == {"B": "N m^2", "zeta": "kg/(s N^2)", "theta0": "rad"}
+
+
+def test_probe_dataclasses_carry_the_specs():
+    from afmforce.cantilever import InclinedCantilever, SimpleSpring
+
+    for cls in (InclinedCantilever, SimpleSpring):
+        for f in dataclasses.fields(cls):
+            assert spec_of(f) is QUANTITIES[f.name]
