@@ -7,10 +7,11 @@ dataclasses validated on construction; derived quantities are properties.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
+from ._fields import qfield
 from ._validate import finite, positive
 from .errors import ParameterError
 
@@ -29,8 +30,8 @@ class SimpleSpring:
         Effective mass m [kg].
     """
 
-    spring_constant: float
-    mass: float
+    spring_constant: float = qfield("spring_constant")
+    mass: float = qfield("mass")
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "spring_constant", positive("spring_constant", self.spring_constant, "N/m"))
@@ -66,12 +67,12 @@ class InclinedCantilever:
         Flexural rigidity [N m^2].
     """
 
-    L0: float
-    L1: float
-    L2: float
-    theta0: float
-    k0: float | None = None
-    B: float | None = field(default=None)
+    L0: float = qfield("L0")
+    L1: float = qfield("L1")
+    L2: float = qfield("L2")
+    theta0: float = qfield("theta0")
+    k0: float | None = qfield("k0", None)
+    B: float | None = qfield("B", None)
 
     def __post_init__(self) -> None:
         set_ = lambda n, v: object.__setattr__(self, n, v)  # noqa: E731

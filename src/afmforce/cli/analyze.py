@@ -24,6 +24,7 @@ from pathlib import Path
 
 from .. import errors as _errors
 from ..errors import ParameterError
+from ._validate import add_field, check_output, lazy_help
 from .common import add_quantity, chunk_progress_bar, eprint
 
 SUFFIX = ".afmforce"
@@ -36,9 +37,6 @@ _BATCH_FOLDER = re.compile(r"batch-[0-9a-f]{12}")  # our summary tables are not 
 
 
 def register(sub) -> None:
-    from ..analysis.mapping import MAP_QUANTITIES
-    from ..pipeline import STEPS
-
     p = sub.add_parser("analyze", help="analyse force-curve files and force maps: force vs separation, jumps, "
                        "fits, diagnosis", description=__doc__.split("\n\n")[1].replace("\n", " "))
     p.add_argument("files", nargs="*", metavar="FILE", help="force-curve files, force maps or folders "
@@ -51,16 +49,16 @@ def register(sub) -> None:
     p.add_argument("--json", action="store_true", help="print the results as JSON (SI) instead of a table")
     p.add_argument("--force", action="store_true", help="with --out: recompute every curve and overwrite its "
                    "outputs (default: a rerun skips curves whose outputs exist and keeps the tables)")
-    p.add_argument("--steps", default=None, metavar="A,B,...",
-                   help="analysis steps to run (their requirements are added): " + ", ".join(STEPS))
+    lazy_help(p.add_argument("--steps", default=None, metavar="A,B,...",
+                             help="analysis steps to run (their requirements are added): "), _steps)
     p.add_argument("--format", default=None, metavar="ID", help="reader to use instead of detection "
                    "(see docs/analysis.md), e.g. jpk-zip for raw volts")
     p.add_argument("--channel", choices=("auto", "measured", "nominal"), default="auto",
                    help="position channel (default: measured if recorded)")
     p.add_argument("--no-plot", action="store_true", help="with --out: skip the per-curve figures")
-    p.add_argument("--map-quantity", action="append", default=[], metavar="Q", choices=list(MAP_QUANTITIES),
-                   help=f"quantity drawn as a heat map per force map (repeatable; default {DEFAULT_MAP_QUANTITY}): "
-                        + ", ".join(MAP_QUANTITIES))
+    lazy_help(p.add_argument("--map-quantity", action="append", default=[], metavar="Q",
+                             help="quantity drawn as a heat map per force map (repeatable; default "
+                                  f"{DEFAULT_MAP_QUANTITY}): "), _map_quantities)
     p.add_argument("--per-curve", action="store_true",
                    help=f"with --out: write each curve's JSON, CSV and figure also in runs of {BATCH_CURVES} "
                         "curves or more")
@@ -75,20 +73,19 @@ def register(sub) -> None:
                    help="curves per chunk (default: about 64 chunks, at most 256 curves each); "
                         "makes the run a resumable batch")
     g = p.add_argument_group("instrument and probe (values with units, e.g. 0.21N/m, 45nm/V, -15deg, 220nm)")
-    add_quantity(g, "--spring-constant", "stiffness", None,
-                 "spring constant k (with --theta0: the intrinsic k0, corrected by eq 13/14)", "N/m")
-    add_quantity(g, "--sensitivity", "sensitivity", None, "deflection sensitivity (InvOLS)", "m/V")
+    add_field(g, "spring_constant", help="spring constant k (with --theta0: the intrinsic k0, corrected by eq 13/14)")
+    add_field(g, "sensitivity", help="deflection sensitivity (InvOLS)")
     g.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
                    help="any other file metadata to give or replace, with units (repeatable), e.g. "
                         "sample_rate=6kHz, velocity=1um/s (afmforce formats lists the keys)")
-    add_quantity(g, "--theta0", "angle", None, "cantilever inclination for the tilt correction", "rad")
-    add_quantity(g, "--L0", "length", None, "beam length (with --L1, --L2: eq 13 instead of eq 14)", "m")
-    add_quantity(g, "--L1", "length", None, "rigid base length", "m")
-    add_quantity(g, "--L2", "length", None, "rigid probe length", "m")
-    add_quantity(g, "--radius", "length", None, "probe radius R (gives gamma from the pull-off, A from A R)", "m")
-    add_quantity(g, "--resonance-frequency", "frequency", None, "resonance frequency (inertia diagnosis)", "Hz")
-    add_quantity(g, "--contact-separation", "length", 0.35e-9,
-                 "separation given to the compliance line (paper: z0; 0 also common)", "m")
+    add_field(g, "theta0", help="cantilever inclination for the tilt correction")
+    add_field(g, "L0", help="beam length (with --L1, --L2: eq 13 instead of eq 14)")
+    add_field(g, "L1", help="rigid base length")
+    add_field(g, "L2", help="rigid probe length")
+    add_field(g, "radius", help="probe radius R (gives gamma from the pull-off, A from A R)")
+    add_field(g, "resonance_frequency", help="resonance frequency (inertia diagnosis)")
+    add_field(g, "compliance_separation", flag="--contact-separation", dest="contact_separation", default=0.35e-9,
+              help="separation given to the compliance line (paper: z0; 0 also common)")
     g.add_argument("--calibration", choices=("auto", "fit", "metadata"), default="auto",
                    help="deflection calibration: from the file/--sensitivity, or the compliance slope")
     p.set_defaults(func=run)
@@ -98,6 +95,18 @@ def _example_names() -> list[str]:
     from ..datasets import DATASETS
 
     return list(DATASETS)
+
+
+def _steps() -> str:  # help text, computed when printed (the pipeline imports numba)
+    from ..pipeline import STEPS
+
+    return ", ".join(STEPS)
+
+
+def _map_quantities() -> str:
+    from ..analysis.mapping import MAP_QUANTITIES
+
+    return ", ".join(MAP_QUANTITIES)
 
 
 def _inputs(names: list[str]) -> list[Path]:
@@ -146,8 +155,13 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     resolve_steps(steps)  # unknown step: ParameterError -> exit 2
     if args.format is not None and args.format not in FORMATS:
         raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")
-    if args.out is not None and args.out.exists() and not args.out.is_dir():
-        raise ParameterError(f"--out {args.out} exists and is not a folder")
+    if args.out is not None:
+        check_output(args.out, folder=True)
+    from ..analysis.mapping import MAP_QUANTITIES
+
+    for q in args.map_quantity:
+        if q not in MAP_QUANTITIES:
+            raise ParameterError(f"--map-quantity {q}: unknown; choose one of {', '.join(MAP_QUANTITIES)}")
     if args.serial and (args.workers is not None or args.scheduler):
         raise ParameterError("--serial runs in this process; drop --workers/--scheduler")
     if args.workers is not None and args.scheduler:

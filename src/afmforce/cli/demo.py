@@ -42,8 +42,10 @@ def format_checks(results) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from ..paper.demo import virtual_experiment
+    from ._validate import check_output
     from .reproduce import run_reproduce, summarize
 
+    check_output(args.out, folder=True)
     res = run_reproduce(args.out, None, True, False)
     runs = virtual_experiment(Path(args.out) / "virtual")
     if args.json:

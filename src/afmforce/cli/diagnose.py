@@ -6,20 +6,17 @@ import argparse
 
 from ..constants import FIG1, HAMAKER, Z0
 from ..diagnostics import Diagnosis, diagnose
-from .common import add_quantity, print_json, print_table
+from ._validate import add_field
+from .common import print_json, print_table
 
 
 def register(sub) -> None:
     p = sub.add_parser("diagnose", help="inertia parameter, inertial lag, jump-in and pull-off estimates",
                        description="Dynamic diagnosis of section 2.1 (eqs 3-4). Defaults: Fig 1 probe at 10 um/s.")
-    add_quantity(p, "--spring-constant", "stiffness", FIG1["spring_constant"], "spring constant k", "N/m")
-    add_quantity(p, "--mass", "mass", FIG1["mass"], "effective mass", "kg")
-    add_quantity(p, "--radius", "length", FIG1["radius"], "effective radius R", "m")
-    add_quantity(p, "--hamaker", "energy", HAMAKER, "Hamaker constant A", "J")
-    add_quantity(p, "--z0", "length", Z0, "soft-wall length", "m")
-    add_quantity(p, "--velocity", "velocity", FIG1["velocities"][0], "driving speed", "m/s")
-    add_quantity(p, "--resolution", "length", 0.5e-9, "deflection resolution", "m")
-    add_quantity(p, "--separation", "length", 5e-9, "separation where the force gradient is taken", "m")
+    for name, default in (("spring_constant", FIG1["spring_constant"]), ("mass", FIG1["mass"]),
+                          ("radius", FIG1["radius"]), ("hamaker", HAMAKER), ("z0", Z0),
+                          ("velocity", FIG1["velocities"][0]), ("resolution", 0.5e-9), ("separation", 5e-9)):
+        add_field(p, name, default=default)
     p.add_argument("--json", action="store_true", help="print one JSON object with SI values")
     p.set_defaults(func=run)
 

@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from .._files import check_writable
+from ._validate import check_output
 from .common import quantity
 
 
@@ -35,6 +36,7 @@ def run(args: argparse.Namespace) -> int:
     from ..explore.page import DEFAULT_VELOCITIES, DEFAULT_XIS
 
     check_writable(args.out, args.force)
+    check_output(args.out, force=args.force)
     grid = compute_grid(args.velocities or DEFAULT_VELOCITIES, args.xis or DEFAULT_XIS)
     path = build_page(args.out, grid, force=args.force)
     print(f"wrote {path} ({len(grid.runs)} simulated runs: {len(grid.velocities)} speeds x "

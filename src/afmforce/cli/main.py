@@ -2,24 +2,45 @@
 
 Each sub-command lives in its own module of this package with a
 ``register(subparsers)`` function that adds its parser and sets ``func``
-(a callable ``func(args) -> int``). Errors raised on purpose
-(:class:`~afmforce.errors.AfmforceError`) become one line on stderr and exit
-status 2 (bad input) unless the command says otherwise; ``--debug`` shows the
-traceback.
+(a callable ``func(args) -> int``). :data:`COMMANDS` lists them; only the
+module of the command being run is imported, so ``afmforce --help`` and
+``afmforce --version`` answer without loading numpy, numba or dask. Errors
+raised on purpose (:class:`~afmforce.errors.AfmforceError`) become one line on
+stderr and exit status 2 (bad input) unless the command says otherwise;
+``--debug`` shows the traceback.
+
+Adding a command: write ``cli/<name>.py`` with ``register(sub)`` and
+``run(args)``, and add one line ``"<name>": ("<module>", "<one-line help>")``
+to :data:`COMMANDS`.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import re
 import sys
 
+from .. import __version__
 from ..errors import AfmforceError
+from ._validate import HelpFormatter
 
-#: Sub-command modules, in the order ``afmforce --help`` lists them.
-COMMANDS = ("demo", "statics", "diagnose", "simulate", "analyze", "formats", "sweep", "reproduce", "explore",
-            "fit", "plan")
+#: Sub-command -> (module of this package, one-line help), in the order ``afmforce --help`` lists them.
+COMMANDS: dict[str, tuple[str, str]] = {
+    "demo": ("demo", "reproduce the paper (fast) and analyse a virtual experiment end to end"),
+    "statics": ("statics", "static spring constant, calibration factor, friction hysteresis"),
+    "diagnose": ("diagnose", "inertia parameter, inertial lag, jump-in and pull-off estimates"),
+    "simulate": ("simulate", "simulate a dynamic approach-retract cycle (spring or inclined beam)"),
+    "analyze": ("analyze", "analyse force-curve files and force maps: force vs separation, jumps, fits, "
+                           "diagnosis"),
+    "sweep": ("sweep", "parameter sweeps of the simulation (grids, random/LHS samples) on Dask"),
+    "reproduce": ("reproduce", "reproduce the paper's figures and numbers (report.md, PNG)"),
+    "explore": ("explore", "write an interactive HTML page: speed x friction on the Fig 5-6 run"),
+    "formats": ("formats", "list the force-curve file formats afmforce reads and what each needs"),
+    "fit": ("fit", "fit the dynamic model to curves at several driving speeds (friction, A*R)"),
+    "plan": ("plan", "plan driving speeds and sample rates that determine friction best"),
+}
 
 EXIT_USAGE = 2
 
@@ -27,27 +48,55 @@ EXIT_USAGE = 2
 class _Parser(argparse.ArgumentParser):
     """ArgumentParser whose errors are one line: ``error: <what is wrong>``."""
 
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", HelpFormatter)
+        super().__init__(*args, **kwargs)
+
     def error(self, message: str):  # noqa: D401
         if message.startswith("argument ") and ": " in message:
             head, rest = message.split(": ", 1)
-            if " expects " in rest:
+            flag = head[len("argument "):]
+            if " expects " in rest or rest.startswith(flag.split("/")[-1]):
                 message = rest
             else:
-                message = f"{head[len('argument '):]}: {rest}"
+                message = f"{flag}: {rest}"
         self.exit(EXIT_USAGE, f"error: {message}\n")
 
 
-def build_parser() -> argparse.ArgumentParser:
-    """Build the full argument parser with every available sub-command."""
+def build_parser(command: str | None = None) -> argparse.ArgumentParser:
+    """Build the argument parser.
+
+    Parameters
+    ----------
+    command : str, optional
+        Register only this sub-command fully (the others are listed by name
+        and help); ``None`` registers every command (imports every module).
+        ``""`` registers none.
+    """
     parser = _Parser(
         prog="afmforce",
         description="Dynamic surface force measurement with the atomic force microscope.",
+        epilog="afmforce COMMAND --help shows the options of a command. Values take units "
+               "(200nm, 0.1um/s, -15deg) and are checked against their valid range "
+               "(docs/ranges.md) before any work.",
     )
+    parser.add_argument("--version", action="version", version=f"afmforce {__version__}")
     parser.add_argument("--debug", action="store_true", help="show tracebacks on errors")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", parser_class=_Parser)
-    for name in COMMANDS:
-        importlib.import_module(f"{__package__}.{name}").register(sub)
+    for name, (module, help_) in COMMANDS.items():
+        if command is None or name == command:
+            importlib.import_module(f"{__package__}.{module}").register(sub)
+        else:
+            sub.add_parser(name, help=help_, add_help=False)
     return parser
+
+
+def _command_of(argv: list[str]) -> str:
+    """The sub-command named in ``argv`` ("" when none: top-level help, version, a typo)."""
+    for tok in argv:
+        if not tok.startswith("-"):
+            return tok if tok in COMMANDS else ""
+    return ""
 
 
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)")
@@ -74,8 +123,8 @@ def _join_negative_values(argv: list[str]) -> list[str]:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
-    parser = build_parser()
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
+    parser = build_parser(_command_of(argv))
     args = parser.parse_args(argv)
     if not getattr(args, "func", None):
         parser.print_help()
@@ -87,6 +136,9 @@ def main(argv: list[str] | None = None) -> int:
             raise
         print(f"error: {exc}", file=sys.stderr)
         return EXIT_USAGE
+    except BrokenPipeError:  # stdout closed early (afmforce ... | head): not an error of ours
+        sys.stdout = open(os.devnull, "w")
+        return 1
     except KeyboardInterrupt:
         print("error: interrupted", file=sys.stderr)
         return 130

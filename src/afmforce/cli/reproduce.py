@@ -56,6 +56,9 @@ def summarize(res) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ._validate import check_output
+
+    check_output(args.out, folder=True)
     only = [s.strip() for s in args.only.split(",") if s.strip()] if args.only else None
     res = run_reproduce(args.out, only, args.fast, args.svg)
     print(summarize(res))

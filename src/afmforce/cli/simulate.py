@@ -19,30 +19,27 @@ from pathlib import Path
 from typing import Callable
 
 from .._files import atomic_path, check_writable
-from ..errors import FileFormatError, ParameterError
-from .common import add_quantity, print_json, print_table
+from ..errors import FileFormatError
+from ._validate import add_field, check_output, check_simulation_config, check_simulation_options, lazy_help
+from .common import print_json, print_table
 
 __all__ = ["register", "run", "ARGUMENT_GROUPS", "OUTPUT_FLAGS", "POST_HOOKS", "config_from_args"]
 
 
-def _defaults():
-    from ..dynamics import SimulationConfig
+def _dyn():
+    from .. import dynamics
 
-    return {f.name: f.default for f in dataclasses.fields(SimulationConfig)}
+    return dynamics
+
+
+def _defaults():
+    return {f.name: f.default for f in dataclasses.fields(_dyn().SimulationConfig)}
 
 
 def _q(group, flag, dim, unit, help_, dest=None, default_text=None):
-    """A quantity flag whose default (None: take the config's) is shown in the help."""
-    d = _defaults()
+    """A quantity flag (spec: :data:`afmforce._fields.QUANTITIES`); the config's default shown in help."""
     name = dest or flag.lstrip("-").replace("-", "_")
-    shown = default_text
-    if shown is None and d.get(name) is not None:
-        from ..units import format_quantity
-
-        shown = format_quantity(d[name], unit) if unit else f"{d[name]:g}"
-    text = help_ + (f" (default {shown})" if shown else "")
-    kw = {"dest": dest} if dest else {}
-    add_quantity(group, flag, dim, None, text, unit=unit, **kw)
+    add_field(group, name, flag=flag, help=help_, default_from=lambda: _defaults().get(name))
 
 
 def _model_group(parser):
@@ -79,12 +76,9 @@ def _surface_group(parser):
 
 
 def _friction_group(parser):
-    from ..dynamics import FRICTION_LAWS
-
     g = parser.add_argument_group("tip friction (beam model; eq 28)")
-    g.add_argument("--friction", choices=tuple(FRICTION_LAWS), default=None,
-                   help="; ".join(f"{k}: {v.formula}" for k, v in FRICTION_LAWS.items())
-                   + " (default viscous)")
+    lazy_help(g.add_argument("--friction", default=None, metavar="LAW", help="friction law: "),
+              lambda: "; ".join(f"{k}: {v.formula}" for k, v in _dyn().FRICTION_LAWS.items()) + " (default viscous)")
     _q(g, "--xi", "damping", "kg/s", "friction coefficient xi")
     _q(g, "--zeta", "friction_per_force2", "kg/(s N^2)", "load-dependent coefficient zeta")
 
@@ -105,17 +99,14 @@ def _drive_group(parser):
 
 
 def _solver_group(parser):
-    from ..dynamics import RINGING
-
     g = parser.add_argument_group("sampling and solver")
     _q(g, "--sample-rate", "frequency", "Hz", "instrument sample rate", dest="sample_rate")
     _q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
     _q(g, "--atol", "length", "m", "absolute tolerance on positions")
-    g.add_argument("--ringing", choices=tuple(RINGING), default=None,
-                   help="in-contact ringing: " + "; ".join(
-                       f"{k}: {v.name}" for k, v in RINGING.items()) + " (default damp)")
-    g.add_argument("--max-steps", type=int, default=None, dest="max_steps",
-                   help="step budget (default: sized from the run, max(2e6, 60 f_max T))")
+    lazy_help(g.add_argument("--ringing", default=None, metavar="HOW", help="in-contact ringing: "),
+              lambda: "; ".join(f"{k}: {v.name}" for k, v in _dyn().RINGING.items()) + " (default damp)")
+    _q(g, "--max-steps", "integer", "", "step budget (default: sized from the run, max(2e6, 60 f_max T))",
+       dest="max_steps")
     g.add_argument("--check", choices=("off", "auto", "always", "raise"), default="auto",
                    help="convergence guard: re-solve 10x tighter in risky regimes (auto, "
                         "default), always, never (off), or fail instead of warning (raise)")
@@ -161,11 +152,10 @@ def config_from_args(args: argparse.Namespace):
 
     names = {f.name for f in dataclasses.fields(SimulationConfig)}
     overrides = {k: v for k, v in vars(args).items() if k in names and v is not None}
-    if "theta0" in overrides and abs(overrides["theta0"]) > 1.5708:
-        raise ParameterError(
-            f"--theta0 {overrides['theta0']:g} rad is not an inclination; give degrees with a "
-            "unit, e.g. --theta0 -15deg")
-    return SimulationConfig(**overrides)
+    check_simulation_options(args, overrides)  # ranges were checked while parsing
+    cfg = SimulationConfig(**overrides)
+    check_simulation_config(cfg)
+    return cfg
 
 
 def _progress_bar(args):
@@ -193,6 +183,7 @@ def run(args: argparse.Namespace) -> int:
         path = getattr(args, dest, None)
         if path:
             check_writable(path, args.force)
+            check_output(path, flag="--" + dest.replace("_", "-"), force=args.force)
     if args.out and Path(args.out).suffix.lower() not in (".csv", ".h5", ".hdf5"):
         raise FileFormatError(f"cannot write {args.out}: --out takes a .csv or .h5 file")
     if args.plot and Path(args.plot).suffix.lower() != ".png":

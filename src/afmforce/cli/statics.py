@@ -7,26 +7,31 @@ import argparse
 from ..cantilever import InclinedCantilever
 from ..constants import FIG3
 from ..statics import FRICTION_MODELS, static_analysis
-from .common import add_quantity, print_json, print_table
+from ._validate import add_field, check_beam, refuse_ignored
+from .common import print_json, print_table
 
 
 def add_geometry_arguments(parser: argparse.ArgumentParser, defaults: dict = FIG3) -> None:
     """Add the inclined-cantilever flags (--k0/--B, --L0, --L1, --L2, --theta0)."""
     g = parser.add_argument_group("cantilever geometry (Fig 2)")
     stiff = g.add_mutually_exclusive_group()
-    add_quantity(stiff, "--k0", "stiffness", defaults.get("k0"), "intrinsic spring constant", "N/m")
-    add_quantity(stiff, "--B", "rigidity", defaults.get("B"), "flexural rigidity B = k0 L0^3/3 [N m^2]")
-    add_quantity(g, "--L0", "length", defaults["L0"], "length of the flexible beam", "m")
-    add_quantity(g, "--L1", "length", defaults["L1"], "length of the rigid base", "m")
-    add_quantity(g, "--L2", "length", defaults["L2"], "length of the rigid probe", "m")
-    add_quantity(g, "--theta0", "angle", defaults["theta0"], "inclination of the beam (e.g. -15deg)", "rad")
+    add_field(stiff, "k0", default=defaults.get("k0"))
+    add_field(stiff, "B", default=defaults.get("B"))
+    for name in ("L0", "L1", "L2", "theta0"):
+        add_field(g, name, default=defaults[name])
 
 
 def cantilever_from_args(args: argparse.Namespace) -> InclinedCantilever:
-    """Build the :class:`InclinedCantilever` from parsed geometry flags."""
+    """Build the :class:`InclinedCantilever` from parsed geometry flags (checked by :func:`check_beam`)."""
     B = getattr(args, "B", None)
     k0 = None if B is not None else args.k0
+    check_beam(args.L0, args.L1, args.L2, k0=k0, B=B)
     return InclinedCantilever(L0=args.L0, L1=args.L1, L2=args.L2, theta0=args.theta0, k0=k0, B=B)
+
+
+#: Flags of each friction model's parameters: (dest, flag, model parameter).
+_FRICTION_FLAGS = (("mu", "--mu", "mu"), ("lam", "--lambda", "lam"), ("xi", "--xi", "xi"),
+                   ("velocity", "--velocity", "velocity"), ("gap_deflection", "--gap-deflection", "deflection"))
 
 
 def register(sub) -> None:
@@ -36,18 +41,21 @@ def register(sub) -> None:
     f = p.add_argument_group("friction (section 2.2)")
     f.add_argument("--friction", choices=list(FRICTION_MODELS), default="none",
                    help="; ".join(f"{m.identifier}: {m.name}" for m in FRICTION_MODELS.values()))
-    add_quantity(f, "--mu", "force", None, "constant friction force (--friction constant)", "N")
-    f.add_argument("--lambda", dest="lam", type=float, default=None,
-                   help="friction/load ratio lambda (--friction load)")
-    add_quantity(f, "--xi", "damping", None, "viscous friction coefficient (--friction viscous)")
-    add_quantity(f, "--velocity", "velocity", None, "driving speed (--friction viscous)")
-    add_quantity(f, "--gap-deflection", "length", None,
-                 "deflection of the inward line where the load-friction gap is evaluated (default 10 nm)", "m")
+    add_field(f, "mu", help="constant friction force (--friction constant)")
+    add_field(f, "lam", flag="--lambda", help="friction/load ratio lambda (--friction load)")
+    add_field(f, "xi", help="viscous friction coefficient (--friction viscous)")
+    add_field(f, "velocity", help="driving speed (--friction viscous)")
+    add_field(f, "gap_deflection", help="deflection of the inward line where the load-friction gap is "
+              "evaluated (--friction load; default 10 nm)")
     p.add_argument("--json", action="store_true", help="print one JSON object with SI values")
     p.set_defaults(func=run)
 
 
 def run(args: argparse.Namespace) -> int:
+    used = {p for p, _ in FRICTION_MODELS[args.friction].parameters} | (
+        {"deflection"} if args.friction == "load" else set())
+    refuse_ignored(args, [(dest, flag, param in used, f"by --friction {args.friction}")
+                          for dest, flag, param in _FRICTION_FLAGS])
     cantilever = cantilever_from_args(args)
     params = {"constant": {"mu": args.mu},
               "load": {"lam": args.lam, "deflection": args.gap_deflection},

@@ -10,6 +10,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from ..units import format_quantity
+from ._validate import CONFIRM_RUNS, check_output, check_simulation_sweep
 from .common import chunk_progress_bar
 
 #: Output columns summarised on the terminal, in this order.
@@ -46,6 +47,8 @@ def register(sub) -> None:
     r.add_argument("--scheduler", metavar="tcp://HOST:PORT", help="use a running Dask cluster")
     r.add_argument("--serial", action="store_true", help="run in this process, one run after the other")
     r.add_argument("--chunk-size", type=int, default=None, help="runs per chunk (default: about 64 chunks)")
+    r.add_argument("--yes", action="store_true",
+                   help=f"run a sweep of more than {CONFIRM_RUNS:,} runs (refused without it)")
     o = p.add_argument_group("output")
     o.add_argument("--out", default="sweeps", metavar="DIR",
                    help="parent folder of the results (default ./sweeps); each sweep gets a sub-folder")
@@ -57,21 +60,16 @@ def register(sub) -> None:
 def _list_parameters() -> int:
     from dataclasses import fields
 
+    from .._fields import spec_of
     from ..dynamics import SimulationConfig
-    from ..sweep.simulation import parameter_units, simulation_dimensions
 
-    dims = simulation_dimensions()
-    units = parameter_units(dims)
-    print("parameters (SimulationConfig fields) and their Fig 5 defaults:")
+    print("parameters (SimulationConfig fields): SI unit, Fig 5 default, valid range")
     for f in fields(SimulationConfig):
-        default = f.default
-        if isinstance(default, float) and units[f.name] == "rad":
-            text = f"{math.degrees(default):.4g} deg"
-        elif isinstance(default, float) and units[f.name]:
-            text = format_quantity(default, units[f.name])
+        spec = spec_of(f)
+        if spec is None:
+            print(f"  {f.name:<20} {'text':<12} {f.default!r}")
         else:
-            text = repr(default)
-        print(f"  {f.name:<20} {units[f.name] or ('text' if dims[f.name] is None else '-'):<12} {text}")
+            print(f"  {f.name:<20} {spec.unit or '-':<12} {spec.show(f.default):<12} {spec.range_text()}")
     return 0
 
 
@@ -135,6 +133,8 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--plot {unknown[0]}: no such numeric output; choose one of {', '.join(numeric)}")
     spec = build_spec(args.grid, args.ranges, args.sets, sample=args.sample, n=args.n, seed=args.seed,
                       config=args.config, dimensions=simulation_dimensions())
+    check_simulation_sweep(spec, yes=args.yes)  # every value in range, sane sizes: before any work
+    check_output(args.out, folder=True)
     chunk_size = args.chunk_size or chunk_size_from_config(args.config)
     n_chunks = math.ceil(spec.n_runs / (chunk_size or default_chunk_size(spec.n_runs)))
     executor = "serial" if args.serial or (n_chunks <= 1 and not args.scheduler) else None

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import asdict, dataclass, fields
 
+from .._fields import qfield
 from .._validate import finite, non_negative, positive
 from ..cantilever import InclinedCantilever, SimpleSpring
 from ..constants import FIG1, FIG5
@@ -138,39 +139,39 @@ class SimulationConfig:
     """
 
     model: str = "beam"
-    L0: float = FIG5["L0"]
-    L1: float = FIG5["L1"]
-    L2: float = FIG5["L2"]
-    theta0: float = FIG5["theta0"]
-    k0: float | None = None
-    B: float | None = None
-    m_joint: float = FIG5["m_joint"]
-    m_base: float = FIG5["m_base"]
-    spring_constant: float = FIG1["spring_constant"]
-    mass: float = FIG1["mass"]
-    radius: float = FIG5["radius"]
-    hamaker: float = FIG5["hamaker"]
-    z0: float = FIG5["z0"]
-    viscosity: float = FIG5["viscosity"]
+    L0: float = qfield("L0", FIG5["L0"])
+    L1: float = qfield("L1", FIG5["L1"])
+    L2: float = qfield("L2", FIG5["L2"])
+    theta0: float = qfield("theta0", FIG5["theta0"])
+    k0: float | None = qfield("k0", None)
+    B: float | None = qfield("B", None)
+    m_joint: float = qfield("m_joint", FIG5["m_joint"])
+    m_base: float = qfield("m_base", FIG5["m_base"])
+    spring_constant: float = qfield("spring_constant", FIG1["spring_constant"])
+    mass: float = qfield("mass", FIG1["mass"])
+    radius: float = qfield("radius", FIG5["radius"])
+    hamaker: float = qfield("hamaker", FIG5["hamaker"])
+    z0: float = qfield("z0", FIG5["z0"])
+    viscosity: float = qfield("viscosity", FIG5["viscosity"])
     friction: str = "viscous"
-    xi: float = FIG5["xi"]
-    zeta: float = 0.0
-    velocity: float = FIG5["velocity"]
-    retract_velocity: float | None = None
-    start: float = FIG5["start"]
-    turn: float = FIG5["turn"]
-    turn_force: float | None = None
-    turn_deflection: float | None = None
-    dwell: float = 0.0
-    end: float = FIG5["end"]
-    sample_rate: float = 10e3
-    rtol: float = 1e-4
-    atol: float = 1e-12
-    contact_separation: float = 1e-9
-    jump_factor: float = 2.0
-    spike_window: float = 2e-3
+    xi: float = qfield("xi", FIG5["xi"])
+    zeta: float = qfield("zeta", 0.0)
+    velocity: float = qfield("velocity", FIG5["velocity"])
+    retract_velocity: float | None = qfield("retract_velocity", None)
+    start: float = qfield("start", FIG5["start"])
+    turn: float = qfield("turn", FIG5["turn"])
+    turn_force: float | None = qfield("turn_force", None)
+    turn_deflection: float | None = qfield("turn_deflection", None)
+    dwell: float = qfield("dwell", 0.0)
+    end: float = qfield("end", FIG5["end"])
+    sample_rate: float = qfield("sample_rate", 10e3)
+    rtol: float = qfield("rtol", 1e-4)
+    atol: float = qfield("atol", 1e-12)
+    contact_separation: float = qfield("contact_separation", 1e-9)
+    jump_factor: float = qfield("jump_factor", 2.0)
+    spike_window: float = qfield("spike_window", 2e-3)
     ringing: str = "damp"
-    max_steps: int | None = None
+    max_steps: int | None = qfield("max_steps", None)
 
     def __post_init__(self) -> None:
         set_ = lambda n, v: object.__setattr__(self, n, v)  # noqa: E731

@@ -15,6 +15,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._fields import meta as _meta
 from .._validate import positive
 from ..errors import ParameterError
 
@@ -22,10 +23,6 @@ __all__ = ["Acquisition", "trajectory_sample_rate"]
 
 #: Relative tolerance when comparing sample rates.
 RATE_TOLERANCE = 1e-6
-
-
-def _meta(dimension: str, unit: str, help: str) -> dict:
-    return {"dimension": dimension, "unit": unit, "help": help}
 
 
 def trajectory_sample_rate(time) -> float:

@@ -33,6 +33,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._fields import meta as _meta
 from .._validate import non_negative, positive
 from ..errors import ParameterError
 
@@ -46,10 +47,6 @@ PAPER_BACKLASH: tuple[tuple[float, float], ...] = (
     (6.6e-6, 27e-9),  # Fig 8A
     (0.4e-6, 0.0),    # Fig 8B, "no shift appeared to be necessary"
 )
-
-
-def _meta(dimension: str, unit: str, help: str) -> dict:
-    return {"dimension": dimension, "unit": unit, "help": help}
 
 
 @dataclass(frozen=True)

@@ -19,15 +19,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._fields import meta as _meta
 from .._validate import finite, non_negative
 from ..errors import ParameterError
 from .detector import run_bounds
 
 __all__ = ["Drift", "Noise", "pink_noise"]
-
-
-def _meta(dimension: str, unit: str, help: str) -> dict:
-    return {"dimension": dimension, "unit": unit, "help": help}
 
 
 @dataclass(frozen=True)

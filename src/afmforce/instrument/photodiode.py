@@ -33,14 +33,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._fields import meta as _meta
 from .._validate import finite, non_negative, positive
 from ..errors import ParameterError
 
 __all__ = ["Photodiode", "fringe_length"]
-
-
-def _meta(dimension: str, unit: str, help: str) -> dict:
-    return {"dimension": dimension, "unit": unit, "help": help}
 
 
 def fringe_length(wavelength: float, incidence_angle: float = 0.0) -> float:

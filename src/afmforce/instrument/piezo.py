@@ -47,14 +47,11 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .._fields import meta as _meta
 from .._validate import positive
 from ..errors import ParameterError
 
 __all__ = ["Piezo", "pi_inverse_parameters", "initial_direction"]
-
-
-def _meta(dimension: str, unit: str, help: str) -> dict:
-    return {"dimension": dimension, "unit": unit, "help": help}
 
 
 @dataclass(frozen=True)

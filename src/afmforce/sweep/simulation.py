@@ -19,31 +19,12 @@ import dataclasses
 import math
 import warnings
 
+from .._fields import QUANTITIES, spec_of
 from ..errors import MissingDependencyError
 from ..forces import static_jump_in_separation, vdw_force
 from .engine import flatten
 
 __all__ = ["simulate_run", "simulation_dimensions", "OUTPUT_UNITS", "parameter_units"]
-
-#: SimulationConfig field -> dimension for :func:`afmforce.units.parse_quantity`
-#: (None: text). Fields not listed are plain numbers.
-PARAMETER_DIMENSIONS: dict[str, str | None] = {
-    "model": None, "friction": None,
-    "L0": "length", "L1": "length", "L2": "length", "theta0": "angle",
-    "k0": "stiffness", "B": "rigidity", "spring_constant": "stiffness",
-    "m_joint": "mass", "m_base": "mass", "mass": "mass",
-    "radius": "length", "hamaker": "energy", "z0": "length", "viscosity": "viscosity",
-    "xi": "damping", "zeta": "friction_per_force2",
-    "velocity": "velocity", "retract_velocity": "velocity",
-    "start": "length", "turn": "length", "end": "length",
-    "turn_force": "force", "turn_deflection": "length", "dwell": "time",
-    "sample_rate": "frequency", "atol": "length", "contact_separation": "length",
-    "spike_window": "time",
-}
-
-_SI = {"length": "m", "angle": "rad", "stiffness": "N/m", "rigidity": "N m^2", "mass": "kg",
-       "energy": "J", "viscosity": "Pa s", "damping": "kg/s", "friction_per_force2": "kg/(s N^2)",
-       "velocity": "m/s", "force": "N", "time": "s", "frequency": "Hz"}
 
 #: Output column -> SI unit ("" for plain numbers and text).
 OUTPUT_UNITS: dict[str, str] = {
@@ -68,20 +49,20 @@ def _dynamics():
 
 
 def simulation_dimensions() -> dict[str, str | None]:
-    """Dimension of every :class:`SimulationConfig` field (None: text)."""
-    config = _dynamics().SimulationConfig
+    """Dimension of every :class:`SimulationConfig` field (None: text), from its field metadata."""
     out = {}
-    for f in dataclasses.fields(config):
-        if f.name in PARAMETER_DIMENSIONS:
-            out[f.name] = PARAMETER_DIMENSIONS[f.name]
-        else:
+    for f in dataclasses.fields(_dynamics().SimulationConfig):
+        spec = spec_of(f)
+        if spec is None:
             out[f.name] = None if isinstance(f.default, str) else "dimensionless"
+        else:
+            out[f.name] = "dimensionless" if spec.dimension == "integer" else spec.dimension
     return out
 
 
 def parameter_units(names) -> dict[str, str]:
-    """SI unit of each parameter name ("" when plain or text)."""
-    return {n: _SI.get(PARAMETER_DIMENSIONS.get(n) or "", "") for n in names}
+    """SI unit of each parameter name ("" when plain or text), from :data:`afmforce._fields.QUANTITIES`."""
+    return {n: QUANTITIES[n].unit if n in QUANTITIES else "" for n in names}
 
 
 def simulate_run(**parameters) -> dict:

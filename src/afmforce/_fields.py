@@ -1,0 +1,265 @@
+"""Field metadata: each quantity's dimension, SI unit, help and valid range, declared once.
+
+Configuration dataclasses carry a :class:`FieldSpec` in their field metadata
+(``dataclasses.field(metadata=meta(...))``, or :func:`qfield` for a quantity
+of the shared vocabulary :data:`QUANTITIES`). Everything else is derived from
+it: command-line flags and their help (defaults shown in the user's units,
+``10 ug``, ``0.1 um/s``, ``-15 deg``), validation with one message style
+(:meth:`FieldSpec.check`), the docs' table of valid ranges
+(:func:`ranges_markdown`).
+
+Ranges are physically wide -- what a surface-force experimentalist would
+still call an AFM experiment -- and refuse only values outside what the model
+means (a 1 m cantilever base, a 1 J Hamaker constant, a 1 m/s approach).
+
+This module imports nothing heavy (no numpy, no pint): the command line
+builds its parsers from it in a few milliseconds.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from typing import Any, Mapping
+
+from .errors import ParameterError
+
+__all__ = ["FieldSpec", "meta", "qfield", "spec_of", "QUANTITIES", "check", "show", "ranges_markdown"]
+
+#: Display unit -> its size in SI (the only conversions the help and messages need).
+_DISPLAY = {
+    "nm": 1e-9, "um": 1e-6, "mm": 1e-3, "m": 1.0,
+    "ng": 1e-12, "ug": 1e-9, "mg": 1e-6, "kg": 1.0,
+    "um/s": 1e-6, "m/s": 1.0, "deg": math.pi / 180, "rad": 1.0,
+    "pN": 1e-12, "nN": 1e-9, "uN": 1e-6, "N": 1.0,
+    "Hz": 1.0, "kHz": 1e3, "MHz": 1e6, "nm/V": 1e-9, "m/V": 1.0,
+    "ms": 1e-3, "s": 1.0,
+}
+#: SI prefixes, largest first.
+_PREFIXES = (("G", 1e9), ("M", 1e6), ("k", 1e3), ("", 1.0), ("m", 1e-3), ("u", 1e-6), ("n", 1e-9),
+             ("p", 1e-12), ("f", 1e-15))
+#: SI unit -> (symbol that takes the prefix, its size in SI, largest and smallest prefix used).
+_AUTO = {"m": ("m", 1.0, 1.0, 1e-9), "N": ("N", 1.0, 1.0, 1e-12), "m/s": ("m/s", 1.0, 1.0, 1e-9),
+         "m/V": ("m/V", 1.0, 1.0, 1e-9), "s": ("s", 1.0, 1.0, 1e-9), "Hz": ("Hz", 1.0, 1e9, 1.0),
+         "kg": ("g", 1e-3, 1.0, 1e-15)}
+
+
+def _num(x: float) -> str:
+    return f"{x:.4g}"
+
+
+def _auto(v: float, unit: str) -> str:
+    sym, size, top, bottom = _AUTO[unit]
+    x = v / size
+    for prefix, f in _PREFIXES:
+        if f <= top and (abs(x) >= f * 0.9999 or f <= bottom):
+            return f"{_num(x / f)} {prefix}{sym}"
+    return f"{_num(x)} {sym}"  # pragma: no cover
+
+
+def show(value: float | None, unit: str, display: str = "") -> str:
+    """``value`` [SI ``unit``] as the user would write it: ``show(1e-8, 'kg', 'ug') -> '10 ug'``.
+
+    Without a ``display`` unit, lengths, forces, speeds, masses, times and
+    frequencies take the nearest SI prefix (``show(2e-7, 'm') -> '200 nm'``).
+    """
+    if value is None:
+        return "none"
+    if isinstance(value, str):
+        return value
+    if isinstance(value, int) and not isinstance(value, bool) and not unit:
+        return str(value)
+    v = float(value)
+    if display and display in _DISPLAY:
+        return f"{_num(v / _DISPLAY[display])} {display}"
+    if unit in _AUTO and v != 0 and math.isfinite(v):
+        return _auto(v, unit)
+    return f"{_num(v)} {unit}".rstrip()
+
+
+@dataclass(frozen=True)
+class FieldSpec:
+    """What one field is: dimension, SI unit, help and valid range.
+
+    Attributes
+    ----------
+    dimension : str
+        Dimension for :func:`afmforce.units.parse_quantity` (``length`` ...),
+        ``integer``, ``text`` or another word the owner understands.
+    unit : str
+        SI unit ("" for plain numbers).
+    help : str
+        One line: what the value is.
+    lo, hi : float or None
+        Valid range [SI]; ``None``: unbounded on that side.
+    lo_open, hi_open : bool
+        Whether the bound itself is excluded (``(0, 1 mm]``: ``lo_open``).
+    display : str
+        Unit in which defaults, ranges and messages are shown (e.g. ``um/s``);
+        "" shows SI, lengths and forces with an automatic prefix.
+    """
+
+    dimension: str
+    unit: str
+    help: str
+    lo: float | None = None
+    hi: float | None = None
+    lo_open: bool = False
+    hi_open: bool = False
+    display: str = ""
+
+    def show(self, value) -> str:
+        """``value`` [SI] in this field's display unit."""
+        return show(value, self.unit, self.display)
+
+    @property
+    def bounded(self) -> bool:
+        """True when the field has a lower or an upper bound."""
+        return self.lo is not None or self.hi is not None
+
+    def _bound(self, value: float) -> str:
+        if value == 0:
+            return "0"
+        return show(value, self.unit, "" if self.unit in _AUTO else self.display)
+
+    def range_text(self) -> str:
+        """The valid range, e.g. ``(0, 1 mm]`` or ``>= 0 kg/s``."""
+        if self.lo is not None and self.hi is not None:
+            return (("(" if self.lo_open else "[") + f"{self._bound(self.lo)}, {self._bound(self.hi)}"
+                    + (")" if self.hi_open else "]"))
+        if self.lo is not None:
+            return (">" if self.lo_open else ">=") + f" {self._bound(self.lo)}"
+        if self.hi is not None:
+            return ("<" if self.hi_open else "<=") + f" {self._bound(self.hi)}"
+        return "any finite value"
+
+    def contains(self, value: float) -> bool:
+        """Whether ``value`` [SI] lies in the valid range (and is finite)."""
+        v = float(value)
+        if not math.isfinite(v):
+            return False
+        if self.lo is not None and (v < self.lo or (self.lo_open and v == self.lo)):
+            return False
+        if self.hi is not None and (v > self.hi or (self.hi_open and v == self.hi)):
+            return False
+        return True
+
+    def check(self, value, name: str, where: str | None = None, typed: str | None = None):
+        """Return ``value`` or raise :class:`ParameterError` in the one message style.
+
+        ``where`` is what the user typed the value as (``--radius``, ``--set radius``),
+        default ``name``; ``typed`` the text they typed (default: the value in
+        the display unit). The message::
+
+            --radius -5nm is out of range: radius, the effective radius R, must lie in (0, 1 mm]
+        """
+        if value is None or isinstance(value, str) or not self.bounded:
+            return value
+        if isinstance(value, bool):
+            raise ParameterError(f"{where or name} expects a number, got {value!r}")
+        if self.contains(value):
+            return value
+        shown = typed if typed is not None else self.show(value)
+        head = f"{where} {shown}" if where else f"{name} = {shown}"
+        raise ParameterError(f"{head} is out of range: {name}, the {self.help}, must lie in {self.range_text()}")
+
+
+def meta(dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,
+         lo_open: bool = False, hi_open: bool = False, display: str = "") -> dict[str, Any]:
+    """Field metadata: ``{"dimension", "unit", "help", "spec"}`` (``spec``: a :class:`FieldSpec`)."""
+    spec = FieldSpec(dimension, unit, help, lo, hi, lo_open, hi_open, display)
+    return _meta_of(spec)
+
+
+def _meta_of(spec: FieldSpec) -> dict[str, Any]:
+    return {"dimension": spec.dimension, "unit": spec.unit, "help": spec.help, "spec": spec}
+
+
+def spec_of(f: dataclasses.Field) -> FieldSpec | None:
+    """The :class:`FieldSpec` a dataclass field declares, or ``None``."""
+    return f.metadata.get("spec")
+
+
+def _q(dimension, unit, help, lo=None, hi=None, *, lo_open=False, hi_open=False, display=""):
+    return FieldSpec(dimension, unit, help, lo, hi, lo_open, hi_open, display)
+
+
+_POS = {"lo": 0.0, "lo_open": True}
+
+#: The shared vocabulary: one meaning, unit and valid range per name, used by
+#: the configuration dataclasses (:func:`qfield`), the command line and sweeps.
+QUANTITIES: dict[str, FieldSpec] = {
+    # probe: cantilever (Fig 2) and simple spring (eq 1)
+    "k0": _q("stiffness", "N/m", "intrinsic spring constant k0", 1e-4, 1e3),
+    "B": _q("rigidity", "N m^2", "flexural rigidity B = k0 L0^3/3", 1e-24, 1e-5),
+    "L0": _q("length", "m", "length of the flexible beam", 1e-6, 2e-3),
+    "L1": _q("length", "m", "length of the rigid base", 0.0, 1e-3),
+    "L2": _q("length", "m", "length of the rigid probe", 0.0, 1e-3),
+    "theta0": _q("angle", "rad", "inclination of the beam", -math.radians(89), math.radians(89),
+                 display="deg"),
+    "m_joint": _q("mass", "kg", "point mass at the beam-base joint", hi=1e-5, display="ng", **_POS),
+    "m_base": _q("mass", "kg", "mass spread along the base", hi=1e-5, display="ng", **_POS),
+    "spring_constant": _q("stiffness", "N/m", "spring constant k", 1e-4, 1e3),
+    "mass": _q("mass", "kg", "effective mass m", hi=1e-5, display="ug", **_POS),
+    "resonance_frequency": _q("frequency", "Hz", "resonance frequency", 1.0, 1e8, display="kHz"),
+    "sensitivity": _q("sensitivity", "m/V", "deflection sensitivity (InvOLS)", 1e-10, 1e-5,
+                      display="nm/V"),
+    # surfaces (eq 2, drainage)
+    "radius": _q("length", "m", "effective radius R", hi=1e-3, **_POS),
+    "hamaker": _q("energy", "J", "Hamaker constant A", 1e-22, 1e-17),
+    "z0": _q("length", "m", "soft-wall length z0", hi=1e-8, **_POS),
+    "viscosity": _q("viscosity", "Pa s", "fluid viscosity (0: no drainage)", 0.0, 100.0),
+    # friction (section 2.2, eq 28)
+    "xi": _q("damping", "kg/s", "viscous friction coefficient xi", 0.0, 100.0),
+    "zeta": _q("friction_per_force2", "kg/(s N^2)", "load-dependent friction coefficient zeta", 0.0, 1e20),
+    "mu": _q("force", "N", "constant friction force mu", hi=1e-5, **_POS),
+    "lam": _q("dimensionless", "", "friction/load ratio lambda", hi=10.0, **_POS),
+    # drive
+    "velocity": _q("velocity", "m/s", "driving speed", 1e-10, 1e-2, display="um/s"),
+    "retract_velocity": _q("velocity", "m/s", "retract speed", 1e-10, 1e-2, display="um/s"),
+    "start": _q("length", "m", "drive start position", -1e-4, 1e-4),
+    "turn": _q("length", "m", "drive turn position", -1e-4, 1e-4),
+    "end": _q("length", "m", "drive end position", -1e-4, 1e-4),
+    "turn_force": _q("force", "N", "load at which the approach turns", hi=1e-5, **_POS),
+    "turn_deflection": _q("length", "m", "deflection at which the approach turns", hi=1e-5, **_POS),
+    "dwell": _q("time", "s", "pause at the turn", 0.0, 1e4),
+    # sampling and solver
+    "sample_rate": _q("frequency", "Hz", "sample rate", 1.0, 1e8, display="kHz"),
+    "rtol": _q("dimensionless", "", "relative tolerance", 1e-12, 0.1),
+    "atol": _q("length", "m", "absolute tolerance on positions", 1e-15, 1e-9),
+    "contact_separation": _q("length", "m", "separation counted as contact", hi=1e-8, **_POS),
+    "jump_factor": _q("dimensionless", "", "jump-in criterion dh/dt < -factor dz/dt", hi=1e3, **_POS),
+    "spike_window": _q("time", "s", "jump-in transient window", hi=10.0, **_POS),
+    "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
+    # analysis and diagnosis
+    "resolution": _q("length", "m", "deflection resolution", hi=1e-6, **_POS),
+    "separation": _q("length", "m", "separation where the force gradient is taken", hi=1e-6, **_POS),
+    "gap_deflection": _q("length", "m", "deflection where the load-friction gap is taken", hi=1e-6, **_POS),
+    "compliance_separation": _q("length", "m", "separation given to the compliance line", 0.0, 1e-8),
+}
+
+
+def qfield(name: str, default: Any = dataclasses.MISSING) -> Any:
+    """A dataclass field carrying the metadata of :data:`QUANTITIES` ``[name]``."""
+    return dataclasses.field(default=default, metadata=_meta_of(QUANTITIES[name]))
+
+
+def check(name: str, value, where: str | None = None):
+    """Check ``value`` of the vocabulary quantity ``name`` (unknown names pass unchanged)."""
+    spec = QUANTITIES.get(name)
+    return value if spec is None else spec.check(value, name, where)
+
+
+def check_all(values: Mapping[str, Any], where: str = "") -> None:
+    """Check every ``name -> value`` of the vocabulary; ``where`` prefixes the name (``--set``)."""
+    for name, value in values.items():
+        check(name, value, f"{where} {name}".strip() if where else None)
+
+
+def ranges_markdown() -> str:
+    """The docs table of :data:`QUANTITIES`: name, meaning, SI unit, valid range."""
+    lines = ["| name | meaning | SI unit | valid range |", "|---|---|---|---|"]
+    for name, s in QUANTITIES.items():
+        lines.append(f"| `{name}` | {s.help} | {s.unit or '-'} | {s.range_text()} |")
+    return "\n".join(lines)

@@ -1,0 +1,333 @@
+"""Command-line flags derived from field metadata, and the checks made before any work.
+
+- :func:`add_field` adds ``--flag VALUE`` for a quantity of
+  :data:`afmforce._fields.QUANTITIES` (or any :class:`~afmforce._fields.FieldSpec`):
+  the value takes units, is checked against the valid range while parsing
+  (exit 2, one line), and the help shows the range and the default in the
+  user's units. A default that only a heavy module knows (``SimulationConfig``)
+  is given as ``default_from=callable`` and computed when help is printed,
+  never when the parser is built.
+- :func:`check_output` fails before the work if an output cannot be written.
+- :func:`refuse_ignored` refuses options that the chosen model ignores.
+- :func:`confirm_size` refuses very large runs without ``--yes``.
+
+Nothing here imports numpy, numba, dask or matplotlib.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import os
+import tempfile
+from pathlib import Path
+from typing import Any, Callable, Iterable
+
+from .._fields import QUANTITIES, FieldSpec
+from ..errors import OutputExistsError, ParameterError, UnitError
+
+__all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "refuse_ignored", "confirm_size",
+           "lazy_help", "given"]
+
+
+class HelpFormatter(argparse.HelpFormatter):
+    """Help formatter that appends lazily computed text (defaults, choices) at print time."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        extra = getattr(action, "lazy_help", None)
+        return text if extra is None else text + extra().replace("%", "%%")
+
+
+def lazy_help(action: argparse.Action, text: Callable[[], str]) -> argparse.Action:
+    """Append ``text()`` to ``action``'s help when the help is printed."""
+    action.lazy_help = text
+    return action
+
+
+def field_type(spec: FieldSpec, name: str, flag: str) -> Callable[[str], Any]:
+    """An argparse ``type=``: value with units -> SI, checked against ``spec``'s range."""
+
+    def convert(text: str):
+        from ..units import DIMENSIONS, parse_quantity
+
+        try:
+            if spec.dimension == "integer":
+                try:
+                    value = float(text)
+                except ValueError:
+                    raise ParameterError(f"{flag} expects a whole number, got {text}") from None
+                if not value.is_integer():
+                    raise ParameterError(f"{flag} expects a whole number, got {text}")
+                value = int(value)
+            elif spec.dimension in DIMENSIONS:
+                value = parse_quantity(text, spec.dimension, flag)
+            else:  # pragma: no cover - every CLI quantity has a parseable dimension
+                value = float(text)
+            return spec.check(value, name, flag, typed=text)
+        except (ParameterError, UnitError) as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    convert.__name__ = spec.dimension  # argparse names it in some messages
+    convert.spec = spec
+    return convert
+
+
+def add_field(group, name: str, *, flag: str | None = None, dest: str | None = None,
+              default: Any = None, default_from: Callable[[], Any] | None = None,
+              help: str | None = None, spec: FieldSpec | None = None, **kw) -> argparse.Action:
+    """Add ``--flag VALUE`` for quantity ``name`` (a key of :data:`QUANTITIES`, or give ``spec``).
+
+    Parameters
+    ----------
+    flag : str
+        Default ``--<name>`` with ``_`` -> ``-``.
+    dest : str
+        Namespace attribute; default ``name``.
+    default : any
+        Parsed default [SI], shown in the help in the field's display unit.
+    default_from : callable
+        Returns the default to *show* (the value itself stays ``default``),
+        called only when the help is printed.
+    help : str
+        Help text; default the spec's.
+    """
+    spec = spec or QUANTITIES[name]
+    flag = flag or "--" + name.replace("_", "-")
+    text = help or spec.help
+    text += f" [{spec.unit}]" if spec.unit and f"[{spec.unit}]" not in text else ""
+
+    def tail() -> str:
+        parts = []
+        if spec.bounded:
+            parts.append(f"range {spec.range_text()}")
+        shown = default if default_from is None else default_from()
+        if shown is not None:
+            parts.append(f"default {spec.show(shown)}")
+        return f" ({'; '.join(parts)})" if parts else ""
+
+    action = group.add_argument(flag, dest=dest or name, type=field_type(spec, dest or name, flag),
+                                default=default, metavar="VALUE", help=text, **kw)
+    return lazy_help(action, tail)
+
+
+def given(args: argparse.Namespace, dest: str) -> bool:
+    """Whether option ``dest`` has a value (was given, or has a non-None default)."""
+    return getattr(args, dest, None) is not None
+
+
+def refuse_ignored(args: argparse.Namespace, rules: Iterable[tuple[str, str, bool, str]]) -> None:
+    """Refuse options that the chosen model ignores.
+
+    ``rules``: ``(dest, flag, applies, why)``; an option with a value whose
+    ``applies`` is false raises ``ParameterError("{flag} is ignored {why}")``.
+    """
+    for dest, flag, applies, why in rules:
+        if not applies and given(args, dest):
+            raise ParameterError(f"{flag} is ignored {why}; drop it")
+
+
+def _nearest_existing(path: Path) -> Path:
+    p = path
+    while not p.exists():
+        if p.parent == p:
+            break
+        p = p.parent
+    return p
+
+
+def _can_create_in(folder: Path) -> bool:
+    """Really try: create and remove a temporary file (os.access lies for root and read-only mounts)."""
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=".afmforce-write-test-", dir=folder)
+    except OSError:
+        return False
+    os.close(fd)
+    os.unlink(tmp)
+    return True
+
+
+def check_output(path, *, flag: str = "--out", force: bool = True, folder: bool = False) -> Path:
+    """Fail before any work if ``path`` cannot be written (exit 2 via the error).
+
+    Parameters
+    ----------
+    folder : bool
+        ``path`` is an output folder (created if missing) rather than a file.
+    force : bool
+        For a file: overwriting an existing one is allowed.
+
+    Raises
+    ------
+    OutputExistsError
+        A file exists and ``force`` is false.
+    ParameterError
+        The path, or the folder it would be created in, cannot be written.
+    """
+    path = Path(path)
+    if folder:
+        if path.exists() and not path.is_dir():
+            raise ParameterError(f"{flag} {path} exists and is not a folder")
+    elif path.is_dir():
+        raise ParameterError(f"{flag} {path} is a folder; give a file name")
+    elif path.exists() and not force:
+        raise OutputExistsError(f"{path} exists; choose another name or pass --force to overwrite")
+    base = path if folder and path.is_dir() else _nearest_existing(path.parent if not folder else path)
+    if not base.is_dir():
+        raise ParameterError(f"{flag} {path} cannot be written: {base} is not a folder")
+    if not _can_create_in(base):
+        raise ParameterError(f"{flag} {path} cannot be written: no permission to write in {base}")
+    return path
+
+
+def confirm_size(n: int, limit: int, *, yes: bool, what: str) -> None:
+    """Refuse ``n`` > ``limit`` units of work unless ``yes``."""
+    if n > limit and not yes:
+        raise ParameterError(f"{what}: {n:,} runs is more than {limit:,}; check the numbers, "
+                             "then pass --yes to run them")
+
+
+def check_beam(L0: float, L1: float, L2: float, *, k0: float | None = None, B: float | None = None,
+               prefix: str = "--") -> None:
+    """Refuse an inclined cantilever that is not one: rigid parts longer than the beam, or a
+    rigidity that makes the intrinsic spring constant ``k0 = 3 B / L0^3`` leave its range.
+    """
+    for name, value in (("L1", L1), ("L2", L2)):
+        if value is not None and L0 is not None and value > L0:
+            raise ParameterError(
+                f"{prefix}{name} {QUANTITIES[name].show(value)} is longer than the flexible beam "
+                f"{prefix}L0 {QUANTITIES['L0'].show(L0)}; the base and the probe are short rigid parts "
+                "of the cantilever (Fig 2)")
+    if B is not None and L0 is not None and k0 is None:
+        k = 3.0 * B / L0**3
+        spec = QUANTITIES["k0"]
+        if not spec.contains(k):
+            raise ParameterError(
+                f"{prefix}B {QUANTITIES['B'].show(B)} with {prefix}L0 {QUANTITIES['L0'].show(L0)} gives "
+                f"k0 = 3B/L0^3 = {spec.show(k)}, out of range: k0 must lie in {spec.range_text()}")
+
+
+#: The most samples one simulated cycle may have (a real force curve has at most ~1e6).
+MAX_SAMPLES = 10_000_000
+#: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
+_BYTES_PER_SAMPLE = 88
+
+_BEAM_ONLY = ("L0", "L1", "L2", "theta0", "k0", "B", "m_joint", "m_base", "friction", "xi", "zeta")
+_SPRING_ONLY = ("spring_constant", "mass")
+
+
+def _flag(dest: str) -> str:
+    return "--" + dest.replace("_", "-")
+
+
+def check_simulation_options(args: argparse.Namespace, overrides: dict) -> None:
+    """Refuse options the chosen model ignores (``simulate``; see :func:`refuse_ignored`).
+
+    Beam-only flags with ``--model spring`` and spring-only flags with the
+    beam; friction coefficients the friction law does not use; virtual-AFM
+    options without ``--raw`` (the recorded curve would go nowhere).
+    """
+    from ..dynamics import FRICTION_LAWS
+
+    check_choices(overrides, "--")
+    model = overrides.get("model", "beam")
+    by_model = f"by --model {model}" + ("" if "model" in overrides else " (the default)")
+    rules = [(d, _flag(d), model == "beam", by_model) for d in _BEAM_ONLY]
+    rules += [(d, _flag(d), model == "spring", by_model) for d in _SPRING_ONLY]
+    law = FRICTION_LAWS[overrides.get("friction", "viscous")]
+    if model == "beam":
+        by_law = f"by --friction {law.key}" + ("" if "friction" in overrides else " (the default)")
+        rules += [(d, _flag(d), d in law.parameters, by_law) for d in ("xi", "zeta")]
+    refuse_ignored(args, rules)
+    if not getattr(args, "raw", None):
+        used = [d for d in vars(args) if d.startswith("instrument_param__") or d in ("instrument", "instrument_config")]
+        used += ["seed"] if "raw" in vars(args) else []
+        for dest in used:
+            if given(args, dest):
+                flag = ("--" + dest.split("__", 1)[1].replace("__", "-").replace("_", "-")
+                        if dest.startswith("instrument_param__") else _flag(dest))
+                raise ParameterError(f"{flag} is ignored without a virtual-instrument output: add --raw FILE "
+                                     "(and --instrument ideal|typical|paper), or drop it")
+
+
+def simulation_samples(start: float, turn: float, end: float, velocity: float,
+                       retract_velocity: float | None, dwell: float, sample_rate: float) -> float:
+    """Samples of one cycle: (approach + retract) / speed + dwell, times the sample rate."""
+    retract = velocity if retract_velocity is None else retract_velocity
+    return ((turn - start) / velocity + (turn - end) / retract + dwell) * sample_rate
+
+
+def check_samples(n: float, where: str = "") -> None:
+    """Refuse a cycle of more than :data:`MAX_SAMPLES` samples before anything is allocated."""
+    if n > MAX_SAMPLES:
+        size = n * _BYTES_PER_SAMPLE
+        mem = next(f"{size / f:.3g} {u}" for f, u in ((1e15, "PB"), (1e12, "TB"), (1e9, "GB"), (1e6, "MB"))
+                   if size >= f or u == "MB")
+        raise ParameterError(
+            f"{where}the cycle would have about {n:.3g} samples ({mem} of trajectory), more than the "
+            f"{MAX_SAMPLES:.0e} a run may have; lower --sample-rate, raise --velocity or shorten the drive")
+
+
+def check_simulation_config(cfg) -> None:
+    """Checks of a built :class:`~afmforce.dynamics.SimulationConfig` before it is run:
+    the beam is a cantilever (:func:`check_beam`) and the sample count is sane."""
+    if cfg.model == "beam":
+        check_beam(cfg.L0, cfg.L1, cfg.L2, k0=cfg.k0, B=cfg.B if cfg.B is not None or cfg.k0 is not None
+                   else None)
+    check_samples(simulation_samples(cfg.start, cfg.turn, cfg.end, cfg.velocity, cfg.retract_velocity,
+                                     cfg.dwell, cfg.sample_rate))
+
+
+def _registries() -> dict[str, dict]:
+    from ..dynamics import FRICTION_LAWS, MODELS, RINGING
+
+    return {"model": MODELS, "friction": FRICTION_LAWS, "ringing": RINGING}
+
+
+def check_choices(values: dict, prefix: str = "--") -> None:
+    """Refuse unknown names of the simulation's registries (model, friction, ringing)."""
+    for name, registry in _registries().items():
+        if name in values and values[name] not in registry:
+            raise ParameterError(f"{prefix}{name} {values[name]}: unknown; choose one of {', '.join(registry)}")
+
+
+#: Sweeps of more runs than this need ``--yes``.
+CONFIRM_RUNS = 100_000
+
+_SAMPLE_WORST = {"start": min, "turn": max, "end": min, "velocity": min, "retract_velocity": min,
+                 "dwell": max, "sample_rate": max}
+
+
+def check_simulation_sweep(spec, *, yes: bool) -> None:
+    """Checks of a simulation sweep before anything is dispatched.
+
+    The number of runs (more than :data:`CONFIRM_RUNS` needs ``yes``), every
+    value of every grid axis, range bound and ``--set`` against the field's
+    valid range and the registries, and the sample count of the most
+    demanding combination (slowest speeds, longest drive, highest rate).
+    """
+    from .._fields import check as check_value
+    from ..dynamics import SimulationConfig
+
+    confirm_size(spec.n_runs, CONFIRM_RUNS, yes=yes, what="this sweep")
+    values: dict[str, list] = {}
+    for axis in spec.grid:
+        values.setdefault(axis.name, []).extend((v, f"--grid {axis.name}") for v in axis.values)
+    for r in spec.ranges:
+        values.setdefault(r.name, []).extend(((r.lo, f"--range {r.name}"), (r.hi, f"--range {r.name}")))
+    for name, value in spec.fixed:
+        values.setdefault(name, []).append((value, f"--set {name}"))
+    for name, entries in values.items():
+        for value, where in entries:
+            if name in _registries():
+                check_choices({name: value}, prefix=where[: -len(name)])
+            else:
+                check_value(name, value, where)
+    defaults = {f.name: f.default for f in dataclasses.fields(SimulationConfig)}
+    worst = {}
+    for name, pick in _SAMPLE_WORST.items():
+        candidates = [v for v, _ in values.get(name, []) if v is not None] or [defaults[name]]
+        worst[name] = pick(candidates) if None not in candidates else None
+    n = simulation_samples(**worst)
+    if n > MAX_SAMPLES:
+        check_samples(n, where="the most demanding run of this sweep: ")

@@ -1,0 +1,104 @@
+"""The layers of docs/architecture.md hold: static import analysis of the source.
+
+Every ``import``/``from ... import`` in ``src/afmforce`` (at any depth, lazy
+imports inside functions included) is resolved to the top-level unit it
+reaches (``afmforce.analysis.steps`` -> ``analysis``); no unit may reach a unit
+its layer never imports.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import pytest
+
+SRC = Path(__file__).resolve().parents[2] / "src" / "afmforce"
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "architecture.md"
+
+LAWS = ("constants", "units", "errors", "_validate", "_fields", "_files", "_json",
+        "forces", "friction", "cantilever", "statics", "diagnostics")
+IO = ("io", "raw", "rawfile", "rawmap", "_rawcommon", "_rawhdf5")
+ABOVE_DYNAMICS = ("instrument", "io", "rawfile", "rawmap", "analysis", "pipeline", "plotting",
+                  "sweep", "paper", "explore", "cli")
+
+#: layer name -> (units in it, units it never imports). The docs table shows the same.
+RULES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
+    "laws": (LAWS, ("dynamics", "instrument", *IO, "analysis", "pipeline", "plotting", "sweep",
+                    "paper", "explore", "cli")),
+    "dynamics": (("dynamics",), ABOVE_DYNAMICS),
+    "instrument": (("instrument",), ("dynamics", "analysis", "pipeline", "plotting", "sweep", "paper",
+                                     "explore", "cli")),
+    "io": (IO, ("dynamics", "instrument", "analysis", "pipeline", "plotting", "sweep", "paper",
+                "explore", "cli")),
+    "analysis": (("analysis", "pipeline"), ("dynamics", "instrument", "plotting", "sweep", "paper",
+                                            "explore", "cli")),
+    "plotting": (("plotting",), ("sweep", "paper", "explore", "cli")),
+    "sweep": (("sweep",), ("paper", "explore", "cli")),
+    "paper": (("paper", "explore"), ("sweep", "cli")),
+}
+
+
+def _unit(module: str) -> str:
+    parts = module.split(".")
+    return parts[1] if len(parts) > 1 else ""
+
+
+def _is_module(unit: str) -> bool:
+    return (SRC / unit).is_dir() or (SRC / f"{unit}.py").is_file()
+
+
+def imports() -> dict[str, set[tuple[str, str]]]:
+    """unit -> {(imported unit, file)} for every import of another afmforce unit."""
+    out: dict[str, set[tuple[str, str]]] = {}
+    for path in SRC.rglob("*.py"):
+        rel = path.relative_to(SRC.parent).with_suffix("")
+        module = ".".join(rel.parts).removesuffix(".__init__")
+        package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            targets: list[str] = []
+            if isinstance(node, ast.Import):
+                targets = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    target = ".".join(base + ([node.module] if node.module else []))
+                    targets = [target] if node.module else [f"{target}.{a.name}" for a in node.names]
+                else:
+                    targets = [node.module or ""]
+            for t in targets:
+                if t.startswith("afmforce.") and _is_module(_unit(t)) and _unit(t) != _unit(module):
+                    out.setdefault(_unit(module), set()).add((_unit(t), str(path.relative_to(SRC))))
+    return out
+
+
+GRAPH = imports()
+
+
+def test_the_analysis_sees_imports():
+    # the analysis must find known edges, else the rules below pass vacuously
+    assert any(u == "dynamics" for u, _ in GRAPH["sweep"])
+    assert any(u == "dynamics" for u, _ in GRAPH["cli"])
+    assert any(u == "errors" for u, _ in GRAPH["forces"])
+
+
+@pytest.mark.parametrize("layer", list(RULES))
+def test_layer_never_imports(layer):
+    units, forbidden = RULES[layer]
+    bad = sorted((f, u) for unit in units for u, f in GRAPH.get(unit, ()) if u in forbidden)
+    assert not bad, f"layer {layer} imports what it never may: " + ", ".join(f"{f} -> {u}" for f, u in bad)
+
+
+def test_nothing_imports_the_cli():
+    bad = sorted(f for unit, edges in GRAPH.items() if unit != "cli" for u, f in edges if u == "cli")
+    assert not bad, f"only the command line imports afmforce.cli: {bad}"
+
+
+def test_docs_table_states_the_rules():
+    text = DOCS.read_text(encoding="utf-8")
+    for layer, (_, forbidden) in RULES.items():
+        row = re.search(rf"^\| \*\*{layer}\*\* \|.*\| (.*) \|$", text, re.M)
+        assert row, f"docs/architecture.md has no row for layer {layer}"
+        stated = {s.strip(" `") for s in row.group(1).split(",")}
+        assert stated == set(forbidden), f"docs/architecture.md: {layer} never imports {sorted(forbidden)}"
