@@ -4,7 +4,7 @@
     python benchmarks/bench_sweep.py --full     # the full 100 x 100 grid (10,000 runs)
     python benchmarks/bench_sweep.py --map-only --map-workers 0 2   # only the map, serial and 2 workers
 
-Prints three figures:
+Prints four figures (the fourth, the automatic executor choice, after the second):
 
 1. **10,000 Fig-5-type runs** (velocity 0.1-10 um/s x xi 0.001-0.1 kg/s, a
    log-spaced 100 x 100 grid, every other parameter the paper's Fig 5) on a local
@@ -23,6 +23,10 @@ Prints three figures:
    drift,compliance,calibration,zero,jumps`` reads them a chunk of curves at a time,
    stores each chunk's summary as it finishes, writes the summary table and the
    adhesion image. Target peak RSS < 1 GB; the curves alone take 0.8 GB.
+4. **Automatic choice** (``executor="auto"``, the default of ``run_sweep`` and
+   ``afmforce sweep``): a 22 x 22 grid (484 runs) timed start to end with
+   "auto", "serial" and a cold local cluster of 2 workers; auto should be within
+   a few % of the better of the two.
    ``--map-workers 0 2`` also runs it on a local cluster of 2 workers (each
    worker's peak RSS is printed).
 """
@@ -114,6 +118,27 @@ def bench_sweeps(n_side: int, full: bool, speedup: bool, repeat: int) -> None:
               f"tables identical: {same}; load average {load0:.2f} before, {load[0]:.2f} after, "
               f"on {os.cpu_count()} cores; best of {1 if full else repeat})")
         print(f"   serial, in this process: {ts:.1f} s (Dask overhead with 1 worker: {100 * (t1 / ts - 1):+.0f}%)")
+
+
+# --- 4: automatic executor choice (issue 16) -------------------------------------------
+def bench_auto(n_side: int) -> None:
+    """Wall time, start to end, of the same sweep run with executor "auto", "serial" and a cold "dask"."""
+    from afmforce.sweep import run_sweep
+    from afmforce.sweep.simulation import simulate_run
+
+    spec = _grid(n_side)
+    simulate_run(velocity=10e-6)  # this process warm for all three (the cluster is not)
+    times = {}
+    for name in ("auto", "serial", "dask"):
+        with tempfile.TemporaryDirectory() as store:
+            t = time.perf_counter()
+            result = run_sweep(simulate_run, spec, executor=name, store=store, workers=2 if name != "serial" else None)
+            times[name] = time.perf_counter() - t
+        if name == "auto":
+            print(f"4. automatic choice, {spec.n_runs} runs: {result.executor}")
+    best = min(times["serial"], times["dask"])
+    print("   " + "; ".join(f"{k} {v:.1f} s" for k, v in times.items())
+          + f"; auto / best of the two = {times['auto'] / best:.2f}  (cluster start included for dask)")
 
 
 # --- 3: 128 x 128 map memory ------------------------------------------------------------
@@ -243,6 +268,7 @@ def main(argv=None) -> int:
     p.add_argument("--map-workers", type=int, nargs="+", default=[0],
                    help="map runs: 0 for --serial (default), N for a local cluster of N workers")
     p.add_argument("--map-only", action="store_true", help="only the map (figure 3)")
+    p.add_argument("--auto-side", type=int, default=22, help="grid points per axis of the automatic-choice sweep (4.)")
     p.add_argument("--map-write", nargs=2, default=None, help=argparse.SUPPRESS)
     p.add_argument("--map-analyze", nargs=3, default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
@@ -254,6 +280,7 @@ def main(argv=None) -> int:
         return 0
     if not args.map_only:
         bench_sweeps(args.n_side, args.full, not args.no_speedup, args.repeat)
+        bench_auto(args.auto_side)
     if not args.no_map:
         bench_map(args.map_side, args.map_workers)
     return 0

@@ -137,7 +137,9 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out, folder=True)
     chunk_size = args.chunk_size or chunk_size_from_config(args.config)
     n_chunks = math.ceil(spec.n_runs / (chunk_size or default_chunk_size(spec.n_runs)))
-    executor = "serial" if args.serial or (n_chunks <= 1 and not args.scheduler) else None
+    # default: time one run, run here when that is sooner than starting a cluster (sweep.autoplan)
+    executor = "serial" if args.serial or (n_chunks <= 1 and not args.scheduler) else (
+        "dask" if args.scheduler or args.workers else "auto")
     print(f"afmforce sweep: {spec.n_runs} runs, {_describe(spec)}", flush=True)
     bar, update = chunk_progress_bar("sweep", n_chunks)
     try:

@@ -15,17 +15,20 @@ the others go on; a chunk that fails as a whole (worker lost, or
 from __future__ import annotations
 
 import dataclasses
+import functools
 import hashlib
 import json
 import math
 import time
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
 import numpy as np
 
 from ..errors import ParameterError
-from .executors import make_executor
+from .autoplan import ExecutionPlan, plan_execution
+from .executors import available_cores, make_executor
 from .results import SweepResult
 from .spec import SweepSpec
 from .store import SweepStore
@@ -240,14 +243,15 @@ class _Execution:
 
 
 def execute(task_fn: Callable, make_tasks: Callable[[set[int]], Iterable], *, executor, workers, scheduler,
-            store: SweepStore | None, totals, progress, describe, before=None) -> _Execution:
+            store: SweepStore | None, totals, progress, describe, before=None, warmup=None) -> _Execution:
     """Run chunk tasks on an executor with a locked store (shared by sweeps and batches).
 
     ``make_tasks(skipped)`` yields ``(index, args, n_items)`` for the chunks
-    not in ``skipped``; ``before(store)`` runs once the store is locked.
+    not in ``skipped``; ``before(store)`` runs once the store is locked;
+    ``warmup()`` runs once on every worker of a Dask cluster before the first chunk.
     """
     t0 = time.perf_counter()
-    ex, owned = make_executor(executor, workers=workers, scheduler=scheduler)
+    ex, owned = make_executor(executor, workers=workers, scheduler=scheduler, warmup=warmup)
     try:
         if store is not None:
             store.lock()
@@ -268,7 +272,39 @@ def execute(task_fn: Callable, make_tasks: Callable[[set[int]], Iterable], *, ex
     return _Execution(frames, failures, ran, len(skipped), description, time.perf_counter() - t0)
 
 
-def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = None, executor=None,
+def _warm_call(func: Callable, kwargs: dict) -> None:
+    """One run on a worker before its first chunk (loads compiled code); errors are ignored."""
+    try:
+        func(**kwargs)
+    except Exception:
+        pass
+
+
+def _resumed(store, key: str) -> tuple[int | None, int]:
+    """(chunk size, chunks done) of a store that already exists for ``key``, else (None, 0)."""
+    if store is None:
+        return None, 0
+    opened = store if isinstance(store, SweepStore) else SweepStore(Path(store) / f"sweep-{key[:12]}")
+    manifest = opened.manifest()
+    if manifest is None:
+        return None, 0
+    return int(manifest["chunk_size"]), len(opened.completed())
+
+
+def _auto_plan(func, table, key: str, store, chunk_size, workers) -> ExecutionPlan:
+    n = len(table)
+    fixed, done = _resumed(store, key)
+    fixed = chunk_size or fixed
+    remaining = n - done * (fixed or 0) if fixed else n
+    if remaining <= 0:  # everything stored: nothing to time
+        return ExecutionPlan("serial", fixed or default_chunk_size(n), None, 0.0, None, "all chunks stored")
+    row0 = {c: table[c].iloc[0] for c in table.columns}
+    row0 = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in row0.items()}
+    return plan_execution(functools.partial(func, **row0), max(1, remaining), workers or available_cores(),
+                          chunk_size=fixed, default_chunk_size=default_chunk_size(n))
+
+
+def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = None, executor="auto",
               workers: int | None = None, scheduler: str | None = None, store=None,
               progress: Callable[[Progress], None] | None = None, errors: str = "record",
               key: str | None = None) -> SweepResult:
@@ -283,9 +319,13 @@ def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = 
         One row per run.
     chunk_size : int, optional
         Runs per chunk (default :func:`default_chunk_size`; a resumed store keeps its own).
-    executor : "serial", "dask", SerialExecutor, DaskExecutor, distributed.Client, optional
-        Default: a local Dask cluster of ``workers`` processes (one per core),
-        or the cluster at ``scheduler`` (``tcp://host:port``).
+    executor : "auto", "serial", "dask", SerialExecutor, DaskExecutor, distributed.Client, optional
+        ``"auto"`` (default): time one run here and run in this process when that
+        finishes sooner than starting a local cluster, else on a local Dask cluster
+        of ``workers`` processes (one per core) with chunks sized from the measured
+        cost (:func:`~afmforce.sweep.autoplan.plan_execution`; one run is done once
+        more to time it). ``"dask"``: always a local cluster, or the cluster at
+        ``scheduler`` (``tcp://host:port``, also the choice when a scheduler is given).
     store : path or SweepStore, optional
         Parent folder of the resumable store (a sub-folder keyed by a hash of
         ``func`` and the table is created); without it nothing is written.
@@ -305,8 +345,16 @@ def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = 
     spec = parameters if isinstance(parameters, SweepSpec) else None
     table = _table(parameters)
     n = len(table)
+    key = key or table_key(func, table)
+    plan = None
+    if executor is None or executor == "auto":
+        if scheduler is None:
+            plan = _auto_plan(func, table, key, store, chunk_size, workers)
+            executor, chunk_size = plan.executor, plan.chunk_size if chunk_size is None else chunk_size
+        else:
+            executor = "dask"
     manifest = {"function": _func_name(func), "n_items": n, "spec": spec.to_dict() if spec else None}
-    store, size = _open_store(store, key or table_key(func, table), manifest, "sweep", chunk_size, n)
+    store, size = _open_store(store, key, manifest, "sweep", chunk_size, n)
     n_chunks = math.ceil(n / size)
     columns = {c: table[c].tolist() for c in table.columns}
 
@@ -324,11 +372,15 @@ def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = 
             return None, None
         return list(runs(i)), [{"run": r, **{c: v[r] for c, v in columns.items()}} for r in runs(i)]
 
+    row0 = {c: v[0] for c, v in columns.items()}
     done = execute(_parameter_chunk, make_tasks, executor=executor, workers=workers, scheduler=scheduler,
                    store=store, totals=(n_chunks, n), progress=progress, describe=describe,
-                   before=lambda s: s.write_parameters(table))
+                   before=lambda s: s.write_parameters(table), warmup=functools.partial(_warm_call, func, row0))
+    described = done.executor
+    if plan is not None and done.chunks_run:
+        described = f"{done.executor}; chosen automatically: {plan.reason}"
     return SweepResult.assemble(
         table, done.frames if store is None else store, spec=spec, failures=done.failures,
         chunks_total=n_chunks, chunks_run=done.chunks_run, chunks_skipped=done.chunks_skipped,
-        wall_time=done.wall_time, executor=done.executor,
+        wall_time=done.wall_time, executor=described,
     )

@@ -75,10 +75,11 @@ class DaskExecutor:
 
     At most ``window`` tasks are in flight at once (default: three per worker
     thread), so that a long iterable of tasks is never held in memory whole.
+    ``warmup()`` runs once on every worker before the first task is submitted.
     """
 
     def __init__(self, workers: int | None = None, scheduler: str | None = None, client=None,
-                 window: int | None = None) -> None:
+                 window: int | None = None, warmup: Callable[[], Any] | None = None) -> None:
         if workers is not None and int(workers) < 1:
             raise ParameterError(f"--workers must be at least 1, got {workers}")
         if client is not None and scheduler is not None:
@@ -89,6 +90,7 @@ class DaskExecutor:
         self._own_client = client is None
         self._cluster = None
         self._window = window
+        self._warmup = warmup
 
     @property
     def client(self):
@@ -140,6 +142,11 @@ class DaskExecutor:
             return  # nothing to run: do not start a cluster
         pending = itertools.chain([first], pending)
         client = self.client
+        if self._warmup is not None:
+            # every worker loads the compiled code once before its first chunk (the run that
+            # timed the sweep in this process has written the numba cache it loads)
+            client.run(self._warmup)
+            self._warmup = None
         window = self._window or 3 * self.n_workers
         keys: dict[str, Hashable] = {}
         done = as_completed()
@@ -191,17 +198,19 @@ class DaskExecutor:
         self.close()
 
 
-def make_executor(executor=None, *, workers: int | None = None, scheduler: str | None = None):
+def make_executor(executor=None, *, workers: int | None = None, scheduler: str | None = None,
+                  warmup: Callable[[], Any] | None = None):
     """Resolve an executor argument; returns ``(executor, owned)``.
 
     ``executor`` may be an executor object, ``"serial"``, ``"dask"``/``"local"``/None
     (a Dask cluster: local unless ``scheduler`` is given) or a
     :class:`distributed.Client`. ``owned`` says whether the caller must close it.
+    ``warmup`` is passed to a cluster this function creates.
     """
     if workers is not None and scheduler:
         raise ParameterError("--workers sizes the local cluster; a --scheduler cluster has its own workers")
     if executor is None or executor in ("dask", "local"):
-        return DaskExecutor(workers=workers, scheduler=scheduler), True
+        return DaskExecutor(workers=workers, scheduler=scheduler, warmup=warmup), True
     if executor == "serial":
         if scheduler:
             raise ParameterError("--serial and --scheduler exclude each other")

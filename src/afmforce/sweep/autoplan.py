@@ -1,0 +1,128 @@
+"""Choose where a sweep runs and how big its chunks are, from the measured cost of one run.
+
+A local Dask cluster costs seconds to start and to load the compiled (numba)
+code in every worker; a sweep that finishes in this process sooner than that
+should not start one. :func:`plan_execution` times one run of the swept
+function in this process (twice when the first call is short, because the first
+call may load or compile code), then compares
+
+* serial:  ``n_runs * t_run``
+* cluster: ``CLUSTER_START_SECONDS + n_runs * t_run / (PARALLEL_EFFICIENCY * workers)``
+
+and picks the faster. On a cluster, chunks are sized to take about
+``TARGET_CHUNK_SECONDS`` each (so that scheduling overhead stays small and a
+killed sweep loses little) with at least ``MIN_CHUNKS_PER_WORKER`` chunks per
+worker (so that the load balances). The timing runs are done once more than
+the sweep asks for; their results are discarded (the swept function must be
+pure, which :func:`~afmforce.sweep.run_sweep` already requires). They also
+leave the numba cache written, so that cluster workers load it instead of each
+compiling the same code.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass
+from typing import Any, Callable
+
+__all__ = ["ExecutionPlan", "plan_execution", "CLUSTER_START_SECONDS", "TARGET_CHUNK_SECONDS"]
+
+#: Seconds to start a local cluster and warm its workers: measured 4.2 s to start 2 workers
+#: plus about 0.7 s per worker to load the dynamics' numba cache on the 2-core development
+#: machine (benchmarks/bench_sweep.py prints the figure of the machine it runs on).
+CLUSTER_START_SECONDS = 5.0
+#: Fraction of ideal speed-up a local cluster reaches (1.84x on 2 workers measured for issue 7).
+PARALLEL_EFFICIENCY = 0.9
+#: Wall time aimed at per chunk on a cluster [s].
+TARGET_CHUNK_SECONDS = 1.0
+#: At least this many chunks per worker on a cluster.
+MIN_CHUNKS_PER_WORKER = 4
+#: Largest chunk (runs).
+MAX_CHUNK = 256
+#: A first call longer than this [s] is taken as the cost of a run (no second timing call).
+_RETIME_BELOW = 2.0
+
+
+@dataclass(frozen=True)
+class ExecutionPlan:
+    """Where a sweep runs and with which chunk size, and why.
+
+    Attributes
+    ----------
+    executor : {"serial", "dask"}
+        In this process, or on a local Dask cluster.
+    chunk_size : int
+        Runs per chunk.
+    seconds_per_run : float or None
+        Measured cost of one run [s]; None when the timing run raised.
+    serial_estimate, cluster_estimate : float or None
+        Predicted wall time [s] of the two choices.
+    reason : str
+        One line for the user.
+    """
+
+    executor: str
+    chunk_size: int
+    seconds_per_run: float | None
+    serial_estimate: float | None
+    cluster_estimate: float | None
+    reason: str
+
+
+def _time_call(call: Callable[[], Any]) -> float | None:
+    try:
+        t0 = time.perf_counter()
+        call()
+        first = time.perf_counter() - t0
+        if first >= _RETIME_BELOW:
+            return first
+        t0 = time.perf_counter()
+        call()
+        return time.perf_counter() - t0
+    except Exception:  # the sweep itself records the error of each run
+        return None
+
+
+def plan_execution(call: Callable[[], Any], n_runs: int, workers: int, *, chunk_size: int | None = None,
+                   default_chunk_size: int = 1) -> ExecutionPlan:
+    """Time ``call()`` (one representative run) and plan the sweep of ``n_runs`` runs.
+
+    Parameters
+    ----------
+    call : callable
+        One run of the swept function (e.g. on the first row of the table).
+    n_runs : int
+        Runs still to do.
+    workers : int
+        Worker processes a local cluster would have.
+    chunk_size : int, optional
+        Chunk size fixed by the user or by a resumed store; kept as it is.
+    default_chunk_size : int
+        Chunk size to use in this process (progress granularity).
+
+    Returns
+    -------
+    ExecutionPlan
+    """
+    t_run = _time_call(call)
+    if t_run is None:
+        size = chunk_size or default_chunk_size
+        return ExecutionPlan("serial" if workers <= 1 else "dask", size, None, None, None,
+                             "the timing run raised; errors are recorded per run")
+    serial = n_runs * t_run
+    cluster = CLUSTER_START_SECONDS + n_runs * t_run / (PARALLEL_EFFICIENCY * max(1, workers))
+    if workers <= 1 or serial <= cluster:
+        why = ("one worker" if workers <= 1 else
+               f"{n_runs} runs x {t_run * 1e3:.3g} ms = {serial:.3g} s serial <= {cluster:.3g} s on a "
+               f"{workers}-worker cluster (incl. {CLUSTER_START_SECONDS:g} s start)")
+        return ExecutionPlan("serial", chunk_size or default_chunk_size, t_run, serial, cluster,
+                             f"in this process: {why}")
+    if chunk_size is None:
+        by_time = max(1, round(TARGET_CHUNK_SECONDS / max(t_run, 1e-9)))
+        balance = max(1, math.ceil(n_runs / (MIN_CHUNKS_PER_WORKER * workers)))
+        chunk_size = int(min(MAX_CHUNK, by_time, balance))
+    return ExecutionPlan("dask", chunk_size, t_run, serial, cluster,
+                         f"local Dask cluster of {workers} workers: {n_runs} runs x {t_run * 1e3:.3g} ms = "
+                         f"{serial:.3g} s serial, about {cluster:.3g} s on the cluster; "
+                         f"{chunk_size} runs per chunk")
