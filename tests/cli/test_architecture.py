@@ -36,6 +36,7 @@ RULES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
                                             "explore", "cli")),
     "plotting": (("plotting",), ("sweep", "paper", "explore", "cli")),
     "sweep": (("sweep",), ("paper", "explore", "cli")),
+    "fit": (("fit",), ("paper", "explore", "cli")),
     "paper": (("paper", "explore"), ("sweep", "cli")),
 }
 

@@ -8,6 +8,8 @@ with a traceback instead of exit status 2.
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import pytest
 
 from afmforce.cli.main import main
@@ -55,7 +57,7 @@ def refused(capsys, argv) -> str:
     return err
 
 
-CURVE = "tests/data/does-not-matter.jpk-force"  # never read: the checks come first
+CURVE = str(Path(__file__).parents[1] / "data" / "asylum-mfp3d_SiN-tip_air.ibw")  # exists (a missing file is refused first), never analysed: the checks come first
 
 CASES = [
     # (argv, fragments the one line must contain)

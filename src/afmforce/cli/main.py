@@ -37,9 +37,9 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "sweep": ("sweep", "parameter sweeps of the simulation (grids, random/LHS samples) on Dask"),
     "reproduce": ("reproduce", "reproduce the paper's figures and numbers (report.md, PNG)"),
     "explore": ("explore", "write an interactive HTML page: speed x friction on the Fig 5-6 run"),
-    "formats": ("formats", "list the force-curve file formats afmforce reads and what each needs"),
+    "formats": ("formats", "list the force-curve file formats afmforce reads"),
     "fit": ("fit", "fit the dynamic model to curves at several driving speeds (friction, A*R)"),
-    "plan": ("plan", "plan driving speeds and sample rates that determine friction best"),
+    "plan": ("plan", "design a multi-speed measurement: speeds and sample rates that fix xi best"),
 }
 
 EXIT_USAGE = 2
