@@ -6,9 +6,11 @@ Differential Equations II* (2nd ed., Springer 1996), section IV.8 (code
 RADAU5), in the formulation of ``scipy.integrate.Radau``:
 
 * simplified Newton iterations on the transformed stage equations (one real
-  and one complex linear system of size n per iteration, the complex one
-  solved as a real system of size 2n), the Jacobian reused until Newton
-  converges slowly, LU factors reused while the step size is unchanged;
+  and one complex linear system of size n per iteration, reduced to size
+  n/2 by the second-order structure ``J = [[0, I], [Jq, Jv]]`` of the models:
+  Schur complement on the position block, :mod:`._linalg`), the Jacobian
+  reused until Newton converges slowly, factors reused while the step size
+  is unchanged;
 * embedded error estimate filtered through ``(I - h gamma0 J)^-1`` (so stiff
   components do not spoil it), with the improved estimate after a rejection;
 * step-size control with the predictive (Gustafsson) controller;
@@ -35,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._linalg import _lu_factor, _lu_solve, _rms
+from ._linalg import _rms, _schur_factor, _solve_complex, _solve_real
 from ._locate import (  # noqa: F401  (re-exported: the event layout used by simulate)
     APPROACH, DWELL, E_CONTACT_T, E_CONTACT_Z, E_H_CONTACT, E_IN_CONTACT, E_JUMP_FACTOR,
     E_FAST_T, E_FAST_Z, E_H_STATIC, E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL, E_MIN_DEFL_Z, E_MIN_FZ, E_MIN_FZ_Z,
@@ -181,10 +183,11 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
     err = np.empty(n)
     rr = np.empty(n)
     cc = np.empty(2 * n)
-    LUr = np.empty((n, n))
-    LUc = np.empty((2 * n, 2 * n))   # the complex system as a real one of size 2n
-    pivr = np.empty(n, dtype=np.int64)
-    pivc = np.empty(2 * n, dtype=np.int64)
+    # Newton matrices (mu I - J) in the second-order form of ._linalg (Schur complements)
+    Sr = np.zeros((2, 2))
+    Sc = np.zeros((2, 2), dtype=np.complex128)
+    det_r = 0.0
+    det_c = 0j
     o = np.empty(N_OBS)
     oprev = np.empty(N_OBS)
     have_lu = False
@@ -298,22 +301,10 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                     mr = MU_REAL / h
                     mcr = MU_CR / h
                     mci = MU_CI / h
-                    # (mcr + i mci) I - J acting on a + i b, as [[A, -mci I], [mci I, A]]
-                    for i in range(2 * n):
-                        for j in range(2 * n):
-                            LUc[i, j] = 0.0
-                    for i in range(n):
-                        for j in range(n):
-                            LUr[i, j] = -J[i, j]
-                            LUc[i, j] = -J[i, j]
-                            LUc[n + i, n + j] = -J[i, j]
-                        LUr[i, i] += mr
-                        LUc[i, i] += mcr
-                        LUc[n + i, n + i] += mcr
-                        LUc[i, n + i] = -mci
-                        LUc[n + i, i] = mci
-                    ok1 = _lu_factor(LUr, pivr)
-                    ok2 = _lu_factor(LUc, pivc)
+                    det_r = _schur_factor(J, mr, Sr)
+                    det_c = _schur_factor(J, complex(mcr, mci), Sc)
+                    ok1 = det_r != 0.0
+                    ok2 = det_c != 0.0
                     stats[S_NLU] += 1
                     if not (ok1 and ok2):
                         have_lu = False
@@ -356,8 +347,8 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                         rr[i] = fr - mr * W[0, i]
                         cc[i] = fc1 - mcr * W[1, i] + mci * W[2, i]
                         cc[n + i] = fc2 - mci * W[1, i] - mcr * W[2, i]
-                    _lu_solve(LUr, pivr, rr)
-                    _lu_solve(LUc, pivc, cc)
+                    _solve_real(J, mr, Sr, det_r, rr)
+                    _solve_complex(J, complex(mcr, mci), Sc, det_c, cc)
                     dwn = 0.0
                     for i in range(n):
                         dW[0, i] = rr[i]
@@ -411,7 +402,7 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 err[i] = fcur[i] + ze
                 ai = atol[i] if i < n // 2 else av
                 scale[i] = ai + max(abs(y[i]), abs(ytmp[i])) * rtolv[i]
-            _lu_solve(LUr, pivr, err)
+            _solve_real(J, MU_REAL / h, Sr, det_r, err)
             err_norm = _rms(err, scale)
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
             if rejected and err_norm > 1.0:
@@ -422,7 +413,7 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                     for i in range(n):
                         ze = (E1 * Z[0, i] + E2 * Z[1, i] + E3 * Z[2, i]) / h
                         err[i] = fnew[i] + ze
-                    _lu_solve(LUr, pivr, err)
+                    _solve_real(J, MU_REAL / h, Sr, det_r, err)
                     err_norm = _rms(err, scale)
             if not math.isfinite(err_norm):
                 err_norm = 1e10
