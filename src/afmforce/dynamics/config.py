@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, fields
+from functools import lru_cache
 
 from .._fields import qfield
 from .._validate import finite, non_negative, positive
@@ -26,6 +27,21 @@ MODELS = {
     "beam": "inclined cantilever with base, probe and tip friction (eqs 22-28)",
     "spring": "mass on a spring moving vertically (eq 1)",
 }
+
+
+@lru_cache(maxsize=256)
+def _cantilever(L0, L1, L2, theta0, k0, B) -> InclinedCantilever:
+    """The (immutable) cantilever of these fields, built and validated once per geometry."""
+    if k0 is not None and B is not None:
+        raise ParameterError("give at most one of k0 [N/m] or B [N m^2]")
+    if k0 is not None:
+        return InclinedCantilever(L0, L1, L2, theta0, k0=k0)
+    return InclinedCantilever(L0, L1, L2, theta0, B=DEFAULT_B if B is None else B)
+
+
+@lru_cache(maxsize=256)
+def _spring(k, m) -> SimpleSpring:
+    return SimpleSpring(k, m)
 
 
 @dataclass(frozen=True)
@@ -225,34 +241,39 @@ class SimulationConfig:
                 f"sample_rate {self.sample_rate:.4g} Hz gives only {n_app:.1f} samples on the "
                 "approach; raise it (at least 10 samples per run)")
         if self.model == "beam":
-            self.cantilever  # validates the geometry  # noqa: B018
+            # validates the geometry; kept (with k and beta) so that a run builds it once
+            cant = _cantilever(self.L0, self.L1, self.L2, self.theta0, self.k0, self.B)
+            set_("_cant", cant)
+            set_("_k", cant.spring_constant)
+            set_("_beta", cant.calibration_factor)
         else:
-            SimpleSpring(self.spring_constant, self.mass)
+            _spring(self.spring_constant, self.mass)
+            set_("_cant", None)
+            set_("_k", self.spring_constant)
+            set_("_beta", math.nan)
         from .drive import start_deflection
 
         # raises if the start is already in contact; kept for initial_state()
-        object.__setattr__(self, "_start_deflection", start_deflection(self))
+        set_("_start_deflection", start_deflection(self))
 
     # --- derived -----------------------------------------------------------
     @property
     def cantilever(self) -> InclinedCantilever:
         """The :class:`~afmforce.cantilever.InclinedCantilever` of the beam model."""
-        if self.k0 is not None and self.B is not None:
-            raise ParameterError("give at most one of k0 [N/m] or B [N m^2]")
-        if self.k0 is not None:
-            return InclinedCantilever(self.L0, self.L1, self.L2, self.theta0, k0=self.k0)
-        return InclinedCantilever(self.L0, self.L1, self.L2, self.theta0,
-                                  B=DEFAULT_B if self.B is None else self.B)
+        cant = self.__dict__.get("_cant")
+        if cant is None:
+            cant = _cantilever(self.L0, self.L1, self.L2, self.theta0, self.k0, self.B)
+        return cant
 
     @property
     def force_constant(self) -> float:
         """Force-measuring spring constant k [N/m] (eq 13 for the beam, k for the spring)."""
-        return self.cantilever.spring_constant if self.model == "beam" else self.spring_constant
+        return self._k
 
     @property
     def calibration_factor(self) -> float:
         """beta = dz2/dtheta of eq 15 [m/rad] (NaN for the spring model: it does not tilt)."""
-        return self.cantilever.calibration_factor if self.model == "beam" else math.nan
+        return self._beta
 
     @property
     def retract_speed(self) -> float:

@@ -110,7 +110,7 @@ P_ = np.array([
 EPS = np.finfo(float).eps
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                       hmax_frac, hmax_dz, damp_cycles, damp_kappa, term_kind, term_level,
                       s_t0, s_dt, s_next, ybuf, ev, work, Q, y_old, J, stats,
