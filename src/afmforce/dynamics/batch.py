@@ -24,7 +24,7 @@ from .config import SimulationConfig
 from .simulate import _Run
 from .trajectory import Trajectory
 
-__all__ = ["simulate_many", "default_threads"]
+__all__ = ["simulate_many", "run_many", "default_threads"]
 
 #: ``on_error`` choices of :func:`simulate_many`.
 ON_ERROR = ("raise", "return")
@@ -84,6 +84,21 @@ def simulate_many(configs: Iterable[SimulationConfig | dict], *, threads: int | 
         (:class:`DynamicsWarning`, :class:`ConvergenceWarning`) are issued as by
         :func:`simulate`.
     """
+    def fin(run):
+        tr = run.finish(check)
+        return tr if reduce is None else reduce(tr)
+
+    return run_many(configs, fin, threads=threads, on_error=on_error)
+
+
+def run_many(configs: Iterable[SimulationConfig | dict], finish: Callable[[_Run], Any], *,
+             threads: int | None = None, on_error: str = "raise") -> list:
+    """The pipeline of :func:`simulate_many` with a custom last step.
+
+    ``finish(run)`` turns an integrated :class:`._Run` into the result kept
+    (``run.finish(check)`` gives the Trajectory); it runs in this thread, in
+    the order of ``configs``, so it may use ``warnings.catch_warnings``.
+    """
     if on_error not in ON_ERROR:
         raise ParameterError(f"on_error must be one of {ON_ERROR}, got {on_error!r}")
     items: Sequence = list(configs)
@@ -116,12 +131,11 @@ def simulate_many(configs: Iterable[SimulationConfig | dict], *, threads: int | 
         except AfmforceError as exc:
             return exc
 
-    def finish(i, run):
+    def done(i, run):
         try:
             if isinstance(run, BaseException):
                 raise run
-            tr = run.finish(check)
-            out[i] = tr if reduce is None else reduce(tr)
+            out[i] = finish(run)
         except AfmforceError as exc:
             if on_error == "raise":
                 raise
@@ -129,7 +143,7 @@ def simulate_many(configs: Iterable[SimulationConfig | dict], *, threads: int | 
 
     if threads == 1 or len(todo) < 2:
         for i in todo:
-            finish(i, integrate(start(i)))
+            done(i, integrate(start(i)))
         return out
     # a bounded window of runs in flight: memory stays ~WINDOW_PER_THREAD * threads runs
     window = WINDOW_PER_THREAD * threads
@@ -140,10 +154,10 @@ def simulate_many(configs: Iterable[SimulationConfig | dict], *, threads: int | 
                 pending.append((i, pool.submit(integrate, start(i))))
                 if len(pending) >= window:
                     j, fut = pending.popleft()
-                    finish(j, fut.result())
+                    done(j, fut.result())
             while pending:
                 j, fut = pending.popleft()
-                finish(j, fut.result())
+                done(j, fut.result())
         finally:
             for _, fut in pending:
                 fut.cancel()
