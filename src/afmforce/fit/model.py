@@ -54,32 +54,60 @@ class Evaluator:
         self.simulations = 0
         self.failures = 0
         self.last_error = ""
+        #: integrator threads of the batched runs (None: one per core; see simulate_many)
+        self.threads: int | None = None
 
     # --- predictions -------------------------------------------------------------
     def predict(self, i: int, values: dict, shift: float) -> np.ndarray | None:
         """Model apparent deflection [m] at the samples of curve ``i`` (None: the model failed)."""
-        c = self.curves[i]
-        self.simulations += 1
-        if self.kind == "static":
-            return self._static(c, values, shift)
-        from ..dynamics import DynamicsWarning, simulate
+        return self.predict_many([(i, values, shift)])[0]
 
+    def _config(self, i: int, values: dict, shift: float):
+        c = self.curves[i]
         dz = c.velocity / c.sample_rate
         start = float(c.position[0] - shift)
         turn = start + c.velocity * float(c.time[-1]) + dz
-        try:
-            cfg = self.base.replace(**values, velocity=c.velocity, sample_rate=c.sample_rate,
-                                    start=start, turn=turn, end=turn - 1e-9, turn_force=None,
-                                    turn_deflection=None, dwell=0.0, retract_velocity=None)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", DynamicsWarning)
-                tr = simulate(cfg)
-        except AfmforceError as exc:   # start in contact, solver failure: a bad trial point
-            self.failures += 1
-            self.last_error = str(exc)
-            return None
-        app = tr.segment == 0
-        return np.interp(c.time, tr.time[app], tr.apparent_deflection[app])
+        return self.base.replace(**values, velocity=c.velocity, sample_rate=c.sample_rate,
+                                 start=start, turn=turn, end=turn - 1e-9, turn_force=None,
+                                 turn_deflection=None, dwell=0.0, retract_velocity=None)
+
+    def _failed(self, exc: AfmforceError) -> None:
+        self.failures += 1
+        self.last_error = str(exc)
+
+    def predict_many(self, requests: Sequence[tuple[int, dict, float]]) -> list[np.ndarray | None]:
+        """:meth:`predict` for many ``(curve index, values, shift)`` at once.
+
+        The dynamic model runs them in one :func:`afmforce.dynamics.simulate_many`
+        call (a Jacobian's perturbed runs, the curves of one residual); the
+        results equal separate :meth:`predict` calls.
+        """
+        self.simulations += len(requests)
+        if self.kind == "static":
+            return [self._static(self.curves[i], values, shift) for i, values, shift in requests]
+        from ..dynamics import DynamicsWarning
+        from ..dynamics.batch import simulate_many
+
+        out: list = [None] * len(requests)
+        cfgs, where = [], []
+        for k, (i, values, shift) in enumerate(requests):
+            try:
+                cfgs.append(self._config(i, values, shift))
+                where.append(k)
+            except AfmforceError as exc:   # start in contact: a bad trial point
+                self._failed(exc)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DynamicsWarning)
+            runs = simulate_many(cfgs, on_error="return", threads=self.threads,
+                                 reduce=lambda tr: (tr.time, tr.segment, tr.apparent_deflection))
+        for k, r in zip(where, runs):
+            if isinstance(r, AfmforceError):   # solver failure: a bad trial point
+                self._failed(r)
+                continue
+            t, seg, app_defl = r
+            app = seg == 0
+            out[k] = np.interp(self.curves[requests[k][0]].time, t[app], app_defl[app])
+        return out
 
     def _static(self, c: FitCurve, values: dict, shift: float) -> np.ndarray:
         from ..forces import vdw_force
