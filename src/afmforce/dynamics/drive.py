@@ -19,7 +19,6 @@ from functools import lru_cache
 import numpy as np
 
 from ..errors import ParameterError
-from ..forces import vdw_force
 from .radau import APPROACH, DWELL, RETRACT
 from .static import static_deflection, static_jump_in
 
@@ -125,7 +124,8 @@ def initial_state(cfg) -> np.ndarray:
     if cfg.model == "spring":
         return np.array([d, 0.0])
     cant = cfg.cantilever
-    fz = float(vdw_force(d - cfg.start, cfg.radius, cfg.hamaker, cfg.z0))
+    h = d - cfg.start      # eq 2 (forces.vdw_force) on a scalar
+    fz = -(cfg.hamaker * cfg.radius / (12.0 * h * h)) * (1.0 - 0.25 * (cfg.z0 / h) ** 6)
     gx, gt = _unit_load_response(cant)
     x, theta = gx * fz, gt * fz
     return np.array([x, cant.L1 * theta + 1.5 * x, 0.0, 0.0])

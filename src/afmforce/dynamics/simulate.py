@@ -15,9 +15,10 @@ from . import radau as R
 from .config import SimulationConfig
 from .drive import approach_segment, initial_state, segments
 from .events import Events, compliance_lines
+from .guard import run_check
 from .static import static_jump_in
 from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
-                     O_Y2, observe_array, pack_beam, pack_spring, state_size)
+                     O_Y2, pack_beam, pack_spring, sample_columns, state_size)
 from .trajectory import SolverStats, Trajectory
 
 __all__ = ["simulate", "DynamicsWarning", "H_GUARD_FRACTION", "VELOCITY_ATOL_FREQUENCY"]
@@ -87,6 +88,11 @@ def _beam_template(cantilever, m_joint: float, m_base: float) -> np.ndarray:
                   viscosity=0.0, xi=0.0, zeta=0.0, h_guard=0.0)
     p.flags.writeable = False
     return p
+
+
+@lru_cache(maxsize=256)
+def _beam_fmax(cantilever, m_joint: float, m_base: float) -> float:
+    return free_frequency_max(_beam_template(cantilever, m_joint, m_base), MODEL_BEAM)
 
 
 def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
@@ -215,7 +221,8 @@ class _Run:
             self.term = (R.TERM_DEFLECTION, cfg.turn_deflection)
         else:
             self.term = (R.TERM_NONE, 0.0)
-        self.f_max = f_max = free_frequency_max(p, model)
+        self.f_max = f_max = (_beam_fmax(cfg.cantilever, cfg.m_joint, cfg.m_base)
+                              if model == MODEL_BEAM else free_frequency_max(p, model))
         self.budget = cfg.max_steps if cfg.max_steps is not None else max(
             2_000_000, int(60.0 * f_max * t_total_max))
 
@@ -280,19 +287,14 @@ class _Run:
         cfg, model, ev, stats, plan = self.cfg, self.model, self.ev, self.stats, self.plan
         n_samp = int(self.s_next[0])
         Y = self.ybuf[:n_samp]
-        if not np.all(np.isfinite(Y)):
+        lab = np.array([(a, b, kind) for kind, a, b in self.labels], dtype=np.int64).reshape(-1, 3)
+        seg = np.array([(s.t_start, s.z_start, s.velocity) for s in plan]).reshape(-1, 3)
+        tt, zd, seg_code, obs, finite = sample_columns(
+            model, self.p, Y, self.dt, lab[:, 0], lab[:, 1], lab[:, 2].astype(np.int8),
+            seg[:, 0], seg[:, 1], seg[:, 2])
+        if not finite:
             raise SolverError("the sampled trajectory contains non-finite values; "
                               "try a tighter rtol/atol")
-        dt = self.dt
-        tt = np.arange(n_samp) * dt
-        seg_code = np.empty(n_samp, dtype=np.int8)
-        zd = np.empty(n_samp)
-        vd = np.empty(n_samp)
-        for (kind, a, b), seg in zip(self.labels, plan):
-            seg_code[a:b] = kind
-            zd[a:b] = seg.position(tt[a:b])
-            vd[a:b] = seg.velocity
-        obs = observe_array(model, self.p, zd, vd, Y)
         beta = cfg.calibration_factor
         deflection = obs[:, O_DEFL]
         if model == MODEL_BEAM:
@@ -320,8 +322,6 @@ class _Run:
                 warnings.warn(f"{what} was not reached before the turn limit "
                               f"z = {cfg.turn * 1e9:.4g} nm; turned there", DynamicsWarning,
                               stacklevel=3)
-
-        from .guard import run_check
 
         def _resolve(tight):
             with warnings.catch_warnings():
