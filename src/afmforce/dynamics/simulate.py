@@ -369,6 +369,8 @@ def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code, h_s,
     if model == MODEL_BEAM:
         min_app, min_app_z = beta * ev[R.E_MIN_THETA], ev[R.E_MIN_THETA_Z]
         spike, spike_t, spike_z = beta * ev[R.E_SPIKE_THETA], ev[R.E_SPIKE_T], ev[R.E_SPIKE_Z]
+        if cfg.spike_window == 0.0:         # not asked for: no window, no spike
+            spike = spike_t = spike_z = math.nan
     else:
         min_app, min_app_z = ev[R.E_MIN_DEFL], ev[R.E_MIN_DEFL_Z]
         spike = spike_t = spike_z = math.nan
