@@ -8,7 +8,7 @@ velocity tolerance ~1e-5 m/s), not to ``|xv|``; the bounds say so.
 import numpy as np
 import pytest
 
-from afmforce.dynamics._linalg import _schur_factor, _solve_complex, _solve_real
+from afmforce.dynamics._linalg import _schur_factor, _schur_factor_complex, _solve_complex, _solve_real
 from afmforce.dynamics.models import MODEL_BEAM, MODEL_SPRING, jac
 
 
@@ -48,10 +48,12 @@ def test_complex_solve_equals_dense_solve(mu):
         n = J.shape[0]
         rng = np.random.default_rng(n + 1)
         b = rng.normal(size=n) + 1j * rng.normal(size=n)
-        S = np.zeros((2, 2), dtype=complex)
-        det = _schur_factor(J, mu, S)
+        S = np.zeros((2, 2, 2))
+        dr, di = _schur_factor_complex(J, mu.real, mu.imag, S)
+        Sc = np.zeros((2, 2), dtype=complex)
+        assert complex(dr, di) == pytest.approx(_schur_factor(J, mu, Sc), rel=1e-12)
         c = np.concatenate([b.real, b.imag])
-        _solve_complex(J, mu, S, det, c)
+        _solve_complex(J, mu.real, mu.imag, S, dr, di, c)
         ref = np.linalg.solve(mu * np.eye(n) - J, b)
         got = c[:n] + 1j * c[n:]
         _check(got, ref, b)
@@ -76,5 +78,7 @@ def test_singular_matrix_is_reported():
     J[:2, 2:] = np.eye(2)
     S = np.zeros((2, 2))
     assert _schur_factor(J, 0.0, S) == 0.0
+    assert _schur_factor_complex(J, 0.0, 0.0, np.zeros((2, 2, 2))) == (0.0, 0.0)
     J[2, 0] = np.inf
     assert _schur_factor(J, 1.0, S) == 0.0
+    assert _schur_factor_complex(J, 1.0, 2.0, np.zeros((2, 2, 2))) == (0.0, 0.0)

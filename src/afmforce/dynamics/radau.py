@@ -37,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._linalg import _rms, _schur_factor, _solve_complex, _solve_real
+from ._linalg import _rms, _schur_factor, _schur_factor_complex, _solve_complex, _solve_real
 from ._locate import (  # noqa: F401  (re-exported: the event layout used by simulate)
     APPROACH, DWELL, E_CONTACT_T, E_CONTACT_Z, E_H_CONTACT, E_IN_CONTACT, E_JUMP_FACTOR,
     E_FAST_T, E_FAST_Z, E_H_STATIC, E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL, E_MIN_DEFL_Z, E_MIN_FZ, E_MIN_FZ_Z,
@@ -185,9 +185,10 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
     cc = np.empty(2 * n)
     # Newton matrices (mu I - J) in the second-order form of ._linalg (Schur complements)
     Sr = np.zeros((2, 2))
-    Sc = np.zeros((2, 2), dtype=np.complex128)
+    Sc = np.zeros((2, 2, 2))        # complex entries as (re, im)
     det_r = 0.0
-    det_c = 0j
+    det_cr = 0.0
+    det_ci = 0.0
     o = np.empty(N_OBS)
     oprev = np.empty(N_OBS)
     have_lu = False
@@ -302,9 +303,9 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                     mcr = MU_CR / h
                     mci = MU_CI / h
                     det_r = _schur_factor(J, mr, Sr)
-                    det_c = _schur_factor(J, complex(mcr, mci), Sc)
+                    det_cr, det_ci = _schur_factor_complex(J, mcr, mci, Sc)
                     ok1 = det_r != 0.0
-                    ok2 = det_c != 0.0
+                    ok2 = det_cr != 0.0 or det_ci != 0.0
                     stats[S_NLU] += 1
                     if not (ok1 and ok2):
                         have_lu = False
@@ -348,7 +349,7 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                         cc[i] = fc1 - mcr * W[1, i] + mci * W[2, i]
                         cc[n + i] = fc2 - mci * W[1, i] - mcr * W[2, i]
                     _solve_real(J, mr, Sr, det_r, rr)
-                    _solve_complex(J, complex(mcr, mci), Sc, det_c, cc)
+                    _solve_complex(J, mcr, mci, Sc, det_cr, det_ci, cc)
                     dwn = 0.0
                     for i in range(n):
                         dW[0, i] = rr[i]
