@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from .models import N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z, observe
@@ -275,3 +276,30 @@ def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o):
             if t > ev[E_LAST_OUT]:
                 ev[E_LAST_OUT] = t
             return
+
+
+@njit(cache=True, error_model="numpy")
+def sample_columns(model, p, Y, dt, seg_first, seg_last, seg_kind, seg_t0, seg_z0, seg_v):
+    """Time, drive, segment code and observables of the sampled states in one pass.
+
+    Row ``k`` of ``Y`` is the state at ``t = k dt``; samples ``seg_first[j]`` to
+    ``seg_last[j] - 1`` belong to drive segment ``j`` (``z = seg_z0 + seg_v (t - seg_t0)``).
+    Returns ``(t, z, segment code, observables (rows x N_OBS), all finite)``.
+    """
+    n = Y.shape[0]
+    tt = np.empty(n)
+    zd = np.empty(n)
+    code = np.zeros(n, dtype=np.int8)
+    obs = np.empty((n, N_OBS))
+    finite = True
+    for k in range(n):
+        tt[k] = k * dt
+        for i in range(Y.shape[1]):
+            if not math.isfinite(Y[k, i]):
+                finite = False
+    for j in range(seg_first.shape[0]):
+        for k in range(seg_first[j], seg_last[j]):
+            code[k] = seg_kind[j]
+            zd[k] = seg_z0[j] + seg_v[j] * (tt[k] - seg_t0[j])
+            observe(model, p, zd[k], seg_v[j], Y[k], obs[k])
+    return tt, zd, code, obs, finite

@@ -424,30 +424,3 @@ RINGING: dict[str, RingingTreatment] = {
             "the tolerance (costly: ~1e7 steps per simulated second while it rings)", 0.0),
     )
 }
-
-
-@njit(cache=True, error_model="numpy")
-def sample_columns(model, p, Y, dt, seg_first, seg_last, seg_kind, seg_t0, seg_z0, seg_v):
-    """Time, drive, segment code and observables of the sampled states in one pass.
-
-    Row ``k`` of ``Y`` is the state at ``t = k dt``; samples ``seg_first[j]`` to
-    ``seg_last[j] - 1`` belong to drive segment ``j`` (``z = seg_z0 + seg_v (t - seg_t0)``).
-    Returns ``(t, z, segment code, observables (rows x N_OBS), all finite)``.
-    """
-    n = Y.shape[0]
-    tt = np.empty(n)
-    zd = np.empty(n)
-    code = np.zeros(n, dtype=np.int8)
-    obs = np.empty((n, N_OBS))
-    finite = True
-    for k in range(n):
-        tt[k] = k * dt
-        for i in range(Y.shape[1]):
-            if not math.isfinite(Y[k, i]):
-                finite = False
-    for j in range(seg_first.shape[0]):
-        for k in range(seg_first[j], seg_last[j]):
-            code[k] = seg_kind[j]
-            zd[k] = seg_z0[j] + seg_v[j] * (tt[k] - seg_t0[j])
-            observe(model, p, zd[k], seg_v[j], Y[k], obs[k])
-    return tt, zd, code, obs, finite

@@ -14,11 +14,12 @@ from ..errors import SolverError
 from . import radau as R
 from .config import SimulationConfig
 from .drive import approach_segment, initial_state, segments
+from ._locate import sample_columns
 from .events import Events, compliance_lines
 from .guard import run_check
 from .static import static_jump_in
 from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
-                     O_Y2, pack_beam, pack_spring, sample_columns, state_size)
+                     O_Y2, pack_beam, pack_spring, state_size)
 from .trajectory import SolverStats, Trajectory
 
 __all__ = ["simulate", "DynamicsWarning", "H_GUARD_FRACTION", "VELOCITY_ATOL_FREQUENCY"]

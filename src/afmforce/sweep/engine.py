@@ -123,17 +123,13 @@ def _call_row(func: Callable, kwargs: dict, record_errors: bool) -> dict:
     return row
 
 
-def _batch_rows(batch: Callable, kwargs_list: list[dict], record_errors: bool) -> list[dict]:
-    """Rows of a chunk from ``func.batch(kwargs_list)`` (one result or exception per run)."""
-    def stored(result):
-        def call(**_):
-            if isinstance(result, BaseException):
-                raise result
-            return result
-        return call
-
-    return [_call_row(stored(result), kwargs, record_errors)
-            for kwargs, result in zip(kwargs_list, batch(kwargs_list))]
+def _stored(result) -> Callable:
+    """A function of any kwargs returning (or raising) a result already computed."""
+    def call(**_):
+        if isinstance(result, BaseException):
+            raise result
+        return result
+    return call
 
 
 def _parameter_chunk(func: Callable, runs: list[int], columns: dict[str, list], record_errors: bool):
@@ -147,10 +143,8 @@ def _parameter_chunk(func: Callable, runs: list[int], columns: dict[str, list], 
 
     kwargs_list = [{name: values[i] for name, values in columns.items()} for i in range(len(runs))]
     batch = getattr(func, "batch", None)
-    if batch is not None:
-        outs = _batch_rows(batch, kwargs_list, record_errors)
-    else:
-        outs = [_call_row(func, kwargs, record_errors) for kwargs in kwargs_list]
+    calls = [_stored(r) for r in batch(kwargs_list)] if batch is not None else [func] * len(runs)
+    outs = [_call_row(call, kwargs, record_errors) for call, kwargs in zip(calls, kwargs_list)]
     rows = [{"run": run, **kwargs, **out} for run, kwargs, out in zip(runs, kwargs_list, outs)]
     return pd.DataFrame(rows).set_index("run")
 
