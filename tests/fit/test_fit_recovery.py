@@ -64,12 +64,6 @@ def test_recovery(cli_result):
     assert 0.7 < res["redchi"] < 1.4          # the model describes the data within their noise
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "open since the issue-12 solver change (2026-11-23): a frictionless beam (xi = 0) rings in contact "
-    "(367 kHz) with almost no damping; a tight solve keeps +-4 nm of it, the default 'damp' treatment removes "
-    "it only once its amplitude is below 0.1 nm, which depends on the run's history. Data and model drives "
-    "then differ by 0.06 nm rms in contact (noise 0.01 nm) and the fit absorbs that as friction "
-    "(xi 2.7e-4 kg/s, p ~ 0). docs/fit.md names this false-positive risk"))
 def test_null_no_friction():
     curves = make_curves(0.0, seed=12)
     res = fit_dynamic(curves, "beam", free=("hamaker", "xi"))

@@ -28,6 +28,7 @@ def add_model_flags(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("solver")
     S._q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
     S._q(g, "--atol", "length", "m", "absolute tolerance on positions")
+    S.add_sampling_flag(g, "average")
 
 
 def model_config(args: argparse.Namespace):
@@ -69,6 +70,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--sample-rates", type=_list("frequency", "--sample-rates"), default=None,
                    metavar="F1,F2,..", help="sample rate of each curve (default: from the files)")
     g.add_argument("--no-drift", action="store_true", help="fit no drift slope per curve")
+    g.add_argument("--retract", action="store_true",
+                   help="fit the retract run too (outward compliance and its hysteresis; the "
+                        "pull-off is left out like the jump-in)")
     g.add_argument("--level", type=float, default=0.95,
                    help="confidence level of intervals and friction test (default 0.95)")
     g.add_argument("--starts", type=int, default=2,
@@ -125,7 +129,9 @@ def run(args: argparse.Namespace) -> int:
                           velocities=args.velocities, sample_rates=args.sample_rates,
                           drift=not args.no_drift, starts=args.starts, level=args.level,
                           profile=() if args.no_profile else None,
-                          compare=not args.no_compare, jump_window=args.jump_window)
+                          compare=not args.no_compare, jump_window=args.jump_window,
+                          sampling=None,    # --sampling (default average) is in cfg
+                          retract=args.retract)
     d = res.to_dict()
     if args.plots:
         written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)

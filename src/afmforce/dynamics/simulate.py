@@ -150,7 +150,8 @@ def simulate(config: SimulationConfig | None = None, *,
     t_total_max = plan[-1].t_end
     dt = 1.0 / cfg.sample_rate
     nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
-    ybuf = np.full((nbuf, n), np.nan)
+    averaged = cfg.sampling == "average"
+    ybuf = np.zeros((nbuf, n + 1)) if averaged else np.full((nbuf, n), np.nan)
     s_next = np.zeros(1, dtype=np.int64)
 
     ev = np.full(R.E_SIZE, np.nan)
@@ -196,7 +197,8 @@ def simulate(config: SimulationConfig | None = None, *,
                 model, p, seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end, y,
                 cfg.rtol, rtolv, atol, HMAX_FRACTION, hmax_dz, damp_cycles, DAMP_KAPPA_RATIO,
                 term_kind, term_level,
-                0.0, dt, s_next, ybuf, ev, work, Q, y_old, J, stats, budget, chunk, 0.0)
+                0.0, dt, s_next, ybuf, ev, work, Q, y_old, J, stats, budget, chunk, 0.0,
+                1.0 if averaged else 0.0)
             if status == R.PAUSED:
                 progress(min(1.0, work[R.W_T] / t_total))
                 continue
@@ -229,8 +231,17 @@ def simulate(config: SimulationConfig | None = None, *,
         labels.append((seg.kind, a, b))
     if progress is not None:
         progress(1.0)
-    n_samp = int(s_next[0])
-    Y = ybuf[:n_samp]
+    if averaged:
+        # every grid time up to the end; windows at the ends are clipped to the run
+        n_samp = min(nbuf, int(math.floor(t_total * cfg.sample_rate * (1.0 + 1e-12))) + 1)
+        Y = ybuf[:n_samp, :n] / ybuf[:n_samp, n:]
+        bounds = [seg.t_end for seg in plan[:-1]]
+        sample_seg = np.searchsorted(np.asarray(bounds), np.arange(n_samp) * dt, side="left")
+        labels = [(seg.kind, int(np.searchsorted(sample_seg, i)),
+                   int(np.searchsorted(sample_seg, i, side="right"))) for i, seg in enumerate(plan)]
+    else:
+        n_samp = int(s_next[0])
+        Y = ybuf[:n_samp]
     if not np.all(np.isfinite(Y)):
         raise SolverError("the sampled trajectory contains non-finite values; "
                           "try a tighter rtol/atol")
