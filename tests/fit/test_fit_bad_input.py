@@ -76,3 +76,21 @@ def test_force_and_volts_calibrated_with_the_files_own_constants(two):
     ref, fn, fv = prepare_curves([c, as_n, as_v])
     np.testing.assert_allclose(fn.deflection, ref.deflection, rtol=1e-12)
     np.testing.assert_allclose(fv.deflection, ref.deflection, rtol=1e-12)
+
+
+def test_retract_missing_or_after_a_pause(two):
+    def cut(c, keep):
+        return dataclasses.replace(c, **{f: np.asarray(getattr(c, f))[keep] for f in
+                                        ("time", "piezo_nominal", "deflection_signal", "segment")},
+                                   piezo_measured=None, truth=None)
+    approach_only = [cut(c, np.asarray(c.segment) == 0) for c in two]
+    with pytest.raises(AnalysisError, match="no retract run directly after the approach"):
+        fit_dynamic(approach_only, "beam", free=("hamaker", "xi"), retract=True)
+    # a pause at the turn: the retract starts 50 ms after the drive lines meet
+    paused = []
+    for c in two:
+        t = np.asarray(c.time, float).copy()
+        t[np.asarray(c.segment) == 1] += 0.05
+        paused.append(dataclasses.replace(c, time=t))
+    with pytest.raises(AnalysisError, match="pause at the turn is not supported"):
+        fit_dynamic(paused, "beam", free=("hamaker", "xi"), retract=True)

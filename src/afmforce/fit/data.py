@@ -226,9 +226,11 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
         raise AnalysisError(f"{fc.name}: the nominal position does not rise on the approach "
                             "and fall on the retract; cannot place the turn")
     t_turn = (zb - za) / (va - vr)
-    if not fc.time[-1] - 1.0 / fc.sample_rate <= t_turn <= tr[0] + 1.0 / fc.sample_rate:
-        raise AnalysisError(f"{fc.name}: the drive lines meet at t = {t_turn:.4g} s, not "
-                            "between the last approach and the first retract sample; a pause "
+    gap = tr[0] - fc.time[-1]
+    if gap > 1.5 / fc.sample_rate or not (
+            fc.time[-1] - 1.0 / fc.sample_rate <= t_turn <= tr[0] + 1.0 / fc.sample_rate):
+        raise AnalysisError(f"{fc.name}: {gap:.4g} s between the last approach and the first "
+                            f"retract sample (drive lines meet at t = {t_turn:.4g} s); a pause "
                             "at the turn is not supported (fit the approach only)")
     # keep the outward compliance line down to half the adhesive deflection before the
     # pull-off; leave out the rest: where the model pulls off moves discontinuously with
