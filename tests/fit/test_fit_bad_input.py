@@ -94,3 +94,39 @@ def test_retract_missing_or_after_a_pause(two):
         paused.append(dataclasses.replace(c, time=t))
     with pytest.raises(AnalysisError, match="pause at the turn is not supported"):
         fit_dynamic(paused, "beam", free=("hamaker", "xi"), retract=True)
+
+
+def test_speed_and_rate_read_off_the_ramp_when_missing(two):
+    """A file without velocity/sample_rate: both come from the approach, with a note."""
+    from afmforce.fit.data import prepare_curves
+
+    bare = [dataclasses.replace(c, metadata={k: v for k, v in c.metadata.items()
+                                             if k not in ("velocity", "sample_rate")}) for c in two]
+    fc = prepare_curves(bare)
+    for c, f in zip(two, fc):
+        assert f.velocity == pytest.approx(c.metadata["velocity"], rel=1e-9)
+        assert f.sample_rate == pytest.approx(c.metadata["sample_rate"], rel=1e-9)
+        assert "read off the approach ramp" in f.metadata["velocity_from_ramp"]
+    # a ramp that is not straight (a sine) is not taken: the user is asked
+    c = bare[0]
+    t = np.asarray(c.time, float)
+    bent = dataclasses.replace(c, piezo_nominal=np.asarray(c.piezo_nominal) + 5e-9 * np.sin(40 * t / t[-1]))
+    with pytest.raises(FileFormatError, match="--velocities"):
+        prepare_curves([bent])
+
+
+def test_cli_meta_calibrates_volts(two, tmp_path, capsys):
+    """Curves recorded in volts without a sensitivity: the error names --meta; with it they fit."""
+    volts = [dataclasses.replace(c, deflection_signal=np.asarray(c.deflection_signal) / 50e-9,
+                                 deflection_unit="V",
+                                 metadata={k: v for k, v in c.metadata.items() if k != "sensitivity"})
+             for c in two]
+    paths = write_curves(volts, tmp_path)
+    argv = ["fit", *map(str, paths), "--free", "hamaker", "--no-profile", "--no-compare", "--json"]
+    assert main(argv) == 2
+    assert "--meta sensitivity=" in capsys.readouterr().err
+    assert main(argv + ["--meta", "sensitivity=50nm/V"]) == 0
+    import json
+
+    res = json.loads(capsys.readouterr().out)
+    assert res["parameters"]["hamaker"]["value"] == pytest.approx(5e-19, rel=0.05)

@@ -230,7 +230,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     cov = _covariance(J, max(redchi, 1.0))
     sd = np.sqrt(np.clip(np.diag(cov), 0, None)) * prob.scale()
     values, shifts = prob.unpack(x)
-    warns = []
+    warns = [c.metadata["velocity_from_ramp"] for c in fc if c.metadata.get("velocity_from_ramp")]
     if ev.failures:
         warns.append(f"{ev.failures} trial simulations failed during the fit (last: {ev.last_error})")
     if redchi > 2.0:

@@ -88,12 +88,42 @@ class FitCurve:
 def _meta_value(curve: RawCurve, key: str, override, name: str, unit: str) -> float:
     value = override if override is not None else (curve.metadata or {}).get(key)
     if value is None:
-        raise FileFormatError(f"{name}: no {key} [{unit}] in the file; give it "
-                              f"(--{key.replace('_', '-')})")
+        flag, kw = {"velocity": ("--velocities", "velocities"),
+                    "sample_rate": ("--sample-rates", "sample_rates")}[key]
+        raise FileFormatError(f"{name}: no {key} [{unit}] in the file; give it ({flag} V1,V2,.. "
+                              f"or --meta {key}=VALUE; Python: fit_dynamic(..., {kw}=[...]))")
     value = float(value)
     if not math.isfinite(value) or value <= 0:
         raise FileFormatError(f"{name}: {key} must be positive, got {value!r} {unit}")
     return value
+
+
+def _ramp(curve: RawCurve, idx: np.ndarray) -> dict:
+    """Speed [m/s] and sample rate [Hz] read off the approach itself, where the file lacks them.
+
+    The sample rate is 1 / the median time step when the steps agree within 1 %; the speed
+    is the slope of the nominal position in time when a straight line describes the ramp
+    (its middle 80 %) within 5 % of its travel, with that deviation in
+    ``ramp_deviation``. Otherwise None (the user must give them).
+    """
+    t = np.asarray(curve.time, float)[idx]
+    z = np.asarray(curve.piezo_nominal, float)[idx]
+    out = {"velocity": None, "sample_rate": None}
+    dt = np.diff(t)
+    if dt.size < 10 or not np.all(np.isfinite(dt)) or not np.all(np.isfinite(z)):
+        return out
+    med = float(np.median(dt))
+    if med > 0 and np.percentile(np.abs(dt / med - 1.0), 95) < 0.01:
+        out["sample_rate"] = 1.0 / med
+    n = t.size
+    mid = slice(n // 10, n - n // 10)            # closed-loop ramps bend at their ends
+    slope, icpt = np.polyfit(t[mid], z[mid], 1)
+    travel = abs(z[-1] - z[0])
+    dev = float(np.max(np.abs(z[mid] - (icpt + slope * t[mid])))) if travel > 0 else math.inf
+    if slope > 0 and dev < 0.05 * travel:
+        out["velocity"] = float(slope)
+        out["ramp_deviation"] = dev / travel
+    return out
 
 
 def _noise_sigma(y: np.ndarray) -> float:
@@ -126,16 +156,22 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     if unit != "m" and (need is None or not meta.get(need)):
         raise FileFormatError(
             f"{name}: the deflection is in {unit} and the file has no {need}; the fit needs a "
-            "calibrated deflection in metres (deflection_signal [m]); calibrate it first")
+            f"calibrated deflection in metres: give it (--meta {need}=VALUE; Python: "
+            f"load(..., meta_override={{'{need}': ...}}))")
     # force / k or volts x sensitivity: the file's own calibration
     scale = 1.0 if unit == "m" else (1.0 / float(meta[need]) if unit == "N" else float(meta[need]))
-    v = _meta_value(curve, "velocity", velocity, name, "m/s")
-    fs = _meta_value(curve, "sample_rate", sample_rate, name, "Hz")
     app = np.asarray(curve.segment) == 0
     idx = np.flatnonzero(app)
     if idx.size < 30:
         raise AnalysisError(f"{name}: only {idx.size} approach samples; the fit needs >= 30")
     idx = idx[: np.flatnonzero(np.diff(idx) != 1)[0] + 1] if np.any(np.diff(idx) != 1) else idx
+    ramp = _ramp(curve, idx)
+    from_ramp = velocity is None and not (curve.metadata or {}).get("velocity") and ramp["velocity"]
+    v = _meta_value(curve, "velocity", velocity if velocity is not None else
+                    (ramp["velocity"] if from_ramp else None), name, "m/s")
+    fs = _meta_value(curve, "sample_rate", sample_rate if sample_rate is not None else
+                     (None if (curve.metadata or {}).get("sample_rate") else ramp["sample_rate"]),
+                     name, "Hz")
     t = np.asarray(curve.time, float)[idx]
     z = np.asarray(curve.piezo_nominal, float)[idx]
     y = np.asarray(curve.deflection_signal, float)[idx] * scale
@@ -189,6 +225,11 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
                   guess={"shift": shift, "offset": float(offset), "drift": float(drift),
                          "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
                   metadata=dict(curve.metadata or {}))
+    if from_ramp:
+        fc.metadata["velocity_from_ramp"] = (
+            f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp "
+            f"(positions deviate from a straight line by up to {ramp['ramp_deviation']:.1%} of the "
+            "travel; the model drives at constant speed); give --velocities to override")
     return _append_retract(fc, curve, idx, scale, jump_window) if retract else fc
 
 
