@@ -16,7 +16,7 @@ Modules: :mod:`.models` (vector fields, Jacobians, friction registry),
 an independent cross-check).
 """
 
-from .config import DEFAULT_B, MODELS, SimulationConfig
+from .config import DEFAULT_B, MODELS, SAMPLING, SimulationConfig
 from .events import Events
 from .models import FRICTION_LAWS, RINGING, FrictionLaw, RingingTreatment
 from .guard import ConvergenceWarning
@@ -37,6 +37,7 @@ __all__ = [
     "FRICTION_LAWS",
     "FrictionLaw",
     "RINGING",
+    "SAMPLING",
     "RingingTreatment",
     "MODELS",
     "DEFAULT_B",

@@ -110,11 +110,47 @@ P_ = np.array([
 EPS = np.finfo(float).eps
 
 
+@njit(cache=True, error_model="numpy")
+def _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf):
+    """Add the integral of the step's dense polynomial over each sample window it overlaps.
+
+    Window ``k`` is ``[s_t0 + (k - 1/2) s_dt, s_t0 + (k + 1/2) s_dt]``; the
+    polynomial is ``y_old + Q [s, s^2, s^3]`` on ``[t_old, t_old + h]``, so its
+    integral over ``[a, b]`` is exact: ``h * sum_j c_j (s_b^(j+1) - s_a^(j+1)) / (j+1)``.
+    """
+    n = y_old.shape[0]
+    half = 0.5 * s_dt
+    k = s_next[0]
+    while k < ybuf.shape[0]:
+        ts = s_t0 + k * s_dt
+        lo = ts - half
+        if lo >= t_new:
+            break
+        hi = ts + half
+        a = max(lo, t_old)
+        b = min(hi, t_new)
+        if b > a:
+            sa = (a - t_old) / h
+            sb = (b - t_old) / h
+            d1 = sb - sa
+            d2 = (sb * sb - sa * sa) * 0.5
+            d3 = (sb * sb * sb - sa * sa * sa) / 3.0
+            d4 = (sb * sb * sb * sb - sa * sa * sa * sa) * 0.25
+            for i in range(n):
+                ybuf[k, i] += h * (y_old[i] * d1 + Q[i, 0] * d2 + Q[i, 1] * d3 + Q[i, 2] * d4)
+            ybuf[k, n] += b - a
+        if hi <= t_new:
+            k += 1
+        else:
+            break
+    s_next[0] = k
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                       hmax_frac, hmax_dz, damp_cycles, damp_kappa, term_kind, term_level,
                       s_t0, s_dt, s_next, ybuf, ev, work, Q, y_old, J, stats,
-                      max_steps, chunk_steps, h_fixed=0.0):
+                      max_steps, chunk_steps, h_fixed=0.0, s_avg=0.0):
     """Integrate one drive segment from ``work[W_T]`` to ``t_end``.
 
     Parameters (all arrays are updated in place)
@@ -162,6 +198,13 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
     h_fixed : float
         If > 0, take fixed steps of this size without error control (for
         convergence-order tests); a Newton failure then returns NEWTON_FAILED.
+    s_avg : float
+        0: samples are the state at the grid times (point sampling). 1: each
+        sample is the integral of the dense polynomial over its window
+        ``[t_k - s_dt/2, t_k + s_dt/2]`` (exact, clipped to the integrated
+        time), accumulated into ``ybuf[k, :n]`` with the covered time in
+        ``ybuf[k, n]`` (``ybuf`` then has ``n + 1`` columns, zero-initialised);
+        ``s_next[0]`` counts windows that are complete.
 
     Returns
     -------
@@ -489,7 +532,9 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 continue
         stats[S_ACCEPTED] += 1
         # samples on the instrument grid
-        k = s_next[0]
+        if s_avg > 0.0:
+            _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf)
+        k = ybuf.shape[0] if s_avg > 0.0 else s_next[0]
         while k < ybuf.shape[0]:
             ts = s_t0 + k * s_dt
             if ts > t_new:
@@ -499,7 +544,8 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 for i in range(n):
                     ybuf[k, i] = yst[i]
             k += 1
-        s_next[0] = k
+        if s_avg <= 0.0:
+            s_next[0] = k
         _events(model, p, kind, t_a, z_a, v, t_old, h, y_old, Q, ev, yst, o, oprev)
         # --- next step size, Jacobian reuse
         recompute_jac = n_iter > 2 and rate > 1e-3

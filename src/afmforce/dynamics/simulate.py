@@ -197,8 +197,9 @@ class _Run:
         plan = segments(cfg)
         self.t_total_max = t_total_max = plan[-1].t_end
         self.dt = 1.0 / cfg.sample_rate
-        nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
-        self.ybuf = np.full((nbuf, n), np.nan)
+        self.nbuf = nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
+        self.averaged = cfg.sampling == "average"
+        self.ybuf = np.zeros((nbuf, n + 1)) if self.averaged else np.full((nbuf, n), np.nan)
         self.s_next = np.zeros(1, dtype=np.int64)
         self.ev = ev = np.full(R.E_SIZE, np.nan)
         ev[R.E_IN_CONTACT] = 0.0
@@ -244,7 +245,7 @@ class _Run:
                 self.y, self.cfg.rtol, self.rtolv, self.atol, HMAX_FRACTION, self.hmax_dz,
                 self.damp_cycles, DAMP_KAPPA_RATIO, term_kind, term_level,
                 0.0, self.dt, s_next, self.ybuf, self.ev, work, self.Q, self.y_old, self.J, stats,
-                self.budget, chunk, 0.0)
+                self.budget, chunk, 0.0, 1.0 if self.averaged else 0.0)
             if status == R.PAUSED:
                 progress(min(1.0, work[R.W_T] / t_total))
                 continue
@@ -286,9 +287,22 @@ class _Run:
     def finish(self, check: str = "off", wall0: float | None = None) -> Trajectory:
         """The trajectory, events, warnings and convergence check of an integrated run."""
         cfg, model, ev, stats, plan = self.cfg, self.model, self.ev, self.stats, self.plan
-        n_samp = int(self.s_next[0])
-        Y = self.ybuf[:n_samp]
-        lab = np.array([(a, b, kind) for kind, a, b in self.labels], dtype=np.int64).reshape(-1, 3)
+        labels, n = self.labels, self.n
+        if self.averaged:
+            # every grid time up to the end; windows at the ends are clipped to the run
+            n_samp = min(self.nbuf, int(math.floor(plan[-1].t_end * cfg.sample_rate
+                                                   * (1.0 + 1e-12))) + 1)
+            Y = self.ybuf[:n_samp, :n] / self.ybuf[:n_samp, n:]
+            bounds = [seg.t_end for seg in plan[:-1]]
+            sample_seg = np.searchsorted(np.asarray(bounds), np.arange(n_samp) * self.dt,
+                                         side="left")
+            labels = [(seg.kind, int(np.searchsorted(sample_seg, i)),
+                       int(np.searchsorted(sample_seg, i, side="right")))
+                      for i, seg in enumerate(plan)]
+        else:
+            n_samp = int(self.s_next[0])
+            Y = self.ybuf[:n_samp]
+        lab = np.array([(a, b, kind) for kind, a, b in labels], dtype=np.int64).reshape(-1, 3)
         seg = np.array([(s.t_start, s.z_start, s.velocity) for s in plan]).reshape(-1, 3)
         tt, zd, seg_code, obs, finite = sample_columns(
             model, self.p, Y, self.dt, lab[:, 0], lab[:, 1], lab[:, 2].astype(np.int8),

@@ -144,5 +144,5 @@ class Problem:
                 out.append(None)
                 continue
             coef = self.ev.project(i, m)[1]
-            out.append(m + coef[0] + coef[1] * c.time)
+            out.append(m + self.ev.baseline(i, coef))
         return out
