@@ -175,8 +175,16 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
         zf = st.z[idx]
         z_split = st.z[run.index[min(run.split, run.index.size - 1)]]
         far = np.abs(zf - z_split) > margin * (np.ptp(zf) if zf.size else 0.0)  # not the attraction near contact
+        if run.kind == "retract" and not runs["approach"].found and apply != "always":
+            # fringes are a property of the optics, present on both runs: without them on the
+            # approach nothing is changed whatever the retract shows, so it is not searched
+            runs["retract"] = dataclasses.replace(runs["approach"], found=False, explained=math.nan,
+                                                  period=math.nan, cycles=math.nan, residual=math.nan)
+            searched = False
+            continue
         runs[run.kind] = fit_fringes(zf[far], st.signal[idx][far], period=period, order=order,
                                      t=st.time[idx][far] if st.time_known else None)
+        searched = True
     fa, fr = runs["approach"], runs["retract"]
     # real fringes are periodic in the true position: both runs show the same period
     both = fa.found and fr.found and abs(fa.period - fr.period) < 0.05 * 0.5 * (fa.period + fr.period)
@@ -202,6 +210,11 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
                    "(modulo one period)")
     elif fa.found or fr.found:
         verdict = "periodic baseline on one run only, or periods that differ: not fringes; nothing changed"
+    elif not searched:
+        why = "" if fa.converged else "; the fit wanders: no clean period"
+        verdict = (f"no interference fringes in the approach baseline (a periodic term explains "
+                   f"{max(fa.explained, 0.0):.2g} of its variance{why}); the retract was not "
+                   "searched (fringes come from the optics and show on both runs)")
     else:
         verdict = "no interference fringes detected in the baseline"
     res = FringeResult(fa, fr, width, applied, verdict)
