@@ -240,7 +240,8 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
     if "diagnosis" in d:
         g = d["diagnosis"]
         kw.update(velocity=g.velocity, inertia_parameter=g.inertia_parameter, force_gradient=g.force_gradient,
-                  resonance_frequency=g.resonance_frequency, dynamic=g.dynamic, verdict=g.verdict)
+                  resonance_frequency=g.resonance_frequency, dynamic=g.dynamic, verdict=g.verdict,
+                  dynamic_assessed=g.assessed)
     if "friction" in d:
         kw["friction_verdict"] = d["friction"].verdict
     kw["not_applicable"] = dict(d.get("skipped", {}))
