@@ -540,12 +540,11 @@ def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
                        f"{c:.3g}, outside {1 / max_curvature:.3g}-{max_curvature:.3g})")
                 break
     dr = st.details.get("drift")
-    if why is None and dr is not None and dr.retract_from_approach and comp.approach.found and comp.retract.found:
+    if why is None and dr is not None and dr.retract_settling and comp.approach.found and comp.retract.found:
         # the retract carries the approach's drift line: its slope and offset are off by the change of
         # drift between the runs, which the 2 % slope test cannot tell from friction
-        why = ("not assessed: the retract has no drift line of its own (" + (
-            "its free part is still relaxing after the pull-off" if dr.retract_settling else
-            "its free part is too short or rings") + "), so its compliance line is not comparable to 2 %")
+        why = ("not assessed: the retract has no drift line of its own (its free part is still relaxing after "
+               "the pull-off), so its compliance line is not comparable to 2 %")
     if why is not None:
         return _skip(st, "friction", why, cc.FrictionSignature("not assessed", nan, nan, nan, nan, why))
     sh = st.details.get("shift") or cc.compliance_shift(comp, applied=False)
@@ -557,9 +556,7 @@ def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
                   f"the lines are known to a slope of {slope_unc * 100:.2g} % and an offset of "
                   f"{offset_unc * 1e9:.3g} nm")
         if sig.kind == "none":
-            sig = dataclasses.replace(sig, kind="undetermined", verdict=(
-                f"compliance lines agree within the drift uncertainty (slope ratio {sig.slope_ratio:.4g}, offset "
-                f"{sig.offset * 1e9:.3g} nm; {bounds}): friction cannot be judged"))
+            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} within the drift uncertainty ({bounds})")
         else:
             sig = dataclasses.replace(sig, verdict=f"{sig.verdict} (beyond the drift uncertainty: {bounds})")
     return st.update("friction", sig)
