@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._fringe_kernel import lm_fit
+
 __all__ = ["FringeRun", "FringeResult", "fit_fringes", "position_map", "fringe_signal", "fringe_baseline",
            "loop_width"]
 
@@ -259,14 +261,16 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = None, or
         best = fits[int(np.argmin(bic))]
     else:
         best = fits[0]
-    if keep is None or not math.isfinite(best.period):
+    if not math.isfinite(best.period):
         return best
-    return _finish(z, r, t, best.period, best.scale, best.a2, best.a3, min_explained, min_cycles)
+    return _finish(z, r, t, best.period, best.scale, best.a2, best.a3, min_explained, min_cycles,
+                   converged=best.converged)
 
 
 def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=None,
                reference_cost=None, start: FringeRun | None = None) -> FringeRun:
-    """:func:`fit_fringes` for one map order (on the samples given).
+    """:func:`fit_fringes` for one map order (on the samples given): the map and its residual
+    (amplitude, line and verdict are left to :func:`_finish`).
 
     Starts from ``start`` (the lower order's fit) when given. The cubic map starts from
     a3 = 0, and from a3 = +-0.05 only when the first start does not improve on
@@ -301,51 +305,15 @@ def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=N
         a3 = rest[1] if n_map >= 2 else 0.0
         return P, c1, a2, a3
 
-    x = (z - zm) / L
+    x = np.ascontiguousarray((z - zm) / L)
     x2, x3 = x * x, x * x * x
     # variable projection: the line (1, x or t) is projected out once (thin QR), the cos/sin
-    # amplitudes are a 2x2 solve per evaluation
+    # amplitudes are a 2x2 solve per evaluation (compiled: analysis._fringe_kernel)
     Q0, _ = np.linalg.qr(np.column_stack([np.ones_like(x), x if xt is None else xt]))
-    r_perp = r - Q0 @ (Q0.T @ r)
-    C = np.empty((z.size, 2))
-    memo: dict = {}
-
-    def solve(q):
-        key = tuple(q)
-        if memo.get("key") != key:
-            P, c1, a2, a3 = unpack(q)
-            poly = x + a2 * x2 + a3 * x3
-            th = (2 * math.pi / P) * (zm + c1 * L * poly)
-            C[:, 0] = np.cos(th)
-            C[:, 1] = np.sin(th)
-            Cp = C - Q0 @ (Q0.T @ C)
-            A = Cp.T @ Cp
-            A[0, 0] += 1e-12 * (A[0, 0] + A[1, 1]) + 1e-300  # a period far beyond the range: cos ~ line
-            A[1, 1] += 1e-12 * (A[0, 0] + A[1, 1]) + 1e-300
-            Ai = np.linalg.inv(A)
-            coef = Ai @ (Cp.T @ r_perp)
-            memo.update(key=key, th=th, poly=poly, Cp=Cp, Ai=Ai, coef=coef, P=P, c1=c1,
-                        res=Cp @ coef - r_perp)
-        return memo
-
-    def resid(q):
-        return solve(q)["res"]
-
-    def jac(q):
-        """Kaufman's variable-projection Jacobian: (I - P_X) dX/dq coef."""
-        m = solve(q)
-        c = m["coef"]
-        g = c[1] * C[:, 0] - c[0] * C[:, 1]  # d(X coef)/d(theta)
-        k = 2 * math.pi * m["c1"] * L / m["P"]
-        cols = [2 * math.pi * L * m["poly"] / m["P"] if period else -m["th"]]
-        if n_map >= 1:
-            cols.append(k * x2)
-        if n_map >= 2:
-            cols.append(k * x3)
-        V = g[:, None] * np.column_stack(cols)
-        V = V - Q0 @ (Q0.T @ V)
-        Cp = m["Cp"]
-        return V - Cp @ (m["Ai"] @ (Cp.T @ V))
+    Q0 = np.ascontiguousarray(Q0)
+    r_perp = np.ascontiguousarray(r - Q0 @ (Q0.T @ r))
+    known = bool(period)
+    per = float(period) if period else 0.0
 
     q0 = np.zeros(1 + n_map)
     q0[0] = 1.0 if period else 0.0
@@ -358,13 +326,18 @@ def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=N
         q = q0.copy()
         if n_map >= 2:
             q[2] = a3_start
-        sol = _levenberg_marquardt(resid, jac, q, MAX_NFEV)
+        qs, cost, status = lm_fit(q, known, float(P0), per, n_map, x, x2, x3, float(zm), float(L), Q0, r_perp,
+                                  MAX_NFEV, 1e-6, 1e-7)
+        sol = _Solution(qs, float(cost), int(status))
         if best is None or sol.cost < best.cost:
             best = sol
         if reference_cost is not None and best.cost < reference_cost:
             break  # the cubic already improves on the lower order: not stuck, no other start needed
     P, c1, a2, a3 = unpack(best.x)
-    return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=best.status > 0)
+    # the map only (the line, amplitude and verdict come from _finish on every sample)
+    rms = math.sqrt(2.0 * best.cost / z.size)
+    return FringeRun(False, float(P), 0.0, 0.0, float(c1), float(a2), float(a3), float(zm), float(L), 0.0,
+                     1.0 - rms**2 / var0, float(np.ptp(z)) / P if P > 0 else 0.0, rms, converged=best.status > 0)
 
 
 @dataclass
@@ -372,48 +345,6 @@ class _Solution:
     x: np.ndarray
     cost: float  # half the sum of squared residuals
     status: int  # 0: evaluation budget spent; 1: converged
-
-
-def _levenberg_marquardt(fun, jac, q0: np.ndarray, max_nfev: int, ftol: float = 1e-6,
-                         xtol: float = 1e-7) -> _Solution:
-    """Levenberg-Marquardt for the 1-3 nonlinear parameters (a lean loop: scipy's
-    ``least_squares`` costs ~0.4 ms of overhead per iteration, more than the model).
-
-    Converged when an accepted step changes the cost by less than ``ftol`` of it, or
-    the parameters by less than ``xtol (xtol + |q|)``.
-    """
-    q = np.asarray(q0, float).copy()
-    r = fun(q)
-    cost = 0.5 * float(r @ r)
-    lam, nfev = 1e-3, 1
-    while nfev < max_nfev:
-        J = jac(q)
-        A = J.T @ J
-        g = J.T @ r
-        d = np.diag(A).copy()
-        d[d <= 0] = 1.0
-        while nfev < max_nfev:
-            try:
-                dq = -np.linalg.solve(A + lam * np.diag(d), g)
-            except np.linalg.LinAlgError:
-                lam *= 10
-                continue
-            qn = q + dq
-            rn = fun(qn)
-            nfev += 1
-            cn = 0.5 * float(rn @ rn)
-            if cn <= cost:
-                small_f = cost - cn <= ftol * cost
-                small_x = bool(np.all(np.abs(dq) <= xtol * (xtol + np.abs(q))))
-                q, r, cost = qn, rn, cn
-                lam = max(lam / 3, 1e-12)
-                if small_f or small_x:
-                    return _Solution(q, cost, 1)
-                break
-            lam *= 4
-            if lam > 1e12:
-                return _Solution(q, cost, 1)  # no descent left: a minimum to working precision
-    return _Solution(q, cost, 0)
 
 
 def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True) -> FringeRun:
