@@ -56,10 +56,21 @@ class DriftResult:
     retract_settling: bool = False
 
 
+def _wls(X: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Weighted least squares by the normal equations (the 1-3 columns here are scaled to
+    order one); lstsq only if they are singular."""
+    Xw = X * w[:, None]
+    try:
+        return np.linalg.solve(Xw.T @ X, Xw.T @ y)
+    except np.linalg.LinAlgError:
+        sw = np.sqrt(w)
+        return np.linalg.lstsq(X * sw[:, None], y * sw, rcond=None)[0]
+
+
 def _irls(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
     """Bisquare-weighted least squares: coefficients, robust residual scale, weighted SSR."""
     w = np.ones(y.size)
-    coef = np.linalg.lstsq(X, y, rcond=None)[0]
+    coef = _wls(X, y, w)
     sigma = 0.0
     for _ in range(n_iter):
         r = y - X @ coef
@@ -68,8 +79,7 @@ def _irls(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
             break
         u = r / (tuning * sigma)
         w = np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
-        sw = np.sqrt(w)
-        coef = np.linalg.lstsq(X * sw[:, None], y * sw, rcond=None)[0]
+        coef = _wls(X, y, w)
     r = y - X @ coef
     return coef, sigma, float(np.sum(w * r * r))
 
