@@ -209,3 +209,12 @@ def test_asylum_resonance_frequency_from_the_note():
     assert c.metadata["sample_rate"] == pytest.approx(10000.0)
     assert load(DATA / "asylum-mfp3d_ForceMetric_X60_3_x4_0100.ibw",
                 meta_override={"resonance_frequency": 1e5})[0].metadata["resonance_frequency"] == 1e5
+
+
+def test_parse_properties_fast_path_and_escapes():
+    """Lines without escapes split at the first '=' or ':'; escaped lines follow Java's rules."""
+    from afmforce.io.jpk_zip import parse_properties
+
+    text = "# comment\n! other\na.b=1\nc : d e\nurl=http://x:8080\nk\\:x=2\nu=\\u00e9\\tz\nno separator\n"
+    assert parse_properties(text) == {"a.b": "1", "c": "d e", "url": "http://x:8080", "k:x": "2",
+                                      "u": "\u00e9\tz"}
