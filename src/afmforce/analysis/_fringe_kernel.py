@@ -71,8 +71,11 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
     if want_jac:
         m = J.shape[1]
         k = w * c1 * L
+        gd = np.empty(n)  # g = d(X coef)/dtheta from the unprojected cos/sin
+        for i in range(n):
+            gd[i] = c1c * math.cos(th[i]) - c0 * math.sin(th[i])
         for j in range(m):
-            # column j of V = g * dtheta/dq_j, g = d(X coef)/dtheta from the unprojected cos/sin
+            # column j of V = g * dtheta/dq_j
             h0 = h1 = 0.0
             for i in range(n):
                 if j == 0:
@@ -81,8 +84,7 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
                     d = k * x2[i]
                 else:
                     d = k * x3[i]
-                g = c1c * math.cos(th[i]) - c0 * math.sin(th[i])
-                J[i, j] = g * d
+                J[i, j] = gd[i] * d
                 h0 += Q0[i, 0] * J[i, j]
                 h1 += Q0[i, 1] * J[i, j]
             e0 = e1 = 0.0

@@ -135,9 +135,9 @@ def _design(z, zm, L, P, c1, a2, a3, xt=None):
 FIT_POINTS = 4000
 #: Samples per fringe period kept when thinning for the nonlinear fit.
 POINTS_PER_PERIOD = 12
-#: Evaluations allowed to one start of the nonlinear fit (fringes converge in under ten; a smooth
+#: Evaluations allowed to one start of the nonlinear fit (fringes converge in 3-17 in the tests; a smooth
 #: bow fitted as 1-2 "periods" with a strongly bent map wanders for a hundred).
-MAX_NFEV = 30
+MAX_NFEV = 20
 #: Number of uniform position bins of the FFT periodogram.
 BINS = 2048
 
