@@ -161,3 +161,26 @@ def test_every_verdict_carries_its_numbers():
     assert "false alarm" in res.oscillation_verdict or "no time base" in res.oscillation_verdict
     assert "x the baseline noise" in res.adhesion_verdict
     assert "resonance frequency unknown" in res.verdict  # JPK files carry none: not assessed, said so
+
+
+def test_stiff_lever_without_repulsive_contact_reports_the_pull_off():
+    """README: the 2023 JPK file without k, read with k = 12 N/m. The approach barely deflects (and
+    ends attractive), yet the retract pulls off far below its baseline: the tip touched the surface.
+    The result says so, with the adhesion against an independent reading of the force column
+    (the deepest retract sample less the mean of its last 30 %) within 5 %."""
+    from pathlib import Path
+
+    from afmforce.io import load
+    from afmforce.pipeline import analyze
+
+    path = Path(__file__).resolve().parents[3] / "shared" / "data" / "real" / (
+        "afmformats_jpk-fd_single-modified_2023.jpk-force")
+    if not path.exists():
+        pytest.skip("shared real files not available")
+    c = load(path, meta_override={"spring_constant": 12.0})[0]
+    res = analyze(c)
+    f = c.deflection_signal[c.segment == 1]
+    independent = f.min() - f[int(0.7 * f.size):].mean()
+    assert res.contact_kind == "none" and "the tip touched the surface" in res.verdict
+    assert res.adhesion_force < 0
+    assert res.adhesion_force == pytest.approx(independent, rel=0.05)

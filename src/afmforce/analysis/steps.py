@@ -105,6 +105,23 @@ def smooth(st: State, *, window: int | str = "auto") -> State:
     return st.update("smooth", SmoothResult(window, st.channel, change), z=z)
 
 
+def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
+    """Depth of the retract's pull-off below its own far baseline, and the noise [signal units].
+
+    Depth: the retract's last 30 % (median) less the lowest level held for two consecutive
+    samples (a single spike does not count; a stiff lever rings after the release, the first
+    swing is the pull-off); noise: from sample-to-sample differences there (blind to drift).
+    Evidence of a contact the approach does not show (a stiff lever, an attractive approach end).
+    """
+    if idx.size < 50:
+        return math.nan, math.nan
+    s = signal[idx]
+    far = s[int(0.7 * s.size):]
+    sigma = float(np.median(np.abs(np.diff(far)))) / (0.6745 * math.sqrt(2.0))
+    low = float(np.min(np.maximum(s[:-1], s[1:])))
+    return float(np.median(far)) - low, sigma
+
+
 def contact(st: State, *, min_points: int = 5, baseline_fraction: float = 0.7,
             compliance_fraction: float = 0.5, flat_ratio: float = 0.05,
             max_slope_ratio: float | str = "auto") -> State:
