@@ -133,8 +133,9 @@ def _design(z, zm, L, P, c1, a2, a3, xt=None):
 #: At most this many samples enter the nonlinear fit (evenly thinned; the final linear solve and the
 #: reported residual and explained variance use every sample).
 FIT_POINTS = 4000
-#: Samples per fringe period kept when thinning for the nonlinear fit.
+#: Samples per fringe period kept when thinning for the nonlinear fit, and at least this many in all.
 POINTS_PER_PERIOD = 12
+MIN_FIT_POINTS = 200
 #: Evaluations allowed to one start of the nonlinear fit (fringes converge in 3-17 in the tests; a smooth
 #: bow fitted as 1-2 "periods" with a strongly bent map wanders for a hundred).
 MAX_NFEV = 20
@@ -244,8 +245,8 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = None, or
     keep = None
     per = float(period) if period else p0
     if per and z.size > 16:
-        m = int(min(FIT_POINTS, max(400, POINTS_PER_PERIOD * np.ptp(z) / per)))
-        if z.size > 1.5 * m:
+        m = int(min(FIT_POINTS, max(MIN_FIT_POINTS, POINTS_PER_PERIOD * np.ptp(z) / per)))
+        if z.size > m:
             keep = np.unique(np.linspace(0, z.size - 1, m).round().astype(np.int64))
     zs, rs, ts = (z, r, t) if keep is None else (z[keep], r[keep], None if t is None else t[keep])
     orders = (1, 2, 3) if order == "auto" else (int(order),)
