@@ -117,8 +117,9 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
 
 def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
     """True when a baseline is a relaxation, not a drift line: a parabola in time fits it
-    better than the line by more than ``nsigma`` times the curvature's standard error, and
-    the curved part spans more than ``nsigma`` noise levels.
+    better than the line by more than ``nsigma`` times the curvature's standard error, the
+    curved part spans more than ``nsigma`` noise levels, and it decays (both halves slope the
+    same way, the first at least twice as steeply).
 
     After the pull-off an overdamped (viscous) cantilever returns to zero over a time
     ``~ xi / k``; when the run ends within a few such times, its "free" part is an
@@ -141,7 +142,14 @@ def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
     cov = np.linalg.pinv(X.T @ X) * sigma**2
     c, se = float(coef[2]), float(np.sqrt(max(cov[2, 2], 0.0)))
     bow = abs(c) * float(np.ptp(X[:, 2]))  # signal change the curvature accounts for
-    return abs(c) > nsigma * se and bow > nsigma * sigma
+    if not (abs(c) > nsigma * se and bow > nsigma * sigma):
+        return False
+    # a relaxation decays: both halves slope the same way, the first at least twice as steeply
+    # (a bow of the baseline, e.g. optical, slopes the two ways and is not this)
+    half = t.size // 2
+    s1 = float(np.polyfit(t[:half], s[:half], 1)[0])
+    s2 = float(np.polyfit(t[half:], s[half:], 1)[0])
+    return s1 * s2 > 0 and abs(s1) > 2 * abs(s2)
 
 
 def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
