@@ -340,7 +340,17 @@ def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curv
         if cp.index < 0:
             raise AnalysisError("soft contact: no contact point found on the approach (too few samples before "
                                 "the largest deflection)")
-        new = new.update("contact_point", cp)
+        warn = None
+        if force_fraction < 1.0:  # how much the point depends on the fitted range: the whole approach
+            alt = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=1.0, window=window)
+            if alt.index >= 0:
+                gap = alt.position - cp.position
+                if abs(gap) > max(100e-9, 0.5 * abs(cp.indentation)):  # the indentation uncertain by ~2x
+                    warn = (f"contact point uncertain: fitted up to {force_fraction:.0%} of the deflection it lies at "
+                            f"{cp.position * 1e6:.4g} um (indentation {cp.indentation * 1e6:.3g} um), fitted to the "
+                            f"whole approach at {alt.position * 1e6:.4g} um ({gap * 1e6:+.3g} um): a slowly rising "
+                            "baseline or a long-range force before contact makes the onset ambiguous")
+        new = new.update("contact_point", cp, warn=warn)
     return new
 
 
