@@ -35,7 +35,7 @@ def main() -> None:
              "contact (scaled to the curve); van der Waals fit residuals (hard contacts); post-contact spectrum "
              "(only with a time base). A panel that cannot be drawn says why.", ""]
     for path in sorted(DATA.iterdir()):
-        if path.suffix in SKIP or path.is_dir():
+        if path.suffix in SKIP or path.is_dir() or path.name.startswith("."):
             continue
         override = meta.get(path.name)
         lines.append(f"## `{path.name}`")

@@ -18,6 +18,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Callable, Mapping, Sequence
 
+import numpy as np
+
 from .analysis import steps as S
 from .analysis.result import AnalysisResult
 from .analysis.state import NoContact, State, prepare
@@ -179,16 +181,30 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None,
     return _result(st, tuple(order))
 
 
-def _no_contact(st: State, order: tuple[str, ...], why: str) -> AnalysisResult:
+def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.0) -> AnalysisResult:
     nan = st.z * math.nan
     md = st.metadata
     k = float(md.get("spring_constant", math.nan) or math.nan)
+    sens = float(md.get("sensitivity", math.nan) or math.nan)
+    verdict = f"no contact reached ({why}): nothing to analyse beyond the baseline"
+    extra: dict[str, Any] = {}
+    depth, sigma = S.retract_dip(st.signal, st.curve.run_indices(1) if hasattr(st.curve, "run_indices")
+                                 else np.flatnonzero(st.curve.segment == 1))
+    if math.isfinite(depth) and sigma > 0 and depth > nsigma * sigma:
+        to_force = {"N": 1.0, "m": k, "V": k * sens}.get(st.unit, math.nan)
+        force, noise = -depth * to_force, sigma * to_force
+        what = (f"{-force * 1e9:.4g} nN ({depth / sigma:.3g} x the noise)" if math.isfinite(force)
+                else f"{depth:.4g} {st.unit} ({depth / sigma:.3g} x the noise; in force with --spring-constant"
+                     + (" and --sensitivity" if st.unit == "V" and not math.isfinite(sens) else "") + ")")
+        verdict = (f"no repulsive contact on the approach ({why}), but the retract pulls off {what} below its "
+                   "baseline: the tip touched the surface; adhesion only")
+        why = "the approach never pushed; the retract shows the pull-off"
+        extra = dict(adhesion_force=force, adhesion_noise=noise, adhesion_verdict=verdict)
     return AnalysisResult(
         source=str(md.get("source_file", "")), steps_run=("contact",), deflection_unit=st.unit,
         position_channel=st.channel, contact_kind="none", contact_kind_reason=why,
         sensitivity=float(md.get("sensitivity", math.nan) or math.nan), spring_constant=k,
-        verdict=f"no contact reached ({why}): nothing to analyse beyond the baseline",
-        warnings=st.warnings + (why,), time=st.time, position=st.z, separation=nan, deflection=nan, force=nan,
+        verdict=verdict, warnings=st.warnings + (why,), **extra, time=st.time, position=st.z, separation=nan, deflection=nan, force=nan,
         segment=st.curve.segment.astype("int8"), details={"skipped": {s: "no contact reached" for s in order
                                                                        if s not in ("smooth", "contact")}})
 
@@ -240,7 +256,8 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
     if "diagnosis" in d:
         g = d["diagnosis"]
         kw.update(velocity=g.velocity, inertia_parameter=g.inertia_parameter, force_gradient=g.force_gradient,
-                  resonance_frequency=g.resonance_frequency, dynamic=g.dynamic, verdict=g.verdict)
+                  resonance_frequency=g.resonance_frequency, dynamic=g.dynamic, verdict=g.verdict,
+                  dynamic_assessed=g.assessed)
     if "friction" in d:
         kw["friction_verdict"] = d["friction"].verdict
     kw["not_applicable"] = dict(d.get("skipped", {}))

@@ -161,3 +161,43 @@ def test_every_verdict_carries_its_numbers():
     assert "false alarm" in res.oscillation_verdict or "no time base" in res.oscillation_verdict
     assert "x the baseline noise" in res.adhesion_verdict
     assert "resonance frequency unknown" in res.verdict  # JPK files carry none: not assessed, said so
+
+
+def test_stiff_lever_without_repulsive_contact_reports_the_pull_off():
+    """README: the 2023 JPK file without k, read with k = 12 N/m. The approach barely deflects (and
+    ends attractive), yet the retract pulls off far below its baseline: the tip touched the surface.
+    The result says so, with the adhesion against an independent reading of the force column
+    (the deepest retract sample less the mean of its last 30 %) within 5 %."""
+    from pathlib import Path
+
+    from afmforce.io import load
+    from afmforce.pipeline import analyze
+
+    path = Path(__file__).resolve().parents[3] / "shared" / "data" / "real" / (
+        "afmformats_jpk-fd_single-modified_2023.jpk-force")
+    if not path.exists():
+        pytest.skip("shared real files not available")
+    c = load(path, meta_override={"spring_constant": 12.0})[0]
+    res = analyze(c)
+    f = c.deflection_signal[c.segment == 1]
+    independent = f.min() - f[int(0.7 * f.size):].mean()
+    assert res.contact_kind == "none" and "the tip touched the surface" in res.verdict
+    assert res.adhesion_force < 0
+    assert res.adhesion_force == pytest.approx(independent, rel=0.05)
+
+
+def test_ambiguous_onset_is_flagged():
+    """The 2016 CellHesion curve rises slowly over ~20 um before its steep contact: the Hertz-local
+    point fitted up to 55 % of the deflection lies ~14 um before the one fitted to the whole approach
+    (nanite's fit_line_polynomial, on the same reading: -31.9 um, between the two). The result must
+    say the onset is ambiguous rather than give a 20 um indentation silently; the well-defined map
+    curves (within 30 nm of nanite) carry no such warning."""
+    real = Path(__file__).resolve().parents[3] / "shared" / "data" / "real"
+    path = real / "jpkfile_force-save-2016.06.15-13.17.08.jpk-force"
+    if not path.exists():
+        pytest.skip("shared real files not available")
+    res = analyze(load(path)[0])
+    warn = [w for w in res.warnings if w.startswith("contact point uncertain")]
+    assert warn and "whole approach at -30.58 um" in warn[0]
+    for c in load(real / "afmformats_jpk-fd_map2x2_extracted.jpk-force-map"):
+        assert not any(w.startswith("contact point uncertain") for w in analyze(c).warnings)

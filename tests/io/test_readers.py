@@ -71,15 +71,20 @@ def test_asylum_ibw_split_at_turning_point_and_metadata():
 
 def test_jpk_zip_reader_reproduces_afmformats_on_a_calibrated_file():
     """Independent decoding: raw volts x sensitivity x k (from the file) equals afmformats' force."""
+    import afmformats
+
     path = DATA / "jpk_cellhesion_spot3.jpk-force"
-    via_afmformats = load(path)[0]
+    dd = afmformats.load_data(path)[0]
     direct = load(path, format="jpk-zip")[0]
-    assert direct.deflection_unit == "V" and via_afmformats.deflection_unit == "N"
+    calibrated = load(path)[0]  # the jpk-force reader: the same decoding, in force
+    assert direct.deflection_unit == "V" and calibrated.deflection_unit == "N"
     k, s = direct.metadata["spring_constant"], direct.metadata["sensitivity"]
     assert k == pytest.approx(0.043493666407368466) and s == pytest.approx(7.000143623002982e-08)
-    np.testing.assert_allclose(direct.deflection_signal * s * k, via_afmformats.deflection_signal, rtol=1e-12)
-    np.testing.assert_allclose(direct.piezo_measured, via_afmformats.piezo_measured, rtol=1e-12)
-    np.testing.assert_array_equal(direct.segment, via_afmformats.segment)
+    np.testing.assert_allclose(direct.deflection_signal * s * k, dd["force"], rtol=1e-12)
+    np.testing.assert_allclose(calibrated.deflection_signal, dd["force"], rtol=1e-12)
+    np.testing.assert_allclose(direct.piezo_measured, -np.asarray(dd["height (measured)"]), rtol=1e-12)
+    np.testing.assert_array_equal(direct.segment, np.asarray(dd["segment"]))
+    assert calibrated.metadata["segment_types"] == ["extend-spm", "retract-spm"]
 
 
 def test_jpk_calibration_curve_is_read_in_raw_volts():
@@ -204,3 +209,12 @@ def test_asylum_resonance_frequency_from_the_note():
     assert c.metadata["sample_rate"] == pytest.approx(10000.0)
     assert load(DATA / "asylum-mfp3d_ForceMetric_X60_3_x4_0100.ibw",
                 meta_override={"resonance_frequency": 1e5})[0].metadata["resonance_frequency"] == 1e5
+
+
+def test_parse_properties_fast_path_and_escapes():
+    """Lines without escapes split at the first '=' or ':'; escaped lines follow Java's rules."""
+    from afmforce.io.jpk_zip import parse_properties
+
+    text = "# comment\n! other\na.b=1\nc : d e\nurl=http://x:8080\nk\\:x=2\nu=\\u00e9\\tz\nno separator\n"
+    assert parse_properties(text) == {"a.b": "1", "c": "d e", "url": "http://x:8080", "k:x": "2",
+                                      "u": "\u00e9\tz"}

@@ -9,7 +9,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["running_mean", "two_line_split", "line_fit", "robust_line", "largest_step", "mad_sigma"]
+__all__ = ["running_mean", "two_line_split", "line_fit", "robust_line", "robust_line_thin", "largest_step",
+           "mad_sigma"]
 
 
 @njit(cache=True)
@@ -196,3 +197,14 @@ def largest_step(d: np.ndarray, lo: int, hi: int, sign: float) -> int:
             best = s
             ib = i
     return ib
+
+
+def robust_line_thin(x: np.ndarray, y: np.ndarray, max_points: int = 4001):
+    """:func:`robust_line` on at most ``max_points`` evenly spaced samples (long baselines and runs:
+    60,000 samples cost 10 ms for a slope whose standard error, sqrt(n / max_points) larger, stays
+    far below what it is used for)."""
+    n = x.size
+    if n > max_points:
+        keep = np.linspace(0, n - 1, max_points).astype(np.int64)
+        x, y = np.ascontiguousarray(x[keep]), np.ascontiguousarray(y[keep])
+    return robust_line(x, y)

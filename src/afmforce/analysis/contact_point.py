@@ -34,6 +34,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ..errors import ParameterError
 
@@ -72,20 +73,41 @@ def _block(x: np.ndarray, n: int) -> np.ndarray:
     return x[:k * m].reshape(k, m).mean(1)
 
 
+@njit(cache=True)
 def _fit_grid(x: np.ndarray, y: np.ndarray, cands: np.ndarray, exponent: float) -> tuple[np.ndarray, np.ndarray]:
-    """Least squares of ``y = a + b x + c (x - x_c)_+^p`` for each candidate ``x_c``: coefficients, residual sums."""
-    g = np.clip(x[None, :] - cands[:, None], 0.0, None) ** exponent
-    n, sx, sxx, sy, sxy = x.size, x.sum(), (x * x).sum(), y.sum(), (x * y).sum()
-    sg, sgg, sxg, syg = g.sum(1), (g * g).sum(1), (g * x).sum(1), (g * y).sum(1)
-    m = np.empty((cands.size, 3, 3))
-    m[:, 0, 0], m[:, 0, 1], m[:, 1, 0], m[:, 1, 1] = n, sx, sx, sxx
-    m[:, 0, 2] = m[:, 2, 0] = sg
-    m[:, 1, 2] = m[:, 2, 1] = sxg
-    m[:, 2, 2] = sgg
-    v = np.stack([np.full(cands.size, sy), np.full(cands.size, sxy), syg], -1)
-    coef = np.linalg.solve(m + 1e-12 * np.eye(3), v[..., None])[..., 0]
-    rss = (y * y).sum() - (coef * v).sum(-1)
-    return coef, np.where(coef[:, 2] > 0, rss, np.inf)
+    """Least squares of ``y = a + b x + c (x - x_c)_+^p`` for each candidate ``x_c``: coefficients, residual sums
+    (infinite where c <= 0). Normal equations per candidate (compiled loops)."""
+    n = x.size
+    sx = sxx = sy = sxy = syy = 0.0
+    for i in range(n):
+        sx += x[i]
+        sxx += x[i] * x[i]
+        sy += y[i]
+        sxy += x[i] * y[i]
+        syy += y[i] * y[i]
+    coef = np.empty((cands.size, 3))
+    rss = np.empty(cands.size)
+    m = np.empty((3, 3))
+    v = np.empty(3)
+    for k in range(cands.size):
+        sg = sgg = sxg = syg = 0.0
+        for i in range(n):
+            u = x[i] - cands[k]
+            if u > 0.0:
+                g = u ** exponent
+                sg += g
+                sgg += g * g
+                sxg += g * x[i]
+                syg += g * y[i]
+        m[0, 0], m[0, 1], m[0, 2] = n + 1e-12, sx, sg
+        m[1, 0], m[1, 1], m[1, 2] = sx, sxx + 1e-12, sxg
+        m[2, 0], m[2, 1], m[2, 2] = sg, sxg, sgg + 1e-12
+        v[0], v[1], v[2] = sy, sxy, syg
+        c = np.linalg.solve(m, v)
+        coef[k, 0], coef[k, 1], coef[k, 2] = c[0], c[1], c[2]
+        r = syy - (c[0] * v[0] + c[1] * v[1] + c[2] * v[2])
+        rss[k] = r if c[2] > 0 else np.inf
+    return coef, rss
 
 
 def soft_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, *, exponent: float = 1.5,

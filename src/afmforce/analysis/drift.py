@@ -22,7 +22,11 @@ import numpy as np
 from ._numeric import mad_sigma
 from .regions import RunRegions
 
-__all__ = ["DriftResult", "fit_baseline", "remove_drift"]
+__all__ = ["DriftResult", "fit_baseline", "remove_drift", "is_settling"]
+
+#: Baselines longer than this are fitted on evenly thinned samples (the standard error of the
+#: line grows as sqrt(n / MAX_POINTS), still far below the noise it is compared with).
+MAX_POINTS = 4001
 
 
 @dataclass(frozen=True)
@@ -41,6 +45,9 @@ class DriftResult:
         The retract's free part was too short or too noisy; the approach line was used.
     unit : str
         ``"V"``, ``"m"`` or ``"N"``.
+    retract_settling : bool
+        The retract's free part is still relaxing after the pull-off (see :func:`is_settling`):
+        not a drift line, so the approach line was used.
     """
 
     offset_approach: float
@@ -50,12 +57,24 @@ class DriftResult:
     noise: float
     retract_from_approach: bool
     unit: str
+    retract_settling: bool = False
+
+
+def _wls(X: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """Weighted least squares by the normal equations (the 1-3 columns here are scaled to
+    order one); lstsq only if they are singular."""
+    Xw = X * w[:, None]
+    try:
+        return np.linalg.solve(Xw.T @ X, Xw.T @ y)
+    except np.linalg.LinAlgError:
+        sw = np.sqrt(w)
+        return np.linalg.lstsq(X * sw[:, None], y * sw, rcond=None)[0]
 
 
 def _irls(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
     """Bisquare-weighted least squares: coefficients, robust residual scale, weighted SSR."""
     w = np.ones(y.size)
-    coef = np.linalg.lstsq(X, y, rcond=None)[0]
+    coef = _wls(X, y, w)
     sigma = 0.0
     for _ in range(n_iter):
         r = y - X @ coef
@@ -64,8 +83,7 @@ def _irls(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
             break
         u = r / (tuning * sigma)
         w = np.where(np.abs(u) < 1, (1 - u * u) ** 2, 0.0)
-        sw = np.sqrt(w)
-        coef = np.linalg.lstsq(X * sw[:, None], y * sw, rcond=None)[0]
+        coef = _wls(X, y, w)
     r = y - X @ coef
     return coef, sigma, float(np.sum(w * r * r))
 
@@ -78,6 +96,10 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
     ``tail`` is an optional extra regressor (see the module docstring), kept only
     if it lowers the residual sum of squares by more than 25 noise variances.
     """
+    if s.size > MAX_POINTS:  # a long baseline: evenly thinned (the line's error stays far below the noise)
+        keep = np.linspace(0, s.size - 1, MAX_POINTS).astype(np.int64)
+        t, s = t[keep], s[keep]
+        tail = None if tail is None else tail[keep]
     tt = t - t[0]
     if order == 0 or np.ptp(tt) == 0:
         X = np.ones((s.size, 1))
@@ -91,6 +113,43 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
             coef, sigma = coef_t, sigma_t
     slope = float(coef[1]) / max(np.ptp(tt), 1e-300) if X.shape[1] > 1 else 0.0
     return float(coef[0]), slope, float(sigma)
+
+
+def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
+    """True when a baseline is a relaxation, not a drift line: a parabola in time fits it
+    better than the line by more than ``nsigma`` times the curvature's standard error, the
+    curved part spans more than ``nsigma`` noise levels, and it decays (both halves slope the
+    same way, the first at least twice as steeply).
+
+    After the pull-off an overdamped (viscous) cantilever returns to zero over a time
+    ``~ xi / k``; when the run ends within a few such times, its "free" part is an
+    exponential tail. A line fitted there is the tail's slope, not the drift (in the
+    paper preset's Fig 5 run, 1.14 V/s against a true drift of 0.098 V/s), and it tilts the
+    whole retract. Drift over a fraction of a second is a line to well within the noise.
+    """
+    if t.size < 12 or np.ptp(t) == 0:
+        return False
+    if t.size > MAX_POINTS:
+        keep = np.linspace(0, t.size - 1, MAX_POINTS).astype(np.int64)
+        t, s = t[keep], s[keep]
+    x = (t - t.mean()) / np.ptp(t)
+    X = np.column_stack([np.ones_like(x), x, x * x - np.mean(x * x)])
+    coef, sigma, _ = _irls(X, s)
+    if not sigma > 0:
+        return False
+    r = s - X @ coef
+    sigma = max(sigma, float(np.std(r)))
+    cov = np.linalg.pinv(X.T @ X) * sigma**2
+    c, se = float(coef[2]), float(np.sqrt(max(cov[2, 2], 0.0)))
+    bow = abs(c) * float(np.ptp(X[:, 2]))  # signal change the curvature accounts for
+    if not (abs(c) > nsigma * se and bow > nsigma * sigma):
+        return False
+    # a relaxation decays: both halves slope the same way, the first at least twice as steeply
+    # (a bow of the baseline, e.g. optical, slopes the two ways and is not this)
+    half = t.size // 2
+    s1 = float(np.polyfit(t[:half], s[:half], 1)[0])
+    s2 = float(np.polyfit(t[half:], s[half:], 1)[0])
+    return s1 * s2 > 0 and abs(s1) > 2 * abs(s2)
 
 
 def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
@@ -113,10 +172,14 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
     t0a = t[ia[0]]
     ir = retract.index[retract.zero_force]
     from_app = ir.size < min_points
+    settling = False
     if not from_app:
         off_r, slope_r, noise_r = fit_baseline(t[ir], s[ir], order)
         t0r = t[ir[0]]
         from_app = noise > 0 and noise_r > max_noise_ratio * noise
+        if not from_app and order == 1:
+            settling = is_settling(t[ir], s[ir])
+            from_app = settling
     if from_app:
         off_r, slope_r, t0r = off_a, slope_a, t0a
     not_ret = np.asarray(segment) != 1
@@ -127,5 +190,6 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
     start_a, start_r = t[approach.index[0]], t[retract.index[0]]
     res = DriftResult(offset_approach=off_a + slope_a * (start_a - t0a), slope_approach=slope_a,
                       offset_retract=off_r + slope_r * (start_r - t0r), slope_retract=slope_r,
-                      noise=noise, retract_from_approach=bool(from_app), unit=unit)
+                      noise=noise, retract_from_approach=bool(from_app), unit=unit,
+                      retract_settling=bool(settling))
     return out, res

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import Z0
-from ._numeric import robust_line
+from ._numeric import robust_line, robust_line_thin
 
 __all__ = ["DynamicDiagnosis", "diagnose_curve", "run_velocity"]
 
@@ -58,6 +58,10 @@ class DynamicDiagnosis:
     attraction_ratio : float  fitted A R / (16 z0^2 |F_pull|) [-]
     dynamic : bool  flagged as dynamic
     verdict : str
+    assessed : bool
+        The run could be judged: flagged dynamic, or both inertia (eq 3) and friction
+        (the compliance lines) assessed. Otherwise ``dynamic`` is False without evidence
+        and the verdict starts with "dynamics not assessed".
     """
 
     velocity: float
@@ -74,13 +78,14 @@ class DynamicDiagnosis:
     attraction_ratio: float
     dynamic: bool
     verdict: str
+    assessed: bool = True
 
 
 def run_velocity(t: np.ndarray, z: np.ndarray) -> float:
     """Speed of a run [m/s]: robust slope of position against time."""
     if t.size < 3 or np.ptp(t) == 0:
         return math.nan
-    _, b, *_ = robust_line(t - t[0], z)
+    _, b, *_ = robust_line_thin(t - t[0], z)
     return float(abs(b))
 
 
@@ -186,6 +191,13 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
         dynamic = True
         words.append(f"the approach attraction is {ratio:.2f} x what the pull-off implies (A R = 16 z0^2 |F|): "
                      "underestimated by friction or speed, or an extra adhesion (capillarity)")
+    # "not dynamic" needs both mechanisms excluded: inertia (eq 3) and friction (the compliance lines);
+    # the jump-in and attraction tests can only flag a dynamic run, not clear one
+    friction_assessed = friction in ("none", "constant", "load-proportional", "opposite", "pinned")
+    assessed = dynamic or (math.isfinite(r_par) and friction_assessed)
+    if not assessed:
+        missing = [w for w, ok in (("inertia", math.isfinite(r_par)), ("friction", friction_assessed)) if not ok]
+        words.insert(0, f"dynamics not assessed ({' and '.join(missing)} not assessed, nothing flags the run)")
     return DynamicDiagnosis(float(velocity), k, f, float(resolution), grad, force_gradient_method, float(r_par), float(lag),
                             float(jump_in_separation), float(static_jump_in_separation), float(excess),
-                            float(ratio), dynamic, "; ".join(words))
+                            float(ratio), dynamic, "; ".join(words), assessed)

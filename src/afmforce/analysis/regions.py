@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AnalysisError
-from ._numeric import mad_sigma, robust_line, two_line_split
+from ._numeric import mad_sigma, robust_line, robust_line_thin, two_line_split
 
 __all__ = ["RunRegions", "find_run_regions", "saturated_mask", "run_indices", "check_compliance",
            "contact_slopes"]
@@ -170,7 +170,7 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
 def _slope(z: np.ndarray, s: np.ndarray) -> float:
     if z.size < 3 or np.ptp(z) == 0:
         return math.nan
-    return float(robust_line(z - z.mean(), s)[1])
+    return float(robust_line_thin(z - z.mean(), s)[1])
 
 
 def contact_slopes(z: np.ndarray, s: np.ndarray, run: RunRegions) -> tuple[float, float]:

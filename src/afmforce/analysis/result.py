@@ -136,6 +136,9 @@ class AnalysisResult:
         Plain words, with the reason when not assessed.
     dynamic : bool
         The run is flagged as dynamic (the static fit is not trustworthy).
+    dynamic_assessed : bool
+        The diagnosis had the evidence to judge (see :class:`~.dynamic.DynamicDiagnosis`);
+        False: ``dynamic`` False means "not assessed", not "quasi-static".
     verdict : str
         Plain-words dynamic diagnosis.
     warnings : tuple of str
@@ -191,6 +194,7 @@ class AnalysisResult:
     friction: str = ""
     friction_verdict: str = ""
     dynamic: bool = False
+    dynamic_assessed: bool = False
     verdict: str = ""
     warnings: tuple[str, ...] = ()
     not_applicable: Mapping[str, str] = field(default_factory=dict)

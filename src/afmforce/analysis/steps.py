@@ -56,15 +56,40 @@ def _staircase_window(z: np.ndarray, minimum: int = 11) -> int:
     return max(minimum, 2 * step + 1)
 
 
+def _smooth_run(z: np.ndarray, window: int, staircase: bool = False) -> np.ndarray:
+    """Running mean of one run; for a ``staircase`` (digitized) channel, within half a window
+    of the run's ends, the line through the next ``window`` fully averaged samples.
+
+    The symmetric window shrinks at the ends, and a shrunken window cannot average out a
+    digitization staircase: the last half window (5 nm of a 5 nm-step detector) would keep
+    its steps, which bends the constant-compliance line that ends at the turning point.
+    A smooth channel keeps the shrinking window (a line would overshoot a decelerating turn).
+    """
+    out = running_mean(z, window)
+    half = window // 2
+    if not staircase or half < 1 or z.size < 2 * window + 2 * half:
+        return out
+    k = np.arange(z.size, dtype=float)
+    for inner, edge in ((slice(half, half + window), slice(0, half)),
+                        (slice(z.size - half - window, z.size - half), slice(z.size - half, z.size))):
+        b, a = np.polyfit(k[inner], out[inner], 1)
+        out[edge] = a + b * k[edge]
+    return out
+
+
 def smooth(st: State, *, window: int | str = "auto") -> State:
     """Running average of the position channel, each run separately (Fig 7C).
 
     ``window="auto"``: the paper's 11 points, or two digitization steps of a
     stepped (digitized) channel if those are longer, so that the average
-    interpolates linearly between levels as in the paper.
+    interpolates linearly between levels as in the paper. On a stepped channel,
+    within half a window of a run's ends the position continues the line of the
+    averaged samples next to them (a shrinking window would leave the steps there).
     """
+    staircase = False
     if window == "auto":
         window = _staircase_window(st.z)
+        staircase = window > 11
     try:
         window = int(window)
     except (TypeError, ValueError):
@@ -75,9 +100,26 @@ def smooth(st: State, *, window: int | str = "auto") -> State:
     for which in (0, 1, 2):
         idx = run_indices(st.curve.segment, which)
         if idx.size:
-            z[idx] = running_mean(st.z[idx], window)
+            z[idx] = _smooth_run(st.z[idx], window, staircase)
     change = float(np.max(np.abs(z - st.z))) if z.size else 0.0
     return st.update("smooth", SmoothResult(window, st.channel, change), z=z)
+
+
+def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
+    """Depth of the retract's pull-off below its own far baseline, and the noise [signal units].
+
+    Depth: the retract's last 30 % (median) less the lowest level held for two consecutive
+    samples (a single spike does not count; a stiff lever rings after the release, the first
+    swing is the pull-off); noise: from sample-to-sample differences there (blind to drift).
+    Evidence of a contact the approach does not show (a stiff lever, an attractive approach end).
+    """
+    if idx.size < 50:
+        return math.nan, math.nan
+    s = signal[idx]
+    far = s[int(0.7 * s.size):]
+    sigma = float(np.median(np.abs(np.diff(far)))) / (0.6745 * math.sqrt(2.0))
+    low = float(np.min(np.maximum(s[:-1], s[1:])))
+    return float(np.median(far)) - low, sigma
 
 
 def contact(st: State, *, min_points: int = 5, baseline_fraction: float = 0.7,
@@ -143,7 +185,10 @@ def drift(st: State, *, order: int = 1, tail: bool = True) -> State:
     signal, res = remove_drift(st.time, st.signal, st.curve.segment, st.approach, st.retract, st.unit, order,
                                z=st.z if tail else None)
     warn = None
-    if res.retract_from_approach and not st.retract.has_compliance:
+    if res.retract_settling:
+        warn = ("the retract's free part is still relaxing after the pull-off (a curved tail, not a drift line: "
+                "an overdamped cantilever): the approach baseline was used for both runs")
+    elif res.retract_from_approach and not st.retract.has_compliance:
         warn = ("the retract run has no baseline of its own (its free cantilever had not settled): the approach "
                 "baseline was used for both runs")
     elif res.retract_from_approach:
@@ -175,8 +220,16 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
         zf = st.z[idx]
         z_split = st.z[run.index[min(run.split, run.index.size - 1)]]
         far = np.abs(zf - z_split) > margin * (np.ptp(zf) if zf.size else 0.0)  # not the attraction near contact
+        if run.kind == "retract" and not runs["approach"].found and apply != "always":
+            # fringes are a property of the optics, present on both runs: without them on the
+            # approach nothing is changed whatever the retract shows, so it is not searched
+            runs["retract"] = dataclasses.replace(runs["approach"], found=False, explained=math.nan,
+                                                  period=math.nan, cycles=math.nan, residual=math.nan)
+            searched = False
+            continue
         runs[run.kind] = fit_fringes(zf[far], st.signal[idx][far], period=period, order=order,
                                      t=st.time[idx][far] if st.time_known else None)
+        searched = True
     fa, fr = runs["approach"], runs["retract"]
     # real fringes are periodic in the true position: both runs show the same period
     both = fa.found and fr.found and abs(fa.period - fr.period) < 0.05 * 0.5 * (fa.period + fr.period)
@@ -202,6 +255,11 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
                    "(modulo one period)")
     elif fa.found or fr.found:
         verdict = "periodic baseline on one run only, or periods that differ: not fringes; nothing changed"
+    elif not searched:
+        why = "" if fa.converged else "; the fit wanders: no clean period"
+        verdict = (f"no interference fringes in the approach baseline (a periodic term explains "
+                   f"{max(fa.explained, 0.0):.2g} of its variance{why}); the retract was not "
+                   "searched (fringes come from the optics and show on both runs)")
     else:
         verdict = "no interference fringes detected in the baseline"
     res = FringeResult(fa, fr, width, applied, verdict)
@@ -282,7 +340,17 @@ def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curv
         if cp.index < 0:
             raise AnalysisError("soft contact: no contact point found on the approach (too few samples before "
                                 "the largest deflection)")
-        new = new.update("contact_point", cp)
+        warn = None
+        if force_fraction < 1.0:  # how much the point depends on the fitted range: the whole approach
+            alt = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=1.0, window=window)
+            if alt.index >= 0:
+                gap = alt.position - cp.position
+                if abs(gap) > max(100e-9, 0.5 * abs(cp.indentation)):  # the indentation uncertain by ~2x
+                    warn = (f"contact point uncertain: fitted up to {force_fraction:.0%} of the deflection it lies at "
+                            f"{cp.position * 1e6:.4g} um (indentation {cp.indentation * 1e6:.3g} um), fitted to the "
+                            f"whole approach at {alt.position * 1e6:.4g} um ({gap * 1e6:+.3g} um): a slowly rising "
+                            "baseline or a long-range force before contact makes the onset ambiguous")
+        new = new.update("contact_point", cp, warn=warn)
     return new
 
 
@@ -498,11 +566,64 @@ def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
                 why = (f"not assessed: the {run.kind} compliance line is not straight (late/early slope ratio "
                        f"{c:.3g}, outside {1 / max_curvature:.3g}-{max_curvature:.3g})")
                 break
+    dr = st.details.get("drift")
+    if why is None and dr is not None and dr.retract_settling and comp.approach.found and comp.retract.found:
+        # the retract carries the approach's drift line: its slope and offset are off by the change of
+        # drift between the runs, which the 2 % slope test cannot tell from friction
+        why = ("not assessed: the retract has no drift line of its own (its free part is still relaxing after "
+               "the pull-off), so its compliance line is not comparable to 2 %")
     if why is not None:
         return _skip(st, "friction", why, cc.FrictionSignature("not assessed", nan, nan, nan, nan, why))
     sh = st.details.get("shift") or cc.compliance_shift(comp, applied=False)
-    return st.update("friction", cc.friction_signature(comp, sh, nsigma=nsigma, slope_tolerance=slope_tolerance,
-                                                       offset_tolerance=offset_tolerance, channel=st.channel))
+    slope_unc, offset_unc, rate_gap = _drift_uncertainty(st, comp)
+    sig = cc.friction_signature(comp, sh, nsigma=nsigma, slope_tolerance=max(slope_tolerance, slope_unc),
+                                offset_tolerance=max(offset_tolerance, offset_unc), channel=st.channel)
+    if rate_gap > 0 and (slope_unc > slope_tolerance or offset_unc > offset_tolerance):
+        bounds = (f"the drift rate holds to {rate_gap:.3g} {st.unit}/s between the halves of the baselines, so "
+                  f"the lines are known to a slope of {slope_unc * 100:.2g} % and an offset of "
+                  f"{offset_unc * 1e9:.3g} nm")
+        if sig.kind == "none":
+            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} within the drift uncertainty ({bounds})")
+        else:
+            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} (beyond the drift uncertainty: {bounds})")
+    return st.update("friction", sig)
+
+
+def _drift_uncertainty(st: State, comp) -> tuple[float, float, float]:
+    """How far an imperfect drift line can move the compliance lines.
+
+    Each run's drift line is a line in time through its own zero-force region. How well
+    that line holds is measured on the region itself: the drift-corrected baseline of each
+    half of it has its own slope, and the larger difference between the halves ``dr``
+    [signal/s] is what slow structure (a fraction of a fringe, a relaxation) leaves in a
+    rate. ``dr`` tilts a compliance line by ``dr / (v s)`` of its slope ``s`` and moves it
+    by ``dr dt / s`` over the time ``dt`` between the line and its baseline.
+
+    Returns
+    -------
+    slope : float  relative slope uncertainty [-]
+    offset : float  offset uncertainty [m]
+    rate : float  ``dr`` [signal/s]
+    """
+    if not st.time_known:
+        return 0.0, 0.0, 0.0
+    rate, lever = 0.0, 0.0
+    for run in (st.approach, st.retract):
+        base = run.index[run.zero_force & ~run.saturated]
+        line = run.index[run.compliance]
+        if base.size >= 24:
+            half = base.size // 2
+            slopes = [robust_line(st.time[part] - st.time[part].mean(), st.signal[part])[1]
+                      for part in (base[:half], base[half:])]
+            rate = max(rate, abs(float(slopes[1] - slopes[0])))
+        if line.size and base.size:
+            lever += abs(float(np.median(st.time[line])) - float(np.median(st.time[base])))
+    idx = st.approach.index
+    v = run_velocity(st.time[idx], st.z[idx])
+    slope = abs(comp.approach.slope)
+    if not (rate > 0 and math.isfinite(v) and v > 0 and slope > 0):
+        return 0.0, 0.0, rate
+    return rate / (v * slope), rate * lever / slope, rate
 
 
 def _force_gradient(st: State, window: int = 5) -> tuple[float, str]:

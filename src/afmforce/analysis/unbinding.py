@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import median_filter
 
-from ._numeric import mad_sigma, robust_line
+from ._numeric import mad_sigma, robust_line, robust_line_thin
 from .regions import RunRegions
 
 __all__ = ["UnbindingStep", "Adhesion", "retract_adhesion"]
@@ -104,7 +104,7 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
         free = far & ~run.saturated
     xf = x[free]
     xm = float(xf.mean())
-    a, b, *_ = robust_line(xf - xm, y[free])
+    a, b, *_ = robust_line_thin(xf - xm, y[free])
     if not math.isfinite(b):
         a, b = float(np.median(y[free])), 0.0
     u = y - (a + b * (x - xm))

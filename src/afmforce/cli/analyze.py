@@ -345,7 +345,8 @@ def _print_rows(ok) -> None:
     for _, r in ok.iterrows():
         vals = [float(r[c]) * s for c, _, s in _COLUMNS]
         rows.append([r["name"], r["contact_kind"] or "-"] + [_fmt(v) for v in vals]
-                    + [r["friction"] or "-", "yes" if r["dynamic"] else "no"])
+                    + [r["friction"] or "-", "-" if r["contact_kind"] == "none" else "yes" if r["dynamic"] else (
+                        "not assessed" if str(r["verdict"] or "").startswith("dynamics not assessed") else "no")])
     widths = [max(len(h), *(len(row[i]) for row in rows)) for i, h in enumerate(heads)]
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths)))
     for row in rows:

@@ -36,6 +36,7 @@ _DTYPES = {"signedshort": ">i2", "unsignedshort": ">u2", "signedinteger": ">i4",
            "unsignedinteger": ">u4", "signedlong": ">i8", "float": ">f4", "double": ">f8"}
 _MEASURED = ("measuredHeight", "capacitiveSensorHeight", "strainGaugeHeight")
 _ESCAPE = re.compile(r"\\(u[0-9a-fA-F]{4}|.)")
+_LINE = re.compile(r"((?:\\.|[^=:\\])*)\s*[=:]\s*(.*)$")
 
 
 def _unescape(text: str) -> str:
@@ -55,7 +56,13 @@ def parse_properties(text: str) -> dict[str, str]:
         line = raw.strip()
         if not line or line[0] in "#!":
             continue
-        m = re.match(r"((?:\\.|[^=:\\])*)\s*[=:]\s*(.*)$", line)
+        if "\\" not in line:  # no escapes (nearly every line): split at the first = or :
+            i, j = line.find("="), line.find(":")
+            i = j if i < 0 or (0 <= j < i) else i
+            if i >= 0:
+                props[line[:i].strip()] = line[i + 1:].lstrip()
+            continue
+        m = _LINE.match(line)
         if m is None:
             continue
         props[_unescape(m.group(1).strip())] = _unescape(m.group(2))
