@@ -18,7 +18,7 @@ Prints four figures (the fourth, the automatic executor choice, after the second
 3. **Memory of a 128 x 128 map** analysed by ``afmforce analyze`` itself (the
    command's code, run in a fresh process so that its peak RSS is its own):
    16,384 synthetic 2,000-point curves (jump-in and pull-off, adhesion in a
-   checkerboard) are first written to an afmforce map file (``afmforce.rawmap``,
+   checkerboard) are first written to an afmforce map file (``afmforce.io.native.rawmap``,
    curve by curve), then ``afmforce analyze MAP --out DIR --serial --steps
    drift,compliance,calibration,zero,jumps`` reads them a chunk of curves at a time,
    stores each chunk's summary as it finishes, writes the summary table and the
@@ -150,7 +150,7 @@ def synthetic_curve(pixel: int, n: int = CURVE_POINTS, side: int = MAP_SIDE):
     retract: on that line until the pull-off, 6 or 10 nm below it (a checkerboard of
     16 x 16 pixel squares over the map), then back to the tail. Noise 0.05 nm.
     """
-    from afmforce.raw import RawCurve
+    from afmforce.io.curve import RawCurve
 
     rng = np.random.default_rng(pixel)
     x, y = pixel % side, pixel // side
@@ -178,7 +178,7 @@ def _peak_mb() -> float:
 
 def map_write_child(side: int, path: str) -> None:
     """Fresh process: write the synthetic map file, curve by curve (afmforce map format)."""
-    from afmforce.rawmap import write_map
+    from afmforce.io.native.rawmap import write_map
 
     t = time.perf_counter()
     write_map((synthetic_curve(p, side=side) for p in range(side * side)), path, shape=(side, side))

@@ -20,7 +20,7 @@ def test_readme_raw_text_example_reads(tmp_path):
     # the README's afmforce raw text example is a valid file, read into SI
     import re
 
-    from afmforce.rawfile import read_raw
+    from afmforce.io.native.rawfile import read_raw
 
     readme = (DOCS.parent / "README.md").read_text()
     block = re.search(r"```text\n(# format: afmforce-raw.*?)```", readme, re.S).group(1)

@@ -19,7 +19,7 @@ from afmforce.analysis.synthetic import static_curve
 from afmforce.errors import AnalysisError, ParameterError
 from afmforce.io import load
 from afmforce.pipeline import DEFAULT_STEPS, STEPS, analyze, resolve_steps, steps_table
-from afmforce.raw import RawCurve
+from afmforce.io.curve import RawCurve
 
 DATA = Path(__file__).resolve().parent / "data"
 NTMDT_META = {"spring_constant": 0.05, "sensitivity": 61e-9}

@@ -25,7 +25,7 @@ from .analysis.result import AnalysisResult
 from .analysis.state import NoContact, State, prepare
 from .constants import HAMAKER, Z0
 from .errors import ParameterError
-from .raw import RawCurve
+from .io.curve import RawCurve
 
 __all__ = ["Step", "STEPS", "DEFAULT_STEPS", "analyze", "resolve_steps", "steps_table", "AnalysisResult"]
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from . import forces
 from .analysis.result import AnalysisResult
-from .raw import RawCurve
+from .io.curve import RawCurve
 
 __all__ = ["plot_raw", "plot_force_separation", "plot_residuals", "plot_spectrum", "plot_summary"]
 

@@ -10,7 +10,7 @@ header, and a random zero of position and baseline offset per curve (kept in
 from __future__ import annotations
 
 from afmforce.fit import virtual_curves
-from afmforce.rawfile import write_raw
+from afmforce.io.native.rawfile import write_raw
 
 SPEEDS = (0.5e-6, 1e-6, 2e-6, 5e-6)
 #: Short curves (40 nm of approach) keep a fit affordable.

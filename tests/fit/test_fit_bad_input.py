@@ -10,7 +10,7 @@ import pytest
 from afmforce.cli.main import main
 from afmforce.errors import AnalysisError, FileFormatError, ParameterError
 from afmforce.fit import IdentifiabilityError, fit_dynamic
-from afmforce.rawfile import write_raw
+from afmforce.io.native.rawfile import write_raw
 
 from fit_virtual import make_curves, write_curves
 

@@ -9,7 +9,7 @@ from afmforce.cli.main import _Parser
 from afmforce.errors import FileFormatError, OutputExistsError, ParameterError, UnitError
 from afmforce.instrument import build_instrument, get_preset, load_config
 from afmforce.instrument.config import PARAMETERS, parse_config, parse_parameter
-from afmforce.rawfile import read_raw
+from afmforce.io.native.rawfile import read_raw
 
 from afm_trajectories import ramp_trajectory
 

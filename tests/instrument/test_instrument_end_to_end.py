@@ -6,7 +6,7 @@ import pytest
 from afmforce.errors import ParameterError
 from afmforce.instrument import get_preset
 from afmforce.instrument.protocols import out_then_in
-from afmforce.rawfile import read_raw, write_raw
+from afmforce.io.native.rawfile import read_raw, write_raw
 
 from afm_trajectories import ramp_trajectory
 

@@ -7,8 +7,8 @@ from hypothesis import strategies as st
 
 from afmforce.errors import FileFormatError, OutputExistsError
 from afmforce.instrument import get_preset
-from afmforce.raw import RawCurve
-from afmforce.rawfile import read_raw, write_raw
+from afmforce.io.curve import RawCurve
+from afmforce.io.native.rawfile import read_raw, write_raw
 
 from afm_trajectories import ramp_trajectory
 

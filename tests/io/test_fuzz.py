@@ -85,8 +85,8 @@ def _fuzz(src: Path, workdir: Path, seed: int, meta) -> dict:
 @pytest.fixture(scope="module")
 def generated(tmp_path_factory):
     from afmforce.analysis.synthetic import static_curve
-    from afmforce.rawfile import write_raw
-    from afmforce.rawmap import write_map
+    from afmforce.io.native.rawfile import write_raw
+    from afmforce.io.native.rawmap import write_map
 
     d = tmp_path_factory.mktemp("fuzzsrc")
     c = static_curve(noise=0.05e-9, seed=3, sample_rate=2000.0)

@@ -175,7 +175,7 @@ def test_meta_override_wins_and_uses_afmformats_keys():
 
 
 def test_afmforce_raw_files_round_trip_through_the_registry(tmp_path):
-    rawfile = pytest.importorskip("afmforce.rawfile")
+    rawfile = pytest.importorskip("afmforce.io.native.rawfile")
     from afmforce.analysis.synthetic import static_curve
 
     curve = static_curve(noise=0.05e-9, seed=3)

@@ -13,7 +13,7 @@ from afmforce.analysis.synthetic import static_curve
 from afmforce.errors import FileFormatError
 from afmforce.io import FORMATS, ReaderFormat, load
 from afmforce.io._guard import FileTimeoutError, run_with_timeout
-from afmforce.rawfile import format_text, write_raw
+from afmforce.io.native.rawfile import format_text, write_raw
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
@@ -80,7 +80,7 @@ def test_text_not_claimed_by_ntmdt(tmp_path):
 def test_oversized_hdf5_attribute_is_not_read(tmp_path):
     """A 'format' attribute of 8000 bytes is refused before it is read (detection reads at most
     256 bytes of it: it must not read untrusted attributes blindly)."""
-    from afmforce._rawhdf5 import safe_attr
+    from afmforce.io.native._hdf5 import safe_attr
 
     path = tmp_path / "big.h5"
     write_raw(static_curve(noise=0.05e-9, seed=3), path)

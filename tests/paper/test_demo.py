@@ -6,7 +6,7 @@ import pytest
 
 from afmforce.cli.main import main
 from afmforce.paper.demo import virtual_experiment
-from afmforce.rawfile import read_raw
+from afmforce.io.native.rawfile import read_raw
 
 
 @pytest.fixture(scope="module")

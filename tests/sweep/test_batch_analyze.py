@@ -25,8 +25,8 @@ from afmforce.analysis.synthetic import static_curve
 from afmforce.cli.main import main
 from afmforce.errors import FileFormatError, ParameterError
 from afmforce.io import find_format, load
-from afmforce.rawfile import read_raw, write_raw
-from afmforce.rawmap import MapReader, map_info, read_map, write_map
+from afmforce.io.native.rawfile import read_raw, write_raw
+from afmforce.io.native.rawmap import MapReader, map_info, read_map, write_map
 from afmforce.sweep.analysis import (CurveAnalysis, analyze_files, failures, plan_curves, summary_table,
                                      write_summary)
 from afmforce.sweep.summary import _grid

@@ -1,7 +1,7 @@
 """Working state carried through the pipeline steps (internal).
 
 A frozen dataclass replaced (never mutated) by each step; arrays are new
-arrays, never edited in place, so the input :class:`~afmforce.raw.RawCurve`
+arrays, never edited in place, so the input :class:`~afmforce.io.curve.RawCurve`
 is untouched.
 """
 
@@ -15,7 +15,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ..errors import AnalysisError
-from ..raw import RawCurve
+from ..io.curve import RawCurve
 from .regions import RunRegions, run_indices
 
 __all__ = ["State", "prepare", "ContactSummary", "SmoothResult", "NoContact"]

@@ -20,7 +20,7 @@ import numpy as np
 
 from .. import forces
 from ..constants import HAMAKER, Z0
-from ..raw import RawCurve
+from ..io.curve import RawCurve
 
 __all__ = ["static_separation", "static_curve"]
 

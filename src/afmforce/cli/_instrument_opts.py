@@ -25,8 +25,8 @@ from .._files import check_writable
 from ..errors import AfmforceError
 from ..instrument.config import PARAMETERS, Parameter, build_instrument, load_config, parse_parameter
 from ..instrument.presets import PRESETS
-from ..raw import RawCurve
-from ..rawfile import write_raw
+from ..io.curve import RawCurve
+from ..io.native.rawfile import write_raw
 
 __all__ = ["add_instrument_arguments", "record_from_args", "check_raw_output", "instrument_requested"]
 

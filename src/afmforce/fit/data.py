@@ -17,7 +17,7 @@ from typing import Sequence
 import numpy as np
 
 from ..errors import AnalysisError, FileFormatError, ParameterError
-from ..raw import RawCurve
+from ..io.curve import RawCurve
 
 __all__ = ["FitCurve", "prepare_curves", "check_consistent"]
 

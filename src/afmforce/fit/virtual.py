@@ -17,7 +17,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..raw import RawCurve
+from ..io.curve import RawCurve
 
 __all__ = ["virtual_curves"]
 

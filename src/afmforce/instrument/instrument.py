@@ -29,7 +29,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
-from ..raw import RawCurve
+from ..io.curve import RawCurve
 from .acquisition import Acquisition, resample, resample_segment, trajectory_sample_rate
 from .detector import PositionDetector, run_bounds, run_speeds
 from .noise import Drift, Noise

@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ParameterError
-from ..raw import SEGMENT_APPROACH, SEGMENT_RETRACT
+from ..io.curve import SEGMENT_APPROACH, SEGMENT_RETRACT
 from .instrument import TRUTH_COLUMNS
 
 __all__ = ["ReorderedTrajectory", "out_then_in"]

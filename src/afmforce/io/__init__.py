@@ -3,7 +3,7 @@
 Every reader is a record in :data:`FORMATS` (identifier, name, suffixes, a
 ``detect(path)`` function and a ``loader``); :func:`load` picks the first record
 whose suffix matches and whose detector accepts the file, and returns a list of
-:class:`~afmforce.raw.RawCurve` in afmforce's conventions (z increasing towards
+:class:`~afmforce.io.curve.RawCurve` in afmforce's conventions (z increasing towards
 the probe, segments by type: approach 0, retract 1, dwell 2; deflection positive
 = up). Input files are only ever opened for reading; HDF5 files (and any file with
 ``timeout=``) are read in a child process with a time budget. ``afmforce formats``
@@ -24,7 +24,7 @@ from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
 from ..errors import AfmforceError, FileFormatError, ParameterError
-from ..raw import RawCurve
+from .curve import RawCurve
 from . import native
 from ._meta import METADATA, check_meta_override, require_metadata
 

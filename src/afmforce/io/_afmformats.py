@@ -2,7 +2,7 @@
 (Asylum ``.ibw``: :mod:`afmforce.io.igor`; Optics11 Chiaro: :mod:`afmforce.io.chiaro`).
 
 afmformats returns force [N] against a "height" that *decreases* towards the
-sample. These readers turn each curve into a :class:`~afmforce.raw.RawCurve`:
+sample. These readers turn each curve into a :class:`~afmforce.io.curve.RawCurve`:
 ``z = -height`` (checked: z must increase on the approach run, otherwise the
 sign is flipped), force kept as the deflection signal in N (the vendor's
 calibration), time from the file or from the sample rate.
@@ -36,7 +36,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import FileFormatError, MissingMetadataError
-from ..raw import RawCurve
+from .curve import RawCurve
 from ._meta import AFMFORMATS_KEYS, afmformats_override, finalize_curve, missing_metadata, orient, segment_code
 
 __all__ = ["load_afmformats", "load_jpk", "load_ntmdt", "load_workshop", "orient"]
@@ -252,7 +252,7 @@ def detect_afmformats_hdf5(path: Path) -> bool:
                 return False
         import h5py
 
-        from .._rawhdf5 import safe_attr
+        from .native._hdf5 import safe_attr
 
         with h5py.File(path, "r") as f:
             value = safe_attr(f, "software", limit=256)

@@ -1,6 +1,6 @@
 """Metadata table shared by the readers: each key with its label, SI unit and validator.
 
-Readers put SI values under these keys in :attr:`afmforce.raw.RawCurve.metadata`;
+Readers put SI values under these keys in :attr:`afmforce.io.curve.RawCurve.metadata`;
 unknown vendor keys are kept as they are. ``meta_override`` (from the user, e.g.
 ``--spring-constant``) is validated against this table and wins over values read
 from the file.
@@ -15,7 +15,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import FileFormatError, MissingMetadataError, ParameterError
-from ..raw import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
+from .curve import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
 
 __all__ = ["MetaField", "METADATA", "check_meta_override", "finalize_curve", "segment_code",
            "missing_metadata", "require_metadata", "orient", "afmformats_override", "parse_meta_args"]

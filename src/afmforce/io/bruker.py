@@ -42,7 +42,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import FileFormatError
-from ..raw import RawCurve
+from .curve import RawCurve
 from ._afmformats import orient
 from ._meta import finalize_curve
 

@@ -6,7 +6,7 @@ import dataclasses
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
-from ..raw import RawCurve
+from .curve import RawCurve
 from ._afmformats import load_afmformats
 from ._meta import finalize_curve
 

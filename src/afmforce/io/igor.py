@@ -17,7 +17,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import FileFormatError
-from ..raw import RawCurve
+from .curve import RawCurve
 from ._afmformats import _afm_errors, _curve_from_afmdata, _load_data
 from ._meta import finalize_curve, missing_metadata, orient
 

@@ -27,7 +27,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import FileFormatError
-from ..raw import RawCurve
+from .curve import RawCurve
 from ._meta import finalize_curve, orient, segment_code
 
 __all__ = ["load_jpk_zip", "detect_jpk_zip", "parse_properties", "segment_styles"]

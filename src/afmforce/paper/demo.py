@@ -67,7 +67,7 @@ def virtual_experiment(out_dir: str | Path | None = None, seed: int = 1) -> list
     from ..dynamics import simulate
     from ..instrument import get_preset
     from ..pipeline import analyze
-    from ..rawfile import read_raw, write_raw
+    from ..io.native.rawfile import read_raw, write_raw
 
     out = Path(out_dir) if out_dir is not None else None
     results = []

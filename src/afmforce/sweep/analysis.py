@@ -71,7 +71,7 @@ class CurveRef:
 def _count_curves(path: Path, fmt) -> int | None:
     """Curves in a multi-curve file, counted without reading them (None: not a map, or unknown)."""
     if fmt.identifier == "afmforce-map":
-        from ..rawmap import map_info
+        from ..io.native.rawmap import map_info
 
         return map_info(path).n_curves
     if fmt.identifier == "jpk-force" and path.name.lower().endswith(_MAP_SUFFIXES):
@@ -123,7 +123,7 @@ def _identity(path: Path, *extra) -> tuple:
 
 
 def _map_reader(path: Path):
-    from ..rawmap import MapReader
+    from ..io.native.rawmap import MapReader
 
     ident = _identity(path, "map")
     if _OPEN.get("id") != ident:

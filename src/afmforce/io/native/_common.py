@@ -7,7 +7,7 @@ from typing import Any
 
 import numpy as np
 
-from .errors import ParameterError
+from ...errors import ParameterError
 
 FORMAT = "afmforce-raw"
 VERSION = 1

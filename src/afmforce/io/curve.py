@@ -26,7 +26,7 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from .errors import FileFormatError
+from ..errors import FileFormatError
 
 __all__ = ["RawCurve", "SEGMENT_APPROACH", "SEGMENT_RETRACT", "SEGMENT_DWELL", "DEFLECTION_UNITS"]
 

@@ -1,4 +1,4 @@
-"""afmforce raw files: a :class:`~afmforce.raw.RawCurve` as text or HDF5.
+"""afmforce raw files: a :class:`~afmforce.io.curve.RawCurve` as text or HDF5.
 
 Text format (``.txt``, ``.tsv``, ``.raw``, anything but ``.h5``/``.hdf5``)
 -------------------------------------------------------------------------
@@ -30,7 +30,7 @@ column names with units in brackets, then tab-separated data::
   N -- the unit sets ``deflection_unit``; mV, nm, nN ... are converted] and
   ``segment`` (0 approach, 1 retract, 2 dwell) are required;
   ``piezo_measured`` [m] and ``truth.<name>`` columns are optional. Positions
-  increase towards the probe (see :mod:`afmforce.raw`).
+  increase towards the probe (see :mod:`afmforce.io.curve`).
 * Keys and columns prefixed ``truth.`` form ``RawCurve.truth`` (simulated curves).
 
 We write SI values with Python's ``repr`` of each float (the shortest text
@@ -44,7 +44,7 @@ Root attributes ``format``, ``version``, ``deflection_unit`` and
 group ``truth`` with one dataset per truth array and the attribute
 ``scalars`` (JSON) for the rest. :func:`write_curve_group` and
 :func:`read_curve_group` write and read this layout in any HDF5 group; a force
-map (many curves on a grid, one group each) is :mod:`afmforce.rawmap`.
+map (many curves on a grid, one group each) is :mod:`afmforce.io.native.rawmap`.
 """
 
 from __future__ import annotations
@@ -58,11 +58,11 @@ from typing import Any
 
 import numpy as np
 
-from ._files import atomic_path
-from .errors import FileFormatError, ParameterError
-from ._rawcommon import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _json
-from ._rawhdf5 import _read_hdf5, _write_hdf5, read_curve_group, write_curve_group
-from .raw import DEFLECTION_UNITS, RawCurve
+from ..._files import atomic_path
+from ...errors import FileFormatError, ParameterError
+from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _json
+from ._hdf5 import _read_hdf5, _write_hdf5, read_curve_group, write_curve_group
+from ..curve import DEFLECTION_UNITS, RawCurve
 
 __all__ = ["write_raw", "read_raw", "write_curve_group", "read_curve_group", "FORMAT", "VERSION", "METADATA_UNITS",
            "TRUTH_UNITS", "HDF5_SUFFIXES"]
@@ -283,7 +283,7 @@ def _factor(unit: str, si: str, where: str) -> float | None:
     """Multiplier from ``unit`` to ``si`` (None: already SI)."""
     if unit == si or (unit in _DIMENSIONLESS and si in _DIMENSIONLESS):
         return None
-    from .units import _registry
+    from ...units import _registry
 
     try:
         return float(_registry().Quantity(1.0, unit.replace("µ", "u")).to(si or "dimensionless").magnitude)
@@ -316,7 +316,7 @@ def _value_si(value: Any, unit: str, si: str | None, where: str) -> Any:
         return value
     if si is None:  # unknown key with a unit: SI base units if pint knows it, else keep the text
         if isinstance(value, (int, float)) and not isinstance(value, bool):
-            from .units import _registry
+            from ...units import _registry
 
             try:
                 return float(_registry().Quantity(value, unit).to_base_units().magnitude)
@@ -332,7 +332,7 @@ def _value_si(value: Any, unit: str, si: str | None, where: str) -> Any:
 
 
 def _text_quantity(text: str, si: str, where: str) -> float:
-    from .units import _registry
+    from ...units import _registry
 
     try:
         return float(_registry().Quantity(text.replace("µ", "u")).to(si).magnitude)

@@ -1,7 +1,7 @@
 """afmforce force maps: many force curves on a grid in one HDF5 file.
 
 A force map (a "force volume": one curve per point of a grid over the sample)
-in the layout of :mod:`afmforce.rawfile`'s HDF5 files, one group per curve::
+in the layout of :mod:`afmforce.io.native.rawfile`'s HDF5 files, one group per curve::
 
     /                 attributes: format = "afmforce-map", version = 1,
                       map_shape = [ny, nx] (rows, columns of the grid),
@@ -18,7 +18,7 @@ plus ``map_nx`` and ``map_ny`` (the grid shape). Not every grid point needs a
 curve. Curves are written one at a time (a generator of curves is never held
 whole) and can be read back one at a time or by index.
 
->>> from afmforce.rawmap import write_map, read_map, map_info
+>>> from afmforce.io.native.rawmap import write_map, read_map, map_info
 >>> write_map(curves, "map.h5", shape=(64, 64))          # doctest: +SKIP
 >>> map_info("map.h5").shape, read_map("map.h5", [0, 5])  # doctest: +SKIP
 """
@@ -31,11 +31,11 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any, Iterable, Iterator, Mapping, Sequence
 
-from ._files import atomic_path
-from .errors import FileFormatError, ParameterError
-from .raw import RawCurve
-from ._rawcommon import _json
-from ._rawhdf5 import _attr_str, _h5py, read_curve_group, safe_attr, write_curve_group
+from ..._files import atomic_path
+from ...errors import FileFormatError, ParameterError
+from ..curve import RawCurve
+from ._common import _json
+from ._hdf5 import _attr_str, _h5py, read_curve_group, safe_attr, write_curve_group
 
 __all__ = ["MAP_FORMAT", "MAP_VERSION", "MapInfo", "MapReader", "write_map", "read_map", "iter_map", "map_info",
            "is_map"]

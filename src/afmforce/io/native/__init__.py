@@ -1,7 +1,7 @@
 """Glue between the registry and afmforce's own formats (raw text, raw HDF5, force maps).
 
-The formats themselves are written and read by :mod:`afmforce.rawfile` and
-:mod:`afmforce.rawmap`; these functions detect them (reading at most a few bytes
+The formats themselves are written and read by :mod:`afmforce.io.native.rawfile` and
+:mod:`afmforce.io.native.rawmap`; these functions detect them (reading at most a few bytes
 of an untrusted attribute) and return curves in the registry's conventions.
 """
 
@@ -11,13 +11,13 @@ import importlib.util
 from pathlib import Path
 from typing import Any, Mapping
 
-from ..raw import RawCurve
+from ..curve import RawCurve
 
 __all__ = ["detect_raw_text", "detect_raw_hdf5", "detect_raw_map", "load_rawfile", "load_rawmap"]
 
 
 def rawfile_available() -> bool:
-    return importlib.util.find_spec("afmforce.rawfile") is not None
+    return importlib.util.find_spec("afmforce.io.native.rawfile") is not None
 
 
 def detect_raw_text(path: Path) -> bool:
@@ -42,7 +42,7 @@ def detect_raw_hdf5(path: Path) -> bool:
                 return False
         import h5py
 
-        from afmforce._rawhdf5 import safe_attr
+        from ._hdf5 import safe_attr
 
         with h5py.File(path, "r") as f:
             fmt = safe_attr(f, "format", limit=256)  # sizes checked before reading: a damaged file must not hang
@@ -52,12 +52,12 @@ def detect_raw_hdf5(path: Path) -> bool:
 
 
 def load_rawfile(path: Path, *, meta_override: Mapping[str, Any], callback=None) -> list[RawCurve]:
-    """afmforce raw text / HDF5, written by :mod:`afmforce.rawfile`."""
+    """afmforce raw text / HDF5, written by :mod:`afmforce.io.native.rawfile`."""
     import dataclasses
 
-    from afmforce.rawfile import read_raw  # lazy: written by the instrument module
+    from .rawfile import read_raw
 
-    from ._meta import finalize_curve
+    from .._meta import finalize_curve
 
     curve = read_raw(path)
     reader = "afmforce-hdf5" if path.suffix.lower() in (".h5", ".hdf5", ".hdf") else "afmforce-raw"
@@ -75,24 +75,24 @@ def detect_raw_map(path: Path) -> bool:
     """HDF5 signature and the root attribute ``format = "afmforce-map"``."""
     if not rawfile_available():
         return False
-    from afmforce.rawmap import is_map
+    from .rawmap import is_map
 
     return is_map(path)
 
 
 def load_rawmap(path: Path, *, meta_override: Mapping[str, Any], callback=None,
                  indices: list[int] | None = None, reader=None) -> list[RawCurve]:
-    """afmforce force map (HDF5, many curves on a grid), written by :mod:`afmforce.rawmap`.
+    """afmforce force map (HDF5, many curves on a grid), written by :mod:`afmforce.io.native.rawmap`.
 
     ``indices`` reads only those curves and ``reader`` (an open
-    :class:`~afmforce.rawmap.MapReader` of ``path``) saves opening the file:
+    :class:`~afmforce.io.native.rawmap.MapReader` of ``path``) saves opening the file:
     the batch analysis reads a map a chunk at a time.
     """
     import dataclasses
 
-    from afmforce.rawmap import MapReader
+    from .rawmap import MapReader
 
-    from ._meta import finalize_curve
+    from .._meta import finalize_curve
 
     own = reader is None
     reader = MapReader(path) if own else reader

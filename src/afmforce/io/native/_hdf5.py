@@ -1,4 +1,4 @@
-"""HDF5 half of the afmforce raw format (see :mod:`afmforce.rawfile`)."""
+"""HDF5 half of the afmforce raw format (see :mod:`afmforce.io.native.rawfile`)."""
 
 from __future__ import annotations
 
@@ -8,10 +8,10 @@ from typing import Any
 
 import numpy as np
 
-from ._files import atomic_path
-from ._rawcommon import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _json
-from .errors import FileFormatError, MissingDependencyError, ParameterError
-from .raw import RawCurve
+from ..._files import atomic_path
+from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _json
+from ...errors import FileFormatError, MissingDependencyError, ParameterError
+from ..curve import RawCurve
 
 
 def _h5py():
@@ -33,7 +33,7 @@ def _write_hdf5(curve: RawCurve, path: Path, force: bool) -> None:
 
 def write_curve_group(group, curve: RawCurve) -> None:
     """Write ``curve`` into an open h5py File or Group: the layout of a raw HDF5
-    file without its ``format``/``version`` attributes (also used by :mod:`afmforce.rawmap`).
+    file without its ``format``/``version`` attributes (also used by :mod:`afmforce.io.native.rawmap`).
 
     Raises
     ------
