@@ -157,6 +157,20 @@ def test_guard_warns_on_the_load_friction_case_and_can_raise():
         simulate(**CASES["load_friction"], check="raise")
 
 
+def test_unchecked_stiff_load_friction_warns():
+    """With check="off" (the library default) stiff load-dependent friction is not silent: the
+    Fig-5 run with zeta 3e14 gives hysteresis 0.46 nm at default but 0.84 nm converged (rtol
+    1e-7..1e-8, atol 1e-15..1e-16, 7-12e6 steps), so it warns; linear friction does not."""
+    from afmforce.dynamics import ConvergenceWarning
+
+    with pytest.warns(ConvergenceWarning, match="stiff load-dependent friction"):
+        tr = simulate(friction="load", zeta=3e14, end=-190e-9)
+    assert "warned" in tr.solver.check
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        simulate(friction="load", zeta=1e11, end=-190e-9)
+
+
 def test_guard_skips_safe_runs_and_reports_errors_when_asked(fig5):
     assert fig5.solver.event_errors == {} and fig5.solver.check == "not checked"
     with warnings.catch_warnings():
