@@ -60,7 +60,7 @@ def test_simulation_config_fields_carry_the_specs():
     from afmforce.dynamics import SimulationConfig
 
     carried = {f.name: spec_of(f) for f in dataclasses.fields(SimulationConfig) if spec_of(f) is not None}
-    assert set(carried) == {f.name for f in dataclasses.fields(SimulationConfig)} - {"model", "friction", "ringing"}
+    assert set(carried) == {f.name for f in dataclasses.fields(SimulationConfig)} - {"model", "friction", "ringing", "sampling"}
     for name, spec in carried.items():
         assert spec is QUANTITIES[name]
         default = next(f.default for f in dataclasses.fields(SimulationConfig) if f.name == name)

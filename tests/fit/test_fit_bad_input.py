@@ -76,3 +76,57 @@ def test_force_and_volts_calibrated_with_the_files_own_constants(two):
     ref, fn, fv = prepare_curves([c, as_n, as_v])
     np.testing.assert_allclose(fn.deflection, ref.deflection, rtol=1e-12)
     np.testing.assert_allclose(fv.deflection, ref.deflection, rtol=1e-12)
+
+
+def test_retract_missing_or_after_a_pause(two):
+    def cut(c, keep):
+        return dataclasses.replace(c, **{f: np.asarray(getattr(c, f))[keep] for f in
+                                        ("time", "piezo_nominal", "deflection_signal", "segment")},
+                                   piezo_measured=None, truth=None)
+    approach_only = [cut(c, np.asarray(c.segment) == 0) for c in two]
+    with pytest.raises(AnalysisError, match="no retract run directly after the approach"):
+        fit_dynamic(approach_only, "beam", free=("hamaker", "xi"), retract=True)
+    # a pause at the turn: the retract starts 50 ms after the drive lines meet
+    paused = []
+    for c in two:
+        t = np.asarray(c.time, float).copy()
+        t[np.asarray(c.segment) == 1] += 0.05
+        paused.append(dataclasses.replace(c, time=t))
+    with pytest.raises(AnalysisError, match="pause at the turn is not supported"):
+        fit_dynamic(paused, "beam", free=("hamaker", "xi"), retract=True)
+
+
+def test_speed_and_rate_read_off_the_ramp_when_missing(two):
+    """A file without velocity/sample_rate: both come from the approach, with a note."""
+    from afmforce.fit.data import prepare_curves
+
+    bare = [dataclasses.replace(c, metadata={k: v for k, v in c.metadata.items()
+                                             if k not in ("velocity", "sample_rate")}) for c in two]
+    fc = prepare_curves(bare)
+    for c, f in zip(two, fc):
+        assert f.velocity == pytest.approx(c.metadata["velocity"], rel=1e-9)
+        assert f.sample_rate == pytest.approx(c.metadata["sample_rate"], rel=1e-9)
+        assert "read off the approach ramp" in f.metadata["velocity_from_ramp"]
+    # a ramp that is not straight (a sine) is not taken: the user is asked
+    c = bare[0]
+    t = np.asarray(c.time, float)
+    bent = dataclasses.replace(c, piezo_nominal=np.asarray(c.piezo_nominal) + 5e-9 * np.sin(40 * t / t[-1]))
+    with pytest.raises(FileFormatError, match="--velocities"):
+        prepare_curves([bent])
+
+
+def test_cli_meta_calibrates_volts(two, tmp_path, capsys):
+    """Curves recorded in volts without a sensitivity: the error names --meta; with it they fit."""
+    volts = [dataclasses.replace(c, deflection_signal=np.asarray(c.deflection_signal) / 50e-9,
+                                 deflection_unit="V",
+                                 metadata={k: v for k, v in c.metadata.items() if k != "sensitivity"})
+             for c in two]
+    paths = write_curves(volts, tmp_path)
+    argv = ["fit", *map(str, paths), "--free", "hamaker", "--no-profile", "--no-compare", "--json"]
+    assert main(argv) == 2
+    assert "--meta sensitivity=" in capsys.readouterr().err
+    assert main(argv + ["--meta", "sensitivity=50nm/V"]) == 0
+    import json
+
+    res = json.loads(capsys.readouterr().out)
+    assert res["parameters"]["hamaker"]["value"] == pytest.approx(5e-19, rel=0.05)

@@ -64,12 +64,6 @@ def test_recovery(cli_result):
     assert 0.7 < res["redchi"] < 1.4          # the model describes the data within their noise
 
 
-@pytest.mark.xfail(strict=True, reason=(
-    "open since the issue-12 solver change (2026-11-23): a frictionless beam (xi = 0) rings in contact "
-    "(367 kHz) with almost no damping; a tight solve keeps +-4 nm of it, the default 'damp' treatment removes "
-    "it only once its amplitude is below 0.1 nm, which depends on the run's history. Data and model drives "
-    "then differ by 0.06 nm rms in contact (noise 0.01 nm) and the fit absorbs that as friction "
-    "(xi 2.7e-4 kg/s, p ~ 0). docs/fit.md names this false-positive risk"))
 def test_null_no_friction():
     curves = make_curves(0.0, seed=12)
     res = fit_dynamic(curves, "beam", free=("hamaker", "xi"))
@@ -97,3 +91,25 @@ def test_stderr_matches_plan(cli_result):
     sd = np.sqrt(np.diag(np.linalg.inv(sum(infos))))
     assert res["parameters"]["xi"]["stderr"] == pytest.approx(sd[1], rel=0.3)
     assert res["parameters"]["hamaker"]["stderr"] == pytest.approx(sd[0], rel=0.3)
+
+
+def test_retract_fit_recovers_and_tightens_xi(cli_result, capsys):
+    """``--retract``: the outward compliance line and its friction hysteresis join the fit.
+
+    Truth xi = 0.005 kg/s, A = 5e-19 J. Measured: xi 0.00498 +- 0.00001 (approach only:
+    0.00518 +- 0.00011), A 5.000e-19 +- 1.7e-21 J.
+    """
+    approach_only, curves, d = cli_result
+    rc = main(["fit", *map(str, sorted(d.glob("v*.txt"))), "--model", "beam", "--radius", "100nm",
+               "--free", "hamaker,xi", "--retract", "--no-profile", "--json"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    xi = res["parameters"]["xi"]
+    assert abs(xi["value"] / XI - 1) < 0.05
+    assert abs(res["derived"]["hamaker_radius"]["value"] / AR - 1) < 0.02
+    assert xi["stderr"] < approach_only["parameters"]["xi"]["stderr"] / 3
+    assert res["friction_detected"] is True
+    assert 0.7 < res["redchi"] < 1.4
+    for c, fit in zip(curves, res["curves"]):
+        assert fit["retract"] is True and fit["n_used"] > 1.5 * approach_only["curves"][0]["n_used"]
+        assert fit["shift"] == pytest.approx(c.truth["zero_offset"], abs=0.2e-9)

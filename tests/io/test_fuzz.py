@@ -26,7 +26,9 @@ DATA = Path(__file__).resolve().parents[1] / "data"
 OVERRIDES = json.loads((DATA / "meta_override.json").read_text())
 FILES = sorted(p.name for p in DATA.iterdir() if is_supported(p))
 ENDINGS = (".txt", ".csv", ".ibw", ".jpk-force", ".spm", ".h5", ".001")
-SECONDS_PER_FILE = 2.0
+SECONDS_PER_FILE = 3.0
+#: Mutations per file whatever the machine's load.
+MIN_MUTATIONS = 20
 SLOW = 5.0      # [s] one load may take at most this (HDF5: the budget below, then FileTimeoutError)
 H5_BUDGET = 3.0
 
@@ -64,7 +66,8 @@ def _fuzz(src: Path, workdir: Path, seed: int, meta) -> dict:
     bad, slow, n = [], [], 0
     cases = [(f"ending {e}", workdir / f"wrong{e}", data) for e in ENDINGS if not src.name.endswith(e)]
     t_end = time.monotonic() + SECONDS_PER_FILE
-    while cases or time.monotonic() < t_end:
+    # at least MIN_MUTATIONS per file, more while time is left (a loaded machine runs fewer)
+    while cases or n < MIN_MUTATIONS or time.monotonic() < t_end:
         if cases:
             kind, target, new = cases.pop()
         else:
@@ -103,7 +106,6 @@ def test_mutated_files_load_cleanly_or_fail_with_one_named_error(name, generated
     result = run_with_timeout(_fuzz, src, tmp_path, sum(map(ord, name)), OVERRIDES.get(name),
                               timeout=SECONDS_PER_FILE + 8 * (SLOW + 1) + 60, path=name)
     TOTAL[name] = result["n"]
-    assert result["n"] >= 20
     assert not result["bad"], result["bad"]
     assert not result["slow"], result["slow"]
 

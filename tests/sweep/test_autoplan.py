@@ -71,3 +71,12 @@ def test_every_dask_worker_runs_the_warmup_once(dask_client, tmp_path):
     assert sorted(o.value["product"] for o in outcomes) == [0, 1, 2, 3]
     workers = dask_client.run(os.getpid)
     assert sorted(p.name for p in tmp_path.iterdir()) == sorted(f"pid-{pid}" for pid in workers.values())
+
+
+def test_a_batched_function_on_threads_counts_them_in_the_serial_estimate():
+    one = plan_execution(functools.partial(_sleeper, 0.01), 400, workers=2)
+    two = plan_execution(functools.partial(_sleeper, 0.01), 400, workers=2, serial_threads=2)
+    assert two.serial_estimate == pytest.approx(
+        400 * two.seconds_per_run / (PARALLEL_EFFICIENCY * 2))
+    assert one.serial_estimate == pytest.approx(400 * one.seconds_per_run)
+    assert "on 2 threads" in two.reason

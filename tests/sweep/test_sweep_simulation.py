@@ -83,3 +83,23 @@ def test_cli_bad_input_is_one_line_and_exit_2(argv, words, capsys, tmp_path):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and words in err[0]
     assert not list(tmp_path.iterdir())  # nothing ran, nothing written
+
+
+def _unbatched(**parameters):
+    """simulate_run without its batch attribute: one simulate() per row."""
+    return simulate_run(**parameters)
+
+
+def test_batched_chunks_give_the_rows_of_separate_runs():
+    """The chunk runner uses simulate_run.batch (simulate_many on threads): same table,
+    a failing run (start above turn) recorded in its own row."""
+    assert callable(simulate_run.batch) and simulate_run.batch_threads() >= 1
+    spec = build_spec(["xi=0.001,0.01,0.1", "start=-20nm,30nm"], sets=["velocity=5um/s"],
+                      dimensions=simulation_dimensions())
+    batched = run_sweep(simulate_run, spec, executor="serial", chunk_size=6)
+    single = run_sweep(_unbatched, spec, executor="serial", chunk_size=6)
+    cols = [c for c in batched.table.columns if c != "solver.wall_time"]
+    pd.testing.assert_frame_equal(batched.table[cols], single.table[cols])
+    bad = batched.table[np.isclose(batched.table["start"], 30e-9)]
+    assert len(bad) == 3 and bad["error"].str.startswith("ParameterError").all()
+    assert batched.table[np.isclose(batched.table["start"], -20e-9)]["error"].isna().all()

@@ -279,9 +279,9 @@ def check_simulation_config(cfg) -> None:
 
 
 def _registries() -> dict[str, dict]:
-    from ..dynamics import FRICTION_LAWS, MODELS, RINGING
+    from ..dynamics import FRICTION_LAWS, MODELS, RINGING, SAMPLING
 
-    return {"model": MODELS, "friction": FRICTION_LAWS, "ringing": RINGING}
+    return {"model": MODELS, "friction": FRICTION_LAWS, "ringing": RINGING, "sampling": SAMPLING}
 
 
 def check_choices(values: dict, prefix: str = "--") -> None:

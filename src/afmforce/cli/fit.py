@@ -28,6 +28,7 @@ def add_model_flags(parser: argparse.ArgumentParser) -> None:
     g = parser.add_argument_group("solver")
     S._q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
     S._q(g, "--atol", "length", "m", "absolute tolerance on positions")
+    S.add_sampling_flag(g, "average")
 
 
 def model_config(args: argparse.Namespace):
@@ -68,7 +69,14 @@ def register(subparsers) -> argparse.ArgumentParser:
                    metavar="V1,V2,..", help="driving speed of each curve (default: from the files)")
     g.add_argument("--sample-rates", type=_list("frequency", "--sample-rates"), default=None,
                    metavar="F1,F2,..", help="sample rate of each curve (default: from the files)")
+    g.add_argument("--meta", action="append", default=[], metavar="KEY=VALUE",
+                   help="file metadata to give or replace in every curve, with units (repeatable), "
+                        "e.g. sensitivity=50nm/V, spring_constant=0.14N/m, sample_rate=2kHz "
+                        "(afmforce formats lists the keys)")
     g.add_argument("--no-drift", action="store_true", help="fit no drift slope per curve")
+    g.add_argument("--retract", action="store_true",
+                   help="fit the retract run too (outward compliance and its hysteresis; the "
+                        "pull-off is left out like the jump-in)")
     g.add_argument("--level", type=float, default=0.95,
                    help="confidence level of intervals and friction test (default 0.95)")
     g.add_argument("--starts", type=int, default=2,
@@ -91,12 +99,12 @@ def register(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _load(paths):
+def _load(paths, meta=None):
     from ..io import load
 
     curves, names = [], []
     for path in paths:
-        got = load(path)
+        got = load(path, meta_override=meta or None)
         if len(got) != 1:
             raise ParameterError(f"{path} holds {len(got)} curves; give files with one curve each")
         curves.append(got[0])
@@ -118,14 +126,18 @@ def run(args: argparse.Namespace) -> int:
         if vals is not None and len(vals) != len(args.curves):
             raise ParameterError(f"{flag} has {len(vals)} values for {len(args.curves)} curves")
     cfg = model_config(args)
-    curves, names = _load(args.curves)
+    from ..io._meta import parse_meta_args
+
+    curves, names = _load(args.curves, parse_meta_args(args.meta))
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("ignore")
         res = fit_dynamic(curves, cfg, free=args.free.split(","), names=names,
                           velocities=args.velocities, sample_rates=args.sample_rates,
                           drift=not args.no_drift, starts=args.starts, level=args.level,
                           profile=() if args.no_profile else None,
-                          compare=not args.no_compare, jump_window=args.jump_window)
+                          compare=not args.no_compare, jump_window=args.jump_window,
+                          sampling=None,    # --sampling (default average) is in cfg
+                          retract=args.retract)
     d = res.to_dict()
     if args.plots:
         written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)

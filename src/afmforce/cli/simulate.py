@@ -98,6 +98,15 @@ def _drive_group(parser):
     _q(g, "--end", "length", "m", "end position of the retract")
 
 
+def add_sampling_flag(group, default: str | None = None) -> None:
+    """``--sampling point|average`` (:data:`afmforce.dynamics.SAMPLING`)."""
+    shown = default or "point"
+    group.add_argument("--sampling", choices=("point", "average"), default=default,
+                       help="what one sample is: the state at the sample time (point) or its mean "
+                            f"over the sample interval, as an averaging detector records it "
+                            f"(average; removes aliased MHz ringing) (default {shown})")
+
+
 def _solver_group(parser):
     g = parser.add_argument_group("sampling and solver")
     _q(g, "--sample-rate", "frequency", "Hz", "instrument sample rate", dest="sample_rate")
@@ -105,6 +114,7 @@ def _solver_group(parser):
     _q(g, "--atol", "length", "m", "absolute tolerance on positions")
     lazy_help(g.add_argument("--ringing", default=None, metavar="HOW", help="in-contact ringing: "),
               lambda: "; ".join(f"{k}: {v.name}" for k, v in _dyn().RINGING.items()) + " (default damp)")
+    add_sampling_flag(g)
     _q(g, "--max-steps", "integer", "", "step budget (default: sized from the run, max(2e6, 60 f_max T))",
        dest="max_steps")
     g.add_argument("--check", choices=("off", "auto", "always", "raise"), default="auto",

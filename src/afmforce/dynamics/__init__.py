@@ -6,25 +6,28 @@ Public API::
     traj = simulate()                      # the paper's Fig 5 (beam, xi = 0.1 kg/s, 0.1 um/s)
     traj = simulate(xi=0.01, velocity=1e-6)
     traj = simulate(model="spring", mass=1e-8, spring_constant=0.21, velocity=10e-6)
+    trajs = simulate_many([dict(xi=x) for x in (0.01, 0.1)])   # many runs, one call
     traj.summary(); traj.events; traj.write("run.csv")
 
 Modules: :mod:`.models` (vector fields, Jacobians, friction registry),
 :mod:`.drive` (protocols), :mod:`.radau` (compiled Radau IIA integrator),
-:mod:`.events`, :mod:`.trajectory`, :mod:`.simulate`, :mod:`.static`
+:mod:`.events`, :mod:`.trajectory`, :mod:`.simulate`, :mod:`.batch`, :mod:`.static`
 (quasi-static curves), :mod:`.reference` (a plain scipy implementation used as
 an independent cross-check).
 """
 
-from .config import DEFAULT_B, MODELS, SimulationConfig
+from .config import DEFAULT_B, MODELS, SAMPLING, SimulationConfig
 from .events import Events
 from .models import FRICTION_LAWS, RINGING, FrictionLaw, RingingTreatment
 from .guard import ConvergenceWarning
 from .simulate import DynamicsWarning, simulate
+from .batch import simulate_many
 from .static import StaticCurve, static_curve, static_deflection, static_jump_in
 from .trajectory import COLUMNS, SolverStats, Trajectory
 
 __all__ = [
     "simulate",
+    "simulate_many",
     "SimulationConfig",
     "Trajectory",
     "Events",
@@ -34,6 +37,7 @@ __all__ = [
     "FRICTION_LAWS",
     "FrictionLaw",
     "RINGING",
+    "SAMPLING",
     "RingingTreatment",
     "MODELS",
     "DEFAULT_B",

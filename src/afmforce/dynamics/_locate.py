@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from numba import njit
 
 from .models import N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z, observe
@@ -161,6 +162,10 @@ def _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, e_v
 @njit(cache=True, error_model="numpy")
 def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
     """Update the event record with the accepted step [t0, t0 + h]."""
+    # ``r0`` is an int64 zero known only at run time: integer constants passed as
+    # ``K + r0`` reach the callees as int64, not as literals, so that numba
+    # compiles each callee once instead of once per constant (first call 2x faster)
+    r0 = kind - kind
     hc = ev[E_H_CONTACT]
     jf = ev[E_JUMP_FACTOR]
     hs = ev[E_H_STATIC]
@@ -178,7 +183,7 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
                 if math.isnan(ev[E_JUMP_T]) and o[O_H] < hs:
                     if oprev[O_H] >= hs:
                         sj = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
-                                     O_H, hs, -1.0, ytmp, o)
+                                     O_H + r0, hs, -1.0, ytmp, o)
                     else:
                         sj = s_prev
                     tj = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, sj, ytmp, o)
@@ -194,7 +199,7 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
                 if math.isnan(ev[E_FAST_T]) and o[O_HDOT] + jf * v < 0.0:
                     if oprev[O_HDOT] + jf * v >= 0.0:
                         sf = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
-                                     O_HDOT, -jf * v, -1.0, ytmp, o)
+                                     O_HDOT + r0, -jf * v, -1.0, ytmp, o)
                     else:
                         sf = s_prev
                     tf = t0 + sf * h
@@ -203,17 +208,17 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
                     _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
                 if o[O_H] < hc:
                     sc = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
-                                 O_H, hc, -1.0, ytmp, o)
+                                 O_H + r0, hc, -1.0, ytmp, o)
                     break
                 for i in range(N_OBS):
                     oprev[i] = o[i]
                 s_prev = s
             s_end = 1.0 if math.isnan(sc) else sc
             # minima before contact
-            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_DEFL, 1.0,
-                        E_MIN_DEFL, E_MIN_DEFL_Z, -1, ev, ytmp, o)
-            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_THETA, 1.0,
-                        E_MIN_THETA, E_MIN_THETA_Z, -1, ev, ytmp, o)
+            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_DEFL + r0, 1.0,
+                        E_MIN_DEFL + r0, E_MIN_DEFL_Z + r0, r0 - 1, ev, ytmp, o)
+            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_THETA + r0, 1.0,
+                        E_MIN_THETA + r0, E_MIN_THETA_Z + r0, r0 - 1, ev, ytmp, o)
             if not math.isnan(sc):
                 tc = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, sc, ytmp, o)
                 ev[E_CONTACT_T] = tc
@@ -233,8 +238,8 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
                 s_hi = min(1.0, (ev[E_CONTACT_T] + ev[E_SPIKE_WINDOW] - t0) / h)
             s_lo = max(0.0, (ev[E_SPIKE_T] - t0) / h)
             if s_hi > s_lo:
-                _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, O_THETA,
-                            -1.0, E_SPIKE_THETA, E_SPIKE_Z, E_SPIKE_T, ev, ytmp, o)
+                _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, O_THETA + r0,
+                            -1.0, E_SPIKE_THETA + r0, E_SPIKE_Z + r0, E_SPIKE_T + r0, ev, ytmp, o)
     elif kind == DWELL:
         if ev[E_IN_CONTACT] == 1.0:
             _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o)
@@ -248,12 +253,12 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
                 _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
                 if o[O_H] > hc:
                     sp = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
-                                 O_H, hc, 1.0, ytmp, o)
+                                 O_H + r0, hc, 1.0, ytmp, o)
                     break
                 s_prev = s
             s_end = 1.0 if math.isnan(sp) else sp
-            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_FZ, 1.0,
-                        E_MIN_FZ, E_MIN_FZ_Z, -1, ev, ytmp, o)
+            _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, s_end, O_FZ + r0, 1.0,
+                        E_MIN_FZ + r0, E_MIN_FZ_Z + r0, r0 - 1, ev, ytmp, o)
             if not math.isnan(sp):
                 tp = t0 + sp * h
                 ev[E_PULL_T] = tp
@@ -271,3 +276,30 @@ def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o):
             if t > ev[E_LAST_OUT]:
                 ev[E_LAST_OUT] = t
             return
+
+
+@njit(cache=True, error_model="numpy")
+def sample_columns(model, p, Y, dt, seg_first, seg_last, seg_kind, seg_t0, seg_z0, seg_v):
+    """Time, drive, segment code and observables of the sampled states in one pass.
+
+    Row ``k`` of ``Y`` is the state at ``t = k dt``; samples ``seg_first[j]`` to
+    ``seg_last[j] - 1`` belong to drive segment ``j`` (``z = seg_z0 + seg_v (t - seg_t0)``).
+    Returns ``(t, z, segment code, observables (rows x N_OBS), all finite)``.
+    """
+    n = Y.shape[0]
+    tt = np.empty(n)
+    zd = np.empty(n)
+    code = np.zeros(n, dtype=np.int8)
+    obs = np.empty((n, N_OBS))
+    finite = True
+    for k in range(n):
+        tt[k] = k * dt
+        for i in range(Y.shape[1]):
+            if not math.isfinite(Y[k, i]):
+                finite = False
+    for j in range(seg_first.shape[0]):
+        for k in range(seg_first[j], seg_last[j]):
+            code[k] = seg_kind[j]
+            zd[k] = seg_z0[j] + seg_v[j] * (tt[k] - seg_t0[j])
+            observe(model, p, zd[k], seg_v[j], Y[k], obs[k])
+    return tt, zd, code, obs, finite

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, fields
+from functools import lru_cache
 
 from .._fields import qfield
 from .._validate import finite, non_negative, positive
@@ -17,7 +18,14 @@ from ..constants import FIG1, FIG5
 from ..errors import ParameterError
 from .models import FRICTION_LAWS, RINGING
 
-__all__ = ["SimulationConfig", "DEFAULT_B", "MODELS"]
+__all__ = ["SimulationConfig", "DEFAULT_B", "MODELS", "SAMPLING"]
+
+#: What one trajectory sample is: the state at the sample time, or its mean over the sample interval.
+SAMPLING = {
+    "point": "the state at the sample time",
+    "average": "the state averaged over the sample interval centred on the sample time "
+               "(a detector averaged over each interval; removes aliased MHz ringing)",
+}
 
 #: Flexural rigidity used when neither k0 nor B is given [N m^2] (spec section 5 decision).
 DEFAULT_B = FIG5["B"]
@@ -26,6 +34,21 @@ MODELS = {
     "beam": "inclined cantilever with base, probe and tip friction (eqs 22-28)",
     "spring": "mass on a spring moving vertically (eq 1)",
 }
+
+
+@lru_cache(maxsize=256)
+def _cantilever(L0, L1, L2, theta0, k0, B) -> InclinedCantilever:
+    """The (immutable) cantilever of these fields, built and validated once per geometry."""
+    if k0 is not None and B is not None:
+        raise ParameterError("give at most one of k0 [N/m] or B [N m^2]")
+    if k0 is not None:
+        return InclinedCantilever(L0, L1, L2, theta0, k0=k0)
+    return InclinedCantilever(L0, L1, L2, theta0, B=DEFAULT_B if B is None else B)
+
+
+@lru_cache(maxsize=256)
+def _spring(k, m) -> SimpleSpring:
+    return SimpleSpring(k, m)
 
 
 @dataclass(frozen=True)
@@ -125,12 +148,24 @@ class SimulationConfig:
     spike_window : float
         The jump-in transient: the apparent-deflection spike is searched from
         jump-in (or contact) to this long after contact, and the in-contact
-        ringing is resolved at least this long [s].
+        ringing is resolved at least this long [s]. 0: the spike is not asked
+        for (``spike_height`` etc. NaN); the ringing is then damped as soon as
+        its amplitude allows, which takes 2-4x fewer steps (Fig 5/6 runs) and
+        leaves every other event within its tolerance (docs/dynamics.md).
     ringing : {"damp", "resolve"}
         Treatment of the nearly undamped in-contact mode
         (:data:`afmforce.dynamics.RINGING`; docs/dynamics.md): ``damp`` lets
         the L-stable integrator damp it after ``spike_window``; ``resolve``
         follows it under normal error control.
+    sampling : {"point", "average"}
+        What one sample of the trajectory is (:data:`SAMPLING`): ``point``
+        (default) the state at the sample time; ``average`` the state averaged
+        over the sample interval centred on it (exact integral of the
+        solver's dense output), as an instrument whose detector signal is
+        averaged (oversampled) over each sample interval records it. Linear
+        observables (deflection, angle, apparent deflection, separation) are
+        then exact interval means; force columns are evaluated at the mean
+        state. Events are located on the dense output in both modes.
     max_steps : int or None
         Step budget; exceeding it raises :class:`~afmforce.errors.SolverError`.
         None (default): sized from the run, ``max(2e6, 60 f_max T)`` with
@@ -171,6 +206,7 @@ class SimulationConfig:
     jump_factor: float = qfield("jump_factor", 2.0)
     spike_window: float = qfield("spike_window", 2e-3)
     ringing: str = "damp"
+    sampling: str = "point"
     max_steps: int | None = qfield("max_steps", None)
 
     def __post_init__(self) -> None:
@@ -180,17 +216,19 @@ class SimulationConfig:
         if self.ringing not in RINGING:
             raise ParameterError(
                 f"ringing must be one of {sorted(RINGING)}, got {self.ringing!r}")
+        if self.sampling not in SAMPLING:
+            raise ParameterError(
+                f"sampling must be one of {sorted(SAMPLING)}, got {self.sampling!r}")
         if self.friction not in FRICTION_LAWS:
             raise ParameterError(
                 f"friction must be one of {sorted(FRICTION_LAWS)}, got {self.friction!r}")
         for name, unit in (("m_joint", "kg"), ("m_base", "kg"), ("spring_constant", "N/m"),
                            ("mass", "kg"), ("radius", "m"), ("hamaker", "J"), ("z0", "m"),
                            ("velocity", "m/s"), ("sample_rate", "Hz"), ("atol", "m"),
-                           ("contact_separation", "m"), ("jump_factor", ""),
-                           ("spike_window", "s")):
+                           ("contact_separation", "m"), ("jump_factor", "")):
             set_(name, positive(name, getattr(self, name), unit))
         for name, unit in (("viscosity", "Pa s"), ("xi", "kg/s"), ("zeta", "kg/(s N^2)"),
-                           ("dwell", "s")):
+                           ("dwell", "s"), ("spike_window", "s")):
             set_(name, non_negative(name, getattr(self, name), unit))
         for name in ("start", "turn", "end"):
             set_(name, finite(name, getattr(self, name), "m"))
@@ -225,34 +263,39 @@ class SimulationConfig:
                 f"sample_rate {self.sample_rate:.4g} Hz gives only {n_app:.1f} samples on the "
                 "approach; raise it (at least 10 samples per run)")
         if self.model == "beam":
-            self.cantilever  # validates the geometry  # noqa: B018
+            # validates the geometry; kept (with k and beta) so that a run builds it once
+            cant = _cantilever(self.L0, self.L1, self.L2, self.theta0, self.k0, self.B)
+            set_("_cant", cant)
+            set_("_k", cant.spring_constant)
+            set_("_beta", cant.calibration_factor)
         else:
-            SimpleSpring(self.spring_constant, self.mass)
+            _spring(self.spring_constant, self.mass)
+            set_("_cant", None)
+            set_("_k", self.spring_constant)
+            set_("_beta", math.nan)
         from .drive import start_deflection
 
         # raises if the start is already in contact; kept for initial_state()
-        object.__setattr__(self, "_start_deflection", start_deflection(self))
+        set_("_start_deflection", start_deflection(self))
 
     # --- derived -----------------------------------------------------------
     @property
     def cantilever(self) -> InclinedCantilever:
         """The :class:`~afmforce.cantilever.InclinedCantilever` of the beam model."""
-        if self.k0 is not None and self.B is not None:
-            raise ParameterError("give at most one of k0 [N/m] or B [N m^2]")
-        if self.k0 is not None:
-            return InclinedCantilever(self.L0, self.L1, self.L2, self.theta0, k0=self.k0)
-        return InclinedCantilever(self.L0, self.L1, self.L2, self.theta0,
-                                  B=DEFAULT_B if self.B is None else self.B)
+        cant = self.__dict__.get("_cant")
+        if cant is None:
+            cant = _cantilever(self.L0, self.L1, self.L2, self.theta0, self.k0, self.B)
+        return cant
 
     @property
     def force_constant(self) -> float:
         """Force-measuring spring constant k [N/m] (eq 13 for the beam, k for the spring)."""
-        return self.cantilever.spring_constant if self.model == "beam" else self.spring_constant
+        return self._k
 
     @property
     def calibration_factor(self) -> float:
         """beta = dz2/dtheta of eq 15 [m/rad] (NaN for the spring model: it does not tilt)."""
-        return self.cantilever.calibration_factor if self.model == "beam" else math.nan
+        return self._beta
 
     @property
     def retract_speed(self) -> float:

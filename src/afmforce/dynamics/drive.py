@@ -14,11 +14,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from ..errors import ParameterError
-from ..forces import vdw_force
 from .radau import APPROACH, DWELL, RETRACT
 from .static import static_deflection, static_jump_in
 
@@ -96,13 +96,19 @@ def start_deflection(cfg) -> float:
         raise ParameterError(
             f"start {cfg.start * 1e9:.4g} nm is already in contact: the static jump-in is at "
             f"z = {zj * 1e9:.4g} nm (h = {hj * 1e9:.4g} nm); start further out (more negative)")
-    d = float(static_deflection(cfg.start, k, cfg.radius, cfg.hamaker, cfg.z0))
+    d = _static_start(cfg.start, k, cfg.radius, cfg.hamaker, cfg.z0)
     h = d - cfg.start
     if not h > cfg.contact_separation:
         raise ParameterError(
             f"start {cfg.start * 1e9:.4g} nm is already in contact (equilibrium separation "
             f"{h * 1e9:.3g} nm); start further out (more negative)")
     return d
+
+
+@lru_cache(maxsize=1024)
+def _static_start(start: float, k: float, radius: float, hamaker: float, z0: float) -> float:
+    """The static deflection at ``start`` (a Brent solve), once per parameter set [m]."""
+    return float(static_deflection(start, k, radius, hamaker, z0))
 
 
 def initial_state(cfg) -> np.ndarray:
@@ -118,6 +124,15 @@ def initial_state(cfg) -> np.ndarray:
     if cfg.model == "spring":
         return np.array([d, 0.0])
     cant = cfg.cantilever
-    fz = float(vdw_force(d - cfg.start, cfg.radius, cfg.hamaker, cfg.z0))
-    x, theta = cant.beam_compliance @ cant.force_to_load @ np.array([fz, 0.0])
+    h = d - cfg.start      # eq 2 (forces.vdw_force) on a scalar
+    fz = -(cfg.hamaker * cfg.radius / (12.0 * h * h)) * (1.0 - 0.25 * (cfg.z0 / h) ** 6)
+    gx, gt = _unit_load_response(cant)
+    x, theta = gx * fz, gt * fz
     return np.array([x, cant.L1 * theta + 1.5 * x, 0.0, 0.0])
+
+
+@lru_cache(maxsize=256)
+def _unit_load_response(cant) -> tuple[float, float]:
+    """(x, theta) per unit Fz: the first column of ``G P`` (eqs 7-10) [m/N, 1/N]."""
+    x, theta = cant.beam_compliance @ cant.force_to_load @ np.array([1.0, 0.0])
+    return float(x), float(theta)

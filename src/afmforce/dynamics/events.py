@@ -80,7 +80,8 @@ class Events:
         (the deflection itself for the spring model).
     spike_height, spike_time, spike_position : float
         Largest apparent deflection from jump-in to ``spike_window`` after
-        contact [m], when [s], where [m] (NaN for the spring model).
+        contact [m], when [s], where [m] (NaN for the spring model, and with
+        ``spike_window = 0``: not asked for).
     hysteresis_offset : float
         ``z_inward - z_outward`` of the constant-compliance lines at a fixed
         angle [m] (NaN without two usable contact lines).

@@ -6,9 +6,11 @@ Differential Equations II* (2nd ed., Springer 1996), section IV.8 (code
 RADAU5), in the formulation of ``scipy.integrate.Radau``:
 
 * simplified Newton iterations on the transformed stage equations (one real
-  and one complex linear system of size n per iteration, the complex one
-  solved as a real system of size 2n), the Jacobian reused until Newton
-  converges slowly, LU factors reused while the step size is unchanged;
+  and one complex linear system of size n per iteration, reduced to size
+  n/2 by the second-order structure ``J = [[0, I], [Jq, Jv]]`` of the models:
+  Schur complement on the position block, :mod:`._linalg`), the Jacobian
+  reused until Newton converges slowly, factors reused while the step size
+  is unchanged;
 * embedded error estimate filtered through ``(I - h gamma0 J)^-1`` (so stiff
   components do not spoil it), with the improved estimate after a rejection;
 * step-size control with the predictive (Gustafsson) controller;
@@ -35,7 +37,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._linalg import _lu_factor, _lu_solve, _rms
+from ._linalg import _rms, _schur_factor, _schur_factor_complex, _solve_complex, _solve_real
 from ._locate import (  # noqa: F401  (re-exported: the event layout used by simulate)
     APPROACH, DWELL, E_CONTACT_T, E_CONTACT_Z, E_H_CONTACT, E_IN_CONTACT, E_JUMP_FACTOR,
     E_FAST_T, E_FAST_Z, E_H_STATIC, E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL, E_MIN_DEFL_Z, E_MIN_FZ, E_MIN_FZ_Z,
@@ -109,10 +111,46 @@ EPS = np.finfo(float).eps
 
 
 @njit(cache=True, error_model="numpy")
+def _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf):
+    """Add the integral of the step's dense polynomial over each sample window it overlaps.
+
+    Window ``k`` is ``[s_t0 + (k - 1/2) s_dt, s_t0 + (k + 1/2) s_dt]``; the
+    polynomial is ``y_old + Q [s, s^2, s^3]`` on ``[t_old, t_old + h]``, so its
+    integral over ``[a, b]`` is exact: ``h * sum_j c_j (s_b^(j+1) - s_a^(j+1)) / (j+1)``.
+    """
+    n = y_old.shape[0]
+    half = 0.5 * s_dt
+    k = s_next[0]
+    while k < ybuf.shape[0]:
+        ts = s_t0 + k * s_dt
+        lo = ts - half
+        if lo >= t_new:
+            break
+        hi = ts + half
+        a = max(lo, t_old)
+        b = min(hi, t_new)
+        if b > a:
+            sa = (a - t_old) / h
+            sb = (b - t_old) / h
+            d1 = sb - sa
+            d2 = (sb * sb - sa * sa) * 0.5
+            d3 = (sb * sb * sb - sa * sa * sa) / 3.0
+            d4 = (sb * sb * sb * sb - sa * sa * sa * sa) * 0.25
+            for i in range(n):
+                ybuf[k, i] += h * (y_old[i] * d1 + Q[i, 0] * d2 + Q[i, 1] * d3 + Q[i, 2] * d4)
+            ybuf[k, n] += b - a
+        if hi <= t_new:
+            k += 1
+        else:
+            break
+    s_next[0] = k
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
 def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                       hmax_frac, hmax_dz, damp_cycles, damp_kappa, term_kind, term_level,
                       s_t0, s_dt, s_next, ybuf, ev, work, Q, y_old, J, stats,
-                      max_steps, chunk_steps, h_fixed=0.0):
+                      max_steps, chunk_steps, h_fixed=0.0, s_avg=0.0):
     """Integrate one drive segment from ``work[W_T]`` to ``t_end``.
 
     Parameters (all arrays are updated in place)
@@ -160,6 +198,13 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
     h_fixed : float
         If > 0, take fixed steps of this size without error control (for
         convergence-order tests); a Newton failure then returns NEWTON_FAILED.
+    s_avg : float
+        0: samples are the state at the grid times (point sampling). 1: each
+        sample is the integral of the dense polynomial over its window
+        ``[t_k - s_dt/2, t_k + s_dt/2]`` (exact, clipped to the integrated
+        time), accumulated into ``ybuf[k, :n]`` with the covered time in
+        ``ybuf[k, n]`` (``ybuf`` then has ``n + 1`` columns, zero-initialised);
+        ``s_next[0]`` counts windows that are complete.
 
     Returns
     -------
@@ -181,10 +226,12 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
     err = np.empty(n)
     rr = np.empty(n)
     cc = np.empty(2 * n)
-    LUr = np.empty((n, n))
-    LUc = np.empty((2 * n, 2 * n))   # the complex system as a real one of size 2n
-    pivr = np.empty(n, dtype=np.int64)
-    pivc = np.empty(2 * n, dtype=np.int64)
+    # Newton matrices (mu I - J) in the second-order form of ._linalg (Schur complements)
+    Sr = np.zeros((2, 2))
+    Sc = np.zeros((2, 2, 2))        # complex entries as (re, im)
+    det_r = 0.0
+    det_cr = 0.0
+    det_ci = 0.0
     o = np.empty(N_OBS)
     oprev = np.empty(N_OBS)
     have_lu = False
@@ -298,22 +345,10 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                     mr = MU_REAL / h
                     mcr = MU_CR / h
                     mci = MU_CI / h
-                    # (mcr + i mci) I - J acting on a + i b, as [[A, -mci I], [mci I, A]]
-                    for i in range(2 * n):
-                        for j in range(2 * n):
-                            LUc[i, j] = 0.0
-                    for i in range(n):
-                        for j in range(n):
-                            LUr[i, j] = -J[i, j]
-                            LUc[i, j] = -J[i, j]
-                            LUc[n + i, n + j] = -J[i, j]
-                        LUr[i, i] += mr
-                        LUc[i, i] += mcr
-                        LUc[n + i, n + i] += mcr
-                        LUc[i, n + i] = -mci
-                        LUc[n + i, i] = mci
-                    ok1 = _lu_factor(LUr, pivr)
-                    ok2 = _lu_factor(LUc, pivc)
+                    det_r = _schur_factor(J, mr, Sr)
+                    det_cr, det_ci = _schur_factor_complex(J, mcr, mci, Sc)
+                    ok1 = det_r != 0.0
+                    ok2 = det_cr != 0.0 or det_ci != 0.0
                     stats[S_NLU] += 1
                     if not (ok1 and ok2):
                         have_lu = False
@@ -356,8 +391,8 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                         rr[i] = fr - mr * W[0, i]
                         cc[i] = fc1 - mcr * W[1, i] + mci * W[2, i]
                         cc[n + i] = fc2 - mci * W[1, i] - mcr * W[2, i]
-                    _lu_solve(LUr, pivr, rr)
-                    _lu_solve(LUc, pivc, cc)
+                    _solve_real(J, mr, Sr, det_r, rr)
+                    _solve_complex(J, mcr, mci, Sc, det_cr, det_ci, cc)
                     dwn = 0.0
                     for i in range(n):
                         dW[0, i] = rr[i]
@@ -411,7 +446,7 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 err[i] = fcur[i] + ze
                 ai = atol[i] if i < n // 2 else av
                 scale[i] = ai + max(abs(y[i]), abs(ytmp[i])) * rtolv[i]
-            _lu_solve(LUr, pivr, err)
+            _solve_real(J, MU_REAL / h, Sr, det_r, err)
             err_norm = _rms(err, scale)
             safety = 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
             if rejected and err_norm > 1.0:
@@ -422,7 +457,7 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                     for i in range(n):
                         ze = (E1 * Z[0, i] + E2 * Z[1, i] + E3 * Z[2, i]) / h
                         err[i] = fnew[i] + ze
-                    _lu_solve(LUr, pivr, err)
+                    _solve_real(J, MU_REAL / h, Sr, det_r, err)
                     err_norm = _rms(err, scale)
             if not math.isfinite(err_norm):
                 err_norm = 1e10
@@ -497,7 +532,9 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 continue
         stats[S_ACCEPTED] += 1
         # samples on the instrument grid
-        k = s_next[0]
+        if s_avg > 0.0:
+            _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf)
+        k = ybuf.shape[0] if s_avg > 0.0 else s_next[0]
         while k < ybuf.shape[0]:
             ts = s_t0 + k * s_dt
             if ts > t_new:
@@ -507,7 +544,8 @@ def integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
                 for i in range(n):
                     ybuf[k, i] = yst[i]
             k += 1
-        s_next[0] = k
+        if s_avg <= 0.0:
+            s_next[0] = k
         _events(model, p, kind, t_a, z_a, v, t_old, h, y_old, Q, ev, yst, o, oprev)
         # --- next step size, Jacobian reuse
         recompute_jac = n_iter > 2 and rate > 1e-3

@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from functools import lru_cache
 from typing import Callable
 
 import numpy as np
@@ -13,10 +14,13 @@ from ..errors import SolverError
 from . import radau as R
 from .config import SimulationConfig
 from .drive import approach_segment, initial_state, segments
+from ._locate import sample_columns
 from .events import Events, compliance_lines
+from .guard import run_check
 from .static import static_jump_in
+from .load_friction import load_friction_controls  # noqa: F401  (re-exported)
 from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
-                     O_Y2, observe_array, pack_beam, pack_spring, state_size)
+                     O_Y2, pack_beam, pack_spring, state_size)
 from .trajectory import SolverStats, Trajectory
 
 __all__ = ["simulate", "DynamicsWarning", "H_GUARD_FRACTION", "VELOCITY_ATOL_FREQUENCY"]
@@ -52,21 +56,6 @@ HMAX_TRAVEL = 3.0
 #: change the separation (see docs/dynamics.md, "The in-contact ringing").
 RING_AMPLITUDE = 0.1e-9
 
-#: Load-dependent friction (issue 12, finding 2): the in-contact ringing of
-#: amplitude a changes the friction coefficient by about zeta (kappa a)^2 (Fz^2
-#: rectifies), so it may be damped numerically only while that stays below this
-#: fraction of xi; see :func:`load_friction_controls`.
-LOAD_RING_FRICTION_FRACTION = 0.01
-#: Velocity-tolerance scale for load-dependent friction: this margin times
-#: xi / (xi + zeta Fa^2) (see :func:`load_friction_controls`). The ringing's force
-#: swing enters the friction squared; calibrated on issue 12's case (zeta 2e15):
-#: at 1 the default hysteresis is 0.75 nm off the tightest solve, at 0.1 0.17 nm,
-#: for 1.2x the steps.
-LOAD_VFAC_MARGIN = 0.1
-#: Floor of the velocity-tolerance scale for load-dependent friction.
-LOAD_VFAC_FLOOR = 1e-4
-
-
 #: Damping steps only where the contact stiffness -Fs'(h) exceeds this multiple
 #: of k: well inside the repulsive wall, away from the pull-off fold (h = z0).
 DAMP_KAPPA_RATIO = 100.0
@@ -81,48 +70,31 @@ def free_frequency_max(p, model) -> float:
     from . import models as M
     if model == M.MODEL_SPRING:
         w2 = p[M.K] * p[M.INV_M]
-    else:
-        A = np.array([[p[M.A00], p[M.A01]], [p[M.A10], p[M.A11]]])
-        w2 = float(np.max(np.abs(np.linalg.eigvals(-np.diag([p[M.INV_MA], p[M.INV_MB]]) @ A))))
+    else:   # eigenvalues of -diag(1/m) A (2x2, closed form)
+        a, b = -p[M.INV_MA] * p[M.A00], -p[M.INV_MA] * p[M.A01]
+        c, d = -p[M.INV_MB] * p[M.A10], -p[M.INV_MB] * p[M.A11]
+        tr, det = a + d, a * d - b * c
+        disc = math.sqrt(max(tr * tr / 4.0 - det, 0.0))
+        w2 = max(abs(tr / 2.0 + disc), abs(tr / 2.0 - disc))
     return math.sqrt(w2) / (2.0 * math.pi)
-
-
-def load_friction_controls(cfg: SimulationConfig) -> tuple[float, float]:
-    """Error-control settings for load-dependent friction: (velocity scale, ringing limit [m]).
-
-    With ``Fy = -(xi + zeta Fz^2) y2'`` the nearly undamped in-contact ringing
-    is not a detail that may be damped away: its force swing kappa a (kappa =
-    -Fs'(h) in contact, a the amplitude in h) rectifies through Fz^2 into a mean
-    friction ``zeta (kappa a)^2 / 2`` that can exceed xi and decide between a
-    sliding and a pinned tip (issue 12, finding 2). Hence:
-
-    * the velocity tolerance is scaled by ``s = m / (1 + zeta Fa^2 / xi)``
-      (m = :data:`LOAD_VFAC_MARGIN`, floor :data:`LOAD_VFAC_FLOOR`), Fa = A R / (16 z0^2) the adhesion force,
-      the scale of the contact force swing: the ratio of the load-friction
-      stiffness at that load to the bare friction. The ringing amplitude, hence
-      the rectified friction, is then followed to the same relative accuracy
-      as a linearly damped mode;
-    * the ringing may be damped numerically only below the amplitude
-      ``sqrt(f xi / zeta) / kappa0`` (f = :data:`LOAD_RING_FRICTION_FRACTION`,
-      kappa0 the contact stiffness where Fs = 0), where it changes the friction
-      coefficient by less than a fraction f of xi.
-
-    Without load-dependent friction: ``(1.0, RING_AMPLITUDE)``.
-    """
-    xi, zeta = FRICTION_LAWS[cfg.friction].coefficients(cfg.xi, cfg.zeta)
-    if cfg.model == "spring" or zeta <= 0.0:
-        return 1.0, RING_AMPLITUDE
-    ar = cfg.hamaker * cfg.radius
-    fa = ar / (16.0 * cfg.z0**2)
-    s = max(LOAD_VFAC_FLOOR, LOAD_VFAC_MARGIN * xi / (xi + zeta * fa * fa))
-    h0 = cfg.z0 / 4.0 ** (1.0 / 6.0)          # Fs(h0) = 0 (eq 2)
-    kappa0 = ar / (2.0 * h0**3)               # -Fs'(h0)
-    amp = math.sqrt(LOAD_RING_FRICTION_FRACTION * xi / zeta) / kappa0
-    return s, min(RING_AMPLITUDE, amp)
 
 
 def _known(overrides) -> bool:
     return set(overrides) <= set(SimulationConfig.__dataclass_fields__)
+
+
+@lru_cache(maxsize=256)
+def _beam_template(cantilever, m_joint: float, m_base: float) -> np.ndarray:
+    """The geometry/mass part of the beam's parameter vector (surfaces filled per run)."""
+    p = pack_beam(cantilever, m_joint=m_joint, m_base=m_base, radius=1.0, hamaker=0.0, z0=1.0,
+                  viscosity=0.0, xi=0.0, zeta=0.0, h_guard=0.0)
+    p.flags.writeable = False
+    return p
+
+
+@lru_cache(maxsize=256)
+def _beam_fmax(cantilever, m_joint: float, m_base: float) -> float:
+    return free_frequency_max(_beam_template(cantilever, m_joint, m_base), MODEL_BEAM)
 
 
 def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
@@ -131,10 +103,27 @@ def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
     if cfg.model == "spring":
         return pack_spring(spring_constant=cfg.spring_constant, mass=cfg.mass, radius=cfg.radius,
                            hamaker=cfg.hamaker, z0=cfg.z0, viscosity=cfg.viscosity, h_guard=guard)
+    from . import models as M
     xi, zeta = FRICTION_LAWS[cfg.friction].coefficients(cfg.xi, cfg.zeta)
-    return pack_beam(cfg.cantilever, m_joint=cfg.m_joint, m_base=cfg.m_base, radius=cfg.radius,
-                     hamaker=cfg.hamaker, z0=cfg.z0, viscosity=cfg.viscosity, xi=xi, zeta=zeta,
-                     h_guard=guard)
+    p = _beam_template(cfg.cantilever, cfg.m_joint, cfg.m_base).copy()
+    # the same values as pack_beam(cfg.cantilever, ...) fills in
+    p[M.AR] = cfg.hamaker * cfg.radius
+    p[M.Z0] = cfg.z0
+    p[M.CD] = 6.0 * math.pi * cfg.viscosity * cfg.radius**2 / 4.0
+    p[M.H_GUARD] = guard
+    p[M.XI] = xi
+    p[M.ZETA] = zeta
+    return p
+
+
+def _resolve_config(config, overrides) -> SimulationConfig:
+    if config is None:
+        cfg = SimulationConfig(**overrides) if _known(overrides) else None
+    else:
+        cfg = config.replace(**overrides) if overrides else config
+    if cfg is None:
+        cfg = SimulationConfig().replace(**overrides)   # raises on the unknown names
+    return cfg
 
 
 def simulate(config: SimulationConfig | None = None, *,
@@ -177,76 +166,88 @@ def simulate(config: SimulationConfig | None = None, *,
     -----
     DynamicsWarning
         The approach never reached contact, or the retract ended in contact.
+
+    See Also
+    --------
+    afmforce.dynamics.simulate_many : many configurations in one call (faster per run).
     """
     wall0 = time.perf_counter()
-    if config is None:
-        cfg = SimulationConfig(**overrides) if _known(overrides) else None
-    else:
-        cfg = config.replace(**overrides) if overrides else config
-    if cfg is None:
-        cfg = SimulationConfig().replace(**overrides)   # raises on the unknown names
-    model = MODEL_IDS[cfg.model]
-    n = state_size(model)
-    p = parameter_vector(cfg)
-    y = initial_state(cfg)
-    atol = np.full(n, cfg.atol)
-    atol[n // 2:] = cfg.atol * 2.0 * math.pi * VELOCITY_ATOL_FREQUENCY
-    rtolv = np.full(n, cfg.rtol)
-    rtolv[: n // 2] = cfg.rtol * POSITION_RTOL_FACTOR
+    run = _Run(_resolve_config(config, overrides))
+    run.integrate(progress)
+    return run.finish(check, wall0)
 
-    app = approach_segment(cfg)
-    plan = segments(cfg)
-    t_total_max = plan[-1].t_end
-    dt = 1.0 / cfg.sample_rate
-    nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
-    ybuf = np.full((nbuf, n), np.nan)
-    s_next = np.zeros(1, dtype=np.int64)
 
-    ev = np.full(R.E_SIZE, np.nan)
-    ev[R.E_IN_CONTACT] = 0.0
-    ev[R.E_H_CONTACT] = cfg.contact_separation
-    ev[R.E_SPIKE_WINDOW] = cfg.spike_window
-    ev[R.E_JUMP_FACTOR] = cfg.jump_factor
-    h_s, z_s, _ = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)
-    ev[R.E_H_STATIC] = h_s if math.isfinite(h_s) else -math.inf
-    vfac_scale, ring_amp = load_friction_controls(cfg)
-    ev[R.E_RING_AMP] = ring_amp
-    work = np.zeros(R.W_SIZE)
-    Q = np.zeros((n, 3))
-    y_old = np.zeros(n)
-    J = np.zeros((n, n))
-    stats = np.zeros(R.S_SIZE, dtype=np.int64)
-    chunk = PROGRESS_CHUNK if progress is not None else 2**62
-    hmax_dz = HMAX_TRAVEL * cfg.z0
-    damp_cycles = RINGING[cfg.ringing].damp_cycles
+class _Run:
+    """One cycle split into its three phases, so that :func:`simulate_many` can run the
+    compiled middle one (:meth:`integrate`, no Python objects touched, the GIL released)
+    on several threads while this thread prepares and finishes the others."""
 
-    if cfg.turn_force is not None:
-        # the load an instrument triggers on: k z2, not the ringing contact force Fz
-        term_kind, term_level = R.TERM_DEFLECTION, cfg.turn_force / cfg.force_constant
-    elif cfg.turn_deflection is not None:
-        term_kind, term_level = R.TERM_DEFLECTION, cfg.turn_deflection
-    else:
-        term_kind, term_level = R.TERM_NONE, 0.0
+    def __init__(self, cfg: SimulationConfig) -> None:
+        self.wall0 = time.perf_counter()
+        self.cfg = cfg
+        self.model = model = MODEL_IDS[cfg.model]
+        self.n = n = state_size(model)
+        self.p = p = parameter_vector(cfg)
+        self.y = initial_state(cfg)
+        atol = np.full(n, cfg.atol)
+        atol[n // 2:] = cfg.atol * 2.0 * math.pi * VELOCITY_ATOL_FREQUENCY
+        rtolv = np.full(n, cfg.rtol)
+        rtolv[: n // 2] = cfg.rtol * POSITION_RTOL_FACTOR
+        self.atol, self.rtolv = atol, rtolv
+        self.app = approach_segment(cfg)
+        plan = segments(cfg)
+        self.t_total_max = t_total_max = plan[-1].t_end
+        self.dt = 1.0 / cfg.sample_rate
+        self.nbuf = nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
+        self.averaged = cfg.sampling == "average"
+        self.ybuf = np.zeros((nbuf, n + 1)) if self.averaged else np.full((nbuf, n), np.nan)
+        self.s_next = np.zeros(1, dtype=np.int64)
+        self.ev = ev = np.full(R.E_SIZE, np.nan)
+        ev[R.E_IN_CONTACT] = 0.0
+        ev[R.E_H_CONTACT] = cfg.contact_separation
+        ev[R.E_SPIKE_WINDOW] = cfg.spike_window
+        ev[R.E_JUMP_FACTOR] = cfg.jump_factor
+        self.h_s, self.z_s, _ = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)
+        ev[R.E_H_STATIC] = self.h_s if math.isfinite(self.h_s) else -math.inf
+        self.vfac_scale, ring_amp = load_friction_controls(cfg)
+        ev[R.E_RING_AMP] = ring_amp
+        self.work = np.zeros(R.W_SIZE)
+        self.Q = np.zeros((n, 3))
+        self.y_old = np.zeros(n)
+        self.J = np.zeros((n, n))
+        self.stats = np.zeros(R.S_SIZE, dtype=np.int64)
+        self.hmax_dz = HMAX_TRAVEL * cfg.z0
+        self.damp_cycles = RINGING[cfg.ringing].damp_cycles
+        if cfg.turn_force is not None:
+            # the load an instrument triggers on: k z2, not the ringing contact force Fz
+            self.term = (R.TERM_DEFLECTION, cfg.turn_force / cfg.force_constant)
+        elif cfg.turn_deflection is not None:
+            self.term = (R.TERM_DEFLECTION, cfg.turn_deflection)
+        else:
+            self.term = (R.TERM_NONE, 0.0)
+        self.f_max = f_max = (_beam_fmax(cfg.cantilever, cfg.m_joint, cfg.m_base)
+                              if model == MODEL_BEAM else free_frequency_max(p, model))
+        self.budget = cfg.max_steps if cfg.max_steps is not None else max(
+            2_000_000, int(60.0 * f_max * t_total_max))
 
-    f_max = free_frequency_max(p, model)
-    budget = cfg.max_steps if cfg.max_steps is not None else max(
-        2_000_000, int(60.0 * f_max * t_total_max))
-
-    def run(seg, term_kind, term_level, t_total):
+    def _segment(self, seg, term_kind, term_level, t_total, progress):
+        work, s_next, stats = self.work, self.s_next, self.stats
         work[R.W_T] = seg.t_start
         work[R.W_H] = INITIAL_STEP
         work[R.W_H_OLD] = 0.0
         work[R.W_ERR_OLD] = 0.0
         work[R.W_HAS_SOL] = 0.0
         work[R.W_HAVE_JAC] = 0.0
-        work[R.W_VFAC] = VELOCITY_TOLERANCE_FACTOR * vfac_scale
+        work[R.W_VFAC] = VELOCITY_TOLERANCE_FACTOR * self.vfac_scale
         first = int(s_next[0])
+        chunk = PROGRESS_CHUNK if progress is not None else 2**62
         while True:
             status = R.integrate_segment(
-                model, p, seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end, y,
-                cfg.rtol, rtolv, atol, HMAX_FRACTION, hmax_dz, damp_cycles, DAMP_KAPPA_RATIO,
-                term_kind, term_level,
-                0.0, dt, s_next, ybuf, ev, work, Q, y_old, J, stats, budget, chunk, 0.0)
+                self.model, self.p, seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end,
+                self.y, self.cfg.rtol, self.rtolv, self.atol, HMAX_FRACTION, self.hmax_dz,
+                self.damp_cycles, DAMP_KAPPA_RATIO, term_kind, term_level,
+                0.0, self.dt, s_next, self.ybuf, self.ev, work, self.Q, self.y_old, self.J, stats,
+                self.budget, chunk, 0.0, 1.0 if self.averaged else 0.0)
             if status == R.PAUSED:
                 progress(min(1.0, work[R.W_T] / t_total))
                 continue
@@ -256,93 +257,109 @@ def simulate(config: SimulationConfig | None = None, *,
             where = (f"at t = {t:.6g} s, z = {seg.position(t) * 1e9:.4g} nm in the "
                      f"{('approach', 'retract', 'dwell')[seg.kind]} after {stats[R.S_STEPS]} steps")
             if status == R.MAX_STEPS:
-                advice = (f"the step budget max_steps = {budget} is spent; raise max_steps "
-                          f"(this run follows modes up to {f_max / 1e3:.3g} kHz over "
+                advice = (f"the step budget max_steps = {self.budget} is spent; raise max_steps "
+                          f"(this run follows modes up to {self.f_max / 1e3:.3g} kHz over "
                           f"{t_total:.4g} s; a tighter rtol/atol needs more steps, not fewer)")
             else:
                 advice = "a tighter rtol/atol may get past it"
             raise SolverError(f"integration failed ({R.STATUS[status]}) {where}; {advice}")
         return status, first, int(s_next[0])
 
-    labels = []
-    status, a, b = run(app, term_kind, term_level, t_total_max)
-    labels.append((app.kind, a, b))
-    turned_at_load = status == R.TERMINAL
-    if turned_at_load:
-        t_turn = float(ev[R.E_TERM_T])
-        plan = segments(cfg, t_turn, float(app.position(t_turn)))
-    else:
-        plan = segments(cfg)
-    t_total = plan[-1].t_end
-    for seg in plan[1:]:
-        _, a, b = run(seg, R.TERM_NONE, 0.0, t_total)
-        labels.append((seg.kind, a, b))
-    if progress is not None:
-        progress(1.0)
-    n_samp = int(s_next[0])
-    Y = ybuf[:n_samp]
-    if not np.all(np.isfinite(Y)):
-        raise SolverError("the sampled trajectory contains non-finite values; "
-                          "try a tighter rtol/atol")
+    def integrate(self, progress=None) -> "_Run":
+        """Run the integrator over every drive segment (raises :class:`SolverError`)."""
+        cfg, app = self.cfg, self.app
+        labels = []
+        status, a, b = self._segment(app, *self.term, self.t_total_max, progress)
+        labels.append((app.kind, a, b))
+        self.turned_at_load = status == R.TERMINAL
+        if self.turned_at_load:
+            t_turn = float(self.ev[R.E_TERM_T])
+            plan = segments(cfg, t_turn, float(app.position(t_turn)))
+        else:
+            plan = segments(cfg)
+        t_total = plan[-1].t_end
+        for seg in plan[1:]:
+            _, a, b = self._segment(seg, R.TERM_NONE, 0.0, t_total, progress)
+            labels.append((seg.kind, a, b))
+        if progress is not None:
+            progress(1.0)
+        self.labels, self.plan = labels, plan
+        return self
 
-    # --- columns
-    tt = np.arange(n_samp) * dt
-    seg_code = np.empty(n_samp, dtype=np.int8)
-    zd = np.empty(n_samp)
-    vd = np.empty(n_samp)
-    for (kind, a, b), seg in zip(labels, plan):
-        seg_code[a:b] = kind
-        zd[a:b] = seg.position(tt[a:b])
-        vd[a:b] = seg.velocity
-    obs = observe_array(model, p, zd, vd, Y)
-    beta = cfg.calibration_factor
-    deflection = obs[:, O_DEFL]
-    if model == MODEL_BEAM:
-        angle = obs[:, O_THETA]
-        apparent = beta * angle
-    else:
-        angle = np.full(n_samp, np.nan)
-        apparent = deflection.copy()
-    separation = obs[:, O_H]
+    def finish(self, check: str = "off", wall0: float | None = None) -> Trajectory:
+        """The trajectory, events, warnings and convergence check of an integrated run."""
+        cfg, model, ev, stats, plan = self.cfg, self.model, self.ev, self.stats, self.plan
+        labels, n = self.labels, self.n
+        if self.averaged:
+            # every grid time up to the end; windows at the ends are clipped to the run
+            n_samp = min(self.nbuf, int(math.floor(plan[-1].t_end * cfg.sample_rate
+                                                   * (1.0 + 1e-12))) + 1)
+            Y = self.ybuf[:n_samp, :n] / self.ybuf[:n_samp, n:]
+            bounds = [seg.t_end for seg in plan[:-1]]
+            sample_seg = np.searchsorted(np.asarray(bounds), np.arange(n_samp) * self.dt,
+                                         side="left")
+            labels = [(seg.kind, int(np.searchsorted(sample_seg, i)),
+                       int(np.searchsorted(sample_seg, i, side="right")))
+                      for i, seg in enumerate(plan)]
+        else:
+            n_samp = int(self.s_next[0])
+            Y = self.ybuf[:n_samp]
+        lab = np.array([(a, b, kind) for kind, a, b in labels], dtype=np.int64).reshape(-1, 3)
+        seg = np.array([(s.t_start, s.z_start, s.velocity) for s in plan]).reshape(-1, 3)
+        tt, zd, seg_code, obs, finite = sample_columns(
+            model, self.p, Y, self.dt, lab[:, 0], lab[:, 1], lab[:, 2].astype(np.int8),
+            seg[:, 0], seg[:, 1], seg[:, 2])
+        if not finite:
+            raise SolverError("the sampled trajectory contains non-finite values; "
+                              "try a tighter rtol/atol")
+        beta = cfg.calibration_factor
+        deflection = obs[:, O_DEFL]
+        if model == MODEL_BEAM:
+            angle = obs[:, O_THETA]
+            apparent = beta * angle
+        else:
+            angle = np.full(n_samp, np.nan)
+            apparent = deflection.copy()
+        separation = obs[:, O_H]
 
-    events = _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code, h_s, z_s)
-    if not math.isfinite(events.contact_time):
-        warnings.warn(
-            f"the approach never reached contact (h < {cfg.contact_separation * 1e9:.3g} nm) "
-            f"before turning at z = {events.turn_position * 1e9:.4g} nm; raise turn",
-            DynamicsWarning, stacklevel=2)
-    elif ev[R.E_IN_CONTACT] == 1.0:
-        warnings.warn(
-            f"the retract ended in contact at z = {cfg.end * 1e9:.4g} nm (no pull-off); "
-            "lower end", DynamicsWarning, stacklevel=2)
-    if cfg.turn_force is not None or cfg.turn_deflection is not None:
-        if not turned_at_load:
-            what = "turn_force" if cfg.turn_force is not None else "turn_deflection"
-            warnings.warn(f"{what} was not reached before the turn limit "
-                          f"z = {cfg.turn * 1e9:.4g} nm; turned there", DynamicsWarning,
-                          stacklevel=2)
+        events = _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code,
+                         self.h_s, self.z_s)
+        if not math.isfinite(events.contact_time):
+            warnings.warn(
+                f"the approach never reached contact (h < {cfg.contact_separation * 1e9:.3g} nm) "
+                f"before turning at z = {events.turn_position * 1e9:.4g} nm; raise turn",
+                DynamicsWarning, stacklevel=3)
+        elif ev[R.E_IN_CONTACT] == 1.0:
+            warnings.warn(
+                f"the retract ended in contact at z = {cfg.end * 1e9:.4g} nm (no pull-off); "
+                "lower end", DynamicsWarning, stacklevel=3)
+        if cfg.turn_force is not None or cfg.turn_deflection is not None:
+            if not self.turned_at_load:
+                what = "turn_force" if cfg.turn_force is not None else "turn_deflection"
+                warnings.warn(f"{what} was not reached before the turn limit "
+                              f"z = {cfg.turn * 1e9:.4g} nm; turned there", DynamicsWarning,
+                              stacklevel=3)
 
-    from .guard import run_check
+        def _resolve(tight):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                return simulate(tight).events
 
-    def _resolve(tight):
-        with warnings.catch_warnings():
-            warnings.simplefilter("ignore")
-            return simulate(tight).events
-
-    event_errors, check_note = run_check(check, cfg, events, _resolve)
-    solver = SolverStats(
-        status="success", method="Radau IIA (order 5), compiled, analytic Jacobian",
-        steps=int(stats[R.S_STEPS]), accepted=int(stats[R.S_ACCEPTED]),
-        rejected=int(stats[R.S_REJECTED]), rhs_evaluations=int(stats[R.S_NFEV]),
-        jacobian_evaluations=int(stats[R.S_NJEV]), lu_decompositions=int(stats[R.S_NLU]),
-        damping_steps=int(stats[R.S_DAMPED]), newton_failures=int(stats[R.S_NEWTON_FAIL]),
-        wall_time=time.perf_counter() - wall0, event_errors=event_errors, check=check_note)
-    return Trajectory(
-        time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
-        separation=separation, apparent_separation=apparent - zd, angle=angle,
-        lateral_position=obs[:, O_Y2], normal_force=obs[:, O_FZ], friction_force=obs[:, O_FY],
-        segment=seg_code, calibration_factor=beta, spring_constant=cfg.force_constant,
-        config=cfg, events=events, solver=solver)
+        event_errors, check_note = run_check(check, cfg, events, _resolve)
+        wall = time.perf_counter() - (self.wall0 if wall0 is None else wall0)
+        solver = SolverStats(
+            status="success", method="Radau IIA (order 5), compiled, analytic Jacobian",
+            steps=int(stats[R.S_STEPS]), accepted=int(stats[R.S_ACCEPTED]),
+            rejected=int(stats[R.S_REJECTED]), rhs_evaluations=int(stats[R.S_NFEV]),
+            jacobian_evaluations=int(stats[R.S_NJEV]), lu_decompositions=int(stats[R.S_NLU]),
+            damping_steps=int(stats[R.S_DAMPED]), newton_failures=int(stats[R.S_NEWTON_FAIL]),
+            wall_time=wall, event_errors=event_errors, check=check_note)
+        return Trajectory(
+            time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
+            separation=separation, apparent_separation=apparent - zd, angle=angle,
+            lateral_position=obs[:, O_Y2], normal_force=obs[:, O_FZ], friction_force=obs[:, O_FY],
+            segment=seg_code, calibration_factor=beta, spring_constant=cfg.force_constant,
+            config=cfg, events=events, solver=solver)
 
 
 def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code, h_s, z_s) -> Events:
@@ -369,6 +386,8 @@ def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code, h_s,
     if model == MODEL_BEAM:
         min_app, min_app_z = beta * ev[R.E_MIN_THETA], ev[R.E_MIN_THETA_Z]
         spike, spike_t, spike_z = beta * ev[R.E_SPIKE_THETA], ev[R.E_SPIKE_T], ev[R.E_SPIKE_Z]
+        if cfg.spike_window == 0.0:         # not asked for: no window, no spike
+            spike = spike_t = spike_z = math.nan
     else:
         min_app, min_app_z = ev[R.E_MIN_DEFL], ev[R.E_MIN_DEFL_Z]
         spike = spike_t = spike_z = math.nan

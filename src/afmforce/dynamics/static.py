@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike
@@ -69,6 +70,12 @@ def static_jump_in(spring_constant: float, radius: float, hamaker: float = HAMAK
     All NaN when there is no mechanical instability.
     """
     k = positive("spring_constant", spring_constant, "N/m")
+    return _jump_in(k, float(radius), float(hamaker), float(z0))
+
+
+@lru_cache(maxsize=1024)
+def _jump_in(k: float, radius: float, hamaker: float, z0: float) -> tuple[float, float, float]:
+    """:func:`static_jump_in` for validated scalars, solved once per parameter set."""
     hj = float(static_jump_in_separation(k, radius, hamaker, z0))
     if not math.isfinite(hj):
         return math.nan, math.nan, math.nan

@@ -221,8 +221,8 @@ class Trajectory:
     def _csv_text(self) -> str:
         buf = io.StringIO()
         buf.write("# afmforce trajectory 1\n")
-        buf.write(f"# calibration_factor: {self.calibration_factor!r} m/rad\n")
-        buf.write(f"# spring_constant: {self.spring_constant!r} N/m\n")
+        buf.write(f"# calibration_factor: {float(self.calibration_factor)!r} m/rad\n")
+        buf.write(f"# spring_constant: {float(self.spring_constant)!r} N/m\n")
         buf.write(f"# model: {self.config.model}\n")
         buf.write(f"# events: {json.dumps(to_jsonable(self.events.to_dict()))}\n")
         buf.write(f"# solver: {json.dumps(to_jsonable(self.solver.to_dict()))}\n")

@@ -46,13 +46,22 @@ class FitCurve:
     jump_index : int
         Index of the first sample after the jump-in (largest drop).
     mask : ndarray of bool
-        Samples used by the fit: all but the jump-in and the landing transient.
+        Samples used by the fit: all but the jump-in and the landing transient, and
+        the last one (an averaging detector's window may straddle the turn).
     guess : dict
         Static guesses: ``shift`` (nominal position of the true z = 0) [m],
         ``offset`` [m], ``drift`` [m/s], ``min_deflection`` [m] (before the jump,
         baseline removed).
     metadata : dict
         The curve's metadata.
+    retract_start : int or None
+        Index of the first retract sample when the retract run is fitted too
+        (None: approach only).
+    turn_time, turn_position : float
+        Time [s] and nominal position [m] of the turn (intersection of the
+        approach and retract drive lines); NaN for an approach only.
+    retract_velocity : float
+        Retract speed [m/s] (NaN for an approach only).
     """
 
     name: str
@@ -66,6 +75,10 @@ class FitCurve:
     mask: np.ndarray
     guess: dict = field(default_factory=dict)
     metadata: dict = field(default_factory=dict)
+    retract_start: int | None = None
+    turn_time: float = math.nan
+    turn_position: float = math.nan
+    retract_velocity: float = math.nan
 
     @property
     def n(self) -> int:
@@ -75,12 +88,42 @@ class FitCurve:
 def _meta_value(curve: RawCurve, key: str, override, name: str, unit: str) -> float:
     value = override if override is not None else (curve.metadata or {}).get(key)
     if value is None:
-        raise FileFormatError(f"{name}: no {key} [{unit}] in the file; give it "
-                              f"(--{key.replace('_', '-')})")
+        flag, kw = {"velocity": ("--velocities", "velocities"),
+                    "sample_rate": ("--sample-rates", "sample_rates")}[key]
+        raise FileFormatError(f"{name}: no {key} [{unit}] in the file; give it ({flag} V1,V2,.. "
+                              f"or --meta {key}=VALUE; Python: fit_dynamic(..., {kw}=[...]))")
     value = float(value)
     if not math.isfinite(value) or value <= 0:
         raise FileFormatError(f"{name}: {key} must be positive, got {value!r} {unit}")
     return value
+
+
+def _ramp(curve: RawCurve, idx: np.ndarray) -> dict:
+    """Speed [m/s] and sample rate [Hz] read off the approach itself, where the file lacks them.
+
+    The sample rate is 1 / the median time step when the steps agree within 1 %; the speed
+    is the slope of the nominal position in time when a straight line describes the ramp
+    (its middle 80 %) within 5 % of its travel, with that deviation in
+    ``ramp_deviation``. Otherwise None (the user must give them).
+    """
+    t = np.asarray(curve.time, float)[idx]
+    z = np.asarray(curve.piezo_nominal, float)[idx]
+    out = {"velocity": None, "sample_rate": None}
+    dt = np.diff(t)
+    if dt.size < 10 or not np.all(np.isfinite(dt)) or not np.all(np.isfinite(z)):
+        return out
+    med = float(np.median(dt))
+    if med > 0 and np.percentile(np.abs(dt / med - 1.0), 95) < 0.01:
+        out["sample_rate"] = 1.0 / med
+    n = t.size
+    mid = slice(n // 10, n - n // 10)            # closed-loop ramps bend at their ends
+    slope, icpt = np.polyfit(t[mid], z[mid], 1)
+    travel = abs(z[-1] - z[0])
+    dev = float(np.max(np.abs(z[mid] - (icpt + slope * t[mid])))) if travel > 0 else math.inf
+    if slope > 0 and dev < 0.05 * travel:
+        out["velocity"] = float(slope)
+        out["ramp_deviation"] = dev / travel
+    return out
 
 
 def _noise_sigma(y: np.ndarray) -> float:
@@ -92,8 +135,13 @@ def _noise_sigma(y: np.ndarray) -> float:
 
 
 def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | None = None,
-                  sample_rate: float | None = None, jump_window: float = 2e-3) -> FitCurve:
+                  sample_rate: float | None = None, jump_window: float = 2e-3,
+                  retract: bool = False) -> FitCurve:
     """Prepare the approach run of ``curve`` (see the module docstring).
+
+    With ``retract=True`` the retract run that follows it is appended
+    (:func:`_append_retract`): its contact part is fitted, the pull-off and the
+    free part after it are left out.
 
     Raises
     ------
@@ -108,16 +156,22 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     if unit != "m" and (need is None or not meta.get(need)):
         raise FileFormatError(
             f"{name}: the deflection is in {unit} and the file has no {need}; the fit needs a "
-            "calibrated deflection in metres (deflection_signal [m]); calibrate it first")
+            f"calibrated deflection in metres: give it (--meta {need}=VALUE; Python: "
+            f"load(..., meta_override={{'{need}': ...}}))")
     # force / k or volts x sensitivity: the file's own calibration
     scale = 1.0 if unit == "m" else (1.0 / float(meta[need]) if unit == "N" else float(meta[need]))
-    v = _meta_value(curve, "velocity", velocity, name, "m/s")
-    fs = _meta_value(curve, "sample_rate", sample_rate, name, "Hz")
     app = np.asarray(curve.segment) == 0
     idx = np.flatnonzero(app)
     if idx.size < 30:
         raise AnalysisError(f"{name}: only {idx.size} approach samples; the fit needs >= 30")
     idx = idx[: np.flatnonzero(np.diff(idx) != 1)[0] + 1] if np.any(np.diff(idx) != 1) else idx
+    ramp = _ramp(curve, idx)
+    from_ramp = velocity is None and not (curve.metadata or {}).get("velocity") and ramp["velocity"]
+    v = _meta_value(curve, "velocity", velocity if velocity is not None else
+                    (ramp["velocity"] if from_ramp else None), name, "m/s")
+    fs = _meta_value(curve, "sample_rate", sample_rate if sample_rate is not None else
+                     (None if (curve.metadata or {}).get("sample_rate") else ramp["sample_rate"]),
+                     name, "Hz")
     t = np.asarray(curve.time, float)[idx]
     z = np.asarray(curve.piezo_nominal, float)[idx]
     y = np.asarray(curve.deflection_signal, float)[idx] * scale
@@ -155,6 +209,9 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     win = int(math.ceil(jump_window * fs))
     mask = np.ones(n, bool)
     mask[max(j - 2, 0): min(max(j, i_c) + win + 2, n)] = False
+    # the last approach sample: an averaging detector's window may straddle the turn,
+    # which the model (turned one sample later) cannot know
+    mask[-1] = False
     if mask.sum() < 20:
         raise AnalysisError(f"{name}: only {int(mask.sum())} samples left outside the jump-in "
                             "window; record a longer approach or a higher sample rate")
@@ -163,11 +220,82 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     ybl = y - offset - drift * t
     post = slice(min(max(j, i_c) + win + 2, n - 3), n)
     shift = float(np.median(z[post] - ybl[post]))
-    return FitCurve(name=name, time=t, position=z, deflection=y, velocity=v, sample_rate=fs,
-                    sigma=sigma, jump_index=j, mask=mask,
-                    guess={"shift": shift, "offset": float(offset), "drift": float(drift),
-                           "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
-                    metadata=dict(curve.metadata or {}))
+    fc = FitCurve(name=name, time=t, position=z, deflection=y, velocity=v, sample_rate=fs,
+                  sigma=sigma, jump_index=j, mask=mask,
+                  guess={"shift": shift, "offset": float(offset), "drift": float(drift),
+                         "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
+                  metadata=dict(curve.metadata or {}))
+    if from_ramp:
+        fc.metadata["velocity_from_ramp"] = (
+            f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp "
+            f"(positions deviate from a straight line by up to {ramp['ramp_deviation']:.1%} of the "
+            "travel; the model drives at constant speed); give --velocities to override")
+    return _append_retract(fc, curve, idx, scale, jump_window) if retract else fc
+
+
+def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float,
+                    jump_window: float) -> FitCurve:
+    """Append the retract run that directly follows the approach samples ``idx``.
+
+    The turn is where the two drive lines (nominal position vs time) meet; the
+    model is then driven through the same turn. Fitted: the retract in contact
+    down to half the adhesive deflection before the pull-off (the largest rise
+    of the deflection on the retract, if it exceeds 8 noise rms); the pull-off
+    and the free retract after it are left out (``mask``).
+    """
+    seg = np.asarray(curve.segment)
+    nxt = int(idx[-1]) + 1
+    if nxt >= seg.size or seg[nxt] != 1:
+        raise AnalysisError(
+            f"{fc.name}: no retract run directly after the approach (a dwell or pause in "
+            "between, or an approach-only file); fit the approach only (no --retract)")
+    ridx = np.arange(nxt, seg.size)
+    stop = np.flatnonzero(seg[ridx] != 1)
+    ridx = ridx[: stop[0]] if stop.size else ridx
+    if ridx.size < 30:
+        raise AnalysisError(f"{fc.name}: only {ridx.size} retract samples; the fit needs >= 30")
+    t0 = float(np.asarray(curve.time, float)[idx[0]])
+    tr = np.asarray(curve.time, float)[ridx] - t0
+    zr = np.asarray(curve.piezo_nominal, float)[ridx]
+    yr = np.asarray(curve.deflection_signal, float)[ridx] * scale
+    if not (np.all(np.isfinite(yr)) and np.all(np.isfinite(zr)) and np.all(np.diff(tr) > 0)):
+        raise FileFormatError(f"{fc.name}: the retract contains NaN/infinite values or "
+                              "non-increasing times")
+    va, za = np.polyfit(fc.time, fc.position, 1)
+    vr, zb = np.polyfit(tr, zr, 1)
+    if not (va > 0 and vr < 0):
+        raise AnalysisError(f"{fc.name}: the nominal position does not rise on the approach "
+                            "and fall on the retract; cannot place the turn")
+    t_turn = (zb - za) / (va - vr)
+    gap = tr[0] - fc.time[-1]
+    if gap > 1.5 / fc.sample_rate or not (
+            fc.time[-1] - 1.0 / fc.sample_rate <= t_turn <= tr[0] + 1.0 / fc.sample_rate):
+        raise AnalysisError(f"{fc.name}: {gap:.4g} s between the last approach and the first "
+                            f"retract sample (drive lines meet at t = {t_turn:.4g} s); a pause "
+                            "at the turn is not supported (fit the approach only)")
+    # keep the outward compliance line down to half the adhesive deflection before the
+    # pull-off; leave out the rest: where the model pulls off moves discontinuously with
+    # the parameters (like the jump-in), so samples near it would steer the fit by timing
+    mask_r = np.ones(ridx.size, bool)
+    yb = yr - (fc.guess["offset"] + fc.guess["drift"] * tr)
+    dy = np.diff(yr)
+    k = int(np.argmax(dy)) + 1
+    if dy[k - 1] > 8.0 * fc.sigma:
+        floor = float(np.min(yb[:k]))
+        below = np.flatnonzero(yb[:k] < 0.5 * floor) if floor < -8.0 * fc.sigma else np.array([], int)
+        cut = int(below[0]) if below.size else max(k - 2, 0)
+        mask_r[cut:] = False
+    mask = fc.mask.copy()
+    mask[-1] = True             # the model is driven through the same turn
+    n_app = fc.n
+    return FitCurve(
+        name=fc.name, time=np.concatenate([fc.time, tr]),
+        position=np.concatenate([fc.position, zr]),
+        deflection=np.concatenate([fc.deflection, yr]), velocity=fc.velocity,
+        sample_rate=fc.sample_rate, sigma=fc.sigma, jump_index=fc.jump_index,
+        mask=np.concatenate([mask, mask_r]), guess=fc.guess, metadata=fc.metadata,
+        retract_start=n_app, turn_time=float(t_turn), turn_position=float(za + va * t_turn),
+        retract_velocity=float(-vr))
 
 
 def check_consistent(curves: Sequence[RawCurve], names: Sequence[str]) -> None:
@@ -195,7 +323,7 @@ def check_consistent(curves: Sequence[RawCurve], names: Sequence[str]) -> None:
 def prepare_curves(curves: Sequence[RawCurve | FitCurve], names: Sequence[str] | None = None,
                    *, velocities: Sequence[float] | None = None,
                    sample_rates: Sequence[float] | None = None,
-                   jump_window: float = 2e-3) -> list[FitCurve]:
+                   jump_window: float = 2e-3, retract: bool = False) -> list[FitCurve]:
     """Prepare several curves (see :func:`prepare_curve`) and check their calibrations."""
     if len(curves) == 0:
         raise ParameterError("give at least one curve")
@@ -209,5 +337,5 @@ def prepare_curves(curves: Sequence[RawCurve | FitCurve], names: Sequence[str] |
             continue
         out.append(prepare_curve(c, nm, velocity=None if velocities is None else velocities[i],
                                  sample_rate=None if sample_rates is None else sample_rates[i],
-                                 jump_window=jump_window))
+                                 jump_window=jump_window, retract=retract))
     return out

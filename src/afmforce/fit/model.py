@@ -3,7 +3,8 @@
 The dynamic model of curve *i* is :func:`afmforce.dynamics.simulate` with the
 curve's own speed and sample rate, started at the true position of its first
 sample (``position[0] - shift_i``) and turned one sample after its last, so the
-simulated samples fall at the data's times. The linear nuisance parameters
+simulated samples fall at the data's times; with the retract run, turned at the
+data's turn and driven back one sample past its last retract sample. The linear nuisance parameters
 (baseline offset and drift slope of each curve) are eliminated by weighted
 linear least squares inside the residual (variable projection, Golub & Pereyra
 1973): the optimiser sees only the nonlinear ones, and the Jacobian of the
@@ -54,32 +55,71 @@ class Evaluator:
         self.simulations = 0
         self.failures = 0
         self.last_error = ""
+        #: integrator threads of the batched runs (None: one per core; see simulate_many)
+        self.threads: int | None = None
 
     # --- predictions -------------------------------------------------------------
     def predict(self, i: int, values: dict, shift: float) -> np.ndarray | None:
         """Model apparent deflection [m] at the samples of curve ``i`` (None: the model failed)."""
-        c = self.curves[i]
-        self.simulations += 1
-        if self.kind == "static":
-            return self._static(c, values, shift)
-        from ..dynamics import DynamicsWarning, simulate
+        return self.predict_many([(i, values, shift)])[0]
 
+    def _config(self, i: int, values: dict, shift: float):
+        c = self.curves[i]
         dz = c.velocity / c.sample_rate
         start = float(c.position[0] - shift)
-        turn = start + c.velocity * float(c.time[-1]) + dz
-        try:
-            cfg = self.base.replace(**values, velocity=c.velocity, sample_rate=c.sample_rate,
-                                    start=start, turn=turn, end=turn - 1e-9, turn_force=None,
-                                    turn_deflection=None, dwell=0.0, retract_velocity=None)
-            with warnings.catch_warnings():
-                warnings.simplefilter("ignore", DynamicsWarning)
-                tr = simulate(cfg)
-        except AfmforceError as exc:   # start in contact, solver failure: a bad trial point
-            self.failures += 1
-            self.last_error = str(exc)
-            return None
-        app = tr.segment == 0
-        return np.interp(c.time, tr.time[app], tr.apparent_deflection[app])
+        if c.retract_start is None:
+            turn = start + c.velocity * float(c.time[-1]) + dz
+            end, v_ret = turn - 1e-9, None
+        else:   # through the data's turn, one sample past its last fitted retract sample
+            turn = start + c.velocity * c.turn_time
+            v_ret = c.retract_velocity
+            t_last = float(c.time[np.flatnonzero(c.mask)[-1]])
+            end = turn - v_ret * (max(t_last, c.turn_time) - c.turn_time + 1.0 / c.sample_rate)
+        return self.base.replace(**values, velocity=c.velocity, sample_rate=c.sample_rate,
+                                 start=start, turn=turn, end=end, turn_force=None,
+                                 turn_deflection=None, dwell=0.0, retract_velocity=v_ret)
+
+    def _failed(self, exc: AfmforceError) -> None:
+        self.failures += 1
+        self.last_error = str(exc)
+
+    def predict_many(self, requests: Sequence[tuple[int, dict, float]]) -> list[np.ndarray | None]:
+        """:meth:`predict` for many ``(curve index, values, shift)`` at once.
+
+        The dynamic model runs them in one :func:`afmforce.dynamics.simulate_many`
+        call (a Jacobian's perturbed runs, the curves of one residual); the
+        results equal separate :meth:`predict` calls.
+        """
+        self.simulations += len(requests)
+        if self.kind == "static":
+            return [self._static(self.curves[i], values, shift) for i, values, shift in requests]
+        from ..dynamics import DynamicsWarning
+        from ..dynamics.batch import simulate_many
+
+        out: list = [None] * len(requests)
+        cfgs, where = [], []
+        for k, (i, values, shift) in enumerate(requests):
+            try:
+                cfgs.append(self._config(i, values, shift))
+                where.append(k)
+            except AfmforceError as exc:   # start in contact: a bad trial point
+                self._failed(exc)
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DynamicsWarning)
+            runs = simulate_many(cfgs, on_error="return", threads=self.threads,
+                                 reduce=lambda tr: (tr.time, tr.segment, tr.apparent_deflection))
+        for k, r in zip(where, runs):
+            if isinstance(r, AfmforceError):   # solver failure: a bad trial point
+                self._failed(r)
+                continue
+            t, seg, app_defl = r
+            c = self.curves[requests[k][0]]
+            if c.retract_start is not None:     # NaN past the simulated (fitted) part
+                out[k] = np.interp(c.time, t, app_defl, right=np.nan)
+            else:
+                app = seg == 0
+                out[k] = np.interp(c.time, t[app], app_defl[app])
+        return out
 
     def _static(self, c: FitCurve, values: dict, shift: float) -> np.ndarray:
         from ..forces import vdw_force
@@ -101,33 +141,50 @@ class Evaluator:
         zin, yin = zz[: i_in + 1][::-1], z2[: i_in + 1][::-1]     # z increasing
         zout, yout = zz[i_out:][::-1], z2[i_out:][::-1]
         z_jump = zz[i_out]
-        return np.where(z < z_jump, np.interp(z, zout, yout), np.interp(z, zin, yin))
+        pred = np.where(z < z_jump, np.interp(z, zout, yout), np.interp(z, zin, yin))
+        if c.retract_start is not None:     # retract: on the contact branch down to its end
+            r = slice(c.retract_start, None)
+            z_pull = zz[i_in]
+            pred[r] = np.where(z[r] < z_pull, np.interp(z[r], zout, yout),
+                               np.interp(z[r], zin, yin))
+        return pred
 
     # --- residuals ---------------------------------------------------------------
     def design(self, i: int) -> np.ndarray:
         c = self.curves[i]
         cols = [np.ones(c.n)] + ([c.time] if self.drift else [])
+        if self.drift and c.retract_start is not None:
+            # the drift rate may change at the turn (a new run): continuous, with a kink
+            cols.append(np.clip(c.time - c.turn_time, 0.0, None))
         return np.column_stack(cols)
+
+    def baseline(self, i: int, coef: np.ndarray) -> np.ndarray:
+        """Offset and drift of curve ``i`` for the coefficients of :meth:`project` [m]."""
+        X = self.design(i)
+        return X @ np.nan_to_num(np.asarray(coef, float)[: X.shape[1]])
 
     def project(self, i: int, model: np.ndarray | None) -> tuple[np.ndarray, np.ndarray]:
         """Weighted residual of curve ``i`` on its mask, offset/drift eliminated.
 
         Returns ``(residual, coefficients)``: residual in noise units, coefficients
-        ``(offset [m], drift [m/s])`` (drift 0 when not fitted).
+        ``(offset [m], drift [m/s], drift change at the turn [m/s])`` (0 when not
+        fitted).
         """
         c = self.curves[i]
         m = c.mask
         if model is None or not np.all(np.isfinite(model[m])):
-            return np.full(int(m.sum()), FAILED_RESIDUAL), np.array([math.nan, math.nan])
+            return np.full(int(m.sum()), FAILED_RESIDUAL), np.full(3, math.nan)
         X = self.design(i)[m] / c.sigma
         b = (c.deflection[m] - model[m]) / c.sigma
         coef, *_ = np.linalg.lstsq(X, b, rcond=None)
         r = b - X @ coef
-        return r, np.append(coef, 0.0)[:2]
+        return r, np.append(coef, [0.0, 0.0])[:3]
 
     def residual(self, i: int, values: dict, shift: float) -> np.ndarray:
         return self.project(i, self.predict(i, values, shift))[0]
 
-    def n_linear(self) -> int:
-        """Linear nuisance parameters eliminated per curve."""
-        return 2 if self.drift else 1
+    def n_linear(self, i: int | None = None) -> int:
+        """Linear nuisance parameters eliminated for curve ``i`` (None: all curves)."""
+        if i is None:
+            return sum(self.n_linear(j) for j in range(len(self.curves)))
+        return self.design(i).shape[1]

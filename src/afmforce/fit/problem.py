@@ -69,8 +69,25 @@ class Problem:
             self._cache[key] = self.ev.predict(i, values, float(shift))
         return self._cache[key]
 
+    def prefetch(self, requests) -> None:
+        """Simulate every ``(i, values, shift)`` not yet cached in one batched call."""
+        todo, keys = [], set()
+        for i, values, shift in requests:
+            key = (i, tuple(sorted(values.items())), float(shift))
+            if key not in keys:
+                keys.add(key)
+                if key not in self._cache:
+                    todo.append((key, (i, values, float(shift))))
+        if not todo:
+            return
+        if len(self._cache) + len(todo) > 64 * self.n_curves:   # keep what is asked for now
+            self._cache = {k: v for k, v in self._cache.items() if k in keys}
+        for (key, _), pred in zip(todo, self.ev.predict_many([r for _, r in todo])):
+            self._cache[key] = pred
+
     def residual(self, x: np.ndarray) -> np.ndarray:
         values, shifts = self.unpack(x)
+        self.prefetch([(i, values, shifts[i]) for i in range(self.n_curves)])
         return np.concatenate([self.ev.project(i, self.curve_prediction(i, values, shifts[i]))[0]
                                for i in range(self.n_curves)])
 
@@ -81,6 +98,16 @@ class Problem:
     def jacobian(self, x: np.ndarray) -> np.ndarray:
         """Forward-difference Jacobian of :meth:`residual` w.r.t. the scaled vector."""
         values, shifts = self.unpack(x)
+        requests = [(i, values, shifts[i]) for i in range(self.n_curves)]
+        for name in self.free:       # every perturbed run of this Jacobian in one batch
+            p = PARAMETERS[name]
+            h = p.step(values[name])
+            if values[name] + h > p.upper:
+                h = -h
+            requests += [(i, {**values, name: values[name] + h}, shifts[i])
+                         for i in range(self.n_curves)]
+        requests += [(i, values, shifts[i] + SHIFT_STEP) for i in range(self.n_curves)]
+        self.prefetch(requests)
         base = [self.ev.project(i, self.curve_prediction(i, values, shifts[i]))[0]
                 for i in range(self.n_curves)]
         sizes = [len(b) for b in base]
@@ -117,5 +144,5 @@ class Problem:
                 out.append(None)
                 continue
             coef = self.ev.project(i, m)[1]
-            out.append(m + coef[0] + coef[1] * c.time)
+            out.append(m + self.ev.baseline(i, coef))
         return out

@@ -50,6 +50,7 @@ class CurveFit:
     drift: float
     chi2: float
     rms_residual: float
+    retract: bool = False       # the retract run was fitted too
 
 
 @dataclass

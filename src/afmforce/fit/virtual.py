@@ -47,7 +47,9 @@ def virtual_curves(velocities: Sequence[float], *, seed: int = 0,
         default: random, ~N(0, 20 nm) and ~N(0, 2 nm).
     **config
         :class:`~afmforce.dynamics.SimulationConfig` fields shared by all
-        curves (model, xi, hamaker, start, turn, end, ...).
+        curves (model, xi, hamaker, start, turn, end, ...); ``sampling``
+        defaults to ``"average"`` (a detector averaged over each sample
+        interval, like the instruments the fit assumes).
 
     Returns
     -------
@@ -64,6 +66,7 @@ def virtual_curves(velocities: Sequence[float], *, seed: int = 0,
     fs = list(sample_rates) if sample_rates is not None else [v / 0.5e-9 for v in velocities]
     zoff = list(zero_offsets) if zero_offsets is not None else list(rng.normal(0, 20e-9, n))
     boff = list(baseline_offsets) if baseline_offsets is not None else list(rng.normal(0, 2e-9, n))
+    config.setdefault("sampling", "average")    # the detector averages over each sample interval
     config.setdefault("start", -40e-9)
     config.setdefault("turn", 20e-9)
     config.setdefault("end", -260e-9 if config.get("model", "beam") == "beam" else -500e-9)

@@ -85,7 +85,7 @@ def _time_call(call: Callable[[], Any]) -> float | None:
 
 
 def plan_execution(call: Callable[[], Any], n_runs: int, workers: int, *, chunk_size: int | None = None,
-                   default_chunk_size: int = 1) -> ExecutionPlan:
+                   default_chunk_size: int = 1, serial_threads: int = 1) -> ExecutionPlan:
     """Time ``call()`` (one representative run) and plan the sweep of ``n_runs`` runs.
 
     Parameters
@@ -100,6 +100,11 @@ def plan_execution(call: Callable[[], Any], n_runs: int, workers: int, *, chunk_
         Chunk size fixed by the user or by a resumed store; kept as it is.
     default_chunk_size : int
         Chunk size to use in this process (progress granularity).
+    serial_threads : int
+        Threads a run in this process uses (a batched function, e.g.
+        :func:`~afmforce.sweep.simulation.simulate_run`, integrates on one thread
+        per core): the serial estimate is divided by
+        ``PARALLEL_EFFICIENCY * serial_threads`` when above 1.
 
     Returns
     -------
@@ -110,11 +115,13 @@ def plan_execution(call: Callable[[], Any], n_runs: int, workers: int, *, chunk_
         size = chunk_size or default_chunk_size
         return ExecutionPlan("serial" if workers <= 1 else "dask", size, None, None, None,
                              "the timing run raised; errors are recorded per run")
-    serial = n_runs * t_run
+    serial = n_runs * t_run / (PARALLEL_EFFICIENCY * serial_threads if serial_threads > 1 else 1.0)
     cluster = CLUSTER_START_SECONDS + n_runs * t_run / (PARALLEL_EFFICIENCY * max(1, workers))
     if workers <= 1 or serial <= cluster:
         why = ("one worker" if workers <= 1 else
-               f"{n_runs} runs x {t_run * 1e3:.3g} ms = {serial:.3g} s serial <= {cluster:.3g} s on a "
+               f"{n_runs} runs x {t_run * 1e3:.3g} ms" + (
+                   f" on {serial_threads} threads" if serial_threads > 1 else "") +
+               f" = {serial:.3g} s serial <= {cluster:.3g} s on a "
                f"{workers}-worker cluster (incl. {CLUSTER_START_SECONDS:g} s start)")
         return ExecutionPlan("serial", chunk_size or default_chunk_size, t_run, serial, cluster,
                              f"in this process: {why}")

@@ -123,14 +123,29 @@ def _call_row(func: Callable, kwargs: dict, record_errors: bool) -> dict:
     return row
 
 
+def _stored(result) -> Callable:
+    """A function of any kwargs returning (or raising) a result already computed."""
+    def call(**_):
+        if isinstance(result, BaseException):
+            raise result
+        return result
+    return call
+
+
 def _parameter_chunk(func: Callable, runs: list[int], columns: dict[str, list], record_errors: bool):
-    """Run one chunk of a sweep (executes on a worker). Returns a DataFrame indexed by run."""
+    """Run one chunk of a sweep (executes on a worker). Returns a DataFrame indexed by run.
+
+    A ``func`` with a ``batch`` attribute (e.g. :func:`~afmforce.sweep.simulation.simulate_run`)
+    runs the whole chunk in one ``func.batch(list of kwargs)`` call, which returns one
+    result (or the exception of a failed run) per row.
+    """
     import pandas as pd
 
-    rows = []
-    for i, run in enumerate(runs):
-        kwargs = {name: values[i] for name, values in columns.items()}
-        rows.append({"run": run, **kwargs, **_call_row(func, kwargs, record_errors)})
+    kwargs_list = [{name: values[i] for name, values in columns.items()} for i in range(len(runs))]
+    batch = getattr(func, "batch", None)
+    calls = [_stored(r) for r in batch(kwargs_list)] if batch is not None else [func] * len(runs)
+    outs = [_call_row(call, kwargs, record_errors) for call, kwargs in zip(calls, kwargs_list)]
+    rows = [{"run": run, **kwargs, **out} for run, kwargs, out in zip(runs, kwargs_list, outs)]
     return pd.DataFrame(rows).set_index("run")
 
 
@@ -300,8 +315,11 @@ def _auto_plan(func, table, key: str, store, chunk_size, workers) -> ExecutionPl
         return ExecutionPlan("serial", fixed or default_chunk_size(n), None, 0.0, None, "all chunks stored")
     row0 = {c: table[c].iloc[0] for c in table.columns}
     row0 = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in row0.items()}
+    # a batched function says how many threads its runs use in this process
+    threads = int(func.batch_threads()) if callable(getattr(func, "batch_threads", None)) else 1
     return plan_execution(functools.partial(func, **row0), max(1, remaining), workers or available_cores(),
-                          chunk_size=fixed, default_chunk_size=default_chunk_size(n))
+                          chunk_size=fixed, default_chunk_size=default_chunk_size(n),
+                          serial_threads=threads)
 
 
 def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = None, executor="auto",

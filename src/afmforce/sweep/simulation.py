@@ -24,7 +24,7 @@ from ..errors import MissingDependencyError
 from ..forces import static_jump_in_separation, vdw_force
 from .engine import flatten
 
-__all__ = ["simulate_run", "simulation_dimensions", "OUTPUT_UNITS", "parameter_units"]
+__all__ = ["simulate_run", "simulate_runs", "simulation_dimensions", "OUTPUT_UNITS", "parameter_units"]
 
 #: Output column -> SI unit ("" for plain numbers and text).
 OUTPUT_UNITS: dict[str, str] = {
@@ -77,6 +77,52 @@ def simulate_run(**parameters) -> dict:
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         trajectory = dyn.simulate(config)
+    return _row(config, trajectory, caught)
+
+
+def simulate_runs(parameter_rows: list[dict], threads: int | None = None) -> list:
+    """:func:`simulate_run` for many rows in one call (:func:`afmforce.dynamics.simulate_many`).
+
+    The sweep's chunk runner calls this (``simulate_run.batch``) instead of one
+    :func:`simulate_run` per row: the same rows, the compiled integration of
+    several runs on a thread pool (one thread per core, one inside a Dask
+    worker). A run that fails gets its exception in its place of the result.
+    """
+    from ..dynamics.batch import run_many
+
+    def finish(run):
+        try:
+            with warnings.catch_warnings(record=True) as caught:
+                warnings.simplefilter("always")
+                trajectory = run.finish()
+            return _row(run.cfg, trajectory, caught)
+        except Exception as exc:    # recorded in its row, like simulate_run's errors
+            return exc
+
+    out = [None] * len(parameter_rows)
+    configs, where = [], []
+    for i, kw in enumerate(parameter_rows):       # non-library errors (TypeError...) too
+        try:
+            configs.append(_dynamics().SimulationConfig(**kw))
+            where.append(i)
+        except Exception as exc:
+            out[i] = exc
+    for i, r in zip(where, run_many(configs, finish, threads=threads, on_error="return")):
+        out[i] = r
+    return out
+
+
+def _batch_threads() -> int:
+    from ..dynamics.batch import default_threads
+    return default_threads()
+
+
+#: the sweep engine's batched protocol: ``func.batch(rows)``, ``func.batch_threads()``
+simulate_run.batch = simulate_runs
+simulate_run.batch_threads = _batch_threads
+
+
+def _row(config, trajectory, caught) -> dict:
     row = flatten(trajectory.summary())
     k = config.force_constant
     h_s = float(static_jump_in_separation(k, config.radius, config.hamaker, config.z0))
