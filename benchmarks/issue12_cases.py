@@ -41,9 +41,26 @@ def summarize(tr):
                 wall=tr.solver.wall_time)
 
 
+def scipy_window():
+    """The load-friction case from -8 nm, scipy Radau (rtol 1e-8, atol 1e-15) up to 1 ms after
+    contact: separation range over the last 0.1 ms (tests/dynamics/test_issue12.py)."""
+    import numpy as np
+    from afmforce.dynamics import SimulationConfig
+    from afmforce.dynamics.reference import reference_solve
+    cfg = SimulationConfig(**dict(CASES["load_friction"], start=-8e-9, turn=-2.6e-9, end=-30e-9))
+    pre = reference_solve(cfg, rtol=1e-8, atol=1e-15, t_stop=0.0093)
+    tc = pre.contact_time
+    tw = np.linspace(tc + 0.9e-3, tc + 1.0e-3, 4001)
+    ref = reference_solve(cfg, rtol=1e-8, atol=1e-15, t_stop=tc + 1.0e-3, sample_times=tw)
+    print(f"contact t = {tc:.9g} s; h over [tc+0.9, tc+1.0] ms: "
+          f"{ref.separation.min() * 1e9:.5f} .. {ref.separation.max() * 1e9:.5f} nm")
+
+
 def main():
     import sys
     from afmforce.dynamics import simulate
+    if sys.argv[1:] == ["--scipy-window"]:
+        return scipy_window()
     names = sys.argv[1:] or list(CASES)
     for name in names:
         for extra in (dict(), dict(rtol=1e-6, atol=1e-14), dict(rtol=1e-8, atol=1e-15)):

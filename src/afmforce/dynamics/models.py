@@ -249,9 +249,9 @@ def error_frequency(model, p, zd, vd, y):
     amplitude error ``dv / w``. The integrator's velocity tolerance is
     ``atol * VELOCITY_TOLERANCE_FACTOR`` times ``w = sqrt((k + max(kappa, 0)) mobility)``
     (the free mode out of contact, the contact mode in contact; kappa =
-    -Fs'(h)), so a slow bounce is never under-resolved. (A friction term
-    ``k / (zeta Fz^2)`` was tried for the load-dependent friction and did not
-    change its outcome; see docs/dynamics.md, known limits.)
+    -Fs'(h)), so a slow bounce is never under-resolved. Load-dependent
+    friction scales the factor down per run
+    (:func:`afmforce.dynamics.simulate.load_friction_controls`).
     """
     if model == MODEL_SPRING:
         h = y[0] - zd

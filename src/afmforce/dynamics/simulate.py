@@ -18,6 +18,7 @@ from ._locate import sample_columns
 from .events import Events, compliance_lines
 from .guard import run_check
 from .static import static_jump_in
+from .load_friction import load_friction_controls  # noqa: F401  (re-exported)
 from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
                      O_Y2, pack_beam, pack_spring, state_size)
 from .trajectory import SolverStats, Trajectory
@@ -208,7 +209,8 @@ class _Run:
         ev[R.E_JUMP_FACTOR] = cfg.jump_factor
         self.h_s, self.z_s, _ = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)
         ev[R.E_H_STATIC] = self.h_s if math.isfinite(self.h_s) else -math.inf
-        ev[R.E_RING_AMP] = RING_AMPLITUDE
+        self.vfac_scale, ring_amp = load_friction_controls(cfg)
+        ev[R.E_RING_AMP] = ring_amp
         self.work = np.zeros(R.W_SIZE)
         self.Q = np.zeros((n, 3))
         self.y_old = np.zeros(n)
@@ -236,7 +238,7 @@ class _Run:
         work[R.W_ERR_OLD] = 0.0
         work[R.W_HAS_SOL] = 0.0
         work[R.W_HAVE_JAC] = 0.0
-        work[R.W_VFAC] = VELOCITY_TOLERANCE_FACTOR
+        work[R.W_VFAC] = VELOCITY_TOLERANCE_FACTOR * self.vfac_scale
         first = int(s_next[0])
         chunk = PROGRESS_CHUNK if progress is not None else 2**62
         while True:
