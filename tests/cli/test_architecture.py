@@ -117,3 +117,36 @@ def test_top_level_holds_the_laws_and_packages():
     for name in ("raw", "rawfile", "rawmap", "_rawcommon", "_rawhdf5"):
         assert not (SRC / f"{name}.py").exists()
     assert (SRC / "io" / "curve.py").is_file() and (SRC / "io" / "native" / "rawfile.py").is_file()
+
+
+def _module_edges() -> tuple[dict[str, set[str]], dict[str, Path]]:
+    mods = {".".join(p.relative_to(SRC.parent).with_suffix("").parts).removesuffix(".__init__"): p
+            for p in SRC.rglob("*.py")}
+    edges: dict[str, set[str]] = {}
+    for module, path in mods.items():
+        package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+        out: set[str] = set()
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            names: list[str] = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom):
+                if node.level:
+                    base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                    target = ".".join(base + ([node.module] if node.module else []))
+                else:
+                    target = node.module or ""
+                names = [target] + [f"{target}.{a.name}" for a in node.names]
+            out |= {n for n in names if n in mods and n != module}
+        edges[module] = out
+    return edges, mods
+
+
+def test_no_two_modules_import_each_other():
+    """Import cycles between modules (lazy imports included) are broken: e.g. paper.numbers and
+    paper.numbers_dynamic share paper.checks, fit.core and fit.uncertainty share fit.problem."""
+    edges, mods = _module_edges()
+    assert "afmforce.paper.checks" in edges["afmforce.paper.numbers_dynamic"]   # the analysis sees edges
+    pairs = sorted({tuple(sorted((a, b))) for a in edges for b in edges[a]
+                    if a in edges.get(b, ()) and mods[a].name != "__init__.py" and mods[b].name != "__init__.py"})
+    assert not pairs, f"modules that import each other: {pairs}"

@@ -12,6 +12,11 @@ import math
 
 from .models import FRICTION_LAWS
 
+#: Numerical damping of the contact mode only while its amplitude in h,
+#: sqrt((h'/w_c)^2 + (h''/w_c^2)^2), is below this [m]: the most the damping may
+#: change the separation (see docs/dynamics.md, "The in-contact ringing").
+RING_AMPLITUDE = 0.1e-9
+
 __all__ = ["load_friction_controls", "LOAD_RING_FRICTION_FRACTION", "LOAD_VFAC_MARGIN",
            "LOAD_VFAC_FLOOR"]
 
@@ -52,8 +57,6 @@ def load_friction_controls(cfg: SimulationConfig) -> tuple[float, float]:
 
     Without load-dependent friction: ``(1.0, RING_AMPLITUDE)``.
     """
-    from .simulate import RING_AMPLITUDE
-
     xi, zeta = FRICTION_LAWS[cfg.friction].coefficients(cfg.xi, cfg.zeta)
     if cfg.model == "spring" or zeta <= 0.0:
         return 1.0, RING_AMPLITUDE

@@ -18,7 +18,7 @@ from ._locate import sample_columns
 from .events import Events, compliance_lines
 from .guard import run_check
 from .static import static_jump_in
-from .load_friction import load_friction_controls  # noqa: F401  (re-exported)
+from .load_friction import RING_AMPLITUDE, load_friction_controls  # noqa: F401  (re-exported)
 from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
                      O_Y2, pack_beam, pack_spring, state_size)
 from .trajectory import SolverStats, Trajectory
@@ -50,11 +50,6 @@ PROGRESS_CHUNK = 5000
 HMAX_FRACTION = 0.1
 HMAX_TRAVEL = 3.0
 
-
-#: Numerical damping of the contact mode only while its amplitude in h,
-#: sqrt((h'/w_c)^2 + (h''/w_c^2)^2), is below this [m]: the most the damping may
-#: change the separation (see docs/dynamics.md, "The in-contact ringing").
-RING_AMPLITUDE = 0.1e-9
 
 #: Damping steps only where the contact stiffness -Fs'(h) exceeds this multiple
 #: of k: well inside the repulsive wall, away from the pull-off fold (h = z0).

@@ -11,14 +11,12 @@ import numpy as np
 from ..errors import ParameterError
 from .data import FitCurve, prepare_curves
 from .model import Evaluator
-from .params import PARAMETERS, check_free
-from .problem import Problem
+from .params import PARAMETERS, SPEED_DEPENDENT, check_free
+from .problem import Problem, local_fit
 from .result import CurveFit, Estimate, FitResult, wald_interval
 
 __all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT"]
 
-#: Parameters whose effect depends on the driving speed: not identifiable from one speed.
-SPEED_DEPENDENT = ("xi", "zeta", "viscosity", "mass", "m_joint")
 #: Starting values of xi scanned before the local fits [kg/s].
 XI_SCAN = (0.0, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1)
 #: Factors on the static guess of A (or R) scanned with xi.
@@ -40,32 +38,6 @@ def base_config(model="beam", **fields):
     if isinstance(model, Mapping):
         return SimulationConfig(**{**dict(model), **fields})
     return SimulationConfig(model=str(model), **fields)
-
-
-def local_fit(problem: Problem, x0: np.ndarray, max_nfev: int = 40):
-    """Bounded least squares from ``x0`` with lmfit (scipy ``least_squares``, TRF).
-
-    Returns ``(x, lmfit result)``; ``x`` is the scaled parameter vector.
-    """
-    import lmfit
-
-    params = lmfit.Parameters()
-    names = problem.names
-    for name, v in zip(names, x0):
-        if name in PARAMETERS:
-            p = PARAMETERS[name]
-            lo, hi = p.lower / p.scale, p.upper / p.scale
-            params.add(name, value=float(np.clip(v, lo, hi)), min=lo, max=hi)
-        else:
-            params.add(name, value=float(v))
-
-    def vec(p):
-        return np.array([p[n].value for n in names])
-
-    res = lmfit.minimize(lambda p: problem.residual(vec(p)), params, method="least_squares",
-                         jac=lambda p, *a, **k: problem.jacobian(vec(p)), x_scale="jac",
-                         max_nfev=max_nfev, scale_covar=True)
-    return vec(res.params), res
 
 
 def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:

@@ -13,7 +13,10 @@ from dataclasses import dataclass
 
 from ..errors import ParameterError
 
-__all__ = ["FitParameter", "PARAMETERS", "check_free"]
+__all__ = ["FitParameter", "PARAMETERS", "SPEED_DEPENDENT", "check_free"]
+
+#: Parameters only curves at several driving speeds can separate from A*R.
+SPEED_DEPENDENT = ("xi", "zeta", "viscosity", "mass", "m_joint")
 
 
 @dataclass(frozen=True)

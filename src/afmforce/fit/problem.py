@@ -14,7 +14,7 @@ import numpy as np
 from .model import Evaluator
 from .params import PARAMETERS
 
-__all__ = ["Problem", "SHIFT_SCALE", "SHIFT_STEP"]
+__all__ = ["Problem", "SHIFT_SCALE", "SHIFT_STEP", "local_fit"]
 
 #: Shifts are handled in nm inside the optimiser.
 SHIFT_SCALE = 1e-9
@@ -146,3 +146,29 @@ class Problem:
             coef = self.ev.project(i, m)[1]
             out.append(m + self.ev.baseline(i, coef))
         return out
+
+
+def local_fit(problem: Problem, x0: np.ndarray, max_nfev: int = 40):
+    """Bounded least squares from ``x0`` with lmfit (scipy ``least_squares``, TRF).
+
+    Returns ``(x, lmfit result)``; ``x`` is the scaled parameter vector.
+    """
+    import lmfit
+
+    params = lmfit.Parameters()
+    names = problem.names
+    for name, v in zip(names, x0):
+        if name in PARAMETERS:
+            p = PARAMETERS[name]
+            lo, hi = p.lower / p.scale, p.upper / p.scale
+            params.add(name, value=float(np.clip(v, lo, hi)), min=lo, max=hi)
+        else:
+            params.add(name, value=float(v))
+
+    def vec(p):
+        return np.array([p[n].value for n in names])
+
+    res = lmfit.minimize(lambda p: problem.residual(vec(p)), params, method="least_squares",
+                         jac=lambda p, *a, **k: problem.jacobian(vec(p)), x_scale="jac",
+                         max_nfev=max_nfev, scale_covar=True)
+    return vec(res.params), res

@@ -40,7 +40,7 @@ def _drop(x: np.ndarray, j: int) -> np.ndarray:
 
 
 def _refit(sub: Problem, x0: np.ndarray, max_nfev: int) -> tuple[float, np.ndarray]:
-    from .core import local_fit
+    from .problem import local_fit
 
     if len(x0) == 0:
         return sub.chi2(x0), x0
@@ -90,7 +90,8 @@ def profile_interval(prob: Problem, x: np.ndarray, chi2_min: float, name: str, s
 def compare_models(prob: Problem, x: np.ndarray, chi2_full: float, curves, base, drift: bool,
                    level: float, max_nfev: int, warns: list, s2: float) -> ModelComparison:
     """Fit the static and the friction-free dynamic models and compare with the full fit."""
-    from .core import SPEED_DEPENDENT, local_fit
+    from .params import SPEED_DEPENDENT
+    from .problem import local_fit
 
     n = sum(int(c.mask.sum()) for c in curves)
     n_lin = (2 if drift else 1) * len(curves)

@@ -13,7 +13,7 @@ import numpy as np
 
 from .. import constants as C
 from ..diagnostics import inertial_lag, resonance_frequency
-from .numbers import PaperCheck
+from .checks import PaperCheck
 from .runs import FIG1_RUN, FIG5_RUN, FIG9_EXPERIMENTS, FIG9_RUN, run
 
 __all__ = ["DYNAMIC_CHECKS", "lag_behind_static"]
