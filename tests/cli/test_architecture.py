@@ -17,7 +17,7 @@ import pytest
 SRC = Path(__file__).resolve().parents[2] / "src" / "afmforce"
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "architecture.md"
 
-LAWS = ("constants", "units", "errors", "_validate", "_fields", "_files", "_json",
+LAWS = ("constants", "units", "errors", "progress", "_validate", "_fields", "_files", "_json",
         "forces", "friction", "cantilever", "statics", "diagnostics")
 IO = ("io",)
 ABOVE_DYNAMICS = ("instrument", "io", "analysis", "pipeline", "plotting", "sweep", "paper", "explore",

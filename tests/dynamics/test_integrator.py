@@ -124,7 +124,9 @@ def test_progress_pauses_do_not_change_the_result(monkeypatch, sim):
     b = sim(xi=0.01, velocity=1e-6)
     assert a.solver.steps == b.solver.steps
     np.testing.assert_array_equal(a.deflection, b.deflection)
-    assert len(seen) > 10 and seen[-1] == 1.0 and all(np.diff(seen) >= 0)
+    frac = [p.fraction for p in seen]
+    assert len(seen) > 10 and frac[-1] == 1.0 and all(np.diff(frac) >= 0)
+    assert {p.unit for p in seen} == {"s"} and seen[-1].done == pytest.approx(b.time[-1], abs=1 / 10e3)
 
 
 def test_failed_solve_raises_instead_of_returning():

@@ -100,8 +100,9 @@ def test_interrupted_sweep_resumes_without_recomputing_stored_chunks(tmp_path):
     result = run_sweep(f.counted, spec, executor="serial", store=tmp_path, key="k", progress=seen.append)
     assert len(f.CALLS) == 20 - 6  # only the 5 chunks not stored ran
     assert result.chunks_skipped == 2 and result.chunks_run == 5
-    assert seen[0].chunks_done == 2 and seen[-1].chunks_done == seen[-1].chunks_total == 7
-    assert [p.chunks_done for p in seen] == sorted(p.chunks_done for p in seen)
+    assert seen[0].done == 2 and seen[-1].done == seen[-1].total == 7 and seen[-1].fraction == 1.0
+    assert {p.unit for p in seen} == {"chunk"} and seen[-1].skipped == 2
+    assert [p.done for p in seen] == sorted(p.done for p in seen)
     reference = run_sweep(f.counted, spec, executor="serial")
     pd.testing.assert_frame_equal(result.table, reference.table)
     # a third run finds everything stored and starts nothing

@@ -59,23 +59,39 @@ def eprint(msg: str) -> None:
     print(msg, file=sys.stderr)
 
 
-def chunk_progress_bar(desc: str, total: int, *, min_total: int = 1, leave: bool = True):
-    """A tqdm bar over chunks on a terminal and the engine callback that drives it.
+def progress_bar(desc: str, total: float | None = None, *, unit: str = "", min_total: float = 0,
+                 leave: bool = True, enabled: bool = True):
+    """A tqdm bar on a terminal driven by :class:`afmforce.progress.Progress` records.
 
-    Returns ``(bar, update)``; ``update(progress)`` takes the engine's progress
-    record (``chunks_total``, ``chunks_done``, ``chunks_failed``). The bar is
-    disabled off a terminal or for fewer than ``min_total`` chunks.
+    Returns ``(bar, update)``; pass ``update`` as the ``progress`` callback of
+    ``simulate``, ``load``, ``run_sweep``/``run_batch`` or ``reproduce``. Chunks
+    and figures count as they are; other units (simulated seconds, a fraction
+    of a file) are shown in per mille. Disabled off a terminal, when
+    ``enabled`` is false or for a known ``total`` below ``min_total``.
     """
     from tqdm import tqdm
 
-    bar = tqdm(total=total, unit="chunk", desc=desc, disable=total < min_total or not sys.stderr.isatty(),
-               file=sys.stderr, dynamic_ncols=True, leave=leave)
+    counted = unit in ("chunk", "figure", "file list")
+    disable = (not enabled or not sys.stderr.isatty()
+               or (total is not None and total < min_total))
+    bar = tqdm(total=total if counted else 1000, unit=unit if counted else "‰", desc=desc,
+               disable=disable, file=sys.stderr, dynamic_ncols=True, leave=leave)
 
     def update(p) -> None:
-        bar.total = p.chunks_total
-        bar.n = p.chunks_done
-        if p.chunks_failed:
-            bar.set_postfix(failed=p.chunks_failed, refresh=False)
+        if counted:
+            bar.total = p.total
+            bar.n = int(p.done)
+        else:
+            bar.n = int(1000 * (p.fraction or 0.0))
+        if p.failed:
+            bar.set_postfix(failed=p.failed, refresh=False)
+        if p.what:
+            bar.set_description(f"{desc} {p.what}", refresh=False)
         bar.refresh()
 
     return bar, update
+
+
+def chunk_progress_bar(desc: str, total: int, *, min_total: int = 1, leave: bool = True):
+    """:func:`progress_bar` over a sweep's or batch's chunks."""
+    return progress_bar(desc, total, unit="chunk", min_total=min_total, leave=leave)

@@ -3,7 +3,6 @@
 from __future__ import annotations
 
 import argparse
-import sys
 
 
 def register(sub) -> None:
@@ -22,23 +21,14 @@ def run_reproduce(out: str, only, fast: bool, svg: bool):
     """Run :func:`afmforce.paper.reproduce.reproduce` with a progress bar on a terminal."""
     from ..paper.reproduce import reproduce
 
-    bar = None
-    if sys.stderr.isatty():
-        from tqdm import tqdm
+    from .common import progress_bar
 
-        bar = tqdm(total=100, desc="reproduce", unit="%", leave=False)
-
-    def progress(frac, what):
-        if bar is not None:
-            bar.n = int(100 * frac)
-            bar.set_postfix_str(what)
-            bar.refresh()
+    bar, progress = progress_bar("reproduce", unit="figure", leave=False)
 
     try:
         return reproduce(out, only=only, fast=fast, svg=svg, progress=progress)
     finally:
-        if bar is not None:
-            bar.close()
+        bar.close()
 
 
 def summarize(res) -> str:

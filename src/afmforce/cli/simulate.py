@@ -171,15 +171,9 @@ def config_from_args(args: argparse.Namespace):
 def _progress_bar(args):
     if args.no_progress or args.json or not sys.stderr.isatty():
         return None, None
-    from tqdm import tqdm
+    from .common import progress_bar
 
-    bar = tqdm(total=1000, desc="simulate", unit="‰", leave=False, file=sys.stderr)
-
-    def update(frac):
-        bar.n = int(1000 * frac)
-        bar.refresh()
-
-    return bar, update
+    return progress_bar("simulate", unit="s", leave=False)
 
 
 def run(args: argparse.Namespace) -> int:

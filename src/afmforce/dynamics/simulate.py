@@ -18,6 +18,7 @@ from ._locate import sample_columns
 from .events import Events, compliance_lines
 from .guard import run_check
 from .static import static_jump_in
+from ..progress import Progress
 from .load_friction import RING_AMPLITUDE, load_friction_controls  # noqa: F401  (re-exported)
 from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
                      O_Y2, pack_beam, pack_spring, state_size)
@@ -122,7 +123,7 @@ def _resolve_config(config, overrides) -> SimulationConfig:
 
 
 def simulate(config: SimulationConfig | None = None, *,
-             progress: Callable[[float], None] | None = None, check: str = "off",
+             progress: Callable[[Progress], None] | None = None, check: str = "off",
              **overrides) -> Trajectory:
     """Simulate one approach-dwell-retract cycle (spec sections 3 and 5).
 
@@ -131,7 +132,8 @@ def simulate(config: SimulationConfig | None = None, *,
     config : SimulationConfig, optional
         The run; default: the paper's Fig 5 (beam, xi = 0.1 kg/s, 0.1 um/s).
     progress : callable, optional
-        Called with the fraction of simulated time done (0..1) now and then.
+        Called now and then with a :class:`~afmforce.progress.Progress`
+        (``done`` / ``total`` simulated time [s], ``unit="s"``).
     check : {"off", "auto", "always", "raise"}
         Convergence guard (:mod:`afmforce.dynamics.guard`): ``"auto"`` re-solves
         at 10x tighter tolerances when the run is in a risky regime (low
@@ -244,7 +246,8 @@ class _Run:
                 0.0, self.dt, s_next, self.ybuf, self.ev, work, self.Q, self.y_old, self.J, stats,
                 self.budget, chunk, 0.0, 1.0 if self.averaged else 0.0)
             if status == R.PAUSED:
-                progress(min(1.0, work[R.W_T] / t_total))
+                progress(Progress(done=min(float(work[R.W_T]), t_total), total=t_total, unit="s",
+                                  what="simulate"))
                 continue
             break
         if status < 0:
@@ -277,7 +280,7 @@ class _Run:
             _, a, b = self._segment(seg, R.TERM_NONE, 0.0, t_total, progress)
             labels.append((seg.kind, a, b))
         if progress is not None:
-            progress(1.0)
+            progress(Progress(done=t_total, total=t_total, unit="s", what="simulate"))
         self.labels, self.plan = labels, plan
         return self
 

@@ -24,6 +24,7 @@ from pathlib import Path
 from typing import Any, Callable, Mapping, Sequence
 
 from ..errors import AfmforceError, FileFormatError, ParameterError
+from ..progress import Progress
 from .curve import RawCurve
 from . import native
 from ._meta import METADATA, check_meta_override, require_metadata
@@ -210,7 +211,7 @@ def _find_format(path: Path) -> ReaderFormat:
 
 
 def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
-         callback: Callable[[float], None] | None = None, format: str | None = None,
+         progress: Callable[[Progress], None] | None = None, format: str | None = None,
          require: Sequence[str] = (), timeout: float | None = None) -> list[RawCurve]:
     """Read every force curve in ``path``.
 
@@ -221,8 +222,10 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
     meta_override : mapping, optional
         Metadata in SI (keys of :data:`METADATA`, e.g. ``spring_constant``
         [N/m], ``sensitivity`` [m/V]) that replace or complete the file's.
-    callback : callable, optional
-        Called with the fraction done, a float in [0, 1].
+    progress : callable, optional
+        Called with a :class:`~afmforce.progress.Progress` (``unit="file"``,
+        ``done`` the fraction read, ``what`` the file name) where the reader
+        reports it (not for files read in a child process).
     format : str, optional
         Identifier of a format in :data:`FORMATS`, skipping detection.
     require : sequence of str, optional
@@ -256,7 +259,20 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
 
         return run_with_timeout(_load, path, timeout=timeout, path=str(path), meta_override=meta_override,
                                 callback=None, format=format, require=require)
-    return _load(path, meta_override=meta_override, callback=callback, format=format, require=require)
+    return _load(path, meta_override=meta_override, callback=_file_progress(path, progress), format=format,
+                 require=require)
+
+
+def _file_progress(path, progress) -> Callable[[float], None] | None:
+    """The readers' float callback, reported as :class:`~afmforce.progress.Progress` records."""
+    if progress is None:
+        return None
+    name = Path(path).name
+
+    def report(fraction: float) -> None:
+        progress(Progress(done=float(fraction), total=1.0, unit="file", what=name))
+
+    return report
 
 
 #: Endings of HDF5 files, read in a child process with a time budget (:data:`HDF5_TIMEOUT` [s]).

@@ -15,6 +15,7 @@ from typing import Callable
 
 from .._files import atomic_path, atomic_write_text
 from ..errors import ParameterError
+from ..progress import Progress
 from .numbers import KINDS, MAX_TOLERANCE, CheckResult, evaluate_checks
 
 __all__ = ["FIGURES", "ReproduceResult", "reproduce", "report_markdown"]
@@ -160,7 +161,7 @@ def report_markdown(checks: list[CheckResult], figures: dict[str, list[Path]], o
 
 
 def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None = None, fast: bool = False,
-              svg: bool = False, progress: Callable[[float, str], None] | None = None) -> ReproduceResult:
+              svg: bool = False, progress: Callable[[Progress], None] | None = None) -> ReproduceResult:
     """Reproduce the paper's figures and numbers into ``out_dir``.
 
     Parameters
@@ -175,7 +176,8 @@ def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None 
     svg : bool
         Also write SVG files.
     progress : callable, optional
-        ``progress(fraction, what)``.
+        Called with a :class:`~afmforce.progress.Progress` (``unit="figure"``,
+        ``what`` the figure key) before each figure and at the end.
     """
     import matplotlib
 
@@ -194,7 +196,7 @@ def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None 
     steps = len(keys) + 1
     for i, key in enumerate(keys):
         if progress:
-            progress(i / steps, key)
+            progress(Progress(done=i, total=steps, unit="figure", what=key))
         stem, _ = FIGURES[key]
         try:
             fig = _fig(key)(fast)
@@ -210,7 +212,7 @@ def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None 
         plt.close(fig)
         written[key] = paths
     if progress:
-        progress(len(keys) / steps, "numbers")
+        progress(Progress(done=len(keys), total=steps, unit="figure", what="numbers"))
     checks = evaluate_checks()
     atomic_write_text(out / "report.md", report_markdown(checks, written, out))
     payload = {
@@ -224,5 +226,5 @@ def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None 
     atomic_write_text(out / "report.json", json.dumps(payload, indent=2, allow_nan=False,
                                                       default=lambda o: None))
     if progress:
-        progress(1.0, "done")
+        progress(Progress(done=steps, total=steps, unit="figure", what="done"))
     return ReproduceResult(out, written, checks, failed, time.perf_counter() - t0)

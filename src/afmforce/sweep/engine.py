@@ -27,6 +27,7 @@ from typing import Any, Callable, Iterable, Mapping
 import numpy as np
 
 from ..errors import ParameterError
+from ..progress import Progress
 from .autoplan import ExecutionPlan, plan_execution
 from .executors import available_cores, make_executor
 from .results import SweepResult
@@ -37,23 +38,6 @@ __all__ = ["Progress", "ChunkFailure", "run_sweep", "execute", "default_chunk_si
 
 #: Arrays longer than this are refused as outputs (a sweep stores summaries).
 MAX_ARRAY_OUTPUT = 16
-
-
-@dataclass(frozen=True)
-class Progress:
-    """Progress over chunks, passed to the ``progress`` callback.
-
-    ``chunks_done`` counts the chunks finished, failed or found in the store;
-    ``items_done`` the items (runs) processed by this call; totals are None
-    for a batch of unknown length.
-    """
-
-    chunks_done: int
-    chunks_total: int | None
-    items_done: int
-    items_total: int | None
-    chunks_failed: int
-    chunks_skipped: int
 
 
 @dataclass(frozen=True)
@@ -171,8 +155,9 @@ def _drive(task_fn, tasks, *, executor, store, totals, skipped, progress, descri
 
     def report() -> None:
         if progress is not None:
-            progress(Progress(state["done"], chunks_total, state["items"], items_total,
-                              state["failed"], len(skipped)))
+            progress(Progress(done=state["done"], total=chunks_total, unit="chunk",
+                              failed=state["failed"], skipped=len(skipped),
+                              items_done=state["items"], items_total=items_total))
 
     def submit():
         for index, args, n in tasks:
@@ -348,7 +333,8 @@ def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = 
         Parent folder of the resumable store (a sub-folder keyed by a hash of
         ``func`` and the table is created); without it nothing is written.
     progress : callable, optional
-        Called with a :class:`Progress` at the start and after every chunk.
+        Called with a :class:`~afmforce.progress.Progress` (unit ``"chunk"``,
+        runs as items) at the start and after every chunk.
     errors : {"record", "raise"}
         ``"record"``: a run that raises gets its error in the ``error`` column.
         ``"raise"``: it fails its whole chunk (recorded, retried by a rerun).
