@@ -20,7 +20,8 @@ import pyarrow.parquet as pq
 import pytest
 
 from afmforce import forces
-from afmforce.analysis.mapping import EXTENT_KEY, map_images, write_map_png
+from afmforce.analysis.mapping import EXTENT_KEY, map_images
+from afmforce.plotting import write_map_png
 from afmforce.analysis.synthetic import static_curve
 from afmforce.cli.main import main
 from afmforce.errors import FileFormatError, ParameterError

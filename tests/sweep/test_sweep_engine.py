@@ -203,7 +203,7 @@ def test_heat_map_shows_the_grid_values_on_log_axes():
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from afmforce.sweep.plot import plot_metric
+    from afmforce.plotting import plot_metric
 
     spec = build_spec(["x=1:100:3:log", "y=1,2,3,4"])
     result = run_sweep(f.counted, spec, executor="serial")

@@ -4,28 +4,26 @@ The batch analysis (:mod:`afmforce.sweep.analysis`) gives one row per curve
 with its grid indices (``map_x`` column, ``map_y`` row, ``map_nx`` x ``map_ny``
 grid; -1 for curves outside maps). :func:`map_images` turns a chosen quantity
 (:data:`MAP_QUANTITIES`) into one :class:`MapImage` per map file;
-:func:`plot_map` draws it, :func:`write_map_png` writes it atomically.
+:func:`afmforce.plotting.plot_map` draws it, :func:`afmforce.plotting.write_map_png`
+writes it atomically.
 
->>> from afmforce.analysis.mapping import map_images, write_map_png
+>>> from afmforce.analysis.mapping import map_images
+>>> from afmforce.plotting import write_map_png
 >>> for image in map_images(table, "adhesion"):                    # doctest: +SKIP
 ...     write_map_png(image, f"{image.name}.adhesion.png")
 """
 
 from __future__ import annotations
 
-import os
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from .._files import atomic_path
 from ..errors import ParameterError
 from .result import SUMMARY_FIELDS
 
-__all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_images", "plot_map",
-           "write_map_png", "EXTENT_KEY"]
+__all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_images", "EXTENT_KEY"]
 
 #: PNG text key holding the heat map's pixel box in the image: "left top right bottom".
 EXTENT_KEY = "afmforce.map_extent"
@@ -132,58 +130,3 @@ def map_images(table, quantity: str | MapQuantity) -> list[MapImage]:
         values[y[ok], x[ok]] = q.sign * col.to_numpy(float)[ok]
         out.append(MapImage(str(source), q, values, int(len(rows))))
     return out
-
-
-def _display(unit: str) -> tuple[float, str]:
-    return _DISPLAY.get(unit, (1.0, unit))
-
-
-def plot_map(image: MapImage, ax=None):
-    """Heat map of ``image`` over the grid (x to the right, y upwards, grey: no value).
-
-    Cells are centred on the integer grid indices; lengths are shown in nm,
-    forces in nN. Returns the matplotlib Axes.
-    """
-    import matplotlib as mpl
-
-    if ax is None:
-        from matplotlib.figure import Figure
-
-        ax = Figure(figsize=(6, 5), layout="constrained").add_subplot()
-    factor, shown = _display(image.quantity.unit)
-    ny, nx = image.shape
-    values = np.ma.masked_invalid(image.values * factor)
-    cmap = mpl.colormaps["viridis"].with_extremes(bad="lightgrey")
-    im = ax.imshow(values, origin="lower", interpolation="nearest", cmap=cmap, aspect="equal",
-                   extent=(-0.5, nx - 0.5, -0.5, ny - 0.5))
-    label = image.quantity.label + (f" [{shown}]" if shown else "")
-    ax.figure.colorbar(im, ax=ax, label=label, shrink=0.9)
-    ax.set_xlabel("x (column index)")
-    ax.set_ylabel("y (row index)")
-    finite = int(np.isfinite(image.values).sum())
-    ax.set_title(f"{image.name}: {image.quantity.identifier} ({finite} of {nx * ny} points)", fontsize="medium")
-    return ax
-
-
-def write_map_png(image: MapImage, path: str | os.PathLike, *, dpi: int = 100, force: bool = True) -> Path:
-    """Write :func:`plot_map` of ``image`` as PNG, atomically.
-
-    The PNG's text chunk :data:`EXTENT_KEY` gives the pixel box of the heat map
-    in the image ("left top right bottom", pixels from the top left corner), so
-    that tools can read the values' colours back.
-    """
-    ax = plot_map(image)
-    fig = ax.figure
-    fig.set_dpi(dpi)
-    fig.draw_without_rendering()  # lay out (constrained), then freeze it: the saved box is the measured one
-    fig.set_layout_engine("none")
-    fig.draw_without_rendering()
-    box = ax.get_window_extent()
-    height = fig.bbox.height
-    extent = f"{box.x0:.2f} {height - box.y1:.2f} {box.x1:.2f} {height - box.y0:.2f}"
-    meta: dict[str, Any] = {"Title": f"{image.name}: {image.quantity.label}", "Software": "afmforce",
-                            EXTENT_KEY: extent}
-    path = Path(path)
-    with atomic_path(path, force) as tmp:
-        fig.savefig(tmp, dpi=dpi, format="png", metadata=meta)
-    return path

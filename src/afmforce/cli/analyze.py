@@ -278,7 +278,8 @@ def _clean(error: str) -> str:
 
 
 def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
-    from ..analysis.mapping import map_images, write_map_png
+    from ..analysis.mapping import map_images
+    from ..plotting import write_map_png
 
     out = {}
     for q in dict.fromkeys(quantities or [DEFAULT_MAP_QUANTITY]):

@@ -18,7 +18,7 @@ import sys
 from pathlib import Path
 from typing import Callable
 
-from .._files import atomic_path, check_writable
+from .._files import check_writable
 from ..errors import FileFormatError
 from ._validate import add_field, check_output, check_simulation_config, check_simulation_options, lazy_help
 from .common import print_json, print_table
@@ -243,54 +243,9 @@ def _print_summary(traj) -> None:
 
 def plot_trajectory(traj, path, force: bool = False):
     """Deflection vs separation (actual and apparent) with the static curve, as a PNG."""
-    import matplotlib
+    from ..plotting import write_trajectory_png
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-    import numpy as np
-
-    from ..dynamics import static_curve
-
-    cfg = traj.config
-    nm = 1e9
-    fig, (ax0, ax1) = plt.subplots(1, 2, figsize=(11, 4.5))
-    for seg, name, color in ((0, "approach", "C0"), (1, "retract", "C3")):
-        m = traj.segment == seg
-        ax0.plot(traj.piezo_position[m] * nm, traj.deflection[m] * nm, color=color, lw=1,
-                 label=f"{name}: actual $z_2$")
-        ax1.plot(traj.separation[m] * nm, traj.deflection[m] * nm, color=color, lw=1,
-                 label=f"{name}: actual")
-        if cfg.model == "beam":
-            ax0.plot(traj.piezo_position[m] * nm, traj.apparent_deflection[m] * nm, color=color,
-                     lw=1, ls="--", label=rf"{name}: apparent $\beta\theta$")
-            ax1.plot(traj.apparent_separation[m] * nm, traj.apparent_deflection[m] * nm,
-                     color=color, lw=1, ls="--", label=f"{name}: apparent")
-    sc = static_curve(traj.spring_constant, cfg.radius, cfg.hamaker, cfg.z0, h_max=40e-9)
-    stable = np.where(sc.stable, sc.deflection, np.nan)
-    unstable = np.where(~sc.stable, sc.deflection, np.nan)
-    ax1.plot(sc.separation * nm, stable * nm, "k", lw=2, label="static")
-    ax1.plot(sc.separation * nm, unstable * nm, "k:", lw=1.5, label="static (unstable)")
-    ax0.set_xlabel("piezo position z [nm]")
-    ax0.set_ylabel("deflection [nm]")
-    ax0.set_title("full cycle")
-    ax1.set_xlabel("separation [nm]")
-    ax1.set_ylabel("deflection [nm]")
-    ax1.set_title("near contact")
-    ax1.set_xlim(-2, 12)
-    lo = np.nanmin([traj.events.min_deflection, traj.events.min_apparent_deflection,
-                    sc.jump_in_deflection]) * nm
-    top = max(1.0, -0.8 * lo)
-    if np.isfinite(traj.events.spike_height):
-        top = max(top, 1.15 * traj.events.spike_height * nm)
-    ax1.set_ylim(min(-1.0, 1.6 * lo), top)
-    ax1.axhline(0, color="0.7", lw=0.5)
-    ax1.legend(fontsize=7)
-    ax0.legend(fontsize=7)
-    fig.tight_layout()
-    with atomic_path(path, force) as tmp:
-        fig.savefig(tmp, dpi=120, format="png")
-    plt.close(fig)
-    return path
+    return write_trajectory_png(traj, path, force=force)
 
 
 # Virtual instrument (issue 4; afmforce.cli._instrument_opts): --instrument, --seed, --raw, ...

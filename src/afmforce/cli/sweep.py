@@ -99,19 +99,13 @@ def _stats_rows(result, units) -> list[tuple[str, str, str, str]]:
 
 
 def _save_plot(result, metric: str, units: dict):
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    from ..sweep.plot import plot_metric
+    from ..plotting import plot_metric
     from .common import atomic_path
 
     path = result.store.root / f"{metric}.png"
     ax = plot_metric(result, metric, units=units)
     with atomic_path(path) as tmp:
         ax.figure.savefig(tmp, dpi=120, bbox_inches="tight", format="png")
-    plt.close(ax.figure)
     return path
 
 

@@ -24,10 +24,7 @@ def plot_curves(result, curves, directory: str | os.PathLike, force: bool = Fals
     ``curves`` are the prepared :class:`~afmforce.fit.FitCurve` objects
     (``result._problem.ev.curves``). Returns the paths written.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     directory = Path(directory)
     directory.mkdir(parents=True, exist_ok=True)
@@ -35,7 +32,8 @@ def plot_curves(result, curves, directory: str | os.PathLike, force: bool = Fals
     out = []
     nm = 1e9
     for i, (c, cf, m) in enumerate(zip(curves, result.curves, preds)):
-        fig, (a0, a1) = plt.subplots(2, 1, figsize=(7, 6), sharex=True,
+        fig = Figure(figsize=(7, 6))
+        a0, a1 = fig.subplots(2, 1, sharex=True,
                                      gridspec_kw={"height_ratios": [3, 1.3]})
         z = (c.position - cf.shift) * nm
         a0.plot(z, c.deflection * nm, ".", ms=3, color="0.45", label="data")
@@ -55,7 +53,6 @@ def plot_curves(result, curves, directory: str | os.PathLike, force: bool = Fals
         fig.tight_layout()
         stem = "".join(ch if ch.isalnum() or ch in "-_." else "_" for ch in Path(c.name).stem)
         out.append(_save(fig, directory / f"fit_curve{i + 1}_{stem}.png", force))
-        plt.close(fig)
     return out
 
 
@@ -63,14 +60,12 @@ def plot_profiles(result, path: str | os.PathLike, force: bool = False) -> Path 
     """Profile likelihood (delta chi-square) of every profiled parameter; None if none."""
     if not result.profiles:
         return None
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
     from scipy.stats import chi2
 
     names = list(result.profiles)
-    fig, axes = plt.subplots(1, len(names), figsize=(4.5 * len(names), 3.8), squeeze=False)
+    fig = Figure(figsize=(4.5 * len(names), 3.8))
+    axes = fig.subplots(1, len(names), squeeze=False)
     thr = chi2.ppf(result.level, 1)
     for ax, name in zip(axes[0], names):
         p = result.profiles[name]
@@ -87,5 +82,4 @@ def plot_profiles(result, path: str | os.PathLike, force: bool = False) -> Path 
     fig.tight_layout()
     path = Path(path)
     _save(fig, path, force)
-    plt.close(fig)
     return path

@@ -1,12 +1,11 @@
-"""Figures of sweep results: heat map of a metric over two parameters."""
+"""Figures of sweep results (:class:`afmforce.sweep.SweepResult`, used by duck typing: the
+plotting layer never imports the sweep): heat map, line or scatter of a metric."""
 
 from __future__ import annotations
 
 from typing import Mapping
 
 import numpy as np
-
-from .results import SweepResult
 
 __all__ = ["plot_metric", "DISPLAY_UNITS"]
 
@@ -34,14 +33,14 @@ def _edges(centres: np.ndarray, log: bool) -> np.ndarray:
     return np.exp(mid) if log else mid
 
 
-def _is_log(result: SweepResult, name: str) -> bool:
+def _is_log(result, name: str) -> bool:
     spec = result.spec
     if spec is None:
         return False
     return any(a.name == name and a.log for a in spec.grid) or any(r.name == name and r.log for r in spec.ranges)
 
 
-def plot_metric(result: SweepResult, metric: str, *, x: str | None = None, y: str | None = None,
+def plot_metric(result, metric: str, *, x: str | None = None, y: str | None = None,
                 units: Mapping[str, str] | None = None, ax=None):
     """Plot ``metric`` over the swept parameters; returns the matplotlib Axes.
 
@@ -51,8 +50,6 @@ def plot_metric(result: SweepResult, metric: str, *, x: str | None = None, y: st
     give a scatter coloured by the metric. Lengths are shown in nm, forces in
     nN, speeds in µm/s.
     """
-    import matplotlib.pyplot as plt
-
     table = result.table
     if metric not in table.columns:
         names = ", ".join(result.output_names)
@@ -63,7 +60,9 @@ def plot_metric(result: SweepResult, metric: str, *, x: str | None = None, y: st
     x = x or (numeric[0] if numeric else varying[0])
     y = y or next((n for n in numeric if n != x), None)
     if ax is None:
-        _, ax = plt.subplots(figsize=(6, 4.5))
+        from matplotlib.figure import Figure
+
+        ax = Figure(figsize=(6, 4.5)).add_subplot()
     mf, mlabel = _label(metric, units)
     xf, xlabel = _label(x, units)
     held = []

@@ -12,9 +12,9 @@ import math
 
 import numpy as np
 
-from . import forces
-from .analysis.result import AnalysisResult
-from .io.curve import RawCurve
+from .. import forces
+from ..analysis.result import AnalysisResult
+from ..io.curve import RawCurve
 
 __all__ = ["plot_raw", "plot_force_separation", "plot_residuals", "plot_spectrum", "plot_summary"]
 

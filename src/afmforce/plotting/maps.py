@@ -1,0 +1,72 @@
+"""Heat maps of force-map quantities (:func:`afmforce.analysis.mapping.map_images`).
+
+Built on :class:`matplotlib.figure.Figure`, never pyplot; every function takes ``ax=None``.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._files import atomic_path
+from ..analysis.mapping import _DISPLAY, EXTENT_KEY, MapImage
+
+__all__ = ["plot_map", "write_map_png"]
+
+
+def _display(unit: str) -> tuple[float, str]:
+    return _DISPLAY.get(unit, (1.0, unit))
+
+
+def plot_map(image: MapImage, ax=None):
+    """Heat map of ``image`` over the grid (x to the right, y upwards, grey: no value).
+
+    Cells are centred on the integer grid indices; lengths are shown in nm,
+    forces in nN. Returns the matplotlib Axes.
+    """
+    import matplotlib as mpl
+
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        ax = Figure(figsize=(6, 5), layout="constrained").add_subplot()
+    factor, shown = _display(image.quantity.unit)
+    ny, nx = image.shape
+    values = np.ma.masked_invalid(image.values * factor)
+    cmap = mpl.colormaps["viridis"].with_extremes(bad="lightgrey")
+    im = ax.imshow(values, origin="lower", interpolation="nearest", cmap=cmap, aspect="equal",
+                   extent=(-0.5, nx - 0.5, -0.5, ny - 0.5))
+    label = image.quantity.label + (f" [{shown}]" if shown else "")
+    ax.figure.colorbar(im, ax=ax, label=label, shrink=0.9)
+    ax.set_xlabel("x (column index)")
+    ax.set_ylabel("y (row index)")
+    finite = int(np.isfinite(image.values).sum())
+    ax.set_title(f"{image.name}: {image.quantity.identifier} ({finite} of {nx * ny} points)", fontsize="medium")
+    return ax
+
+
+def write_map_png(image: MapImage, path: str | os.PathLike, *, dpi: int = 100, force: bool = True) -> Path:
+    """Write :func:`plot_map` of ``image`` as PNG, atomically.
+
+    The PNG's text chunk :data:`EXTENT_KEY` gives the pixel box of the heat map
+    in the image ("left top right bottom", pixels from the top left corner), so
+    that tools can read the values' colours back.
+    """
+    ax = plot_map(image)
+    fig = ax.figure
+    fig.set_dpi(dpi)
+    fig.draw_without_rendering()  # lay out (constrained), then freeze it: the saved box is the measured one
+    fig.set_layout_engine("none")
+    fig.draw_without_rendering()
+    box = ax.get_window_extent()
+    height = fig.bbox.height
+    extent = f"{box.x0:.2f} {height - box.y1:.2f} {box.x1:.2f} {height - box.y0:.2f}"
+    meta: dict[str, Any] = {"Title": f"{image.name}: {image.quantity.label}", "Software": "afmforce",
+                            EXTENT_KEY: extent}
+    path = Path(path)
+    with atomic_path(path, force) as tmp:
+        fig.savefig(tmp, dpi=dpi, format="png", metadata=meta)
+    return path

@@ -1,0 +1,71 @@
+"""Figures of a simulated cycle (:class:`afmforce.dynamics.Trajectory`).
+
+Built on :class:`matplotlib.figure.Figure`, never pyplot; ``axes=None`` makes a figure.
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import numpy as np
+
+from .._files import atomic_path
+
+__all__ = ["plot_trajectory", "write_trajectory_png"]
+
+
+def plot_trajectory(traj, axes=None):
+    """Deflection vs drive position (full cycle) and vs separation near contact, with the
+    static curve; apparent (beta theta) dashed for the beam. Returns the two Axes."""
+    from ..dynamics import static_curve
+
+    if axes is None:
+        from matplotlib.figure import Figure
+
+        axes = Figure(figsize=(11, 4.5), layout="tight").subplots(1, 2)
+    ax0, ax1 = axes
+    cfg = traj.config
+    nm = 1e9
+    for seg, name, color in ((0, "approach", "C0"), (1, "retract", "C3")):
+        m = traj.segment == seg
+        ax0.plot(traj.piezo_position[m] * nm, traj.deflection[m] * nm, color=color, lw=1,
+                 label=f"{name}: actual $z_2$")
+        ax1.plot(traj.separation[m] * nm, traj.deflection[m] * nm, color=color, lw=1,
+                 label=f"{name}: actual")
+        if cfg.model == "beam":
+            ax0.plot(traj.piezo_position[m] * nm, traj.apparent_deflection[m] * nm, color=color,
+                     lw=1, ls="--", label=rf"{name}: apparent $\beta\theta$")
+            ax1.plot(traj.apparent_separation[m] * nm, traj.apparent_deflection[m] * nm,
+                     color=color, lw=1, ls="--", label=f"{name}: apparent")
+    sc = static_curve(traj.spring_constant, cfg.radius, cfg.hamaker, cfg.z0, h_max=40e-9)
+    stable = np.where(sc.stable, sc.deflection, np.nan)
+    unstable = np.where(~sc.stable, sc.deflection, np.nan)
+    ax1.plot(sc.separation * nm, stable * nm, "k", lw=2, label="static")
+    ax1.plot(sc.separation * nm, unstable * nm, "k:", lw=1.5, label="static (unstable)")
+    ax0.set_xlabel("piezo position z [nm]")
+    ax0.set_ylabel("deflection [nm]")
+    ax0.set_title("full cycle")
+    ax1.set_xlabel("separation [nm]")
+    ax1.set_ylabel("deflection [nm]")
+    ax1.set_title("near contact")
+    ax1.set_xlim(-2, 12)
+    lo = np.nanmin([traj.events.min_deflection, traj.events.min_apparent_deflection,
+                    sc.jump_in_deflection]) * nm
+    top = max(1.0, -0.8 * lo)
+    if np.isfinite(traj.events.spike_height):
+        top = max(top, 1.15 * traj.events.spike_height * nm)
+    ax1.set_ylim(min(-1.0, 1.6 * lo), top)
+    ax1.axhline(0, color="0.7", lw=0.5)
+    ax1.legend(fontsize=7)
+    ax0.legend(fontsize=7)
+    return ax0, ax1
+
+
+def write_trajectory_png(traj, path: str | os.PathLike, *, force: bool = False, dpi: int = 120) -> Path:
+    """:func:`plot_trajectory` written atomically as a PNG; returns the path."""
+    ax0, _ = plot_trajectory(traj)
+    path = Path(path)
+    with atomic_path(path, force) as tmp:
+        ax0.figure.savefig(tmp, dpi=dpi, format="png")
+    return path
