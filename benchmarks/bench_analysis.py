@@ -121,7 +121,7 @@ def _cpu(fn, repeat):
 def _ours(path, meta):
     from afmforce.errors import AfmforceError
     from afmforce.io import load
-    from afmforce.pipeline import analyze
+    from afmforce.analysis.pipeline import analyze
 
     curves = load(path, meta_override=meta)
     verdicts = []

@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT / "src"))
 
 from afmforce.errors import AfmforceError  # noqa: E402
 from afmforce.io import load  # noqa: E402
-from afmforce.pipeline import analyze  # noqa: E402
+from afmforce.analysis.pipeline import analyze  # noqa: E402
 from afmforce.plotting import plot_summary  # noqa: E402
 
 DATA = ROOT / "tests" / "data"

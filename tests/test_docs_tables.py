@@ -4,7 +4,7 @@ from pathlib import Path
 
 import pytest
 
-from afmforce.pipeline import steps_table
+from afmforce.analysis.pipeline import steps_table
 
 DOCS = Path(__file__).resolve().parents[1] / "docs"
 

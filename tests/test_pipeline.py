@@ -18,7 +18,7 @@ import pytest
 from afmforce.analysis.synthetic import static_curve
 from afmforce.errors import AnalysisError, ParameterError
 from afmforce.io import load
-from afmforce.pipeline import DEFAULT_STEPS, STEPS, analyze, resolve_steps, steps_table
+from afmforce.analysis.pipeline import DEFAULT_STEPS, STEPS, analyze, resolve_steps, steps_table
 from afmforce.io.curve import RawCurve
 
 DATA = Path(__file__).resolve().parent / "data"

@@ -8,7 +8,7 @@ import pytest
 from afmforce.analysis.batch import analyze_batch
 from afmforce.analysis.synthetic import static_curve
 from afmforce.errors import ParameterError
-from afmforce.pipeline import analyze
+from afmforce.analysis.pipeline import analyze
 
 
 @pytest.fixture(scope="module")

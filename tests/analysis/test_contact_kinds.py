@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from afmforce.io import load
-from afmforce.pipeline import analyze
+from afmforce.analysis.pipeline import analyze
 
 HERE = Path(__file__).parent
 DATA = HERE.parent / "data"
@@ -171,7 +171,7 @@ def test_stiff_lever_without_repulsive_contact_reports_the_pull_off():
     from pathlib import Path
 
     from afmforce.io import load
-    from afmforce.pipeline import analyze
+    from afmforce.analysis.pipeline import analyze
 
     path = Path(__file__).resolve().parents[3] / "shared" / "data" / "real" / (
         "afmformats_jpk-fd_single-modified_2023.jpk-force")

@@ -33,7 +33,7 @@ pytest.importorskip("afmforce.instrument")
 from afmforce.dynamics import simulate  # noqa: E402
 from afmforce.instrument import get_preset  # noqa: E402
 from afmforce.instrument.protocols import out_then_in  # noqa: E402
-from afmforce.pipeline import analyze  # noqa: E402
+from afmforce.analysis.pipeline import analyze  # noqa: E402
 
 PAPER = get_preset("paper")
 S = PAPER.photodiode.sensitivity  # 20 nm/V: the true InvOLS

@@ -30,7 +30,7 @@ pytest.importorskip("afmforce.instrument")
 
 from afmforce.dynamics import simulate  # noqa: E402
 from afmforce.instrument import Drift, Instrument, Noise, Photodiode, Piezo, PositionDetector  # noqa: E402
-from afmforce.pipeline import analyze  # noqa: E402
+from afmforce.analysis.pipeline import analyze  # noqa: E402
 
 S = 50e-9  # photodiode sensitivity [m/V]: the true InvOLS
 STEP = 0.5e-9  # drive step per sample [m]

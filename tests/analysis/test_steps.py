@@ -21,7 +21,7 @@ from afmforce.analysis.jumps import PullOff
 from afmforce.analysis.oscillation import find_peak
 from afmforce.analysis.synthetic import static_curve
 from afmforce.constants import FIG3
-from afmforce.pipeline import analyze
+from afmforce.analysis.pipeline import analyze
 
 K, R, A = 0.21, 220e-9, 5e-19  # Fig 9 theory (constants.FIG9)
 

@@ -20,19 +20,19 @@ DOCS = Path(__file__).resolve().parents[2] / "docs" / "architecture.md"
 LAWS = ("constants", "units", "errors", "progress", "_validate", "_fields", "_files", "_json",
         "forces", "friction", "cantilever", "statics", "diagnostics")
 IO = ("io",)
-ABOVE_DYNAMICS = ("instrument", "io", "analysis", "pipeline", "plotting", "sweep", "paper", "explore",
+ABOVE_DYNAMICS = ("instrument", "io", "analysis", "plotting", "sweep", "paper", "explore",
                   "cli")
 
 #: layer name -> (units in it, units it never imports). The docs table shows the same.
 RULES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
-    "laws": (LAWS, ("dynamics", "instrument", *IO, "analysis", "pipeline", "plotting", "sweep",
+    "laws": (LAWS, ("dynamics", "instrument", *IO, "analysis", "plotting", "sweep",
                     "paper", "explore", "cli")),
     "dynamics": (("dynamics",), ABOVE_DYNAMICS),
-    "instrument": (("instrument",), ("dynamics", "analysis", "pipeline", "plotting", "sweep", "paper",
+    "instrument": (("instrument",), ("dynamics", "analysis", "plotting", "sweep", "paper",
                                      "explore", "cli")),
-    "io": (IO, ("dynamics", "instrument", "analysis", "pipeline", "plotting", "sweep", "paper",
+    "io": (IO, ("dynamics", "instrument", "analysis", "plotting", "sweep", "paper",
                 "explore", "cli")),
-    "analysis": (("analysis", "pipeline"), ("dynamics", "instrument", "plotting", "sweep", "paper",
+    "analysis": (("analysis",), ("dynamics", "instrument", "plotting", "sweep", "paper",
                                             "explore", "cli")),
     "plotting": (("plotting",), ("sweep", "paper", "explore", "cli")),
     "sweep": (("sweep",), ("paper", "explore", "cli")),
@@ -105,9 +105,8 @@ def test_docs_table_states_the_rules():
         assert stated == set(forbidden), f"docs/architecture.md: {layer} never imports {sorted(forbidden)}"
 
 
-#: Top-level modules (not packages) allowed besides the laws: the pipeline waits for its move
-#: into the analysis package (issue 11, item 4).
-TOP_LEVEL = set(LAWS) | {"__init__", "pipeline"}
+#: Top-level modules (not packages): the laws and base modules only (issue 11, item 4).
+TOP_LEVEL = set(LAWS) | {"__init__"}
 
 
 def test_top_level_holds_the_laws_and_packages():

@@ -1,6 +1,6 @@
 """Force-curve analysis: small functions for each step of the paper's recipe (section 3).
 
-The pipeline that chains them is :mod:`afmforce.pipeline`; the vectorised core
+The pipeline that chains them is :mod:`afmforce.analysis.pipeline`; the vectorised core
 for many curves at once is :mod:`afmforce.analysis.batch`.
 """
 

@@ -1,7 +1,7 @@
 """The pipeline steps: each takes a :class:`~.state.State` and options, returns a new State.
 
 The registry that names them, gives their options and requirements lives in
-:mod:`afmforce.pipeline`. Each function stores its result dataclass under its
+:mod:`afmforce.analysis.pipeline`. Each function stores its result dataclass under its
 step identifier in ``state.details``.
 """
 

@@ -98,7 +98,7 @@ def _example_names() -> list[str]:
 
 
 def _steps() -> str:  # help text, computed when printed (the pipeline imports numba)
-    from ..pipeline import STEPS
+    from ..analysis.pipeline import STEPS
 
     return ", ".join(STEPS)
 
@@ -136,7 +136,7 @@ def _options(args: argparse.Namespace) -> dict:
 def _check(args: argparse.Namespace) -> list[str] | None:
     """Usage errors (exit 2) before any work; returns the steps."""
     from ..io import FORMATS
-    from ..pipeline import resolve_steps
+    from ..analysis.pipeline import resolve_steps
 
     from ..datasets import DATASETS, path as example_path
 

@@ -2,7 +2,7 @@
 
 A :class:`RawCurve` is the common currency between the virtual AFM
 (:mod:`afmforce.instrument`), the file readers (:mod:`afmforce.io`) and the
-analysis pipeline (:mod:`afmforce.pipeline`).
+analysis pipeline (:mod:`afmforce.analysis.pipeline`).
 
 Conventions (spec section 1)
 ----------------------------

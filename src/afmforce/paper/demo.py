@@ -66,7 +66,7 @@ def virtual_experiment(out_dir: str | Path | None = None, seed: int = 1) -> list
     """
     from ..dynamics import simulate
     from ..instrument import get_preset
-    from ..pipeline import analyze
+    from ..analysis.pipeline import analyze
     from ..io.native.rawfile import read_raw, write_raw
 
     out = Path(out_dir) if out_dir is not None else None

@@ -151,7 +151,7 @@ def _close_open() -> None:
 
 @dataclass(frozen=True)
 class CurveAnalysis:
-    """The function a batch runs on each item: load, :func:`~afmforce.pipeline.analyze`, summarise.
+    """The function a batch runs on each item: load, :func:`~afmforce.analysis.pipeline.analyze`, summarise.
 
     Picklable (Dask workers run it). Returns one summary row per curve of the
     item; a curve that cannot be read or analysed raises, and the batch records
@@ -221,7 +221,7 @@ class CurveAnalysis:
         return [(ref.index, curves[ref.index])]
 
     def __call__(self, ref: CurveRef) -> list[dict[str, Any]]:
-        from ..pipeline import analyze
+        from ..analysis.pipeline import analyze
 
         pairs = self.load(ref)
         several = ref.index is not None or len(pairs) > 1

@@ -20,12 +20,12 @@ from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
-from .analysis import steps as S
-from .analysis.result import AnalysisResult
-from .analysis.state import NoContact, State, prepare
-from .constants import HAMAKER, Z0
-from .errors import ParameterError
-from .io.curve import RawCurve
+from . import steps as S
+from .result import AnalysisResult
+from .state import NoContact, State, prepare
+from ..constants import HAMAKER, Z0
+from ..errors import ParameterError
+from ..io.curve import RawCurve
 
 __all__ = ["Step", "STEPS", "DEFAULT_STEPS", "analyze", "resolve_steps", "steps_table", "AnalysisResult"]
 
