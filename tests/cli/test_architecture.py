@@ -151,18 +151,12 @@ def test_no_two_modules_import_each_other():
     assert not pairs, f"modules that import each other: {pairs}"
 
 
-#: Library code that still draws with pyplot (the paper's figure scripts, to be moved onto
-#: afmforce.plotting); nothing else may.
-PYPLOT_ALLOWED = ("paper/",)
-
-
-def test_no_pyplot_state_outside_the_paper_scripts():
+def test_no_pyplot_state_in_library_code():
+    """Figures are matplotlib.figure.Figure objects: no global pyplot state anywhere."""
     bad = []
     for path in SRC.rglob("*.py"):
         rel = str(path.relative_to(SRC))
-        if rel.startswith(PYPLOT_ALLOWED):
-            continue
         if re.search(r"matplotlib\.pyplot|import pyplot", path.read_text(encoding="utf-8")):
             bad.append(rel)
-    assert not bad, f"pyplot used outside afmforce.paper: {bad}"
+    assert not bad, f"pyplot used in: {bad}"
     assert (SRC / "plotting" / "__init__.py").is_file()

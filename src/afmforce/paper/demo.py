@@ -94,16 +94,10 @@ def virtual_experiment(out_dir: str | Path | None = None, seed: int = 1) -> list
 
 
 def _figure(result, raw, path: Path) -> Path:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     from .._files import atomic_path
     from ..plotting import plot_summary
 
     fig = plot_summary(result, raw)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=90, format="png")
-    plt.close(fig)
     return path

@@ -17,9 +17,9 @@ NM = 1e9
 
 def _axes(ax, figsize=(5.5, 4.2)):
     if ax is None:
-        import matplotlib.pyplot as plt
+        from matplotlib.figure import Figure
 
-        _, ax = plt.subplots(figsize=figsize, constrained_layout=True)
+        ax = Figure(figsize=figsize, layout="constrained").add_subplot()
     return ax
 
 
@@ -103,9 +103,9 @@ def fig6(axes=None, velocities=(0.1e-6, 1e-6), xis=(0.01, 0.1)):
     and the y range is set to include the highest spike.
     """
     if axes is None:
-        import matplotlib.pyplot as plt
+        from matplotlib.figure import Figure
 
-        _, axes = plt.subplots(1, len(xis), figsize=(11, 4.4), constrained_layout=True, sharey=True)
+        axes = Figure(figsize=(11, 4.4), layout="constrained").subplots(1, len(xis), sharey=True)
     tr0 = run(**FIG5_RUN)
     curve = static_curve(tr0.spring_constant, C.FIG5["radius"], h_max=30e-9)
     top = 2.0

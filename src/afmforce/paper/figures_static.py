@@ -16,9 +16,9 @@ from ..statics import constant_friction_offset, load_friction_constants
 
 def _axes(ax):
     if ax is None:
-        import matplotlib.pyplot as plt
+        from matplotlib.figure import Figure
 
-        _, ax = plt.subplots(figsize=(5.5, 4.2), constrained_layout=True)
+        ax = Figure(figsize=(5.5, 4.2), layout="constrained").add_subplot()
     return ax
 
 

@@ -40,12 +40,13 @@ def virtual_fig7_curve(seed: int = 7):
 
 def fig7_virtual(fast: bool = False, seed: int = 7):
     """Three panels: signal vs nominal position, vs measured, vs measured with the inward shift."""
-    import matplotlib.pyplot as plt
+    from matplotlib.figure import Figure
 
     from ..instrument.detector import PAPER_BACKLASH
 
     raw = virtual_fig7_curve(seed)
-    fig, axes = plt.subplots(1, 3, figsize=(14, 4.3), constrained_layout=True, sharey=True)
+    fig = Figure(figsize=(14, 4.3), layout="constrained")
+    axes = fig.subplots(1, 3, sharey=True)
     inward = raw.segment == 0
     outward = raw.segment == 1
     sig = np.asarray(raw.deflection_signal)

@@ -179,11 +179,6 @@ def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None 
         Called with a :class:`~afmforce.progress.Progress` (``unit="figure"``,
         ``what`` the figure key) before each figure and at the end.
     """
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
     t0 = time.perf_counter()
     keys = list(FIGURES) if not only else list(only)
     bad = [k for k in keys if k not in FIGURES]
@@ -209,7 +204,6 @@ def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None 
             with atomic_path(target) as tmp:
                 fig.savefig(tmp, dpi=90 if fast else 150, format=ext)
             paths.append(target)
-        plt.close(fig)
         written[key] = paths
     if progress:
         progress(Progress(done=len(keys), total=steps, unit="figure", what="numbers"))
