@@ -137,7 +137,7 @@ def test_fringes_do_not_spoil_the_round_trip():
     (the retract rings freely after the pull-off), the results stay within their tolerances."""
     tr, cfg, raw, res = _run(1e-6, {"photodiode": {"interference_amplitude": 0.4e-9 / S}}, start=-800e-9)
     fringe = res.details["fringes"].approach
-    assert fringe.found and fringe.period == pytest.approx(raw.truth["fringe_period"], rel=0.15)
+    assert fringe.found and fringe.period == pytest.approx(raw.truth["fringe_period"], rel=0.01)  # measured 0.2 %
     assert res.sensitivity_fit == pytest.approx(S, rel=0.01)
     assert res.hamaker_radius == pytest.approx(5e-19 * cfg["radius"], rel=0.10)
 
@@ -160,8 +160,24 @@ def test_dynamic_runs_are_flagged(case):
         assert res.inertia_parameter > 1
     else:
         tr, cfg, raw, res = _run(1e-6, model="beam", xi=0.01)
-        # spec section 7: z_in - z_out = 0.454 nm at xi v = 1e-8 N
-        assert res.details["friction"].offset == pytest.approx(0.454e-9, abs=0.5e-9)
+        # the sign of the friction offset (inward line at larger z); its size: next test
+        assert res.details["friction"].offset > 0
     assert res.dynamic
     assert res.details["vdw"].reliable is False
     assert any("dynamic run" in w for w in res.warnings)
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "open (found 2026-11-23 while tightening issue 11.10's loose tolerance, which was abs=0.5 nm on a "
+    "0.454 nm value): the analysis finds 0.828 +- 0.009 nm where the trajectory has 0.454 nm. The lines "
+    "themselves agree (raw data, contact masked by the truth: 0.447 nm); the retract's drift line is fitted "
+    "on a free retract that is still relaxing after the pull-off (apparent deflection -170 -> -40 nm over the "
+    "first 20 samples, exponential), which drift.is_settling does not flag here: 0.025 V/s of false drift, "
+    "0.38 nm at the compliance region. Fix: detect the relaxation (or use one drift line continuous over "
+    "both runs)"))
+def test_friction_offset_matches_the_trajectory():
+    """Spec section 7: z_in - z_out = 0.454 nm at xi v = 1e-8 N (the trajectory's own compliance lines);
+    the analysis of the recorded curve must find it within 0.05 nm (about 5 standard errors)."""
+    tr, cfg, raw, res = _run(1e-6, model="beam", xi=0.01)
+    assert tr.events.hysteresis_offset == pytest.approx(0.454e-9, abs=0.005e-9)
+    assert res.details["friction"].offset == pytest.approx(tr.events.hysteresis_offset, abs=0.05e-9)

@@ -49,7 +49,8 @@ def test_robust_line_ignores_spikes():
     y[::37] += 5.0  # spikes
     a, b, se_a, se_b, sigma, n = robust_line(x, y)
     assert a == pytest.approx(2.0, abs=5e-3) and b == pytest.approx(3.0, abs=1e-2)
-    assert sigma == pytest.approx(0.01, rel=0.2) and n < 300
+    # a MAD-based scale from ~290 inliers: ~5 % standard error; measured 1.088 x the true 0.01
+    assert sigma == pytest.approx(0.01, rel=0.12) and n < 300
 
 
 def test_largest_step():

@@ -21,7 +21,7 @@ from afmforce.io import load
 from afmforce.analysis.pipeline import DEFAULT_STEPS, STEPS, analyze, resolve_steps, steps_table
 from afmforce.io.curve import RawCurve
 
-DATA = Path(__file__).resolve().parent / "data"
+DATA = Path(__file__).resolve().parents[1] / "data"
 NTMDT_META = {"spring_constant": 0.05, "sensitivity": 61e-9}
 REAL = sorted(p for p in DATA.iterdir() if p.suffix in (".ibw", ".csv", ".txt", ".jpk-force"))
 
@@ -184,6 +184,8 @@ def test_jpk_calibration_curve_gives_an_invols():
     assert res.details["calibration"].source == "fit" and res.deflection_unit == "V"
     app = np.flatnonzero(c.segment == 0)[-5:]
     slope = np.polyfit(c.piezo_measured[app], c.deflection_signal[app], 1)[0]
-    assert res.sensitivity_fit == pytest.approx(1 / slope, rel=0.25) and np.isnan(res.sensitivity)
+    # loose on purpose: the independent estimate is a line through 5 noisy samples (measured: ours
+    # is 1.10 x it); the exact check of the slope-to-InvOLS step is test_steps' synthetic curve
+    assert res.sensitivity_fit == pytest.approx(1 / slope, rel=0.2) and np.isnan(res.sensitivity)
     assert 1e-7 < res.sensitivity_fit < 5e-6  # m/V, the range of real optical levers
     assert np.isnan(res.spring_constant) and any("spring constant" in w for w in res.warnings)
