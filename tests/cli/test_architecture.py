@@ -50,27 +50,37 @@ def _is_module(unit: str) -> bool:
     return (SRC / unit).is_dir() or (SRC / f"{unit}.py").is_file()
 
 
+def _module_name(path: Path) -> str:
+    return ".".join(path.relative_to(SRC.parent).with_suffix("").parts).removesuffix(".__init__")
+
+
+def _imported(path: Path) -> set[str]:
+    """Every dotted name an import in ``path`` reaches (lazy imports included): the module
+    imported and, for ``from X import a``, ``X.a`` too (a submodule when ``a`` is one)."""
+    module = _module_name(path)
+    package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
+    names: set[str] = set()
+    for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        if isinstance(node, ast.Import):
+            names |= {a.name for a in node.names}
+        elif isinstance(node, ast.ImportFrom):
+            if node.level:
+                base = package.split(".")[: len(package.split(".")) - node.level + 1]
+                target = ".".join(base + ([node.module] if node.module else []))
+            else:
+                target = node.module or ""
+            names |= {target} | {f"{target}.{a.name}" for a in node.names}
+    return names
+
+
 def imports() -> dict[str, set[tuple[str, str]]]:
     """unit -> {(imported unit, file)} for every import of another afmforce unit."""
     out: dict[str, set[tuple[str, str]]] = {}
     for path in SRC.rglob("*.py"):
-        rel = path.relative_to(SRC.parent).with_suffix("")
-        module = ".".join(rel.parts).removesuffix(".__init__")
-        package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            targets: list[str] = []
-            if isinstance(node, ast.Import):
-                targets = [a.name for a in node.names]
-            elif isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = package.split(".")[: len(package.split(".")) - node.level + 1]
-                    target = ".".join(base + ([node.module] if node.module else []))
-                    targets = [target] if node.module else [f"{target}.{a.name}" for a in node.names]
-                else:
-                    targets = [node.module or ""]
-            for t in targets:
-                if t.startswith("afmforce.") and _is_module(_unit(t)) and _unit(t) != _unit(module):
-                    out.setdefault(_unit(module), set()).add((_unit(t), str(path.relative_to(SRC))))
+        unit = _unit(_module_name(path))
+        for t in _imported(path):
+            if t.startswith("afmforce.") and _unit(t) and _is_module(_unit(t)) and _unit(t) != unit:
+                out.setdefault(unit, set()).add((_unit(t), str(path.relative_to(SRC))))
     return out
 
 
@@ -119,25 +129,8 @@ def test_top_level_holds_the_laws_and_packages():
 
 
 def _module_edges() -> tuple[dict[str, set[str]], dict[str, Path]]:
-    mods = {".".join(p.relative_to(SRC.parent).with_suffix("").parts).removesuffix(".__init__"): p
-            for p in SRC.rglob("*.py")}
-    edges: dict[str, set[str]] = {}
-    for module, path in mods.items():
-        package = module if path.name == "__init__.py" else module.rsplit(".", 1)[0]
-        out: set[str] = set()
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
-            names: list[str] = []
-            if isinstance(node, ast.Import):
-                names = [a.name for a in node.names]
-            elif isinstance(node, ast.ImportFrom):
-                if node.level:
-                    base = package.split(".")[: len(package.split(".")) - node.level + 1]
-                    target = ".".join(base + ([node.module] if node.module else []))
-                else:
-                    target = node.module or ""
-                names = [target] + [f"{target}.{a.name}" for a in node.names]
-            out |= {n for n in names if n in mods and n != module}
-        edges[module] = out
+    mods = {_module_name(p): p for p in SRC.rglob("*.py")}
+    edges = {m: {n for n in _imported(p) if n in mods and n != m} for m, p in mods.items()}
     return edges, mods
 
 
