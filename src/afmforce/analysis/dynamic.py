@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import Z0
-from ._numeric import robust_line, robust_line_thin
+from ._numeric import robust_line_thin
 
 __all__ = ["DynamicDiagnosis", "diagnose_curve", "run_velocity"]
 

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AnalysisError
-from ._numeric import mad_sigma, robust_line, robust_line_thin, two_line_split
+from ._numeric import mad_sigma, robust_line_thin, two_line_split
 
 __all__ = ["RunRegions", "find_run_regions", "saturated_mask", "run_indices", "check_compliance",
            "contact_slopes"]

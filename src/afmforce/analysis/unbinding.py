@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import median_filter
 
-from ._numeric import mad_sigma, robust_line, robust_line_thin
+from ._numeric import mad_sigma, robust_line_thin
 from .regions import RunRegions
 
 __all__ = ["UnbindingStep", "Adhesion", "retract_adhesion"]

@@ -1,0 +1,285 @@
+"""Pipeline steps that read physics off a calibrated curve: jumps, adhesion, surface energy,
+van der Waals fit, oscillations, friction signature, dynamic diagnosis."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from ..constants import HAMAKER, Z0
+from ..errors import AnalysisError
+from . import compliance as cc
+from ._numeric import robust_line
+from .dynamic import diagnose_curve, run_velocity
+from .contact_point import curvature_ratio
+from .jumps import JumpIn, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings, pull_off_estimate
+from .oscillation import OscillationResult, both_runs, find_peak
+from .state import State
+from .unbinding import retract_adhesion
+from .vdw import fit_vdw
+
+from ._step_helpers import _kind, _skip
+
+__all__ = ["jumps", "adhesion_step", "surface_energy", "vdw", "oscillation", "friction", "diagnosis"]
+
+
+def jumps(st: State, *, nsigma: float = 5.0, window: int = 3, onset_tolerance: float = 3e-9) -> State:
+    """Jump into contact and pull-off, near each run's contact split.
+
+    Warns when the first contact sample lies more than ``onset_tolerance`` (or
+    ``nsigma`` noise) off the compliance line the zero of separation was put on.
+    """
+    st.require("separation", step="jumps")
+    if _kind(st) == "soft":
+        nan = math.nan
+        return _skip(st, "jumps", "soft contact: no jump into contact and no single pull-off jump (see adhesion)",
+                     {"jump_in": JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
+                      "pull_off": PullOff(False, -1, nan, nan, nan, nan, 0.0, False)})
+    noise = abs(st.noise * st.factor)
+    k = st.spring_constant
+    ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window)
+    ret = st.retract
+    clipped = not ret.has_compliance and bool(ret.contact.any())  # its whole contact is clipped
+    if clipped:  # the pull-off is not in the record
+        po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
+    else:
+        po = find_pull_off(st.deflection, st.position, ret, noise, k, nsigma, window)
+    warn = jump_warnings(ji, po, k, clipped)
+    z0 = st.details["zero"].contact_separation if "zero" in st.details else Z0
+    if 0 <= ji.index < st.separation.size - 1:
+        # at a rigid contact the first contact sample lies on the compliance line (h = z0)
+        off = float(st.separation[ji.index + 1] - z0)
+        if abs(off) > max(nsigma * noise, onset_tolerance):
+            warn.append(f"the first contact sample lies {off * 1e9:.3g} nm off the compliance line: a soft or "
+                        "nonlinear contact, or a line displaced by friction or hysteresis (dynamic run); "
+                        "separations near contact are uncertain by about that much")
+    return st.update("jumps", {"jump_in": ji, "pull_off": po}, warn=warn)
+
+
+def adhesion_step(st: State, *, nsigma: float = 5.0) -> State:
+    """Adhesion for every contact kind: the retract's deepest dip below its own baseline (<= 0).
+
+    See :mod:`~afmforce.analysis.unbinding`; the dip counts above ``nsigma``
+    baseline noise, with its position, the last rupture and the unbinding steps.
+    """
+    st.require("position", step="adhesion")
+    res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=nsigma)
+    return st.update("adhesion", res)
+
+
+def surface_energy(st: State, *, radius: float | None = None, model: str = "jkr", hamaker: float = HAMAKER,
+                   z0: float = Z0) -> State:
+    """Surface energy from the pull-off and R, and R from the jump-out distance (hard contacts)."""
+    j = st.details.get("jumps")
+    if j is None:
+        raise AnalysisError("step 'surface_energy' needs the jumps")
+    if _kind(st) == "soft":
+        return _skip(st, "surface_energy", "soft contact: JKR/DMT from a pull-off jump need a rigid contact")
+    if not j["pull_off"].found:
+        return _skip(st, "surface_energy", "no pull-off found")
+    radius = radius if radius is not None else st.metadata.get("radius")
+    return st.update("surface_energy", adhesion(j["pull_off"], st.spring_constant, radius=radius, model=model,
+                                                hamaker=hamaker, z0=z0))
+
+
+def vdw(st: State, *, radius: float | None = None, z0: float = Z0, max_separation: float = 30e-9,
+        baseline: str = "line", fit_separation_offset: bool = False) -> State:
+    """van der Waals fit of the approach before the jump (eq 2)."""
+    j = st.details.get("jumps")
+    if j is None:
+        raise AnalysisError("step 'vdw' needs the jumps")
+    if _kind(st) == "soft":
+        return _skip(st, "vdw", "soft contact: the van der Waals law of eq 2 is for a rigid contact with a jump")
+    radius = radius if radius is not None else st.metadata.get("radius")
+    idx = st.approach.index
+    ji = j["jump_in"]
+    end = int(np.searchsorted(idx, ji.index)) + 1 if ji.found else st.approach.split
+    pre = idx[:end]
+    res = fit_vdw(st.separation[pre], st.force[pre], spring_constant=st.spring_constant, radius=radius, z0=z0,
+                  max_separation=max_separation, baseline=baseline,
+                  fit_separation_offset=fit_separation_offset)
+    warn = None if res.status == "ok" else f"van der Waals fit: {res.status}"
+    return st.update("vdw", res, warn=warn)
+
+
+def oscillation(st: State, *, false_alarm: float = 1e-3, min_cycles: float = 3.0) -> State:
+    """Post-contact oscillation of each run; temporal versus spatial origin."""
+    st.require("deflection", step="oscillation")
+    peaks = {}
+    for run in (st.approach, st.retract):
+        idx = run.index[run.compliance & ~run.saturated]
+        v = run_velocity(st.time[run.index], st.z[run.index]) if st.time_known else math.nan
+        if not st.time_known or idx.size < 8:
+            nyq = math.nan
+            if st.time_known and run.index.size > 1:
+                nyq = 0.5 / float(np.median(np.diff(st.time[run.index])))
+            peaks[run.kind] = dataclasses.replace(find_peak(np.array([]), np.array([]), v, run.kind), nyquist=nyq)
+            continue
+        x = st.z[idx] - st.z[idx].mean()
+        a, b, *_ = robust_line(x, st.deflection[idx])
+        resid = st.deflection[idx] - (a + b * x)
+        peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=min_cycles,
+                                    false_alarm=false_alarm)
+    origin, verdict, _ = both_runs(peaks["approach"], peaks["retract"])
+    return st.update("oscillation", OscillationResult(peaks["approach"], peaks["retract"], origin, verdict))
+
+
+def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
+             offset_tolerance: float = 0.2e-9, max_curvature: float = 1.25) -> State:
+    """Friction signature of the two compliance lines (before the shift).
+
+    Assessed only on a hard contact whose two compliance regions are straight
+    lines (late/early slope ratio within ``max_curvature``); otherwise the
+    signature is ``"not assessed"`` with the reason and its numbers.
+    """
+    comp = st.details.get("compliance")
+    if comp is None:
+        raise AnalysisError("step 'friction' needs the compliance lines")
+    nan = math.nan
+    why = None
+    if _kind(st) == "soft":
+        why = "not assessed: soft contact (curved; friction's signature needs straight compliance lines)"
+    else:
+        for run in (st.approach, st.retract):
+            if not run.has_compliance:
+                continue
+            idx = run.index[run.compliance & ~run.saturated]
+            c = curvature_ratio(st.z, st.signal, idx, min_points=12)
+            if not math.isfinite(c):
+                why = (f"not assessed: the {run.kind} compliance region has {idx.size} samples, too few to tell "
+                       "a straight line from a curved one")
+                break
+            if not (1 / max_curvature <= c <= max_curvature):
+                why = (f"not assessed: the {run.kind} compliance line is not straight (late/early slope ratio "
+                       f"{c:.3g}, outside {1 / max_curvature:.3g}-{max_curvature:.3g})")
+                break
+    dr = st.details.get("drift")
+    if why is None and dr is not None and dr.retract_settling and comp.approach.found and comp.retract.found:
+        # the retract carries the approach's drift line: its slope and offset are off by the change of
+        # drift between the runs, which the 2 % slope test cannot tell from friction
+        why = ("not assessed: the retract has no drift line of its own (its free part is still relaxing after "
+               "the pull-off), so its compliance line is not comparable to 2 %")
+    if why is not None:
+        return _skip(st, "friction", why, cc.FrictionSignature("not assessed", nan, nan, nan, nan, why))
+    sh = st.details.get("shift") or cc.compliance_shift(comp, applied=False)
+    slope_unc, offset_unc, rate_gap = _drift_uncertainty(st, comp)
+    sig = cc.friction_signature(comp, sh, nsigma=nsigma, slope_tolerance=max(slope_tolerance, slope_unc),
+                                offset_tolerance=max(offset_tolerance, offset_unc), channel=st.channel)
+    if rate_gap > 0 and (slope_unc > slope_tolerance or offset_unc > offset_tolerance):
+        bounds = (f"the drift rate holds to {rate_gap:.3g} {st.unit}/s between the halves of the baselines, so "
+                  f"the lines are known to a slope of {slope_unc * 100:.2g} % and an offset of "
+                  f"{offset_unc * 1e9:.3g} nm")
+        if sig.kind == "none":
+            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} within the drift uncertainty ({bounds})")
+        else:
+            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} (beyond the drift uncertainty: {bounds})")
+    return st.update("friction", sig)
+
+
+def _drift_uncertainty(st: State, comp) -> tuple[float, float, float]:
+    """How far an imperfect drift line can move the compliance lines.
+
+    Each run's drift line is a line in time through its own zero-force region. How well
+    that line holds is measured on the region itself: the drift-corrected baseline of each
+    half of it has its own slope, and the larger difference between the halves ``dr``
+    [signal/s] is what slow structure (a fraction of a fringe, a relaxation) leaves in a
+    rate. ``dr`` tilts a compliance line by ``dr / (v s)`` of its slope ``s`` and moves it
+    by ``dr dt / s`` over the time ``dt`` between the line and its baseline.
+
+    Returns
+    -------
+    slope : float  relative slope uncertainty [-]
+    offset : float  offset uncertainty [m]
+    rate : float  ``dr`` [signal/s]
+    """
+    if not st.time_known:
+        return 0.0, 0.0, 0.0
+    rate, lever = 0.0, 0.0
+    for run in (st.approach, st.retract):
+        base = run.index[run.zero_force & ~run.saturated]
+        line = run.index[run.compliance]
+        if base.size >= 24:
+            half = base.size // 2
+            slopes = [robust_line(st.time[part] - st.time[part].mean(), st.signal[part])[1]
+                      for part in (base[:half], base[half:])]
+            rate = max(rate, abs(float(slopes[1] - slopes[0])))
+        if line.size and base.size:
+            lever += abs(float(np.median(st.time[line])) - float(np.median(st.time[base])))
+    idx = st.approach.index
+    v = run_velocity(st.time[idx], st.z[idx])
+    slope = abs(comp.approach.slope)
+    if not (rate > 0 and math.isfinite(v) and v > 0 and slope > 0):
+        return 0.0, 0.0, rate
+    return rate / (v * slope), rate * lever / slope, rate
+
+
+def _force_gradient(st: State, window: int = 5) -> tuple[float, str]:
+    """Measured |dF/dh| [N/m] where the tip meets the surface, and how it was measured."""
+    if st.force is None or not math.isfinite(st.spring_constant):
+        return math.nan, "no force (spring constant unknown)"
+    idx = st.approach.index
+    h, f = st.separation[idx], st.force[idx]
+    if _kind(st) == "soft":
+        cp = st.details["contact_point"]
+        k = int(np.searchsorted(idx, cp.index))
+        stop = np.flatnonzero((np.arange(idx.size) > k) & (h < -0.1 * max(cp.indentation, 0.0)))
+        end = int(stop[0]) if stop.size else idx.size
+        sel = slice(k, max(end, k + 3))
+        what = "contact stiffness over the first 10 % of the indentation"
+    else:
+        ji = st.details["jumps"]["jump_in"]
+        if not ji.found:
+            return math.nan, "no jump into contact: the attraction's gradient is below the noise"
+        k = int(np.searchsorted(idx, ji.index))
+        sel = slice(max(k - window + 1, 0), k + 1)
+        what = f"attraction over the last {window} samples before the jump"
+    hs, fs = h[sel], f[sel]
+    if hs.size < 3 or np.ptp(hs) == 0:
+        return math.nan, "too few samples to measure the force gradient"
+    return float(abs(np.polyfit(hs - hs.mean(), fs, 1)[0])), what
+
+
+def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution: float | None = None,
+              min_resolution: float = 0.01e-9, attraction_ratio: float = 0.75) -> State:
+    """Dynamic diagnosis: eq 3, eq 4, jump-in distance, friction and adhesion consistency.
+
+    Flags the van der Waals fit as unreliable when the run is judged dynamic.
+    """
+    j = st.details.get("jumps")
+    if j is None:
+        raise AnalysisError("step 'diagnosis' needs the jumps")
+    idx = st.approach.index
+    v = run_velocity(st.time[idx], st.z[idx]) if st.time_known else math.nan
+    f = resonance_frequency if resonance_frequency is not None else st.metadata.get("resonance_frequency")
+    dx = resolution if resolution is not None else max(abs(st.noise * st.factor), min_resolution)
+    fit = st.details.get("vdw")
+    fit = fit if fit is not None and hasattr(fit, "static_jump_in_separation") else None
+    h_static = fit.static_jump_in_separation if fit is not None else math.nan
+    step = float(np.median(np.abs(np.diff(st.z[idx])))) if idx.size > 1 else 0.0
+    fr = st.details.get("friction")
+    z0 = st.details["zero"].contact_separation if "zero" in st.details else math.nan
+    grad, grad_how = _force_gradient(st)
+    res = diagnose_curve(velocity=v, spring_constant=st.spring_constant, resonance_frequency=f, resolution=dx,
+                         force_gradient=grad, force_gradient_method=grad_how,
+                         jump_in_separation=j["jump_in"].separation if j["jump_in"].found else math.nan,
+                         static_jump_in_separation=h_static,
+                         sample_step=step, friction=None if fr is None else fr.kind,
+                         friction_verdict="" if fr is None else fr.verdict,
+                         hamaker_radius=fit.hamaker_radius if fit is not None else math.nan,
+                         pull_off_force=pull_off_estimate(j["pull_off"], st.spring_constant), contact_separation=z0,
+                         attraction_ratio=attraction_ratio)
+    ret = st.retract
+    if ret is not None and not ret.has_compliance and ret.contact.any() and bool(
+            np.all(st.signal[ret.index[ret.contact]] > 0)):
+        # static pull-off needs adhesion (negative deflection): leaving while pushed is dynamics
+        res = dataclasses.replace(res, dynamic=True, verdict=res.verdict + "; " + (
+            "the tip left the surface while the cantilever was still pushed (deflection above the photodiode's "
+            "saturation on the whole retract contact), where a static pull-off needs adhesion: drag or friction "
+            "held the cantilever bent -- a dynamic run, not a static force curve"))
+    new = st.update("diagnosis", res)
+    if res.dynamic and fit is not None:
+        new = new.update("vdw", dataclasses.replace(fit, reliable=False),
+                         warn="dynamic run: the van der Waals fit is NOT a static force law (see diagnosis)")
+    return new
