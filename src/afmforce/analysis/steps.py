@@ -56,7 +56,7 @@ def calibration(st: State, *, source: str = "auto", run: str = "approach") -> St
 
 
 def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curvature: float = 1.6,
-         method: str = "hertz_local", force_fraction: float = 0.55, window: float = 0.15) -> State:
+         method: str = "power_local", force_fraction: float = 0.65, window: float = 0.15) -> State:
     """Contact kind (hard with jump-in or straight line / soft curved) and a soft contact's contact point.
 
     See :mod:`~afmforce.analysis.contact_point`: hard when the approach jumps
@@ -87,7 +87,14 @@ def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curv
             raise AnalysisError("soft contact: no contact point found on the approach (too few samples before "
                                 "the largest deflection)")
         warn = None
-        if force_fraction < 1.0:  # how much the point depends on the fitted range: the whole approach
+        width = cp.position_high - cp.position_low
+        if width > max(100e-9, 0.1 * abs(cp.indentation)):
+            warn = (f"contact point uncertain: {cp.position * 1e6:.4g} um, but fits with the contact anywhere in "
+                    f"[{cp.position_low * 1e6:.4g}, {cp.position_high * 1e6:.4g}] um are as good within 2 sigma "
+                    f"({width * 1e6:.3g} um, {width / abs(cp.indentation):.0%} of the {cp.indentation * 1e6:.3g} um "
+                    "indentation): a slowly rising baseline or a long-range force before contact makes the onset "
+                    "ambiguous")
+        elif force_fraction < 1.0:  # how much the point depends on the fitted range: the whole approach
             alt = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=1.0, window=window)
             if alt.index >= 0:
                 gap = alt.position - cp.position
