@@ -32,7 +32,7 @@ from ..errors import ParameterError
 from ._numeric import largest_step, robust_line
 from .regions import RunRegions
 
-__all__ = ["JumpIn", "PullOff", "find_jump_in", "find_pull_off", "jump_warnings", "pull_off_estimate",
+__all__ = ["JumpIn", "PullOff", "Jumps", "find_jump_in", "find_pull_off", "jump_warnings", "pull_off_estimate",
            "AdhesionResult", "adhesion"]
 
 
@@ -91,6 +91,20 @@ class PullOff:
     significance: float
     saturated: bool
     deflection_extrapolated: float = math.nan
+
+
+@dataclass(frozen=True)
+class Jumps:
+    """The jumps step's result: the jump into contact and the pull-off.
+
+    Attributes
+    ----------
+    jump_in : JumpIn
+    pull_off : PullOff
+    """
+
+    jump_in: JumpIn
+    pull_off: PullOff
 
 
 def _nan_jump_in() -> JumpIn:

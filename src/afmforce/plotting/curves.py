@@ -149,7 +149,7 @@ def plot_residuals(result: AnalysisResult, ax=None):
         return _say(ax, why)
     h, f = result.separation, result.force
     m = (result.segment == 0) & (h >= fit.separation_min) & (h <= fit.separation_max)
-    ji = result.details["jumps"]["jump_in"]
+    ji = result.details["jumps"].jump_in
     if ji.found:
         m &= np.arange(h.size) <= ji.index
     model = _vdw_curve(result, h[m]) + fit.force_offset + fit.force_slope * (
