@@ -13,6 +13,7 @@ import pytest
 
 from afmforce._fields import QUANTITIES, spec_of
 from afmforce.analysis import options as O
+from afmforce.analysis.options_text import parse_option
 from afmforce.analysis.pipeline import STEPS, analyze, resolve_options
 from afmforce.analysis.synthetic import static_curve
 from afmforce.errors import AfmforceError, ParameterError
@@ -70,7 +71,7 @@ def test_probe_fields_share_the_vocabulary():
     (lambda: O.FringesOptions(apply="sometimes"), ["fringes.apply", "auto, always, never"]),
     (lambda: O.SmoothOptions(window=4), ["smooth.window", "odd"]),
     (lambda: O.JumpsOptions(window=2.5), ["jumps.window", "whole number"]),
-    (lambda: O.KindOptions(method="magic"), ["kind.method", "hertz_local"]),
+    (lambda: resolve_options([O.KindOptions(method="magic")]), ["kind.method", "hertz_local"]),
     (lambda: O.ProbeCalibration(radius=-5e-9), ["radius", "nm", "out of range"]),
     (lambda: O.ProbeCalibration(sensitivity=1.0), ["sensitivity", "nm/V"]),
     (lambda: O.ProbeCalibration(theta0=math.radians(95)), ["theta0", "deg"]),
@@ -89,16 +90,16 @@ def test_records_are_frozen():
 
 
 def test_parse_option_takes_units_words_and_flags():
-    assert O.parse_option("vdw.max_separation=20nm") == ("vdw", "max_separation", pytest.approx(20e-9))
-    assert O.parse_option("fringes.apply=never") == ("fringes", "apply", "never")
-    assert O.parse_option("vdw.fit_separation_offset=true") == ("vdw", "fit_separation_offset", True)
-    assert O.parse_option("fringes.period=none") == ("fringes", "period", None)
-    assert O.parse_option("jumps.window=5") == ("jumps", "window", 5)
+    assert parse_option("vdw.max_separation=20nm") == ("vdw", "max_separation", pytest.approx(20e-9))
+    assert parse_option("fringes.apply=never") == ("fringes", "apply", "never")
+    assert parse_option("vdw.fit_separation_offset=true") == ("vdw", "fit_separation_offset", True)
+    assert parse_option("fringes.period=none") == ("fringes", "period", None)
+    assert parse_option("jumps.window=5") == ("jumps", "window", 5)
     for bad, word in (("vdw.max_separation=20nN", "length"), ("vdw.nope=1", "unknown option"),
                       ("vwd.z0=1nm", "unknown step"), ("vdw", "STEP.NAME=VALUE"),
                       ("vdw.max_separation=-2nm", "out of range"), ("shift.apply=maybe", "true or false")):
         with pytest.raises(AfmforceError, match=word):
-            O.parse_option(bad)
+            parse_option(bad)
 
 
 # --- the pipeline takes records; the old dict still works, with a warning -----------------------
@@ -153,3 +154,77 @@ def test_details_entries_are_dataclasses(curve):
     for name, detail in res.details.items():
         assert dataclasses.is_dataclass(detail), name
     assert json.loads(res.to_json())["details"]["jumps"]["jump_in"]["index"] == res.details["jumps"].jump_in.index
+
+
+def _numeric_fields_without_unit(obj, path):
+    missing = []
+    for f in dataclasses.fields(obj):
+        v = getattr(obj, f.name)
+        if dataclasses.is_dataclass(v):
+            missing += _numeric_fields_without_unit(v, f"{path}.{f.name}")
+        elif isinstance(v, tuple) and v and dataclasses.is_dataclass(v[0]):
+            missing += _numeric_fields_without_unit(v[0], f"{path}.{f.name}[0]")
+        elif isinstance(v, (int, float, np.number)) and not isinstance(v, (bool, np.bool_)) \
+                and "unit" not in f.metadata:
+            missing.append(f"{path}.{f.name}")
+    return missing
+
+
+@pytest.mark.parametrize("kind", ["hard", "soft"])
+def test_every_number_in_details_declares_its_unit(kind):
+    """Each numeric field of each step's result dataclass (nested ones too) carries its unit as
+    metadata; the JSON states them under ``details_units`` with the signal's unit filled in."""
+    from pathlib import Path
+
+    from afmforce.io import load
+
+    soft = Path(__file__).resolve().parents[1] / "data" / "jpk_cellhesion_spot3.jpk-force"
+    c = static_curve(noise=0.05e-9, drift=0.01, seed=11) if kind == "hard" else load(soft)[0]
+    res = analyze(c)
+    assert res.contact_kind == kind
+    missing = [m for step, d in res.details.items() for m in _numeric_fields_without_unit(d, step)]
+    assert not missing
+    units = json.loads(res.to_json())["details_units"]
+    assert units["vdw" if kind == "hard" else "contact_point"]
+    if kind == "hard":
+        assert units["jumps"]["pull_off"]["force"] == "N" and units["vdw"]["hamaker_radius"] == "J m"
+        assert units["compliance"]["approach"]["slope"] == f"{res.deflection_unit}/m"
+        assert units["calibration"]["factor"] == f"m/{res.deflection_unit}"
+    else:
+        assert units["contact_point"]["indentation"] == "m"
+
+
+ALGORITHMS = [  # (module, function, record, options whose default the function shares)
+    ("vdw", "fit_vdw", O.VdwOptions, ["z0", "max_separation", "baseline", "fit_separation_offset"]),
+    ("jumps", "find_jump_in", O.JumpsOptions, ["nsigma", "window"]),
+    ("jumps", "find_pull_off", O.JumpsOptions, ["nsigma", "window"]),
+    ("jumps", "adhesion", O.SurfaceEnergyOptions, ["model", "hamaker", "z0"]),
+    ("compliance", "calibrate", O.CalibrationOptions, ["source", "run"]),
+    ("compliance", "friction_signature", O.FrictionOptions, ["nsigma", "slope_tolerance", "offset_tolerance"]),
+    ("unbinding", "retract_adhesion", O.AdhesionOptions, ["nsigma"]),
+    ("oscillation", "find_peak", O.OscillationOptions, ["min_cycles", "false_alarm"]),
+    ("separation", "zero_of_separation", O.ZeroOptions, ["contact_separation"]),
+    ("fringes", "fit_fringes", O.FringesOptions, ["period", "order"]),
+    ("contact_point", "classify_contact", O.KindOptions, ["nsigma", "min_stiffness", "max_curvature"]),
+    ("drift", "remove_drift", O.DriftOptions, ["order"]),
+]
+
+
+@pytest.mark.parametrize("module, func, record, names", ALGORITHMS, ids=lambda x: x if isinstance(x, str) else "")
+def test_algorithms_take_their_defaults_from_the_records(module, func, record, names):
+    """The functions behind the steps name the record's default (``nsigma: float = _J.nsigma``),
+    never a second literal: one place to change a default."""
+    import ast
+    import importlib
+
+    mod = importlib.import_module(f"afmforce.analysis.{module}")
+    tree = ast.parse(inspect.getsource(mod))
+    fn = next(n for n in ast.walk(tree) if isinstance(n, ast.FunctionDef) and n.name == func)
+    args = fn.args.args + fn.args.kwonlyargs
+    defaults = dict(zip([a.arg for a in fn.args.args][len(fn.args.args) - len(fn.args.defaults):], fn.args.defaults))
+    defaults.update({a.arg: d for a, d in zip(fn.args.kwonlyargs, fn.args.kw_defaults) if d is not None})
+    sig = inspect.signature(getattr(mod, func))
+    for name in names:
+        assert name in [a.arg for a in args] and name in defaults, (func, name)
+        assert not isinstance(defaults[name], ast.Constant), f"{func}({name}=literal): use the record's default"
+        assert sig.parameters[name].default == getattr(record(), name)

@@ -27,6 +27,8 @@ import numpy as np
 
 from . import options as O
 from . import steps as S
+from .contact_point import CONTACT_POINT_METHODS
+from .options_text import show_default
 from .result import AnalysisResult
 from .state import NoContact, State, prepare
 from ..errors import ParameterError
@@ -203,6 +205,7 @@ def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
             raise ParameterError(f"options for step {rec.step!r} given twice")
         seen.add(rec.step)
         out[rec.step] = rec
+    out["kind"].check_method(CONTACT_POINT_METHODS)
     if probe is not None and not isinstance(probe, O.ProbeCalibration):
         raise ParameterError(f"probe must be a ProbeCalibration, got {probe!r}")
     return out, probe or O.ProbeCalibration()
@@ -346,5 +349,5 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
 def steps_table() -> list[dict[str, str]]:
     """One row per step (the docs table is built from this)."""
     return [{"identifier": s.identifier, "name": s.name, "requires": ", ".join(s.requires) or "-",
-             "options": ", ".join(f"{f.name}={O.show_default(f)}" for f in dataclasses.fields(s.options)) or "-",
+             "options": ", ".join(f"{f.name}={show_default(f)}" for f in dataclasses.fields(s.options)) or "-",
              "reference": s.reference or "-"} for s in STEPS.values()]

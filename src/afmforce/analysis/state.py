@@ -18,6 +18,7 @@ from ..errors import AnalysisError
 from ..io.curve import RawCurve
 from .options import ProbeCalibration
 from .regions import RunRegions, run_indices
+from ._units import unit as _u
 
 __all__ = ["State", "prepare", "ContactSummary", "SmoothResult", "NoContact"]
 
@@ -30,13 +31,13 @@ class NoContact(AnalysisError):
 class ContactSummary:
     """Where contact starts and ends (indices into the curve) and region sizes [-]."""
 
-    contact_index: int
-    pull_off_region_end: int
-    zero_force_approach: int
-    zero_force_retract: int
-    compliance_approach: int
-    compliance_retract: int
-    saturated: int
+    contact_index: int = _u("")
+    pull_off_region_end: int = _u("")
+    zero_force_approach: int = _u("")
+    zero_force_retract: int = _u("")
+    compliance_approach: int = _u("")
+    compliance_retract: int = _u("")
+    saturated: int = _u("")
 
 
 @dataclass(frozen=True)
@@ -50,9 +51,9 @@ class SmoothResult:
     max_change : float  largest change of a position [m]
     """
 
-    window: int
+    window: int = _u("")
     channel: str
-    max_change: float
+    max_change: float = _u("m")
 
 
 @dataclass(frozen=True)

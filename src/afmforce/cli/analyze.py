@@ -25,6 +25,7 @@ from pathlib import Path
 from .. import errors as _errors
 from ..errors import ParameterError
 from ._validate import add_field, check_output, lazy_help
+from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
 from .common import add_quantity, chunk_progress_bar, eprint
 
 SUFFIX = ".afmforce"
@@ -112,22 +113,6 @@ def _steps() -> str:  # help text, computed when printed (the pipeline imports n
     return ", ".join(STEPS)
 
 
-def _default(step: str, name: str):
-    """A step option's registry default (shown in the help; computed when the help is printed)."""
-    from ..analysis.options import OPTIONS
-
-    return OPTIONS[step].__dataclass_fields__[name].default
-
-
-def _option_names() -> str:
-    import dataclasses
-
-    from ..analysis.options import OPTIONS
-
-    return "; ".join(f"{s}: {', '.join(f.name for f in dataclasses.fields(c))}" for s, c in OPTIONS.items()
-                     if dataclasses.fields(c))
-
-
 def _map_quantities() -> str:
     from ..analysis.mapping import MAP_QUANTITIES
 
@@ -147,38 +132,6 @@ def _inputs(names: list[str]) -> list[Path]:
         else:
             out.append(path)
     return out
-
-
-#: Dedicated flags that set a step option: dest -> (step, option).
-_OPTION_FLAGS = {"contact_separation": ("zero", "contact_separation"), "calibration": ("calibration", "source")}
-
-
-def _options(args: argparse.Namespace) -> tuple:
-    """The step options records (``--option`` and the dedicated flags) and the probe record.
-
-    Raises ParameterError (exit 2) for an unknown step or option, a value out of
-    its range, or an option given twice.
-    """
-    from ..analysis.options import OPTIONS, ProbeCalibration, parse_option
-
-    given: dict[str, dict] = {}
-    for text in args.option:
-        step, name, value = parse_option(text)
-        if name in given.setdefault(step, {}):
-            raise ParameterError(f"--option {step}.{name} given twice")
-        given[step][name] = value
-    for dest, (step, name) in _OPTION_FLAGS.items():
-        value = getattr(args, dest)
-        if value is None:
-            continue
-        if name in given.get(step, {}):
-            raise ParameterError(f"--{dest.replace('_', '-')} and --option {step}.{name} set the same option; "
-                                 "give one")
-        given.setdefault(step, {})[name] = value
-    records = tuple(OPTIONS[step](**values) for step, values in given.items())
-    probe = ProbeCalibration(**{k: getattr(args, k) for k in ("radius", "spring_constant", "theta0", "sensitivity",
-                                                              "resonance_frequency", "L0", "L1", "L2")})
-    return records, probe
 
 
 def _check(args: argparse.Namespace) -> list[str] | None:
