@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import math
 
-from ..errors import AnalysisError, ParameterError
+from ..errors import AnalysisError
 from . import compliance as cc
 from .contact_point import CONTACT_POINT_METHODS, classify_contact, curvature_ratio
 from .jumps import find_jump_in
@@ -69,8 +69,7 @@ def kind(st: State, o: KindOptions) -> State:
     """
     st.require("deflection", step="kind")
     nsigma, method, force_fraction, window = o.nsigma, o.method, o.force_fraction, o.window
-    if method not in CONTACT_POINT_METHODS:
-        raise ParameterError(f"contact point method {method!r} unknown; choose from {', '.join(CONTACT_POINT_METHODS)}")
+    o.check_method(CONTACT_POINT_METHODS)
     noise = abs(st.noise * st.factor)
     app = st.approach
     ji = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma)

@@ -7,11 +7,11 @@ import math
 
 import numpy as np
 
-from ..errors import AnalysisError, ParameterError
+from ..errors import AnalysisError
 from ._numeric import running_mean
 from .drift import remove_drift
-from .options import ContactOptions, DriftOptions, FringesOptions, SmoothOptions
 from .fringes import FringeResult, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
+from .options import ContactOptions, DriftOptions, FringesOptions, SmoothOptions
 from .regions import check_compliance, find_run_regions, run_indices, saturated_mask
 from .state import ContactSummary, NoContact, SmoothResult, State
 
@@ -62,16 +62,11 @@ def smooth(st: State, o: SmoothOptions) -> State:
     averaged samples next to them (a shrinking window would leave the steps there).
     """
     staircase = False
-    window = o.window
-    if window == "auto":
+    if o.window == "auto":  # the record checked a given window (a positive odd number)
         window = _staircase_window(st.z)
         staircase = window > 11
-    try:
-        window = int(window)
-    except (TypeError, ValueError):
-        raise ParameterError(f"smoothing window must be 'auto' or an odd number of points, got {window!r}") from None
-    if window < 1 or window % 2 == 0:
-        raise ParameterError(f"smoothing window must be a positive odd number of points, got {window}")
+    else:
+        window = int(o.window)
     z = st.z.copy()
     for which in (0, 1, 2):
         idx = run_indices(st.curve.segment, which)
@@ -109,15 +104,10 @@ def contact(st: State, o: ContactOptions) -> State:
     creep changes the local gain) keeps no compliance line; later steps use
     the other run's and say what could not be measured.
     """
-    max_slope_ratio, flat_ratio = o.max_slope_ratio, o.flat_ratio
+    max_slope_ratio = o.max_slope_ratio  # the record checked the ranges (> 1; flat_ratio in (0, 1])
     if max_slope_ratio == "auto":
         max_slope_ratio = 2.0 if st.channel == "measured" else math.inf
-    try:
-        max_slope_ratio = float(max_slope_ratio)
-    except (TypeError, ValueError):
-        raise ParameterError(f"max_slope_ratio must be 'auto' or a number > 1, got {max_slope_ratio!r}") from None
-    if not (max_slope_ratio > 1 and flat_ratio > 0):
-        raise ParameterError("contact: max_slope_ratio must exceed 1 and flat_ratio must be positive")
+    max_slope_ratio, flat_ratio = float(max_slope_ratio), o.flat_ratio
     sat = saturated_mask(st.signal)
     kw = dict(saturated=sat, min_points=int(o.min_points), baseline_fraction=o.baseline_fraction,
               compliance_fraction=o.compliance_fraction)
