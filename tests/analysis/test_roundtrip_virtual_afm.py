@@ -30,6 +30,7 @@ pytest.importorskip("afmforce.instrument")
 
 from afmforce.dynamics import simulate  # noqa: E402
 from afmforce.instrument import Drift, Instrument, Noise, Photodiode, Piezo, PositionDetector  # noqa: E402
+from afmforce.analysis.options import ProbeCalibration  # noqa: E402
 from afmforce.analysis.pipeline import analyze  # noqa: E402
 
 S = 50e-9  # photodiode sensitivity [m/V]: the true InvOLS
@@ -59,7 +60,7 @@ def _run(velocity, instrument_kw=None, seed=3, **traj_kw):
     tr, cfg = _trajectory(velocity, **traj_kw)
     raw = _instrument(**(instrument_kw or {})).record(tr, seed=seed)
     f = math.sqrt(cfg["spring_constant"] / cfg["mass"]) / (2 * math.pi) if cfg["model"] == "spring" else None
-    res = analyze(raw, options={"diagnosis": {"resonance_frequency": f}})
+    res = analyze(raw, probe=ProbeCalibration(resonance_frequency=f))
     return tr, cfg, raw, res
 
 
@@ -67,7 +68,7 @@ def _within_one_sample(raw, res, tr, velocity):
     """Jump-in and pull-off positions vs the engine's events (one drive step = one sample)."""
     z = raw.truth["piezo_position"]
     events = tr.summary()
-    ji, po = res.details["jumps"]["jump_in"], res.details["jumps"]["pull_off"]
+    ji, po = res.details["jumps"].jump_in, res.details["jumps"].pull_off
     assert ji.found and po.found
     assert abs(z[ji.index] - events["jump_in"]["piezo_position"]) <= STEP * 1.01
     assert abs(z[po.index] - events["pull_off"]["piezo_position"]) <= STEP * 1.01

@@ -49,6 +49,8 @@ import numpy as np
 from numba import njit
 
 from ..errors import ParameterError
+from ._units import unit as _u
+from .options import KindOptions as _K  # the defaults: declared once, in the step's record
 
 __all__ = ["ContactKind", "SoftContactPoint", "classify_contact", "soft_contact_point", "hertz_contact_point",
            "CONTACT_POINT_METHODS"]
@@ -74,14 +76,14 @@ class SoftContactPoint:
     """
 
     method: str
-    index: int
-    position: float
-    deflection: float
-    initial_position: float
-    indentation: float
-    exponent: float
-    position_low: float = math.nan
-    position_high: float = math.nan
+    index: int = _u("")
+    position: float = _u("m")
+    deflection: float = _u("m")
+    initial_position: float = _u("m")
+    indentation: float = _u("m")
+    exponent: float = _u("")
+    position_low: float = _u("m", math.nan)
+    position_high: float = _u("m", math.nan)
 
 
 def _block(x: np.ndarray, n: int) -> np.ndarray:
@@ -130,7 +132,7 @@ def _fit_grid(x: np.ndarray, y: np.ndarray, cands: np.ndarray, exponent: float) 
 
 
 def soft_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, *, exponent: float = 1.8,
-                       force_fraction: float = 0.65, window: float = 0.15, grid: int = 121,
+                       force_fraction: float = _K.force_fraction, window: float = _K.window, grid: int = 121,
                        max_points: int = 500, method: str = "power_local") -> SoftContactPoint:
     """Contact point of the approach run ``index`` (time order) by a local power-law fit.
 
@@ -226,9 +228,9 @@ class ContactKind:
 
     kind: str
     reason: str
-    jump_significance: float
-    stiffness_ratio: float
-    curvature_ratio: float
+    jump_significance: float = _u("")
+    stiffness_ratio: float = _u("")
+    curvature_ratio: float = _u("")
 
 
 def _slope(x: np.ndarray, y: np.ndarray) -> float:
@@ -253,7 +255,8 @@ def curvature_ratio(z: np.ndarray, d: np.ndarray, contact: np.ndarray, min_point
 
 
 def classify_contact(*, jump_significance: float, stiffness_ratio: float, curvature: float,
-                     nsigma: float = 5.0, min_stiffness: float = 0.7, max_curvature: float = 1.6) -> ContactKind:
+                     nsigma: float = _K.nsigma, min_stiffness: float = _K.min_stiffness,
+                     max_curvature: float = _K.max_curvature) -> ContactKind:
     """Hard (jump-in, or a straight line the deflection follows) or soft (curved or shallow).
 
     Parameters

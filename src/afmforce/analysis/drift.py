@@ -32,6 +32,8 @@ import numpy as np
 
 from ._numeric import mad_sigma
 from .regions import RunRegions
+from ._units import unit as _u
+from .options import DriftOptions as _D  # the default: declared once, in the step's record
 
 __all__ = ["DriftResult", "fit_baseline", "remove_drift", "is_settling", "retract_line"]
 
@@ -66,11 +68,11 @@ class DriftResult:
         :func:`retract_line`.
     """
 
-    offset_approach: float
-    slope_approach: float
-    offset_retract: float
-    slope_retract: float
-    noise: float
+    offset_approach: float = _u("{signal}")
+    slope_approach: float = _u("{signal}/s")
+    offset_retract: float = _u("{signal}")
+    slope_retract: float = _u("{signal}/s")
+    noise: float = _u("{signal}")
     retract_from_approach: bool
     unit: str
     retract_settling: bool = False
@@ -257,7 +259,7 @@ def retract_line(t: np.ndarray, s: np.ndarray, off_a: float, slope_a: float, t0a
 
 
 def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
-                 retract: RunRegions, unit: str, order: int = 1, min_points: int = 5,
+                 retract: RunRegions, unit: str, order: int = _D.order, min_points: int = 5,
                  max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
     """Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
 
