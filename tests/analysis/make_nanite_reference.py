@@ -36,6 +36,10 @@ CURVES_ARRAYS = (
     ("tests/data", "bruker-nanoscope_PyFMlab_Egel4_00025.spm", {}, False),
     ("shared", "afmformats_jpk-sr_cell1-0008.jpk-force", {}, False),
     ("shared", "jpkfile_force-save-2016.06.15-13.17.08.jpk-force", {}, True),
+    # no calibration in these files: any k and sensitivity do (the contact point is in position)
+    ("shared", "ntmdt_gel-in-water.txt", {"spring_constant": 0.1, "sensitivity": 50e-9}, False),
+    ("shared", "afmformats_afm-workshop-fd_single_2018-08-01.csv", {"spring_constant": 0.1, "sensitivity": 50e-9},
+     False),
 )
 
 
