@@ -297,6 +297,21 @@ _SAMPLE_WORST = {"start": min, "turn": max, "end": min, "velocity": min, "retrac
                  "dwell": max, "sample_rate": max}
 
 
+def check_sweep_models(values: dict[str, list]) -> None:
+    """Refuse a probe field that some of the sweep's models do not have (``--set k0=...`` with
+    ``--grid model=spring,beam``): every such run would fail."""
+    from ..dynamics.config import FLAT
+
+    models = {v for v, _ in values.get("model", [])} or {"beam"}
+    for name, entries in values.items():
+        where = FLAT.get(name)
+        lacking = sorted(models - set(where.models)) if where is not None else []
+        if lacking and name != "model":
+            raise ParameterError(
+                f"{entries[0][1]}: {name} is a field of the {where.models[0]} model's probe, and this "
+                f"sweep's runs with model {', '.join(lacking)} have none; sweep the models separately")
+
+
 def check_simulation_sweep(spec, *, yes: bool) -> None:
     """Checks of a simulation sweep before anything is dispatched.
 
@@ -322,6 +337,7 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
                 check_choices({name: value}, prefix=where[: -len(name)])
             else:
                 check_value(name, value, where)
+    check_sweep_models(values)
     defaults = flat_defaults()
     worst = {}
     for name, pick in _SAMPLE_WORST.items():
