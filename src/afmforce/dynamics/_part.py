@@ -12,7 +12,7 @@ import dataclasses
 from functools import cache
 from typing import Any
 
-from .._fields import QUANTITIES
+from .._fields import qfield
 from .._validate import finite, non_negative, positive
 from ..errors import ParameterError
 
@@ -20,11 +20,9 @@ __all__ = ["DOMAINS", "Part", "choice", "quantity", "validate"]
 
 
 def quantity(name: str, default: Any, domain: str) -> Any:
-    """A numeric part field: the metadata of ``QUANTITIES[name]`` plus its ``domain``."""
-    spec = QUANTITIES[name]
-    md = {"dimension": spec.dimension, "unit": spec.unit, "help": spec.help, "spec": spec,
-          "domain": domain}
-    return dataclasses.field(default=default, metadata=md)
+    """A numeric part field: :func:`afmforce._fields.qfield`'s metadata of
+    ``QUANTITIES[name]`` (dimension, unit, help, range) plus the model's ``domain``."""
+    return dataclasses.field(default=default, metadata={**qfield(name).metadata, "domain": domain})
 
 
 def choice(default: str, registry: dict, help: str, name: str | None = None) -> Any:
