@@ -8,6 +8,7 @@ import pytest
 from afmforce.analysis.batch import analyze_batch
 from afmforce.analysis.synthetic import static_curve
 from afmforce.errors import ParameterError
+from afmforce.analysis.options import SmoothOptions
 from afmforce.analysis.pipeline import analyze
 
 
@@ -32,11 +33,11 @@ def test_batch_matches_truth_and_pipeline(stack, parallel):
         assert abs(res.jump_in_index[i] - truth["jump_in_index"]) <= 1
         assert abs(res.pull_off_index[i] - truth["pull_off_index"]) <= 1
         assert res.jump_in_separation[i] == pytest.approx(truth["separation"][truth["jump_in_index"]], abs=0.3e-9)
-        pipe = analyze(c, steps=["shift", "jumps"], options={"smooth": {"window": 1}})
+        pipe = analyze(c, steps=["shift", "jumps"], options=[SmoothOptions(window=1)])
         assert res.sensitivity[i] == pytest.approx(pipe.sensitivity_fit, rel=2e-3)
         assert res.shift[i] == pytest.approx(pipe.shift, abs=0.2e-9)
-        assert res.jump_in_index[i] == pipe.details["jumps"]["jump_in"].index
-        assert res.pull_off_deflection[i] == pytest.approx(pipe.details["jumps"]["pull_off"].deflection, rel=0.01)
+        assert res.jump_in_index[i] == pipe.details["jumps"].jump_in.index
+        assert res.pull_off_deflection[i] == pytest.approx(pipe.details["jumps"].pull_off.deflection, rel=0.01)
 
 
 def test_batch_flags_a_curve_without_contact(stack):

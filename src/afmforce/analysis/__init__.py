@@ -1,6 +1,7 @@
 """Force-curve analysis: small functions for each step of the paper's recipe (section 3).
 
-The pipeline that chains them is :mod:`afmforce.analysis.pipeline`; the vectorised core
+The pipeline that chains them is :mod:`afmforce.analysis.pipeline`, its typed inputs
+(the probe record and one options record per step) :mod:`afmforce.analysis.options`; the vectorised core
 for many curves at once is :mod:`afmforce.analysis.batch`.
 """
 
@@ -13,6 +14,10 @@ from .dynamic import DynamicDiagnosis, diagnose_curve, run_velocity
 from .fringes import FringeResult, FringeRun, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
 from .jumps import (AdhesionResult, JumpIn, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings,
                     pull_off_estimate)
+from .options import (OPTIONS, AdhesionOptions, CalibrationOptions, ComplianceOptions, ContactOptions,
+                      DiagnosisOptions, DriftOptions, ForceOptions, FrictionOptions, FringesOptions, JumpsOptions,
+                      KindOptions, OscillationOptions, ProbeCalibration, ShiftOptions, SmoothOptions, StepOptions,
+                      SurfaceEnergyOptions, VdwOptions, ZeroOptions)
 from .oscillation import OscillationPeak, OscillationResult, find_peak, oscillation_origin
 from .regions import RunRegions, check_compliance, contact_slopes, find_run_regions, saturated_mask
 from .result import AnalysisResult
@@ -20,6 +25,10 @@ from .separation import ForceConversion, ZeroResult, effective_spring_constant, 
 from .vdw import VdwFit, fit_vdw
 
 __all__ = [
+    "OPTIONS", "AdhesionOptions", "CalibrationOptions", "ComplianceOptions", "ContactOptions", "DiagnosisOptions",
+    "DriftOptions", "ForceOptions", "FrictionOptions", "FringesOptions", "JumpsOptions", "KindOptions",
+    "OscillationOptions", "ProbeCalibration", "ShiftOptions", "SmoothOptions", "StepOptions",
+    "SurfaceEnergyOptions", "VdwOptions", "ZeroOptions",
     "AdhesionResult", "AnalysisResult", "CalibrationResult", "ComplianceLine", "ComplianceResult",
     "DriftResult", "DynamicDiagnosis", "ForceConversion", "FrictionSignature", "FringeResult", "FringeRun",
     "JumpIn", "OscillationPeak", "OscillationResult", "PullOff", "RunRegions", "ShiftResult", "VdwFit",
