@@ -57,21 +57,23 @@ def test_every_quantity_has_a_consistent_spec():
 
 
 def test_simulation_config_fields_carry_the_specs():
-    from afmforce.dynamics import SimulationConfig
+    # every numeric field of every part of SimulationConfig carries its vocabulary spec
+    from afmforce.dynamics.config import FLAT, PARTS
 
-    carried = {f.name: spec_of(f) for f in dataclasses.fields(SimulationConfig) if spec_of(f) is not None}
-    assert set(carried) == {f.name for f in dataclasses.fields(SimulationConfig)} - {"model", "friction", "ringing", "sampling"}
+    classes = [c for kind in PARTS.values() for c in (kind if isinstance(kind, tuple) else (kind,))]
+    carried = {f.name: spec_of(f) for c in classes for f in dataclasses.fields(c) if spec_of(f) is not None}
+    assert set(carried) == set(FLAT) - {"model", "friction", "ringing", "sampling"}
     for name, spec in carried.items():
-        assert spec is QUANTITIES[name]
-        default = next(f.default for f in dataclasses.fields(SimulationConfig) if f.name == name)
+        assert spec is QUANTITIES[name] is FLAT[name].spec
+        default = FLAT[name].default
         assert default is None or spec.contains(default), f"the default of {name} is out of its own range"
 
 
 def test_simulate_flags_are_the_config_fields():
-    # every quantity flag of `simulate` sets a SimulationConfig field of the same spec
-    from afmforce.dynamics import SimulationConfig
+    # every quantity flag of `simulate` sets a SimulationConfig field (flat name) of the same spec
+    from afmforce.dynamics.config import FLAT
 
-    fields = {f.name: f for f in dataclasses.fields(SimulationConfig)}
+    fields = {name: where.field for name, where in FLAT.items() if where.field is not None}
     parser = build_parser("simulate")
     sim = parser._subparsers._group_actions[0].choices["simulate"]
     flags = [a for a in sim._actions if hasattr(a.type, "spec")]

@@ -23,8 +23,6 @@ from afmforce.errors import AfmforceError, FileFormatError, OutputExistsError, P
     (dict(model="spring", mass=0.0), "mass"),
     (dict(xi=-0.1), "xi"),
     (dict(sample_rate=10.0), "sample_rate"),
-    (dict(start=-5e-9), "already in contact"),          # beam: static jump-in at -5.87 nm
-    (dict(start=1e-9, turn=30e-9), "already in contact"),
     (dict(turn=-50e-9), "turn"),
     (dict(end=30e-9), "end"),
     (dict(model="cantilever"), "model"),
@@ -43,6 +41,24 @@ def test_bad_input_raises_parameter_error(bad, match):
         SimulationConfig(**bad)
 
 
+@pytest.mark.parametrize("bad", [dict(start=-5e-9),          # beam: static jump-in at -5.87 nm
+                                 dict(start=1e-9, turn=30e-9)])
+def test_start_in_contact_is_refused_before_any_work(bad):
+    """The static start solve left construction (issue 11.7): validate(), simulate() and
+    simulate_many() refuse the start before integrating anything."""
+    from afmforce.dynamics import simulate_many
+
+    cfg = SimulationConfig(**bad)                      # cheap: no static solve yet
+    with pytest.raises(ParameterError, match="already in contact"):
+        cfg.validate()
+    with pytest.raises(ParameterError, match="already in contact"):
+        simulate(cfg)
+    with pytest.raises(ParameterError, match="already in contact"):
+        simulate_many([dict(velocity=1e-6), cfg], threads=1)
+    out = simulate_many([cfg], on_error="return", threads=1)
+    assert isinstance(out[0], ParameterError)
+
+
 def test_unknown_override_is_an_afmforce_error():
     with pytest.raises(AfmforceError, match="unknown simulation parameter"):
         simulate(velocty=1e-6)
@@ -54,7 +70,7 @@ def test_defaults_are_fig5():
     for key in ("L0", "L1", "L2", "theta0", "m_joint", "m_base", "radius", "hamaker", "z0",
                 "viscosity", "xi", "velocity", "start", "turn", "end"):
         assert getattr(cfg, key) == FIG5[key], key
-    assert cfg.model == "beam" and cfg.friction == "viscous"
+    assert cfg.model == "beam" and cfg.friction.law == "viscous" and cfg.to_dict()["friction"] == "viscous"
     assert cfg.cantilever.B == FIG5["B"]
 
 

@@ -17,7 +17,6 @@ Nothing here imports numpy, numba, dask or matplotlib.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import os
 import tempfile
 from pathlib import Path
@@ -212,10 +211,6 @@ MAX_SAMPLES = 10_000_000
 #: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
 _BYTES_PER_SAMPLE = 88
 
-_BEAM_ONLY = ("L0", "L1", "L2", "theta0", "k0", "B", "m_joint", "m_base", "friction", "xi", "zeta")
-_SPRING_ONLY = ("spring_constant", "mass")
-
-
 def _flag(dest: str) -> str:
     return "--" + dest.replace("_", "-")
 
@@ -228,12 +223,14 @@ def check_simulation_options(args: argparse.Namespace, overrides: dict) -> None:
     options without ``--raw`` (the recorded curve would go nowhere).
     """
     from ..dynamics import FRICTION_LAWS
+    from ..dynamics.config import FLAT
 
     check_choices(overrides, "--")
     model = overrides.get("model", "beam")
     by_model = f"by --model {model}" + ("" if "model" in overrides else " (the default)")
-    rules = [(d, _flag(d), model == "beam", by_model) for d in _BEAM_ONLY]
-    rules += [(d, _flag(d), model == "spring", by_model) for d in _SPRING_ONLY]
+    # the other model's probe fields; friction acts on the beam only (the spring has no lateral motion)
+    rules = [(d, _flag(d), model in w.models and (w.part != "friction" or model == "beam"), by_model)
+             for d, w in FLAT.items() if w.part in ("probe", "friction") and w.field is not None]
     law = FRICTION_LAWS[overrides.get("friction", "viscous")]
     if model == "beam":
         by_law = f"by --friction {law.key}" + ("" if "friction" in overrides else " (the default)")
@@ -272,10 +269,12 @@ def check_simulation_config(cfg) -> None:
     """Checks of a built :class:`~afmforce.dynamics.SimulationConfig` before it is run:
     the beam is a cantilever (:func:`check_beam`) and the sample count is sane."""
     if cfg.model == "beam":
-        check_beam(cfg.L0, cfg.L1, cfg.L2, k0=cfg.k0, B=cfg.B if cfg.B is not None or cfg.k0 is not None
-                   else None)
-    check_samples(simulation_samples(cfg.start, cfg.turn, cfg.end, cfg.velocity, cfg.retract_velocity,
-                                     cfg.dwell, cfg.sample_rate))
+        p = cfg.probe
+        check_beam(p.L0, p.L1, p.L2, k0=p.k0, B=p.B)
+    d = cfg.drive
+    check_samples(simulation_samples(d.start, d.turn, d.end, d.velocity, d.retract_velocity,
+                                     d.dwell, cfg.solver.sample_rate))
+    cfg.validate()      # the start is out of contact (a static solve)
 
 
 def _registries() -> dict[str, dict]:
@@ -298,6 +297,21 @@ _SAMPLE_WORST = {"start": min, "turn": max, "end": min, "velocity": min, "retrac
                  "dwell": max, "sample_rate": max}
 
 
+def check_sweep_models(values: dict[str, list]) -> None:
+    """Refuse a probe field that some of the sweep's models do not have (``--set k0=...`` with
+    ``--grid model=spring,beam``): every such run would fail."""
+    from ..dynamics.config import FLAT
+
+    models = {v for v, _ in values.get("model", [])} or {"beam"}
+    for name, entries in values.items():
+        where = FLAT.get(name)
+        lacking = sorted(models - set(where.models)) if where is not None else []
+        if lacking and name != "model":
+            raise ParameterError(
+                f"{entries[0][1]}: {name} is a field of the {where.models[0]} model's probe, and this "
+                f"sweep's runs with model {', '.join(lacking)} have none; sweep the models separately")
+
+
 def check_simulation_sweep(spec, *, yes: bool) -> None:
     """Checks of a simulation sweep before anything is dispatched.
 
@@ -307,7 +321,7 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
     demanding combination (slowest speeds, longest drive, highest rate).
     """
     from .._fields import check as check_value
-    from ..dynamics import SimulationConfig
+    from ..dynamics.config import flat_defaults
 
     confirm_size(spec.n_runs, CONFIRM_RUNS, yes=yes, what="this sweep")
     values: dict[str, list] = {}
@@ -323,7 +337,8 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
                 check_choices({name: value}, prefix=where[: -len(name)])
             else:
                 check_value(name, value, where)
-    defaults = {f.name: f.default for f in dataclasses.fields(SimulationConfig)}
+    check_sweep_models(values)
+    defaults = flat_defaults()
     worst = {}
     for name, pick in _SAMPLE_WORST.items():
         candidates = [v for v, _ in values.get(name, []) if v is not None] or [defaults[name]]

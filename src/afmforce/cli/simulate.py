@@ -13,7 +13,6 @@ protects it), and a function ``(args, trajectory) -> None`` to
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import sys
 from pathlib import Path
 from typing import Callable
@@ -33,7 +32,9 @@ def _dyn():
 
 
 def _defaults():
-    return {f.name: f.default for f in dataclasses.fields(_dyn().SimulationConfig)}
+    from ..dynamics.config import flat_defaults
+
+    return flat_defaults()
 
 
 def _q(group, flag, dim, unit, help_, dest=None, default_text=None):
@@ -159,9 +160,9 @@ def register(subparsers) -> argparse.ArgumentParser:
 def config_from_args(args: argparse.Namespace):
     """The :class:`~afmforce.dynamics.SimulationConfig` given by the flags."""
     from ..dynamics import SimulationConfig
+    from ..dynamics.config import FLAT
 
-    names = {f.name for f in dataclasses.fields(SimulationConfig)}
-    overrides = {k: v for k, v in vars(args).items() if k in names and v is not None}
+    overrides = {k: v for k, v in vars(args).items() if k in FLAT and v is not None}
     check_simulation_options(args, overrides)  # ranges were checked while parsing
     cfg = SimulationConfig(**overrides)
     check_simulation_config(cfg)

@@ -26,7 +26,7 @@ def register(sub) -> None:
         "sweep", help="parameter sweeps of the simulation (grids, random/LHS samples) on Dask",
         description="Run the dynamics simulation over a grid or a sample of parameters, in chunks on a "
                     "local Dask cluster (or --scheduler, or --serial). Finished chunks are stored as they "
-                    "complete; rerunning the same command resumes. Parameters are SimulationConfig fields "
+                    "complete; rerunning the same command resumes. Parameters are the flat names of SimulationConfig "
                     "(see --list-parameters); values take units (0.1um/s, 200nm, -15deg).",
     )
     s = p.add_argument_group("what to sweep")
@@ -58,18 +58,17 @@ def register(sub) -> None:
 
 
 def _list_parameters() -> int:
-    from dataclasses import fields
+    from ..dynamics.config import FLAT
 
-    from .._fields import spec_of
-    from ..dynamics import SimulationConfig
-
-    print("parameters (SimulationConfig fields): SI unit, Fig 5 default, valid range")
-    for f in fields(SimulationConfig):
-        spec = spec_of(f)
+    print("parameters (flat names of SimulationConfig; part.field): SI unit, Fig 5 default, valid range")
+    for name, where in FLAT.items():
+        spec, part = where.spec, f"{where.part}.{where.attr}"
+        only = "" if len(where.models) > 1 else f"  ({where.models[0]} model)"
         if spec is None:
-            print(f"  {f.name:<20} {'text':<12} {f.default!r}")
+            print(f"  {name:<20} {part:<26} {'text':<12} {where.default!r}{only}")
         else:
-            print(f"  {f.name:<20} {spec.unit or '-':<12} {spec.show(f.default):<12} {spec.range_text()}")
+            print(f"  {name:<20} {part:<26} {spec.unit or '-':<12} {spec.show(where.default):<12} "
+                  f"{spec.range_text()}{only}")
     return 0
 
 

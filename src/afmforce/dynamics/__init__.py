@@ -7,9 +7,12 @@ Public API::
     traj = simulate(xi=0.01, velocity=1e-6)
     traj = simulate(model="spring", mass=1e-8, spring_constant=0.21, velocity=10e-6)
     trajs = simulate_many([dict(xi=x) for x in (0.01, 0.1)])   # many runs, one call
+    cfg = SimulationConfig(probe=SpringProbe(mass=1e-9), drive=Drive(velocity=7.2e-6))  # by parts
     traj.summary(); traj.events; traj.write("run.csv")
 
-Modules: :mod:`.models` (vector fields, Jacobians, friction registry),
+Modules: :mod:`.config` (``SimulationConfig`` and its flat names) and
+:mod:`.parts` (its parts: probe, surface, friction, drive, solver options),
+:mod:`.models` (vector fields, Jacobians, friction registry),
 :mod:`.drive` (protocols), :mod:`.radau` (compiled Radau IIA integrator),
 :mod:`.events`, :mod:`.trajectory`, :mod:`.simulate`, :mod:`.batch`, :mod:`.static`
 (quasi-static curves), :mod:`.reference` (a plain scipy implementation used as
@@ -17,6 +20,7 @@ an independent cross-check).
 """
 
 from .config import DEFAULT_B, MODELS, SAMPLING, SimulationConfig
+from .parts import BeamProbe, Drive, Friction, SolverOptions, SpringProbe, Surface
 from .events import Events
 from .models import FRICTION_LAWS, RINGING, FrictionLaw, RingingTreatment
 from .guard import ConvergenceWarning
@@ -29,6 +33,12 @@ __all__ = [
     "simulate",
     "simulate_many",
     "SimulationConfig",
+    "BeamProbe",
+    "SpringProbe",
+    "Surface",
+    "Friction",
+    "Drive",
+    "SolverOptions",
     "Trajectory",
     "Events",
     "SolverStats",

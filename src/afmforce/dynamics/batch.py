@@ -50,7 +50,9 @@ def default_threads() -> int:
 
 
 def _config(item) -> SimulationConfig:
-    return item if isinstance(item, SimulationConfig) else SimulationConfig(**dict(item))
+    """The configuration of one item, with the checks that need a static solve done."""
+    cfg = item if isinstance(item, SimulationConfig) else SimulationConfig(**dict(item))
+    return cfg.validate()
 
 
 def simulate_many(configs: Iterable[SimulationConfig | dict], *, threads: int | None = None,
@@ -61,7 +63,7 @@ def simulate_many(configs: Iterable[SimulationConfig | dict], *, threads: int | 
     Parameters
     ----------
     configs : iterable of SimulationConfig or dict
-        The runs (a dict holds :class:`SimulationConfig` fields).
+        The runs (a dict holds flat names of :class:`SimulationConfig`, e.g. ``{"xi": 0.01}``).
     threads : int, optional
         Integrator threads (default :func:`default_threads`: one per usable core,
         1 inside a Dask worker); 1 runs everything in this thread.

@@ -62,27 +62,31 @@ class Segment:
 
 def approach_segment(cfg) -> Segment:
     """The approach from ``start`` to ``turn`` (the latest turn for a load turn)."""
-    return Segment(APPROACH, 0.0, (cfg.turn - cfg.start) / cfg.velocity, cfg.start, cfg.velocity)
+    d = cfg.drive
+    return Segment(APPROACH, 0.0, (d.turn - d.start) / d.velocity, d.start, d.velocity)
 
 
 def segments(cfg, t_turn: float | None = None, z_turn: float | None = None) -> list[Segment]:
     """Approach, dwell (if any) and retract, given the actual turn time and position."""
+    d = cfg.drive
     app = approach_segment(cfg)
     if t_turn is None:
         t_turn, z_turn = app.t_end, app.z_end
-    app = Segment(APPROACH, 0.0, t_turn, cfg.start, cfg.velocity)
+    app = Segment(APPROACH, 0.0, t_turn, d.start, d.velocity)
     out = [app]
     t = t_turn
-    if cfg.dwell > 0:
-        out.append(Segment(DWELL, t, t + cfg.dwell, z_turn, 0.0))
-        t += cfg.dwell
-    vr = cfg.retract_speed
-    out.append(Segment(RETRACT, t, t + (z_turn - cfg.end) / vr, z_turn, -vr))
+    if d.dwell > 0:
+        out.append(Segment(DWELL, t, t + d.dwell, z_turn, 0.0))
+        t += d.dwell
+    vr = d.retract_speed
+    out.append(Segment(RETRACT, t, t + (z_turn - d.end) / vr, z_turn, -vr))
     return out
 
 
 def start_deflection(cfg) -> float:
     """Static (friction-free) deflection z2 at the start position [m].
+
+    Use ``cfg.start_deflection`` (solved once per configuration).
 
     Raises
     ------
@@ -91,16 +95,17 @@ def start_deflection(cfg) -> float:
         equilibrium separation is already below ``contact_separation``.
     """
     k = cfg.force_constant
-    hj, zj, _ = static_jump_in(k, cfg.radius, cfg.hamaker, cfg.z0)
-    if math.isfinite(zj) and cfg.start >= zj:
+    s, start = cfg.surface, cfg.drive.start
+    hj, zj, _ = static_jump_in(k, s.radius, s.hamaker, s.z0)
+    if math.isfinite(zj) and start >= zj:
         raise ParameterError(
-            f"start {cfg.start * 1e9:.4g} nm is already in contact: the static jump-in is at "
+            f"start {start * 1e9:.4g} nm is already in contact: the static jump-in is at "
             f"z = {zj * 1e9:.4g} nm (h = {hj * 1e9:.4g} nm); start further out (more negative)")
-    d = _static_start(cfg.start, k, cfg.radius, cfg.hamaker, cfg.z0)
-    h = d - cfg.start
-    if not h > cfg.contact_separation:
+    d = _static_start(start, k, s.radius, s.hamaker, s.z0)
+    h = d - start
+    if not h > cfg.solver.contact_separation:
         raise ParameterError(
-            f"start {cfg.start * 1e9:.4g} nm is already in contact (equilibrium separation "
+            f"start {start * 1e9:.4g} nm is already in contact (equilibrium separation "
             f"{h * 1e9:.3g} nm); start further out (more negative)")
     return d
 
@@ -118,14 +123,12 @@ def initial_state(cfg) -> np.ndarray:
     ``(x, theta) = G P (Fz, 0)`` (eqs 7-10), ``q_alpha = x``,
     ``q_beta = L1 theta + 3x/2``.
     """
-    d = getattr(cfg, "_start_deflection", None)
-    if d is None:
-        d = start_deflection(cfg)
+    d = cfg.start_deflection
     if cfg.model == "spring":
         return np.array([d, 0.0])
-    cant = cfg.cantilever
-    h = d - cfg.start      # eq 2 (forces.vdw_force) on a scalar
-    fz = -(cfg.hamaker * cfg.radius / (12.0 * h * h)) * (1.0 - 0.25 * (cfg.z0 / h) ** 6)
+    cant, s = cfg.cantilever, cfg.surface
+    h = d - cfg.drive.start      # eq 2 (forces.vdw_force) on a scalar
+    fz = -(s.hamaker * s.radius / (12.0 * h * h)) * (1.0 - 0.25 * (s.z0 / h) ** 6)
     gx, gt = _unit_load_response(cant)
     x, theta = gx * fz, gt * fz
     return np.array([x, cant.L1 * theta + 1.5 * x, 0.0, 0.0])

@@ -47,22 +47,23 @@ def damping_ratio(cfg) -> float:
 
     Drainage is not counted: far from the surface it vanishes.
     """
-    if cfg.model == "spring" or cfg.friction == "none":
+    if cfg.model == "spring" or cfg.friction.law == "none":
         return 0.0
     from .models import beam_couplings, beam_matrices
     import numpy as np
 
-    A, (ma, mb) = beam_matrices(cfg.cantilever, cfg.m_joint, cfg.m_base)
-    _, yq, _ = beam_couplings(cfg.cantilever)
+    probe = cfg.probe
+    A, (ma, mb) = beam_matrices(probe.cantilever, probe.m_joint, probe.m_base)
+    _, yq, _ = beam_couplings(probe.cantilever)
     minv = np.array([1.0 / ma, 1.0 / mb])
     w2 = np.linalg.eigvals(-minv[:, None] * A).real
     w = math.sqrt(float(np.min(w2[w2 > 0])))
     mob_y = float(yq @ (minv * yq))
-    return cfg.xi * mob_y / (2.0 * w)
+    return cfg.friction.xi * mob_y / (2.0 * w)
 
 
 def _stiff_load_friction(cfg) -> bool:
-    return cfg.model == "beam" and cfg.friction == "load" and cfg.zeta >= RISKY_ZETA
+    return cfg.model == "beam" and cfg.friction.law == "load" and cfg.friction.zeta >= RISKY_ZETA
 
 
 def risky(cfg) -> str:

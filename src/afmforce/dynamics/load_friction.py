@@ -10,8 +10,6 @@ from __future__ import annotations
 
 import math
 
-from .models import FRICTION_LAWS
-
 #: Numerical damping of the contact mode only while its amplitude in h,
 #: sqrt((h'/w_c)^2 + (h''/w_c^2)^2), is below this [m]: the most the damping may
 #: change the separation (see docs/dynamics.md, "The in-contact ringing").
@@ -35,7 +33,7 @@ LOAD_VFAC_MARGIN = 0.1
 LOAD_VFAC_FLOOR = 1e-4
 
 
-def load_friction_controls(cfg: SimulationConfig) -> tuple[float, float]:
+def load_friction_controls(cfg) -> tuple[float, float]:
     """Error-control settings for load-dependent friction: (velocity scale, ringing limit [m]).
 
     With ``Fy = -(xi + zeta Fz^2) y2'`` the nearly undamped in-contact ringing
@@ -57,13 +55,14 @@ def load_friction_controls(cfg: SimulationConfig) -> tuple[float, float]:
 
     Without load-dependent friction: ``(1.0, RING_AMPLITUDE)``.
     """
-    xi, zeta = FRICTION_LAWS[cfg.friction].coefficients(cfg.xi, cfg.zeta)
+    xi, zeta = cfg.friction.coefficients
     if cfg.model == "spring" or zeta <= 0.0:
         return 1.0, RING_AMPLITUDE
-    ar = cfg.hamaker * cfg.radius
-    fa = ar / (16.0 * cfg.z0**2)
+    surface = cfg.surface
+    ar = surface.hamaker * surface.radius
+    fa = ar / (16.0 * surface.z0**2)
     s = max(LOAD_VFAC_FLOOR, LOAD_VFAC_MARGIN * xi / (xi + zeta * fa * fa))
-    h0 = cfg.z0 / 4.0 ** (1.0 / 6.0)          # Fs(h0) = 0 (eq 2)
+    h0 = surface.z0 / 4.0 ** (1.0 / 6.0)          # Fs(h0) = 0 (eq 2)
     kappa0 = ar / (2.0 * h0**3)               # -Fs'(h0)
     amp = math.sqrt(LOAD_RING_FRICTION_FRACTION * xi / zeta) / kappa0
     return s, min(RING_AMPLITUDE, amp)

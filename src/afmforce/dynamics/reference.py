@@ -29,11 +29,12 @@ class ReferenceModel:
 
     def __init__(self, cfg: SimulationConfig):
         self.cfg = cfg
-        self.R, self.A, self.z0, self.eta = cfg.radius, cfg.hamaker, cfg.z0, cfg.viscosity
+        s, probe, fr = cfg.surface, cfg.probe, cfg.friction
+        self.R, self.A, self.z0, self.eta = s.radius, s.hamaker, s.z0, s.viscosity
         self.cd = 6.0 * math.pi * self.eta * self.R**2 / 4.0
         if cfg.model == "spring":
             self.beam = False
-            self.k, self.m = cfg.spring_constant, cfg.mass
+            self.k, self.m = probe.spring_constant, probe.mass
             return
         self.beam = True
         c = cfg.cantilever
@@ -41,16 +42,16 @@ class ReferenceModel:
         L1 = c.L1
         T = np.array([[1.0, 0.0], [-1.5 / L1, 1.0 / L1]])     # d(x, theta)/d(q_alpha, q_beta)
         self.Adyn = -T.T @ c.beam_stiffness @ T
-        self.minv = np.array([1.0 / (cfg.m_joint + cfg.m_base / 4.0), 3.0 / cfg.m_base])
+        self.minv = np.array([1.0 / (probe.m_joint + probe.m_base / 4.0), 3.0 / probe.m_base])
         self.dh = np.array([math.cos(th0), c.a]) @ T             # dh/dq (eqs 24, 25)
         self.dy = np.array([math.sin(th0), c.b]) @ T             # dy2/dq (eqs 26, 27)
         self.dth = np.array([0.0, 1.0]) @ T                     # dtheta/dq
-        if cfg.friction == "none":
+        if fr.law == "none":
             self.xi, self.zeta = 0.0, 0.0
-        elif cfg.friction == "viscous":
-            self.xi, self.zeta = cfg.xi, 0.0
+        elif fr.law == "viscous":
+            self.xi, self.zeta = fr.xi, 0.0
         else:
-            self.xi, self.zeta = cfg.xi, cfg.zeta
+            self.xi, self.zeta = fr.xi, fr.zeta
 
     def _forces(self, h, hd):
         fz = float(vdw_force(h, self.R, self.A, self.z0)) + float(

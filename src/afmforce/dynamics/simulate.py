@@ -20,7 +20,7 @@ from .guard import run_check
 from .static import static_jump_in
 from ..progress import Progress
 from .load_friction import RING_AMPLITUDE, load_friction_controls  # noqa: F401  (re-exported)
-from .models import (MODEL_BEAM, MODEL_IDS, FRICTION_LAWS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
+from .models import (MODEL_BEAM, MODEL_IDS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
                      O_Y2, pack_beam, pack_spring, state_size)
 from .trajectory import SolverStats, Trajectory
 
@@ -75,10 +75,6 @@ def free_frequency_max(p, model) -> float:
     return math.sqrt(w2) / (2.0 * math.pi)
 
 
-def _known(overrides) -> bool:
-    return set(overrides) <= set(SimulationConfig.__dataclass_fields__)
-
-
 @lru_cache(maxsize=256)
 def _beam_template(cantilever, m_joint: float, m_base: float) -> np.ndarray:
     """The geometry/mass part of the beam's parameter vector (surfaces filled per run)."""
@@ -95,17 +91,18 @@ def _beam_fmax(cantilever, m_joint: float, m_base: float) -> float:
 
 def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
     """Packed model parameters for the compiled vector field."""
-    guard = H_GUARD_FRACTION * cfg.z0
+    s, probe = cfg.surface, cfg.probe
+    guard = H_GUARD_FRACTION * s.z0
     if cfg.model == "spring":
-        return pack_spring(spring_constant=cfg.spring_constant, mass=cfg.mass, radius=cfg.radius,
-                           hamaker=cfg.hamaker, z0=cfg.z0, viscosity=cfg.viscosity, h_guard=guard)
+        return pack_spring(spring_constant=probe.spring_constant, mass=probe.mass, radius=s.radius,
+                           hamaker=s.hamaker, z0=s.z0, viscosity=s.viscosity, h_guard=guard)
     from . import models as M
-    xi, zeta = FRICTION_LAWS[cfg.friction].coefficients(cfg.xi, cfg.zeta)
-    p = _beam_template(cfg.cantilever, cfg.m_joint, cfg.m_base).copy()
+    xi, zeta = cfg.friction.coefficients
+    p = _beam_template(probe.cantilever, probe.m_joint, probe.m_base).copy()
     # the same values as pack_beam(cfg.cantilever, ...) fills in
-    p[M.AR] = cfg.hamaker * cfg.radius
-    p[M.Z0] = cfg.z0
-    p[M.CD] = 6.0 * math.pi * cfg.viscosity * cfg.radius**2 / 4.0
+    p[M.AR] = s.hamaker * s.radius
+    p[M.Z0] = s.z0
+    p[M.CD] = 6.0 * math.pi * s.viscosity * s.radius**2 / 4.0
     p[M.H_GUARD] = guard
     p[M.XI] = xi
     p[M.ZETA] = zeta
@@ -114,12 +111,8 @@ def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
 
 def _resolve_config(config, overrides) -> SimulationConfig:
     if config is None:
-        cfg = SimulationConfig(**overrides) if _known(overrides) else None
-    else:
-        cfg = config.replace(**overrides) if overrides else config
-    if cfg is None:
-        cfg = SimulationConfig().replace(**overrides)   # raises on the unknown names
-    return cfg
+        return SimulationConfig(**overrides)      # flat names (raises on unknown ones)
+    return config.replace(**overrides) if overrides else config
 
 
 def simulate(config: SimulationConfig | None = None, *,
@@ -144,7 +137,9 @@ def simulate(config: SimulationConfig | None = None, *,
         differences are in ``solver.event_errors``. Default "off" (the CLI
         uses "auto").
     **overrides
-        Fields of :class:`SimulationConfig` to change, e.g. ``xi=0.01``.
+        Changes to ``config`` (or to the default): flat names of
+        :data:`~afmforce.dynamics.config.FLAT`, e.g. ``xi=0.01``, or whole
+        parts, e.g. ``drive=Drive(velocity=1e-6)``.
 
     Returns
     -------

@@ -1,7 +1,7 @@
 """Registry of the global parameters the dynamic fit can free (``--free``).
 
-Each entry maps a user name to a :class:`~afmforce.dynamics.SimulationConfig`
-field, with its unit, bounds, the scale used inside the optimiser and the
+Each entry maps a user name to a flat name of :class:`~afmforce.dynamics.SimulationConfig`
+(:data:`afmforce.dynamics.config.FLAT`), with its unit, bounds, the scale used inside the optimiser and the
 finite-difference step of the Jacobian. Per-curve nuisance parameters (the zero
 of the piezo position ``shift``, the baseline ``offset`` and the ``drift``
 slope) are always fitted and are not in this registry.
@@ -26,7 +26,7 @@ class FitParameter:
     Attributes
     ----------
     name : str
-        User name (``--free`` key) and SimulationConfig field.
+        User name (``--free`` key) and flat name of SimulationConfig.
     unit : str
         SI unit.
     lower, upper : float

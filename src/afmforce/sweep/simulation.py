@@ -1,7 +1,8 @@
 """The run of a simulation sweep: one approach-retract cycle, one summary row.
 
 :func:`simulate_run` calls :func:`afmforce.dynamics.simulate` with the run's
-parameters (:class:`~afmforce.dynamics.SimulationConfig` field names; every
+parameters (the flat names of :class:`~afmforce.dynamics.SimulationConfig`,
+:data:`afmforce.dynamics.config.FLAT`, e.g. ``xi``, ``velocity``, ``friction``; every
 other field keeps the paper's Fig 5 default), flattens
 ``Trajectory.summary()`` into ``a.b`` columns, and adds the error of the
 apparent attraction against the static theory (spec sections 2 and 7): the
@@ -15,11 +16,10 @@ deflection there ``d_s = Fs(h_s) / k``, and
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import warnings
 
-from .._fields import QUANTITIES, spec_of
+from .._fields import QUANTITIES
 from ..errors import MissingDependencyError
 from ..forces import static_jump_in_separation, vdw_force
 from .engine import flatten
@@ -49,14 +49,18 @@ def _dynamics():
 
 
 def simulation_dimensions() -> dict[str, str | None]:
-    """Dimension of every :class:`SimulationConfig` field (None: text), from its field metadata."""
+    """Dimension of every flat parameter name of :class:`SimulationConfig` (None: text), from
+    the field metadata of its part (:data:`afmforce.dynamics.config.FLAT`)."""
+    _dynamics()
+    from ..dynamics.config import FLAT
+
     out = {}
-    for f in dataclasses.fields(_dynamics().SimulationConfig):
-        spec = spec_of(f)
+    for name, where in FLAT.items():
+        spec = where.spec
         if spec is None:
-            out[f.name] = None if isinstance(f.default, str) else "dimensionless"
+            out[name] = None if isinstance(where.default, str) else "dimensionless"
         else:
-            out[f.name] = "dimensionless" if spec.dimension == "integer" else spec.dimension
+            out[name] = "dimensionless" if spec.dimension == "integer" else spec.dimension
     return out
 
 
@@ -66,7 +70,7 @@ def parameter_units(names) -> dict[str, str]:
 
 
 def simulate_run(**parameters) -> dict:
-    """Simulate one cycle with these :class:`SimulationConfig` fields; one summary row.
+    """Simulate one cycle with these flat :class:`SimulationConfig` names; one summary row.
 
     Returns the flattened ``Trajectory.summary()`` plus ``static_jump_in_separation``,
     ``static_jump_in_deflection``, ``attraction_error`` [m], ``attraction_ratio`` [-]
@@ -124,9 +128,9 @@ simulate_run.batch_threads = _batch_threads
 
 def _row(config, trajectory, caught) -> dict:
     row = flatten(trajectory.summary())
-    k = config.force_constant
-    h_s = float(static_jump_in_separation(k, config.radius, config.hamaker, config.z0))
-    d_s = float(vdw_force(h_s, config.radius, config.hamaker, config.z0)) / k
+    k, s = config.force_constant, config.surface
+    h_s = float(static_jump_in_separation(k, s.radius, s.hamaker, s.z0))
+    d_s = float(vdw_force(h_s, s.radius, s.hamaker, s.z0)) / k
     measured = float(row.get("min_apparent_deflection", math.nan))
     row["static_jump_in_separation"] = h_s
     row["static_jump_in_deflection"] = d_s

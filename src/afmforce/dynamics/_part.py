@@ -1,0 +1,119 @@
+"""Validation machinery of the configuration parts (:mod:`afmforce.dynamics.parts`).
+
+A part field declares its quantity's metadata (:data:`afmforce._fields.QUANTITIES`:
+dimension, SI unit, help, valid range) and the ``domain`` the model itself
+needs, once (:func:`quantity`); :func:`validate` checks every field of a part
+against it with the one message style of :mod:`afmforce._validate`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from functools import cache
+from typing import Any
+
+from .._fields import qfield
+from .._validate import finite, non_negative, positive
+from ..errors import ParameterError
+
+__all__ = ["DOMAINS", "Part", "choice", "quantity", "validate"]
+
+
+def quantity(name: str, default: Any, domain: str) -> Any:
+    """A numeric part field: :func:`afmforce._fields.qfield`'s metadata of
+    ``QUANTITIES[name]`` (dimension, unit, help, range) plus the model's ``domain``."""
+    return dataclasses.field(default=default, metadata={**qfield(name).metadata, "domain": domain})
+
+
+def choice(default: str, registry: dict, help: str, name: str | None = None) -> Any:
+    """A text part field naming an entry of ``registry`` (``name``: its flat name in messages)."""
+    return dataclasses.field(default=default, metadata={"choices": registry, "help": help, "name": name})
+
+
+def _count(name: str, value, unit: str):
+    if value is None:
+        return None
+    try:
+        whole = not isinstance(value, bool) and float(value).is_integer() and value >= 1
+    except (TypeError, ValueError):
+        whole = False
+    if not whole:
+        raise ParameterError(f"{name} must be a positive integer, got {value!r}")
+    return int(value)
+
+
+def _optional(check):
+    return lambda name, value, unit: None if value is None else check(name, value, unit)
+
+
+#: Domain -> check(name, value, unit) returning the value as stored (float) or raising.
+DOMAINS = {
+    "positive": positive,
+    "non_negative": non_negative,
+    "finite": finite,
+    "optional_positive": _optional(positive),
+    "count": _count,
+}
+
+
+def _checker(f: dataclasses.Field):
+    """check(value) of one field: its domain (or its spec's range, or its registry)."""
+    name, md = f.name, f.metadata
+    if "choices" in md:
+        choices, name = md["choices"], md["name"] or name
+
+        def check_choice(value):
+            if value not in choices:
+                raise ParameterError(f"{name} must be one of {sorted(choices)}, got {value!r}")
+            return value
+        return check_choice
+    unit, domain = md["unit"], md["domain"]
+    if domain == "range":
+        spec = md["spec"]
+        return lambda value: spec.check(finite(name, value, unit), name)
+    check = DOMAINS[domain]
+    return lambda value: check(name, value, unit)
+
+
+@cache
+def _checks(cls, skip: tuple[str, ...]) -> tuple:
+    """(name, check) of every field of part class ``cls`` checked on construction."""
+    return tuple((f.name, _checker(f)) for f in dataclasses.fields(cls)
+                 if ("domain" in f.metadata or "choices" in f.metadata) and f.name not in skip)
+
+
+@cache
+def _field_order(cls) -> tuple[str, ...]:
+    return tuple(f.name for f in dataclasses.fields(cls))
+
+
+@cache
+def _names(cls) -> frozenset[str]:
+    return frozenset(f.name for f in dataclasses.fields(cls))
+
+
+def validate(part, skip: tuple[str, ...] = ()) -> None:
+    """Check every field of ``part`` against its declared domain or registry; store floats."""
+    d = part.__dict__
+    for name, check in _checks(type(part), skip):
+        value = d[name]
+        checked = check(value)
+        if checked is not value:
+            object.__setattr__(part, name, checked)
+
+
+class Part:
+    """Shared behaviour of the parts: ``replace`` and the plain field dict."""
+
+    def replace(self, **changes):
+        """A copy with some fields changed (validated again)."""
+        known = _names(type(self))
+        if not known.issuperset(changes):
+            raise ParameterError(f"{type(self).__name__} has no field(s) {sorted(set(changes) - known)}; "
+                                 f"known: {', '.join(sorted(known))}")
+        return type(self)(**{**self.to_dict(), **changes})
+
+    def to_dict(self) -> dict[str, Any]:
+        """The fields as a plain dict (SI values)."""
+        d = self.__dict__
+        return {n: d[n] for n in _field_order(type(self))}

@@ -1,0 +1,349 @@
+"""The parts a :class:`~afmforce.dynamics.SimulationConfig` is composed of.
+
+One simulated cycle is a probe (:class:`BeamProbe`, the inclined cantilever
+of Fig 2, or :class:`SpringProbe`, the simple spring of eq 1), the surfaces
+(:class:`Surface`, eq 2 and drainage), the tip friction (:class:`Friction`,
+eq 28), the drive protocol (:class:`Drive`) and the numerics
+(:class:`SolverOptions`: sampling, tolerances, event definitions). Each part is
+a frozen dataclass that validates its own fields on construction and computes
+nothing else: no static solve, no matrix.
+
+Every numeric field carries the metadata of its quantity in
+:data:`afmforce._fields.QUANTITIES` (dimension, SI unit, help, valid range;
+read with :func:`afmforce._fields.spec_of`) plus the ``domain`` the model
+itself needs (checked on construction, :mod:`._part`): ``positive``, ``non_negative``, ``finite``,
+``range`` (the spec's range), ``optional_positive`` (None or > 0) or
+``count`` (None or a whole number >= 1). The valid *ranges* of the vocabulary
+(what an AFM experiment means) are enforced where a user types a value: the
+command line and sweeps.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from functools import lru_cache
+from typing import ClassVar
+
+from ..cantilever import InclinedCantilever
+from ..constants import FIG1, FIG5
+from ..errors import ParameterError
+from ._part import Part, choice, quantity, validate
+from .models import FRICTION_LAWS, RINGING
+
+__all__ = [
+    "DEFAULT_B",
+    "MODELS",
+    "PROBES",
+    "SAMPLING",
+    "BeamProbe",
+    "Drive",
+    "Friction",
+    "SolverOptions",
+    "SpringProbe",
+    "Surface",
+]
+
+#: Flexural rigidity used when neither k0 nor B is given [N m^2] (spec section 5 decision).
+DEFAULT_B = FIG5["B"]
+#: Dynamical models selectable with ``model=`` / ``--model``.
+MODELS = {
+    "beam": "inclined cantilever with base, probe and tip friction (eqs 22-28)",
+    "spring": "mass on a spring moving vertically (eq 1)",
+}
+#: What one trajectory sample is: the state at the sample time, or its mean over the sample interval.
+SAMPLING = {
+    "point": "the state at the sample time",
+    "average": "the state averaged over the sample interval centred on the sample time "
+               "(a detector averaged over each interval; removes aliased MHz ringing)",
+}
+
+
+# --- probes -------------------------------------------------------------------
+@lru_cache(maxsize=256)
+def _cantilever(L0, L1, L2, theta0, k0, B) -> InclinedCantilever:
+    """The (immutable) cantilever of these values, built and validated once per geometry."""
+    return InclinedCantilever(L0, L1, L2, theta0, k0=k0, B=B)
+
+
+@lru_cache(maxsize=256)
+def _k_beta(cant: InclinedCantilever) -> tuple[float, float]:
+    """(k of eq 13 [N/m], beta of eq 15 [m/rad]) of a cantilever, computed once."""
+    return float(cant.spring_constant), float(cant.calibration_factor)
+
+
+@dataclass(frozen=True)
+class BeamProbe(Part):
+    """The inclined cantilever of Fig 2 with its masses (the ``beam`` model, eqs 22-28).
+
+    Attributes
+    ----------
+    L0, L1, L2 : float
+        Beam, base and probe lengths [m].
+    theta0 : float
+        Inclination [rad] (negative: -15 deg in the paper).
+    k0, B : float or None
+        The beam's stiffness, given as the intrinsic spring constant k0 [N/m]
+        *or* the flexural rigidity B [N m^2] (``B = k0 L0^3 / 3``), not both;
+        neither: B = :data:`DEFAULT_B` (3.5e-13; spec section 5 decision: the
+        paper prints 3.5e-12). After construction exactly one is set; read
+        both from :attr:`cantilever`.
+    m_joint, m_base : float
+        Point mass at the beam-base joint and mass spread along the base [kg]
+        (``m_alpha = m_joint + m_base/4``, ``m_beta = m_base/3``).
+    """
+
+    model: ClassVar[str] = "beam"
+
+    L0: float = quantity("L0", FIG5["L0"], "positive")
+    L1: float = quantity("L1", FIG5["L1"], "positive")
+    L2: float = quantity("L2", FIG5["L2"], "finite")
+    theta0: float = quantity("theta0", FIG5["theta0"], "finite")
+    k0: float | None = quantity("k0", None, "optional_positive")
+    B: float | None = quantity("B", None, "optional_positive")
+    m_joint: float = quantity("m_joint", FIG5["m_joint"], "positive")
+    m_base: float = quantity("m_base", FIG5["m_base"], "positive")
+
+    def __post_init__(self) -> None:
+        if self.k0 is not None and self.B is not None:
+            raise ParameterError("give at most one of k0 [N/m] or B [N m^2]")
+        if self.k0 is None and self.B is None:
+            object.__setattr__(self, "B", DEFAULT_B)
+        validate(self, skip=("L0", "L1", "L2", "theta0"))   # the cantilever checks its geometry
+        cant = _cantilever(self.L0, self.L1, self.L2, self.theta0, self.k0, self.B)
+        for name in ("L0", "L1", "L2", "theta0"):
+            object.__setattr__(self, name, getattr(cant, name))
+        object.__setattr__(self, "_cant", cant)
+
+    def replace(self, **changes) -> BeamProbe:
+        """A copy with some fields changed; giving k0 (or B) alone replaces the other."""
+        if "k0" in changes and "B" not in changes:
+            changes["B"] = None
+        elif "B" in changes and "k0" not in changes:
+            changes["k0"] = None
+        return super().replace(**changes)
+
+    @property
+    def cantilever(self) -> InclinedCantilever:
+        """The :class:`~afmforce.cantilever.InclinedCantilever` (k0 and B both resolved)."""
+        return self._cant
+
+    @property
+    def force_constant(self) -> float:
+        """Force-measuring spring constant k of eq 13 [N/m]."""
+        return _k_beta(self._cant)[0]
+
+    @property
+    def calibration_factor(self) -> float:
+        """beta = dz2/dtheta of eq 15 [m/rad]."""
+        return _k_beta(self._cant)[1]
+
+
+@dataclass(frozen=True)
+class SpringProbe(Part):
+    """A mass on a spring moving vertically (the ``spring`` model, eq 1; no tilt, no friction).
+
+    Attributes
+    ----------
+    spring_constant : float
+        k [N/m] (default: Fig 1, 0.21).
+    mass : float
+        m [kg] (default: Fig 1, 10 ug).
+    """
+
+    model: ClassVar[str] = "spring"
+
+    spring_constant: float = quantity("spring_constant", FIG1["spring_constant"], "positive")
+    mass: float = quantity("mass", FIG1["mass"], "positive")
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+    @property
+    def force_constant(self) -> float:
+        """k [N/m]."""
+        return self.spring_constant
+
+    @property
+    def calibration_factor(self) -> float:
+        """NaN: the spring does not tilt (no eq 15)."""
+        return math.nan
+
+
+#: Model name -> its probe class.
+PROBES: dict[str, type] = {"beam": BeamProbe, "spring": SpringProbe}
+
+
+# --- surfaces, friction, drive, numerics ---------------------------------------
+@dataclass(frozen=True)
+class Surface(Part):
+    """The surfaces: van der Waals force with a soft wall (eq 2) and drainage.
+
+    Attributes
+    ----------
+    radius : float
+        Effective radius R [m].
+    hamaker : float
+        Hamaker constant A [J].
+    z0 : float
+        Soft-wall length [m].
+    viscosity : float
+        Fluid viscosity for drainage [Pa s] (0 switches drainage off).
+    """
+
+    radius: float = quantity("radius", FIG5["radius"], "positive")
+    hamaker: float = quantity("hamaker", FIG5["hamaker"], "positive")
+    z0: float = quantity("z0", FIG5["z0"], "positive")
+    viscosity: float = quantity("viscosity", FIG5["viscosity"], "non_negative")
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+
+@dataclass(frozen=True)
+class Friction(Part):
+    """Lateral friction on the probe tip (beam model; the spring has no lateral motion).
+
+    Attributes
+    ----------
+    law : {"viscous", "load", "none"}
+        Law from :data:`afmforce.dynamics.FRICTION_LAWS` (the flat name is ``friction``).
+    xi : float
+        Viscous friction coefficient [kg/s].
+    zeta : float
+        Load-dependent coefficient [kg/(s N^2)] (``law="load"``).
+    """
+
+    law: str = choice("viscous", FRICTION_LAWS, "friction law", name="friction")
+    xi: float = quantity("xi", FIG5["xi"], "non_negative")
+    zeta: float = quantity("zeta", 0.0, "non_negative")
+
+    def __post_init__(self) -> None:
+        validate(self)
+
+    @property
+    def coefficients(self) -> tuple[float, float]:
+        """(xi, zeta) as the compiled force law ``Fy = -(xi + zeta Fz^2) y2'`` uses them."""
+        return FRICTION_LAWS[self.law].coefficients(self.xi, self.zeta)
+
+
+@dataclass(frozen=True)
+class Drive(Part):
+    """The drive protocol: approach, optional dwell, retract (substrate position z, up > 0).
+
+    Attributes
+    ----------
+    velocity : float
+        Approach speed [m/s], > 0.
+    retract_velocity : float or None
+        Retract speed [m/s]; default: ``velocity``.
+    start : float
+        Drive position at t = 0 [m]; the cantilever starts at static
+        equilibrium there (no friction at rest). Must be out of contact
+        (checked by :meth:`SimulationConfig.validate`, which needs a static solve).
+    turn : float
+        Drive position where the approach turns [m]. With ``turn_force`` or
+        ``turn_deflection`` it is the farthest the approach may go.
+    turn_force : float or None
+        Turn when the load ``k z2`` first reaches this value [N] (k of eq 13
+        for the beam): the trigger of an instrument, which sees the deflection;
+        the contact force Fz itself rings at jump-in.
+    turn_deflection : float or None
+        Turn when the deflection z2 first reaches this value [m].
+    dwell : float
+        Pause at the turn point [s].
+    end : float
+        Drive position where the retract ends [m].
+    """
+
+    velocity: float = quantity("velocity", FIG5["velocity"], "positive")
+    retract_velocity: float | None = quantity("retract_velocity", None, "optional_positive")
+    start: float = quantity("start", FIG5["start"], "finite")
+    turn: float = quantity("turn", FIG5["turn"], "finite")
+    turn_force: float | None = quantity("turn_force", None, "optional_positive")
+    turn_deflection: float | None = quantity("turn_deflection", None, "optional_positive")
+    dwell: float = quantity("dwell", 0.0, "non_negative")
+    end: float = quantity("end", FIG5["end"], "finite")
+
+    def __post_init__(self) -> None:
+        validate(self)
+        if self.turn_force is not None and self.turn_deflection is not None:
+            raise ParameterError("give at most one of turn_force [N] or turn_deflection [m]")
+        if self.turn <= self.start:
+            raise ParameterError(
+                f"turn ({self.turn:.4g} m) must lie above start ({self.start:.4g} m): "
+                "the approach moves the substrate up (z increasing)")
+        if self.end >= self.turn:
+            raise ParameterError(
+                f"end ({self.end:.4g} m) must lie below turn ({self.turn:.4g} m): "
+                "the retract moves the substrate down")
+
+    @property
+    def retract_speed(self) -> float:
+        """Retract speed [m/s]."""
+        return self.velocity if self.retract_velocity is None else self.retract_velocity
+
+
+@dataclass(frozen=True)
+class SolverOptions(Part):
+    """Sampling of the returned trajectory, integrator tolerances and event definitions.
+
+    Attributes
+    ----------
+    sample_rate : float
+        Instrument sampling rate of the returned trajectory [Hz].
+    rtol : float
+        Relative tolerance of the integrator on velocities; also sets the
+        Newton tolerance.
+    atol : float
+        Absolute tolerance on positions [m] (positions have no relative
+        tolerance: the forces depend on h, a small difference of two large
+        positions in contact); velocities use ``atol * 10 * w`` with w the
+        model's own free or contact frequency at the current state
+        (:func:`afmforce.dynamics.models.error_frequency`; docs/dynamics.md).
+    contact_separation : float
+        Separation below which the surfaces count as in contact [m]
+        (contact and pull-off events; spec section 7 uses 1 nm).
+    jump_factor : float
+        Jump-in criterion: the first time ``dh/dt < -jump_factor * dz/dt``
+        on the approach before contact.
+    spike_window : float
+        The jump-in transient: the apparent-deflection spike is searched from
+        jump-in (or contact) to this long after contact, and the in-contact
+        ringing is resolved at least this long [s]. 0: the spike is not asked
+        for (``spike_height`` etc. NaN); the ringing is then damped as soon as
+        its amplitude allows, which takes 2-4x fewer steps (Fig 5/6 runs) and
+        leaves every other event within its tolerance (docs/dynamics.md).
+    ringing : {"damp", "resolve"}
+        Treatment of the nearly undamped in-contact mode
+        (:data:`afmforce.dynamics.RINGING`; docs/dynamics.md): ``damp`` lets
+        the L-stable integrator damp it after ``spike_window``; ``resolve``
+        follows it under normal error control.
+    sampling : {"point", "average"}
+        What one sample of the trajectory is (:data:`SAMPLING`): ``point``
+        (default) the state at the sample time; ``average`` the state averaged
+        over the sample interval centred on it (exact integral of the
+        solver's dense output), as an instrument whose detector signal is
+        averaged (oversampled) over each sample interval records it. Linear
+        observables (deflection, angle, apparent deflection, separation) are
+        then exact interval means; force columns are evaluated at the mean
+        state. Events are located on the dense output in both modes.
+    max_steps : int or None
+        Step budget; exceeding it raises :class:`~afmforce.errors.SolverError`.
+        None (default): sized from the run, ``max(2e6, 60 f_max T)`` with
+        ``f_max`` the highest free mode and ``T`` the simulated time, so a
+        slow run that must follow a free oscillation for minutes finishes.
+    """
+
+    sample_rate: float = quantity("sample_rate", 10e3, "positive")
+    rtol: float = quantity("rtol", 1e-4, "range")
+    atol: float = quantity("atol", 1e-12, "positive")
+    contact_separation: float = quantity("contact_separation", 1e-9, "positive")
+    jump_factor: float = quantity("jump_factor", 2.0, "positive")
+    spike_window: float = quantity("spike_window", 2e-3, "non_negative")
+    ringing: str = choice("damp", RINGING, "treatment of the in-contact ringing")
+    sampling: str = choice("point", SAMPLING, "what one trajectory sample is")
+    max_steps: int | None = quantity("max_steps", None, "count")
+
+    def __post_init__(self) -> None:
+        validate(self)
