@@ -1,7 +1,8 @@
 """Force-curve analysis: small functions for each step of the paper's recipe (section 3).
 
-The pipeline that chains them is :mod:`afmforce.analysis.pipeline`; the vectorised core
-for many curves at once is :mod:`afmforce.analysis.batch`.
+The pipeline that chains them is :mod:`afmforce.analysis.pipeline`; many files or the
+curves of a force map go through it in chunks with :func:`afmforce.sweep.files.analyze_files`;
+:mod:`afmforce.analysis.maps` turns their summary table into map images.
 """
 
 from __future__ import annotations

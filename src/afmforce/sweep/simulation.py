@@ -22,7 +22,7 @@ import warnings
 from .._fields import QUANTITIES, spec_of
 from ..errors import MissingDependencyError
 from ..forces import static_jump_in_separation, vdw_force
-from .engine import flatten
+from .chunks import flatten
 
 __all__ = ["simulate_run", "simulate_runs", "simulation_dimensions", "OUTPUT_UNITS", "parameter_units"]
 
@@ -117,7 +117,7 @@ def _batch_threads() -> int:
     return default_threads()
 
 
-#: the sweep engine's batched protocol: ``func.batch(rows)``, ``func.batch_threads()``
+#: the chunk runner's batched protocol (sweep.parametric): ``func.batch(rows)``, ``func.batch_threads()``
 simulate_run.batch = simulate_runs
 simulate_run.batch_threads = _batch_threads
 
