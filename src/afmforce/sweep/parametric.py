@@ -31,6 +31,9 @@ from .store import SweepStore
 
 __all__ = ["run_sweep", "table_key"]
 
+#: Rows timed by the automatic plan of a long sweep (first, middle, last).
+TIMED_ROWS = 3
+
 
 def _call_row(func: Callable, kwargs: dict, record_errors: bool) -> dict:
     try:
@@ -125,13 +128,20 @@ def _auto_plan(func, table, key: str, store, chunk_size, workers) -> ExecutionPl
     remaining = n - done * (fixed or 0) if fixed else n
     if remaining <= 0:  # everything stored: nothing to time
         return ExecutionPlan("serial", fixed or default_chunk_size(n), None, 0.0, None, "all chunks stored")
-    row0 = {c: table[c].iloc[0] for c in table.columns}
-    row0 = {k: (v.item() if isinstance(v, np.generic) else v) for k, v in row0.items()}
+    # time rows spread over the table (costs vary with the parameters) when the sweep is long
+    # enough for the extra timing runs not to matter (at most ~5 % of its runs)
+    positions = sorted({0, n // 2, n - 1}) if remaining >= 20 * TIMED_ROWS else [0]
+    calls = [functools.partial(func, **_row(table, i)) for i in positions]
     # a batched function says how many threads its runs use in this process
     threads = int(func.batch_threads()) if callable(getattr(func, "batch_threads", None)) else 1
-    return plan_execution(functools.partial(func, **row0), max(1, remaining), workers or available_cores(),
+    return plan_execution(calls, max(1, remaining), workers or available_cores(),
                           chunk_size=fixed, default_chunk_size=default_chunk_size(n),
                           serial_threads=threads)
+
+
+def _row(table, i: int) -> dict:
+    row = {c: table[c].iloc[i] for c in table.columns}
+    return {k: (v.item() if isinstance(v, np.generic) else v) for k, v in row.items()}
 
 
 def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = None, executor="auto",
@@ -150,12 +160,13 @@ def run_sweep(func: Callable[..., Any], parameters, *, chunk_size: int | None = 
     chunk_size : int, optional
         Runs per chunk (default :func:`default_chunk_size`; a resumed store keeps its own).
     executor : "auto", "serial", "dask", SerialExecutor, DaskExecutor, distributed.Client, optional
-        ``"auto"`` (default): time one run here and run in this process when that
-        finishes sooner than starting a local cluster, else on a local Dask cluster
-        of ``workers`` processes (one per core) with chunks sized from the measured
-        cost (:func:`~afmforce.sweep.autoplan.plan_execution`; one run is done once
-        more to time it). ``"dask"``: always a local cluster, or the cluster at
-        ``scheduler`` (``tcp://host:port``, also the choice when a scheduler is given).
+        ``"auto"`` (default): time runs here (one, or three spread over a long
+        table: they are done once more than asked) and run in this process when
+        that finishes sooner than starting a local cluster, else on a local Dask
+        cluster of ``workers`` processes (one per core); chunks are sized from the
+        measured cost in both cases (:func:`~afmforce.sweep.autoplan.plan_execution`).
+        ``"dask"``: always a local cluster, or the cluster at ``scheduler``
+        (``tcp://host:port``, also the choice when a scheduler is given).
     store : path or SweepStore, optional
         Parent folder of the resumable store (a sub-folder keyed by a hash of
         ``func`` and the table is created); without it nothing is written.
