@@ -5,8 +5,9 @@ code in every worker; a sweep that finishes in this process sooner than that
 should not start one. :func:`plan_execution` times runs of the swept function
 in this process: one row, or a few rows spread over the table (run costs vary
 with the parameters: a Fig-5 run at 0.1 um/s takes twice one at 2 um/s), the
-first call once more when it is short (the first call may load or compile
-code); the cost of a run is their mean. It then compares
+first call once more (it may load or compile code: 2.3 s in a fresh process
+for a 20 ms run) unless it was long and the sweep short; the cost of a run is
+their mean. It then compares
 
 * serial:  ``n_runs * t_run`` (divided by ``PARALLEL_EFFICIENCY * threads`` for a
   batched function that integrates on threads, e.g. ``simulate_run``)
@@ -50,8 +51,11 @@ MIN_CHUNKS_PER_WORKER = 4
 MAX_CHUNK = 256
 #: At least this many runs per thread in a chunk of a batched function run in this process.
 MIN_RUNS_PER_THREAD = 4
-#: A first call longer than this [s] is taken as the cost of a run (no second timing call).
+#: A first call longer than this [s] is taken as the cost of a run (no second timing call) ...
 _RETIME_BELOW = 2.0
+#: ... in a sweep of fewer runs than this (in a longer one, one extra run is a small share of it and
+#: the first call may have been mostly loading compiled code: 2.3 s for a 20 ms Fig-5 run).
+_RETIME_RUNS = 20
 
 
 @dataclass(frozen=True)
@@ -80,13 +84,18 @@ class ExecutionPlan:
     reason: str
 
 
-def _time_calls(calls: Sequence[Callable[[], Any]]) -> float | None:
-    """Mean seconds of one call over ``calls`` (the first one timed again when short)."""
+def _time_calls(calls: Sequence[Callable[[], Any]], n_runs: int) -> float | None:
+    """Mean seconds of one call over ``calls``.
+
+    The first call may load or compile code (seconds in a fresh process: the numba cache), so
+    it is timed again, unless it took ``_RETIME_BELOW`` or more and the sweep is so short
+    (fewer than ``_RETIME_RUNS`` runs) that an extra run would cost a noticeable share of it.
+    """
     try:
         t0 = time.perf_counter()
         calls[0]()
         first = time.perf_counter() - t0
-        if first >= _RETIME_BELOW:
+        if first >= _RETIME_BELOW and n_runs < _RETIME_RUNS:
             return first
         times = []
         for call in calls:
@@ -126,7 +135,7 @@ def plan_execution(call: Callable[[], Any] | Sequence[Callable[[], Any]], n_runs
     -------
     ExecutionPlan
     """
-    t_run = _time_calls([call] if callable(call) else list(call))
+    t_run = _time_calls([call] if callable(call) else list(call), n_runs)
     if t_run is None:
         size = chunk_size or default_chunk_size
         return ExecutionPlan("serial" if workers <= 1 else "dask", size, None, None, None,
