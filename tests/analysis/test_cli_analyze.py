@@ -121,3 +121,41 @@ def test_usage_errors_exit_2(argv, capsys):
         code = main(argv)
         raise SystemExit(code)
     assert exc.value.code == 2
+
+
+@pytest.mark.parametrize("option, words", [
+    ("vdw.max_separation=-5nm", ["--option vdw.max_separation", "out of range", "um"]),
+    ("vdw.max_separation=5nN", ["--option vdw.max_separation", "length"]),
+    ("jumps.nsigmaa=4", ["unknown option", "nsigma"]),
+    ("vwd.z0=1nm", ["unknown step", "vdw"]),
+    ("fringes.apply=sometimes", ["fringes.apply", "auto, always, never"]),
+    ("smooth.window=4", ["smooth.window", "odd"]),
+])
+def test_bad_step_options_exit_2_with_one_line_before_any_work(option, words, tmp_path, capsys):
+    out = tmp_path / "out"
+    code = main(["analyze", str(DATA / FILES[0]), "--out", str(out), "--option", option])
+    assert code == 2 and not out.exists()
+    err = capsys.readouterr().err.strip()
+    assert len(err.splitlines()) == 1 and "Traceback" not in err
+    for w in words:
+        assert w in err
+
+
+def test_option_flag_matches_the_library_records(capsys):
+    """``--option`` (units parsed) gives the numbers of the records in Python; the short forms agree."""
+    from afmforce.analysis.options import ProbeCalibration, VdwOptions, ZeroOptions
+    from afmforce.analysis.pipeline import analyze
+    from afmforce.io import load
+
+    assert main(["analyze", str(DATA / FILES[0]), "--json", "--radius", "20nm", "--option", "vdw.max_separation=20nm",
+                 "--option", "zero.contact_separation=0nm"]) == 0
+    cli = json.loads(capsys.readouterr().out)["results"][FILES[0]]
+    lib = analyze(load(DATA / FILES[0])[0], options=[VdwOptions(max_separation=20e-9),
+                                                      ZeroOptions(contact_separation=0.0)],
+                  probe=ProbeCalibration(radius=20e-9))
+    assert cli["hamaker_radius"] == lib.hamaker_radius and cli["hamaker"] == lib.hamaker
+    assert cli["contact_separation"] == 0.0
+    assert cli["details"]["vdw"]["separation_max"] <= 20e-9
+    assert main(["analyze", str(DATA / FILES[0]), "--contact-separation", "0nm", "--option",
+                 "zero.contact_separation=0nm"]) == 2  # one option, two flags: refused
+    assert "set the same option" in capsys.readouterr().err

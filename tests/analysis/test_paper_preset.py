@@ -100,7 +100,7 @@ def test_fig7_protocol_calibration_shift_and_zero(name):
     assert abs(np.median(res.separation[free] - h[free])) < 1e-9
     # the tip jumps by about the noise (truth: 0.5-1.5 nm at 0.3 nm noise): jump or not, the
     # onset of contact, at a small positive separation, within two samples of the true contact
-    ji = res.details["jumps"]["jump_in"]
+    ji = res.details["jumps"].jump_in
     i0 = _first_contact(raw)
     assert abs(ji.index + 1 - i0) <= 2
     assert 0 < res.contact_onset_separation < 6e-9
@@ -121,7 +121,7 @@ def test_fig7_protocol_clipped_pull_off(name):
     in_contact = ret[t["separation"][ret] < CONTACT_H]
     d_true = float(t["apparent_deflection"][ret[: np.searchsorted(ret, in_contact[-1]) + 1]].min())
     assert d_true < -CLIP * S  # the premise: the pull-off lies beyond the clip
-    po = res.details["jumps"]["pull_off"]
+    po = res.details["jumps"].pull_off
     assert po.found and po.saturated and res.pull_off_saturated
     assert abs(po.index - in_contact[-1]) <= 3
     assert abs(po.deflection) < abs(d_true)  # a lower bound ...
@@ -172,7 +172,7 @@ def test_issue_run_with_the_contact_hidden_in_the_clip():
     # no jump-in at a large negative separation; the run is called dynamic. Friction (spec
     # section 7: the lines' offset grows as xi v, 4.5 nm at 1e-7 N) displaces the only line
     # left, so the zero is uncertain, and the analysis says by how much
-    ji = res.details["jumps"]["jump_in"]
+    ji = res.details["jumps"].jump_in
     assert abs(ji.index + 1 - _first_contact(raw)) <= 1
     assert res.contact_onset_separation > 0
     assert not res.jump_in_separation < 0

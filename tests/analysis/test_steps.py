@@ -21,6 +21,7 @@ from afmforce.analysis.jumps import PullOff
 from afmforce.analysis.oscillation import find_peak
 from afmforce.analysis.synthetic import static_curve
 from afmforce.constants import FIG3
+from afmforce.analysis.options import FringesOptions
 from afmforce.analysis.pipeline import analyze
 
 K, R, A = 0.21, 220e-9, 5e-19  # Fig 9 theory (constants.FIG9)
@@ -111,8 +112,8 @@ def test_quasi_static_round_trip(seed):
     free = (c.segment == 0) & (t["separation"] > 1e-9)
     assert abs(np.median(res.separation[free] - t["separation"][free])) < 0.3e-9
     assert res.hamaker_radius == pytest.approx(A * R, rel=0.10)
-    assert abs(res.details["jumps"]["jump_in"].index - t["jump_in_index"]) <= 1
-    assert abs(res.details["jumps"]["pull_off"].index - t["pull_off_index"]) <= 1
+    assert abs(res.details["jumps"].jump_in.index - t["jump_in_index"]) <= 1
+    assert abs(res.details["jumps"].pull_off.index - t["pull_off_index"]) <= 1
     # pull-off of a rigid contact: the largest attraction -A R / (16 z0^2) (eq 2)
     assert res.pull_off_force == pytest.approx(forces.max_attraction_force(R, A), rel=0.03)
 
@@ -138,7 +139,7 @@ def test_fringe_calibration_maps_nominal_to_true_position():
     c = static_curve(start=-1000e-9, turn=40e-9, end=-1200e-9, fringe_amplitude=0.02, fringe_period=320e-9,
                      piezo_quadratic=(0.03, -0.02), noise=0.05e-9, velocity=2e-6, sample_rate=4000, seed=4)
     for period in (None, 320e-9):
-        res = analyze(c, steps=["fringes"], options={"fringes": {"period": period}})
+        res = analyze(c, steps=["fringes"], options=[FringesOptions(period=period)])
         fr = res.details["fringes"]
         assert fr.applied and fr.approach.found and fr.retract.found
         for seg, run in ((0, fr.approach), (1, fr.retract)):

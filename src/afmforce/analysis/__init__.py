@@ -1,8 +1,10 @@
 """Force-curve analysis: small functions for each step of the paper's recipe (section 3).
 
-The pipeline that chains them is :mod:`afmforce.analysis.pipeline`; many files or the
-curves of a force map go through it in chunks with :func:`afmforce.sweep.files.analyze_files`;
-:mod:`afmforce.analysis.maps` turns their summary table into map images.
+The pipeline that chains them is :mod:`afmforce.analysis.pipeline`, its typed inputs
+(the probe record and one options record per step) :mod:`afmforce.analysis.options`; many
+files or the curves of a force map go through it in chunks with
+:func:`afmforce.sweep.files.analyze_files`; :mod:`afmforce.analysis.maps` turns their summary
+table into map images.
 """
 
 from __future__ import annotations
@@ -14,6 +16,10 @@ from .dynamic import DynamicDiagnosis, diagnose_curve, run_velocity
 from .fringes import FringeResult, FringeRun, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
 from .jumps import (AdhesionResult, JumpIn, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings,
                     pull_off_estimate)
+from .options import (OPTIONS, AdhesionOptions, CalibrationOptions, ComplianceOptions, ContactOptions,
+                      DiagnosisOptions, DriftOptions, ForceOptions, FrictionOptions, FringesOptions, JumpsOptions,
+                      KindOptions, OscillationOptions, ProbeCalibration, ShiftOptions, SmoothOptions, StepOptions,
+                      SurfaceEnergyOptions, VdwOptions, ZeroOptions)
 from .oscillation import OscillationPeak, OscillationResult, find_peak, oscillation_origin
 from .regions import RunRegions, check_compliance, contact_slopes, find_run_regions, saturated_mask
 from .result import AnalysisResult
@@ -21,6 +27,10 @@ from .separation import ForceConversion, ZeroResult, effective_spring_constant, 
 from .vdw import VdwFit, fit_vdw
 
 __all__ = [
+    "OPTIONS", "AdhesionOptions", "CalibrationOptions", "ComplianceOptions", "ContactOptions", "DiagnosisOptions",
+    "DriftOptions", "ForceOptions", "FrictionOptions", "FringesOptions", "JumpsOptions", "KindOptions",
+    "OscillationOptions", "ProbeCalibration", "ShiftOptions", "SmoothOptions", "StepOptions",
+    "SurfaceEnergyOptions", "VdwOptions", "ZeroOptions",
     "AdhesionResult", "AnalysisResult", "CalibrationResult", "ComplianceLine", "ComplianceResult",
     "DriftResult", "DynamicDiagnosis", "ForceConversion", "FrictionSignature", "FringeResult", "FringeRun",
     "JumpIn", "OscillationPeak", "OscillationResult", "PullOff", "RunRegions", "ShiftResult", "VdwFit",

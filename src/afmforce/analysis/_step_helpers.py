@@ -16,8 +16,7 @@ def _kind(st: State) -> str:
 
 def _skip(st: State, step: str, why: str, detail=None) -> State:
     """Record that ``step`` does not apply to this curve, and why."""
-    skipped = {**st.details.get("skipped", {}), step: why}
-    new = st.update("skipped", skipped)
+    new = st.update(skipped={**st.skipped, step: why})
     return new.update(step, detail) if detail is not None else new
 
 

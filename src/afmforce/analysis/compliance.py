@@ -24,6 +24,8 @@ import numpy as np
 from ..errors import AnalysisError, ParameterError
 from ._numeric import robust_line
 from .regions import RunRegions
+from ._units import unit as _u
+from .options import CalibrationOptions as _C, FrictionOptions as _F  # defaults declared once
 
 __all__ = ["ComplianceLine", "ComplianceResult", "fit_compliance", "CalibrationResult", "calibrate",
            "ShiftResult", "compliance_shift", "FrictionSignature", "friction_signature"]
@@ -44,16 +46,16 @@ class ComplianceLine:
     s_min, s_max : float  signal range fitted [unit]
     """
 
-    intercept: float
-    slope: float
-    intercept_se: float
-    slope_se: float
-    sigma: float
-    n_points: int
-    z_min: float
-    z_max: float
-    s_min: float
-    s_max: float
+    intercept: float = _u("{signal}")
+    slope: float = _u("{signal}/m")
+    intercept_se: float = _u("{signal}")
+    slope_se: float = _u("{signal}/m")
+    sigma: float = _u("{signal}")
+    n_points: int = _u("")
+    z_min: float = _u("m")
+    z_max: float = _u("m")
+    s_min: float = _u("{signal}")
+    s_max: float = _u("{signal}")
 
     @property
     def found(self) -> bool:
@@ -141,15 +143,15 @@ class CalibrationResult:
     unit : str
     """
 
-    factor: float
-    factor_fit: float
-    factor_given: float
+    factor: float = _u("m/{signal}")
+    factor_fit: float = _u("m/{signal}")
+    factor_given: float = _u("m/{signal}")
     source: str
-    sensitivity: float
-    sensitivity_fit: float
-    compliance_slope: float
-    slope_ratio: float
-    spring_constant_from_slope: float
+    sensitivity: float = _u("m/V")
+    sensitivity_fit: float = _u("m/V")
+    compliance_slope: float = _u("{signal}/m")
+    slope_ratio: float = _u("")
+    spring_constant_from_slope: float = _u("N/m")
     unit: str
 
 
@@ -162,8 +164,8 @@ def _metadata_factor(unit: str, metadata: Mapping[str, Any]) -> float:
     return 1.0 / float(k) if k else math.nan
 
 
-def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, source: str = "auto",
-              run: str = "approach") -> CalibrationResult:
+def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, source: str = _C.source,
+              run: str = _C.run) -> CalibrationResult:
     """Calibration factor from the compliance slope and/or the metadata.
 
     ``source="auto"`` uses the file's or user's calibration when there is one
@@ -224,9 +226,9 @@ class ShiftResult:
         Whether the inward run was moved.
     """
 
-    shift: float
-    shift_se: float
-    reference_signal: float
+    shift: float = _u("m")
+    shift_se: float = _u("m")
+    reference_signal: float = _u("{signal}")
     applied: bool
 
 
@@ -269,15 +271,15 @@ class FrictionSignature:
     """
 
     kind: str
-    offset: float
-    offset_se: float
-    slope_ratio: float
-    slope_ratio_se: float
+    offset: float = _u("m")
+    offset_se: float = _u("m")
+    slope_ratio: float = _u("")
+    slope_ratio_se: float = _u("")
     verdict: str
 
 
-def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsigma: float = 3.0,
-                       slope_tolerance: float = 0.02, offset_tolerance: float = 0.2e-9,
+def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsigma: float = _F.nsigma,
+                       slope_tolerance: float = _F.slope_tolerance, offset_tolerance: float = _F.offset_tolerance,
                        friction_slope_limit: float = 0.25, channel: str = "") -> FrictionSignature:
     """Classify the pair of compliance lines.
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..constants import Z0
 from ._numeric import robust_line_thin
+from ._units import unit as _u
 
 __all__ = ["DynamicDiagnosis", "diagnose_curve", "run_velocity"]
 
@@ -64,18 +65,18 @@ class DynamicDiagnosis:
         and the verdict starts with "dynamics not assessed".
     """
 
-    velocity: float
-    spring_constant: float
-    resonance_frequency: float
-    resolution: float
-    force_gradient: float
+    velocity: float = _u("m/s")
+    spring_constant: float = _u("N/m")
+    resonance_frequency: float = _u("Hz")
+    resolution: float = _u("m")
+    force_gradient: float = _u("N/m")
     force_gradient_method: str
-    inertia_parameter: float
-    inertial_lag: float
-    jump_in_separation: float
-    static_jump_in_separation: float
-    jump_excess: float
-    attraction_ratio: float
+    inertia_parameter: float = _u("")
+    inertial_lag: float = _u("m")
+    jump_in_separation: float = _u("m")
+    static_jump_in_separation: float = _u("m")
+    jump_excess: float = _u("m")
+    attraction_ratio: float = _u("")
     dynamic: bool
     verdict: str
     assessed: bool = True

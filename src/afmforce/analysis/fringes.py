@@ -29,6 +29,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._fringe_kernel import lm_fit
+from ._units import unit as _u
+from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
 
 __all__ = ["FringeRun", "FringeResult", "fit_fringes", "position_map", "fringe_signal", "fringe_baseline",
            "loop_width"]
@@ -60,21 +62,21 @@ class FringeRun:
     """
 
     found: bool
-    period: float
-    amplitude: float
-    phase: float
-    scale: float
-    a2: float
-    a3: float
-    z_mid: float
-    half_range: float
-    nonlinearity: float
-    explained: float
-    cycles: float
-    residual: float
-    baseline_offset: float = 0.0
-    baseline_slope: float = 0.0
-    baseline_origin: float = 0.0
+    period: float = _u("m")
+    amplitude: float = _u("{signal}")
+    phase: float = _u("rad")
+    scale: float = _u("")
+    a2: float = _u("")
+    a3: float = _u("")
+    z_mid: float = _u("m")
+    half_range: float = _u("m")
+    nonlinearity: float = _u("")
+    explained: float = _u("")
+    cycles: float = _u("")
+    residual: float = _u("{signal}")
+    baseline_offset: float = _u("{signal}", 0.0)
+    baseline_slope: float = _u("{signal}/s or {signal}/m (baseline_variable)", 0.0)
+    baseline_origin: float = _u("s or m (baseline_variable)", 0.0)
     baseline_variable: str = "position"
     converged: bool = True
 
@@ -93,7 +95,7 @@ class FringeResult:
 
     approach: FringeRun
     retract: FringeRun
-    loop_width: float
+    loop_width: float = _u("m")
     applied: bool
     verdict: str
 
@@ -203,7 +205,7 @@ def _not_found(z: np.ndarray, r: np.ndarray, explained: float, period: float) ->
                      float(np.ptp(z) / period) if period > 0 else 0.0, float(np.std(r)))
 
 
-def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = None, order: int | str = "auto",
+def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.period, order: int | str = _Fr.order,
                 min_explained: float = 0.3, min_cycles: float = 1.0, t: np.ndarray | None = None) -> FringeRun:
     """Fit the fringe model to the baseline residual ``r`` against position ``z``.
 

@@ -27,12 +27,13 @@ from dataclasses import dataclass
 import numpy as np
 
 from .. import forces
-from ..constants import HAMAKER, Z0
 from ..errors import ParameterError
 from ._numeric import largest_step, robust_line
 from .regions import RunRegions
+from ._units import unit as _u
+from .options import JumpsOptions as _J, SurfaceEnergyOptions as _E  # defaults declared once
 
-__all__ = ["JumpIn", "PullOff", "find_jump_in", "find_pull_off", "jump_warnings", "pull_off_estimate",
+__all__ = ["JumpIn", "PullOff", "Jumps", "find_jump_in", "find_pull_off", "jump_warnings", "pull_off_estimate",
            "AdhesionResult", "adhesion"]
 
 
@@ -53,14 +54,14 @@ class JumpIn:
     """
 
     found: bool
-    index: int
-    position: float
-    separation: float
-    deflection_before: float
-    deflection_after: float
-    force_before: float
-    force_after: float
-    significance: float
+    index: int = _u("")
+    position: float = _u("m")
+    separation: float = _u("m")
+    deflection_before: float = _u("m")
+    deflection_after: float = _u("m")
+    force_before: float = _u("N")
+    force_after: float = _u("N")
+    significance: float = _u("")
 
 
 @dataclass(frozen=True)
@@ -83,14 +84,28 @@ class PullOff:
     """
 
     found: bool
-    index: int
-    position: float
-    deflection: float
-    force: float
-    jump_out_distance: float
-    significance: float
+    index: int = _u("")
+    position: float = _u("m")
+    deflection: float = _u("m")
+    force: float = _u("N")
+    jump_out_distance: float = _u("m")
+    significance: float = _u("")
     saturated: bool
-    deflection_extrapolated: float = math.nan
+    deflection_extrapolated: float = _u("m", math.nan)
+
+
+@dataclass(frozen=True)
+class Jumps:
+    """The jumps step's result: the jump into contact and the pull-off.
+
+    Attributes
+    ----------
+    jump_in : JumpIn
+    pull_off : PullOff
+    """
+
+    jump_in: JumpIn
+    pull_off: PullOff
 
 
 def _nan_jump_in() -> JumpIn:
@@ -99,7 +114,7 @@ def _nan_jump_in() -> JumpIn:
 
 
 def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, run: RunRegions,
-                 noise: float, spring_constant: float, nsigma: float = 5.0, window: int = 3) -> JumpIn:
+                 noise: float, spring_constant: float, nsigma: float = _J.nsigma, window: int = _J.window) -> JumpIn:
     """Largest downward step of the approach within ``window`` samples of the contact split.
 
     ``noise`` is the deflection noise [m]; the step noise is ``sqrt(2) noise``.
@@ -123,7 +138,7 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
 
 
 def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: float,
-                  spring_constant: float, nsigma: float = 5.0, window: int = 3) -> PullOff:
+                  spring_constant: float, nsigma: float = _J.nsigma, window: int = _J.window) -> PullOff:
     """The last retract sample on the contact line before the cantilever leaves it.
 
     The contact (compliance and adhesion) line is fitted robustly on the
@@ -222,14 +237,14 @@ class AdhesionResult:
     """
 
     model: str
-    surface_energy: float
-    radius: float
-    surface_energy_assumed: float
-    radius_given: float
+    surface_energy: float = _u("J/m^2")
+    radius: float = _u("m")
+    surface_energy_assumed: float = _u("J/m^2")
+    radius_given: float = _u("m")
 
 
 def adhesion(pull_off: PullOff, spring_constant: float, *, radius: float | None = None,
-             model: str = "jkr", hamaker: float = HAMAKER, z0: float = Z0) -> AdhesionResult:
+             model: str = _E.model, hamaker: float = _E.hamaker, z0: float = _E.z0) -> AdhesionResult:
     """gamma from a known R, and R from gamma = A/(16 pi z0^2) (section 2.1)."""
     if model not in ("jkr", "dmt"):
         raise ParameterError(f"adhesion model must be jkr or dmt, got {model!r}")

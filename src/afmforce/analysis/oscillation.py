@@ -25,6 +25,9 @@ from typing import Sequence
 import numpy as np
 from scipy.ndimage import median_filter
 
+from ._units import unit as _u
+from .options import OscillationOptions as _Osc  # the defaults: declared once, in the step's record
+
 __all__ = ["OscillationPeak", "OscillationResult", "find_peak", "oscillation_origin", "false_alarm_probability",
            "both_runs"]
 
@@ -50,15 +53,15 @@ class OscillationPeak:
 
     run: str
     found: bool
-    frequency: float
-    spatial_frequency: float
-    wavelength: float
-    amplitude: float
-    significance: float
-    threshold: float
-    velocity: float
-    false_alarm: float = math.nan
-    nyquist: float = math.nan
+    frequency: float = _u("Hz")
+    spatial_frequency: float = _u("1/m")
+    wavelength: float = _u("m")
+    amplitude: float = _u("m")
+    significance: float = _u("")
+    threshold: float = _u("")
+    velocity: float = _u("m/s")
+    false_alarm: float = _u("", math.nan)
+    nyquist: float = _u("Hz", math.nan)
 
 
 @dataclass(frozen=True)
@@ -90,8 +93,8 @@ def false_alarm_probability(z: float, m: int) -> float:
     return float(-np.expm1(m * np.log1p(-math.exp(-z)))) if z > 0 else 1.0
 
 
-def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cycles: float = 3.0,
-              false_alarm: float = 1e-3, min_points: int = 32, max_nyquist_fraction: float = 0.8) -> OscillationPeak:
+def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cycles: float = _Osc.min_cycles,
+              false_alarm: float = _Osc.false_alarm, min_points: int = 32, max_nyquist_fraction: float = 0.8) -> OscillationPeak:
     """Strongest line in the periodogram of ``r`` sampled at times ``t`` [s].
 
     Parameters

@@ -1,33 +1,41 @@
 """Analysis pipeline: named steps from a raw curve to an :class:`AnalysisResult`.
 
 The paper's recipe (section 3, spec section 6) as an explicit registry
-(:data:`STEPS`): each step has an identifier, a name, options with defaults,
+(:data:`STEPS`): each step has an identifier, a name, an options dataclass
+(:mod:`.options`, whose field defaults are the only defaults),
 the steps it requires, and its source in the paper. :func:`analyze` runs the
 steps asked for (all by default) plus whatever they require, in registry order.
 
 >>> from afmforce.io import load
->>> from afmforce.pipeline import analyze
+>>> from afmforce.analysis.pipeline import analyze
+>>> from afmforce.analysis.options import ProbeCalibration, VdwOptions
 >>> curve = load("curve.ibw")[0]                                   # doctest: +SKIP
->>> res = analyze(curve, options={"vdw": {"radius": 20e-9}})        # doctest: +SKIP
+>>> res = analyze(curve, options=[VdwOptions(max_separation=20e-9)],
+...               probe=ProbeCalibration(radius=20e-9))             # doctest: +SKIP
 >>> res.pull_off_force, res.hamaker                                  # doctest: +SKIP
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
-from dataclasses import dataclass, field
+import warnings
+from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
+from . import options as O
 from . import steps as S
+from .contact_point import CONTACT_POINT_METHODS
+from .options_text import show_default
 from .result import AnalysisResult
 from .state import NoContact, State, prepare
-from ..constants import HAMAKER, Z0
 from ..errors import ParameterError
 from ..io.curve import RawCurve
 
-__all__ = ["Step", "STEPS", "DEFAULT_STEPS", "analyze", "resolve_steps", "steps_table", "AnalysisResult"]
+__all__ = ["Step", "STEPS", "DEFAULT_STEPS", "analyze", "resolve_steps", "resolve_options", "options_from_dict",
+           "steps_table", "AnalysisResult"]
 
 
 @dataclass(frozen=True)
@@ -41,9 +49,10 @@ class Step:
     name : str
         Human-readable name.
     func : callable
-        ``func(state, **options) -> state``.
-    options : mapping
-        Option names and defaults (SI).
+        ``func(state, options) -> state``; ``options`` an instance of :attr:`options`.
+    options : type
+        The step's options dataclass (:mod:`.options`): its field defaults are the
+        step's defaults, its field metadata their units and valid ranges.
     requires : tuple of str
         Steps that must run before.
     reference : str
@@ -52,58 +61,48 @@ class Step:
 
     identifier: str
     name: str
-    func: Callable[..., State]
-    options: Mapping[str, Any] = field(default_factory=dict)
+    func: Callable[[State, Any], State]
+    options: type[O.StepOptions]
     requires: tuple[str, ...] = ()
     reference: str = ""
 
 
 #: The registry, in execution order.
 STEPS: dict[str, Step] = {s.identifier: s for s in (
-    Step("smooth", "Digitization smoothing of the position (running average)", S.smooth,
-         {"window": "auto"}, (), "section 3.1, Fig 7C"),
-    Step("contact", "Contact, constant-compliance and zero-force regions", S.contact,
-         {"min_points": 5, "baseline_fraction": 0.7, "compliance_fraction": 0.5, "flat_ratio": 0.05,
-          "max_slope_ratio": "auto"}, (), "section 3.1, Fig 7"),
-    Step("drift", "Thermal drift: line in time in the zero-force region, per run", S.drift,
-         {"order": 1, "tail": True}, ("contact",), "section 3.1, Fig 7"),
-    Step("fringes", "Interferometric calibration from baseline fringes", S.fringes,
-         {"apply": "auto", "period": None, "order": "auto", "in_contact": "hold", "margin": 0.1}, ("drift",),
-         "section 3.1, Fig 7A; spec section 6"),
-    Step("compliance", "Constant-compliance lines (robust fit)", S.compliance, {}, ("drift",),
+    Step("smooth", "Digitization smoothing of the position (running average)", S.smooth, O.SmoothOptions,
+         (), "section 3.1, Fig 7C"),
+    Step("contact", "Contact, constant-compliance and zero-force regions", S.contact, O.ContactOptions,
+         (), "section 3.1, Fig 7"),
+    Step("drift", "Thermal drift: line in time in the zero-force region, per run", S.drift, O.DriftOptions,
+         ("contact",), "section 3.1, Fig 7"),
+    Step("fringes", "Interferometric calibration from baseline fringes", S.fringes, O.FringesOptions,
+         ("drift",), "section 3.1, Fig 7A; spec section 6"),
+    Step("compliance", "Constant-compliance lines (robust fit)", S.compliance, O.ComplianceOptions, ("drift",),
          "section 3.1"),
     Step("calibration", "Deflection sensitivity (InvOLS): the file's, or from the compliance slope", S.calibration,
-         {"source": "auto", "run": "approach"}, ("compliance",), "section 3.1; eq 15"),
+         O.CalibrationOptions, ("compliance",), "section 3.1; eq 15"),
     Step("kind", "Contact kind (hard: jump-in or straight line; soft: curved) and a soft contact point",
-         S.kind, {"nsigma": 5.0, "min_stiffness": 0.7, "max_curvature": 1.6, "method": "hertz_local",
-                  "force_fraction": 0.55, "window": 0.15}, ("calibration",),
-         "afmforce (Hertz term as in nanite's fit_line_polynomial piecewise model)"),
-    Step("shift", "Inward/outward shift overlaying the compliance lines", S.shift,
-         {"apply": True}, ("kind",), "section 3.2, Fig 9; Fig 7C"),
-    Step("zero", "Zero of separation at the compliance line", S.zero,
-         {"contact_separation": Z0, "run": "auto", "parallel_tolerance": 0.25}, ("kind",),
+         S.kind, O.KindOptions, ("calibration",),
+         "afmforce (baseline line + power-law contact term; checked against nanite's fit_line_polynomial)"),
+    Step("shift", "Inward/outward shift overlaying the compliance lines", S.shift, O.ShiftOptions, ("kind",),
+         "section 3.2, Fig 9; Fig 7C"),
+    Step("zero", "Zero of separation at the compliance line", S.zero, O.ZeroOptions, ("kind",),
          "section 3.2, Fig 9"),
-    Step("force", "Deflection to force (tilt-corrected spring constant)", S.force,
-         {"spring_constant": None, "theta0": None, "L0": None, "L1": None, "L2": None},
+    Step("force", "Deflection to force (tilt-corrected spring constant)", S.force, O.ForceOptions,
          ("calibration",), "eqs 13, 14"),
-    Step("jumps", "Jump into contact and pull-off", S.jumps, {"nsigma": 5.0, "window": 3, "onset_tolerance": 3e-9},
-         ("zero", "force"),
+    Step("jumps", "Jump into contact and pull-off", S.jumps, O.JumpsOptions, ("zero", "force"),
          "section 2.1, Fig 9"),
     Step("adhesion", "Adhesion: deepest retract dip below its own baseline, last rupture, unbinding steps",
-         S.adhesion_step, {"nsigma": 5.0}, ("zero", "force"), "afmforce (every contact kind)"),
+         S.adhesion_step, O.AdhesionOptions, ("zero", "force"), "afmforce (every contact kind)"),
     Step("surface_energy", "Surface energy and radius from the pull-off (JKR/DMT; hard contacts)", S.surface_energy,
-         {"radius": None, "model": "jkr", "hamaker": HAMAKER, "z0": Z0}, ("jumps",), "section 2.1"),
-    Step("vdw", "van der Waals fit before the jump (A R or A)", S.vdw,
-         {"radius": None, "z0": Z0, "max_separation": 30e-9, "baseline": "line",
-          "fit_separation_offset": False}, ("jumps",), "eq 2"),
+         O.SurfaceEnergyOptions, ("jumps",), "section 2.1"),
+    Step("vdw", "van der Waals fit before the jump (A R or A)", S.vdw, O.VdwOptions, ("jumps",), "eq 2"),
     Step("oscillation", "Post-contact oscillation: frequency, temporal or spatial", S.oscillation,
-         {"false_alarm": 1e-3, "min_cycles": 3.0}, ("calibration",), "section 3.2"),
+         O.OscillationOptions, ("calibration",), "section 3.2"),
     Step("friction", "Friction signature of the compliance lines (hard contacts, straight lines)", S.friction,
-         {"nsigma": 3.0, "slope_tolerance": 0.02, "offset_tolerance": 0.2e-9, "max_curvature": 1.25}, ("kind",),
-         "sections 2.2.2-2.2.4, eqs 16-21"),
+         O.FrictionOptions, ("kind",), "sections 2.2.2-2.2.4, eqs 16-21"),
     Step("diagnosis", "Dynamic diagnosis: inertia parameter, lag, jump-in distance", S.diagnosis,
-         {"resonance_frequency": None, "resolution": None, "min_resolution": 0.01e-9, "attraction_ratio": 0.75},
-         ("jumps", "adhesion", "vdw", "friction"), "eqs 3, 4; sections 2.3, 3.2"),
+         O.DiagnosisOptions, ("jumps", "adhesion", "vdw", "friction"), "eqs 3, 4; sections 2.3, 3.2"),
 )}
 
 #: Steps run when none are named: all of them.
@@ -129,21 +128,91 @@ def resolve_steps(steps: Sequence[str] | None) -> list[str]:
     return [s for s in STEPS if s in wanted]
 
 
-def _check_options(options: Mapping[str, Mapping[str, Any]] | None) -> dict[str, dict[str, Any]]:
-    out: dict[str, dict[str, Any]] = {}
-    for step, opts in (options or {}).items():
+#: Options of the old ``{step: {option: value}}`` form that are now the probe's.
+_PROBE_OPTIONS = {("force", "spring_constant"): "spring_constant", ("force", "theta0"): "theta0",
+                  ("force", "L0"): "L0", ("force", "L1"): "L1", ("force", "L2"): "L2",
+                  ("surface_energy", "radius"): "radius", ("vdw", "radius"): "radius",
+                  ("diagnosis", "resonance_frequency"): "resonance_frequency"}
+
+
+def options_from_dict(options: Mapping[str, Mapping[str, Any]]) -> tuple[list[O.StepOptions], dict[str, Any]]:
+    """The old ``{step: {option: value}}`` form -> (options records, probe fields).
+
+    ``radius``, ``spring_constant``, ``theta0``, ``L0``-``L2`` and ``resonance_frequency``
+    go to the probe (:class:`~.options.ProbeCalibration`); ``None`` values are dropped.
+
+    Raises
+    ------
+    ParameterError
+        Unknown step or option, an invalid value, or two different radii.
+    """
+    records, probe = [], {}
+    for step, opts in options.items():
         if step not in STEPS:
             raise ParameterError(f"options for unknown step {step!r}; steps: {', '.join(STEPS)}")
-        bad = set(opts) - set(STEPS[step].options)
+        cls = STEPS[step].options
+        known = [f.name for f in dataclasses.fields(cls)]
+        moved = [n for (s, n) in _PROBE_OPTIONS if s == step]
+        bad = set(opts) - set(known) - set(moved)
         if bad:
-            known = ", ".join(STEPS[step].options) or "none"
-            raise ParameterError(f"unknown option(s) {', '.join(sorted(bad))} for step {step!r}; known: {known}")
-        out[step] = dict(opts)
-    return out
+            raise ParameterError(f"unknown option(s) {', '.join(sorted(bad))} for step {step!r}; known: "
+                                 f"{', '.join(known + moved) or 'none'}")
+        for name in moved:
+            value = opts.get(name)
+            if value is None:
+                continue
+            field_name = _PROBE_OPTIONS[(step, name)]
+            if probe.get(field_name, value) != value:
+                raise ParameterError(f"two different values of {field_name} ({probe[field_name]!r}, {value!r}): "
+                                     "the probe has one (ProbeCalibration)")
+            probe[field_name] = value
+        records.append(cls(**{k: v for k, v in opts.items() if k in known}))
+    return records, probe
 
 
-def analyze(curve: RawCurve, steps: Sequence[str] | None = None,
-            options: Mapping[str, Mapping[str, Any]] | None = None, *, channel: str = "auto") -> AnalysisResult:
+def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
+                    ) -> tuple[dict[str, O.StepOptions], O.ProbeCalibration]:
+    """Every step's options record (the registry's defaults unless given) and the probe.
+
+    ``options``: options records (one per step at most), or the deprecated
+    ``{step: {option: value}}`` dict (a :class:`DeprecationWarning`).
+    """
+    if options is None:
+        given: list[Any] = []
+    elif isinstance(options, Mapping):
+        warnings.warn("analyze(options={step: {option: value}}) is deprecated and will be removed in the next "
+                      "release: pass option records (e.g. options=[VdwOptions(max_separation=20e-9)]) and the "
+                      "probe as probe=ProbeCalibration(radius=..., spring_constant=...)",
+                      DeprecationWarning, stacklevel=3)
+        given, moved = options_from_dict(options)
+        if moved:
+            mine = probe.given() if probe is not None else {}
+            clash = {k for k in set(mine) & set(moved) if mine[k] != moved[k]}
+            if clash:
+                raise ParameterError(f"{', '.join(sorted(clash))} given twice with different values (options "
+                                     "and probe)")
+            probe = O.ProbeCalibration(**{**moved, **mine})
+    elif isinstance(options, O.StepOptions):
+        given = [options]
+    else:
+        given = list(options)
+    out = {name: step.options() for name, step in STEPS.items()}
+    seen = set()
+    for rec in given:
+        if not isinstance(rec, O.StepOptions):
+            raise ParameterError(f"options must be step options records (e.g. VdwOptions(...)), got {rec!r}")
+        if rec.step in seen:
+            raise ParameterError(f"options for step {rec.step!r} given twice")
+        seen.add(rec.step)
+        out[rec.step] = rec
+    out["kind"].check_method(CONTACT_POINT_METHODS)
+    if probe is not None and not isinstance(probe, O.ProbeCalibration):
+        raise ParameterError(f"probe must be a ProbeCalibration, got {probe!r}")
+    return out, probe or O.ProbeCalibration()
+
+
+def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = None, *,
+            probe: O.ProbeCalibration | None = None, channel: str = "auto") -> AnalysisResult:
     """Analyse one force curve.
 
     Parameters
@@ -152,9 +221,14 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None,
         The recorded curve (left unchanged).
     steps : sequence of str, optional
         Step identifiers (see :data:`STEPS`); required steps are added.
-    options : mapping, optional
-        ``{step: {option: value}}`` in SI, e.g. ``{"force": {"spring_constant": 0.21,
-        "theta0": -0.26}, "vdw": {"radius": 220e-9}}``.
+    options : sequence of StepOptions, optional
+        Options records of the steps whose defaults you change, e.g.
+        ``[VdwOptions(max_separation=20e-9), ZeroOptions(contact_separation=0.0)]``
+        (SI; see :mod:`afmforce.analysis.options`). The old ``{step: {option: value}}``
+        dict is still accepted for one release, with a :class:`DeprecationWarning`.
+    probe : ProbeCalibration, optional
+        Radius [m], spring constant [N/m], inclination [rad], sensitivity [m/V], ...
+        given by the user; a field left ``None`` takes the file's value.
     channel : str
         Position channel: ``"auto"``, ``"measured"`` or ``"nominal"``.
 
@@ -169,13 +243,15 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None,
     ParameterError
         Unknown step or option, or an invalid option value.
     """
+    if steps is not None and (isinstance(steps, str) or not all(isinstance(s, str) for s in steps)):
+        raise ParameterError(f"steps are step names (e.g. ['vdw']), got {steps!r}; options records go to "
+                             "options=[...]")
     order = resolve_steps(steps)
-    opts = _check_options(options)
-    st = prepare(curve, channel)
+    opts, probe = resolve_options(options, probe)
+    st = prepare(curve, channel, probe)
     for name in order:
-        step = STEPS[name]
         try:
-            st = step.func(st, **{**step.options, **opts.get(name, {})})
+            st = STEPS[name].func(st, opts[name])
         except NoContact as exc:  # a curve that never touches: contact kind "none", not a failure
             return _no_contact(st, tuple(order), str(exc))
     return _result(st, tuple(order))
@@ -184,8 +260,8 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None,
 def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.0) -> AnalysisResult:
     nan = st.z * math.nan
     md = st.metadata
-    k = float(md.get("spring_constant", math.nan) or math.nan)
-    sens = float(md.get("sensitivity", math.nan) or math.nan)
+    k = float(st.probe.value("spring_constant", md) or math.nan)
+    sens = float(st.probe.value("sensitivity", md) or math.nan)
     verdict = f"no contact reached ({why}): nothing to analyse beyond the baseline"
     extra: dict[str, Any] = {}
     depth, sigma = S.retract_dip(st.signal, st.curve.run_indices(1) if hasattr(st.curve, "run_indices")
@@ -203,10 +279,10 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
     return AnalysisResult(
         source=str(md.get("source_file", "")), steps_run=("contact",), deflection_unit=st.unit,
         position_channel=st.channel, contact_kind="none", contact_kind_reason=why,
-        sensitivity=float(md.get("sensitivity", math.nan) or math.nan), spring_constant=k,
+        sensitivity=sens, spring_constant=k,
         verdict=verdict, warnings=st.warnings + (why,), **extra, time=st.time, position=st.z, separation=nan, deflection=nan, force=nan,
-        segment=st.curve.segment.astype("int8"), details={"skipped": {s: "no contact reached" for s in order
-                                                                       if s not in ("smooth", "contact")}})
+        segment=st.curve.segment.astype("int8"),
+        not_applicable={s: "no contact reached" for s in order if s not in ("smooth", "contact")})
 
 
 def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
@@ -226,8 +302,8 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
         kw["shift"] = d["shift"].shift
     if "zero" in d:
         kw["contact_separation"] = d["zero"].contact_separation
-    if "jumps" in d and "jumps" not in d.get("skipped", {}):
-        ji, po = d["jumps"]["jump_in"], d["jumps"]["pull_off"]
+    if "jumps" in d and "jumps" not in st.skipped:
+        ji, po = d["jumps"].jump_in, d["jumps"].pull_off
         kw.update(contact_onset_separation=ji.separation, pull_off_force=po.force,
                   pull_off_position=po.position, jump_out_distance=po.jump_out_distance,
                   pull_off_saturated=po.saturated, pull_off_force_extrapolated=(
@@ -242,7 +318,7 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
                   adhesion_verdict=a.verdict)
     if "surface_energy" in d:
         kw.update(surface_energy=d["surface_energy"].surface_energy, radius=d["surface_energy"].radius)
-    if "vdw" in d and "vdw" not in d.get("skipped", {}):
+    if "vdw" in d and "vdw" not in st.skipped:
         v = d["vdw"]
         kw.update(hamaker_radius=v.hamaker_radius, hamaker_radius_se=v.hamaker_radius_se, hamaker=v.hamaker,
                   hamaker_se=v.hamaker_se)
@@ -260,7 +336,7 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
                   dynamic_assessed=g.assessed)
     if "friction" in d:
         kw["friction_verdict"] = d["friction"].verdict
-    kw["not_applicable"] = dict(d.get("skipped", {}))
+    kw["not_applicable"] = dict(st.skipped)
     full = lambda a: a if a is not None else st.z * nan  # noqa: E731
     return AnalysisResult(
         source=str(st.metadata.get("source_file", "")), steps_run=order, deflection_unit=st.unit,
@@ -273,5 +349,5 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
 def steps_table() -> list[dict[str, str]]:
     """One row per step (the docs table is built from this)."""
     return [{"identifier": s.identifier, "name": s.name, "requires": ", ".join(s.requires) or "-",
-             "options": ", ".join(f"{k}={v!r}" for k, v in s.options.items()) or "-",
+             "options": ", ".join(f"{f.name}={show_default(f)}" for f in dataclasses.fields(s.options)) or "-",
              "reference": s.reference or "-"} for s in STEPS.values()]

@@ -14,6 +14,7 @@ import numpy as np
 
 from .._files import atomic_write_text
 from .._json import to_jsonable
+from ._units import units_of
 
 __all__ = ["AnalysisResult", "SUMMARY_FIELDS"]
 
@@ -147,7 +148,8 @@ class AnalysisResult:
     segment : ndarray of int8
         0 approach, 1 retract, 2 dwell.
     details : mapping
-        Step identifier -> that step's result dataclass.
+        Step identifier -> that step's result dataclass; its fields' units are their
+        metadata (JSON: ``details_units``, the raw signal's unit filled in).
     """
 
     source: str
@@ -226,6 +228,7 @@ class AnalysisResult:
                 continue
             out[f.name] = to_jsonable(getattr(self, f.name), use_to_dict=False)
         out["units"] = dict(self.UNITS)
+        out["details_units"] = {step: units_of(d, self.deflection_unit) for step, d in self.details.items()}
         return out
 
     def to_json(self, arrays: bool = False, indent: int | None = 2) -> str:

@@ -24,10 +24,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..cantilever import InclinedCantilever
-from ..constants import Z0
 from ..errors import AnalysisError, ParameterError
 from ._numeric import robust_line
 from .regions import RunRegions
+from ._units import unit as _u
+from .options import ZeroOptions as _Z  # the default: declared once, in the step's record
 
 __all__ = ["ZeroResult", "zero_of_separation", "ForceConversion", "effective_spring_constant"]
 
@@ -49,14 +50,14 @@ class ZeroResult:
         Robust spread of ``d - z`` along that line [m].
     """
 
-    contact_separation: float
-    contact_position: float
+    contact_separation: float = _u("m")
+    contact_position: float = _u("m")
     run: str
-    scatter: float
+    scatter: float = _u("m")
 
 
 def zero_of_separation(z: np.ndarray, d: np.ndarray, run: RunRegions,
-                       contact_separation: float = Z0):
+                       contact_separation: float = _Z.contact_separation):
     """Separation and position arrays, and the :class:`ZeroResult`.
 
     Parameters
@@ -108,10 +109,10 @@ class ForceConversion:
         ``"given"``, ``"eq 14"``, ``"eq 13"``, ``"compliance slope"`` or ``"none"``.
     """
 
-    spring_constant: float
-    spring_constant_given: float
-    tilt_factor: float
-    theta0: float
+    spring_constant: float = _u("N/m")
+    spring_constant_given: float = _u("N/m")
+    tilt_factor: float = _u("")
+    theta0: float = _u("rad")
     method: str
 
 

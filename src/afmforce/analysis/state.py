@@ -16,7 +16,9 @@ import numpy as np
 
 from ..errors import AnalysisError
 from ..io.curve import RawCurve
+from .options import ProbeCalibration
 from .regions import RunRegions, run_indices
+from ._units import unit as _u
 
 __all__ = ["State", "prepare", "ContactSummary", "SmoothResult", "NoContact"]
 
@@ -29,13 +31,13 @@ class NoContact(AnalysisError):
 class ContactSummary:
     """Where contact starts and ends (indices into the curve) and region sizes [-]."""
 
-    contact_index: int
-    pull_off_region_end: int
-    zero_force_approach: int
-    zero_force_retract: int
-    compliance_approach: int
-    compliance_retract: int
-    saturated: int
+    contact_index: int = _u("")
+    pull_off_region_end: int = _u("")
+    zero_force_approach: int = _u("")
+    zero_force_retract: int = _u("")
+    compliance_approach: int = _u("")
+    compliance_retract: int = _u("")
+    saturated: int = _u("")
 
 
 @dataclass(frozen=True)
@@ -49,14 +51,19 @@ class SmoothResult:
     max_change : float  largest change of a position [m]
     """
 
-    window: int
+    window: int = _u("")
     channel: str
-    max_change: float
+    max_change: float = _u("m")
 
 
 @dataclass(frozen=True)
 class State:
-    """Arrays and results of the steps so far (SI; ``signal`` in ``unit``)."""
+    """Arrays and results of the steps so far (SI; ``signal`` in ``unit``).
+
+    ``probe`` is the user's probe record (a field left ``None`` takes the file's
+    value: :meth:`ProbeCalibration.value`); ``details`` maps a step to its result
+    dataclass; ``skipped`` a step that does not apply to this curve to the reason.
+    """
 
     curve: RawCurve
     time: np.ndarray
@@ -76,6 +83,8 @@ class State:
     spring_constant: float = math.nan
     details: Mapping[str, Any] = field(default_factory=dict)
     warnings: tuple[str, ...] = ()
+    probe: ProbeCalibration = field(default_factory=ProbeCalibration)
+    skipped: Mapping[str, str] = field(default_factory=dict)
 
     @property
     def metadata(self) -> Mapping[str, Any]:
@@ -99,13 +108,15 @@ class State:
                 raise AnalysisError(f"step {step!r} needs {name}, computed by an earlier step")
 
 
-def prepare(curve: RawCurve, channel: str = "auto") -> State:
+def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | None = None) -> State:
     """Check the curve and choose the position channel.
 
     Parameters
     ----------
     channel : str
         ``"auto"`` (measured if recorded, else nominal), ``"measured"`` or ``"nominal"``.
+    probe : ProbeCalibration, optional
+        The user's probe record (None: everything from the file).
 
     Raises
     ------
@@ -132,4 +143,5 @@ def prepare(curve: RawCurve, channel: str = "auto") -> State:
                                 "both runs: split the curve at its turning point")
     return State(curve=curve, time=t, z=z, signal=s, unit=curve.deflection_unit,
                  channel="measured" if use_measured else "nominal",
-                 time_known=not bool(curve.metadata.get("time_is_sample_index", False)))
+                 time_known=not bool(curve.metadata.get("time_is_sample_index", False)),
+                 probe=probe if probe is not None else ProbeCalibration())

@@ -13,11 +13,12 @@ from __future__ import annotations
 
 import math
 
-from ..constants import Z0
-from ..errors import AnalysisError, ParameterError
+from ..errors import AnalysisError
 from . import compliance as cc
 from .contact_point import CONTACT_POINT_METHODS, classify_contact, curvature_ratio
 from .jumps import find_jump_in
+from .options import (CalibrationOptions, ComplianceOptions, ForceOptions, KindOptions, ShiftOptions,
+                      ZeroOptions)
 from .separation import ZeroResult, effective_spring_constant, zero_of_separation
 from .state import State
 from ._step_helpers import _kind, _skip
@@ -28,18 +29,20 @@ __all__ = ["smooth", "contact", "drift", "fringes", "retract_dip", "compliance",
            "jumps", "adhesion_step", "surface_energy", "vdw", "oscillation", "friction", "diagnosis"]
 
 
-def compliance(st: State) -> State:
+def compliance(st: State, o: ComplianceOptions) -> State:
     """Robust constant-compliance line of each run."""
     st.require("approach", step="compliance")
     return st.update("compliance", cc.fit_compliance(st.z, st.signal, st.approach, st.retract, st.unit))
 
 
-def calibration(st: State, *, source: str = "auto", run: str = "approach") -> State:
-    """Calibration factor (InvOLS) and the deflection in metres."""
+def calibration(st: State, o: CalibrationOptions) -> State:
+    """Calibration factor (InvOLS) and the deflection in metres (the probe's sensitivity, if given, over the file's)."""
     comp = st.details.get("compliance")
     if comp is None:
         raise AnalysisError("step 'calibration' needs the compliance lines")
-    res = cc.calibrate(comp, st.metadata, source=source, run=run)
+    run = o.run
+    md = st.metadata if st.probe.sensitivity is None else {**st.metadata, "sensitivity": st.probe.sensitivity}
+    res = cc.calibrate(comp, md, source=o.source, run=run)
     warn = []
     if not (comp.approach.found and comp.retract.found):
         used = "approach" if comp.approach.found else "retract"
@@ -55,8 +58,7 @@ def calibration(st: State, *, source: str = "auto", run: str = "approach") -> St
     return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
 
 
-def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curvature: float = 1.6,
-         method: str = "hertz_local", force_fraction: float = 0.55, window: float = 0.15) -> State:
+def kind(st: State, o: KindOptions) -> State:
     """Contact kind (hard with jump-in or straight line / soft curved) and a soft contact's contact point.
 
     See :mod:`~afmforce.analysis.contact_point`: hard when the approach jumps
@@ -66,8 +68,8 @@ def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curv
     the file's); soft otherwise, with the contact point by ``method``.
     """
     st.require("deflection", step="kind")
-    if method not in CONTACT_POINT_METHODS:
-        raise ParameterError(f"contact point method {method!r} unknown; choose from {', '.join(CONTACT_POINT_METHODS)}")
+    nsigma, method, force_fraction, window = o.nsigma, o.method, o.force_fraction, o.window
+    o.check_method(CONTACT_POINT_METHODS)
     noise = abs(st.noise * st.factor)
     app = st.approach
     ji = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma)
@@ -78,7 +80,7 @@ def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curv
     contact_idx = app.index[app.contact & ~app.saturated]
     curv = curvature_ratio(st.z, st.deflection, contact_idx)
     res = classify_contact(jump_significance=sig, stiffness_ratio=stiff, curvature=curv, nsigma=nsigma,
-                           min_stiffness=min_stiffness, max_curvature=max_curvature)
+                           min_stiffness=o.min_stiffness, max_curvature=o.max_curvature)
     new = st.update("kind", res)
     if res.kind == "soft":
         cp = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=force_fraction,
@@ -87,7 +89,14 @@ def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curv
             raise AnalysisError("soft contact: no contact point found on the approach (too few samples before "
                                 "the largest deflection)")
         warn = None
-        if force_fraction < 1.0:  # how much the point depends on the fitted range: the whole approach
+        width = cp.position_high - cp.position_low
+        if width > max(100e-9, 0.1 * abs(cp.indentation)):
+            warn = (f"contact point uncertain: {cp.position * 1e6:.4g} um, but fits with the contact anywhere in "
+                    f"[{cp.position_low * 1e6:.4g}, {cp.position_high * 1e6:.4g}] um are as good within 2 sigma "
+                    f"({width * 1e6:.3g} um, {width / abs(cp.indentation):.0%} of the {cp.indentation * 1e6:.3g} um "
+                    "indentation): a slowly rising baseline or a long-range force before contact makes the onset "
+                    "ambiguous")
+        elif force_fraction < 1.0:  # how much the point depends on the fitted range: the whole approach
             alt = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=1.0, window=window)
             if alt.index >= 0:
                 gap = alt.position - cp.position
@@ -100,7 +109,7 @@ def kind(st: State, *, nsigma: float = 5.0, min_stiffness: float = 0.7, max_curv
     return new
 
 
-def shift(st: State, *, apply: bool = True) -> State:
+def shift(st: State, o: ShiftOptions) -> State:
     """Shift the inward run to overlay the outward compliance line (Fig 9)."""
     comp = st.details.get("compliance")
     if comp is None:
@@ -109,7 +118,8 @@ def shift(st: State, *, apply: bool = True) -> State:
         nan = math.nan
         return _skip(st, "shift", "soft contact: no constant-compliance lines to overlay",
                      cc.ShiftResult(nan, nan, nan, False))
-    res = cc.compliance_shift(comp, applied=bool(apply))
+    apply = bool(o.apply)
+    res = cc.compliance_shift(comp, applied=apply)
     if not math.isfinite(res.shift):
         missing = "retract" if comp.approach.found else "approach"
         return st.update("shift", res, warn=(
@@ -122,7 +132,7 @@ def shift(st: State, *, apply: bool = True) -> State:
     return st.update("shift", res, z=z)
 
 
-def zero(st: State, *, contact_separation: float = Z0, run: str = "auto", parallel_tolerance: float = 0.25) -> State:
+def zero(st: State, o: ZeroOptions) -> State:
     """Zero of separation: the compliance line at h = contact_separation.
 
     ``run="auto"``: the outward (retract) line as in the paper, unless the
@@ -139,8 +149,7 @@ def zero(st: State, *, contact_separation: float = Z0, run: str = "auto", parall
         sep = st.deflection - st.z - c0
         res = ZeroResult(0.0, cp.position, "approach", math.nan)
         return st.update("zero", res, separation=sep, position=st.z - cp.position)
-    if run not in ("auto", "approach", "retract"):
-        raise ParameterError(f"zero: run must be auto, approach or retract, got {run!r}")
+    run = o.run
     warn = []
     if run == "auto":
         dr = st.details.get("drift")
@@ -148,7 +157,7 @@ def zero(st: State, *, contact_separation: float = Z0, run: str = "auto", parall
         run = "approach" if dr is not None and dr.retract_from_approach else "retract"
         if comp is not None and comp.approach.found and comp.retract.found:
             ratio = comp.approach.slope / comp.retract.slope
-            if abs(ratio - 1) > parallel_tolerance:
+            if abs(ratio - 1) > o.parallel_tolerance:
                 run = "approach"
                 warn.append(f"compliance lines not parallel (slope ratio {ratio:.3g}): zero of separation from "
                             "the inward line; the outward run's separations are approximate")
@@ -159,20 +168,23 @@ def zero(st: State, *, contact_separation: float = Z0, run: str = "auto", parall
         warn.append(f"zero of separation from the {regions.kind} run's compliance line alone: friction or "
                     f"hysteresis between the runs would offset it by up to half their distance (not measured), "
                     f"and the other run's separations are not corrected for the shift")
-    h, pos, res = zero_of_separation(st.z, st.deflection, regions, contact_separation)
+    h, pos, res = zero_of_separation(st.z, st.deflection, regions, o.contact_separation)
     return st.update("zero", res, warn=warn, separation=h, position=pos)
 
 
-def force(st: State, *, spring_constant: float | None = None, theta0: float | None = None,
-          L0: float | None = None, L1: float | None = None, L2: float | None = None) -> State:
-    """Force = k x deflection, tilt-corrected (eq 13/14) when theta0 is given."""
+def force(st: State, o: ForceOptions) -> State:
+    """Force = k x deflection, tilt-corrected (eq 13/14) when theta0 is given.
+
+    k, theta0 and the lengths are the probe's (:class:`~.options.ProbeCalibration`),
+    k and theta0 from the file when the user gives none.
+    """
     st.require("deflection", step="force")
-    md = st.metadata
-    k = spring_constant if spring_constant is not None else md.get("spring_constant")
-    theta0 = theta0 if theta0 is not None else md.get("theta0")
+    md, p = st.metadata, st.probe
+    k = p.value("spring_constant", md)
+    theta0 = p.value("theta0", md)
     cal = st.details.get("calibration")
     slope_k = cal.spring_constant_from_slope if cal is not None else math.nan
-    conv = effective_spring_constant(k, theta0=theta0, L0=L0, L1=L1, L2=L2, from_slope=slope_k)
+    conv = effective_spring_constant(k, theta0=theta0, L0=p.L0, L1=p.L1, L2=p.L2, from_slope=slope_k)
     warn = None
     if conv.method == "none":
         warn = "no spring constant (give --spring-constant): forces not computed"

@@ -7,10 +7,11 @@ import math
 
 import numpy as np
 
-from ..errors import AnalysisError, ParameterError
+from ..errors import AnalysisError
 from ._numeric import running_mean
 from .drift import remove_drift
 from .fringes import FringeResult, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
+from .options import ContactOptions, DriftOptions, FringesOptions, SmoothOptions
 from .regions import check_compliance, find_run_regions, run_indices, saturated_mask
 from .state import ContactSummary, NoContact, SmoothResult, State
 
@@ -51,25 +52,21 @@ def _smooth_run(z: np.ndarray, window: int, staircase: bool = False) -> np.ndarr
     return out
 
 
-def smooth(st: State, *, window: int | str = "auto") -> State:
+def smooth(st: State, o: SmoothOptions) -> State:
     """Running average of the position channel, each run separately (Fig 7C).
 
-    ``window="auto"``: the paper's 11 points, or two digitization steps of a
+    ``o.window="auto"``: the paper's 11 points, or two digitization steps of a
     stepped (digitized) channel if those are longer, so that the average
     interpolates linearly between levels as in the paper. On a stepped channel,
     within half a window of a run's ends the position continues the line of the
     averaged samples next to them (a shrinking window would leave the steps there).
     """
     staircase = False
-    if window == "auto":
+    if o.window == "auto":  # the record checked a given window (a positive odd number)
         window = _staircase_window(st.z)
         staircase = window > 11
-    try:
-        window = int(window)
-    except (TypeError, ValueError):
-        raise ParameterError(f"smoothing window must be 'auto' or an odd number of points, got {window!r}") from None
-    if window < 1 or window % 2 == 0:
-        raise ParameterError(f"smoothing window must be a positive odd number of points, got {window}")
+    else:
+        window = int(o.window)
     z = st.z.copy()
     for which in (0, 1, 2):
         idx = run_indices(st.curve.segment, which)
@@ -96,9 +93,7 @@ def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
     return float(np.median(far)) - low, sigma
 
 
-def contact(st: State, *, min_points: int = 5, baseline_fraction: float = 0.7,
-            compliance_fraction: float = 0.5, flat_ratio: float = 0.05,
-            max_slope_ratio: float | str = "auto") -> State:
+def contact(st: State, o: ContactOptions) -> State:
     """Contact, constant-compliance and zero-force regions of both runs.
 
     A run clipped at its turning point whose contact region is no
@@ -109,19 +104,13 @@ def contact(st: State, *, min_points: int = 5, baseline_fraction: float = 0.7,
     creep changes the local gain) keeps no compliance line; later steps use
     the other run's and say what could not be measured.
     """
-    if not (0 < baseline_fraction <= 1 and 0 < compliance_fraction <= 1):
-        raise ParameterError("baseline_fraction and compliance_fraction must lie in (0, 1]")
+    max_slope_ratio = o.max_slope_ratio  # the record checked the ranges (> 1; flat_ratio in (0, 1])
     if max_slope_ratio == "auto":
         max_slope_ratio = 2.0 if st.channel == "measured" else math.inf
-    try:
-        max_slope_ratio = float(max_slope_ratio)
-    except (TypeError, ValueError):
-        raise ParameterError(f"max_slope_ratio must be 'auto' or a number > 1, got {max_slope_ratio!r}") from None
-    if not (max_slope_ratio > 1 and flat_ratio > 0):
-        raise ParameterError("contact: max_slope_ratio must exceed 1 and flat_ratio must be positive")
+    max_slope_ratio, flat_ratio = float(max_slope_ratio), o.flat_ratio
     sat = saturated_mask(st.signal)
-    kw = dict(saturated=sat, min_points=int(min_points), baseline_fraction=baseline_fraction,
-              compliance_fraction=compliance_fraction)
+    kw = dict(saturated=sat, min_points=int(o.min_points), baseline_fraction=o.baseline_fraction,
+              compliance_fraction=o.compliance_fraction)
     try:
         app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach", **kw)
     except AnalysisError as exc:
@@ -151,13 +140,11 @@ def contact(st: State, *, min_points: int = 5, baseline_fraction: float = 0.7,
     return st.update("contact", summary, warn=warn, approach=app, retract=ret, noise=app.noise)
 
 
-def drift(st: State, *, order: int = 1, tail: bool = True) -> State:
+def drift(st: State, o: DriftOptions) -> State:
     """Subtract a baseline line in time fitted in each run's zero-force region."""
     st.require("approach", step="drift")
-    if order not in (0, 1):
-        raise ParameterError(f"drift order must be 0 (offset) or 1 (line), got {order}")
-    signal, res = remove_drift(st.time, st.signal, st.curve.segment, st.approach, st.retract, st.unit, order,
-                               z=st.z if tail else None)
+    signal, res = remove_drift(st.time, st.signal, st.curve.segment, st.approach, st.retract, st.unit,
+                               int(o.order), z=st.z if o.tail else None)
     warn = None
     if res.retract_settling:
         warn = ("the retract's free part is still relaxing after the pull-off (a curved tail, not a drift line: "
@@ -171,8 +158,7 @@ def drift(st: State, *, order: int = 1, tail: bool = True) -> State:
     return st.update("drift", res, warn=warn, signal=signal)
 
 
-def fringes(st: State, *, apply: str = "auto", period: float | None = None, order: int | str = "auto",
-            in_contact: str = "hold", margin: float = 0.1) -> State:
+def fringes(st: State, o: FringesOptions) -> State:
     """Fit interference fringes in the baseline; remove them, remap nominal positions.
 
     ``apply="auto"``: when both runs show fringes, subtract them from the signal,
@@ -186,8 +172,7 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
     line crosses zero signal (the separation no longer changes there).
     """
     st.require("approach", step="fringes")
-    if apply not in ("auto", "always", "never") or in_contact not in ("hold", "follow"):
-        raise ParameterError("fringes: apply must be auto/always/never and in_contact hold/follow")
+    apply, margin = o.apply, o.margin
     runs = {}
     for run in (st.approach, st.retract):
         idx = run.index[run.zero_force & ~run.saturated]  # the baseline: not the attraction, nor a settling tail
@@ -201,7 +186,7 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
                                                   period=math.nan, cycles=math.nan, residual=math.nan)
             searched = False
             continue
-        runs[run.kind] = fit_fringes(zf[far], st.signal[idx][far], period=period, order=order,
+        runs[run.kind] = fit_fringes(zf[far], st.signal[idx][far], period=o.period, order=o.order,
                                      t=st.time[idx][far] if st.time_known else None)
         searched = True
     fa, fr = runs["approach"], runs["retract"]
@@ -215,7 +200,7 @@ def fringes(st: State, *, apply: str = "auto", period: float | None = None, orde
             continue
         idx = run.index
         term = fringe_signal(st.z[idx], fit)
-        if in_contact == "hold":
+        if o.in_contact == "hold":
             z_contact = _zero_deflection_position(st, run if run.has_compliance else st.approach)
             term = np.where(run.contact, fringe_signal(np.array([z_contact]), fit)[0], term)
         s[idx] = st.signal[idx] - term - fringe_baseline(st.time[idx], st.z[idx], fit)

@@ -8,13 +8,15 @@ import math
 
 import numpy as np
 
-from ..constants import HAMAKER, Z0
+from ..constants import Z0
 from ..errors import AnalysisError
 from . import compliance as cc
 from ._numeric import robust_line
 from .dynamic import diagnose_curve, run_velocity
 from .contact_point import curvature_ratio
-from .jumps import JumpIn, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings, pull_off_estimate
+from .jumps import JumpIn, Jumps, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings, pull_off_estimate
+from .options import (AdhesionOptions, DiagnosisOptions, FrictionOptions, JumpsOptions, OscillationOptions,
+                      SurfaceEnergyOptions, VdwOptions)
 from .oscillation import OscillationResult, both_runs, find_peak
 from .state import State
 from .unbinding import retract_adhesion
@@ -25,18 +27,19 @@ from ._step_helpers import _kind, _skip
 __all__ = ["jumps", "adhesion_step", "surface_energy", "vdw", "oscillation", "friction", "diagnosis"]
 
 
-def jumps(st: State, *, nsigma: float = 5.0, window: int = 3, onset_tolerance: float = 3e-9) -> State:
+def jumps(st: State, o: JumpsOptions) -> State:
     """Jump into contact and pull-off, near each run's contact split.
 
-    Warns when the first contact sample lies more than ``onset_tolerance`` (or
-    ``nsigma`` noise) off the compliance line the zero of separation was put on.
+    Warns when the first contact sample lies more than ``o.onset_tolerance`` (or
+    ``o.nsigma`` noise) off the compliance line the zero of separation was put on.
     """
     st.require("separation", step="jumps")
+    nsigma, window = o.nsigma, int(o.window)
     if _kind(st) == "soft":
         nan = math.nan
         return _skip(st, "jumps", "soft contact: no jump into contact and no single pull-off jump (see adhesion)",
-                     {"jump_in": JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
-                      "pull_off": PullOff(False, -1, nan, nan, nan, nan, 0.0, False)})
+                     Jumps(JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
+                           PullOff(False, -1, nan, nan, nan, nan, 0.0, False)))
     noise = abs(st.noise * st.factor)
     k = st.spring_constant
     ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window)
@@ -51,60 +54,58 @@ def jumps(st: State, *, nsigma: float = 5.0, window: int = 3, onset_tolerance: f
     if 0 <= ji.index < st.separation.size - 1:
         # at a rigid contact the first contact sample lies on the compliance line (h = z0)
         off = float(st.separation[ji.index + 1] - z0)
-        if abs(off) > max(nsigma * noise, onset_tolerance):
+        if abs(off) > max(nsigma * noise, o.onset_tolerance):
             warn.append(f"the first contact sample lies {off * 1e9:.3g} nm off the compliance line: a soft or "
                         "nonlinear contact, or a line displaced by friction or hysteresis (dynamic run); "
                         "separations near contact are uncertain by about that much")
-    return st.update("jumps", {"jump_in": ji, "pull_off": po}, warn=warn)
+    return st.update("jumps", Jumps(ji, po), warn=warn)
 
 
-def adhesion_step(st: State, *, nsigma: float = 5.0) -> State:
+def adhesion_step(st: State, o: AdhesionOptions) -> State:
     """Adhesion for every contact kind: the retract's deepest dip below its own baseline (<= 0).
 
-    See :mod:`~afmforce.analysis.unbinding`; the dip counts above ``nsigma``
+    See :mod:`~afmforce.analysis.unbinding`; the dip counts above ``o.nsigma``
     baseline noise, with its position, the last rupture and the unbinding steps.
     """
     st.require("position", step="adhesion")
-    res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=nsigma)
+    res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma)
     return st.update("adhesion", res)
 
 
-def surface_energy(st: State, *, radius: float | None = None, model: str = "jkr", hamaker: float = HAMAKER,
-                   z0: float = Z0) -> State:
-    """Surface energy from the pull-off and R, and R from the jump-out distance (hard contacts)."""
+def surface_energy(st: State, o: SurfaceEnergyOptions) -> State:
+    """Surface energy from the pull-off and the probe's R, and R from the jump-out distance (hard contacts)."""
     j = st.details.get("jumps")
     if j is None:
         raise AnalysisError("step 'surface_energy' needs the jumps")
     if _kind(st) == "soft":
         return _skip(st, "surface_energy", "soft contact: JKR/DMT from a pull-off jump need a rigid contact")
-    if not j["pull_off"].found:
+    if not j.pull_off.found:
         return _skip(st, "surface_energy", "no pull-off found")
-    radius = radius if radius is not None else st.metadata.get("radius")
-    return st.update("surface_energy", adhesion(j["pull_off"], st.spring_constant, radius=radius, model=model,
-                                                hamaker=hamaker, z0=z0))
+    radius = st.probe.value("radius", st.metadata)
+    return st.update("surface_energy", adhesion(j.pull_off, st.spring_constant, radius=radius, model=o.model,
+                                                hamaker=o.hamaker, z0=o.z0))
 
 
-def vdw(st: State, *, radius: float | None = None, z0: float = Z0, max_separation: float = 30e-9,
-        baseline: str = "line", fit_separation_offset: bool = False) -> State:
-    """van der Waals fit of the approach before the jump (eq 2)."""
+def vdw(st: State, o: VdwOptions) -> State:
+    """van der Waals fit of the approach before the jump (eq 2; A R, or A with the probe's R)."""
     j = st.details.get("jumps")
     if j is None:
         raise AnalysisError("step 'vdw' needs the jumps")
     if _kind(st) == "soft":
         return _skip(st, "vdw", "soft contact: the van der Waals law of eq 2 is for a rigid contact with a jump")
-    radius = radius if radius is not None else st.metadata.get("radius")
+    radius = st.probe.value("radius", st.metadata)
     idx = st.approach.index
-    ji = j["jump_in"]
+    ji = j.jump_in
     end = int(np.searchsorted(idx, ji.index)) + 1 if ji.found else st.approach.split
     pre = idx[:end]
-    res = fit_vdw(st.separation[pre], st.force[pre], spring_constant=st.spring_constant, radius=radius, z0=z0,
-                  max_separation=max_separation, baseline=baseline,
-                  fit_separation_offset=fit_separation_offset)
+    res = fit_vdw(st.separation[pre], st.force[pre], spring_constant=st.spring_constant, radius=radius, z0=o.z0,
+                  max_separation=o.max_separation, baseline=o.baseline,
+                  fit_separation_offset=bool(o.fit_separation_offset))
     warn = None if res.status == "ok" else f"van der Waals fit: {res.status}"
     return st.update("vdw", res, warn=warn)
 
 
-def oscillation(st: State, *, false_alarm: float = 1e-3, min_cycles: float = 3.0) -> State:
+def oscillation(st: State, o: OscillationOptions) -> State:
     """Post-contact oscillation of each run; temporal versus spatial origin."""
     st.require("deflection", step="oscillation")
     peaks = {}
@@ -120,20 +121,21 @@ def oscillation(st: State, *, false_alarm: float = 1e-3, min_cycles: float = 3.0
         x = st.z[idx] - st.z[idx].mean()
         a, b, *_ = robust_line(x, st.deflection[idx])
         resid = st.deflection[idx] - (a + b * x)
-        peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=min_cycles,
-                                    false_alarm=false_alarm)
+        peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=o.min_cycles,
+                                    false_alarm=o.false_alarm)
     origin, verdict, _ = both_runs(peaks["approach"], peaks["retract"])
     return st.update("oscillation", OscillationResult(peaks["approach"], peaks["retract"], origin, verdict))
 
 
-def friction(st: State, *, nsigma: float = 3.0, slope_tolerance: float = 0.02,
-             offset_tolerance: float = 0.2e-9, max_curvature: float = 1.25) -> State:
+def friction(st: State, o: FrictionOptions) -> State:
     """Friction signature of the two compliance lines (before the shift).
 
     Assessed only on a hard contact whose two compliance regions are straight
-    lines (late/early slope ratio within ``max_curvature``); otherwise the
+    lines (late/early slope ratio within ``o.max_curvature``); otherwise the
     signature is ``"not assessed"`` with the reason and its numbers.
     """
+    nsigma, slope_tolerance, offset_tolerance, max_curvature = (o.nsigma, o.slope_tolerance, o.offset_tolerance,
+                                                                o.max_curvature)
     comp = st.details.get("compliance")
     if comp is None:
         raise AnalysisError("step 'friction' needs the compliance lines")
@@ -229,7 +231,7 @@ def _force_gradient(st: State, window: int = 5) -> tuple[float, str]:
         sel = slice(k, max(end, k + 3))
         what = "contact stiffness over the first 10 % of the indentation"
     else:
-        ji = st.details["jumps"]["jump_in"]
+        ji = st.details["jumps"].jump_in
         if not ji.found:
             return math.nan, "no jump into contact: the attraction's gradient is below the noise"
         k = int(np.searchsorted(idx, ji.index))
@@ -241,8 +243,7 @@ def _force_gradient(st: State, window: int = 5) -> tuple[float, str]:
     return float(abs(np.polyfit(hs - hs.mean(), fs, 1)[0])), what
 
 
-def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution: float | None = None,
-              min_resolution: float = 0.01e-9, attraction_ratio: float = 0.75) -> State:
+def diagnosis(st: State, o: DiagnosisOptions) -> State:
     """Dynamic diagnosis: eq 3, eq 4, jump-in distance, friction and adhesion consistency.
 
     Flags the van der Waals fit as unreliable when the run is judged dynamic.
@@ -252,8 +253,8 @@ def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution
         raise AnalysisError("step 'diagnosis' needs the jumps")
     idx = st.approach.index
     v = run_velocity(st.time[idx], st.z[idx]) if st.time_known else math.nan
-    f = resonance_frequency if resonance_frequency is not None else st.metadata.get("resonance_frequency")
-    dx = resolution if resolution is not None else max(abs(st.noise * st.factor), min_resolution)
+    f = st.probe.value("resonance_frequency", st.metadata)
+    dx = o.resolution if o.resolution is not None else max(abs(st.noise * st.factor), o.min_resolution)
     fit = st.details.get("vdw")
     fit = fit if fit is not None and hasattr(fit, "static_jump_in_separation") else None
     h_static = fit.static_jump_in_separation if fit is not None else math.nan
@@ -263,13 +264,13 @@ def diagnosis(st: State, *, resonance_frequency: float | None = None, resolution
     grad, grad_how = _force_gradient(st)
     res = diagnose_curve(velocity=v, spring_constant=st.spring_constant, resonance_frequency=f, resolution=dx,
                          force_gradient=grad, force_gradient_method=grad_how,
-                         jump_in_separation=j["jump_in"].separation if j["jump_in"].found else math.nan,
+                         jump_in_separation=j.jump_in.separation if j.jump_in.found else math.nan,
                          static_jump_in_separation=h_static,
                          sample_step=step, friction=None if fr is None else fr.kind,
                          friction_verdict="" if fr is None else fr.verdict,
                          hamaker_radius=fit.hamaker_radius if fit is not None else math.nan,
-                         pull_off_force=pull_off_estimate(j["pull_off"], st.spring_constant), contact_separation=z0,
-                         attraction_ratio=attraction_ratio)
+                         pull_off_force=pull_off_estimate(j.pull_off, st.spring_constant), contact_separation=z0,
+                         attraction_ratio=o.attraction_ratio)
     ret = st.retract
     if ret is not None and not ret.has_compliance and ret.contact.any() and bool(
             np.all(st.signal[ret.index[ret.contact]] > 0)):

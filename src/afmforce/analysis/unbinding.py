@@ -26,6 +26,8 @@ from scipy.ndimage import median_filter
 
 from ._numeric import mad_sigma, robust_line_thin
 from .regions import RunRegions
+from ._units import unit as _u
+from .options import AdhesionOptions as _A  # the default: declared once, in the step's record
 
 __all__ = ["UnbindingStep", "Adhesion", "retract_adhesion"]
 
@@ -41,9 +43,9 @@ class UnbindingStep:
     force : float  height of the step [N] (> 0; deflection [m] when k is unknown)
     """
 
-    index: int
-    distance: float
-    force: float
+    index: int = _u("")
+    distance: float = _u("m")
+    force: float = _u("N")
 
 
 @dataclass(frozen=True)
@@ -65,19 +67,19 @@ class Adhesion:
     """
 
     found: bool
-    force: float
-    deflection: float
-    index: int
-    distance: float
-    noise: float
-    nsigma: float
-    rupture_distance: float
+    force: float = _u("N")
+    deflection: float = _u("m")
+    index: int = _u("")
+    distance: float = _u("m")
+    noise: float = _u("N")
+    nsigma: float = _u("")
+    rupture_distance: float = _u("m")
     steps: tuple[UnbindingStep, ...]
     verdict: str
 
 
 def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, spring_constant: float, *,
-                     nsigma: float = 5.0, smooth: int | None = None) -> Adhesion:
+                     nsigma: float = _A.nsigma, smooth: int | None = None) -> Adhesion:
     """The retract's deepest dip below its own baseline, last rupture and unbinding steps.
 
     Parameters

@@ -20,8 +20,9 @@ import numpy as np
 from scipy.optimize import least_squares
 
 from .. import forces
-from ..constants import Z0
 from ..errors import ParameterError
+from ._units import unit as _u
+from .options import VdwOptions as _O  # the defaults: declared once, in the step's record
 
 __all__ = ["VdwFit", "fit_vdw", "BASELINES"]
 
@@ -54,21 +55,21 @@ class VdwFit:
     """
 
     status: str
-    hamaker_radius: float
-    hamaker_radius_se: float
-    hamaker: float
-    hamaker_se: float
-    radius: float
+    hamaker_radius: float = _u("J m")
+    hamaker_radius_se: float = _u("J m")
+    hamaker: float = _u("J")
+    hamaker_se: float = _u("J")
+    radius: float = _u("m")
     baseline: str
-    force_offset: float
-    force_slope: float
-    separation_offset: float
-    separation_offset_se: float
-    n_points: int
-    separation_min: float
-    separation_max: float
-    rms_residual: float
-    static_jump_in_separation: float
+    force_offset: float = _u("N")
+    force_slope: float = _u("N/m")
+    separation_offset: float = _u("m")
+    separation_offset_se: float = _u("m")
+    n_points: int = _u("")
+    separation_min: float = _u("m")
+    separation_max: float = _u("m")
+    rms_residual: float = _u("N")
+    static_jump_in_separation: float = _u("m")
     reliable: bool = True
 
 
@@ -83,8 +84,9 @@ def _shape(h: np.ndarray, z0: float) -> np.ndarray:
 
 
 def fit_vdw(separation: np.ndarray, force: np.ndarray, *, spring_constant: float,
-            radius: float | None = None, z0: float = Z0, max_separation: float = 30e-9,
-            min_separation: float = 0.0, baseline: str = "line", fit_separation_offset: bool = False,
+            radius: float | None = None, z0: float = _O.z0, max_separation: float = _O.max_separation,
+            min_separation: float = 0.0, baseline: str = _O.baseline,
+            fit_separation_offset: bool = _O.fit_separation_offset,
             min_points: int = 8) -> VdwFit:
     """Fit eq 2 to approach points (separation [m], force [N]) before the jump.
 

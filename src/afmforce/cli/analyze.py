@@ -25,6 +25,7 @@ from pathlib import Path
 from .. import errors as _errors
 from ..errors import ParameterError
 from ._validate import add_field, check_output, lazy_help
+from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
 from .common import add_quantity, chunk_progress_bar, eprint
 
 SUFFIX = ".afmforce"
@@ -84,10 +85,19 @@ def register(sub) -> None:
     add_field(g, "L2", help="rigid probe length")
     add_field(g, "radius", help="probe radius R (gives gamma from the pull-off, A from A R)")
     add_field(g, "resonance_frequency", help="resonance frequency (inertia diagnosis)")
-    add_field(g, "compliance_separation", flag="--contact-separation", dest="contact_separation", default=0.35e-9,
-              help="separation given to the compliance line (paper: z0; 0 also common)")
-    g.add_argument("--calibration", choices=("auto", "fit", "metadata"), default="auto",
-                   help="deflection calibration: from the file/--sensitivity, or the compliance slope")
+    add_field(g, "compliance_separation", flag="--contact-separation", dest="contact_separation",
+              default_from=lambda: _default("zero", "contact_separation"),
+              help="separation given to the compliance line (paper: z0; 0 also common); the same as "
+                   "--option zero.contact_separation=VALUE")
+    lazy_help(g.add_argument("--calibration", choices=("auto", "fit", "metadata"), default=None,
+                             help="deflection calibration: from the file/--sensitivity, or the compliance slope "
+                                  "(the same as --option calibration.source=VALUE; default "),
+              lambda: f"{_default('calibration', 'source')})")
+    lazy_help(p.add_argument("--option", action="append", default=[], metavar="STEP.NAME=VALUE",
+                             help="any other option of an analysis step, with units (repeatable), e.g. "
+                                  "vdw.max_separation=20nm, jumps.nsigma=4, fringes.apply=never "
+                                  "(docs/analysis.md lists them with their ranges); steps with options: "),
+              _option_names)
     p.set_defaults(func=run)
 
 
@@ -124,15 +134,6 @@ def _inputs(names: list[str]) -> list[Path]:
     return out
 
 
-def _options(args: argparse.Namespace) -> dict:
-    return {"zero": {"contact_separation": args.contact_separation},
-            "calibration": {"source": args.calibration},
-            "force": {"spring_constant": args.spring_constant, "theta0": args.theta0,
-                      "L0": args.L0, "L1": args.L1, "L2": args.L2},
-            "surface_energy": {"radius": args.radius}, "vdw": {"radius": args.radius},
-            "diagnosis": {"resonance_frequency": args.resonance_frequency}}
-
-
 def _check(args: argparse.Namespace) -> list[str] | None:
     """Usage errors (exit 2) before any work; returns the steps."""
     from ..io import FORMATS
@@ -153,6 +154,7 @@ def _check(args: argparse.Namespace) -> list[str] | None:
         raise ParameterError(f"no such file or folder: {', '.join(missing)}")
     steps = None if args.steps is None else [s.strip() for s in args.steps.split(",") if s.strip()]
     resolve_steps(steps)  # unknown step: ParameterError -> exit 2
+    args.records, args.probe = _options(args)  # unknown or out-of-range option: exit 2
     if args.format is not None and args.format not in FORMATS:
         raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")
     if args.out is not None:
@@ -199,7 +201,7 @@ def run(args: argparse.Namespace) -> int:
     meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
                                                               ("sensitivity", args.sensitivity)) if v is not None}}
     analysis = CurveAnalysis(
-        steps=None if steps is None else tuple(steps), options=_options(args), meta_override=meta,
+        steps=None if steps is None else tuple(steps), options=args.records, probe=args.probe, meta_override=meta,
         format=args.format, channel=args.channel, keep_json=args.json,
         out=str(args.out) if per_curve else None, force=args.force, plot=not args.no_plot,
         protect=tuple(str(p.resolve()) for p in files if p.exists()) if per_curve else (),

@@ -66,6 +66,7 @@ def virtual_experiment(out_dir: str | Path | None = None, seed: int = 1) -> list
     """
     from ..dynamics import simulate
     from ..instrument import get_preset
+    from ..analysis.options import ProbeCalibration
     from ..analysis.pipeline import analyze
     from ..io.native.rawfile import read_raw, write_raw
 
@@ -80,8 +81,7 @@ def virtual_experiment(out_dir: str | Path | None = None, seed: int = 1) -> list
             raw_file = out / f"virtual_run_{i + 1}.txt"
             write_raw(raw, raw_file, force=True)
             raw = read_raw(raw_file)  # analyse what a user would: the file
-        res = analyze(raw, options={"vdw": {"radius": C.FIG5["radius"]},
-                                    "force": {"spring_constant": tr.spring_constant}})
+        res = analyze(raw, probe=ProbeCalibration(radius=C.FIG5["radius"], spring_constant=tr.spring_constant))
         if out is not None:
             fig_file = _figure(res, raw, out / f"virtual_run_{i + 1}_analysis.png")
         a_true = tr.config.hamaker

@@ -120,7 +120,7 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
     if ad is not None and ad.found and 0 <= ad.index < h.size and math.isfinite(f[ad.index]):
         ax.plot([h[ad.index] * 1e9], [f[ad.index] * 1e9], "^", color="C1", ms=8,
                 label=f"adhesion {ad.force * 1e9:.3g} nN" if math.isfinite(ad.force) else "adhesion")
-    ji = result.details.get("jumps", {}).get("jump_in") if "jumps" in result.details else None
+    ji = result.details["jumps"].jump_in if "jumps" in result.details else None
     if ji is not None and ji.found and math.isfinite(ji.force_before):
         ax.plot([ji.separation * 1e9], [ji.force_before * 1e9], "v", color="C2", ms=8, label="jump-in")
     ax.axhline(0, color="0.6", lw=0.5)
@@ -149,7 +149,7 @@ def plot_residuals(result: AnalysisResult, ax=None):
         return _say(ax, why)
     h, f = result.separation, result.force
     m = (result.segment == 0) & (h >= fit.separation_min) & (h <= fit.separation_max)
-    ji = result.details["jumps"]["jump_in"]
+    ji = result.details["jumps"].jump_in
     if ji.found:
         m &= np.arange(h.size) <= ji.index
     model = _vdw_curve(result, h[m]) + fit.force_offset + fit.force_slope * (

@@ -161,8 +161,12 @@ class CurveAnalysis:
     ----------
     steps : tuple of str or None
         Analysis steps (None: all).
-    options : mapping
-        ``{step: {option: value}}`` in SI.
+    options : tuple of StepOptions
+        Options records of the steps (:mod:`afmforce.analysis.options`; the registry's
+        defaults for the others). The deprecated ``{step: {option: value}}`` dict is
+        still accepted (:func:`~afmforce.analysis.pipeline.analyze` warns).
+    probe : ProbeCalibration or None
+        The user's probe record (radius, spring constant, theta0, sensitivity, ...).
     meta_override : mapping
         Metadata replacing the files' (``spring_constant`` [N/m], ``sensitivity`` [m/V]).
     format : str or None
@@ -185,7 +189,8 @@ class CurveAnalysis:
     """
 
     steps: tuple[str, ...] | None = None
-    options: Mapping[str, Mapping[str, Any]] = field(default_factory=dict)
+    options: Any = ()
+    probe: Any = None
     meta_override: Mapping[str, Any] = field(default_factory=dict)
     format: str | None = None
     channel: str = "auto"
@@ -198,7 +203,11 @@ class CurveAnalysis:
 
     def key_fields(self) -> dict[str, Any]:
         """What determines the results (and so the store they resume from)."""
-        return {"steps": self.steps, "options": self.options, "meta": self.meta_override,
+        opts = self.options
+        if not isinstance(opts, Mapping):  # records: {step: {option: value}} (SI), as the JSON shows them
+            opts = {o.step: o.to_dict() for o in opts}
+        probe = self.probe.given() if self.probe is not None else {}
+        return {"steps": self.steps, "options": opts, "probe": probe, "meta": self.meta_override,
                 "format": self.format, "channel": self.channel, "json": self.keep_json}
 
     def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
@@ -234,7 +243,8 @@ class CurveAnalysis:
                 if row is not None:  # a rerun resumes: this curve's outputs are complete
                     rows.append(row)
                     continue
-            res = analyze(curve, steps=self.steps, options=self.options, channel=self.channel)
+            res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
+                          channel=self.channel)
             row = summary_row(res, curve, file=ref.path, index=index,
                               name=f"{base}#{index}" if several else base)
             if self.keep_json:

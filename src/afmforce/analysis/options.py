@@ -1,0 +1,369 @@
+"""Typed inputs of the analysis pipeline: the probe record and one options record per step.
+
+:class:`ProbeCalibration` holds what the user knows about the probe and its
+calibration (radius, spring constant, inclination, sensitivity, ...); a field
+left ``None`` takes the file's value. Each step of
+:data:`afmforce.analysis.pipeline.STEPS` has an options dataclass here
+(:class:`VdwOptions`, :class:`ZeroOptions`, ...) whose field defaults are the
+step's defaults -- declared once, here, and nowhere else (the step functions
+take the record, not keyword defaults). Every field carries a
+:class:`~afmforce._fields.FieldSpec` in its metadata (dimension, SI unit, help,
+valid range), from which the records validate themselves
+(:class:`~afmforce.errors.ParameterError` naming the option and its range), and
+:mod:`.options_text` parses ``--option STEP.NAME=VALUE`` (values with units)
+and writes the docs table with the defaults in the user's units.
+
+>>> from afmforce.analysis.options import ProbeCalibration, VdwOptions
+>>> probe = ProbeCalibration(radius=20e-9, spring_constant=0.21)
+>>> VdwOptions(max_separation=20e-9)                                   # doctest: +ELLIPSIS
+VdwOptions(z0=3.5e-10, max_separation=2e-08, ...)
+
+This module imports nothing heavy: the command line builds its parser from it.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Any, ClassVar, Mapping
+
+from .._fields import QUANTITIES, meta, qfield, spec_of
+from ..constants import HAMAKER, Z0
+from ..errors import ParameterError
+
+__all__ = ["ProbeCalibration", "StepOptions", "SmoothOptions", "ContactOptions", "DriftOptions",
+           "FringesOptions", "ComplianceOptions", "CalibrationOptions", "KindOptions", "ShiftOptions",
+           "ZeroOptions", "ForceOptions", "JumpsOptions", "AdhesionOptions", "SurfaceEnergyOptions",
+           "VdwOptions", "OscillationOptions", "FrictionOptions", "DiagnosisOptions", "OPTIONS"]
+
+
+def _opt(default: Any, dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,
+         lo_open: bool = False, hi_open: bool = False, display: str = "", choices: tuple = ()) -> Any:
+    """An option field: its default, and its :class:`FieldSpec` (plus the words it accepts) as metadata.
+
+    ``choices`` are the words (or values) accepted besides a number in the range;
+    a field of dimension ``"choice"`` accepts only those, ``"flag"`` only True/False.
+    """
+    md = dict(meta(dimension, unit, help, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, display=display))
+    md["choices"] = tuple(choices)
+    return dataclasses.field(default=default, metadata=md)
+
+
+def _q(name: str, default: Any, help: str | None = None) -> Any:
+    """A field of the shared vocabulary :data:`~afmforce._fields.QUANTITIES` (its range and unit)."""
+    if help is None:
+        return qfield(name, default)
+    s = QUANTITIES[name]
+    return _opt(default, s.dimension, s.unit, help, lo=s.lo, hi=s.hi, lo_open=s.lo_open, hi_open=s.hi_open,
+                display=s.display)
+
+
+def _frac(default: float, help: str) -> Any:
+    return _opt(default, "dimensionless", "", help, lo=0.0, hi=1.0, lo_open=True)
+
+
+def _nsigma(default: float, help: str = "significance threshold in multiples of the noise") -> Any:
+    return _opt(default, "dimensionless", "", help, lo=0.0, hi=1e3, lo_open=True)
+
+
+def _check_field(obj: Any, f: dataclasses.Field, where: str) -> None:
+    """Validate one field of a record against its metadata (ParameterError in the one message style)."""
+    value = getattr(obj, f.name)
+    spec = spec_of(f)
+    if spec is None or value is None:
+        return
+    choices = f.metadata.get("choices", ())
+    name = f"{where}.{f.name}" if where else f.name
+    if spec.dimension == "text":  # a registry key: the record checks it (see KindOptions)
+        if not isinstance(value, str):
+            raise ParameterError(f"{name} expects a name, got {value!r}")
+        return
+    if spec.dimension == "flag":
+        if not isinstance(value, (bool, int)) or value not in (0, 1):
+            raise ParameterError(f"{name} must be true or false, got {value!r}")
+        return
+    if isinstance(value, str) or spec.dimension == "choice":
+        if value in choices:
+            return
+        words = ", ".join(str(c) for c in choices)
+        what = f"a number ({spec.range_text()}) or {words}" if spec.dimension != "choice" else words
+        raise ParameterError(f"{name} = {value!r} is not valid: {f.name}, the {spec.help}, must be {what}")
+    if spec.dimension == "integer" and not (isinstance(value, int) or float(value).is_integer()):
+        raise ParameterError(f"{name} expects a whole number, got {value!r}")
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        raise ParameterError(f"{name} expects a number [{spec.unit or '-'}], got {value!r}") from None
+    spec.check(value, f.name, name, typed=spec.show(value) if spec.unit else None)
+
+
+class _Validated:
+    """Mix-in: validate every field against its metadata on construction."""
+
+    step: ClassVar[str] = ""
+
+    def __post_init__(self) -> None:
+        for f in dataclasses.fields(self):  # type: ignore[arg-type]
+            _check_field(self, f, self.step or "probe")
+
+    def to_dict(self) -> dict[str, Any]:
+        """Field name -> value (SI)."""
+        return {f.name: getattr(self, f.name) for f in dataclasses.fields(self)}  # type: ignore[arg-type]
+
+    @classmethod
+    def units(cls) -> dict[str, str]:
+        """Field name -> SI unit ("" for plain numbers and words)."""
+        return {f.name: f.metadata["unit"] for f in dataclasses.fields(cls)}  # type: ignore[arg-type]
+
+
+@dataclass(frozen=True)
+class ProbeCalibration(_Validated):
+    """The probe and its calibration, as the user gives them (SI; ``None``: the file's value).
+
+    Attributes
+    ----------
+    radius : float or None
+        Effective tip radius R [m] (surface energy from the pull-off, A from A R).
+    spring_constant : float or None
+        Spring constant k [N/m]; with ``theta0`` the intrinsic k0, tilt-corrected (eqs 13, 14).
+    theta0 : float or None
+        Cantilever inclination [rad] for the tilt correction.
+    sensitivity : float or None
+        Deflection sensitivity (InvOLS) [m/V].
+    resonance_frequency : float or None
+        Resonance frequency [Hz] (inertia diagnosis, eq 3).
+    L0, L1, L2 : float or None
+        Beam, rigid base and rigid probe lengths [m] (eq 13 instead of eq 14).
+    """
+
+    radius: float | None = qfield("radius", None)
+    spring_constant: float | None = qfield("spring_constant", None)
+    theta0: float | None = qfield("theta0", None)
+    sensitivity: float | None = qfield("sensitivity", None)
+    resonance_frequency: float | None = qfield("resonance_frequency", None)
+    L0: float | None = qfield("L0", None)
+    L1: float | None = qfield("L1", None)
+    L2: float | None = qfield("L2", None)
+
+    def value(self, name: str, metadata: Mapping[str, Any]) -> Any:
+        """The user's ``name`` if given, else the file's (``metadata[name]``, ``None`` if absent)."""
+        v = getattr(self, name)
+        return v if v is not None else metadata.get(name)
+
+    def given(self) -> dict[str, float]:
+        """The fields the user gave (name -> SI value)."""
+        return {k: v for k, v in self.to_dict().items() if v is not None}
+
+
+@dataclass(frozen=True)
+class StepOptions(_Validated):
+    """Base of the per-step options records (the registry names each step's class)."""
+
+
+@dataclass(frozen=True)
+class SmoothOptions(StepOptions):
+    """Running average of the position (Fig 7C)."""
+
+    step: ClassVar[str] = "smooth"
+    window: int | str = _opt("auto", "integer", "", "running-average window in samples (odd; 'auto': 11, or two "
+                             "digitization steps of a stepped channel)", lo=1, hi=1e6, choices=("auto",))
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.window != "auto" and int(self.window) % 2 == 0:
+            raise ParameterError(f"smooth.window must be an odd number of samples, got {self.window}")
+
+
+@dataclass(frozen=True)
+class ContactOptions(StepOptions):
+    """Contact, constant-compliance and zero-force regions."""
+
+    step: ClassVar[str] = "contact"
+    min_points: int = _opt(5, "integer", "", "fewest samples of a region", lo=1, hi=1e6)
+    baseline_fraction: float = _frac(0.7, "fraction of the free part taken as zero-force baseline")
+    compliance_fraction: float = _frac(0.5, "fraction of the contact part taken as compliance line")
+    flat_ratio: float = _opt(0.05, "dimensionless", "", "free/contact slope ratio below which a contact "
+                             "region is a constant-compliance line", lo=0.0, hi=1.0, lo_open=True)
+    max_slope_ratio: float | str = _opt("auto", "dimensionless", "", "largest slope ratio of the two runs' "
+                                        "contact lines ('auto': 2 on the measured channel, none on the "
+                                        "nominal one)", lo=1.0, lo_open=True, choices=("auto",))
+
+
+@dataclass(frozen=True)
+class DriftOptions(StepOptions):
+    """Thermal drift: a line in time through each run's zero-force region."""
+
+    step: ClassVar[str] = "drift"
+    order: int = _opt(1, "integer", "", "drift polynomial order in time (0: offset, 1: line)", lo=0, hi=1)
+    tail: bool = _opt(True, "flag", "", "detect a retract tail still relaxing after the pull-off")
+
+
+@dataclass(frozen=True)
+class FringesOptions(StepOptions):
+    """Interferometric calibration from baseline fringes."""
+
+    step: ClassVar[str] = "fringes"
+    apply: str = _opt("auto", "choice", "", "when to subtract the fringes and remap positions",
+                      choices=("auto", "always", "never"))
+    period: float | None = _opt(None, "length", "m", "fringe period (None: searched)", lo=0.0, hi=1e-4,
+                                lo_open=True)
+    order: int | str = _opt("auto", "integer", "", "polynomial order of the position map", lo=1, hi=3,
+                            choices=("auto",))
+    in_contact: str = _opt("hold", "choice", "", "fringe term in contact: held at the contact value or "
+                           "following the position", choices=("hold", "follow"))
+    margin: float = _opt(0.1, "dimensionless", "", "fraction of the baseline next to contact left out of the "
+                         "fit", lo=0.0, hi=1.0, hi_open=True)
+
+
+@dataclass(frozen=True)
+class ComplianceOptions(StepOptions):
+    """Constant-compliance lines (robust fit): no options."""
+
+    step: ClassVar[str] = "compliance"
+
+
+@dataclass(frozen=True)
+class CalibrationOptions(StepOptions):
+    """Deflection sensitivity: the file's or user's, or from the compliance slope."""
+
+    step: ClassVar[str] = "calibration"
+    source: str = _opt("auto", "choice", "", "calibration source (auto: the file's or user's if any)",
+                       choices=("auto", "fit", "metadata"))
+    run: str = _opt("approach", "choice", "", "compliance line giving the slope",
+                    choices=("approach", "retract", "both"))
+
+
+@dataclass(frozen=True)
+class KindOptions(StepOptions):
+    """Contact kind (hard or soft) and a soft contact's contact point."""
+
+    step: ClassVar[str] = "kind"
+    nsigma: float = _nsigma(5.0, "jump-in significance in multiples of the step noise")
+    min_stiffness: float = _opt(0.7, "dimensionless", "", "least deflection per position of a hard contact",
+                                lo=0.0, hi=10.0, lo_open=True)
+    max_curvature: float = _opt(1.6, "dimensionless", "", "largest late/early slope ratio of a straight "
+                                "contact line", lo=1.0, hi=100.0)
+    method: str = _opt("power_local", "text", "", "soft contact point method (a key of "
+                       "analysis.contact_point.CONTACT_POINT_METHODS)")
+    force_fraction: float = _frac(0.65, "fraction of the largest (block-averaged) deflection fitted for the contact point")
+    window: float = _frac(0.15, "window of the local fit, as a fraction of the approach")
+
+    def check_method(self, methods) -> None:
+        """Raise ParameterError unless :attr:`method` is a key of ``methods`` (the contact point registry)."""
+        if self.method not in methods:
+            raise ParameterError(f"kind.method = {self.method!r} is not valid: method, the soft contact point "
+                                 f"method, must be one of {', '.join(methods)}")
+
+
+@dataclass(frozen=True)
+class ShiftOptions(StepOptions):
+    """Inward/outward shift overlaying the compliance lines."""
+
+    step: ClassVar[str] = "shift"
+    apply: bool = _opt(True, "flag", "", "shift the inward run onto the outward line")
+
+
+@dataclass(frozen=True)
+class ZeroOptions(StepOptions):
+    """Zero of separation at the compliance line."""
+
+    step: ClassVar[str] = "zero"
+    contact_separation: float = _q("compliance_separation", Z0, "separation given to the compliance line "
+                                   "(paper: z0; 0 also common)")
+    run: str = _opt("auto", "choice", "", "compliance line that defines the zero",
+                    choices=("auto", "approach", "retract"))
+    parallel_tolerance: float = _opt(0.25, "dimensionless", "", "largest relative slope difference of the two "
+                                     "lines before the inward one is used", lo=0.0, hi=10.0, lo_open=True)
+
+
+@dataclass(frozen=True)
+class ForceOptions(StepOptions):
+    """Deflection to force: no options (k, theta0 and the lengths are the probe's)."""
+
+    step: ClassVar[str] = "force"
+
+
+@dataclass(frozen=True)
+class JumpsOptions(StepOptions):
+    """Jump into contact and pull-off."""
+
+    step: ClassVar[str] = "jumps"
+    nsigma: float = _nsigma(5.0, "jump significance in multiples of the step noise")
+    window: int = _opt(3, "integer", "", "samples around the contact split searched for the jump", lo=1, hi=1e4)
+    onset_tolerance: float = _opt(3e-9, "length", "m", "distance of the first contact sample from the "
+                                  "compliance line before a warning", lo=0.0, hi=1e-6)
+
+
+@dataclass(frozen=True)
+class AdhesionOptions(StepOptions):
+    """Adhesion: the retract's deepest dip below its own baseline."""
+
+    step: ClassVar[str] = "adhesion"
+    nsigma: float = _nsigma(5.0, "dip significance in multiples of the baseline noise")
+
+
+@dataclass(frozen=True)
+class SurfaceEnergyOptions(StepOptions):
+    """Surface energy and radius from the pull-off (JKR/DMT)."""
+
+    step: ClassVar[str] = "surface_energy"
+    model: str = _opt("jkr", "choice", "", "contact mechanics model", choices=("jkr", "dmt"))
+    hamaker: float = _q("hamaker", HAMAKER)
+    z0: float = _q("z0", Z0)
+
+
+@dataclass(frozen=True)
+class VdwOptions(StepOptions):
+    """van der Waals fit before the jump (eq 2)."""
+
+    step: ClassVar[str] = "vdw"
+    z0: float = _q("z0", Z0)
+    max_separation: float = _opt(30e-9, "length", "m", "largest separation fitted", lo=0.0, hi=1e-6,
+                                 lo_open=True)
+    baseline: str = _opt("line", "choice", "", "baseline fitted with the force law",
+                         choices=("none", "offset", "line"))
+    fit_separation_offset: bool = _opt(False, "flag", "", "fit a shift of the zero of separation too")
+
+
+@dataclass(frozen=True)
+class OscillationOptions(StepOptions):
+    """Post-contact oscillation."""
+
+    step: ClassVar[str] = "oscillation"
+    false_alarm: float = _opt(1e-3, "dimensionless", "", "false-alarm probability of a periodogram peak",
+                              lo=0.0, hi=1.0, lo_open=True, hi_open=True)
+    min_cycles: float = _opt(3.0, "dimensionless", "", "fewest oscillation cycles in the compliance region",
+                             lo=0.0, hi=1e6, lo_open=True)
+
+
+@dataclass(frozen=True)
+class FrictionOptions(StepOptions):
+    """Friction signature of the compliance lines."""
+
+    step: ClassVar[str] = "friction"
+    nsigma: float = _nsigma(3.0, "significance of a slope or offset difference in standard errors")
+    slope_tolerance: float = _opt(0.02, "dimensionless", "", "relative slope difference below which the lines "
+                                  "are parallel", lo=0.0, hi=1.0, lo_open=True)
+    offset_tolerance: float = _opt(0.2e-9, "length", "m", "offset below which the lines coincide", lo=0.0,
+                                   hi=1e-6)
+    max_curvature: float = _opt(1.25, "dimensionless", "", "largest late/early slope ratio of a straight line",
+                                lo=1.0, hi=100.0)
+
+
+@dataclass(frozen=True)
+class DiagnosisOptions(StepOptions):
+    """Dynamic diagnosis (eqs 3, 4)."""
+
+    step: ClassVar[str] = "diagnosis"
+    resolution: float | None = _q("resolution", None, "deflection resolution (None: the measured noise, at "
+                                  "least min_resolution)")
+    min_resolution: float = _opt(0.01e-9, "length", "m", "smallest deflection resolution", lo=0.0, hi=1e-6,
+                                 lo_open=True)
+    attraction_ratio: float = _frac(0.75, "share of the jump-in a static attraction must explain")
+
+
+#: Step identifier -> its options class (the registry's records point here).
+OPTIONS: dict[str, type[StepOptions]] = {c.step: c for c in (
+    SmoothOptions, ContactOptions, DriftOptions, FringesOptions, ComplianceOptions, CalibrationOptions,
+    KindOptions, ShiftOptions, ZeroOptions, ForceOptions, JumpsOptions, AdhesionOptions, SurfaceEnergyOptions,
+    VdwOptions, OscillationOptions, FrictionOptions, DiagnosisOptions)}
