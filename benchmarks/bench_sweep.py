@@ -29,6 +29,15 @@ Prints four figures (the fourth, the automatic executor choice, after the second
    a few % of the better of the two.
    ``--map-workers 0 2`` also runs it on a local cluster of 2 workers (each
    worker's peak RSS is printed).
+5. **Where the time of a simulation sweep goes** (``--breakdown N``, default 150
+   runs spread over ``bench_speed.py``'s 10,000-run table, xi 0.005-0.2 kg/s x
+   0.1-2 um/s; 0 skips): per run, medians of interleaved rounds in this process,
+   ``SimulationConfig`` + ``simulate`` alone, ``simulate_run`` (adds the summary row
+   and the static solution), ``simulate_runs`` (the batched path) on 1 thread and on
+   the default threads, and ``run_sweep`` with the default chunks ("serial") and
+   with the automatic plan (chunks from the measured cost). The gap between the
+   first and the last is what the sweep machinery costs; the first is the floor
+   that only a faster integrator lowers.
 """
 
 from __future__ import annotations
@@ -139,6 +148,43 @@ def bench_auto(n_side: int) -> None:
     best = min(times["serial"], times["dask"])
     print("   " + "; ".join(f"{k} {v:.1f} s" for k, v in times.items())
           + f"; auto / best of the two = {times['auto'] / best:.2f}  (cluster start included for dask)")
+
+
+# --- 5: where the time of a simulation sweep goes (issue 16) ---------------------------
+def bench_breakdown(n: int, rounds: int = 3) -> None:
+    import statistics
+    import warnings
+
+    import afmforce.dynamics as dyn
+    from afmforce.sweep import run_sweep
+    from afmforce.sweep.simulation import simulate_run, simulate_runs
+
+    warnings.simplefilter("ignore")
+    xi, v = np.geomspace(0.005, 0.2, 100), np.geomspace(0.1e-6, 2e-6, 100)
+    table = [dict(xi=float(a), velocity=float(b)) for a in xi for b in v]
+    rows = table[::len(table) // n][:n]
+    simulate_run(**rows[0])
+    cases = {
+        "SimulationConfig + simulate": lambda: [dyn.simulate(dyn.SimulationConfig(**r)) for r in rows],
+        "simulate_run (+ row, static solution)": lambda: [simulate_run(**r) for r in rows],
+        "simulate_runs, 1 thread": lambda: simulate_runs(rows, threads=1),
+        "simulate_runs, default threads": lambda: simulate_runs(rows),
+        "run_sweep, serial, default chunks": lambda: run_sweep(simulate_run, rows, executor="serial"),
+        "run_sweep, auto (chunks from cost)": lambda: run_sweep(simulate_run, rows),
+    }
+    times: dict[str, list[float]] = {k: [] for k in cases}
+    load0 = os.getloadavg()[0]
+    for _ in range(rounds):
+        for name, fn in cases.items():
+            t = time.perf_counter()
+            fn()
+            times[name].append((time.perf_counter() - t) / len(rows))
+    print(f"5. where the time of a simulation sweep goes: {len(rows)} runs of bench_speed.py's table, per run, "
+          f"median of {rounds} interleaved rounds (load average {load0:.1f} -> {os.getloadavg()[0]:.1f})")
+    for name, ts in times.items():
+        med = statistics.median(ts)
+        print(f"   {name:40s} {med * 1e3:6.2f} ms/run (range {min(ts) * 1e3:.2f}-{max(ts) * 1e3:.2f}) "
+              f"-> 10,000 runs {med * 1e4:5.0f} s")
 
 
 # --- 3: 128 x 128 map memory ------------------------------------------------------------
@@ -269,6 +315,7 @@ def main(argv=None) -> int:
                    help="map runs: 0 for --serial (default), N for a local cluster of N workers")
     p.add_argument("--map-only", action="store_true", help="only the map (figure 3)")
     p.add_argument("--auto-side", type=int, default=22, help="grid points per axis of the automatic-choice sweep (4.)")
+    p.add_argument("--breakdown", type=int, default=150, help="runs of the time breakdown (5.); 0 skips")
     p.add_argument("--map-write", nargs=2, default=None, help=argparse.SUPPRESS)
     p.add_argument("--map-analyze", nargs=3, default=None, help=argparse.SUPPRESS)
     args = p.parse_args(argv)
@@ -281,6 +328,8 @@ def main(argv=None) -> int:
     if not args.map_only:
         bench_sweeps(args.n_side, args.full, not args.no_speedup, args.repeat)
         bench_auto(args.auto_side)
+        if args.breakdown:
+            bench_breakdown(args.breakdown)
     if not args.no_map:
         bench_map(args.map_side, args.map_workers)
     return 0

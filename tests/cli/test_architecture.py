@@ -153,3 +153,33 @@ def test_no_pyplot_state_in_library_code():
             bad.append(rel)
     assert not bad, f"pyplot used in: {bad}"
     assert (SRC / "plotting" / "__init__.py").is_file()
+
+
+def test_each_class_name_is_defined_once():
+    # issue 11.5: there were two BatchResults (analysis.batch and sweep.results) for two different
+    # things; a public class name now means one thing, defined in one module
+    where: dict[str, list[str]] = {}
+    for path in SRC.rglob("*.py"):
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            if isinstance(node, ast.ClassDef) and not node.name.startswith("_"):
+                where.setdefault(node.name, []).append(_module_name(path))
+    assert len(where) > 50  # the walk sees the package
+    twice = {name: mods for name, mods in where.items() if len(mods) > 1}
+    assert not twice, twice
+
+
+def test_many_runs_live_in_the_sweep_package_one_module_per_concept():
+    # docs/architecture.md, "Many runs": the chunk runner, the parameter sweep, the batch of items
+    # and the analysis of many files each have one module; the old homes are gone
+    import importlib
+
+    sweep = SRC / "sweep"
+    for name in ("chunks", "parametric", "batch", "files", "results"):
+        assert (sweep / f"{name}.py").is_file(), name
+    for gone in ("analysis/batch.py", "analysis/mapping.py", "sweep/analysis.py", "sweep/engine.py"):
+        assert not (SRC / gone).exists(), gone
+    assert "Many runs" in DOCS.read_text(encoding="utf-8")
+    mod = importlib.import_module("afmforce.sweep")
+    assert mod.run_batch.__module__ == "afmforce.sweep.batch"
+    assert mod.run_sweep.__module__ == "afmforce.sweep.parametric"
+    assert mod.flatten.__module__ == "afmforce.sweep.chunks"

@@ -29,7 +29,7 @@ def no_work(monkeypatch):
     import afmforce.cli.statics as statics
     import afmforce.dynamics as dynamics
     import afmforce.sweep as sweep
-    import afmforce.sweep.analysis as sweep_analysis
+    import afmforce.sweep.files as sweep_analysis
 
     monkeypatch.setattr(statics, "static_analysis", _boom)
     monkeypatch.setattr(diagnose, "diagnose", _boom)

@@ -66,3 +66,17 @@ def square(item: float) -> dict:
 def mark_pid(folder: str) -> None:
     """Write an empty file named after this process's id into ``folder`` (warm-up test)."""
     open(os.path.join(folder, f"pid-{os.getpid()}"), "w").close()
+
+
+def batched(x: float, y: float) -> dict:
+    """counted() after 5 ms, with the batched protocol of simulate_run (``batch``, ``batch_threads``)."""
+    time.sleep(0.005)
+    return counted(x, y)
+
+
+def _batched_rows(rows: list[dict]) -> list:
+    return [batched(**row) for row in rows]
+
+
+batched.batch = _batched_rows
+batched.batch_threads = lambda: 2

@@ -103,3 +103,25 @@ def test_batched_chunks_give_the_rows_of_separate_runs():
     bad = batched.table[np.isclose(batched.table["start"], 30e-9)]
     assert len(bad) == 3 and bad["error"].str.startswith("ParameterError").all()
     assert batched.table[np.isclose(batched.table["start"], -20e-9)]["error"].isna().all()
+
+
+def test_static_jump_in_is_solved_for_each_spring_and_surface():
+    # the static solution is cached per (k, R, A, z0): a sweep over R must still get each R's own
+    # value; checked against an independent root solve of Fs'(h) = k (spec section 2)
+    from scipy.optimize import brentq
+
+    from afmforce import forces
+    from afmforce.dynamics import SimulationConfig
+
+    spec = build_spec(["radius=100nm,220nm,50nm", "xi=0.01,0.1"], sets=["velocity=5um/s"],
+                      dimensions=simulation_dimensions())
+    t = run_sweep(simulate_run, spec, executor="serial").table
+    assert t["error"].isna().all()
+    for _, row in t.iterrows():
+        cfg = SimulationConfig(radius=row["radius"], xi=row["xi"], velocity=5e-6)
+        k, r, a, z0 = cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0
+        steep = 3 ** (1 / 6) * z0
+        h = brentq(lambda x: forces.vdw_force_gradient(x, r, a, z0) - k, steep, 1e-6, xtol=1e-18)
+        assert row["static_jump_in_separation"] == pytest.approx(h, rel=1e-9)
+        assert row["static_jump_in_deflection"] == pytest.approx(forces.vdw_force(h, r, a, z0) / k, rel=1e-9)
+    assert len(set(t["static_jump_in_separation"].round(15))) == 3

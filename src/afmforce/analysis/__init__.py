@@ -1,8 +1,10 @@
 """Force-curve analysis: small functions for each step of the paper's recipe (section 3).
 
 The pipeline that chains them is :mod:`afmforce.analysis.pipeline`, its typed inputs
-(the probe record and one options record per step) :mod:`afmforce.analysis.options`; the vectorised core
-for many curves at once is :mod:`afmforce.analysis.batch`.
+(the probe record and one options record per step) :mod:`afmforce.analysis.options`; many
+files or the curves of a force map go through it in chunks with
+:func:`afmforce.sweep.files.analyze_files`; :mod:`afmforce.analysis.maps` turns their summary
+table into map images.
 """
 
 from __future__ import annotations

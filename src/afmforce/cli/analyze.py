@@ -2,7 +2,7 @@
 
 For each curve: calibrated force against separation, jump-in, pull-off, the
 van der Waals fit, the instrument's artefacts and the dynamic diagnosis.
-Curves are analysed in chunks through the sweep engine: a few curves (fewer
+Curves are analysed in chunks (afmforce.sweep.files): a few curves (fewer
 than 64) in this process, more on a local Dask cluster (or --workers N,
 --scheduler, --serial). With --out DIR: one summary table for the batch
 (DIR/batch-<hash>/summary.parquet and summary.csv, with units), a heat map of
@@ -114,7 +114,7 @@ def _steps() -> str:  # help text, computed when printed (the pipeline imports n
 
 
 def _map_quantities() -> str:
-    from ..analysis.mapping import MAP_QUANTITIES
+    from ..analysis.maps import MAP_QUANTITIES
 
     return ", ".join(MAP_QUANTITIES)
 
@@ -159,7 +159,7 @@ def _check(args: argparse.Namespace) -> list[str] | None:
         raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")
     if args.out is not None:
         check_output(args.out, folder=True)
-    from ..analysis.mapping import MAP_QUANTITIES
+    from ..analysis.maps import MAP_QUANTITIES
 
     for q in args.map_quantity:
         if q not in MAP_QUANTITIES:
@@ -176,8 +176,8 @@ def _check(args: argparse.Namespace) -> list[str] | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..sweep.analysis import CurveAnalysis, analysis_key, analyze_files, plan_curves
-    from ..sweep.engine import default_chunk_size
+    from ..sweep.files import CurveAnalysis, analysis_key, analyze_files, plan_curves
+    from ..sweep.chunks import default_chunk_size
 
     steps = _check(args)
     if "list" in args.example:
@@ -228,7 +228,7 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
-    from ..sweep.analysis import failures, summary_table, write_summary
+    from ..sweep.files import failures, summary_table, write_summary
 
     table = summary_table(result, with_json=args.json)
     ok = table[table["error"].isna()]
@@ -280,7 +280,7 @@ def _clean(error: str) -> str:
 
 
 def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
-    from ..analysis.mapping import map_images
+    from ..analysis.maps import map_images
     from ..plotting import write_map_png
 
     out = {}

@@ -110,7 +110,7 @@ def _save_plot(result, metric: str, units: dict):
 
 def run(args: argparse.Namespace) -> int:
     from ..sweep import build_spec, run_sweep
-    from ..sweep.engine import default_chunk_size
+    from ..sweep.chunks import default_chunk_size
     from ..sweep.simulation import OUTPUT_UNITS, parameter_units, simulate_run, simulation_dimensions
     from ..sweep.spec import chunk_size_from_config
 

@@ -1,4 +1,4 @@
-"""Heat maps of force-map quantities (:func:`afmforce.analysis.mapping.map_images`).
+"""Heat maps of force-map quantities (:func:`afmforce.analysis.maps.map_images`).
 
 Built on :class:`matplotlib.figure.Figure`, never pyplot; every function takes ``ax=None``.
 """
@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .._files import atomic_path
-from ..analysis.mapping import _DISPLAY, EXTENT_KEY, MapImage
+from ..analysis.maps import _DISPLAY, EXTENT_KEY, MapImage
 
 __all__ = ["plot_map", "write_map_png"]
 

@@ -7,16 +7,21 @@
 >>> result = run_sweep(simulate_run, spec, store="sweeps")                # doctest: +SKIP
 >>> result.table, result.to_xarray()                                      # doctest: +SKIP
 
-``run_sweep`` calls a function once per row of a parameter table,
-``run_batch`` once per item (files, curves); both chunk the calls, run them on
-a local Dask cluster (or ``executor="serial"``), store finished chunks as they
-arrive and resume from the store. See ``docs/sweep.md``.
+``run_sweep`` (:mod:`.parametric`) calls a function once per row of a parameter
+table, ``run_batch`` (:mod:`.batch`) once per item (files, curves), and
+``analyze_files`` (:mod:`.files`) runs the analysis pipeline over many files and
+force maps on ``run_batch``. All three use one chunk runner (:mod:`.chunks`):
+chunks run in this process or on a local Dask cluster (``executor="auto"``
+chooses from the measured cost of a run), finished chunks are stored as they
+arrive and a rerun resumes from the store. See ``docs/sweep.md``.
 """
 
 from __future__ import annotations
 
 from .batch import run_batch
-from .engine import ChunkFailure, Progress, default_chunk_size, flatten, run_sweep
+from ..progress import Progress
+from .chunks import ChunkFailure, default_chunk_size, flatten
+from .parametric import run_sweep
 from .executors import DaskExecutor, SerialExecutor, make_executor
 from .results import BatchResult, SweepResult
 from .spec import (

@@ -2,17 +2,25 @@
 
 A local Dask cluster costs seconds to start and to load the compiled (numba)
 code in every worker; a sweep that finishes in this process sooner than that
-should not start one. :func:`plan_execution` times one run of the swept
-function in this process (twice when the first call is short, because the first
-call may load or compile code), then compares
+should not start one. :func:`plan_execution` times runs of the swept function
+in this process: one row, or a few rows spread over the table (run costs vary
+with the parameters: a Fig-5 run at 0.1 um/s takes twice one at 2 um/s), the
+first call once more (it may load or compile code: 2.3 s in a fresh process
+for a 20 ms run) unless it was long and the sweep short; the cost of a run is
+their mean. It then compares
 
-* serial:  ``n_runs * t_run``
+* serial:  ``n_runs * t_run`` (divided by ``PARALLEL_EFFICIENCY * threads`` for a
+  batched function that integrates on threads, e.g. ``simulate_run``)
 * cluster: ``CLUSTER_START_SECONDS + n_runs * t_run / (PARALLEL_EFFICIENCY * workers)``
 
-and picks the faster. On a cluster, chunks are sized to take about
-``TARGET_CHUNK_SECONDS`` each (so that scheduling overhead stays small and a
-killed sweep loses little) with at least ``MIN_CHUNKS_PER_WORKER`` chunks per
-worker (so that the load balances). The timing runs are done once more than
+and picks the faster. Chunks are sized from the measured cost as well: on a
+cluster, about ``TARGET_CHUNK_SECONDS`` each (so that scheduling overhead stays
+small and a killed sweep loses little) with at least ``MIN_CHUNKS_PER_WORKER``
+chunks per worker (so that the load balances); in this process a batched
+function gets chunks of about ``TARGET_CHUNK_SECONDS`` of work on its threads
+and at least ``MIN_RUNS_PER_THREAD`` runs per thread (a chunk is one batch: with
+3 runs on 2 threads one thread idles a third of the time), an unbatched one the
+default size (progress granularity). The timing runs are done once more than
 the sweep asks for; their results are discarded (the swept function must be
 pure, which :func:`~afmforce.sweep.run_sweep` already requires). They also
 leave the numba cache written, so that cluster workers load it instead of each
@@ -24,9 +32,10 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any, Callable, Sequence
 
-__all__ = ["ExecutionPlan", "plan_execution", "CLUSTER_START_SECONDS", "TARGET_CHUNK_SECONDS"]
+__all__ = ["ExecutionPlan", "plan_execution", "CLUSTER_START_SECONDS", "TARGET_CHUNK_SECONDS",
+           "MIN_RUNS_PER_THREAD"]
 
 #: Seconds to start a local cluster and warm its workers: measured 4.2 s to start 2 workers
 #: plus about 0.7 s per worker to load the dynamics' numba cache on the 2-core development
@@ -40,8 +49,13 @@ TARGET_CHUNK_SECONDS = 1.0
 MIN_CHUNKS_PER_WORKER = 4
 #: Largest chunk (runs).
 MAX_CHUNK = 256
-#: A first call longer than this [s] is taken as the cost of a run (no second timing call).
+#: At least this many runs per thread in a chunk of a batched function run in this process.
+MIN_RUNS_PER_THREAD = 4
+#: A first call longer than this [s] is taken as the cost of a run (no second timing call) ...
 _RETIME_BELOW = 2.0
+#: ... in a sweep of fewer runs than this (in a longer one, one extra run is a small share of it and
+#: the first call may have been mostly loading compiled code: 2.3 s for a 20 ms Fig-5 run).
+_RETIME_RUNS = 20
 
 
 @dataclass(frozen=True)
@@ -70,28 +84,39 @@ class ExecutionPlan:
     reason: str
 
 
-def _time_call(call: Callable[[], Any]) -> float | None:
+def _time_calls(calls: Sequence[Callable[[], Any]], n_runs: int) -> float | None:
+    """Mean seconds of one call over ``calls``.
+
+    The first call may load or compile code (seconds in a fresh process: the numba cache), so
+    it is timed again, unless it took ``_RETIME_BELOW`` or more and the sweep is so short
+    (fewer than ``_RETIME_RUNS`` runs) that an extra run would cost a noticeable share of it.
+    """
     try:
         t0 = time.perf_counter()
-        call()
+        calls[0]()
         first = time.perf_counter() - t0
-        if first >= _RETIME_BELOW:
+        if first >= _RETIME_BELOW and n_runs < _RETIME_RUNS:
             return first
-        t0 = time.perf_counter()
-        call()
-        return time.perf_counter() - t0
+        times = []
+        for call in calls:
+            t0 = time.perf_counter()
+            call()
+            times.append(time.perf_counter() - t0)
+        return sum(times) / len(times)
     except Exception:  # the sweep itself records the error of each run
         return None
 
 
-def plan_execution(call: Callable[[], Any], n_runs: int, workers: int, *, chunk_size: int | None = None,
-                   default_chunk_size: int = 1, serial_threads: int = 1) -> ExecutionPlan:
-    """Time ``call()`` (one representative run) and plan the sweep of ``n_runs`` runs.
+def plan_execution(call: Callable[[], Any] | Sequence[Callable[[], Any]], n_runs: int, workers: int, *,
+                   chunk_size: int | None = None, default_chunk_size: int = 1,
+                   serial_threads: int = 1) -> ExecutionPlan:
+    """Time ``call()`` (representative runs) and plan the sweep of ``n_runs`` runs.
 
     Parameters
     ----------
-    call : callable
-        One run of the swept function (e.g. on the first row of the table).
+    call : callable or sequence of callables
+        One run of the swept function, or a few (e.g. on rows spread over the
+        table); the cost of a run is their mean.
     n_runs : int
         Runs still to do.
     workers : int
@@ -110,7 +135,7 @@ def plan_execution(call: Callable[[], Any], n_runs: int, workers: int, *, chunk_
     -------
     ExecutionPlan
     """
-    t_run = _time_call(call)
+    t_run = _time_calls([call] if callable(call) else list(call), n_runs)
     if t_run is None:
         size = chunk_size or default_chunk_size
         return ExecutionPlan("serial" if workers <= 1 else "dask", size, None, None, None,
@@ -123,8 +148,14 @@ def plan_execution(call: Callable[[], Any], n_runs: int, workers: int, *, chunk_
                    f" on {serial_threads} threads" if serial_threads > 1 else "") +
                f" = {serial:.3g} s serial <= {cluster:.3g} s on a "
                f"{workers}-worker cluster (incl. {CLUSTER_START_SECONDS:g} s start)")
-        return ExecutionPlan("serial", chunk_size or default_chunk_size, t_run, serial, cluster,
-                             f"in this process: {why}")
+        if chunk_size is None:
+            chunk_size = default_chunk_size
+            if serial_threads > 1:  # a chunk is one batch on the threads: keep them all busy
+                by_time = round(TARGET_CHUNK_SECONDS * PARALLEL_EFFICIENCY * serial_threads / max(t_run, 1e-9))
+                chunk_size = max(default_chunk_size, MIN_RUNS_PER_THREAD * serial_threads, by_time)
+                chunk_size = int(min(MAX_CHUNK, n_runs, chunk_size))
+        return ExecutionPlan("serial", chunk_size, t_run, serial, cluster,
+                             f"in this process: {why}; {chunk_size} runs per chunk")
     if chunk_size is None:
         by_time = max(1, round(TARGET_CHUNK_SECONDS / max(t_run, 1e-9)))
         balance = max(1, math.ceil(n_runs / (MIN_CHUNKS_PER_WORKER * workers)))

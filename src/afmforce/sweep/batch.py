@@ -1,7 +1,7 @@
 """Batches: one function over many items (files, curves, map pixels), in chunks.
 
 The same chunking, executors, resumable store, progress and failure listing as
-sweeps (:mod:`afmforce.sweep.engine`); items may come from a generator, which
+sweeps (:mod:`afmforce.sweep.chunks`); items may come from a generator, which
 is consumed one chunk at a time, so that a large batch (a 128 x 128 map) is
 never held in memory whole and its results go to disk as chunks finish.
 """
@@ -16,7 +16,8 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from ..errors import ParameterError
-from .engine import Progress, _check_errors, _error_text, _func_name, _open_store, execute, flatten
+from ..progress import Progress
+from .chunks import _check_errors, _error_text, _func_name, _open_store, execute, flatten
 from .results import BatchResult
 
 __all__ = ["run_batch", "batch_key"]

@@ -1,7 +1,7 @@
 """The summary table of a batch analysis: one row per curve, SI units.
 
 Rows come from :func:`summary_row` (called on the workers by
-:class:`~afmforce.sweep.analysis.CurveAnalysis`); :func:`summary_table` gathers
+:class:`~afmforce.sweep.files.CurveAnalysis`); :func:`summary_table` gathers
 a batch's rows with fixed columns and types (:data:`SUMMARY_COLUMNS`, units in
 :data:`SUMMARY_UNITS`), :func:`write_summary` streams them chunk by chunk into
 Parquet and CSV, :func:`failures` lists the items that failed.

@@ -1,13 +1,13 @@
 """Force maps: a quantity of every analysed curve as an image over the map's grid.
 
-The batch analysis (:mod:`afmforce.sweep.analysis`) gives one row per curve
+The batch analysis (:mod:`afmforce.sweep.files`) gives one row per curve
 with its grid indices (``map_x`` column, ``map_y`` row, ``map_nx`` x ``map_ny``
 grid; -1 for curves outside maps). :func:`map_images` turns a chosen quantity
 (:data:`MAP_QUANTITIES`) into one :class:`MapImage` per map file;
 :func:`afmforce.plotting.plot_map` draws it, :func:`afmforce.plotting.write_map_png`
 writes it atomically.
 
->>> from afmforce.analysis.mapping import map_images
+>>> from afmforce.analysis.maps import map_images
 >>> from afmforce.plotting import write_map_png
 >>> for image in map_images(table, "adhesion"):                    # doctest: +SKIP
 ...     write_map_png(image, f"{image.name}.adhesion.png")

@@ -1,4 +1,4 @@
-"""Batch analysis of force-curve files and force maps on the sweep engine.
+"""The analysis of many force-curve files and force maps: the pipeline over each curve, in chunks.
 
 The work is split into items: one per curve of a force map (an afmforce map
 file, or a JPK ``.jpk-force-map``/``.jpk-qi-data``, whose curves can be
@@ -10,7 +10,7 @@ name. Each curve gives one summary row (:data:`SUMMARY_COLUMNS`, SI units in
 :data:`SUMMARY_UNITS`); :func:`write_summary` streams them into one Parquet
 and one CSV table.
 
->>> from afmforce.sweep.analysis import CurveAnalysis, analyze_files, summary_table
+>>> from afmforce.sweep.files import CurveAnalysis, analyze_files, summary_table
 >>> result = analyze_files(["map.h5", "a.ibw"], CurveAnalysis(steps=("jumps",)),
 ...                        executor="serial", store="results")     # doctest: +SKIP
 >>> summary_table(result)                                          # doctest: +SKIP

@@ -20,7 +20,7 @@ import pyarrow.parquet as pq
 import pytest
 
 from afmforce import forces
-from afmforce.analysis.mapping import EXTENT_KEY, map_images
+from afmforce.analysis.maps import EXTENT_KEY, map_images
 from afmforce.plotting import write_map_png
 from afmforce.analysis.synthetic import static_curve
 from afmforce.cli.main import main
@@ -28,7 +28,7 @@ from afmforce.errors import FileFormatError, ParameterError
 from afmforce.io import find_format, load
 from afmforce.io.native.rawfile import read_raw, write_raw
 from afmforce.io.native.rawmap import MapReader, map_info, read_map, write_map
-from afmforce.sweep.analysis import (CurveAnalysis, analyze_files, failures, plan_curves, summary_table,
+from afmforce.sweep.files import (CurveAnalysis, analyze_files, failures, plan_curves, summary_table,
                                      write_summary)
 from afmforce.sweep.summary import _grid
 
