@@ -107,13 +107,55 @@ def _irls(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
     return coef, sigma, float(np.sum(w * r * r))
 
 
-def _transient(t: np.ndarray, min_points: int = 12, n_tau: int = 16) -> list[np.ndarray]:
-    """Candidate settling regressors ``exp(-(t - t[0]) / tau)``, tau from one sample to a fifth of the span."""
+def _transient(t: np.ndarray, min_points: int = 12, n_tau: int = 16) -> np.ndarray:
+    """Candidate settling regressors ``exp(-(t - t[0]) / tau)`` as columns (n, K), tau from one
+    sample to a fifth of the span; (n, 0) when the baseline is too short."""
     span = float(t[-1] - t[0]) if t.size else 0.0
     if t.size < min_points or not span > 0:
-        return []
+        return np.empty((t.size, 0))
     dt = span / (t.size - 1)
-    return [np.exp(-(t - t[0]) / tau) for tau in np.geomspace(dt, span / 5.0, n_tau) if tau < span / 5.0 + dt]
+    taus = np.geomspace(dt, span / 5.0, n_tau)
+    return np.exp(-np.divide.outer(t - t[0], taus))
+
+
+def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[float, np.ndarray, int]:
+    """Least squares of ``y`` on ``X`` (n, p; p may be 0) and on ``[X, E_k]`` for every column of
+    ``E`` at once (the settling candidates; kept only with a negative coefficient: rising from below).
+
+    Returns the smallest capped residual sum (squares capped at ``cap``, so a spike costs the same
+    in every model), the coefficients of ``X`` there, and the column of ``E`` used (-1: none).
+    Plain least squares on normal equations: 16 candidates cost one matrix product, not 16 robust fits.
+    """
+    p = X.shape[1]
+    if p:
+        c0 = _wls(X, y, np.ones(y.size))
+        r0 = y - X @ c0
+    else:
+        c0, r0 = np.empty(0), y
+    best, coef, used = float(np.sum(np.minimum(r0 * r0, cap))), c0, -1
+    K = E.shape[1]
+    if K == 0 or y.size <= p + 2:
+        return best, coef, used
+    M = np.empty((K, p + 1, p + 1))
+    rhs = np.empty((K, p + 1))
+    M[:, :p, :p] = X.T @ X
+    xe = X.T @ E  # (p, K)
+    M[:, :p, p] = xe.T
+    M[:, p, :p] = xe.T
+    M[:, p, p] = np.einsum("ij,ij->j", E, E)
+    rhs[:, :p] = X.T @ y
+    rhs[:, p] = E.T @ y
+    try:
+        C = np.linalg.solve(M, rhs[..., None])[..., 0]  # (K, p + 1)
+    except np.linalg.LinAlgError:
+        return best, coef, used
+    R = y[:, None] - X @ C[:, :p].T - E * C[:, p]
+    costs = np.sum(np.minimum(R * R, cap), axis=0)
+    costs[~(C[:, p] < 0)] = np.inf
+    k = int(np.argmin(costs))
+    if costs[k] < best:
+        best, coef, used = float(costs[k]), C[k, :p], k
+    return best, coef, used
 
 
 def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
@@ -137,8 +179,11 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
         X = np.column_stack([np.ones_like(tt), tt / max(np.ptp(tt), 1e-300)])
     coef, sigma, ssr = _irls(X, s)
     extra = [(tail, False)] if tail is not None else []
-    if transient and X.shape[1] > 1:
-        extra += [(col, True) for col in _transient(t)]
+    if transient and X.shape[1] > 1 and sigma > 0:  # the best settling candidate, then one robust fit
+        E = _transient(t)
+        _, _, k = _family(X, s, E, (4.685 * sigma) ** 2)
+        if k >= 0:
+            extra.append((E[:, k], True))
     best = None
     for col, settles in extra:
         if s.size > X.shape[1] + 5 and np.ptp(col) > 0:
@@ -191,34 +236,6 @@ def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
     return s1 * s2 > 0 and abs(s1) > 2 * abs(s2)
 
 
-def _fit_ssr(X: np.ndarray | None, y: np.ndarray, cols: list[np.ndarray], noise: float) -> tuple[float, np.ndarray | None]:
-    """Smallest truncated SSR (squares capped at (4.685 noise)^2, the same for every model) of ``y``
-    on ``X`` (None: no column) alone or with one settling column (kept only with a negative
-    coefficient: rising from below); and the coefficients of ``X``."""
-    cap = (4.685 * noise) ** 2
-
-    def cost(r: np.ndarray) -> float:
-        return float(np.sum(np.minimum(r * r, cap)))
-
-    if X is None:
-        best, coef = cost(y), None
-        for col in cols:
-            c, _, _ = _irls(col[:, None], y)
-            if c[-1] < 0:
-                best = min(best, cost(y - col * c[-1]))
-        return best, coef
-    coef, _, _ = _irls(X, y)
-    best = cost(y - X @ coef)
-    for col in cols:
-        Xc = np.column_stack([X, col])
-        c, _, _ = _irls(Xc, y)
-        if c[-1] < 0:
-            ssr = cost(y - Xc @ c)
-            if ssr < best:
-                best, coef = ssr, c[: X.shape[1]]
-    return best, coef
-
-
 def retract_line(t: np.ndarray, s: np.ndarray, off_a: float, slope_a: float, t0a: float, t_turn: float,
                  noise: float, threshold: float = 25.0) -> tuple[str, float, float]:
     """The retract's drift line, the simplest the data allow: ``(model, offset at t_turn, slope)``.
@@ -242,14 +259,15 @@ def retract_line(t: np.ndarray, s: np.ndarray, off_a: float, slope_a: float, t0a
         return "separate", math.nan, math.nan
     sel = slice(None) if t.size <= MAX_POINTS else np.linspace(0, t.size - 1, MAX_POINTS).astype(np.int64)
     t, s = t[sel], s[sel]
-    cols = _transient(t)
+    E = _transient(t)
+    cap = (4.685 * noise) ** 2
     y0 = s - (off_a + slope_a * (t - t0a))
-    ssr0, _ = _fit_ssr(None, y0, cols, noise)
+    ssr0, _, _ = _family(np.empty((t.size, 0)), y0, E, cap)
     scale = max(float(t[-1] - t_turn), 1e-300)
     y1 = s - at_turn
-    ssr1, c1 = _fit_ssr(((t - t_turn) / scale)[:, None], y1, cols, noise)
+    ssr1, c1, _ = _family(((t - t_turn) / scale)[:, None], y1, E, cap)
     X2 = np.column_stack([np.ones_like(t), (t - t_turn) / scale])
-    ssr2, c2 = _fit_ssr(X2, y1, cols, noise)
+    ssr2, c2, _ = _family(X2, y1, E, cap)
     lim = threshold * noise**2
     if ssr0 - min(ssr1, ssr2) <= lim:
         return "approach", at_turn, slope_a
