@@ -9,6 +9,10 @@ estimate, step-size controller, step bounds and the in-contact damping step.
 * Step-size control with the predictive (Gustafsson) controller; no increase
   right after a rejection, no change below a factor 1.2 when the factors can be
   reused (RADAU5).
+
+Compiled as described in :mod:`._radau_newton`; the scalar-only controller
+functions are inlined by numba itself (``inline="always"``: nothing to compile
+separately, no arrays to count references of).
 """
 
 from __future__ import annotations
@@ -83,13 +87,13 @@ def improved_error_norm(model, p, drive, t, h, y, J, Sr, det_r, Z, err, scale, y
     return _rms(err, scale)
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def safety_factor(n_iter):
     """Step-size safety factor: 0.9, less when Newton needed many iterations."""
     return 0.9 * (2 * NEWTON_MAXITER + 1) / (2 * NEWTON_MAXITER + n_iter)
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def controller(h_abs, h_abs_old, err_old, err_norm):
     """Step-size factor of the predictive (Gustafsson) controller, before safety and limits."""
     if h_abs_old > 0.0 and err_old > 0.0 and err_norm > 0.0:
@@ -101,7 +105,7 @@ def controller(h_abs, h_abs_old, err_old, err_norm):
     return MAX_FACTOR
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@njit(cache=True, error_model="numpy", inline="always")
 def next_step_factor(h_abs, h_abs_old, err_old, err_norm, safety, rejected, recompute_jac):
     """Factor for the step after an accepted one."""
     factor = min(MAX_FACTOR, safety * controller(h_abs, h_abs_old, err_old, err_norm))

@@ -139,7 +139,7 @@ def new_state(y, ev) -> tuple:
             np.zeros(S_SIZE, dtype=np.int64))
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", inline="always")
 def _save(work, t, h_abs, h_abs_old, err_old, current_jac):
     work[W_T] = t
     work[W_H] = h_abs
