@@ -300,13 +300,15 @@ def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o):
             return
 
 
-@njit(cache=True, error_model="numpy")
+@njit(cache=True, error_model="numpy", nogil=True)
 def sample_columns(model, p, Y, dt, seg_first, seg_last, seg_kind, seg_t0, seg_z0, seg_v):
     """Time, drive, segment code and observables of the sampled states in one pass.
 
     Row ``k`` of ``Y`` is the state at ``t = k dt``; samples ``seg_first[j]`` to
     ``seg_last[j] - 1`` belong to drive segment ``j`` (``z = seg_z0 + seg_v (t - seg_t0)``).
     Returns ``(t, z, segment code, observables (rows x N_OBS), all finite)``.
+    Releases the GIL (``nogil``): in :func:`afmforce.dynamics.simulate_many` it is
+    1.2 ms of a 10 ms Fig-6 run, and it overlaps the other threads' integrations.
     """
     n = Y.shape[0]
     tt = np.empty(n)
