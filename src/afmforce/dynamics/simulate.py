@@ -229,17 +229,22 @@ class _Run:
 
     def _integrator_args(self, seg, term_kind, term_level, chunk) -> tuple:
         """The arguments of :func:`.radau.integrate_segment` for the drive segment ``seg``
-        (its records as plain tuples; the arrays are this run's, updated in place)."""
-        cfg = self.cfg
-        return (self.model, self.p,
-                R.drive_record(seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end,
-                               term_kind, term_level),
+        (its records as plain tuples; the arrays are this run's, updated in place; the
+        records that do not change between segments are built once per run)."""
+        fixed = self.__dict__.get("_fixed_records")
+        if fixed is None or fixed[0] != chunk:
+            cfg = self.cfg
+            fixed = self._fixed_records = (
+                chunk,
                 R.tolerance_record(cfg.rtol, self.rtolv, self.atol),
                 R.control_record(HMAX_FRACTION, self.hmax_dz, self.damp_cycles,
                                  DAMP_KAPPA_RATIO, self.budget, chunk),
                 R.sampling_record(0.0, self.dt, self.averaged, self.s_next, self.ybuf),
                 R.state_record(self.y, self.ev, self.work, self.Q, self.y_old, self.J,
                                self.stats))
+        return (self.model, self.p,
+                R.drive_record(seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end,
+                               term_kind, term_level)) + fixed[1:]
 
     def _segment(self, seg, term_kind, term_level, t_total, progress):
         work, s_next, stats = self.work, self.s_next, self.stats
