@@ -187,6 +187,11 @@ def dump(tree: Path, path: str) -> dict:
         return {k: z[k] for k in z.files}
 
 
+#: Computed after the integrator by a changed fit (compiled least squares instead of
+#: ``np.polyfit`` since this benchmark was written): equal to rounding, 1e-9 relative.
+ROUNDING_ONLY = ("events.hysteresis_offset", "events.compliance_slope")
+
+
 def compare(a: dict, b: dict) -> bool:
     same = True
     for k in sorted(set(a) | set(b)):
@@ -205,6 +210,9 @@ def compare(a: dict, b: dict) -> bool:
             same = False
             continue
         eq = np.array_equal(x, y, equal_nan=x.dtype.kind == "f")
+        if not eq and k.endswith(ROUNDING_ONLY) and np.allclose(x, y, rtol=1e-9, atol=0.0):
+            print(f"  {k}: equal to rounding (|diff| = {np.nanmax(np.abs(x - y)):.2g})")
+            continue
         if not eq:
             d = np.nanmax(np.abs(x.astype(float) - y.astype(float))) if x.size else 0.0
             print(f"  {k}: differs, max |diff| = {d:.3g}")
