@@ -32,15 +32,16 @@ def _fixed_step(cfg, t1, nsteps):
     ev[R.E_H_CONTACT] = 1e-9
     ev[R.E_SPIKE_WINDOW] = 1e-3
     ev[R.E_JUMP_FACTOR] = 2.0
-    work = np.zeros(R.W_SIZE)
+    state = R.new_state(y, ev)
+    work, stats = state[2], state[6]
     h = t1 / nsteps
     work[R.W_H] = h
-    stats = np.zeros(R.S_SIZE, dtype=np.int64)
     status = R.integrate_segment(
-        model, p, R.APPROACH, 0.0, cfg.start, cfg.velocity, t1, y, 1e-12, rtolv, atol,
-        0.0, 1.0, 0.0, 0.0, R.TERM_NONE, 0.0, 0.0, 1.0, np.zeros(1, dtype=np.int64),
-        np.zeros((0, n)), ev, work, np.zeros((n, 3)), np.zeros(n), np.zeros((n, n)), stats,
-        10**7, 2**62, h)
+        model, p, R.drive_record(R.APPROACH, 0.0, cfg.start, cfg.velocity, t1),
+        R.tolerance_record(1e-12, rtolv, atol),
+        R.control_record(0.0, 1.0, 0.0, 0.0, 10**7, 2**62, h_fixed=h),
+        R.sampling_record(0.0, 1.0, False, np.zeros(1, dtype=np.int64), np.zeros((0, n))),
+        state)
     assert status == R.DONE
     assert stats[R.S_ACCEPTED] == nsteps
     return y
@@ -140,3 +141,60 @@ def test_solver_statistics_are_reported(fig5):
     assert s.status == "success"
     assert s.accepted + s.rejected == s.steps
     assert s.rhs_evaluations > s.steps and s.jacobian_evaluations > 0 and s.wall_time > 0
+
+
+def test_records_follow_their_named_tuples_and_fix_the_types():
+    """integrate_segment takes plain tuples in the field order of the named tuples; the
+    packers give one type per field whatever the caller passes (one compiled variant)."""
+    n = 4
+    a = np.zeros(n)
+    recs = [
+        (R.Drive, R.drive_record(1, 0, 1, 2, 3, R.TERM_FORCE, 5)),
+        (R.Tolerances, R.tolerance_record(1, a, a)),
+        (R.StepControl, R.control_record(1, 2, 0, 100, 10, 5)),
+        (R.Sampling, R.sampling_record(0, 1, 0, np.zeros(1, dtype=np.int64), np.zeros((1, n)))),
+        (R.SolverState, R.new_state(a, np.zeros(R.E_SIZE))),
+    ]
+    for cls, rec in recs:
+        assert type(rec) is tuple and len(rec) == len(cls._fields)
+    drive = R.Drive(*recs[0][1])
+    assert isinstance(drive.kind, int) and isinstance(drive.t_a, float)
+    assert isinstance(drive.term_kind, int) and drive.term_level == 5.0
+    control = R.StepControl(*recs[2][1])
+    assert isinstance(control.max_steps, int) and control.h_fixed == 0.0
+    assert R.Sampling(*recs[3][1]).average is False
+
+
+def test_step_size_controller_follows_radau5():
+    """Gustafsson's predictive controller (Hairer & Wanner IV.8, eq 8.25) as RADAU5 applies it."""
+    from afmforce.dynamics._radau_control import controller, next_step_factor, safety_factor
+
+    # no history: factor err^-1/4
+    assert controller(1e-6, 0.0, 0.0, 0.5) == pytest.approx(0.5 ** -0.25, rel=1e-15)
+    # with history: min(1, h/h_old (err_old/err)^1/4) err^-1/4
+    h, h_old, e_old, e = 2e-6, 1e-6, 0.8, 0.1
+    mult = h / h_old * (e_old / e) ** 0.25
+    assert controller(h, h_old, e_old, e) == pytest.approx(min(1.0, mult) * e ** -0.25)
+    assert controller(h, h_old, e_old, 0.0) == 10.0
+    # safety 0.9 (2 nmax + 1) / (2 nmax + iterations), nmax = 6
+    assert safety_factor(1) == pytest.approx(0.9)
+    assert safety_factor(6) == pytest.approx(0.9 * 13 / 18)
+    # after a rejection never larger; below 1.2 the step (and its factors) is kept
+    assert next_step_factor(h, 0.0, 0.0, 1e-6, 0.9, True, False) == 1.0
+    assert next_step_factor(h, 0.0, 0.0, 1e-6, 0.9, False, False) == 10.0
+    assert next_step_factor(h, 0.0, 0.0, 0.9, 0.9, False, False) == 1.0
+    assert next_step_factor(h, 0.0, 0.0, 0.9, 0.9, False, True) == pytest.approx(
+        0.9 * 0.9 ** -0.25)
+
+
+def test_integrator_modules_stay_readable():
+    """Issue 11.8: the compiled integrator in pieces, no module over 400 lines."""
+    from pathlib import Path
+
+    import afmforce.dynamics as D
+
+    root = Path(D.__file__).parent
+    for name in ("radau", "_radau_newton", "_radau_control", "_radau_tableau", "_sampling",
+                 "_locate", "_linalg"):
+        lines = (root / f"{name}.py").read_text().count("\n")
+        assert lines <= 400, (name, lines)

@@ -43,6 +43,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from .radau import APPROACH, RETRACT
 
@@ -128,7 +129,7 @@ def compliance_lines(piezo_position, apparent_deflection, separation, segment,
 
     Uses in-contact samples (h < contact_separation) with z in the middle
     half of ``[contact_position, turn_position]`` on each run; fits
-    ``z = c0 + c1 * d~`` by least squares.
+    ``z = c0 + c1 * d~`` by least squares (:func:`_line_fit`, compiled).
 
     Returns
     -------
@@ -138,23 +139,60 @@ def compliance_lines(piezo_position, apparent_deflection, separation, segment,
     slope : float
         ``beta * mean(c1)``: dz/dtheta [m/rad] (NaN when beta is NaN).
     """
-    z = np.asarray(piezo_position)
-    d = np.asarray(apparent_deflection)
-    h = np.asarray(separation)
-    seg = np.asarray(segment)
+    z = np.asarray(piezo_position, dtype=float)
+    d = np.asarray(apparent_deflection, dtype=float)
+    h = np.asarray(separation, dtype=float)
+    seg = np.asarray(segment).astype(np.int64, copy=False)
     if not (math.isfinite(contact_position) and turn_position > contact_position):
         return math.nan, math.nan
     span = turn_position - contact_position
     lo, hi = contact_position + 0.25 * span, turn_position - 0.25 * span
     fits = []
     for kind in (APPROACH, RETRACT):
-        m = (seg == kind) & (h < contact_separation) & (z >= lo) & (z <= hi)
-        if np.count_nonzero(m) < 5:
+        count, c0, c1, dlo, dhi = _line_fit(z, d, h, seg, kind, contact_separation, lo, hi)
+        if count < 5 or not math.isfinite(c1):
             return math.nan, math.nan
-        c1, c0 = np.polyfit(d[m], z[m], 1)
-        fits.append((c0, c1, d[m].min(), d[m].max()))
+        fits.append((c0, c1, dlo, dhi))
     (a0, a1, alo, ahi), (b0, b1, blo, bhi) = fits
     dmid = 0.5 * (max(alo, blo) + min(ahi, bhi))
     offset = (a0 + a1 * dmid) - (b0 + b1 * dmid)
     slope = beta * 0.5 * (a1 + b1) if math.isfinite(beta) else math.nan
     return float(offset), float(slope)
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def _line_fit(z, d, h, seg, kind, hc, lo, hi):
+    """Least-squares line ``z = c0 + c1 d`` through the samples of segment ``kind`` with
+    ``h < hc`` and ``lo <= z <= hi`` (what ``np.polyfit(d[m], z[m], 1)`` fits, in one
+    compiled pass over the centred sums, without the GIL).
+
+    Returns ``(count, c0, c1, min d, max d)``; ``c1`` is NaN when the d values do not
+    vary (or fewer than two samples).
+    """
+    n = 0
+    sd = 0.0
+    sz = 0.0
+    dmin = math.inf
+    dmax = -math.inf
+    for i in range(z.shape[0]):
+        if seg[i] == kind and h[i] < hc and z[i] >= lo and z[i] <= hi:
+            n += 1
+            sd += d[i]
+            sz += z[i]
+            dmin = min(dmin, d[i])
+            dmax = max(dmax, d[i])
+    if n < 2 or not dmax > dmin:
+        return n, math.nan, math.nan, dmin, dmax
+    dm = sd / n
+    zm = sz / n
+    sdd = 0.0
+    sdz = 0.0
+    for i in range(z.shape[0]):
+        if seg[i] == kind and h[i] < hc and z[i] >= lo and z[i] <= hi:
+            dd = d[i] - dm
+            sdd += dd * dd
+            sdz += dd * (z[i] - zm)
+    if not sdd > 0.0:
+        return n, math.nan, math.nan, dmin, dmax
+    c1 = sdz / sdd
+    return n, zm - c1 * dm, c1, dmin, dmax

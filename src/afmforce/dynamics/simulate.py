@@ -222,6 +222,25 @@ class _Run:
         self.budget = cfg.max_steps if cfg.max_steps is not None else max(
             2_000_000, int(60.0 * f_max * t_total_max))
 
+    def _integrator_args(self, seg, term_kind, term_level, chunk) -> tuple:
+        """The arguments of :func:`.radau.integrate_segment` for the drive segment ``seg``
+        (its records as plain tuples; the arrays are this run's, updated in place; the
+        records that do not change between segments are built once per run)."""
+        fixed = self.__dict__.get("_fixed_records")
+        if fixed is None or fixed[0] != chunk:
+            cfg = self.cfg
+            fixed = self._fixed_records = (
+                chunk,
+                R.tolerance_record(cfg.rtol, self.rtolv, self.atol),
+                R.control_record(HMAX_FRACTION, self.hmax_dz, self.damp_cycles,
+                                 DAMP_KAPPA_RATIO, self.budget, chunk),
+                R.sampling_record(0.0, self.dt, self.averaged, self.s_next, self.ybuf),
+                R.state_record(self.y, self.ev, self.work, self.Q, self.y_old, self.J,
+                               self.stats))
+        return (self.model, self.p,
+                R.drive_record(seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end,
+                               term_kind, term_level)) + fixed[1:]
+
     def _segment(self, seg, term_kind, term_level, t_total, progress):
         work, s_next, stats = self.work, self.s_next, self.stats
         work[R.W_T] = seg.t_start
@@ -233,13 +252,9 @@ class _Run:
         work[R.W_VFAC] = VELOCITY_TOLERANCE_FACTOR * self.vfac_scale
         first = int(s_next[0])
         chunk = PROGRESS_CHUNK if progress is not None else 2**62
+        args = self._integrator_args(seg, term_kind, term_level, chunk)
         while True:
-            status = R.integrate_segment(
-                self.model, self.p, seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end,
-                self.y, self.cfg.rtol, self.rtolv, self.atol, HMAX_FRACTION, self.hmax_dz,
-                self.damp_cycles, DAMP_KAPPA_RATIO, term_kind, term_level,
-                0.0, self.dt, s_next, self.ybuf, self.ev, work, self.Q, self.y_old, self.J, stats,
-                self.budget, chunk, 0.0, 1.0 if self.averaged else 0.0)
+            status = R.integrate_segment(*args)
             if status == R.PAUSED:
                 progress(Progress(done=min(float(work[R.W_T]), t_total), total=t_total, unit="s",
                                   what="simulate"))

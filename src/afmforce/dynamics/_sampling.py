@@ -1,0 +1,76 @@
+"""Samples of the compiled integrator on the instrument's time grid, from the dense output.
+
+Two detectors: point sampling (the state at the grid times ``t0 + k dt``) and
+averaging (each sample the exact mean of the collocation polynomial over its
+window ``[t_k - dt/2, t_k + dt/2]``), selected by the ``average`` field of
+:data:`afmforce.dynamics.radau.Sampling`.
+"""
+
+from __future__ import annotations
+
+from numba import njit
+
+from ._locate import _dense
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+def _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf):
+    """Add the integral of the step's dense polynomial over each sample window it overlaps.
+
+    Window ``k`` is ``[s_t0 + (k - 1/2) s_dt, s_t0 + (k + 1/2) s_dt]``; the
+    polynomial is ``y_old + Q [s, s^2, s^3]`` on ``[t_old, t_old + h]``, so its
+    integral over ``[a, b]`` is exact: ``h * sum_j c_j (s_b^(j+1) - s_a^(j+1)) / (j+1)``.
+    """
+    n = y_old.shape[0]
+    half = 0.5 * s_dt
+    k = s_next[0]
+    while k < ybuf.shape[0]:
+        ts = s_t0 + k * s_dt
+        lo = ts - half
+        if lo >= t_new:
+            break
+        hi = ts + half
+        a = max(lo, t_old)
+        b = min(hi, t_new)
+        if b > a:
+            sa = (a - t_old) / h
+            sb = (b - t_old) / h
+            d1 = sb - sa
+            d2 = (sb * sb - sa * sa) * 0.5
+            d3 = (sb * sb * sb - sa * sa * sa) / 3.0
+            d4 = (sb * sb * sb * sb - sa * sa * sa * sa) * 0.25
+            for i in range(n):
+                ybuf[k, i] += h * (y_old[i] * d1 + Q[i, 0] * d2 + Q[i, 1] * d3 + Q[i, 2] * d4)
+            ybuf[k, n] += b - a
+        if hi <= t_new:
+            k += 1
+        else:
+            break
+    s_next[0] = k
+
+
+@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+def sample_step(t_old, t_new, h, y_old, Q, s_t0, s_dt, average, s_next, ybuf, ytmp):
+    """Write the samples of the accepted step ``[t_old, t_new]`` into ``ybuf``.
+
+    Point sampling: rows ``s_next[0]`` ... with grid time ``s_t0 + k s_dt`` <= ``t_new``
+    get the dense state; ``s_next[0]`` moves past them. Averaging: the step's
+    integral is added to every window it overlaps (column ``n`` collects the
+    covered time); ``s_next[0]`` counts the complete windows. Rows beyond
+    ``ybuf`` are not written.
+    """
+    if average:
+        _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf)
+        return
+    n = y_old.shape[0]
+    k = s_next[0]
+    while k < ybuf.shape[0]:
+        ts = s_t0 + k * s_dt
+        if ts > t_new:
+            break
+        if ts >= t_old:
+            _dense(y_old, Q, (ts - t_old) / h, ytmp)
+            for i in range(n):
+                ybuf[k, i] = ytmp[i]
+        k += 1
+    s_next[0] = k
