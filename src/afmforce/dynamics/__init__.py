@@ -22,7 +22,7 @@ an independent cross-check).
 from .config import DEFAULT_B, MODELS, SAMPLING, SimulationConfig
 from .parts import BeamProbe, Drive, Friction, SolverOptions, SpringProbe, Surface
 from .events import Events
-from .models import FRICTION_LAWS, RINGING, FrictionLaw, RingingTreatment
+from .registries import FRICTION_LAWS, RINGING, FrictionLaw, RingingTreatment
 from .guard import ConvergenceWarning
 from .simulate import DynamicsWarning, simulate
 from .batch import simulate_many

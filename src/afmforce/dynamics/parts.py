@@ -29,7 +29,7 @@ from ..cantilever import InclinedCantilever
 from ..constants import FIG1, FIG5
 from ..errors import ParameterError
 from ._part import Part, choice, quantity, validate
-from .models import FRICTION_LAWS, RINGING
+from .registries import FRICTION_LAWS, RINGING
 
 __all__ = [
     "DEFAULT_B",

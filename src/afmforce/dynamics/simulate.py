@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from functools import lru_cache
 from typing import Callable
 
 import numpy as np
@@ -20,16 +19,15 @@ from .guard import run_check
 from .static import static_jump_in
 from ..progress import Progress
 from .load_friction import RING_AMPLITUDE, load_friction_controls  # noqa: F401  (re-exported)
-from .models import (MODEL_BEAM, MODEL_IDS, RINGING, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
-                     O_Y2, pack_beam, pack_spring, state_size)
+from .registries import RINGING
+from .models import (MODEL_BEAM, MODEL_IDS, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
+                     O_Y2, state_size)
 from .trajectory import SolverStats, Trajectory
+from ._params import (H_GUARD_FRACTION, _beam_fmax, _beam_template, free_frequency_max,  # noqa: F401 (re-exported)
+                      parameter_vector)
 
 __all__ = ["simulate", "DynamicsWarning", "H_GUARD_FRACTION", "VELOCITY_ATOL_FREQUENCY"]
 
-#: Trial states with a separation below this fraction of z0 are rejected by the
-#: force law (eq 2 would turn attractive again at h -> 0; at 0.2 z0 the
-#: soft-wall repulsion of the default parameters is already ~3 mN).
-H_GUARD_FRACTION = 0.2
 #: The absolute tolerance on velocities is ``atol * 2 pi * VELOCITY_ATOL_FREQUENCY``
 #: [Hz]: a velocity error counts like a position error over one period at this
 #: frequency. 1 MHz lies above every mode that must be resolved (the free beam,
@@ -59,54 +57,6 @@ DAMP_KAPPA_RATIO = 100.0
 
 class DynamicsWarning(UserWarning):
     """A simulation ran but its protocol did not do what was asked (no contact, no pull-off)."""
-
-
-def free_frequency_max(p, model) -> float:
-    """Highest free (out-of-contact) mode frequency [Hz] of the packed model."""
-    from . import models as M
-    if model == M.MODEL_SPRING:
-        w2 = p[M.K] * p[M.INV_M]
-    else:   # eigenvalues of -diag(1/m) A (2x2, closed form)
-        a, b = -p[M.INV_MA] * p[M.A00], -p[M.INV_MA] * p[M.A01]
-        c, d = -p[M.INV_MB] * p[M.A10], -p[M.INV_MB] * p[M.A11]
-        tr, det = a + d, a * d - b * c
-        disc = math.sqrt(max(tr * tr / 4.0 - det, 0.0))
-        w2 = max(abs(tr / 2.0 + disc), abs(tr / 2.0 - disc))
-    return math.sqrt(w2) / (2.0 * math.pi)
-
-
-@lru_cache(maxsize=256)
-def _beam_template(cantilever, m_joint: float, m_base: float) -> np.ndarray:
-    """The geometry/mass part of the beam's parameter vector (surfaces filled per run)."""
-    p = pack_beam(cantilever, m_joint=m_joint, m_base=m_base, radius=1.0, hamaker=0.0, z0=1.0,
-                  viscosity=0.0, xi=0.0, zeta=0.0, h_guard=0.0)
-    p.flags.writeable = False
-    return p
-
-
-@lru_cache(maxsize=256)
-def _beam_fmax(cantilever, m_joint: float, m_base: float) -> float:
-    return free_frequency_max(_beam_template(cantilever, m_joint, m_base), MODEL_BEAM)
-
-
-def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
-    """Packed model parameters for the compiled vector field."""
-    s, probe = cfg.surface, cfg.probe
-    guard = H_GUARD_FRACTION * s.z0
-    if cfg.model == "spring":
-        return pack_spring(spring_constant=probe.spring_constant, mass=probe.mass, radius=s.radius,
-                           hamaker=s.hamaker, z0=s.z0, viscosity=s.viscosity, h_guard=guard)
-    from . import models as M
-    xi, zeta = cfg.friction.coefficients
-    p = _beam_template(probe.cantilever, probe.m_joint, probe.m_base).copy()
-    # the same values as pack_beam(cfg.cantilever, ...) fills in
-    p[M.AR] = s.hamaker * s.radius
-    p[M.Z0] = s.z0
-    p[M.CD] = 6.0 * math.pi * s.viscosity * s.radius**2 / 4.0
-    p[M.H_GUARD] = guard
-    p[M.XI] = xi
-    p[M.ZETA] = zeta
-    return p
 
 
 def _resolve_config(config, overrides) -> SimulationConfig:
