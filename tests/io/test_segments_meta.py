@@ -184,7 +184,7 @@ def test_afmformats_exports_load(tmp_path, fmt):
     dd.export_data(out, fmt=fmt)
     c = load(out)[0]
     ref = load(src)[0]
-    assert c.metadata["reader"] == "afmformats"
+    assert c.metadata["reader"] == f"afmformats-{fmt}"  # the registry identifier
     np.testing.assert_allclose(c.deflection_signal, ref.deflection_signal, rtol=1e-6)
     np.testing.assert_array_equal(c.segment, ref.segment)
     assert c.metadata["spring_constant"] == pytest.approx(ref.metadata["spring_constant"])
@@ -232,7 +232,7 @@ def test_other_metadata_overrides_reach_the_readers():
 def _chiaro(path: Path, micro: bytes) -> np.ndarray:
     """A SYNTHETIC Optics11 Chiaro export in the layout afmformats' reader parses; returns its table."""
     n = 200
-    t = np.arange(2 * n) * 0.01
+    t = np.arange(2 * n) * 0.005  # s: 2000 nm per run at the header's 2 um/s
     piezo = np.concatenate([np.linspace(0, 2000, n), np.linspace(2000, 0, n)])  # nm, into the sample
     load_un = np.clip(piezo - 1500, 0, None) * 1e-3  # uN, contact after 1500 nm
     load_un[n:] -= 0.05 * np.exp(-((piezo[n:] - 1400) / 30) ** 2)  # a small adhesion dip on the retract

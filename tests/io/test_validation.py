@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import os
+import sys
 import time
 from pathlib import Path
 
@@ -99,6 +101,37 @@ def test_oversized_hdf5_attribute_is_not_read(tmp_path):
 def _forever(*args, **kwargs):
     while True:
         time.sleep(0.01)
+
+
+def _record_pid_and_hang(pidfile):
+    pidfile.write_text(str(os.getpid()))
+    _forever()
+
+
+def _nested(pidfile):
+    """A guarded call inside a guarded call (load(timeout=) detecting an HDF5 file does this)."""
+    return run_with_timeout(_record_pid_and_hang, pidfile, timeout=600, path="inner")
+
+
+@pytest.mark.skipif(not sys.platform.startswith("linux"), reason="PR_SET_PDEATHSIG is Linux only")
+def test_time_budget_kills_the_readers_own_children(tmp_path):
+    """The outer budget kills the child and the grandchild it is waiting on (no orphan left spinning
+    and holding the result pipe open: found by the fuzz test on an afmformats HDF5 export)."""
+    pidfile = tmp_path / "pid"
+    t0 = time.monotonic()
+    with pytest.raises(FileTimeoutError, match="outer"):
+        run_with_timeout(_nested, pidfile, timeout=2.0, path="outer")
+    assert time.monotonic() - t0 < 10
+    inner = int(pidfile.read_text())
+    for _ in range(100):  # SIGKILL is delivered asynchronously
+        try:
+            os.kill(inner, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        os.kill(inner, 9)
+        pytest.fail(f"grandchild {inner} survived its parent")
 
 
 def test_time_budget_kills_a_hanging_reader(tmp_path, monkeypatch):

@@ -39,7 +39,7 @@ from ..errors import FileFormatError, MissingMetadataError
 from .curve import RawCurve
 from ._meta import AFMFORMATS_KEYS, afmformats_override, finalize_curve, missing_metadata, orient, segment_code
 
-__all__ = ["load_afmformats", "load_jpk", "load_ntmdt", "load_workshop", "orient"]
+__all__ = ["load_afmformats", "load_export", "load_jpk", "load_ntmdt", "load_workshop", "orient", "rescale_force"]
 
 # afmformats and igor2 log loader failures with tracebacks and whole byte buffers; keep them out of
 # the user's terminal (the error we raise says what is wrong).
@@ -84,7 +84,11 @@ def _curve_from_afmdata(dd, path: Path, reader: str, meta_override: Mapping[str,
                         segment_styles: list[str] | None = None) -> RawCurve:
     cols = dd.columns
     md = dict(dd.metadata)
-    n = len(dd)
+    n = np.asarray(dd["force"]).size  # not len(dd): afmformats takes that from the "point count" metadata
+    short = {c: np.asarray(dd[c]).size for c in cols if c != "index" and np.asarray(dd[c]).size != n}
+    if short:
+        raise FileFormatError(f"{path}: columns of different lengths (force {n}, "
+                              f"{', '.join(f'{c} {m}' for c, m in short.items())}); the file is truncated or damaged")
     if "height (piezo)" in cols:
         z_nom = -np.asarray(dd["height (piezo)"], dtype=float)
         z_meas = -np.asarray(dd["height (measured)"], dtype=float) if "height (measured)" in cols else None
@@ -239,9 +243,70 @@ def load_workshop(path: Path, *, meta_override: Mapping[str, Any], callback: Cal
                                                deflection_unit="V"), str(path)) for c in curves]
 
 
-def load_generic(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
-    """Any other afmformats format (its HDF5 and tab exports, Optics11 Chiaro): force [N]."""
-    return load_afmformats(path, meta_override=meta_override, callback=callback, reader="afmformats")
+def load_export(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
+    """afmformats' own exports (HDF5 or tab-separated): force [N].
+
+    The curve's ``reader`` is ``afmformats-hdf5`` or ``afmformats-tab`` (by the
+    file's content). The force is the file's; a user's spring constant or
+    sensitivity rescales it (:func:`rescale_force`; afmformats refuses them). afmformats exports an Igor curve with every sample in
+    segment 0 (its Igor reader does not split the cycle): a one-segment curve whose
+    z runs out and back is split at its turning point (as :mod:`afmforce.io.igor`
+    does for the original wave) and says so in ``metadata["segments_note"]``.
+    """
+    with open(path, "rb") as fh:
+        reader = "afmformats-hdf5" if fh.read(8) == b"\x89HDF\r\n\x1a\n" else "afmformats-tab"
+    data = _load_data(path, {}, callback)  # afmformats' export readers refuse a k or sensitivity override
+    if not data:
+        raise FileFormatError(f"{path}: the file holds no force-distance curve")
+    out = []
+    for dd in data:
+        force = np.asarray(dd["force"], dtype=float) * rescale_force(path, dd.metadata, meta_override)
+        out.append(_split_at_turn(_curve_from_afmdata(dd, path, reader, meta_override, signal=force), path))
+    return out
+
+
+def rescale_force(path: Path, md, meta_override: Mapping[str, Any]) -> float:
+    """Factor that turns a force computed with the file's k and sensitivity into one with the user's.
+
+    force = k x sensitivity x volts: a user's spring constant [N/m] or sensitivity
+    [m/V] scales it by the ratio to the file's value.
+
+    Raises
+    ------
+    FileFormatError
+        The file stores no (or no positive) value to rescale from.
+    """
+    factor = 1.0
+    for ours, theirs in (("spring_constant", "spring constant"), ("sensitivity", "sensitivity")):
+        if ours in meta_override:
+            try:
+                old = float(md[theirs])
+            except _afm_errors():  # afmformats' missing-metadata error is a BaseException
+                raise FileFormatError(f"{path}: the file stores no {theirs}, so its force cannot be "
+                                      f"recomputed with the given {ours}") from None
+            if not (np.isfinite(old) and old > 0):
+                raise FileFormatError(f"{path}: the file's {theirs} is {old!r}; cannot rescale to the given {ours}")
+            factor *= float(meta_override[ours]) / old
+    return factor
+
+
+def _split_at_turn(curve: RawCurve, path: Path) -> RawCurve:
+    """Approach/retract at the turning point of z for a curve stored as one segment."""
+    if np.any(curve.segment != 0):
+        return curve
+    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal, float)
+    n = z.size
+    turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
+    out, back = abs(z[turn] - z[0]), abs(z[turn] - z[-1])
+    if not (2 <= turn <= n - 3) or back < 0.25 * out:  # no run back: an approach only, keep it
+        return curve
+    seg = np.where(np.arange(n) < turn, 0, 1).astype(np.int8)
+    z_nom, z_meas, sign = orient(curve.piezo_nominal, curve.piezo_measured, seg)
+    meta = {**curve.metadata, "position_sign": float(curve.metadata.get("position_sign", 1.0)) * sign,
+            "segments_note": f"split at the turning point of z (sample {turn}): the file marks every sample "
+                             "as one segment"}
+    return finalize_curve(dataclasses.replace(curve, segment=seg, piezo_nominal=z_nom, piezo_measured=z_meas,
+                                              metadata=meta), str(path))
 
 
 def detect_afmformats_hdf5(path: Path) -> bool:

@@ -5,6 +5,11 @@ a huge declared size) can spin in compiled code that holds the GIL, so a thread
 cannot be stopped. :func:`run_with_timeout` therefore runs the call in a forked
 child process (POSIX) and kills it when the budget is spent; the result comes back
 pickled. Where ``fork`` does not exist the call runs in this process, unguarded.
+
+Guarded calls nest (``load(..., timeout=)`` detects an HDF5 file in a child of its
+own): on Linux every child asks to be killed when its parent dies
+(``PR_SET_PDEATHSIG``), so killing a child takes its children with it instead of
+leaving them spinning in h5py as orphans (elsewhere only the direct child is killed).
 """
 
 from __future__ import annotations
@@ -57,18 +62,20 @@ def run_with_timeout(func: Callable, *args: Any, timeout: float | None, path: st
     if not timeout > 0:
         raise ValueError(f"timeout must be positive [s], got {timeout!r}")
     read_fd, write_fd = os.pipe()
+    parent = os.getpid()
     pid = os.fork()
     if pid == 0:  # child
+        _die_with_parent(parent)
         os.close(read_fd)
         _child(write_fd, func, args, kwargs)
     os.close(write_fd)
     chunks: list[bytes] = []
     deadline = time.monotonic() + timeout
+    finished = False
     try:
         while True:
             left = deadline - time.monotonic()
             if left <= 0:
-                os.kill(pid, signal.SIGKILL)
                 raise FileTimeoutError(
                     f"{path}: reading took longer than {timeout:g} s (--file-timeout); the file is damaged "
                     "or very large: skipped")
@@ -76,10 +83,16 @@ def run_with_timeout(func: Callable, *args: Any, timeout: float | None, path: st
             if ready:
                 block = os.read(read_fd, 1 << 20)
                 if not block:
+                    finished = True
                     break
                 chunks.append(block)
     finally:
         os.close(read_fd)
+        if not finished:  # budget spent, or interrupted
+            try:
+                os.kill(pid, signal.SIGKILL)
+            except OSError:  # already gone
+                pass
         os.waitpid(pid, 0)
     if not chunks:
         raise FileFormatError(f"{path}: the reader process died without an answer (crash in a parser)")
@@ -89,3 +102,16 @@ def run_with_timeout(func: Callable, *args: Any, timeout: float | None, path: st
     if isinstance(value, (AfmforceError, KeyboardInterrupt)):
         raise value
     raise value
+
+
+
+def _die_with_parent(parent: int) -> None:
+    """Linux: SIGKILL this (child) process when its parent dies (no orphans of a killed reader)."""
+    try:
+        import ctypes
+
+        ctypes.CDLL(None, use_errno=True).prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG = 1
+    except (OSError, AttributeError):  # not Linux: the direct child is still killed by its parent
+        return
+    if os.getppid() != parent:  # the parent died before the request took effect
+        os._exit(0)

@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import FileFormatError
 from .curve import RawCurve
-from ._afmformats import _afm_errors, _curve_from_afmdata, _load_data
+from ._afmformats import _curve_from_afmdata, _load_data, rescale_force
 from ._meta import finalize_curve, missing_metadata, orient
 
 __all__ = ["load_ibw", "check_ibw_header", "CHANNELS"]
@@ -100,7 +100,7 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
         seg = np.asarray(dd["segment"]).astype(np.int8)
         if np.all(seg == 0):
             seg = _ibw_segments(path, z)
-        force = np.asarray(dd["force"], dtype=float) * _rescale(path, dd.metadata, meta_override)
+        force = np.asarray(dd["force"], dtype=float) * rescale_force(path, dd.metadata, meta_override)
         curve = _curve_from_afmdata(dd, path, "asylum-ibw", meta_override, segment=seg, signal=force)
         f0 = _thermal_frequency(path)  # afmformats does not pass the note's resonance frequency on
         if f0 is not None and "resonance_frequency" not in meta_override:
@@ -123,25 +123,6 @@ def _thermal_frequency(path: Path) -> float | None:
                 return None
             return value if np.isfinite(value) and value > 0 else None
     return None
-
-
-def _rescale(path: Path, md, meta_override: Mapping[str, Any]) -> float:
-    """Factor that turns a force computed with the file's k and sensitivity into one with the user's.
-
-    Asylum stores the deflection in metres (volts x the file's InvOLS); force = k x deflection.
-    """
-    factor = 1.0
-    for ours, theirs in (("spring_constant", "spring constant"), ("sensitivity", "sensitivity")):
-        if ours in meta_override:
-            try:
-                old = float(md[theirs])
-            except _afm_errors():  # afmformats' missing-metadata error is a BaseException
-                raise FileFormatError(f"{path}: the file stores no {theirs}, so its force cannot be "
-                                      f"recomputed with the given {ours}") from None
-            if not (np.isfinite(old) and old > 0):
-                raise FileFormatError(f"{path}: the file's {theirs} is {old!r}; cannot rescale to the given {ours}")
-            factor *= float(meta_override[ours]) / old
-    return factor
 
 
 
