@@ -235,3 +235,17 @@ def test_contact_point_methods_bracket_nanite():
         cp = soft_contact_point(z, d, idx)
         assert abs(cp.position - e["z"]) < max(30e-9, 0.1 * cp.indentation)
     assert after >= 3 and before >= 3
+
+
+def test_adhesion_far_below_the_pull_off_is_flagged():
+    """A dynamic virtual-AFM run (beam, xi = 0.1 kg/s, 'typical' instrument) whose free retract is
+    still relaxing: the pull-off from the drift-corrected zero is -17.2 nN, the adhesion from the
+    retract's own baseline -4.9 nN. Both are reported, with a warning naming both; the Asylum curve,
+    whose retract settles, gives the same number twice (within 0.1 %) and no warning."""
+    res = analyze(load(DATA / "afmforce-hdf5_virtual-afm.h5")[0])
+    assert res.adhesion_force < 0 and res.pull_off_force < 2 * res.adhesion_force
+    warn = [w for w in res.warnings if w.startswith("adhesion ")]
+    assert warn and f"{res.pull_off_force * 1e9:.3g} nN" in warn[0]
+    _, asylum = _analysed(DATA / "asylum-mfp3d_SiN-tip_air.ibw")
+    assert asylum.adhesion_force == pytest.approx(asylum.pull_off_force, rel=1e-3)
+    assert not any(w.startswith("adhesion ") for w in asylum.warnings)

@@ -69,7 +69,17 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
     """
     st.require("position", step="adhesion")
     res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma)
-    return st.update("adhesion", res)
+    warn = None
+    jumps = st.details.get("jumps")
+    po = getattr(jumps, "pull_off", None)
+    if (po is not None and po.found and math.isfinite(po.force) and po.force < 0 and math.isfinite(res.force)
+            and abs(res.force) < 0.5 * abs(po.force)):
+        # both are below zero force; they differ only by the baseline each is measured from
+        warn = (f"adhesion {res.force * 1e9:.3g} nN (from the retract's own baseline) is under half the pull-off "
+                f"force {po.force * 1e9:.3g} nN (from the drift-corrected zero): the retract's free part does not "
+                "return to the approach's baseline (still relaxing, drift, or an offset at the turn); "
+                "trust the pull-off only with a settled baseline")
+    return st.update("adhesion", res, warn=warn)
 
 
 def surface_energy(st: State, o: SurfaceEnergyOptions) -> State:
