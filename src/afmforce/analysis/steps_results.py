@@ -70,8 +70,7 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
     st.require("position", step="adhesion")
     res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma)
     warn = None
-    jumps = st.details.get("jumps")
-    po = getattr(jumps, "pull_off", None)
+    po = st.details["jumps"].pull_off if "jumps" in st.details else None
     if (po is not None and po.found and math.isfinite(po.force) and po.force < 0 and math.isfinite(res.force)
             and abs(res.force) < 0.5 * abs(po.force)):
         # both are below zero force; they differ only by the baseline each is measured from
