@@ -119,7 +119,7 @@ def test_ringing_damp_and_resolve_agree(sim):
 
 def test_progress_pauses_do_not_change_the_result(monkeypatch, sim):
     """Pausing for progress reports resumes the integrator exactly (same steps, same samples)."""
-    monkeypatch.setattr(SIM, "PROGRESS_CHUNK", 97)
+    monkeypatch.setattr(SIM, "PROGRESS_CHUNK", 37)
     seen = []
     a = simulate(xi=0.01, velocity=1e-6, progress=seen.append)
     b = sim(xi=0.01, velocity=1e-6)

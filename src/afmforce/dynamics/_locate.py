@@ -38,7 +38,8 @@ E_LAST_OUT = 21                            # last time h > contact separation (b
 E_H_STATIC = 22                            # static instability separation h_s [m] (input)
 E_FAST_T, E_FAST_Z = 23, 24                # first h' < -factor z' before contact
 E_RING_AMP = 25                            # ringing amplitude below which damping is allowed (input)
-E_SIZE = 26
+E_SPIKE_CYCLES = 26                        # ringing resolved this many contact cycles past the spike (input)
+E_SIZE = 27
 
 # segment kinds (= Trajectory.segment codes)
 APPROACH, RETRACT, DWELL = 0, 1, 2

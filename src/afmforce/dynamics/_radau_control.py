@@ -17,12 +17,14 @@ separately, no arrays to count references of).
 
 from __future__ import annotations
 
+import math
+
 from numba import njit
 
 from ._linalg import _rms, _solve_real
 from ._radau_tableau import (E1, E2, E3, MAX_FACTOR, MU_REAL, NEWTON_MAXITER, S_NFEV,
                              W_VFAC)
-from ._locate import E_IN_CONTACT, E_LAST_OUT, E_RING_AMP, E_SPIKE_WINDOW
+from ._locate import E_IN_CONTACT, E_LAST_OUT, E_RING_AMP, E_SPIKE_CYCLES, E_SPIKE_T, E_SPIKE_WINDOW
 from .models import HQA, HQB, K_EFF, contact_frequency, error_frequency, rhs, ringing_amplitude
 
 
@@ -136,17 +138,26 @@ def max_step(model, p, drive, t, t_end, y, hmax_frac, hmax_dz):
 def damping_step(model, p, drive, t, t_end, y, fcur, ev, damp_cycles, damp_kappa, h_max):
     """Shortest step of the in-contact ringing treatment at ``(t, y)`` (0: none).
 
-    Once the probe has stayed in contact for ``spike_window`` without bouncing
-    out, where the contact stiffness ``kappa = -Fs'(h)`` exceeds
+    Once the probe has stayed in contact without bouncing out for ``spike_window``,
+    or for ``ev[E_SPIKE_CYCLES]`` contact cycles both after contact and after the
+    last spike maximum (the spike has stopped growing), where the contact stiffness ``kappa = -Fs'(h)`` exceeds
     ``damp_kappa * k`` and the ringing is below ``ev[E_RING_AMP]``: ``damp_cycles
     / omega_c`` (omega_c the contact mode), at most ``h_max`` and the rest of
     the segment. See :func:`afmforce.dynamics.radau.integrate_segment`.
     """
-    if not (damp_cycles > 0.0 and ev[E_IN_CONTACT] == 1.0 and
-            t >= ev[E_LAST_OUT] + ev[E_SPIKE_WINDOW]):
+    if not (damp_cycles > 0.0 and ev[E_IN_CONTACT] == 1.0):
+        return 0.0
+    t_in = t - ev[E_LAST_OUT]
+    if not t_in >= 0.0:
         return 0.0
     zt = drive.z_a + drive.v * (t - drive.t_a)
     wc, kappa = contact_frequency(model, p, zt, y)
+    if t_in < ev[E_SPIKE_WINDOW]:
+        # inside the spike window: resolved until the spike maximum has not grown
+        # for E_SPIKE_CYCLES contact cycles (and as long after contact)
+        quiet = ev[E_SPIKE_CYCLES] * 2.0 * math.pi
+        if not (wc > 0.0 and t_in * wc >= quiet and (t - ev[E_SPIKE_T]) * wc >= quiet):
+            return 0.0
     if kappa >= damp_kappa * p[K_EFF] and wc > 0.0 and \
             ringing_amplitude(model, p, drive.v, y, fcur, wc) <= ev[E_RING_AMP]:
         return min(damp_cycles / wc, h_max, t_end - t)

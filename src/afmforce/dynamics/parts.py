@@ -309,8 +309,9 @@ class SolverOptions(Part):
         on the approach before contact.
     spike_window : float
         The jump-in transient: the apparent-deflection spike is searched from
-        jump-in (or contact) to this long after contact, and the in-contact
-        ringing is resolved at least this long [s]. 0: the spike is not asked
+        jump-in (or contact) to this long after contact [s]; the in-contact
+        ringing is resolved until the spike has not grown for 30 contact-mode
+        cycles (``simulate.SPIKE_QUIET_CYCLES``), at most this long. 0: the spike is not asked
         for (``spike_height`` etc. NaN); the ringing is then damped as soon as
         its amplitude allows, which takes 2-4x fewer steps (Fig 5/6 runs) and
         leaves every other event within its tolerance (docs/dynamics.md).

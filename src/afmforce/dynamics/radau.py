@@ -45,7 +45,7 @@ from ._locate import (  # noqa: F401  (re-exported: the event layout used by sim
     APPROACH, DWELL, E_CONTACT_T, E_CONTACT_Z, E_H_CONTACT, E_IN_CONTACT, E_JUMP_FACTOR,
     E_FAST_T, E_FAST_Z, E_H_STATIC, E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL,
     E_MIN_DEFL_Z, E_MIN_FZ, E_MIN_FZ_Z, E_MIN_THETA, E_MIN_THETA_Z, E_PULL_T, E_PULL_Z, E_SIZE,
-    E_SPIKE_T, E_SPIKE_THETA, E_RING_AMP, E_SPIKE_WINDOW, E_SPIKE_Z, E_TERM_T, RETRACT,
+    E_SPIKE_T, E_SPIKE_THETA, E_RING_AMP, E_SPIKE_WINDOW, E_SPIKE_Z, E_TERM_T, RETRACT, E_SPIKE_CYCLES,
     TERM_DEFLECTION, TERM_FORCE, TERM_NONE, _events, _terminal_event)
 from ._radau_control import (controller, damping_step, error_norm, error_scale,
                              improved_error_norm, left_hard_contact, max_step, next_step_factor,
@@ -162,8 +162,9 @@ def integrate_segment(model, p, drive, tolerances, control, sampling, state):
         holds the state at ``work[W_T]`` on entry, at the end (or pause) on exit.
 
     In-contact ringing (``control.damp_cycles`` > 0): once the probe has stayed
-    in contact (h < contact separation) for ``spike_window`` without bouncing
-    out, and where the contact stiffness ``kappa = -Fs'(h)`` exceeds
+    in contact (h < contact separation) without bouncing out for ``spike_window``,
+    or for ``ev[E_SPIKE_CYCLES]`` contact cycles both after contact and after the
+    last spike maximum, and where the contact stiffness ``kappa = -Fs'(h)`` exceeds
     ``damp_kappa * k`` at both ends of the step, the step is never shorter than
     ``damp_cycles / omega_c`` (omega_c the contact mode,
     :func:`~afmforce.dynamics.models.contact_frequency`) and such a step is

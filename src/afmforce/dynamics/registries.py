@@ -74,7 +74,8 @@ RINGING: dict[str, RingingTreatment] = {
     for r in (
         RingingTreatment(
             "damp", "damped numerically",
-            "after the jump-in transient (spike_window after contact) the contact mode is "
+            "after the jump-in transient (resolved until the spike has not grown for 30 "
+            "contact cycles, at most spike_window after contact) the contact mode is "
             "damped by L-stable Radau steps of >= 50/omega_c; the quasi-static contact "
             "is followed exactly", 50.0),
         RingingTreatment(
