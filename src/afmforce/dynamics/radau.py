@@ -248,6 +248,7 @@ def integrate_segment(model, p, drive, tolerances, control, sampling, state):
         h_damp = damping_step(model, p, d, t, t_end, y, fcur, ev, c.damp_cycles, c.damp_kappa,
                               h_max)
         forced = h_abs < h_damp
+        h_prop = h_abs                  # the controller's step, if a damping step fails
         if forced:
             h_abs = h_damp
         accepted = False
@@ -290,9 +291,15 @@ def integrate_segment(model, p, drive, tolerances, control, sampling, state):
                 if c.h_fixed > 0.0:
                     work[W_T] = t
                     return NEWTON_FAILED
-                h_abs *= 0.5
+                # a failed damping step falls back to the controller's step, not to half
+                # the damping step (which cascaded through ~4 more failures, issue 16)
+                # (and does not count as a rejection of the controller's step)
+                if forced:
+                    h_abs = h_prop
+                else:
+                    h_abs *= 0.5
+                    rejected = True
                 lu[LU_OK] = 0.0
-                rejected = True
                 forced = False
                 stats[S_REJECTED] += 1
                 stats[S_NEWTON_FAIL] += 1
