@@ -35,6 +35,8 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
     cs = np.empty(n)
     sn = np.empty(n)
     th = np.empty(n)
+    cr = np.empty(n)  # cos and sin before the projection (the Jacobian needs them: not computed twice)
+    sr = np.empty(n)
     poly = np.empty(n)
     g00 = g01 = g10 = g11 = 0.0  # Q0^T C
     for i in range(n):
@@ -42,8 +44,10 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
         poly[i] = p
         t = w * (zm + c1 * L * p)
         th[i] = t
-        cs[i] = math.cos(t)
-        sn[i] = math.sin(t)
+        cr[i] = math.cos(t)
+        sr[i] = math.sin(t)
+        cs[i] = cr[i]
+        sn[i] = sr[i]
         g00 += Q0[i, 0] * cs[i]
         g01 += Q0[i, 0] * sn[i]
         g10 += Q0[i, 1] * cs[i]
@@ -73,7 +77,7 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
         k = w * c1 * L
         gd = np.empty(n)  # g = d(X coef)/dtheta from the unprojected cos/sin
         for i in range(n):
-            gd[i] = c1c * math.cos(th[i]) - c0 * math.sin(th[i])
+            gd[i] = c1c * cr[i] - c0 * sr[i]
         for j in range(m):
             # column j of V = g * dtheta/dq_j
             h0 = h1 = 0.0
