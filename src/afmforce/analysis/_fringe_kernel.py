@@ -7,16 +7,52 @@ evaluation; the nonlinear parameters ``q`` are ``(log(P / P0) or c1, a2, a3)`` (
 The Jacobian is Kaufman's variable-projection approximation ``(I - P_X) dX/dq coef``.
 Written as loops for numba: one evaluation of 2,000 samples costs a few microseconds, where
 the same in numpy calls costs ~100 (the fit is dominated by call overhead, not arithmetic).
+:func:`_prepare` computes, once per run, what the fits of every map order share.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
 __all__ = ["vp_eval", "lm_fit"]
+
+
+@dataclass(frozen=True)
+class _Prep:
+    """What every map order's fit of one run shares (computed once per run, the same numbers)."""
+
+    zm: float
+    L: float
+    var0: float
+    x: np.ndarray
+    x2: np.ndarray
+    x3: np.ndarray
+    Q0: np.ndarray
+    r_perp: np.ndarray
+
+
+def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
+    """Normalised position and its powers, and the residual with the line projected out."""
+    zm = 0.5 * (z.max() + z.min())
+    L = 0.5 * float(np.ptp(z)) or 1.0
+    xt = None
+    if t is not None:
+        t = np.asarray(t, float)
+        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
+        xt = (t - tm) / tL
+    var0 = float(np.var(r))
+    x = np.ascontiguousarray((z - zm) / L)
+    x2, x3 = x * x, x * x * x
+    # variable projection: the line (1, x or t) is projected out once (thin QR), the cos/sin
+    # amplitudes are a 2x2 solve per evaluation (compiled: analysis._fringe_kernel)
+    Q0, _ = np.linalg.qr(np.column_stack([np.ones_like(x), x if xt is None else xt]))
+    Q0 = np.ascontiguousarray(Q0)
+    r_perp = np.ascontiguousarray(r - Q0 @ (Q0.T @ r))
+    return _Prep(zm, L, var0, x, x2, x3, Q0, r_perp)
 
 
 @njit(cache=True)

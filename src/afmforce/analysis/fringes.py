@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._fringe_kernel import lm_fit
+from ._fringe_kernel import _Prep, _prepare, lm_fit
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
 
@@ -331,40 +331,6 @@ def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=N
     rms = math.sqrt(2.0 * best.cost / z.size)
     return FringeRun(False, float(P), 0.0, 0.0, float(c1), float(a2), float(a3), float(zm), float(L), 0.0,
                      1.0 - rms**2 / var0, float(np.ptp(z)) / P if P > 0 else 0.0, rms, converged=best.status > 0)
-
-
-@dataclass(frozen=True)
-class _Prep:
-    """What every map order's fit of one run shares (computed once per run, the same numbers)."""
-
-    zm: float
-    L: float
-    var0: float
-    x: np.ndarray
-    x2: np.ndarray
-    x3: np.ndarray
-    Q0: np.ndarray
-    r_perp: np.ndarray
-
-
-def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
-    """Normalised position and its powers, and the residual with the line projected out."""
-    zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(np.ptp(z)) or 1.0
-    xt = None
-    if t is not None:
-        t = np.asarray(t, float)
-        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
-        xt = (t - tm) / tL
-    var0 = float(np.var(r))
-    x = np.ascontiguousarray((z - zm) / L)
-    x2, x3 = x * x, x * x * x
-    # variable projection: the line (1, x or t) is projected out once (thin QR), the cos/sin
-    # amplitudes are a 2x2 solve per evaluation (compiled: analysis._fringe_kernel)
-    Q0, _ = np.linalg.qr(np.column_stack([np.ones_like(x), x if xt is None else xt]))
-    Q0 = np.ascontiguousarray(Q0)
-    r_perp = np.ascontiguousarray(r - Q0 @ (Q0.T @ r))
-    return _Prep(zm, L, var0, x, x2, x3, Q0, r_perp)
 
 
 @dataclass
