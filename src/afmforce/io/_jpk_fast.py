@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import functools
 import io
+import math
 import pathlib
 import re
 import string
@@ -82,6 +83,14 @@ def _reader_class():
     def _read(path, name):
         return load_properties(ArchiveCache.get(path).read(name))
 
+    def _read_once(reader, name):
+        """A copy of the parsed file, parsed once per reader (a curve's index header is read for
+        each of its segments)."""
+        cache = reader.__dict__.setdefault("_afmforce_props", {})
+        if name not in cache:
+            cache[name] = _read(reader.path, name)
+        return dict(cache[name])
+
     class FastJPKReader(JPKReader):
         @property
         @functools.lru_cache()
@@ -109,10 +118,10 @@ def _reader_class():
         @functools.lru_cache()
         def _get_index_segment_properties(self, index, segment):
             # afmformats 0.18.7 JPKReader._get_index_segment_properties, jprops replaced
-            prop = _read(self.path, self.get_index_path(index) + "header.properties")
+            prop = _read_once(self, self.get_index_path(index) + "header.properties")
             if segment is not None:
-                prop.update(_read(self.path, self.get_index_segment_path(index, segment)
-                                  + "segment-header.properties"))
+                prop.update(_read_once(self, self.get_index_segment_path(index, segment)
+                                       + "segment-header.properties"))
             psprop = self._properties_shared
             proplist = sorted(prop.keys())
             pslist = sorted(psprop.keys())
@@ -133,12 +142,15 @@ def _reader_class():
                             prop[".".join([headkey, var])] = psprop[k2]
             prop.update(self._properties_general)
             for p in list(prop.keys()):
+                v = prop[p]
+                if isinstance(v, str) and v[:1].isalpha() and v[:1] not in "iInN":
+                    continue  # float() refuses a text starting with a letter other than inf/nan's
                 try:
-                    prop[p] = float(prop[p])
+                    prop[p] = float(v)
                 except BaseException:
                     pass
                 else:
-                    if np.isnan(prop[p]):
+                    if math.isnan(prop[p]):
                         prop.pop(p)
             prmet = jpk_meta.get_primary_meta_recipe()
             for key, base_slot, unit in [("spring constant", "distance", "N"), ("sensitivity", "volts", "m")]:
