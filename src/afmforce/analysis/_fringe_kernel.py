@@ -7,16 +7,52 @@ evaluation; the nonlinear parameters ``q`` are ``(log(P / P0) or c1, a2, a3)`` (
 The Jacobian is Kaufman's variable-projection approximation ``(I - P_X) dX/dq coef``.
 Written as loops for numba: one evaluation of 2,000 samples costs a few microseconds, where
 the same in numpy calls costs ~100 (the fit is dominated by call overhead, not arithmetic).
+:func:`_prepare` computes, once per run, what the fits of every map order share.
 """
 
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 import numpy as np
 from numba import njit
 
 __all__ = ["vp_eval", "lm_fit"]
+
+
+@dataclass(frozen=True)
+class _Prep:
+    """What every map order's fit of one run shares (computed once per run, the same numbers)."""
+
+    zm: float
+    L: float
+    var0: float
+    x: np.ndarray
+    x2: np.ndarray
+    x3: np.ndarray
+    Q0: np.ndarray
+    r_perp: np.ndarray
+
+
+def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
+    """Normalised position and its powers, and the residual with the line projected out."""
+    zm = 0.5 * (z.max() + z.min())
+    L = 0.5 * float(np.ptp(z)) or 1.0
+    xt = None
+    if t is not None:
+        t = np.asarray(t, float)
+        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
+        xt = (t - tm) / tL
+    var0 = float(np.var(r))
+    x = np.ascontiguousarray((z - zm) / L)
+    x2, x3 = x * x, x * x * x
+    # variable projection: the line (1, x or t) is projected out once (thin QR), the cos/sin
+    # amplitudes are a 2x2 solve per evaluation (compiled: analysis._fringe_kernel)
+    Q0, _ = np.linalg.qr(np.column_stack([np.ones_like(x), x if xt is None else xt]))
+    Q0 = np.ascontiguousarray(Q0)
+    r_perp = np.ascontiguousarray(r - Q0 @ (Q0.T @ r))
+    return _Prep(zm, L, var0, x, x2, x3, Q0, r_perp)
 
 
 @njit(cache=True)
@@ -35,6 +71,8 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
     cs = np.empty(n)
     sn = np.empty(n)
     th = np.empty(n)
+    cr = np.empty(n)  # cos and sin before the projection (the Jacobian needs them: not computed twice)
+    sr = np.empty(n)
     poly = np.empty(n)
     g00 = g01 = g10 = g11 = 0.0  # Q0^T C
     for i in range(n):
@@ -42,8 +80,10 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
         poly[i] = p
         t = w * (zm + c1 * L * p)
         th[i] = t
-        cs[i] = math.cos(t)
-        sn[i] = math.sin(t)
+        cr[i] = math.cos(t)
+        sr[i] = math.sin(t)
+        cs[i] = cr[i]
+        sn[i] = sr[i]
         g00 += Q0[i, 0] * cs[i]
         g01 += Q0[i, 0] * sn[i]
         g10 += Q0[i, 1] * cs[i]
@@ -73,7 +113,7 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
         k = w * c1 * L
         gd = np.empty(n)  # g = d(X coef)/dtheta from the unprojected cos/sin
         for i in range(n):
-            gd[i] = c1c * math.cos(th[i]) - c0 * math.sin(th[i])
+            gd[i] = c1c * cr[i] - c0 * sr[i]
         for j in range(m):
             # column j of V = g * dtheta/dq_j
             h0 = h1 = 0.0

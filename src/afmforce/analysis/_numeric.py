@@ -208,3 +208,88 @@ def robust_line_thin(x: np.ndarray, y: np.ndarray, max_points: int = 4001):
         keep = np.linspace(0, n - 1, max_points).astype(np.int64)
         x, y = np.ascontiguousarray(x[keep]), np.ascontiguousarray(y[keep])
     return robust_line(x, y)
+
+
+@njit(cache=True)
+def _wls_small(X, y, w):
+    """Weighted least squares by the normal equations (p <= 3 columns, Gaussian elimination with
+    partial pivoting); ``ok`` False when a pivot is zero (singular: the caller uses lstsq)."""
+    n, p = X.shape
+    A = np.zeros((p, p))
+    b = np.zeros(p)
+    for i in range(n):
+        wi = w[i]
+        if wi == 0.0:
+            continue
+        for j in range(p):
+            xw = X[i, j] * wi
+            b[j] += xw * y[i]
+            for k in range(p):
+                A[j, k] += xw * X[i, k]
+    for c in range(p):
+        piv = c
+        for r in range(c + 1, p):
+            if abs(A[r, c]) > abs(A[piv, c]):
+                piv = r
+        if A[piv, c] == 0.0:
+            return b, False
+        if piv != c:
+            for k in range(p):
+                A[c, k], A[piv, k] = A[piv, k], A[c, k]
+            b[c], b[piv] = b[piv], b[c]
+        for r in range(c + 1, p):
+            f = A[r, c] / A[c, c]
+            for k in range(c, p):
+                A[r, k] -= f * A[c, k]
+            b[r] -= f * b[c]
+    out = np.empty(p)
+    for c in range(p - 1, -1, -1):
+        s = b[c]
+        for k in range(c + 1, p):
+            s -= A[c, k] * out[k]
+        out[c] = s / A[c, c]
+    return out, True
+
+
+@njit(cache=True)
+def irls_bisquare(X, y, n_iter, tuning):
+    """Bisquare-weighted least squares of ``y`` on the columns of ``X`` (see
+    :func:`afmforce.analysis.drift._irls`): ``(coef, sigma, weighted SSR, ok)``; ``ok`` False when a
+    normal-equation system was singular (the caller then uses its numpy version)."""
+    n, p = X.shape
+    w = np.ones(n)
+    coef, ok = _wls_small(X, y, w)
+    if not ok:
+        return coef, 0.0, 0.0, False
+    sigma = 0.0
+    r = np.empty(n)
+    for _ in range(n_iter):
+        for i in range(n):
+            s = 0.0
+            for j in range(p):
+                s += X[i, j] * coef[j]
+            r[i] = y[i] - s
+        sigma = mad_sigma(r)
+        if not sigma > 0:
+            break
+        c = tuning * sigma
+        for i in range(n):
+            u = r[i] / c
+            w[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
+        new, ok = _wls_small(X, y, w)
+        if not ok:
+            return coef, sigma, 0.0, False
+        moved = 0.0
+        for j in range(p):
+            moved += abs(new[j] - coef[j])
+        coef = new
+        if moved < 1e-4 * sigma:
+            break
+    ssr = 0.0
+    for i in range(n):
+        s = 0.0
+        for j in range(p):
+            s += X[i, j] * coef[j]
+        e = y[i] - s
+        ssr += w[i] * e * e
+    return coef, sigma, ssr, True

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._fringe_kernel import lm_fit
+from ._fringe_kernel import _Prep, _prepare, lm_fit
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
 
@@ -253,10 +253,11 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     zs, rs, ts = (z, r, t) if keep is None else (z[keep], r[keep], None if t is None else t[keep])
     orders = (1, 2, 3) if order == "auto" else (int(order),)
     fits = []
+    prep = _prepare(zs, rs, ts) if zs.size >= 16 else None  # shared by the orders
     for o in orders:
         ref = 0.5 * zs.size * fits[-1].residual ** 2 if fits and math.isfinite(fits[-1].residual) else None
         warm = fits[-1] if fits and fits[-1].converged and math.isfinite(fits[-1].period) else None
-        fits.append(_fit_order(zs, rs, period, o, min_explained, min_cycles, ts, p0, ref, warm))
+        fits.append(_fit_order(zs, rs, period, o, min_explained, min_cycles, ts, p0, ref, warm, prep))
     if len(fits) > 1:
         n = max(zs.size, 1)
         bic = [n * math.log(max(f.residual, 1e-300) ** 2) + (o + 3) * math.log(n) if math.isfinite(f.residual)
@@ -271,7 +272,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
 
 
 def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=None,
-               reference_cost=None, start: FringeRun | None = None) -> FringeRun:
+               reference_cost=None, start: FringeRun | None = None, prep: "_Prep | None" = None) -> FringeRun:
     """:func:`fit_fringes` for one map order (on the samples given): the map and its residual
     (amplitude, line and verdict are left to :func:`_finish`).
 
@@ -284,14 +285,9 @@ def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=N
     nan = math.nan
     if z.size < 16:
         return FringeRun(False, nan, 0.0, 0.0, 1.0, 0.0, 0.0, nan, 1.0, 0.0, 0.0, 0.0, nan)
-    zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(np.ptp(z)) or 1.0
-    xt = None
-    if t is not None:
-        t = np.asarray(t, float)
-        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
-        xt = (t - tm) / tL
-    var0 = float(np.var(r))
+    if prep is None:
+        prep = _prepare(z, r, t)
+    zm, L, var0 = prep.zm, prep.L, prep.var0
     if var0 == 0:
         return FringeRun(False, nan, 0.0, 0.0, 1.0, 0.0, 0.0, zm, L, 0.0, 0.0, 0.0, nan)
     P0 = float(period) if period else (p_start if p_start else _initial_period(z, r))
@@ -308,13 +304,7 @@ def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=N
         a3 = rest[1] if n_map >= 2 else 0.0
         return P, c1, a2, a3
 
-    x = np.ascontiguousarray((z - zm) / L)
-    x2, x3 = x * x, x * x * x
-    # variable projection: the line (1, x or t) is projected out once (thin QR), the cos/sin
-    # amplitudes are a 2x2 solve per evaluation (compiled: analysis._fringe_kernel)
-    Q0, _ = np.linalg.qr(np.column_stack([np.ones_like(x), x if xt is None else xt]))
-    Q0 = np.ascontiguousarray(Q0)
-    r_perp = np.ascontiguousarray(r - Q0 @ (Q0.T @ r))
+    x, x2, x3, Q0, r_perp = prep.x, prep.x2, prep.x3, prep.Q0, prep.r_perp
     known = bool(period)
     per = float(period) if period else 0.0
 

@@ -235,10 +235,13 @@ def check_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract
     # only a run clipped where it turns can hide its contact in the saturated samples
     clipped = {"approach": bool(approach.saturated[-1]), "retract": bool(retract.saturated[0])}
     for kind, run in runs.items():
-        near, far = contact_slopes(z, s, run)
+        ic = run.index[run.compliance & ~run.saturated]
+        near = _slope(z[ic], s[ic])  # contact_slopes' first value; its free-part slope only where used:
         slopes[kind] = near
         if not clipped[kind]:
             continue
+        iz = run.index[run.zero_force & ~run.saturated]
+        far = _slope(z[iz], s[iz])
         if math.isfinite(near) and math.isfinite(far) and abs(far) > flat_ratio * abs(near):
             runs[kind] = _without_compliance(run, (
                 f"the {kind} run has no unclipped constant-compliance region: its contact part is only "

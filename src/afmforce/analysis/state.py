@@ -85,6 +85,21 @@ class State:
     warnings: tuple[str, ...] = ()
     probe: ProbeCalibration = field(default_factory=ProbeCalibration)
     skipped: Mapping[str, str] = field(default_factory=dict)
+    #: Intermediate values several steps share (e.g. a run's velocity), keyed by the arrays they were
+    #: computed from (identity): one dict shared by every state of one curve's analysis.
+    cache: dict = field(default_factory=dict, compare=False, repr=False)
+
+    def velocity(self, index: np.ndarray) -> float:
+        """Speed of the run ``index`` [m/s] (:func:`~.dynamic.run_velocity` of the current time and
+        position), computed once per curve for the same arrays."""
+        from .dynamic import run_velocity
+
+        hit = self.cache.get(("velocity", id(index)))
+        if hit is not None and hit[0] is index and hit[1] is self.time and hit[2] is self.z:
+            return hit[3]
+        v = run_velocity(self.time[index], self.z[index])
+        self.cache[("velocity", id(index))] = (index, self.time, self.z, v)
+        return v
 
     @property
     def metadata(self) -> Mapping[str, Any]:

@@ -12,7 +12,7 @@ from ..constants import Z0
 from ..errors import AnalysisError
 from . import compliance as cc
 from ._numeric import robust_line
-from .dynamic import diagnose_curve, run_velocity
+from .dynamic import diagnose_curve
 from .contact_point import curvature_ratio
 from .jumps import JumpIn, Jumps, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings, pull_off_estimate
 from .options import (AdhesionOptions, DiagnosisOptions, FrictionOptions, JumpsOptions, OscillationOptions,
@@ -120,7 +120,7 @@ def oscillation(st: State, o: OscillationOptions) -> State:
     peaks = {}
     for run in (st.approach, st.retract):
         idx = run.index[run.compliance & ~run.saturated]
-        v = run_velocity(st.time[run.index], st.z[run.index]) if st.time_known else math.nan
+        v = st.velocity(run.index) if st.time_known else math.nan
         if not st.time_known or idx.size < 8:
             nyq = math.nan
             if st.time_known and run.index.size > 1:
@@ -219,7 +219,7 @@ def _drift_uncertainty(st: State, comp) -> tuple[float, float, float]:
         if line.size and base.size:
             lever += abs(float(np.median(st.time[line])) - float(np.median(st.time[base])))
     idx = st.approach.index
-    v = run_velocity(st.time[idx], st.z[idx])
+    v = st.velocity(idx)
     slope = abs(comp.approach.slope)
     if not (rate > 0 and math.isfinite(v) and v > 0 and slope > 0):
         return 0.0, 0.0, rate
@@ -261,7 +261,7 @@ def diagnosis(st: State, o: DiagnosisOptions) -> State:
     if j is None:
         raise AnalysisError("step 'diagnosis' needs the jumps")
     idx = st.approach.index
-    v = run_velocity(st.time[idx], st.z[idx]) if st.time_known else math.nan
+    v = st.velocity(idx) if st.time_known else math.nan
     f = st.probe.value("resonance_frequency", st.metadata)
     dx = o.resolution if o.resolution is not None else max(abs(st.noise * st.factor), o.min_resolution)
     fit = st.details.get("vdw")
