@@ -9,7 +9,6 @@ window ``[t_k - dt/2, t_k + dt/2]``), selected by the ``average`` field of
 from __future__ import annotations
 
 from ._jit import piece
-
 from ._locate import _dense
 
 

@@ -34,6 +34,7 @@ import numpy as np
 from numba import njit
 
 from ._jit import piece
+
 MODEL_SPRING = 0
 MODEL_BEAM = 1
 MODEL_IDS = {"spring": MODEL_SPRING, "beam": MODEL_BEAM}
