@@ -37,11 +37,14 @@ def test_piece_refuses_calls_from_python_instead_of_crashing():
 
 
 def test_piece_with_python_wrapper_is_callable():
-    @piece(python=True)
-    def add(a, b):
-        return a + b
-
-    assert add(1.0, 2.5) == 3.5
+    """``piece(python=True)`` (rhs, jac, the Schur solves: called by tests) keeps its wrapper."""
+    y = np.array([2e-9, 0.0])
+    out = np.zeros(2)
+    p = M.pack_spring(spring_constant=0.1, mass=1e-11, radius=1e-7, hamaker=1e-20, z0=1.6e-10,
+                      viscosity=0.0, h_guard=1e-10)
+    assert M.rhs(M.MODEL_SPRING, p, 0.0, 0.0, y, out)
+    assert out[0] == 0.0 and out[1] == pytest.approx(1e11 * (-0.1 * 2e-9 + M.surface_force.py_func(
+        2e-9, 1e-27, 1.6e-10)[0]), rel=1e-12)
 
 
 def test_pieces_compute_what_their_python_source_does():
