@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from ._jit import piece
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _lu_factor(A, piv):
     """In-place LU with partial pivoting. False if singular."""
     n = A.shape[0]
@@ -34,7 +34,7 @@ def _lu_factor(A, piv):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _lu_solve(LU, piv, b):
     """Solve in place with the factors of :func:`_lu_factor`."""
     n = LU.shape[0]
@@ -56,7 +56,7 @@ def _lu_solve(LU, piv, b):
         b[i] = s / LU[i, i]
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _rms(v, scale):
     s = 0.0
     for i in range(v.shape[0]):
@@ -77,7 +77,7 @@ def _rms(v, scale):
 # accurate as the dense LU; xv carries an absolute error ~eps |bq| (bq a
 # velocity residual, << the velocity tolerance atol * 10 w ~ 1e-5 m/s).
 
-@njit(cache=True, error_model="numpy")
+@piece(python=True)
 def _schur_factor(J, mu, S):
     """Fill ``S = mu^2 I - mu Jv - Jq`` (m x m) and return its determinant (0: singular)."""
     m = J.shape[0] // 2
@@ -96,7 +96,7 @@ def _schur_factor(J, mu, S):
     return det
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _schur_solve(J, mu, S, det, bq0, bq1, bv0, bv1):
     """Solve ``(mu I - J) x = b`` with the factor of :func:`_schur_factor`.
 
@@ -115,7 +115,7 @@ def _schur_solve(J, mu, S, det, bq0, bq1, bv0, bv1):
     return xq0, xq1, mu * xq0 - bq0, mu * xq1 - bq1
 
 
-@njit(cache=True, error_model="numpy")
+@piece(python=True)
 def _solve_real(J, mu, S, det, b):
     """In place: ``b <- (mu I - J)^-1 b`` (real ``mu``, n = 2 or 4)."""
     m = J.shape[0] // 2
@@ -131,7 +131,7 @@ def _solve_real(J, mu, S, det, b):
         b[3] = x3
 
 
-@njit(cache=True, error_model="numpy")
+@piece(python=True)
 def _schur_factor_complex(J, mr, mi, S):
     """:func:`_schur_factor` for ``mu = mr + i mi`` in real arithmetic.
 
@@ -162,7 +162,7 @@ def _schur_factor_complex(J, mr, mi, S):
     return dr, di
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _cdiv(ar, ai, br, bi):
     """(ar + i ai) / (br + i bi) (Smith's algorithm)."""
     if abs(br) >= abs(bi):
@@ -174,7 +174,7 @@ def _cdiv(ar, ai, br, bi):
     return (ar * r + ai) / d, (ai * r - ar) / d
 
 
-@njit(cache=True, error_model="numpy")
+@piece(python=True)
 def _solve_complex(J, mr, mi, S, dr, di, c):
     """In place: ``c <- (mu I - J)^-1 c`` for ``mu = mr + i mi`` with the factor of
     :func:`_schur_factor_complex`; ``c`` holds the real parts in ``c[:n]`` and the

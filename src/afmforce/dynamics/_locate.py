@@ -19,6 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ._jit import piece
 from .models import N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z, observe
 
 # --- events array layout (float, NaN = not found) ---------------------------
@@ -50,7 +51,7 @@ NSUB = 4            # scan points per step (then bisection / golden section)
 _GOLD = 0.3819660112501051
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _dense(y_old, Q, s, out):
     """Collocation polynomial at step fraction s: y_old + Q [s, s^2, s^3]."""
     s2 = s * s
@@ -59,7 +60,7 @@ def _dense(y_old, Q, s, out):
         out[i] = y_old[i] + Q[i, 0] * s + Q[i, 1] * s2 + Q[i, 2] * s3
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o):
     _dense(y_old, Q, s, ytmp)
     t = t0 + s * h
@@ -67,7 +68,7 @@ def _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o):
     return t
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, level, sign, ytmp, o):
     """Step fraction where obs[idx] crosses level (sign*(obs-level) turns > 0)."""
     for _ in range(50):
@@ -82,7 +83,7 @@ def _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, level, sign
     return s_hi
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, sign, ytmp, o):
     """Golden-section search for the minimum of sign*obs[idx] on [s_lo, s_hi].
 
@@ -118,7 +119,7 @@ def _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, sign, ytm
     return s, o[idx]
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _terminal_event(model, p, t_a, z_a, v, t0, h, y_old, Q, z_new, y_new, term_kind, level,
                     ytmp, o, oprev):
     """Where in the accepted step ``[t0, t0 + h]`` the terminal level is first reached.
@@ -139,7 +140,7 @@ def _terminal_event(model, p, t_a, z_a, v, t0, h, y_old, Q, z_new, y_new, term_k
     return t0 + s_hit * h
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _scan_extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, best,
                    ytmp, o):
     """Extremum of sign*obs[idx] over [s_a, s_b] if it beats ``sign*best`` (else NaN, NaN).
@@ -169,7 +170,7 @@ def _scan_extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, 
     return s, val
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, e_val, e_pos,
                 e_time, ev, ytmp, o):
     """Running extremum (min of sign*obs[idx]) over [s_a, s_b] into ev[e_val], ev[e_pos]."""
@@ -182,7 +183,7 @@ def _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, e_v
             ev[e_time] = t0 + s * h
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
     """Update the event record with the accepted step [t0, t0 + h]."""
     # ``r0`` is an int64 zero known only at run time: integer constants passed as
@@ -289,7 +290,7 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
                 ev[E_IN_CONTACT] = 0.0
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o):
     """In contact: remember the last time the tip bounced out (h > hc)."""
     for k in range(NSUB, -1, -1):

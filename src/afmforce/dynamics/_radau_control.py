@@ -21,6 +21,7 @@ import math
 
 from numba import njit
 
+from ._jit import piece
 from ._linalg import _rms, _solve_real
 from ._radau_tableau import (E1, E2, E3, MAX_FACTOR, MU_REAL, NEWTON_MAXITER, S_NFEV,
                              W_VFAC)
@@ -28,7 +29,7 @@ from ._locate import E_IN_CONTACT, E_LAST_OUT, E_RING_AMP, E_SPIKE_CYCLES, E_SPI
 from .models import HQA, HQB, K_EFF, contact_frequency, error_frequency, rhs, ringing_amplitude
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def velocity_atol(model, p, drive, t, y, atol, work):
     """Absolute tolerance of the velocities at ``(t, y)``: ``atol[n-1]``, or
     ``atol[0] * work[W_VFAC] * error_frequency`` where that is smaller."""
@@ -39,7 +40,7 @@ def velocity_atol(model, p, drive, t, y, atol, work):
     return av
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def error_scale(y, atol, av, rtolv, scale):
     """``scale = atol + rtolv |y|`` (velocities: ``av``)."""
     n = y.shape[0]
@@ -48,7 +49,7 @@ def error_scale(y, atol, av, rtolv, scale):
         scale[i] = ai + abs(y[i]) * rtolv[i]
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def _filtered_error(h, f, J, Sr, det_r, Z, err):
     """``err = (mu_r/h I - J)^-1 (f + (e . Z) / h)``: the embedded error estimate of the step
     whose stages are ``Z`` (``f`` the derivative at its start, or at ``y + err``
@@ -59,7 +60,7 @@ def _filtered_error(h, f, J, Sr, det_r, Z, err):
     _solve_real(J, MU_REAL / h, Sr, det_r, err)
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def error_norm(h, y, fcur, J, Sr, det_r, Z, atol, av, rtolv, ytmp, err, scale):
     """Error norm of the step of size ``h`` from ``y`` whose stages are ``Z``.
 
@@ -75,7 +76,7 @@ def error_norm(h, y, fcur, J, Sr, det_r, Z, atol, av, rtolv, ytmp, err, scale):
     return _rms(err, scale)
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def improved_error_norm(model, p, drive, t, h, y, J, Sr, det_r, Z, err, scale, yst, fnew,
                         stats, err_norm):
     """After a rejection: the estimate again with f evaluated at ``y + err`` (Hairer &
@@ -118,7 +119,7 @@ def next_step_factor(h_abs, h_abs_old, err_old, err_norm, safety, rejected, reco
     return factor
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def max_step(model, p, drive, t, t_end, y, hmax_frac, hmax_dz):
     """Longest step from ``(t, y)``: the drive may move at most
     ``max(hmax_frac * h, hmax_dz)`` (h the separation), so no surface event is
@@ -134,7 +135,7 @@ def max_step(model, p, drive, t, t_end, y, hmax_frac, hmax_dz):
     return max(hmax_frac * hsep, hmax_dz) / abs(v)
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def damping_step(model, p, drive, t, t_end, y, fcur, ev, damp_cycles, damp_kappa, h_max):
     """Shortest step of the in-contact ringing treatment at ``(t, y)`` (0: none).
 
@@ -164,7 +165,7 @@ def damping_step(model, p, drive, t, t_end, y, fcur, ev, damp_cycles, damp_kappa
     return 0.0
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def left_hard_contact(model, p, drive, t_new, y_new, damp_kappa):
     """Whether the state ``y_new`` at ``t_new`` has left the stiff contact where damping
     steps are allowed (contact stiffness below ``damp_kappa * k``)."""

@@ -21,7 +21,7 @@ from __future__ import annotations
 
 import math
 
-from numba import njit
+from ._jit import piece
 
 from ._linalg import _schur_factor, _schur_factor_complex, _solve_complex, _solve_real
 from ._locate import _dense
@@ -30,7 +30,7 @@ from ._radau_tableau import (C1, C2, LU_DET_CI, LU_DET_CR, LU_DET_R, LU_H, LU_OK
 from .models import rhs
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def predict(t, h, y, y_old, Q, work, Z0, ytmp):
     """Starting stages ``Z0``: the last step's collocation polynomial extrapolated
     (zero when there is none or the new step is over 10x longer)."""
@@ -49,7 +49,7 @@ def predict(t, h, y, y_old, Q, work, Z0, ytmp):
                 Z0[st, i] = 0.0
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def factorize(J, h, Sr, Sc, lu, stats):
     """Factor ``(mu I - J)`` for the real and the complex eigenvalue of the method at step
     ``h`` (Schur complements ``Sr``, ``Sc``; determinants, validity and ``h`` into ``lu``,
@@ -68,7 +68,7 @@ def factorize(J, h, Sr, Sc, lu, stats):
     return True
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def newton(model, p, drive, t, h, y, J, Sr, Sc, lu, scale, newton_tol, nmax, Z0, Z, W, F, dW,
            rr, cc, ytmp, yst, stats):
     """Simplified Newton iterations from ``Z0`` with the factors of :func:`factorize`.
@@ -151,7 +151,7 @@ def newton(model, p, drive, t, h, y, J, Sr, Sc, lu, scale, newton_tol, nmax, Z0,
     return converged, n_iter, rate
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def dense_coefficients(y, Z, y_old, Q):
     """Dense output of the accepted step: ``y_old = y``, ``Q = Z^T P`` (the collocation
     polynomial ``y_old + Q [s, s^2, s^3]`` in the step fraction ``s``)."""

@@ -8,12 +8,11 @@ window ``[t_k - dt/2, t_k + dt/2]``), selected by the ``average`` field of
 
 from __future__ import annotations
 
-from numba import njit
-
+from ._jit import piece
 from ._locate import _dense
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf):
     """Add the integral of the step's dense polynomial over each sample window it overlaps.
 
@@ -49,7 +48,7 @@ def _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf):
     s_next[0] = k
 
 
-@njit(cache=True, error_model="numpy", _nrt=False, forceinline=True)
+@piece(inline=True)
 def sample_step(t_old, t_new, h, y_old, Q, s_t0, s_dt, average, s_next, ybuf, ytmp):
     """Write the samples of the accepted step ``[t_old, t_new]`` into ``ybuf``.
 

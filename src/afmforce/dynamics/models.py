@@ -33,6 +33,8 @@ import math
 import numpy as np
 from numba import njit
 
+from ._jit import piece
+
 MODEL_SPRING = 0
 MODEL_BEAM = 1
 MODEL_IDS = {"spring": MODEL_SPRING, "beam": MODEL_BEAM}
@@ -69,7 +71,7 @@ def state_size(model: int) -> int:
     return 2 if model == MODEL_SPRING else 4
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def surface_force(h, ar, z0):
     """Fs(h) and Fs'(h) of eq 2 [N, N/m]."""
     ih2 = 1.0 / (h * h)
@@ -79,7 +81,7 @@ def surface_force(h, ar, z0):
     return fs, dfs
 
 
-@njit(cache=True, error_model="numpy")
+@piece(python=True)
 def rhs(model, p, zd, vd, y, out):
     """Evaluate ``out = f(t, y)`` at drive position ``zd`` and speed ``vd``.
 
@@ -124,7 +126,7 @@ def rhs(model, p, zd, vd, y, out):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@piece(python=True)
 def jac(model, p, zd, vd, y, J):
     """Analytic Jacobian ``J = df/dy`` (same arguments as :func:`rhs`)."""
     ar = p[AR]
@@ -183,7 +185,7 @@ def jac(model, p, zd, vd, y, J):
     return True
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def observe(model, p, zd, vd, y, o):
     """Fill ``o`` with the observables of state ``y`` (indices ``O_*``).
 
@@ -223,7 +225,7 @@ def observe(model, p, zd, vd, y, o):
     o[O_Z] = zd
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def contact_frequency(model, p, zd, y):
     """Angular frequency of the contact mode, ``sqrt((k - Fs'(h)) * mobility)`` [rad/s].
 
@@ -240,7 +242,7 @@ def contact_frequency(model, p, zd, y):
     return math.sqrt(w2) if w2 > 0.0 else 0.0, kappa
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def error_frequency(model, p, zd, vd, y):
     """Rate converting velocity errors into position errors [1/s] (error control).
 
@@ -264,7 +266,7 @@ def error_frequency(model, p, zd, vd, y):
     return w
 
 
-@njit(cache=True, error_model="numpy")
+@piece()
 def ringing_amplitude(model, p, vd, y, f, wc):
     """Amplitude of the contact mode [m]: ``sqrt((h'/wc)^2 + (h''/wc^2)^2)``.
 

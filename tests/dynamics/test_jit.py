@@ -1,0 +1,68 @@
+"""The compiled pieces of the integrator (:mod:`afmforce.dynamics._jit`, issue 16)."""
+
+from __future__ import annotations
+
+import types
+
+import numpy as np
+import pytest
+
+from afmforce.dynamics import _locate as L
+from afmforce.dynamics import models as M
+from afmforce.dynamics._jit import piece
+
+
+def test_piece_refuses_calls_from_python_instead_of_crashing():
+    """A piece has no Python wrapper: a call from Python is a TypeError, before and after
+    a compiled caller has compiled it (a call to the missing wrapper would crash)."""
+
+    @piece()
+    def twice(x):
+        return 2.0 * x
+
+    from numba import njit
+
+    @njit
+    def caller(x):
+        return twice(x) + 1.0
+
+    with pytest.raises(TypeError, match="compiled code only"):
+        twice(1.5)
+    assert caller(1.5) == 4.0                  # compiled from a compiled caller
+    assert len(twice.overloads) == 1
+    with pytest.raises(TypeError, match="compiled code only"):
+        twice(1.5)
+    with pytest.raises(TypeError, match="compiled code only"):
+        L._dense(np.zeros(2), np.zeros((2, 3)), 0.5, np.zeros(2))
+
+
+def test_piece_with_python_wrapper_is_callable():
+    """``piece(python=True)`` (rhs, jac, the Schur solves: called by tests) keeps its wrapper."""
+    y = np.array([2e-9, 0.0])
+    out = np.zeros(2)
+    p = M.pack_spring(spring_constant=0.1, mass=1e-11, radius=1e-7, hamaker=1e-20, z0=1.6e-10,
+                      viscosity=0.0, h_guard=1e-10)
+    assert M.rhs(M.MODEL_SPRING, p, 0.0, 0.0, y, out)
+    assert out[0] == 0.0 and out[1] == pytest.approx(1e11 * (-0.1 * 2e-9 + M.surface_force.py_func(
+        2e-9, 1e-27, 1.6e-10)[0]), rel=1e-12)
+
+
+def test_pieces_compute_what_their_python_source_does():
+    """observe (a piece without wrapper, with surface_force inside) through the compiled
+    observe_array equals the same functions run as Python (to rounding: numba's x**3
+    may round differently from Python's)."""
+    rng = np.random.default_rng(3)
+    for model, n in ((M.MODEL_SPRING, 2), (M.MODEL_BEAM, 4)):
+        p = rng.uniform(0.5, 2.0, M.P_SIZE) * 1e-3
+        Y = rng.uniform(0.5, 1.0, (5, n)) * 1e-8
+        zd = -rng.uniform(1.0, 2.0, 5) * 1e-8
+        vd = rng.uniform(-1.0, 1.0, 5) * 1e-6
+        got = M.observe_array(model, p, zd, vd, Y)
+        want = np.empty_like(got)
+        # the pure-Python source, with the pure-Python force law
+        src = M.observe.py_func
+        observe = types.FunctionType(src.__code__,
+                                     dict(src.__globals__, surface_force=M.surface_force.py_func))
+        for i in range(5):
+            observe(model, p, zd[i], vd[i], Y[i], want[i])
+        np.testing.assert_allclose(got, want, rtol=1e-14, atol=0.0)
