@@ -37,15 +37,19 @@ L_FIRST, L_LAST, L_KIND = 0, 1, 2
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def run_cycle(model, p, y, tolerances, control, sampling, state, protocol, seg, lab):
+def run_cycle(model, p, y, tolerances, control, grid, state, protocol, seg, lab):
     """Integrate a whole cycle, then sample it (:func:`sample_cycle`).
 
     Parameters
     ----------
-    model, p, tolerances, control, sampling, state
-        As for :func:`~afmforce.dynamics.radau.integrate_segment` (``sampling``:
-        ``(t0, dt, average, next, buf)``; ``state``: ``(y, ev, work, Q, y_old, J,
-        stats)``; ``y`` is ``state[0]``).
+    model, p, tolerances, control, state
+        As for :func:`~afmforce.dynamics.radau.integrate_segment` (``state``: ``(y, ev,
+        work, Q, y_old, J, stats)``; ``y`` is ``state[0]``).
+    grid : tuple
+        ``(t0, dt, average, next, rows)``: the sample grid of
+        :data:`~afmforce.dynamics.radau.Sampling` with the number of buffer rows
+        instead of the buffer (allocated here, without the GIL: NaN for point
+        samples, zeros for window sums).
     protocol : tuple
         ``(start, velocity, t_turn_max, dwell, retract_speed, end, term_kind,
         term_level, initial_step, vfac, sample_rate, beta, beam)`` [SI]: the drive of
@@ -67,7 +71,13 @@ def run_cycle(model, p, y, tolerances, control, sampling, state, protocol, seg, 
     (start, v, t_max, dwell, vr, end, term_kind, term_level, h0, vfac, rate, beta,
      beam) = protocol
     work = state[2]
-    s_next = sampling[3]
+    s_next = grid[3]
+    n = y.shape[0]
+    if grid[2]:
+        ybuf = np.zeros((grid[4], n + 1))
+    else:
+        ybuf = np.full((grid[4], n), np.nan)
+    sampling = (grid[0], grid[1], grid[2], s_next, ybuf)
     ev = state[1]
     n_seg = 0
     turned = False
@@ -112,7 +122,7 @@ def run_cycle(model, p, y, tolerances, control, sampling, state, protocol, seg, 
         lab[j, L_LAST] = s_next[0]
         if status < 0:
             return status, n_seg, t_turn, z_turn, _empty_columns(p)
-    cols = sample_cycle(model, p, sampling[1], rate, sampling[2], s_next, sampling[4], y.shape[0],
+    cols = sample_cycle(model, p, sampling[1], rate, sampling[2], s_next, ybuf, n,
                         ev, seg[:n_seg], lab[:n_seg], beta, beam)
     return (TERMINAL if turned else 0), n_seg, t_turn, z_turn, cols
 

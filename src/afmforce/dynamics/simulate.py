@@ -5,6 +5,7 @@ from __future__ import annotations
 import math
 import time
 import warnings
+from collections import namedtuple
 from typing import Callable
 
 import numpy as np
@@ -21,6 +22,7 @@ from .static import static_jump_in
 from ..progress import Progress
 from .load_friction import RING_AMPLITUDE, load_friction_controls  # noqa: F401  (re-exported)
 from .registries import RINGING
+from .models import XI as _XI, ZETA as _ZETA
 from .models import (MODEL_BEAM, MODEL_IDS, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
                      O_Y2, state_size)
 from .trajectory import SolverStats, Trajectory
@@ -123,14 +125,24 @@ def simulate(config: SimulationConfig | None = None, *,
 
 
 class _Setup:
-    """What a run derives from its configuration alone (computed once per configuration,
-    :func:`_setup`): the packed model, start state, tolerances, drive plan, the event
+    """What a run derives from its configuration alone (:func:`_setup`, once per
+    configuration): the packed model, start state, tolerances, drive plan, the event
     record's inputs and the compiled call's records. Read-only: runs copy what they change."""
 
     __slots__ = ("model", "n", "p", "y0", "atol", "rtolv", "app", "t_total_max", "dt", "nbuf",
-                 "averaged", "ev0", "h_s", "z_s", "vfac_scale", "hmax_dz", "damp_cycles", "term",
-                 "f_max", "budget", "tolerances", "control", "protocol", "beta", "beam",
-                 "stiff_load")
+                 "averaged", "ev0", "h_s", "z_s", "hmax_dz", "damp_cycles", "term", "f_max",
+                 "budget", "tolerances", "control", "beta", "beam", "drive",
+                 # friction-dependent (the rest depends on probe, surface, drive, solver only)
+                 "vfac_scale", "stiff_load", "protocol")
+
+
+#: The fields of :class:`_Setup` shared by configurations that differ in friction only.
+_BASE_FIELDS = _Setup.__slots__[:-3]
+#: The base _Setup by (probe, surface, drive, solver), and by their ids (-> (parts, base)):
+#: a fit or sweep changes one part (e.g. friction) and keeps the others as the same objects
+#: or equal ones.
+_BASES: dict = {}
+_BASES_MAX = 256
 
 
 def _setup(cfg: SimulationConfig) -> _Setup:
@@ -138,17 +150,53 @@ def _setup(cfg: SimulationConfig) -> _Setup:
     s = cfg.__dict__.get("_setup")
     if s is not None:
         return s
+    parts = (cfg.probe, cfg.surface, cfg.drive, cfg.solver)
+    key = tuple(map(id, parts))
+    hit = _BASES.get(key)
+    if hit is not None and all(a is b for a, b in zip(hit[0], parts)):
+        base = hit[1]
+    else:                   # equal parts built anew (flat names): the same base
+        base = _BASES.get(parts)
+        if base is None:
+            base = _base(cfg)
+            if len(_BASES) >= _BASES_MAX:
+                _BASES.clear()
+            _BASES[parts] = base
+        _BASES[key] = (parts, base)
+    s = _Setup()
+    for name in _BASE_FIELDS:
+        setattr(s, name, getattr(base, name))
+    xi, zeta = cfg.friction.coefficients
+    if s.beam:              # the same values as parameter_vector(cfg) fills in
+        s.p = p = base.p.copy()
+        p[_XI] = xi
+        p[_ZETA] = zeta
+    s.vfac_scale, ring_amp = load_friction_controls(cfg)
+    s.ev0 = ev = base.ev0.copy()
+    ev[R.E_RING_AMP] = ring_amp
+    s.stiff_load = _stiff_load_friction(cfg)
+    d = s.drive
+    s.protocol = (d.start, d.velocity, s.app.t_end, d.dwell, d.retract_speed, d.end,
+                  int(s.term[0]), float(s.term[1]), float(INITIAL_STEP),
+                  float(VELOCITY_TOLERANCE_FACTOR * s.vfac_scale), float(cfg.sample_rate),
+                  s.beta, s.beam)
+    cfg.__dict__["_setup"] = s
+    return s
+
+
+def _base(cfg: SimulationConfig) -> _Setup:
+    """The friction-independent part of :func:`_setup` (``p``: friction coefficients 0)."""
     s = _Setup()
     s.model = model = MODEL_IDS[cfg.model]
     s.n = n = state_size(model)
-    s.p = p = parameter_vector(cfg)
+    s.p = p = parameter_vector(cfg.replace(friction="none") if model == MODEL_BEAM else cfg)
     s.y0 = initial_state(cfg)
     atol = np.full(n, cfg.atol)
     atol[n // 2:] = cfg.atol * 2.0 * math.pi * VELOCITY_ATOL_FREQUENCY
     rtolv = np.full(n, cfg.rtol)
     rtolv[: n // 2] = cfg.rtol * POSITION_RTOL_FACTOR
     s.atol, s.rtolv = atol, rtolv
-    s.app = app = approach_segment(cfg)
+    s.app = approach_segment(cfg)
     s.t_total_max = t_total_max = segments(cfg)[-1].t_end
     s.dt = 1.0 / cfg.sample_rate
     s.nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
@@ -160,8 +208,6 @@ def _setup(cfg: SimulationConfig) -> _Setup:
     ev[R.E_JUMP_FACTOR] = cfg.jump_factor
     s.h_s, s.z_s, _ = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)
     ev[R.E_H_STATIC] = s.h_s if math.isfinite(s.h_s) else -math.inf
-    s.vfac_scale, ring_amp = load_friction_controls(cfg)
-    ev[R.E_RING_AMP] = ring_amp
     s.hmax_dz = HMAX_TRAVEL * cfg.z0
     s.damp_cycles = RINGING[cfg.ringing].damp_cycles
     if cfg.turn_force is not None:
@@ -176,17 +222,16 @@ def _setup(cfg: SimulationConfig) -> _Setup:
     s.budget = cfg.max_steps if cfg.max_steps is not None else max(
         2_000_000, int(60.0 * f_max * t_total_max))
     s.beam = model == MODEL_BEAM
-    s.stiff_load = _stiff_load_friction(cfg)
     s.beta = float(cfg.calibration_factor)
     s.tolerances = R.tolerance_record(cfg.rtol, rtolv, atol)
     s.control = _control(s, 2**62)
     d = cfg.drive
-    s.protocol = (float(d.start), float(d.velocity), float(app.t_end), float(d.dwell),
-                  float(d.retract_speed), float(d.end), int(s.term[0]), float(s.term[1]),
-                  float(INITIAL_STEP), float(VELOCITY_TOLERANCE_FACTOR * s.vfac_scale),
-                  float(cfg.sample_rate), s.beta, s.beam)
-    cfg.__dict__["_setup"] = s
+    s.drive = _Drive(float(d.start), float(d.velocity), float(d.dwell), float(d.retract_speed),
+                     float(d.end))
     return s
+
+
+_Drive = namedtuple("_Drive", "start velocity dwell retract_speed end")
 
 
 def _control(s: _Setup, chunk: int) -> tuple:
@@ -207,7 +252,6 @@ class _Run:
         n = s.n
         self.y = s.y0.copy()
         self.ev = s.ev0.copy()
-        self.ybuf = np.zeros((s.nbuf, n + 1)) if s.averaged else np.full((s.nbuf, n), np.nan)
         self.s_next = np.zeros(1, dtype=np.int64)
         self.work = np.zeros(R.W_SIZE)
         self.stats = np.zeros(R.S_SIZE, dtype=np.int64)
@@ -222,21 +266,22 @@ class _Run:
         :class:`SolverError`): one compiled call, or with a ``progress`` callback (or an
         integrator replaced for a benchmark) segment by segment from Python."""
         s = self.setup
-        sampling = (0.0, s.dt, s.averaged, self.s_next, self.ybuf)
         if progress is None and R.integrate_segment is _cycle.integrate_segment:
             status, n_seg, t_turn, z_turn, cols = _cycle.run_cycle(
-                s.model, s.p, self.y, s.tolerances, s.control, sampling, self.state,
-                s.protocol, self.seg, self.lab)
+                s.model, s.p, self.y, s.tolerances, s.control,
+                (0.0, s.dt, s.averaged, self.s_next, s.nbuf), self.state, s.protocol, self.seg,
+                self.lab)
             if status < 0:
                 self._fail(status, n_seg, t_turn, z_turn)
             self.turned_at_load = status == R.TERMINAL
         else:
-            n_seg, t_turn, z_turn = self._segments(progress, sampling)
+            ybuf = np.zeros((s.nbuf, s.n + 1)) if s.averaged else np.full((s.nbuf, s.n), np.nan)
+            n_seg, t_turn, z_turn = self._segments(
+                progress, (0.0, s.dt, s.averaged, self.s_next, ybuf))
             cols = _cycle.sample_cycle(s.model, s.p, s.dt, self.cfg.sample_rate, s.averaged,
-                                       self.s_next, self.ybuf, s.n, self.ev, self.seg[:n_seg],
+                                       self.s_next, ybuf, s.n, self.ev, self.seg[:n_seg],
                                        self.lab[:n_seg], s.beta, s.beam)
         self.t_turn, self.z_turn, self.columns = t_turn, z_turn, cols
-        self.ybuf = None          # the samples are in the columns now
         return self
 
     def _segments(self, progress, sampling):
