@@ -411,8 +411,10 @@ def _events(cfg, ev, t_turn, z_turn, beta, model, offset, slope, h_s, z_s) -> Ev
     # events of identical runs compare equal (dataclass == compares fields by identity first)
     nan = math.nan
     e = [x if x == x else nan for x in ev.tolist()]
-    offset = offset if offset == offset else nan
-    slope = slope if slope == slope else nan
+
+    def f(x) -> float:
+        x = float(x)
+        return x if x == x else nan
     contact = math.isfinite(e[R.E_CONTACT_T])
     left = math.isfinite(e[R.E_JUMP_T])
     fast = math.isfinite(e[R.E_FAST_T]) and (not contact or e[R.E_FAST_T] <= e[R.E_CONTACT_T])
@@ -435,7 +437,6 @@ def _events(cfg, ev, t_turn, z_turn, beta, model, offset, slope, h_s, z_s) -> Ev
     else:
         min_app, min_app_z = e[R.E_MIN_DEFL], e[R.E_MIN_DEFL_Z]
         spike = spike_t = spike_z = math.nan
-    f = float
     return Events(
         jumped=jumped, jump_in_note=note,
         jump_in_time=e[R.E_JUMP_T], jump_in_position=e[R.E_JUMP_Z],

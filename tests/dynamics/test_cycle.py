@@ -1,0 +1,120 @@
+"""The compiled whole-cycle call (_cycle.run_cycle) against the Python segment driver.
+
+simulate() runs a cycle in one compiled call; with a progress callback it drives the
+segments one by one from Python (the code before issue 16's overhead work) and samples
+with the same compiled routine. Both must give bit-identical trajectories, events and
+counters; the compiled compliance lines must equal events.compliance_lines on the
+returned columns; the per-configuration setup cache must not leak between configurations.
+"""
+
+import math
+import pickle
+import warnings
+
+import numpy as np
+import pytest
+
+from afmforce.dynamics import SimulationConfig, simulate, simulate_many
+from afmforce.dynamics.events import compliance_lines
+from afmforce.dynamics.trajectory import COLUMNS
+from afmforce.errors import SolverError
+
+FAST = dict(velocity=1e-6, start=-30e-9, turn=5e-9, end=-200e-9, sample_rate=20e3)
+CASES = {
+    "beam": dict(FAST, xi=0.05),
+    "turn_force_dwell_average": dict(FAST, xi=0.02, turn_force=0.3e-9, dwell=1e-3,
+                                     sampling="average"),
+    "turn_deflection_point": dict(FAST, turn_deflection=0.5e-9, dwell=0.5e-3),
+    "no_spike": dict(FAST, spike_window=0.0),
+    "spring": dict(model="spring", velocity=10e-6),
+    "no_contact": dict(FAST, turn=-20e-9),
+}
+
+
+def _identical(a, b):
+    for name in COLUMNS:
+        x, y = getattr(a, name), getattr(b, name)
+        assert x.dtype == y.dtype and x.shape == y.shape, name
+        assert np.array_equal(x, y, equal_nan=x.dtype.kind == "f"), name
+    da, db = a.events.to_dict(), b.events.to_dict()
+    for k in da:
+        assert da[k] == db[k] or (isinstance(da[k], float) and math.isnan(da[k])
+                                  and math.isnan(db[k])), k
+    sa, sb = a.solver.to_dict(), b.solver.to_dict()
+    sa.pop("wall_time"), sb.pop("wall_time")
+    assert sa == sb
+
+
+@pytest.mark.parametrize("name", CASES)
+def test_compiled_cycle_equals_python_segment_driver(name):
+    calls = []
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        fast = simulate(**CASES[name])
+        slow = simulate(**CASES[name], progress=calls.append)
+    assert calls, "the progress path was not taken"
+    _identical(fast, slow)
+
+
+def test_turned_at_load_and_dwell_segments():
+    tr = simulate(**CASES["turn_force_dwell_average"])
+    e = tr.events
+    assert e.turn_position < FAST["turn"]              # turned at the load, before `turn`
+    kinds = [int(k) for k in np.unique(tr.segment)]
+    assert kinds == [0, 1, 2]
+    # the turn point lies on the approach line z = start + v t
+    assert e.turn_position == pytest.approx(FAST["start"] + FAST["velocity"] * e.turn_time,
+                                            rel=0, abs=1e-18)
+
+
+def test_compiled_compliance_lines_equal_the_python_fit():
+    tr = simulate(**CASES["beam"])
+    offset, slope = compliance_lines(tr.piezo_position, tr.apparent_deflection, tr.separation,
+                                     tr.segment, tr.config.contact_separation,
+                                     tr.events.contact_position, tr.events.turn_position,
+                                     tr.calibration_factor)
+    assert math.isfinite(offset) and math.isfinite(slope)
+    assert tr.events.hysteresis_offset == offset and tr.events.compliance_slope == slope
+
+
+def test_failure_in_the_compiled_cycle_raises_as_the_python_driver():
+    starved = dict(FAST, max_steps=50)
+    with pytest.raises(SolverError) as fast:
+        simulate(**starved)
+    with pytest.raises(SolverError) as slow:
+        simulate(**starved, progress=lambda p: None)
+    assert str(fast.value) == str(slow.value)
+    assert "max_steps = 50" in str(fast.value) and "in the approach" in str(fast.value)
+    # a failure after the turn names the segment it happened in
+    total = simulate(**FAST).solver.steps
+    late = dict(FAST, max_steps=total - 5)
+    with pytest.raises(SolverError, match="in the retract") as fast:
+        simulate(**late)
+    with pytest.raises(SolverError) as slow:
+        simulate(**late, progress=lambda p: None)
+    assert str(fast.value) == str(slow.value)
+
+
+def test_setup_cache_follows_every_part():
+    """Configurations sharing parts share the cached setup, yet each run uses its own
+    friction, drive and probe; a pickled configuration leaves the cache behind."""
+    base = SimulationConfig(**FAST)
+    runs = [base.replace(xi=0.01), base.replace(xi=0.1), base.replace(xi=0.01, velocity=2e-6),
+            base.replace(xi=0.01, k0=0.2)]
+    got = simulate_many(runs, threads=1)
+    for cfg, tr in zip(runs, got):
+        fresh = pickle.loads(pickle.dumps(cfg))
+        assert "_setup" not in fresh.__dict__
+        _identical(tr, simulate(fresh))
+    assert got[0].events.pull_off_position != got[1].events.pull_off_position
+    assert got[0].time.size != got[2].time.size
+    assert got[0].spring_constant != got[3].spring_constant
+
+
+def test_events_of_identical_runs_compare_equal():
+    """Missing events are the one math.nan, so Events of identical runs are == (NaN fields too)."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        a, b = simulate(**CASES["no_contact"]), simulate(**CASES["no_contact"])
+    assert math.isnan(a.events.contact_time) and math.isnan(a.events.hysteresis_offset)
+    assert a.events == b.events
