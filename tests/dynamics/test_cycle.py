@@ -118,3 +118,22 @@ def test_events_of_identical_runs_compare_equal():
         a, b = simulate(**CASES["no_contact"]), simulate(**CASES["no_contact"])
     assert math.isnan(a.events.contact_time) and math.isnan(a.events.hysteresis_offset)
     assert a.events == b.events
+
+
+def test_results_are_complete_dataclasses():
+    """simulate() builds Events, SolverStats and Trajectory without their __init__: every
+    field is set, and each equals the one the constructor builds from the same fields."""
+    import dataclasses
+
+    from afmforce.dynamics.events import Events
+    from afmforce.dynamics.trajectory import SolverStats, Trajectory
+
+    tr = simulate(**CASES["beam"])
+    for obj, cls in ((tr, Trajectory), (tr.events, Events), (tr.solver, SolverStats)):
+        assert not hasattr(cls, "__post_init__")
+        names = [f.name for f in dataclasses.fields(cls)]
+        assert set(vars(obj)) == set(names)
+        if cls is not Trajectory:       # (arrays: == is elementwise)
+            assert cls(**{n: getattr(obj, n) for n in names}) == obj
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        tr.events.pull_off_position = 0.0

@@ -130,7 +130,7 @@ def run_cycle(model, p, y, tolerances, control, grid, state, protocol, seg, lab)
 @njit(cache=True, error_model="numpy")
 def _empty_columns(p):
     e = np.empty(0)
-    return (e, e, np.empty(0, dtype=np.int8), np.empty((0, 1)), e, False, math.nan, math.nan)
+    return (e, e, np.empty(0, dtype=np.int8), np.empty((0, 1)), e, e, False, math.nan, math.nan)
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
@@ -145,7 +145,8 @@ def sample_cycle(model, p, dt, rate, average, s_next, ybuf, n, ev, seg, lab, bet
     -------
     tuple
         ``(time, piezo_position, segment code (int8), observables (rows x N_OBS),
-        apparent deflection, all finite, hysteresis offset, compliance slope)``;
+        apparent deflection, apparent separation, all finite, hysteresis offset,
+        compliance slope)``;
         offset and slope as :func:`afmforce.dynamics.events.compliance_lines`
         (NaN without contact).
     """
@@ -184,14 +185,16 @@ def sample_cycle(model, p, dt, rate, average, s_next, ybuf, n, ev, seg, lab, bet
                                                seg[:, G_V].copy())
     m = tt.shape[0]
     apparent = np.empty(m)
+    apparent_sep = np.empty(m)
     for k in range(m):
         apparent[k] = beta * obs[k, O_THETA] if beam else obs[k, O_DEFL]
+        apparent_sep[k] = apparent[k] - zd[k]
     offset, slope = math.nan, math.nan
     if math.isfinite(ev[E_CONTACT_T]):
         z_turn = seg[0, G_Z0] + seg[0, G_V] * (seg[0, G_T1] - seg[0, G_T0])
         offset, slope = _compliance(zd, apparent, obs[:, O_H], code, ev[E_H_CONTACT],
                                     ev[E_CONTACT_Z], z_turn, beta if beam else math.nan)
-    return tt, zd, code, obs, apparent, finite, offset, slope
+    return tt, zd, code, obs, apparent, apparent_sep, finite, offset, slope
 
 
 @njit(cache=True, error_model="numpy")
