@@ -14,7 +14,8 @@
 4. ``simulate_many`` vs a loop of ``simulate()`` over N Fig-6-type runs (xi 0.01
    and 0.1 kg/s x 0.1 and 1 um/s, cycled; only the events kept); per-run time
    of both, blocks interleaved; target >= 1.8x. Also ``threads=1`` (no
-   parallelism: the hoisted Python alone).
+   parallelism: the hoisted Python alone), and the share of a run that holds the
+   GIL (outside the compiled cycle), which bounds the speed-up on 2 free cores.
 5. A 10,000-run sweep (``run_sweep(simulate_run, ...)``, executor "auto") over
    xi x velocity; target < 60 s. Run at default settings and with
    ``spike_window=0``.
@@ -158,6 +159,38 @@ def many(n: int, blocks: int = 4) -> dict:
                 identical_events=bool(same))
 
 
+def gil_share(n: int = 100) -> dict:
+    """Share of a Fig-6-type run (loop of ``simulate()``, one thread) spent inside the
+    compiled cycle, which releases the GIL; the rest holds it. Bound on the speed-up of
+    ``simulate_many`` on 2 free cores (Amdahl): ``1 / (held + (1 - held) / 2)``."""
+    from afmforce.dynamics import SimulationConfig, simulate
+    from afmforce.dynamics import _cycle as C
+
+    orig, inside = C.run_cycle, [0.0]
+
+    def timed(*a):
+        t0 = time.perf_counter()
+        r = orig(*a)
+        inside[0] += time.perf_counter() - t0
+        return r
+
+    for kw in FIG6:
+        simulate(**kw)
+    total = 0.0
+    C.run_cycle = timed
+    try:
+        for i in range(n):
+            cfg = SimulationConfig(**FIG6[i % len(FIG6)])     # a new configuration per run
+            t0 = time.perf_counter()
+            simulate(cfg).events
+            total += time.perf_counter() - t0
+    finally:
+        C.run_cycle = orig
+    held = (total - inside[0]) / total
+    return dict(n=n, per_run_s=total / n, gil_held_per_run_s=(total - inside[0]) / n,
+                gil_held_share=held, bound_2_cores=1.0 / (held + (1.0 - held) / 2.0))
+
+
 def sweep(n: int, **fixed) -> dict:
     from afmforce.sweep import run_sweep
     from afmforce.sweep.simulation import simulate_run
@@ -216,6 +249,11 @@ def main(argv=None) -> int:
               f"({m['threads']} threads) {p['many'] * 1e3:.2f} ms/run = {m['speedup']:.2f}x, "
               f"threads=1 {p['many_1thread'] * 1e3:.2f} ms/run = {m['speedup_1thread']:.2f}x; "
               f"identical events: {m['identical_events']}")
+        g = gil_share()
+        rep["gil_share"] = g
+        print(f"   GIL held {g['gil_held_per_run_s'] * 1e3:.3f} ms of a {g['per_run_s'] * 1e3:.2f} ms "
+              f"run ({g['gil_held_share'] * 100:.1f} %): speed-up bound on 2 free cores "
+              f"{g['bound_2_cores']:.2f}x")
         targets.append(("simulate_many >= 1.8x", m["speedup"] >= 1.8, f"{m['speedup']:.2f}x"))
     if args.sweep:
         rep["sweep"] = {}
