@@ -131,7 +131,7 @@ class _Setup:
 
     __slots__ = ("model", "n", "p", "y0", "atol", "rtolv", "app", "t_total_max", "dt", "nbuf",
                  "averaged", "ev0", "h_s", "z_s", "hmax_dz", "damp_cycles", "term", "f_max",
-                 "budget", "tolerances", "control", "beta", "beam", "drive",
+                 "budget", "tolerances", "control", "beta", "k", "beam", "drive",
                  # friction-dependent (the rest depends on probe, surface, drive, solver only)
                  "vfac_scale", "stiff_load", "protocol")
 
@@ -223,6 +223,7 @@ def _base(cfg: SimulationConfig) -> _Setup:
         2_000_000, int(60.0 * f_max * t_total_max))
     s.beam = model == MODEL_BEAM
     s.beta = float(cfg.calibration_factor)
+    s.k = cfg.force_constant
     s.tolerances = R.tolerance_record(cfg.rtol, rtolv, atol)
     s.control = _control(s, 2**62)
     d = cfg.drive
@@ -402,8 +403,8 @@ class _Run:
             time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
             separation=obs[:, O_H], apparent_separation=apparent_sep, angle=angle,
             lateral_position=obs[:, O_Y2], normal_force=obs[:, O_FZ], friction_force=obs[:, O_FY],
-            segment=seg_code, calibration_factor=cfg.calibration_factor,
-            spring_constant=cfg.force_constant, config=cfg, events=events, solver=solver))
+            segment=seg_code, calibration_factor=s.beta, spring_constant=s.k, config=cfg,
+            events=events, solver=solver))
 
 
 def _events(cfg, ev, t_turn, z_turn, beta, model, offset, slope, h_s, z_s) -> Events:
