@@ -7,15 +7,15 @@
    <= 0.01 nm, pull-off <= 0.5 nm, hysteresis <= 0.005 nm. The same with
    ``spike_window=0`` (the spike not asked for).
 3. Per-call overhead of a short run (no contact, 18 steps): ``simulate(config)``
-   minus the time inside the compiled cycle (``_cycle.run_cycle``: integration,
-   sampled columns and compliance lines in one call, timed around it; before
-   issue 16's overhead work the integrator alone, and sampling counted as
-   overhead); target <= 0.1 ms.
+   minus the time inside the compiled pieces (timed around each call: the
+   integrator, one call per drive segment, and ``_cycle.sample_cycle``, the
+   sampled columns and compliance lines; before issue 16's overhead work the
+   sampling and event fits ran as Python and counted as overhead); target <= 0.1 ms.
 4. ``simulate_many`` vs a loop of ``simulate()`` over N Fig-6-type runs (xi 0.01
    and 0.1 kg/s x 0.1 and 1 um/s, cycled; only the events kept); per-run time
    of both, blocks interleaved; target >= 1.8x. Also ``threads=1`` (no
    parallelism: the hoisted Python alone), and the share of a run that holds the
-   GIL (outside the compiled cycle), which bounds the speed-up on 2 free cores.
+   GIL (outside the compiled pieces), which bounds the speed-up on 2 free cores.
 5. A 10,000-run sweep (``run_sweep(simulate_run, ...)``, executor "auto") over
    xi x velocity; target < 60 s. Run at default settings and with
    ``spike_window=0``.
@@ -91,24 +91,38 @@ def fig5(repeat: int) -> dict:
     return out
 
 
+def _time_compiled(inside: list):
+    """Time every call of the compiled pieces of a run into ``inside[0]``: the integrator
+    (one call per drive segment) and the sampling (``_cycle.sample_cycle``, since issue
+    16's overhead work; before it, the sampling and the event fits ran as Python and
+    counted as overhead). Returns the function that restores them."""
+    from afmforce.dynamics import radau as R
+    from afmforce.dynamics import _cycle as C
+
+    saved = [(R, "integrate_segment", R.integrate_segment), (C, "sample_cycle", C.sample_cycle)]
+
+    def timed(f):
+        def g(*a):
+            t0 = time.perf_counter()
+            r = f(*a)
+            inside[0] += time.perf_counter() - t0
+            return r
+        return g
+
+    for mod, name, f in saved:
+        setattr(mod, name, timed(f))
+    return lambda: [setattr(mod, name, f) for mod, name, f in saved]
+
+
 def overhead(n: int = 2000) -> dict:
     from afmforce.dynamics import SimulationConfig, simulate
-    from afmforce.dynamics import _cycle as C
 
     cfg = SimulationConfig(**SHORT)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         simulate(cfg)
-        orig = C.run_cycle
         inside = [0.0]
-
-        def timed(*a):
-            t0 = time.perf_counter()
-            r = orig(*a)
-            inside[0] += time.perf_counter() - t0
-            return r
-
-        C.run_cycle = timed
+        restore = _time_compiled(inside)
         try:
             rows = []
             for _ in range(n):
@@ -122,7 +136,7 @@ def overhead(n: int = 2000) -> dict:
                 SimulationConfig(**SHORT)
                 t_cfg.append(time.perf_counter() - t0)
         finally:
-            C.run_cycle = orig
+            restore()
     total = np.array([r[0] for r in rows])
     integ = np.array([r[1] for r in rows])
     return dict(steps=tr.solver.steps, total_median_s=float(np.median(total)),
@@ -161,23 +175,15 @@ def many(n: int, blocks: int = 4) -> dict:
 
 def gil_share(n: int = 100) -> dict:
     """Share of a Fig-6-type run (loop of ``simulate()``, one thread) spent inside the
-    compiled cycle, which releases the GIL; the rest holds it. Bound on the speed-up of
+    compiled pieces, which release the GIL; the rest holds it. Bound on the speed-up of
     ``simulate_many`` on 2 free cores (Amdahl): ``1 / (held + (1 - held) / 2)``."""
     from afmforce.dynamics import SimulationConfig, simulate
-    from afmforce.dynamics import _cycle as C
 
-    orig, inside = C.run_cycle, [0.0]
-
-    def timed(*a):
-        t0 = time.perf_counter()
-        r = orig(*a)
-        inside[0] += time.perf_counter() - t0
-        return r
-
+    inside = [0.0]
     for kw in FIG6:
         simulate(**kw)
     total = 0.0
-    C.run_cycle = timed
+    restore = _time_compiled(inside)
     try:
         for i in range(n):
             cfg = SimulationConfig(**FIG6[i % len(FIG6)])     # a new configuration per run
@@ -185,7 +191,7 @@ def gil_share(n: int = 100) -> dict:
             simulate(cfg).events
             total += time.perf_counter() - t0
     finally:
-        C.run_cycle = orig
+        restore()
     held = (total - inside[0]) / total
     return dict(n=n, per_run_s=total / n, gil_held_per_run_s=(total - inside[0]) / n,
                 gil_held_share=held, bound_2_cores=1.0 / (held + (1.0 - held) / 2.0))

@@ -1,10 +1,11 @@
-"""The compiled whole-cycle call (_cycle.run_cycle) against the Python segment driver.
+"""simulate()'s lean path (issue 16): cached setup, compiled sampling, results as before.
 
-simulate() runs a cycle in one compiled call; with a progress callback it drives the
-segments one by one from Python (the code before issue 16's overhead work) and samples
-with the same compiled routine. Both must give bit-identical trajectories, events and
-counters; the compiled compliance lines must equal events.compliance_lines on the
-returned columns; the per-configuration setup cache must not leak between configurations.
+simulate() integrates each drive segment in one compiled call and samples the cycle in one
+more (_cycle.sample_cycle); with a progress callback the integrator pauses every 5,000 steps
+and resumes. Both must give bit-identical trajectories, events and counters (the suite's
+stored references check them against the physics); the compiled compliance lines must
+equal events.compliance_lines on the returned columns; the per-configuration setup cache
+must not leak between configurations.
 """
 
 import math
@@ -31,7 +32,7 @@ CASES = {
 }
 
 
-def _identical(a, b):
+def _identical(a, b, resumed=False):
     for name in COLUMNS:
         x, y = getattr(a, name), getattr(b, name)
         assert x.dtype == y.dtype and x.shape == y.shape, name
@@ -42,18 +43,24 @@ def _identical(a, b):
                                   and math.isnan(db[k])), k
     sa, sb = a.solver.to_dict(), b.solver.to_dict()
     sa.pop("wall_time"), sb.pop("wall_time")
+    if resumed:     # a resumed call evaluates f at its start and factorizes anew
+        for k in ("rhs_evaluations", "lu_decompositions"):
+            assert sb.pop(k) >= sa.pop(k)
     assert sa == sb
 
 
 @pytest.mark.parametrize("name", CASES)
-def test_compiled_cycle_equals_python_segment_driver(name):
+def test_paused_and_resumed_runs_are_identical(name, monkeypatch):
+    import importlib
+
+    monkeypatch.setattr(importlib.import_module("afmforce.dynamics.simulate"), "PROGRESS_CHUNK", 97)
     calls = []
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fast = simulate(**CASES[name])
         slow = simulate(**CASES[name], progress=calls.append)
-    assert calls, "the progress path was not taken"
-    _identical(fast, slow)
+    assert len(calls) > fast.solver.steps // 97 - 3, "the runs did not pause"
+    _identical(fast, slow, resumed=True)
 
 
 def test_turned_at_load_and_dwell_segments():
@@ -77,7 +84,7 @@ def test_compiled_compliance_lines_equal_the_python_fit():
     assert tr.events.hysteresis_offset == offset and tr.events.compliance_slope == slope
 
 
-def test_failure_in_the_compiled_cycle_raises_as_the_python_driver():
+def test_failures_raise_the_same_with_and_without_progress():
     starved = dict(FAST, max_steps=50)
     with pytest.raises(SolverError) as fast:
         simulate(**starved)

@@ -5,7 +5,6 @@ from __future__ import annotations
 import math
 import time
 import warnings
-from collections import namedtuple
 from typing import Callable
 
 import numpy as np
@@ -13,9 +12,8 @@ import numpy as np
 from ..errors import SolverError
 from . import radau as R
 from .config import SimulationConfig
-from .drive import approach_segment, initial_state, segments
+from .drive import initial_state, segments
 from . import _cycle
-from ._cycle import MAX_SEGMENTS
 from .events import Events
 from .guard import _stiff_load_friction, run_check
 from .static import static_jump_in
@@ -129,11 +127,12 @@ class _Setup:
     configuration): the packed model, start state, tolerances, drive plan, the event
     record's inputs and the compiled call's records. Read-only: runs copy what they change."""
 
-    __slots__ = ("model", "n", "p", "y0", "atol", "rtolv", "app", "t_total_max", "dt", "nbuf",
+    __slots__ = ("model", "n", "p", "y0", "atol", "rtolv", "t_total_max", "dt", "nbuf",
                  "averaged", "ev0", "h_s", "z_s", "hmax_dz", "damp_cycles", "term", "f_max",
-                 "budget", "tolerances", "control", "beta", "k", "beam", "drive",
+                 "budget", "tolerances", "control", "beta", "k", "beam", "plan", "records",
+                 "seg_table", "rate",
                  # friction-dependent (the rest depends on probe, surface, drive, solver only)
-                 "vfac_scale", "stiff_load", "protocol")
+                 "vfac_scale", "stiff_load", "vfac")
 
 
 #: The fields of :class:`_Setup` shared by configurations that differ in friction only.
@@ -175,11 +174,7 @@ def _setup(cfg: SimulationConfig) -> _Setup:
     s.ev0 = ev = base.ev0.copy()
     ev[R.E_RING_AMP] = ring_amp
     s.stiff_load = _stiff_load_friction(cfg)
-    d = s.drive
-    s.protocol = (d.start, d.velocity, s.app.t_end, d.dwell, d.retract_speed, d.end,
-                  int(s.term[0]), float(s.term[1]), float(INITIAL_STEP),
-                  float(VELOCITY_TOLERANCE_FACTOR * s.vfac_scale), float(cfg.sample_rate),
-                  s.beta, s.beam)
+    s.vfac = VELOCITY_TOLERANCE_FACTOR * s.vfac_scale
     cfg.__dict__["_setup"] = s
     return s
 
@@ -196,7 +191,6 @@ def _base(cfg: SimulationConfig) -> _Setup:
     rtolv = np.full(n, cfg.rtol)
     rtolv[: n // 2] = cfg.rtol * POSITION_RTOL_FACTOR
     s.atol, s.rtolv = atol, rtolv
-    s.app = approach_segment(cfg)
     s.t_total_max = t_total_max = segments(cfg)[-1].t_end
     s.dt = 1.0 / cfg.sample_rate
     s.nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
@@ -226,13 +220,22 @@ def _base(cfg: SimulationConfig) -> _Setup:
     s.k = cfg.force_constant
     s.tolerances = R.tolerance_record(cfg.rtol, rtolv, atol)
     s.control = _control(s, 2**62)
-    d = cfg.drive
-    s.drive = _Drive(float(d.start), float(d.velocity), float(d.dwell), float(d.retract_speed),
-                     float(d.end))
+    s.rate = float(cfg.sample_rate)
+    s.plan = plan = segments(cfg)          # the plan unless the approach turns at a load
+    s.records = [_record(seg) for seg in plan]
+    s.records[0] = _record(plan[0], *s.term)
+    s.seg_table = _seg_table(plan)
     return s
 
 
-_Drive = namedtuple("_Drive", "start velocity dwell retract_speed end")
+def _record(seg, term_kind=R.TERM_NONE, term_level=0.0) -> tuple:
+    return R.drive_record(seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end, term_kind,
+                          term_level)
+
+
+def _seg_table(plan) -> np.ndarray:
+    """(t_start, z_start, velocity, t_end) of every segment (:func:`._cycle.sample_cycle`)."""
+    return np.array([(g.t_start, g.z_start, g.velocity, g.t_end) for g in plan], dtype=float)
 
 
 def _control(s: _Setup, chunk: int) -> tuple:
@@ -242,9 +245,9 @@ def _control(s: _Setup, chunk: int) -> tuple:
 
 class _Run:
     """One cycle split into its three phases, so that :func:`simulate_many` can run the
-    compiled middle one (:meth:`integrate`: one call of :func:`._cycle.run_cycle`, no
-    Python objects touched, the GIL released) on several threads while this thread
-    prepares and finishes the others."""
+    compiled middle one (:meth:`integrate`: one integrator call per drive segment and one
+    :func:`._cycle.sample_cycle`, all releasing the GIL, a few microseconds of Python
+    between them) on several threads while this thread prepares and finishes the others."""
 
     def __init__(self, cfg: SimulationConfig) -> None:
         self.wall0 = time.perf_counter()
@@ -258,57 +261,37 @@ class _Run:
         self.stats = np.zeros(R.S_SIZE, dtype=np.int64)
         self.state = (self.y, self.ev, self.work, np.zeros((n, 3)), np.zeros(n),
                       np.zeros((n, n)), self.stats)
-        # segments run: (t_start, z_start, velocity, t_end) and (first, end sample, kind)
-        self.seg = np.zeros((MAX_SEGMENTS, 4))
-        self.lab = np.zeros((MAX_SEGMENTS, 3), dtype=np.int64)
 
     def integrate(self, progress=None) -> "_Run":
-        """Run the integrator over every drive segment and sample the result (raises
-        :class:`SolverError`): one compiled call, or with a ``progress`` callback (or an
-        integrator replaced for a benchmark) segment by segment from Python."""
+        """Run the integrator over every drive segment, then sample the result in one
+        compiled call (:func:`._cycle.sample_cycle`); raises :class:`SolverError`."""
         s = self.setup
-        if progress is None and R.integrate_segment is _cycle.integrate_segment:
-            status, n_seg, t_turn, z_turn, cols = _cycle.run_cycle(
-                s.model, s.p, self.y, s.tolerances, s.control,
-                (0.0, s.dt, s.averaged, self.s_next, s.nbuf), self.state, s.protocol, self.seg,
-                self.lab)
-            if status < 0:
-                self._fail(status, n_seg, t_turn, z_turn)
-            self.turned_at_load = status == R.TERMINAL
-        else:
-            ybuf = np.zeros((s.nbuf, s.n + 1)) if s.averaged else np.full((s.nbuf, s.n), np.nan)
-            n_seg, t_turn, z_turn = self._segments(
-                progress, (0.0, s.dt, s.averaged, self.s_next, ybuf))
-            cols = _cycle.sample_cycle(s.model, s.p, s.dt, self.cfg.sample_rate, s.averaged,
-                                       self.s_next, ybuf, s.n, self.ev, self.seg[:n_seg],
-                                       self.lab[:n_seg], s.beta, s.beam)
-        self.t_turn, self.z_turn, self.columns = t_turn, z_turn, cols
-        return self
-
-    def _segments(self, progress, sampling):
-        """The Python driver of :func:`._cycle.run_cycle` (progress callbacks); returns
-        (segments run, turn time, turn position)."""
-        cfg, s = self.cfg, self.setup
-        app = s.app
-        chunk = PROGRESS_CHUNK if progress is not None else 2**62
-        fixed = (s.tolerances, s.control if progress is None else _control(s, chunk), sampling,
-                 self.state)
-        status = self._segment(0, app, *s.term, s.t_total_max, progress, fixed)
-        self.turned_at_load = status == R.TERMINAL
-        if self.turned_at_load:
+        ybuf = np.zeros((s.nbuf, s.n + 1)) if s.averaged else np.full((s.nbuf, s.n), np.nan)
+        fixed = (s.tolerances, s.control if progress is None else _control(s, PROGRESS_CHUNK),
+                 (0.0, s.dt, s.averaged, self.s_next, ybuf), self.state)
+        rows = [self._segment(s.records[0], s.t_total_max, progress, fixed, s.plan[0])]
+        self.turned_at_load = turned = rows[0][0] == R.TERMINAL
+        if turned:
             t_turn = float(self.ev[R.E_TERM_T])
-            plan = segments(cfg, t_turn, float(app.position(t_turn)))
+            plan = segments(self.cfg, t_turn, float(s.plan[0].position(t_turn)))
+            records = [_record(seg) for seg in plan]
+            seg_table = _seg_table(plan)
         else:
-            plan = segments(cfg)
+            plan, records, seg_table = s.plan, s.records, s.seg_table
         t_total = plan[-1].t_end
-        self.seg[0, 3] = plan[0].t_end
-        for j, seg in enumerate(plan[1:], 1):
-            self._segment(j, seg, R.TERM_NONE, 0.0, t_total, progress, fixed)
+        for j in range(1, len(plan)):
+            rows.append(self._segment(records[j], t_total, progress, fixed, plan[j]))
         if progress is not None:
             progress(Progress(done=t_total, total=t_total, unit="s", what="simulate"))
-        return len(plan), plan[0].t_end, plan[0].z_end
+        lab = np.array([(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)], dtype=np.int64)
+        self.columns = _cycle.sample_cycle(s.model, s.p, s.dt, s.rate, s.averaged, self.s_next,
+                                           ybuf, s.n, self.ev, seg_table, lab, s.beta, s.beam)
+        self.t_turn, self.z_turn = plan[0].t_end, plan[0].z_end
+        return self
 
-    def _segment(self, j, seg, term_kind, term_level, t_total, progress, fixed):
+    def _segment(self, record, t_total, progress, fixed, seg):
+        """Integrate one drive segment (``record``: its :func:`.radau.drive_record`); returns
+        (status, first sample, end sample)."""
         work, s_next = self.work, self.s_next
         work[R.W_T] = seg.t_start
         work[R.W_H] = INITIAL_STEP
@@ -316,12 +299,9 @@ class _Run:
         work[R.W_ERR_OLD] = 0.0
         work[R.W_HAS_SOL] = 0.0
         work[R.W_HAVE_JAC] = 0.0
-        work[R.W_VFAC] = VELOCITY_TOLERANCE_FACTOR * self.setup.vfac_scale
-        self.seg[j] = (seg.t_start, seg.z_start, seg.velocity, seg.t_end)
-        self.lab[j] = (int(s_next[0]), 0, seg.kind)
-        args = (self.setup.model, self.setup.p,
-                R.drive_record(seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end,
-                               term_kind, term_level)) + fixed
+        work[R.W_VFAC] = self.setup.vfac
+        first = int(s_next[0])
+        args = (self.setup.model, self.setup.p, record) + fixed
         while True:
             status = R.integrate_segment(*args)
             if status == R.PAUSED:
@@ -329,21 +309,9 @@ class _Run:
                                   what="simulate"))
                 continue
             break
-        self.lab[j, 1] = int(s_next[0])
         if status < 0:
             self._raise(status, seg, t_total)
-        return status
-
-    def _fail(self, status, n_seg, t_turn, z_turn):
-        """Raise the SolverError of a compiled cycle that failed in segment ``n_seg - 1``."""
-        cfg, s = self.cfg, self.setup
-        if n_seg == 1:
-            seg, t_total = s.app, s.t_total_max
-        else:
-            turned = math.isfinite(self.ev[R.E_TERM_T])
-            plan = segments(cfg, t_turn, z_turn) if turned else segments(cfg)
-            seg, t_total = plan[n_seg - 1], plan[-1].t_end
-        self._raise(status, seg, t_total)
+        return status, first, int(s_next[0])
 
     def _raise(self, status, seg, t_total):
         t = self.work[R.W_T]
