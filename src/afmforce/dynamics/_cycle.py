@@ -75,17 +75,28 @@ def sample_cycle(model, p, dt, rate, average, s_next, ybuf, n, ev, seg, lab, bet
             while j < n_seg - 1 and seg[j, G_T1] < tk:
                 j += 1
             sample_seg[k] = j
-        for j in range(n_seg):
-            first[j] = np.searchsorted(sample_seg, j)
-            last[j] = np.searchsorted(sample_seg, j, side="right")
+        for j in range(n_seg):       # np.searchsorted(sample_seg, j, side="left"/"right")
+            first[j] = n_samp
+            last[j] = n_samp
+        for k in range(n_samp - 1, -1, -1):
+            j = sample_seg[k]
+            first[j] = k
+            for i in range(j):
+                first[i] = k
+                last[i] = k
     else:
         Y = ybuf[:s_next[0]]
         for j in range(n_seg):
             first[j] = lab[j, L_FIRST]
             last[j] = lab[j, L_LAST]
-    tt, zd, code, obs, finite = sample_columns(model, p, Y, dt, first, last, kinds,
-                                               seg[:, G_T0].copy(), seg[:, G_Z0].copy(),
-                                               seg[:, G_V].copy())
+    t0 = np.empty(n_seg)
+    z0 = np.empty(n_seg)
+    v = np.empty(n_seg)
+    for j in range(n_seg):
+        t0[j] = seg[j, G_T0]
+        z0[j] = seg[j, G_Z0]
+        v[j] = seg[j, G_V]
+    tt, zd, code, obs, finite = sample_columns(model, p, Y, dt, first, last, kinds, t0, z0, v)
     m = tt.shape[0]
     apparent = np.empty(m)
     apparent_sep = np.empty(m)
@@ -103,7 +114,7 @@ def sample_cycle(model, p, dt, rate, average, s_next, ybuf, n, ev, seg, lab, bet
 @njit(cache=True, error_model="numpy")
 def _compliance(z, d, h, code, contact_separation, contact_position, turn_position, beta):
     """:func:`afmforce.dynamics.events.compliance_lines`, compiled (the same operations)."""
-    seg = code.astype(np.int64)
+    seg = code
     if not (math.isfinite(contact_position) and turn_position > contact_position):
         return math.nan, math.nan
     span = turn_position - contact_position
