@@ -7,10 +7,8 @@
    <= 0.01 nm, pull-off <= 0.5 nm, hysteresis <= 0.005 nm. The same with
    ``spike_window=0`` (the spike not asked for).
 3. Per-call overhead of a short run (no contact, 18 steps): ``simulate(config)``
-   minus the time inside the compiled pieces (timed around each call: the
-   integrator, one call per drive segment, and ``_cycle.sample_cycle``, the
-   sampled columns and compliance lines; before issue 16's overhead work the
-   sampling and event fits ran as Python and counted as overhead); target <= 0.1 ms.
+   minus the time inside the compiled integrator (timed around each call, one
+   per drive segment); target <= 0.1 ms.
 4. ``simulate_many`` vs a loop of ``simulate()`` over N Fig-6-type runs (xi 0.01
    and 0.1 kg/s x 0.1 and 1 um/s, cycled; only the events kept); per-run time
    of both, blocks interleaved; target >= 1.8x. Also ``threads=1`` (no
@@ -91,15 +89,20 @@ def fig5(repeat: int) -> dict:
     return out
 
 
-def _time_compiled(inside: list):
+def _time_compiled(inside: list, sampling: bool = True):
     """Time every call of the compiled pieces of a run into ``inside[0]``: the integrator
-    (one call per drive segment) and the sampling (``_cycle.sample_cycle``, since issue
-    16's overhead work; before it, the sampling and the event fits ran as Python and
-    counted as overhead). Returns the function that restores them."""
-    from afmforce.dynamics import radau as R
-    from afmforce.dynamics import _cycle as C
+    (one call per drive segment) and, with ``sampling``, the sampled columns
+    (``sample_columns``) and the compliance fits (``_line_fit``), which release the GIL
+    too. Returns the function that restores them."""
+    import sys as _sys
 
-    saved = [(R, "integrate_segment", R.integrate_segment), (C, "sample_cycle", C.sample_cycle)]
+    from afmforce.dynamics import events as E
+    from afmforce.dynamics import radau as R
+
+    S = _sys.modules["afmforce.dynamics.simulate"]
+    saved = [(R, "integrate_segment", R.integrate_segment)]
+    if sampling:
+        saved += [(S, "sample_columns", S.sample_columns), (E, "_line_fit", E._line_fit)]
 
     def timed(f):
         def g(*a):
@@ -122,7 +125,7 @@ def overhead(n: int = 2000) -> dict:
         warnings.simplefilter("ignore")
         simulate(cfg)
         inside = [0.0]
-        restore = _time_compiled(inside)
+        restore = _time_compiled(inside, sampling=False)
         try:
             rows = []
             for _ in range(n):

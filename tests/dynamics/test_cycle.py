@@ -1,11 +1,11 @@
 """simulate()'s lean path (issue 16): cached setup, compiled sampling, results as before.
 
-simulate() integrates each drive segment in one compiled call and samples the cycle in one
-more (_cycle.sample_cycle); with a progress callback the integrator pauses every 5,000 steps
-and resumes. Both must give bit-identical trajectories, events and counters (the suite's
-stored references check them against the physics); the compiled compliance lines must
-equal events.compliance_lines on the returned columns; the per-configuration setup cache
-must not leak between configurations.
+simulate() integrates each drive segment in one compiled call, with a thin layer of Python
+around (the setup cached per configuration and shared parts); with a progress callback the
+integrator pauses every 5,000 steps and resumes. Both must give bit-identical trajectories
+and events (the suite's stored references check them against the physics); the hysteresis
+must be the compliance-line fit of the returned columns; the setup cache must not leak
+between configurations.
 """
 
 import math
@@ -74,7 +74,7 @@ def test_turned_at_load_and_dwell_segments():
                                             rel=0, abs=1e-18)
 
 
-def test_compiled_compliance_lines_equal_the_python_fit():
+def test_hysteresis_is_the_compliance_fit_of_the_columns():
     tr = simulate(**CASES["beam"])
     offset, slope = compliance_lines(tr.piezo_position, tr.apparent_deflection, tr.separation,
                                      tr.segment, tr.config.contact_separation,

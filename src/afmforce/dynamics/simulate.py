@@ -13,8 +13,8 @@ from ..errors import SolverError
 from . import radau as R
 from .config import SimulationConfig
 from .drive import initial_state, segments
-from . import _cycle
-from .events import Events
+from ._locate import sample_columns
+from .events import Events, compliance_lines
 from .guard import _stiff_load_friction, run_check
 from .static import static_jump_in
 from ..progress import Progress
@@ -234,7 +234,7 @@ def _record(seg, term_kind=R.TERM_NONE, term_level=0.0) -> tuple:
 
 
 def _seg_table(plan) -> np.ndarray:
-    """(t_start, z_start, velocity, t_end) of every segment (:func:`._cycle.sample_cycle`)."""
+    """(t_start, z_start, velocity, t_end) of every segment (for the sampled columns)."""
     return np.array([(g.t_start, g.z_start, g.velocity, g.t_end) for g in plan], dtype=float)
 
 
@@ -245,9 +245,9 @@ def _control(s: _Setup, chunk: int) -> tuple:
 
 class _Run:
     """One cycle split into its three phases, so that :func:`simulate_many` can run the
-    compiled middle one (:meth:`integrate`: one integrator call per drive segment and one
-    :func:`._cycle.sample_cycle`, all releasing the GIL, a few microseconds of Python
-    between them) on several threads while this thread prepares and finishes the others."""
+    compiled middle one (:meth:`integrate`: one integrator call per drive segment, the
+    sampled columns and the compliance fits, all releasing the GIL, with some microseconds
+    of Python between them) on several threads while this thread prepares and finishes the others."""
 
     def __init__(self, cfg: SimulationConfig) -> None:
         self.wall0 = time.perf_counter()
@@ -263,8 +263,8 @@ class _Run:
                       np.zeros((n, n)), self.stats)
 
     def integrate(self, progress=None) -> "_Run":
-        """Run the integrator over every drive segment, then sample the result in one
-        compiled call (:func:`._cycle.sample_cycle`); raises :class:`SolverError`."""
+        """Run the integrator over every drive segment, then sample the result (raises
+        :class:`SolverError`)."""
         s = self.setup
         ybuf = np.zeros((s.nbuf, s.n + 1)) if s.averaged else np.full((s.nbuf, s.n), np.nan)
         fixed = (s.tolerances, s.control if progress is None else _control(s, PROGRESS_CHUNK),
@@ -283,11 +283,40 @@ class _Run:
             rows.append(self._segment(records[j], t_total, progress, fixed, plan[j]))
         if progress is not None:
             progress(Progress(done=t_total, total=t_total, unit="s", what="simulate"))
-        lab = np.array([(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)], dtype=np.int64)
-        self.columns = _cycle.sample_cycle(s.model, s.p, s.dt, s.rate, s.averaged, self.s_next,
-                                           ybuf, s.n, self.ev, seg_table, lab, s.beta, s.beam)
         self.t_turn, self.z_turn = plan[0].t_end, plan[0].z_end
+        self.columns = self._sample(ybuf, plan, rows, seg_table)
         return self
+
+    def _sample(self, ybuf, plan, rows, seg_table) -> tuple:
+        """The sampled columns and compliance lines (compiled pieces that release the GIL,
+        and numpy on whole columns): ``(time, z, segment code, observables, apparent
+        deflection, apparent separation, all finite, hysteresis offset, compliance slope)``."""
+        s, n = self.setup, self.setup.n
+        if s.averaged:
+            # every grid time up to the end; windows at the ends are clipped to the run
+            n_samp = min(s.nbuf, int(math.floor(plan[-1].t_end * s.rate * (1.0 + 1e-12))) + 1)
+            Y = ybuf[:n_samp, :n] / ybuf[:n_samp, n:]
+            bounds = [seg.t_end for seg in plan[:-1]]
+            sample_seg = np.searchsorted(np.asarray(bounds), np.arange(n_samp) * s.dt,
+                                         side="left")
+            labels = [(int(np.searchsorted(sample_seg, i)),
+                       int(np.searchsorted(sample_seg, i, side="right")), seg.kind)
+                      for i, seg in enumerate(plan)]
+        else:
+            Y = ybuf[:int(self.s_next[0])]
+            labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
+        lab = np.array(labels, dtype=np.int64)
+        tt, zd, code, obs, finite = sample_columns(
+            s.model, s.p, Y, s.dt, lab[:, 0], lab[:, 1], lab[:, 2].astype(np.int8),
+            seg_table[:, 0], seg_table[:, 1], seg_table[:, 2])
+        apparent = s.beta * obs[:, O_THETA] if s.beam else obs[:, O_DEFL].copy()
+        offset = slope = math.nan
+        if finite and math.isfinite(self.ev[R.E_CONTACT_T]):
+            offset, slope = compliance_lines(zd, apparent, obs[:, O_H], code,
+                                             self.cfg.contact_separation,
+                                             self.ev[R.E_CONTACT_Z], self.z_turn,
+                                             s.beta if s.beam else math.nan)
+        return tt, zd, code, obs, apparent, apparent - zd, finite, offset, slope
 
     def _segment(self, record, t_total, progress, fixed, seg):
         """Integrate one drive segment (``record``: its :func:`.radau.drive_record`); returns
