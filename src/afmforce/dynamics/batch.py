@@ -5,11 +5,11 @@ one :func:`~afmforce.dynamics.simulate` call is a thin layer of Python
 around one compiled call. Here every run is prepared in this thread
 (validation; the run's setup, cached per configuration and per shared parts;
 a few small arrays), its compiled part (:meth:`._Run.integrate`: one
-integrator call per drive segment, then :func:`._cycle.sample_cycle` for the
-sampled observables and the constant-compliance lines, all releasing the
-GIL) runs on a pool of threads, one per core, and the finished runs (events,
+integrator call per drive segment, then the sampled observables and the
+constant-compliance fits, compiled pieces that release the GIL) runs on a
+pool of threads, one per core, and the finished runs (events,
 warnings, the ``Trajectory`` around the arrays) are assembled here while the
-pool integrates the next ones. About 1-2 % of a Fig-6 run holds the GIL. The
+pool integrates the next ones. About 5 % of a Fig-6 run holds the GIL. The
 results are the same as from separate :func:`simulate` calls: the same code
 runs, only the order differs.
 """
