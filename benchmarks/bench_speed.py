@@ -7,12 +7,13 @@
    <= 0.01 nm, pull-off <= 0.5 nm, hysteresis <= 0.005 nm. The same with
    ``spike_window=0`` (the spike not asked for).
 3. Per-call overhead of a short run (no contact, 18 steps): ``simulate(config)``
-   minus the time inside the compiled integrator (timed around each call);
-   target <= 0.1 ms.
+   minus the time inside the compiled integrator (timed around each call, one
+   per drive segment); target <= 0.1 ms.
 4. ``simulate_many`` vs a loop of ``simulate()`` over N Fig-6-type runs (xi 0.01
    and 0.1 kg/s x 0.1 and 1 um/s, cycled; only the events kept); per-run time
    of both, blocks interleaved; target >= 1.8x. Also ``threads=1`` (no
-   parallelism: the hoisted Python alone).
+   parallelism: the hoisted Python alone), and the share of a run that holds the
+   GIL (outside the compiled pieces), which bounds the speed-up on 2 free cores.
 5. A 10,000-run sweep (``run_sweep(simulate_run, ...)``, executor "auto") over
    xi x velocity; target < 60 s. Run at default settings and with
    ``spike_window=0``.
@@ -88,24 +89,43 @@ def fig5(repeat: int) -> dict:
     return out
 
 
+def _time_compiled(inside: list, sampling: bool = True):
+    """Time every call of the compiled pieces of a run into ``inside[0]``: the integrator
+    (one call per drive segment) and, with ``sampling``, the sampled columns
+    (``sample_columns``) and the compliance fits (``_line_fit``), which release the GIL
+    too. Returns the function that restores them."""
+    import sys as _sys
+
+    from afmforce.dynamics import events as E
+    from afmforce.dynamics import radau as R
+
+    S = _sys.modules["afmforce.dynamics.simulate"]
+    saved = [(R, "integrate_segment", R.integrate_segment)]
+    if sampling:
+        saved += [(S, "sample_columns", S.sample_columns), (E, "_line_fit", E._line_fit)]
+
+    def timed(f):
+        def g(*a):
+            t0 = time.perf_counter()
+            r = f(*a)
+            inside[0] += time.perf_counter() - t0
+            return r
+        return g
+
+    for mod, name, f in saved:
+        setattr(mod, name, timed(f))
+    return lambda: [setattr(mod, name, f) for mod, name, f in saved]
+
+
 def overhead(n: int = 2000) -> dict:
     from afmforce.dynamics import SimulationConfig, simulate
-    from afmforce.dynamics import radau as R
 
     cfg = SimulationConfig(**SHORT)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         simulate(cfg)
-        orig = R.integrate_segment
         inside = [0.0]
-
-        def timed(*a):
-            t0 = time.perf_counter()
-            r = orig(*a)
-            inside[0] += time.perf_counter() - t0
-            return r
-
-        R.integrate_segment = timed
+        restore = _time_compiled(inside, sampling=False)
         try:
             rows = []
             for _ in range(n):
@@ -119,7 +139,7 @@ def overhead(n: int = 2000) -> dict:
                 SimulationConfig(**SHORT)
                 t_cfg.append(time.perf_counter() - t0)
         finally:
-            R.integrate_segment = orig
+            restore()
     total = np.array([r[0] for r in rows])
     integ = np.array([r[1] for r in rows])
     return dict(steps=tr.solver.steps, total_median_s=float(np.median(total)),
@@ -154,6 +174,30 @@ def many(n: int, blocks: int = 4) -> dict:
     return dict(n=n, threads=default_threads(), per_run_s={k: v / n for k, v in t.items()},
                 speedup=t["loop"] / t["many"], speedup_1thread=t["loop"] / t["many_1thread"],
                 identical_events=bool(same))
+
+
+def gil_share(n: int = 100) -> dict:
+    """Share of a Fig-6-type run (loop of ``simulate()``, one thread) spent inside the
+    compiled pieces, which release the GIL; the rest holds it. Bound on the speed-up of
+    ``simulate_many`` on 2 free cores (Amdahl): ``1 / (held + (1 - held) / 2)``."""
+    from afmforce.dynamics import SimulationConfig, simulate
+
+    inside = [0.0]
+    for kw in FIG6:
+        simulate(**kw)
+    total = 0.0
+    restore = _time_compiled(inside)
+    try:
+        for i in range(n):
+            cfg = SimulationConfig(**FIG6[i % len(FIG6)])     # a new configuration per run
+            t0 = time.perf_counter()
+            simulate(cfg).events
+            total += time.perf_counter() - t0
+    finally:
+        restore()
+    held = (total - inside[0]) / total
+    return dict(n=n, per_run_s=total / n, gil_held_per_run_s=(total - inside[0]) / n,
+                gil_held_share=held, bound_2_cores=1.0 / (held + (1.0 - held) / 2.0))
 
 
 def sweep(n: int, **fixed) -> dict:
@@ -214,6 +258,11 @@ def main(argv=None) -> int:
               f"({m['threads']} threads) {p['many'] * 1e3:.2f} ms/run = {m['speedup']:.2f}x, "
               f"threads=1 {p['many_1thread'] * 1e3:.2f} ms/run = {m['speedup_1thread']:.2f}x; "
               f"identical events: {m['identical_events']}")
+        g = gil_share()
+        rep["gil_share"] = g
+        print(f"   GIL held {g['gil_held_per_run_s'] * 1e3:.3f} ms of a {g['per_run_s'] * 1e3:.2f} ms "
+              f"run ({g['gil_held_share'] * 100:.1f} %): speed-up bound on 2 free cores "
+              f"{g['bound_2_cores']:.2f}x")
         targets.append(("simulate_many >= 1.8x", m["speedup"] >= 1.8, f"{m['speedup']:.2f}x"))
     if args.sweep:
         rep["sweep"] = {}

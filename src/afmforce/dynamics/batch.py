@@ -1,14 +1,17 @@
 """``simulate_many()``: many approach-retract cycles in one call.
 
 A fit evaluates the forward model hundreds of times and a sweep thousands;
-one :func:`~afmforce.dynamics.simulate` call is Python around a compiled
-core. Here every run is prepared once in this thread (validation, cached
-cantilever and static solutions, buffers), its compiled integration
-(:meth:`._Run.integrate`: no Python objects, the GIL released by the
-``nogil`` integrator) runs on a pool of threads, one per core, and the
-finished runs (observables, events, warnings) are assembled here while the
-pool integrates the next ones. The results are the same as from separate
-:func:`simulate` calls: the same code runs, only the order differs.
+one :func:`~afmforce.dynamics.simulate` call is a thin layer of Python
+around one compiled call. Here every run is prepared in this thread
+(validation; the run's setup, cached per configuration and per shared parts;
+a few small arrays), its compiled part (:meth:`._Run.integrate`: one
+integrator call per drive segment, then the sampled observables and the
+constant-compliance fits, compiled pieces that release the GIL) runs on a
+pool of threads, one per core, and the finished runs (events,
+warnings, the ``Trajectory`` around the arrays) are assembled here while the
+pool integrates the next ones. About 5 % of a Fig-6 run holds the GIL. The
+results are the same as from separate :func:`simulate` calls: the same code
+runs, only the order differs.
 """
 
 from __future__ import annotations

@@ -225,6 +225,13 @@ class SimulationConfig:
                 f"sample_rate {parts['solver'].sample_rate:.4g} Hz gives only {n_app:.1f} samples on "
                 "the approach; raise it (at least 10 samples per run)")
 
+    def __getstate__(self) -> dict[str, Any]:
+        # pickled (sweep workers, caches): the parts and the solved start deflection, not
+        # the arrays simulate() caches here (rebuilt on first use)
+        state = dict(self.__dict__)
+        state.pop("_setup", None)
+        return state
+
     # --- flat names -----------------------------------------------------------
     @classmethod
     def from_flat(cls, values: Mapping[str, Any] | None = None, /, **flat: Any) -> SimulationConfig:

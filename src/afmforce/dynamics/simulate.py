@@ -12,14 +12,15 @@ import numpy as np
 from ..errors import SolverError
 from . import radau as R
 from .config import SimulationConfig
-from .drive import approach_segment, initial_state, segments
+from .drive import initial_state, segments
 from ._locate import sample_columns
 from .events import Events, compliance_lines
-from .guard import run_check
+from .guard import _stiff_load_friction, run_check
 from .static import static_jump_in
 from ..progress import Progress
 from .load_friction import RING_AMPLITUDE, load_friction_controls  # noqa: F401  (re-exported)
 from .registries import RINGING
+from .models import XI as _XI, ZETA as _ZETA
 from .models import (MODEL_BEAM, MODEL_IDS, O_DEFL, O_FY, O_FZ, O_H, O_THETA,
                      O_Y2, state_size)
 from .trajectory import SolverStats, Trajectory
@@ -60,6 +61,8 @@ SPIKE_QUIET_CYCLES = 30.0
 #: Damping steps only where the contact stiffness -Fs'(h) exceeds this multiple
 #: of k: well inside the repulsive wall, away from the pull-off fold (h = z0).
 DAMP_KAPPA_RATIO = 100.0
+#: ``SolverStats.method``.
+METHOD = "Radau IIA (order 5), compiled, analytic Jacobian"
 
 
 class DynamicsWarning(UserWarning):
@@ -126,91 +129,216 @@ def simulate(config: SimulationConfig | None = None, *,
     return run.finish(check, wall0)
 
 
+class _Setup:
+    """What a run derives from its configuration alone (:func:`_setup`, once per
+    configuration): the packed model, start state, tolerances, drive plan, the event
+    record's inputs and the compiled call's records. Read-only: runs copy what they change."""
+
+    __slots__ = ("model", "n", "p", "y0", "atol", "rtolv", "t_total_max", "dt", "nbuf",
+                 "averaged", "ev0", "h_s", "z_s", "hmax_dz", "damp_cycles", "term", "f_max",
+                 "budget", "tolerances", "control", "beta", "k", "beam", "plan", "records",
+                 "seg_table", "rate",
+                 # friction-dependent (the rest depends on probe, surface, drive, solver only)
+                 "vfac_scale", "stiff_load", "vfac")
+
+
+#: The fields of :class:`_Setup` shared by configurations that differ in friction only.
+_BASE_FIELDS = _Setup.__slots__[:-3]
+#: The base _Setup by (probe, surface, drive, solver), and by their ids (-> (parts, base)):
+#: a fit or sweep changes one part (e.g. friction) and keeps the others as the same objects
+#: or equal ones.
+_BASES: dict = {}
+_BASES_MAX = 256
+
+
+def _setup(cfg: SimulationConfig) -> _Setup:
+    """The :class:`_Setup` of ``cfg``, cached on the (immutable) configuration."""
+    s = cfg.__dict__.get("_setup")
+    if s is not None:
+        return s
+    parts = (cfg.probe, cfg.surface, cfg.drive, cfg.solver)
+    key = tuple(map(id, parts))
+    hit = _BASES.get(key)
+    if hit is not None and all(a is b for a, b in zip(hit[0], parts)):
+        base = hit[1]
+    else:                   # equal parts built anew (flat names): the same base
+        base = _BASES.get(parts)
+        if base is None:
+            base = _base(cfg)
+            if len(_BASES) >= _BASES_MAX:
+                _BASES.clear()
+            _BASES[parts] = base
+        _BASES[key] = (parts, base)
+    s = _Setup()
+    for name in _BASE_FIELDS:
+        setattr(s, name, getattr(base, name))
+    xi, zeta = cfg.friction.coefficients
+    if s.beam:              # the same values as parameter_vector(cfg) fills in
+        s.p = p = base.p.copy()
+        p[_XI] = xi
+        p[_ZETA] = zeta
+    s.vfac_scale, ring_amp = load_friction_controls(cfg)
+    s.ev0 = ev = base.ev0.copy()
+    ev[R.E_RING_AMP] = ring_amp
+    s.stiff_load = _stiff_load_friction(cfg)
+    s.vfac = VELOCITY_TOLERANCE_FACTOR * s.vfac_scale
+    cfg.__dict__["_setup"] = s
+    return s
+
+
+def _base(cfg: SimulationConfig) -> _Setup:
+    """The friction-independent part of :func:`_setup` (``p``: friction coefficients 0)."""
+    s = _Setup()
+    s.model = model = MODEL_IDS[cfg.model]
+    s.n = n = state_size(model)
+    s.p = p = parameter_vector(cfg.replace(friction="none") if model == MODEL_BEAM else cfg)
+    s.y0 = initial_state(cfg)
+    atol = np.full(n, cfg.atol)
+    atol[n // 2:] = cfg.atol * 2.0 * math.pi * VELOCITY_ATOL_FREQUENCY
+    rtolv = np.full(n, cfg.rtol)
+    rtolv[: n // 2] = cfg.rtol * POSITION_RTOL_FACTOR
+    s.atol, s.rtolv = atol, rtolv
+    s.t_total_max = t_total_max = segments(cfg)[-1].t_end
+    s.dt = 1.0 / cfg.sample_rate
+    s.nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
+    s.averaged = cfg.sampling == "average"
+    s.ev0 = ev = np.full(R.E_SIZE, np.nan)
+    ev[R.E_IN_CONTACT] = 0.0
+    ev[R.E_H_CONTACT] = cfg.contact_separation
+    ev[R.E_SPIKE_WINDOW] = cfg.spike_window
+    ev[R.E_JUMP_FACTOR] = cfg.jump_factor
+    s.h_s, s.z_s, _ = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)
+    ev[R.E_H_STATIC] = s.h_s if math.isfinite(s.h_s) else -math.inf
+    s.hmax_dz = HMAX_TRAVEL * cfg.z0
+    s.damp_cycles = RINGING[cfg.ringing].damp_cycles
+    if cfg.turn_force is not None:
+        # the load an instrument triggers on: k z2, not the ringing contact force Fz
+        s.term = (R.TERM_DEFLECTION, cfg.turn_force / cfg.force_constant)
+    elif cfg.turn_deflection is not None:
+        s.term = (R.TERM_DEFLECTION, cfg.turn_deflection)
+    else:
+        s.term = (R.TERM_NONE, 0.0)
+    s.f_max = f_max = (_beam_fmax(cfg.cantilever, cfg.m_joint, cfg.m_base)
+                       if model == MODEL_BEAM else free_frequency_max(p, model))
+    s.budget = cfg.max_steps if cfg.max_steps is not None else max(
+        2_000_000, int(60.0 * f_max * t_total_max))
+    s.beam = model == MODEL_BEAM
+    s.beta = float(cfg.calibration_factor)
+    s.k = cfg.force_constant
+    s.tolerances = R.tolerance_record(cfg.rtol, rtolv, atol)
+    s.control = _control(s, 2**62)
+    s.rate = float(cfg.sample_rate)
+    s.plan = plan = segments(cfg)          # the plan unless the approach turns at a load
+    s.records = [_record(seg) for seg in plan]
+    s.records[0] = _record(plan[0], *s.term)
+    s.seg_table = _seg_table(plan)
+    return s
+
+
+def _record(seg, term_kind=R.TERM_NONE, term_level=0.0) -> tuple:
+    return R.drive_record(seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end, term_kind,
+                          term_level)
+
+
+def _seg_table(plan) -> np.ndarray:
+    """(t_start, z_start, velocity, t_end) of every segment (for the sampled columns)."""
+    return np.array([(g.t_start, g.z_start, g.velocity, g.t_end) for g in plan], dtype=float)
+
+
+def _control(s: _Setup, chunk: int) -> tuple:
+    return R.control_record(HMAX_FRACTION, s.hmax_dz, s.damp_cycles, DAMP_KAPPA_RATIO, s.budget,
+                            chunk)
+
+
 class _Run:
     """One cycle split into its three phases, so that :func:`simulate_many` can run the
-    compiled middle one (:meth:`integrate`, no Python objects touched, the GIL released)
-    on several threads while this thread prepares and finishes the others."""
+    compiled middle one (:meth:`integrate`: one integrator call per drive segment, the
+    sampled columns and the compliance fits, all releasing the GIL, with some microseconds
+    of Python between them) on several threads while this thread prepares and finishes the others."""
 
     def __init__(self, cfg: SimulationConfig) -> None:
         self.wall0 = time.perf_counter()
         self.cfg = cfg
-        self.model = model = MODEL_IDS[cfg.model]
-        self.n = n = state_size(model)
-        self.p = p = parameter_vector(cfg)
-        self.y = initial_state(cfg)
-        atol = np.full(n, cfg.atol)
-        atol[n // 2:] = cfg.atol * 2.0 * math.pi * VELOCITY_ATOL_FREQUENCY
-        rtolv = np.full(n, cfg.rtol)
-        rtolv[: n // 2] = cfg.rtol * POSITION_RTOL_FACTOR
-        self.atol, self.rtolv = atol, rtolv
-        self.app = approach_segment(cfg)
-        plan = segments(cfg)
-        self.t_total_max = t_total_max = plan[-1].t_end
-        self.dt = 1.0 / cfg.sample_rate
-        self.nbuf = nbuf = int(math.floor(t_total_max * cfg.sample_rate * (1.0 + 1e-12))) + 1
-        self.averaged = cfg.sampling == "average"
-        self.ybuf = np.zeros((nbuf, n + 1)) if self.averaged else np.full((nbuf, n), np.nan)
+        self.setup = s = _setup(cfg)
+        n = s.n
+        self.y = s.y0.copy()
+        self.ev = s.ev0.copy()
+        self.ev[R.E_SPIKE_CYCLES] = SPIKE_QUIET_CYCLES   # not cached: tests may patch it
         self.s_next = np.zeros(1, dtype=np.int64)
-        self.ev = ev = np.full(R.E_SIZE, np.nan)
-        ev[R.E_IN_CONTACT] = 0.0
-        ev[R.E_H_CONTACT] = cfg.contact_separation
-        ev[R.E_SPIKE_WINDOW] = cfg.spike_window
-        ev[R.E_SPIKE_CYCLES] = SPIKE_QUIET_CYCLES
-        ev[R.E_JUMP_FACTOR] = cfg.jump_factor
-        self.h_s, self.z_s, _ = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)
-        ev[R.E_H_STATIC] = self.h_s if math.isfinite(self.h_s) else -math.inf
-        self.vfac_scale, ring_amp = load_friction_controls(cfg)
-        ev[R.E_RING_AMP] = ring_amp
         self.work = np.zeros(R.W_SIZE)
-        self.Q = np.zeros((n, 3))
-        self.y_old = np.zeros(n)
-        self.J = np.zeros((n, n))
         self.stats = np.zeros(R.S_SIZE, dtype=np.int64)
-        self.hmax_dz = HMAX_TRAVEL * cfg.z0
-        self.damp_cycles = RINGING[cfg.ringing].damp_cycles
-        if cfg.turn_force is not None:
-            # the load an instrument triggers on: k z2, not the ringing contact force Fz
-            self.term = (R.TERM_DEFLECTION, cfg.turn_force / cfg.force_constant)
-        elif cfg.turn_deflection is not None:
-            self.term = (R.TERM_DEFLECTION, cfg.turn_deflection)
+        self.state = (self.y, self.ev, self.work, np.zeros((n, 3)), np.zeros(n),
+                      np.zeros((n, n)), self.stats)
+
+    def integrate(self, progress=None) -> "_Run":
+        """Run the integrator over every drive segment, then sample the result (raises
+        :class:`SolverError`)."""
+        s = self.setup
+        ybuf = np.zeros((s.nbuf, s.n + 1)) if s.averaged else np.full((s.nbuf, s.n), np.nan)
+        fixed = (s.tolerances, s.control if progress is None else _control(s, PROGRESS_CHUNK),
+                 (0.0, s.dt, s.averaged, self.s_next, ybuf), self.state)
+        rows = [self._segment(s.records[0], s.t_total_max, progress, fixed, s.plan[0])]
+        self.turned_at_load = turned = rows[0][0] == R.TERMINAL
+        if turned:
+            t_turn = float(self.ev[R.E_TERM_T])
+            plan = segments(self.cfg, t_turn, float(s.plan[0].position(t_turn)))
+            records = [_record(seg) for seg in plan]
+            seg_table = _seg_table(plan)
         else:
-            self.term = (R.TERM_NONE, 0.0)
-        self.f_max = f_max = (_beam_fmax(cfg.cantilever, cfg.m_joint, cfg.m_base)
-                              if model == MODEL_BEAM else free_frequency_max(p, model))
-        self.budget = cfg.max_steps if cfg.max_steps is not None else max(
-            2_000_000, int(60.0 * f_max * t_total_max))
+            plan, records, seg_table = s.plan, s.records, s.seg_table
+        t_total = plan[-1].t_end
+        for j in range(1, len(plan)):
+            rows.append(self._segment(records[j], t_total, progress, fixed, plan[j]))
+        if progress is not None:
+            progress(Progress(done=t_total, total=t_total, unit="s", what="simulate"))
+        self.t_turn, self.z_turn = plan[0].t_end, plan[0].z_end
+        self.columns = self._sample(ybuf, plan, rows, seg_table)
+        return self
 
-    def _integrator_args(self, seg, term_kind, term_level, chunk) -> tuple:
-        """The arguments of :func:`.radau.integrate_segment` for the drive segment ``seg``
-        (its records as plain tuples; the arrays are this run's, updated in place; the
-        records that do not change between segments are built once per run)."""
-        fixed = self.__dict__.get("_fixed_records")
-        if fixed is None or fixed[0] != chunk:
-            cfg = self.cfg
-            fixed = self._fixed_records = (
-                chunk,
-                R.tolerance_record(cfg.rtol, self.rtolv, self.atol),
-                R.control_record(HMAX_FRACTION, self.hmax_dz, self.damp_cycles,
-                                 DAMP_KAPPA_RATIO, self.budget, chunk),
-                R.sampling_record(0.0, self.dt, self.averaged, self.s_next, self.ybuf),
-                R.state_record(self.y, self.ev, self.work, self.Q, self.y_old, self.J,
-                               self.stats))
-        return (self.model, self.p,
-                R.drive_record(seg.kind, seg.t_start, seg.z_start, seg.velocity, seg.t_end,
-                               term_kind, term_level)) + fixed[1:]
+    def _sample(self, ybuf, plan, rows, seg_table) -> tuple:
+        """The sampled columns and compliance lines (compiled pieces that release the GIL,
+        and numpy on whole columns): ``(time, z, segment code, observables, apparent
+        deflection, apparent separation, all finite, hysteresis offset, compliance slope)``."""
+        s, n = self.setup, self.setup.n
+        if s.averaged:
+            # every grid time up to the end; windows at the ends are clipped to the run
+            n_samp = min(s.nbuf, int(math.floor(plan[-1].t_end * s.rate * (1.0 + 1e-12))) + 1)
+            Y = ybuf[:n_samp, :n] / ybuf[:n_samp, n:]
+            bounds = [seg.t_end for seg in plan[:-1]]
+            sample_seg = np.searchsorted(np.asarray(bounds), np.arange(n_samp) * s.dt,
+                                         side="left")
+            labels = [(int(np.searchsorted(sample_seg, i)),
+                       int(np.searchsorted(sample_seg, i, side="right")), seg.kind)
+                      for i, seg in enumerate(plan)]
+        else:
+            Y = ybuf[:int(self.s_next[0])]
+            labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
+        lab = np.array(labels, dtype=np.int64)
+        tt, zd, code, obs, finite = sample_columns(
+            s.model, s.p, Y, s.dt, lab[:, 0], lab[:, 1], lab[:, 2].astype(np.int8),
+            seg_table[:, 0], seg_table[:, 1], seg_table[:, 2])
+        apparent = s.beta * obs[:, O_THETA] if s.beam else obs[:, O_DEFL].copy()
+        offset = slope = math.nan
+        if finite and math.isfinite(self.ev[R.E_CONTACT_T]):
+            offset, slope = compliance_lines(zd, apparent, obs[:, O_H], code,
+                                             self.cfg.contact_separation,
+                                             self.ev[R.E_CONTACT_Z], self.z_turn,
+                                             s.beta if s.beam else math.nan)
+        return tt, zd, code, obs, apparent, apparent - zd, finite, offset, slope
 
-    def _segment(self, seg, term_kind, term_level, t_total, progress):
-        work, s_next, stats = self.work, self.s_next, self.stats
+    def _segment(self, record, t_total, progress, fixed, seg):
+        """Integrate one drive segment (``record``: its :func:`.radau.drive_record`); returns
+        (status, first sample, end sample)."""
+        work, s_next = self.work, self.s_next
         work[R.W_T] = seg.t_start
         work[R.W_H] = INITIAL_STEP
         work[R.W_H_OLD] = 0.0
         work[R.W_ERR_OLD] = 0.0
         work[R.W_HAS_SOL] = 0.0
         work[R.W_HAVE_JAC] = 0.0
-        work[R.W_VFAC] = VELOCITY_TOLERANCE_FACTOR * self.vfac_scale
+        work[R.W_VFAC] = self.setup.vfac
         first = int(s_next[0])
-        chunk = PROGRESS_CHUNK if progress is not None else 2**62
-        args = self._integrator_args(seg, term_kind, term_level, chunk)
+        args = (self.setup.model, self.setup.p, record) + fixed
         while True:
             status = R.integrate_segment(*args)
             if status == R.PAUSED:
@@ -219,77 +347,33 @@ class _Run:
                 continue
             break
         if status < 0:
-            t = work[R.W_T]
-            where = (f"at t = {t:.6g} s, z = {seg.position(t) * 1e9:.4g} nm in the "
-                     f"{('approach', 'retract', 'dwell')[seg.kind]} after {stats[R.S_STEPS]} steps")
-            if status == R.MAX_STEPS:
-                advice = (f"the step budget max_steps = {self.budget} is spent; raise max_steps "
-                          f"(this run follows modes up to {self.f_max / 1e3:.3g} kHz over "
-                          f"{t_total:.4g} s; a tighter rtol/atol needs more steps, not fewer)")
-            else:
-                advice = "a tighter rtol/atol may get past it"
-            raise SolverError(f"integration failed ({R.STATUS[status]}) {where}; {advice}")
+            self._raise(status, seg, t_total)
         return status, first, int(s_next[0])
 
-    def integrate(self, progress=None) -> "_Run":
-        """Run the integrator over every drive segment (raises :class:`SolverError`)."""
-        cfg, app = self.cfg, self.app
-        labels = []
-        status, a, b = self._segment(app, *self.term, self.t_total_max, progress)
-        labels.append((app.kind, a, b))
-        self.turned_at_load = status == R.TERMINAL
-        if self.turned_at_load:
-            t_turn = float(self.ev[R.E_TERM_T])
-            plan = segments(cfg, t_turn, float(app.position(t_turn)))
+    def _raise(self, status, seg, t_total):
+        t = self.work[R.W_T]
+        where = (f"at t = {t:.6g} s, z = {seg.position(t) * 1e9:.4g} nm in the "
+                 f"{('approach', 'retract', 'dwell')[seg.kind]} after {self.stats[R.S_STEPS]} steps")
+        if status == R.MAX_STEPS:
+            advice = (f"the step budget max_steps = {self.setup.budget} is spent; raise max_steps "
+                      f"(this run follows modes up to {self.setup.f_max / 1e3:.3g} kHz over "
+                      f"{t_total:.4g} s; a tighter rtol/atol needs more steps, not fewer)")
         else:
-            plan = segments(cfg)
-        t_total = plan[-1].t_end
-        for seg in plan[1:]:
-            _, a, b = self._segment(seg, R.TERM_NONE, 0.0, t_total, progress)
-            labels.append((seg.kind, a, b))
-        if progress is not None:
-            progress(Progress(done=t_total, total=t_total, unit="s", what="simulate"))
-        self.labels, self.plan = labels, plan
-        return self
+            advice = "a tighter rtol/atol may get past it"
+        raise SolverError(f"integration failed ({R.STATUS[status]}) {where}; {advice}")
 
     def finish(self, check: str = "off", wall0: float | None = None) -> Trajectory:
         """The trajectory, events, warnings and convergence check of an integrated run."""
-        cfg, model, ev, stats, plan = self.cfg, self.model, self.ev, self.stats, self.plan
-        labels, n = self.labels, self.n
-        if self.averaged:
-            # every grid time up to the end; windows at the ends are clipped to the run
-            n_samp = min(self.nbuf, int(math.floor(plan[-1].t_end * cfg.sample_rate
-                                                   * (1.0 + 1e-12))) + 1)
-            Y = self.ybuf[:n_samp, :n] / self.ybuf[:n_samp, n:]
-            bounds = [seg.t_end for seg in plan[:-1]]
-            sample_seg = np.searchsorted(np.asarray(bounds), np.arange(n_samp) * self.dt,
-                                         side="left")
-            labels = [(seg.kind, int(np.searchsorted(sample_seg, i)),
-                       int(np.searchsorted(sample_seg, i, side="right")))
-                      for i, seg in enumerate(plan)]
-        else:
-            n_samp = int(self.s_next[0])
-            Y = self.ybuf[:n_samp]
-        lab = np.array([(a, b, kind) for kind, a, b in labels], dtype=np.int64).reshape(-1, 3)
-        seg = np.array([(s.t_start, s.z_start, s.velocity) for s in plan]).reshape(-1, 3)
-        tt, zd, seg_code, obs, finite = sample_columns(
-            model, self.p, Y, self.dt, lab[:, 0], lab[:, 1], lab[:, 2].astype(np.int8),
-            seg[:, 0], seg[:, 1], seg[:, 2])
+        cfg, s, ev, stats = self.cfg, self.setup, self.ev, self.stats
+        tt, zd, seg_code, obs, apparent, apparent_sep, finite, offset, slope = self.columns
         if not finite:
             raise SolverError("the sampled trajectory contains non-finite values; "
                               "try a tighter rtol/atol")
-        beta = cfg.calibration_factor
+        beta = s.beta
         deflection = obs[:, O_DEFL]
-        if model == MODEL_BEAM:
-            angle = obs[:, O_THETA]
-            apparent = beta * angle
-        else:
-            angle = np.full(n_samp, np.nan)
-            apparent = deflection.copy()
-        separation = obs[:, O_H]
-
-        events = _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code,
-                         self.h_s, self.z_s)
+        angle = obs[:, O_THETA] if s.beam else np.full(tt.shape[0], np.nan)
+        events = _events(cfg, ev, self.t_turn, self.z_turn, beta, s.model, offset, slope,
+                         s.h_s, s.z_s)
         if not math.isfinite(events.contact_time):
             warnings.warn(
                 f"the approach never reached contact (h < {cfg.contact_separation * 1e9:.3g} nm) "
@@ -299,41 +383,49 @@ class _Run:
             warnings.warn(
                 f"the retract ended in contact at z = {cfg.end * 1e9:.4g} nm (no pull-off); "
                 "lower end", DynamicsWarning, stacklevel=3)
-        if cfg.turn_force is not None or cfg.turn_deflection is not None:
-            if not self.turned_at_load:
-                what = "turn_force" if cfg.turn_force is not None else "turn_deflection"
-                warnings.warn(f"{what} was not reached before the turn limit "
-                              f"z = {cfg.turn * 1e9:.4g} nm; turned there", DynamicsWarning,
-                              stacklevel=3)
+        if s.term[0] != R.TERM_NONE and not self.turned_at_load:
+            what = "turn_force" if cfg.turn_force is not None else "turn_deflection"
+            warnings.warn(f"{what} was not reached before the turn limit "
+                          f"z = {cfg.turn * 1e9:.4g} nm; turned there", DynamicsWarning,
+                          stacklevel=3)
 
         def _resolve(tight):
             with warnings.catch_warnings():
                 warnings.simplefilter("ignore")
                 return simulate(tight).events
 
-        event_errors, check_note = run_check(check, cfg, events, _resolve)
+        event_errors, check_note = ({}, "not checked") if check == "off" and not s.stiff_load \
+            else run_check(check, cfg, events, _resolve)
         wall = time.perf_counter() - (self.wall0 if wall0 is None else wall0)
-        solver = SolverStats(
-            status="success", method="Radau IIA (order 5), compiled, analytic Jacobian",
-            steps=int(stats[R.S_STEPS]), accepted=int(stats[R.S_ACCEPTED]),
-            rejected=int(stats[R.S_REJECTED]), rhs_evaluations=int(stats[R.S_NFEV]),
-            jacobian_evaluations=int(stats[R.S_NJEV]), lu_decompositions=int(stats[R.S_NLU]),
-            damping_steps=int(stats[R.S_DAMPED]), newton_failures=int(stats[R.S_NEWTON_FAIL]),
-            wall_time=wall, event_errors=event_errors, check=check_note)
-        return Trajectory(
+        st = stats.tolist()
+        solver = _frozen(SolverStats, dict(
+            status="success", method=METHOD, steps=st[R.S_STEPS], accepted=st[R.S_ACCEPTED],
+            rejected=st[R.S_REJECTED], rhs_evaluations=st[R.S_NFEV],
+            jacobian_evaluations=st[R.S_NJEV], lu_decompositions=st[R.S_NLU],
+            damping_steps=st[R.S_DAMPED], newton_failures=st[R.S_NEWTON_FAIL],
+            wall_time=wall, event_errors=event_errors, check=check_note))
+        return _frozen(Trajectory, dict(
             time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
-            separation=separation, apparent_separation=apparent - zd, angle=angle,
+            separation=obs[:, O_H], apparent_separation=apparent_sep, angle=angle,
             lateral_position=obs[:, O_Y2], normal_force=obs[:, O_FZ], friction_force=obs[:, O_FY],
-            segment=seg_code, calibration_factor=beta, spring_constant=cfg.force_constant,
-            config=cfg, events=events, solver=solver)
+            segment=seg_code, calibration_factor=s.beta, spring_constant=s.k, config=cfg,
+            events=events, solver=solver))
 
 
-def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code, h_s, z_s) -> Events:
-    contact = math.isfinite(ev[R.E_CONTACT_T])
-    left = math.isfinite(ev[R.E_JUMP_T])
-    fast = math.isfinite(ev[R.E_FAST_T]) and (not contact or ev[R.E_FAST_T] <= ev[R.E_CONTACT_T])
+def _events(cfg, ev, t_turn, z_turn, beta, model, offset, slope, h_s, z_s) -> Events:
+    # Python floats (the same values), read once; every NaN is the one math.nan, so that
+    # events of identical runs compare equal (dataclass == compares fields by identity first)
+    nan = math.nan
+    e = [x if x == x else nan for x in ev.tolist()]
+
+    def f(x) -> float:
+        x = float(x)
+        return x if x == x else nan
+    contact = math.isfinite(e[R.E_CONTACT_T])
+    left = math.isfinite(e[R.E_JUMP_T])
+    fast = math.isfinite(e[R.E_FAST_T]) and (not contact or e[R.E_FAST_T] <= e[R.E_CONTACT_T])
     where = (f"left the static branch (h < h_s = {h_s * 1e9:.4g} nm) at "
-             f"z = {ev[R.E_JUMP_Z] * 1e9:.4g} nm; static instability at z = {z_s * 1e9:.4g} nm"
+             f"z = {e[R.E_JUMP_Z] * 1e9:.4g} nm; static instability at z = {z_s * 1e9:.4g} nm"
              if left else "")
     if not contact:
         jumped, note = None, "no contact: the approach turned before the surfaces touched"
@@ -343,31 +435,33 @@ def _events(cfg, ev, plan, beta, model, zd, apparent, separation, seg_code, h_s,
         jumped, note = False, ("no jump: crept into contact (dh/dt never fell below "
                                f"-{cfg.jump_factor:g} dz/dt before contact)"
                                + (f"; {where}" if left else ""))
-    turn = plan[0]
-    offset, slope = (math.nan, math.nan)
-    if contact:
-        offset, slope = compliance_lines(zd, apparent, separation, seg_code,
-                                         cfg.contact_separation, ev[R.E_CONTACT_Z],
-                                         turn.z_end, beta if model == MODEL_BEAM else math.nan)
     if model == MODEL_BEAM:
-        min_app, min_app_z = beta * ev[R.E_MIN_THETA], ev[R.E_MIN_THETA_Z]
-        spike, spike_t, spike_z = beta * ev[R.E_SPIKE_THETA], ev[R.E_SPIKE_T], ev[R.E_SPIKE_Z]
+        min_app, min_app_z = beta * e[R.E_MIN_THETA], e[R.E_MIN_THETA_Z]
+        spike, spike_t, spike_z = beta * e[R.E_SPIKE_THETA], e[R.E_SPIKE_T], e[R.E_SPIKE_Z]
         if cfg.spike_window == 0.0:         # not asked for: no window, no spike
             spike = spike_t = spike_z = math.nan
     else:
-        min_app, min_app_z = ev[R.E_MIN_DEFL], ev[R.E_MIN_DEFL_Z]
+        min_app, min_app_z = e[R.E_MIN_DEFL], e[R.E_MIN_DEFL_Z]
         spike = spike_t = spike_z = math.nan
-    f = float
-    return Events(
+    return _frozen(Events, dict(
         jumped=jumped, jump_in_note=note,
-        jump_in_time=f(ev[R.E_JUMP_T]), jump_in_position=f(ev[R.E_JUMP_Z]),
-        jump_in_separation=f(ev[R.E_JUMP_H]),
+        jump_in_time=e[R.E_JUMP_T], jump_in_position=e[R.E_JUMP_Z],
+        jump_in_separation=e[R.E_JUMP_H],
         static_jump_in_position=f(z_s), static_jump_in_separation=f(h_s),
-        contact_time=f(ev[R.E_CONTACT_T]), contact_position=f(ev[R.E_CONTACT_Z]),
-        pull_off_time=f(ev[R.E_PULL_T]), pull_off_position=f(ev[R.E_PULL_Z]),
-        pull_off_force=f(ev[R.E_MIN_FZ]) if contact else math.nan,
-        min_deflection=f(ev[R.E_MIN_DEFL]), min_deflection_position=f(ev[R.E_MIN_DEFL_Z]),
+        contact_time=e[R.E_CONTACT_T], contact_position=e[R.E_CONTACT_Z],
+        pull_off_time=e[R.E_PULL_T], pull_off_position=e[R.E_PULL_Z],
+        pull_off_force=e[R.E_MIN_FZ] if contact else math.nan,
+        min_deflection=e[R.E_MIN_DEFL], min_deflection_position=e[R.E_MIN_DEFL_Z],
         min_apparent_deflection=f(min_app), min_apparent_deflection_position=f(min_app_z),
         spike_height=f(spike), spike_time=f(spike_t), spike_position=f(spike_z),
         hysteresis_offset=f(offset), compliance_slope=f(slope),
-        turn_time=f(turn.t_end), turn_position=f(turn.z_end))
+        turn_time=f(t_turn), turn_position=f(z_turn)))
+
+
+def _frozen(cls, fields: dict):
+    """``cls(**fields)`` of a frozen dataclass without ``__post_init__`` (Events,
+    SolverStats, Trajectory; every field given), without its generated ``__init__``,
+    which sets each field through ``object.__setattr__`` (14 us for the 23 of Events)."""
+    obj = object.__new__(cls)
+    obj.__dict__.update(fields)
+    return obj
