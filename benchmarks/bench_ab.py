@@ -1,15 +1,11 @@
 """A/B check of an integrator change, in one run.
 
-``python benchmarks/bench_ab.py [--inprocess-rounds N]`` (in-process only), or
-``python benchmarks/bench_ab.py --before DIR [--rounds N] [--dump-only]`` (against a tree).
+``python benchmarks/bench_ab.py --before DIR [--rounds N] [--dump-only]``.
 
-0. **In process** (always): ``simulate()`` with the package's integrator and with the one
-   before issue 11.8 (``benchmarks/_radau_before.py``, the same records unpacked into its 31
-   positional arguments) on the Fig-5 cycle, the four Fig-6 runs and two long ramps,
-   alternating call by call; trajectories, events and counters compared bitwise, CPU
-   time of this thread (robust to the load of a shared machine) as medians, ratio
-   after/before per case. (The short run times the whole call, Python included; the
-   "before" side pays ~1 us more for unpacking the records in Python.)
+(Until issue 16 an in-process mode also compared against a frozen copy of the integrator
+before issue 11.8, ``benchmarks/_radau_before.py``; that gate has served, and the copy no
+longer matched the pieces it imported, so both are gone: compare against a checkout of the
+commit before a change instead.)
 
 ``DIR`` is another checkout of the project (e.g. ``git archive <commit> | tar -x -C DIR``).
 1. **Same answers**: both trees simulate a fixed set of runs (Fig 5, the Fig-6 runs, the
@@ -78,102 +74,6 @@ np.savez(sys.argv[1], **out)
 """
 
 
-INPROCESS_CASES = {
-    "short run, no contact (18 steps)": dict(start=-40e-9, turn=-35e-9, end=-40e-9,
-                                             velocity=1e-6),
-    "Fig 5 (beam, xi 0.1, 0.1 um/s)": {},
-    "Fig 6 xi 0.01, 0.1 um/s": dict(xi=0.01),
-    "Fig 6 xi 0.01, 1 um/s": dict(xi=0.01, velocity=1e-6),
-    "Fig 6 xi 0.1, 1 um/s": dict(velocity=1e-6),
-    "Fig 5, averaged samples": dict(sampling="average"),
-    "spring 1 ug, 7.2 um/s, 2 um ramps": dict(
-        model="spring", mass=1e-9, spring_constant=0.21, radius=220e-9, velocity=7.2e-6,
-        start=-2e-6, turn=50e-9, end=-2e-6, sample_rate=1.6e3),
-    "beam xi 0.01, 20 um/s, 5 um ramps": dict(xi=0.01, velocity=20e-6, start=-5e-6,
-                                              turn=100e-9, end=-5e-6, sample_rate=50e3),
-}
-
-
-def _before_integrator():
-    """The integrator before issue 11.8, called with the records of the current one."""
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    import _radau_before as B
-
-    def call(model, p, drive, tol, control, sampling, state):
-        kind, t_a, z_a, v, t_end, term_kind, term_level = drive
-        rtol, rtolv, atol = tol
-        hmax_frac, hmax_dz, damp_cycles, damp_kappa, h_fixed, max_steps, chunk = control
-        s_t0, s_dt, average, s_next, ybuf = sampling
-        y, ev, work, Q, y_old, J, stats = state
-        return B.integrate_segment(model, p, kind, t_a, z_a, v, t_end, y, rtol, rtolv, atol,
-                                   hmax_frac, hmax_dz, damp_cycles, damp_kappa, term_kind,
-                                   term_level, s_t0, s_dt, s_next, ybuf, ev, work, Q, y_old,
-                                   J, stats, max_steps, chunk, h_fixed,
-                                   1.0 if average else 0.0)
-    return call
-
-
-def _same(a, b) -> bool:
-    import dataclasses
-    for f in dataclasses.fields(a):
-        x, y = getattr(a, f.name), getattr(b, f.name)
-        if isinstance(x, np.ndarray):
-            if not np.array_equal(x, y, equal_nan=x.dtype.kind == "f"):
-                return False
-    ea, eb = dataclasses.asdict(a.events), dataclasses.asdict(b.events)
-    for k in ea:
-        if ea[k] != eb[k] and not (isinstance(ea[k], float) and np.isnan(ea[k])
-                                   and np.isnan(eb[k])):
-            return False
-    sa, sb = a.solver, b.solver
-    return all(getattr(sa, k) == getattr(sb, k) for k in (
-        "steps", "accepted", "rejected", "rhs_evaluations", "jacobian_evaluations",
-        "lu_decompositions", "damping_steps", "newton_failures"))
-
-
-def inprocess(rounds: int) -> bool:
-    """Section 0 of the module docstring; True if all answers are identical and no case
-    is more than 5 % slower."""
-    import time
-    import warnings
-
-    from afmforce.dynamics import radau as R
-    from afmforce.dynamics import simulate
-
-    new, old = R.integrate_segment, _before_integrator()
-    ok = True
-    print(f"in-process A/B, CPU time of this thread, medians of {rounds} alternating calls"
-          f" (load {os.getloadavg()[0]:.2f})")
-    print(f"  {'case':36s} {'before':>9s} {'after':>9s} {'after/before':>13s}  answers")
-    ratios = []
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        for name, kw in INPROCESS_CASES.items():
-            times = {"before": [], "after": []}
-            last = {}
-            for r in range(rounds + 1):
-                for side, fn in (("before", old), ("after", new)) if r % 2 else \
-                        (("after", new), ("before", old)):
-                    R.integrate_segment = fn
-                    try:
-                        t0 = time.thread_time()
-                        last[side] = simulate(**kw)
-                        dt = time.thread_time() - t0
-                    finally:
-                        R.integrate_segment = new
-                    if r:                      # round 0 compiles / warms up
-                        times[side].append(dt)
-            b0, a0 = st.median(times["before"]), st.median(times["after"])
-            same = _same(last["before"], last["after"])
-            ratios.append(a0 / b0)
-            slow = a0 / b0 > 1.05
-            ok &= same and not slow
-            print(f"  {name:36s} {b0 * 1e3:7.2f}ms {a0 * 1e3:7.2f}ms {a0 / b0:12.3f}"
-                  f"{'  > 5 %' if slow else ''}  {'identical' if same else 'DIFFER'}")
-    print(f"  geometric mean after/before: {float(np.exp(np.mean(np.log(ratios)))):.3f}")
-    return ok
-
-
 def env_for(tree: Path) -> dict:
     env = dict(os.environ, PYTHONPATH=str(tree / "src"), MPLBACKEND="Agg")
     env.pop("NUMBA_CACHE_DIR", None)
@@ -235,17 +135,15 @@ def bench(tree: Path, repeat: int) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--before", type=Path)
-    ap.add_argument("--inprocess-rounds", type=int, default=30)
+    ap.add_argument("--before", type=Path, required=True,
+                    help="another checkout, e.g. git archive <commit> | tar -x -C DIR")
     ap.add_argument("--after", type=Path, default=HERE)
     ap.add_argument("--rounds", type=int, default=5)
     ap.add_argument("--repeat", type=int, default=20)
     ap.add_argument("--dump-only", action="store_true")
     ap.add_argument("--skip-dump", action="store_true")
     args = ap.parse_args(argv)
-    ok = inprocess(args.inprocess_rounds) if args.inprocess_rounds else True
-    if args.before is None:
-        return 0 if ok else 1
+    ok = True
     if not args.skip_dump:
         with tempfile.TemporaryDirectory() as tmp:
             a = dump(args.before, f"{tmp}/before.npz")
