@@ -18,6 +18,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ._numeric import solve_small as _solve_small
+
 __all__ = ["vp_eval", "lm_fit"]
 
 
@@ -139,35 +141,6 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
     return 0.5 * cost
 
 
-@njit(cache=True)
-def _solve_small(A, b):
-    """Gaussian elimination with partial pivoting (1-3 unknowns); NaN when singular."""
-    m = b.size
-    M = A.copy()
-    v = b.copy()
-    for c in range(m):
-        p = c
-        for r in range(c + 1, m):
-            if abs(M[r, c]) > abs(M[p, c]):
-                p = r
-        if M[p, c] == 0.0:
-            return np.full(m, np.nan)
-        if p != c:
-            for k in range(m):
-                M[c, k], M[p, k] = M[p, k], M[c, k]
-            v[c], v[p] = v[p], v[c]
-        for r in range(c + 1, m):
-            f = M[r, c] / M[c, c]
-            for k in range(c, m):
-                M[r, k] -= f * M[c, k]
-            v[r] -= f * v[c]
-    out = np.empty(m)
-    for c in range(m - 1, -1, -1):
-        s = v[c]
-        for k in range(c + 1, m):
-            s -= M[c, k] * out[k]
-        out[c] = s / M[c, c]
-    return out
 
 
 @njit(cache=True)

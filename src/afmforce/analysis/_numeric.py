@@ -6,6 +6,8 @@ same kernels for many curves. Every kernel is O(n).
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
@@ -211,6 +213,38 @@ def robust_line_thin(x: np.ndarray, y: np.ndarray, max_points: int = 4001):
 
 
 @njit(cache=True)
+def solve_small(A, b):
+    """``A x = b`` by Gaussian elimination with partial pivoting (a few unknowns; ``A`` and ``b``
+    are not changed); NaN when a pivot is zero (singular). Shared by the compiled fits."""
+    m = b.size
+    M = A.copy()
+    v = b.copy()
+    for c in range(m):
+        p = c
+        for r in range(c + 1, m):
+            if abs(M[r, c]) > abs(M[p, c]):
+                p = r
+        if M[p, c] == 0.0:
+            return np.full(m, np.nan)
+        if p != c:
+            for k in range(m):
+                M[c, k], M[p, k] = M[p, k], M[c, k]
+            v[c], v[p] = v[p], v[c]
+        for r in range(c + 1, m):
+            f = M[r, c] / M[c, c]
+            for k in range(c, m):
+                M[r, k] -= f * M[c, k]
+            v[r] -= f * v[c]
+    out = np.empty(m)
+    for c in range(m - 1, -1, -1):
+        s = v[c]
+        for k in range(c + 1, m):
+            s -= M[c, k] * out[k]
+        out[c] = s / M[c, c]
+    return out
+
+
+@njit(cache=True)
 def _wls_small(X, y, w):
     """Weighted least squares by the normal equations (p <= 3 columns, Gaussian elimination with
     partial pivoting); ``ok`` False when a pivot is zero (singular: the caller uses lstsq)."""
@@ -226,29 +260,8 @@ def _wls_small(X, y, w):
             b[j] += xw * y[i]
             for k in range(p):
                 A[j, k] += xw * X[i, k]
-    for c in range(p):
-        piv = c
-        for r in range(c + 1, p):
-            if abs(A[r, c]) > abs(A[piv, c]):
-                piv = r
-        if A[piv, c] == 0.0:
-            return b, False
-        if piv != c:
-            for k in range(p):
-                A[c, k], A[piv, k] = A[piv, k], A[c, k]
-            b[c], b[piv] = b[piv], b[c]
-        for r in range(c + 1, p):
-            f = A[r, c] / A[c, c]
-            for k in range(c, p):
-                A[r, k] -= f * A[c, k]
-            b[r] -= f * b[c]
-    out = np.empty(p)
-    for c in range(p - 1, -1, -1):
-        s = b[c]
-        for k in range(c + 1, p):
-            s -= A[c, k] * out[k]
-        out[c] = s / A[c, c]
-    return out, True
+    out = solve_small(A, b)
+    return out, not math.isnan(out[0])
 
 
 @njit(cache=True)
