@@ -30,3 +30,16 @@ def test_format():
     assert format_quantity(1e-9, "m") == "1 nm"
     assert format_quantity(-3.1e-9, "N") == "-3.1 nN"
     assert format_quantity(0.13, "N/m") == "0.13 N/m"
+
+
+def test_parse_typed_integer_quantity_and_plain():
+    """The one parser of option texts shared by the CLI fields and analysis --option."""
+    from afmforce.errors import ParameterError
+    from afmforce.units import parse_typed
+
+    assert parse_typed("3", "integer", "--n") == 3 and isinstance(parse_typed("3.0", "integer"), int)
+    with pytest.raises(ParameterError, match="--n expects a whole number, got 3.5"):
+        parse_typed("3.5", "integer", "--n")
+    with pytest.raises(ParameterError, match="whole number"):
+        parse_typed("three", "integer", "--n")
+    assert parse_typed("200nm", "length", "--x") == pytest.approx(200e-9)

@@ -11,9 +11,9 @@ import functools
 import math
 import re
 
-from .errors import UnitError
+from .errors import ParameterError, UnitError
 
-__all__ = ["DIMENSIONS", "parse_quantity", "format_quantity"]
+__all__ = ["DIMENSIONS", "parse_quantity", "parse_typed", "format_quantity"]
 
 #: Expected dimension name -> (SI unit understood by pint, human word).
 DIMENSIONS: dict[str, tuple[str, str]] = {
@@ -85,6 +85,24 @@ def parse_quantity(text: str | float | int, dimension: str, name: str = "value")
     if not math.isfinite(value):
         raise UnitError(f"{name} expects {word}, got {text}")
     return value
+
+
+
+def parse_typed(text: str, dimension: str, name: str = "value") -> float | int:
+    """Parse the text of an option of ``dimension``: ``"integer"`` (a whole number, e.g.
+    ``"3"`` or ``"3.0"``), a key of :data:`DIMENSIONS` (a value with optional units -> SI,
+    :func:`parse_quantity`), else a plain float. Raises ParameterError/UnitError naming ``name``."""
+    if dimension == "integer":
+        try:
+            number = float(text)
+        except ValueError:
+            raise ParameterError(f"{name} expects a whole number, got {text}") from None
+        if not number.is_integer():
+            raise ParameterError(f"{name} expects a whole number, got {text}")
+        return int(number)
+    if dimension in DIMENSIONS:
+        return parse_quantity(text, dimension, name)
+    return float(text)
 
 
 def _parse_with_pint(s: str, si: str, word: str, name: str, original) -> float:

@@ -66,20 +66,9 @@ def parse_option(text: str, where: str = "--option") -> tuple[str, str, Any]:
     if spec.dimension == "choice":
         raise ParameterError(f"{flag} = {value!r} is not valid: {name}, the {spec.help}, must be "
                              + ", ".join(str(c) for c in choices))
-    from ..units import DIMENSIONS, parse_quantity
+    from ..units import parse_typed
 
-    if spec.dimension == "integer":
-        try:
-            number: Any = float(value)
-        except ValueError:
-            raise ParameterError(f"{flag} expects a whole number, got {value}") from None
-        if not number.is_integer():
-            raise ParameterError(f"{flag} expects a whole number, got {value}")
-        number = int(number)
-    elif spec.dimension in DIMENSIONS:
-        number = parse_quantity(value, spec.dimension, flag)
-    else:  # pragma: no cover - every option has a parseable dimension
-        number = float(value)
+    number: Any = parse_typed(value, spec.dimension, flag)
     if not (isinstance(number, float) and math.isnan(number)):
         spec.check(number, name, flag, typed=value)
     return step, name, number

@@ -48,21 +48,10 @@ def field_type(spec: FieldSpec, name: str, flag: str) -> Callable[[str], Any]:
     """An argparse ``type=``: value with units -> SI, checked against ``spec``'s range."""
 
     def convert(text: str):
-        from ..units import DIMENSIONS, parse_quantity
+        from ..units import parse_typed
 
         try:
-            if spec.dimension == "integer":
-                try:
-                    value = float(text)
-                except ValueError:
-                    raise ParameterError(f"{flag} expects a whole number, got {text}") from None
-                if not value.is_integer():
-                    raise ParameterError(f"{flag} expects a whole number, got {text}")
-                value = int(value)
-            elif spec.dimension in DIMENSIONS:
-                value = parse_quantity(text, spec.dimension, flag)
-            else:  # pragma: no cover - every CLI quantity has a parseable dimension
-                value = float(text)
+            value = parse_typed(text, spec.dimension, flag)
             return spec.check(value, name, flag, typed=text)
         except (ParameterError, UnitError) as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
