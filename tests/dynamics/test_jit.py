@@ -37,7 +37,8 @@ def test_piece_refuses_calls_from_python_instead_of_crashing():
 
 
 def test_piece_with_python_wrapper_is_callable():
-    """``piece(python=True)`` (rhs, jac, the Schur solves: called by tests) keeps its wrapper."""
+    """``piece(python=True)`` (rhs, jac, the Schur solves: called by tests) hands calls from
+    Python to its twin, an ordinary njit of the same source."""
     y = np.array([2e-9, 0.0])
     out = np.zeros(2)
     p = M.pack_spring(spring_constant=0.1, mass=1e-11, radius=1e-7, hamaker=1e-20, z0=1.6e-10,
@@ -66,3 +67,52 @@ def test_pieces_compute_what_their_python_source_does():
         for i in range(5):
             observe(model, p, zd[i], vd[i], Y[i], want[i])
         np.testing.assert_allclose(got, want, rtol=1e-14, atol=0.0)
+
+
+def _inner(x, out):
+    s = 0.0
+    for i in range(out.size):
+        out[i] = np.sin(x * (i + 1)) / (1.0 + x * x)
+        s += out[i] ** 3
+    return s
+
+
+def _outer(x, out):
+    return inner(x, out) + inner(-0.5 * x, out) * out[0]  # noqa: F821 (given below)
+
+
+def _entry(xs, out):
+    acc = np.zeros(xs.size)
+    for j in range(xs.size):
+        acc[j] = outer(xs[j], out)  # noqa: F821 (given below)
+    return acc
+
+
+def test_link_only_pieces_build_no_code_of_their_own_and_compute_the_same():
+    """A piece's library is link-only (no machine code, no module optimisation): its
+    callers, compiled ordinarily, compute exactly what the same functions compiled with
+    plain ``njit`` compute, through two levels of pieces."""
+    from numba import njit
+
+    from afmforce.dynamics import _jit
+
+    assert _jit.LINK_ONLY                       # this numba has the internals it overrides
+
+    g_piece = {"np": np}
+    g_plain = {"np": np}
+    for g, deco in ((g_piece, piece(inline=True)), (g_plain, njit)):
+        for f in (_inner, _outer):
+            g[f.__name__[1:]] = deco(types.FunctionType(f.__code__, g, f.__name__[1:]))
+    e_piece = njit(types.FunctionType(_entry.__code__, g_piece))
+    e_plain = njit(types.FunctionType(_entry.__code__, g_plain))
+    xs = np.linspace(-3.0, 3.0, 41)
+    got = e_piece(xs, np.zeros(5))
+    want = e_plain(xs, np.zeros(5))
+    assert np.array_equal(got, want)
+    assert got[0] != 0.0
+    for name in ("inner", "outer"):
+        (cres,) = g_piece[name].overloads.values()
+        assert isinstance(cres.library, _jit._LinkOnlyLibrary)
+        assert cres.library.get_pointer_to_function(cres.fndesc.mangled_name) == 0
+        (plain,) = g_plain[name].overloads.values()
+        assert plain.library.get_pointer_to_function(plain.fndesc.mangled_name) != 0

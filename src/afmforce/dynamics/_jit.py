@@ -7,35 +7,72 @@ the fixed cost of a compiled function is paid once per piece. :func:`piece`
 cuts what a piece costs and does not need:
 
 * no CPython and no C-function wrapper (``no_cpython_wrapper``,
-  ``no_cfunc_wrapper``): the pieces are called from compiled code only (pass
-  ``python=True`` for the few that tests call from Python). Called from Python
-  such a function would jump to a missing wrapper (a crash), so it raises a
-  ``TypeError`` instead;
+  ``no_cfunc_wrapper``): the pieces are called from compiled code only.
+  Called from Python such a function would jump to a missing wrapper (a
+  crash), so it raises a ``TypeError`` instead (or, ``python=True``, hands
+  the call to its twin, below);
 * no reference counting (``_nrt=False``): the pieces allocate nothing, so
   their array arguments need no incref/decref (less code to lower and
   optimise, and none of the calls at run time);
 * ``forceinline``: LLVM inlines the piece into its caller (the step loop's
-  pieces, see :mod:`._radau_newton`).
+  pieces, see :mod:`._radau_newton`);
+* no machine code and no module optimisation of their own (a *link-only*
+  library, :class:`_LinkOnlyLibrary`): numba links a callee's LLVM module
+  into every caller and optimises and compiles the caller's module with
+  everything in it, so a piece's own optimised module and machine code were
+  built and never run. A piece's library now stops after the function-level
+  clean-up that lowering does; the entry points (which are compiled as
+  before) optimise it once, inside the module that runs.
 
 They are not cached on their own (``cache=False``; writing ~40 cache files
 costs ~0.5 s of the first call): the cached entry point holds their code, so
-a process with a warm cache never compiles them. ``error_model="numpy"``:
+a process with a warm cache never compiles them. A piece that tests call from
+Python (``python=True``) hands such calls to a *twin*: an ordinary ``njit``
+of the same source, compiled (and cached) on the first call from Python. ``error_model="numpy"``:
 division by zero gives inf/NaN, which the integrator checks, not an
 exception. The entry points called from Python
 (:func:`~afmforce.dynamics.radau.integrate_segment`, the sampling pass, the
 compliance fit) are plain ``njit(cache=True)`` functions.
 
-Measured (``benchmarks/README.md``, "First call"): the first ``simulate()`` with
-an empty cache ~10-20 % less CPU time than with plain ``njit`` pieces; run
-times and results unchanged (bitwise).
+Measured (``benchmarks/README.md``, "First call"): wrappers and reference
+counting off, the first ``simulate()`` with an empty cache takes ~10-20 % less
+CPU time than with plain ``njit`` pieces; link-only libraries take another
+~15-20 % off (14.6-16.7 s to 12.4-13.4 s on the 2-core machine) and the Fig-5
+run 2.7 to 2.2-2.4 ms (LLVM optimises the pieces once, in their caller);
+results unchanged (bitwise, the whole Fig-5 trajectory).
+
+The link-only library overrides three internals of numba's CPU code library
+(``_optimize_final_module``, ``_finalize_final_module``,
+``get_pointer_to_function``) and the environment pointer that
+``get_executable`` writes (a piece has no Python objects and raises nothing,
+so its environment is never read). :data:`LINK_ONLY` says whether this numba
+has them; where it does not, the pieces are compiled the ordinary way
+(slower first call, same results). ``AFMFORCE_LINK_ONLY=0`` turns it off.
 """
 
 from __future__ import annotations
 
+import os
 from functools import partial
 
 from numba import njit
 from numba.core.dispatcher import Dispatcher
+
+try:
+    from numba.core import codegen as _codegen
+    from numba.core.compiler import CompilerBase, DefaultPassBuilder
+    from numba.core.compiler_machinery import FunctionPass, register_pass
+    from numba.core.typed_passes import NopythonTypeInference
+
+    _BASE = _codegen.JITCodeLibrary
+    LINK_ONLY = (os.environ.get("AFMFORCE_LINK_ONLY", "1") != "0"
+                 and all(callable(getattr(_BASE, name, None)) for name in (
+                     "_optimize_final_module", "_finalize_final_module", "_finalize_dynamic_globals",
+                     "_verify_declare_only_symbols", "get_pointer_to_function",
+                     "_ensure_finalized", "enable_object_caching"))
+                 and isinstance(getattr(_BASE, "codegen", None), property))
+except (ImportError, AttributeError):     # pragma: no cover - another numba
+    LINK_ONLY = False
 
 
 def _keep_overload(disp, cres) -> None:
@@ -51,6 +88,78 @@ def _refuse_python_call(disp, *args, **kws):
                     "afmforce.dynamics._jit)")
 
 
+if LINK_ONLY:
+    class _NoEnv:
+        """The codegen as the piece's library shows it: ``set_env`` does nothing (the
+        piece has no module in the execution engine to write the pointer into)."""
+
+        def __init__(self, codegen):
+            self._codegen = codegen
+
+        def set_env(self, env_name, env) -> None:
+            pass
+
+        def __getattr__(self, name):
+            return getattr(self._codegen, name)
+
+    class _LinkOnlyLibrary(_BASE):
+        """A code library that is only linked into callers: no module optimisation,
+        no execution engine, no machine code (see the module docstring)."""
+
+        def _optimize_final_module(self) -> None:
+            pass
+
+        def _finalize_final_module(self) -> None:
+            self._finalize_dynamic_globals()
+            self._verify_declare_only_symbols()
+            self._finalized = True
+
+        def get_pointer_to_function(self, name) -> int:
+            self._ensure_finalized()
+            return 0                    # no code; the piece is never called through it
+
+        @property
+        def codegen(self):
+            return _NoEnv(self._codegen)
+
+    @register_pass(mutates_CFG=False, analysis_only=True)
+    class _UseLinkOnlyLibrary(FunctionPass):
+        """Give the function a :class:`_LinkOnlyLibrary` before it is lowered."""
+
+        _name = "afmforce_link_only_library"
+
+        def __init__(self):
+            FunctionPass.__init__(self)
+
+        def run_pass(self, state) -> bool:
+            if state.library is None:
+                state.library = _LinkOnlyLibrary(state.targetctx.codegen(),
+                                                 state.func_id.func_qualname)
+                state.library.enable_object_caching()
+            return False
+
+    class _PieceCompiler(CompilerBase):
+        """numba's nopython pipeline with the link-only library."""
+
+        def define_pipelines(self):
+            pm = DefaultPassBuilder.define_nopython_pipeline(self.state)
+            pm.add_pass_after(_UseLinkOnlyLibrary, NopythonTypeInference)
+            pm.finalize()
+            return [pm]
+
+    _PIPELINE = dict(pipeline_class=_PieceCompiler)
+else:                                   # pragma: no cover - another numba
+    _PIPELINE = {}
+
+
+def _call_twin(disp, twin, *args, **kws):
+    # a call from Python: numba's dispatcher calls what _compile_for_args returns with the
+    # arguments, here the ordinary njit of the same source (made on the first call)
+    if not twin:
+        twin.append(njit(cache=True, error_model="numpy")(disp.py_func))
+    return twin[0]
+
+
 def piece(*, inline: bool = False, python: bool = False):
     """``njit`` decorator for a function of the integrator called from compiled code.
 
@@ -59,18 +168,18 @@ def piece(*, inline: bool = False, python: bool = False):
     inline : bool
         ``forceinline``: LLVM inlines the function into every caller.
     python : bool
-        Keep the CPython wrapper (the function is also called from Python, e.g. tests).
+        The function is also called from Python (tests): such calls go to its twin, an
+        ordinary ``njit`` of the same source.
     """
-    jit = njit(cache=python, error_model="numpy", _nrt=False, forceinline=inline,
-               no_cpython_wrapper=not python, no_cfunc_wrapper=True)
-    if python:
-        return jit
+    jit = njit(cache=False, error_model="numpy", _nrt=False, forceinline=inline,
+               no_cpython_wrapper=True, no_cfunc_wrapper=True, **_PIPELINE)
 
     def decorate(func):
         disp = jit(func)
         if isinstance(disp, Dispatcher):        # not with NUMBA_DISABLE_JIT
             disp.add_overload = partial(_keep_overload, disp)
-            disp._compile_for_args = partial(_refuse_python_call, disp)
+            disp._compile_for_args = (partial(_call_twin, disp, []) if python
+                                      else partial(_refuse_python_call, disp))
         return disp
 
     return decorate
