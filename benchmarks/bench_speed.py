@@ -92,17 +92,16 @@ def fig5(repeat: int) -> dict:
 def _time_compiled(inside: list, sampling: bool = True):
     """Time every call of the compiled pieces of a run into ``inside[0]``: the integrator
     (one call per drive segment) and, with ``sampling``, the sampled columns
-    (``sample_columns``) and the compliance fits (``_line_fit``), which release the GIL
-    too. Returns the function that restores them."""
+    (``sample_columns``) and the compliance fits (``fit_compliance``), which release the
+    GIL too. Returns the function that restores them."""
     import sys as _sys
 
-    from afmforce.dynamics import events as E
     from afmforce.dynamics import radau as R
 
     S = _sys.modules["afmforce.dynamics.simulate"]
     saved = [(R, "integrate_segment", R.integrate_segment)]
     if sampling:
-        saved += [(S, "sample_columns", S.sample_columns), (E, "_line_fit", E._line_fit)]
+        saved += [(S, "sample_columns", S.sample_columns), (S, "fit_compliance", S.fit_compliance)]
 
     def timed(f):
         def g(*a):

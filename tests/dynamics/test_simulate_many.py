@@ -80,3 +80,27 @@ def test_config_caches_do_not_leak_between_configs():
         SimulationConfig(k0=0.1, B=1e-13)
     s = SimulationConfig(model="spring", spring_constant=0.5)
     assert s.force_constant == 0.5 and np.isnan(s.calibration_factor)
+
+
+def test_columns_do_not_hold_the_unused_part_of_the_sample_buffer():
+    """The sampled columns are written into buffers sized for the longest possible run
+    (allocated in the preparing thread); a run that turns early at a load gets copies of
+    its rows, a full run views of the whole buffer."""
+    import sys
+
+    setup = sys.modules["afmforce.dynamics.simulate"]._setup
+    full = simulate(**FAST)
+    cfg = SimulationConfig(**dict(FAST, turn=100e-9, xi=0.05, turn_force=0.3e-9))
+    early = simulate(cfg)
+    assert full.time.size == setup(full.config).nbuf
+    assert early.time.size < 0.75 * setup(cfg).nbuf      # turned at 1.9 nm, not 100 nm
+    for tr in (full, early):
+        for col in ("time", "piezo_position", "normal_force", "apparent_deflection",
+                    "apparent_separation", "segment"):
+            a = getattr(tr, col)
+            base = a if a.base is None else a.base
+            while base.base is not None:
+                base = base.base
+            assert base.shape[0] <= 4 * a.shape[0] // 3 + 1, col
+    np.testing.assert_array_equal(full.apparent_separation,
+                                  full.apparent_deflection - full.piezo_position)

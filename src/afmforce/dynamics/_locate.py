@@ -303,29 +303,40 @@ def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o):
 
 
 @njit(cache=True, error_model="numpy", nogil=True)
-def sample_columns(model, p, Y, dt, seg_first, seg_last, seg_kind, seg_t0, seg_z0, seg_v):
-    """Time, drive, segment code and observables of the sampled states in one pass.
+def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kind, seg_t0,
+                   seg_z0, seg_v, beam, beta, tt, zd, code, obs, app, app_sep):
+    """Time, drive, segment code, observables and apparent deflection of the first ``n``
+    samples in one pass, written into the first ``n`` rows of ``tt, zd, code, obs, app,
+    app_sep``.
 
-    Row ``k`` of ``Y`` is the state at ``t = k dt``; samples ``seg_first[j]`` to
-    ``seg_last[j] - 1`` belong to drive segment ``j`` (``z = seg_z0 + seg_v (t - seg_t0)``).
-    Returns ``(t, z, segment code, observables (rows x N_OBS), all finite)``.
-    Releases the GIL (``nogil``): in :func:`afmforce.dynamics.simulate_many` it is
-    1.2 ms of a 10 ms Fig-6 run, and it overlaps the other threads' integrations.
+    Row ``k`` of ``ybuf`` holds the state at ``t = k dt`` (``averaged``: its window
+    sums, with the covered time in the last column; the state is their ratio).
+    Samples ``seg_first[j]`` to ``seg_last[j] - 1`` belong to drive segment ``j``
+    (``z = seg_z0 + seg_v (t - seg_t0)``). The apparent deflection ``app`` is
+    ``beta * theta`` for the beam (``beam``), the deflection for the spring;
+    ``app_sep = app - z``. The output arrays come from the caller (allocated in the
+    thread that prepares the run: see :class:`~afmforce.dynamics.simulate._Run`).
+    Releases the GIL (``nogil``): in :func:`afmforce.dynamics.simulate_many` it
+    overlaps the other threads' integrations. Returns whether every state is finite.
     """
-    n = Y.shape[0]
-    tt = np.empty(n)
-    zd = np.empty(n)
-    code = np.zeros(n, dtype=np.int8)
-    obs = np.empty((n, N_OBS))
+    ns = ybuf.shape[1] - 1 if averaged else ybuf.shape[1]
+    yk = np.empty(ns)
     finite = True
     for k in range(n):
         tt[k] = k * dt
-        for i in range(Y.shape[1]):
-            if not math.isfinite(Y[k, i]):
+        code[k] = 0
+        for i in range(ns):
+            v = ybuf[k, i] / ybuf[k, ns] if averaged else ybuf[k, i]
+            if not math.isfinite(v):
                 finite = False
     for j in range(seg_first.shape[0]):
         for k in range(seg_first[j], seg_last[j]):
             code[k] = seg_kind[j]
             zd[k] = seg_z0[j] + seg_v[j] * (tt[k] - seg_t0[j])
-            observe(model, p, zd[k], seg_v[j], Y[k], obs[k])
-    return tt, zd, code, obs, finite
+            for i in range(ns):
+                yk[i] = ybuf[k, i] / ybuf[k, ns] if averaged else ybuf[k, i]
+            observe(model, p, zd[k], seg_v[j], yk, obs[k])
+    for k in range(n):
+        app[k] = beta * obs[k, O_THETA] if beam else obs[k, O_DEFL]
+        app_sep[k] = app[k] - zd[k]
+    return finite

@@ -8,6 +8,8 @@ window ``[t_k - dt/2, t_k + dt/2]``), selected by the ``average`` field of
 
 from __future__ import annotations
 
+import math
+
 from ._jit import piece
 from ._locate import _dense
 
@@ -53,7 +55,9 @@ def sample_step(t_old, t_new, h, y_old, Q, s_t0, s_dt, average, s_next, ybuf, yt
     """Write the samples of the accepted step ``[t_old, t_new]`` into ``ybuf``.
 
     Point sampling: rows ``s_next[0]`` ... with grid time ``s_t0 + k s_dt`` <= ``t_new``
-    get the dense state; ``s_next[0]`` moves past them. Averaging: the step's
+    get the dense state (NaN for a grid time before ``t_old``, which a run that starts
+    on the grid never has: every row below ``s_next[0]`` is written, so the buffer
+    needs no initial value); ``s_next[0]`` moves past them. Averaging: the step's
     integral is added to every window it overlaps (column ``n`` collects the
     covered time); ``s_next[0]`` counts the complete windows. Rows beyond
     ``ybuf`` are not written.
@@ -71,5 +75,8 @@ def sample_step(t_old, t_new, h, y_old, Q, s_t0, s_dt, average, s_next, ybuf, yt
             _dense(y_old, Q, (ts - t_old) / h, ytmp)
             for i in range(n):
                 ybuf[k, i] = ytmp[i]
+        else:                       # a grid time before the step (none expected): no value
+            for i in range(n):
+                ybuf[k, i] = math.nan
         k += 1
     s_next[0] = k

@@ -47,7 +47,7 @@ from numba import njit
 
 from .radau import APPROACH, RETRACT
 
-__all__ = ["Events", "compliance_lines"]
+__all__ = ["Events", "compliance_lines", "fit_compliance"]
 
 
 @dataclass(frozen=True)
@@ -142,22 +142,31 @@ def compliance_lines(piezo_position, apparent_deflection, separation, segment,
     z = np.asarray(piezo_position, dtype=float)
     d = np.asarray(apparent_deflection, dtype=float)
     h = np.asarray(separation, dtype=float)
-    seg = np.asarray(segment).astype(np.int64, copy=False)
+    seg = np.asarray(segment)
+    if seg.dtype != np.int8:
+        seg = seg.astype(np.int64, copy=False)
+    return fit_compliance(z, d, h, seg, float(contact_separation), float(contact_position),
+                          float(turn_position), float(beta))
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def fit_compliance(z, d, h, seg, hc, contact_position, turn_position, beta):
+    """:func:`compliance_lines` on arrays, compiled (no GIL; the simulation calls it from
+    its compiled sampling pass). Returns ``(offset, slope)``, NaN where not fitted."""
     if not (math.isfinite(contact_position) and turn_position > contact_position):
         return math.nan, math.nan
     span = turn_position - contact_position
     lo, hi = contact_position + 0.25 * span, turn_position - 0.25 * span
-    fits = []
-    for kind in (APPROACH, RETRACT):
-        count, c0, c1, dlo, dhi = _line_fit(z, d, h, seg, kind, contact_separation, lo, hi)
-        if count < 5 or not math.isfinite(c1):
-            return math.nan, math.nan
-        fits.append((c0, c1, dlo, dhi))
-    (a0, a1, alo, ahi), (b0, b1, blo, bhi) = fits
+    na, a0, a1, alo, ahi = _line_fit(z, d, h, seg, APPROACH, hc, lo, hi)
+    if na < 5 or not math.isfinite(a1):
+        return math.nan, math.nan
+    nb, b0, b1, blo, bhi = _line_fit(z, d, h, seg, RETRACT, hc, lo, hi)
+    if nb < 5 or not math.isfinite(b1):
+        return math.nan, math.nan
     dmid = 0.5 * (max(alo, blo) + min(ahi, bhi))
     offset = (a0 + a1 * dmid) - (b0 + b1 * dmid)
     slope = beta * 0.5 * (a1 + b1) if math.isfinite(beta) else math.nan
-    return float(offset), float(slope)
+    return offset, slope
 
 
 @njit(cache=True, error_model="numpy", nogil=True)

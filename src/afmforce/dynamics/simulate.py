@@ -15,9 +15,9 @@ from . import radau as R
 from .config import SimulationConfig
 from .drive import segments
 from ._locate import sample_columns
-from .events import Events, compliance_lines
+from .events import Events, fit_compliance
 from .guard import run_check
-from .models import MODEL_BEAM, O_DEFL, O_FY, O_FZ, O_H, O_THETA, O_Y2
+from .models import MODEL_BEAM, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_THETA, O_Y2
 from .trajectory import SolverStats, Trajectory
 from ._setup import _control, _record, _seg_table, _setup
 # re-exported (tests, docs and earlier imports name them here)
@@ -127,12 +127,21 @@ class _Run:
         self.stats = np.zeros(R.S_SIZE, dtype=np.int64)
         self.state = (self.y, self.ev, self.work, np.zeros((n, 3)), np.zeros(n),
                       np.zeros((n, n)), self.stats)
+        # the sample buffer and the sampled columns, allocated here: simulate_many prepares
+        # runs in its own thread and integrates them on others, and large arrays allocated
+        # there came back from glibc as fresh pages (a page fault per 4 kB: 0.1 ms and 40 %
+        # of the batch's speed-up lost); averaged: sums from 0; point samples: every row up
+        # to s_next is written (._sampling.sample_step), so np.empty
+        nb = s.nbuf
+        self.ybuf = np.zeros((nb, n + 1)) if s.averaged else np.empty((nb, n))
+        self.out = (np.empty(nb), np.empty(nb), np.empty(nb, dtype=np.int8),
+                    np.empty((nb, N_OBS)), np.empty(nb), np.empty(nb))
 
     def integrate(self, progress=None) -> "_Run":
         """Run the integrator over every drive segment, then sample the result (raises
         :class:`SolverError`)."""
         s = self.setup
-        ybuf = np.zeros((s.nbuf, s.n + 1)) if s.averaged else np.full((s.nbuf, s.n), np.nan)
+        ybuf = self.ybuf
         fixed = (s.tolerances, s.control if progress is None else _control(s, PROGRESS_CHUNK),
                  (0.0, s.dt, s.averaged, self.s_next, ybuf), self.state)
         rows = [self._segment(s.records[0], s.t_total_max, progress, fixed, s.plan[0])]
@@ -157,11 +166,10 @@ class _Run:
         """The sampled columns and compliance lines (compiled pieces that release the GIL,
         and numpy on whole columns): ``(time, z, segment code, observables, apparent
         deflection, apparent separation, all finite, hysteresis offset, compliance slope)``."""
-        s, n = self.setup, self.setup.n
+        s = self.setup
         if s.averaged:
             # every grid time up to the end; windows at the ends are clipped to the run
             n_samp = min(s.nbuf, int(math.floor(plan[-1].t_end * s.rate * (1.0 + 1e-12))) + 1)
-            Y = ybuf[:n_samp, :n] / ybuf[:n_samp, n:]
             bounds = [seg.t_end for seg in plan[:-1]]
             sample_seg = np.searchsorted(np.asarray(bounds), np.arange(n_samp) * s.dt,
                                          side="left")
@@ -169,20 +177,25 @@ class _Run:
                        int(np.searchsorted(sample_seg, i, side="right")), seg.kind)
                       for i, seg in enumerate(plan)]
         else:
-            Y = ybuf[:int(self.s_next[0])]
+            n_samp = int(self.s_next[0])
             labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
         lab = np.array(labels, dtype=np.int64)
-        tt, zd, code, obs, finite = sample_columns(
-            s.model, s.p, Y, s.dt, lab[:, 0], lab[:, 1], lab[:, 2].astype(np.int8),
-            seg_table[:, 0], seg_table[:, 1], seg_table[:, 2])
-        apparent = s.beta * obs[:, O_THETA] if s.beam else obs[:, O_DEFL].copy()
+        finite = sample_columns(
+            s.model, s.p, ybuf, n_samp, s.averaged, s.dt, lab[:, 0], lab[:, 1],
+            lab[:, 2].astype(np.int8), seg_table[:, 0], seg_table[:, 1], seg_table[:, 2],
+            s.beam, s.beta, *self.out)
+        # the first n_samp rows; a copy where they are well short of the buffer (a run
+        # that turned early at a load), so that the trajectory does not hold the rest
+        short = 4 * n_samp < 3 * s.nbuf
+        tt, zd, code, obs, apparent, apparent_sep = (
+            a[:n_samp].copy() if short else a[:n_samp] for a in self.out)
         offset = slope = math.nan
         if finite and math.isfinite(self.ev[R.E_CONTACT_T]):
-            offset, slope = compliance_lines(zd, apparent, obs[:, O_H], code,
-                                             self.cfg.contact_separation,
-                                             self.ev[R.E_CONTACT_Z], self.z_turn,
-                                             s.beta if s.beam else math.nan)
-        return tt, zd, code, obs, apparent, apparent - zd, finite, offset, slope
+            offset, slope = fit_compliance(zd, apparent, obs[:, O_H], code,
+                                           self.cfg.contact_separation,
+                                           self.ev[R.E_CONTACT_Z], self.z_turn,
+                                           s.beta if s.beam else math.nan)
+        return tt, zd, code, obs, apparent, apparent_sep, finite, offset, slope
 
     def _segment(self, record, t_total, progress, fixed, seg):
         """Integrate one drive segment (``record``: its :func:`.radau.drive_record`); returns
