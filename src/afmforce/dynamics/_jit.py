@@ -16,13 +16,13 @@ cuts what a piece costs and does not need:
   optimise, and none of the calls at run time);
 * ``forceinline``: LLVM inlines the piece into its caller (the step loop's
   pieces, see :mod:`._radau_newton`);
-* no machine code and no module optimisation of their own (a *link-only*
-  library, :class:`_LinkOnlyLibrary`): numba links a callee's LLVM module
-  into every caller and optimises and compiles the caller's module with
-  everything in it, so a piece's own optimised module and machine code were
-  built and never run. A piece's library now stops after the function-level
-  clean-up that lowering does; the entry points (which are compiled as
-  before) optimise it once, inside the module that runs.
+* no optimisation and no machine code of their own (a *link-only* library,
+  :class:`_LinkOnlyLibrary`): numba links a callee's LLVM module into every
+  caller and optimises and compiles the caller's module with everything in
+  it, so a piece's own optimised module and machine code were built and
+  never run. A piece's library now holds its IR as lowered; the entry points
+  (which are compiled as before) optimise it once, inside the module that
+  runs.
 
 They are not cached on their own (``cache=False``; writing ~40 cache files
 costs ~0.5 s of the first call): the cached entry point holds their code, so
@@ -37,13 +37,14 @@ compliance fit) are plain ``njit(cache=True)`` functions.
 Measured (``benchmarks/README.md``, "First call"): wrappers and reference
 counting off, the first ``simulate()`` with an empty cache takes ~10-20 % less
 CPU time than with plain ``njit`` pieces; link-only libraries take another
-~15-20 % off (14.6-16.7 s to 12.4-13.4 s on the 2-core machine) and the Fig-5
-run 2.7 to 2.2-2.4 ms (LLVM optimises the pieces once, in their caller);
+~15-20 % off (median 14.6 s to 12.7 s on the 2-core machine, interleaved
+runs; skipping the per-function clean-up too, another 0.4-0.7 s) and the
+Fig-5 run 2.7 to 2.1 ms (LLVM optimises the pieces once, in their caller);
 results unchanged (bitwise, the whole Fig-5 trajectory).
 
-The link-only library overrides three internals of numba's CPU code library
-(``_optimize_final_module``, ``_finalize_final_module``,
-``get_pointer_to_function``) and the environment pointer that
+The link-only library overrides four internals of numba's CPU code library
+(``_optimize_functions``, ``_optimize_final_module``,
+``_finalize_final_module``, ``get_pointer_to_function``) and the environment pointer that
 ``get_executable`` writes (a piece has no Python objects and raises nothing,
 so its environment is never read). :data:`LINK_ONLY` says whether this numba
 has them; where it does not, the pieces are compiled the ordinary way
@@ -67,7 +68,8 @@ try:
     _BASE = _codegen.JITCodeLibrary
     LINK_ONLY = (os.environ.get("AFMFORCE_LINK_ONLY", "1") != "0"
                  and all(callable(getattr(_BASE, name, None)) for name in (
-                     "_optimize_final_module", "_finalize_final_module", "_finalize_dynamic_globals",
+                     "_optimize_functions", "_optimize_final_module", "_finalize_final_module",
+                     "_finalize_dynamic_globals",
                      "_verify_declare_only_symbols", "get_pointer_to_function",
                      "_ensure_finalized", "enable_object_caching"))
                  and isinstance(getattr(_BASE, "codegen", None), property))
@@ -103,8 +105,13 @@ if LINK_ONLY:
             return getattr(self._codegen, name)
 
     class _LinkOnlyLibrary(_BASE):
-        """A code library that is only linked into callers: no module optimisation,
-        no execution engine, no machine code (see the module docstring)."""
+        """A code library that is only linked into callers: no optimisation, no
+        execution engine, no machine code (see the module docstring)."""
+
+        def _optimize_functions(self, ll_module) -> None:
+            # the per-function clean-up after lowering: the caller's module pipeline
+            # (which holds this IR) runs the same simplification passes
+            ll_module.data_layout = self._codegen._data_layout
 
         def _optimize_final_module(self) -> None:
             pass

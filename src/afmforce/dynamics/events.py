@@ -157,12 +157,14 @@ def fit_compliance(z, d, h, seg, hc, contact_position, turn_position, beta):
         return math.nan, math.nan
     span = turn_position - contact_position
     lo, hi = contact_position + 0.25 * span, turn_position - 0.25 * span
-    na, a0, a1, alo, ahi = _line_fit(z, d, h, seg, APPROACH, hc, lo, hi)
-    if na < 5 or not math.isfinite(a1):
-        return math.nan, math.nan
-    nb, b0, b1, blo, bhi = _line_fit(z, d, h, seg, RETRACT, hc, lo, hi)
-    if nb < 5 or not math.isfinite(b1):
-        return math.nan, math.nan
+    fits = np.empty((2, 4))
+    for j, kind in enumerate((APPROACH, RETRACT)):   # kind an int64, not two literals
+        count, c0, c1, dlo, dhi = _line_fit(z, d, h, seg, kind, hc, lo, hi)
+        if count < 5 or not math.isfinite(c1):
+            return math.nan, math.nan
+        fits[j, 0], fits[j, 1], fits[j, 2], fits[j, 3] = c0, c1, dlo, dhi
+    a0, a1, alo, ahi = fits[0, 0], fits[0, 1], fits[0, 2], fits[0, 3]
+    b0, b1, blo, bhi = fits[1, 0], fits[1, 1], fits[1, 2], fits[1, 3]
     dmid = 0.5 * (max(alo, blo) + min(ahi, bhi))
     offset = (a0 + a1 * dmid) - (b0 + b1 * dmid)
     slope = beta * 0.5 * (a1 + b1) if math.isfinite(beta) else math.nan
