@@ -45,6 +45,8 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
+from ._jit import piece
+
 from .radau import APPROACH, RETRACT
 
 __all__ = ["Events", "compliance_lines", "fit_compliance"]
@@ -171,7 +173,7 @@ def fit_compliance(z, d, h, seg, hc, contact_position, turn_position, beta):
     return offset, slope
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@piece()
 def _line_fit(z, d, h, seg, kind, hc, lo, hi):
     """Least-squares line ``z = c0 + c1 d`` through the samples of segment ``kind`` with
     ``h < hc`` and ``lo <= z <= hi`` (what ``np.polyfit(d[m], z[m], 1)`` fits, in one
