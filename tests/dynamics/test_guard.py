@@ -91,3 +91,15 @@ def test_bouncing_spring_is_not_converged_at_any_of_the_three_tolerances():
     assert moved > EVENT_TOLERANCES["pull_off_force"][0]
     assert moved > EVENT_TOLERANCES["pull_off_force"][1] * abs(runs[1].pull_off_force)
     assert "pull_off_force" in tr.solver.check.split("nor at 10x tighter:")[1]
+
+
+def test_no_pull_off_warning_of_an_unchecked_bouncing_run_points_to_the_check():
+    """The default solve of the bouncing spring settles it in contact (no pull-off, while
+    tighter solves pull off at the turn): unchecked, the warning names that possibility."""
+    with pytest.warns(Warning) as caught:
+        tr = simulate(**BOUNCING)
+    assert math.isnan(tr.events.pull_off_position)
+    (msg,) = [str(w.message) for w in caught if "ended in contact" in str(w.message)]
+    assert "check='auto'" in msg and "free-mode damping ratio 0" in msg
+    tight = simulate(**BOUNCING, rtol=1e-7, atol=1e-15).events
+    assert tight.pull_off_position == pytest.approx(20e-9, abs=0.5e-9)   # off at the turn

@@ -16,7 +16,7 @@ from .config import SimulationConfig
 from .drive import segments
 from ._locate import sample_columns
 from .events import Events, fit_compliance
-from .guard import run_check
+from .guard import risky, run_check
 from .models import MODEL_BEAM, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_THETA, O_Y2
 from .trajectory import SolverStats, Trajectory
 from ._setup import _control, _record, _seg_table, _setup
@@ -251,9 +251,13 @@ class _Run:
                 f"before turning at z = {events.turn_position * 1e9:.4g} nm; raise turn",
                 DynamicsWarning, stacklevel=3)
         elif ev[R.E_IN_CONTACT] == 1.0:
+            why = risky(cfg) if check == "off" else ""
             warnings.warn(
                 f"the retract ended in contact at z = {cfg.end * 1e9:.4g} nm (no pull-off); "
-                "lower end", DynamicsWarning, stacklevel=3)
+                "lower end" + (f"; or, with this little damping ({why}), the solve lost the "
+                               "energy of a probe that bounces in contact: run with "
+                               "check='auto' to find out" if why else ""),
+                DynamicsWarning, stacklevel=3)
         if s.term[0] != R.TERM_NONE and not self.turned_at_load:
             what = "turn_force" if cfg.turn_force is not None else "turn_deflection"
             warnings.warn(f"{what} was not reached before the turn limit "
