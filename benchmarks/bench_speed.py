@@ -175,6 +175,35 @@ def many(n: int, blocks: int = 4) -> dict:
                 identical_events=bool(same))
 
 
+def spin_ratio(n: int = 60_000_000) -> float:
+    """What 2 threads get on this machine now: a compiled ``nogil`` loop run twice in one
+    thread against once on each of 2 threads (1.0-2.0; the ceiling of any thread
+    speed-up measured beside it)."""
+    import threading
+
+    from numba import njit
+
+    @njit(nogil=True)
+    def spin(m):
+        s = 0.0
+        for i in range(m):
+            s += (i % 7) * 1e-9
+        return s
+
+    spin(10)
+    t0 = time.perf_counter()
+    spin(n)
+    spin(n)
+    serial = time.perf_counter() - t0
+    th = [threading.Thread(target=spin, args=(n,)) for _ in range(2)]
+    t0 = time.perf_counter()
+    for t in th:
+        t.start()
+    for t in th:
+        t.join()
+    return serial / (time.perf_counter() - t0)
+
+
 def gil_share(n: int = 100) -> dict:
     """Share of a Fig-6-type run (loop of ``simulate()``, one thread) spent inside the
     compiled pieces, which release the GIL; the rest holds it. Bound on the speed-up of
@@ -262,6 +291,9 @@ def main(argv=None) -> int:
         print(f"   GIL held {g['gil_held_per_run_s'] * 1e3:.3f} ms of a {g['per_run_s'] * 1e3:.2f} ms "
               f"run ({g['gil_held_share'] * 100:.1f} %): speed-up bound on 2 free cores "
               f"{g['bound_2_cores']:.2f}x")
+        spin = spin_ratio()
+        rep["spin_2_threads"] = spin
+        print(f"   a 2-thread nogil spin loop gets {spin:.2f}x on this machine now (the ceiling)")
         targets.append(("simulate_many >= 1.8x", m["speedup"] >= 1.8, f"{m['speedup']:.2f}x"))
     if args.sweep:
         rep["sweep"] = {}
