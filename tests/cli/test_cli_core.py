@@ -97,3 +97,45 @@ def test_bad_input_one_line_exit_2(capsys, argv, fragment):
     assert fragment in err
     assert len(err.strip().splitlines()) == 1
     assert "Traceback" not in err
+
+
+def test_first_run_notice_only_when_the_integrator_is_not_cached(capsys, monkeypatch):
+    """A simulating command says on stderr that it compiles (first run, no cache); stdout of
+    --json stays JSON; a cached integrator gives no notice, and other commands never do."""
+    from afmforce.dynamics import _jit
+
+    argv = ["simulate", "--model", "spring", "--start=-20nm", "--turn", "-5nm", "--end=-20nm",
+            "--check", "off", "--json"]
+    monkeypatch.setattr(_jit, "cache_missing", lambda disp: True)
+    code, out, err = run(capsys, argv)
+    assert code == 0 and "compiling the integrator" in err
+    json.loads(out)
+    code, _, err = run(capsys, ["statics", *GEOM, "--json"])
+    assert "compiling" not in err
+    monkeypatch.undo()
+    _, _, err = run(capsys, argv)             # compiled in this process by now
+    assert "compiling" not in err
+
+
+def test_cache_missing_sees_the_numba_cache_index(tmp_path, monkeypatch):
+    """``cache_missing``: True for a cache=True function never compiled and without an index
+    file, False once compiled (and for a fresh dispatcher of it, which finds the index)."""
+    import importlib
+    import sys
+
+    from afmforce.dynamics._jit import cache_missing
+
+    (tmp_path / "cm_mod.py").write_text(
+        "from numba import njit\n\n@njit(cache=True)\ndef f(x):\n    return x + 1.0\n")
+    monkeypatch.setenv("NUMBA_CACHE_DIR", str(tmp_path / "cache"))
+    monkeypatch.syspath_prepend(str(tmp_path))
+    import numba.core.config as nconfig
+
+    monkeypatch.setattr(nconfig, "CACHE_DIR", str(tmp_path / "cache"))
+    mod = importlib.import_module("cm_mod")
+    assert cache_missing(mod.f)
+    assert mod.f(1.0) == 2.0
+    assert not cache_missing(mod.f)
+    del sys.modules["cm_mod"]
+    fresh = importlib.import_module("cm_mod")
+    assert not fresh.f.signatures and not cache_missing(fresh.f)

@@ -121,6 +121,21 @@ def _join_negative_values(argv: list[str]) -> list[str]:
     return out
 
 
+#: Commands that run the dynamic model (and compile it on the first run).
+SIMULATING = ("simulate", "demo", "reproduce", "explore", "fit", "plan", "sweep")
+
+
+def _compile_notice() -> None:
+    """One line on stderr when the integrator is about to be compiled (first run, empty
+    numba cache): 10-20 s of silence otherwise looks like a hang."""
+    from ..dynamics import radau
+    from ..dynamics._jit import cache_missing
+
+    if cache_missing(radau.integrate_segment):
+        print("afmforce: compiling the integrator (first run; later runs load it from numba's "
+              "cache)...", file=sys.stderr, flush=True)
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status."""
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
@@ -130,6 +145,8 @@ def main(argv: list[str] | None = None) -> int:
         parser.print_help()
         return EXIT_USAGE
     try:
+        if _command_of(argv) in SIMULATING:
+            _compile_notice()
         return int(args.func(args) or 0)
     except AfmforceError as exc:
         if args.debug:

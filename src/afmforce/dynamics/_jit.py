@@ -77,6 +77,19 @@ except (ImportError, AttributeError):     # pragma: no cover - another numba
     LINK_ONLY = False
 
 
+def cache_missing(disp) -> bool:
+    """Whether calling the ``cache=True`` dispatcher ``disp`` will compile it: nothing compiled
+    in this process and no numba cache index for it on disk (a stale index, e.g. after an
+    upgrade, is not detected: then it compiles without notice). False when unsure."""
+    if getattr(disp, "signatures", None):
+        return False
+    try:
+        index = disp._cache._cache_file._index_path       # numba internals
+    except AttributeError:
+        return False
+    return not os.path.exists(index)
+
+
 def _keep_overload(disp, cres) -> None:
     # Dispatcher.add_overload without registering the entry point for calls from
     # Python (there is none without the CPython wrapper): such calls then reach
