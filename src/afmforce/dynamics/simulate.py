@@ -163,9 +163,10 @@ class _Run:
         return self
 
     def _sample(self, ybuf, plan, rows, seg_table) -> tuple:
-        """The sampled columns and compliance lines (compiled pieces that release the GIL,
-        and numpy on whole columns): ``(time, z, segment code, observables, apparent
-        deflection, apparent separation, all finite, hysteresis offset, compliance slope)``."""
+        """The sampled columns and compliance lines (two compiled calls that release the
+        GIL, writing into the buffers of ``__init__``): ``(time, z, segment code,
+        observables, apparent deflection, apparent separation, all finite, hysteresis
+        offset, compliance slope)``."""
         s = self.setup
         if s.averaged:
             # every grid time up to the end; windows at the ends are clipped to the run
