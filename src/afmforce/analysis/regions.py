@@ -175,9 +175,13 @@ def _slope(z: np.ndarray, s: np.ndarray) -> float:
 
 def contact_slopes(z: np.ndarray, s: np.ndarray, run: RunRegions) -> tuple[float, float]:
     """Robust slopes [signal unit/m] of a run's compliance region and of its zero-force region."""
-    near = run.index[run.compliance & ~run.saturated]
-    far = run.index[run.zero_force & ~run.saturated]
-    return _slope(z[near], s[near]), _slope(z[far], s[far])
+    return _region_slope(z, s, run, run.compliance), _region_slope(z, s, run, run.zero_force)
+
+
+def _region_slope(z: np.ndarray, s: np.ndarray, run: RunRegions, region: np.ndarray) -> float:
+    """Robust slope of the unsaturated samples of one region of a run (a mask over its index)."""
+    idx = run.index[region & ~run.saturated]
+    return _slope(z[idx], s[idx])
 
 
 def _without_compliance(run: RunRegions, note: str, reason: str) -> RunRegions:
@@ -235,13 +239,11 @@ def check_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract
     # only a run clipped where it turns can hide its contact in the saturated samples
     clipped = {"approach": bool(approach.saturated[-1]), "retract": bool(retract.saturated[0])}
     for kind, run in runs.items():
-        ic = run.index[run.compliance & ~run.saturated]
-        near = _slope(z[ic], s[ic])  # contact_slopes' first value; its free-part slope only where used:
+        near = _region_slope(z, s, run, run.compliance)  # the free part's slope only where used:
         slopes[kind] = near
         if not clipped[kind]:
             continue
-        iz = run.index[run.zero_force & ~run.saturated]
-        far = _slope(z[iz], s[iz])
+        far = _region_slope(z, s, run, run.zero_force)
         if math.isfinite(near) and math.isfinite(far) and abs(far) > flat_ratio * abs(near):
             runs[kind] = _without_compliance(run, (
                 f"the {kind} run has no unclipped constant-compliance region: its contact part is only "
