@@ -20,15 +20,17 @@ import pytest
 
 from afmforce.io import load
 from afmforce.analysis.pipeline import analyze
+from realdata import real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
 
 HERE = Path(__file__).parent
 DATA = HERE.parent / "data"
-SHARED = HERE.parents[2] / "shared" / "data" / "real"
 REF = json.loads((HERE / "nanite_reference.json").read_text())
 
 
 def _path(folder: str, name: str) -> Path:
-    path = (SHARED if folder == "shared" else HERE.parents[1] / folder) / name
+    if folder == "shared":
+        return real_file(name)
+    path = HERE.parents[1] / folder / name
     if not path.exists():
         pytest.skip(f"{name} is not in this checkout ({path.parent})")
     return path
@@ -174,15 +176,7 @@ def test_stiff_lever_without_repulsive_contact_reports_the_pull_off():
     ends attractive), yet the retract pulls off far below its baseline: the tip touched the surface.
     The result says so, with the adhesion against an independent reading of the force column
     (the deepest retract sample less the mean of its last 30 %) within 5 %."""
-    from pathlib import Path
-
-    from afmforce.io import load
-    from afmforce.analysis.pipeline import analyze
-
-    path = Path(__file__).resolve().parents[3] / "shared" / "data" / "real" / (
-        "afmformats_jpk-fd_single-modified_2023.jpk-force")
-    if not path.exists():
-        pytest.skip("shared real files not available")
+    path = real_file("afmformats_jpk-fd_single-modified_2023.jpk-force")
     c = load(path, meta_override={"spring_constant": 12.0})[0]
     res = analyze(c)
     f = c.deflection_signal[c.segment == 1]
@@ -197,17 +191,14 @@ def test_ambiguous_onset_is_flagged():
     contact points over a 1.6 um range fit as well within 2 sigma (14 % of the indentation), and nanite's
     own point moves by 4-7 um when its input is block-averaged. The result must say the onset is ambiguous,
     with the range; the well-defined map curves (within 30 nm of nanite) carry no such warning."""
-    real = Path(__file__).resolve().parents[3] / "shared" / "data" / "real"
-    path = real / "jpkfile_force-save-2016.06.15-13.17.08.jpk-force"
-    if not path.exists():
-        pytest.skip("shared real files not available")
+    path = real_file("jpkfile_force-save-2016.06.15-13.17.08.jpk-force")
     res = analyze(load(path)[0])
     cp = res.details["contact_point"]
     warn = [w for w in res.warnings if w.startswith("contact point uncertain")]
     assert warn and "as good within 2 sigma" in warn[0]
     assert cp.position_low < cp.position < cp.position_high
     assert cp.position_high - cp.position_low > 0.1 * cp.indentation
-    for c in load(real / "afmformats_jpk-fd_map2x2_extracted.jpk-force-map"):
+    for c in load(real_file("afmformats_jpk-fd_map2x2_extracted.jpk-force-map")):
         r = analyze(c)
         assert not any(w.startswith("contact point uncertain") for w in r.warnings)
         cp = r.details["contact_point"]

@@ -17,12 +17,12 @@ import numpy as np
 import pytest
 
 from afmforce.io import FORMATS, is_supported, load
+from realdata import real_path  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 OVERRIDES = json.loads((DATA / "meta_override.json").read_text())
 FILES = sorted(p for p in DATA.iterdir() if is_supported(p))
-SHARED_MAP = Path(__file__).resolve().parents[3] / "shared" / "data" / "real" / \
-    "afmformats_jpk-fd_map2x2_extracted.jpk-force-map"
+SHARED_MAP = real_path("afmformats_jpk-fd_map2x2_extracted.jpk-force-map")  # 0.95 MB: not copied
 
 
 def test_every_registered_format_has_a_file():
@@ -68,7 +68,7 @@ def test_afmforce_hdf5_is_the_documented_virtual_afm_run():
     assert c.truth["separation"][0] > 30e-9  # starts 40 nm away (the paper's Fig 5 start)
 
 
-@pytest.mark.skipif(not SHARED_MAP.is_file(), reason="shared/data/real not present")
+@pytest.mark.skipif(SHARED_MAP is None, reason="shared/data/real not present (the map is too large for tests/data)")
 def test_afmforce_map_holds_the_jpk_map_corners_thinned():
     src = load(SHARED_MAP)
     curves = load(DATA / "afmforce-map_jpk-map2x2.h5")
@@ -143,3 +143,17 @@ def test_chiaro_file_against_its_own_columns_and_header():
     travel = abs(table[ret[-1], 4] - table[ret[0], 4]) * 1e-9 / (table[ret[-1], 0] - table[ret[0], 0])
     assert c.metadata["retract_velocity"] == pytest.approx(travel, rel=1e-9) and travel > 70e-6
     assert "header 'Piezo speed'" in c.metadata["retract_velocity_note"]
+
+
+def test_copies_of_the_shared_real_files_are_identical():
+    """tests/realdata.py uses tests/data's copies where the shared folder is absent: they must
+    be the same bytes (the renamed ones included)."""
+    from realdata import COPIES, DATA, SHARED
+
+    if not SHARED.is_dir():
+        pytest.skip("shared/data/real not present: nothing to compare the copies with")
+    pairs = [(SHARED / name, DATA / COPIES.get(name, name)) for name in sorted(
+        p.name for p in SHARED.iterdir()) if (DATA / COPIES.get(name, name)).is_file()]
+    assert len(pairs) >= 9
+    for shared, copy in pairs:
+        assert shared.read_bytes() == copy.read_bytes(), copy.name

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 
 from afmforce.errors import MissingMetadataError, ParameterError
-from afmforce.io import load, require_metadata
+from afmforce.io import is_supported, load, require_metadata
 from afmforce.io._meta import segment_code
 from afmforce.io.jpk_zip import parse_properties
+from realdata import SHARED, real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
 
 DATA = Path(__file__).resolve().parents[1] / "data"
-REAL = Path(__file__).resolve().parents[2].parent / "shared" / "data" / "real"
 OVERRIDES = json.loads((DATA / "meta_override.json").read_text())
 
 
@@ -30,10 +30,7 @@ def _runs(segment: np.ndarray) -> list[tuple[int, int]]:
 
 
 def _real(name: str) -> Path:
-    path = REAL / name
-    if not path.is_file():
-        pytest.skip(f"{path} not available (shared data folder beside the repository)")
-    return path
+    return real_file(name)
 
 
 @pytest.mark.parametrize("style,code", [("extend", 0), ("Retract", 1), ("pause", 2), ("dwell", 2),
@@ -201,8 +198,12 @@ def test_formats_cli_lists_every_format(capsys):
     assert "bruker-nanoscope" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("path", sorted(p for p in REAL.glob("*") if p.suffix != ".md") if REAL.is_dir() else [],
-                         ids=lambda p: p.name)
+#: the shared real files; without the shared folder, the files of tests/data (copies of most)
+REAL_FILES = (sorted(p for p in SHARED.glob("*") if p.suffix != ".md") if SHARED.is_dir()
+              else sorted(p for p in DATA.iterdir() if is_supported(p)))
+
+
+@pytest.mark.parametrize("path", REAL_FILES, ids=lambda p: p.name)
 def test_every_shared_real_file_loads_or_names_the_flag(path):
     """Every real file in shared/data/real loads, or fails with one line naming what to give."""
     try:

@@ -1,0 +1,36 @@
+"""Where the tests find the real instrument files of ``shared/data/real`` (beside the
+repository): there, or their byte-identical copies in ``tests/data`` (some under a name
+that says the instrument), so that a checkout without the shared folder still tests them.
+Only files too large for ``tests/data`` (the 0.6-1 MB JPK files) are skipped without it."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+TESTS = Path(__file__).resolve().parent
+DATA = TESTS / "data"
+SHARED = TESTS.parents[1] / "shared" / "data" / "real"
+
+#: shared name -> name of its byte-identical copy in tests/data, where they differ
+COPIES = {
+    "ForceMetric_X60_3_x4_0100.ibw": "asylum-mfp3d_ForceMetric_X60_3_x4_0100.ibw",
+    "PyFMlab_20200904_Egel4-Z1.0_00025.spm": "bruker-nanoscope_PyFMlab_Egel4_00025.spm",
+}
+
+
+def real_path(name: str) -> Path | None:
+    """The shared real file ``name``, or its copy in tests/data; None when neither exists."""
+    for path in (SHARED / name, DATA / COPIES.get(name, name)):
+        if path.is_file():
+            return path
+    return None
+
+
+def real_file(name: str) -> Path:
+    """:func:`real_path`, skipping the calling test when the file is in neither place."""
+    path = real_path(name)
+    if path is None:
+        pytest.skip(f"{name} is neither in {SHARED} nor in tests/data (too large to copy)")
+    return path
