@@ -153,7 +153,7 @@ def test_copies_of_the_shared_real_files_are_identical():
     if not SHARED.is_dir():
         pytest.skip("shared/data/real not present: nothing to compare the copies with")
     pairs = [(SHARED / name, DATA / COPIES.get(name, name)) for name in sorted(
-        p.name for p in SHARED.iterdir()) if (DATA / COPIES.get(name, name)).is_file()]
+        p.name for p in SHARED.iterdir() if p.suffix != ".md") if (DATA / COPIES.get(name, name)).is_file()]
     assert len(pairs) >= 9
     for shared, copy in pairs:
         assert shared.read_bytes() == copy.read_bytes(), copy.name
