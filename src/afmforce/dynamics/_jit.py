@@ -203,3 +203,17 @@ def piece(*, inline: bool = False, python: bool = False):
         return disp
 
     return decorate
+
+
+@piece(inline=True, python=True)
+def fmin(a, b):
+    """``min(a, b)`` with numba's semantics (``b if b < a else a``: the first argument on
+    ties and NaN comparisons), without numba's ``min`` overload, which is compiled once per
+    argument types *and* per set of compiler flags (four times on the first call)."""
+    return b if b < a else a
+
+
+@piece(inline=True, python=True)
+def fmax(a, b):
+    """``max(a, b)`` with numba's semantics (``b if b > a else a``); see :func:`fmin`."""
+    return b if b > a else a

@@ -19,7 +19,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._jit import piece
+from ._jit import fmax, fmin, piece
 from .models import N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z, observe
 
 # --- events array layout (float, NaN = not found) ---------------------------
@@ -160,8 +160,8 @@ def _scan_extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, 
     if kbest < 0:
         return math.nan, math.nan
     ds = (s_b - s_a) / NSUB
-    lo = max(s_a, vals_s - ds)
-    hi = min(s_b, vals_s + ds)
+    lo = fmax(s_a, vals_s - ds)
+    hi = fmin(s_b, vals_s + ds)
     s, val = _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, lo, hi, idx, sign, ytmp, o)
     if sign * val > vbest:        # the scan point itself is better (end of the interval)
         s = vals_s
@@ -259,8 +259,8 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
         if not math.isnan(ev[E_SPIKE_T]):
             s_hi = 1.0
             if not math.isnan(ev[E_CONTACT_T]):
-                s_hi = min(1.0, (ev[E_CONTACT_T] + ev[E_SPIKE_WINDOW] - t0) / h)
-            s_lo = max(0.0, (ev[E_SPIKE_T] - t0) / h)
+                s_hi = fmin(1.0, (ev[E_CONTACT_T] + ev[E_SPIKE_WINDOW] - t0) / h)
+            s_lo = fmax(0.0, (ev[E_SPIKE_T] - t0) / h)
             if s_hi > s_lo:
                 _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, O_THETA + r0,
                             -1.0, E_SPIKE_THETA + r0, E_SPIKE_Z + r0, E_SPIKE_T + r0, ev, ytmp, o)

@@ -21,7 +21,7 @@ import math
 
 from numba import njit
 
-from ._jit import piece
+from ._jit import fmax, fmin, piece
 from ._linalg import _rms, _solve_real
 from ._radau_tableau import (E1, E2, E3, MAX_FACTOR, MU_REAL, NEWTON_MAXITER, S_NFEV,
                              W_VFAC)
@@ -36,7 +36,7 @@ def velocity_atol(model, p, drive, t, y, atol, work):
     av = atol[y.shape[0] - 1]
     if work[W_VFAC] > 0.0:
         zt = drive.z_a + drive.v * (t - drive.t_a)
-        av = min(av, atol[0] * work[W_VFAC] * error_frequency(model, p, zt, drive.v, y))
+        av = fmin(av, atol[0] * work[W_VFAC] * error_frequency(model, p, zt, drive.v, y))
     return av
 
 
@@ -71,7 +71,7 @@ def error_norm(h, y, fcur, J, Sr, det_r, Z, atol, av, rtolv, ytmp, err, scale):
     for i in range(n):
         ytmp[i] = y[i] + Z[2, i]
         ai = atol[i] if i < n // 2 else av
-        scale[i] = ai + max(abs(y[i]), abs(ytmp[i])) * rtolv[i]
+        scale[i] = ai + fmax(abs(y[i]), abs(ytmp[i])) * rtolv[i]
     _filtered_error(h, fcur, J, Sr, det_r, Z, err)
     return _rms(err, scale)
 
@@ -104,16 +104,16 @@ def controller(h_abs, h_abs_old, err_old, err_norm):
     else:
         mult = 1.0
     if err_norm > 0.0:
-        return min(1.0, mult) * err_norm ** -0.25
+        return fmin(1.0, mult) * err_norm ** -0.25
     return MAX_FACTOR
 
 
 @njit(cache=True, error_model="numpy", inline="always")
 def next_step_factor(h_abs, h_abs_old, err_old, err_norm, safety, rejected, recompute_jac):
     """Factor for the step after an accepted one."""
-    factor = min(MAX_FACTOR, safety * controller(h_abs, h_abs_old, err_old, err_norm))
+    factor = fmin(MAX_FACTOR, safety * controller(h_abs, h_abs_old, err_old, err_norm))
     if rejected:                    # RADAU5: no increase right after a rejection
-        factor = min(factor, 1.0)
+        factor = fmin(factor, 1.0)
     if not recompute_jac and factor < 1.2:
         factor = 1.0
     return factor
@@ -132,7 +132,7 @@ def max_step(model, p, drive, t, t_end, y, hmax_frac, hmax_dz):
         hsep = y[0] - zt
     else:
         hsep = p[HQA] * y[0] + p[HQB] * y[1] - zt
-    return max(hmax_frac * hsep, hmax_dz) / abs(v)
+    return fmax(hmax_frac * hsep, hmax_dz) / abs(v)
 
 
 @piece(inline=True)
@@ -161,7 +161,7 @@ def damping_step(model, p, drive, t, t_end, y, fcur, ev, damp_cycles, damp_kappa
             return 0.0
     if kappa >= damp_kappa * p[K_EFF] and wc > 0.0 and \
             ringing_amplitude(model, p, drive.v, y, fcur, wc) <= ev[E_RING_AMP]:
-        return min(damp_cycles / wc, h_max, t_end - t)
+        return fmin(fmin(damp_cycles / wc, h_max), t_end - t)
     return 0.0
 
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 
-from ._jit import piece
+from ._jit import fmax, fmin, piece
 from ._locate import _dense
 
 
@@ -31,8 +31,8 @@ def _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf):
         if lo >= t_new:
             break
         hi = ts + half
-        a = max(lo, t_old)
-        b = min(hi, t_new)
+        a = fmax(lo, t_old)
+        b = fmin(hi, t_new)
         if b > a:
             sa = (a - t_old) / h
             sb = (b - t_old) / h

@@ -45,7 +45,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._jit import piece
+from ._jit import fmax, fmin, piece
 
 from .radau import APPROACH, RETRACT
 
@@ -167,7 +167,7 @@ def fit_compliance(z, d, h, seg, hc, contact_position, turn_position, beta):
         fits[j, 0], fits[j, 1], fits[j, 2], fits[j, 3] = c0, c1, dlo, dhi
     a0, a1, alo, ahi = fits[0, 0], fits[0, 1], fits[0, 2], fits[0, 3]
     b0, b1, blo, bhi = fits[1, 0], fits[1, 1], fits[1, 2], fits[1, 3]
-    dmid = 0.5 * (max(alo, blo) + min(ahi, bhi))
+    dmid = 0.5 * (fmax(alo, blo) + fmin(ahi, bhi))
     offset = (a0 + a1 * dmid) - (b0 + b1 * dmid)
     slope = beta * 0.5 * (a1 + b1) if math.isfinite(beta) else math.nan
     return offset, slope
@@ -192,8 +192,8 @@ def _line_fit(z, d, h, seg, kind, hc, lo, hi):
             n += 1
             sd += d[i]
             sz += z[i]
-            dmin = min(dmin, d[i])
-            dmax = max(dmax, d[i])
+            dmin = fmin(dmin, d[i])
+            dmax = fmax(dmax, d[i])
     if n < 2 or not dmax > dmin:
         return n, math.nan, math.nan, dmin, dmax
     dm = sd / n

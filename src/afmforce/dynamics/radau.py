@@ -18,15 +18,13 @@ RADAU5), in the formulation of ``scipy.integrate.Radau``:
 * dense output from the collocation polynomial (cubic in the step fraction),
   sampled on the instrument's grid (:mod:`._sampling`).
 
-Everything is compiled with numba (``cache=True``) around the model
-functions of :mod:`afmforce.dynamics.models`; this module holds the step loop
-and its records. One call integrates one segment
-of the piecewise-linear drive (so the kink of ``z(t)`` is never stepped over),
-samples the solution on the instrument's time grid, locates events inside
-each accepted step on the dense output (:mod:`._locate`), and may stop at a
-terminal event (turn at a load) or pause after a number of steps (progress
-reporting). All integrator state lives in small work arrays, so a paused
-call resumes exactly.
+Everything is compiled with numba (``cache=True``) around the model functions of
+:mod:`afmforce.dynamics.models`; this module holds the step loop and its records. One
+call integrates one segment of the piecewise-linear drive (so the kink of ``z(t)`` is
+never stepped over), samples the solution on the instrument's time grid, locates events
+inside each accepted step on the dense output (:mod:`._locate`), and may stop at a
+terminal event (turn at a load) or pause after a number of steps (progress reporting).
+All integrator state lives in small work arrays, so a paused call resumes exactly.
 
 A failure never passes silently: the return code says why the segment did
 not reach its end (see ``STATUS``), and :func:`afmforce.dynamics.simulate`
@@ -41,6 +39,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
+from ._jit import fmax, fmin
 from ._locate import (  # noqa: F401  (re-exported: the event layout used by simulate)
     APPROACH, DWELL, E_CONTACT_T, E_CONTACT_Z, E_H_CONTACT, E_IN_CONTACT, E_JUMP_FACTOR,
     E_FAST_T, E_FAST_Z, E_H_STATIC, E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL,
@@ -77,10 +76,10 @@ STATUS = {
 }
 
 # --- the records passed to integrate_segment --------------------------------
-# Python passes plain tuples in these field orders (numba dispatches plain tuples
-# in C, named tuples ~5x slower: what a short run would pay per segment); the
-# compiled code turns them into these named tuples. Build them with the
-# functions below, which also fix the types (one compiled specialisation).
+# Python passes plain tuples in these field orders (numba dispatches plain tuples in C,
+# named tuples ~5x slower: what a short run would pay per segment); the compiled code
+# turns them into these named tuples. Build them with the functions below, which also
+# fix the types (one compiled specialisation).
 
 #: Drive segment ``z(t) = z_a + v (t - t_a)`` up to ``t_end`` [s, m, m/s, s], its kind
 #: (APPROACH, RETRACT, DWELL: selects the events) and terminal event: stop when Fz
@@ -161,17 +160,15 @@ def integrate_segment(model, p, drive, tolerances, control, sampling, state):
         :data:`SolverState` as plain tuples (:func:`drive_record`, ...). ``state.y``
         holds the state at ``work[W_T]`` on entry, at the end (or pause) on exit.
 
-    In-contact ringing (``control.damp_cycles`` > 0): once the probe has stayed
-    in contact (h < contact separation) without bouncing out for ``spike_window``,
-    or for ``ev[E_SPIKE_CYCLES]`` contact cycles both after contact and after the
-    last spike maximum, and where the contact stiffness ``kappa = -Fs'(h)`` exceeds
-    ``damp_kappa * k`` at both ends of the step, the step is never shorter than
-    ``damp_cycles / omega_c`` (omega_c the contact mode,
-    :func:`~afmforce.dynamics.models.contact_frequency`) and such a step is
-    accepted once its Newton iteration converges: Radau IIA's L-stability then
-    damps the ringing (|R(i y)| < 0.06 for y >= 50) instead of resolving it. The
-    slow motion stays accurate (stiffly accurate method; drive travel per step
-    bounded by ``hmax_dz``).
+    In-contact ringing (``control.damp_cycles`` > 0): once the probe has stayed in contact
+    (h < contact separation) without bouncing out for ``spike_window``, or for
+    ``ev[E_SPIKE_CYCLES]`` contact cycles both after contact and after the last spike
+    maximum, and where the contact stiffness ``kappa = -Fs'(h)`` exceeds ``damp_kappa * k``
+    at both ends of the step, the step is never shorter than ``damp_cycles / omega_c``
+    (omega_c the contact mode, :func:`~afmforce.dynamics.models.contact_frequency`) and such
+    a step is accepted once its Newton iteration converges: Radau IIA's L-stability then
+    damps the ringing (|R(i y)| < 0.06 for y >= 50) instead of resolving it. The slow motion
+    stays accurate (stiffly accurate method; drive travel per step bounded by ``hmax_dz``).
 
     Returns
     -------
@@ -184,12 +181,14 @@ def integrate_segment(model, p, drive, tolerances, control, sampling, state):
     s_t0, s_dt, average, s_next, ybuf = sampling
     y, ev, work, Q, y_old, J, stats = state
     n = y.shape[0]
-    # scratch (arrays are passed to the pieces one by one: see ._radau_newton)
-    Z0 = np.zeros((3, n))               # predicted stages
-    Z = np.zeros((3, n))                # stage increments Y_i - y
-    W = np.zeros((3, n))                # transformed stages
-    F = np.zeros((3, n))                # f at the stages
-    dW = np.zeros((3, n))               # Newton increment
+    # scratch (passed to the pieces one by one: see ._radau_newton). np.empty and loops, not
+    # np.zeros (compiled per shape: 0.4 s of the first call); not views of one block (1.4x
+    # the run time: LLVM then loses the shapes and that the arrays are distinct)
+    Z0 = np.empty((3, n))               # predicted stages
+    Z = np.empty((3, n))                # stage increments Y_i - y
+    W = np.empty((3, n))                # transformed stages
+    F = np.empty((3, n))                # f at the stages
+    dW = np.empty((3, n))               # Newton increment
     fcur = np.empty(n)                  # f at the current state
     fnew = np.empty(n)                  # f at the new state
     ytmp = np.empty(n)                  # the new state (after the error estimate)
@@ -198,12 +197,20 @@ def integrate_segment(model, p, drive, tolerances, control, sampling, state):
     err = np.empty(n)
     rr = np.empty(n)                    # real Newton system
     cc = np.empty(2 * n)                # complex Newton system (re, im)
-    Sr = np.zeros((2, 2))               # Schur factors (._linalg)
-    Sc = np.zeros((2, 2, 2))
-    lu = np.zeros(LU_SIZE)              # their determinants, validity, step (LU_*)
+    Sr = np.empty((2, 2))               # Schur factors (._linalg)
+    Sc = np.empty((2, 2, 2))
+    lu = np.empty(LU_SIZE)              # their determinants, validity, step (LU_*)
     o = np.empty(N_OBS)
     oprev = np.empty(N_OBS)
-    newton_tol = max(10.0 * EPS / rtol, min(0.03, math.sqrt(rtol)))
+    for i in range(3):
+        for j in range(n):
+            Z0[i, j] = Z[i, j] = W[i, j] = F[i, j] = dW[i, j] = 0.0
+    for i in range(2):
+        for j in range(2):
+            Sr[i, j] = Sc[i, j, 0] = Sc[i, j, 1] = 0.0
+    for i in range(LU_SIZE):
+        lu[i] = 0.0
+    newton_tol = fmax(10.0 * EPS / rtol, fmin(0.03, math.sqrt(rtol)))
     t_end = d.t_end
     term_kind = d.term_kind
     t = work[W_T]
@@ -325,7 +332,7 @@ def integrate_segment(model, p, drive, tolerances, control, sampling, state):
                 h_abs_old = 0.0
                 err_old = 0.0
             elif err_n > 1.0:
-                h_abs *= max(MIN_FACTOR, safety * controller(h_abs, h_abs_old, err_old, err_n))
+                h_abs *= fmax(MIN_FACTOR, safety * controller(h_abs, h_abs_old, err_old, err_n))
                 lu[LU_OK] = 0.0
                 rejected = True
                 stats[S_REJECTED] += 1
