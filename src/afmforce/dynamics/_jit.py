@@ -180,7 +180,7 @@ def _call_twin(disp, twin, *args, **kws):
     return twin[0]
 
 
-def piece(*, inline: bool = False, python: bool = False):
+def piece(*, inline: bool = False, python: bool = False, cached: bool = False):
     """``njit`` decorator for a function of the integrator called from compiled code.
 
     Parameters
@@ -190,9 +190,14 @@ def piece(*, inline: bool = False, python: bool = False):
     python : bool
         The function is also called from Python (tests): such calls go to its twin, an
         ordinary ``njit`` of the same source.
+    cached : bool
+        Compiled the ordinary way (machine code, not link-only) and cached, so that another
+        process can compile it into numba's cache (:mod:`._helper`); callers still inline
+        it (numba caches its LLVM IR too).
     """
-    jit = njit(cache=False, error_model="numpy", _nrt=False, forceinline=inline,
-               no_cpython_wrapper=True, no_cfunc_wrapper=True, **_PIPELINE)
+    jit = njit(cache=cached, error_model="numpy", _nrt=False, forceinline=inline,
+               no_cpython_wrapper=True, no_cfunc_wrapper=True,
+               **({} if cached else _PIPELINE))
 
     def decorate(func):
         disp = jit(func)

@@ -119,7 +119,7 @@ def _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, sign, ytm
     return s, o[idx]
 
 
-@piece()
+@piece(cached=True)
 def _terminal_event(model, p, t_a, z_a, v, t0, h, y_old, Q, z_new, y_new, term_kind, level,
                     ytmp, o, oprev):
     """Where in the accepted step ``[t0, t0 + h]`` the terminal level is first reached.
@@ -183,7 +183,7 @@ def _update_min(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, e_v
             ev[e_time] = t0 + s * h
 
 
-@piece()
+@piece(cached=True)
 def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
     """Update the event record with the accepted step [t0, t0 + h]."""
     # ``r0`` is an int64 zero known only at run time: integer constants passed as

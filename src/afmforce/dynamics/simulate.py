@@ -11,6 +11,7 @@ import numpy as np
 
 from ..errors import SolverError
 from ..progress import Progress
+from . import _helper
 from . import radau as R
 from .config import SimulationConfig
 from .drive import segments
@@ -140,6 +141,7 @@ class _Run:
     def integrate(self, progress=None) -> "_Run":
         """Run the integrator over every drive segment, then sample the result (raises
         :class:`SolverError`)."""
+        _helper.start()             # first call, empty numba cache: compile on two cores
         s = self.setup
         ybuf = self.ybuf
         fixed = (s.tolerances, s.control if progress is None else _control(s, PROGRESS_CHUNK),

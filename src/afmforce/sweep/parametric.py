@@ -15,6 +15,7 @@ import functools
 import hashlib
 import json
 import math
+import os
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
@@ -103,7 +104,10 @@ def table_key(func: Callable, table) -> str:
 
 
 def _warm_call(func: Callable, kwargs: dict) -> None:
-    """One run on a worker before its first chunk (loads compiled code); errors are ignored."""
+    """One run on a worker before its first chunk (loads compiled code); errors are ignored.
+    The workers compile side by side already: no compile helper process each
+    (:mod:`afmforce.dynamics._helper`)."""
+    os.environ["AFMFORCE_COMPILE_HELPER"] = "0"
     try:
         func(**kwargs)
     except Exception:

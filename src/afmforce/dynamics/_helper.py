@@ -1,0 +1,198 @@
+"""A second process compiles part of the integrator on the first call (issue 16).
+
+With an empty numba cache the first :func:`~afmforce.dynamics.simulate` compiles about ten
+seconds of code on one core. Four of the compiled functions are cached entry points that
+the rest only calls (:data:`TASKS`): the event location (``_locate._terminal_event``,
+``_locate._events``) and the two passes after the integration (``_locate.sample_columns``,
+``events.fit_compliance``). When this process is about to compile the integrator,
+:func:`start` launches ``python -m afmforce.dynamics._helper``, which compiles the four
+into numba's cache, in the order the integrator needs them, and prints one line per task.
+The dispatcher of a task waits for that line before it compiles (:func:`_compile`) and
+numba then loads the task from the cache. numba caches a function's LLVM IR with its
+machine code, so the integrator still inlines the event location: the machine code and the
+answers are those of a compilation in one process (``benchmarks/bench_ab.py``: all 616
+identical, run times unchanged).
+
+The helper is launched only where it can help: the integrator is not in numba's cache
+(:func:`~afmforce.dynamics._jit.cache_missing`), numba compiles (not ``NUMBA_DISABLE_JIT``),
+this process may use two CPUs or more, and ``AFMFORCE_COMPILE_HELPER`` is not ``0`` (the
+workers of a Dask sweep set it: they compile side by side already). It loses nothing when
+it fails: if it cannot start, reports a failure, dies or stays silent for :data:`WAIT_S`,
+this process compiles the task itself, as without it. It is stopped when this process
+exits.
+
+Measured (``benchmarks/README.md``, "First call"): the first ``simulate()`` with an empty
+cache takes ~2.4 s less wall time (the helper: ~4 s on the other core).
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import subprocess
+import sys
+import threading
+from functools import partial
+from pathlib import Path
+
+from numba.core.dispatcher import Dispatcher
+
+from . import events as _E
+from . import _locate as _L
+from . import radau as _R
+from ._jit import cache_missing
+
+__all__ = ["TASKS", "WAIT_S", "start", "tasks"]
+
+#: The tasks, in the order the integrator needs them (their signatures: :func:`tasks`).
+TASKS = ("_terminal_event", "_events", "sample_columns", "fit_compliance")
+#: Longest wait for one task's line [s] before compiling it here.
+WAIT_S = 60.0
+ENV = "AFMFORCE_COMPILE_HELPER"
+
+
+def tasks() -> list[tuple[str, Dispatcher, tuple]]:
+    """``(name, dispatcher, numba signature)`` of every task, in :data:`TASKS` order: the
+    argument types ``simulate`` passes (``tests/dynamics/test_helper.py`` checks them)."""
+    from numba import types as T
+
+    f8, i8, b1 = T.float64, T.int64, T.boolean
+    a1, a2 = T.Array(f8, 1, "C"), T.Array(f8, 2, "C")
+    a1a, i1a, c1 = T.Array(f8, 1, "A"), T.Array(i8, 1, "A"), T.Array(T.int8, 1, "C")
+    sigs = {
+        "_terminal_event": (i8, a1, f8, f8, f8, f8, f8, a1, a2, f8, a1, i8, f8, a1, a1, a1),
+        "_events": (i8, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1),
+        "sample_columns": (i8, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
+                           a1, a1, c1, a2, a1, a1),
+        "fit_compliance": (a1, a1, a1a, c1, f8, f8, f8, f8),
+    }
+    disp = {"_terminal_event": _L._terminal_event, "_events": _L._events,
+            "sample_columns": _L.sample_columns, "fit_compliance": _E.fit_compliance}
+    return [(name, disp[name], sigs[name]) for name in TASKS]
+
+
+def in_cache(disp) -> bool:
+    """Whether numba's cache on disk has an index for the ``cache=True`` dispatcher."""
+    try:
+        return os.path.exists(disp._cache._cache_file._index_path)     # numba internals
+    except AttributeError:
+        return False
+
+
+class _Helper:
+    """The helper process and the lines it printed (read by a thread)."""
+
+    def __init__(self, proc: subprocess.Popen):
+        self.proc = proc
+        self.lines: dict[str, str] = {}
+        self.closed = False
+        self.cond = threading.Condition()
+        threading.Thread(target=self._read, name="afmforce-compile-helper", daemon=True).start()
+
+    def _read(self) -> None:
+        for raw in self.proc.stdout:
+            status, _, name = raw.decode("ascii", "replace").strip().partition(" ")
+            with self.cond:
+                self.lines[name] = status
+                self.cond.notify_all()
+        self.proc.wait()
+        with self.cond:
+            self.closed = True
+            self.cond.notify_all()
+
+    def wait(self, name: str, timeout: float = WAIT_S) -> str | None:
+        """The helper's word on task ``name`` ("done", "fail") or None (it died, or timed
+        out)."""
+        with self.cond:
+            self.cond.wait_for(lambda: name in self.lines or self.closed, timeout)
+            return self.lines.get(name)
+
+    def stop(self) -> None:
+        if self.proc.poll() is None:
+            self.proc.kill()
+            self.proc.wait()
+
+
+_HELPER: _Helper | None = None
+_TRIED = False
+_LOCK = threading.Lock()
+
+
+def _cpus() -> int:
+    try:
+        return len(os.sched_getaffinity(0))
+    except AttributeError:                      # pragma: no cover - not Linux
+        return os.cpu_count() or 1
+
+
+def _useful() -> bool:
+    if os.environ.get(ENV, "1") == "0" or not sys.executable or _cpus() < 2:
+        return False
+    if not isinstance(_R.integrate_segment, Dispatcher) or not cache_missing(_R.integrate_segment):
+        return False
+    return any(not in_cache(d) for _, d, _ in tasks())
+
+
+def start() -> bool:
+    """Launch the helper if it can help (once per process; cheap after the first call).
+    Returns whether one is running."""
+    global _HELPER, _TRIED
+    if _TRIED:
+        return _HELPER is not None
+    with _LOCK:
+        if not _TRIED:
+            _TRIED = True
+            if _useful():
+                _HELPER = _launch()
+    return _HELPER is not None
+
+
+def _launch() -> _Helper | None:
+    import afmforce
+
+    root = Path(afmforce.__file__).resolve().parents[1]
+    env = dict(os.environ, **{ENV: "0"})
+    if env.get("NUMBA_CACHE_DIR"):              # the helper runs in ``root``
+        env["NUMBA_CACHE_DIR"] = os.path.abspath(env["NUMBA_CACHE_DIR"])
+    try:
+        proc = subprocess.Popen([sys.executable, "-m", "afmforce.dynamics._helper"],
+                                cwd=root, env=env, stdin=subprocess.DEVNULL,
+                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+    except OSError:
+        return None
+    helper = _Helper(proc)
+    atexit.register(helper.stop)
+    return helper
+
+
+def _compile(compile_here, name: str, sig: tuple, args: tuple):
+    # the dispatcher's compile(args): waits for the helper first where it compiles this
+    # signature, then numba loads it from the cache (or compiles it here)
+    helper = _HELPER
+    if helper is not None and tuple(args) == sig:
+        helper.wait(name)
+    return compile_here(args)
+
+
+if __name__ != "__main__":              # run as the helper: the imported module installs them
+    for _name, _disp, _sig in tasks():
+        if isinstance(_disp, Dispatcher):
+            _disp.compile = partial(_compile, _disp.compile, _name, _sig)
+
+
+def main() -> int:
+    """The helper: compile every task, print ``done NAME`` once numba's cache holds it
+    (``fail NAME`` otherwise)."""
+    for name, disp, sig in tasks():
+        try:
+            disp.compile(sig)
+            ok = in_cache(disp)
+        except Exception:                       # noqa: BLE001 - the caller compiles it
+            ok = False
+        print(("done " if ok else "fail ") + name, flush=True)
+    return 0
+
+
+if __name__ == "__main__":
+    from afmforce.dynamics._helper import main as _main     # the module, not this copy
+    sys.exit(_main())
