@@ -37,38 +37,46 @@ from pathlib import Path
 
 from numba.core.dispatcher import Dispatcher
 
-from . import events as _E
 from . import _locate as _L
+from . import _radau_control as _C
+from . import _radau_newton as _N
+from . import _sampling as _S
+from . import events as _E
 from . import radau as _R
-from ._jit import cache_missing
+from ._jit import cache_missing, compile_link_only
 
-__all__ = ["TASKS", "WAIT_S", "start", "tasks"]
+__all__ = ["WAIT_S", "in_cache", "start", "tasks"]
 
-#: The tasks, in the order the integrator needs them (their signatures: :func:`tasks`).
-TASKS = ("_terminal_event", "_events", "sample_columns", "fit_compliance")
 #: Longest wait for one task's line [s] before compiling it here.
 WAIT_S = 60.0
 ENV = "AFMFORCE_COMPILE_HELPER"
 
 
 def tasks() -> list[tuple[str, Dispatcher, tuple]]:
-    """``(name, dispatcher, numba signature)`` of every task, in :data:`TASKS` order: the
-    argument types ``simulate`` passes (``tests/dynamics/test_helper.py`` checks them)."""
+    """``(name, dispatcher, numba signature)`` of every task, in the order the integrator
+    needs them: the argument types ``simulate`` passes (``tests/dynamics/test_helper.py``
+    checks them)."""
+    from numba import typeof
     from numba import types as T
 
     f8, i8, b1 = T.float64, T.int64, T.boolean
-    a1, a2 = T.Array(f8, 1, "C"), T.Array(f8, 2, "C")
+    a1, a2, i1 = T.Array(f8, 1, "C"), T.Array(f8, 2, "C"), T.Array(i8, 1, "C")
     a1a, i1a, c1 = T.Array(f8, 1, "A"), T.Array(i8, 1, "A"), T.Array(T.int8, 1, "C")
-    sigs = {
-        "_terminal_event": (i8, a1, f8, f8, f8, f8, f8, a1, a2, f8, a1, i8, f8, a1, a1, a1),
-        "_events": (i8, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1),
-        "sample_columns": (i8, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
-                           a1, a1, c1, a2, a1, a1),
-        "fit_compliance": (a1, a1, a1a, c1, f8, f8, f8, f8),
-    }
-    disp = {"_terminal_event": _L._terminal_event, "_events": _L._events,
-            "sample_columns": _L.sample_columns, "fit_compliance": _E.fit_compliance}
-    return [(name, disp[name], sigs[name]) for name in TASKS]
+    drive = typeof(_R.Drive(0, 0.0, 0.0, 0.0, 0.0, 0, 0.0))
+    table = [
+        (_L, "_terminal_event", (i8, a1, f8, f8, f8, f8, f8, a1, a2, f8, a1, i8, f8, a1, a1, a1)),
+        (_L, "_events", (i8, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1)),
+        (_C, "error_norm", (f8, a1, a1, a2, a2, f8, a2, a1, f8, a1, a1, a1, a1)),
+        (_C, "improved_error_norm", (i8, a1, drive, f8, f8, a1, a2, a2, f8, a2, a1, a1, a1,
+                                     a1, i1, f8)),
+        (_C, "left_hard_contact", (i8, a1, drive, f8, a1, f8)),
+        (_N, "dense_coefficients", (a1, a2, a1, a2)),
+        (_S, "sample_step", (f8, f8, f8, a1, a2, f8, f8, b1, i1, a2, a1)),
+        (_L, "sample_columns", (i8, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
+                                a1, a1, c1, a2, a1, a1)),
+        (_E, "fit_compliance", (a1, a1, a1a, c1, f8, f8, f8, f8)),
+    ]
+    return [(name, getattr(module, name), sig) for module, name, sig in table]
 
 
 def in_cache(disp) -> bool:
@@ -144,6 +152,10 @@ def start() -> bool:
             _TRIED = True
             if _useful():
                 _HELPER = _launch()
+            if _HELPER is None:         # compiled here: as a link-only piece, like the rest
+                for _, disp, _ in tasks():
+                    if not in_cache(disp):
+                        compile_link_only(disp)
     return _HELPER is not None
 
 

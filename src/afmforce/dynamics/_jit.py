@@ -167,9 +167,52 @@ if LINK_ONLY:
             pm.finalize()
             return [pm]
 
+    class _EntryLibrary(_BASE):
+        """The code library of the integrator's entry point (:data:`ENTRY`): its module
+        (with every piece linked in) is optimised once, without vectorisation."""
+
+        def _optimize_functions(self, ll_module) -> None:
+            # the per-function clean-up after lowering: the module pipeline runs it again
+            ll_module.data_layout = self._codegen._data_layout
+
+        def _optimize_final_module(self) -> None:
+            # numba runs a "cheap" module pipeline first, to inline reference-count
+            # operations before pruning them; the pruning pass also ends the full pipeline
+            mpm, mpb = self._codegen._module_pass_manager(loop_vectorize=False,
+                                                          slp_vectorize=False)
+            mpm.run(self._final_module, mpb)
+
+    @register_pass(mutates_CFG=False, analysis_only=True)
+    class _UseEntryLibrary(FunctionPass):
+        """Give the entry point an :class:`_EntryLibrary` before it is lowered."""
+
+        _name = "afmforce_entry_library"
+
+        def __init__(self):
+            FunctionPass.__init__(self)
+
+        def run_pass(self, state) -> bool:
+            if state.library is None:
+                state.library = _EntryLibrary(state.targetctx.codegen(),
+                                              state.func_id.func_qualname)
+                state.library.enable_object_caching()
+            return False
+
+    class _EntryCompiler(CompilerBase):
+        """numba's nopython pipeline with the entry point's library."""
+
+        def define_pipelines(self):
+            pm = DefaultPassBuilder.define_nopython_pipeline(self.state)
+            pm.add_pass_after(_UseEntryLibrary, NopythonTypeInference)
+            pm.finalize()
+            return [pm]
+
     _PIPELINE = dict(pipeline_class=_PieceCompiler)
+    #: ``njit`` options of the integrator's entry point (``radau.integrate_segment``)
+    ENTRY = dict(pipeline_class=_EntryCompiler)
 else:                                   # pragma: no cover - another numba
     _PIPELINE = {}
+    ENTRY = {}
 
 
 def _call_twin(disp, twin, *args, **kws):
@@ -191,23 +234,35 @@ def piece(*, inline: bool = False, python: bool = False, cached: bool = False):
         The function is also called from Python (tests): such calls go to its twin, an
         ordinary ``njit`` of the same source.
     cached : bool
-        Compiled the ordinary way (machine code, not link-only) and cached, so that another
-        process can compile it into numba's cache (:mod:`._helper`); callers still inline
-        it (numba caches its LLVM IR too).
+        Compiled to machine code (not link-only; optimised as the entry point is, see
+        :data:`ENTRY`) and cached, so that another process can compile it into numba's
+        cache (:mod:`._helper`); callers still inline it (numba caches its LLVM IR too).
     """
     jit = njit(cache=cached, error_model="numpy", _nrt=False, forceinline=inline,
                no_cpython_wrapper=True, no_cfunc_wrapper=True,
-               **({} if cached else _PIPELINE))
+               **(ENTRY if cached else _PIPELINE))
 
     def decorate(func):
         disp = jit(func)
         if isinstance(disp, Dispatcher):        # not with NUMBA_DISABLE_JIT
+            disp._afmforce_cached_piece = cached
             disp.add_overload = partial(_keep_overload, disp)
             disp._compile_for_args = (partial(_call_twin, disp, []) if python
                                       else partial(_refuse_python_call, disp))
         return disp
 
     return decorate
+
+
+def compile_link_only(disp) -> None:
+    """Compile the ``cached=True`` piece ``disp`` link-only and uncached after all (no other
+    process compiles it into the cache: its own machine code would never run, and the
+    entry point that inlines it is cached). Only before it is compiled; numba internals."""
+    if LINK_ONLY and getattr(disp, "_afmforce_cached_piece", False) and not disp.overloads:
+        from numba.core.caching import NullCache
+
+        disp._compiler.pipeline_class = _PieceCompiler
+        disp._cache = NullCache()
 
 
 @piece(inline=True, python=True)

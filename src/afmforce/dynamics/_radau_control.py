@@ -60,7 +60,7 @@ def _filtered_error(h, f, J, Sr, det_r, Z, err):
     _solve_real(J, MU_REAL / h, Sr, det_r, err)
 
 
-@piece(inline=True)
+@piece(inline=True, cached=True)
 def error_norm(h, y, fcur, J, Sr, det_r, Z, atol, av, rtolv, ytmp, err, scale):
     """Error norm of the step of size ``h`` from ``y`` whose stages are ``Z``.
 
@@ -76,7 +76,7 @@ def error_norm(h, y, fcur, J, Sr, det_r, Z, atol, av, rtolv, ytmp, err, scale):
     return _rms(err, scale)
 
 
-@piece(inline=True)
+@piece(inline=True, cached=True)
 def improved_error_norm(model, p, drive, t, h, y, J, Sr, det_r, Z, err, scale, yst, fnew,
                         stats, err_norm):
     """After a rejection: the estimate again with f evaluated at ``y + err`` (Hairer &
@@ -165,7 +165,7 @@ def damping_step(model, p, drive, t, t_end, y, fcur, ev, damp_cycles, damp_kappa
     return 0.0
 
 
-@piece(inline=True)
+@piece(inline=True, cached=True)
 def left_hard_contact(model, p, drive, t_new, y_new, damp_kappa):
     """Whether the state ``y_new`` at ``t_new`` has left the stiff contact where damping
     steps are allowed (contact stiffness below ``damp_kappa * k``)."""

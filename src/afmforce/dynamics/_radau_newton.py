@@ -151,7 +151,7 @@ def newton(model, p, drive, t, h, y, J, Sr, Sc, lu, scale, newton_tol, nmax, Z0,
     return converged, n_iter, rate
 
 
-@piece(inline=True)
+@piece(inline=True, cached=True)
 def dense_coefficients(y, Z, y_old, Q):
     """Dense output of the accepted step: ``y_old = y``, ``Q = Z^T P`` (the collocation
     polynomial ``y_old + Q [s, s^2, s^3]`` in the step fraction ``s``)."""

@@ -50,7 +50,7 @@ def _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf):
     s_next[0] = k
 
 
-@piece(inline=True)
+@piece(inline=True, cached=True)
 def sample_step(t_old, t_new, h, y_old, Q, s_t0, s_dt, average, s_next, ybuf, ytmp):
     """Write the samples of the accepted step ``[t_old, t_new]`` into ``ybuf``.
 

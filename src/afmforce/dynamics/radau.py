@@ -39,7 +39,7 @@ from collections import namedtuple
 import numpy as np
 from numba import njit
 
-from ._jit import fmax, fmin
+from ._jit import ENTRY, fmax, fmin
 from ._locate import (  # noqa: F401  (re-exported: the event layout used by simulate)
     APPROACH, DWELL, E_CONTACT_T, E_CONTACT_Z, E_H_CONTACT, E_IN_CONTACT, E_JUMP_FACTOR,
     E_FAST_T, E_FAST_Z, E_H_STATIC, E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL,
@@ -147,7 +147,7 @@ def _save(work, t, h_abs, h_abs_old, err_old, current_jac):
     work[W_CUR_JAC] = 1.0 if current_jac else 0.0
 
 
-@njit(cache=True, error_model="numpy", nogil=True)
+@njit(cache=True, error_model="numpy", nogil=True, **ENTRY)
 def integrate_segment(model, p, drive, tolerances, control, sampling, state):
     """Integrate one drive segment from ``work[W_T]`` to its end.
 
