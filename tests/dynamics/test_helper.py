@@ -162,3 +162,17 @@ def test_cached_piece_compiled_here_is_link_only_and_not_cached(tmp_path, monkey
     _jit.compile_link_only(mod.g2)                           # compiled already: unchanged
     assert not isinstance(next(iter(mod.g2.overloads.values())).library,
                           _jit._LinkOnlyLibrary)
+
+
+@pytest.mark.skipif(not hasattr(os, "fork"), reason="fork only")
+def test_a_forked_child_forgets_the_parents_helper(monkeypatch):
+    """The helper and the thread reading it belong to the parent: a forked child must not
+    wait on them (it would wait out WAIT_S)."""
+    monkeypatch.setattr(H, "_HELPER", object())
+    monkeypatch.setattr(H, "_TRIED", True)
+    pid = os.fork()
+    if pid == 0:                                             # the child
+        os._exit(0 if (H._HELPER is None and H._TRIED is False) else 1)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0
+    assert H._HELPER is not None                             # the parent keeps its own

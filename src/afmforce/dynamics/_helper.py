@@ -1,28 +1,31 @@
 """A second process compiles part of the integrator on the first call (issue 16).
 
 With an empty numba cache the first :func:`~afmforce.dynamics.simulate` compiles about ten
-seconds of code on one core. Four of the compiled functions are cached entry points that
-the rest only calls (:data:`TASKS`): the event location (``_locate._terminal_event``,
-``_locate._events``) and the two passes after the integration (``_locate.sample_columns``,
-``events.fit_compliance``). When this process is about to compile the integrator,
-:func:`start` launches ``python -m afmforce.dynamics._helper``, which compiles the four
-into numba's cache, in the order the integrator needs them, and prints one line per task.
-The dispatcher of a task waits for that line before it compiles (:func:`_compile`) and
-numba then loads the task from the cache. numba caches a function's LLVM IR with its
-machine code, so the integrator still inlines the event location: the machine code and the
-answers are those of a compilation in one process (``benchmarks/bench_ab.py``: all 616
-identical, run times unchanged).
+seconds of code on one core. Part of it are functions the rest only calls, compiled as
+cached pieces (``piece(cached=True)``, :mod:`._jit`) or cached entry points (:func:`tasks`):
+the event location (``_locate._terminal_event``, ``_locate._events``), the error norms, the
+dense output and the sampling step of an accepted step, and the two passes after the
+integration (``_locate.sample_columns``, ``events.fit_compliance``). When this process is
+about to compile the integrator, :func:`start` launches ``python -m
+afmforce.dynamics._helper``, which compiles them into numba's cache, in the order the
+integrator needs them, and prints one line per task. The dispatcher of a task waits for that
+line before it compiles (:func:`_compile`); numba then loads the task from the cache. The
+helper runs ahead: this process, compiling the pieces before them, has never had to wait.
+numba caches a function's LLVM IR with its machine code, so the integrator still inlines the
+tasks: the answers are those of a compilation in one process (``benchmarks/bench_ab.py``:
+all 616 identical).
 
 The helper is launched only where it can help: the integrator is not in numba's cache
 (:func:`~afmforce.dynamics._jit.cache_missing`), numba compiles (not ``NUMBA_DISABLE_JIT``),
 this process may use two CPUs or more, and ``AFMFORCE_COMPILE_HELPER`` is not ``0`` (the
-workers of a Dask sweep set it: they compile side by side already). It loses nothing when
-it fails: if it cannot start, reports a failure, dies or stays silent for :data:`WAIT_S`,
-this process compiles the task itself, as without it. It is stopped when this process
-exits.
+workers of a Dask sweep set it: they compile side by side already). Where none runs, the
+tasks are compiled here as link-only pieces, as before (:func:`~._jit.compile_link_only`).
+It loses nothing when it fails: if it cannot start, reports a failure, dies or stays silent
+for :data:`WAIT_S`, this process compiles the task itself. It is stopped when this process
+exits; a forked child forgets it.
 
 Measured (``benchmarks/README.md``, "First call"): the first ``simulate()`` with an empty
-cache takes ~2.4 s less wall time (the helper: ~4 s on the other core).
+cache takes ~7 s of wall time instead of ~10.5 s (the helper: ~4.5 s on the other core).
 """
 
 from __future__ import annotations
@@ -175,6 +178,16 @@ def _launch() -> _Helper | None:
     helper = _Helper(proc)
     atexit.register(helper.stop)
     return helper
+
+
+def _forget() -> None:
+    # a forked child: the helper (and the thread reading it) belong to the parent
+    global _HELPER, _TRIED
+    _HELPER, _TRIED = None, False
+
+
+if hasattr(os, "register_at_fork"):
+    os.register_at_fork(after_in_child=_forget)
 
 
 def _compile(compile_here, name: str, sig: tuple, args: tuple):
