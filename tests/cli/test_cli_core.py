@@ -139,3 +139,9 @@ def test_cache_missing_sees_the_numba_cache_index(tmp_path, monkeypatch):
     del sys.modules["cm_mod"]
     fresh = importlib.import_module("cm_mod")
     assert not fresh.f.signatures and not cache_missing(fresh.f)
+    # the source changed (an upgrade): the index on disk is stale, the call will compile
+    with open(tmp_path / "cm_mod.py", "a") as fh:
+        fh.write("# changed\n")
+    del sys.modules["cm_mod"]
+    changed = importlib.import_module("cm_mod")
+    assert (tmp_path / "cache").exists() and cache_missing(changed.f)

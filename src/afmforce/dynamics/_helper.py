@@ -46,7 +46,7 @@ from . import _radau_newton as _N
 from . import _sampling as _S
 from . import events as _E
 from . import radau as _R
-from ._jit import cache_missing, compile_link_only
+from ._jit import cache_index_fresh, cache_missing, compile_link_only
 
 __all__ = ["WAIT_S", "in_cache", "start", "tasks"]
 
@@ -83,11 +83,8 @@ def tasks() -> list[tuple[str, Dispatcher, tuple]]:
 
 
 def in_cache(disp) -> bool:
-    """Whether numba's cache on disk has an index for the ``cache=True`` dispatcher."""
-    try:
-        return os.path.exists(disp._cache._cache_file._index_path)     # numba internals
-    except AttributeError:
-        return False
+    """Whether numba's cache on disk has a current index for the ``cache=True`` dispatcher."""
+    return cache_index_fresh(disp) is True
 
 
 class _Helper:

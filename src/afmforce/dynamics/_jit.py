@@ -88,17 +88,27 @@ except (ImportError, AttributeError):     # pragma: no cover - another numba
     LINK_ONLY = False
 
 
+def cache_index_fresh(disp) -> bool | None:
+    """Whether numba's cache on disk holds a current index for the ``cache=True``
+    dispatcher ``disp`` (one written for this source file as it is now: an index left from
+    another version of the file is stale); None where this cannot be told."""
+    try:
+        cache_file = disp._cache._cache_file               # numba internals
+    except AttributeError:
+        return None
+    try:
+        return bool(cache_file._load_index())              # {} when missing or stale
+    except Exception:                                      # noqa: BLE001 - unreadable: unsure
+        return None
+
+
 def cache_missing(disp) -> bool:
     """Whether calling the ``cache=True`` dispatcher ``disp`` will compile it: nothing compiled
-    in this process and no numba cache index for it on disk (a stale index, e.g. after an
-    upgrade, is not detected: then it compiles without notice). False when unsure."""
+    in this process and no current numba cache index for it on disk (missing, or stale: e.g.
+    after an upgrade). False when unsure."""
     if getattr(disp, "signatures", None):
         return False
-    try:
-        index = disp._cache._cache_file._index_path       # numba internals
-    except AttributeError:
-        return False
-    return not os.path.exists(index)
+    return cache_index_fresh(disp) is False
 
 
 def _keep_overload(disp, cres) -> None:
