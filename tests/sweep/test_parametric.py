@@ -214,3 +214,22 @@ def test_heat_map_shows_the_grid_values_on_log_axes():
     assert ax.get_xscale() == "log" and ax.get_yscale() == "linear"
     assert ax.get_xlabel() == "x [nm]"
     plt.close(ax.figure)
+
+
+def test_worker_warmup_runs_once_and_turns_the_compile_helper_off(monkeypatch):
+    """The warm-up on a Dask worker: one call, errors ignored, and no compile helper process
+    for that worker (the workers compile side by side already)."""
+    import os
+
+    from afmforce.dynamics._helper import ENV
+    from afmforce.sweep.parametric import _warm_call
+
+    monkeypatch.setenv(ENV, "1")
+    calls = []
+    _warm_call(lambda **kw: calls.append(kw), {"x": 1.0})
+    assert calls == [{"x": 1.0}] and os.environ[ENV] == "0"
+
+    def broken(**kw):
+        raise ValueError("bad row")
+
+    _warm_call(broken, {})                                   # ignored
