@@ -17,7 +17,8 @@ all 616 identical).
 
 The helper is launched only where it can help: the integrator is not in numba's cache
 (:func:`~afmforce.dynamics._jit.cache_missing`), numba compiles (not ``NUMBA_DISABLE_JIT``),
-this process may use two CPUs or more, and ``AFMFORCE_COMPILE_HELPER`` is not ``0`` (the
+this process may use two CPUs or more (:func:`afmforce._cores.available_cores`: a
+container's CPU quota counts), and ``AFMFORCE_COMPILE_HELPER`` is not ``0`` (the
 workers of a Dask sweep set it: they compile side by side already). Where none runs, the
 tasks are compiled here as link-only pieces, as before (:func:`~._jit.compile_link_only`).
 It loses nothing when it fails: if it cannot start, reports a failure, dies or stays silent
@@ -46,6 +47,7 @@ from . import _radau_newton as _N
 from . import _sampling as _S
 from . import events as _E
 from . import radau as _R
+from .._cores import available_cores
 from ._jit import cache_index_fresh, cache_missing, compile_link_only
 
 __all__ = ["WAIT_S", "in_cache", "start", "tasks"]
@@ -127,10 +129,7 @@ _LOCK = threading.Lock()
 
 
 def _cpus() -> int:
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:                      # pragma: no cover - not Linux
-        return os.cpu_count() or 1
+    return available_cores()
 
 
 def _useful() -> bool:

@@ -16,12 +16,12 @@ runs, only the order differs.
 
 from __future__ import annotations
 
-import os
 import sys
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from typing import Any, Callable, Iterable, Sequence
 
+from .._cores import available_cores
 from ..errors import AfmforceError, ParameterError
 from .config import SimulationConfig
 from .simulate import _Run
@@ -46,10 +46,7 @@ def default_threads() -> int:
             return 1
         except (ImportError, ValueError):
             pass
-    try:
-        return max(1, len(os.sched_getaffinity(0)))
-    except AttributeError:   # not on Linux
-        return max(1, os.cpu_count() or 1)
+    return available_cores()
 
 
 def _config(item) -> SimulationConfig:

@@ -10,11 +10,11 @@ from __future__ import annotations
 
 import itertools
 import logging
-import os
 import traceback
 from dataclasses import dataclass
 from typing import Any, Callable, Hashable, Iterable, Iterator
 
+from .._cores import available_cores
 from ..errors import ParameterError
 
 __all__ = ["Outcome", "SerialExecutor", "DaskExecutor", "make_executor", "available_cores"]
@@ -30,12 +30,6 @@ class Outcome:
     traceback: str = ""
 
 
-def available_cores() -> int:
-    """CPU cores this process may use."""
-    try:
-        return len(os.sched_getaffinity(0))
-    except AttributeError:  # pragma: no cover - not Linux
-        return os.cpu_count() or 1
 
 
 class SerialExecutor:
