@@ -163,31 +163,6 @@ if LINK_ONLY:
         def codegen(self):
             return _NoEnv(self._codegen)
 
-    @register_pass(mutates_CFG=False, analysis_only=True)
-    class _UseLinkOnlyLibrary(FunctionPass):
-        """Give the function a :class:`_LinkOnlyLibrary` before it is lowered."""
-
-        _name = "afmforce_link_only_library"
-
-        def __init__(self):
-            FunctionPass.__init__(self)
-
-        def run_pass(self, state) -> bool:
-            if state.library is None:
-                state.library = _LinkOnlyLibrary(state.targetctx.codegen(),
-                                                 state.func_id.func_qualname)
-                state.library.enable_object_caching()
-            return False
-
-    class _PieceCompiler(CompilerBase):
-        """numba's nopython pipeline with the link-only library."""
-
-        def define_pipelines(self):
-            pm = DefaultPassBuilder.define_nopython_pipeline(self.state)
-            pm.add_pass_after(_UseLinkOnlyLibrary, NopythonTypeInference)
-            pm.finalize()
-            return [pm]
-
     class _EntryLibrary(_BASE):
         """The code library of the integrator's entry point (:data:`ENTRY`): its module
         (with every piece linked in) is optimised once, without vectorisation."""
@@ -203,31 +178,35 @@ if LINK_ONLY:
                                                           slp_vectorize=False)
             mpm.run(self._final_module, mpb)
 
-    @register_pass(mutates_CFG=False, analysis_only=True)
-    class _UseEntryLibrary(FunctionPass):
-        """Give the entry point an :class:`_EntryLibrary` before it is lowered."""
+    def _compiler_with(library_class, name: str):
+        """numba's nopython pipeline with a pass that gives the function a
+        ``library_class`` code library before it is lowered."""
 
-        _name = "afmforce_entry_library"
+        @register_pass(mutates_CFG=False, analysis_only=True)
+        class _UseLibrary(FunctionPass):
+            _name = name
 
-        def __init__(self):
-            FunctionPass.__init__(self)
+            def __init__(self):
+                FunctionPass.__init__(self)
 
-        def run_pass(self, state) -> bool:
-            if state.library is None:
-                state.library = _EntryLibrary(state.targetctx.codegen(),
-                                              state.func_id.func_qualname)
-                state.library.enable_object_caching()
-            return False
+            def run_pass(self, state) -> bool:
+                if state.library is None:
+                    state.library = library_class(state.targetctx.codegen(),
+                                                  state.func_id.func_qualname)
+                    state.library.enable_object_caching()
+                return False
 
-    class _EntryCompiler(CompilerBase):
-        """numba's nopython pipeline with the entry point's library."""
+        class _Compiler(CompilerBase):
+            def define_pipelines(self):
+                pm = DefaultPassBuilder.define_nopython_pipeline(self.state)
+                pm.add_pass_after(_UseLibrary, NopythonTypeInference)
+                pm.finalize()
+                return [pm]
 
-        def define_pipelines(self):
-            pm = DefaultPassBuilder.define_nopython_pipeline(self.state)
-            pm.add_pass_after(_UseEntryLibrary, NopythonTypeInference)
-            pm.finalize()
-            return [pm]
+        return _Compiler
 
+    _PieceCompiler = _compiler_with(_LinkOnlyLibrary, "afmforce_link_only_library")
+    _EntryCompiler = _compiler_with(_EntryLibrary, "afmforce_entry_library")
     _PIPELINE = dict(pipeline_class=_PieceCompiler)
     #: ``njit`` options of the integrator's entry point (``radau.integrate_segment``)
     ENTRY = dict(pipeline_class=_EntryCompiler)
