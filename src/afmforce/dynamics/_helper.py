@@ -69,14 +69,14 @@ def tasks() -> list[tuple[str, Dispatcher, tuple]]:
     a1a, i1a, c1 = T.Array(f8, 1, "A"), T.Array(i8, 1, "A"), T.Array(T.int8, 1, "C")
     drive = typeof(_R.Drive(0, 0.0, 0.0, 0.0, 0.0, 0, 0.0))
     table = [
-        (_L, "_terminal_event", (i8, a1, f8, f8, f8, f8, f8, a1, a2, f8, a1, i8, f8, a1, a1, a1)),
-        (_L, "_events", (i8, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1)),
         (_C, "error_norm", (f8, a1, a1, a2, a2, f8, a2, a1, f8, a1, a1, a1, a1)),
         (_C, "improved_error_norm", (i8, a1, drive, f8, f8, a1, a2, a2, f8, a2, a1, a1, a1,
                                      a1, i1, f8)),
         (_C, "left_hard_contact", (i8, a1, drive, f8, a1, f8)),
         (_N, "dense_coefficients", (a1, a2, a1, a2)),
+        (_L, "_terminal_event", (i8, a1, f8, f8, f8, f8, f8, a1, a2, f8, a1, i8, f8, a1, a1, a1)),
         (_S, "sample_step", (f8, f8, f8, a1, a2, f8, f8, b1, i1, a2, a1)),
+        (_L, "_events", (i8, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1)),
         (_L, "sample_columns", (i8, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
                                 a1, a1, c1, a2, a1, a1)),
         (_E, "fit_compliance", (a1, a1, a1a, c1, f8, f8, f8, f8)),
