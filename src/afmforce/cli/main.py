@@ -126,14 +126,14 @@ SIMULATING = ("simulate", "demo", "reproduce", "explore", "fit", "plan", "sweep"
 
 
 def _compile_notice() -> None:
-    """One line on stderr when the integrator is about to be compiled (first run, empty
-    numba cache): 10-20 s of silence otherwise looks like a hang."""
+    """One line on stderr when the integrator is about to be compiled (first run, empty or
+    stale numba cache): 7-10 s of silence otherwise looks like a hang."""
     from ..dynamics import radau
     from ..dynamics._jit import cache_missing
 
     if cache_missing(radau.integrate_segment):
-        print("afmforce: compiling the integrator (first run; later runs load it from numba's "
-              "cache)...", file=sys.stderr, flush=True)
+        print("afmforce: compiling the integrator, ~10 s (first run; later runs load it from "
+              "numba's cache)...", file=sys.stderr, flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
