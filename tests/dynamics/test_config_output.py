@@ -128,7 +128,7 @@ def test_trajectory_columns_and_summary(fig5):
                        "hysteresis_offset", "spike_height", "solver"]
     assert list(s["jump_in"]) == ["time", "piezo_position", "separation"]
     assert list(s["pull_off"]) == ["piezo_position", "force"]
-    assert list(s["solver"]) == ["status", "steps", "rhs_evaluations", "wall_time"]
+    assert list(s["solver"]) == ["status", "steps", "rhs_evaluations", "wall_time", "check"]
     with pytest.raises(dataclasses.FrozenInstanceError):
         tr.time = None
 

@@ -103,3 +103,23 @@ def test_no_pull_off_warning_of_an_unchecked_bouncing_run_points_to_the_check():
     assert "check='auto'" in msg and "free-mode damping ratio 0" in msg
     tight = simulate(**BOUNCING, rtol=1e-7, atol=1e-15).events
     assert tight.pull_off_position == pytest.approx(20e-9, abs=0.5e-9)   # off at the turn
+
+
+def test_an_unchecked_run_says_whether_its_regime_is_risky():
+    """check='off' (the library default): the solver's note and the summary say "not
+    checked", with the reason a check would matter where the regime is risky (the spring:
+    free-mode damping ratio 0), and nothing more where it is not (Fig 5's beam); the free
+    mode (an eigenproblem) is cached per probe."""
+    from afmforce.dynamics import DynamicsWarning, SimulationConfig, simulate
+    from afmforce.dynamics.guard import _free_mode, damping_ratio, risky
+
+    with pytest.warns(DynamicsWarning, match="never reached contact"):     # a short run
+        spring = simulate(model="spring", start=-40e-9, turn=-35e-9, end=-40e-9, velocity=1e-6)
+    assert spring.solver.check.startswith("not checked (risky regime: free-mode damping ratio 0")
+    assert spring.summary()["solver"]["check"] == spring.solver.check
+    fig5 = SimulationConfig()
+    assert risky(fig5) == "" and simulate(fig5).solver.check == "not checked"
+    first = damping_ratio(fig5)
+    hits = _free_mode.cache_info().hits
+    assert all(damping_ratio(fig5) == first for _ in range(5))   # the eigenproblem once
+    assert _free_mode.cache_info().hits == hits + 5

@@ -15,6 +15,7 @@ rtol 1e-4, 1e-5, 1e-6 and -56 nN converged).
 
 from __future__ import annotations
 
+import functools
 import math
 import warnings
 
@@ -46,6 +47,20 @@ class ConvergenceWarning(UserWarning):
     """Events of the run moved under a tighter second solve by more than their tolerance."""
 
 
+@functools.lru_cache(maxsize=256)
+def _free_mode(probe) -> tuple[float, float]:
+    """(angular frequency of the beam's free mode [rad/s], lateral mobility [1/kg]) of a
+    probe (cached: an eigenproblem, ~50 us, asked for by every unchecked run)."""
+    from .models import beam_couplings, beam_matrices
+    import numpy as np
+
+    A, (ma, mb) = beam_matrices(probe.cantilever, probe.m_joint, probe.m_base)
+    _, yq, _ = beam_couplings(probe.cantilever)
+    minv = np.array([1.0 / ma, 1.0 / mb])
+    w2 = np.linalg.eigvals(-minv[:, None] * A).real
+    return math.sqrt(float(np.min(w2[w2 > 0]))), float(yq @ (minv * yq))
+
+
 def damping_ratio(cfg) -> float:
     """Damping ratio of the free mode from lateral friction at rest [-] (0 for the spring).
 
@@ -53,16 +68,7 @@ def damping_ratio(cfg) -> float:
     """
     if cfg.model == "spring" or cfg.friction.law == "none":
         return 0.0
-    from .models import beam_couplings, beam_matrices
-    import numpy as np
-
-    probe = cfg.probe
-    A, (ma, mb) = beam_matrices(probe.cantilever, probe.m_joint, probe.m_base)
-    _, yq, _ = beam_couplings(probe.cantilever)
-    minv = np.array([1.0 / ma, 1.0 / mb])
-    w2 = np.linalg.eigvals(-minv[:, None] * A).real
-    w = math.sqrt(float(np.min(w2[w2 > 0])))
-    mob_y = float(yq @ (minv * yq))
+    w, mob_y = _free_mode(cfg.probe)
     return cfg.friction.xi * mob_y / (2.0 * w)
 
 

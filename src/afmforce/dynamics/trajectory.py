@@ -153,7 +153,8 @@ class Trajectory:
         Keys: ``jump_in`` {time, piezo_position, separation}, ``pull_off``
         {piezo_position, force}, ``min_deflection``, ``min_apparent_deflection``,
         ``hysteresis_offset``, ``spike_height``, ``solver`` {status, steps,
-        rhs_evaluations, wall_time}.
+        rhs_evaluations, wall_time, check: the convergence check's note, e.g. "not checked
+        (risky regime: ...)"}.
         """
         e, s = self.events, self.solver
         return {
@@ -165,7 +166,7 @@ class Trajectory:
             "hysteresis_offset": e.hysteresis_offset,
             "spike_height": e.spike_height,
             "solver": {"status": s.status, "steps": s.steps, "rhs_evaluations": s.rhs_evaluations,
-                       "wall_time": s.wall_time},
+                       "wall_time": s.wall_time, "check": s.check},
         }
 
     def segment_slice(self, kind: int) -> np.ndarray:
