@@ -41,7 +41,7 @@ def test_available_cores_caps_the_affinity_by_the_quota(monkeypatch, limit, want
     """A container limited to one CPU on an 8-CPU host: 1 (its thread pools and the compile
     helper would otherwise share one CPU eight or two ways)."""
     monkeypatch.setattr(os, "sched_getaffinity", lambda pid: set(range(8)), raising=False)
-    monkeypatch.setattr(_cores, "cgroup_cpu_limit", lambda: limit)
+    monkeypatch.setattr(_cores, "_process_limit", lambda: limit)
     assert _cores.available_cores() == want
 
 
@@ -50,3 +50,13 @@ def test_this_machine():
     n = _cores.available_cores()
     assert 1 <= n <= (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity")
                       else os.cpu_count())
+
+
+def test_the_quota_is_read_once_per_process():
+    """simulate_many asks on every call (a fit: hundreds): the cgroup files are read once."""
+    _cores.available_cores()
+    before = _cores._process_limit.cache_info()
+    for _ in range(3):
+        _cores.available_cores()
+    after = _cores._process_limit.cache_info()
+    assert after.hits == before.hits + 3 and after.misses == before.misses
