@@ -37,7 +37,7 @@ def _digest(tr) -> str:
                                     tr.apparent_deflection]).tobytes()).hexdigest()
 
 
-@pytest.mark.skipif(H._cpus() < 2, reason="the helper runs only with two CPUs or more")
+@pytest.mark.skipif(H.available_cores() < 2, reason="the helper runs only with two CPUs or more")
 def test_first_call_loads_every_task_from_the_helper_with_the_same_answers(tmp_path):
     """End to end, empty numba cache: the helper compiles every task into the cache, the
     first simulate() loads each one from there (a hit, no miss: the signatures of
@@ -58,24 +58,37 @@ def test_first_call_loads_every_task_from_the_helper_with_the_same_answers(tmp_p
 
 
 def test_no_helper_where_it_cannot_help(monkeypatch):
-    """start() launches nothing when turned off, when the integrator is in the cache (as in
-    this test process), or with one CPU; it decides once per process."""
-    launched = []
+    """start() launches nothing when turned off, with one CPU, or when the integrator is in
+    the cache (as in this test process: then it reads nothing more than that index); where no
+    helper runs but the integrator compiles, the tasks compile link-only here. It decides
+    once per process."""
+    launched, link_only, asked = [], [], []
     monkeypatch.setattr(H, "_launch", lambda: launched.append(1) or None)
-    for setup in (lambda: monkeypatch.setenv(H.ENV, "0"),
-                  lambda: monkeypatch.setattr(H, "cache_missing", lambda disp: False),
-                  lambda: monkeypatch.setattr(H, "_cpus", lambda: 1)):
+    monkeypatch.setattr(H, "compile_link_only", lambda disp: link_only.append(disp))
+
+    def in_cache(disp):
+        asked.append(disp)
+        return False
+
+    for setup, compiles in ((lambda: monkeypatch.setenv(H.ENV, "0"), True),
+                            (lambda: monkeypatch.setattr(H, "available_cores", lambda: 1), True),
+                            (lambda: monkeypatch.setattr(H, "cache_missing", lambda d: False),
+                             False)):
         monkeypatch.setattr(H, "_TRIED", False)
         monkeypatch.setattr(H, "_HELPER", None)
         monkeypatch.setattr(H, "cache_missing", lambda disp: True)
-        monkeypatch.setattr(H, "in_cache", lambda disp: False)
+        monkeypatch.setattr(H, "in_cache", in_cache)
         monkeypatch.delenv(H.ENV, raising=False)
-        monkeypatch.setattr(H, "_cpus", lambda: 2)
+        monkeypatch.setattr(H, "available_cores", lambda: 2)
+        link_only.clear()
+        asked.clear()
         setup()
         assert H.start() is False
+        tasks = [d for _, d, _ in H.tasks()]
+        assert link_only == (tasks if compiles else []) and asked == (tasks if compiles else [])
     assert launched == []
     monkeypatch.setattr(H, "_TRIED", False)
-    monkeypatch.setattr(H, "_cpus", lambda: 2)
+    monkeypatch.setattr(H, "cache_missing", lambda disp: True)
     assert H.start() is False and launched == [1]          # useful: launched (stub: failed)
     assert H.start() is False and launched == [1]          # once per process
 

@@ -128,18 +128,6 @@ _TRIED = False
 _LOCK = threading.Lock()
 
 
-def _cpus() -> int:
-    return available_cores()
-
-
-def _useful() -> bool:
-    if os.environ.get(ENV, "1") == "0" or not sys.executable or _cpus() < 2:
-        return False
-    if not isinstance(_R.integrate_segment, Dispatcher) or not cache_missing(_R.integrate_segment):
-        return False
-    return any(not in_cache(d) for _, d, _ in tasks())
-
-
 def start() -> bool:
     """Launch the helper if it can help (once per process; cheap after the first call).
     Returns whether one is running."""
@@ -147,14 +135,19 @@ def start() -> bool:
     if _TRIED:
         return _HELPER is not None
     with _LOCK:
-        if not _TRIED:
-            _TRIED = True
-            if _useful():
-                _HELPER = _launch()
-            if _HELPER is None:         # compiled here: as a link-only piece, like the rest
-                for _, disp, _ in tasks():
-                    if not in_cache(disp):
-                        compile_link_only(disp)
+        if _TRIED:
+            return _HELPER is not None
+        _TRIED = True
+        if not (isinstance(_R.integrate_segment, Dispatcher)
+                and cache_missing(_R.integrate_segment)):
+            return False                # nothing to compile (the usual case: one index read)
+        missing = [disp for _, disp, _ in tasks() if not in_cache(disp)]
+        if (missing and os.environ.get(ENV, "1") != "0" and sys.executable
+                and available_cores() >= 2):
+            _HELPER = _launch()
+        if _HELPER is None:             # compiled here: as link-only pieces, like the rest
+            for disp in missing:
+                compile_link_only(disp)
     return _HELPER is not None
 
 
