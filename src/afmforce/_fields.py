@@ -203,6 +203,10 @@ QUANTITIES: dict[str, FieldSpec] = {
     "spring_constant": _q("stiffness", "N/m", "spring constant k", 1e-4, 1e3),
     "mass": _q("mass", "kg", "effective mass m", hi=1e-5, display="ug", **_POS),
     "resonance_frequency": _q("frequency", "Hz", "resonance frequency", 1.0, 1e8, display="kHz"),
+    "quality_factor": _q("dimensionless", "", "quality factor Q of the lever in its medium (none: undamped)",
+                         0.1, 1e6),
+    "quality_factor_2": _q("dimensionless", "", "quality factor of the beam's second free mode "
+                           "(none: quality_factor)", 0.1, 1e6),
     "sensitivity": _q("sensitivity", "m/V", "deflection sensitivity (InvOLS)", 1e-10, 1e-5,
                       display="nm/V"),
     # surfaces (eq 2, drainage)

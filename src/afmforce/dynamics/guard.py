@@ -11,6 +11,13 @@ flagged run is solved once more, 100x tighter, so that the message can say
 whether the 10x tighter run is converged (use it) or not (the events moved
 again: a bouncing spring, for one, gives pull-off forces of -56, -10, -18 nN at
 rtol 1e-4, 1e-5, 1e-6 and -56 nN converged).
+
+A risky run without lever damping (``quality_factor`` None, the paper's model) is
+also solved with a realistic quality factor (:data:`REALISTIC_Q`; issue 23): where
+an event moves beyond its tolerance, the result hangs on damping the model lacks,
+and ``solver.check`` says so with the numbers (issue 23's load-friction case:
+"hysteresis_offset 4.98 nm undamped vs 0.354 nm at Q = 300"), with a
+:class:`LeverDampingWarning`.
 """
 
 from __future__ import annotations
@@ -21,7 +28,8 @@ import warnings
 
 from ..errors import ParameterError, SolverError
 
-__all__ = ["CHECKS", "EVENT_TOLERANCES", "ConvergenceWarning", "risky", "compare_events"]
+__all__ = ["CHECKS", "EVENT_TOLERANCES", "REALISTIC_Q", "ConvergenceWarning", "LeverDampingWarning",
+           "risky", "compare_events"]
 
 #: Accepted values of ``check=``.
 CHECKS = ("off", "auto", "always", "raise")
@@ -41,10 +49,17 @@ EVENT_TOLERANCES = {
 RISKY_DAMPING_RATIO = 0.05
 #: Load-dependent friction at or above this zeta [kg/(s N^2)] is risky (stiff friction).
 RISKY_ZETA = 1e12
+#: Quality factor of the lever with which a risky undamped run is compared (issue 23):
+#: real levers have tens (in liquid) to a few hundred (in air).
+REALISTIC_Q = 300.0
 
 
 class ConvergenceWarning(UserWarning):
     """Events of the run moved under a tighter second solve by more than their tolerance."""
+
+
+class LeverDampingWarning(ConvergenceWarning):
+    """Events of an undamped run move when the lever gets a realistic quality factor."""
 
 
 @functools.lru_cache(maxsize=256)
@@ -62,14 +77,17 @@ def _free_mode(probe) -> tuple[float, float]:
 
 
 def damping_ratio(cfg) -> float:
-    """Damping ratio of the free mode from lateral friction at rest [-] (0 for the spring).
+    """Damping ratio of the free mode from lateral friction at rest and the lever's own
+    damping, 1 / (2 Q) [-] (0 for an undamped spring).
 
     Drainage is not counted: far from the surface it vanishes.
     """
+    q = cfg.probe.quality_factor
+    lever = 0.0 if q is None else 0.5 / q
     if cfg.model == "spring" or cfg.friction.law == "none":
-        return 0.0
+        return lever
     w, mob_y = _free_mode(cfg.probe)
-    return cfg.friction.xi * mob_y / (2.0 * w)
+    return cfg.friction.xi * mob_y / (2.0 * w) + lever
 
 
 def _stiff_load_friction(cfg) -> bool:
@@ -160,7 +178,29 @@ def run_check(check: str, cfg, events, resolve):
         if check == "raise":
             raise SolverError(msg)
         warnings.warn(msg, ConvergenceWarning, stacklevel=3)
+    if why and cfg.probe.quality_factor is None:
+        note += "; " + _lever_damping(cfg, events, resolve)
     return errors, note
+
+
+def _lever_damping(cfg, events, resolve) -> str:
+    """Compare an undamped run with one at :data:`REALISTIC_Q`; the note (and a warning)."""
+    try:
+        damped = resolve(cfg.replace(quality_factor=REALISTIC_Q))
+    except Exception as exc:    # noqa: BLE001 - the check must not fail the run it checks
+        return f"lever damping not compared (the run at Q = {REALISTIC_Q:g} failed: {exc})"
+    moved = exceeded(compare_events(events, damped), damped)
+    if not moved:
+        return f"no event moves beyond its tolerance with lever damping Q = {REALISTIC_Q:g}"
+    parts = []
+    for n in moved:
+        unit = "nN" if n == "pull_off_force" else "nm"
+        parts.append(f"{n} {getattr(events, n) * 1e9:.4g} {unit} undamped vs "
+                     f"{getattr(damped, n) * 1e9:.4g} {unit} at Q = {REALISTIC_Q:g}")
+    msg = "hangs on damping the model lacks: " + ", ".join(parts)
+    warnings.warn(msg + "; real levers have Q of tens to a few hundred: give quality_factor "
+                  "(--quality-factor)", LeverDampingWarning, stacklevel=4)
+    return msg
 
 
 def _values(names, *runs) -> str:
