@@ -29,7 +29,7 @@ import warnings
 from ..errors import ParameterError, SolverError
 
 __all__ = ["CHECKS", "EVENT_TOLERANCES", "REALISTIC_Q", "ConvergenceWarning", "LeverDampingWarning",
-           "risky", "compare_events"]
+           "risky", "compare_events", "lever_damping_check"]
 
 #: Accepted values of ``check=``.
 CHECKS = ("off", "auto", "always", "raise")
@@ -178,20 +178,28 @@ def run_check(check: str, cfg, events, resolve):
         if check == "raise":
             raise SolverError(msg)
         warnings.warn(msg, ConvergenceWarning, stacklevel=3)
-    if why and cfg.probe.quality_factor is None:
-        note += "; " + _lever_damping(cfg, events, resolve)
     return errors, note
 
 
-def _lever_damping(cfg, events, resolve) -> str:
-    """Compare an undamped run with one at :data:`REALISTIC_Q`; the note (and a warning)."""
+def lever_damping_check(check: str, cfg, events, resolve) -> str:
+    """Where the run is risky, unchecked (``check`` not "off") and has no lever damping:
+    compare it with a run at :data:`REALISTIC_Q` (``resolve(cfg)`` returns its events).
+
+    Returns the note for ``solver.check`` ('' when nothing was compared) and warns with
+    :class:`LeverDampingWarning` where an event moved beyond its tolerance.
+    """
+    if check == "off" or cfg.probe.quality_factor is not None:
+        return ""
+    why = risky(cfg)
+    if not why:
+        return ""
     try:
         damped = resolve(cfg.replace(quality_factor=REALISTIC_Q))
     except Exception as exc:    # noqa: BLE001 - the check must not fail the run it checks
-        return f"lever damping not compared (the run at Q = {REALISTIC_Q:g} failed: {exc})"
+        return f"; lever damping not compared (the run at Q = {REALISTIC_Q:g} failed: {exc})"
     moved = exceeded(compare_events(events, damped), damped)
     if not moved:
-        return f"no event moves beyond its tolerance with lever damping Q = {REALISTIC_Q:g}"
+        return f"; no event moves beyond its tolerance with lever damping Q = {REALISTIC_Q:g}"
     parts = []
     for n in moved:
         unit = "nN" if n == "pull_off_force" else "nm"
@@ -200,7 +208,7 @@ def _lever_damping(cfg, events, resolve) -> str:
     msg = "hangs on damping the model lacks: " + ", ".join(parts)
     warnings.warn(msg + "; real levers have Q of tens to a few hundred: give quality_factor "
                   "(--quality-factor)", LeverDampingWarning, stacklevel=4)
-    return msg
+    return "; " + msg
 
 
 def _values(names, *runs) -> str:
