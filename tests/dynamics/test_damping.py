@@ -179,3 +179,59 @@ def test_damped_load_friction_comes_back_to_the_quasi_static_hysteresis(q1, q2):
     assert hyst / nm == pytest.approx(0.3545, abs=0.001)
     assert e.hysteresis_offset == pytest.approx(hyst, abs=0.002 * nm)
     assert e.compliance_slope == pytest.approx(slope, rel=1e-4)
+
+
+#: an undamped spring probe (1 ug, R 220 nm, 7.2 um/s) that bounces in contact: a risky regime
+BOUNCING = dict(model="spring", mass=1e-9, radius=220e-9, velocity=7.2e-6)
+
+
+def test_guard_says_when_a_result_hangs_on_damping_the_model_lacks():
+    """check="auto" on a risky undamped run also solves it at REALISTIC_Q and reports, in
+    solver.check and a LeverDampingWarning, the events that move (the numbers are those of an
+    ordinary run at that Q); a run with a Q, or unchecked, is not compared."""
+    from afmforce.dynamics.guard import REALISTIC_Q, LeverDampingWarning, lever_damping_check
+
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        tr = simulate(**BOUNCING, check="auto")
+    damped = _sim(**BOUNCING, quality_factor=REALISTIC_Q).events
+    note = tr.solver.check
+    assert "hangs on damping the model lacks" in note
+    assert (f"pull_off_force {tr.events.pull_off_force / nm:.4g} nN undamped vs "
+            f"{damped.pull_off_force / nm:.4g} nN at Q = {REALISTIC_Q:g}") in note
+    assert abs(damped.pull_off_force - tr.events.pull_off_force) > 1 * nm
+    assert any(issubclass(w.category, LeverDampingWarning) for w in caught)
+    assert "lever damping" not in _sim(**BOUNCING).solver.check                 # check="off"
+    cfg = SimulationConfig(**BOUNCING)
+    asked = []
+    assert lever_damping_check("auto", cfg.replace(quality_factor=300.0), tr.events, asked.append) == ""
+    assert lever_damping_check("off", cfg, tr.events, asked.append) == "" and asked == []
+    same = lever_damping_check("always", cfg, tr.events, lambda c: asked.append(c) or tr.events)
+    assert "no event moves" in same and asked[0].quality_factor == REALISTIC_Q
+
+
+def test_cli_takes_the_quality_factor(capsys):
+    """`simulate`, `fit` and `plan` take --quality-factor (and -2 for the beam); the spring
+    refuses --quality-factor-2; the range is checked while parsing."""
+    import json
+
+    from afmforce.cli.fit import model_config
+    from afmforce.cli.main import build_parser, main
+
+    argv = ["simulate", "--json", "--model", "spring", "--mass", "1ug", "--radius", "220nm",
+            "--velocity", "7.2um/s", "--quality-factor", "30", "--check", "off"]
+    assert main(argv) == 0
+    s = json.loads(capsys.readouterr().out)
+    assert s["pull_off"]["force"] == _sim(**BOUNCING, quality_factor=30.0).events.pull_off_force
+    for cmd in ("fit", "plan"):
+        args = build_parser(cmd).parse_args([cmd, *(["x.txt"] if cmd == "fit" else []),
+                                             "--quality-factor", "300", "--quality-factor-2", "40"])
+        cfg = model_config(args)
+        assert (cfg.quality_factor, cfg.quality_factor_2) == (300.0, 40.0)
+    for bad, why in ((["--model", "spring", "--quality-factor-2", "30"], "ignored by --model spring"),
+                     (["--quality-factor", "0"], "out of range")):
+        try:
+            code = main(["simulate", *bad])
+        except SystemExit as exc:          # argparse rejects out-of-range values itself
+            code = exc.code
+        assert code == 2 and why in capsys.readouterr().err
