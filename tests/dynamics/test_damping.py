@@ -64,13 +64,12 @@ def test_undamped_by_default_and_the_names_flow():
     assert SimulationConfig(model="spring", quality_factor=30).probe.quality_factor == 30
     with pytest.raises(ParameterError, match="quality_factor_2"):
         SimulationConfig(model="spring", quality_factor_2=30)
-    with pytest.raises(ParameterError, match="needs quality_factor"):
-        SimulationConfig(quality_factor_2=30)
     with pytest.raises(ParameterError, match="quality_factor"):
         SimulationConfig(quality_factor=0.0)
 
 
-@pytest.mark.parametrize("q1, q2", [(300.0, None), (300.0, 30.0), (50.0, 2000.0), (0.7, 3.0)])
+@pytest.mark.parametrize("q1, q2", [(300.0, None), (300.0, 30.0), (50.0, 2000.0), (0.7, 3.0),
+                                    (None, 30.0)])
 def test_beam_free_modes_have_the_requested_quality_factors(q1, q2):
     """Eigen-analysis of (M, C, K) of the packed beam: both free modes have the Q asked for, at
     the damped frequency w sqrt(1 - 1/(4Q^2)); the matrix equals the one the scipy reference
@@ -81,9 +80,9 @@ def test_beam_free_modes_have_the_requested_quality_factors(q1, q2):
     got = _modes(Mm, C, K)
     want = (q1, q1 if q2 is None else q2)
     for (w0, _), (w, q), qi in zip(undamped, got, want):
-        assert q == pytest.approx(qi, rel=1e-9)
+        assert q == pytest.approx(qi, rel=1e-9) if qi is not None else q > 1e12
         assert w == pytest.approx(w0, rel=1e-9)       # |lambda| of a Rayleigh-damped mode
-    assert np.all(np.linalg.eigvalsh(0.5 * (C + C.T)) > 0)    # positive definite: dissipates
+    assert np.all(np.linalg.eigvalsh(0.5 * (C + C.T)) > -1e-12 * np.abs(C).max())   # dissipates
     ref = ReferenceModel(cfg).C
     assert np.allclose(C, ref, rtol=1e-10, atol=0.0)
     assert np.allclose(ref, rayleigh_damping(K, Mm, q1, q2), rtol=1e-12)

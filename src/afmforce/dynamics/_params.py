@@ -72,7 +72,7 @@ def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
     p[M.H_GUARD] = guard
     p[M.XI] = xi
     p[M.ZETA] = zeta
-    if probe.quality_factor is not None:
+    if probe.quality_factor is not None or probe.quality_factor_2 is not None:
         p[M.C00:M.C11 + 1] = _beam_damping(probe.cantilever, probe.m_joint, probe.m_base,
                                            probe.quality_factor, probe.quality_factor_2)
     return p

@@ -61,8 +61,9 @@ class ConvergenceWarning(UserWarning):
     """Events of the run moved under a tighter second solve by more than their tolerance."""
 
 
-class LeverDampingWarning(ConvergenceWarning):
-    """Events of an undamped run move when the lever gets a realistic quality factor."""
+class LeverDampingWarning(UserWarning):
+    """Events of an undamped run move when the lever gets a realistic quality factor
+    (:data:`REALISTIC_Q`): the result hangs on damping the model lacks."""
 
 
 @functools.lru_cache(maxsize=256)
@@ -191,7 +192,8 @@ def lever_damping_check(check: str, cfg, events, resolve) -> str:
     Returns the note for ``solver.check`` ('' when nothing was compared) and warns with
     :class:`LeverDampingWarning` where an event moved beyond its tolerance.
     """
-    if check == "off" or cfg.probe.quality_factor is not None:
+    probe = cfg.probe
+    if check == "off" or probe.quality_factor is not None or getattr(probe, "quality_factor_2", None):
         return ""
     why = risky(cfg)
     if not why:

@@ -320,7 +320,8 @@ def free_modes(A, masses) -> np.ndarray:
     return np.sqrt([tr / 2.0 - disc, tr / 2.0 + disc])
 
 
-def rayleigh_coefficients(w1: float, w2: float, q1: float, q2: float) -> tuple[float, float]:
+def rayleigh_coefficients(w1: float, w2: float, q1: float | None,
+                          q2: float | None) -> tuple[float, float]:
     """(alpha [1/s], beta [s]) of ``C = alpha M + beta K`` giving modes ``w1 < w2`` [rad/s]
     the quality factors ``q1``, ``q2``.
 
@@ -329,9 +330,10 @@ def rayleigh_coefficients(w1: float, w2: float, q1: float, q2: float) -> tuple[f
     equations give ``alpha = 2 w1 w2 (zeta1 w2 - zeta2 w1) / (w2^2 - w1^2)``,
     ``beta = 2 (zeta2 w2 - zeta1 w1) / (w2^2 - w1^2)``. ``C`` is positive definite for
     any positive Q (in modal coordinates it is ``diag(2 zeta_i w_i)``), even where alpha
-    or beta is negative.
+    or beta is negative; a Q of None leaves its mode undamped (zeta 0).
     """
-    z1, z2 = 0.5 / q1, 0.5 / q2
+    z1 = 0.0 if q1 is None else 0.5 / q1
+    z2 = 0.0 if q2 is None else 0.5 / q2
     d = w2 * w2 - w1 * w1
     return 2.0 * w1 * w2 * (z1 * w2 - z2 * w1) / d, 2.0 * (z2 * w2 - z1 * w1) / d
 
@@ -343,9 +345,10 @@ def beam_damping(A, masses, quality_factor: float | None,
     ``K = -A`` and ``M = diag(masses)`` in the generalised coordinates (q_alpha,
     q_beta); alpha and beta from :func:`rayleigh_coefficients`, so that the first and
     second free modes have the quality factors ``quality_factor`` and
-    ``quality_factor_2`` (None: the first one's). Zeros for ``quality_factor`` None.
+    ``quality_factor_2`` (None: the first one's). ``quality_factor`` None: the first mode
+    undamped; both None: zeros (the paper's model).
     """
-    if quality_factor is None:
+    if quality_factor is None and quality_factor_2 is None:
         return np.zeros((2, 2))
     w1, w2 = free_modes(A, masses)
     q2 = quality_factor if quality_factor_2 is None else quality_factor_2

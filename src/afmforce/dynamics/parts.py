@@ -96,8 +96,9 @@ class BeamProbe(Part):
         medium (issue 23): Rayleigh damping ``C = alpha M + beta K`` of the
         beam's mass and stiffness matrices, chosen so that the free modes have
         exactly these Q (``quality_factor_2`` None: both get ``quality_factor``;
-        :func:`afmforce.dynamics.models.beam_damping`). None (default): no
-        lever damping, the paper's model.
+        ``quality_factor`` None with ``quality_factor_2`` given: the first mode
+        stays undamped; :func:`afmforce.dynamics.models.beam_damping`). Both
+        None (default): no lever damping, the paper's model.
     """
 
     model: ClassVar[str] = "beam"
@@ -114,8 +115,6 @@ class BeamProbe(Part):
     quality_factor_2: float | None = quantity("quality_factor_2", None, "optional_positive")
 
     def __post_init__(self) -> None:
-        if self.quality_factor is None and self.quality_factor_2 is not None:
-            raise ParameterError("quality_factor_2 needs quality_factor (the first free mode's Q)")
         if self.k0 is not None and self.B is not None:
             raise ParameterError("give at most one of k0 [N/m] or B [N m^2]")
         if self.k0 is None and self.B is None:

@@ -29,14 +29,15 @@ __all__ = ["ReferenceSolution", "reference_solve", "ReferenceModel"]
 
 def rayleigh_damping(K, M, q1, q2=None) -> np.ndarray:
     """``C = alpha M + beta K`` giving the two undamped free modes of (M, K) the quality
-    factors q1, q2 (q2 None: q1); zeros for q1 None (the paper's undamped model)."""
-    if q1 is None:
+    factors q1, q2 (q2 None: q1; q1 None: the first mode undamped); zeros for both None
+    (the paper's undamped model)."""
+    if q1 is None and q2 is None:
         return np.zeros_like(K)
     from scipy.linalg import eigh
 
     w = np.sqrt(eigh(K, M, eigvals_only=True))
-    q = np.array([q1, q1 if q2 is None else q2], dtype=float)
-    alpha, beta = np.linalg.solve(np.column_stack([0.5 / w, 0.5 * w]), 0.5 / q)
+    zeta = np.array([0.0 if q is None else 0.5 / q for q in (q1, q1 if q2 is None else q2)])
+    alpha, beta = np.linalg.solve(np.column_stack([0.5 / w, 0.5 * w]), zeta)
     return alpha * M + beta * K
 
 
