@@ -9,7 +9,8 @@ from functools import lru_cache
 import numpy as np
 
 from .config import SimulationConfig
-from .models import MODEL_BEAM, beam_damping, beam_matrices, pack_beam, pack_spring
+from .damping import beam_damping
+from .models import MODEL_BEAM, beam_matrices, pack_beam, pack_spring
 
 __all__ = ["parameter_vector", "free_frequency_max", "H_GUARD_FRACTION"]
 

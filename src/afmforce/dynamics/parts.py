@@ -97,7 +97,7 @@ class BeamProbe(Part):
         beam's mass and stiffness matrices, chosen so that the free modes have
         exactly these Q (``quality_factor_2`` None: both get ``quality_factor``;
         ``quality_factor`` None with ``quality_factor_2`` given: the first mode
-        stays undamped; :func:`afmforce.dynamics.models.beam_damping`). Both
+        stays undamped; :func:`afmforce.dynamics.damping.beam_damping`). Both
         None (default): no lever damping, the paper's model.
     """
 
