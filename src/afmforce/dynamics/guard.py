@@ -52,7 +52,7 @@ RISKY_ZETA = 1e12
 #: Quality factor of the lever with which a risky undamped run is compared (issue 23):
 #: real levers have tens (in liquid) to a few hundred (in air); the low end, because the
 #: beam's Rayleigh damping reaches its contact mode weakly (Q = 300 for both free modes
-#: leaves the 170-670 kHz contact mode at Q 1.2e4-4e3, and issue 23's load-friction case at
+#: leaves the 170-670 kHz contact mode at Q 4e3-1.6e4, and issue 23's load-friction case at
 #: 5.0 nm of hysteresis; Q = 30: 0.354 nm, the quasi-static answer; docs/dynamics.md).
 REALISTIC_Q = 30.0
 
