@@ -185,20 +185,22 @@ BOUNCING = dict(model="spring", mass=1e-9, radius=220e-9, velocity=7.2e-6)
 
 
 def test_guard_says_when_a_result_hangs_on_damping_the_model_lacks():
-    """check="auto" on a risky undamped run also solves it at REALISTIC_Q and reports, in
-    solver.check and a LeverDampingWarning, the events that move (the numbers are those of an
-    ordinary run at that Q); a run with a Q, or unchecked, is not compared."""
+    """check="auto" on a risky undamped run also solves it at Q = 30 and 300 (REALISTIC_Q) and
+    reports, in solver.check and a LeverDampingWarning, the events that move (the numbers are
+    those of ordinary runs at these Q); a run with a Q, or unchecked, is not compared."""
     from afmforce.dynamics.guard import REALISTIC_Q, LeverDampingWarning, lever_damping_check
 
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         tr = simulate(**BOUNCING, check="auto")
-    damped = _sim(**BOUNCING, quality_factor=REALISTIC_Q).events
+    assert REALISTIC_Q == (30.0, 300.0)
+    low, high = (_sim(**BOUNCING, quality_factor=q).events for q in REALISTIC_Q)
     note = tr.solver.check
     assert "hangs on damping the model lacks" in note
     assert (f"pull_off_force {tr.events.pull_off_force / nm:.4g} nN undamped vs "
-            f"{damped.pull_off_force / nm:.4g} nN at Q = {REALISTIC_Q:g}") in note
-    assert abs(damped.pull_off_force - tr.events.pull_off_force) > 1 * nm
+            f"{low.pull_off_force / nm:.4g} nN at Q = 30, "
+            f"{high.pull_off_force / nm:.4g} nN at Q = 300") in note
+    assert abs(low.pull_off_force - tr.events.pull_off_force) > 1 * nm
     assert any(issubclass(w.category, LeverDampingWarning) for w in caught)
     assert "lever damping" not in _sim(**BOUNCING).solver.check                 # check="off"
     cfg = SimulationConfig(**BOUNCING)
@@ -206,7 +208,7 @@ def test_guard_says_when_a_result_hangs_on_damping_the_model_lacks():
     assert lever_damping_check("auto", cfg.replace(quality_factor=300.0), tr.events, asked.append) == ""
     assert lever_damping_check("off", cfg, tr.events, asked.append) == "" and asked == []
     same = lever_damping_check("always", cfg, tr.events, lambda c: asked.append(c) or tr.events)
-    assert "no event moves" in same and asked[0].quality_factor == REALISTIC_Q
+    assert "no event moves" in same and [c.quality_factor for c in asked] == list(REALISTIC_Q)
 
 
 def test_cli_takes_the_quality_factor(capsys):
