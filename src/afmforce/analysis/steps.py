@@ -90,7 +90,14 @@ def kind(st: State, o: KindOptions) -> State:
                                 "the largest deflection)")
         warn = None
         width = cp.position_high - cp.position_low
-        if width > max(100e-9, 0.1 * abs(cp.indentation)):
+        steep = _steep_contact(st, cp, method, window) if width > max(100e-9, 0.1 * abs(cp.indentation)) else None
+        if steep is not None:  # a slow rise, then a distinct steep contact: the contact is where it steepens
+            warn = (f"slowly rising approach before contact: fitted over the whole approach the contact lies anywhere "
+                    f"in [{cp.position_low * 1e6:.4g}, {cp.position_high * 1e6:.4g}] um (2 sigma); the steep contact "
+                    f"after it begins at {steep.position * 1e6:.4g} um (indentation {steep.indentation * 1e6:.3g} um), "
+                    "taken as the contact point")
+            cp = steep
+        elif width > max(100e-9, 0.1 * abs(cp.indentation)):
             warn = (f"contact point uncertain: {cp.position * 1e6:.4g} um, but fits with the contact anywhere in "
                     f"[{cp.position_low * 1e6:.4g}, {cp.position_high * 1e6:.4g}] um are as good within 2 sigma "
                     f"({width * 1e6:.3g} um, {width / abs(cp.indentation):.0%} of the {cp.indentation * 1e6:.3g} um "
@@ -106,6 +113,24 @@ def kind(st: State, o: KindOptions) -> State:
                             f"whole approach at {alt.position * 1e6:.4g} um ({gap * 1e6:+.3g} um): a slowly rising "
                             "baseline or a long-range force before contact makes the onset ambiguous")
         new = new.update("contact_point", cp, warn=warn)
+    return new
+
+
+def _steep_contact(st: State, cp, method: str, window: float):
+    """On an approach whose whole-run fit leaves the onset ambiguous (a slow rise over many um before a
+    steep contact, e.g. a long cell-adhesion curve), the same fit once more on the approach after that
+    onset, up to the largest deflection: its contact point when it lies clearly after the ambiguous range
+    and is itself well defined (its range within 2.5 x the usual bound, max(10 % of its indentation, 100 nm)),
+    else None."""
+    idx = st.approach.index
+    sub = idx[st.z[idx] >= cp.position]
+    if sub.size < 64:
+        return None
+    new = CONTACT_POINT_METHODS[method](st.z, st.deflection, sub, force_fraction=1.0, window=window)
+    if new.index < 0 or not new.position > cp.position_high or not new.indentation > 0:
+        return None
+    if new.position_high - new.position_low > max(0.1 * new.indentation, 100e-9) * 2.5:
+        return None
     return new
 
 
