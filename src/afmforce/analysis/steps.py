@@ -11,6 +11,7 @@ step identifier in ``state.details``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from ..errors import AnalysisError
@@ -55,6 +56,7 @@ def calibration(st: State, o: CalibrationOptions) -> State:
                         "stale sensitivity (calibration source 'fit', --calibration fit, uses the slope)")
     if not (math.isfinite(res.factor) and res.factor != 0):
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
+    st = st.update("calibration_requested", o.source)
     return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
 
 
@@ -82,6 +84,8 @@ def kind(st: State, o: KindOptions) -> State:
     res = classify_contact(jump_significance=sig, stiffness_ratio=stiff, curvature=curv, nsigma=nsigma,
                            min_stiffness=o.min_stiffness, max_curvature=o.max_curvature)
     new = st.update("kind", res)
+    if res.kind == "hard":
+        new = _recalibrate_hard(new, cal, curv, o.max_curvature)
     if res.kind == "soft":
         cp = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=force_fraction,
                                            window=window)
@@ -114,6 +118,30 @@ def kind(st: State, o: KindOptions) -> State:
                             "baseline or a long-range force before contact makes the onset ambiguous")
         new = new.update("contact_point", cp, warn=warn)
     return new
+
+
+#: A hard contact's straight compliance line this far from the file's sensitivity (ratio) recalibrates it.
+STALE_SENSITIVITY = 1.25
+
+
+def _recalibrate_hard(st: State, cal, curvature: float, max_curvature: float) -> State:
+    """A hard contact on a measured (linear) position channel whose straight compliance line disagrees
+    with the file's sensitivity by more than :data:`STALE_SENSITIVITY`: on a rigid contact the
+    deflection follows the position one to one, so the file's sensitivity is stale (a realigned laser)
+    and the compliance slope is the calibration (the paper's, section 3.1). Not with a sensitivity the
+    user gave, nor with ``calibration.source=metadata`` (the result's source stays the file's then)."""
+    ratio = cal.factor_fit / cal.factor if cal.source == "metadata" and cal.factor else math.nan
+    straight = math.isfinite(curvature) and 1 / max_curvature <= curvature <= max_curvature
+    if (st.probe.sensitivity is not None or st.channel != "measured" or not straight or not math.isfinite(ratio)
+            or ratio <= 0 or 1 / STALE_SENSITIVITY <= ratio <= STALE_SENSITIVITY
+            or st.details.get("calibration_requested") == "metadata"):
+        return st
+    new = dataclasses.replace(cal, factor=cal.factor_fit, source="fit")
+    warn = (f"hard contact whose straight compliance line follows the position {1 / ratio:.3g} x with the file's "
+            f"sensitivity (1 on a rigid contact): the file's sensitivity is stale, the compliance slope calibrates ("
+            f"{cal.sensitivity_fit * 1e9:.4g} nm/V instead of {cal.sensitivity * 1e9:.4g}; "
+            "--calibration metadata keeps the file's)")
+    return st.update("calibration", new, warn=warn, factor=new.factor, deflection=st.signal * new.factor)
 
 
 def _steep_contact(st: State, cp, method: str, window: float):

@@ -75,7 +75,7 @@ def _window(result: AnalysisResult, max_separation: float | None) -> tuple[float
     if result.contact_kind == "soft":
         lo = -1.05 * (result.indentation if math.isfinite(result.indentation) else -lo)
     else:
-        lo = max(lo, -5e-9)
+        lo = min(max(lo, -5e-9), -1e-9)  # the compliance line inside the frame, not on its edge
     reach = [40e-9 if result.contact_kind != "soft" else 0.5 * abs(lo)]
     for v in (result.rupture_distance, result.adhesion_distance, result.jump_in_separation):
         if math.isfinite(v) and v > 0:
