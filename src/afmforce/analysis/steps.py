@@ -56,7 +56,7 @@ def calibration(st: State, o: CalibrationOptions) -> State:
                         "stale sensitivity (calibration source 'fit', --calibration fit, uses the slope)")
     if not (math.isfinite(res.factor) and res.factor != 0):
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
-    st = st.update("calibration_requested", o.source)
+    res = dataclasses.replace(res, requested=o.source)
     return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
 
 
@@ -134,7 +134,7 @@ def _recalibrate_hard(st: State, cal, curvature: float, max_curvature: float) ->
     straight = math.isfinite(curvature) and 1 / max_curvature <= curvature <= max_curvature
     if (st.probe.sensitivity is not None or st.channel != "measured" or not straight or not math.isfinite(ratio)
             or ratio <= 0 or 1 / STALE_SENSITIVITY <= ratio <= STALE_SENSITIVITY
-            or st.details.get("calibration_requested") == "metadata"):
+            or cal.requested == "metadata"):
         return st
     new = dataclasses.replace(cal, factor=cal.factor_fit, source="fit")
     warn = (f"hard contact whose straight compliance line follows the position {1 / ratio:.3g} x with the file's "

@@ -16,8 +16,8 @@ from .. import forces
 from ..analysis.result import AnalysisResult
 from ..io.curve import RawCurve
 
-__all__ = ["plot_raw", "plot_force_separation", "plot_residuals", "plot_contact_region", "plot_spectrum",
-           "plot_summary"]
+__all__ = ["plot_raw", "plot_force_separation", "plot_residuals", "plot_contact_region", "plot_compliance_region",
+           "plot_spectrum", "plot_summary"]
 
 _RUNS = ((0, "inward (approach)", "C0", "-"), (1, "outward (retract)", "C3", ":"))
 
@@ -121,7 +121,8 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
     ad = result.details.get("adhesion")
     if ad is not None and ad.found and 0 <= ad.index < h.size and math.isfinite(f[ad.index]):
         ax.plot([h[ad.index] * 1e9], [f[ad.index] * 1e9], "^", color="C1", ms=8,
-                label=f"adhesion {ad.force * 1e9:.3g} nN" if math.isfinite(ad.force) else "adhesion")
+                label=f"adhesion {ad.force * 1e9:.3g} nN" if math.isfinite(ad.force) else
+                f"adhesion {ad.deflection * 1e9:.3g} nm")
     _mark_steps(ax, result, h, f)
     if ad is not None and math.isfinite(getattr(ad, "rupture_distance", math.nan)) and lo < ad.rupture_distance < hi:
         ax.axvline(ad.rupture_distance * 1e9, color="C4", ls=":", lw=1,
@@ -194,6 +195,32 @@ def plot_contact_region(result: AnalysisResult, ax=None, width: float = 0.25):
     return ax
 
 
+def plot_compliance_region(result: AnalysisResult, ax=None, fraction: float = 0.15):
+    """Hard contacts without a van der Waals fit: force (or deflection) against position near the turning
+    point (the last ``fraction`` of the position range, at least 40 samples), both runs: the contact
+    lines enlarged, whose slopes calibrate the deflection."""
+    ax = _new_ax(ax)
+    ax.set_title("contact region, enlarged")
+    z, f = result.position, result.force
+    ylabel = "force [nN]"
+    if not np.isfinite(f).any():
+        f, ylabel = result.deflection, "deflection [nm]"
+    ax.set_ylabel(ylabel)
+    ax.set_xlabel("position z [nm]")
+    runs = np.isfinite(f) & np.isfinite(z) & ((result.segment == 0) | (result.segment == 1))
+    if runs.sum() < 4:
+        return _say(ax, "no contact region to enlarge")
+    zr = z[runs]
+    top = float(np.max(zr))
+    lo = min(top - fraction * float(np.ptp(zr)), float(np.sort(zr)[-min(40, zr.size)]))
+    for seg, label, color, ls in _RUNS:
+        m = runs & (result.segment == seg) & (z >= lo)
+        ax.plot(z[m] * 1e9, f[m] * 1e9, ls, marker=".", ms=3, color=color, lw=0.7, label=label)
+    ax.axhline(0, color="0.6", lw=0.5)
+    ax.legend(fontsize="small")
+    return ax
+
+
 def plot_residuals(result: AnalysisResult, ax=None):
     """Residual of the van der Waals fit on the approach before the jump."""
     ax = _new_ax(ax)
@@ -256,7 +283,7 @@ def plot_spectrum(result: AnalysisResult, ax=None):
 
 def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None):
     """Four panels: raw signal, force vs separation with fit and theory, the van der Waals residuals (hard
-    contacts) or the contact region enlarged (soft contacts), spectrum."""
+    contacts with a fit) or the contact region enlarged (soft contacts, hard ones without a fit), spectrum."""
     if fig is None:
         from matplotlib.figure import Figure
 
@@ -273,14 +300,20 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
         ax.set_ylabel("deflection [nm]")
         ax.legend(fontsize="small")
     plot_force_separation(result, axes[0, 1])
+    fit = result.details.get("vdw")
     if result.contact_kind == "soft":
         plot_contact_region(result, axes[1, 0])
+    elif fit is None or not math.isfinite(getattr(fit, "hamaker_radius", math.nan)):
+        plot_compliance_region(result, axes[1, 0])  # no fit to show residuals of
     else:
         plot_residuals(result, axes[1, 0])
     plot_spectrum(result, axes[1, 1])
     name = result.source.rsplit("/", 1)[-1] if result.source else "force curve"
     adh = (f"adhesion {result.adhesion_force * 1e9:.3g} nN" if math.isfinite(result.adhesion_force)
            else "no adhesion above the noise")
+    ad = result.details.get("adhesion")
+    if not math.isfinite(result.adhesion_force) and ad is not None and ad.found and math.isfinite(ad.deflection):
+        adh = f"adhesion {ad.deflection * 1e9:.3g} nm of deflection (no spring constant)"  # as the marker says
     fig.suptitle(f"{name}: {result.contact_kind or '?'} contact; {adh}; friction {result.friction or '-'}"
                  f"{'; DYNAMIC' if result.dynamic else ''}", fontsize="medium")
     return fig
