@@ -156,7 +156,7 @@ def plot_contact_region(result: AnalysisResult, ax=None, width: float = 0.25):
     """Soft contacts: force against indentation around the contact point, enlarged.
 
     The window spans ``width`` of the indentation before the contact point (at least the candidate
-    range of equally good contact points, shaded) and up to four times that into the sample (at most
+    range of equally good contact points, shaded) and up to twice that into the sample (at most
     the whole indentation); the approach is drawn with the
     retract, the contact point as a vertical line at zero indentation.
     """
@@ -176,7 +176,7 @@ def plot_contact_region(result: AnalysisResult, ax=None, width: float = 0.25):
         np.nanmax(ind))
     lo_c, hi_c = cp.position_low - cp.position, cp.position_high - cp.position  # candidate range, in z
     half = max(width * depth, 1.2 * max(abs(lo_c), abs(hi_c), 0.0), 5e-9)
-    top = max(half, min(depth, 4 * half))  # into the sample: far enough to see the contact stiffen
+    top = max(half, min(depth, 2 * half))  # into the sample: far enough to see the contact stiffen
     inside = np.isfinite(f) & (ind >= -half) & (ind <= top)
     for seg, label, color, ls in _RUNS:
         m = (result.segment == seg) & inside
@@ -197,8 +197,9 @@ def plot_contact_region(result: AnalysisResult, ax=None, width: float = 0.25):
 
 def plot_compliance_region(result: AnalysisResult, ax=None, fraction: float = 0.15):
     """Hard contacts without a van der Waals fit: force (or deflection) against position near the turning
-    point (the last ``fraction`` of the position range, at least 40 samples), both runs: the contact
-    lines enlarged, whose slopes calibrate the deflection."""
+    point (three times the positions of the compliance lines, h < 2 nm, else the last ``fraction`` of the
+    position range; at least 40 samples), both runs: the contact lines enlarged, whose slopes calibrate
+    the deflection."""
     ax = _new_ax(ax)
     ax.set_title("contact region, enlarged")
     z, f = result.position, result.force
@@ -212,7 +213,10 @@ def plot_compliance_region(result: AnalysisResult, ax=None, fraction: float = 0.
         return _say(ax, "no contact region to enlarge")
     zr = z[runs]
     top = float(np.max(zr))
-    lo = min(top - fraction * float(np.ptp(zr)), float(np.sort(zr)[-min(40, zr.size)]))
+    h = result.separation
+    touching = runs & np.isfinite(h) & (h < 2e-9)  # on the compliance lines
+    width = top - float(np.min(z[touching])) if touching.any() else fraction * float(np.ptp(zr))
+    lo = min(top - 3 * width, float(np.sort(zr)[-min(40, zr.size)]))
     for seg, label, color, ls in _RUNS:
         m = runs & (result.segment == seg) & (z >= lo)
         ax.plot(z[m] * 1e9, f[m] * 1e9, ls, marker=".", ms=3, color=color, lw=0.7, label=label)
