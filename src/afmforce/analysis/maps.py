@@ -89,12 +89,16 @@ class MapImage:
         no curve, its analysis failed or found nothing.
     n_curves : int
         Curves of this map in the table [-].
+    width, height : float
+        Size of the scanned area [m] (NaN: not in the file; the image then shows grid indices).
     """
 
     source: str
     quantity: MapQuantity
     values: np.ndarray
     n_curves: int
+    width: float = float("nan")
+    height: float = float("nan")
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -128,5 +132,7 @@ def map_images(table, quantity: str | MapQuantity) -> list[MapImage]:
         y = rows["map_y"].to_numpy(int)
         ok = (x >= 0) & (x < nx) & (y >= 0) & (y < ny)
         values[y[ok], x[ok]] = q.sign * col.to_numpy(float)[ok]
-        out.append(MapImage(str(source), q, values, int(len(rows))))
+        size = [float(pd.to_numeric(rows[c], errors="coerce").median()) if c in rows else float("nan")
+                for c in ("map_width", "map_height")]
+        out.append(MapImage(str(source), q, values, int(len(rows)), *size))
     return out

@@ -278,9 +278,11 @@ class ZeroOptions(StepOptions):
 
 @dataclass(frozen=True)
 class ForceOptions(StepOptions):
-    """Deflection to force: no options (k, theta0 and the lengths are the probe's)."""
+    """Deflection to force (k, theta0 and the lengths are the probe's)."""
 
     step: ClassVar[str] = "force"
+    thermal_k: bool = _opt(True, "flag", "", "the file's spring constant is a thermal one: with a refitted "
+                           "sensitivity it scales by (file's / fitted sensitivity)^2")
 
 
 @dataclass(frozen=True)

@@ -29,6 +29,7 @@ from . import options as O
 from . import steps as S
 from .contact_point import CONTACT_POINT_METHODS
 from .options_text import show_default
+from .plausibility import plausibility_warnings
 from .result import AnalysisResult
 from .state import NoContact, State, prepare
 from ..errors import ParameterError
@@ -286,6 +287,7 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
 
 
 def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
+    st = st.update(warn=plausibility_warnings(st))
     d = st.details
     nan = math.nan
     kw: dict[str, Any] = {}

@@ -37,14 +37,17 @@ def plot_map(image: MapImage, ax=None):
     ny, nx = image.shape
     values = np.ma.masked_invalid(image.values * factor)
     cmap = mpl.colormaps["viridis"].with_extremes(bad="lightgrey")
-    im = ax.imshow(values, origin="lower", interpolation="nearest", cmap=cmap, aspect="equal",
-                   extent=(-0.5, nx - 0.5, -0.5, ny - 0.5))
+    sized = np.isfinite(image.width) and np.isfinite(image.height)
+    extent = (0.0, image.width * 1e6, 0.0, image.height * 1e6) if sized else (-0.5, nx - 0.5, -0.5, ny - 0.5)
+    im = ax.imshow(values, origin="lower", interpolation="nearest", cmap=cmap, aspect="equal", extent=extent)
     label = image.quantity.label + (f" [{shown}]" if shown else "")
     ax.figure.colorbar(im, ax=ax, label=label, shrink=0.9)
-    ax.set_xlabel("x (column index)")
-    ax.set_ylabel("y (row index)")
+    ax.set_xlabel("x [µm]" if sized else "x (column index; the file gives no size)")
+    ax.set_ylabel("y [µm]" if sized else "y (row index)")
     finite = int(np.isfinite(image.values).sum())
-    ax.set_title(f"{image.name}: {image.quantity.identifier} ({finite} of {nx * ny} points)", fontsize="medium")
+    name = image.name if len(image.name) <= 48 else image.name[:22] + "..." + image.name[-23:]
+    pitch = f", {image.width / nx * 1e6:.3g} x {image.height / ny * 1e6:.3g} µm pixels" if sized else ""
+    ax.set_title(f"{name}\n{image.quantity.identifier}: {finite} of {nx * ny} points{pitch}", fontsize="small")
     return ax
 
 

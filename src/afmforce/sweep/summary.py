@@ -32,7 +32,8 @@ _OSC = tuple(f"oscillation_{run}_{what}" for run in ("approach", "retract") for 
 #: Columns of the summary table and their types (``int``: -1 where not a map).
 SUMMARY_COLUMNS: dict[str, str] = {
     "item": "int", "source": "str", "name": "str", "file": "str", "curve": "int",
-    "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "deflection_unit": "str",
+    "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "map_width": "float", "map_height": "float",
+    "deflection_unit": "str",
     **{name: "float" for name in _FLOATS + _OSC},
     "contact_kind": "str", "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str", "error": "str",
 }
@@ -43,6 +44,7 @@ def _units() -> dict[str, str]:
 
     units = {name: AnalysisResult.UNITS[name] for name in _FLOATS}
     units.update({n: ("Hz" if n.endswith("frequency") else "m/s") for n in _OSC})
+    units.update(map_width="m", map_height="m")
     return units
 
 
@@ -66,11 +68,25 @@ def _grid(meta: Mapping[str, Any]) -> tuple[int, int, int, int]:
     return tuple(out)  # type: ignore[return-value]
 
 
+def _grid_size(meta: Mapping[str, Any]) -> tuple[float, float]:
+    """Width and height of a map's scanned area [m] (afmforce ``map_width``/``map_height`` or afmformats'
+    JPK ``grid size x/y``); NaN when the file does not say."""
+    out = []
+    for ours, theirs in (("map_width", "afmformats:grid size x"), ("map_height", "afmformats:grid size y")):
+        try:
+            v = float(meta.get(ours, meta.get(theirs)))
+        except (TypeError, ValueError):
+            v = math.nan
+        out.append(v if math.isfinite(v) and v > 0 else math.nan)
+    return out[0], out[1]
+
+
 def summary_row(result, curve, *, file: str, index: int, name: str) -> dict[str, Any]:
     """The summary of one analysed curve (see :data:`SUMMARY_COLUMNS`)."""
     mx, my, nx, ny = _grid(curve.metadata)
     row: dict[str, Any] = {"name": name, "file": file, "curve": int(index), "map_x": mx, "map_y": my,
                            "map_nx": nx, "map_ny": ny, "deflection_unit": result.deflection_unit}
+    row["map_width"], row["map_height"] = _grid_size(curve.metadata) if mx >= 0 else (math.nan, math.nan)
     row.update({f: float(getattr(result, f)) for f in _FLOATS})
     osc = result.details.get("oscillation")
     confirmed = osc is not None and osc.origin != "none"  # a peak in both runs (see oscillation.both_runs)
