@@ -125,17 +125,20 @@ def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
     span = hi - lo
     if not span > 0:
         raise AnalysisError("the tip does not move: no indentation to fit")
-    cands = np.linspace(lo, hi - 0.02 * span, 48)
+    # indentations from 0.1 % of the travel to all of it, on a log scale (the contact is near the top
+    # on most curves), and evenly over the travel
+    cands = np.concatenate((hi - span * np.geomspace(1e-3, 1.0, 64), np.linspace(lo, hi, 33)[1:-1]))
     if guess is not None and math.isfinite(guess):
-        cands = np.concatenate((cands, guess + span * np.linspace(-0.05, 0.05, 16)))
-    for _ in range(3):
+        cands = np.concatenate((cands, guess + span * np.linspace(-0.02, 0.02, 9)))
+    for _ in range(4):
+        cands = np.unique(cands)
         E, b, ssr = _scan(u, F, cands, key, geom, nu, width, max_ind)
         i = int(np.argmin(ssr))
         if not math.isfinite(ssr[i]):
             raise AnalysisError("no contact point gives a positive modulus: the curve does not rise into contact")
         c0 = float(cands[i])
-        step = float(np.min(np.abs(np.diff(np.sort(cands))[np.diff(np.sort(cands)) > 0]))) if cands.size > 1 else span
-        cands = c0 + step * np.linspace(-1.5, 1.5, 25)
+        left, right = cands[max(i - 1, 0)], cands[min(i + 1, cands.size - 1)]
+        cands = np.linspace(left, right, 17)
     c, E0, b0 = c0, float(E[i]), float(b[i])
     # Gauss-Newton on (E, c, b): the weights at the current c
     p = np.array([E0, c, b0])
