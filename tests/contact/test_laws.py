@@ -67,8 +67,8 @@ def test_jkr_published_relations():
     # at zero indentation: -4/3 pi w R (8/9 of the pull-off); and the SI law agrees with the dimensionless one
     assert math.isclose(float(A.jkr(1e-15, E, 0.02, R, NU)), -4 / 3 * fs, rel_tol=1e-4)
     # the force-indentation relation: delta = a^2/R - sqrt(2 pi w a / E*), F = 4 E* a^3/(3R) - sqrt(8 pi w E* a^3)
-    a = np.linspace(2e-6, 6e-6, 7)
     w = 0.02
+    a = (math.pi * w * R ** 2 / (4 / 3 * ES)) ** (1 / 3) * np.linspace(0.8, 4, 7)  # on the stable branch
     delta = a ** 2 / R - np.sqrt(2 * math.pi * w * a / ES)
     F = 4 * ES * a ** 3 / (3 * R) - np.sqrt(8 * math.pi * w * ES * a ** 3)
     assert np.allclose(A.jkr(delta, E, w, R, NU, branch="retract"), F, rtol=2e-4)
