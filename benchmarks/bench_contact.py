@@ -1,0 +1,162 @@
+"""Young's modulus speed (issue 26, item 4): one QI curve against nanite, and a 64 x 64 map.
+
+    python benchmarks/bench_contact.py            # both
+    python benchmarks/bench_contact.py --part qi  # the curve only (needs nanite: pip install -e .[bench])
+    python benchmarks/bench_contact.py --part map --workers 2
+
+**qi**: a 300 + 300-point curve (the PyFMlab gel curve, Bruker, read by afmforce and thinned
+to 300 samples per run, as a QI pixel) analysed from the raw curve to the modulus --
+afmforce: ``analyze(curve, steps=["indentation"])`` (smoothing, regions, drift, calibration,
+contact kind, force, the fit); nanite: ``Indentation`` on the same calibrated force and height,
+its preprocessing (tip position, force offset, contact point by fit_line_polynomial) and its
+fit of the same model (Hertz paraboloid, R = 5 um, nu = 0.5, whole approach). Best of N each,
+interleaved; prints both moduli and the ratio (target: afmforce >= 5x faster).
+
+**map**: 4,096 such curves (the gel curve with a stiffness pattern, a tilted topography and
+noise, written once to an afmforce map file in the system's temporary folder) through
+``analyze_files`` on a local Dask cluster (``--workers``, default 2), steps indentation and
+adhesion; prints the wall time (target: < 60 s on 2 cores) and the modulus range.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import tempfile
+import time
+import warnings
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+GEL = ROOT / "tests" / "data" / "bruker-nanoscope_PyFMlab_Egel4_00025.spm"
+
+
+def qi_curve(n: int = 300):
+    """The gel curve thinned to ``n`` samples per run."""
+    from afmforce.io import load
+
+    c = load(GEL)[0]
+    seg = np.asarray(c.segment)
+    idx = np.concatenate([np.flatnonzero(seg == s)[np.linspace(0, (seg == s).sum() - 1, n).astype(int)]
+                          for s in (0, 1)])
+    kw = {f.name: getattr(c, f.name)[idx] for f in dataclasses.fields(c)
+          if isinstance(getattr(c, f.name), np.ndarray) and getattr(c, f.name).shape == seg.shape}
+    return dataclasses.replace(c, **kw)
+
+
+def _nanite_inputs(curve):
+    from afmforce.analysis.pipeline import analyze
+
+    r = analyze(curve, steps=["force"])
+    seg = np.asarray(curve.segment)
+    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal)
+    data = {"force": r.deflection * r.spring_constant, "height (measured)": -z, "segment": seg.astype(bool),
+            "time": np.asarray(curve.time)}
+    md = {"spring constant": r.spring_constant, "sensitivity": 1.0, "path": "bench", "enum": 0,
+          "imaging mode": "force-distance", "duration": 1.0, "point count": int(seg.size)}
+    return data, md
+
+
+def bench_qi(repeat: int) -> None:
+    import nanite
+
+    from afmforce.analysis.options import IndentationOptions
+    from afmforce.analysis.pipeline import analyze
+
+    curve = qi_curve()
+    data, md = _nanite_inputs(curve)
+    opts = [IndentationOptions(tip_radius=5e-6, poisson=0.5)]
+
+    def ours():
+        return analyze(curve, steps=["indentation"], options=opts).youngs_modulus
+
+    def theirs():
+        idnt = nanite.Indentation(data=dict(data), metadata=dict(md))
+        idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
+                                 options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
+        p = idnt.get_initial_fit_parameters(model_key="hertz_para")
+        p["R"].set(value=5e-6)
+        p["nu"].set(value=0.5)
+        idnt.fit_model(model_key="hertz_para", params_initial=p, weight_cp=0, range_x=(0, 0),
+                       range_type="absolute", segment="approach")
+        return idnt.fit_properties["params_fitted"]["E"].value
+
+    ours(), theirs()  # warm: numba caches, imports
+    t_ours, t_theirs = [], []
+    for _ in range(repeat):
+        t = time.perf_counter()
+        e_ours = ours()
+        t_ours.append(time.perf_counter() - t)
+        t = time.perf_counter()
+        e_theirs = theirs()
+        t_theirs.append(time.perf_counter() - t)
+    a, b = min(t_ours), min(t_theirs)
+    print(f"qi curve 300+300: afmforce {a * 1e3:.2f} ms (E {e_ours:.5g} Pa), nanite {nanite.__version__} "
+          f"{b * 1e3:.2f} ms (E {e_theirs:.5g} Pa): afmforce {b / a:.1f}x faster (target >= 5x); "
+          f"medians {np.median(t_ours) * 1e3:.2f} / {np.median(t_theirs) * 1e3:.2f} ms")
+
+
+def make_map(path: Path, n: int = 64, step: float = 0.5e-6) -> Path:
+    """A 64 x 64 afmforce map: the gel curve with a stiffness pattern, topography and noise."""
+    from afmforce.io.native.rawmap import write_map
+
+    base = qi_curve()
+    rng = np.random.default_rng(0)
+    seg = np.asarray(base.segment)
+    d0 = np.asarray(base.deflection_signal)
+    noise = 0.02 * float(np.std(d0[seg == 0][:50]) + 1e-12) + 1e-4 * float(np.ptp(d0))
+
+    def curves():
+        for y in range(n):
+            for x in range(n):
+                stiff = 1.0 + 0.5 * np.sin(x / 8.0) * np.cos(y / 11.0)  # the deflection scaled in contact
+                top = 0.2e-6 * (x + y) / (2 * n)  # a tilted sample
+                d = d0 - d0[0]
+                d = d0[0] + d * stiff + rng.normal(0, noise, d.size)
+                z = {f: getattr(base, f) + top for f in ("piezo_nominal", "piezo_measured")
+                     if getattr(base, f) is not None}
+                md = {**base.metadata, "map_x": x, "map_y": y, "position_x": x * step, "position_y": y * step}
+                yield dataclasses.replace(base, deflection_signal=d, metadata=md, **z)
+
+    return write_map(curves(), path, shape=(n, n), force=True)
+
+
+def bench_map(workers: int) -> None:
+    from afmforce.analysis.options import IndentationOptions
+    from afmforce.sweep.files import CurveAnalysis, analyze_files, summary_table
+
+    path = Path(tempfile.gettempdir()) / "afmforce-bench-contact-map64.h5"
+    if not path.exists():
+        t = time.perf_counter()
+        make_map(path)
+        print(f"wrote {path} in {time.perf_counter() - t:.1f} s")
+    analysis = CurveAnalysis(steps=("indentation", "adhesion"),
+                             options=(IndentationOptions(tip_radius=5e-6, poisson=0.5),))
+    t = time.perf_counter()
+    result = analyze_files([path], analysis, workers=workers)
+    wall = time.perf_counter() - t
+    table = summary_table(result)
+    ok = table["error"].isna()
+    E = table.loc[ok, "youngs_modulus"].to_numpy(float)
+    print(f"map 64 x 64 ({len(table)} curves, {int(ok.sum())} analysed) on {result.executor} with {workers} "
+          f"workers: {wall:.1f} s (target < 60 s; includes starting the cluster); E {np.nanmin(E):.4g} to "
+          f"{np.nanmax(E):.4g} Pa, {int(np.isfinite(E).sum())} finite")
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--part", choices=("qi", "map", "all"), default="all")
+    ap.add_argument("--repeat", type=int, default=10)
+    ap.add_argument("--workers", type=int, default=2)
+    args = ap.parse_args()
+    warnings.simplefilter("ignore")
+    if args.part in ("qi", "all"):
+        bench_qi(args.repeat)
+    if args.part in ("map", "all"):
+        bench_map(args.workers)
+
+
+if __name__ == "__main__":
+    main()
