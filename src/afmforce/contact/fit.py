@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import AnalysisError, ParameterError
 from .adhesive import adhesive_force
-from .models import shape_and_slope
+from .models import BILODEAU_FOUR_SIDED, BILODEAU_THREE_SIDED, shape_and_slope
 from .registry import indentation_model
 
 __all__ = ["IndentationFit", "fit_indentation", "validity", "model_force"]
@@ -103,8 +103,21 @@ def _weights(d: np.ndarray, width: float, max_indentation: float) -> np.ndarray:
     return q
 
 
+#: Power laws F = E k delta^p: key -> (k(geometry, nu), p), scanned by the compiled kernel.
+_POWER = {"hertz_paraboloid": (lambda g, c: 4.0 / 3.0 * c * math.sqrt(g["radius"]), 1.5),
+          "hertz_cone": (lambda g, c: 2.0 / math.pi * math.tan(g["half_angle"]) * c, 2.0),
+          "bilodeau_pyramid3": (lambda g, c: BILODEAU_THREE_SIDED * math.tan(g["half_angle"]) * c, 2.0),
+          "bilodeau_pyramid4": (lambda g, c: BILODEAU_FOUR_SIDED * math.tan(g["half_angle"]) * c, 2.0)}
+
+
 def _scan(u, F, cands, key, geom, nu, width, max_ind):
     """Closed-form (E, b) and the weighted sum of squares for each candidate contact point."""
+    if key in _POWER:
+        from ._kernels import scan_power_law
+
+        kf, p = _POWER[key]
+        return scan_power_law(u, F, np.ascontiguousarray(cands, dtype=float), kf(geom, 1.0 / (1.0 - nu * nu)), p,
+                              float(width), float(max_ind))
     d = u[None, :] - cands[:, None]
     phi = shape_and_slope(key, d, geom, nu)[0]
     q = _weights(d, width, max_ind) ** 2
@@ -143,14 +156,14 @@ def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
     # Gauss-Newton on (E, c, b): the weights at the current c
     p = np.array([E0, c, b0])
     best = ssr[i]
-    for _ in range(8):
+    for _ in range(4):
         d = u - p[1]
         phi, dphi = shape_and_slope(key, d, geom, nu)
         q = _weights(d, width, max_ind)
         r = q * (F - p[0] * phi - p[2])
         J = q[:, None] * np.column_stack((phi, -p[0] * dphi, np.ones_like(phi)))
         try:
-            dp = np.linalg.lstsq(J, r, rcond=None)[0]
+            dp = np.linalg.solve(J.T @ J, J.T @ r)
         except np.linalg.LinAlgError:
             break
         trial = p + dp
