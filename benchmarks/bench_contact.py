@@ -3,6 +3,7 @@
     python benchmarks/bench_contact.py            # both
     python benchmarks/bench_contact.py --part qi  # the curve only (needs nanite: pip install -e .[bench])
     python benchmarks/bench_contact.py --part map --workers 2
+    python benchmarks/bench_contact.py --part map-cpu --curves 512   # CPU time per curve, serial
 
 **qi**: a 300 + 300-point curve (the PyFMlab gel curve, Bruker, read by afmforce and thinned
 to 300 samples per run, as a QI pixel) analysed from the raw curve to the modulus --
@@ -145,15 +146,38 @@ def bench_map(workers: int) -> None:
           f"{np.nanmax(E):.4g} Pa, {int(np.isfinite(E).sum())} finite")
 
 
+def bench_map_cpu(n_curves: int) -> None:
+    """CPU time of the map's curves in this process (serial): the cost on an idle machine, whatever the load."""
+    from afmforce.analysis.options import IndentationOptions
+    from afmforce.sweep.files import CurveAnalysis, analyze_files, plan_curves
+
+    path = Path(tempfile.gettempdir()) / "afmforce-bench-contact-map64.h5"
+    if not path.exists():
+        make_map(path)
+    refs = plan_curves([path])[:n_curves]
+    analysis = CurveAnalysis(steps=("indentation", "adhesion"),
+                             options=(IndentationOptions(tip_radius=5e-6, poisson=0.5),))
+    analyze_files(refs[:8], analysis, executor="serial")  # warm
+    c, t = time.process_time(), time.perf_counter()
+    analyze_files(refs, analysis, executor="serial", chunk_size=64)
+    cpu, wall = time.process_time() - c, time.perf_counter() - t
+    per = cpu / len(refs)
+    print(f"map curves, serial, {len(refs)} curves: CPU {per * 1e3:.1f} ms per curve (wall {wall / len(refs) * 1e3:.1f} "
+          f"ms): 4,096 curves on 2 cores = {4096 * per / 2:.1f} s of CPU each (target < 60 s)")
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--part", choices=("qi", "map", "all"), default="all")
+    ap.add_argument("--part", choices=("qi", "map", "map-cpu", "all"), default="all")
+    ap.add_argument("--curves", type=int, default=512, help="curves of the map-cpu part")
     ap.add_argument("--repeat", type=int, default=10)
     ap.add_argument("--workers", type=int, default=2)
     args = ap.parse_args()
     warnings.simplefilter("ignore")
     if args.part in ("qi", "all"):
         bench_qi(args.repeat)
+    if args.part in ("map-cpu", "all"):
+        bench_map_cpu(args.curves)
     if args.part in ("map", "all"):
         bench_map(args.workers)
 
