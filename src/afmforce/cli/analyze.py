@@ -303,10 +303,15 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
     from ..analysis.maps import map_images
     from ..plotting import write_map_png
 
-    out = {}
+    out, per_map = {}, {}
     for q in dict.fromkeys(quantities or [DEFAULT_MAP_QUANTITY]):
         for image in map_images(table, q):
             out[f"map {image.source} {q}"] = write_map_png(image, folder / f"{image.name}.{q}.png")
+            per_map.setdefault(image.source, []).append(image)
+    from ..analysis.maps import write_map_hdf5
+
+    for source, images in per_map.items():  # the numbers, with the grid positions
+        out[f"map {source} numbers"] = write_map_hdf5(images, folder / f"{images[0].name}.maps.h5")
     return out
 
 
