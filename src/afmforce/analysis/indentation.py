@@ -106,15 +106,15 @@ def indentation(st: State, o: IndentationOptions) -> State:
         fit = fit_indentation(u, f, o.model, {k: v for k, v in geom.items() if v is not None}, nu=o.poisson,
                               weight_width=o.weight_width, contact_guess=guess, thickness=o.thickness,
                               max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
-                              transition=o.transition)
+                              transition=o.transition, branch=o.run)
     except (AnalysisError, ParameterError) as exc:
         return _skip(st, "indentation", f"no modulus: {exc}")
     k = st.spring_constant
     # z at contact: where u = c, i.e. z = c + d with d the deflection of the fitted baseline force
     z_c = fit.contact + fit.baseline / k
     delta = u[fit.fitted] - fit.contact
-    model_f = model_force(o.model, delta, fit.youngs_modulus, geom, o.poisson,
-                          0.0 if math.isnan(fit.work_of_adhesion) else fit.work_of_adhesion, o.transition) + fit.baseline
+    w = 0.0 if math.isnan(fit.work_of_adhesion) else fit.work_of_adhesion
+    model_f = model_force(o.model, delta, fit.youngs_modulus, geom, o.poisson, w, o.transition, o.run) + fit.baseline
     res = IndentationResult(
         model=o.model, run=o.run, youngs_modulus=fit.youngs_modulus, youngs_modulus_se=fit.youngs_modulus_se,
         youngs_modulus_low=fit.youngs_modulus_low, youngs_modulus_high=fit.youngs_modulus_high,

@@ -180,18 +180,28 @@ def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
     return p
 
 
+def _lstsq(J: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least squares with the columns scaled to unit norm (they differ by ~1e13: E multiplies m^1.5)."""
+    norm = np.linalg.norm(J, axis=0)
+    norm[norm == 0] = 1.0
+    return np.linalg.lstsq(J / norm, y, rcond=None)[0] / norm
+
+
 def _dmt_solve(u, F, c, R, nu, geom, width, max_ind):
     """DMT at contact point c: linear in (E, w, b). Returns (ssr, E, w, b, J without the c column)."""
     d = u - c
     phi = shape_and_slope("hertz_paraboloid", d, geom, nu)[0]
     q = _weights(d, width, max_ind)
     J = q[:, None] * np.column_stack((phi, -2 * math.pi * R * (d > 0), np.ones_like(phi)))
-    x, *_ = np.linalg.lstsq(J, q * F, rcond=None)
+    x = _lstsq(J, q * F)
+    if x[1] < 0:  # w >= 0: on the bound, the Hertz fit
+        x2 = _lstsq(J[:, [0, 2]], q * F)
+        x = np.array([x2[0], 0.0, x2[1]])
     r = q * F - J @ x
     return float(r @ r), x, J
 
 
-def _adhesive_at(u, F, key, c, geom, nu, width, max_ind, lam, start):
+def _adhesive_at(u, F, key, c, geom, nu, width, max_ind, lam, start, branch="approach"):
     """JKR/Maugis at contact point c: (E, w) by least squares, b in closed form (variable projection)."""
     from scipy.optimize import least_squares
 
@@ -202,20 +212,20 @@ def _adhesive_at(u, F, key, c, geom, nu, width, max_ind, lam, start):
 
     def resid(x):
         f = adhesive_force(key, d, math.exp(min(x[0], 700)), math.exp(max(min(x[1], 700), -200)), R, nu, lam,
-                           "approach")
+                           branch)
         r = q * (F - f)
         return r - q * (float(q @ r) / qs)
 
     sol = least_squares(resid, np.log(start), method="lm", x_scale=1.0, max_nfev=60)
     E, w = np.exp(np.clip(sol.x, -200, 700))
     w = max(w, 1e-300)
-    f = adhesive_force(key, d, E, w, R, nu, lam, "approach")
+    f = adhesive_force(key, d, E, w, R, nu, lam, branch)
     b = float(q @ (q * (F - f))) / qs
     J = np.column_stack((sol.jac[:, 0] / E, sol.jac[:, 1] / w, -q))  # d resid / d (E, w, b)
     return float(sol.fun @ sol.fun), np.array([E, w, b]), -J
 
 
-def _adhesive_fit(u, F, key, geom, nu, width, max_ind, p_elastic, lam):
+def _adhesive_fit(u, F, key, geom, nu, width, max_ind, p_elastic, lam, branch="approach"):
     """Scan the contact point (DMT in closed form, wide; then the law itself, near the DMT point); at
     each, the law's other parameters by least squares. Returns ((E, w, c, b), standard errors (E, w, c))."""
     R = geom["radius"]
@@ -225,9 +235,20 @@ def _adhesive_fit(u, F, key, geom, nu, width, max_ind, p_elastic, lam):
         out = []
         for c in cands:
             ssr, x, J = _dmt_solve(u, F, c, R, nu, geom, width, max_ind)
-            if law != "dmt" and x[0] > 0:
-                start = (x[0], max(x[1], 1e-6 * x[0] * R))
-                ssr, x, J = _adhesive_at(u, F, law, c, geom, nu, width, max_ind, lam, start)
+            if law != "dmt":
+                # two starts: DMT's (E, w) and Hertz's E with a weak adhesion (1 % of the largest force)
+                E_h = float(_scan(u, F, np.array([c]), "hertz_paraboloid", geom, nu, width, max_ind)[0][0])
+                starts = [(x[0], max(x[1], 1e-6 * x[0] * R))] if x[0] > 0 else []
+                if E_h > 0:
+                    starts.append((E_h, max(0.01 * float(np.ptp(F)) / (math.pi * R), 1e-12)))
+                best = None
+                for start in starts:
+                    got = _adhesive_at(u, F, law, c, geom, nu, width, max_ind, lam, start, branch)
+                    if best is None or got[0] < best[0]:
+                        best = got
+                if best is None:
+                    continue
+                ssr, x, J = best
             if x[0] > 0 and x[1] >= 0 and math.isfinite(ssr):
                 out.append((ssr, float(c), x, J))
         if not out:
@@ -289,7 +310,7 @@ def validity(key: str, geometry: dict, max_indentation: float, thickness: float 
 def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dict | None = None, *,
                     nu: float = 0.5, weight_width: float = 0.0, max_indentation: float = math.inf,
                     contact_guess: float | None = None, thickness: float | None = None,
-                    transition: float = 1.0) -> IndentationFit:
+                    transition: float = 1.0, branch: str = "approach") -> IndentationFit:
     """Fit the law ``model`` to one run: E, contact point and baseline jointly (and w for adhesive laws).
 
     Parameters
@@ -314,6 +335,9 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
         Sample thickness [m], for the validity check.
     transition : float
         Maugis-Dugdale transition parameter lambda [-].
+    branch : str
+        Adhesive laws: ``"approach"`` (no force before contact) or ``"retract"`` (the neck before
+        the pull-off: negative indentations; the data read backwards, into the sample).
 
     Returns
     -------
@@ -353,10 +377,11 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
         J = q[:, None] * np.column_stack((phi, -E * dphi, np.ones_like(phi)))
         names = 3
     else:
-        (E, w, c, b), se_a = _adhesive_fit(u, F, model, geom, nu, weight_width, max_indentation, p, transition)
+        (E, w, c, b), se_a = _adhesive_fit(u, F, model, geom, nu, weight_width, max_indentation, p, transition,
+                                           branch)
         d = u - c
         q = _weights(d, weight_width, max_indentation)
-        r = q * (F - model_force(model, d, E, geom, nu, w, transition) - b)
+        r = q * (F - model_force(model, d, E, geom, nu, w, transition, branch) - b)
         names = 4
     used = q > 0
     n = int(used.sum())
@@ -373,7 +398,7 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     t = _t95(dof)
     in_contact = used & (d > 0)
     dmax = float(d[in_contact].max()) if in_contact.any() else 0.0
-    fmodel = model_force(model, d, E, geom, nu, w if not m.linear else 0.0, transition)
+    fmodel = model_force(model, d, E, geom, nu, w if not m.linear else 0.0, transition, branch)
     resid = (F - fmodel - b)[used]
     warn = list(validity(model, geom, dmax, thickness, int(in_contact.sum())))
     if math.isfinite(E_se) and E_se > 0.5 * E:

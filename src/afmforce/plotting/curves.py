@@ -211,7 +211,12 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
         ax.set_ylabel("deflection [nm]")
         ax.legend(fontsize="small")
     plot_force_separation(result, axes[0, 1])
-    plot_residuals(result, axes[1, 0])
+    if "indentation" in result.details:  # a soft contact's modulus fit: force vs indentation (issue 26)
+        from .indentation import plot_indentation
+
+        plot_indentation(result, axes[1, 0])
+    else:
+        plot_residuals(result, axes[1, 0])
     plot_spectrum(result, axes[1, 1])
     name = result.source.rsplit("/", 1)[-1] if result.source else "force curve"
     adh = (f"adhesion {result.adhesion_force * 1e9:.3g} nN" if math.isfinite(result.adhesion_force)
