@@ -162,8 +162,9 @@ def bench_map_cpu(n_curves: int) -> None:
     analyze_files(refs, analysis, executor="serial", chunk_size=64)
     cpu, wall = time.process_time() - c, time.perf_counter() - t
     per = cpu / len(refs)
-    print(f"map curves, serial, {len(refs)} curves: CPU {per * 1e3:.1f} ms per curve (wall {wall / len(refs) * 1e3:.1f} "
-          f"ms): 4,096 curves on 2 cores = {4096 * per / 2:.1f} s of CPU each (target < 60 s)")
+    print(f"map curves, serial, {len(refs)} curves: CPU {per * 1e3:.1f} ms per curve (wall "
+          f"{wall / len(refs) * 1e3:.1f} ms): 4,096 curves on 2 cores = {4096 * per / 2:.1f} s of CPU each "
+          "(target < 60 s)")
 
 
 def main() -> None:

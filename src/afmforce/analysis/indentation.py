@@ -114,7 +114,8 @@ def indentation(st: State, o: IndentationOptions) -> State:
     z_c = fit.contact + fit.baseline / k
     delta = u[fit.fitted] - fit.contact
     w = 0.0 if math.isnan(fit.work_of_adhesion) else fit.work_of_adhesion
-    model_f = model_force(o.model, delta, fit.youngs_modulus, geom, o.poisson, w, o.transition, o.run) + fit.baseline
+    model_f = model_force(o.model, delta, fit.youngs_modulus, geom, o.poisson, w, o.transition, o.run)
+    model_f = model_f + fit.baseline
     res = IndentationResult(
         model=o.model, run=o.run, youngs_modulus=fit.youngs_modulus, youngs_modulus_se=fit.youngs_modulus_se,
         youngs_modulus_low=fit.youngs_modulus_low, youngs_modulus_high=fit.youngs_modulus_high,
