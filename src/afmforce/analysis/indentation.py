@@ -20,10 +20,10 @@ from ..contact.registry import indentation_model
 from ..errors import AnalysisError, ParameterError
 from ._step_helpers import _kind, _skip
 from ._units import unit as _u
-from .options import IndentationOptions
+from .options import IndentationOptions, ProbeCalibration
 from .state import State
 
-__all__ = ["IndentationResult", "indentation"]
+__all__ = ["IndentationResult", "indentation", "fast_modulus"]
 
 
 @dataclass(frozen=True)
@@ -109,14 +109,17 @@ def indentation(st: State, o: IndentationOptions) -> State:
                               transition=o.transition, branch=o.run)
     except (AnalysisError, ParameterError) as exc:
         return _skip(st, "indentation", f"no modulus: {exc}")
-    k = st.spring_constant
+    res = _result(fit, u, o, geom, radius, st.spring_constant)
+    return st.update("indentation", res, warn=[f"indentation ({o.model}): {w}" for w in fit.warnings])
+
+
+def _result(fit, u: np.ndarray, o: IndentationOptions, geom: dict, radius, k: float) -> IndentationResult:
     # z at contact: where u = c, i.e. z = c + d with d the deflection of the fitted baseline force
     z_c = fit.contact + fit.baseline / k
     delta = u[fit.fitted] - fit.contact
     w = 0.0 if math.isnan(fit.work_of_adhesion) else fit.work_of_adhesion
     model_f = model_force(o.model, delta, fit.youngs_modulus, geom, o.poisson, w, o.transition, o.run)
-    model_f = model_f + fit.baseline
-    res = IndentationResult(
+    return IndentationResult(
         model=o.model, run=o.run, youngs_modulus=fit.youngs_modulus, youngs_modulus_se=fit.youngs_modulus_se,
         youngs_modulus_low=fit.youngs_modulus_low, youngs_modulus_high=fit.youngs_modulus_high,
         contact_point=z_c, contact_point_se=fit.contact_se, contact_depth=fit.contact, baseline=fit.baseline,
@@ -124,5 +127,54 @@ def indentation(st: State, o: IndentationOptions) -> State:
         max_indentation=fit.max_indentation, max_force=fit.max_force, n_points=fit.n_points,
         n_contact=fit.n_contact, rms=fit.rms, tip_radius=float(radius) if radius is not None else math.nan,
         half_angle=float(o.half_angle) if o.half_angle is not None else math.nan, poisson=o.poisson,
-        indentation=delta, fit_force=np.asarray(model_f), residuals=fit.residuals, warnings=fit.warnings)
-    return st.update("indentation", res, warn=[f"indentation ({o.model}): {w}" for w in fit.warnings])
+        indentation=delta, fit_force=np.asarray(model_f + fit.baseline), residuals=fit.residuals,
+        warnings=fit.warnings)
+
+
+def fast_modulus(curve, options: IndentationOptions | None = None,
+                 probe: ProbeCalibration | None = None) -> IndentationResult:
+    """The modulus of one curve without the pipeline's other steps (a QI pixel's fast path).
+
+    What nanite's preprocessing and fit do: the deflection [m] and force [N] from the file's (or
+    the probe's) sensitivity and spring constant, the tip depth, and :func:`fit_indentation` with
+    the contact point, E and the force baseline together. No smoothing, drift line, contact kind
+    or hard-contact check: :func:`~afmforce.analysis.pipeline.analyze` with the ``indentation``
+    step does those (and gives the same modulus on a curve without drift).
+
+    Raises
+    ------
+    AnalysisError
+        No approach (retract) samples, no spring constant or sensitivity, or the fit fails.
+    ParameterError
+        The model's geometry is missing.
+    """
+    o = options if options is not None else IndentationOptions()
+    p = probe if probe is not None else ProbeCalibration()
+    md = curve.metadata
+    seg = np.asarray(curve.segment)
+    idx = np.flatnonzero(seg == (0 if o.run == "approach" else 1))
+    if idx.size < 8:
+        raise AnalysisError(f"the curve has {idx.size} {o.run} samples: nothing to fit")
+    if o.run == "retract":
+        idx = idx[::-1]
+    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal)[idx]
+    sig = np.asarray(curve.deflection_signal, dtype=float)[idx]
+    k = p.value("spring_constant", md)
+    if not k:
+        raise AnalysisError("no spring constant (give --spring-constant): no force to fit")
+    unit = curve.deflection_unit
+    if unit == "V":
+        sens = p.value("sensitivity", md)
+        if not sens:
+            raise AnalysisError("the deflection is in volts and no sensitivity is known (give --sensitivity)")
+        d = sig * float(sens)
+    else:
+        d = sig if unit == "m" else sig / float(k)
+    radius = o.tip_radius if o.tip_radius is not None else p.value("radius", md)
+    geom = {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
+    u = z - d
+    fit = fit_indentation(u, d * float(k), o.model, {g: v for g, v in geom.items() if v is not None},
+                          nu=o.poisson, weight_width=o.weight_width, thickness=o.thickness,
+                          max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
+                          transition=o.transition, branch=o.run)
+    return _result(fit, u, o, geom, radius, float(k))

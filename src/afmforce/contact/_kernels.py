@@ -32,7 +32,14 @@ def scan_power_law(u, F, cands, k, p, width, max_ind):  # pragma: no cover - com
             if width > 0:
                 q = min(abs(d) / width, 1.0)
             q = q * q
-            phi = k * d ** p if d > 0 else 0.0
+            if d <= 0:
+                phi = 0.0
+            elif p == 1.5:  # a power is ten times the cost of a square root
+                phi = k * d * math.sqrt(d)
+            elif p == 2.0:
+                phi = k * d * d
+            else:
+                phi = k * d ** p
             f = F[i]
             s0 += q
             s1 += q * phi

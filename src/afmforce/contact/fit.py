@@ -156,14 +156,14 @@ def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
     # Gauss-Newton on (E, c, b): the weights at the current c
     p = np.array([E0, c, b0])
     best = ssr[i]
-    for _ in range(4):
+    for _ in range(2):  # the scan has the contact point to ~1e-4 of a grid step: a polish
         d = u - p[1]
         phi, dphi = shape_and_slope(key, d, geom, nu)
         q = _weights(d, width, max_ind)
         r = q * (F - p[0] * phi - p[2])
         J = q[:, None] * np.column_stack((phi, -p[0] * dphi, np.ones_like(phi)))
         try:
-            dp = np.linalg.solve(J.T @ J, J.T @ r)
+            dp = _normal_solve(J, r)
         except np.linalg.LinAlgError:
             break
         trial = p + dp
@@ -178,6 +178,22 @@ def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
         if abs(dp[1]) < 1e-6 * span and abs(dp[0]) < 1e-9 * abs(p[0]):
             break
     return p
+
+
+def _normal_solve(J: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """The Gauss-Newton step (J^T J)^-1 J^T r, with J's columns scaled (they differ by ~1e13)."""
+    A = J.T @ J
+    n = np.sqrt(np.diag(A))
+    n[n == 0] = 1.0
+    return np.linalg.solve(A / np.outer(n, n), (J.T @ r) / n) / n
+
+
+def _covariance(J: np.ndarray, s2: float) -> np.ndarray:
+    """s^2 (J^T J)^-1, inverted with the columns scaled."""
+    A = J.T @ J
+    n = np.sqrt(np.diag(A))
+    n[n == 0] = 1.0
+    return np.linalg.inv(A / np.outer(n, n)) / np.outer(n, n) * s2
 
 
 def _lstsq(J: np.ndarray, y: np.ndarray) -> np.ndarray:
@@ -266,7 +282,7 @@ def _adhesive_fit(u, F, key, geom, nu, width, max_ind, p_elastic, lam, branch="a
     n = int((J[:, 2] != 0).sum())
     s2 = ssr / max(n - 4, 1)
     try:
-        se = np.sqrt(np.clip(np.diag(np.linalg.inv(J.T @ J)) * s2, 0, None))
+        se = np.sqrt(np.clip(np.diag(_covariance(J, s2)), 0, None))
     except np.linalg.LinAlgError:
         se = np.full(3, math.nan)
     c_se = math.nan  # the profile's curvature near the best point: delta chi^2 = 1
@@ -389,7 +405,7 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     if m.linear:
         s2 = float(r @ r) / dof if dof > 0 else math.nan
         try:
-            se = np.sqrt(np.clip(np.diag(np.linalg.inv(J.T @ J) * s2), 0, None))
+            se = np.sqrt(np.clip(np.diag(_covariance(J, s2)), 0, None))
         except np.linalg.LinAlgError:
             se = np.full(names, math.nan)
         E_se, c_se = float(se[0]), float(se[1])
