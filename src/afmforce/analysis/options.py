@@ -370,9 +370,8 @@ class IndentationOptions(StepOptions):
     model: str = _opt("hertz_paraboloid", "text", "", "indentation model (a key of "
                       "afmforce.contact.INDENTATION_MODELS)")
     tip_radius: float | None = _q("radius", None, "tip radius of the indentation model (None: the probe's radius)")
-    half_angle: float | None = _opt(None, "angle", "rad", "half-angle of a cone, face angle of a pyramid",
-                                    lo=0.0, hi=1.5533, lo_open=True, display="deg")
-    poisson: float = _opt(0.5, "dimensionless", "", "Poisson ratio of the sample", lo=-1.0, hi=0.5, lo_open=True)
+    half_angle: float | None = _q("half_angle", None)
+    poisson: float = _q("poisson", 0.5)
     thickness: float | None = _opt(None, "length", "m", "sample (layer) thickness: the thin-layer model's h, "
                                    "the validity check of the others (None: a half space)", lo=0.0, hi=1e-2,
                                    lo_open=True)

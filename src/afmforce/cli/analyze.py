@@ -104,21 +104,16 @@ def register(sub) -> None:
 
 def _indentation_flags(p) -> None:
     """Short forms of the indentation step's options (docs/contact.md)."""
-    from ..analysis.options import IndentationOptions
-    from .._fields import spec_of
-
-    fields = IndentationOptions.__dataclass_fields__
     g = p.add_argument_group("indentation: Young's modulus of soft samples (docs/contact.md)")
     g.add_argument("--indentation-model", default=None, metavar="KEY",
                    help="hertz_paraboloid (default), sneddon_sphere, hertz_cone, bilodeau_pyramid3, "
                         "bilodeau_pyramid4, hertz_thin_layer, jkr, dmt, maugis (the same as --option "
                         "indentation.model=KEY)")
-    add_field(g, "radius", flag="--tip-radius", dest="tip_radius", spec=spec_of(fields["tip_radius"]),
+    add_field(g, "radius", flag="--tip-radius", dest="tip_radius",
               help="tip radius of a sphere model (default: --radius)")
-    add_field(g, "half_angle", flag="--half-angle", dest="half_angle", spec=spec_of(fields["half_angle"]),
-              help="half-angle of a cone, face angle of a pyramid")
-    add_field(g, "poisson", flag="--poisson", dest="poisson", spec=spec_of(fields["poisson"]),
-              default_from=lambda: 0.5, help="Poisson ratio of the sample")
+    add_field(g, "half_angle", help="half-angle of a cone, face angle of a pyramid")
+    add_field(g, "poisson", default_from=lambda: _default("indentation", "poisson"),
+              help="Poisson ratio of the sample")
 
 
 def _example_names() -> list[str]:
