@@ -14,7 +14,6 @@ import warnings
 from functools import lru_cache
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 from afmforce.analysis.options import IndentationOptions
