@@ -31,18 +31,13 @@ from .registry import indentation_model
 
 __all__ = ["IndentationFit", "fit_indentation", "validity", "model_force"]
 
-_T95 = {1: 12.706, 2: 4.303, 3: 3.182, 4: 2.776, 5: 2.571, 6: 2.447, 8: 2.306, 10: 2.228, 15: 2.131,
-        20: 2.086, 30: 2.042, 60: 2.000, 120: 1.980}
-
-
 def _t95(dof: int) -> float:
-    """Two-sided 95 % Student t quantile (table; 1.96 beyond 120 degrees of freedom)."""
+    """Two-sided 95 % Student t quantile for ``dof`` degrees of freedom (NaN for none)."""
     if dof <= 0:
         return math.nan
-    for k in sorted(_T95):
-        if dof <= k:
-            return _T95[k]
-    return 1.96
+    from scipy.special import stdtrit
+
+    return float(stdtrit(dof, 0.975))
 
 
 @dataclass(frozen=True)
