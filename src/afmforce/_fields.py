@@ -211,6 +211,10 @@ QUANTITIES: dict[str, FieldSpec] = {
                       display="nm/V"),
     # surfaces (eq 2, drainage)
     "radius": _q("length", "m", "effective radius R", hi=1e-3, **_POS),
+    # contact mechanics (docs/contact.md)
+    "half_angle": _q("angle", "rad", "half-angle of a cone, face angle of a pyramid", hi=math.radians(89),
+                     display="deg", **_POS),
+    "poisson": _q("dimensionless", "", "Poisson ratio of the sample", -1.0, 0.5, lo_open=True),
     "hamaker": _q("energy", "J", "Hamaker constant A", 1e-22, 1e-17),
     "z0": _q("length", "m", "soft-wall length z0", hi=1e-8, **_POS),
     "viscosity": _q("viscosity", "Pa s", "fluid viscosity (0: no drainage)", 0.0, 100.0),

@@ -305,7 +305,11 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
         ax.legend(fontsize="small")
     plot_force_separation(result, axes[0, 1])
     fit = result.details.get("vdw")
-    if result.contact_kind == "soft":
+    if "indentation" in result.details:  # a soft contact's modulus fit: force vs indentation (issue 26)
+        from .indentation import plot_indentation
+
+        plot_indentation(result, axes[1, 0])
+    elif result.contact_kind == "soft":
         plot_contact_region(result, axes[1, 0])
     elif fit is None or not math.isfinite(getattr(fit, "hamaker_radius", math.nan)):
         plot_compliance_region(result, axes[1, 0])  # no fit to show residuals of

@@ -26,7 +26,9 @@ _FLOATS = ("sensitivity", "sensitivity_fit", "spring_constant", "adhesion_force"
            "resonance_frequency", "shift", "contact_separation",
            "jump_in_separation", "jump_in_force", "jump_in_deflection", "pull_off_force", "pull_off_position",
            "jump_out_distance", "surface_energy", "radius", "hamaker_radius", "hamaker_radius_se", "hamaker",
-           "hamaker_se", "oscillation_frequency", "velocity", "inertia_parameter")
+           "hamaker_se", "oscillation_frequency", "velocity", "inertia_parameter",
+           "youngs_modulus", "youngs_modulus_se", "youngs_modulus_low", "youngs_modulus_high", "contact_point",
+           "work_of_adhesion", "work_of_adhesion_se", "position_x", "position_y")
 _OSC = tuple(f"oscillation_{run}_{what}" for run in ("approach", "retract") for what in ("frequency", "velocity"))
 
 #: Columns of the summary table and their types (``int``: -1 where not a map).
@@ -42,7 +44,7 @@ SUMMARY_COLUMNS: dict[str, str] = {
 def _units() -> dict[str, str]:
     from ..analysis.result import AnalysisResult
 
-    units = {name: AnalysisResult.UNITS[name] for name in _FLOATS}
+    units = {name: AnalysisResult.UNITS.get(name, "m") for name in _FLOATS}  # position_x/y: m
     units.update({n: ("Hz" if n.endswith("frequency") else "m/s") for n in _OSC})
     units.update(map_width="m", map_height="m")
     return units
@@ -87,7 +89,12 @@ def summary_row(result, curve, *, file: str, index: int, name: str) -> dict[str,
     row: dict[str, Any] = {"name": name, "file": file, "curve": int(index), "map_x": mx, "map_y": my,
                            "map_nx": nx, "map_ny": ny, "deflection_unit": result.deflection_unit}
     row["map_width"], row["map_height"] = _grid_size(curve.metadata) if mx >= 0 else (math.nan, math.nan)
-    row.update({f: float(getattr(result, f)) for f in _FLOATS})
+    row.update({f: float(getattr(result, f, math.nan)) for f in _FLOATS})
+    for axis in ("position_x", "position_y"):  # where the map's curve was recorded [m] (NaN: not given)
+        try:
+            row[axis] = float(curve.metadata.get(axis, math.nan))
+        except (TypeError, ValueError):
+            row[axis] = math.nan
     osc = result.details.get("oscillation")
     confirmed = osc is not None and osc.origin != "none"  # a peak in both runs (see oscillation.both_runs)
     for run in ("approach", "retract"):
