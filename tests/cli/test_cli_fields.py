@@ -62,7 +62,7 @@ def test_simulation_config_fields_carry_the_specs():
 
     classes = [c for kind in PARTS.values() for c in (kind if isinstance(kind, tuple) else (kind,))]
     carried = {f.name: spec_of(f) for c in classes for f in dataclasses.fields(c) if spec_of(f) is not None}
-    assert set(carried) == set(FLAT) - {"model", "friction", "ringing", "sampling"}
+    assert set(carried) == set(FLAT) - {"model", "friction", "ringing", "sampling", "geometry", "double_layer"}
     for name, spec in carried.items():
         assert spec is QUANTITIES[name] is FLAT[name].spec
         default = FLAT[name].default
