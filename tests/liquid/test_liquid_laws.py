@@ -90,3 +90,13 @@ def test_hhf_tends_to_weak_overlap_and_orders_correctly():
 def test_lever_drag():
     assert F.lever_drag_force(1e-6, -2e-6, 5e-5) == pytest.approx(1e-10)
     assert F.lever_drag_force(np.array([0.0, 10e-6]), 1e-6, 5e-5, 10e-6) == pytest.approx([-5e-11, -2.5e-11])
+
+
+def test_quadratic_photodiode_response():
+    from afmforce.instrument import Photodiode, get_preset
+    pd = Photodiode(sensitivity=30e-9, offset=0.1, nonlinearity_length=3e-6)
+    d = np.array([-50e-9, 0.0, 100e-9])
+    assert pd.optical(d) == pytest.approx((d + d**2 / 3e-6) / 30e-9 + 0.1, rel=1e-14)
+    with pytest.raises(ParameterError):
+        Photodiode(sensitivity=30e-9, nonlinearity_length=0.0)
+    assert get_preset("liquid").photodiode.nonlinearity_length == 3e-6

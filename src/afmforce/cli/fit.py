@@ -22,7 +22,7 @@ def add_model_flags(parser: argparse.ArgumentParser) -> None:
     """The model flags of ``afmforce simulate`` (model, beam, spring, surfaces, friction)."""
     from . import simulate as S
 
-    for add in (S._model_group, S._beam_group, S._spring_group, S._surface_group,
+    for add in (S._model_group, S._beam_group, S._spring_group, S._surface_group, S._liquid_group,
                 S._friction_group):
         add(parser)
     g = parser.add_argument_group("solver")
