@@ -42,7 +42,7 @@ def base_config(model="beam", **fields):
 
 def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
     """Static first guesses: A (or R) from the static jump-in deflection of the slowest curve."""
-    from ..dynamics import static_jump_in
+    from ..dynamics.static import surface_jump_in
 
     g = {n: float(getattr(base, n)) for n in free}
     slow = min(curves, key=lambda c: c.velocity)
@@ -54,11 +54,10 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
         lo, hi = math.log(PARAMETERS[name].lower), math.log(PARAMETERS[name].upper)
         for _ in range(60):   # |static jump deflection| grows with A*R
             mid = 0.5 * (lo + hi)
-            vals = {"hamaker": base.hamaker, "radius": base.radius, name: math.exp(mid)}
-            dj = static_jump_in(k, vals["radius"], vals["hamaker"], base.z0)[2]
+            dj = surface_jump_in(k, base.surface.replace(**{name: math.exp(mid)}))[2]
             lo, hi = (mid, hi) if dj > target else (lo, mid)
         g[name] = math.exp(0.5 * (lo + hi))
-    for name in ("xi", "zeta"):
+    for name in ("xi", "zeta", "slip_length"):
         if name in free:
             g[name] = max(g[name], PARAMETERS[name].abs_step)
     return g
