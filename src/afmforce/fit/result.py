@@ -170,8 +170,11 @@ class FitResult:
         L.append("")
         if self.comparison is not None:
             c = self.comparison
-            L += [f"**{c.verdict}** (likelihood ratio {c.lr:.3g}, p = {c.p_value:.3g})", "",
-                  "| model | chi2 | parameters | AIC | BIC |", "|---|---|---|---|---|"]
+            L += [f"**{c.verdict}** (likelihood ratio {c.lr:.3g}, p = {c.p_value:.3g})", ""]
+            if c.slip_detected is not None:
+                L += [f"**{c.slip_verdict}** (likelihood ratio {c.slip_lr:.3g}, p = "
+                      f"{c.slip_p_value:.3g})", ""]
+            L += ["| model | chi2 | parameters | AIC | BIC |", "|---|---|---|---|---|"]
             for m in c.chi2:
                 L.append(f"| {m} | {c.chi2[m]:.1f} | {c.n_parameters[m]} | {c.aic[m]:.1f} | "
                          f"{c.bic[m]:.1f} |")
