@@ -100,3 +100,15 @@ def test_liquid_cycle_matches_a_tight_reference_solve(model):
                                           geometry="sphere-flat")
                    + F.vdw_force(h_far, 4e-6, 1e-20)) / k
     assert tr.deflection[i] == pytest.approx(expect, rel=2e-3)
+
+
+def test_guard_counts_lever_drag_and_the_liquid_run_is_converged():
+    from afmforce.dynamics.guard import EVENT_TOLERANCES, damping_ratio
+    cfg = SimulationConfig(**LIQUID)
+    assert damping_ratio(cfg) == pytest.approx(5e-5 / (2 * math.sqrt(0.1 * 1e-11)), rel=1e-12)
+    assert damping_ratio(cfg.replace(lever_drag=0.0)) == 0.0
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")       # no ConvergenceWarning
+        tr = simulate(cfg.replace(lever_drag=1e-7), check="always")   # underdamped: ratio 0.05
+    assert tr.solver.event_errors and all(
+        err <= EVENT_TOLERANCES[name][0] for name, err in tr.solver.event_errors.items())
