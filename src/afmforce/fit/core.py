@@ -131,7 +131,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Confidence level of the intervals and of the friction test.
     profile : sequence of str, optional
         Parameters with profile-likelihood intervals; default: the free ones
-        among ``hamaker``, ``radius`` and ``xi``.
+        among ``hamaker``, ``radius``, ``xi``, ``slip_length``, ``surface_potential`` and
+        ``debye_length``.
     compare : bool
         Fit the static and the friction-free model too (model comparison).
     jump_window : float
@@ -223,7 +224,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                                 wald_interval(values[name], float(sd[j]), level, p.lower, p.upper),
                                 "wald", p.unit)
     profiles = {}
-    todo = [n for n in (profile if profile is not None else ("hamaker", "radius", "xi"))
+    todo = [n for n in (profile if profile is not None else (
+        "hamaker", "radius", "xi", "slip_length", "surface_potential", "debye_length"))
             if n in free]
     for name in todo:
         lo, hi, pts = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
