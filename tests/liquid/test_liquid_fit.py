@@ -46,3 +46,17 @@ def test_registry_and_speed_dependence():
         cur = virtual_curves([10e-6, 10e-6], seed=1, sample_rates=[1e4, 1e4], slip_length=2e-9, **LIQ)
     with pytest.raises(ParameterError, match="slip_length"):
         fit_dynamic(cur, model="spring", free=("slip_length",), jump_window=0.3e-3)
+
+
+def test_plan_slip_scales_with_the_target():
+    from afmforce.fit.plan_slip import plan_slip
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        p = plan_slip(target=0.05e-9, speeds=(10e-6, 40e-6), n_curves=2, slip_length=4e-9,
+                      **{k: v for k, v in LIQ.items()})
+    assert set(p.best_speeds) <= {10e-6, 40e-6} and p.half_width > 0
+    # information grows with the samples per nm: the half-width scales as 1/sqrt(points)
+    assert p.points_per_nm_needed == pytest.approx(max(p.points_per_nm * (p.half_width / 0.05e-9) ** 2,
+                                                       100 / 140), rel=1e-12)
+    with pytest.raises(ParameterError, match="slip length"):
+        plan_slip(target=0.5e-9, **{**LIQ, "slip_length": 0.0})
