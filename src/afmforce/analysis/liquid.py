@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import AnalysisError
 
 __all__ = ["ComplianceCalibration", "quadratic_compliance", "DragBaselines", "drag_baselines",
-           "split_drainage", "velocity_force_fit", "DLVOFit", "fit_dlvo"]
+           "split_drainage", "velocity_force_fit", "DLVOFit", "fit_dlvo", "calibrate_liquid_curve"]
 
 
 @dataclass(frozen=True)
@@ -254,3 +254,37 @@ def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-f
     return DLVOFit(float(psi), float(lam), float(a),
                    {"surface_potential": float(se[0]), "debye_length": float(se[1]),
                     "hamaker": float(se[2])}, redchi)
+
+
+def calibrate_liquid_curve(curve, far: float | None = None):
+    """A raw curve in volts -> the same curve with the deflection in metres (for ``afmforce fit``).
+
+    The zero-deflection signal is the mean of the approach and retract far-field lines at the
+    far region's middle (the lever drag cancels), ``far`` [m] the upper end of the far region
+    in piezo position (default: the first 30 % of the approach travel); the deflection is the
+    quadratic compliance calibration (:func:`quadratic_compliance`). The calibration is in
+    ``metadata["liquid_calibration"]``. The piezo position read by the position sensor is
+    used when there is one.
+    """
+    import dataclasses
+
+    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal,
+                   float)
+    v = np.asarray(curve.deflection_signal, float)
+    seg = np.asarray(curve.segment)
+    a, r = seg == 0, seg == 1
+    if a.sum() < 20 or r.sum() < 20:
+        raise AnalysisError("calibrate_liquid_curve: needs an approach and a retract run "
+                            "(>= 20 samples each)")
+    if far is None:
+        far = z[a].min() + 0.3 * (z[a].max() - z[a].min())
+    ma, mr = a & (z < far), r & (z < far)
+    if ma.sum() < 5 or mr.sum() < 5:
+        raise AnalysisError("calibrate_liquid_curve: fewer than 5 samples of a run in the far region")
+    mid = 0.5 * (max(z[ma].min(), z[mr].min()) + far)
+    v0 = 0.5 * (np.polyval(np.polyfit(z[ma], v[ma], 1), mid) + np.polyval(np.polyfit(z[mr], v[mr], 1), mid))
+    cal = quadratic_compliance(z[a], v[a], v0)
+    meta = dict(curve.metadata or {})
+    meta["liquid_calibration"] = dataclasses.asdict(cal)
+    return dataclasses.replace(curve, deflection_signal=cal.deflection(v), deflection_unit="m",
+                               metadata=meta)
