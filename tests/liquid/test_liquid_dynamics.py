@@ -112,3 +112,16 @@ def test_guard_counts_lever_drag_and_the_liquid_run_is_converged():
         tr = simulate(cfg.replace(lever_drag=1e-7), check="always")   # underdamped: ratio 0.05
     assert tr.solver.event_errors and all(
         err <= EVENT_TOLERANCES[name][0] for name, err in tr.solver.event_errors.items())
+
+
+def test_trajectory_figure_draws_the_liquid_static_curve():
+    from afmforce.plotting.trajectory import plot_trajectory
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        tr = simulate(SimulationConfig(**LIQUID))
+    _, ax1 = plot_trajectory(tr)
+    static = [ln for ln in ax1.get_lines() if ln.get_label() == "static"][0]
+    h, d = static.get_data()
+    f, _ = surface_static_force(tr.config.surface, np.asarray(h) * 1e-9)
+    ok = np.isfinite(d)
+    assert ok.sum() > 100 and np.allclose(np.asarray(d)[ok] * 1e-9, (f / tr.spring_constant)[ok], rtol=1e-9)

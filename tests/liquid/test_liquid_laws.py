@@ -43,9 +43,11 @@ def test_slip_factor_limits():
     hh = 6 * 1e-9 / np.array([0.999e-3, 1.001e-3])
     f = F.slip_factor(hh, 1e-9)
     assert f[0] == pytest.approx(f[1], rel=1e-5)
-    # h << b: f* ~ (h/3b) ln(6b/h)
+    # h << b: f* ~ (h/3b) ln(6b/h), the next order (h/3b)(ln(6b/h) - 1) to O((h/b) ln(b/h))
     b, hs = 1e-6, np.array([1e-12, 1e-11])
-    assert F.slip_factor(hs, b) == pytest.approx(hs / (3 * b) * np.log(6 * b / hs), rel=0.1)
+    lead = hs / (3 * b) * np.log(6 * b / hs)
+    assert F.slip_factor(hs, b) == pytest.approx(hs / (3 * b) * (np.log(6 * b / hs) - 1), rel=1e-5)
+    assert F.slip_factor(hs, b) / lead == pytest.approx(1 - 1 / np.log(6 * b / hs), rel=1e-5)
     # the exact formula at a moderate point, written out independently
     h1, b1 = 10e-9, 5e-9
     exact = h1 / (3 * b1) * ((1 + h1 / (6 * b1)) * math.log(1 + 6 * b1 / h1) - 1)
