@@ -20,8 +20,10 @@ def _fit(slip):
         warnings.simplefilter("ignore")
         cur = virtual_curves(SPEEDS, seed=4, noise=0.05e-9, drift_rms=0.5e-9,
                              sample_rates=[v / 2e-9 for v in SPEEDS], slip_length=slip, **LIQ)
-    fixed = {k: v for k, v in LIQ.items() if k not in ("start", "turn", "end", "model")}
-    fixed["spring_constant"] = 0.108                    # the file's k, 8 % off
+    import dataclasses
+    cur = [dataclasses.replace(c, metadata={**c.metadata, "spring_constant": 0.108}) for c in cur]
+    # the file's k is 8 % off; the free spring constant starts from it
+    fixed = {k: v for k, v in LIQ.items() if k not in ("start", "turn", "end", "model", "spring_constant")}
     return fit_dynamic(cur, model="spring", free=("slip_length", "spring_constant"), fixed=fixed,
                        profile=("slip_length",), jump_window=0.3e-3)
 
@@ -60,3 +62,20 @@ def test_plan_slip_scales_with_the_target():
                                                        100 / 140), rel=1e-12)
     with pytest.raises(ParameterError, match="slip length"):
         plan_slip(target=0.5e-9, **{**LIQ, "slip_length": 0.0})
+
+
+def test_free_spring_constant_starts_from_the_files():
+    from afmforce.dynamics import SimulationConfig
+    from afmforce.fit.core import _start_from_file_k
+
+    class C:      # only the metadata matters here
+        def __init__(self, k):
+            self.metadata = {"spring_constant": k}
+    curves = [C(0.108), C(0.108)]
+    base = SimulationConfig(model="spring", spring_constant=0.2)
+    assert _start_from_file_k(base, curves, ("slip_length", "spring_constant"), None).spring_constant == 0.108
+    assert _start_from_file_k(base, curves, ("spring_constant",), {"spring_constant": 0.2}) is base
+    assert _start_from_file_k(base, curves, ("slip_length",), None) is base
+    beam = SimulationConfig(model="beam", k0=0.1)
+    got = _start_from_file_k(beam, curves, ("k0",), None)
+    assert got.force_constant == pytest.approx(0.108, rel=1e-12)     # eq 13 scales with k0

@@ -63,6 +63,20 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
     return g
 
 
+def _start_from_file_k(base, curves: list[FitCurve], free, fixed):
+    """A free spring constant (issue 25) starts from the files' calibration when they have one:
+    ``spring_constant`` as it is, ``k0`` scaled by the beam's k0/k (eq 13)."""
+    name = next((n for n in ("spring_constant", "k0") if n in free and n not in (fixed or {})), None)
+    ks = [float(c.metadata["spring_constant"]) for c in curves
+          if (c.metadata or {}).get("spring_constant")]
+    if name is None or not ks:
+        return base
+    k_file = float(np.median(ks))
+    if name == "spring_constant":
+        return base.replace(spring_constant=k_file)
+    return base.replace(k0=base.cantilever.k0 * k_file / base.force_constant)
+
+
 def _starts(problem: Problem, guess: dict, shifts) -> list[np.ndarray]:
     """Starting vectors ranked by chi-square: a scan of xi x (A or R) where xi is free.
 
@@ -173,6 +187,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     free = check_free(free, base.model)
     fc = prepare_curves(curves, names, velocities=velocities, sample_rates=sample_rates,
                         jump_window=jump_window, retract=retract)
+    base = _start_from_file_k(base, fc, free, fixed)
     speeds = sorted({round(c.velocity, 15) for c in fc})
     dep = [n for n in free if n in SPEED_DEPENDENT]
     if dep and (len(speeds) < 2 or speeds[-1] / speeds[0] < 1.2):
