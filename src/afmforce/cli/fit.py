@@ -58,7 +58,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                     "curves measured at several driving speeds: global parameters (--free), and "
                     "per curve the zero of position, the baseline offset and drift. Reports "
                     "standard errors, profile-likelihood intervals and whether friction is "
-                    "detected (likelihood ratio, AIC/BIC). See docs/fit.md.")
+                    "detected (likelihood ratio, AIC/BIC); in a liquid the slip length, the "
+                    "spring constant in situ and whether slip is detected (docs/liquid.md). "
+                    "See docs/fit.md.")
     p.add_argument("curves", nargs="+", metavar="CURVE",
                    help="force-curve files with a calibrated deflection [m]")
     g = p.add_argument_group("fit")
