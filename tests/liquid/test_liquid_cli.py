@@ -56,3 +56,33 @@ def test_bad_liquid_flags_are_one_line(capsys, argv, match):
     assert code == 2
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and match in err[0] and "Traceback" not in err[0]
+
+
+def test_fit_from_volts_with_a_quadratic_compliance(tmp_path, capsys):
+    """Raw files in volts from the ``liquid`` virtual AFM (curved photodiode, drift, 1/f noise),
+    the file's spring constant 8 % off: ``afmforce fit --quadratic-compliance`` finds b and k."""
+    import dataclasses
+
+    from afmforce.instrument import get_preset
+    from afmforce.io.native.rawfile import write_raw
+
+    paths = []
+    for i, v in enumerate((10e-6, 40e-6)):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            tr = simulate(model="spring", mass=1e-11, spring_constant=0.1, radius=5e-6,
+                          geometry="sphere-flat", hamaker=5e-21, viscosity=0.89e-3, slip_length=3e-9,
+                          lever_drag=1e-5, z0=1e-9, velocity=v, sample_rate=v / 1e-9,
+                          start=-200e-9, turn=60e-9, end=-200e-9, sampling="average")
+        raw = get_preset("liquid").record(tr, seed=i)
+        raw = dataclasses.replace(raw, metadata={**raw.metadata, "spring_constant": 0.108})
+        paths.append(str(write_raw(raw, tmp_path / f"v{i}.txt")))
+    argv = ["fit", *paths, "--quadratic-compliance", "--model", "spring", "--mass", "10ng",
+            "--geometry", "sphere-flat", "--medium", "water", "--radius", "5um", "--hamaker", "5e-21J",
+            "--z0", "1nm", "--lever-drag", "1e-5", "--free", "slip_length,spring_constant",
+            "--jump-window", "0.3ms", "--no-profile", "--no-compare", "--json"]
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    assert d["parameters"]["slip_length"]["value"] == pytest.approx(3e-9, abs=0.5e-9)
+    assert d["parameters"]["spring_constant"]["value"] == pytest.approx(0.1, rel=0.02)
+    assert d["slip_detected"] is None          # no comparison asked for

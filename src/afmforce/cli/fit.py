@@ -76,6 +76,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "e.g. sensitivity=50nm/V, spring_constant=0.14N/m, sample_rate=2kHz "
                         "(afmforce formats lists the keys)")
     g.add_argument("--no-drift", action="store_true", help="fit no drift slope per curve")
+    g.add_argument("--quadratic-compliance", action="store_true",
+                   help="calibrate curves in volts by a quadratic fit of their compliance region "
+                        "(a curved photodiode response; both runs needed: analysis.liquid, "
+                        "docs/liquid.md) instead of the file's sensitivity")
     g.add_argument("--retract", action="store_true",
                    help="fit the retract run too (outward compliance and its hysteresis; the "
                         "pull-off is left out like the jump-in)")
@@ -131,6 +135,9 @@ def run(args: argparse.Namespace) -> int:
     from ..io._meta import parse_meta_args
 
     curves, names = _load(args.curves, parse_meta_args(args.meta))
+    if args.quadratic_compliance:    # issue 25: volts -> metres by the curved compliance
+        from ..analysis.liquid import calibrate_liquid_curve
+        curves = [calibrate_liquid_curve(c) if c.deflection_unit == "V" else c for c in curves]
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("ignore")
         res = fit_dynamic(curves, cfg, free=args.free.split(","), names=names,
