@@ -77,7 +77,8 @@ def test_simulate_flags_are_the_config_fields():
     parser = build_parser("simulate")
     sim = parser._subparsers._group_actions[0].choices["simulate"]
     flags = [a for a in sim._actions if hasattr(a.type, "spec")]
-    assert len(flags) == 28  # every numeric field but contact_separation, jump_factor, spike_window
+    # every numeric field but contact_separation, jump_factor, spike_window; + 9 liquid ones (issue 25)
+    assert len(flags) == 28 + 9
     for action in flags:
         assert action.dest in fields, action.option_strings
         assert spec_of(fields[action.dest]) is QUANTITIES[action.dest] is action.type.spec
