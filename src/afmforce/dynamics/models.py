@@ -18,6 +18,11 @@ one call.
   if derived from potentials: they act through ``dh/dq`` and ``dy2/dq`` like
   the conservative surface force.
 
+In a liquid (issue 25, docs/liquid.md) ``Fz`` also holds the double layer
+(:func:`static_force`: weak overlap or Hogg-Healy-Fuerstenau), drainage with
+Vinogradova's slip factor and the drag on the lever (:func:`drainage`); the geometry
+(sphere-sphere or sphere-flat) is in the packed ``AR`` and ``CD``.
+
 The parameters are packed into one float64 vector ``p`` (layout below) so that
 the integrator can be compiled once for both models. ``p[H_GUARD]`` is the
 smallest separation the force law accepts: a trial state with ``h`` below it
