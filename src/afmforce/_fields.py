@@ -34,7 +34,7 @@ _DISPLAY = {
     "um/s": 1e-6, "m/s": 1.0, "deg": math.pi / 180, "rad": 1.0,
     "pN": 1e-12, "nN": 1e-9, "uN": 1e-6, "N": 1.0,
     "Hz": 1.0, "kHz": 1e3, "MHz": 1e6, "nm/V": 1e-9, "m/V": 1.0,
-    "ms": 1e-3, "s": 1.0,
+    "ms": 1e-3, "s": 1.0, "mV": 1e-3, "V": 1.0, "mM": 1.0,
 }
 #: SI prefixes, largest first.
 _PREFIXES = (("G", 1e9), ("M", 1e6), ("k", 1e3), ("", 1.0), ("m", 1e-3), ("u", 1e-6), ("n", 1e-9),
@@ -218,6 +218,20 @@ QUANTITIES: dict[str, FieldSpec] = {
     "hamaker": _q("energy", "J", "Hamaker constant A", 1e-22, 1e-17),
     "z0": _q("length", "m", "soft-wall length z0", hi=1e-8, **_POS),
     "viscosity": _q("viscosity", "Pa s", "fluid viscosity (0: no drainage)", 0.0, 100.0),
+    # liquids (issue 25; docs/liquid.md)
+    "slip_length": _q("length", "m", "slip length b (Vinogradova drainage)", 0.0, 1e-6),
+    "lever_drag": _q("damping", "kg/s", "viscous drag coefficient of the lever body (N s/m)", 0.0, 1.0),
+    "lever_height": _q("length", "m", "lever height above the substrate at contact (0: constant drag)",
+                       0.0, 1e-3),
+    "surface_potential": _q("voltage", "V", "surface potential psi1", -1.0, 1.0, display="mV"),
+    "surface_potential_2": _q("voltage", "V", "surface potential psi2 of the substrate (default psi1)",
+                              -1.0, 1.0, display="mV"),
+    "debye_length": _q("length", "m", "Debye length 1/kappa", 1e-10, 1e-5),
+    "salt_concentration": _q("concentration", "mol/m^3",
+                             "concentration of a symmetric z:z salt (sets the Debye length)",
+                             hi=1e4, display="mM", **_POS),
+    "valence": _q("dimensionless", "", "valence z of the symmetric salt", 1.0, 4.0),
+    "permittivity": _q("dimensionless", "", "relative permittivity of the medium", 1.0, 200.0),
     # friction (section 2.2, eq 28)
     "xi": _q("damping", "kg/s", "viscous friction coefficient xi", 0.0, 100.0),
     "zeta": _q("friction_per_force2", "kg/(s N^2)", "load-dependent friction coefficient zeta", 0.0, 1e20),

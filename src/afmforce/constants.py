@@ -38,3 +38,14 @@ FIG5 = dict(
 
 #: Figs 9-10 theory (section 3): silicon ultralever on glass in air.
 FIG9 = dict(hamaker=HAMAKER, spring_constant=0.21, radius=220e-9, jump_out=200e-9, mass=1e-9)
+
+#: Media at 25 C (issue 25, ``--medium``): viscosity [Pa s] and relative permittivity.
+#: Water: 0.890 mPa s, 78.4 (CRC Handbook); air: the paper's 1.8e-5 and 1.0006; ethanol
+#: 1.074 mPa s, 24.5; n-hexadecane 3.03 mPa s, 2.05; glycerol 0.934 Pa s, 42.5 (CRC Handbook).
+MEDIA = {
+    "water": dict(viscosity=0.890e-3, permittivity=78.4),
+    "air": dict(viscosity=ETA_AIR, permittivity=1.0006),
+    "ethanol": dict(viscosity=1.074e-3, permittivity=24.5),
+    "hexadecane": dict(viscosity=3.03e-3, permittivity=2.05),
+    "glycerol": dict(viscosity=0.934, permittivity=42.5),
+}

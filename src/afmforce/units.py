@@ -33,6 +33,7 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "rigidity": ("N*m**2", "a flexural rigidity"),
     "friction_per_force2": ("kg/s/N**2", "a coefficient in kg/(s N^2)"),
     "surface_energy": ("J/m**2", "an energy per area"),
+    "concentration": ("mol/m**3", "a concentration (1 mM = 1 mol/m^3)"),
     "dimensionless": ("", "a plain number"),
 }
 

@@ -62,7 +62,7 @@ def test_simulation_config_fields_carry_the_specs():
 
     classes = [c for kind in PARTS.values() for c in (kind if isinstance(kind, tuple) else (kind,))]
     carried = {f.name: spec_of(f) for c in classes for f in dataclasses.fields(c) if spec_of(f) is not None}
-    assert set(carried) == set(FLAT) - {"model", "friction", "ringing", "sampling"}
+    assert set(carried) == set(FLAT) - {"model", "friction", "ringing", "sampling", "geometry", "double_layer"}
     for name, spec in carried.items():
         assert spec is QUANTITIES[name] is FLAT[name].spec
         default = FLAT[name].default
@@ -77,7 +77,9 @@ def test_simulate_flags_are_the_config_fields():
     parser = build_parser("simulate")
     sim = parser._subparsers._group_actions[0].choices["simulate"]
     flags = [a for a in sim._actions if hasattr(a.type, "spec")]
-    assert len(flags) == 30  # every numeric field but contact_separation, jump_factor, spike_window
+    # every numeric field but contact_separation, jump_factor, spike_window (28); + 2 lever quality
+    # factors (issue 23) + 9 liquid ones (issue 25)
+    assert len(flags) == 28 + 2 + 9
     for action in flags:
         assert action.dest in fields, action.option_strings
         assert spec_of(fields[action.dest]) is QUANTITIES[action.dest] is action.type.spec

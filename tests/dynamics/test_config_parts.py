@@ -36,6 +36,10 @@ OLD_FLAT_NAMES = (
     "contact_separation", "jump_factor", "spike_window", "ringing", "sampling", "max_steps")
 #: Flat names added since (issue 23: the lever's quality factors, probe fields).
 NEW_FLAT_NAMES = ("quality_factor", "quality_factor_2")
+#: Surface fields added by issue 25 (liquids).
+LIQUID_FLAT_NAMES = (
+    "geometry", "double_layer", "surface_potential", "surface_potential_2", "debye_length",
+    "salt_concentration", "valence", "permittivity", "slip_length", "lever_drag", "lever_height")
 
 #: Trajectory headers written by the version before issue 11.7 (every field of both probes).
 OLD_HEADERS = [
@@ -59,7 +63,8 @@ OLD_HEADERS = [
 
 #: A value outside each domain (the domain is declared in the field metadata).
 BAD = {"positive": (0.0, -1.0, math.nan), "non_negative": (-1e-3, math.inf), "finite": (math.nan,),
-       "optional_positive": (0.0, -1.0), "count": (0, 2.5, math.inf), "range": (10.0, -1.0)}
+       "optional_positive": (0.0, -1.0), "count": (0, 2.5, math.inf), "range": (10.0, -1.0),
+       "optional_finite": (math.nan, math.inf)}
 
 
 def _bad_cases():
@@ -109,12 +114,13 @@ def test_parts_are_frozen_and_the_model_is_the_probe():
 
 def test_the_flat_names_are_the_old_ones():
     """Sweeps' --set/--grid names, fit parameters and header keys keep working."""
-    assert tuple(n for n in FLAT if n not in NEW_FLAT_NAMES) == OLD_FLAT_NAMES
-    assert set(NEW_FLAT_NAMES) <= set(FLAT)
+    extra = NEW_FLAT_NAMES + LIQUID_FLAT_NAMES
+    assert tuple(n for n in FLAT if n not in extra) == OLD_FLAT_NAMES
+    assert set(FLAT) == set(OLD_FLAT_NAMES) | set(extra)
     from afmforce.sweep.simulation import simulation_dimensions
 
     dims = simulation_dimensions()
-    assert set(dims) == set(OLD_FLAT_NAMES + NEW_FLAT_NAMES)
+    assert set(dims) == set(OLD_FLAT_NAMES) | set(extra)
     assert dims["velocity"] == "velocity" and dims["friction"] is None and dims["max_steps"] == "dimensionless"
 
 

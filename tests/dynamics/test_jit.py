@@ -62,8 +62,12 @@ def test_pieces_compute_what_their_python_source_does():
         want = np.empty_like(got)
         # the pure-Python source, with the pure-Python force law
         src = M.observe.py_func
+        sf = M.surface_force.py_func
+        static = M.static_force.py_func      # (issue 25: eq 2 + double layer; drainage with slip)
+        static = types.FunctionType(static.__code__, dict(static.__globals__, surface_force=sf))
         observe = types.FunctionType(src.__code__,
-                                     dict(src.__globals__, surface_force=M.surface_force.py_func))
+                                     dict(src.__globals__, surface_force=sf, static_force=static,
+                                          drainage=M.drainage.py_func))
         for i in range(5):
             observe(model, p, zd[i], vd[i], Y[i], want[i])
         np.testing.assert_allclose(got, want, rtol=1e-14, atol=0.0)

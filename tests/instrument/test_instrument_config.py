@@ -95,7 +95,7 @@ def test_parameter_parsing_with_units():
     assert parse_parameter("acquisition.sample_rate", "none") is None
     assert parse_parameter("piezo.creep_amplitudes", "0.3, 0.1") == (0.3, 0.1)
     assert parse_parameter("drift.rate_rms", "5 mV/s") == pytest.approx(5e-3)
-    assert len(PARAMETERS) == 26
+    assert len(PARAMETERS) == 27   # + photodiode.nonlinearity_length (issue 25)
 
 
 def _parser(**existing):

@@ -46,5 +46,8 @@ def test_demo_command(tmp_path, capsys):
     m = re.search(r"(\d+) of (\d+) gated numbers pass", out)
     assert m and m.group(1) == m.group(2), out[-500:]
     assert "virtual experiment" in out and "vs true" in out
+    # issue 25: the liquid experiment, slip length vs truth (3 nm) and detected
+    m = re.search(r"slip length ([\d.]+) nm \(95 % \[([\d.]+), ([\d.]+)\]\) vs true 3 nm; slip detected", out)
+    assert m and abs(float(m.group(1)) - 3.0) < 0.5 and float(m.group(2)) <= 3.0 <= float(m.group(3)), out[-800:]
     rep = json.loads((tmp_path / "paper" / "report.json").read_text())
     assert rep["passed"]

@@ -7,7 +7,7 @@ simulating, calls :func:`record_from_args`::
     afmforce simulate ... --instrument typical --photodiode-sensitivity 30nm/V --raw out.h5
     afmforce simulate ... --config instrument.toml --raw out.txt --force
 
-Options: ``--instrument ideal|typical|paper``, ``--seed N``, ``--raw FILE``
+Options: ``--instrument ideal|typical|paper|liquid``, ``--seed N``, ``--raw FILE``
 (afmforce raw text, or HDF5 for ``.h5``/``.hdf5``), ``--instrument-config
 FILE.toml`` (also ``--config`` when the command has no ``--config`` of its
 own), ``--force`` (overwrite ``--raw``; shared with the command's own

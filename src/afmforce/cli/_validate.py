@@ -233,7 +233,7 @@ def check_simulation_options(args: argparse.Namespace, overrides: dict) -> None:
                 flag = ("--" + dest.split("__", 1)[1].replace("__", "-").replace("_", "-")
                         if dest.startswith("instrument_param__") else _flag(dest))
                 raise ParameterError(f"{flag} is ignored without a virtual-instrument output: add --raw FILE "
-                                     "(and --instrument ideal|typical|paper), or drop it")
+                                     "(and --instrument ideal|typical|paper|liquid), or drop it")
 
 
 def simulation_samples(start: float, turn: float, end: float, velocity: float,

@@ -5,7 +5,9 @@
 2. one virtual experiment analysed end to end: the virtual AFM records a
    simulated run, the raw file is read back and analysed by the pipeline, and
    the recovered Hamaker constant is compared with the truth (without and
-   with tip friction).
+   with tip friction);
+3. a liquid experiment (issue 25): a colloid probe in water with slip, four speeds, the slip
+   length and the spring constant fitted in situ against the truth.
 """
 
 from __future__ import annotations
@@ -55,11 +57,14 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out, folder=True)
     res = run_reproduce(args.out, None, True, False)
     runs = virtual_experiment(Path(args.out) / "virtual")
+    from ..paper.demo_liquid import liquid_experiment
+    liq = liquid_experiment(Path(args.out) / "liquid")
     if args.json:
         print_json({"out_dir": str(res.out_dir), "passed": res.passed,
                     "checks": [c.to_dict() for c in res.checks],
                     "virtual_experiment": [r.__dict__ | {"raw_file": str(r.raw_file), "figure": str(r.figure)}
-                                           for r in runs]})
+                                           for r in runs],
+                    "liquid_experiment": liq.__dict__})
         return 0 if res.passed else 1
     print("afmforce demo: Attard, Carambassis & Rutland, Langmuir 15, 553 (1999), recomputed\n")
     print(format_checks(res.checks))
@@ -70,6 +75,14 @@ def run(args: argparse.Namespace) -> int:
         print(f"  {r.label:<30} A = {r.hamaker_fit:.3g} J (+- {r.hamaker_se:.1g}) vs true {r.hamaker_true:.3g} J: "
               f"{100 * r.relative_error:+.0f} %; friction signature: {r.friction or '-'}")
     print("  friction makes the apparent attraction weaker: the fit underestimates A (paper section 2.3)")
+    print()
+    print("liquid experiment: colloid probe R = 5 um on a flat in water, b = 3 nm, 4 speeds 5-40 um/s,")
+    print("the file's spring constant 8 % off; fit of slip length and spring constant (in situ):")
+    lo, hi = liq.slip_interval
+    print(f"  slip length {liq.slip_fit * 1e9:.3f} nm (95 % [{lo * 1e9:.3f}, {hi * 1e9:.3f}]) vs true "
+          f"{liq.slip_true * 1e9:.3g} nm; slip {'detected' if liq.slip_detected else 'not detected'} "
+          f"(p = {liq.slip_p_value:.2g}); k {liq.spring_constant_fit:.4g} N/m vs true "
+          f"{liq.spring_constant_true:.4g} (file {liq.spring_constant_file:.4g}); {liq.fit_seconds:.1f} s")
     print()
     print(summarize(res))
     print(f"virtual runs, raw files and analysis figures in {Path(args.out) / 'virtual'}/")

@@ -22,7 +22,7 @@ def add_model_flags(parser: argparse.ArgumentParser) -> None:
     """The model flags of ``afmforce simulate`` (model, beam, spring, surfaces, friction)."""
     from . import simulate as S
 
-    for add in (S._model_group, S._beam_group, S._spring_group, S._surface_group,
+    for add in (S._model_group, S._beam_group, S._spring_group, S._surface_group, S._liquid_group,
                 S._friction_group):
         add(parser)
     g = parser.add_argument_group("solver")
@@ -58,7 +58,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                     "curves measured at several driving speeds: global parameters (--free), and "
                     "per curve the zero of position, the baseline offset and drift. Reports "
                     "standard errors, profile-likelihood intervals and whether friction is "
-                    "detected (likelihood ratio, AIC/BIC). See docs/fit.md.")
+                    "detected (likelihood ratio, AIC/BIC); in a liquid the slip length, the "
+                    "spring constant in situ and whether slip is detected (docs/liquid.md). "
+                    "See docs/fit.md.")
     p.add_argument("curves", nargs="+", metavar="CURVE",
                    help="force-curve files with a calibrated deflection [m]")
     g = p.add_argument_group("fit")
@@ -74,6 +76,10 @@ def register(subparsers) -> argparse.ArgumentParser:
                         "e.g. sensitivity=50nm/V, spring_constant=0.14N/m, sample_rate=2kHz "
                         "(afmforce formats lists the keys)")
     g.add_argument("--no-drift", action="store_true", help="fit no drift slope per curve")
+    g.add_argument("--quadratic-compliance", action="store_true",
+                   help="calibrate curves in volts by a quadratic fit of their compliance region "
+                        "(a curved photodiode response; both runs needed: analysis.liquid, "
+                        "docs/liquid.md) instead of the file's sensitivity")
     g.add_argument("--retract", action="store_true",
                    help="fit the retract run too (outward compliance and its hysteresis; the "
                         "pull-off is left out like the jump-in)")
@@ -129,6 +135,9 @@ def run(args: argparse.Namespace) -> int:
     from ..io._meta import parse_meta_args
 
     curves, names = _load(args.curves, parse_meta_args(args.meta))
+    if args.quadratic_compliance:    # issue 25: volts -> metres by the curved compliance
+        from ..analysis.liquid import calibrate_liquid_curve
+        curves = [calibrate_liquid_curve(c) if c.deflection_unit == "V" else c for c in curves]
     with warnings.catch_warnings(record=True):
         warnings.simplefilter("ignore")
         res = fit_dynamic(curves, cfg, free=args.free.split(","), names=names,

@@ -40,6 +40,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="start of each approach (default -40 nm)")
     g.add_argument("--turn", type=quantity("length", "--turn"), default=None, metavar="VALUE",
                    help="turn of each approach (default +20 nm)")
+    add_quantity(g, "--slip-target", "length", None,
+                 "plan the slip length instead: the 95 %% half-width wanted (issue 25; with "
+                 "--slip-length, --medium, --geometry ...; docs/liquid.md)", unit="m")
     add_model_flags(p)
     o = p.add_argument_group("output")
     o.add_argument("--json", action="store_true", help="print the plan as JSON (SI units)")
@@ -47,6 +50,12 @@ def register(subparsers) -> argparse.ArgumentParser:
     o.add_argument("--force", action="store_true", help="overwrite existing outputs")
     p.set_defaults(func=run)
     return p
+
+
+def _given(args) -> set:
+    """Flags typed on the command line (a non-default --speeds)."""
+    default = [0.2e-6, 0.5e-6, 1e-6, 2e-6, 5e-6, 10e-6, 20e-6]
+    return {"--speeds"} if list(args.speeds) != default else set()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -60,9 +69,15 @@ def run(args: argparse.Namespace) -> int:
              "turn": 20e-9 if args.turn is None else args.turn}
     args.start = args.turn = None
     cfg = model_config(args).replace(**drive)
-    plan = plan_experiment(cfg, noise=args.noise, speeds=args.speeds,
-                           sample_rates=args.sample_rates, points_per_nm=args.points_per_nm,
-                           n_curves=args.curves, force_error=args.force_error)
+    if args.slip_target is not None:
+        from ..fit.plan_slip import plan_slip
+        kw = {} if "--speeds" not in _given(args) else {"speeds": args.speeds}
+        plan = plan_slip(cfg, target=args.slip_target, noise=args.noise, n_curves=args.curves,
+                         points_per_nm=args.points_per_nm, **kw)
+    else:
+        plan = plan_experiment(cfg, noise=args.noise, speeds=args.speeds,
+                               sample_rates=args.sample_rates, points_per_nm=args.points_per_nm,
+                               n_curves=args.curves, force_error=args.force_error)
     if args.report:
         atomic_write_text(args.report, plan.markdown(), force=args.force)
     if args.json:

@@ -81,6 +81,33 @@ def _surface_group(parser):
     _q(g, "--viscosity", "viscosity", "Pa*s", "fluid viscosity (drainage)")
 
 
+def _liquid_group(parser):
+    g = parser.add_argument_group("liquid (issue 25; docs/liquid.md)")
+    from ..constants import MEDIA
+    g.add_argument("--medium", default=None, choices=sorted(MEDIA),
+                   help="set --viscosity and --permittivity of this medium at 25 C "
+                        "(flags given explicitly win)")
+    g.add_argument("--geometry", default=None, choices=("sphere-sphere", "sphere-flat"),
+                   help="sphere-sphere: the paper (R_eff = R/2); sphere-flat: a colloid probe "
+                        "(R_eff = R) (default sphere-sphere)")
+    g.add_argument("--double-layer", dest="double_layer", default=None,
+                   choices=("none", "weak_overlap", "constant_potential", "constant_charge"),
+                   help="double-layer law (default none)")
+    _q(g, "--surface-potential", "voltage", "V", "surface potential psi1", dest="surface_potential")
+    _q(g, "--surface-potential-2", "voltage", "V", "substrate potential psi2 (default psi1)",
+       dest="surface_potential_2")
+    _q(g, "--debye-length", "length", "m", "Debye length", dest="debye_length")
+    _q(g, "--salt-concentration", "concentration", "mol/m^3",
+       "symmetric salt concentration (instead of --debye-length; 1mM = 1 mol/m^3)",
+       dest="salt_concentration")
+    _q(g, "--valence", "dimensionless", "", "valence z of the salt")
+    _q(g, "--permittivity", "dimensionless", "", "relative permittivity")
+    _q(g, "--slip-length", "length", "m", "slip length b", dest="slip_length")
+    _q(g, "--lever-drag", "damping", "N s/m", "drag coefficient of the lever body", dest="lever_drag")
+    _q(g, "--lever-height", "length", "m", "lever height at contact (0: constant drag)",
+       dest="lever_height")
+
+
 def _friction_group(parser):
     g = parser.add_argument_group("tip friction (beam model; eq 28)")
     lazy_help(g.add_argument("--friction", default=None, metavar="LAW", help="friction law: "),
@@ -140,7 +167,8 @@ def _output_group(parser):
 
 #: Functions ``(parser) -> None`` adding the argument groups, in help order.
 ARGUMENT_GROUPS: list[Callable[[argparse.ArgumentParser], None]] = [
-    _model_group, _beam_group, _spring_group, _surface_group, _friction_group, _drive_group,
+    _model_group, _beam_group, _spring_group, _surface_group, _liquid_group, _friction_group,
+    _drive_group,
     _solver_group, _output_group,
 ]
 #: ``dest`` names of output-file flags that --force protects.
@@ -168,6 +196,9 @@ def config_from_args(args: argparse.Namespace):
     from ..dynamics.config import FLAT
 
     overrides = {k: v for k, v in vars(args).items() if k in FLAT and v is not None}
+    if getattr(args, "medium", None):
+        from ..constants import MEDIA
+        overrides = {**MEDIA[args.medium], **overrides}
     check_simulation_options(args, overrides)  # ranges were checked while parsing
     cfg = SimulationConfig(**overrides)
     check_simulation_config(cfg)

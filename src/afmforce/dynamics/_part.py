@@ -52,6 +52,7 @@ DOMAINS = {
     "non_negative": non_negative,
     "finite": finite,
     "optional_positive": _optional(positive),
+    "optional_finite": _optional(finite),
     "count": _count,
 }
 

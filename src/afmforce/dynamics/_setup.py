@@ -18,7 +18,7 @@ from .load_friction import load_friction_controls
 from .models import XI as _XI, ZETA as _ZETA
 from .models import MODEL_BEAM, MODEL_IDS, state_size
 from .registries import RINGING
-from .static import static_jump_in
+from .static import surface_jump_in
 from ._params import _beam_fmax, free_frequency_max, parameter_vector
 
 #: The absolute tolerance on velocities is ``atol * 2 pi * VELOCITY_ATOL_FREQUENCY``
@@ -122,7 +122,7 @@ def _base(cfg: SimulationConfig) -> _Setup:
     ev[R.E_H_CONTACT] = cfg.contact_separation
     ev[R.E_SPIKE_WINDOW] = cfg.spike_window
     ev[R.E_JUMP_FACTOR] = cfg.jump_factor
-    s.h_s, s.z_s, _ = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)
+    s.h_s, s.z_s, _ = surface_jump_in(cfg.force_constant, cfg.surface)
     ev[R.E_H_STATIC] = s.h_s if math.isfinite(s.h_s) else -math.inf
     s.hmax_dz = HMAX_TRAVEL * cfg.z0
     s.damp_cycles = RINGING[cfg.ringing].damp_cycles

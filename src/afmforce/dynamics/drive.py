@@ -20,7 +20,8 @@ import numpy as np
 
 from ..errors import ParameterError
 from .radau import APPROACH, DWELL, RETRACT
-from .static import static_deflection, static_jump_in
+from .static import static_deflection, surface_jump_in, surface_static_deflection, \
+    surface_static_force
 
 __all__ = ["Segment", "segments", "initial_state", "SEGMENT_NAMES"]
 
@@ -96,12 +97,15 @@ def start_deflection(cfg) -> float:
     """
     k = cfg.force_constant
     s, start = cfg.surface, cfg.drive.start
-    hj, zj, _ = static_jump_in(k, s.radius, s.hamaker, s.z0)
+    hj, zj, _ = surface_jump_in(k, s)     # eq 2 on the geometry (+ double layer, issue 25)
     if math.isfinite(zj) and start >= zj:
         raise ParameterError(
             f"start {start * 1e9:.4g} nm is already in contact: the static jump-in is at "
             f"z = {zj * 1e9:.4g} nm (h = {hj * 1e9:.4g} nm); start further out (more negative)")
-    d = _static_start(start, k, s.radius, s.hamaker, s.z0)
+    if s.double_layer == "none":
+        d = _static_start(start, k, s.paper_radius, s.hamaker, s.z0)
+    else:
+        d = surface_static_deflection(start, k, s)
     h = d - start
     if not h > cfg.solver.contact_separation:
         raise ParameterError(
@@ -128,7 +132,10 @@ def initial_state(cfg) -> np.ndarray:
         return np.array([d, 0.0])
     cant, s = cfg.cantilever, cfg.surface
     h = d - cfg.drive.start      # eq 2 (forces.vdw_force) on a scalar
-    fz = -(s.hamaker * s.radius / (12.0 * h * h)) * (1.0 - 0.25 * (s.z0 / h) ** 6)
+    r = s.paper_radius
+    fz = -(s.hamaker * r / (12.0 * h * h)) * (1.0 - 0.25 * (s.z0 / h) ** 6)
+    if s.double_layer != "none":
+        fz = float(surface_static_force(s, h)[0])
     gx, gt = _unit_load_response(cant)
     x, theta = gx * fz, gt * fz
     return np.array([x, cant.L1 * theta + 1.5 * x, 0.0, 0.0])

@@ -80,18 +80,33 @@ def _free_mode(probe) -> tuple[float, float]:
     return math.sqrt(float(np.min(w2[w2 > 0]))), float(yq @ (minv * yq))
 
 
+def _lever_drag_ratio(cfg) -> float:
+    """Damping ratio of the free mode from the lever drag (issue 25) [-]: ``c mob_h / (2 w)``."""
+    c = cfg.surface.lever_drag
+    if c <= 0.0:
+        return 0.0
+    if cfg.model == "spring":
+        return c / (2.0 * math.sqrt(cfg.probe.spring_constant * cfg.probe.mass))
+    from .models import beam_couplings, beam_matrices
+    w, _ = _free_mode(cfg.probe)
+    _, (ma, mb) = beam_matrices(cfg.probe.cantilever, cfg.probe.m_joint, cfg.probe.m_base)
+    hq, _, _ = beam_couplings(cfg.probe.cantilever)
+    return c * (hq[0] ** 2 / ma + hq[1] ** 2 / mb) / (2.0 * w)
+
+
 def damping_ratio(cfg) -> float:
     """Damping ratio of the free mode from lateral friction at rest and the lever's own
     damping, 1 / (2 Q) [-] (0 for an undamped spring).
 
-    Drainage is not counted: far from the surface it vanishes.
+    Drainage is not counted: far from the surface it vanishes. The drag on the lever body
+    in a liquid (``lever_drag``, issue 25) is.
     """
     q = cfg.probe.quality_factor
     lever = 0.0 if q is None else 0.5 / q
     if cfg.model == "spring" or cfg.friction.law == "none":
-        return lever
+        return lever + _lever_drag_ratio(cfg)
     w, mob_y = _free_mode(cfg.probe)
-    return cfg.friction.xi * mob_y / (2.0 * w) + lever
+    return cfg.friction.xi * mob_y / (2.0 * w) + lever + _lever_drag_ratio(cfg)
 
 
 def _stiff_load_friction(cfg) -> bool:

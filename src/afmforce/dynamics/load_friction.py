@@ -59,7 +59,7 @@ def load_friction_controls(cfg) -> tuple[float, float]:
     if cfg.model == "spring" or zeta <= 0.0:
         return 1.0, RING_AMPLITUDE
     surface = cfg.surface
-    ar = surface.hamaker * surface.radius
+    ar = surface.hamaker * surface.paper_radius
     fa = ar / (16.0 * surface.z0**2)
     s = max(LOAD_VFAC_FLOOR, LOAD_VFAC_MARGIN * xi / (xi + zeta * fa * fa))
     h0 = surface.z0 / 4.0 ** (1.0 / 6.0)          # Fs(h0) = 0 (eq 2)

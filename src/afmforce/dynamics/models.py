@@ -22,6 +22,11 @@ one call.
   Rayleigh matrix ``C = alpha M + beta K`` (:mod:`.damping`), which gives
   both free modes the requested quality factors.
 
+In a liquid (issue 25, docs/liquid.md) ``Fz`` also holds the double layer
+(:func:`static_force`: weak overlap or Hogg-Healy-Fuerstenau), drainage with
+Vinogradova's slip factor and the drag on the lever (:func:`drainage`); the geometry
+(sphere-sphere or sphere-flat) is in the packed ``AR`` and ``CD``.
+
 The parameters are packed into one float64 vector ``p`` (layout below) so that
 the integrator can be compiled once for both models. ``p[H_GUARD]`` is the
 smallest separation the force law accepts: a trial state with ``h`` below it
@@ -65,7 +70,15 @@ MOBILITY = 18   # dh-direction inverse mass: 1/m (spring), hq.M^-1.hq (beam) [1/
 K_EFF = 19      # force-measuring spring constant k (eq 13 for the beam) [N/m]
 # lever damping (issue 23): -C q' [kg/s]; spring: C00 = m omega0 / Q; 0 = undamped (paper)
 C00, C01, C10, C11 = 20, 21, 22, 23
-P_SIZE = 24
+# liquids (issue 25; both models): double layer, drainage with slip, lever drag
+DL_A = 24       # double layer: 2 pi R_eff (eps eps0 kappa / 2) 2 psi1 psi2 [N] (csch term)
+DL_B = 25       # double layer: 2 pi R_eff (eps eps0 kappa / 2) (-/+)(psi1^2 + psi2^2) [N] (coth - 1)
+DL_KAPPA = 26   # inverse Debye length kappa [1/m] (0: no double layer)
+DL_EXACT = 27   # 1: Hogg-Healy-Fuerstenau terms; 0: weak overlap (csch -> 2 exp(-kappa h))
+SLIP6B = 28     # 6 b, b the slip length [m] (0: no slip; Fd = -CD f*(h)/h h')
+LEVER = 29      # lever drag coefficient c [N s/m] (F = -c g(h) h')
+LEVER_H = 30    # lever height H [m]: g = H / (h + H); 0: g = 1
+P_SIZE = 31
 
 #: Number of monitored observables returned by :func:`observe`.
 N_OBS = 9
@@ -88,6 +101,67 @@ def surface_force(h, ar, z0):
     return fs, dfs
 
 
+@piece()
+def static_force(h, p):
+    """Static normal force and its gradient: eq 2 plus the double layer [N, N/m]."""
+    fs, dfs = surface_force(h, p[AR], p[Z0])
+    kappa = p[DL_KAPPA]
+    if kappa > 0.0:
+        x = kappa * h
+        e1 = math.exp(-x)
+        if p[DL_EXACT] > 0.0:
+            q = -math.expm1(-2.0 * x)
+            cs = 2.0 * e1 / q                 # csch x
+            cm = cs * e1                      # coth x - 1
+            fs += p[DL_A] * cs + p[DL_B] * cm
+            dfs -= kappa * (p[DL_A] * cs * (cm + 1.0) + p[DL_B] * cs * cs)
+        else:
+            w = p[DL_A] * 2.0 * e1
+            fs += w
+            dfs -= kappa * w
+    return fs, dfs
+
+
+@piece()
+def drainage(h, hd, p):
+    """Drainage (with slip) and lever drag: (F [N], dF/dh [N/m], dF/dh' [N s/m]).
+
+    ``F = -CD phi(h) h' - c g(h) h'`` with ``phi = f*(h)/h`` (Vinogradova 1995; 1/h
+    without slip, computed exactly as before issue 25) and ``g = H/(h + H)`` (or 1).
+    """
+    cd = p[CD]
+    b6 = p[SLIP6B]
+    if b6 > 0.0:
+        u = b6 / h
+        if u < 1e-3:
+            phi = (1.0 - u / 3.0 + u * u / 6.0 - 0.1 * u * u * u) / h
+            dphi = -(1.0 - 2.0 * u / 3.0 + 0.5 * u * u - 0.4 * u * u * u) / (h * h)
+        else:
+            l1 = math.log1p(u)
+            phi = ((1.0 + 1.0 / u) * l1 - 1.0) * 2.0 / b6
+            dphi = -(2.0 / (u * h * h)) * (1.0 - l1 / u)
+        f = -cd * phi * hd
+        dfh = -cd * dphi * hd
+        dfv = -cd * phi
+    else:
+        f = -cd * hd / h
+        dfh = cd * hd / (h * h)
+        dfv = -cd / h
+    c = p[LEVER]
+    if c > 0.0:
+        H = p[LEVER_H]
+        if H > 0.0:
+            g = H / (h + H)
+            dg = -g / (h + H)
+        else:
+            g = 1.0
+            dg = 0.0
+        f -= c * g * hd
+        dfh -= c * dg * hd
+        dfv -= c * g
+    return f, dfh, dfv
+
+
 @piece(python=True)
 def rhs(model, p, zd, vd, y, out):
     """Evaluate ``out = f(t, y)`` at drive position ``zd`` and speed ``vd``.
@@ -95,9 +169,6 @@ def rhs(model, p, zd, vd, y, out):
     Returns ``False`` (and leaves ``out`` undefined) when the separation is
     below ``p[H_GUARD]``: the trial state is inadmissible.
     """
-    ar = p[AR]
-    z0 = p[Z0]
-    cd = p[CD]
     if model == MODEL_SPRING:
         x = y[0]
         xd = y[1]
@@ -105,8 +176,9 @@ def rhs(model, p, zd, vd, y, out):
         if not h > p[H_GUARD]:
             return False
         hd = xd - vd
-        fs, _ = surface_force(h, ar, z0)
-        fz = fs - cd * hd / h
+        fs, _ = static_force(h, p)
+        fd, _, _ = drainage(h, hd, p)
+        fz = fs + fd
         out[0] = xd
         out[1] = p[INV_M] * (-p[K] * x + fz - p[C00] * xd)
         return True
@@ -122,8 +194,9 @@ def rhs(model, p, zd, vd, y, out):
     if not h > p[H_GUARD]:
         return False
     hd = hqa * va + hqb * vb - vd
-    fs, _ = surface_force(h, ar, z0)
-    fz = fs - cd * hd / h
+    fs, _ = static_force(h, p)
+    fd, _, _ = drainage(h, hd, p)
+    fz = fs + fd
     yd = yqa * va + yqb * vb
     fy = -(p[XI] + p[ZETA] * fz * fz) * yd
     out[0] = va
@@ -138,20 +211,18 @@ def rhs(model, p, zd, vd, y, out):
 @piece(python=True)
 def jac(model, p, zd, vd, y, J):
     """Analytic Jacobian ``J = df/dy`` (same arguments as :func:`rhs`)."""
-    ar = p[AR]
-    z0 = p[Z0]
-    cd = p[CD]
     if model == MODEL_SPRING:
         h = y[0] - zd
         if not h > p[H_GUARD]:
             return False
         hd = y[1] - vd
-        _, dfs = surface_force(h, ar, z0)
+        _, dfs = static_force(h, p)
+        _, dfh, dfv = drainage(h, hd, p)
         im = p[INV_M]
         J[0, 0] = 0.0
         J[0, 1] = 1.0
-        J[1, 0] = im * (-p[K] + dfs + cd * hd / (h * h))
-        J[1, 1] = -im * cd / h - im * p[C00]
+        J[1, 0] = im * (-p[K] + dfs + dfh)
+        J[1, 1] = im * dfv - im * p[C00]
         return True
     qa = y[0]
     qb = y[1]
@@ -165,10 +236,11 @@ def jac(model, p, zd, vd, y, J):
     if not h > p[H_GUARD]:
         return False
     hd = hqa * va + hqb * vb - vd
-    fs, dfs = surface_force(h, ar, z0)
-    fz = fs - cd * hd / h
-    dfz_dh = dfs + cd * hd / (h * h)      # dFz/dh
-    dfz_dhd = -cd / h                     # dFz/dh'
+    fs, dfs = static_force(h, p)
+    fd, dfh, dfv = drainage(h, hd, p)
+    fz = fs + fd
+    dfz_dh = dfs + dfh                    # dFz/dh
+    dfz_dhd = dfv                         # dFz/dh'
     yd = yqa * va + yqb * vb
     xi_eff = p[XI] + p[ZETA] * fz * fz
     dfy_dfz = -2.0 * p[ZETA] * fz * yd    # dFy/dFz
@@ -203,9 +275,6 @@ def observe(model, p, zd, vd, y, o):
     normal force Fz, lateral position y2, dy2/dt, friction force Fy, drive z.
     Does not guard h: call only on accepted states.
     """
-    ar = p[AR]
-    z0 = p[Z0]
-    cd = p[CD]
     if model == MODEL_SPRING:
         defl = y[0]
         hd = y[1] - vd
@@ -219,8 +288,9 @@ def observe(model, p, zd, vd, y, o):
         y2 = p[YQA] * y[0] + p[YQB] * y[1]
         y2d = p[YQA] * y[2] + p[YQB] * y[3]
     h = defl - zd
-    fs, _ = surface_force(h, ar, z0)
-    fz = fs - cd * hd / h
+    fs, _ = static_force(h, p)
+    fd, _, _ = drainage(h, hd, p)
+    fz = fs + fd
     o[O_H] = h
     o[O_HDOT] = hd
     o[O_DEFL] = defl
@@ -246,7 +316,7 @@ def contact_frequency(model, p, zd, y):
         h = y[0] - zd
     else:
         h = p[HQA] * y[0] + p[HQB] * y[1] - zd
-    _, dfs = surface_force(h, p[AR], p[Z0])
+    _, dfs = static_force(h, p)
     kappa = -dfs
     w2 = (kappa + p[K_EFF]) * p[MOBILITY]
     return math.sqrt(w2) if w2 > 0.0 else 0.0, kappa
@@ -270,7 +340,7 @@ def error_frequency(model, p, zd, vd, y):
     else:
         h = p[HQA] * y[0] + p[HQB] * y[1] - zd
         hd = p[HQA] * y[2] + p[HQB] * y[3] - vd
-    fs, dfs = surface_force(h, p[AR], p[Z0])
+    fs, dfs = static_force(h, p)
     kappa = -dfs if dfs < 0.0 else 0.0
     w = math.sqrt((kappa + p[K_EFF]) * p[MOBILITY])
     return w

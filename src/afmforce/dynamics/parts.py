@@ -28,6 +28,7 @@ from typing import ClassVar
 from ..cantilever import InclinedCantilever
 from ..constants import FIG1, FIG5
 from ..errors import ParameterError
+from ..forces import DOUBLE_LAYERS, GEOMETRIES, debye_length
 from ._part import Part, choice, quantity, validate
 from .registries import FRICTION_LAWS, RINGING
 
@@ -192,27 +193,88 @@ PROBES: dict[str, type] = {"beam": BeamProbe, "spring": SpringProbe}
 # --- surfaces, friction, drive, numerics ---------------------------------------
 @dataclass(frozen=True)
 class Surface(Part):
-    """The surfaces: van der Waals force with a soft wall (eq 2) and drainage.
+    """The surfaces: van der Waals force with a soft wall (eq 2) and drainage; in a liquid also
+    the double layer, slip and the drag on the lever (issue 25; docs/liquid.md).
 
     Attributes
     ----------
     radius : float
-        Effective radius R [m].
+        Radius R [m]: of each of two spheres (``geometry="sphere-sphere"``, the paper's
+        effective radius) or of the probe on a flat (``"sphere-flat"``).
     hamaker : float
         Hamaker constant A [J].
     z0 : float
         Soft-wall length [m].
     viscosity : float
         Fluid viscosity for drainage [Pa s] (0 switches drainage off).
+    geometry : {"sphere-sphere", "sphere-flat"}
+        :data:`afmforce.forces.GEOMETRIES`: R_eff = R/2 (the paper) or R (a colloid probe).
+    double_layer : {"none", "weak_overlap", "constant_potential", "constant_charge"}
+        :data:`afmforce.forces.DOUBLE_LAYERS`.
+    surface_potential, surface_potential_2 : float
+        psi1 and psi2 [V] (psi2 None: equal to psi1).
+    debye_length : float or None
+        1/kappa [m]; or give ``salt_concentration`` [mol/m^3] (and ``valence``) instead.
+        Neither: 10 nm. After construction ``debye_length`` is always set.
+    permittivity : float
+        Relative permittivity of the medium (water 78.5).
+    slip_length : float
+        Slip length b [m] on both surfaces (Vinogradova's f*; 0: no slip).
+    lever_drag : float
+        Drag coefficient of the lever body [N s/m] on the relative velocity of lever and substrate.
+    lever_height : float
+        Lever height above the substrate at contact [m]: drag ``c H/(h + H)``; 0: constant.
     """
 
     radius: float = quantity("radius", FIG5["radius"], "positive")
     hamaker: float = quantity("hamaker", FIG5["hamaker"], "positive")
     z0: float = quantity("z0", FIG5["z0"], "positive")
     viscosity: float = quantity("viscosity", FIG5["viscosity"], "non_negative")
+    geometry: str = choice("sphere-sphere", GEOMETRIES, "geometry of the surfaces")
+    double_layer: str = choice("none", DOUBLE_LAYERS, "double-layer law")
+    surface_potential: float = quantity("surface_potential", 0.0, "finite")
+    surface_potential_2: float | None = quantity("surface_potential_2", None, "optional_finite")
+    debye_length: float | None = quantity("debye_length", None, "optional_positive")
+    salt_concentration: float | None = quantity("salt_concentration", None, "optional_positive")
+    valence: float = quantity("valence", 1.0, "positive")
+    permittivity: float = quantity("permittivity", 78.5, "positive")
+    slip_length: float = quantity("slip_length", 0.0, "non_negative")
+    lever_drag: float = quantity("lever_drag", 0.0, "non_negative")
+    lever_height: float = quantity("lever_height", 0.0, "non_negative")
 
     def __post_init__(self) -> None:
         validate(self)
+        if self.salt_concentration is not None:
+            lam = float(debye_length(self.valence**2 * self.salt_concentration * 1e-3,
+                                     self.permittivity))
+            if self.debye_length is not None and not math.isclose(self.debye_length, lam, rel_tol=1e-9):
+                raise ParameterError("give at most one of debye_length [m] or salt_concentration "
+                                     "[mol/m^3]")
+            object.__setattr__(self, "debye_length", lam)
+        elif self.debye_length is None:
+            object.__setattr__(self, "debye_length", 10e-9)
+
+    def replace(self, **changes) -> Surface:
+        """A copy with some fields changed; a new salt concentration replaces the Debye length
+        (and a new Debye length drops the concentration)."""
+        if "salt_concentration" in changes and "debye_length" not in changes:
+            changes["debye_length"] = None
+        elif "debye_length" in changes and "salt_concentration" not in changes:
+            changes["salt_concentration"] = None
+        if ("permittivity" in changes or "valence" in changes) and self.salt_concentration is not None \
+                and "debye_length" not in changes:
+            changes["debye_length"] = None
+        return super().replace(**changes)
+
+    @property
+    def liquid(self) -> bool:
+        """True when any force beyond the paper's air model is on (double layer, slip, lever drag)."""
+        return self.double_layer != "none" or self.slip_length > 0 or self.lever_drag > 0
+
+    @property
+    def paper_radius(self) -> float:
+        """The radius the paper's sphere-sphere formulas take (R, or 2R on a flat) [m]."""
+        return self.radius if self.geometry == "sphere-sphere" else 2.0 * self.radius
 
 
 @dataclass(frozen=True)

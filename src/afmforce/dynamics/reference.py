@@ -19,10 +19,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..forces import drainage_force, vdw_force, vdw_force_gradient
+from ..forces import (double_layer_force, double_layer_force_gradient, lever_drag_force,
+                      slip_drainage_force, vdw_force, vdw_force_gradient)
 from .config import SimulationConfig
 from .drive import initial_state, segments
-from .static import static_jump_in
+from .static import surface_jump_in
 
 __all__ = ["ReferenceSolution", "reference_solve", "ReferenceModel"]
 
@@ -47,8 +48,8 @@ class ReferenceModel:
     def __init__(self, cfg: SimulationConfig):
         self.cfg = cfg
         s, probe, fr = cfg.surface, cfg.probe, cfg.friction
-        self.R, self.A, self.z0, self.eta = s.radius, s.hamaker, s.z0, s.viscosity
-        self.cd = 6.0 * math.pi * self.eta * self.R**2 / 4.0
+        self.R, self.A, self.z0, self.eta = s.paper_radius, s.hamaker, s.z0, s.viscosity
+        self.surface = s
         if cfg.model == "spring":
             self.beam = False
             self.k, self.m = probe.spring_constant, probe.mass
@@ -74,9 +75,21 @@ class ReferenceModel:
         else:
             self.xi, self.zeta = fr.xi, fr.zeta
 
+    def _dl(self, h, law):
+        s = self.surface
+        if s.double_layer == "none":
+            return 0.0
+        return float(law(h, s.radius, s.surface_potential, s.debye_length, s.surface_potential_2,
+                         s.permittivity, s.double_layer, s.geometry))
+
+    def _drag(self, h, hd):
+        s = self.surface
+        return float(slip_drainage_force(h, hd, s.radius, s.viscosity, s.slip_length, s.geometry)) \
+            + float(lever_drag_force(h, hd, s.lever_drag, s.lever_height))
+
     def _forces(self, h, hd):
-        fz = float(vdw_force(h, self.R, self.A, self.z0)) + float(
-            drainage_force(h, hd, self.R, self.eta))
+        fz = float(vdw_force(h, self.R, self.A, self.z0)) + self._dl(h, double_layer_force) \
+            + self._drag(h, hd)
         return fz
 
     def separation(self, y, z, v):
@@ -99,9 +112,11 @@ class ReferenceModel:
     def jac(self, t, y, z_of_t, v):
         z = z_of_t(t)
         h, hd = self.separation(y, z, v)
-        dfs = float(vdw_force_gradient(h, self.R, self.A, self.z0))
-        dfz_dh = dfs + self.cd * hd / h**2
-        dfz_dhd = -self.cd / h
+        dfs = float(vdw_force_gradient(h, self.R, self.A, self.z0)) + self._dl(
+            h, double_layer_force_gradient)
+        dd = 1e-6 * h      # drainage and drag: linear in h', differentiated numerically in h
+        dfz_dh = dfs + (self._drag(h + dd, hd) - self._drag(h - dd, hd)) / (2.0 * dd)
+        dfz_dhd = self._drag(h, 1.0)
         if not self.beam:
             return np.array([[0.0, 1.0], [(-self.k + dfz_dh) / self.m,
                                           (dfz_dhd - self.c) / self.m]])
@@ -195,7 +210,7 @@ def reference_solve(cfg: SimulationConfig | None = None, *, rtol: float = 1e-8,
     atol_v[n // 2:] = atol * 2 * math.pi * 1e7
     beta = cfg.calibration_factor if model.beam else 1.0
     hc = cfg.contact_separation
-    h_s = static_jump_in(cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0)[0]
+    h_s = surface_jump_in(cfg.force_constant, cfg.surface)[0]
     plan = segments(cfg)
     t_stop = plan[-1].t_end if t_stop is None else t_stop
     ts_req = None if sample_times is None else np.asarray(sample_times, float)

@@ -24,7 +24,8 @@ from ..constants import HAMAKER, Z0
 from ..errors import ParameterError
 from ..forces import static_jump_in_separation, vdw_force, vdw_force_gradient
 
-__all__ = ["StaticCurve", "static_curve", "static_deflection", "static_jump_in"]
+__all__ = ["StaticCurve", "static_curve", "static_deflection", "static_jump_in", "surface_jump_in",
+           "surface_static_deflection", "surface_static_force"]
 
 
 @dataclass(frozen=True)
@@ -168,3 +169,80 @@ def static_deflection(piezo_position: ArrayLike, spring_constant: float, radius:
     if math.isfinite(zj):
         d = np.where(z < zj, d, np.nan)
     return d[()] if d.ndim == 0 else d
+
+
+# --- any surface (issue 25): the paper's eq 2 on the geometry, plus the double layer ----------
+def surface_static_force(surface, h: ArrayLike):
+    """(F(h) [N], F'(h) [N/m]) of a :class:`~afmforce.dynamics.parts.Surface`: eq 2 with its
+    geometry (:attr:`Surface.paper_radius`) plus its double layer (drainage and drag vanish at rest)."""
+    from ..forces import double_layer_force, double_layer_force_gradient
+    s = surface
+    r = s.paper_radius
+    f = np.asarray(vdw_force(h, r, s.hamaker, s.z0), dtype=float)
+    df = np.asarray(vdw_force_gradient(h, r, s.hamaker, s.z0), dtype=float)
+    if s.double_layer != "none":
+        args = (s.radius, s.surface_potential, s.debye_length, s.surface_potential_2,
+                s.permittivity, s.double_layer, s.geometry)
+        f = f + double_layer_force(h, *args)
+        df = df + double_layer_force_gradient(h, *args)
+    return f, df
+
+
+def surface_jump_in(spring_constant: float, surface) -> tuple[float, float, float]:
+    """Static jump-in ``(h_J, z_J, z2_J)`` [m] of any surface (largest h with F'(h) = k).
+
+    Without a double layer this is :func:`static_jump_in` with the geometry's radius (closed
+    form); with one, F' is scanned on a fine logarithmic grid from the outside in and the
+    crossing refined by Brent's method. NaN when there is no instability.
+    """
+    s = surface
+    if s.double_layer == "none":
+        return static_jump_in(spring_constant, s.paper_radius, s.hamaker, s.z0)
+    return _surface_jump_in(float(spring_constant), s)
+
+
+@lru_cache(maxsize=1024)
+def _surface_jump_in(k: float, s) -> tuple[float, float, float]:
+    from scipy.optimize import brentq
+    hi = max(60.0 * s.debye_length, 200e-9)
+    h = np.geomspace(0.5 * s.z0, hi, 6000)[::-1]
+    _, df = surface_static_force(s, h)
+    above = np.nonzero(df >= k)[0]
+    if above.size == 0:
+        return math.nan, math.nan, math.nan
+    i = above[0]
+    if i == 0:
+        raise ParameterError("the surface force is steeper than the spring out to "
+                             f"{hi * 1e9:.3g} nm: no static branch to start on")
+    hj = brentq(lambda x: float(surface_static_force(s, x)[1]) - k, h[i], h[i - 1], xtol=1e-22,
+                rtol=4 * np.finfo(float).eps)
+    dj = float(surface_static_force(s, hj)[0]) / k
+    return hj, dj - hj, dj
+
+
+def surface_static_deflection(start: float, spring_constant: float, surface) -> float:
+    """Deflection [m] on the out-of-contact static branch at drive position ``start`` (any surface)."""
+    s = surface
+    if s.double_layer == "none":
+        return float(static_deflection(start, spring_constant, s.paper_radius, s.hamaker, s.z0))
+    return _surface_start(float(start), float(spring_constant), s)
+
+
+@lru_cache(maxsize=1024)
+def _surface_start(start: float, k: float, s) -> float:
+    from scipy.optimize import brentq
+    hj, zj, _ = _surface_jump_in(k, s)
+    if math.isfinite(zj) and start >= zj:
+        return math.nan
+    lo = hj if math.isfinite(hj) else 0.5 * s.z0
+
+    def g(h):
+        return h + start - float(surface_static_force(s, h)[0]) / k
+
+    hi = max(-start, lo) + 1e-9
+    while g(hi) <= 0.0:
+        hi *= 2.0
+    if g(lo) >= 0.0:
+        return lo + start
+    h = brentq(g, lo, hi, xtol=1e-24, rtol=4 * np.finfo(float).eps, maxiter=200)
+    return h + start

@@ -42,7 +42,7 @@ def base_config(model="beam", **fields):
 
 def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
     """Static first guesses: A (or R) from the static jump-in deflection of the slowest curve."""
-    from ..dynamics import static_jump_in
+    from ..dynamics.static import surface_jump_in
 
     g = {n: float(getattr(base, n)) for n in free}
     slow = min(curves, key=lambda c: c.velocity)
@@ -54,14 +54,27 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
         lo, hi = math.log(PARAMETERS[name].lower), math.log(PARAMETERS[name].upper)
         for _ in range(60):   # |static jump deflection| grows with A*R
             mid = 0.5 * (lo + hi)
-            vals = {"hamaker": base.hamaker, "radius": base.radius, name: math.exp(mid)}
-            dj = static_jump_in(k, vals["radius"], vals["hamaker"], base.z0)[2]
+            dj = surface_jump_in(k, base.surface.replace(**{name: math.exp(mid)}))[2]
             lo, hi = (mid, hi) if dj > target else (lo, mid)
         g[name] = math.exp(0.5 * (lo + hi))
-    for name in ("xi", "zeta"):
+    for name in ("xi", "zeta", "slip_length"):
         if name in free:
             g[name] = max(g[name], PARAMETERS[name].abs_step)
     return g
+
+
+def _start_from_file_k(base, curves: list[FitCurve], free, fixed):
+    """A free spring constant (issue 25) starts from the files' calibration when they have one:
+    ``spring_constant`` as it is, ``k0`` scaled by the beam's k0/k (eq 13)."""
+    name = next((n for n in ("spring_constant", "k0") if n in free and n not in (fixed or {})), None)
+    ks = [float(c.metadata["spring_constant"]) for c in curves
+          if (c.metadata or {}).get("spring_constant")]
+    if name is None or not ks:
+        return base
+    k_file = float(np.median(ks))
+    if name == "spring_constant":
+        return base.replace(spring_constant=k_file)
+    return base.replace(k0=base.cantilever.k0 * k_file / base.force_constant)
 
 
 def _starts(problem: Problem, guess: dict, shifts) -> list[np.ndarray]:
@@ -132,7 +145,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Confidence level of the intervals and of the friction test.
     profile : sequence of str, optional
         Parameters with profile-likelihood intervals; default: the free ones
-        among ``hamaker``, ``radius`` and ``xi``.
+        among ``hamaker``, ``radius``, ``xi``, ``slip_length``, ``surface_potential`` and
+        ``debye_length``.
     compare : bool
         Fit the static and the friction-free model too (model comparison).
     jump_window : float
@@ -173,6 +187,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     free = check_free(free, base.model)
     fc = prepare_curves(curves, names, velocities=velocities, sample_rates=sample_rates,
                         jump_window=jump_window, retract=retract)
+    base = _start_from_file_k(base, fc, free, fixed)
     speeds = sorted({round(c.velocity, 15) for c in fc})
     dep = [n for n in free if n in SPEED_DEPENDENT]
     if dep and (len(speeds) < 2 or speeds[-1] / speeds[0] < 1.2):
@@ -224,7 +239,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                                 wald_interval(values[name], float(sd[j]), level, p.lower, p.upper),
                                 "wald", p.unit)
     profiles = {}
-    todo = [n for n in (profile if profile is not None else ("hamaker", "radius", "xi"))
+    todo = [n for n in (profile if profile is not None else (
+        "hamaker", "radius", "xi", "slip_length", "surface_potential", "debye_length"))
             if n in free]
     for name in todo:
         lo, hi, pts = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),

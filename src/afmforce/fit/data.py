@@ -200,7 +200,9 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
             f"{n_tail} rising samples, slope {a:.3g}); the fit needs curves that reach contact")
     # jump-in: the largest change before the compliance region (a drop, or the spike of
     # the apparent deflection of a tilting beam held back by friction)
-    j = int(np.argmax(np.abs(dy[: max(i_c, 1)]))) + 1 if i_c > 1 else 1
+    # (not in the first tenth: in a liquid the lever drag sets in there, issue 25)
+    j0 = i_c // 10
+    j = j0 + int(np.argmax(np.abs(dy[j0: max(i_c, 1)]))) + 1 if i_c > 1 else 1
     j = min(j, i_c)
     sigma = max(_noise_sigma(y[: max(12, int(0.8 * j))]), 1e-15)
     j_drop = int(np.argmin(dy[: max(j, 1)])) + 1

@@ -122,12 +122,12 @@ class Evaluator:
         return out
 
     def _static(self, c: FitCurve, values: dict, shift: float) -> np.ndarray:
-        from ..forces import vdw_force
+        from ..dynamics.static import surface_static_force
 
         cfg = self.base.replace(**values) if values else self.base
-        k, R, A, z0 = cfg.force_constant, cfg.radius, cfg.hamaker, cfg.z0
+        k, z0 = cfg.force_constant, cfg.z0
         h = np.geomspace(0.5 * z0, 5e-6, 4000)
-        f = np.asarray(vdw_force(h, R, A, z0))
+        f = surface_static_force(cfg.surface, h)[0]   # eq 2 on the geometry + double layer
         zz = f / k - h
         z2 = f / k
         # stable branches: outer (largest h with Fs' = k and above), inner (contact)

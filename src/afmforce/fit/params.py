@@ -16,7 +16,7 @@ from ..errors import ParameterError
 __all__ = ["FitParameter", "PARAMETERS", "SPEED_DEPENDENT", "check_free"]
 
 #: Parameters only curves at several driving speeds can separate from A*R.
-SPEED_DEPENDENT = ("xi", "zeta", "viscosity", "mass", "m_joint")
+SPEED_DEPENDENT = ("xi", "zeta", "viscosity", "mass", "m_joint", "slip_length", "lever_drag")
 
 
 @dataclass(frozen=True)
@@ -74,6 +74,19 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
                  "effective mass of the simple spring (inertia)"),
     FitParameter("m_joint", "kg", 1e-15, 1e-5, 1e-10, 0.02, 1e-16, ("beam",),
                  "point mass at the beam-base joint (inertia)"),
+    # liquids (issue 25; docs/liquid.md)
+    FitParameter("slip_length", "m", 0.0, 1e-6, 1e-9, 0.02, 2e-11, ("beam", "spring"),
+                 "slip length b of the drainage force (Vinogradova f*)"),
+    FitParameter("spring_constant", "N/m", 1e-4, 1e3, 0.1, 0.002, 1e-6, ("spring",),
+                 "spring constant k, in situ (the drainage force fixes it: eta and R are given)"),
+    FitParameter("k0", "N/m", 1e-4, 1e3, 0.1, 0.002, 1e-6, ("beam",),
+                 "intrinsic spring constant of the beam, in situ (from the drainage force)"),
+    FitParameter("lever_drag", "N s/m", 0.0, 1.0, 1e-5, 0.02, 1e-8, ("beam", "spring"),
+                 "drag coefficient of the lever body (approach and retract together fix it)"),
+    FitParameter("surface_potential", "V", -1.0, 1.0, 0.01, 0.01, 1e-5, ("beam", "spring"),
+                 "surface potential psi1 (double layer)"),
+    FitParameter("debye_length", "m", 1e-10, 1e-5, 1e-8, 0.01, 1e-12, ("beam", "spring"),
+                 "Debye length of the double layer"),
 )}
 
 

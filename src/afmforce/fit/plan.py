@@ -111,10 +111,11 @@ def _sigma(info: np.ndarray) -> np.ndarray:
 
 def static_error_scan(base, speeds: Sequence[float], sample_rates: Sequence[float]) -> list[dict]:
     """Pull-in force k*min(apparent deflection before contact) of the dynamic model vs static."""
-    from ..dynamics import DynamicsWarning, simulate, static_jump_in
+    from ..dynamics import DynamicsWarning, simulate
+    from ..dynamics.static import surface_jump_in
 
     k = base.force_constant
-    f_static = k * static_jump_in(k, base.radius, base.hamaker, base.z0)[2]
+    f_static = k * surface_jump_in(k, base.surface)[2]     # geometry and double layer (issue 25)
     out = []
     for v, fs in zip(speeds, sample_rates):
         with warnings.catch_warnings():

@@ -73,6 +73,12 @@ class ModelComparison:
     verdict: str
     best_by_aic: str
     best_by_bic: str
+    #: issue 25: slip (``slip_length`` free) against no slip (b = 0), the same boundary test;
+    #: None when slip_length is not free
+    slip_detected: bool | None = None
+    slip_lr: float = math.nan
+    slip_p_value: float = math.nan
+    slip_verdict: str = ""
 
 
 @dataclass
@@ -109,6 +115,15 @@ class FitResult:
     def p_value(self) -> float:
         return math.nan if self.comparison is None else self.comparison.p_value
 
+    @property
+    def slip_detected(self) -> bool | None:
+        """Slip against no slip (issue 25): True/False, None when slip_length is not free."""
+        return None if self.comparison is None else self.comparison.slip_detected
+
+    @property
+    def slip_p_value(self) -> float:
+        return math.nan if self.comparison is None else self.comparison.slip_p_value
+
     def predictions(self) -> list:
         """Best-fit model deflection of every curve incl. offset and drift [m]."""
         return self._problem.predictions(self._x)
@@ -124,6 +139,8 @@ class FitResult:
                         for k, v in self.derived.items()},
             "friction_detected": self.friction_detected,
             "p_value": self.p_value,
+            "slip_detected": self.slip_detected,
+            "slip_p_value": self.slip_p_value,
             "comparison": None if self.comparison is None else asdict(self.comparison),
             "correlations": self.correlations,
             "curves": [asdict(c) for c in self.curves],
@@ -153,8 +170,11 @@ class FitResult:
         L.append("")
         if self.comparison is not None:
             c = self.comparison
-            L += [f"**{c.verdict}** (likelihood ratio {c.lr:.3g}, p = {c.p_value:.3g})", "",
-                  "| model | chi2 | parameters | AIC | BIC |", "|---|---|---|---|---|"]
+            L += [f"**{c.verdict}** (likelihood ratio {c.lr:.3g}, p = {c.p_value:.3g})", ""]
+            if c.slip_detected is not None:
+                L += [f"**{c.slip_verdict}** (likelihood ratio {c.slip_lr:.3g}, p = "
+                      f"{c.slip_p_value:.3g})", ""]
+            L += ["| model | chi2 | parameters | AIC | BIC |", "|---|---|---|---|---|"]
             for m in c.chi2:
                 L.append(f"| {m} | {c.chi2[m]:.1f} | {c.n_parameters[m]} | {c.aic[m]:.1f} | "
                          f"{c.bic[m]:.1f} |")

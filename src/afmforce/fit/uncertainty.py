@@ -128,8 +128,30 @@ def compare_models(prob: Problem, x: np.ndarray, chi2_full: float, curves, base,
         lr, p, detected = math.nan, math.nan, False
         verdict = "friction not tested (xi is not free" + (
             "; the spring model has no friction)" if base.model == "spring" else ")")
+    slip = _compare_slip(prob, x, chi2_full, n_lin, level, max_nfev, s2, chi2, npar)
     aic = {m: chi2[m] / s2 + 2 * npar[m] for m in chi2}
     bic = {m: chi2[m] / s2 + npar[m] * math.log(n) for m in chi2}
     return ModelComparison(chi2=chi2, n_parameters=npar, aic=aic, bic=bic, lr=lr, p_value=p,
                            level=level, friction_detected=bool(detected), verdict=verdict,
-                           best_by_aic=min(aic, key=aic.get), best_by_bic=min(bic, key=bic.get))
+                           best_by_aic=min(aic, key=aic.get), best_by_bic=min(bic, key=bic.get),
+                           **slip)
+
+
+def _compare_slip(prob: Problem, x: np.ndarray, chi2_full: float, n_lin: int, level: float,
+                  max_nfev: int, s2: float, chi2: dict, npar: dict) -> dict:
+    """Slip (b free) against no slip (b = 0), issue 25: the boundary likelihood-ratio test of
+    friction (b >= 0; ``p = chi2_1.sf(LR) / 2``). Adds the no-slip fit to ``chi2``/``npar``."""
+    if "slip_length" not in prob.free:
+        return {}
+    sub = Problem(prob.ev, tuple(f for f in prob.free if f != "slip_length"),
+                  {**prob.fixed, "slip_length": 0.0})
+    x0 = np.array([xx for nm, xx in zip(prob.names, x) if nm != "slip_length"])
+    c0, _ = _refit(sub, x0, max_nfev)
+    chi2["dynamic, no slip"], npar["dynamic, no slip"] = c0, len(x0) + n_lin
+    chi2.setdefault("dynamic", chi2_full)
+    npar.setdefault("dynamic", len(x) + n_lin)
+    lr = max((c0 - chi2_full) / s2, 0.0)
+    p = 1.0 if lr <= 0 else 0.5 * float(chi2_dist.sf(lr, 1))
+    detected = p < 1.0 - level
+    return dict(slip_detected=bool(detected), slip_lr=lr, slip_p_value=p,
+                slip_verdict=f"slip {'detected' if detected else 'not detected'} at the {level:.0%} level")

@@ -67,6 +67,10 @@ class Photodiode:
         alpha, angle of the light to the substrate normal [rad].
     interference_phase : float
         phi [rad].
+    nonlinearity_length : float or None
+        L [m] of a quadratic response (issue 25; Attard 2012, "non-linear compliance"):
+        ``signal = (d + d^2 / L) / s + offset`` for the apparent deflection d; the constant
+        compliance then reads curved. None: linear. L may be negative.
     """
 
     sensitivity: float | None = field(default=None,
@@ -79,6 +83,8 @@ class Photodiode:
     incidence_angle: float = field(default=0.0,
           metadata=_meta("angle", "rad", "angle of the light to the substrate normal"))
     interference_phase: float = field(default=0.0, metadata=_meta("angle", "rad", "fringe phase phi"))
+    nonlinearity_length: float | None = field(default=None, metadata=_meta(
+        "length", "m", "quadratic photodiode response: signal (d + d^2/L)/s; unset: linear"))
 
     def __post_init__(self) -> None:
         set_ = lambda n, v: object.__setattr__(self, n, v)  # noqa: E731
@@ -95,6 +101,11 @@ class Photodiode:
             raise ParameterError(f"photodiode incidence_angle must be below 90 deg, got {math.degrees(alpha):.4g} deg")
         set_("incidence_angle", alpha)
         set_("interference_phase", finite("photodiode interference_phase", self.interference_phase, "rad"))
+        if self.nonlinearity_length is not None:
+            L = finite("photodiode nonlinearity_length", self.nonlinearity_length, "m")
+            if L == 0.0:
+                raise ParameterError("photodiode nonlinearity_length must be non-zero (unset: linear)")
+            set_("nonlinearity_length", L)
         if self.sensitivity is None and (self.offset or self.saturation is not None or self.interference_amplitude):
             raise ParameterError("photodiode offset, saturation and interference are in volts: "
                                  "give the photodiode sensitivity [m/V] too")
@@ -117,6 +128,8 @@ class Photodiode:
     def optical(self, apparent_deflection) -> np.ndarray:
         """``beta theta / s + offset`` [V] (or the deflection itself [m] without s)."""
         d = np.asarray(apparent_deflection, float)
+        if self.nonlinearity_length is not None:
+            d = d + d * d / self.nonlinearity_length
         if self.sensitivity is None:
             return d.copy()
         out = d / self.sensitivity

@@ -1,4 +1,4 @@
-"""Registry of instrument presets: ``ideal``, ``typical``, ``paper``.
+"""Registry of instrument presets: ``ideal``, ``typical``, ``paper``, ``liquid``.
 
 Each entry says where its numbers come from. Values are SI.
 
@@ -40,6 +40,16 @@ Piezo hysteresis 10 % over 1 um, creep 5 % at 0.5 s; a position sensor
 without backlash, 0.1 nm step and 0.05 nm noise; photodiode 50 nm/V, +-9.5 V,
 weak fringes (0.4 nm-equivalent), 0.05 nm white and 0.05 nm 1/f noise,
 drift 1 nm/s rms; 16-bit ADC over +-10 V.
+
+``liquid`` -- a colloid probe in water (issue 25; docs/liquid.md)
+-----------------------------------------------------------------
+A closed-loop scanner (no hysteresis or creep: the position sensor reads the true position
+with a 0.05 nm step and 0.05 nm noise), a photodiode of 30 nm/V whose response is curved,
+``(d + d^2/L)/s`` with L = 3 um (3 % at 100 nm; Attard 2012, "non-linear compliance"), no
+fringes (the laser is reflected through water onto a rough colloid-probe substrate), white
+noise 0.03 nm and 1/f noise 0.03 nm, drift 0.3 nm/s rms; 16-bit ADC over +-10 V. The drag
+on the lever (the "virtual deflection" that separates approach and retract far from the
+surface) is physics, not instrument: it is in the trajectory (``lever_drag``).
 
 ``ideal`` -- no artefacts: the raw curve reproduces the trajectory exactly
 (nominal = measured = true position, the signal is the apparent deflection
@@ -126,6 +136,18 @@ def _paper() -> Instrument:
     )
 
 
+def _liquid() -> Instrument:
+    s = 30e-9  # m/V
+    return Instrument(
+        name="liquid",
+        detector=PositionDetector(step=0.05e-9, noise=0.05e-9),
+        photodiode=Photodiode(sensitivity=s, offset=0.1, saturation=9.5, nonlinearity_length=3e-6),
+        drift=Drift(rate_rms=0.3e-9 / s),
+        noise=Noise(white=0.03e-9 / s, pink=0.03e-9 / s),
+        acquisition=Acquisition(adc_bits=16, adc_range=10.0),
+    )
+
+
 #: The presets, by name.
 PRESETS: dict[str, Preset] = {p.name: p for p in (
     Preset("ideal", "no artefacts: the raw curve is the trajectory", _ideal, "definition"),
@@ -134,6 +156,9 @@ PRESETS: dict[str, Preset] = {p.name: p for p in (
     Preset("paper", "the paper's Park Autoprobe: 1.5 um piezo shift at 17 um/s, detector backlash, "
            "5 nm steps, fringes, saturation", _paper,
            "Attard, Carambassis & Rutland, Langmuir 15, 553 (1999), section 3.1, Figs 7-8"),
+    Preset("liquid", "colloid probe in water: closed-loop scanner, curved (quadratic) photodiode "
+           "response, drift, noise; the lever drag is in the trajectory", _liquid,
+           "Attard, arXiv 1212.3019 (2012); Zhu, Attard & Neto, Langmuir 27, 6701 (2011)"),
 )}
 
 

@@ -38,20 +38,28 @@ def plot_trajectory(traj, axes=None):
                      lw=1, ls="--", label=rf"{name}: apparent $\beta\theta$")
             ax1.plot(traj.apparent_separation[m] * nm, traj.apparent_deflection[m] * nm,
                      color=color, lw=1, ls="--", label=f"{name}: apparent")
-    sc = static_curve(traj.spring_constant, cfg.radius, cfg.hamaker, cfg.z0, h_max=40e-9)
-    stable = np.where(sc.stable, sc.deflection, np.nan)
-    unstable = np.where(~sc.stable, sc.deflection, np.nan)
-    ax1.plot(sc.separation * nm, stable * nm, "k", lw=2, label="static")
-    ax1.plot(sc.separation * nm, unstable * nm, "k:", lw=1.5, label="static (unstable)")
+    s = cfg.surface
+    if s.double_layer == "none":   # eq 2 on the geometry (issue 25: 2R on a flat)
+        sc = static_curve(traj.spring_constant, s.paper_radius, cfg.hamaker, cfg.z0, h_max=40e-9)
+        hs, ds, st, jd, hmax = sc.separation, sc.deflection, sc.stable, sc.jump_in_deflection, 12.0
+    else:                          # with a double layer: the static force of the surface
+        from ..dynamics.static import surface_static_force
+        hs = np.geomspace(0.8 * cfg.z0, max(40e-9, 8 * s.debye_length), 2000)
+        f, df = surface_static_force(s, hs)
+        ds, st = f / traj.spring_constant, df < traj.spring_constant
+        from ..dynamics.static import surface_jump_in
+        jd = surface_jump_in(traj.spring_constant, s)[2]
+        hmax = max(12.0, 4 * s.debye_length * nm)
+    ax1.plot(hs * nm, np.where(st, ds, np.nan) * nm, "k", lw=2, label="static")
+    ax1.plot(hs * nm, np.where(~st, ds, np.nan) * nm, "k:", lw=1.5, label="static (unstable)")
     ax0.set_xlabel("piezo position z [nm]")
     ax0.set_ylabel("deflection [nm]")
     ax0.set_title("full cycle")
     ax1.set_xlabel("separation [nm]")
     ax1.set_ylabel("deflection [nm]")
     ax1.set_title("near contact")
-    ax1.set_xlim(-2, 12)
-    lo = np.nanmin([traj.events.min_deflection, traj.events.min_apparent_deflection,
-                    sc.jump_in_deflection]) * nm
+    ax1.set_xlim(-2, hmax)
+    lo = np.nanmin([traj.events.min_deflection, traj.events.min_apparent_deflection, jd]) * nm
     top = max(1.0, -0.8 * lo)
     if np.isfinite(traj.events.spike_height):
         top = max(top, 1.15 * traj.events.spike_height * nm)

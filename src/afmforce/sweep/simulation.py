@@ -138,7 +138,11 @@ def _static_jump_in(k: float, radius: float, hamaker: float, z0: float) -> tuple
 def _row(config, trajectory, caught) -> dict:
     row = flatten(trajectory.summary())
     k, s = config.force_constant, config.surface
-    h_s, d_s = _static_jump_in(k, s.radius, s.hamaker, s.z0)
+    if s.double_layer == "none":
+        h_s, d_s = _static_jump_in(k, s.paper_radius, s.hamaker, s.z0)
+    else:   # issue 25: the double layer moves the static jump-in
+        from ..dynamics.static import surface_jump_in
+        h_s, _, d_s = surface_jump_in(k, s)
     measured = float(row.get("min_apparent_deflection", math.nan))
     row["static_jump_in_separation"] = h_s
     row["static_jump_in_deflection"] = d_s

@@ -1,0 +1,290 @@
+"""Analysis of colloid-probe curves measured in a liquid (issue 25; docs/liquid.md).
+
+The steps a colloid scientist applies to one approach-retract cycle before fitting forces,
+after P. Attard, "How to measure forces when the AFM shows non-linear compliance"
+(arXiv 1212.3019, 2012) and Zhu, Attard & Neto, Langmuir 27, 6701 (2011):
+
+1. :func:`quadratic_compliance` -- the constant-compliance region calibrates the photodiode
+   with a quadratic, ``d = a (V - V0) + c (V - V0)^2`` (a curved compliance from a
+   non-linear photodiode response), and fixes the zero of separation (h = 0 on the
+   compliance line) without a human.
+2. :func:`drag_baselines` -- far from the surface the approach and the retract deflections
+   are offset from each other by the drag on the lever ("virtual deflection",
+   Vinogradova et al. 2001): ``k (d_app - d_ret) = c (v_app + v_ret)`` gives the lever drag c.
+3. :func:`split_drainage` -- at equal separation the static force is the mean of the
+   approach and retract forces and the velocity-dependent part (drainage and lever drag)
+   half their difference.
+4. :func:`fit_dlvo` -- the static force fitted with eq 2 on the geometry plus a double layer:
+   surface potential, Debye length and Hamaker constant with standard errors.
+
+Everything is SI; the functions take arrays (one run each) and return small records.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import AnalysisError
+
+__all__ = ["ComplianceCalibration", "quadratic_compliance", "DragBaselines", "drag_baselines",
+           "split_drainage", "velocity_force_fit", "DLVOFit", "fit_dlvo", "calibrate_liquid_curve"]
+
+
+@dataclass(frozen=True)
+class ComplianceCalibration:
+    """Quadratic calibration of the photodiode on the compliance region.
+
+    ``deflection(V) = a (V - V0) + c (V - V0)^2`` [m] (V0: the signal at zero force, from
+    the far baseline), and the separation ``h = z + deflection - z_c`` is zero on the
+    compliance line.
+
+    Attributes
+    ----------
+    a : float
+        Linear sensitivity [m/V].
+    c : float
+        Quadratic term [m/V^2].
+    v0 : float
+        Signal at zero deflection [V].
+    z_contact : float
+        Piezo position offset z_c [m] that puts the compliance line at h = 0.
+    rms : float
+        rms residual of the compliance fit [m].
+    n : int
+        Samples in the compliance region.
+    """
+
+    a: float
+    c: float
+    v0: float
+    z_contact: float
+    rms: float
+    n: int
+
+    def deflection(self, signal) -> np.ndarray:
+        """Deflection [m] of photodiode signals [V]."""
+        u = np.asarray(signal, float) - self.v0
+        return self.a * u + self.c * u * u
+
+    def separation(self, piezo, signal, h_contact: float = 0.0) -> np.ndarray:
+        """Separation h [m]: substrate up is ``z`` increasing (spec section 1),
+        ``h = d - z + z_c + h_contact`` (``h_contact``: the separation given to the compliance
+        line, e.g. the soft-wall equilibrium ``z0 / 2^(1/3)``; the paper puts it at z0)."""
+        return self.deflection(signal) - np.asarray(piezo, float) + self.z_contact + h_contact
+
+
+def quadratic_compliance(piezo, signal, v0: float, min_span: float = 20e-9,
+                         slope_tolerance: float = 0.3) -> ComplianceCalibration:
+    """Calibrate a curved compliance region with a quadratic (Attard 2012).
+
+    The compliance region is found without a human: the samples of the approach (``piezo``
+    increasing) after the last point where the local slope ``dV/dz`` falls below
+    ``(1 - slope_tolerance)`` of its final value; there ``z = d(V) + const`` and
+    ``d(V) = a u + c u^2``, ``u = V - v0``, so ``z = a u + c u^2 + const`` is linear least squares.
+
+    Parameters
+    ----------
+    piezo, signal : array_like
+        Approach run: piezo position [m] (increasing) and photodiode signal [V].
+    v0 : float
+        Signal at zero deflection [V] (the far-field baseline, corrected for drag if known).
+    min_span : float
+        Smallest piezo travel the compliance region must span [m].
+    """
+    z = np.asarray(piezo, float)
+    v = np.asarray(signal, float)
+    if z.size < 20:
+        raise AnalysisError("quadratic_compliance: give at least 20 approach samples")
+    n = z.size
+    w = max(5, n // 50)
+    dz = z[w:] - z[:-w]
+    dv = v[w:] - v[:-w]
+    slope = np.where(dz != 0, dv / np.where(dz != 0, dz, 1.0), 0.0)
+    final = np.median(slope[-max(3, slope.size // 20):])
+    if not final > 0:
+        raise AnalysisError("quadratic_compliance: the signal does not rise at the end of the "
+                            "approach: no constant-compliance region")
+    low = np.flatnonzero(slope < (1.0 - slope_tolerance) * final)
+    i0 = int(low[-1]) + w + 1 if low.size else 0
+    if z[-1] - z[min(i0, n - 1)] < min_span or n - i0 < 10:
+        raise AnalysisError(f"quadratic_compliance: the compliance region spans "
+                            f"{(z[-1] - z[min(i0, n - 1)]) * 1e9:.3g} nm (< {min_span * 1e9:.3g} nm); "
+                            "drive further into contact")
+    u = v[i0:] - v0
+    X = np.column_stack([u, u * u, np.ones_like(u)])
+    coef, *_ = np.linalg.lstsq(X, z[i0:], rcond=None)
+    rms = float(np.sqrt(np.mean((X @ coef - z[i0:]) ** 2)))
+    return ComplianceCalibration(a=float(coef[0]), c=float(coef[1]), v0=float(v0),
+                                 z_contact=float(coef[2]), rms=rms, n=int(n - i0))
+
+
+@dataclass(frozen=True)
+class DragBaselines:
+    """Far-field baselines of the approach and the retract and the lever drag they give.
+
+    Attributes
+    ----------
+    approach, retract : tuple of float
+        (offset [m], slope [-]) of ``d = offset + slope z`` on the far part of each run.
+    gap : float
+        ``d_app - d_ret`` at the middle of the far region [m] (drag: positive).
+    lever_drag : float
+        ``k gap / (v_app + v_ret)`` [N s/m] (NaN without k).
+    """
+
+    approach: tuple
+    retract: tuple
+    gap: float
+    lever_drag: float
+
+
+def drag_baselines(piezo_app, defl_app, piezo_ret, defl_ret, far: float, *,
+                   spring_constant: float = math.nan, v_app: float = math.nan,
+                   v_ret: float = math.nan) -> DragBaselines:
+    """Lines through the far-field deflection of both runs (positions below ``far`` [m]).
+
+    The far region must be out of reach of the surface forces (several Debye lengths); the
+    lever drag offsets the runs in opposite directions. The drainage of a colloid probe
+    reaches far (``6 pi eta R^2 v / h``): the gap holds it at the far region's separation too;
+    :func:`velocity_force_fit` separates the two.
+    """
+    za, da = np.asarray(piezo_app, float), np.asarray(defl_app, float)
+    zr, dr = np.asarray(piezo_ret, float), np.asarray(defl_ret, float)
+    ma, mr = za < far, zr < far
+    if ma.sum() < 5 or mr.sum() < 5:
+        raise AnalysisError("drag_baselines: fewer than 5 samples of a run lie in the far region")
+    pa = np.polyfit(za[ma], da[ma], 1)
+    pr = np.polyfit(zr[mr], dr[mr], 1)
+    zm = 0.5 * (max(za[ma].min(), zr[mr].min()) + far)
+    gap = float(np.polyval(pa, zm) - np.polyval(pr, zm))
+    drag = spring_constant * gap / (v_app + v_ret)
+    return DragBaselines((float(pa[1]), float(pa[0])), (float(pr[1]), float(pr[0])), gap, float(drag))
+
+
+def split_drainage(h_app, f_app, h_ret, f_ret, h=None):
+    """Static force and velocity-dependent force at equal separation [N].
+
+    On approach the drainage and drag push (``+F_v``), on the retract they pull (``-F_v``)
+    at equal speeds, so ``F_static = (F_app + F_ret) / 2`` and ``F_v = (F_app - F_ret) / 2``.
+    Returns ``(h, F_static, F_v)`` on ``h`` (default: the approach separations within the
+    retract's range); both runs are interpolated in h (sorted), and separations where a run
+    has no sample within 3 median spacings (a jump) are left out.
+    """
+    ha, fa = np.asarray(h_app, float), np.asarray(f_app, float)
+    hr, fr = np.asarray(h_ret, float), np.asarray(f_ret, float)
+    oa, orr = np.argsort(ha), np.argsort(hr)
+    if h is None:
+        h = ha[oa][(ha[oa] >= hr.min()) & (ha[oa] <= hr.max())]
+    h = np.asarray(h, float)
+    keep = np.ones(h.size, bool)
+    for hh in (ha[oa], hr[orr]):
+        gaps = np.diff(hh)
+        big = np.flatnonzero(gaps > 3.0 * np.median(gaps))
+        for i in big:
+            keep &= ~((h > hh[i]) & (h < hh[i + 1]))
+    h = h[keep]
+    a = np.interp(h, ha[oa], fa[oa])
+    r = np.interp(h, hr[orr], fr[orr])
+    return h, 0.5 * (a + r), 0.5 * (a - r)
+
+
+def velocity_force_fit(h, f_v, velocity: float, h_min: float, h_max: float) -> tuple[float, float]:
+    """Separate the lever drag from the drainage in the velocity-dependent force.
+
+    Far out (h >> slip length) ``F_v = v (c + beta / h)`` with c the lever drag and
+    ``beta = 6 pi eta R_eff^2`` (Reynolds); a linear fit in 1/h over ``[h_min, h_max]``.
+    Returns ``(c [N s/m], beta [kg m])``: beta checks eta R^2 in situ.
+    """
+    h, f_v = np.asarray(h, float), np.asarray(f_v, float)
+    m = (h >= h_min) & (h <= h_max)
+    if m.sum() < 5:
+        raise AnalysisError("velocity_force_fit: fewer than 5 samples in the separation range")
+    beta, c = np.polyfit(1.0 / h[m], f_v[m] / velocity, 1)
+    return float(c), float(beta)
+
+
+@dataclass(frozen=True)
+class DLVOFit:
+    """Least-squares DLVO fit: values, standard errors [SI], reduced chi-square."""
+
+    surface_potential: float
+    debye_length: float
+    hamaker: float
+    stderr: dict
+    redchi: float
+
+
+def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-flat",
+             law: str = "constant_potential", permittivity: float = 78.4, z0: float = 0.35e-9,
+             guess=(-0.03, 10e-9, 1e-20), h_dot=None, viscosity: float = 0.0,
+             slip_length: float = 0.0) -> DLVOFit:
+    """Fit ``F(h) = vdW(h) + 2 pi R_eff W_dl(h) [+ drainage]`` to a force curve.
+
+    Free: psi (symmetric surfaces, so its sign is that of the guess), the Debye length and
+    the Hamaker constant; ``sigma`` [N] the force noise. With ``h_dot`` [m/s] and
+    ``viscosity`` [Pa s] the drainage with slip (:func:`afmforce.forces.slip_drainage_force`,
+    known) is part of the model, so an approach at finite speed gives the static force.
+    Standard errors from the covariance, scaled by the reduced chi-square when it exceeds 1.
+    """
+    from scipy.optimize import least_squares
+
+    from ..forces import double_layer_force, paper_radius, slip_drainage_force, vdw_force
+
+    hh, ff = np.asarray(h, float), np.asarray(force, float)
+    rp = float(paper_radius(radius, geometry))
+    scale = np.array([0.01, 1e-8, 1e-20])
+    drain = 0.0 if h_dot is None or viscosity <= 0 else np.asarray(
+        slip_drainage_force(hh, h_dot, radius, viscosity, slip_length, geometry))
+
+    def model(p):
+        psi, lam, a = p * scale
+        return np.asarray(vdw_force(hh, rp, a, z0)) + np.asarray(
+            double_layer_force(hh, radius, psi, lam, None, permittivity, law, geometry)) + drain
+
+    res = least_squares(lambda p: (model(p) - ff) / sigma, np.asarray(guess) / scale,
+                        bounds=([-100, 1e-3, 1e-3], [100, 1e3, 1e4]), x_scale="jac")
+    dof = max(hh.size - 3, 1)
+    redchi = float(res.fun @ res.fun / dof)
+    cov = np.linalg.pinv(res.jac.T @ res.jac) * max(redchi, 1.0)
+    se = np.sqrt(np.clip(np.diag(cov), 0, None)) * scale
+    psi, lam, a = res.x * scale
+    return DLVOFit(float(psi), float(lam), float(a),
+                   {"surface_potential": float(se[0]), "debye_length": float(se[1]),
+                    "hamaker": float(se[2])}, redchi)
+
+
+def calibrate_liquid_curve(curve, far: float | None = None):
+    """A raw curve in volts -> the same curve with the deflection in metres (for ``afmforce fit``).
+
+    The zero-deflection signal is the mean of the approach and retract far-field lines at the
+    far region's middle (the lever drag cancels), ``far`` [m] the upper end of the far region
+    in piezo position (default: the first 30 % of the approach travel); the deflection is the
+    quadratic compliance calibration (:func:`quadratic_compliance`). The calibration is in
+    ``metadata["liquid_calibration"]``. The piezo position read by the position sensor is
+    used when there is one.
+    """
+    import dataclasses
+
+    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal,
+                   float)
+    v = np.asarray(curve.deflection_signal, float)
+    seg = np.asarray(curve.segment)
+    a, r = seg == 0, seg == 1
+    if a.sum() < 20 or r.sum() < 20:
+        raise AnalysisError("calibrate_liquid_curve: needs an approach and a retract run "
+                            "(>= 20 samples each)")
+    if far is None:
+        far = z[a].min() + 0.3 * (z[a].max() - z[a].min())
+    ma, mr = a & (z < far), r & (z < far)
+    if ma.sum() < 5 or mr.sum() < 5:
+        raise AnalysisError("calibrate_liquid_curve: fewer than 5 samples of a run in the far region")
+    mid = 0.5 * (max(z[ma].min(), z[mr].min()) + far)
+    v0 = 0.5 * (np.polyval(np.polyfit(z[ma], v[ma], 1), mid) + np.polyval(np.polyfit(z[mr], v[mr], 1), mid))
+    cal = quadratic_compliance(z[a], v[a], v0)
+    meta = dict(curve.metadata or {})
+    meta["liquid_calibration"] = dataclasses.asdict(cal)
+    return dataclasses.replace(curve, deflection_signal=cal.deflection(v), deflection_unit="m",
+                               metadata=meta)
