@@ -13,24 +13,27 @@ from ..errors import UnitError
 from ..units import format_quantity, parse_quantity
 
 
-def quantity(dimension: str, flag: str) -> Callable[[str], float]:
-    """An argparse ``type=`` that parses ``200nm`` style values into SI floats."""
+def quantity(dimension: str, flag: str, positive: bool = False) -> Callable[[str], float]:
+    """An argparse ``type=`` that parses ``200nm`` style values into SI floats (``positive``: > 0)."""
 
     def convert(text: str) -> float:
         try:
-            return parse_quantity(text, dimension, flag)
+            value = parse_quantity(text, dimension, flag)
         except UnitError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
+        if positive and not value > 0:
+            raise argparse.ArgumentTypeError(f"{flag} must be positive, got {text}")
+        return value
 
     convert.__name__ = dimension  # argparse uses it in messages
     return convert
 
 
 def add_quantity(parser: argparse.ArgumentParser, flag: str, dimension: str, default, help: str,
-                 unit: str = "", **kw) -> None:
-    """Add a ``--flag`` taking a value with units (SI default shown in help)."""
+                 unit: str = "", positive: bool = False, **kw) -> None:
+    """Add a ``--flag`` taking a value with units (SI default shown in help; ``positive``: > 0)."""
     shown = "" if default is None else f" (default {format_quantity(default, unit) if unit else default})"
-    parser.add_argument(flag, type=quantity(dimension, flag), default=default,
+    parser.add_argument(flag, type=quantity(dimension, flag, positive), default=default,
                         help=help + shown, metavar="VALUE", **kw)
 
 

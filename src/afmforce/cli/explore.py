@@ -6,16 +6,13 @@ import argparse
 
 from .._files import check_writable
 from ._validate import check_output
-from .common import quantity
 
 
 def _list(dimension: str, flag: str):
-    conv = quantity(dimension, flag)
+    """Values checked against the same ranges as ``afmforce simulate`` (xi <= 100 kg/s, ...)."""
+    from ._validate import quantity_list
 
-    def parse(text: str) -> tuple[float, ...]:
-        return tuple(conv(t) for t in text.split(",") if t.strip())
-
-    return parse
+    return quantity_list({"velocity": "velocity", "damping": "xi"}[dimension], flag)
 
 
 def register(sub) -> None:

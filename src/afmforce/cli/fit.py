@@ -38,13 +38,20 @@ def model_config(args: argparse.Namespace):
     return config_from_args(args)
 
 
+#: Quantity (afmforce._fields.QUANTITIES) whose range checks each value of a list flag, by dimension.
+_LIST_QUANTITY = {"velocity": "velocity", "frequency": "sample_rate", "damping": "xi"}
+
+
 def _list(dimension: str, flag: str):
-    conv = quantity(dimension, flag)
+    """``V1,V2,...`` with units, each value checked against its quantity's range; empty lists refused."""
+    from ._validate import quantity_list
+
+    conv = quantity_list(_LIST_QUANTITY[dimension], flag)
 
     def parse(text: str) -> list[float]:
-        return [conv(t) for t in text.split(",") if t.strip()]
+        return list(conv(text))
 
-    parse.__name__ = f"comma-separated {dimension}s"
+    parse.__name__ = conv.__name__
     return parse
 
 

@@ -30,12 +30,12 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--sample-rates", type=_list("frequency", "--sample-rates"), default=None,
                    metavar="F1,F2,..", help="sample rate of each candidate speed "
                                             "(default: --points-per-nm x speed)")
-    g.add_argument("--points-per-nm", type=float, default=2.0,
+    g.add_argument("--points-per-nm", type=quantity("dimensionless", "--points-per-nm", positive=True), default=2.0,
                    help="samples per nm of drive travel when no rates are given (default 2)")
-    add_quantity(g, "--noise", "length", 0.05e-9, "deflection noise rms", unit="m")
+    add_quantity(g, "--noise", "length", 0.05e-9, "deflection noise rms", unit="m", positive=True)
     g.add_argument("--curves", type=int, default=4, help="curves in a design (default 4)")
     add_quantity(g, "--force-error", "force", None,
-                 "allowed error of the static pull-in force (default 10 %% of it)", unit="N")
+                 "allowed error of the static pull-in force (default 10 %% of it)", unit="N", positive=True)
     g.add_argument("--start", type=quantity("length", "--start"), default=None, metavar="VALUE",
                    help="start of each approach (default -40 nm)")
     g.add_argument("--turn", type=quantity("length", "--turn"), default=None, metavar="VALUE",
