@@ -23,9 +23,10 @@ import re
 from pathlib import Path
 
 from .. import errors as _errors
-from ..errors import ParameterError
+from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
+from ._outcome import reported
 from .common import add_quantity, chunk_progress_bar, eprint
 
 SUFFIX = ".afmforce"
@@ -206,6 +207,11 @@ def run(args: argparse.Namespace) -> int:
         out=str(args.out) if per_curve else None, force=args.force, plot=not args.no_plot,
         protect=tuple(str(p.resolve()) for p in files if p.exists()) if per_curve else (),
         file_timeout=args.file_timeout)
+    clashes = analysis.clashes(refs)
+    if clashes:  # never replace another run's per-curve files silently (the summaries would disagree)
+        raise OutputExistsError(
+            f"{args.out} holds {len(clashes)} per-curve output(s) of an analysis with other options (e.g. "
+            f"{clashes[0].name}); choose another --out, or pass --force to replace them")
     chunk_size = args.chunk_size if batch else 1
     n_chunks = math.ceil(n / (chunk_size or default_chunk_size(n)))
     if batch and not args.json:
@@ -236,6 +242,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
     written = {}
     if folder is not None:
         written = write_summary(result, folder)
+        reported(folder)  # "summary in FOLDER/: ..." below
         written.update(_write_maps(table, folder, args.map_quantity))
     if args.json:
         _print_json(ok, failed)
@@ -256,10 +263,11 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
                       "(delete that folder to recompute)")
         if written:
             print(f"summary in {folder}/: " + ", ".join(p.name for p in written.values()))
-    for name, error in failed[:_MAX_LISTED if batch else None]:
-        error = _clean(error)
-        eprint(f"failed: {error}" if error.startswith(name) else f"failed: {name}: {error}")
-    if failed:
+    for name, error in failed[:_MAX_LISTED if batch else None]:  # one line per failed file or curve
+        error = " ".join(_clean(error).split())
+        named = error.split(": ", 1)[0].endswith(name.split("#")[0])  # the message starts with the path
+        eprint(f"failed: {error}" if named else f"failed: {name}: {error}")
+    if len(failed) > 1:
         if batch and len(failed) > _MAX_LISTED:
             eprint(f"  ... and {len(failed) - _MAX_LISTED} more" + (f" (all in {written['errors']})"
                                                                       if "errors" in written else ""))

@@ -50,11 +50,13 @@ def format_checks(results) -> str:
 def run(args: argparse.Namespace) -> int:
     from ..paper.demo import virtual_experiment
     from ._validate import check_output
+    from ._outcome import reported
     from .reproduce import run_reproduce, summarize
 
     check_output(args.out, folder=True)
     res = run_reproduce(args.out, None, True, False)
     runs = virtual_experiment(Path(args.out) / "virtual")
+    reported(args.out)  # its files are named below (and in the JSON)
     if args.json:
         print_json({"out_dir": str(res.out_dir), "passed": res.passed,
                     "checks": [c.to_dict() for c in res.checks],

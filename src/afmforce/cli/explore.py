@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 
 from .._files import check_writable
+from ._outcome import reported
 from ._validate import check_output
 
 
@@ -36,6 +37,7 @@ def run(args: argparse.Namespace) -> int:
     check_output(args.out, force=args.force)
     grid = compute_grid(args.velocities or DEFAULT_VELOCITIES, args.xis or DEFAULT_XIS)
     path = build_page(args.out, grid, force=args.force)
+    reported(path)
     print(f"wrote {path} ({len(grid.runs)} simulated runs: {len(grid.velocities)} speeds x "
           f"{len(grid.xis)} friction coefficients); open it in a browser")
     return 0

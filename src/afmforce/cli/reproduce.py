@@ -51,6 +51,7 @@ def summarize(res) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ._outcome import reported
     from ._validate import check_output
 
     check_output(args.out, folder=True)
@@ -59,5 +60,6 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError("--only: no figure named; give some of fig1,fig3,fig4,fig5,fig6,fig7,fig9 "
                              "(or drop --only for all)")
     res = run_reproduce(args.out, only, args.fast, args.svg)
+    reported(res.out_dir)  # summarize() names the folder
     print(summarize(res))
     return 0 if res.passed else 1

@@ -11,6 +11,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..units import format_quantity
 from ._validate import CONFIRM_RUNS, check_output, check_simulation_sweep
+from ._outcome import reported
 from .common import chunk_progress_bar
 
 #: Output columns summarised on the terminal, in this order.
@@ -152,6 +153,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"  all {result.chunks_total} chunks were already in the store (delete the folder to recompute)")
     print(f"results in {result.store.root}/")
+    reported(result.store.root)
     print("  " + ", ".join(p.name for p in paths.values()))
     rows = _stats_rows(result, units)
     if rows:

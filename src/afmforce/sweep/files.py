@@ -18,6 +18,7 @@ and one CSV table.
 
 from __future__ import annotations
 
+import glob
 import hashlib
 import json
 import os
@@ -243,6 +244,10 @@ class CurveAnalysis:
                 if row is not None:  # a rerun resumes: this curve's outputs are complete
                     rows.append(row)
                     continue
+                if self.foreign(stem):
+                    raise OutputExistsError(
+                        f"{self._paths(stem)['json']} holds another analysis (other steps, options or "
+                        "metadata); choose another --out, or pass --force to replace it")
             res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
                           channel=self.channel)
             row = summary_row(res, curve, file=ref.path, index=index,
@@ -263,6 +268,30 @@ class CurveAnalysis:
         if not self.plot:
             paths.pop("png")
         return paths
+
+    def foreign(self, stem: str) -> bool:
+        """Does :attr:`out` hold this curve's outputs of an analysis with other settings?"""
+        path = self._paths(stem)["json"]
+        if not path.exists():
+            return False
+        try:
+            settings = json.loads(path.read_text()).get("analysis_settings")
+        except (OSError, ValueError, AttributeError):
+            return True  # not ours to replace silently
+        return settings != self._settings()
+
+    def clashes(self, refs: Iterable["CurveRef"]) -> list[Path]:
+        """Outputs in :attr:`out` of an analysis of these items with other settings (checked before any
+        work: a rerun with other options never replaces another run's files without ``force``)."""
+        if self.out is None or self.force or not Path(self.out).is_dir():
+            return []
+        found = []
+        for base in dict.fromkeys(Path(r.path).name for r in refs):
+            for pattern in (f"{glob.escape(base)}{OUTPUT_SUFFIX}.json",
+                            f"{glob.escape(base)}_[0-9][0-9][0-9][0-9]{OUTPUT_SUFFIX}.json"):
+                found += [p for p in sorted(Path(self.out).glob(pattern))
+                          if self.foreign(p.name[: -len(OUTPUT_SUFFIX + ".json")])]
+        return found
 
     def finished(self, stem: str) -> dict[str, Any] | None:
         """The summary row stored with a curve's complete outputs (None: analyse it)."""
