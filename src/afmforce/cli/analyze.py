@@ -27,7 +27,7 @@ from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
 from ._outcome import reported
-from .common import add_quantity, chunk_progress_bar, eprint
+from .common import add_quantity, chunk_progress_bar, eprint, progress_bar
 
 SUFFIX = ".afmforce"
 #: Runs with at least this many curves are batches: Dask, resumable store, summary statistics.
@@ -192,7 +192,11 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError("no force-curve files found in the given folders")
     if not args.file_timeout > 0:
         raise ParameterError(f"--file-timeout must be positive, got {args.file_timeout} s")
-    refs = plan_curves(files, args.format, timeout=args.file_timeout)
+    bar, _ = progress_bar("detect", len(files), unit="file", min_total=8, leave=False, counted=True)
+    try:
+        refs = plan_curves(files, args.format, timeout=args.file_timeout, on_file=lambda: bar.update())
+    finally:
+        bar.close()
     n = len(refs)
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)
@@ -218,10 +222,19 @@ def run(args: argparse.Namespace) -> int:
         maps = len({r.path for r in refs if r.index is not None})
         print(f"afmforce analyze: {n} items ({len(files)} file(s), {maps} of them force maps) in {n_chunks} chunks",
               flush=True)
+    executor, workers = ("serial" if local else None), args.workers
+    if not local and args.workers is None and not args.scheduler:  # automatic: never slower than serial
+        from ..sweep.files import choose_executor
+
+        plan, usable = choose_executor(refs, analysis)
+        executor, workers = plan.executor, (usable if plan.executor == "dask" else None)
+        if not args.json:
+            print(f"  {'in this process' if plan.executor == 'serial' else 'on a local Dask cluster'}: "
+                  f"{plan.reason}", flush=True)
     bar, update = chunk_progress_bar("analyze", n_chunks, min_total=2, leave=False)
     try:
-        result = analyze_files(refs, analysis, chunk_size=chunk_size, executor="serial" if local else None,
-                               workers=args.workers, scheduler=args.scheduler,
+        result = analyze_files(refs, analysis, chunk_size=chunk_size, executor=executor,
+                               workers=workers, scheduler=args.scheduler,
                                store=args.out if batch and args.out is not None else None, progress=update)
     finally:
         bar.close()

@@ -63,18 +63,18 @@ def eprint(msg: str) -> None:
 
 
 def progress_bar(desc: str, total: float | None = None, *, unit: str = "", min_total: float = 0,
-                 leave: bool = True, enabled: bool = True):
+                 leave: bool = True, enabled: bool = True, counted: bool | None = None):
     """A tqdm bar on a terminal driven by :class:`afmforce.progress.Progress` records.
 
     Returns ``(bar, update)``; pass ``update`` as the ``progress`` callback of
     ``simulate``, ``load``, ``run_sweep``/``run_batch`` or ``reproduce``. Chunks
-    and figures count as they are; other units (simulated seconds, a fraction
-    of a file) are shown in per mille. Disabled off a terminal, when
+    and figures count as they are (any unit with ``counted=True``: ``bar.update()``
+    per item); other units (simulated seconds, a fraction of a file) are shown in per mille. Disabled off a terminal, when
     ``enabled`` is false or for a known ``total`` below ``min_total``.
     """
     from tqdm import tqdm
 
-    counted = unit in ("chunk", "figure", "file list")
+    counted = unit in ("chunk", "figure", "file list") if counted is None else counted
     disable = (not enabled or not sys.stderr.isatty()
                or (total is not None and total < min_total))
     bar = tqdm(total=total if counted else 1000, unit=unit if counted else "‰", desc=desc,
