@@ -27,6 +27,7 @@ from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
 from ._outcome import reported
+from ._verdicts import MAX_LINE, clip as _clip, dynamic_label as _dynamic_label, plain as _plain, short_verdict
 from .common import add_quantity, chunk_progress_bar, eprint, progress_bar
 
 SUFFIX = ".afmforce"
@@ -49,6 +50,8 @@ def register(sub) -> None:
     p.add_argument("--out", metavar="DIR", type=Path, default=None,
                    help="write the summary table, map images and (small runs) each curve's outputs into DIR")
     p.add_argument("--json", action="store_true", help="print the results as JSON (SI) instead of a table")
+    p.add_argument("--verbose", "-v", action="store_true",
+                   help="print each curve's full verdict and warnings (default: one short line each)")
     p.add_argument("--force", action="store_true", help="with --out: recompute every curve and overwrite its "
                    "outputs (default: a rerun skips curves whose outputs exist and keeps the tables)")
     lazy_help(p.add_argument("--steps", default=None, metavar="A,B,...",
@@ -261,7 +264,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         _print_json(ok, failed)
     else:
         if len(ok) <= BATCH_CURVES:
-            _print_rows(ok)
+            _print_rows(ok, verbose=args.verbose)
         else:
             _print_stats(ok)
         origin = _oscillation_origin(ok)
@@ -360,8 +363,8 @@ def _fmt(v: float) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.4g}"
 
 
-def _print_rows(ok) -> None:
-    """One line per curve (small runs)."""
+def _print_rows(ok, verbose: bool = False) -> None:
+    """One line per curve (small runs), then one short verdict line per curve (``verbose``: in full)."""
     if not len(ok):
         return
     heads = ["file", "contact"] + [h for _, h, _ in _COLUMNS] + ["friction", "dynamic"]
@@ -369,16 +372,25 @@ def _print_rows(ok) -> None:
     for _, r in ok.iterrows():
         vals = [float(r[c]) * s for c, _, s in _COLUMNS]
         rows.append([r["name"], r["contact_kind"] or "-"] + [_fmt(v) for v in vals]
-                    + [r["friction"] or "-", "-" if r["contact_kind"] == "none" else "yes" if r["dynamic"] else (
-                        "not assessed" if str(r["verdict"] or "").startswith("dynamics not assessed") else "no")])
+                    + [r["friction"] or "-", _dynamic_label(r)])
     widths = [max(len(h), *(len(row[i]) for row in rows)) for i, h in enumerate(heads)]
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths)))
     for row in rows:
         print("  ".join(c.ljust(w) for c, w in zip(row, widths)))
+    clipped = False
     for _, r in ok.iterrows():
         warnings = [w for w in (r["warnings"] or "").split(" | ") if w]
-        if warnings or r["verdict"]:
+        if not (warnings or r["verdict"]):
+            continue
+        if verbose:
             print(f"{r['name']}: {r['verdict']}" + "".join(f"\n  warning: {w}" for w in warnings))
+            continue
+        head = f"{r['name']}: "
+        line = short_verdict(r, max(60, MAX_LINE - len(head)))
+        print(head + line + "".join(f"\n  warning: {_clip(_plain(w), MAX_LINE - 11)}" for w in warnings))
+        clipped = clipped or line != str(r["verdict"]) or any(_plain(w) != w for w in warnings)
+    if clipped:
+        print("(short verdicts: --verbose or --json gives them in full)")
 
 
 def _print_stats(ok) -> None:

@@ -57,6 +57,18 @@ def print_table(rows: list[tuple[str, Any, str]], title: str | None = None) -> N
         print(f"  {label:<{width}}  {text}")
 
 
+_WORDS = (("pull off", "pull-off"), ("jump in", "jump-in"), ("max ", "maximum "), (" jkr", " (JKR)"),
+          (" dmt", " (DMT)"))
+
+
+def readable(key: str) -> str:
+    """A table label from a field name: ``pull_off_force_jkr`` -> ``pull-off force (JKR)``."""
+    text = key.replace("_", " ")
+    for old, new in _WORDS:
+        text = text.replace(old, new)
+    return text
+
+
 def eprint(msg: str) -> None:
     """Print one line on stderr."""
     print(msg, file=sys.stderr)

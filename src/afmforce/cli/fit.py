@@ -66,8 +66,12 @@ def register(subparsers) -> argparse.ArgumentParser:
                     "per curve the zero of position, the baseline offset and drift. Reports "
                     "standard errors, profile-likelihood intervals and whether friction is "
                     "detected (likelihood ratio, AIC/BIC). See docs/fit.md.")
-    p.add_argument("curves", nargs="+", metavar="CURVE",
-                   help="force-curve files with a calibrated deflection [m]")
+    p.add_argument("curves", nargs="*", metavar="CURVE",
+                   help="force-curve files with a calibrated deflection [m] (or volts/newtons with the "
+                        "file's calibration), at several driving speeds")
+    p.add_argument("--example", metavar="NAME", default=None,
+                   help="fit sample curves shipped with afmforce instead of files: speeds (simulated Fig 5 "
+                        "beam, xi = 0.01 kg/s, at 0.5, 1, 2 and 5 um/s)")
     g = p.add_argument_group("fit")
     g.add_argument("--free", default="hamaker,xi",
                    help=f"global parameters to fit, comma-separated, among {', '.join(PARAMETERS)} "
@@ -124,6 +128,15 @@ def run(args: argparse.Namespace) -> int:
     from ..fit import fit_dynamic
     from ..fit.figures import plot_curves, plot_profiles
 
+    if args.example is not None:
+        from ..datasets import fit_example
+
+        args.curves = list(args.curves) + [str(p) for p in fit_example(args.example)]
+    if not args.curves:
+        raise ParameterError("give force-curve files at several speeds, or --example speeds")
+    missing = [c for c in args.curves if not Path(c).is_file()]
+    if missing:
+        raise ParameterError(f"no such file: {', '.join(missing)}")
     for path in (args.out, args.report):
         if path:
             check_writable(path, args.force)

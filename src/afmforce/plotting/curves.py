@@ -93,7 +93,7 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
     """
     ax = _new_ax(ax)
     ax.set_xlabel("separation h [nm]")
-    ax.set_title(f"force vs separation ({result.contact_kind or '?'} contact)")
+    ax.set_title(f"force vs separation ({_contact_words(result.contact_kind)})")
     h, f = result.separation, result.force
     if not np.isfinite(h).any():
         ax.set_ylabel("force [nN]")
@@ -216,6 +216,11 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
     name = result.source.rsplit("/", 1)[-1] if result.source else "force curve"
     adh = (f"adhesion {result.adhesion_force * 1e9:.3g} nN" if math.isfinite(result.adhesion_force)
            else "no adhesion above the noise")
-    fig.suptitle(f"{name}: {result.contact_kind or '?'} contact; {adh}; friction {result.friction or '-'}"
+    fig.suptitle(f"{name}: {_contact_words(result.contact_kind)}; {adh}; friction {result.friction or '-'}"
                  f"{'; DYNAMIC' if result.dynamic else ''}", fontsize="medium")
     return fig
+
+
+def _contact_words(kind: str | None) -> str:
+    """``hard contact``, ``soft contact``; ``no contact`` (not "none contact"), ``contact unknown``."""
+    return {"none": "no contact", None: "contact unknown", "": "contact unknown"}.get(kind, f"{kind} contact")
