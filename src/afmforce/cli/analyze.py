@@ -180,16 +180,16 @@ def _check(args: argparse.Namespace) -> list[str] | None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from ..sweep.files import CurveAnalysis, analysis_key, analyze_files, plan_curves
-    from ..sweep.chunks import default_chunk_size
-
-    steps = _check(args)
-    if "list" in args.example:
+    if "list" in args.example:  # before the analysis is imported: instant
         from ..datasets import DATASETS
 
         for name, d in DATASETS.items():
             print(f"{name:<14} {d.description}")
         return 0
+    from ..sweep.files import CurveAnalysis, analysis_key, analyze_files, plan_curves
+    from ..sweep.chunks import default_chunk_size
+
+    steps = _check(args)
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
