@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from typing import Any, Callable
@@ -110,3 +111,32 @@ def progress_bar(desc: str, total: float | None = None, *, unit: str = "", min_t
 def chunk_progress_bar(desc: str, total: int, *, min_total: int = 1, leave: bool = True):
     """:func:`progress_bar` over a sweep's or batch's chunks."""
     return progress_bar(desc, total, unit="chunk", min_total=min_total, leave=leave)
+
+
+@contextlib.contextmanager
+def busy(desc: str, *, after: float = 2.0):
+    """On a terminal, a line with the elapsed time once the work inside has taken ``after`` [s]
+    (for work that reports no progress of its own: a fit, a plan); nothing off a terminal."""
+    import threading
+
+    from tqdm import tqdm
+
+    if not sys.stderr.isatty():
+        yield
+        return
+    bar = tqdm(total=None, desc=desc, delay=after, file=sys.stderr, leave=False,
+               bar_format="{desc}: working, {elapsed} elapsed")
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(0.5):
+            bar.refresh()
+
+    thread = threading.Thread(target=tick, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        bar.close()

@@ -35,7 +35,18 @@ def run(args: argparse.Namespace) -> int:
 
     check_writable(args.out, args.force)
     check_output(args.out, force=args.force)
-    grid = compute_grid(args.velocities or DEFAULT_VELOCITIES, args.xis or DEFAULT_XIS)
+    from .common import progress_bar
+
+    bar, _ = progress_bar("explore", unit="run", leave=False)
+
+    def advance(fraction: float) -> None:
+        bar.n = int(1000 * fraction)
+        bar.refresh()
+
+    try:
+        grid = compute_grid(args.velocities or DEFAULT_VELOCITIES, args.xis or DEFAULT_XIS, progress=advance)
+    finally:
+        bar.close()
     path = build_page(args.out, grid, force=args.force)
     reported(path)
     print(f"wrote {path} ({len(grid.runs)} simulated runs: {len(grid.velocities)} speeds x "

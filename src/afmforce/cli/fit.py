@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .._files import atomic_write_text, check_writable
 from ..errors import AfmforceError, ParameterError
-from .common import eprint, print_json, quantity
+from .common import busy, eprint, print_json, quantity
 
 __all__ = ["register", "run", "model_config", "add_model_flags"]
 
@@ -149,7 +149,7 @@ def run(args: argparse.Namespace) -> int:
     from ..io._meta import parse_meta_args
 
     curves, names = _load(args.curves, parse_meta_args(args.meta))
-    with warnings.catch_warnings(record=True):
+    with warnings.catch_warnings(record=True), busy("afmforce fit"):
         warnings.simplefilter("ignore")
         res = fit_dynamic(curves, cfg, free=args.free.split(","), names=names,
                           velocities=args.velocities, sample_rates=args.sample_rates,

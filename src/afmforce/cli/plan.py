@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 
 from .._files import atomic_write_text, check_writable
-from .common import add_quantity, print_json, quantity
+from .common import add_quantity, busy, print_json, quantity
 
 __all__ = ["register", "run"]
 
@@ -60,9 +60,10 @@ def run(args: argparse.Namespace) -> int:
              "turn": 20e-9 if args.turn is None else args.turn}
     args.start = args.turn = None
     cfg = model_config(args).replace(**drive)
-    plan = plan_experiment(cfg, noise=args.noise, speeds=args.speeds,
-                           sample_rates=args.sample_rates, points_per_nm=args.points_per_nm,
-                           n_curves=args.curves, force_error=args.force_error)
+    with busy("afmforce plan"):
+        plan = plan_experiment(cfg, noise=args.noise, speeds=args.speeds,
+                               sample_rates=args.sample_rates, points_per_nm=args.points_per_nm,
+                               n_curves=args.curves, force_error=args.force_error)
     if args.report:
         atomic_write_text(args.report, plan.markdown(), force=args.force)
     if args.json:
