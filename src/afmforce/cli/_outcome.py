@@ -92,7 +92,8 @@ def message_of(exc: BaseException) -> tuple[str, str]:
 
 def fail(kind: str, message: str, status: int) -> int:
     """Report an error: one line on stderr, the error object on stdout under ``--json``."""
-    _release_stdout()
+    release_stdout()
+    RunState.written, RunState.reported = [], []
     print(f"error: {message}", file=sys.stderr, flush=True)
     if RunState.json:
         print(json.dumps({"error": {"type": kind, "message": message, "exit_status": status}}), flush=True)
@@ -105,7 +106,7 @@ def capture_stdout() -> None:
     sys.stdout = RunState.captured
 
 
-def _release_stdout() -> str:
+def release_stdout() -> str:
     text = ""
     if RunState.captured is not None:
         text = RunState.captured.getvalue()
@@ -142,11 +143,12 @@ def written_lines() -> list[str]:
 
 def finish(command: str, status: int) -> int:
     """After a command returned: name the files written; print the generic JSON object."""
-    text = _release_stdout()
-    lines = written_lines()
+    text = release_stdout()
+    lines, written = written_lines(), [str(p) for p in dict.fromkeys(RunState.written)]
+    RunState.written, RunState.reported = [], []  # a long-lived process (tests, notebooks) keeps nothing
     if RunState.generic_json and RunState.json:
         print(json.dumps({"command": command, "exit_status": status, "output": text.splitlines(),
-                          "wrote": [str(p) for p in dict.fromkeys(RunState.written)]}, indent=2))
+                          "wrote": written}, indent=2))
         return status
     for line in lines:
         print(line, file=sys.stderr if RunState.json else sys.stdout)

@@ -189,6 +189,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         return _outcome.fail("KeyboardInterrupt", "interrupted", 130)
     except SystemExit:
+        _outcome.release_stdout()
         raise
     except Exception as exc:
         if args.debug:
