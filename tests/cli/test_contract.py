@@ -81,6 +81,7 @@ ISSUE_CASES = [
     (["simulate", "--out", ""], 2, "--out: empty value"),
     (["explore", "--out", ""], 2, "--out: empty value"),
     (["fit", str(CURVE), "--out", ""], 2, "--out: empty value"),
+    (["analyze", ""], 2, "an empty argument"),
     (["analyze", "{tmp}/typo.ibw"], 2, "no such file"),
     (["fit", "{tmp}/typo.txt", "{tmp}/typo2.txt"], 2, "no such file"),
     (["fit"], 2, "--example speeds"),

@@ -365,6 +365,8 @@ def refuse_empty_values(parser: argparse.ArgumentParser, argv: list[str]) -> Non
             continue
         if eq and not value.strip() or not eq and i + 1 < len(argv) and not argv[i + 1].strip():
             raise ParameterError(f"{flag}: empty value; give one (afmforce {parser.prog.split()[-1]} --help)")
+    if any(not tok.strip() for tok in argv):  # afmforce analyze '' would mean the current folder
+        raise ParameterError("an empty argument (''); give a file, a folder or a value")
 
 
 def quantity_list(name: str, flag: str, dimension: str | None = None) -> Callable[[str], tuple]:
