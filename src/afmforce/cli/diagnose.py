@@ -31,5 +31,6 @@ def run(args: argparse.Namespace) -> int:
     values = d.to_dict()
     rows = [(readable(k), values[k], u) for k, u in Diagnosis.UNITS.items()]
     print_table(rows, title="afmforce diagnose")
-    print(f"  verdict: {d.verdict}")
+    first, *rest = d.verdict.split("; ")  # one clause a line: every line short, nothing left out
+    print(f"  verdict: {first}" + "".join(f";\n           {c}" for c in rest))
     return 0
