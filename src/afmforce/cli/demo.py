@@ -55,7 +55,10 @@ def run(args: argparse.Namespace) -> int:
 
     check_output(args.out, folder=True)
     res = run_reproduce(args.out, None, True, False)
-    runs = virtual_experiment(Path(args.out) / "virtual")
+    from .common import busy
+
+    with busy("afmforce demo: virtual experiment"):
+        runs = virtual_experiment(Path(args.out) / "virtual")
     reported(args.out)  # its files are named below (and in the JSON)
     if args.json:
         print_json({"out_dir": str(res.out_dir), "passed": res.passed,
