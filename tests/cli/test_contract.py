@@ -201,7 +201,8 @@ def test_each_failed_file_is_one_stderr_line(tmp_path, capsys):
 
 
 def test_automatic_executor_is_serial_without_a_free_core(monkeypatch):
-    """72 files at a load of 10 on 2 cores: 59 s serial, 116 s on the Dask cluster the old rule picked."""
+    """72 files at a load of 10 on 2 cores: 32 s serial, 58 s on the Dask cluster the old rule picked
+    (benchmarks/bench_executor.py)."""
     from afmforce.sweep import files
 
     refs = files.plan_curves([CURVE] * 3)

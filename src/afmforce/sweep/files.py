@@ -362,7 +362,7 @@ def choose_executor(refs: list[CurveRef], analysis: CurveAnalysis, workers: int 
     Times the analysis of three items here (first, middle, last; outputs not written) and
     compares serial with a local cluster of the cores that are free now: ``available_cores``
     less the load average (other processes), at least one. On 2 busy cores that is serial
-    (72 files: 59 s serial, 116 s on a 2-worker cluster at a load of 10).
+    (72 files at a load of 10: 32 s serial, 58 s on a 2-worker cluster; benchmarks/bench_executor.py).
     """
     import dataclasses
     from functools import partial
