@@ -155,6 +155,16 @@ def test_commands_without_a_json_result_print_one_object(tmp_path, capsys, monke
     assert any("afmforce-explore.html" in line for line in obj["output"])
 
 
+def test_json_is_one_object_for_listings(capsys):
+    code, out, _ = run(capsys, ["analyze", "--example", "list", "--json"])
+    assert code == 0 and "asylum-air" in json.loads(out)["examples"]
+    code, out, _ = run(capsys, ["formats", "--json"])
+    assert code == 0 and isinstance(json.loads(out)["formats"], list)
+    code, out, _ = run(capsys, ["sweep", "--list-parameters", "--json"])
+    obj = json.loads(out)
+    assert code == 0 and obj["exit_status"] == 0 and any("velocity" in line for line in obj["output"])
+
+
 def test_every_file_written_is_named(tmp_path, capsys):
     argv = ["simulate", "--model", "spring", "--start=-20nm", "--turn", "-5nm", "--end=-20nm", "--check", "off",
             "--out", str(tmp_path / "t.csv"), "--plot", str(tmp_path / "t.png"),

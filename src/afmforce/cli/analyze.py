@@ -183,6 +183,10 @@ def run(args: argparse.Namespace) -> int:
     if "list" in args.example:  # before the analysis is imported: instant
         from ..datasets import DATASETS
 
+        if args.json:
+            print(json.dumps({"examples": {name: {"file": d.filename, "description": d.description,
+                                                  "source": d.source} for name, d in DATASETS.items()}}, indent=2))
+            return 0
         for name, d in DATASETS.items():
             print(f"{name:<14} {d.description}")
         return 0
