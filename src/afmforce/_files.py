@@ -12,14 +12,25 @@ import tempfile
 from pathlib import Path
 from typing import Iterator
 
-from .errors import OutputExistsError
+from .errors import OutputExistsError, ParameterError
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable"]
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable", "LISTENERS"]
+
+#: Callables ``f(path)`` told of every file written (in this process): the command line lists them.
+LISTENERS: list = []
 
 
 def check_writable(path: str | os.PathLike, force: bool = True) -> Path:
-    """Raise :class:`OutputExistsError` if ``path`` exists and ``force`` is false."""
+    """Raise :class:`OutputExistsError` if ``path`` exists and ``force`` is false.
+
+    Raises :class:`~afmforce.errors.ParameterError` for an empty name or a folder
+    (even with ``force``: a folder is never replaced by a file).
+    """
+    if not str(path).strip():
+        raise ParameterError("empty output file name; give a file name")
     path = Path(path)
+    if path.is_dir():
+        raise ParameterError(f"{path} is a folder; give a file name (a folder is never replaced by a file)")
     if path.exists() and not force:
         raise OutputExistsError(f"{path} exists; choose another name or pass --force to overwrite")
     return path
@@ -45,6 +56,8 @@ def atomic_path(path: str | os.PathLike, force: bool = True) -> Iterator[Path]:
     try:
         yield tmp_path
         os.replace(tmp_path, path)
+        for listener in tuple(LISTENERS):
+            listener(path)
     finally:
         if tmp_path.exists():
             tmp_path.unlink()

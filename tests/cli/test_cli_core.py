@@ -101,12 +101,16 @@ def test_bad_input_one_line_exit_2(capsys, argv, fragment):
 
 def test_first_run_notice_only_when_the_integrator_is_not_cached(capsys, monkeypatch):
     """A simulating command says on stderr that it compiles (first run, no cache); stdout of
-    --json stays JSON; a cached integrator gives no notice, and other commands never do."""
-    from afmforce.dynamics import _jit
+    --json stays JSON; a cached integrator gives no notice, and other commands never do; a usage
+    error comes alone (the notice is printed when the compile starts, after the checks)."""
+    from afmforce.dynamics import _helper
 
     argv = ["simulate", "--model", "spring", "--start=-20nm", "--turn", "-5nm", "--end=-20nm",
             "--check", "off", "--json"]
-    monkeypatch.setattr(_jit, "cache_missing", lambda disp: True)
+    monkeypatch.setattr(_helper, "cache_missing", lambda disp: True)
+    monkeypatch.setattr(_helper, "_TRIED", False)
+    code, _, err = run(capsys, argv[:-1] + ["--xi", "1kg/s"])  # ignored by the spring: usage error first
+    assert code == 2 and err.count("\n") == 1 and "compiling" not in err
     code, out, err = run(capsys, argv)
     assert code == 0 and "compiling the integrator" in err
     json.loads(out)

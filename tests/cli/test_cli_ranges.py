@@ -114,8 +114,10 @@ def test_a_large_sweep_runs_with_yes(capsys, tmp_path, monkeypatch, no_work):
     # --yes lifts only the size check: the run then reaches the engine (here: the stub)
     monkeypatch.chdir(tmp_path)
     argv = ["sweep", "--grid", "velocity=1e-6:1e-5:1000", "--grid", "xi=0.01:0.1:1000", "--yes"]
+    assert main(argv) == 1  # the stub's exception: one line, exit 1, no traceback (without --debug)
+    assert "the work started" in capsys.readouterr().err
     with pytest.raises(WorkStarted):
-        main(argv)
+        main(["--debug", *argv])
 
 
 def _outputs(tmp_path):

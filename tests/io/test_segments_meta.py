@@ -192,7 +192,7 @@ def test_formats_cli_lists_every_format(capsys):
     from afmforce.io import FORMATS
 
     assert main(["formats", "--json"]) == 0
-    rows = json.loads(capsys.readouterr().out)
+    rows = json.loads(capsys.readouterr().out)["formats"]
     assert [r["identifier"] for r in rows] == list(FORMATS)
     assert main(["formats"]) == 0
     assert "bruker-nanoscope" in capsys.readouterr().out

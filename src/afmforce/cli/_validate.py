@@ -26,7 +26,7 @@ from .._fields import QUANTITIES, FieldSpec
 from ..errors import OutputExistsError, ParameterError, UnitError
 
 __all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "refuse_ignored", "confirm_size",
-           "lazy_help", "given"]
+           "lazy_help", "given", "quantity_list", "check_common", "refuse_empty_values", "COUNTS"]
 
 
 class HelpFormatter(argparse.HelpFormatter):
@@ -317,6 +317,9 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
     for axis in spec.grid:
         values.setdefault(axis.name, []).extend((v, f"--grid {axis.name}") for v in axis.values)
     for r in spec.ranges:
+        if not r.lo < r.hi:
+            raise ParameterError(f"--range {r.name}={r.lo:g}:{r.hi:g} [SI]: the low end must lie below the high "
+                                 "end (NAME=LO:HI)")
         values.setdefault(r.name, []).extend(((r.lo, f"--range {r.name}"), (r.hi, f"--range {r.name}")))
     for name, value in spec.fixed:
         values.setdefault(name, []).append((value, f"--set {name}"))
@@ -335,3 +338,57 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
     n = simulation_samples(**worst)
     if n > MAX_SAMPLES:
         check_samples(n, where="the most demanding run of this sweep: ")
+
+
+#: Integer options of any command (dest -> smallest valid value), checked by :func:`check_common`.
+COUNTS = {"workers": 1, "chunk_size": 1, "starts": 1, "curves": 2, "n": 1}
+
+
+def check_common(args: argparse.Namespace) -> None:
+    """Checks made for every command before it runs: the counts of :data:`COUNTS`."""
+    for dest, lo in COUNTS.items():
+        value = getattr(args, dest, None)
+        if isinstance(value, int) and not isinstance(value, bool) and value < lo:
+            raise ParameterError(f"{_flag(dest)} must be at least {lo}, got {value}")
+
+
+def refuse_empty_values(parser: argparse.ArgumentParser, argv: list[str]) -> None:
+    """Refuse an option given an empty value (``--out ''``, ``--only=``): it would mean "here" or
+    "the default" silently. ``parser`` is the command's parser (it knows which options take values)."""
+    actions = parser._option_string_actions
+    for i, tok in enumerate(argv):
+        if not tok.startswith("--"):
+            continue
+        flag, eq, value = tok.partition("=")
+        action = actions.get(flag)
+        if action is None or action.nargs == 0:
+            continue
+        if eq and not value.strip() or not eq and i + 1 < len(argv) and not argv[i + 1].strip():
+            raise ParameterError(f"{flag}: empty value; give one (afmforce {parser.prog.split()[-1]} --help)")
+    if any(not tok.strip() for tok in argv):  # afmforce analyze '' would mean the current folder
+        raise ParameterError("an empty argument (''); give a file, a folder or a value")
+
+
+def quantity_list(name: str, flag: str, dimension: str | None = None) -> Callable[[str], tuple]:
+    """An argparse ``type=`` for ``V1,V2,...`` with units: each value checked against the range of
+    quantity ``name`` of :data:`QUANTITIES` (the same range as the single-value flag of every
+    command); an empty list is refused."""
+    spec = QUANTITIES[name]
+
+    def convert(text: str) -> tuple:
+        from ..units import parse_typed
+
+        parts = [t.strip() for t in text.split(",")]
+        if not any(parts):
+            raise argparse.ArgumentTypeError(f"{flag}: empty list; give one or more comma-separated values "
+                                             f"with units [{spec.unit}]")
+        if not all(parts):
+            raise argparse.ArgumentTypeError(f"{flag} {text}: an empty value between commas")
+        try:
+            return tuple(spec.check(parse_typed(t, dimension or spec.dimension, flag), name, flag, typed=t)
+                         for t in parts)
+        except (ParameterError, UnitError) as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+
+    convert.__name__ = f"comma-separated {spec.dimension}s"
+    return convert

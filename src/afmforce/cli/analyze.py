@@ -23,10 +23,12 @@ import re
 from pathlib import Path
 
 from .. import errors as _errors
-from ..errors import ParameterError
+from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
-from .common import add_quantity, chunk_progress_bar, eprint
+from ._outcome import reported
+from ._verdicts import MAX_LINE, clip as _clip, dynamic_label as _dynamic_label, plain as _plain, short_verdict
+from .common import add_quantity, chunk_progress_bar, eprint, progress_bar
 
 SUFFIX = ".afmforce"
 #: Runs with at least this many curves are batches: Dask, resumable store, summary statistics.
@@ -48,6 +50,8 @@ def register(sub) -> None:
     p.add_argument("--out", metavar="DIR", type=Path, default=None,
                    help="write the summary table, map images and (small runs) each curve's outputs into DIR")
     p.add_argument("--json", action="store_true", help="print the results as JSON (SI) instead of a table")
+    p.add_argument("--verbose", "-v", action="store_true",
+                   help="print each curve's full verdict and warnings (default: one short line each)")
     p.add_argument("--force", action="store_true", help="with --out: recompute every curve and overwrite its "
                    "outputs (default: a rerun skips curves whose outputs exist and keeps the tables)")
     lazy_help(p.add_argument("--steps", default=None, metavar="A,B,...",
@@ -191,22 +195,30 @@ def _check(args: argparse.Namespace) -> list[str] | None:
 
 
 def run(args: argparse.Namespace) -> int:
+    if "list" in args.example:  # before the analysis is imported: instant
+        from ..datasets import DATASETS
+
+        if args.json:
+            print(json.dumps({"examples": {name: {"file": d.filename, "description": d.description,
+                                                  "source": d.source} for name, d in DATASETS.items()}}, indent=2))
+            return 0
+        for name, d in DATASETS.items():
+            print(f"{name:<14} {d.description}")
+        return 0
     from ..sweep.files import CurveAnalysis, analysis_key, analyze_files, plan_curves
     from ..sweep.chunks import default_chunk_size
 
     steps = _check(args)
-    if "list" in args.example:
-        from ..datasets import DATASETS
-
-        for name, d in DATASETS.items():
-            print(f"{name:<14} {d.description}")
-        return 0
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
     if not args.file_timeout > 0:
         raise ParameterError(f"--file-timeout must be positive, got {args.file_timeout} s")
-    refs = plan_curves(files, args.format, timeout=args.file_timeout)
+    bar, _ = progress_bar("detect", len(files), unit="file", min_total=8, leave=False, counted=True)
+    try:
+        refs = plan_curves(files, args.format, timeout=args.file_timeout, on_file=lambda: bar.update())
+    finally:
+        bar.close()
     n = len(refs)
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)
@@ -221,16 +233,30 @@ def run(args: argparse.Namespace) -> int:
         out=str(args.out) if per_curve else None, force=args.force, plot=not args.no_plot,
         protect=tuple(str(p.resolve()) for p in files if p.exists()) if per_curve else (),
         file_timeout=args.file_timeout)
+    clashes = analysis.clashes(refs)
+    if clashes:  # never replace another run's per-curve files silently (the summaries would disagree)
+        raise OutputExistsError(
+            f"{args.out} holds {len(clashes)} per-curve output(s) of an analysis with other options (e.g. "
+            f"{clashes[0].name}); choose another --out, or pass --force to replace them")
     chunk_size = args.chunk_size if batch else 1
     n_chunks = math.ceil(n / (chunk_size or default_chunk_size(n)))
     if batch and not args.json:
         maps = len({r.path for r in refs if r.index is not None})
         print(f"afmforce analyze: {n} items ({len(files)} file(s), {maps} of them force maps) in {n_chunks} chunks",
               flush=True)
+    executor, workers = ("serial" if local else None), args.workers
+    if not local and args.workers is None and not args.scheduler:  # automatic: never slower than serial
+        from ..sweep.files import choose_executor
+
+        plan, usable = choose_executor(refs, analysis)
+        executor, workers = plan.executor, (usable if plan.executor == "dask" else None)
+        if not args.json:
+            print(f"  {'in this process' if plan.executor == 'serial' else 'on a local Dask cluster'}: "
+                  f"{plan.reason}", flush=True)
     bar, update = chunk_progress_bar("analyze", n_chunks, min_total=2, leave=False)
     try:
-        result = analyze_files(refs, analysis, chunk_size=chunk_size, executor="serial" if local else None,
-                               workers=args.workers, scheduler=args.scheduler,
+        result = analyze_files(refs, analysis, chunk_size=chunk_size, executor=executor,
+                               workers=workers, scheduler=args.scheduler,
                                store=args.out if batch and args.out is not None else None, progress=update)
     finally:
         bar.close()
@@ -251,12 +277,13 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
     written = {}
     if folder is not None:
         written = write_summary(result, folder)
+        reported(folder)  # "summary in FOLDER/: ..." below
         written.update(_write_maps(table, folder, args.map_quantity))
     if args.json:
         _print_json(ok, failed)
     else:
         if len(ok) <= BATCH_CURVES:
-            _print_rows(ok)
+            _print_rows(ok, verbose=args.verbose)
         else:
             _print_stats(ok)
         origin = _oscillation_origin(ok)
@@ -271,10 +298,11 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
                       "(delete that folder to recompute)")
         if written:
             print(f"summary in {folder}/: " + ", ".join(p.name for p in written.values()))
-    for name, error in failed[:_MAX_LISTED if batch else None]:
-        error = _clean(error)
-        eprint(f"failed: {error}" if error.startswith(name) else f"failed: {name}: {error}")
-    if failed:
+    for name, error in failed[:_MAX_LISTED if batch else None]:  # one line per failed file or curve
+        error = " ".join(_clean(error).split())
+        named = error.split(": ", 1)[0].endswith(name.split("#")[0])  # the message starts with the path
+        eprint(f"failed: {error}" if named else f"failed: {name}: {error}")
+    if len(failed) > 1:
         if batch and len(failed) > _MAX_LISTED:
             eprint(f"  ... and {len(failed) - _MAX_LISTED} more" + (f" (all in {written['errors']})"
                                                                       if "errors" in written else ""))
@@ -360,8 +388,8 @@ def _fmt(v: float) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.4g}"
 
 
-def _print_rows(ok) -> None:
-    """One line per curve (small runs)."""
+def _print_rows(ok, verbose: bool = False) -> None:
+    """One line per curve (small runs), then one short verdict line per curve (``verbose``: in full)."""
     if not len(ok):
         return
     heads = ["file", "contact"] + [h for _, h, _ in _COLUMNS] + ["friction", "dynamic"]
@@ -369,16 +397,25 @@ def _print_rows(ok) -> None:
     for _, r in ok.iterrows():
         vals = [float(r[c]) * s for c, _, s in _COLUMNS]
         rows.append([r["name"], r["contact_kind"] or "-"] + [_fmt(v) for v in vals]
-                    + [r["friction"] or "-", "-" if r["contact_kind"] == "none" else "yes" if r["dynamic"] else (
-                        "not assessed" if str(r["verdict"] or "").startswith("dynamics not assessed") else "no")])
+                    + [r["friction"] or "-", _dynamic_label(r)])
     widths = [max(len(h), *(len(row[i]) for row in rows)) for i, h in enumerate(heads)]
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths)))
     for row in rows:
         print("  ".join(c.ljust(w) for c, w in zip(row, widths)))
+    clipped = False
     for _, r in ok.iterrows():
         warnings = [w for w in (r["warnings"] or "").split(" | ") if w]
-        if warnings or r["verdict"]:
+        if not (warnings or r["verdict"]):
+            continue
+        if verbose:
             print(f"{r['name']}: {r['verdict']}" + "".join(f"\n  warning: {w}" for w in warnings))
+            continue
+        head = f"{r['name']}: "
+        line = short_verdict(r, max(60, MAX_LINE - len(head)))
+        print(head + line + "".join(f"\n  warning: {_clip(_plain(w), MAX_LINE - 11)}" for w in warnings))
+        clipped = clipped or line != str(r["verdict"]) or any(_plain(w) != w for w in warnings)
+    if clipped:
+        print("(short verdicts: --verbose or --json gives them in full)")
 
 
 def _print_stats(ok) -> None:

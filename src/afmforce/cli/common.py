@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import json
 import sys
 from typing import Any, Callable
@@ -13,24 +14,27 @@ from ..errors import UnitError
 from ..units import format_quantity, parse_quantity
 
 
-def quantity(dimension: str, flag: str) -> Callable[[str], float]:
-    """An argparse ``type=`` that parses ``200nm`` style values into SI floats."""
+def quantity(dimension: str, flag: str, positive: bool = False) -> Callable[[str], float]:
+    """An argparse ``type=`` that parses ``200nm`` style values into SI floats (``positive``: > 0)."""
 
     def convert(text: str) -> float:
         try:
-            return parse_quantity(text, dimension, flag)
+            value = parse_quantity(text, dimension, flag)
         except UnitError as exc:
             raise argparse.ArgumentTypeError(str(exc)) from None
+        if positive and not value > 0:
+            raise argparse.ArgumentTypeError(f"{flag} must be positive, got {text}")
+        return value
 
     convert.__name__ = dimension  # argparse uses it in messages
     return convert
 
 
 def add_quantity(parser: argparse.ArgumentParser, flag: str, dimension: str, default, help: str,
-                 unit: str = "", **kw) -> None:
-    """Add a ``--flag`` taking a value with units (SI default shown in help)."""
+                 unit: str = "", positive: bool = False, **kw) -> None:
+    """Add a ``--flag`` taking a value with units (SI default shown in help; ``positive``: > 0)."""
     shown = "" if default is None else f" (default {format_quantity(default, unit) if unit else default})"
-    parser.add_argument(flag, type=quantity(dimension, flag), default=default,
+    parser.add_argument(flag, type=quantity(dimension, flag, positive), default=default,
                         help=help + shown, metavar="VALUE", **kw)
 
 
@@ -54,24 +58,36 @@ def print_table(rows: list[tuple[str, Any, str]], title: str | None = None) -> N
         print(f"  {label:<{width}}  {text}")
 
 
+_WORDS = (("pull off", "pull-off"), ("jump in", "jump-in"), ("max ", "maximum "), (" jkr", " (JKR)"),
+          (" dmt", " (DMT)"))
+
+
+def readable(key: str) -> str:
+    """A table label from a field name: ``pull_off_force_jkr`` -> ``pull-off force (JKR)``."""
+    text = key.replace("_", " ")
+    for old, new in _WORDS:
+        text = text.replace(old, new)
+    return text
+
+
 def eprint(msg: str) -> None:
     """Print one line on stderr."""
     print(msg, file=sys.stderr)
 
 
 def progress_bar(desc: str, total: float | None = None, *, unit: str = "", min_total: float = 0,
-                 leave: bool = True, enabled: bool = True):
+                 leave: bool = True, enabled: bool = True, counted: bool | None = None):
     """A tqdm bar on a terminal driven by :class:`afmforce.progress.Progress` records.
 
     Returns ``(bar, update)``; pass ``update`` as the ``progress`` callback of
     ``simulate``, ``load``, ``run_sweep``/``run_batch`` or ``reproduce``. Chunks
-    and figures count as they are; other units (simulated seconds, a fraction
-    of a file) are shown in per mille. Disabled off a terminal, when
+    and figures count as they are (any unit with ``counted=True``: ``bar.update()``
+    per item); other units (simulated seconds, a fraction of a file) are shown in per mille. Disabled off a terminal, when
     ``enabled`` is false or for a known ``total`` below ``min_total``.
     """
     from tqdm import tqdm
 
-    counted = unit in ("chunk", "figure", "file list")
+    counted = unit in ("chunk", "figure", "file list") if counted is None else counted
     disable = (not enabled or not sys.stderr.isatty()
                or (total is not None and total < min_total))
     bar = tqdm(total=total if counted else 1000, unit=unit if counted else "‰", desc=desc,
@@ -95,3 +111,32 @@ def progress_bar(desc: str, total: float | None = None, *, unit: str = "", min_t
 def chunk_progress_bar(desc: str, total: int, *, min_total: int = 1, leave: bool = True):
     """:func:`progress_bar` over a sweep's or batch's chunks."""
     return progress_bar(desc, total, unit="chunk", min_total=min_total, leave=leave)
+
+
+@contextlib.contextmanager
+def busy(desc: str, *, after: float = 2.0):
+    """On a terminal, a line with the elapsed time once the work inside has taken ``after`` [s]
+    (for work that reports no progress of its own: a fit, a plan); nothing off a terminal."""
+    import threading
+
+    from tqdm import tqdm
+
+    if not sys.stderr.isatty():
+        yield
+        return
+    bar = tqdm(total=None, desc=desc, delay=after, file=sys.stderr, leave=False,
+               bar_format="{desc}: working, {elapsed} elapsed")
+    stop = threading.Event()
+
+    def tick() -> None:
+        while not stop.wait(0.5):
+            bar.refresh()
+
+    thread = threading.Thread(target=tick, daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        stop.set()
+        thread.join()
+        bar.close()

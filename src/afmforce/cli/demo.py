@@ -52,13 +52,20 @@ def format_checks(results) -> str:
 def run(args: argparse.Namespace) -> int:
     from ..paper.demo import virtual_experiment
     from ._validate import check_output
+    from ._outcome import reported
     from .reproduce import run_reproduce, summarize
 
     check_output(args.out, folder=True)
     res = run_reproduce(args.out, None, True, False)
-    runs = virtual_experiment(Path(args.out) / "virtual")
+    from .common import busy
+
+    with busy("afmforce demo: virtual experiment"):
+        runs = virtual_experiment(Path(args.out) / "virtual")
     from ..paper.demo_liquid import liquid_experiment
-    liq = liquid_experiment(Path(args.out) / "liquid")
+
+    with busy("afmforce demo: liquid experiment"):
+        liq = liquid_experiment(Path(args.out) / "liquid")
+    reported(args.out)  # its files are named below (and in the JSON)
     if args.json:
         print_json({"out_dir": str(res.out_dir), "passed": res.passed,
                     "checks": [c.to_dict() for c in res.checks],

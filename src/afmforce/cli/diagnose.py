@@ -7,7 +7,7 @@ import argparse
 from ..constants import FIG1, HAMAKER, Z0
 from ..diagnostics import Diagnosis, diagnose
 from ._validate import add_field
-from .common import print_json, print_table
+from .common import print_json, print_table, readable
 
 
 def register(sub) -> None:
@@ -29,7 +29,8 @@ def run(args: argparse.Namespace) -> int:
         print_json(d.to_dict())
         return 0
     values = d.to_dict()
-    rows = [(k.replace("_", " "), values[k], u) for k, u in Diagnosis.UNITS.items()]
+    rows = [(readable(k), values[k], u) for k, u in Diagnosis.UNITS.items()]
     print_table(rows, title="afmforce diagnose")
-    print(f"  verdict: {d.verdict}")
+    first, *rest = d.verdict.split("; ")  # one clause a line: every line short, nothing left out
+    print(f"  verdict: {first}" + "".join(f";\n           {c}" for c in rest))
     return 0

@@ -5,17 +5,15 @@ from __future__ import annotations
 import argparse
 
 from .._files import check_writable
+from ._outcome import reported
 from ._validate import check_output
-from .common import quantity
 
 
 def _list(dimension: str, flag: str):
-    conv = quantity(dimension, flag)
+    """Values checked against the same ranges as ``afmforce simulate`` (xi <= 100 kg/s, ...)."""
+    from ._validate import quantity_list
 
-    def parse(text: str) -> tuple[float, ...]:
-        return tuple(conv(t) for t in text.split(",") if t.strip())
-
-    return parse
+    return quantity_list({"velocity": "velocity", "damping": "xi"}[dimension], flag)
 
 
 def register(sub) -> None:
@@ -37,8 +35,20 @@ def run(args: argparse.Namespace) -> int:
 
     check_writable(args.out, args.force)
     check_output(args.out, force=args.force)
-    grid = compute_grid(args.velocities or DEFAULT_VELOCITIES, args.xis or DEFAULT_XIS)
+    from .common import progress_bar
+
+    bar, _ = progress_bar("explore", unit="run", leave=False)
+
+    def advance(fraction: float) -> None:
+        bar.n = int(1000 * fraction)
+        bar.refresh()
+
+    try:
+        grid = compute_grid(args.velocities or DEFAULT_VELOCITIES, args.xis or DEFAULT_XIS, progress=advance)
+    finally:
+        bar.close()
     path = build_page(args.out, grid, force=args.force)
+    reported(path)
     print(f"wrote {path} ({len(grid.runs)} simulated runs: {len(grid.velocities)} speeds x "
           f"{len(grid.xis)} friction coefficients); open it in a browser")
     return 0

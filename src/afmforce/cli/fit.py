@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .._files import atomic_write_text, check_writable
 from ..errors import AfmforceError, ParameterError
-from .common import eprint, print_json, quantity
+from .common import busy, eprint, print_json, quantity
 
 __all__ = ["register", "run", "model_config", "add_model_flags"]
 
@@ -38,13 +38,20 @@ def model_config(args: argparse.Namespace):
     return config_from_args(args)
 
 
+#: Quantity (afmforce._fields.QUANTITIES) whose range checks each value of a list flag, by dimension.
+_LIST_QUANTITY = {"velocity": "velocity", "frequency": "sample_rate", "damping": "xi"}
+
+
 def _list(dimension: str, flag: str):
-    conv = quantity(dimension, flag)
+    """``V1,V2,...`` with units, each value checked against its quantity's range; empty lists refused."""
+    from ._validate import quantity_list
+
+    conv = quantity_list(_LIST_QUANTITY[dimension], flag)
 
     def parse(text: str) -> list[float]:
-        return [conv(t) for t in text.split(",") if t.strip()]
+        return list(conv(text))
 
-    parse.__name__ = f"comma-separated {dimension}s"
+    parse.__name__ = conv.__name__
     return parse
 
 
@@ -61,8 +68,12 @@ def register(subparsers) -> argparse.ArgumentParser:
                     "detected (likelihood ratio, AIC/BIC); in a liquid the slip length, the "
                     "spring constant in situ and whether slip is detected (docs/liquid.md). "
                     "See docs/fit.md.")
-    p.add_argument("curves", nargs="+", metavar="CURVE",
-                   help="force-curve files with a calibrated deflection [m]")
+    p.add_argument("curves", nargs="*", metavar="CURVE",
+                   help="force-curve files with a calibrated deflection [m] (or volts/newtons with the "
+                        "file's calibration), at several driving speeds")
+    p.add_argument("--example", metavar="NAME", default=None,
+                   help="fit sample curves shipped with afmforce instead of files: speeds (simulated Fig 5 "
+                        "beam, xi = 0.01 kg/s, at 0.5, 1, 2 and 5 um/s)")
     g = p.add_argument_group("fit")
     g.add_argument("--free", default="hamaker,xi",
                    help=f"global parameters to fit, comma-separated, among {', '.join(PARAMETERS)} "
@@ -123,6 +134,15 @@ def run(args: argparse.Namespace) -> int:
     from ..fit import fit_dynamic
     from ..fit.figures import plot_curves, plot_profiles
 
+    if args.example is not None:
+        from ..datasets import fit_example
+
+        args.curves = list(args.curves) + [str(p) for p in fit_example(args.example)]
+    if not args.curves:
+        raise ParameterError("give force-curve files at several speeds, or --example speeds")
+    missing = [c for c in args.curves if not Path(c).is_file()]
+    if missing:
+        raise ParameterError(f"no such file: {', '.join(missing)}")
     for path in (args.out, args.report):
         if path:
             check_writable(path, args.force)
@@ -138,7 +158,7 @@ def run(args: argparse.Namespace) -> int:
     if args.quadratic_compliance:    # issue 25: volts -> metres by the curved compliance
         from ..analysis.liquid import calibrate_liquid_curve
         curves = [calibrate_liquid_curve(c) if c.deflection_unit == "V" else c for c in curves]
-    with warnings.catch_warnings(record=True):
+    with warnings.catch_warnings(record=True), busy("afmforce fit"):
         warnings.simplefilter("ignore")
         res = fit_dynamic(curves, cfg, free=args.free.split(","), names=names,
                           velocities=args.velocities, sample_rates=args.sample_rates,

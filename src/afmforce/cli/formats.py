@@ -25,7 +25,7 @@ def run(args: argparse.Namespace) -> int:
 
     rows = formats_table()
     if args.json:
-        print_json(rows)
+        print_json({"formats": rows})  # one JSON object, like every command
     elif args.markdown:
         print(formats_markdown(), end="")
     else:

@@ -4,10 +4,11 @@ Each sub-command lives in its own module of this package with a
 ``register(subparsers)`` function that adds its parser and sets ``func``
 (a callable ``func(args) -> int``). :data:`COMMANDS` lists them; only the
 module of the command being run is imported, so ``afmforce --help`` and
-``afmforce --version`` answer without loading numpy, numba or dask. Errors
-raised on purpose (:class:`~afmforce.errors.AfmforceError`) become one line on
-stderr and exit status 2 (bad input) unless the command says otherwise;
-``--debug`` shows the traceback.
+``afmforce --version`` answer without loading numpy, numba or dask. Every
+outcome follows one contract (:mod:`afmforce.cli._outcome`): an error is one
+line on stderr, exit status 2 for usage errors and 1 for failures, no traceback
+unless ``--debug``; ``--json`` (every command has it) prints exactly one JSON
+object on stdout, errors included; every file written is named.
 
 Adding a command: write ``cli/<name>.py`` with ``register(sub)`` and
 ``run(args)``, and add one line ``"<name>": ("<module>", "<one-line help>")``
@@ -23,8 +24,8 @@ import re
 import sys
 
 from .. import __version__
-from ..errors import AfmforceError
-from ._validate import HelpFormatter
+from . import _outcome
+from ._validate import HelpFormatter, check_common, refuse_empty_values
 
 #: Sub-command -> (module of this package, one-line help), in the order ``afmforce --help`` lists them.
 COMMANDS: dict[str, tuple[str, str]] = {
@@ -60,7 +61,7 @@ class _Parser(argparse.ArgumentParser):
                 message = rest
             else:
                 message = f"{flag}: {rest}"
-        self.exit(EXIT_USAGE, f"error: {message}\n")
+        self.exit(_outcome.fail("UsageError", _outcome.one_line(message), EXIT_USAGE))
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -86,9 +87,24 @@ def build_parser(command: str | None = None) -> argparse.ArgumentParser:
     for name, (module, help_) in COMMANDS.items():
         if command is None or name == command:
             importlib.import_module(f"{__package__}.{module}").register(sub)
+            _add_json(sub.choices[name])
         else:
             sub.add_parser(name, help=help_, add_help=False)
     return parser
+
+
+def _add_json(parser: argparse.ArgumentParser) -> None:
+    """Give a command without a JSON result of its own ``--json``: its outcome as one JSON object."""
+    if "--json" not in parser._option_string_actions:
+        parser.add_argument("--json", action="store_true",
+                            help="print one JSON object on stdout: exit status, the text output and the "
+                                 "files written (errors: {\"error\": {...}})")
+        parser.set_defaults(_generic_json=True)
+
+
+def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.ArgumentParser:
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction))
+    return sub.choices[command]
 
 
 def _command_of(argv: list[str]) -> str:
@@ -127,38 +143,60 @@ SIMULATING = ("simulate", "demo", "reproduce", "explore", "fit", "plan", "sweep"
 
 def _compile_notice() -> None:
     """One line on stderr when the integrator is about to be compiled (first run, empty or
-    stale numba cache): 7-10 s of silence otherwise looks like a hang."""
-    from ..dynamics import radau
-    from ..dynamics._jit import cache_missing
+    stale numba cache): 7-10 s of silence otherwise looks like a hang. Registered with the
+    dynamics, so that it is printed only when a compile really starts (never before a usage error)."""
+    from ..dynamics import _helper
 
-    if cache_missing(radau.integrate_segment):
+    def notice() -> None:
         print("afmforce: compiling the integrator, ~10 s (first run; later runs load it from "
               "numba's cache)...", file=sys.stderr, flush=True)
 
+    _helper.BEFORE_COMPILE[:] = [notice]
+
 
 def main(argv: list[str] | None = None) -> int:
-    """Run the command line; returns the exit status."""
+    """Run the command line; returns the exit status (argparse usage errors raise SystemExit(2))."""
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
-    parser = build_parser(_command_of(argv))
-    args = parser.parse_args(argv)
+    _outcome.start(argv)
+    command = _command_of(argv)
+    try:
+        parser = build_parser(command)
+        if command:
+            refuse_empty_values(_subparser(parser, command), argv)
+        args = parser.parse_args(argv)
+    except SystemExit:
+        raise
+    except Exception as exc:  # an empty value, or a command's register() failing: still one line (and JSON)
+        if "--debug" in argv:
+            raise
+        return _outcome.fail(*_outcome.message_of(exc), _outcome.exit_status(exc))
     if not getattr(args, "func", None):
+        if _outcome.RunState.json:
+            return _outcome.fail("UsageError", "give a command (afmforce --help lists them)", EXIT_USAGE)
         parser.print_help()
         return EXIT_USAGE
+    _outcome.RunState.generic_json = bool(getattr(args, "_generic_json", False))
     try:
-        if _command_of(argv) in SIMULATING:
+        check_common(args)
+        if command in SIMULATING:
             _compile_notice()
-        return int(args.func(args) or 0)
-    except AfmforceError as exc:
-        if args.debug:
-            raise
-        print(f"error: {exc}", file=sys.stderr)
-        return EXIT_USAGE
+        if _outcome.RunState.generic_json and _outcome.RunState.json:
+            _outcome.capture_stdout()
+        status = int(args.func(args) or 0)
     except BrokenPipeError:  # stdout closed early (afmforce ... | head): not an error of ours
         sys.stdout = open(os.devnull, "w")
         return 1
     except KeyboardInterrupt:
-        print("error: interrupted", file=sys.stderr)
-        return 130
+        return _outcome.fail("KeyboardInterrupt", "interrupted", 130)
+    except SystemExit:
+        _outcome.release_stdout()
+        raise
+    except Exception as exc:
+        if args.debug:
+            raise
+        kind, message = _outcome.message_of(exc)
+        return _outcome.fail(kind, message, _outcome.exit_status(exc))
+    return _outcome.finish(command, status)
 
 
 if __name__ == "__main__":  # pragma: no cover

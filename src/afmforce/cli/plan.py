@@ -8,7 +8,7 @@ from __future__ import annotations
 import argparse
 
 from .._files import atomic_write_text, check_writable
-from .common import add_quantity, print_json, quantity
+from .common import add_quantity, busy, print_json, quantity
 
 __all__ = ["register", "run"]
 
@@ -30,12 +30,12 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--sample-rates", type=_list("frequency", "--sample-rates"), default=None,
                    metavar="F1,F2,..", help="sample rate of each candidate speed "
                                             "(default: --points-per-nm x speed)")
-    g.add_argument("--points-per-nm", type=float, default=2.0,
+    g.add_argument("--points-per-nm", type=quantity("dimensionless", "--points-per-nm", positive=True), default=2.0,
                    help="samples per nm of drive travel when no rates are given (default 2)")
-    add_quantity(g, "--noise", "length", 0.05e-9, "deflection noise rms", unit="m")
+    add_quantity(g, "--noise", "length", 0.05e-9, "deflection noise rms", unit="m", positive=True)
     g.add_argument("--curves", type=int, default=4, help="curves in a design (default 4)")
     add_quantity(g, "--force-error", "force", None,
-                 "allowed error of the static pull-in force (default 10 %% of it)", unit="N")
+                 "allowed error of the static pull-in force (default 10 %% of it)", unit="N", positive=True)
     g.add_argument("--start", type=quantity("length", "--start"), default=None, metavar="VALUE",
                    help="start of each approach (default -40 nm)")
     g.add_argument("--turn", type=quantity("length", "--turn"), default=None, metavar="VALUE",
@@ -69,15 +69,16 @@ def run(args: argparse.Namespace) -> int:
              "turn": 20e-9 if args.turn is None else args.turn}
     args.start = args.turn = None
     cfg = model_config(args).replace(**drive)
-    if args.slip_target is not None:
-        from ..fit.plan_slip import plan_slip
-        kw = {} if "--speeds" not in _given(args) else {"speeds": args.speeds}
-        plan = plan_slip(cfg, target=args.slip_target, noise=args.noise, n_curves=args.curves,
-                         points_per_nm=args.points_per_nm, **kw)
-    else:
-        plan = plan_experiment(cfg, noise=args.noise, speeds=args.speeds,
-                               sample_rates=args.sample_rates, points_per_nm=args.points_per_nm,
-                               n_curves=args.curves, force_error=args.force_error)
+    with busy("afmforce plan"):
+        if args.slip_target is not None:
+            from ..fit.plan_slip import plan_slip
+            kw = {} if "--speeds" not in _given(args) else {"speeds": args.speeds}
+            plan = plan_slip(cfg, target=args.slip_target, noise=args.noise, n_curves=args.curves,
+                             points_per_nm=args.points_per_nm, **kw)
+        else:
+            plan = plan_experiment(cfg, noise=args.noise, speeds=args.speeds,
+                                   sample_rates=args.sample_rates, points_per_nm=args.points_per_nm,
+                                   n_curves=args.curves, force_error=args.force_error)
     if args.report:
         atomic_write_text(args.report, plan.markdown(), force=args.force)
     if args.json:

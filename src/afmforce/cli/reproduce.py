@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import argparse
 
+from ..errors import ParameterError
+
 
 def register(sub) -> None:
     p = sub.add_parser("reproduce", help="reproduce the paper's figures and numbers (report.md, PNG)",
@@ -49,10 +51,15 @@ def summarize(res) -> str:
 
 
 def run(args: argparse.Namespace) -> int:
+    from ._outcome import reported
     from ._validate import check_output
 
     check_output(args.out, folder=True)
-    only = [s.strip() for s in args.only.split(",") if s.strip()] if args.only else None
+    only = None if args.only is None else [s.strip() for s in args.only.split(",") if s.strip()]
+    if only == []:
+        raise ParameterError("--only: no figure named; give some of fig1,fig3,fig4,fig5,fig6,fig7,fig9 "
+                             "(or drop --only for all)")
     res = run_reproduce(args.out, only, args.fast, args.svg)
+    reported(res.out_dir)  # summarize() names the folder
     print(summarize(res))
     return 0 if res.passed else 1

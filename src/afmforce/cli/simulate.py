@@ -18,7 +18,7 @@ from pathlib import Path
 from typing import Callable
 
 from .._files import check_writable
-from ..errors import FileFormatError
+from ..errors import ParameterError
 from ._validate import add_field, check_output, check_simulation_config, check_simulation_options, lazy_help
 from .common import print_json, print_table
 
@@ -226,9 +226,9 @@ def run(args: argparse.Namespace) -> int:
             check_writable(path, args.force)
             check_output(path, flag="--" + dest.replace("_", "-"), force=args.force)
     if args.out and Path(args.out).suffix.lower() not in (".csv", ".h5", ".hdf5"):
-        raise FileFormatError(f"cannot write {args.out}: --out takes a .csv or .h5 file")
+        raise ParameterError(f"cannot write {args.out}: --out takes a .csv or .h5 file")
     if args.plot and Path(args.plot).suffix.lower() != ".png":
-        raise FileFormatError(f"cannot write {args.plot}: --plot takes a .png file")
+        raise ParameterError(f"cannot write {args.plot}: --plot takes a .png file")
     cfg = config_from_args(args)
     bar, update = _progress_bar(args)
     with warnings.catch_warnings(record=True) as caught:

@@ -8,7 +8,7 @@ from ..cantilever import InclinedCantilever
 from ..constants import FIG3
 from ..statics import FRICTION_MODELS, static_analysis
 from ._validate import add_field, check_beam, refuse_ignored
-from .common import print_json, print_table
+from .common import print_json, print_table, readable
 
 
 def add_geometry_arguments(parser: argparse.ArgumentParser, defaults: dict = FIG3) -> None:
@@ -72,7 +72,7 @@ def run(args: argparse.Namespace) -> int:
                 rows.append((f"{key} {sub_key}", sub_val, result.units.get(sub_key, "")))
         elif key in d:
             rows.append((key, d[key], unit))
-    print_table([(label.replace("_", " "), _scale(v, u), _unit(u)) for label, v, u in rows],
+    print_table([(readable(label), _scale(v, u), _unit(u)) for label, v, u in rows],
                 title="afmforce statics (SI inputs; lengths and forces scaled)")
     return 0
 

@@ -11,6 +11,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..units import format_quantity
 from ._validate import CONFIRM_RUNS, check_output, check_simulation_sweep
+from ._outcome import reported
 from .common import chunk_progress_bar
 
 #: Output columns summarised on the terminal, in this order.
@@ -41,6 +42,9 @@ def register(sub) -> None:
     s.add_argument("--set", dest="sets", action="append", default=[], metavar="NAME=VALUE",
                    help="fixed setting for every run (default: the paper's Fig 5 values); repeat")
     s.add_argument("--config", metavar="FILE.toml", help="sweep file with [sweep], [grid], [range], [set] tables")
+    s.add_argument("--example", action="store_true",
+                   help="use the sweep file shipped with afmforce (Fig 5 run, 4 speeds x 3 friction coefficients; "
+                        "python -c 'import afmforce.datasets as d; print(d.SWEEP_EXAMPLE)' shows where it is)")
     s.add_argument("--list-parameters", action="store_true", help="list the parameters and their units, then exit")
     r = p.add_argument_group("where it runs")
     r.add_argument("--workers", type=int, default=None, help="worker processes of the local cluster (default: one per core)")
@@ -116,6 +120,12 @@ def run(args: argparse.Namespace) -> int:
 
     if args.list_parameters:
         return _list_parameters()
+    if args.example:
+        if args.config:
+            raise ParameterError("--example is a sweep file: give it or --config, not both")
+        from ..datasets import SWEEP_EXAMPLE
+
+        args.config = str(SWEEP_EXAMPLE)
     if args.serial and (args.scheduler or args.workers):
         raise ParameterError("--serial runs in this process; drop --workers/--scheduler")
     if args.chunk_size is not None and args.chunk_size < 1:
@@ -152,6 +162,7 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(f"  all {result.chunks_total} chunks were already in the store (delete the folder to recompute)")
     print(f"results in {result.store.root}/")
+    reported(result.store.root)
     print("  " + ", ".join(p.name for p in paths.values()))
     rows = _stats_rows(result, units)
     if rows:

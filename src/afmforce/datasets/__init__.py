@@ -20,7 +20,7 @@ from pathlib import Path
 
 from ..errors import ParameterError
 
-__all__ = ["Dataset", "DATASETS", "path"]
+__all__ = ["Dataset", "DATASETS", "path", "FIT_EXAMPLES", "SWEEP_EXAMPLE", "fit_example"]
 
 _HERE = Path(__file__).resolve().parent / "data"
 
@@ -74,3 +74,28 @@ def path(name: str) -> Path:
         return _HERE / DATASETS[name].filename
     except KeyError:
         raise ParameterError(f"unknown example {name!r}; choose one of {', '.join(DATASETS)}") from None
+
+
+#: SIMULATED curves for ``afmforce fit --example NAME`` (written by ``docs/make_datasets.py``):
+#: name -> (description, files). ``speeds``: the Fig 5 beam (R 100 nm) with xi = 0.01 kg/s at
+#: 0.5, 1, 2 and 5 um/s, recorded by the virtual AFM (noise 0.01 nm, random zero, offset, drift).
+FIT_EXAMPLES: dict[str, tuple[str, tuple[str, ...]]] = {
+    "speeds": ("SIMULATED Fig 5 beam, xi = 0.01 kg/s, at 0.5, 1, 2, 5 um/s (afmforce raw text)",
+               tuple(f"fit-speed-{i}.txt" for i in range(1, 5))),
+}
+#: A small sweep file (``afmforce sweep --example``): 4 speeds x 3 friction coefficients.
+SWEEP_EXAMPLE = _HERE / "sweep-example.toml"
+
+
+def fit_example(name: str) -> list[Path]:
+    """The shipped curves of :data:`FIT_EXAMPLES` ``[name]``.
+
+    Raises
+    ------
+    ParameterError
+        Unknown name.
+    """
+    try:
+        return [_HERE / f for f in FIT_EXAMPLES[name][1]]
+    except KeyError:
+        raise ParameterError(f"--example {name}: unknown; choose one of {', '.join(FIT_EXAMPLES)}") from None

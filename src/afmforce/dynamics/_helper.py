@@ -128,6 +128,10 @@ _TRIED = False
 _LOCK = threading.Lock()
 
 
+#: Callables ``f()`` run once, just before the integrator is compiled (not when it is cached).
+BEFORE_COMPILE: list = []
+
+
 def start() -> bool:
     """Launch the helper if it can help (once per process; cheap after the first call).
     Returns whether one is running."""
@@ -141,6 +145,8 @@ def start() -> bool:
         if not (isinstance(_R.integrate_segment, Dispatcher)
                 and cache_missing(_R.integrate_segment)):
             return False                # nothing to compile (the usual case: one index read)
+        for notice in tuple(BEFORE_COMPILE):  # the command line says why the first run is slow
+            notice()
         missing = [disp for _, disp, _ in tasks() if not in_cache(disp)]
         if (missing and os.environ.get(ENV, "1") != "0" and sys.executable
                 and available_cores() >= 2):

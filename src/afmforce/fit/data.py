@@ -16,7 +16,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import AnalysisError, FileFormatError, ParameterError
+from ..errors import AnalysisError, FileFormatError, MissingMetadataError, ParameterError
 from ..io.curve import RawCurve
 
 __all__ = ["FitCurve", "prepare_curves", "check_consistent"]
@@ -90,8 +90,9 @@ def _meta_value(curve: RawCurve, key: str, override, name: str, unit: str) -> fl
     if value is None:
         flag, kw = {"velocity": ("--velocities", "velocities"),
                     "sample_rate": ("--sample-rates", "sample_rates")}[key]
-        raise FileFormatError(f"{name}: no {key} [{unit}] in the file; give it ({flag} V1,V2,.. "
-                              f"or --meta {key}=VALUE; Python: fit_dynamic(..., {kw}=[...]))")
+        raise MissingMetadataError(f"{name}: no {key} [{unit}] in the file; give it ({flag} V1,V2,.. "
+                                   f"or --meta {key}=VALUE; Python: fit_dynamic(..., {kw}=[...]))",
+                                   keys=(key,), flags=(flag, "--meta"))
     value = float(value)
     if not math.isfinite(value) or value <= 0:
         raise FileFormatError(f"{name}: {key} must be positive, got {value!r} {unit}")
@@ -154,10 +155,10 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     unit = curve.deflection_unit
     need = {"N": "spring_constant", "V": "sensitivity"}.get(unit)
     if unit != "m" and (need is None or not meta.get(need)):
-        raise FileFormatError(
+        raise MissingMetadataError(
             f"{name}: the deflection is in {unit} and the file has no {need}; the fit needs a "
             f"calibrated deflection in metres: give it (--meta {need}=VALUE; Python: "
-            f"load(..., meta_override={{'{need}': ...}}))")
+            f"load(..., meta_override={{'{need}': ...}}))", keys=(need,), flags=("--meta",))
     # force / k or volts x sensitivity: the file's own calibration
     scale = 1.0 if unit == "m" else (1.0 / float(meta[need]) if unit == "N" else float(meta[need]))
     app = np.asarray(curve.segment) == 0

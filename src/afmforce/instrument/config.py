@@ -174,8 +174,12 @@ def load_config(path: str | os.PathLike) -> dict[str, Any]:
     try:
         with open(path, "rb") as fh:
             data = tomllib.load(fh)
+    except IsADirectoryError:
+        raise FileFormatError(f"instrument config {path} is a folder; give a .toml file") from None
     except OSError as exc:
         raise FileFormatError(f"cannot read instrument config {path}: {exc.strerror or exc}") from exc
+    except UnicodeDecodeError:
+        raise FileFormatError(f"instrument config {path} is not a UTF-8 text file (TOML expected)") from None
     except tomllib.TOMLDecodeError as exc:
         raise FileFormatError(f"{path} is not valid TOML: {exc}") from exc
     return parse_config(data, source=str(path))

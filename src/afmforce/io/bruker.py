@@ -12,24 +12,32 @@ Layout (NanoScope "Export > ASCII" of a ramp)::
     Calc_Ramp_Ex_nm<TAB>Calc_Ramp_Rt_nm<TAB>Defl_V_Ex<TAB>Defl_V_Rt<TAB>Defl_nm_Ex<TAB>...
     <numbers, tab separated; empty cells where one run is shorter>
 
-Header lines start with a backslash (``\*`` opens a section); then one row of
-column names ``<Name>_<unit>_<Ex|Rt>`` (``Calc_Ramp_Ex_nm`` puts the run before
-the unit), then data. Units: ``nm``, ``um``, ``V``, ``pN``, ``nN``, ``s``,
-``ms``; ``Lsb`` (raw counts) columns are ignored.
+Header lines start with a backslash (``\*`` opens a section), or are wrapped whole
+in double quotes (``"\Spring Constant: 0.34"``, NanoScope Analysis); then one row
+of column names ``<Name>_<unit>_<Ex|Rt>`` or ``<Name>_<Ex|Rt>_<unit>``
+(``Calc_Ramp_Ex_nm``), in any order and subset, then data; extend and retract
+share rows. Units: ``nm``, ``um``, ``V``, ``pN``, ``nN``, ``s``, ``ms``; ``Lsb``
+(raw counts) columns are ignored. A column named twice: the first is read.
+Trailing tabs, CRLF line ends, UTF-8, UTF-16 and Windows-1252 text are read.
 
 Conventions chosen here (documented because exports differ between versions):
 
-* deflection: ``Defl_V`` (raw volts) if present, else ``Defl_nm`` (m), else
-  ``Defl_pN``/``Defl_nN`` (N); positive = repulsive = cantilever up;
+* deflection: ``Defl_V`` (raw volts) if every run has it, else ``Defl_nm`` (m),
+  else ``Defl_pN``/``Defl_nN`` (N); positive = repulsive = cantilever up;
 * position: ``Height_Sensor``/``PF_Z_Sensor``/``ZSensor`` is the measured
   position, ``Calc_Ramp`` the nominal one; z is oriented to increase on the
   extend (Ex) run;
-* time order: from ``Time_s_Ex``/``Time_s_Rt`` when exported; otherwise each
-  run is put in time order so that it meets the other run at the turning point
-  (the end with the larger deflection); NanoScope usually lists the retract run
-  in reverse time order;
-* time: from the Time columns, else from ``\Scan rate`` (ramps per second),
-  else the sample index (``time_is_sample_index``).
+* time order: from ``Time_s_Ex``/``Time_s_Rt`` when exported; otherwise the
+  retract is reversed when its position column runs the same way as the
+  extend's (in time order they run opposite ways), and a run without a usable
+  position is put in time order so that it meets the other at the turning
+  point (the end with the larger deflection); NanoScope often lists the retract
+  rows in reverse;
+* time: from the Time columns (``sample_rate`` from their step), else from
+  ``\Scan rate`` (ramps per second), else the sample index
+  (``time_is_sample_index``); ``velocity`` from the slope of the first run's
+  position against time;
+* an export of the extend run only gives a curve without a retract.
 """
 
 from __future__ import annotations
@@ -63,6 +71,8 @@ def detect_bruker_ascii(path: Path) -> bool:
             head = fh.read(64)
     except OSError:
         return False
+    if head[:2] in (b"\xff\xfe", b"\xfe\xff"):  # UTF-16 (Windows "Unicode" text)
+        head = head.decode("utf-16", errors="ignore").encode("utf-8", errors="ignore")
     return head.lstrip(b"\xef\xbb\xbf").lstrip().lstrip(b'"').startswith(b"\\*")
 
 
@@ -149,6 +159,8 @@ def _parse(text: str, where: str):
         if not line.strip():
             continue
         cells = line.rstrip("\r\n").split(sep)
+        while len(cells) > len(names) and not cells[-1].strip():  # trailing tabs
+            cells.pop()
         if len(cells) > len(names):
             raise FileFormatError(f"{where}: line {j} has {len(cells)} cells for {len(names)} columns")
         try:
@@ -189,7 +201,7 @@ def load_bruker_ascii(path: Path, *, meta_override: Mapping[str, Any] | None = N
     try:
         raw = path.read_bytes()
         try:
-            text = raw.decode("utf-8-sig", errors="strict")
+            text = raw.decode("utf-16" if raw[:2] in (b"\xff\xfe", b"\xfe\xff") else "utf-8-sig", errors="strict")
         except UnicodeDecodeError:  # older exports: Windows-1252 (a µ in a unit)
             text = raw.decode("cp1252", errors="strict")
     except UnicodeDecodeError:
@@ -211,6 +223,37 @@ def load_bruker_ascii(path: Path, *, meta_override: Mapping[str, Any] | None = N
     return out
 
 
+def _reversed(run: str, cols: dict, runs: dict) -> bool:
+    """Are the rows of ``run`` in reverse time order?
+
+    From the Time column when exported; else, for the retract, from the piezo: in time
+    order the retract moves the other way than the extend, so a retract column that
+    runs the same way as the extend's is reversed; else from the deflection: the turning
+    point (largest deflection) ends the extend and starts the retract.
+    """
+    t = cols["t"]
+    if t is not None and len(t) > 1 and t[-1] != t[0]:
+        return bool(t[-1] < t[0])
+    other = runs.get("Ex") if run == "Rt" else None
+    if other is not None and len(cols["zn"]) > 1 and len(other["zn"]) > 1:
+        dz_rt, dz_ex = cols["zn"][-1] - cols["zn"][0], other["zn"][-1] - other["zn"][0]
+        if dz_rt != 0 and dz_ex != 0:
+            return bool(np.sign(dz_rt) == np.sign(dz_ex))
+    d = cols["defl"]
+    m = max(1, min(5, len(d) // 4))
+    first, last = d[:m].mean(), d[-m:].mean()
+    return bool(first > last if run == "Ex" else last > first)
+
+
+def _deflection_unit(table: dict, where: str, runs: tuple[str, ...]) -> tuple[str, str]:
+    """The deflection column every run has (volts first, then length, then force): (file unit, SI unit)."""
+    for base, unit, out in _DEFL:
+        if all((base, unit, run) in table for run in runs):
+            return unit, out
+    raise FileFormatError(f"{where}: no deflection column exported for {' and '.join(runs)} in the same unit "
+                          f"(Defl_V_, Defl_nm_ or Defl_pN_ followed by {'/'.join(runs)})")
+
+
 def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
     """One force-curve block."""
     header, names, data = _parse(text, where)
@@ -219,18 +262,16 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
         parsed = parse_column_name(name)
         if parsed is not None:
             base, unit, run = parsed
-            table.setdefault((canonical_base(base), unit, run), data[:, k])
+            table.setdefault((canonical_base(base), unit, run), data[:, k])  # a duplicate: the first wins
+    present = tuple(r for r in ("Ex", "Rt") if any(key[2] == r and key[0] == "Defl" for key in table))
+    if not present:
+        raise FileFormatError(f"{where}: no deflection column (Defl_V_Ex, Defl_nm_Rt, Defl_pN_Ex, ...)")
+    if present == ("Rt",):
+        raise FileFormatError(f"{where}: only retract (_Rt) columns; export the extend (_Ex) run too")
+    unit_in, unit_out = _deflection_unit(table, where, present)
     runs = {}
-    unit_out = None
-    for run in ("Ex", "Rt"):
-        defl = None
-        for base, unit, out in _DEFL:
-            col = table.get((base, unit, run))
-            if col is not None:
-                defl, unit_out = col * _UNITS[unit], out
-                break
-        if defl is None:
-            raise FileFormatError(f"{where}: no deflection column for run {run} (Defl_V/_nm/_pN_{run})")
+    for run in present:
+        defl = table[("Defl", unit_in, run)] * _UNITS[unit_in]
         zm, _ = _column(table, _MEASURED, run)
         zn, _ = _column(table, _NOMINAL, run)
         if zn is None and zm is None:
@@ -243,18 +284,10 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
             raise FileFormatError(f"{where}: columns of run {run} have different lengths")
         runs[run] = cols
     for run, cols in runs.items():
-        t = cols["t"]
-        if t is not None:
-            rev = t[-1] < t[0]
-        else:  # the turning point (largest deflection) ends the Ex run and starts the Rt run
-            d = cols["defl"]
-            m = max(1, min(5, len(d) // 4))
-            first, last = d[:m].mean(), d[-m:].mean()
-            rev = first > last if run == "Ex" else last > first
-        if rev:
+        if _reversed(run, cols, runs):
             runs[run] = {k: (None if v is None else v[::-1].copy()) for k, v in cols.items()}
-    ex, rt = runs["Ex"], runs["Rt"]
-    seg = np.concatenate([np.zeros(len(ex["defl"]), np.int8), np.ones(len(rt["defl"]), np.int8)])
+    parts = list(runs.values())
+    seg = np.concatenate([np.full(len(c["defl"]), 0 if r == "Ex" else 1, np.int8) for r, c in runs.items()])
     meta: dict[str, Any] = {}
     k = _header_value(header, "Spring Constant")
     if k and k > 0:
@@ -263,28 +296,35 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
     if sens and sens > 0:
         meta["sensitivity"] = sens * 1e-9  # nm/V
     n = len(seg)
-    if ex["t"] is not None and rt["t"] is not None:
-        time = np.concatenate([ex["t"], rt["t"]])
-        if not np.all(np.diff(time) >= 0):  # retract times restart from zero in some exports
-            time = np.concatenate([ex["t"], ex["t"][-1] + (rt["t"] - rt["t"][0])
-                                   + np.median(np.diff(ex["t"]))])
+    if all(c["t"] is not None for c in parts):
+        time = np.concatenate([c["t"] for c in parts])
+        if not np.all(np.diff(time) > 0) and len(parts) == 2:  # retract times restart from zero in some exports
+            ex, rt = parts
+            time = np.concatenate([ex["t"], ex["t"][-1] + (rt["t"] - rt["t"][0]) + np.median(np.diff(ex["t"]))])
+        step = np.median(np.diff(time))
+        if step > 0:
+            meta["sample_rate"] = 1.0 / step
     else:
-        rate = _header_value(header, "Scan rate")
+        rate = _header_value(header, "Scan rate")  # ramps (extend + retract) per second
         if rate and rate > 0:
-            dt = 1.0 / (rate * n)
+            dt = 1.0 / (rate * n * (2 if len(parts) == 1 else 1))  # one run: half a ramp
             time = dt * np.arange(n)
             meta["sample_rate"] = 1.0 / dt
         else:
             time = np.arange(n, dtype=float)
             meta["time_is_sample_index"] = True
-    zm = None if ex["zm"] is None or rt["zm"] is None else np.concatenate([ex["zm"], rt["zm"]])
-    zn, zm, sign = orient(np.concatenate([ex["zn"], rt["zn"]]), zm, seg)
+    zm = None if any(c["zm"] is None for c in parts) else np.concatenate([c["zm"] for c in parts])
+    zn = np.concatenate([c["zn"] for c in parts])
+    zn, zm, sign = orient(zn, zm, seg)
+    if not meta.get("time_is_sample_index") and len(parts[0]["zn"]) > 2:
+        first = seg == seg[0]
+        meta["velocity"] = abs(float(np.polyfit(time[first], zn[first], 1)[0]))
     meta.update(dict(meta_override or {}))
     meta.update(source_file=source, reader="bruker-ascii", format="Bruker NanoScope ASCII export",
                 position_sign=sign)
     if "Note" in header:
         meta["note"] = header["Note"]
     curve = RawCurve(time=time, piezo_nominal=zn, piezo_measured=zm,
-                     deflection_signal=np.concatenate([ex["defl"], rt["defl"]]), segment=seg,
+                     deflection_signal=np.concatenate([c["defl"] for c in parts]), segment=seg,
                      metadata=meta, deflection_unit=unit_out)
     return finalize_curve(curve, where)

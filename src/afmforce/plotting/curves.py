@@ -95,7 +95,7 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
     """
     ax = _new_ax(ax)
     ax.set_xlabel("separation h [nm]")
-    ax.set_title(f"force vs separation ({result.contact_kind or '?'} contact)")
+    ax.set_title(f"force vs separation ({_contact_words(result.contact_kind)})")
     h, f = result.separation, result.force
     if not np.isfinite(h).any():
         ax.set_ylabel("force [nN]")
@@ -322,6 +322,11 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
     ad = result.details.get("adhesion")
     if not math.isfinite(result.adhesion_force) and ad is not None and ad.found and math.isfinite(ad.deflection):
         adh = f"adhesion {ad.deflection * 1e9:.3g} nm of deflection (no spring constant)"  # as the marker says
-    fig.suptitle(f"{name}: {result.contact_kind or '?'} contact; {adh}; friction {result.friction or '-'}"
+    fig.suptitle(f"{name}: {_contact_words(result.contact_kind)}; {adh}; friction {result.friction or '-'}"
                  f"{'; DYNAMIC' if result.dynamic else ''}", fontsize="medium")
     return fig
+
+
+def _contact_words(kind: str | None) -> str:
+    """``hard contact``, ``soft contact``; ``no contact`` (not "none contact"), ``contact unknown``."""
+    return {"none": "no contact", None: "contact unknown", "": "contact unknown"}.get(kind, f"{kind} contact")

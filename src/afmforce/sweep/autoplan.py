@@ -109,7 +109,7 @@ def _time_calls(calls: Sequence[Callable[[], Any]], n_runs: int) -> float | None
 
 def plan_execution(call: Callable[[], Any] | Sequence[Callable[[], Any]], n_runs: int, workers: int, *,
                    chunk_size: int | None = None, default_chunk_size: int = 1,
-                   serial_threads: int = 1) -> ExecutionPlan:
+                   serial_threads: int = 1, cluster_start: float = CLUSTER_START_SECONDS) -> ExecutionPlan:
     """Time ``call()`` (representative runs) and plan the sweep of ``n_runs`` runs.
 
     Parameters
@@ -130,6 +130,9 @@ def plan_execution(call: Callable[[], Any] | Sequence[Callable[[], Any]], n_runs
         :func:`~afmforce.sweep.simulation.simulate_run`, integrates on one thread
         per core): the serial estimate is divided by
         ``PARALLEL_EFFICIENCY * serial_threads`` when above 1.
+    cluster_start : float
+        Seconds to start the cluster and warm its workers (default
+        :data:`CLUSTER_START_SECONDS`, the dynamics'; an analysis imports more).
 
     Returns
     -------
@@ -141,13 +144,13 @@ def plan_execution(call: Callable[[], Any] | Sequence[Callable[[], Any]], n_runs
         return ExecutionPlan("serial" if workers <= 1 else "dask", size, None, None, None,
                              "the timing run raised; errors are recorded per run")
     serial = n_runs * t_run / (PARALLEL_EFFICIENCY * serial_threads if serial_threads > 1 else 1.0)
-    cluster = CLUSTER_START_SECONDS + n_runs * t_run / (PARALLEL_EFFICIENCY * max(1, workers))
+    cluster = cluster_start + n_runs * t_run / (PARALLEL_EFFICIENCY * max(1, workers))
     if workers <= 1 or serial <= cluster:
         why = ("one worker" if workers <= 1 else
                f"{n_runs} runs x {t_run * 1e3:.3g} ms" + (
                    f" on {serial_threads} threads" if serial_threads > 1 else "") +
                f" = {serial:.3g} s serial <= {cluster:.3g} s on a "
-               f"{workers}-worker cluster (incl. {CLUSTER_START_SECONDS:g} s start)")
+               f"{workers}-worker cluster (incl. {cluster_start:g} s start)")
         if chunk_size is None:
             chunk_size = default_chunk_size
             if serial_threads > 1:  # a chunk is one batch on the threads: keep them all busy

@@ -18,6 +18,7 @@ and one CSV table.
 
 from __future__ import annotations
 
+import glob
 import hashlib
 import json
 import os
@@ -89,11 +90,12 @@ def _plan_one(path: Path, format: str | None) -> tuple[str, int | None]:
 
 
 def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None,
-                timeout: float | None = None) -> list[CurveRef]:
+                timeout: float | None = None, on_file: Callable[[], None] | None = None) -> list[CurveRef]:
     """Work items for ``paths``: one per curve of a force map, one per other file.
 
     Never raises for a bad file: it becomes one item, whose analysis reports the error.
-    ``timeout`` [s] bounds the detection of each file (see :func:`afmforce.io.load`).
+    ``timeout`` [s] bounds the detection of each file (see :func:`afmforce.io.load`);
+    ``on_file()`` is called after each file (a progress bar).
     """
     from ..io._guard import run_with_timeout
 
@@ -109,6 +111,8 @@ def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None,
             refs.extend(CurveRef(str(path), i, ident) for i in range(n))
         else:
             refs.append(CurveRef(str(path), None, ident))
+        if on_file is not None:
+            on_file()
     return refs
 
 
@@ -243,6 +247,10 @@ class CurveAnalysis:
                 if row is not None:  # a rerun resumes: this curve's outputs are complete
                     rows.append(row)
                     continue
+                if self.foreign(stem):
+                    raise OutputExistsError(
+                        f"{self._paths(stem)['json']} holds another analysis (other steps, options or "
+                        "metadata); choose another --out, or pass --force to replace it")
             res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
                           channel=self.channel)
             row = summary_row(res, curve, file=ref.path, index=index,
@@ -263,6 +271,30 @@ class CurveAnalysis:
         if not self.plot:
             paths.pop("png")
         return paths
+
+    def foreign(self, stem: str) -> bool:
+        """Does :attr:`out` hold this curve's outputs of an analysis with other settings?"""
+        path = self._paths(stem)["json"]
+        if not path.exists():
+            return False
+        try:
+            settings = json.loads(path.read_text()).get("analysis_settings")
+        except (OSError, ValueError, AttributeError):
+            return True  # not ours to replace silently
+        return settings != self._settings()
+
+    def clashes(self, refs: Iterable["CurveRef"]) -> list[Path]:
+        """Outputs in :attr:`out` of an analysis of these items with other settings (checked before any
+        work: a rerun with other options never replaces another run's files without ``force``)."""
+        if self.out is None or self.force or not Path(self.out).is_dir():
+            return []
+        found = []
+        for base in dict.fromkeys(Path(r.path).name for r in refs):
+            for pattern in (f"{glob.escape(base)}{OUTPUT_SUFFIX}.json",
+                            f"{glob.escape(base)}_[0-9][0-9][0-9][0-9]{OUTPUT_SUFFIX}.json"):
+                found += [p for p in sorted(Path(self.out).glob(pattern))
+                          if self.foreign(p.name[: -len(OUTPUT_SUFFIX + ".json")])]
+        return found
 
     def finished(self, stem: str) -> dict[str, Any] | None:
         """The summary row stored with a curve's complete outputs (None: analyse it)."""
@@ -317,6 +349,43 @@ def analysis_key(refs: list[CurveRef], analysis: CurveAnalysis) -> str:
             stats[ref.path] = f"{path}|{st.st_size if st else -1}|{st.st_mtime_ns if st else -1}"
         h.update(f"{stats[ref.path]}|{ref.index}\n".encode())
     return h.hexdigest()
+
+
+#: Seconds to start a local cluster whose workers import the analysis (pandas, the pipeline, numba
+#: kernels): measured about 6 s on the idle 2-core development machine (28 s at a load of 10).
+ANALYSIS_CLUSTER_START = 8.0
+
+
+def choose_executor(refs: list[CurveRef], analysis: CurveAnalysis, workers: int | None = None):
+    """Where a batch runs fastest on this machine: ``(ExecutionPlan, workers of the cluster)``.
+
+    Times the analysis of three items here (first, middle, last; outputs not written) and
+    compares serial with a local cluster of the cores that are free now: ``available_cores``
+    less the load average (other processes), at least one. On 2 busy cores that is serial
+    (72 files at a load of 10: 32 s serial, 58 s on a 2-worker cluster; benchmarks/bench_executor.py).
+    """
+    import dataclasses
+    from functools import partial
+
+    from .._cores import available_cores
+    from .autoplan import plan_execution
+
+    from .autoplan import ExecutionPlan
+
+    cores = workers or available_cores()
+    try:
+        load = os.getloadavg()[0]
+    except (AttributeError, OSError):
+        load = 0.0
+    usable = max(1, min(cores, int(cores - load + 1.0)))  # this process's own core is ours
+    if usable <= 1:
+        return ExecutionPlan("serial", 1, None, None, None,
+                             f"{cores} core(s), load {load:.1f}: no core free for a cluster"), 1
+    probe = dataclasses.replace(analysis, out=None, keep_json=False)
+    picks = sorted({0, len(refs) // 2, len(refs) - 1})
+    plan = plan_execution([partial(probe, refs[i]) for i in picks], len(refs), usable,
+                          cluster_start=ANALYSIS_CLUSTER_START)
+    return plan, usable
 
 
 def analyze_files(items: Iterable, analysis: CurveAnalysis | None = None, *, chunk_size: int | None = None,

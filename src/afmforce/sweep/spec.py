@@ -294,6 +294,13 @@ def _from_toml(path: Path, dimensions: Dimensions | None) -> dict:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except FileNotFoundError:
         raise ParameterError(f"--config {path}: no such file") from None
+    except IsADirectoryError:
+        raise ParameterError(f"--config {path} is a folder; give a .toml sweep file") from None
+    except UnicodeDecodeError:
+        raise ParameterError(f"--config {path}: not a UTF-8 text file (TOML sweep file expected; "
+                             "save it as UTF-8)") from None
+    except OSError as exc:
+        raise ParameterError(f"--config {path}: cannot read ({exc.strerror or exc})") from None
     except tomllib.TOMLDecodeError as exc:
         raise ParameterError(f"--config {path}: not valid TOML ({exc})") from None
     unknown = set(data) - {"sweep", "grid", "range", "set"}
@@ -368,6 +375,6 @@ def chunk_size_from_config(config: str | Path | None) -> int | None:
         return None
     try:
         value = tomllib.loads(Path(config).read_text(encoding="utf-8")).get("sweep", {}).get("chunk_size")
-    except (OSError, tomllib.TOMLDecodeError):
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return None  # build_spec reports unreadable files
     return None if value is None else int(value)
