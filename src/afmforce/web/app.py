@@ -1,0 +1,48 @@
+"""The ASGI application: FastAPI with one router per view, behind :class:`~.guard.Guard`."""
+
+from __future__ import annotations
+
+from contextlib import asynccontextmanager
+
+from fastapi import FastAPI, Request
+from fastapi.responses import JSONResponse
+
+from .. import __version__
+from ..errors import AfmforceError
+from .guard import Guard
+from .jobs import JobManager
+from .sessions import Sessions
+from .settings import Settings
+
+__all__ = ["create_app"]
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the application (``settings.resolved()`` is applied: a token when bound beyond loopback)."""
+    from . import routes_analyze, routes_fit, routes_jobs, routes_main, routes_simulate, routes_sweep
+
+    settings = (settings or Settings()).resolved()
+    settings.data.mkdir(parents=True, exist_ok=True)
+    jobs = JobManager(settings.data, budget=settings.job_budget)
+
+    @asynccontextmanager
+    async def lifespan(app):
+        jobs.load()          # sweeps left running by a previous server resume
+        yield
+        jobs.shutdown()
+
+    app = FastAPI(title="afmforce", version=__version__, lifespan=lifespan,
+                  description="Analyse force curves, simulate the dynamic AFM, fit and sweep "
+                              "(afmforce serve; docs/web.md). Values are SI.")
+    app.state.settings = settings
+    app.state.sessions = Sessions(settings.data)
+    app.state.jobs = jobs
+
+    @app.exception_handler(AfmforceError)
+    async def _bad_input(request: Request, exc: AfmforceError):  # one readable line, as the CLI prints
+        return JSONResponse({"error": str(exc)}, status_code=422)
+
+    for module in (routes_main, routes_analyze, routes_simulate, routes_fit, routes_sweep, routes_jobs):
+        app.include_router(module.router)
+    app.add_middleware(Guard, token=settings.token, max_body=settings.max_upload)
+    return app
