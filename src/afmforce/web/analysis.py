@@ -49,13 +49,16 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
 
 
 def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *, format: str | None = None,
-                 arrays: bool = False, max_points: int = 4000, budget: float = 60.0) -> dict[str, Any]:
+                 arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
+                 guard: bool = True) -> dict[str, Any]:
     """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``.
 
     Returns the JSON of ``afmforce analyze --json`` with every stored name replaced by the
     user's; with ``arrays``: each result holds its per-sample arrays (at most ``max_points``
     samples, evenly spread), ``raw`` the raw signal per curve, ``maps`` the force maps.
-    ``budget`` [s] bounds the reading of each file (a file past it is reported as failed).
+    ``budget`` [s] bounds the reading of each file when ``guard`` (a file past it is reported as
+    failed; the reader runs in a forked child, :mod:`afmforce.io._guard`); files read before
+    without failing are read here directly (``guard=False``).
     """
     from ..sweep.files import CurveAnalysis, analyze_files, plan_curves
     from ..sweep.report import analysis_json
@@ -70,9 +73,10 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     t0 = time.perf_counter()
     rename = {str(p): name for p, name in files}        # full stored paths first, then bare names
     rename.update({Path(p).name: name for p, name in files})
-    refs = plan_curves([p for p, _ in files], format, timeout=budget)
+    timeout = budget if guard else None
+    refs = plan_curves([p for p, _ in files], format, timeout=timeout)
     analysis = CurveAnalysis(options=records, probe=probe_record, meta_override=override, format=format,
-                             keep_json=True, json_arrays=arrays, file_timeout=budget)
+                             keep_json=True, json_arrays=arrays, file_timeout=timeout)
     result = analyze_files(refs, analysis, chunk_size=1, executor="serial")
     payload = analysis_json(result)
     payload = _renamed(payload, rename)
@@ -82,8 +86,11 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
             for key in ("time", "position", "separation", "deflection", "force", "segment"):
                 if res.get(key) is not None:
                     res[key] = [res[key][i] for i in idx]
-        payload["raw"] = _raw_signals(refs, analysis, rename, max_points)
-        payload["maps"] = _maps(summary_table(result), refs, analysis, rename)
+        from dataclasses import replace
+
+        direct = replace(analysis, file_timeout=None)   # read once already, in this call
+        payload["raw"] = _raw_signals(refs, direct, rename, max_points)
+        payload["maps"] = _maps(summary_table(result), refs, direct, rename)
     payload["wall_time"] = time.perf_counter() - t0
     return payload
 

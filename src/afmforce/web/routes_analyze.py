@@ -47,13 +47,16 @@ async def analyze(request: Request,
         paths.append((example_path(name), name))
     if not paths:
         raise ParameterError("give a file (field 'file'), an uploaded file's id ('file_id') or an example")
+    guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
     work = run_in_threadpool(run_analysis, paths, option, meta, probe, format=format, arrays=arrays,
-                             max_points=max_points, budget=settings.request_budget)
+                             max_points=max_points, budget=settings.request_budget, guard=guard)
     try:
         payload = await asyncio.wait_for(work, timeout=settings.request_budget)
     except asyncio.TimeoutError:
         raise HTTPException(504, f"cancelled: the analysis ran past its budget of {settings.request_budget:g} s")
     payload["files"] = stored + [{"id": fid, "name": sessions.path(session, fid)[1]} for fid in file_id]
+    bad = {f["file"] for f in payload["failed"]}
+    sessions.mark_read(session, [f["id"] for f in payload["files"] if f["name"] not in bad])
     return payload
 
 

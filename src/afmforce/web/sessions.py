@@ -65,6 +65,20 @@ class Sessions:
             atomic_write_text(folder / "index.json", json.dumps(index), force=True)
         return {"id": file_id, "name": shown, "size": len(data)}
 
+    def mark_read(self, session: str, file_ids) -> None:
+        """Record that these uploads were read once without failing: later analyses of them
+        skip the forked time-guarded reader (a re-run after an option change stays fast)."""
+        with self._lock:
+            index = self._index(session)
+            for fid in file_ids:
+                if fid in index:
+                    index[fid]["read"] = True
+            atomic_write_text(self.folder(session) / "index.json", json.dumps(index), force=True)
+
+    def was_read(self, session: str, file_id: str) -> bool:
+        """Whether the upload was read once without failing (:meth:`mark_read`)."""
+        return bool(self._index(session).get(file_id, {}).get("read"))
+
     def files(self, session: str) -> list[dict[str, Any]]:
         """The session's uploads: ``[{"id", "name", "size"}]``."""
         return [{"id": k, "name": v["name"], "size": v["size"]} for k, v in self._index(session).items()]
