@@ -23,11 +23,13 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     settings = (settings or Settings()).resolved()
     settings.data.mkdir(parents=True, exist_ok=True)
-    jobs = JobManager(settings.data, budget=settings.job_budget)
+    jobs = JobManager(settings.data, budget=settings.job_budget, spare=settings.spare_job)
 
     @asynccontextmanager
     async def lifespan(app):
         jobs.load()          # sweeps left running by a previous server resume
+        if settings.spare_job:
+            jobs.start_spare()
         yield
         jobs.shutdown()
 

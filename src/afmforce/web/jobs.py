@@ -1,6 +1,7 @@
 """Jobs: fits and sweeps run in child processes, with progress, cancel, budget and resume.
 
-A job is a record (``jobs/<id>.json`` in the data folder, written atomically on every
+Jobs run in spawned processes (nothing shared with the server's threads); one spare process
+is kept warm, the compiled integrator loaded, so that a job starts at once. A job is a record (``jobs/<id>.json`` in the data folder, written atomically on every
 change of state): kind, owner session (hashed), parameters, state, progress, result or
 error. Its process reports through a queue (:func:`~.tasks.run_task`); a watcher thread
 applies the reports, and terminates the process on cancel or when the job's time budget
@@ -23,7 +24,7 @@ from pathlib import Path
 from typing import Any
 
 from .._files import atomic_write_text
-from .tasks import run_task
+from .tasks import standby
 
 __all__ = ["Job", "JobManager", "FINISHED"]
 
@@ -82,9 +83,11 @@ class JobManager:
         Data folder (``jobs/`` and ``sweeps/`` inside).
     budget : float
         Time budget of one job [s].
+    spare : bool
+        Keep a warm spare process for the next job.
     """
 
-    def __init__(self, root: Path, budget: float = 3600.0):
+    def __init__(self, root: Path, budget: float = 3600.0, spare: bool = True):
         self.root = Path(root)
         self.folder = self.root / "jobs"
         self.folder.mkdir(parents=True, exist_ok=True)
@@ -95,6 +98,8 @@ class JobManager:
         self._lock = threading.Lock()
         self._ctx = multiprocessing.get_context("spawn")
         self._closing = False
+        self._spare = None
+        self._keep_spare = spare
 
     # -- records -----------------------------------------------------------------------
     def _save(self, job: Job) -> None:
@@ -149,28 +154,49 @@ class JobManager:
             self._cancel.add(job_id)
         return job
 
+    def start_spare(self) -> None:
+        """Start a spare job process now, so that the next job skips its start-up (~5 s)."""
+        with self._lock:
+            if self._spare is None:
+                self._spare = self._new_spare()
+
+    def _new_spare(self, warm: bool = True):
+        import os
+
+        inbox, q = self._ctx.Queue(), self._ctx.Queue()
+        proc = self._ctx.Process(target=standby, args=(inbox, q, os.getpid(), warm), daemon=False,
+                                 name="afmforce-job")
+        proc.start()
+        return proc, inbox, q
+
     def shutdown(self) -> None:
         """Terminate the running processes; their jobs stay ``running`` on disk, so that the
         next server resumes the sweeps."""
         self._closing = True
-        for proc in list(self._procs.values()):
+        procs = list(self._procs.values()) + ([self._spare[0]] if self._spare else [])
+        for proc in procs:
             if proc.is_alive():
                 proc.terminate()
-        for proc in list(self._procs.values()):
+        for proc in procs:
             proc.join(timeout=5)
 
     # -- running -----------------------------------------------------------------------
     def _start(self, job: Job) -> None:
-        q = self._ctx.Queue()
-        proc = self._ctx.Process(target=run_task, args=(job.kind, job.params, q), daemon=False,
-                                 name=f"afmforce-{job.kind}-{job.id}")
+        with self._lock:   # take the warm spare, start the next one
+            spare, self._spare = self._spare, None
+            if spare is None or not spare[0].is_alive():
+                spare = self._new_spare(warm=False)
+            if not self._closing and self._keep_spare:
+                self._spare = self._new_spare()
+        proc, inbox, q = spare
         job.state, job.error = "running", None
         self._save(job)
-        proc.start()
+        inbox.put((job.kind, job.params))
         self._procs[job.id] = proc
-        threading.Thread(target=self._watch, args=(job, proc, q), daemon=True).start()
+        # the queues live as long as the watcher: a queue collected here would vanish under the child
+        threading.Thread(target=self._watch, args=(job, proc, q, inbox), daemon=True).start()
 
-    def _watch(self, job: Job, proc, q) -> None:
+    def _watch(self, job: Job, proc, q, inbox) -> None:
         deadline = time.monotonic() + self.budget
         last_save = 0.0
         while True:

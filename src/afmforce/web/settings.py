@@ -63,6 +63,8 @@ class Settings:
         Time budget of one analysis or simulation request [s]; a request past it is cancelled.
     job_budget : float
         Time budget of one fit or sweep job [s]; past it the job is cancelled.
+    spare_job : bool
+        Keep one job process warm (compiled integrator loaded), so that a fit or sweep starts at once.
     """
 
     host: str = "127.0.0.1"
@@ -72,6 +74,7 @@ class Settings:
     data: Path = field(default_factory=lambda: Path.home() / ".afmforce" / "serve")
     request_budget: float = 60.0
     job_budget: float = 3600.0
+    spare_job: bool = True
 
     def __post_init__(self) -> None:
         if not 0 <= self.port < 65536:

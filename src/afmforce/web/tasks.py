@@ -16,7 +16,7 @@ import numpy as np
 from .._json import to_jsonable
 from ..errors import AfmforceError
 
-__all__ = ["run_task", "decimate"]
+__all__ = ["run_task", "standby", "decimate"]
 
 
 def decimate(n: int, max_points: int | None) -> np.ndarray:
@@ -128,3 +128,23 @@ def run_task(kind: str, params: dict[str, Any], queue) -> None:
         queue.put(("error", str(exc)))
     except Exception as exc:  # reported to the page, the server keeps running
         queue.put(("error", f"unexpected {type(exc).__name__}: {exc}"))
+
+
+def standby(inbox, queue, parent: int, warm: bool = True) -> None:
+    """A spare job process: load the compiled integrator now (about 5 s: numba's cache), then wait
+    for one task on ``inbox`` and run it. It leaves when the server (``parent``) is gone."""
+    import os
+    import queue as _queue
+
+    if warm:
+        from ..dynamics import simulate
+
+        simulate(velocity=1e-5)
+    while True:
+        try:
+            kind, params = inbox.get(timeout=1.0)
+        except _queue.Empty:
+            if os.getppid() != parent:
+                return
+            continue
+        return run_task(kind, params, queue)
