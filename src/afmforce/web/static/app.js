@@ -81,7 +81,7 @@ function control(f, onChange, { slider = false, value = f.default } = {}) {
         if (f.log) { vlo = Math.max(lo, Math.log10(Math.abs(f.default)) - 1.5); vhi = Math.min(hi, Math.log10(Math.abs(f.default)) + 1.5); }
         else { const w = Math.abs(f.default) * 3; vlo = Math.max(lo, f.default - w); vhi = Math.min(hi, f.default + w); }
       }
-      const r = el("input", { type: "range", min: vlo, max: vhi, step: (vhi - vlo) / 200, "data-slider": f.name });
+      const r = el("input", { type: "range", min: vlo, max: vhi, step: (vhi - vlo) / 200, "data-slider": f.name, "data-log": f.log ? "1" : "0" });
       const toSlider = (si) => (f.log ? Math.log10(Math.abs(si)) : si);
       if (typeof value === "number" && value !== 0) r.value = toSlider(value);
       r.addEventListener("input", () => { const si = f.log ? 10 ** Number(r.value) : Number(r.value); num.value = show(si); onChange(); });
@@ -93,7 +93,7 @@ function control(f, onChange, { slider = false, value = f.default } = {}) {
 }
 
 // ---- Analyse ----------------------------------------------------------------------------------
-const AN = { payload: null, files: [], examples: [], controls: [], busy: false, again: false };
+const AN = { payload: null, files: [], examples: [], controls: [], busy: false, next: null };
 function optionTexts() {
   const out = [];
   for (const c of AN.controls) {
@@ -105,7 +105,7 @@ function optionTexts() {
   return out;
 }
 async function analyse(upload) {
-  if (AN.busy) { AN.again = true; return; }
+  if (AN.busy) { AN.next = upload || AN.next === "upload" ? "upload" : "rerun"; return; }   // the latest wins, an upload is never dropped
   AN.busy = true; $("an-error").textContent = ""; $("status").textContent = "analysing…";
   const fd = new FormData();
   if (upload) { for (const f of $("an-files").files) fd.append("file", f); }
@@ -123,12 +123,12 @@ async function analyse(upload) {
     const sel = $("an-curve"), keep = sel.value;
     sel.innerHTML = ""; names.forEach((n) => sel.append(el("option", { value: n, text: n })));
     if (names.includes(keep)) sel.value = keep;
-    if (p.failed.length) $("an-error").textContent = p.failed.map((f) => `${f.file}${f.curve !== undefined ? "#" + f.curve : ""}: ${f.error}`).join("\n");
+    if (p.failed.length) $("an-error").textContent = p.failed.map((f) => (f.error.startsWith(f.file) ? f.error : `${f.file}${f.curve !== undefined ? "#" + f.curve : ""}: ${f.error}`)).join("\n");
     drawMaps(p.maps || []);
     if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time"].forEach((i) => Plotly.purge(i));
   } catch (e) { $("an-error").textContent = e.message; }
   AN.busy = false; $("status").textContent = "";
-  if (AN.again) { AN.again = false; analyse(false); }
+  if (AN.next) { const up = AN.next === "upload"; AN.next = null; analyse(up); }
 }
 function drawCurve() {
   const name = $("an-curve").value, res = AN.payload.results[name], raw = (AN.payload.raw || {})[name];
