@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import threading
 from contextlib import asynccontextmanager
 
 from fastapi import FastAPI, Request
@@ -25,8 +26,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     settings.data.mkdir(parents=True, exist_ok=True)
     jobs = JobManager(settings.data, budget=settings.job_budget, spare=settings.spare_job)
 
+    warm = threading.Event()
+
+    def warm_up():  # load the compiled integrator (numba's cache, ~5 s) before the first slider move
+        from ..dynamics import simulate
+
+        try:
+            simulate(velocity=1e-5)
+        finally:
+            warm.set()
+
     @asynccontextmanager
     async def lifespan(app):
+        threading.Thread(target=warm_up, daemon=True, name="afmforce-warm-up").start()
         jobs.load()          # sweeps left running by a previous server resume
         if settings.spare_job:
             jobs.start_spare()
@@ -39,6 +51,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.sessions = Sessions(settings.data)
     app.state.jobs = jobs
+    app.state.warm = warm
 
     @app.exception_handler(AfmforceError)
     async def _bad_input(request: Request, exc: AfmforceError):  # one readable line, as the CLI prints

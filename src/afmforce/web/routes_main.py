@@ -44,11 +44,12 @@ def static(name: str) -> FileResponse:
 
 @router.get("/api/health", tags=["server"])
 def health(request: Request) -> dict:
-    """``{"status": "ok", "version", "token_required", "max_upload", "jobs_running"}``."""
+    """``{"status": "ok", "version", "token_required", "max_upload", "jobs_running", "warm"}`` (warm: the
+    simulator is loaded; until then the first simulation waits for it)."""
     s = request.app.state.settings
     running = sum(1 for j in request.app.state.jobs._jobs.values() if j.state == "running")
     return {"status": "ok", "version": __version__, "token_required": s.token is not None,
-            "max_upload": s.max_upload, "jobs_running": running}
+            "max_upload": s.max_upload, "jobs_running": running, "warm": request.app.state.warm.is_set()}
 
 
 @router.get("/api/schema", tags=["server"])
