@@ -4,7 +4,11 @@ the page, per-sample arrays, the raw signal and force-map images with axes in µ
 
 from __future__ import annotations
 
+import json
+import threading
 import time
+from collections import OrderedDict
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -13,8 +17,36 @@ import numpy as np
 from .._fields import QUANTITIES
 from ..errors import ParameterError
 from .tasks import decimate
+from ..sweep.files import CurveAnalysis
 
-__all__ = ["parse_inputs", "run_analysis"]
+__all__ = ["parse_inputs", "run_analysis", "CachedAnalysis"]
+
+#: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)].
+_CURVES: OrderedDict = OrderedDict()
+_CURVES_KEPT = 16
+_LOCK = threading.Lock()
+
+
+@dataclass(frozen=True)
+class CachedAnalysis(CurveAnalysis):
+    """:class:`~afmforce.sweep.files.CurveAnalysis` that keeps the last curves it read in memory:
+    a re-run after an option change does not parse the file again (a 10,000-row text file: 0.3 s)."""
+
+    def load(self, ref):
+        path = Path(ref.location)
+        st = path.stat()
+        key = (str(path), st.st_size, st.st_mtime_ns, ref.index,
+               json.dumps(dict(self.meta_override), sort_keys=True, default=repr), self.format)
+        with _LOCK:
+            if key in _CURVES:
+                _CURVES.move_to_end(key)
+                return _CURVES[key]
+        pairs = super().load(ref)
+        with _LOCK:
+            _CURVES[key] = pairs
+            while len(_CURVES) > _CURVES_KEPT:
+                _CURVES.popitem(last=False)
+        return pairs
 
 _PROBE = ("radius", "spring_constant", "theta0", "sensitivity", "resonance_frequency", "L0", "L1", "L2")
 
@@ -60,7 +92,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     failed; the reader runs in a forked child, :mod:`afmforce.io._guard`); files read before
     without failing are read here directly (``guard=False``).
     """
-    from ..sweep.files import CurveAnalysis, analyze_files, plan_curves
+    from ..sweep.files import analyze_files, plan_curves
     from ..sweep.report import analysis_json
     from ..sweep.summary import summary_table
 
@@ -75,7 +107,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     rename.update({Path(p).name: name for p, name in files})
     timeout = budget if guard else None
     refs = plan_curves([p for p, _ in files], format, timeout=timeout)
-    analysis = CurveAnalysis(options=records, probe=probe_record, meta_override=override, format=format,
+    analysis = CachedAnalysis(options=records, probe=probe_record, meta_override=override, format=format,
                              keep_json=True, json_arrays=arrays, file_timeout=timeout)
     result = analyze_files(refs, analysis, chunk_size=1, executor="serial")
     payload = analysis_json(result)
@@ -90,7 +122,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
 
         direct = replace(analysis, file_timeout=None)   # read once already, in this call
         payload["raw"] = _raw_signals(refs, direct, rename, max_points)
-        payload["maps"] = _maps(summary_table(result), refs, direct, rename)
+        maps = any(r.index is not None for r in refs)
+        payload["maps"] = _maps(summary_table(result), refs, direct, rename) if maps else []
     payload["wall_time"] = time.perf_counter() - t0
     return payload
 
@@ -135,8 +168,6 @@ def _raw_signals(refs, analysis, rename, max_points) -> dict[str, Any]:
 def _maps(table, refs, analysis, rename) -> list[dict[str, Any]]:
     from ..analysis.maps import MAP_QUANTITIES, map_images
 
-    if not any(r.index is not None for r in refs):
-        return []
     out = []
     for q in ("adhesion", "jump_in_distance", "hamaker_radius", "indentation"):
         for image in map_images(table, MAP_QUANTITIES[q]):

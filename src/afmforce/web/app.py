@@ -28,10 +28,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     warm = threading.Event()
 
-    def warm_up():  # load the compiled integrator (numba's cache, ~5 s) before the first slider move
+    def warm_up():  # load the compiled integrator and the unit parser before the first request needs them
         from ..dynamics import simulate
+        from ..units import parse_quantity
 
         try:
+            parse_quantity("1 nm", "length")     # pint's registry: 2-5 s on its first use
             simulate(velocity=1e-5)
         finally:
             warm.set()

@@ -6,6 +6,7 @@ import asyncio
 from typing import Annotated
 
 from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
+from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from ..errors import ParameterError
@@ -26,7 +27,7 @@ async def analyze(request: Request,
                                                                "spring_constant, theta0, sensitivity, ...)")] = [],
                   format: Annotated[str | None, Form(description="reader instead of detection")] = None,
                   arrays: Annotated[bool, Form(description="add per-sample arrays, raw signals, maps")] = False,
-                  max_points: Annotated[int, Form(ge=100, le=200_000)] = 4000) -> dict:
+                  max_points: Annotated[int, Form(ge=100, le=200_000)] = 4000) -> JSONResponse:
     """The JSON of ``afmforce analyze FILE --json`` (``results``, ``failed``, ``oscillation_origin``)
     plus ``files`` (the ids to re-run with ``file_id`` after an option change) and ``wall_time`` [s];
     with ``arrays`` also ``raw`` and ``maps``. A file that cannot be read is listed under ``failed``."""
@@ -57,7 +58,7 @@ async def analyze(request: Request,
     payload["files"] = stored + [{"id": fid, "name": sessions.path(session, fid)[1]} for fid in file_id]
     bad = {f["file"] for f in payload["failed"]}
     sessions.mark_read(session, [f["id"] for f in payload["files"] if f["name"] not in bad])
-    return payload
+    return JSONResponse(payload)   # plain JSON already: no second walk through every value
 
 
 @router.get("/api/files")
