@@ -14,8 +14,6 @@ import pytest
 
 from afmforce.web.sessions import safe_suffix
 
-REAL = Path("/work/shared/data/real")
-HERE = Path(__file__).resolve().parents[1] / "data"
 
 
 def _file() -> Path:
@@ -221,3 +219,31 @@ def test_openapi_documents_the_api(client):
     paths = client.get("/openapi.json").json()["paths"]
     for p in ("/api/health", "/api/analyze", "/api/simulate", "/api/fit", "/api/sweep", "/api/jobs/{job_id}"):
         assert p in paths
+
+
+def test_serve_command_prints_its_url_and_a_generated_token(tmp_path):
+    """``afmforce serve --host 0.0.0.0``: a token is generated, printed and required."""
+    import os
+    import re
+    import subprocess
+    import sys
+
+    import httpx
+
+    src = Path(__file__).resolve().parents[2] / "src"
+    env = {**os.environ, "PYTHONPATH": str(src)}
+    proc = subprocess.Popen([sys.executable, "-m", "afmforce.cli.main", "serve", "--host", "0.0.0.0", "--port", "0",
+                             "--data", str(tmp_path / "d")], stdout=subprocess.PIPE, stderr=subprocess.STDOUT,
+                            text=True, env=env)
+    try:
+        line = proc.stdout.readline()
+        m = re.search(r"http://127\.0\.0\.1:(\d+)/\?token=(\S+)", line)
+        assert m, line
+        assert "token:" in proc.stdout.readline()
+        base = f"http://127.0.0.1:{m.group(1)}/"
+        assert httpx.get(base + "api/health", timeout=30).status_code == 401
+        r = httpx.get(base + "api/health", headers={"authorization": f"Bearer {m.group(2)}"}, timeout=30)
+        assert r.status_code == 200 and r.json()["token_required"] is True
+    finally:
+        proc.terminate()
+        proc.wait(timeout=30)

@@ -127,3 +127,17 @@ def test_run_a_small_fit_and_read_the_verdict(page):
     assert page.evaluate("document.getElementById('fit-progress').value") == 1
     _shot(page, "fit")
     assert not page.errors
+
+
+def test_run_a_small_sweep_and_see_its_table(page):
+    page.click("button[data-view=sweep]")
+    page.fill("#sw-grid", "xi=0.003,0.03,0.3")
+    page.fill("#sw-sets", "velocity=1um/s")
+    page.select_option("#sw-executor", "serial")
+    page.click("#sw-run")
+    page.wait_for_function("document.querySelectorAll('#sw-table tr').length >= 4", timeout=120_000)
+    head = page.inner_text("#sw-table tr:first-child")
+    assert "xi" in head and "min_apparent_deflection" in head
+    assert page.evaluate("document.getElementById('sw-plot').data[0].x.length") == 3
+    assert "done" in page.inner_text("#sw-state")
+    _shot(page, "sweep")

@@ -1,7 +1,7 @@
 """``afmforce serve``: the web application (analyse, simulate, fit, sweep) on a local server.
 
 Binds to 127.0.0.1 by default; bound to any other address it requires a token
-(``--token``, or one generated and printed) on every request. Everything the page
+(--token, or one generated and printed) on every request. Everything the page
 needs ships inside the package: it works without network. See docs/web.md.
 """
 
