@@ -247,3 +247,24 @@ def test_serve_command_prints_its_url_and_a_generated_token(tmp_path):
     finally:
         proc.terminate()
         proc.wait(timeout=30)
+
+
+def test_the_page_needs_no_network(client):
+    """Everything the page loads comes from this server: no http(s) URL in it, Plotly served locally."""
+    import re
+
+    from afmforce.web.routes_main import STATIC
+
+    page = client.get("/")
+    assert page.status_code == 200
+    for name in ("index.html", "app.js", "style.css"):
+        text = (STATIC / name).read_text(encoding="utf-8")
+        assert not re.search(r"https?://|//cdn|@import", text), name
+    srcs = re.findall(r'(?:src|href)="([^"]+)"', page.text)
+    assert "static/plotly.min.js" in srcs
+    for src in srcs:
+        assert client.get("/" + src).status_code == 200, src
+    js = client.get("/static/plotly.min.js")
+    assert js.status_code == 200 and len(js.content) > 1_000_000 and b"plotly" in js.content[:2000].lower()
+    assert client.get("/static/..%2Fapp.py").status_code == 404
+    assert client.get("/docs").status_code == 404          # Swagger UI would load from a CDN

@@ -47,9 +47,10 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         yield
         jobs.shutdown()
 
-    app = FastAPI(title="afmforce", version=__version__, lifespan=lifespan,
+    app = FastAPI(title="afmforce", version=__version__, lifespan=lifespan, docs_url=None, redoc_url=None,
                   description="Analyse force curves, simulate the dynamic AFM, fit and sweep "
-                              "(afmforce serve; docs/web.md). Values are SI.")
+                              "(afmforce serve; docs/web.md). Values are SI. (No Swagger page: it loads "
+                              "its script from a CDN, and this server works offline.)")
     app.state.settings = settings
     app.state.sessions = Sessions(settings.data)
     app.state.jobs = jobs

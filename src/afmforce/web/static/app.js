@@ -329,6 +329,7 @@ function follow(id, prefix, onEnd) {
     $(prefix + "-state").textContent = job.state + (job.resumed ? ` (resumed ${job.resumed}x)` : "");
     if (job.error) $(prefix + "-error").textContent = job.error;
     if (job.result) onEnd(job.result);
+    listJobs();
   });
   $(prefix + "-cancel").onclick = () => api(`api/jobs/${id}/cancel`, { method: "POST" });
 }
