@@ -50,13 +50,13 @@ async def events(request: Request, job_id: str) -> StreamingResponse:
         while True:
             if await request.is_disconnected():
                 return
-            now = (job.state, json.dumps(job.progress))
-            if job.state in FINISHED:
+            state, progress = job.state, json.dumps(job.progress)
+            if progress != last:        # the last stage too, before the end
+                last = progress
+                yield f"event: progress\ndata: {json.dumps({'state': state, 'progress': job.progress})}\n\n"
+            if state in FINISHED:
                 yield f"event: end\ndata: {json.dumps(job.public())}\n\n"
                 return
-            if now != last:
-                last = now
-                yield f"event: progress\ndata: {json.dumps({'state': job.state, 'progress': job.progress})}\n\n"
             await asyncio.sleep(0.2)
 
     return StreamingResponse(stream(), media_type="text/event-stream", headers={"cache-control": "no-cache"})

@@ -320,6 +320,7 @@ function follow(id, prefix, onEnd) {
   $(prefix + "-cancel").disabled = false;
   es.addEventListener("progress", (e) => {
     const d = JSON.parse(e.data), p = d.progress || {};
+    if (p.what) (window.PROGRESS = window.PROGRESS || []).push(`${prefix}: ${p.what}`);
     if (p.fraction !== undefined && p.fraction !== null) $(prefix + "-progress").value = p.fraction;
     $(prefix + "-state").textContent = `${d.state}${p.what ? ": " + p.what : ""}${p.total ? ` (${p.done}/${p.total} ${p.unit})` : ""}`;
   });
