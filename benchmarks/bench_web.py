@@ -169,8 +169,8 @@ def main() -> int:
         print(f"slider -> redrawn Fig-5 trajectory ({len(s['page_ms'])} moves of xi, in Chromium): "
               f"p50 {pct(s['page_ms'], 50):.0f} ms, p95 {p95:.0f} ms (target < 150 ms); library simulate() "
               f"p50 {pct(s['library_ms'], 50):.1f} ms: page/library {pct(s['page_ms'], 50) / pct(s['library_ms'], 50):.1f}x")
-        server, fetch, draw, paint = s["parts_p50"]
-        print(f"  p50 parts: server {server:.0f} ms, request + JSON {fetch:.0f} ms, Plotly {draw:.0f} ms, "
+        on_server, fetch, draw, paint = s["parts_p50"]
+        print(f"  p50 parts: server {on_server:.0f} ms, request + JSON {fetch:.0f} ms, Plotly {draw:.0f} ms, "
               f"paint {paint:.0f} ms")
         ok &= p95 < 150
     r = rerun(url, args.reruns)
