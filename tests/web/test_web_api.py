@@ -268,3 +268,21 @@ def test_the_page_needs_no_network(client):
     assert js.status_code == 200 and len(js.content) > 1_000_000 and b"plotly" in js.content[:2000].lower()
     assert client.get("/static/..%2Fapp.py").status_code == 404
     assert client.get("/docs").status_code == 404          # Swagger UI would load from a CDN
+
+
+def test_force_map_image_has_axes_in_um_and_names_its_curves(client):
+    """The 2x2 corner extract of a 10x10 JPK map (600 um square; tests/data): pixels at the corners."""
+    path = Path(__file__).resolve().parents[1] / "data" / "afmforce-map_jpk-map2x2.h5"
+    r = client.post("/api/analyze", files={"file": (path.name, path.read_bytes())}, data={"arrays": "true"})
+    assert r.status_code == 200 and len(r.json()["results"]) == 4
+    m = next(m for m in r.json()["maps"] if m["quantity"] == "adhesion")
+    assert m["axes"] == "um" and len(m["x_um"]) == 10 and len(m["y_um"]) == 10
+    # the stage positions the file stores (two curves per column or row: their mean, on a line)
+    assert m["x_um"][0] == pytest.approx((31.97265625 + 31.85546875) / 2, rel=1e-9)
+    assert m["x_um"][9] == pytest.approx(571.8359375, rel=1e-9)
+    assert m["y_um"][0] == pytest.approx((-753.53515625 - 753.90625) / 2, rel=1e-9)
+    assert m["y_um"][9] == pytest.approx(-213.73046875, rel=1e-9)
+    assert m["curves"][0][0] == f"{path.name}#0" and m["curves"][9][9] == f"{path.name}#2"
+    assert m["curves"][5][5] is None and m["z"][5][5] is None
+    adhesion = -r.json()["results"][f"{path.name}#0"]["adhesion_force"]
+    assert m["z"][0][0] == pytest.approx(adhesion, rel=1e-12)

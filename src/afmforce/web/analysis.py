@@ -187,9 +187,11 @@ def _maps(table, refs, analysis, rename) -> list[dict[str, Any]]:
 
 
 def _axes(refs, analysis, source, nx, ny):
-    """Grid coordinates [µm] from the curves' stage positions (None when the file has none)."""
-    xs: dict[int, float] = {}
-    ys: dict[int, float] = {}
+    """Grid coordinates [µm] from the stage positions of the curves the file holds: a straight line
+    through (grid index, position) per axis, so a map with curves at only some points (a corner
+    extract) still gets its axes. None when fewer than two distinct indices carry a position."""
+    xs: dict[int, list[float]] = {}
+    ys: dict[int, list[float]] = {}
     for ref in refs:
         if ref.path != source or ref.index is None:
             continue
@@ -197,10 +199,18 @@ def _axes(refs, analysis, source, nx, ny):
             for _, curve in analysis.load(ref):
                 m = curve.metadata
                 if m.get("position_x") is not None and m.get("map_x") is not None:
-                    xs[int(m["map_x"])] = float(m["position_x"]) * 1e6
-                    ys[int(m["map_y"])] = float(m["position_y"]) * 1e6
+                    xs.setdefault(int(m["map_x"]), []).append(float(m["position_x"]) * 1e6)
+                    ys.setdefault(int(m["map_y"]), []).append(float(m["position_y"]) * 1e6)
         except Exception:
             return None, None
-    if len(xs) != nx or len(ys) != ny:
-        return None, None
-    return [xs[i] for i in range(nx)], [ys[j] for j in range(ny)]
+
+    def line(known: dict[int, list[float]], n: int):
+        if len(known) < 2:
+            return None
+        idx = np.array([i for i, v in known.items() for _ in v], float)
+        pos = np.array([p for v in known.values() for p in v])
+        slope, offset = np.polyfit(idx, pos, 1)
+        return [float(offset + slope * i) for i in range(n)]
+
+    x, y = line(xs, nx), line(ys, ny)
+    return (x, y) if x is not None and y is not None else (None, None)

@@ -145,10 +145,8 @@ function drawCurve() {
   const d = res.details || {}, marks = [];
   const j = (d.jumps || {}).jump_in; if (j && j.found !== false && res.jump_in_separation !== null)
     marks.push({ x: [res.jump_in_separation * 1e9], y: [res.jump_in_force * 1e9], name: "jump-in", mode: "markers", marker: { size: 11, symbol: "triangle-down", color: "#1a7f37" }, hovertemplate: "jump-in<br>h = %{x:.3f} nm<br>F = %{y:.4f} nN<extra></extra>" });
-  if (d.adhesion && d.adhesion.found && d.adhesion.index !== null) {
-    const i = d.adhesion.index; // index in the full arrays: show the adhesion force at its distance
-    marks.push({ x: [null], y: [null], name: `adhesion ${fmt(res.adhesion_force, "N")}`, mode: "markers", marker: { color: "#b00020" } });
-  }
+  if (res.adhesion_force !== null && res.adhesion_distance !== null)   // the deepest retract point, at its distance from contact
+    marks.push({ x: [res.adhesion_distance * 1e9], y: [res.adhesion_force * 1e9], name: `adhesion ${fmt(res.adhesion_force, "N")}`, mode: "markers", marker: { size: 10, symbol: "diamond", color: "#b00020" }, hovertemplate: "adhesion %{y:.4f} nN<br>%{x:.2f} nm from contact<extra></extra>" });
   if (res.pull_off_force !== null) marks.push({ x: [0], y: [res.pull_off_force * 1e9], name: `pull-off ${fmt(res.pull_off_force, "N")}`, mode: "markers", marker: { size: 11, symbol: "x", color: "#b00020" }, hovertemplate: "pull-off F = %{y:.4f} nN<extra></extra>" });
   const v = d.vdw || {};
   if (v.status === "ok" && v.hamaker_radius) {
@@ -158,7 +156,6 @@ function drawCurve() {
     }
     marks.push({ x: xs, y: ys, name: `vdW fit A R = ${fmt(v.hamaker_radius, "")} J m`, mode: "lines", line: { dash: "dash", color: "#6a3d9a" }, hovertemplate: "fit: F = %{y:.4f} nN at %{x:.2f} nm<extra></extra>" });
   }
-  const rng = res.separation && res.separation.length ? null : undefined;
   Plotly.react("an-plot-force", f.concat(marks), { ...LAYOUT, title: { text: `Force vs separation — ${name}` }, xaxis: { title: { text: "separation h [nm]" } }, yaxis: { title: { text: "force F [nN]" } } }, CONFIG);
   if (raw) {
     const u = raw.unit || "";
