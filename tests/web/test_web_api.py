@@ -286,3 +286,12 @@ def test_force_map_image_has_axes_in_um_and_names_its_curves(client):
     assert m["curves"][5][5] is None and m["z"][5][5] is None
     adhesion = -r.json()["results"][f"{path.name}#0"]["adhesion_force"]
     assert m["z"][0][0] == pytest.approx(adhesion, rel=1e-12)
+
+
+def test_requests_from_other_sites_are_refused(client):
+    """Another web site's page cannot drive the local server (CSRF), nor a rebound DNS name."""
+    evil = client.post("/api/simulate", json={}, headers={"origin": "http://evil.example"})
+    assert evil.status_code == 403 and "cross-site" in evil.json()["error"]
+    assert client.get("/api/health", headers={"host": "evil.example:8765"}).status_code == 403
+    same = client.get("/api/health", headers={"origin": "http://127.0.0.1"})
+    assert same.status_code == 200

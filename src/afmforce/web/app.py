@@ -62,5 +62,5 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     for module in (routes_main, routes_analyze, routes_simulate, routes_fit, routes_sweep, routes_jobs):
         app.include_router(module.router)
-    app.add_middleware(Guard, token=settings.token, max_body=settings.max_upload)
+    app.add_middleware(Guard, token=settings.token, max_body=settings.max_upload, loopback=settings.loopback)
     return app

@@ -7,6 +7,8 @@
   uploads and jobs belong to it, so two users never see each other's data.
 * A request body larger than the limit gets 413 (from ``Content-Length`` before it
   is read, and while it is read when the length is not announced).
+* Requests sent by another web site are refused (403): a browser's ``Origin`` must be this
+  server's own; bound to loopback, the ``Host`` must be a loopback name (DNS rebinding).
 """
 
 from __future__ import annotations
@@ -16,13 +18,14 @@ import json
 import re
 import secrets
 from http.cookies import SimpleCookie
-from urllib.parse import parse_qs
+from urllib.parse import parse_qs, urlsplit
 
 __all__ = ["Guard", "SESSION_COOKIE", "TOKEN_COOKIE"]
 
 SESSION_COOKIE = "afmforce_session"
 TOKEN_COOKIE = "afmforce_token"
 _SESSION = re.compile(r"^[A-Za-z0-9_-]{32,64}$")
+_LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
 
 
 class _TooLarge(Exception):
@@ -48,8 +51,19 @@ class Guard:
         Largest request body [bytes].
     """
 
-    def __init__(self, app, token: str | None, max_body: int):
-        self.app, self.token, self.max_body = app, token, max_body
+    def __init__(self, app, token: str | None, max_body: int, loopback: bool = True):
+        self.app, self.token, self.max_body, self.loopback = app, token, max_body, loopback
+
+    def _foreign(self, headers: dict) -> str | None:
+        """Why a request comes from elsewhere (another site's page, a rebound DNS name), or None."""
+        host = headers.get(b"host", b"").decode("latin-1")
+        name = (urlsplit(f"//{host}").hostname or "") if host else ""
+        if self.loopback and host and name not in _LOOPBACK_NAMES:
+            return f"host {host!r} is not this loopback server"
+        origin = headers.get(b"origin", b"").decode("latin-1")
+        if origin and origin != "null" and urlsplit(origin).netloc != host:
+            return f"cross-site request from {origin} refused"
+        return None
 
     def _token_ok(self, headers: dict, cookies: dict, query: dict) -> tuple[bool, bool]:
         """(accepted, came in the query: set the cookie)."""
@@ -72,6 +86,9 @@ class Guard:
             pass
         cookies = {k: m.value for k, m in jar.items()}
         query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
+        foreign = self._foreign(headers)
+        if foreign:
+            return await _reply(send, 403, foreign)
         ok, set_token = self._token_ok(headers, cookies, query)
         if not ok:
             return await _reply(send, 401, "this server needs its token: open the URL it printed "
