@@ -126,7 +126,7 @@ async function analyse(upload) {
     if (names.includes(keep)) sel.value = keep;
     if (p.failed.length) $("an-error").textContent = p.failed.map((f) => (f.error.startsWith(f.file) ? f.error : `${f.file}${f.curve !== undefined ? "#" + f.curve : ""}: ${f.error}`)).join("\n");
     drawMaps(p.maps || []);
-    if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time"].forEach((i) => Plotly.purge(i));
+    if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance"].forEach((i) => Plotly.purge(i));
   } catch (e) { $("an-error").textContent = e.message; }
   AN.busy = false; $("status").textContent = "";
   if (AN.next) { const up = AN.next === "upload"; AN.next = null; analyse(up); }
@@ -167,12 +167,7 @@ function drawCurve() {
     }
     Plotly.react("an-plot-raw", rt, { ...LAYOUT, title: { text: "Raw signal vs piezo position" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
   }
-  const tt = [];
-  for (const [k, label, color] of parts) {
-    if (!seg.includes(k)) continue;
-    tt.push({ x: pick(res.time, k), y: sc(pick(res.deflection, k), 1e9), name: label, mode: "lines", line: { color }, hovertemplate: "t = %{x:.4f} s<br>deflection = %{y:.4f} nm<extra>" + label + "</extra>" });
-  }
-  Plotly.react("an-plot-time", tt, { ...LAYOUT, title: { text: "Deflection vs time (drift-corrected, calibrated)" }, xaxis: { title: { text: "time t [s]" } }, yaxis: { title: { text: "deflection [nm]" } } }, CONFIG);
+  drawDrift(raw, d, parts);
   const rows = [["contact", `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
     ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
     ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", `${res.friction}: ${res.friction_verdict}`],
@@ -185,6 +180,31 @@ function drawCurve() {
     const det = el("details", {}, el("summary", { text: step + (res.not_applicable && res.not_applicable[step] ? " (not applicable)" : "") }), table(r, ["field", "value", "unit"]));
     box.append(det);
   }
+}
+function drawDrift(raw, d, parts) {   // the drift step: raw signal against time, its baselines; then the compliance lines
+  const dr = d.drift, co = d.compliance;
+  if (!raw) return;
+  const [fs, us] = U[raw.unit] || [1, raw.unit];
+  const start = (k) => raw.time[raw.segment.indexOf(k)];
+  const base = (t, k) => (!dr ? 0 : k === 1 ? dr.offset_retract + dr.slope_retract * (t - start(1)) : dr.offset_approach + dr.slope_approach * (t - start(0)));
+  const tt = [];
+  for (const [k, label, color] of parts) {
+    if (!raw.segment.includes(k)) continue;
+    const t = raw.time.map((x, i) => (raw.segment[i] === k ? x : null));
+    tt.push({ x: t, y: sc(raw.signal.map((x, i) => (raw.segment[i] === k ? x : null)), fs), name: label, mode: "lines", line: { color }, hovertemplate: `t = %{x:.4f} s<br>%{y:.4g} ${us}<extra>${label}</extra>` });
+    if (dr && k !== 2) tt.push({ x: t, y: sc(t.map((x) => (x === null ? null : base(x, k))), fs), name: `${label} baseline`, mode: "lines", line: { color, dash: "dash" }, hovertemplate: `baseline %{y:.4g} ${us}<extra>${label}</extra>` });
+  }
+  Plotly.react("an-plot-time", tt, { ...LAYOUT, title: { text: `Drift: raw signal and baselines (${dr ? dr.retract_line + " retract line" : "no drift step"})` }, xaxis: { title: { text: "time t [s]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
+  if (!co || !co.approach) { Plotly.purge("an-plot-compliance"); return; }
+  const ct = [], lo = Math.min(co.approach.z_min, (co.retract || co.approach).z_min), hi = Math.max(co.approach.z_max, (co.retract || co.approach).z_max), w = (hi - lo) * 2;
+  for (const [k, label, color] of parts) {
+    if (k === 2 || !raw.segment.includes(k)) continue;
+    const keep = raw.piezo.map((z, i) => raw.segment[i] === k && z >= lo - w && z <= hi + w);
+    ct.push({ x: sc(raw.piezo.map((z, i) => (keep[i] ? z : null)), 1e9), y: sc(raw.signal.map((x, i) => (keep[i] ? x - base(raw.time[i], k) : null)), fs), name: label, mode: "markers", marker: { size: 3, color }, hovertemplate: `z = %{x:.2f} nm<br>%{y:.4g} ${us}<extra>${label}</extra>` });
+    const line = k === 1 ? co.retract : co.approach;
+    if (line) ct.push({ x: [line.z_min * 1e9, line.z_max * 1e9], y: [(line.intercept + line.slope * line.z_min) * fs, (line.intercept + line.slope * line.z_max) * fs], name: `${label} compliance, slope ${Number(line.slope.toPrecision(4))} ${raw.unit}/m`, mode: "lines", line: { color, width: 3, dash: "dot" } });
+  }
+  Plotly.react("an-plot-compliance", ct, { ...LAYOUT, title: { text: "Compliance: drift-corrected signal near contact" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `signal − baseline [${us}]` } } }, CONFIG);
 }
 function drawMaps(maps) {
   const div = $("an-plot-map");
