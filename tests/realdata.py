@@ -5,13 +5,15 @@ Only files too large for ``tests/data`` (the 0.6-1 MB JPK files) are skipped wit
 
 from __future__ import annotations
 
+import os
 from pathlib import Path
 
 import pytest
 
 TESTS = Path(__file__).resolve().parent
 DATA = TESTS / "data"
-SHARED = TESTS.parents[1] / "shared" / "data" / "real"
+#: The shared folder beside the repository, or where ``AFMFORCE_REAL_DATA`` points (a worktree elsewhere).
+SHARED = Path(os.environ.get("AFMFORCE_REAL_DATA") or TESTS.parents[1] / "shared" / "data" / "real")
 
 #: shared name -> name of its byte-identical copy in tests/data, where they differ
 COPIES = {

@@ -203,10 +203,18 @@ QUANTITIES: dict[str, FieldSpec] = {
     "spring_constant": _q("stiffness", "N/m", "spring constant k", 1e-4, 1e3),
     "mass": _q("mass", "kg", "effective mass m", hi=1e-5, display="ug", **_POS),
     "resonance_frequency": _q("frequency", "Hz", "resonance frequency", 1.0, 1e8, display="kHz"),
+    "quality_factor": _q("dimensionless", "", "quality factor Q of the lever in its medium (none: undamped)",
+                         0.1, 1e6),
+    "quality_factor_2": _q("dimensionless", "", "quality factor of the beam's second free mode "
+                           "(none: quality_factor)", 0.1, 1e6),
     "sensitivity": _q("sensitivity", "m/V", "deflection sensitivity (InvOLS)", 1e-10, 1e-5,
                       display="nm/V"),
     # surfaces (eq 2, drainage)
     "radius": _q("length", "m", "effective radius R", hi=1e-3, **_POS),
+    # contact mechanics (docs/contact.md)
+    "half_angle": _q("angle", "rad", "half-angle of a cone, face angle of a pyramid", hi=math.radians(89),
+                     display="deg", **_POS),
+    "poisson": _q("dimensionless", "", "Poisson ratio of the sample", -1.0, 0.5, lo_open=True),
     "hamaker": _q("energy", "J", "Hamaker constant A", 1e-22, 1e-17),
     "z0": _q("length", "m", "soft-wall length z0", hi=1e-8, **_POS),
     "viscosity": _q("viscosity", "Pa s", "fluid viscosity (0: no drainage)", 0.0, 100.0),

@@ -56,14 +56,14 @@ def nanite_contact(path: Path, meta: dict) -> list[int]:
     return out
 
 
-def nanite_contact_on_arrays(curve) -> tuple[int, float]:
-    """nanite's fit_line_polynomial on the approach of an afmforce curve: (sample index, z there [m])."""
+def nanite_contact_on_arrays(curve, method: str = "fit_line_polynomial") -> tuple[int, float]:
+    """nanite's contact point (``method``) on the approach of an afmforce curve: (sample index, z there [m])."""
     from nanite import poc
 
     idx = np.flatnonzero(np.asarray(curve.segment) == 0)
     d = np.asarray(curve.deflection_signal)[idx]
     z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal)[idx]
-    j = int(poc.compute_poc(d, "fit_line_polynomial"))
+    j = int(poc.compute_poc(d, method))
     return int(idx[j]), float(z[j])
 
 
@@ -85,9 +85,15 @@ def main() -> None:
                                   "z": float(z[idx]), "via": "afmformats+nanite preprocessing"})
     for folder, name, meta, ambiguous in CURVES_ARRAYS:
         path = (ROOT / folder if folder != "shared" else SHARED) / name
-        idx, z = nanite_contact_on_arrays(load(path, meta_override=meta)[0])
-        ref["curves"].append({"folder": folder, "file": name, "curve": 0, "meta": meta, "index": idx, "z": z,
-                              "via": "afmforce reading, nanite.poc", "ambiguous": ambiguous})
+        curve = load(path, meta_override=meta)[0]
+        idx, z = nanite_contact_on_arrays(curve)
+        entry = {"folder": folder, "file": name, "curve": 0, "meta": meta, "index": idx, "z": z,
+                 "via": "afmforce reading, nanite.poc", "ambiguous": ambiguous}
+        if ambiguous:  # a slow rise before a steep contact: where nanite's gradient-based methods put the onset
+            i2, z2 = nanite_contact_on_arrays(curve, "deviation_from_baseline")
+            entry["steep"] = {"method": "deviation_from_baseline", "index": i2, "z": z2,
+                              "also": {"gradient_zero_crossing": nanite_contact_on_arrays(curve, "gradient_zero_crossing")[1]}}
+        ref["curves"].append(entry)
     (Path(__file__).parent / "nanite_reference.json").write_text(json.dumps(ref, indent=1))
 
 

@@ -108,7 +108,7 @@ def test_user_metadata_flags(capsys):
 
 
 def test_tilt_correction_flag(capsys):
-    code = main(["analyze", str(DATA / FILES[0]), "--theta0", "-15deg", "--json"])
+    code = main(["analyze", str(DATA / FILES[0]), "--theta0", "-15deg", "--calibration", "metadata", "--json"])
     assert code == 0
     res = json.loads(capsys.readouterr().out)["results"][FILES[0]]
     assert res["spring_constant"] == pytest.approx(1.1841 * 1.0718, rel=1e-3)  # eq 14

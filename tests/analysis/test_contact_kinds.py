@@ -57,9 +57,15 @@ def test_soft_contact_point_agrees_with_stored_nanite(entry):
     cp = res.details["contact_point"]
     tol = max(30e-9, 0.1 * cp.indentation)
     uncertain = [w for w in res.warnings if w.startswith("contact point uncertain")]
-    if entry.get("ambiguous"):  # no method pins this onset down: the result must say so, with its numbers
-        assert uncertain and f"{cp.position_low * 1e6:.4g}" in uncertain[0]
-        assert cp.position_high - cp.position_low > tol
+    if entry.get("ambiguous"):  # a slow rise over ~20 um, then a steep contact: the whole-approach fit (and
+        # nanite's fit_line_polynomial) are fooled by the rise; the point is where it steepens, as nanite's
+        # gradient-based methods put it (deviation_from_baseline -25.73 um, gradient_zero_crossing -25.95 um)
+        slow = [w for w in res.warnings if w.startswith("slowly rising approach")]
+        assert slow and f"{cp.position * 1e6:.4g}" in slow[0]
+        steep = entry["steep"]
+        assert abs(cp.position - steep["z"]) < 0.6e-6
+        assert abs(cp.position - steep["also"]["gradient_zero_crossing"]) < 0.6e-6
+        assert cp.position > entry["z"] + 5e-6  # far after the slow rise nanite's fit_line_polynomial stops at
         return
     assert abs(cp.position - entry["z"]) < tol, (cp.position - entry["z"], tol)
     assert not uncertain
@@ -89,6 +95,8 @@ def test_soft_contact_point_agrees_with_nanite_computed_here():
 ])
 def test_known_spring_constant_and_sensitivity(folder, name, k, sensitivity):
     _, res = _analysed(_path(folder, name))
+    if res.calibration_source == "fit":  # a stale sensitivity recalibrated (issue 24): a thermal k goes as 1/InvOLS^2
+        k = k * (res.sensitivity / res.sensitivity_fit) ** 2
     assert res.spring_constant == pytest.approx(k, rel=1e-4)
     assert res.sensitivity == pytest.approx(sensitivity, rel=1e-3)
 
@@ -124,6 +132,9 @@ def test_adhesion_sign_and_size_against_the_force_column(folder, name, index):
     path = _path(folder, name)
     _, res = _analysed(path, index)
     expected, noise = _independent_adhesion(path, index)
+    if res.calibration_source == "fit":  # recalibrated with a thermal k: forces scale by file's / fitted InvOLS
+        scale = res.sensitivity / res.sensitivity_fit
+        expected, noise = expected * scale, noise * scale
     assert res.adhesion_force <= 0
     assert res.adhesion_force == pytest.approx(expected, rel=0.1, abs=3 * noise)
     if "map2x2" in name:  # README: every retract dips 0.13-0.53 nN below its baseline
@@ -188,19 +199,20 @@ def test_stiff_lever_without_repulsive_contact_reports_the_pull_off():
 
 def test_ambiguous_onset_is_flagged():
     """The 2016 CellHesion curve rises slowly over ~20 um before its steep contact, under 5 nm of noise:
-    contact points over a 1.6 um range fit as well within 2 sigma (14 % of the indentation), and nanite's
-    own point moves by 4-7 um when its input is block-averaged. The result must say the onset is ambiguous,
-    with the range; the well-defined map curves (within 30 nm of nanite) carry no such warning."""
+    fitted over the whole approach, contact points over a ~1.8 um range fit as well within 2 sigma. The
+    result says so, with the range, and takes the steep contact after it (issue 24: -36.5 um before,
+    where the visible contact is near -26 um); the well-defined map curves carry no such warning."""
     path = real_file("jpkfile_force-save-2016.06.15-13.17.08.jpk-force")
     res = analyze(load(path)[0])
     cp = res.details["contact_point"]
-    warn = [w for w in res.warnings if w.startswith("contact point uncertain")]
-    assert warn and "as good within 2 sigma" in warn[0]
-    assert cp.position_low < cp.position < cp.position_high
-    assert cp.position_high - cp.position_low > 0.1 * cp.indentation
+    warn = [w for w in res.warnings if w.startswith("slowly rising approach")]
+    assert warn and "(2 sigma)" in warn[0]
+    assert -26.6e-6 < cp.position < -25.7e-6
+    assert 0 < res.indentation < 1.5e-6
+    assert cp.position_high - cp.position_low < 0.3e-6
     for c in load(real_file("afmformats_jpk-fd_map2x2_extracted.jpk-force-map")):
         r = analyze(c)
-        assert not any(w.startswith("contact point uncertain") for w in r.warnings)
+        assert not any(w.startswith(("contact point uncertain", "slowly rising")) for w in r.warnings)
         cp = r.details["contact_point"]
         assert cp.position_high - cp.position_low < 0.05 * cp.indentation
 

@@ -77,7 +77,7 @@ def test_simulate_flags_are_the_config_fields():
     parser = build_parser("simulate")
     sim = parser._subparsers._group_actions[0].choices["simulate"]
     flags = [a for a in sim._actions if hasattr(a.type, "spec")]
-    assert len(flags) == 28  # every numeric field but contact_separation, jump_factor, spike_window
+    assert len(flags) == 30  # every numeric field but contact_separation, jump_factor, spike_window
     for action in flags:
         assert action.dest in fields, action.option_strings
         assert spec_of(fields[action.dest]) is QUANTITIES[action.dest] is action.type.spec

@@ -34,6 +34,8 @@ OLD_FLAT_NAMES = (
     "radius", "hamaker", "z0", "viscosity", "friction", "xi", "zeta", "velocity", "retract_velocity",
     "start", "turn", "turn_force", "turn_deflection", "dwell", "end", "sample_rate", "rtol", "atol",
     "contact_separation", "jump_factor", "spike_window", "ringing", "sampling", "max_steps")
+#: Flat names added since (issue 23: the lever's quality factors, probe fields).
+NEW_FLAT_NAMES = ("quality_factor", "quality_factor_2")
 
 #: Trajectory headers written by the version before issue 11.7 (every field of both probes).
 OLD_HEADERS = [
@@ -107,11 +109,12 @@ def test_parts_are_frozen_and_the_model_is_the_probe():
 
 def test_the_flat_names_are_the_old_ones():
     """Sweeps' --set/--grid names, fit parameters and header keys keep working."""
-    assert tuple(FLAT) == OLD_FLAT_NAMES
+    assert tuple(n for n in FLAT if n not in NEW_FLAT_NAMES) == OLD_FLAT_NAMES
+    assert set(NEW_FLAT_NAMES) <= set(FLAT)
     from afmforce.sweep.simulation import simulation_dimensions
 
     dims = simulation_dimensions()
-    assert set(dims) == set(OLD_FLAT_NAMES)
+    assert set(dims) == set(OLD_FLAT_NAMES + NEW_FLAT_NAMES)
     assert dims["velocity"] == "velocity" and dims["friction"] is None and dims["max_steps"] == "dimensionless"
 
 

@@ -143,3 +143,36 @@ def test_fmin_fmax_are_numbas_min_and_max():
             # and from Python (the twin), the same as the compiled call
             assert np.array((fmin(a, b), fmax(a, b)), dtype=float).tobytes() \
                 == np.array(got, dtype=float).tobytes()
+
+
+def test_a_change_in_any_dynamics_source_purges_the_numba_cache(tmp_path):
+    """numba keys integrate_segment's cache on radau.py alone; it inlines models.py: a change in
+    any source of the package must delete the cache files (a stale cache ran the old model)."""
+    from types import SimpleNamespace
+
+    from afmforce.dynamics import radau
+    from afmforce.dynamics._jit import SOURCES_DIGEST, purge_stale_cache, sources_digest
+
+    src, cache = tmp_path / "src", tmp_path / "cache"
+    src.mkdir()
+    cache.mkdir()
+    (src / "models.py").write_text("x = 1\n")
+    disp = SimpleNamespace(_cache=SimpleNamespace(_cache_path=str(cache)))
+
+    def fill():
+        for name in ("radau.integrate_segment-150.py311.nbi", "radau.integrate_segment-150.py311.1.nbc"):
+            (cache / name).write_bytes(b"old")
+
+    fill()
+    assert purge_stale_cache(disp, src)                       # no digest yet: purged
+    assert not list(cache.glob("*.nb?"))
+    fill()
+    assert not purge_stale_cache(disp, src)                   # same sources: kept
+    assert len(list(cache.glob("*.nb?"))) == 2
+    (src / "models.py").write_text("x = 2\n")                 # another file than the entry's
+    assert purge_stale_cache(disp, src)
+    assert not list(cache.glob("*.nb?"))
+    assert (cache / SOURCES_DIGEST).read_text() == sources_digest(src)
+    # the package itself: its cache folder carries the digest of the sources as they are now
+    stamp = __import__("pathlib").Path(radau.integrate_segment._cache._cache_path) / SOURCES_DIGEST
+    assert stamp.read_text() == sources_digest(__import__("pathlib").Path(radau.__file__).parent)

@@ -251,4 +251,5 @@ def test_cli_small_run_keeps_per_curve_outputs(map_file, tmp_path, capsys):
     assert code == 0 and "map.h5#13" in text and "chunks run" not in text  # in process, no store
     assert len(list(out.glob("map.h5_*.afmforce.json"))) == 14
     (folder,) = out.glob("batch-*")
-    assert {p.name for p in folder.iterdir()} == {"summary.parquet", "summary.csv", "map.h5.adhesion.png"}
+    assert {p.name for p in folder.iterdir()} == {"summary.parquet", "summary.csv", "map.h5.adhesion.png",
+                                                  "map.h5.maps.h5"}  # the image's numbers (issue 26)

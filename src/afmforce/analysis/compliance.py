@@ -141,6 +141,8 @@ class CalibrationResult:
     spring_constant_from_slope : float
         For force signals: the slope itself [N/m] (NaN otherwise).
     unit : str
+    requested : str
+        The source asked for (``calibration.source``: ``"auto"``, ``"fit"`` or ``"metadata"``).
     """
 
     factor: float = _u("m/{signal}")
@@ -153,6 +155,7 @@ class CalibrationResult:
     slope_ratio: float = _u("")
     spring_constant_from_slope: float = _u("N/m")
     unit: str
+    requested: str = "auto"
 
 
 def _metadata_factor(unit: str, metadata: Mapping[str, Any]) -> float:

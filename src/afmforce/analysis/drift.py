@@ -35,7 +35,7 @@ from .regions import RunRegions
 from ._units import unit as _u
 from .options import DriftOptions as _D  # the default: declared once, in the step's record
 
-__all__ = ["DriftResult", "fit_baseline", "remove_drift", "is_settling", "retract_line"]
+__all__ = ["DriftResult", "fit_baseline", "remove_drift", "is_settling", "retract_line", "borrowed_line"]
 
 #: Baselines longer than this are fitted on evenly thinned samples (the standard error of the
 #: line grows as sqrt(n / MAX_POINTS), still far below the noise it is compared with).
@@ -68,8 +68,13 @@ class DriftResult:
         not a drift line, so the approach line was used.
     retract_line : str
         Which retract line was used: ``"approach"`` (the approach line continued), ``"continuous"``
-        (from the approach line's end, own slope) or ``"separate"`` (own offset and slope); see
-        :func:`retract_line`.
+        (from the approach line's end, own slope) or ``"separate"`` (own offset and slope), see
+        :func:`retract_line`; on a retract too noisy for a line of its own, ``"offset"``,
+        ``"approach slope"`` or ``"position tilt"`` (its own offset; see :func:`borrowed_line`).
+    tilt_retract : float
+        Baseline slope per unit position subtracted on the retract [unit/m] (``"position tilt"``
+        only; 0 otherwise): the baseline there is ``offset_retract + slope_retract (t - t_r) +
+        tilt_retract (z - z_r)`` from the retract's first free sample.
     """
 
     offset_approach: float = _u("{signal}")
@@ -81,6 +86,7 @@ class DriftResult:
     unit: str
     retract_settling: bool = False
     retract_line: str = "separate"
+    tilt_retract: float = _u("{signal}/m", 0.0)
 
 
 def _wls(X: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:
@@ -262,7 +268,7 @@ def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
 
 
 def retract_line(t: np.ndarray, s: np.ndarray, off_a: float, slope_a: float, t0a: float, t_turn: float,
-                 noise: float, threshold: float = 25.0) -> tuple[str, float, float]:
+                 noise: float, threshold: float = 25.0, gap: bool = False) -> tuple[str, float, float]:
     """The retract's drift line, the simplest the data allow: ``(model, offset at t_turn, slope)``.
 
     Models, each kept only when it lowers the residual sum of squares of the retract's free part
@@ -277,7 +283,8 @@ def retract_line(t: np.ndarray, s: np.ndarray, off_a: float, slope_a: float, t0a
 
     The retract's free part is often short (80 ms against 200 ms of approach baseline on the
     xi = 0.01 kg/s beam run) and its line is extrapolated back over the whole contact, so its
-    own offset and slope carry the larger error there.
+    own offset and slope carry the larger error there. ``gap``: a dwell lies between the runs, so
+    ``"continuous"`` (anchored at the approach line's value after the dwell) is not tried.
     """
     at_turn = off_a + slope_a * (t_turn - t0a)
     if not noise > 0 or t.size < 12:
@@ -299,9 +306,47 @@ def retract_line(t: np.ndarray, s: np.ndarray, off_a: float, slope_a: float, t0a
     lim = threshold * noise**2
     if ssr0 - min(ssr1, ssr2) <= lim:
         return "approach", at_turn, slope_a
-    if ssr1 - ssr2 <= lim:
+    if ssr1 - ssr2 <= lim and not gap:
         return "continuous", at_turn, float(c1[0]) / scale
     return "separate", at_turn + float(c2[0]), float(c2[1]) / scale
+
+
+def borrowed_line(t: np.ndarray, s: np.ndarray, z: np.ndarray | None, off_a: float, slope_a: float, t0a: float,
+                  tilt: float, noise: float, threshold: float = 25.0) -> tuple[str, float, float, float]:
+    """The retract's baseline when its free part is too noisy for a line of its own (a ringing or
+    unbinding retract): ``(model, offset at t[0], slope in time, tilt in position)``.
+
+    The baseline ``offset + slope (t - t[0]) + tilt (z - z[0])`` is the simplest of:
+
+    * ``"approach"``: the approach line continued in time (drift is continuous);
+    * ``"offset"``: its own robust offset only;
+    * ``"approach slope"``: its own offset, the approach's drift rate;
+    * ``"position tilt"``: its own offset, the approach baseline's tilt per unit position
+      (``tilt``: optical crosstalk, virtual deflection: what makes a long baseline slope, and
+      what follows the position, not the time, on the way back);
+
+    a one-parameter model replaces the continued line only when it lowers the residuals of the free
+    part by more than ``threshold`` noise variances (squares capped at 4.7 noise levels: spikes and
+    unbinding events count the same in every model). A dwell between the runs (a stress-relaxation or
+    a pause) makes the continued line an extrapolation over the dwell: the data decide.
+    """
+    cap = (4.685 * noise) ** 2 if noise > 0 else np.inf
+    tt = t - t[0]
+    cont = s - (off_a + slope_a * (t - t0a))
+    best = ("approach", off_a + slope_a * (t[0] - t0a), slope_a, 0.0)
+    ssr0 = float(np.sum(np.minimum(cont * cont, cap)))
+    cands = [("offset", np.zeros_like(s), 0.0, 0.0), ("approach slope", slope_a * tt, slope_a, 0.0)]
+    if z is not None and math.isfinite(tilt):
+        cands.append(("position tilt", tilt * (z - z[0]), 0.0, tilt))
+    ssr_best = ssr0
+    for name, shape, slope, tl in cands:
+        y = s - shape
+        coef, _, _ = _irls(np.ones((y.size, 1)), y)
+        r = y - coef[0]
+        ssr = float(np.sum(np.minimum(r * r, cap)))
+        if ssr0 - ssr > threshold * noise**2 and ssr < ssr_best:
+            ssr_best, best = ssr, (name, float(coef[0]), slope, tl)
+    return best
 
 
 def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
@@ -309,14 +354,19 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
                  max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
     """Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
 
-    Dwell samples (segment 2) get the approach line. The retract run uses the
-    approach line instead of its own when its free part is too short, or more
-    than ``max_noise_ratio`` times noisier than the approach's (a cantilever
-    ringing freely after the pull-off: its line would be biased).
+    The runs are found by their segment type, wherever they lie in the record. Samples of other
+    segments (a dwell, a pause before the approach) get the baseline interpolated in time between
+    the runs' (held at the nearest run's value outside them). The retract run uses its own line;
+    when its free part is too short, or more than ``max_noise_ratio`` times noisier than the
+    approach's (a cantilever ringing freely after the pull-off, unbinding events: its line would be
+    biased), it uses the simplest of the approach line and its own offset (:func:`borrowed_line`).
+    A dwell between the runs rules out the "continuous" retract line (the approach line's end is
+    then an extrapolation over the dwell).
     """
     out = np.array(s, dtype=float, copy=True)
     ia = approach.index[approach.zero_force]
     tail = None
+    zpos = z
     if z is not None:
         z_c = z[approach.index[approach.split]]
         tail = 1.0 / (np.maximum(z_c - z[ia], 0.0) + h_tail) ** 2
@@ -325,30 +375,47 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
     ir = retract.index[retract.zero_force]
     settling = False
     line = "approach"  # too short a free part, or too noisy (ringing): the approach line
-    off_r, slope_r, t0r = off_a, slope_a, t0a
+    off_r, slope_r, t0r, tilt_r, z0r = off_a, slope_a, t0a, 0.0, 0.0
+    gap = bool(retract.index[0] - approach.index[-1] > 1)  # a dwell (or anything) between the runs
     if ir.size >= min_points:
         off, slope, noise_r = fit_baseline(t[ir], s[ir], order, transient=order != 1)  # order 1: retract_line
-        if not (noise > 0 and noise_r > max_noise_ratio * noise):
-            if order != 1:
-                line, off_r, slope_r, t0r = "separate", off, slope, t[ir[0]]
-            else:
-                settling = is_settling(t[ir], s[ir])
-                if not settling:
-                    t_turn = t[retract.index[0]]
-                    line, off, slope = retract_line(t[ir], s[ir], off_a, slope_a, t0a, t_turn, noise)
-                    if math.isfinite(off):
-                        off_r, slope_r, t0r = off, slope, t_turn
-                    else:
-                        line = "approach"
+        if noise > 0 and noise_r > max_noise_ratio * noise:
+            tilt = math.nan
+            if zpos is not None and ia.size > 2 and np.ptp(t[ia]) > 0:
+                v = float(np.polyfit(t[ia] - t0a, zpos[ia], 1)[0])
+                tilt = slope_a / v if v != 0 else math.nan
+            line, off, slope, tl = borrowed_line(t[ir], s[ir], None if zpos is None else zpos[ir], off_a, slope_a,
+                                                 t0a, tilt, noise_r)
+            if line != "approach":
+                off_r, slope_r, t0r, tilt_r = off, slope, t[ir[0]], tl
+                z0r = float(zpos[ir[0]]) if zpos is not None else 0.0
+        elif order != 1:
+            line, off_r, slope_r, t0r = "separate", off, slope, t[ir[0]]
+        else:
+            settling = is_settling(t[ir], s[ir])
+            if not settling:
+                t_turn = t[retract.index[0]]
+                line, off, slope = retract_line(t[ir], s[ir], off_a, slope_a, t0a, t_turn, noise, gap=gap)
+                if math.isfinite(off):
+                    off_r, slope_r, t0r = off, slope, t_turn
+                else:
+                    line = "approach"
     from_app = line == "approach"
-    not_ret = np.asarray(segment) != 1
-    out[not_ret] -= off_a + slope_a * (t[not_ret] - t0a)
+    base = np.full(s.size, np.nan)
+    app = approach.index
+    base[app] = off_a + slope_a * (t[app] - t0a)
     ret = retract.index
-    out[ret] -= off_r + slope_r * (t[ret] - t0r)
+    base[ret] = off_r + slope_r * (t[ret] - t0r) + (tilt_r * (z[ret] - z0r) if tilt_r else 0.0)
+    other = np.isnan(base)
+    if other.any():  # dwell, pauses: between the runs' baselines in time, held outside them
+        known = np.flatnonzero(~other)
+        order_t = known[np.argsort(t[known], kind="stable")]
+        base[other] = np.interp(t[other], t[order_t], base[order_t])
+    out -= base
     # report offsets at the start of each run
     start_a, start_r = t[approach.index[0]], t[retract.index[0]]
     res = DriftResult(offset_approach=off_a + slope_a * (start_a - t0a), slope_approach=slope_a,
-                      offset_retract=off_r + slope_r * (start_r - t0r), slope_retract=slope_r,
+                      offset_retract=float(base[ret[0]]), slope_retract=slope_r,
                       noise=noise, retract_from_approach=bool(from_app), unit=unit,
-                      retract_settling=bool(settling), retract_line=line)
+                      retract_settling=bool(settling), retract_line=line, tilt_retract=float(tilt_r))
     return out, res

@@ -105,7 +105,8 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
                    jump_fraction: float = 0.25, sample_step: float = 0.0, friction: str | None = None,
                    friction_verdict: str = "", hamaker_radius: float = math.nan,
                    pull_off_force: float = math.nan, contact_separation: float = math.nan,
-                   attraction_ratio: float = 0.75) -> DynamicDiagnosis:
+                   attraction_ratio: float = 0.75, quality_factor: float = math.nan,
+                   air_quality: float = 20.0) -> DynamicDiagnosis:
     """Combine eq 3, eq 4 and the jump-in distance into a verdict.
 
     Parameters
@@ -136,6 +137,14 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
         z0 of eq 2 [m] (NaN or 0: 0.35 nm).
     attraction_ratio : float
         Flag when fitted A R < this x ``16 z0^2 |F_pull|`` [-].
+    quality_factor : float
+        Q of the free resonance (the file's thermal Q) [-]: at or above ``air_quality`` the
+        curve was recorded in air.
+
+    An early jump-in or an attraction weaker than the pull-off implies is dynamics (friction,
+    inertia) or an extra attraction. It flags the run dynamic only when neither is excluded: in
+    air (a meniscus forms at the contact) it is named likely capillary, and where inertia
+    (eq 3 < 1) and friction (no signature) are both excluded it is an extra attraction.
     """
     nan = math.nan
     f = nan if resonance_frequency is None else float(resonance_frequency)
@@ -166,12 +175,24 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
             words.append(f"quasi-static: inertia parameter {r_par:.3g} < 1 (eq 3; {nums}), lag about "
                          f"{lag * 1e9:.3g} nm (eq 4)")
     excess = jump_in_separation - static_jump_in_separation
+    in_air = math.isfinite(quality_factor) and quality_factor >= air_quality
+    static_run = math.isfinite(r_par) and r_par <= 1 and friction == "none"
+    if in_air:
+        extra = f"likely capillary (in air: quality factor {quality_factor:.3g})"
+    elif static_run:
+        extra = ("an extra attraction (capillary, electrostatic), not dynamics (inertia parameter "
+                 f"{r_par:.2g} < 1, no friction signature)")
+    else:
+        extra = ""
     if (math.isfinite(excess) and excess > jump_tolerance + abs(sample_step)
             and excess > jump_fraction * static_jump_in_separation):
-        dynamic = True
-        words.append(f"jump-in at {jump_in_separation * 1e9:.3g} nm, {excess * 1e9:.3g} nm farther out than "
-                     f"the static {static_jump_in_separation * 1e9:.3g} nm of the fitted law: dynamic "
-                     "effects (friction, inertia) or an extra attraction (capillarity)")
+        what = (f"jump-in at {jump_in_separation * 1e9:.3g} nm, {excess * 1e9:.3g} nm farther out than "
+                f"the static {static_jump_in_separation * 1e9:.3g} nm of the fitted law")
+        if extra:
+            words.append(f"{what}: {extra}")
+        else:
+            dynamic = True
+            words.append(f"{what}: dynamic effects (friction, inertia) or an extra attraction (capillarity)")
     if friction == "constant":  # viscous friction's offset grows with xi v (spec section 7)
         dynamic = True
         words.append(f"friction signature ({friction_verdict}): friction underestimates the precontact "
@@ -189,9 +210,12 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
     ar_pull = 16.0 * z0 * z0 * abs(pull_off_force) if math.isfinite(pull_off_force) else math.nan
     ratio = hamaker_radius / ar_pull if math.isfinite(ar_pull) and ar_pull > 0 else math.nan
     if math.isfinite(ratio) and ratio < attraction_ratio:
-        dynamic = True
-        words.append(f"the approach attraction is {ratio:.2f} x what the pull-off implies (A R = 16 z0^2 |F|): "
-                     "underestimated by friction or speed, or an extra adhesion (capillarity)")
+        what = f"the approach attraction is {ratio:.2f} x what the pull-off implies (A R = 16 z0^2 |F|)"
+        if extra:
+            words.append(f"{what}: an extra adhesion, {extra}")
+        else:
+            dynamic = True
+            words.append(f"{what}: underestimated by friction or speed, or an extra adhesion (capillarity)")
     # "not dynamic" needs both mechanisms excluded: inertia (eq 3) and friction (the compliance lines);
     # the jump-in and attraction tests can only flag a dynamic run, not clear one
     friction_assessed = friction in ("none", "constant", "load-proportional", "opposite", "pinned")

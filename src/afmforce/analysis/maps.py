@@ -15,6 +15,7 @@ writes it atomically.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -23,14 +24,14 @@ import numpy as np
 from ..errors import ParameterError
 from .result import SUMMARY_FIELDS
 
-__all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_images", "EXTENT_KEY"]
+__all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_images", "write_map_hdf5", "EXTENT_KEY"]
 
 #: PNG text key holding the heat map's pixel box in the image: "left top right bottom".
 EXTENT_KEY = "afmforce.map_extent"
 
 #: SI unit -> (factor, unit shown on the image).
 _DISPLAY = {"m": (1e9, "nm"), "N": (1e9, "nN"), "m/V": (1e9, "nm/V"), "J/m^2": (1e3, "mJ/m^2"),
-            "J m": (1e27, "1e-27 J m"), "J": (1e21, "zJ"), "m/s": (1e6, "µm/s")}
+            "J m": (1e27, "1e-27 J m"), "J": (1e21, "zJ"), "m/s": (1e6, "µm/s"), "Pa": (1e-3, "kPa")}
 
 
 @dataclass(frozen=True)
@@ -64,6 +65,8 @@ MAP_QUANTITIES: dict[str, MapQuantity] = {q.identifier: q for q in (
     MapQuantity("jump_in_distance", "jump_in_separation", "jump-in distance (separation before the jump)", "m"),
     *(MapQuantity(name, name, label, unit) for name, label, unit in SUMMARY_FIELDS),
     MapQuantity("jump_in_deflection", "jump_in_deflection", "jump-in deflection", "m"),
+    MapQuantity("modulus", "youngs_modulus", "Young's modulus (indentation fit)", "Pa"),
+    MapQuantity("topography", "contact_point", "height: minus the piezo position at contact", "m", -1.0),
 )}
 
 
@@ -89,12 +92,26 @@ class MapImage:
         no curve, its analysis failed or found nothing.
     n_curves : int
         Curves of this map in the table [-].
+    x0, y0, dx, dy : float
+        Position of grid point (0, 0) and the grid steps [m], from the curves' ``position_x``,
+        ``position_y``; NaN when the map does not record them (the axes show grid indices).
+        When only the scanned area's size is known (``map_width``, ``map_height``), the
+        grid is centred in it: ``x0 = dx / 2``, ``dx = width / nx``.
     """
 
     source: str
     quantity: MapQuantity
     values: np.ndarray
     n_curves: int
+    x0: float = float("nan")
+    y0: float = float("nan")
+    dx: float = float("nan")
+    dy: float = float("nan")
+
+    @property
+    def has_positions(self) -> bool:
+        """The grid's positions are known (axes in um)."""
+        return bool(np.isfinite([self.x0, self.y0, self.dx, self.dy]).all() and self.dx > 0 and self.dy > 0)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -128,5 +145,57 @@ def map_images(table, quantity: str | MapQuantity) -> list[MapImage]:
         y = rows["map_y"].to_numpy(int)
         ok = (x >= 0) & (x < nx) & (y >= 0) & (y < ny)
         values[y[ok], x[ok]] = q.sign * col.to_numpy(float)[ok]
-        out.append(MapImage(str(source), q, values, int(len(rows))))
+        axes = [_axis(rows, i, pos) for i, pos in ((x, "position_x"), (y, "position_y"))]
+        if not all(np.isfinite(a).all() for a in axes):        # no positions: the scanned area's size
+            size = [float(pd.to_numeric(rows[c], errors="coerce").median()) if c in rows else math.nan
+                    for c in ("map_width", "map_height")]
+            if all(math.isfinite(v) and v > 0 for v in size):
+                axes = [(s / n / 2, s / n) for s, n in zip(size, (nx, ny))]
+        out.append(MapImage(str(source), q, values, int(len(rows)), axes[0][0], axes[1][0], axes[0][1],
+                            axes[1][1]))
     return out
+
+
+def _axis(rows, index: np.ndarray, column: str) -> tuple[float, float]:
+    """(position of index 0, step) [m] of one grid axis from the rows' positions (NaN: unknown)."""
+    import pandas as pd
+
+    if column not in rows:
+        return math.nan, math.nan
+    pos = pd.to_numeric(rows[column], errors="coerce").to_numpy(float)
+    ok = np.isfinite(pos)
+    if ok.sum() < 2 or np.unique(index[ok]).size < 2:
+        return math.nan, math.nan
+    step, origin = np.polyfit(index[ok].astype(float), pos[ok], 1)
+    return float(origin), float(abs(step))
+
+
+def write_map_hdf5(images: list[MapImage], path, *, force: bool = True) -> Path:
+    """The numbers of one map's images in one HDF5 file, atomically.
+
+    One dataset per quantity (``values[y, x]``, SI; attributes ``unit``, ``label``, ``column``),
+    and the grid: ``x`` and ``y`` (positions of the columns and rows [m], or their indices when
+    the map records no positions: attribute ``unit`` is then ``""``), ``map_x``/``map_y`` indices.
+    """
+    import h5py
+
+    from .._files import atomic_path
+
+    if not images:
+        raise ParameterError("no map images to write")
+    first = images[0]
+    ny, nx = first.shape
+    path = Path(path)
+    with atomic_path(path, force) as tmp, h5py.File(tmp, "w") as h5:
+        h5.attrs["format"] = "afmforce-map-images"
+        h5.attrs["source"] = first.source
+        for name, n, origin, step in (("x", nx, first.x0, first.dx), ("y", ny, first.y0, first.dy)):
+            idx = np.arange(n)
+            h5.create_dataset(f"map_{name}", data=idx)
+            known = first.has_positions
+            d = h5.create_dataset(name, data=origin + step * idx if known else idx.astype(float))
+            d.attrs["unit"] = "m" if known else ""
+        for image in images:
+            d = h5.create_dataset(image.quantity.identifier, data=image.values, compression="gzip")
+            d.attrs.update(unit=image.quantity.unit, label=image.quantity.label, column=image.quantity.column)
+    return path

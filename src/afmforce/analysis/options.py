@@ -34,7 +34,7 @@ from ..errors import ParameterError
 __all__ = ["ProbeCalibration", "StepOptions", "SmoothOptions", "ContactOptions", "DriftOptions",
            "FringesOptions", "ComplianceOptions", "CalibrationOptions", "KindOptions", "ShiftOptions",
            "ZeroOptions", "ForceOptions", "JumpsOptions", "AdhesionOptions", "SurfaceEnergyOptions",
-           "VdwOptions", "OscillationOptions", "FrictionOptions", "DiagnosisOptions", "OPTIONS"]
+           "VdwOptions", "OscillationOptions", "FrictionOptions", "DiagnosisOptions", "IndentationOptions", "OPTIONS"]
 
 
 def _opt(default: Any, dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,
@@ -278,9 +278,11 @@ class ZeroOptions(StepOptions):
 
 @dataclass(frozen=True)
 class ForceOptions(StepOptions):
-    """Deflection to force: no options (k, theta0 and the lengths are the probe's)."""
+    """Deflection to force (k, theta0 and the lengths are the probe's)."""
 
     step: ClassVar[str] = "force"
+    thermal_k: bool = _opt(True, "flag", "", "the file's spring constant is a thermal one: with a refitted "
+                           "sensitivity it scales by (file's / fitted sensitivity)^2")
 
 
 @dataclass(frozen=True)
@@ -362,8 +364,39 @@ class DiagnosisOptions(StepOptions):
     attraction_ratio: float = _frac(0.75, "share of the jump-in a static attraction must explain")
 
 
+@dataclass(frozen=True)
+class IndentationOptions(StepOptions):
+    """Young's modulus (and work of adhesion) from the indentation of a soft contact (docs/contact.md)."""
+
+    step: ClassVar[str] = "indentation"
+    model: str = _opt("hertz_paraboloid", "text", "", "indentation model (a key of "
+                      "afmforce.contact.INDENTATION_MODELS)")
+    tip_radius: float | None = _q("radius", None, "tip radius of the indentation model (None: the probe's radius)")
+    half_angle: float | None = _q("half_angle", None)
+    poisson: float = _q("poisson", 0.5)
+    thickness: float | None = _opt(None, "length", "m", "sample (layer) thickness: the thin-layer model's h, "
+                                   "the validity check of the others (None: a half space)", lo=0.0, hi=1e-2,
+                                   lo_open=True)
+    bonded: bool = _opt(True, "flag", "", "thin-layer model: the layer is bonded to the substrate")
+    max_indentation: float | None = _opt(None, "length", "m", "fit only up to this indentation (None: the "
+                                         "whole run)", lo=0.0, hi=1e-3, lo_open=True)
+    weight_width: float = _opt(0.0, "length", "m", "residuals within this distance of the contact point "
+                               "weighted down linearly (nanite's weight_cp; 0: none)", lo=0.0, hi=1e-3)
+    run: str = _opt("approach", "choice", "", "run fitted", choices=("approach", "retract"))
+    transition: float = _opt(1.0, "dimensionless", "", "Maugis-Dugdale transition parameter lambda",
+                             lo=0.0, hi=1e3, lo_open=True)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        from ..contact.registry import INDENTATION_MODELS
+
+        if self.model not in INDENTATION_MODELS:
+            raise ParameterError(f"indentation.model = {self.model!r} is not valid: choose one of "
+                                 f"{', '.join(INDENTATION_MODELS)}")
+
+
 #: Step identifier -> its options class (the registry's records point here).
 OPTIONS: dict[str, type[StepOptions]] = {c.step: c for c in (
     SmoothOptions, ContactOptions, DriftOptions, FringesOptions, ComplianceOptions, CalibrationOptions,
     KindOptions, ShiftOptions, ZeroOptions, ForceOptions, JumpsOptions, AdhesionOptions, SurfaceEnergyOptions,
-    VdwOptions, OscillationOptions, FrictionOptions, DiagnosisOptions)}
+    VdwOptions, OscillationOptions, FrictionOptions, DiagnosisOptions, IndentationOptions)}

@@ -28,7 +28,9 @@ import numpy as np
 from . import options as O
 from . import steps as S
 from .contact_point import CONTACT_POINT_METHODS
+from .indentation import indentation
 from .options_text import show_default
+from .plausibility import plausibility_warnings
 from .result import AnalysisResult
 from .state import NoContact, State, prepare
 from ..errors import ParameterError
@@ -101,6 +103,9 @@ STEPS: dict[str, Step] = {s.identifier: s for s in (
          O.OscillationOptions, ("calibration",), "section 3.2"),
     Step("friction", "Friction signature of the compliance lines (hard contacts, straight lines)", S.friction,
          O.FrictionOptions, ("kind",), "sections 2.2.2-2.2.4, eqs 16-21"),
+    Step("indentation", "Young's modulus (and work of adhesion) of a soft contact: indentation model fitted with "
+         "the contact point", indentation, O.IndentationOptions, ("kind", "force"),
+         "Hertz, Sneddon, Bilodeau, Dimitriadis, JKR, DMT, Maugis (docs/contact.md); checked against nanite"),
     Step("diagnosis", "Dynamic diagnosis: inertia parameter, lag, jump-in distance", S.diagnosis,
          O.DiagnosisOptions, ("jumps", "adhesion", "vdw", "friction"), "eqs 3, 4; sections 2.3, 3.2"),
 )}
@@ -286,6 +291,7 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
 
 
 def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
+    st = st.update(warn=plausibility_warnings(st))
     d = st.details
     nan = math.nan
     kw: dict[str, Any] = {}
@@ -336,6 +342,12 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
                   dynamic_assessed=g.assessed)
     if "friction" in d:
         kw["friction_verdict"] = d["friction"].verdict
+    if "indentation" in d:
+        i = d["indentation"]
+        kw.update(indentation_model=i.model, youngs_modulus=i.youngs_modulus, youngs_modulus_se=i.youngs_modulus_se,
+                  youngs_modulus_low=i.youngs_modulus_low, youngs_modulus_high=i.youngs_modulus_high,
+                  contact_point=i.contact_point, work_of_adhesion=i.work_of_adhesion,
+                  work_of_adhesion_se=i.work_of_adhesion_se)
     kw["not_applicable"] = dict(st.skipped)
     full = lambda a: a if a is not None else st.z * nan  # noqa: E731
     return AnalysisResult(

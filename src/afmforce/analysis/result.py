@@ -43,6 +43,10 @@ SUMMARY_FIELDS: tuple[tuple[str, str, str], ...] = (
     ("velocity", "approach speed", "m/s"),
     ("force_gradient", "force gradient at contact", "N/m"),
     ("inertia_parameter", "inertia parameter", ""),
+    ("youngs_modulus", "Young's modulus (indentation fit)", "Pa"),
+    ("youngs_modulus_se", "its standard error", "Pa"),
+    ("contact_point", "contact point (indentation fit; piezo position)", "m"),
+    ("work_of_adhesion", "work of adhesion (JKR, DMT, Maugis fit)", "J/m^2"),
 )
 
 
@@ -142,6 +146,16 @@ class AnalysisResult:
         False: ``dynamic`` False means "not assessed", not "quasi-static".
     verdict : str
         Plain-words dynamic diagnosis.
+    indentation_model : str
+        Key of the indentation model fitted (docs/contact.md; empty if none).
+    youngs_modulus, youngs_modulus_se : float
+        Young's modulus of a soft contact and its standard error [Pa].
+    youngs_modulus_low, youngs_modulus_high : float
+        Its 95 % interval [Pa].
+    contact_point : float
+        Piezo position at contact from the indentation fit [m].
+    work_of_adhesion, work_of_adhesion_se : float
+        w from an adhesive model (JKR, DMT, Maugis) [J/m^2].
     warnings : tuple of str
     time, position, separation, deflection, force : ndarray
         Per sample [s], [m], [m], [m], [N].
@@ -198,6 +212,14 @@ class AnalysisResult:
     dynamic: bool = False
     dynamic_assessed: bool = False
     verdict: str = ""
+    indentation_model: str = ""
+    youngs_modulus: float = math.nan
+    youngs_modulus_se: float = math.nan
+    youngs_modulus_low: float = math.nan
+    youngs_modulus_high: float = math.nan
+    contact_point: float = math.nan
+    work_of_adhesion: float = math.nan
+    work_of_adhesion_se: float = math.nan
     warnings: tuple[str, ...] = ()
     not_applicable: Mapping[str, str] = field(default_factory=dict)
     time: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
@@ -217,7 +239,9 @@ class AnalysisResult:
              "pull_off_force_extrapolated": "N", "pull_off_position": "m",
              "jump_out_distance": "m", "surface_energy": "J/m^2", "radius": "m", "hamaker_radius": "J m",
              "hamaker_radius_se": "J m", "hamaker": "J", "hamaker_se": "J", "oscillation_frequency": "Hz",
-             "velocity": "m/s", "inertia_parameter": "", "time": "s", "position": "m", "separation": "m",
+             "velocity": "m/s", "inertia_parameter": "", "youngs_modulus": "Pa", "youngs_modulus_se": "Pa",
+             "youngs_modulus_low": "Pa", "youngs_modulus_high": "Pa", "contact_point": "m",
+             "work_of_adhesion": "J/m^2", "work_of_adhesion_se": "J/m^2", "time": "s", "position": "m", "separation": "m",
              "deflection": "m", "force": "N"}
 
     def to_dict(self, arrays: bool = False) -> dict[str, Any]:

@@ -11,6 +11,7 @@ step identifier in ``state.details``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 from ..errors import AnalysisError
@@ -55,6 +56,7 @@ def calibration(st: State, o: CalibrationOptions) -> State:
                         "stale sensitivity (calibration source 'fit', --calibration fit, uses the slope)")
     if not (math.isfinite(res.factor) and res.factor != 0):
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
+    res = dataclasses.replace(res, requested=o.source)
     return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
 
 
@@ -82,6 +84,8 @@ def kind(st: State, o: KindOptions) -> State:
     res = classify_contact(jump_significance=sig, stiffness_ratio=stiff, curvature=curv, nsigma=nsigma,
                            min_stiffness=o.min_stiffness, max_curvature=o.max_curvature)
     new = st.update("kind", res)
+    if res.kind == "hard":
+        new = _recalibrate_hard(new, cal, curv, o.max_curvature)
     if res.kind == "soft":
         cp = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=force_fraction,
                                            window=window)
@@ -90,7 +94,14 @@ def kind(st: State, o: KindOptions) -> State:
                                 "the largest deflection)")
         warn = None
         width = cp.position_high - cp.position_low
-        if width > max(100e-9, 0.1 * abs(cp.indentation)):
+        steep = _steep_contact(st, cp, method, window) if width > max(100e-9, 0.1 * abs(cp.indentation)) else None
+        if steep is not None:  # a slow rise, then a distinct steep contact: the contact is where it steepens
+            warn = (f"slowly rising approach before contact: fitted over the whole approach the contact lies anywhere "
+                    f"in [{cp.position_low * 1e6:.4g}, {cp.position_high * 1e6:.4g}] um (2 sigma); the steep contact "
+                    f"after it begins at {steep.position * 1e6:.4g} um (indentation {steep.indentation * 1e6:.3g} um), "
+                    "taken as the contact point")
+            cp = steep
+        elif width > max(100e-9, 0.1 * abs(cp.indentation)):
             warn = (f"contact point uncertain: {cp.position * 1e6:.4g} um, but fits with the contact anywhere in "
                     f"[{cp.position_low * 1e6:.4g}, {cp.position_high * 1e6:.4g}] um are as good within 2 sigma "
                     f"({width * 1e6:.3g} um, {width / abs(cp.indentation):.0%} of the {cp.indentation * 1e6:.3g} um "
@@ -106,6 +117,48 @@ def kind(st: State, o: KindOptions) -> State:
                             f"whole approach at {alt.position * 1e6:.4g} um ({gap * 1e6:+.3g} um): a slowly rising "
                             "baseline or a long-range force before contact makes the onset ambiguous")
         new = new.update("contact_point", cp, warn=warn)
+    return new
+
+
+#: A hard contact's straight compliance line this far from the file's sensitivity (ratio) recalibrates it.
+STALE_SENSITIVITY = 1.25
+
+
+def _recalibrate_hard(st: State, cal, curvature: float, max_curvature: float) -> State:
+    """A hard contact on a measured (linear) position channel whose straight compliance line disagrees
+    with the file's sensitivity by more than :data:`STALE_SENSITIVITY`: on a rigid contact the
+    deflection follows the position one to one, so the file's sensitivity is stale (a realigned laser)
+    and the compliance slope is the calibration (the paper's, section 3.1). Not with a sensitivity the
+    user gave, nor with ``calibration.source=metadata`` (the result's source stays the file's then)."""
+    ratio = cal.factor_fit / cal.factor if cal.source == "metadata" and cal.factor else math.nan
+    straight = math.isfinite(curvature) and 1 / max_curvature <= curvature <= max_curvature
+    if (st.probe.sensitivity is not None or st.channel != "measured" or not straight or not math.isfinite(ratio)
+            or ratio <= 0 or 1 / STALE_SENSITIVITY <= ratio <= STALE_SENSITIVITY
+            or cal.requested == "metadata"):
+        return st
+    new = dataclasses.replace(cal, factor=cal.factor_fit, source="fit")
+    warn = (f"hard contact whose straight compliance line follows the position {1 / ratio:.3g} x with the file's "
+            f"sensitivity (1 on a rigid contact): the file's sensitivity is stale, the compliance slope calibrates ("
+            f"{cal.sensitivity_fit * 1e9:.4g} nm/V instead of {cal.sensitivity * 1e9:.4g}; "
+            "--calibration metadata keeps the file's)")
+    return st.update("calibration", new, warn=warn, factor=new.factor, deflection=st.signal * new.factor)
+
+
+def _steep_contact(st: State, cp, method: str, window: float):
+    """On an approach whose whole-run fit leaves the onset ambiguous (a slow rise over many um before a
+    steep contact, e.g. a long cell-adhesion curve), the same fit once more on the approach after that
+    onset, up to the largest deflection: its contact point when it lies clearly after the ambiguous range
+    and is itself well defined (its range within 2.5 x the usual bound, max(10 % of its indentation, 100 nm)),
+    else None."""
+    idx = st.approach.index
+    sub = idx[st.z[idx] >= cp.position]
+    if sub.size < 64:
+        return None
+    new = CONTACT_POINT_METHODS[method](st.z, st.deflection, sub, force_fraction=1.0, window=window)
+    if new.index < 0 or not new.position > cp.position_high or not new.indentation > 0:
+        return None
+    if new.position_high - new.position_low > max(0.1 * new.indentation, 100e-9) * 2.5:
+        return None
     return new
 
 
@@ -176,7 +229,11 @@ def force(st: State, o: ForceOptions) -> State:
     """Force = k x deflection, tilt-corrected (eq 13/14) when theta0 is given.
 
     k, theta0 and the lengths are the probe's (:class:`~.options.ProbeCalibration`),
-    k and theta0 from the file when the user gives none.
+    k and theta0 from the file when the user gives none. A thermal spring constant (the
+    instruments' usual one, ``thermal_k``) is ``kB T / <d^2>`` with the deflection ``d`` in the
+    file's sensitivity: when the sensitivity is refitted from the compliance slope the file's k
+    scales by (file's / fitted sensitivity)^2 (the deflections by fitted / file's, so forces by
+    file's / fitted), never by one factor alone.
     """
     st.require("deflection", step="force")
     md, p = st.metadata, st.probe
@@ -184,11 +241,19 @@ def force(st: State, o: ForceOptions) -> State:
     theta0 = p.value("theta0", md)
     cal = st.details.get("calibration")
     slope_k = cal.spring_constant_from_slope if cal is not None else math.nan
+    warn = []
+    if (o.thermal_k and p.spring_constant is None and k is not None and cal is not None and cal.source == "fit"
+            and math.isfinite(cal.sensitivity) and math.isfinite(cal.sensitivity_fit) and cal.sensitivity_fit > 0):
+        k_new = float(k) * (cal.sensitivity / cal.sensitivity_fit) ** 2
+        warn.append(f"spring constant rescaled with the refitted sensitivity: {float(k):.4g} -> {k_new:.4g} N/m "
+                    f"(a thermal k goes as 1/InvOLS^2: {cal.sensitivity * 1e9:.4g} -> {cal.sensitivity_fit * 1e9:.4g} "
+                    "nm/V); give --spring-constant if the file's k did not come from a thermal tune "
+                    "(or --option force.thermal_k=false)")
+        k = k_new
     conv = effective_spring_constant(k, theta0=theta0, L0=p.L0, L1=p.L1, L2=p.L2, from_slope=slope_k)
-    warn = None
     if conv.method == "none":
-        warn = "no spring constant (give --spring-constant): forces not computed"
+        warn.append("no spring constant (give --spring-constant): forces not computed")
     elif conv.method == "compliance slope":
-        warn = "spring constant taken from the compliance slope of the force signal (rigid contact assumed)"
+        warn.append("spring constant taken from the compliance slope of the force signal (rigid contact assumed)")
     return st.update("force", conv, warn=warn, spring_constant=conv.spring_constant,
                      force=st.deflection * conv.spring_constant)

@@ -140,6 +140,11 @@ def contact(st: State, o: ContactOptions) -> State:
     return st.update("contact", summary, warn=warn, approach=app, retract=ret, noise=app.noise)
 
 
+#: Retract baselines of a free part too noisy for its own line (:func:`~.drift.borrowed_line`), in words.
+_BORROWED = {"offset": "no slope", "approach slope": "the approach's drift rate",
+             "position tilt": "the approach baseline's tilt in position"}
+
+
 def drift(st: State, o: DriftOptions) -> State:
     """Subtract a baseline line in time fitted in each run's zero-force region."""
     st.require("approach", step="drift")
@@ -155,6 +160,9 @@ def drift(st: State, o: DriftOptions) -> State:
     elif res.retract_from_approach:
         warn = ("retract baseline too short or too noisy after the pull-off (free ringing?): the approach "
                 "baseline was used for both runs")
+    elif res.retract_line in _BORROWED:
+        warn = ("the retract's free part is too noisy for a baseline line of its own (ringing, unbinding events): "
+                f"its own offset with {_BORROWED[res.retract_line]}")
     return st.update("drift", res, warn=warn, signal=signal)
 
 

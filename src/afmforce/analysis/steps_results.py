@@ -279,7 +279,8 @@ def diagnosis(st: State, o: DiagnosisOptions) -> State:
                          friction_verdict="" if fr is None else fr.verdict,
                          hamaker_radius=fit.hamaker_radius if fit is not None else math.nan,
                          pull_off_force=pull_off_estimate(j.pull_off, st.spring_constant), contact_separation=z0,
-                         attraction_ratio=o.attraction_ratio)
+                         attraction_ratio=o.attraction_ratio,
+                         quality_factor=float(st.metadata.get("quality_factor", math.nan) or math.nan))
     ret = st.retract
     if ret is not None and not ret.has_compliance and ret.contact.any() and bool(
             np.all(st.signal[ret.index[ret.contact]] > 0)):

@@ -92,12 +92,27 @@ def register(sub) -> None:
                              help="deflection calibration: from the file/--sensitivity, or the compliance slope "
                                   "(the same as --option calibration.source=VALUE; default "),
               lambda: f"{_default('calibration', 'source')})")
+    _indentation_flags(p)
     lazy_help(p.add_argument("--option", action="append", default=[], metavar="STEP.NAME=VALUE",
                              help="any other option of an analysis step, with units (repeatable), e.g. "
                                   "vdw.max_separation=20nm, jumps.nsigma=4, fringes.apply=never "
                                   "(docs/analysis.md lists them with their ranges); steps with options: "),
               _option_names)
     p.set_defaults(func=run)
+
+
+def _indentation_flags(p) -> None:
+    """Short forms of the indentation step's options (docs/contact.md)."""
+    g = p.add_argument_group("indentation: Young's modulus of soft samples (docs/contact.md)")
+    g.add_argument("--indentation-model", default=None, metavar="KEY",
+                   help="hertz_paraboloid (default), sneddon_sphere, hertz_cone, bilodeau_pyramid3, "
+                        "bilodeau_pyramid4, hertz_thin_layer, jkr, dmt, maugis (the same as --option "
+                        "indentation.model=KEY)")
+    add_field(g, "radius", flag="--tip-radius", dest="tip_radius",
+              help="tip radius of a sphere model (default: --radius)")
+    add_field(g, "half_angle", help="half-angle of a cone, face angle of a pyramid")
+    add_field(g, "poisson", default_from=lambda: _default("indentation", "poisson"),
+              help="Poisson ratio of the sample")
 
 
 def _example_names() -> list[str]:
@@ -277,10 +292,15 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
     from ..analysis.maps import map_images
     from ..plotting import write_map_png
 
-    out = {}
+    out, per_map = {}, {}
     for q in dict.fromkeys(quantities or [DEFAULT_MAP_QUANTITY]):
         for image in map_images(table, q):
             out[f"map {image.source} {q}"] = write_map_png(image, folder / f"{image.name}.{q}.png")
+            per_map.setdefault(image.source, []).append(image)
+    from ..analysis.maps import write_map_hdf5
+
+    for source, images in per_map.items():  # the numbers, with the grid positions
+        out[f"map {source} numbers"] = write_map_hdf5(images, folder / f"{images[0].name}.maps.h5")
     return out
 
 
@@ -303,6 +323,7 @@ _COLUMNS = (  # column, header, scale
     ("adhesion_force", "adhesion [nN]", 1e9),
     ("rupture_distance", "rupture [nm]", 1e9),
     ("indentation", "indent. [nm]", 1e9),
+    ("youngs_modulus", "E [kPa]", 1e-3),
     ("shift", "shift [nm]", 1e9),
     ("jump_in_separation", "jump-in h [nm]", 1e9),
     ("jump_in_force", "jump-in F [nN]", 1e9),

@@ -48,6 +48,11 @@ def _model_group(parser):
     g.add_argument("--model", choices=("beam", "spring"), default=None,
                    help="beam: inclined cantilever with friction (eqs 22-28); "
                         "spring: mass on a spring (eq 1) (default beam)")
+    _q(g, "--quality-factor", "dimensionless", "", "quality factor Q of the lever in its medium "
+       "(beam: both free modes, Rayleigh damping; spring: m omega0/Q; none: undamped, the paper)",
+       dest="quality_factor")
+    _q(g, "--quality-factor-2", "dimensionless", "", "Q of the beam's second free mode "
+       "(default: --quality-factor)", dest="quality_factor_2")
 
 
 def _beam_group(parser):

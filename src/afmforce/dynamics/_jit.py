@@ -64,8 +64,10 @@ has them; where it does not, the pieces are compiled the ordinary way
 
 from __future__ import annotations
 
+import hashlib
 import os
 from functools import partial
+from pathlib import Path
 
 from numba import njit
 from numba.core.dispatcher import Dispatcher
@@ -100,6 +102,53 @@ def cache_index_fresh(disp) -> bool | None:
         return bool(cache_file._load_index())              # {} when missing or stale
     except Exception:                                      # noqa: BLE001 - unreadable: unsure
         return None
+
+
+#: Name of the file, beside the dynamics' numba cache files, that holds the digest of the sources
+#: they were compiled from (:func:`purge_stale_cache`).
+SOURCES_DIGEST = "afmforce-sources.digest"
+
+
+def sources_digest(folder: Path) -> str:
+    """Digest of every ``*.py`` file in ``folder`` (names and contents) [hex]."""
+    h = hashlib.blake2b(digest_size=16)
+    for f in sorted(Path(folder).glob("*.py")):
+        h.update(f.name.encode())
+        h.update(f.read_bytes())
+    return h.hexdigest()
+
+
+def purge_stale_cache(disp, folder: Path) -> bool:
+    """Delete the numba cache files beside ``disp``'s when the sources in ``folder`` changed.
+
+    numba keys a function's cache on its own source file only, but the integrator
+    (``radau.integrate_segment``) inlines the vector field of ``models.py`` and the pieces of
+    the other modules: after an edit or an upgrade that leaves ``radau.py`` as it was, the
+    cache would silently return the old model. A digest of all the package's sources, kept
+    beside the cache files, makes any change of any of them recompile everything (once).
+    Returns whether files were deleted. Never raises (an unwritable cache is numba's affair).
+    """
+    try:
+        cache_dir = Path(disp._cache._cache_path)            # numba internals
+    except AttributeError:
+        return False
+    try:
+        digest = sources_digest(folder)
+        stamp = cache_dir / SOURCES_DIGEST
+        if stamp.is_file() and stamp.read_text().strip() == digest:
+            return False
+        purged = False
+        if cache_dir.is_dir():
+            for f in list(cache_dir.glob("*.nbi")) + list(cache_dir.glob("*.nbc")):
+                f.unlink(missing_ok=True)
+                purged = True
+        cache_dir.mkdir(parents=True, exist_ok=True)
+        tmp = cache_dir / f".{SOURCES_DIGEST}.{os.getpid()}"
+        tmp.write_text(digest)
+        os.replace(tmp, stamp)
+        return purged
+    except OSError:
+        return False
 
 
 def cache_missing(disp) -> bool:

@@ -9,7 +9,8 @@ from functools import lru_cache
 import numpy as np
 
 from .config import SimulationConfig
-from .models import MODEL_BEAM, pack_beam, pack_spring
+from .damping import beam_damping
+from .models import MODEL_BEAM, beam_matrices, pack_beam, pack_spring
 
 __all__ = ["parameter_vector", "free_frequency_max", "H_GUARD_FRACTION"]
 
@@ -43,6 +44,13 @@ def _beam_template(cantilever, m_joint: float, m_base: float) -> np.ndarray:
 
 
 @lru_cache(maxsize=256)
+def _beam_damping(cantilever, m_joint: float, m_base: float, q1, q2) -> tuple[float, ...]:
+    """The beam's Rayleigh damping matrix (C00, C01, C10, C11) [kg/s] (issue 23), per geometry."""
+    A, masses = beam_matrices(cantilever, m_joint, m_base)
+    return tuple(float(c) for c in beam_damping(A, masses, q1, q2).ravel())
+
+
+@lru_cache(maxsize=256)
 def _beam_fmax(cantilever, m_joint: float, m_base: float) -> float:
     return free_frequency_max(_beam_template(cantilever, m_joint, m_base), MODEL_BEAM)
 
@@ -53,7 +61,8 @@ def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
     guard = H_GUARD_FRACTION * s.z0
     if cfg.model == "spring":
         return pack_spring(spring_constant=probe.spring_constant, mass=probe.mass, radius=s.radius,
-                           hamaker=s.hamaker, z0=s.z0, viscosity=s.viscosity, h_guard=guard)
+                           hamaker=s.hamaker, z0=s.z0, viscosity=s.viscosity, h_guard=guard,
+                           quality_factor=probe.quality_factor)
     from . import models as M
     xi, zeta = cfg.friction.coefficients
     p = _beam_template(probe.cantilever, probe.m_joint, probe.m_base).copy()
@@ -64,6 +73,9 @@ def parameter_vector(cfg: SimulationConfig) -> np.ndarray:
     p[M.H_GUARD] = guard
     p[M.XI] = xi
     p[M.ZETA] = zeta
+    if probe.quality_factor is not None or probe.quality_factor_2 is not None:
+        p[M.C00:M.C11 + 1] = _beam_damping(probe.cantilever, probe.m_joint, probe.m_base,
+                                           probe.quality_factor, probe.quality_factor_2)
     return p
 
 

@@ -110,7 +110,9 @@ def _flat_table() -> dict[str, FlatName]:
     out = {"model": FlatName("model", "probe", "model", tuple(MODELS), None)}
     for model, cls in PROBES.items():
         for f in dataclasses.fields(cls):
-            out[f.name] = FlatName(f.name, "probe", f.name, (model,), f)
+            known = out.get(f.name)        # a field of both probes (quality_factor): both models
+            models = (known.models if known is not None else ()) + (model,)
+            out[f.name] = FlatName(f.name, "probe", f.name, models, f)
     for part, cls in PARTS.items():
         if part == "probe":
             continue

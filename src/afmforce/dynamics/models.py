@@ -17,6 +17,10 @@ one call.
   As the paper says ("for technical reasons"), drainage and friction enter as
   if derived from potentials: they act through ``dh/dq`` and ``dy2/dq`` like
   the conservative surface force.
+* **lever damping** (issue 23; absent in the paper, zero by default): the
+  spring gets ``-c x'`` with ``c = m omega0 / Q``; the beam ``-C q'`` with the
+  Rayleigh matrix ``C = alpha M + beta K`` (:mod:`.damping`), which gives
+  both free modes the requested quality factors.
 
 The parameters are packed into one float64 vector ``p`` (layout below) so that
 the integrator can be compiled once for both models. ``p[H_GUARD]`` is the
@@ -34,6 +38,7 @@ import numpy as np
 from numba import njit
 
 from ._jit import piece
+from .damping import beam_damping, spring_damping
 
 MODEL_SPRING = 0
 MODEL_BEAM = 1
@@ -58,7 +63,9 @@ TH_A, TH_B = 16, 17               # dtheta/dq_alpha, dtheta/dq_beta [rad/m]
 # both models
 MOBILITY = 18   # dh-direction inverse mass: 1/m (spring), hq.M^-1.hq (beam) [1/kg]
 K_EFF = 19      # force-measuring spring constant k (eq 13 for the beam) [N/m]
-P_SIZE = 20
+# lever damping (issue 23): -C q' [kg/s]; spring: C00 = m omega0 / Q; 0 = undamped (paper)
+C00, C01, C10, C11 = 20, 21, 22, 23
+P_SIZE = 24
 
 #: Number of monitored observables returned by :func:`observe`.
 N_OBS = 9
@@ -101,7 +108,7 @@ def rhs(model, p, zd, vd, y, out):
         fs, _ = surface_force(h, ar, z0)
         fz = fs - cd * hd / h
         out[0] = xd
-        out[1] = p[INV_M] * (-p[K] * x + fz)
+        out[1] = p[INV_M] * (-p[K] * x + fz - p[C00] * xd)
         return True
     qa = y[0]
     qb = y[1]
@@ -121,8 +128,10 @@ def rhs(model, p, zd, vd, y, out):
     fy = -(p[XI] + p[ZETA] * fz * fz) * yd
     out[0] = va
     out[1] = vb
-    out[2] = p[INV_MA] * (p[A00] * qa + p[A01] * qb + fz * hqa + fy * yqa)
-    out[3] = p[INV_MB] * (p[A10] * qa + p[A11] * qb + fz * hqb + fy * yqb)
+    out[2] = p[INV_MA] * (p[A00] * qa + p[A01] * qb + fz * hqa + fy * yqa
+                          - (p[C00] * va + p[C01] * vb))
+    out[3] = p[INV_MB] * (p[A10] * qa + p[A11] * qb + fz * hqb + fy * yqb
+                          - (p[C10] * va + p[C11] * vb))
     return True
 
 
@@ -142,7 +151,7 @@ def jac(model, p, zd, vd, y, J):
         J[0, 0] = 0.0
         J[0, 1] = 1.0
         J[1, 0] = im * (-p[K] + dfs + cd * hd / (h * h))
-        J[1, 1] = -im * cd / h
+        J[1, 1] = -im * cd / h - im * p[C00]
         return True
     qa = y[0]
     qb = y[1]
@@ -178,10 +187,11 @@ def jac(model, p, zd, vd, y, J):
     J[3, 0] = imb * (p[A10] + gb * dfz_dh * hqa)
     J[3, 1] = imb * (p[A11] + gb * dfz_dh * hqb)
     # velocities: through Fd (hq_j dFz/dh') and friction (-xi_eff yq_j)
-    J[2, 2] = ima * (ga * dfz_dhd * hqa - xi_eff * yqa * yqa)
-    J[2, 3] = ima * (ga * dfz_dhd * hqb - xi_eff * yqa * yqb)
-    J[3, 2] = imb * (gb * dfz_dhd * hqa - xi_eff * yqb * yqa)
-    J[3, 3] = imb * (gb * dfz_dhd * hqb - xi_eff * yqb * yqb)
+    # and the lever damping -C q'
+    J[2, 2] = ima * (ga * dfz_dhd * hqa - xi_eff * yqa * yqa - p[C00])
+    J[2, 3] = ima * (ga * dfz_dhd * hqb - xi_eff * yqa * yqb - p[C01])
+    J[3, 2] = imb * (gb * dfz_dhd * hqa - xi_eff * yqb * yqa - p[C10])
+    J[3, 3] = imb * (gb * dfz_dhd * hqb - xi_eff * yqb * yqb - p[C11])
     return True
 
 
@@ -294,8 +304,9 @@ def observe_array(model, p, zd, vd, Y):
     return out
 
 
-def pack_spring(*, spring_constant, mass, radius, hamaker, z0, viscosity, h_guard) -> np.ndarray:
-    """Parameter vector of the simple-spring model (eq 1)."""
+def pack_spring(*, spring_constant, mass, radius, hamaker, z0, viscosity, h_guard,
+                quality_factor=None) -> np.ndarray:
+    """Parameter vector of the simple-spring model (eq 1; lever damping of issue 23)."""
     p = np.zeros(P_SIZE)
     p[AR] = hamaker * radius
     p[Z0] = z0
@@ -305,6 +316,7 @@ def pack_spring(*, spring_constant, mass, radius, hamaker, z0, viscosity, h_guar
     p[INV_M] = 1.0 / mass
     p[MOBILITY] = 1.0 / mass
     p[K_EFF] = spring_constant
+    p[C00] = spring_damping(spring_constant, mass, quality_factor)
     return p
 
 
@@ -330,8 +342,8 @@ def beam_couplings(cantilever):
 
 
 def pack_beam(cantilever, *, m_joint, m_base, radius, hamaker, z0, viscosity, xi, zeta,
-              h_guard) -> np.ndarray:
-    """Parameter vector of the inclined-beam model (eqs 22-28)."""
+              h_guard, quality_factor=None, quality_factor_2=None) -> np.ndarray:
+    """Parameter vector of the inclined-beam model (eqs 22-28; lever damping of issue 23)."""
     A, (ma, mb) = beam_matrices(cantilever, m_joint, m_base)
     hq, yq, tq = beam_couplings(cantilever)
     p = np.zeros(P_SIZE)
@@ -348,4 +360,6 @@ def pack_beam(cantilever, *, m_joint, m_base, radius, hamaker, z0, viscosity, xi
     p[TH_A], p[TH_B] = tq
     p[MOBILITY] = hq[0] ** 2 / ma + hq[1] ** 2 / mb
     p[K_EFF] = cantilever.spring_constant
+    C = beam_damping(A, (ma, mb), quality_factor, quality_factor_2)
+    p[C00], p[C01], p[C10], p[C11] = C[0, 0], C[0, 1], C[1, 0], C[1, 1]
     return p

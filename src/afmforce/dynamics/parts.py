@@ -91,6 +91,14 @@ class BeamProbe(Part):
     m_joint, m_base : float
         Point mass at the beam-base joint and mass spread along the base [kg]
         (``m_alpha = m_joint + m_base/4``, ``m_beta = m_base/3``).
+    quality_factor, quality_factor_2 : float or None
+        Quality factor Q [-] of the lever's first and second free mode in its
+        medium (issue 23): Rayleigh damping ``C = alpha M + beta K`` of the
+        beam's mass and stiffness matrices, chosen so that the free modes have
+        exactly these Q (``quality_factor_2`` None: both get ``quality_factor``;
+        ``quality_factor`` None with ``quality_factor_2`` given: the first mode
+        stays undamped; :func:`afmforce.dynamics.damping.beam_damping`). Both
+        None (default): no lever damping, the paper's model.
     """
 
     model: ClassVar[str] = "beam"
@@ -103,6 +111,8 @@ class BeamProbe(Part):
     B: float | None = quantity("B", None, "optional_positive")
     m_joint: float = quantity("m_joint", FIG5["m_joint"], "positive")
     m_base: float = quantity("m_base", FIG5["m_base"], "positive")
+    quality_factor: float | None = quantity("quality_factor", None, "optional_positive")
+    quality_factor_2: float | None = quantity("quality_factor_2", None, "optional_positive")
 
     def __post_init__(self) -> None:
         if self.k0 is not None and self.B is not None:
@@ -149,12 +159,17 @@ class SpringProbe(Part):
         k [N/m] (default: Fig 1, 0.21).
     mass : float
         m [kg] (default: Fig 1, 10 ug).
+    quality_factor : float or None
+        Quality factor Q [-] of the spring in its medium (issue 23): viscous
+        damping ``m omega0 / Q`` (omega0 = sqrt(k/m)). None (default): undamped,
+        the paper's eq 1.
     """
 
     model: ClassVar[str] = "spring"
 
     spring_constant: float = quantity("spring_constant", FIG1["spring_constant"], "positive")
     mass: float = quantity("mass", FIG1["mass"], "positive")
+    quality_factor: float | None = quantity("quality_factor", None, "optional_positive")
 
     def __post_init__(self) -> None:
         validate(self)

@@ -4,7 +4,10 @@ Written independently of the compiled vector field: numpy, the force laws of
 :mod:`afmforce.forces` and the beam matrices of
 :class:`~afmforce.cantilever.InclinedCantilever` (spec sections 3 and 5), and
 ``scipy.integrate.solve_ivp`` with an analytic Jacobian, one call per drive
-segment, with solve_ivp's own event location. It is slow (pure Python per
+segment, with solve_ivp's own event location. The lever damping of issue 23 (a quality
+factor) is built here from its definition: the undamped free modes by scipy's generalised
+eigensolver, Rayleigh's alpha and beta by a linear solve of ``zeta_i = alpha / (2 w_i) +
+beta w_i / 2``. It is slow (pure Python per
 step) and meant for tests on short windows at tight tolerances and for the
 benchmark (``benchmarks/bench_dynamics.py``).
 """
@@ -24,6 +27,20 @@ from .static import static_jump_in
 __all__ = ["ReferenceSolution", "reference_solve", "ReferenceModel"]
 
 
+def rayleigh_damping(K, M, q1, q2=None) -> np.ndarray:
+    """``C = alpha M + beta K`` giving the two undamped free modes of (M, K) the quality
+    factors q1, q2 (q2 None: q1; q1 None: the first mode undamped); zeros for both None
+    (the paper's undamped model)."""
+    if q1 is None and q2 is None:
+        return np.zeros_like(K)
+    from scipy.linalg import eigh
+
+    w = np.sqrt(eigh(K, M, eigvals_only=True))
+    zeta = np.array([0.0 if q is None else 0.5 / q for q in (q1, q1 if q2 is None else q2)])
+    alpha, beta = np.linalg.solve(np.column_stack([0.5 / w, 0.5 * w]), zeta)
+    return alpha * M + beta * K
+
+
 class ReferenceModel:
     """The equations of motion in numpy: ``f(t, y)`` and ``df/dy`` for one drive segment."""
 
@@ -35,6 +52,8 @@ class ReferenceModel:
         if cfg.model == "spring":
             self.beam = False
             self.k, self.m = probe.spring_constant, probe.mass
+            q = probe.quality_factor
+            self.c = 0.0 if q is None else self.m * math.sqrt(self.k / self.m) / q
             return
         self.beam = True
         c = cfg.cantilever
@@ -46,6 +65,8 @@ class ReferenceModel:
         self.dh = np.array([math.cos(th0), c.a]) @ T             # dh/dq (eqs 24, 25)
         self.dy = np.array([math.sin(th0), c.b]) @ T             # dy2/dq (eqs 26, 27)
         self.dth = np.array([0.0, 1.0]) @ T                     # dtheta/dq
+        self.C = rayleigh_damping(-self.Adyn, np.diag(1.0 / self.minv), probe.quality_factor,
+                                  probe.quality_factor_2)
         if fr.law == "none":
             self.xi, self.zeta = 0.0, 0.0
         elif fr.law == "viscous":
@@ -69,10 +90,10 @@ class ReferenceModel:
         h, hd = self.separation(y, z, v)
         fz = self._forces(h, hd)
         if not self.beam:
-            return np.array([y[1], (-self.k * y[0] + fz) / self.m])
+            return np.array([y[1], (-self.k * y[0] + fz - self.c * y[1]) / self.m])
         yd = self.dy @ y[2:]
         fy = -(self.xi + self.zeta * fz**2) * yd
-        acc = self.minv * (self.Adyn @ y[:2] + fz * self.dh + fy * self.dy)
+        acc = self.minv * (self.Adyn @ y[:2] + fz * self.dh + fy * self.dy - self.C @ y[2:])
         return np.concatenate([y[2:], acc])
 
     def jac(self, t, y, z_of_t, v):
@@ -82,7 +103,8 @@ class ReferenceModel:
         dfz_dh = dfs + self.cd * hd / h**2
         dfz_dhd = -self.cd / h
         if not self.beam:
-            return np.array([[0.0, 1.0], [(-self.k + dfz_dh) / self.m, dfz_dhd / self.m]])
+            return np.array([[0.0, 1.0], [(-self.k + dfz_dh) / self.m,
+                                          (dfz_dhd - self.c) / self.m]])
         fz = self._forces(h, hd)
         yd = self.dy @ y[2:]
         xi_eff = self.xi + self.zeta * fz**2
@@ -90,7 +112,7 @@ class ReferenceModel:
         # generalised force G = A q + Fz dh + Fy dy
         dG_dq = self.Adyn + np.outer(self.dh + dfy_dfz * self.dy, self.dh) * dfz_dh
         dG_dv = np.outer(self.dh + dfy_dfz * self.dy, self.dh) * dfz_dhd - xi_eff * np.outer(
-            self.dy, self.dy)
+            self.dy, self.dy) - self.C
         J = np.zeros((4, 4))
         J[0, 2] = J[1, 3] = 1.0
         J[2:, :2] = self.minv[:, None] * dG_dq

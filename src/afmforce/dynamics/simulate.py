@@ -17,7 +17,7 @@ from .config import SimulationConfig
 from .drive import segments
 from ._locate import sample_columns
 from .events import Events, fit_compliance
-from .guard import risky, run_check
+from .guard import lever_damping_check, risky, run_check
 from .models import MODEL_BEAM, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_THETA, O_Y2
 from .trajectory import SolverStats, Trajectory
 from ._setup import _control, _record, _seg_table, _setup
@@ -278,6 +278,7 @@ class _Run:
                 f" (risky regime: {why}; check='auto' compares a 10x tighter solve)" if why else "")
         else:
             event_errors, check_note = run_check(check, cfg, events, _resolve)
+            check_note += lever_damping_check(check, cfg, events, _resolve)   # issue 23
         wall = time.perf_counter() - (self.wall0 if wall0 is None else wall0)
         st = stats.tolist()
         solver = _frozen(SolverStats, dict(

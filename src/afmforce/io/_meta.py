@@ -57,6 +57,8 @@ METADATA: dict[str, MetaField] = {
     "retract_velocity": MetaField("Retract speed", "m/s", _positive, "--meta retract_velocity=..."),
     "sample_rate": MetaField("Sample rate", "Hz", _positive, "--meta sample_rate=..."),
     "resonance_frequency": MetaField("Resonance frequency", "Hz", _positive, "--resonance-frequency"),
+    "quality_factor": MetaField("Quality factor of the free resonance (tells air from liquid)", "", _positive,
+                                "--meta quality_factor=..."),
     "theta0": MetaField("Cantilever inclination", "rad", _finite),
     "radius": MetaField("Probe radius", "m", _positive),
     "instrument": MetaField("Instrument", "", _text),

@@ -113,18 +113,22 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
         f0 = _thermal_frequency(path)  # afmformats does not pass the note's resonance frequency on
         if f0 is not None and "resonance_frequency" not in meta_override:
             curve = dataclasses.replace(curve, metadata={**curve.metadata, "resonance_frequency": f0})
+        q = _thermal_frequency(path, "ThermalQ:")  # the medium: Q of tens to hundreds in air, a few in liquid
+        if q is not None and "quality_factor" not in meta_override:
+            curve = dataclasses.replace(curve, metadata={**curve.metadata, "quality_factor": q})
         out.append(curve)
     return out
 
 
-def _thermal_frequency(path: Path) -> float | None:
-    """``ThermalFrequency`` [Hz] of the wave note (the cantilever's thermal resonance), if positive."""
+def _thermal_frequency(path: Path, key: str = "ThermalFrequency:") -> float | None:
+    """``ThermalFrequency`` [Hz] of the wave note (the cantilever's thermal resonance), or another
+    positive number of the note (``key`` with its colon, e.g. ``"ThermalQ:"``), if positive."""
     try:
         note = _ibw_note(path)
     except Exception:  # the note is optional
         return None
     for line in note.replace("\\r", "\r").replace("\n", "\r").split("\r"):
-        if line.startswith("ThermalFrequency:"):
+        if line.startswith(key):
             try:
                 value = float(line.split(":", 1)[1])
             except ValueError:
@@ -216,7 +220,8 @@ def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCur
     unit = CHANNELS[sig_ch]
     meta: dict[str, Any] = {"instrument": "Asylum Research", "channels": f"{sig_ch}+{pos_ch}"}
     for key, ours in (("SpringConstant", "spring_constant"), ("InvOLS", "sensitivity"),
-                      ("NumPtsPerSec", "sample_rate"), ("ThermalFrequency", "resonance_frequency")):
+                      ("NumPtsPerSec", "sample_rate"), ("ThermalFrequency", "resonance_frequency"),
+                      ("ThermalQ", "quality_factor")):
         value = _note_float(note, key)
         if value is not None:
             meta[ours] = value

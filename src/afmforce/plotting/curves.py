@@ -16,7 +16,8 @@ from .. import forces
 from ..analysis.result import AnalysisResult
 from ..io.curve import RawCurve
 
-__all__ = ["plot_raw", "plot_force_separation", "plot_residuals", "plot_spectrum", "plot_summary"]
+__all__ = ["plot_raw", "plot_force_separation", "plot_residuals", "plot_contact_region", "plot_compliance_region",
+           "plot_spectrum", "plot_summary"]
 
 _RUNS = ((0, "inward (approach)", "C0", "-"), (1, "outward (retract)", "C3", ":"))
 
@@ -38,10 +39,11 @@ def plot_raw(curve: RawCurve, ax=None, channel: str = "auto"):
     scale, unit = (1e9, "nm") if curve.deflection_unit in ("m", "N") else (1.0, curve.deflection_unit)
     if curve.deflection_unit == "N":
         unit = "nN"
+    zs, zu = (1e6, "µm") if np.ptp(z) > 20e-6 else (1e9, "nm")  # long cell curves: µm
     for seg, label, color, ls in _RUNS:
         m = np.asarray(curve.segment) == seg
-        ax.plot(z[m] * 1e9, s[m] * scale, ls, color=color, lw=1, label=label)
-    ax.set_xlabel(f"{'measured' if use_measured else 'nominal'} position z [nm]")
+        ax.plot(z[m] * zs, s[m] * scale, ls, color=color, lw=1, label=label)
+    ax.set_xlabel(f"{'measured' if use_measured else 'nominal'} position z [{zu}]")
     ax.set_ylabel(f"deflection signal [{unit}]")
     ax.set_title("raw signal")
     ax.legend(fontsize="small")
@@ -73,7 +75,7 @@ def _window(result: AnalysisResult, max_separation: float | None) -> tuple[float
     if result.contact_kind == "soft":
         lo = -1.05 * (result.indentation if math.isfinite(result.indentation) else -lo)
     else:
-        lo = max(lo, -5e-9)
+        lo = min(max(lo, -5e-9), -1e-9)  # the compliance line inside the frame, not on its edge
     reach = [40e-9 if result.contact_kind != "soft" else 0.5 * abs(lo)]
     for v in (result.rupture_distance, result.adhesion_distance, result.jump_in_separation):
         if math.isfinite(v) and v > 0:
@@ -119,7 +121,12 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
     ad = result.details.get("adhesion")
     if ad is not None and ad.found and 0 <= ad.index < h.size and math.isfinite(f[ad.index]):
         ax.plot([h[ad.index] * 1e9], [f[ad.index] * 1e9], "^", color="C1", ms=8,
-                label=f"adhesion {ad.force * 1e9:.3g} nN" if math.isfinite(ad.force) else "adhesion")
+                label=f"adhesion {ad.force * 1e9:.3g} nN" if math.isfinite(ad.force) else
+                f"adhesion {ad.deflection * 1e9:.3g} nm")
+    _mark_steps(ax, result, h, f)
+    if ad is not None and math.isfinite(getattr(ad, "rupture_distance", math.nan)) and lo < ad.rupture_distance < hi:
+        ax.axvline(ad.rupture_distance * 1e9, color="C4", ls=":", lw=1,
+                   label=f"last rupture {ad.rupture_distance * 1e9:.4g} nm")
     ji = result.details["jumps"].jump_in if "jumps" in result.details else None
     if ji is not None and ji.found and math.isfinite(ji.force_before):
         ax.plot([ji.separation * 1e9], [ji.force_before * 1e9], "v", color="C2", ms=8, label="jump-in")
@@ -132,6 +139,88 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
         pad = 0.08 * max(yhi - ylo, 1e-6)
         ax.set_ylim(ylo - pad, yhi + pad)
     ax.set_ylabel(ylabel)
+    ax.legend(fontsize="small")
+    return ax
+
+
+def _mark_steps(ax, result: AnalysisResult, h: np.ndarray, f: np.ndarray) -> None:
+    """Unbinding steps of the adhesion step: a marker just after each (the force after the bond let go)."""
+    ad = result.details.get("adhesion")
+    steps = [s.index for s in getattr(ad, "steps", ()) if 0 <= s.index < h.size and math.isfinite(h[s.index] * f[s.index])]
+    if steps:
+        ax.plot(h[steps] * 1e9, f[steps] * 1e9, "s", mfc="none", color="C4", ms=7,
+                label=f"{len(steps)} unbinding step{'s' if len(steps) > 1 else ''}")
+
+
+def plot_contact_region(result: AnalysisResult, ax=None, width: float = 0.25):
+    """Soft contacts: force against indentation around the contact point, enlarged.
+
+    The window spans ``width`` of the indentation before the contact point (at least the candidate
+    range of equally good contact points, shaded) and up to twice that into the sample (at most
+    the whole indentation); the approach is drawn with the
+    retract, the contact point as a vertical line at zero indentation.
+    """
+    ax = _new_ax(ax)
+    ax.set_xlabel("indentation [nm]")
+    ax.set_title("contact region, enlarged")
+    cp = result.details.get("contact_point")
+    h, f = result.separation, result.force
+    ylabel = "force [nN]"
+    if not np.isfinite(f).any():
+        f, ylabel = result.deflection, "deflection [nm]"
+    ax.set_ylabel(ylabel)
+    if cp is None or not math.isfinite(cp.position) or not np.isfinite(h).any():
+        return _say(ax, "no contact point: nothing to enlarge")
+    ind = -h  # indentation: positive into the sample
+    depth = result.indentation if math.isfinite(result.indentation) and result.indentation > 0 else float(
+        np.nanmax(ind))
+    lo_c, hi_c = cp.position_low - cp.position, cp.position_high - cp.position  # candidate range, in z
+    half = max(width * depth, 1.2 * max(abs(lo_c), abs(hi_c), 0.0), 5e-9)
+    top = max(half, min(depth, 2 * half))  # into the sample: far enough to see the contact stiffen
+    inside = np.isfinite(f) & (ind >= -half) & (ind <= top)
+    for seg, label, color, ls in _RUNS:
+        m = (result.segment == seg) & inside
+        ax.plot(ind[m] * 1e9, f[m] * 1e9, ls, marker=".", ms=2, color=color, lw=0.7, label=label)
+    if math.isfinite(lo_c) and math.isfinite(hi_c) and hi_c > lo_c:
+        ax.axvspan(lo_c * 1e9, hi_c * 1e9, color="0.85", zorder=0, label="contact points as good (2 sigma)")
+    ax.axvline(0, color="k", lw=0.8, label=f"contact point (z = {cp.position * 1e6:.4g} µm)")
+    ax.axhline(0, color="0.6", lw=0.5)
+    ax.set_xlim(-half * 1e9, top * 1e9)
+    y = f[inside] * 1e9
+    if y.size:
+        ylo, yhi = float(np.min(y)), float(np.max(y))
+        pad = 0.08 * max(yhi - ylo, 1e-6)
+        ax.set_ylim(ylo - pad, yhi + pad)
+    ax.legend(fontsize="small")
+    return ax
+
+
+def plot_compliance_region(result: AnalysisResult, ax=None, fraction: float = 0.15):
+    """Hard contacts without a van der Waals fit: force (or deflection) against position near the turning
+    point (three times the positions of the compliance lines, h < 2 nm, else the last ``fraction`` of the
+    position range; at least 40 samples), both runs: the contact lines enlarged, whose slopes calibrate
+    the deflection."""
+    ax = _new_ax(ax)
+    ax.set_title("contact region, enlarged")
+    z, f = result.position, result.force
+    ylabel = "force [nN]"
+    if not np.isfinite(f).any():
+        f, ylabel = result.deflection, "deflection [nm]"
+    ax.set_ylabel(ylabel)
+    ax.set_xlabel("position z [nm]")
+    runs = np.isfinite(f) & np.isfinite(z) & ((result.segment == 0) | (result.segment == 1))
+    if runs.sum() < 4:
+        return _say(ax, "no contact region to enlarge")
+    zr = z[runs]
+    top = float(np.max(zr))
+    h = result.separation
+    touching = runs & np.isfinite(h) & (h < 2e-9)  # on the compliance lines
+    width = top - float(np.min(z[touching])) if touching.any() else fraction * float(np.ptp(zr))
+    lo = min(top - 3 * width, float(np.sort(zr)[-min(40, zr.size)]))
+    for seg, label, color, ls in _RUNS:
+        m = runs & (result.segment == seg) & (z >= lo)
+        ax.plot(z[m] * 1e9, f[m] * 1e9, ls, marker=".", ms=3, color=color, lw=0.7, label=label)
+    ax.axhline(0, color="0.6", lw=0.5)
     ax.legend(fontsize="small")
     return ax
 
@@ -182,10 +271,13 @@ def plot_spectrum(result: AnalysisResult, ax=None):
         freq = np.fft.rfftfreq(resid.size, dt)
         ax.semilogy(freq[1:], spec[1:] * 1e18 + 1e-30, color=color, lw=0.8, label=label)
     if osc is not None:
+        what = "none"
         if osc.origin != "none":
             for peak in (osc.approach, osc.retract):
                 ax.axvline(peak.frequency, color="k", ls="--", lw=0.8)
-        ax.set_title(f"post-contact spectrum (oscillation: {osc.origin})", fontsize="medium")
+            freq = math.fsum(p.frequency for p in (osc.approach, osc.retract)) / 2  # the table's number
+            what = f"{freq:.4g} Hz, {osc.origin} origin" if osc.origin == "undetermined" else f"{freq:.4g} Hz, {osc.origin}"
+        ax.set_title(f"post-contact spectrum (oscillation: {what})", fontsize="medium")
     if ax.lines:
         ax.legend(fontsize="small")
     else:
@@ -194,7 +286,8 @@ def plot_spectrum(result: AnalysisResult, ax=None):
 
 
 def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None):
-    """Four panels: raw signal, force vs separation with fit and theory, residuals, spectrum."""
+    """Four panels: raw signal, force vs separation with fit and theory, the van der Waals residuals (hard
+    contacts with a fit) or the contact region enlarged (soft contacts, hard ones without a fit), spectrum."""
     if fig is None:
         from matplotlib.figure import Figure
 
@@ -211,11 +304,24 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
         ax.set_ylabel("deflection [nm]")
         ax.legend(fontsize="small")
     plot_force_separation(result, axes[0, 1])
-    plot_residuals(result, axes[1, 0])
+    fit = result.details.get("vdw")
+    if "indentation" in result.details:  # a soft contact's modulus fit: force vs indentation (issue 26)
+        from .indentation import plot_indentation
+
+        plot_indentation(result, axes[1, 0])
+    elif result.contact_kind == "soft":
+        plot_contact_region(result, axes[1, 0])
+    elif fit is None or not math.isfinite(getattr(fit, "hamaker_radius", math.nan)):
+        plot_compliance_region(result, axes[1, 0])  # no fit to show residuals of
+    else:
+        plot_residuals(result, axes[1, 0])
     plot_spectrum(result, axes[1, 1])
     name = result.source.rsplit("/", 1)[-1] if result.source else "force curve"
     adh = (f"adhesion {result.adhesion_force * 1e9:.3g} nN" if math.isfinite(result.adhesion_force)
            else "no adhesion above the noise")
+    ad = result.details.get("adhesion")
+    if not math.isfinite(result.adhesion_force) and ad is not None and ad.found and math.isfinite(ad.deflection):
+        adh = f"adhesion {ad.deflection * 1e9:.3g} nm of deflection (no spring constant)"  # as the marker says
     fig.suptitle(f"{name}: {result.contact_kind or '?'} contact; {adh}; friction {result.friction or '-'}"
                  f"{'; DYNAMIC' if result.dynamic else ''}", fontsize="medium")
     return fig

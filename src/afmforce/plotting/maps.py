@@ -24,8 +24,9 @@ def _display(unit: str) -> tuple[float, str]:
 def plot_map(image: MapImage, ax=None):
     """Heat map of ``image`` over the grid (x to the right, y upwards, grey: no value).
 
-    Cells are centred on the integer grid indices; lengths are shown in nm,
-    forces in nN. Returns the matplotlib Axes.
+    Cells are centred on the curves' positions, axes in µm, when the map records them
+    (``position_x``, ``position_y``), else on the integer grid indices; lengths are shown in nm,
+    forces in nN, moduli in kPa. Returns the matplotlib Axes.
     """
     import matplotlib as mpl
 
@@ -37,14 +38,20 @@ def plot_map(image: MapImage, ax=None):
     ny, nx = image.shape
     values = np.ma.masked_invalid(image.values * factor)
     cmap = mpl.colormaps["viridis"].with_extremes(bad="lightgrey")
-    im = ax.imshow(values, origin="lower", interpolation="nearest", cmap=cmap, aspect="equal",
-                   extent=(-0.5, nx - 0.5, -0.5, ny - 0.5))
+    if image.has_positions:  # axes in um: cells centred on the curves' positions
+        x0, y0, dx, dy = (v * 1e6 for v in (image.x0, image.y0, image.dx, image.dy))
+        extent = (x0 - dx / 2, x0 + (nx - 0.5) * dx, y0 - dy / 2, y0 + (ny - 0.5) * dy)
+    else:
+        extent = (-0.5, nx - 0.5, -0.5, ny - 0.5)
+    im = ax.imshow(values, origin="lower", interpolation="nearest", cmap=cmap, aspect="equal", extent=extent)
     label = image.quantity.label + (f" [{shown}]" if shown else "")
     ax.figure.colorbar(im, ax=ax, label=label, shrink=0.9)
-    ax.set_xlabel("x (column index)")
-    ax.set_ylabel("y (row index)")
+    ax.set_xlabel("x [µm]" if image.has_positions else "x (column index)")
+    ax.set_ylabel("y [µm]" if image.has_positions else "y (row index)")
     finite = int(np.isfinite(image.values).sum())
-    ax.set_title(f"{image.name}: {image.quantity.identifier} ({finite} of {nx * ny} points)", fontsize="medium")
+    name = image.name if len(image.name) <= 48 else image.name[:22] + "..." + image.name[-23:]
+    pitch = f", {image.dx * 1e6:.3g} x {image.dy * 1e6:.3g} µm pixels" if image.has_positions else ""
+    ax.set_title(f"{name}\n{image.quantity.identifier}: {finite} of {nx * ny} points{pitch}", fontsize="small")
     return ax
 
 

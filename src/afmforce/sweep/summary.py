@@ -26,13 +26,16 @@ _FLOATS = ("sensitivity", "sensitivity_fit", "spring_constant", "adhesion_force"
            "resonance_frequency", "shift", "contact_separation",
            "jump_in_separation", "jump_in_force", "jump_in_deflection", "pull_off_force", "pull_off_position",
            "jump_out_distance", "surface_energy", "radius", "hamaker_radius", "hamaker_radius_se", "hamaker",
-           "hamaker_se", "oscillation_frequency", "velocity", "inertia_parameter")
+           "hamaker_se", "oscillation_frequency", "velocity", "inertia_parameter",
+           "youngs_modulus", "youngs_modulus_se", "youngs_modulus_low", "youngs_modulus_high", "contact_point",
+           "work_of_adhesion", "work_of_adhesion_se", "position_x", "position_y")
 _OSC = tuple(f"oscillation_{run}_{what}" for run in ("approach", "retract") for what in ("frequency", "velocity"))
 
 #: Columns of the summary table and their types (``int``: -1 where not a map).
 SUMMARY_COLUMNS: dict[str, str] = {
     "item": "int", "source": "str", "name": "str", "file": "str", "curve": "int",
-    "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "deflection_unit": "str",
+    "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "map_width": "float", "map_height": "float",
+    "deflection_unit": "str",
     **{name: "float" for name in _FLOATS + _OSC},
     "contact_kind": "str", "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str", "error": "str",
 }
@@ -41,8 +44,9 @@ SUMMARY_COLUMNS: dict[str, str] = {
 def _units() -> dict[str, str]:
     from ..analysis.result import AnalysisResult
 
-    units = {name: AnalysisResult.UNITS[name] for name in _FLOATS}
+    units = {name: AnalysisResult.UNITS.get(name, "m") for name in _FLOATS}  # position_x/y: m
     units.update({n: ("Hz" if n.endswith("frequency") else "m/s") for n in _OSC})
+    units.update(map_width="m", map_height="m")
     return units
 
 
@@ -66,12 +70,31 @@ def _grid(meta: Mapping[str, Any]) -> tuple[int, int, int, int]:
     return tuple(out)  # type: ignore[return-value]
 
 
+def _grid_size(meta: Mapping[str, Any]) -> tuple[float, float]:
+    """Width and height of a map's scanned area [m] (afmforce ``map_width``/``map_height`` or afmformats'
+    JPK ``grid size x/y``); NaN when the file does not say."""
+    out = []
+    for ours, theirs in (("map_width", "afmformats:grid size x"), ("map_height", "afmformats:grid size y")):
+        try:
+            v = float(meta.get(ours, meta.get(theirs)))
+        except (TypeError, ValueError):
+            v = math.nan
+        out.append(v if math.isfinite(v) and v > 0 else math.nan)
+    return out[0], out[1]
+
+
 def summary_row(result, curve, *, file: str, index: int, name: str) -> dict[str, Any]:
     """The summary of one analysed curve (see :data:`SUMMARY_COLUMNS`)."""
     mx, my, nx, ny = _grid(curve.metadata)
     row: dict[str, Any] = {"name": name, "file": file, "curve": int(index), "map_x": mx, "map_y": my,
                            "map_nx": nx, "map_ny": ny, "deflection_unit": result.deflection_unit}
-    row.update({f: float(getattr(result, f)) for f in _FLOATS})
+    row["map_width"], row["map_height"] = _grid_size(curve.metadata) if mx >= 0 else (math.nan, math.nan)
+    row.update({f: float(getattr(result, f, math.nan)) for f in _FLOATS})
+    for axis in ("position_x", "position_y"):  # where the map's curve was recorded [m] (NaN: not given)
+        try:
+            row[axis] = float(curve.metadata.get(axis, math.nan))
+        except (TypeError, ValueError):
+            row[axis] = math.nan
     osc = result.details.get("oscillation")
     confirmed = osc is not None and osc.origin != "none"  # a peak in both runs (see oscillation.both_runs)
     for run in ("approach", "retract"):

@@ -123,7 +123,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
         direct = replace(analysis, file_timeout=None)   # read once already, in this call
         payload["raw"] = _raw_signals(refs, direct, rename, max_points)
         maps = any(r.index is not None for r in refs)
-        payload["maps"] = _maps(summary_table(result), refs, direct, rename) if maps else []
+        payload["maps"] = _maps(summary_table(result), rename) if maps else []
     payload["wall_time"] = time.perf_counter() - t0
     return payload
 
@@ -165,7 +165,9 @@ def _raw_signals(refs, analysis, rename, max_points) -> dict[str, Any]:
     return out
 
 
-def _maps(table, refs, analysis, rename) -> list[dict[str, Any]]:
+def _maps(table, rename) -> list[dict[str, Any]]:
+    """The force maps' images (:func:`afmforce.analysis.maps.map_images`: axes in µm from the curves'
+    stage positions, else the scanned area's size; grid indices when neither is known)."""
     from ..analysis.maps import MAP_QUANTITIES, map_images
 
     out = []
@@ -178,39 +180,10 @@ def _maps(table, refs, analysis, rename) -> list[dict[str, Any]]:
             for _, r in rows.iterrows():
                 if 0 <= r["map_x"] < nx and 0 <= r["map_y"] < ny:
                     names[int(r["map_y"])][int(r["map_x"])] = f"{name}#{int(r['curve'])}"
-            x, y = _axes(refs, analysis, image.source, nx, ny)
+            x = [(image.x0 + i * image.dx) * 1e6 for i in range(nx)] if image.has_positions else None
+            y = [(image.y0 + j * image.dy) * 1e6 for j in range(ny)] if image.has_positions else None
             z = [[None if not np.isfinite(v) else float(v) for v in row] for row in image.values]
             out.append({"file": name, "quantity": q, "label": image.quantity.label, "unit": image.quantity.unit,
                         "z": z, "x_um": x, "y_um": y, "axes": "um" if x is not None else "index",
                         "curves": names})
     return out
-
-
-def _axes(refs, analysis, source, nx, ny):
-    """Grid coordinates [µm] from the stage positions of the curves the file holds: a straight line
-    through (grid index, position) per axis, so a map with curves at only some points (a corner
-    extract) still gets its axes. None when fewer than two distinct indices carry a position."""
-    xs: dict[int, list[float]] = {}
-    ys: dict[int, list[float]] = {}
-    for ref in refs:
-        if ref.path != source or ref.index is None:
-            continue
-        try:
-            for _, curve in analysis.load(ref):
-                m = curve.metadata
-                if m.get("position_x") is not None and m.get("map_x") is not None:
-                    xs.setdefault(int(m["map_x"]), []).append(float(m["position_x"]) * 1e6)
-                    ys.setdefault(int(m["map_y"]), []).append(float(m["position_y"]) * 1e6)
-        except Exception:
-            return None, None
-
-    def line(known: dict[int, list[float]], n: int):
-        if len(known) < 2:
-            return None
-        idx = np.array([i for i, v in known.items() for _ in v], float)
-        pos = np.array([p for v in known.values() for p in v])
-        slope, offset = np.polyfit(idx, pos, 1)
-        return [float(offset + slope * i) for i in range(n)]
-
-    x, y = line(xs, nx), line(ys, ny)
-    return (x, y) if x is not None and y is not None else (None, None)

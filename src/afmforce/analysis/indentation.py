@@ -1,0 +1,180 @@
+"""The indentation step: Young's modulus (and work of adhesion) of a soft contact.
+
+The laws and the fit are :mod:`afmforce.contact` (docs/contact.md); this step takes the
+calibrated run (position ``z`` [m], deflection [m], force [N]), forms the tip depth
+``u = z - deflection`` and fits the chosen model with the contact point, the modulus and the
+force baseline together, starting near the ``kind`` step's soft contact point. Hard contacts
+(a constant-compliance line: the tip does not indent) are skipped with the reason, as are
+curves without a spring constant or without the geometry the model needs.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..contact.fit import fit_indentation, model_force
+from ..contact.registry import indentation_model
+from ..errors import AnalysisError, ParameterError
+from ._step_helpers import _kind, _skip
+from ._units import unit as _u
+from .options import IndentationOptions, ProbeCalibration
+from .state import State
+
+__all__ = ["IndentationResult", "indentation", "fast_modulus"]
+
+
+@dataclass(frozen=True)
+class IndentationResult:
+    """The indentation fit of one curve (SI).
+
+    Attributes
+    ----------
+    model : str  the indentation model's key
+    run : str  ``approach`` or ``retract``
+    youngs_modulus, youngs_modulus_se : float  E and its standard error [Pa]
+    youngs_modulus_low, youngs_modulus_high : float  95 % interval [Pa]
+    contact_point, contact_point_se : float  piezo position z at contact, and its standard error [m]
+    contact_depth : float  tip depth u = z - deflection at contact [m]
+    baseline : float  fitted force before contact [N]
+    work_of_adhesion, work_of_adhesion_se : float  w (adhesive models) [J/m^2]
+    max_indentation : float  deepest indentation fitted [m]
+    max_force : float  force there above the baseline [N]
+    n_points, n_contact : int  points fitted, in contact [-]
+    rms : float  rms residual [N]
+    tip_radius, half_angle, poisson : float  geometry used [m], [rad], [-] (NaN: not used)
+    indentation, fit_force, residuals : ndarray  per fitted point: indentation [m], model force [N],
+        data minus model [N]
+    warnings : tuple of str  the model's validity check
+    """
+
+    model: str
+    run: str
+    youngs_modulus: float = _u("Pa")
+    youngs_modulus_se: float = _u("Pa")
+    youngs_modulus_low: float = _u("Pa")
+    youngs_modulus_high: float = _u("Pa")
+    contact_point: float = _u("m")
+    contact_point_se: float = _u("m")
+    contact_depth: float = _u("m")
+    baseline: float = _u("N")
+    work_of_adhesion: float = _u("J/m^2")
+    work_of_adhesion_se: float = _u("J/m^2")
+    max_indentation: float = _u("m")
+    max_force: float = _u("N")
+    n_points: int = _u("")
+    n_contact: int = _u("")
+    rms: float = _u("N")
+    tip_radius: float = _u("m")
+    half_angle: float = _u("rad")
+    poisson: float = _u("")
+    indentation: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, metadata={"unit": "m"})
+    fit_force: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, metadata={"unit": "N"})
+    residuals: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, metadata={"unit": "N"})
+    warnings: tuple[str, ...] = ()
+
+
+def indentation(st: State, o: IndentationOptions) -> State:
+    """Fit the indentation model ``o.model`` to the approach (or retract) of a soft contact."""
+    if _kind(st) != "soft":
+        return _skip(st, "indentation", "hard contact: the tip does not indent the sample (a constant-compliance "
+                     "line), so there is no modulus to fit")
+    if st.force is None or not math.isfinite(st.spring_constant):
+        return _skip(st, "indentation", "no spring constant (give --spring-constant): no force to fit")
+    m = indentation_model(o.model)
+    radius = o.tip_radius if o.tip_radius is not None else st.probe.value("radius", st.metadata)
+    geom = {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
+    missing = [g for g in m.geometry if geom.get(g) is None]
+    if missing:
+        flags = {"radius": "--tip-radius", "half_angle": "--half-angle", "thickness":
+                 "--option indentation.thickness=..."}
+        return _skip(st, "indentation", f"the {m.name} model needs the " + " and the ".join(
+            f"{g.replace('_', ' ')} ({flags[g]})" for g in missing))
+    regions = st.approach if o.run == "approach" else st.retract
+    idx = regions.index
+    if o.run == "retract":
+        idx = idx[::-1]  # the retract read backwards: into the sample, as the fit expects
+    z, d, f = st.z[idx], st.deflection[idx], st.force[idx]
+    u = z - d
+    guess = None
+    cp = st.details.get("contact_point")
+    if cp is not None and math.isfinite(cp.position):
+        guess = cp.position - cp.deflection
+    try:
+        fit = fit_indentation(u, f, o.model, {k: v for k, v in geom.items() if v is not None}, nu=o.poisson,
+                              weight_width=o.weight_width, contact_guess=guess, thickness=o.thickness,
+                              max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
+                              transition=o.transition, branch=o.run)
+    except (AnalysisError, ParameterError) as exc:
+        return _skip(st, "indentation", f"no modulus: {exc}")
+    res = _result(fit, u, o, geom, radius, st.spring_constant)
+    return st.update("indentation", res, warn=[f"indentation ({o.model}): {w}" for w in fit.warnings])
+
+
+def _result(fit, u: np.ndarray, o: IndentationOptions, geom: dict, radius, k: float) -> IndentationResult:
+    # z at contact: where u = c, i.e. z = c + d with d the deflection of the fitted baseline force
+    z_c = fit.contact + fit.baseline / k
+    delta = u[fit.fitted] - fit.contact
+    w = 0.0 if math.isnan(fit.work_of_adhesion) else fit.work_of_adhesion
+    model_f = model_force(o.model, delta, fit.youngs_modulus, geom, o.poisson, w, o.transition, o.run)
+    return IndentationResult(
+        model=o.model, run=o.run, youngs_modulus=fit.youngs_modulus, youngs_modulus_se=fit.youngs_modulus_se,
+        youngs_modulus_low=fit.youngs_modulus_low, youngs_modulus_high=fit.youngs_modulus_high,
+        contact_point=z_c, contact_point_se=fit.contact_se, contact_depth=fit.contact, baseline=fit.baseline,
+        work_of_adhesion=fit.work_of_adhesion, work_of_adhesion_se=fit.work_of_adhesion_se,
+        max_indentation=fit.max_indentation, max_force=fit.max_force, n_points=fit.n_points,
+        n_contact=fit.n_contact, rms=fit.rms, tip_radius=float(radius) if radius is not None else math.nan,
+        half_angle=float(o.half_angle) if o.half_angle is not None else math.nan, poisson=o.poisson,
+        indentation=delta, fit_force=np.asarray(model_f + fit.baseline), residuals=fit.residuals,
+        warnings=fit.warnings)
+
+
+def fast_modulus(curve, options: IndentationOptions | None = None,
+                 probe: ProbeCalibration | None = None) -> IndentationResult:
+    """The modulus of one curve without the pipeline's other steps (a QI pixel's fast path).
+
+    What nanite's preprocessing and fit do: the deflection [m] and force [N] from the file's (or
+    the probe's) sensitivity and spring constant, the tip depth, and :func:`fit_indentation` with
+    the contact point, E and the force baseline together. No smoothing, drift line, contact kind
+    or hard-contact check: :func:`~afmforce.analysis.pipeline.analyze` with the ``indentation``
+    step does those (and gives the same modulus on a curve without drift).
+
+    Raises
+    ------
+    AnalysisError
+        No approach (retract) samples, no spring constant or sensitivity, or the fit fails.
+    ParameterError
+        The model's geometry is missing.
+    """
+    o = options if options is not None else IndentationOptions()
+    p = probe if probe is not None else ProbeCalibration()
+    md = curve.metadata
+    seg = np.asarray(curve.segment)
+    idx = np.flatnonzero(seg == (0 if o.run == "approach" else 1))
+    if idx.size < 8:
+        raise AnalysisError(f"the curve has {idx.size} {o.run} samples: nothing to fit")
+    if o.run == "retract":
+        idx = idx[::-1]
+    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal)[idx]
+    sig = np.asarray(curve.deflection_signal, dtype=float)[idx]
+    k = p.value("spring_constant", md)
+    if not k:
+        raise AnalysisError("no spring constant (give --spring-constant): no force to fit")
+    unit = curve.deflection_unit
+    if unit == "V":
+        sens = p.value("sensitivity", md)
+        if not sens:
+            raise AnalysisError("the deflection is in volts and no sensitivity is known (give --sensitivity)")
+        d = sig * float(sens)
+    else:
+        d = sig if unit == "m" else sig / float(k)
+    radius = o.tip_radius if o.tip_radius is not None else p.value("radius", md)
+    geom = {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
+    u = z - d
+    fit = fit_indentation(u, d * float(k), o.model, {g: v for g, v in geom.items() if v is not None},
+                          nu=o.poisson, weight_width=o.weight_width, thickness=o.thickness,
+                          max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
+                          transition=o.transition, branch=o.run)
+    return _result(fit, u, o, geom, radius, float(k))

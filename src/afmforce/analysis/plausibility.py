@@ -1,0 +1,130 @@
+"""Plausibility of the derived numbers: every one outside its physical range carries a warning.
+
+Run on the final state of every analysis (:func:`plausibility_warnings`), whatever steps ran.
+Each check says the number, its range and what usually causes it:
+
+* the Hamaker constant ``A`` (the probe's radius, else the pull-off's JKR/DMT radius with the
+  fitted ``A R``) outside :data:`HAMAKER_RANGE` (1e-21 to 1e-18 J: condensed media across vacuum,
+  air or water);
+* a spring constant outside :data:`SPRING_CONSTANT_RANGE` (1e-3 to 100 N/m, the cantilevers made),
+  and one inferred from a compliance slope far from the file's;
+* a sensitivity fitted on fewer than :data:`MIN_COMPLIANCE_SAMPLES` contact samples;
+* a contact line the deflection follows faster than the position (the separation then runs
+  backwards in contact: the force panel curls back on itself);
+* a force panel wider than the signal's own span (a baseline correction larger than the data).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .state import State
+
+__all__ = ["plausibility_warnings", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE", "MIN_COMPLIANCE_SAMPLES"]
+
+#: Hamaker constants of condensed media across vacuum, air or water [J].
+HAMAKER_RANGE = (1e-21, 1e-18)
+#: Spring constants of AFM cantilevers [N/m].
+SPRING_CONSTANT_RANGE = (1e-3, 100.0)
+#: Fewest contact samples a fitted sensitivity is trusted from [-].
+MIN_COMPLIANCE_SAMPLES = 20
+#: A contact line steeper than this (deflection per position, calibrated) runs backwards [-].
+MAX_CONTACT_SLOPE = 1.25
+#: The corrected force may span at most this multiple of the signal's own span [-].
+MAX_SPAN_RATIO = 1.5
+
+
+def _hamaker(st: State) -> list[str]:
+    fit = st.details.get("vdw")
+    if fit is None or "vdw" in st.skipped or not math.isfinite(getattr(fit, "hamaker_radius", math.nan)):
+        return []
+    lo, hi = HAMAKER_RANGE
+    a, how = getattr(fit, "hamaker", math.nan), "with the probe's radius"
+    se = st.details.get("surface_energy")
+    if not math.isfinite(a) and se is not None and math.isfinite(getattr(se, "radius", math.nan)) and se.radius > 0:
+        a, how = fit.hamaker_radius / se.radius, f"with the pull-off's radius {se.radius * 1e9:.3g} nm"
+    if not math.isfinite(a) or lo <= a <= hi:
+        return []
+    cause = ("an extra attraction (a capillary meniscus in air, electrostatics) or dynamics in the fit" if a > hi
+             else "a weak attraction: a fit of noise, or friction hiding the precontact force")
+    return [f"Hamaker constant {a:.3g} J ({how}; A R {fit.hamaker_radius:.3g} J m) is outside the physical range "
+            f"{lo:.0e}..{hi:.0e} J: {cause}"]
+
+
+def _spring_constant(st: State) -> list[str]:
+    conv = st.details.get("force")
+    k = st.spring_constant
+    if conv is None or not math.isfinite(k):
+        return []
+    out = []
+    lo, hi = SPRING_CONSTANT_RANGE
+    inferred = getattr(conv, "method", "") == "compliance slope"
+    if not lo <= k <= hi:
+        src = ("inferred from the compliance slope of the force signal (a rigid contact assumed; on a soft "
+               "sample the slope is the contact's, not the lever's)" if inferred else "of the file or the user")
+        out.append(f"spring constant {k:.3g} N/m {src} is outside the range of cantilevers made "
+                   f"({lo:g}..{hi:g} N/m): give --spring-constant")
+    header = float(st.metadata.get("spring_constant", math.nan) or math.nan)
+    if inferred and math.isfinite(header) and header > 0 and not 1 / 3 <= k / header <= 3:
+        out.append(f"spring constant {k:.3g} N/m inferred from the compliance slope is {k / header:.3g} x the "
+                   f"file's {header:.3g} N/m")
+    return out
+
+
+def _sensitivity(st: State) -> list[str]:
+    cal, comp = st.details.get("calibration"), st.details.get("compliance")
+    if cal is None or comp is None or cal.source != "fit":
+        return []
+    out = []
+    for line in (comp.approach, comp.retract):
+        if line.found and math.isclose(line.slope, cal.compliance_slope, rel_tol=1e-12):
+            n = int(line.n_points)
+            if n < MIN_COMPLIANCE_SAMPLES:
+                rel = abs(line.slope_se / line.slope) if line.slope else math.nan
+                unit = f"nm/{st.unit}" if st.unit != "m" else "nm/nm"
+                value = cal.sensitivity_fit if math.isfinite(cal.sensitivity_fit) else cal.factor
+                out.append(f"sensitivity {value * 1e9:.4g} {unit} fitted on only {n} contact samples (fewer than "
+                           f"{MIN_COMPLIANCE_SAMPLES}; slope standard error {rel * 100:.2g} %): record more samples in "
+                           "contact (slower ramp, higher rate) or give --sensitivity")
+            break
+    return out
+
+
+def _contact_slopes(st: State) -> list[str]:
+    comp = st.details.get("compliance")
+    if comp is None or not math.isfinite(st.factor):
+        return []
+    out = []
+    for run, line in (("approach", comp.approach), ("retract", comp.retract)):
+        rate = line.slope * st.factor if line.found else math.nan
+        if math.isfinite(rate) and rate > MAX_CONTACT_SLOPE:
+            out.append(f"on the {run}'s contact line the deflection moves {rate:.3g} x the position (at most 1 on "
+                       "any sample): its separation runs backwards in contact (the force curve curls back on "
+                       "itself); the sensitivity does not fit this run")
+    return out
+
+
+def _span(st: State) -> list[str]:
+    if st.force is None or not math.isfinite(st.spring_constant) or not math.isfinite(st.factor):
+        return []
+    runs = np.concatenate([st.approach.index, st.retract.index]) if st.approach is not None else np.array([], int)
+    f = st.force[runs]
+    f = f[np.isfinite(f)]
+    if f.size < 2:
+        return []
+    signal_span = float(np.ptp(st.curve.deflection_signal[runs])) * abs(st.factor) * st.spring_constant
+    span = float(np.ptp(f))
+    if signal_span > 0 and span > MAX_SPAN_RATIO * signal_span:
+        return [f"the corrected force spans {span * 1e9:.4g} nN where the signal itself spans {signal_span * 1e9:.4g} "
+                "nN: the baseline correction is larger than the data (a drift line extrapolated too far)"]
+    return []
+
+
+def plausibility_warnings(st: State) -> tuple[str, ...]:
+    """Warnings for the derived numbers of ``st`` outside their physical ranges (with the numbers)."""
+    out: list[str] = []
+    for check in (_hamaker, _spring_constant, _sensitivity, _contact_slopes, _span):
+        out.extend(check(st))
+    return tuple(w for w in out if w not in st.warnings)

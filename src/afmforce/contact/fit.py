@@ -1,0 +1,425 @@
+"""The modulus fit of one indentation curve: Young's modulus, contact point and baseline together.
+
+The data are the tip's depth ``u`` [m] (piezo position minus deflection, growing as the tip
+moves into the sample) and the force ``F`` [N] of one run. The model, as nanite's, is::
+
+    F(u) = E * shape(u - c) + b        (shape = 0 before contact, u <= c)
+
+with the Young's modulus E [Pa], the contact point c [m] (a depth) and the force baseline b [N]
+fitted jointly, and residuals weighted down linearly within ``weight_width`` of the contact point
+(nanite's ``weight_cp``; 0: unweighted). For a given c the model is linear in (E, b): the fit
+solves it in closed form for a few dozen contact points at once (one array operation), refines
+the best one twice, and ends with Gauss-Newton steps on (E, c, b), whose Jacobian gives the
+standard errors. Adhesive laws (JKR, DMT, Maugis) add the work of adhesion w [J/m^2] and are
+finished with a bounded least-squares solve started from the elastic fit.
+
+>>> fit = fit_indentation(u, F, "hertz_paraboloid", {"radius": 5e-6}, nu=0.5)   # doctest: +SKIP
+>>> fit.youngs_modulus, fit.youngs_modulus_se, fit.contact                     # doctest: +SKIP
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import AnalysisError, ParameterError
+from .adhesive import adhesive_force
+from .models import BILODEAU_FOUR_SIDED, BILODEAU_THREE_SIDED, shape_and_slope
+from .registry import indentation_model
+
+__all__ = ["IndentationFit", "fit_indentation", "validity", "model_force"]
+
+def _t95(dof: int) -> float:
+    """Two-sided 95 % Student t quantile for ``dof`` degrees of freedom (NaN for none)."""
+    if dof <= 0:
+        return math.nan
+    from scipy.special import stdtrit
+
+    return float(stdtrit(dof, 0.975))
+
+
+@dataclass(frozen=True)
+class IndentationFit:
+    """The fit of one curve (SI).
+
+    Attributes
+    ----------
+    model : str  key of :data:`~afmforce.contact.registry.INDENTATION_MODELS`
+    youngs_modulus, youngs_modulus_se : float  E and its standard error [Pa]
+    youngs_modulus_low, youngs_modulus_high : float  95 % interval of E [Pa]
+    contact, contact_se : float  contact point as a tip depth and its standard error [m]
+    baseline : float  force before contact [N]
+    work_of_adhesion, work_of_adhesion_se : float  w [J/m^2] (adhesive laws; NaN otherwise)
+    max_indentation : float  deepest indentation fitted [m]
+    max_force : float  force there above the baseline [N]
+    n_points, n_contact : int  points fitted, of them in contact [-]
+    rms : float  root-mean-square residual [N]
+    residuals : ndarray  data minus model on the fitted points [N]
+    fitted : ndarray of int  indices (into the arrays given) of the fitted points
+    warnings : tuple of str  the validity check (:func:`validity`) and fit troubles
+    """
+
+    model: str
+    youngs_modulus: float
+    youngs_modulus_se: float
+    youngs_modulus_low: float
+    youngs_modulus_high: float
+    contact: float
+    contact_se: float
+    baseline: float
+    work_of_adhesion: float
+    work_of_adhesion_se: float
+    max_indentation: float
+    max_force: float
+    n_points: int
+    n_contact: int
+    rms: float
+    residuals: np.ndarray = field(repr=False)
+    fitted: np.ndarray = field(repr=False)
+    warnings: tuple[str, ...] = ()
+
+
+def model_force(key: str, delta, E: float, geometry: dict, nu: float, w: float = 0.0, lam: float = 1.0,
+                branch: str = "approach") -> np.ndarray:
+    """Force [N] of model ``key`` at indentation ``delta`` [m] (baseline excluded)."""
+    m = indentation_model(key)
+    delta = np.asarray(delta, dtype=float)
+    if m.linear:
+        return E * shape_and_slope(key, delta, geometry, nu)[0]
+    return np.asarray(adhesive_force(key, delta, E, w, geometry["radius"], nu, lam, branch))
+
+
+def _weights(d: np.ndarray, width: float, max_indentation: float) -> np.ndarray:
+    q = np.ones_like(d) if width <= 0 else np.minimum(np.abs(d) / width, 1.0)
+    if math.isfinite(max_indentation):
+        q = np.where(d > max_indentation, 0.0, q)
+    return q
+
+
+#: Power laws F = E k delta^p: key -> (k(geometry, nu), p), scanned by the compiled kernel.
+_POWER = {"hertz_paraboloid": (lambda g, c: 4.0 / 3.0 * c * math.sqrt(g["radius"]), 1.5),
+          "hertz_cone": (lambda g, c: 2.0 / math.pi * math.tan(g["half_angle"]) * c, 2.0),
+          "bilodeau_pyramid3": (lambda g, c: BILODEAU_THREE_SIDED * math.tan(g["half_angle"]) * c, 2.0),
+          "bilodeau_pyramid4": (lambda g, c: BILODEAU_FOUR_SIDED * math.tan(g["half_angle"]) * c, 2.0)}
+
+
+def _scan(u, F, cands, key, geom, nu, width, max_ind):
+    """Closed-form (E, b) and the weighted sum of squares for each candidate contact point."""
+    if key in _POWER:
+        from ._kernels import scan_power_law
+
+        kf, p = _POWER[key]
+        return scan_power_law(u, F, np.ascontiguousarray(cands, dtype=float), kf(geom, 1.0 / (1.0 - nu * nu)), p,
+                              float(width), float(max_ind))
+    d = u[None, :] - cands[:, None]
+    phi = shape_and_slope(key, d, geom, nu)[0]
+    q = _weights(d, width, max_ind) ** 2
+    s0, s1, s2 = q.sum(1), (q * phi).sum(1), (q * phi * phi).sum(1)
+    qf = q * F
+    sy, sxy, syy = qf.sum(1), (qf * phi).sum(1), (qf * F).sum(1)
+    det = s0 * s2 - s1 * s1
+    with np.errstate(divide="ignore", invalid="ignore"):
+        E = (s0 * sxy - s1 * sy) / det
+        b = (s2 * sy - s1 * sxy) / det
+        ssr = syy - E * sxy - b * sy
+    ssr = np.where((det > 0) & (E > 0) & np.isfinite(ssr), ssr, np.inf)
+    return E, b, ssr
+
+
+def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
+    lo, hi = float(np.min(u)), float(np.max(u))
+    span = hi - lo
+    if not span > 0:
+        raise AnalysisError("the tip does not move: no indentation to fit")
+    # indentations from 0.1 % of the travel to all of it, on a log scale (the contact is near the top
+    # on most curves), and evenly over the travel
+    cands = np.concatenate((hi - span * np.geomspace(1e-3, 1.0, 64), np.linspace(lo, hi, 33)[1:-1]))
+    if guess is not None and math.isfinite(guess):
+        cands = np.concatenate((cands, guess + span * np.linspace(-0.02, 0.02, 9)))
+    stride = max(1, u.size // 2000)  # long runs: the first rounds on every stride-th sample, the last on all
+    for rnd in range(4):
+        cands = np.unique(cands)
+        us, Fs = (u[::stride], F[::stride]) if rnd < 3 else (u, F)
+        E, b, ssr = _scan(us, Fs, cands, key, geom, nu, width, max_ind)
+        i = int(np.argmin(ssr))
+        if not math.isfinite(ssr[i]):
+            raise AnalysisError("no contact point gives a positive modulus: the curve does not rise into contact")
+        c0 = float(cands[i])
+        left, right = cands[max(i - 1, 0)], cands[min(i + 1, cands.size - 1)]
+        cands = np.linspace(left, right, 17)
+    c, E0, b0 = c0, float(E[i]), float(b[i])
+    # Gauss-Newton on (E, c, b): the weights at the current c
+    p = np.array([E0, c, b0])
+    best = ssr[i]
+    for _ in range(2):  # the scan has the contact point to ~1e-4 of a grid step: a polish
+        d = u - p[1]
+        phi, dphi = shape_and_slope(key, d, geom, nu)
+        q = _weights(d, width, max_ind)
+        r = q * (F - p[0] * phi - p[2])
+        J = q[:, None] * np.column_stack((phi, -p[0] * dphi, np.ones_like(phi)))
+        try:
+            dp = _normal_solve(J, r)
+        except np.linalg.LinAlgError:
+            break
+        trial = p + dp
+        if trial[0] <= 0:
+            break
+        dt = u - trial[1]
+        rt = _weights(dt, width, max_ind) * (F - trial[0] * shape_and_slope(key, dt, geom, nu)[0] - trial[2])
+        s = float(rt @ rt)
+        if s > best:
+            break
+        p, best = trial, s
+        if abs(dp[1]) < 1e-6 * span and abs(dp[0]) < 1e-9 * abs(p[0]):
+            break
+    return p
+
+
+def _normal_solve(J: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """The Gauss-Newton step (J^T J)^-1 J^T r, with J's columns scaled (they differ by ~1e13)."""
+    A = J.T @ J
+    n = np.sqrt(np.diag(A))
+    n[n == 0] = 1.0
+    return np.linalg.solve(A / np.outer(n, n), (J.T @ r) / n) / n
+
+
+def _covariance(J: np.ndarray, s2: float) -> np.ndarray:
+    """s^2 (J^T J)^-1, inverted with the columns scaled."""
+    A = J.T @ J
+    n = np.sqrt(np.diag(A))
+    n[n == 0] = 1.0
+    return np.linalg.inv(A / np.outer(n, n)) / np.outer(n, n) * s2
+
+
+def _lstsq(J: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Least squares with the columns scaled to unit norm (they differ by ~1e13: E multiplies m^1.5)."""
+    norm = np.linalg.norm(J, axis=0)
+    norm[norm == 0] = 1.0
+    return np.linalg.lstsq(J / norm, y, rcond=None)[0] / norm
+
+
+def _dmt_solve(u, F, c, R, nu, geom, width, max_ind):
+    """DMT at contact point c: linear in (E, w, b). Returns (ssr, E, w, b, J without the c column)."""
+    d = u - c
+    phi = shape_and_slope("hertz_paraboloid", d, geom, nu)[0]
+    q = _weights(d, width, max_ind)
+    J = q[:, None] * np.column_stack((phi, -2 * math.pi * R * (d > 0), np.ones_like(phi)))
+    x = _lstsq(J, q * F)
+    if x[1] < 0:  # w >= 0: on the bound, the Hertz fit
+        x2 = _lstsq(J[:, [0, 2]], q * F)
+        x = np.array([x2[0], 0.0, x2[1]])
+    r = q * F - J @ x
+    return float(r @ r), x, J
+
+
+def _adhesive_at(u, F, key, c, geom, nu, width, max_ind, lam, start, branch="approach"):
+    """JKR/Maugis at contact point c: (E, w) by least squares, b in closed form (variable projection)."""
+    from scipy.optimize import least_squares
+
+    R = geom["radius"]
+    d = u - c
+    q = _weights(d, width, max_ind)
+    qs = float(q @ q)
+
+    def resid(x):
+        f = adhesive_force(key, d, math.exp(min(x[0], 700)), math.exp(max(min(x[1], 700), -200)), R, nu, lam,
+                           branch)
+        r = q * (F - f)
+        return r - q * (float(q @ r) / qs)
+
+    sol = least_squares(resid, np.log(start), method="lm", x_scale=1.0, max_nfev=60)
+    E, w = np.exp(np.clip(sol.x, -200, 700))
+    w = max(w, 1e-300)
+    f = adhesive_force(key, d, E, w, R, nu, lam, branch)
+    b = float(q @ (q * (F - f))) / qs
+    J = np.column_stack((sol.jac[:, 0] / E, sol.jac[:, 1] / w, -q))  # d resid / d (E, w, b)
+    return float(sol.fun @ sol.fun), np.array([E, w, b]), -J
+
+
+def _adhesive_fit(u, F, key, geom, nu, width, max_ind, p_elastic, lam, branch="approach"):
+    """Scan the contact point (DMT in closed form, wide; then the law itself, near the DMT point); at
+    each, the law's other parameters by least squares. Returns ((E, w, c, b), standard errors (E, w, c))."""
+    R = geom["radius"]
+    span = float(np.ptp(u))
+
+    def run(cands, law):
+        out = []
+        for c in cands:
+            ssr, x, J = _dmt_solve(u, F, c, R, nu, geom, width, max_ind)
+            if law != "dmt":
+                # two starts: DMT's (E, w) and Hertz's E with a weak adhesion (1 % of the largest force)
+                E_h = float(_scan(u, F, np.array([c]), "hertz_paraboloid", geom, nu, width, max_ind)[0][0])
+                starts = [(x[0], max(x[1], 1e-6 * x[0] * R))] if x[0] > 0 else []
+                if E_h > 0:
+                    starts.append((E_h, max(0.01 * float(np.ptp(F)) / (math.pi * R), 1e-12)))
+                best = None
+                for start in starts:
+                    got = _adhesive_at(u, F, law, c, geom, nu, width, max_ind, lam, start, branch)
+                    if best is None or got[0] < best[0]:
+                        best = got
+                if best is None:
+                    continue
+                ssr, x, J = best
+            if x[0] > 0 and x[1] >= 0 and math.isfinite(ssr):
+                out.append((ssr, float(c), x, J))
+        if not out:
+            raise AnalysisError(f"{key}: no contact point gives a positive modulus and work of adhesion")
+        return sorted(out, key=lambda t: t[0])
+
+    plan = [(span * np.linspace(-0.25, 0.25, 51), "dmt"), (span * 0.01 * np.linspace(-1, 1, 9), "dmt")]
+    if key != "dmt":
+        plan += [(span * np.linspace(-0.03, 0.03, 13), key), (span * 0.005 * np.linspace(-1, 1, 7), key)]
+    c = float(p_elastic[1])
+    for offsets, law in plan:
+        last = run(c + offsets, law)
+        c = last[0][1]
+    ssr, c, x, J = last[0]
+    n = int((J[:, 2] != 0).sum())
+    s2 = ssr / max(n - 4, 1)
+    try:
+        se = np.sqrt(np.clip(np.diag(_covariance(J, s2)), 0, None))
+    except np.linalg.LinAlgError:
+        se = np.full(3, math.nan)
+    c_se = math.nan  # the profile's curvature near the best point: delta chi^2 = 1
+    if len(last) >= 3:
+        k = np.polyfit([t[1] - c for t in last], [t[0] for t in last], 2)[0]
+        c_se = math.sqrt(s2 / k) if k > 0 else math.nan
+    return (x[0], x[1], c, x[2]), (se[0], se[1], c_se)
+
+
+def validity(key: str, geometry: dict, max_indentation: float, thickness: float | None = None,
+             n_contact: int = 0) -> tuple[str, ...]:
+    """Where the law is used outside its range, in words (empty: within it).
+
+    Checks: the indentation against the tip radius (sphere laws), against a tenth of the
+    sample's ``thickness`` [m] (half-space laws; for ``hertz_thin_layer``: chi = sqrt(R delta)/h < 1),
+    and the number of points in contact.
+    """
+    m = indentation_model(key)
+    out = []
+    R = geometry.get("radius")
+    d = max_indentation
+    if R and math.isfinite(m.max_depth_over_radius) and d > m.max_depth_over_radius * R:
+        out.append(f"indentation {d * 1e9:.4g} nm exceeds {m.max_depth_over_radius:g} x the tip radius "
+                   f"({R * 1e9:.4g} nm): the {m.name} law does not hold there (fit a smaller range with "
+                   "indentation.max_indentation, or use a cone or pyramid model)")
+    h = thickness if thickness is not None else geometry.get("thickness")
+    if h:
+        if key == "hertz_thin_layer":
+            chi = math.sqrt(R * d) / h
+            if chi > 1:
+                out.append(f"thin-layer parameter sqrt(R delta)/h = {chi:.3g} > 1: beyond the range of "
+                           "Dimitriadis's series")
+        elif d > 0.1 * h:
+            out.append(f"indentation {d * 1e9:.4g} nm is more than a tenth of the sample thickness "
+                       f"({h * 1e9:.4g} nm): the substrate stiffens the response (use hertz_thin_layer)")
+    if n_contact < 10:
+        out.append(f"only {n_contact} points in contact: the modulus is poorly determined")
+    return tuple(out)
+
+
+def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dict | None = None, *,
+                    nu: float = 0.5, weight_width: float = 0.0, max_indentation: float = math.inf,
+                    contact_guess: float | None = None, thickness: float | None = None,
+                    transition: float = 1.0, branch: str = "approach") -> IndentationFit:
+    """Fit the law ``model`` to one run: E, contact point and baseline jointly (and w for adhesive laws).
+
+    Parameters
+    ----------
+    depth : array_like
+        Tip depth u [m]: position minus deflection, growing into the sample.
+    force : array_like
+        Force [N], positive pushing.
+    model : str
+        Key of :data:`~afmforce.contact.registry.INDENTATION_MODELS`.
+    geometry : dict
+        ``radius`` [m], ``half_angle`` [rad], ``thickness`` [m] as the model needs.
+    nu : float
+        Poisson ratio of the sample [-].
+    weight_width : float
+        Residuals within this distance of the contact point are weighted down linearly [m] (0: none).
+    max_indentation : float
+        Fit only up to this indentation beyond the contact point [m] (inf: the whole run).
+    contact_guess : float, optional
+        A contact point (tip depth [m]) the search also looks around.
+    thickness : float, optional
+        Sample thickness [m], for the validity check.
+    transition : float
+        Maugis-Dugdale transition parameter lambda [-].
+    branch : str
+        Adhesive laws: ``"approach"`` (no force before contact) or ``"retract"`` (the neck before
+        the pull-off: negative indentations; the data read backwards, into the sample).
+
+    Returns
+    -------
+    IndentationFit
+
+    Raises
+    ------
+    ParameterError
+        Unknown model or a missing geometry parameter.
+    AnalysisError
+        Too few points, or no contact point gives a positive modulus.
+    """
+    m = indentation_model(model)
+    geom = dict(geometry or {})
+    for g in m.geometry:
+        v = geom.get(g)
+        if v is None or not (float(v) > 0):
+            flag = {"radius": "--tip-radius", "half_angle": "--half-angle",
+                    "thickness": "--option indentation.thickness=..."}[g]
+            raise ParameterError(f"indentation model {model!r} needs the {g.replace('_', ' ')} ({flag})")
+    u = np.asarray(depth, dtype=float)
+    F = np.asarray(force, dtype=float)
+    ok = np.isfinite(u) & np.isfinite(F)
+    idx = np.flatnonzero(ok)
+    u, F = u[ok], F[ok]
+    if u.size < 8:
+        raise AnalysisError(f"only {u.size} points to fit the indentation model (at least 8 are needed)")
+    lin_key = model if m.linear else "hertz_paraboloid"
+    p = _linear_fit(u, F, lin_key, geom, nu, weight_width, max_indentation, contact_guess)
+    w = w_se = math.nan
+    if m.linear:
+        E, c, b = p
+        d = u - c
+        phi, dphi = shape_and_slope(model, d, geom, nu)
+        q = _weights(d, weight_width, max_indentation)
+        r = q * (F - E * phi - b)
+        J = q[:, None] * np.column_stack((phi, -E * dphi, np.ones_like(phi)))
+        names = 3
+    else:
+        (E, w, c, b), se_a = _adhesive_fit(u, F, model, geom, nu, weight_width, max_indentation, p, transition,
+                                           branch)
+        d = u - c
+        q = _weights(d, weight_width, max_indentation)
+        r = q * (F - model_force(model, d, E, geom, nu, w, transition, branch) - b)
+        names = 4
+    used = q > 0
+    n = int(used.sum())
+    dof = n - names
+    if m.linear:
+        s2 = float(r @ r) / dof if dof > 0 else math.nan
+        try:
+            se = np.sqrt(np.clip(np.diag(_covariance(J, s2)), 0, None))
+        except np.linalg.LinAlgError:
+            se = np.full(names, math.nan)
+        E_se, c_se = float(se[0]), float(se[1])
+    else:
+        E_se, w_se, c_se = (float(v) for v in se_a)
+    t = _t95(dof)
+    in_contact = used & (d > 0)
+    dmax = float(d[in_contact].max()) if in_contact.any() else 0.0
+    fmodel = model_force(model, d, E, geom, nu, w if not m.linear else 0.0, transition, branch)
+    resid = (F - fmodel - b)[used]
+    warn = list(validity(model, geom, dmax, thickness, int(in_contact.sum())))
+    if math.isfinite(E_se) and E_se > 0.5 * E:
+        warn.append(f"the modulus is poorly determined: standard error {E_se / E:.0%} of the value")
+    return IndentationFit(
+        model=model, youngs_modulus=float(E), youngs_modulus_se=E_se, youngs_modulus_low=float(E - t * E_se),
+        youngs_modulus_high=float(E + t * E_se), contact=float(c), contact_se=c_se, baseline=float(b),
+        work_of_adhesion=float(w), work_of_adhesion_se=w_se, max_indentation=dmax,
+        max_force=float(F[in_contact].max() - b) if in_contact.any() else math.nan, n_points=n,
+        n_contact=int(in_contact.sum()), rms=float(np.sqrt(np.mean(resid ** 2))) if resid.size else math.nan,
+        residuals=resid, fitted=idx[used], warnings=tuple(warn))

@@ -1,0 +1,178 @@
+"""Issue 24 items 2 and 3 on the real files: segments by type, baselines, plausibility, figures, maps.
+
+Each expected number comes from the file itself, computed here independently of the pipeline (the
+raw signal's span, the force column of the file, a plain least-squares contact slope), or from the
+physical ranges the warnings are about.
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+
+import numpy as np
+import pytest
+
+from afmforce.analysis.dynamic import diagnose_curve
+from afmforce.analysis.drift import borrowed_line
+from afmforce.analysis.options import CalibrationOptions, ForceOptions
+from afmforce.analysis.pipeline import analyze
+from afmforce.io import load
+from realdata import real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
+
+_CACHE: dict = {}
+
+
+def _run(name: str, meta=None, options=None):
+    key = (name, repr(meta), repr(options))
+    if key not in _CACHE:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            curve = load(real_file(name), meta_override=meta)[0]
+        _CACHE[key] = (curve, analyze(curve, options=options))
+    return _CACHE[key]
+
+
+def _runs(res):
+    return (res.segment == 0) | (res.segment == 1)
+
+
+def test_stress_relaxation_segments_by_type_and_force_within_the_signal():
+    """JPK stress relaxation: pause, extend, 30 s pause, retract. Before: the approach's drift line was
+    extrapolated in time over the 30 s dwell (force panel at -7000 nN for a +-210 nN signal)."""
+    curve, res = _run("afmformats_jpk-sr_cell1-0008.jpk-force")
+    seg = np.asarray(curve.segment)
+    assert list(seg[np.r_[0, np.flatnonzero(np.diff(seg)) + 1]]) == [2, 0, 2, 1]  # the file's segment types
+    m = _runs(res)
+    span = float(np.ptp(np.asarray(curve.deflection_signal)[m]))  # [N]: the signal is a force
+    f = res.force[m]
+    assert np.ptp(f) <= 1.05 * span
+    for s in (0, 1):  # each run's free end is its own zero (within 2 % of the span)
+        run = np.flatnonzero(res.segment == s)
+        far = run[np.argsort(curve.piezo_measured[run])[: run.size // 10]]  # farthest 10 % from the sample
+        assert abs(float(np.median(res.force[far]))) < 0.02 * span
+    dwell = res.segment == 2
+    assert np.all(np.abs(res.force[dwell]) <= 1.05 * span)  # the dwell too: between the runs' baselines
+    assert res.details["drift"].retract_line in ("offset", "approach slope", "position tilt", "separate")
+    assert not any(w.startswith("the corrected force spans") for w in res.warnings)
+    # contact point: stored nanite reference -137.19 um (fit_line_polynomial), tolerance 10 % of the indentation
+    cp = res.details["contact_point"]
+    assert abs(cp.position - (-137.194e-6)) < 0.1 * res.indentation
+
+
+def test_bruker_gel_retract_baseline_is_its_own():
+    """Bruker gel: the retract's free part is noisy (unbinding), so it borrowed the approach line and sat
+    about 0.25 V (0.9 nN) below zero throughout; now its own offset."""
+    curve, res = _run("PyFMlab_20200904_Egel4-Z1.0_00025.spm")
+    run = np.flatnonzero(res.segment == 1)
+    z = np.asarray(curve.piezo_nominal)[run]
+    far = run[z < np.min(z) + 0.3 * np.ptp(z)]  # the retract's far 30 % (free)
+    noise = res.details["drift"].noise * res.sensitivity * res.spring_constant
+    assert abs(float(np.median(res.force[far]))) < max(0.1e-9, 10 * noise)
+    assert res.details["drift"].retract_line == "offset"
+    assert any("its own offset" in w for w in res.warnings)
+
+
+def test_borrowed_line_picks_the_data_s_offset():
+    rng = np.random.default_rng(3)
+    t = np.linspace(10.0, 10.5, 400)
+    s = -0.2 + 0.05 * rng.standard_normal(t.size)  # offset -0.2 and ringing noise 0.05
+    name, off, slope, tilt = borrowed_line(t, s, None, 0.0, 0.01, 0.0, math.nan, 0.05)
+    assert name in ("offset", "approach slope") and off == pytest.approx(-0.2, abs=0.02)
+    same = 0.01 * t + 0.05 * rng.standard_normal(t.size)  # the approach line continued: kept
+    assert borrowed_line(t, same, None, 0.0, 0.01, 0.0, math.nan, 0.05)[0] == "approach"
+
+
+def test_cellhesion_contact_rupture_steps_and_oscillation_agree_with_the_figure():
+    """2016 CellHesion: contact -36.5 um before (visible near -26 um), adhesion drawn 10 um inside the
+    sample, rupture -1449 nm, the table's 351.5 Hz against the figure's "undetermined", steps unmarked."""
+    from afmforce.plotting import plot_summary
+
+    curve, res = _run("jpkfile_force-save-2016.06.15-13.17.08.jpk-force")
+    assert -26.6e-6 < res.details["contact_point"].position < -25.7e-6
+    assert abs(res.adhesion_distance) < 1e-6  # the deepest dip right after the contact, not 10 um inside
+    # the last tether lets go near z = -35 um on the retract (a step of the raw signal): ~9 um from contact
+    assert 7e-6 < res.rupture_distance < 11e-6
+    assert res.unbinding_steps >= 1
+    fig = plot_summary(res, curve)
+    titles = [ax.get_title() for ax in fig.axes]
+    labels = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    if math.isfinite(res.oscillation_frequency):
+        assert any(f"{res.oscillation_frequency:.4g} Hz" in t for t in titles)
+    assert any("unbinding step" in t for t in labels) and any("last rupture" in t for t in labels)
+    assert "contact region, enlarged" in titles
+
+
+def test_asylum_stale_sensitivity_recalibrates_with_the_thermal_k():
+    """Asylum SiN in air: the contact line follows the position only 0.46 x with the file's InvOLS (slanted
+    lines, pull-off drawn at h = +15 nm); --calibration fit made it vertical but doubled the forces
+    (-27.3 nN) by keeping the thermal k. A thermal k goes as 1/InvOLS^2: forces scale by file's/fitted."""
+    import afmformats
+
+    path = real_file("asylum-mfp3d_SiN-tip_air.ibw")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        dd = afmformats.load_data(path)[0]
+    f_file = np.asarray(dd["force"])
+    zs = -np.asarray(dd["height (measured)"])
+    turn = 1008
+    top = np.arange(turn - 40, turn)  # the approach's contact line, independently: plain least squares
+    slope = np.polyfit(zs[top], f_file[top] / 1.1841, 1)[0]  # deflection per position with the file's InvOLS
+    base = np.median(f_file[turn + 800:])
+    pull_file = float(np.min(f_file[turn:]) - base)
+    _, res = _run("asylum-mfp3d_SiN-tip_air.ibw")
+    assert res.calibration_source == "fit"
+    assert res.sensitivity_fit == pytest.approx(44.99e-9 / slope, rel=0.03)
+    assert res.spring_constant == pytest.approx(1.1841 * slope**2, rel=0.06)
+    assert res.pull_off_force == pytest.approx(pull_file * slope, rel=0.05)
+    h_pull = res.separation[np.argmin(np.where(res.segment == 1, res.force, np.inf))]
+    assert abs(h_pull) < 3e-9  # pulled off at the surface, not 15 nm away
+    assert not res.dynamic and res.dynamic_assessed and "likely capillary" in res.verdict
+    hw = [w for w in res.warnings if w.startswith("Hamaker constant")]
+    assert hw and "outside the physical range" in hw[0]
+    # the file's calibration kept when asked: the old numbers, the same flags
+    _, old = _run("asylum-mfp3d_SiN-tip_air.ibw",
+                  options=[CalibrationOptions(source="metadata"), ForceOptions(thermal_k=False)])
+    assert old.pull_off_force == pytest.approx(pull_file, rel=0.03)
+    assert old.spring_constant == pytest.approx(1.1841)
+
+
+def test_diagnosis_names_capillarity_in_air_and_keeps_dynamics_in_liquid():
+    common = dict(velocity=4e-7, spring_constant=0.26, resonance_frequency=2.3e4, resolution=1e-11,
+                  force_gradient=0.16, jump_in_separation=6e-9, static_jump_in_separation=4e-9)
+    air = diagnose_curve(**common, friction="none", quality_factor=139.0)
+    assert not air.dynamic and "likely capillary" in air.verdict
+    liquid = diagnose_curve(**common, friction="not assessed", quality_factor=3.0)
+    assert liquid.dynamic and "dynamic effects" in liquid.verdict
+
+
+def test_implausible_spring_constant_and_sensitivity_are_flagged():
+    _, ws = _run("afm-workshop_single.csv")  # k inferred from the slope of a soft contact: 5.1e-5 N/m
+    assert ws.spring_constant < 1e-3
+    assert any(w.startswith(f"spring constant {ws.spring_constant:.3g} N/m") and "outside" in w for w in ws.warnings)
+    _, cal = _run("jpk_calibration-curve_raw-volts.jpk-force")  # 6 samples in contact at 205 Hz
+    n = cal.details["compliance"].approach.n_points
+    assert n < 20
+    assert any(f"fitted on only {n} contact samples" in w for w in cal.warnings)
+    assert any("runs backwards" in w for w in cal.warnings)  # the retract line with the approach's InvOLS
+
+
+def test_map_image_axes_in_um_and_title_inside_the_figure():
+    import pandas as pd
+
+    from afmforce.analysis.maps import map_images
+    from afmforce.plotting.maps import plot_map
+
+    name = "a_rather_long_force_map_file_name_from_the_instrument_2026.jpk-force-map"
+    rows = pd.DataFrame({"file": [name] * 2, "map_x": [0, 9], "map_y": [0, 9], "map_nx": [10, 10], "map_ny": [10, 10],
+                         "map_width": [6e-4, 6e-4], "map_height": [3e-4, 3e-4], "adhesion_force": [-1e-10, -2e-10]})
+    (image,) = map_images(rows, "adhesion")
+    ax = plot_map(image)
+    assert ax.get_xlabel() == "x [µm]" and ax.get_xlim() == pytest.approx((0.0, 600.0))
+    assert ax.get_ylim() == pytest.approx((0.0, 300.0))
+    fig = ax.figure
+    fig.draw_without_rendering()
+    box, title = fig.bbox, ax.title.get_window_extent()
+    assert box.x0 <= title.x0 and title.x1 <= box.x1  # not clipped
+    (plain,) = map_images(rows.drop(columns=["map_width", "map_height"]), "adhesion")
+    assert "index" in plot_map(plain).get_xlabel()
