@@ -38,6 +38,7 @@ RULES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "sweep": (("sweep",), ("paper", "explore", "cli")),
     "fit": (("fit",), ("paper", "explore", "cli")),
     "paper": (("paper", "explore"), ("sweep", "cli")),
+    "web": (("web",), ("cli",)),
 }
 
 
@@ -104,6 +105,13 @@ def test_layer_never_imports(layer):
 def test_nothing_imports_the_cli():
     bad = sorted(f for unit, edges in GRAPH.items() if unit != "cli" for u, f in edges if u == "cli")
     assert not bad, f"only the command line imports afmforce.cli: {bad}"
+
+
+def test_nothing_but_the_cli_imports_the_web_app():
+    """afmforce.web sits at the top beside cli (afmforce serve): no library layer depends on it."""
+    assert any(u == "web" for u, _ in GRAPH["cli"])          # cli/serve.py: the analysis sees the edge
+    bad = sorted(f for unit, edges in GRAPH.items() if unit not in ("cli", "web") for u, f in edges if u == "web")
+    assert not bad, f"only the command line imports afmforce.web: {bad}"
 
 
 def test_docs_table_states_the_rules():

@@ -22,7 +22,6 @@ import math
 import re
 from pathlib import Path
 
-from .. import errors as _errors
 from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
@@ -280,7 +279,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         reported(folder)  # "summary in FOLDER/: ..." below
         written.update(_write_maps(table, folder, args.map_quantity))
     if args.json:
-        _print_json(ok, failed)
+        _print_json(result)
     else:
         if len(ok) <= BATCH_CURVES:
             _print_rows(ok, verbose=args.verbose)
@@ -312,14 +311,9 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
 
 
 def _clean(error: str) -> str:
-    """``FileFormatError: msg`` -> ``msg``; other exception types are marked unexpected."""
-    name, sep, rest = error.partition(": ")
-    cls = getattr(_errors, name, None)
-    if sep and isinstance(cls, type) and issubclass(cls, _errors.AfmforceError):
-        return rest
-    if sep and re.fullmatch(r"\w+(Error|Exception)", name):
-        return f"unexpected {error}"
-    return error
+    from ..sweep.report import clean_error
+
+    return clean_error(error)
 
 
 def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
@@ -338,33 +332,16 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
     return out
 
 
-def _print_json(ok, failed) -> None:
-    payload = {"results": {row["name"]: json.loads(row["json"]) for _, row in ok.iterrows()},
-               "failed": []}
-    for name, error in failed:
-        file, _, curve = name.rpartition("#") if re.search(r"#\d+$", name) else (name, "", "")
-        entry = {"file": file}
-        if curve:
-            entry["curve"] = int(curve)
-        payload["failed"].append({**entry, "error": _clean(error)})
-    origin = _oscillation_origin(ok)
-    if origin is not None:
-        payload["oscillation_origin"] = {"origin": origin[0], "verdict": origin[1]}
-    print(json.dumps(payload, indent=2, allow_nan=False))
+def _print_json(result) -> None:
+    from ..sweep.report import analysis_json
+
+    print(json.dumps(analysis_json(result), indent=2, allow_nan=False))
 
 
 def _oscillation_origin(ok):
-    from ..analysis.oscillation import oscillation_origin
+    from ..sweep.report import oscillation_origin_of
 
-    if len(ok) < 2:
-        return None
-    freqs, vels = [], []
-    for run in ("approach", "retract"):
-        f, v = ok[f"oscillation_{run}_frequency"].to_numpy(float), ok[f"oscillation_{run}_velocity"].to_numpy(float)
-        found = [i for i in range(len(f)) if math.isfinite(f[i])]
-        freqs += [f[i] for i in found]
-        vels += [v[i] for i in found]
-    return oscillation_origin(freqs, vels)
+    return oscillation_origin_of(ok)
 
 
 _COLUMNS = (  # column, header, scale

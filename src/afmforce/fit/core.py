@@ -9,6 +9,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..errors import ParameterError
+from ..progress import Progress
 from .data import FitCurve, prepare_curves
 from .model import Evaluator
 from .params import PARAMETERS, SPEED_DEPENDENT, check_free
@@ -115,7 +116,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 starts: int = 2, level: float = 0.95, profile: Sequence[str] | None = None,
                 compare: bool = True, jump_window: float = 2e-3,
                 max_nfev: int = 40, sampling: str | None = "average",
-                retract: bool = False) -> FitResult:
+                retract: bool = False, progress=None) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -161,6 +162,10 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         record it; this also removes the aliased MHz contact ringing that a
         nearly frictionless beam keeps and that no fit can match in phase.
         None: as ``model`` says.
+    progress : callable, optional
+        Called with a :class:`~afmforce.progress.Progress` (unit ``"stage"``: the
+        local fits, each profile, the model comparison) after each stage; may raise
+        to stop the fit (the web server's cancel).
     retract : bool
         Fit the retract run of each curve too (it must follow the approach
         without a pause): the outward compliance line and its hysteresis carry
@@ -203,12 +208,24 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     n_data = sum(int(c.mask.sum()) for c in fc)
     n_par = len(shifts0) + len(free) + ev.n_linear()
     dof = max(n_data - n_par, 1)
+    todo = [n for n in (profile if profile is not None else (
+        "hamaker", "radius", "xi", "slip_length", "surface_potential", "debye_length"))
+            if n in free]
+    stages = {"done": 0, "total": max(starts, 1) + len(todo) + int(compare)}
+
+    def report(what: str) -> None:
+        if progress is not None:
+            stages["done"] += 1
+            stages["total"] = max(stages["total"], stages["done"])
+            progress(Progress(stages["done"], stages["total"], "stage", what))
+
     best = None
     for k, x0 in enumerate(_starts(prob, guess, shifts0)[: 2 * max(starts, 1) + 2]):
         if k >= max(starts, 1) and best[0] / dof < STUCK_REDCHI:
             break    # multi-start: `starts` local fits, more while they look stuck
         x, res = local_fit(prob, x0, max_nfev)
         chi2 = prob.chi2(x)
+        report(f"local fit {k + 1}")
         if best is None or chi2 < best[0]:
             best = (chi2, x, res)
     chi2, x, res = best
@@ -239,14 +256,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                                 wald_interval(values[name], float(sd[j]), level, p.lower, p.upper),
                                 "wald", p.unit)
     profiles = {}
-    todo = [n for n in (profile if profile is not None else (
-        "hamaker", "radius", "xi", "slip_length", "surface_potential", "debye_length"))
-            if n in free]
     for name in todo:
         lo, hi, pts = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
                                        max(redchi, 1.0), level)
         params[name].interval, params[name].interval_method = (lo, hi), "profile"
         profiles[name] = pts
+        report(f"profile of {name}")
     derived = {}
     if "hamaker" in free or "radius" in free:
         name = "hamaker" if "hamaker" in free else "radius"
@@ -259,6 +274,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     if compare:
         comparison = compare_models(prob, x, chi2, fc, base, drift, level, max_nfev, warns,
                                     max(redchi, 1.0))
+        report("model comparison")
     coefs = prob.linear_coefficients(x)
     cfits = []
     for i, c in enumerate(fc):

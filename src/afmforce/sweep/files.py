@@ -179,6 +179,9 @@ class CurveAnalysis:
         Position channel.
     keep_json : bool
         Add each full result as JSON (column ``json``).
+    json_arrays : bool
+        With ``keep_json``: the JSON holds the per-sample arrays too (time, position,
+        separation, deflection, force, segment; what the web page draws).
     out : str or None
         Folder for per-curve outputs (``<name>.afmforce.json/.csv/.png``); None: none.
     force : bool
@@ -199,6 +202,7 @@ class CurveAnalysis:
     format: str | None = None
     channel: str = "auto"
     keep_json: bool = False
+    json_arrays: bool = False
     out: str | None = None
     force: bool = False
     plot: bool = True
@@ -212,7 +216,8 @@ class CurveAnalysis:
             opts = {o.step: o.to_dict() for o in opts}
         probe = self.probe.given() if self.probe is not None else {}
         return {"steps": self.steps, "options": opts, "probe": probe, "meta": self.meta_override,
-                "format": self.format, "channel": self.channel, "json": self.keep_json}
+                "format": self.format, "channel": self.channel, "json": self.keep_json,
+                **({"json_arrays": True} if self.json_arrays else {})}
 
     def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
         """``(index in the file, RawCurve)`` of the item's curves."""
@@ -256,7 +261,7 @@ class CurveAnalysis:
             row = summary_row(res, curve, file=ref.path, index=index,
                               name=f"{base}#{index}" if several else base)
             if self.keep_json:
-                row["json"] = res.to_json(indent=None)
+                row["json"] = res.to_json(indent=None, arrays=self.json_arrays)
             if self.out is not None:
                 self.write_outputs(res, curve, stem, row)
             rows.append(row)

@@ -1,0 +1,61 @@
+"""``afmforce serve``: the web application (analyse, simulate, fit, sweep) on a local server.
+
+Binds to 127.0.0.1 by default; bound to any other address it requires a token
+(--token, or one generated and printed) on every request. Everything the page
+needs ships inside the package: it works without network. See docs/web.md.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+
+def register(sub) -> None:
+    p = sub.add_parser("serve", help="a local web application: analyse, simulate, fit and sweep in the browser",
+                       description=__doc__.split("\n\n")[1].replace("\n", " "))
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1; any other "
+                   "address requires a token)")
+    p.add_argument("--port", type=int, default=8765, help="TCP port (default 8765; 0: any free port)")
+    p.add_argument("--token", default=None, help="token every request must carry (default: none on "
+                   "loopback, generated and printed otherwise)")
+    p.add_argument("--max-upload", default="200MB", metavar="SIZE", help="largest upload (default 200MB); "
+                   "larger ones get HTTP 413")
+    p.add_argument("--data", type=Path, default=None, metavar="DIR", help="folder for uploads, jobs and sweeps "
+                   "(default ~/.afmforce/serve); sweeps left running resume from it")
+    p.add_argument("--budget", type=float, default=60.0, metavar="SECONDS",
+                   help="time budget of one analysis or simulation request (default 60 s)")
+    p.set_defaults(func=run)
+
+
+def run(args: argparse.Namespace) -> int:
+    import socket
+
+    import uvicorn
+
+    from ..web import create_app
+    from ..web.settings import Settings, parse_size
+
+    kw = {"data": args.data} if args.data is not None else {}
+    settings = Settings(host=args.host, port=args.port, token=args.token, max_upload=parse_size(args.max_upload),
+                        request_budget=args.budget, **kw).resolved()
+    sock = socket.socket(socket.AF_INET6 if ":" in settings.host else socket.AF_INET)
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+    try:
+        sock.bind((settings.host, settings.port))
+    except OSError as exc:
+        from ..errors import ParameterError
+
+        raise ParameterError(f"cannot listen on {settings.host}:{settings.port}: {exc.strerror}; "
+                             "choose another --port") from None
+    from dataclasses import replace
+
+    settings = replace(settings, port=sock.getsockname()[1])
+    app = create_app(settings)
+    print(f"afmforce serve: {settings.url()}", flush=True)
+    if settings.token and not settings.loopback:
+        print(f"  token: {settings.token} (required on every request)", flush=True)
+    print(f"  data in {settings.data}; Ctrl-C stops", flush=True)
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", timeout_graceful_shutdown=3))
+    server.run(sockets=[sock])
+    return 0

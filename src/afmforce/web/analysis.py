@@ -1,0 +1,189 @@
+"""The analysis behind ``POST /api/analyze``: the same batch code and JSON as
+``afmforce analyze FILE --json`` (:func:`afmforce.sweep.report.analysis_json`), plus, for
+the page, per-sample arrays, the raw signal and force-map images with axes in µm."""
+
+from __future__ import annotations
+
+import json
+import threading
+import time
+from collections import OrderedDict
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from .._fields import QUANTITIES
+from ..errors import ParameterError
+from .tasks import decimate
+from ..sweep.files import CurveAnalysis
+
+__all__ = ["parse_inputs", "run_analysis", "CachedAnalysis"]
+
+#: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)].
+_CURVES: OrderedDict = OrderedDict()
+_CURVES_KEPT = 16
+_LOCK = threading.Lock()
+
+
+@dataclass(frozen=True)
+class CachedAnalysis(CurveAnalysis):
+    """:class:`~afmforce.sweep.files.CurveAnalysis` that keeps the last curves it read in memory:
+    a re-run after an option change does not parse the file again (a 10,000-row text file: 0.3 s)."""
+
+    def load(self, ref):
+        path = Path(ref.location)
+        st = path.stat()
+        key = (str(path), st.st_size, st.st_mtime_ns, ref.index,
+               json.dumps(dict(self.meta_override), sort_keys=True, default=repr), self.format)
+        with _LOCK:
+            if key in _CURVES:
+                _CURVES.move_to_end(key)
+                return _CURVES[key]
+        pairs = super().load(ref)
+        with _LOCK:
+            _CURVES[key] = pairs
+            while len(_CURVES) > _CURVES_KEPT:
+                _CURVES.popitem(last=False)
+        return pairs
+
+_PROBE = ("radius", "spring_constant", "theta0", "sensitivity", "resonance_frequency", "L0", "L1", "L2")
+
+
+def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[str]):
+    """``option`` (STEP.NAME=VALUE), ``meta`` (KEY=VALUE) and ``probe`` (NAME=VALUE) texts, values
+    with units, -> (step option records, probe record, metadata override). ParameterError when bad."""
+    from ..analysis.options import OPTIONS, ProbeCalibration
+    from ..analysis.options_text import parse_option
+    from ..analysis.pipeline import resolve_options
+    from ..io._meta import parse_meta_args
+    from ..units import parse_quantity
+
+    given: dict[str, dict[str, Any]] = {}
+    for text in options:
+        step, name, value = parse_option(text, where="option")
+        if name in given.setdefault(step, {}):
+            raise ParameterError(f"option {step}.{name} given twice")
+        given[step][name] = value
+    records = tuple(OPTIONS[step](**values) for step, values in given.items())
+    values: dict[str, float] = {}
+    for text in probe:
+        key, sep, value = str(text).partition("=")
+        key = key.strip()
+        if not sep or key not in _PROBE:
+            raise ParameterError(f"probe {text!r}: expected NAME=VALUE with NAME one of {', '.join(_PROBE)}")
+        values[key] = parse_quantity(value.strip(), QUANTITIES[key].dimension, key)
+    probe_record = ProbeCalibration(**values)
+    resolve_options(records, probe_record)
+    override = {**parse_meta_args(meta), **{k: values[k] for k in ("spring_constant", "sensitivity") if k in values}}
+    return records, probe_record, override
+
+
+def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *, format: str | None = None,
+                 arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
+                 guard: bool = True) -> dict[str, Any]:
+    """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``.
+
+    Returns the JSON of ``afmforce analyze --json`` with every stored name replaced by the
+    user's; with ``arrays``: each result holds its per-sample arrays (at most ``max_points``
+    samples, evenly spread), ``raw`` the raw signal per curve, ``maps`` the force maps.
+    ``budget`` [s] bounds the reading of each file when ``guard`` (a file past it is reported as
+    failed; the reader runs in a forked child, :mod:`afmforce.io._guard`); files read before
+    without failing are read here directly (``guard=False``).
+    """
+    from ..sweep.files import analyze_files, plan_curves
+    from ..sweep.report import analysis_json
+    from ..sweep.summary import summary_table
+
+    if format is not None:
+        from ..io import FORMATS
+
+        if format not in FORMATS:
+            raise ParameterError(f"format {format}: unknown; choose one of {', '.join(FORMATS)}")
+    records, probe_record, override = parse_inputs(options, meta, probe)
+    t0 = time.perf_counter()
+    rename = {str(p): name for p, name in files}        # full stored paths first, then bare names
+    rename.update({Path(p).name: name for p, name in files})
+    timeout = budget if guard else None
+    refs = plan_curves([p for p, _ in files], format, timeout=timeout)
+    analysis = CachedAnalysis(options=records, probe=probe_record, meta_override=override, format=format,
+                             keep_json=True, json_arrays=arrays, file_timeout=timeout)
+    result = analyze_files(refs, analysis, chunk_size=1, executor="serial")
+    payload = analysis_json(result)
+    payload = _renamed(payload, rename)
+    if arrays:
+        for res in payload["results"].values():
+            idx = decimate(len(res.get("time") or ()), max_points)
+            for key in ("time", "position", "separation", "deflection", "force", "segment"):
+                if res.get(key) is not None:
+                    res[key] = [res[key][i] for i in idx]
+        from dataclasses import replace
+
+        direct = replace(analysis, file_timeout=None)   # read once already, in this call
+        payload["raw"] = _raw_signals(refs, direct, rename, max_points)
+        maps = any(r.index is not None for r in refs)
+        payload["maps"] = _maps(summary_table(result), rename) if maps else []
+    payload["wall_time"] = time.perf_counter() - t0
+    return payload
+
+
+def _renamed(payload: dict[str, Any], rename: dict[str, str]) -> dict[str, Any]:
+    def fix(text: str) -> str:
+        for stored, name in rename.items():   # full paths first (dict order)
+            text = text.replace(stored, name)
+        return text
+
+    results = {}
+    for key, res in payload["results"].items():
+        res["source"] = fix(str(res.get("source", "")))
+        results[fix(key)] = res
+    payload["results"] = results
+    for entry in payload["failed"]:
+        entry["file"] = fix(Path(entry["file"]).name)
+        entry["error"] = fix(entry["error"])
+    return payload
+
+
+def _raw_signals(refs, analysis, rename, max_points) -> dict[str, Any]:
+    out = {}
+    for ref in refs:
+        try:
+            pairs = analysis.load(ref)
+        except Exception:  # the failure is in payload["failed"] already
+            continue
+        several = ref.index is not None or len(pairs) > 1
+        base = rename.get(Path(ref.path).name, Path(ref.path).name)
+        for index, curve in pairs:
+            name = f"{base}#{index}" if several else base
+            piezo = curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal
+            idx = decimate(len(curve.time), max_points)
+            out[name] = {"time": curve.time[idx].tolist(), "piezo": np.asarray(piezo)[idx].tolist(),
+                         "signal": curve.deflection_signal[idx].tolist(), "segment": curve.segment[idx].tolist(),
+                         "unit": curve.deflection_unit,
+                         "position": [curve.metadata.get("position_x"), curve.metadata.get("position_y")]}
+    return out
+
+
+def _maps(table, rename) -> list[dict[str, Any]]:
+    """The force maps' images (:func:`afmforce.analysis.maps.map_images`: axes in µm from the curves'
+    stage positions, else the scanned area's size; grid indices when neither is known)."""
+    from ..analysis.maps import MAP_QUANTITIES, map_images
+
+    out = []
+    for q in ("adhesion", "jump_in_distance", "hamaker_radius", "indentation"):
+        for image in map_images(table, MAP_QUANTITIES[q]):
+            rows = table[table["file"] == image.source]
+            name = rename.get(Path(image.source).name, image.name)
+            ny, nx = image.shape
+            names = [[None] * nx for _ in range(ny)]
+            for _, r in rows.iterrows():
+                if 0 <= r["map_x"] < nx and 0 <= r["map_y"] < ny:
+                    names[int(r["map_y"])][int(r["map_x"])] = f"{name}#{int(r['curve'])}"
+            x = [(image.x0 + i * image.dx) * 1e6 for i in range(nx)] if image.has_positions else None
+            y = [(image.y0 + j * image.dy) * 1e6 for j in range(ny)] if image.has_positions else None
+            z = [[None if not np.isfinite(v) else float(v) for v in row] for row in image.values]
+            out.append({"file": name, "quantity": q, "label": image.quantity.label, "unit": image.quantity.unit,
+                        "z": z, "x_um": x, "y_um": y, "axes": "um" if x is not None else "index",
+                        "curves": names})
+    return out

@@ -1,0 +1,67 @@
+"""Analyse view: upload force-curve files (or pick an example) and analyse them."""
+
+from __future__ import annotations
+
+import asyncio
+from typing import Annotated
+
+from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
+from fastapi.responses import JSONResponse
+from starlette.concurrency import run_in_threadpool
+
+from ..errors import ParameterError
+from .analysis import run_analysis
+
+router = APIRouter(tags=["analyse"])
+
+
+@router.post("/api/analyze")
+async def analyze(request: Request,
+                  file: Annotated[list[UploadFile], File(description="force-curve files or force maps")] = [],
+                  file_id: Annotated[list[str], Form(description="files uploaded before in this session")] = [],
+                  example: Annotated[list[str], Form(description="shipped example files (GET /api/schema)")] = [],
+                  option: Annotated[list[str], Form(description="STEP.NAME=VALUE with units, as "
+                                                                "afmforce analyze --option")] = [],
+                  meta: Annotated[list[str], Form(description="KEY=VALUE file metadata, as --meta")] = [],
+                  probe: Annotated[list[str], Form(description="NAME=VALUE probe calibration (radius, "
+                                                               "spring_constant, theta0, sensitivity, ...)")] = [],
+                  format: Annotated[str | None, Form(description="reader instead of detection")] = None,
+                  arrays: Annotated[bool, Form(description="add per-sample arrays, raw signals, maps")] = False,
+                  max_points: Annotated[int, Form(ge=100, le=200_000)] = 4000) -> JSONResponse:
+    """The JSON of ``afmforce analyze FILE --json`` (``results``, ``failed``, ``oscillation_origin``)
+    plus ``files`` (the ids to re-run with ``file_id`` after an option change) and ``wall_time`` [s];
+    with ``arrays`` also ``raw`` and ``maps``. A file that cannot be read is listed under ``failed``."""
+    from ..datasets import DATASETS, path as example_path
+
+    settings, sessions = request.app.state.settings, request.app.state.sessions
+    session = request.state.session
+    stored = []
+    for up in file:
+        data = await up.read()
+        stored.append(sessions.save(session, up.filename or "upload", data))
+    paths = [sessions.path(session, s["id"]) for s in stored]
+    for fid in file_id:
+        paths.append(sessions.path(session, fid))
+    for name in example:
+        if name not in DATASETS:
+            raise ParameterError(f"example {name}: unknown; choose one of {', '.join(DATASETS)}")
+        paths.append((example_path(name), name))
+    if not paths:
+        raise ParameterError("give a file (field 'file'), an uploaded file's id ('file_id') or an example")
+    guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
+    work = run_in_threadpool(run_analysis, paths, option, meta, probe, format=format, arrays=arrays,
+                             max_points=max_points, budget=settings.request_budget, guard=guard)
+    try:
+        payload = await asyncio.wait_for(work, timeout=settings.request_budget)
+    except asyncio.TimeoutError:
+        raise HTTPException(504, f"cancelled: the analysis ran past its budget of {settings.request_budget:g} s")
+    payload["files"] = stored + [{"id": fid, "name": sessions.path(session, fid)[1]} for fid in file_id]
+    bad = {f["file"] for f in payload["failed"]}
+    sessions.mark_read(session, [f["id"] for f in payload["files"] if f["name"] not in bad])
+    return JSONResponse(payload)   # plain JSON already: no second walk through every value
+
+
+@router.get("/api/files")
+def files(request: Request) -> list[dict]:
+    """This session's uploads: ``[{"id", "name", "size"}]`` (other sessions' are never listed)."""
+    return request.app.state.sessions.files(request.state.session)

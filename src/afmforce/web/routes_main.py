@@ -1,0 +1,59 @@
+"""The page, its static files (Plotly.js from the installed ``plotly`` package), health and schema."""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from importlib import resources
+from pathlib import Path
+
+from fastapi import APIRouter, HTTPException, Request
+from fastapi.responses import FileResponse, HTMLResponse, Response
+
+from .. import __version__
+from .schema import schema
+
+router = APIRouter()
+STATIC = Path(__file__).with_name("static")
+_TYPES = {".js": "text/javascript", ".css": "text/css", ".html": "text/html", ".png": "image/png"}
+
+
+@lru_cache(maxsize=1)
+def plotly_js() -> bytes:
+    """``plotly.min.js`` as shipped in the ``plotly`` wheel (package data; no CDN)."""
+    return resources.files("plotly").joinpath("package_data", "plotly.min.js").read_bytes()
+
+
+@router.get("/", response_class=HTMLResponse, include_in_schema=False)
+def index() -> HTMLResponse:
+    return HTMLResponse((STATIC / "index.html").read_text(encoding="utf-8"))
+
+
+@router.get("/static/plotly.min.js", include_in_schema=False)
+def plotly() -> Response:
+    return Response(plotly_js(), media_type="text/javascript",
+                    headers={"cache-control": "public, max-age=86400"})
+
+
+@router.get("/static/{name}", include_in_schema=False)
+def static(name: str) -> FileResponse:
+    path = STATIC / name
+    if "/" in name or "\\" in name or name.startswith(".") or not path.is_file():
+        raise HTTPException(404, "no such file")
+    return FileResponse(path, media_type=_TYPES.get(path.suffix, "application/octet-stream"))
+
+
+@router.get("/api/health", tags=["server"])
+def health(request: Request) -> dict:
+    """``{"status": "ok", "version", "token_required", "max_upload", "jobs_running", "warm"}`` (warm: the
+    simulator is loaded; until then the first simulation waits for it)."""
+    s = request.app.state.settings
+    running = sum(1 for j in request.app.state.jobs._jobs.values() if j.state == "running")
+    return {"status": "ok", "version": __version__, "token_required": s.token is not None,
+            "max_upload": s.max_upload, "jobs_running": running, "warm": request.app.state.warm.is_set()}
+
+
+@router.get("/api/schema", tags=["server"])
+def get_schema() -> dict:
+    """Every control of the page: simulation fields (flat names, SI unit, shown unit, range, default),
+    the analysis steps' options, the fit's parameters, the example files, the instrument presets."""
+    return schema()

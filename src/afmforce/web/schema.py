@@ -1,0 +1,99 @@
+"""What the page's controls are: every field with its unit, shown unit and valid range.
+
+Built from the declarations, never written twice: the simulation's flat names
+(:data:`afmforce.dynamics.config.FLAT`, specs from :data:`afmforce._fields.QUANTITIES`),
+the analysis steps' options (:data:`afmforce.analysis.options.OPTIONS`), the fit's
+parameters (:data:`afmforce.fit.PARAMETERS`) and the shipped example files.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from functools import lru_cache
+from typing import Any
+
+from .._fields import _DISPLAY, FieldSpec
+
+__all__ = ["simulation_fields", "analysis_options", "fit_parameters", "examples", "schema"]
+
+#: SI unit -> the unit a control shows when its spec names none.
+_SHOWN = {"m": "nm", "N": "nN", "kg": "ng", "m/s": "um/s", "Hz": "kHz", "s": "s", "m/V": "nm/V", "rad": "deg"}
+
+
+def _num(v):
+    return v if v is None or isinstance(v, (str, bool)) or (isinstance(v, float) and math.isfinite(v)) \
+        or isinstance(v, int) else None
+
+
+def field_json(name: str, spec: FieldSpec | None, default: Any, *, choices=(), help: str = "") -> dict[str, Any]:
+    """One control: ``{name, unit (SI), shown, factor (SI per shown unit), lo, hi, default, help, choices, kind}``."""
+    if spec is None:
+        return {"name": name, "kind": "choice", "choices": list(choices), "default": default, "help": help,
+                "unit": "", "shown": "", "factor": 1.0, "lo": None, "hi": None}
+    shown = spec.display or _SHOWN.get(spec.unit, spec.unit)
+    if shown == "nm" and isinstance(default, float) and abs(default) >= 1e-6:
+        shown = "um"  # beam lengths
+    factor = _DISPLAY.get(shown, 1.0) if shown != spec.unit else 1.0
+    kind = {"integer": "integer", "flag": "flag", "choice": "choice", "text": "text"}.get(spec.dimension, "number")
+    return {"name": name, "kind": kind, "unit": spec.unit, "shown": shown, "factor": factor,
+            "lo": _num(spec.lo), "hi": _num(spec.hi), "lo_open": spec.lo_open, "hi_open": spec.hi_open,
+            "range": spec.range_text(), "default": _num(default) if not isinstance(default, tuple) else None,
+            "help": help or spec.help, "choices": [c for c in choices if isinstance(c, (str, int, float))],
+            "log": bool(spec.lo is not None and spec.hi is not None and spec.lo > 0 and spec.hi / spec.lo > 1e3)}
+
+
+@lru_cache(maxsize=1)
+def simulation_fields() -> list[dict[str, Any]]:
+    """Every flat name of a :class:`~afmforce.dynamics.SimulationConfig`, in header order."""
+    from ..dynamics import FRICTION_LAWS, MODELS, RINGING, SAMPLING
+    from ..dynamics.config import FLAT
+
+    registries = {"model": MODELS, "friction": FRICTION_LAWS, "ringing": RINGING, "sampling": SAMPLING}
+    out = []
+    for name, where in FLAT.items():
+        d = field_json(name, where.spec, where.default, choices=tuple(registries.get(name, ())),
+                       help=name if where.spec is None else "")
+        d.update(part=where.part, models=list(where.models))
+        out.append(d)
+    return out
+
+
+@lru_cache(maxsize=1)
+def analysis_options() -> dict[str, list[dict[str, Any]]]:
+    """Step -> its options (the typed options of ``afmforce analyze --option``)."""
+    from ..analysis.options import OPTIONS
+
+    out = {}
+    for step, cls in OPTIONS.items():
+        fields = []
+        for f in dataclasses.fields(cls):
+            spec = f.metadata.get("spec")
+            default = f.default if f.default is not dataclasses.MISSING else None
+            fields.append(field_json(f.name, spec, default, choices=f.metadata.get("choices", ())))
+        if fields:
+            out[step] = fields
+    return out
+
+
+def fit_parameters() -> list[dict[str, Any]]:
+    """The fit's global parameters (``free`` choices)."""
+    from ..fit import PARAMETERS
+
+    return [{"name": n, "unit": p.unit, "lower": _num(p.lower), "upper": _num(p.upper)}
+            for n, p in PARAMETERS.items()]
+
+
+def examples() -> list[dict[str, str]]:
+    """The sample files shipped with afmforce (``afmforce analyze --example``)."""
+    from ..datasets import DATASETS
+
+    return [{"name": n, "description": d.description} for n, d in DATASETS.items()]
+
+
+def schema() -> dict[str, Any]:
+    """Everything the page builds its controls from."""
+    from ..instrument.presets import PRESETS
+
+    return {"simulation": simulation_fields(), "analysis": analysis_options(), "fit": fit_parameters(),
+            "examples": examples(), "instrument_presets": list(PRESETS)}

@@ -1,0 +1,437 @@
+// afmforce serve: the page. Plain JavaScript + Plotly.js (served by the server; no network).
+"use strict";
+const $ = (id) => document.getElementById(id);
+const el = (tag, attrs = {}, ...kids) => {
+  const e = document.createElement(tag);
+  for (const [k, v] of Object.entries(attrs)) { if (k === "text") e.textContent = v; else e.setAttribute(k, v); }
+  kids.forEach((k) => e.append(k));
+  return e;
+};
+const SCHEMA = { simulation: [], analysis: {}, fit: [], examples: [], instrument_presets: [] };
+const LAYOUT = { margin: { l: 70, r: 20, t: 40, b: 50 }, hovermode: "closest", legend: { orientation: "h", y: -0.2 } };
+const CONFIG = { responsive: true, displaylogo: false, toImageButtonOptions: { format: "png", scale: 2 } };
+const U = { m: [1e9, "nm"], N: [1e9, "nN"], s: [1, "s"], V: [1, "V"] };
+const sc = (arr, f) => (arr || []).map((v) => (v === null ? null : v * f));
+const fmt = (v, unit) => {
+  if (v === null || v === undefined || (typeof v === "number" && !isFinite(v))) return "–";
+  if (typeof v !== "number") return String(v);
+  const p = { m: [[1e-6, "um", 1e6], [1e-9, "nm", 1e9], [0, "pm", 1e12]], N: [[1e-6, "uN", 1e6], [1e-9, "nN", 1e9], [0, "pN", 1e12]] }[unit];
+  if (p && v !== 0) { for (const [lim, u, f] of p) if (Math.abs(v) >= lim) return `${(v * f).toPrecision(4)} ${u}`; }
+  return `${Number(v.toPrecision(4))} ${unit || ""}`.trim();
+};
+async function api(path, opts = {}) {
+  const r = await fetch(path, opts);
+  const text = await r.text();
+  let body; try { body = JSON.parse(text); } catch { body = { error: text }; }
+  if (!r.ok) throw new Error(body.error || (body.detail && JSON.stringify(body.detail)) || r.statusText);
+  return body;
+}
+function table(rows, head) {
+  const t = el("table");
+  if (head) t.append(el("tr", {}, ...head.map((h) => el("th", { text: h }))));
+  rows.forEach((r) => t.append(el("tr", {}, ...r.map((c) => el("td", { text: c })))));
+  return t;
+}
+function download(name, blob) {
+  const a = el("a", { href: URL.createObjectURL(blob), download: name });
+  document.body.append(a); a.click(); a.remove();
+}
+
+// ---- tabs -----------------------------------------------------------------------------------
+document.querySelectorAll(".tab").forEach((b) => b.addEventListener("click", () => {
+  document.querySelectorAll(".tab").forEach((x) => x.classList.toggle("active", x === b));
+  document.querySelectorAll(".view").forEach((v) => v.classList.toggle("active", v.id === "view-" + b.dataset.view));
+  window.dispatchEvent(new Event("resize"));
+  if (b.dataset.view === "simulate" && !SIM.done) simulate();
+  if (b.dataset.view === "sweep") listJobs();
+}));
+
+// ---- a control of one field (number with unit and range, choice, flag) ------------------------
+function control(f, onChange, { slider = false, value = f.default } = {}) {
+  const box = el("div", { class: "field", "data-name": f.name });
+  const head = el("div", {}, el("span", { class: "name", text: f.name }), " ",
+    el("span", { class: "range", text: f.shown ? `[${f.shown}] ${f.range || ""}` : "" }));
+  box.append(head);
+  if (f.help) box.title = f.help;
+  let get;
+  if (f.kind === "choice" || (f.choices && f.choices.length && f.kind !== "number")) {
+    const s = el("select", { "data-field": f.name });
+    (f.choices.length ? f.choices : [f.default]).forEach((c) => s.append(el("option", { value: c, text: c })));
+    s.value = value ?? ""; s.addEventListener("change", onChange); box.append(s);
+    get = () => s.value;
+  } else if (f.kind === "flag") {
+    const c = el("input", { type: "checkbox", "data-field": f.name }); c.checked = !!value;
+    c.addEventListener("change", onChange); box.append(c); get = () => c.checked;
+  } else {
+    const num = el("input", { type: "text", class: "val", "data-field": f.name });
+    const show = (si) => (si === null || si === undefined ? "" : typeof si === "string" ? si : String(Number((si / f.factor).toPrecision(6))));
+    num.value = show(value);
+    if (f.choices && f.choices.length) num.title = `a number or ${f.choices.join(", ")}`;
+    box.append(num);
+    get = () => {
+      const t = num.value.trim();
+      if (t === "") return null;
+      return isFinite(Number(t)) ? Number(t) * f.factor : t;   // a word the option accepts (auto)
+    };
+    num.addEventListener("change", onChange);
+    if (slider && f.lo !== null && f.hi !== null) {
+      const lo = f.log ? Math.log10(Math.max(f.lo, f.hi * 1e-9) || 1e-30) : f.lo, hi = f.log ? Math.log10(f.hi) : f.hi;
+      let vlo = lo, vhi = hi;   // a useful window: a decade around the default
+      if (typeof f.default === "number" && f.default !== 0) {
+        if (f.log) { vlo = Math.max(lo, Math.log10(Math.abs(f.default)) - 1.5); vhi = Math.min(hi, Math.log10(Math.abs(f.default)) + 1.5); }
+        else { const w = Math.abs(f.default) * 3; vlo = Math.max(lo, f.default - w); vhi = Math.min(hi, f.default + w); }
+      }
+      const r = el("input", { type: "range", min: vlo, max: vhi, step: (vhi - vlo) / 200, "data-slider": f.name, "data-log": f.log ? "1" : "0" });
+      const toSlider = (si) => (f.log ? Math.log10(Math.abs(si)) : si);
+      if (typeof value === "number" && value !== 0) r.value = toSlider(value);
+      r.addEventListener("input", () => { const si = f.log ? 10 ** Number(r.value) : Number(r.value); num.value = show(si); onChange(); });
+      box.append(r);
+    }
+  }
+  box.get = get;
+  return box;
+}
+
+// ---- Analyse ----------------------------------------------------------------------------------
+const AN = { payload: null, files: [], examples: [], controls: [], busy: false, next: null };
+function optionTexts() {
+  const out = [];
+  for (const c of AN.controls) {
+    const v = c.box.get();
+    if (v === null || v === c.f.default || (typeof v === "number" && typeof c.f.default === "number" && Math.abs(v - c.f.default) <= 1e-12 * Math.abs(c.f.default))) continue;
+    const shown = typeof v === "number" ? `${Number((v / c.f.factor).toPrecision(8))}${c.f.shown === "deg" ? "deg" : c.f.shown}` : String(v);
+    out.push(`${c.step}.${c.f.name}=${shown}`);
+  }
+  return out;
+}
+async function analyse(upload) {
+  if (AN.busy) { AN.next = upload || AN.next === "upload" ? "upload" : "rerun"; return; }   // the latest wins, an upload is never dropped
+  AN.busy = true; $("an-error").textContent = ""; $("status").textContent = "analysing…";
+  const fd = new FormData();
+  if (upload) { for (const f of $("an-files").files) fd.append("file", f); }
+  else AN.files.forEach((f) => fd.append("file_id", f.id));
+  AN.examples.forEach((e) => fd.append("example", e));
+  optionTexts().forEach((o) => fd.append("option", o));
+  fd.append("arrays", "true");
+  fd.append("max_points", "2500");
+  try {
+    const t0 = performance.now();
+    const p = await api("api/analyze", { method: "POST", body: fd });
+    if (upload) AN.files = p.files;
+    AN.payload = p;
+    $("an-time").textContent = `${((performance.now() - t0) / 1000).toFixed(2)} s, server ${p.wall_time.toFixed(2)} s`;
+    const names = Object.keys(p.results);
+    const sel = $("an-curve"), keep = sel.value;
+    sel.innerHTML = ""; names.forEach((n) => sel.append(el("option", { value: n, text: n })));
+    if (names.includes(keep)) sel.value = keep;
+    if (p.failed.length) $("an-error").textContent = p.failed.map((f) => (f.error.startsWith(f.file) ? f.error : `${f.file}${f.curve !== undefined ? "#" + f.curve : ""}: ${f.error}`)).join("\n");
+    drawMaps(p.maps || []);
+    if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance"].forEach((i) => Plotly.purge(i));
+  } catch (e) { $("an-error").textContent = e.message; }
+  AN.busy = false; $("status").textContent = "";
+  if (AN.next) { const up = AN.next === "upload"; AN.next = null; analyse(up); }
+}
+function drawCurve() {
+  const name = $("an-curve").value, res = AN.payload.results[name], raw = (AN.payload.raw || {})[name];
+  if (!res) return;
+  const seg = res.segment || [], parts = [[0, "approach", "#2f6db5"], [1, "retract", "#d0632b"], [2, "dwell", "#888"]];
+  const pick = (arr, k) => arr.map((v, i) => (seg[i] === k ? v : null));
+  const f = [];
+  for (const [k, label, color] of parts) {
+    if (!seg.includes(k)) continue;
+    f.push({ x: sc(pick(res.separation, k), 1e9), y: sc(pick(res.force, k), 1e9), name: label, mode: "lines", line: { color },
+      hovertemplate: "h = %{x:.3f} nm<br>F = %{y:.4f} nN<extra>" + label + "</extra>" });
+  }
+  const d = res.details || {}, marks = [];
+  const j = (d.jumps || {}).jump_in; if (j && j.found !== false && res.jump_in_separation !== null)
+    marks.push({ x: [res.jump_in_separation * 1e9], y: [res.jump_in_force * 1e9], name: "jump-in", mode: "markers", marker: { size: 11, symbol: "triangle-down", color: "#1a7f37" }, hovertemplate: "jump-in<br>h = %{x:.3f} nm<br>F = %{y:.4f} nN<extra></extra>" });
+  if (res.adhesion_force !== null && res.adhesion_distance !== null)   // the deepest retract point, at its distance from contact
+    marks.push({ x: [res.adhesion_distance * 1e9], y: [res.adhesion_force * 1e9], name: `adhesion ${fmt(res.adhesion_force, "N")}`, mode: "markers", marker: { size: 10, symbol: "diamond", color: "#b00020" }, hovertemplate: "adhesion %{y:.4f} nN<br>%{x:.2f} nm from contact<extra></extra>" });
+  if (res.pull_off_force !== null) marks.push({ x: [0], y: [res.pull_off_force * 1e9], name: `pull-off ${fmt(res.pull_off_force, "N")}`, mode: "markers", marker: { size: 11, symbol: "x", color: "#b00020" }, hovertemplate: "pull-off F = %{y:.4f} nN<extra></extra>" });
+  const v = d.vdw || {};
+  if (v.status === "ok" && v.hamaker_radius) {
+    const xs = [], ys = [];
+    for (let h = v.separation_min; h <= v.separation_max; h += (v.separation_max - v.separation_min) / 100) {
+      xs.push(h * 1e9); ys.push((-v.hamaker_radius / (6 * h * h) + (v.force_offset || 0) + (v.force_slope || 0) * h) * 1e9);
+    }
+    marks.push({ x: xs, y: ys, name: `vdW fit A R = ${fmt(v.hamaker_radius, "")} J m`, mode: "lines", line: { dash: "dash", color: "#6a3d9a" }, hovertemplate: "fit: F = %{y:.4f} nN at %{x:.2f} nm<extra></extra>" });
+  }
+  Plotly.react("an-plot-force", f.concat(marks), { ...LAYOUT, title: { text: `Force vs separation — ${name}` }, xaxis: { title: { text: "separation h [nm]" } }, yaxis: { title: { text: "force F [nN]" } } }, CONFIG);
+  if (raw) {
+    const u = raw.unit || "";
+    const [fs, us] = U[u] || [1, u];
+    const rt = [];
+    for (const [k, label, color] of parts) {
+      if (!raw.segment.includes(k)) continue;
+      rt.push({ x: sc(raw.piezo.map((z, i) => (raw.segment[i] === k ? z : null)), 1e9), y: sc(raw.signal.map((s, i) => (raw.segment[i] === k ? s : null)), fs), name: label, mode: "lines", line: { color }, hovertemplate: `z = %{x:.2f} nm<br>signal = %{y:.4g} ${us}<extra>${label}</extra>` });
+    }
+    Plotly.react("an-plot-raw", rt, { ...LAYOUT, title: { text: "Raw signal vs piezo position" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
+  }
+  drawDrift(raw, d, parts);
+  const rows = [["contact", `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
+    ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
+    ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", `${res.friction}: ${res.friction_verdict}`],
+    ["diagnosis", res.verdict || "–"], ...res.warnings.map((w) => ["warning", w])];
+  $("an-summary").replaceChildren(table(rows));
+  const box = $("an-details"); box.replaceChildren(el("h2", { text: "Every step's evidence (SI units)" }));
+  for (const [step, vals] of Object.entries(d)) {
+    const units = (res.details_units || {})[step] || {};
+    const r = Object.entries(vals || {}).filter(([, x]) => typeof x !== "object" || x === null).map(([k, x]) => [k, x === null ? "–" : String(x), units[k] || ""]);
+    const det = el("details", {}, el("summary", { text: step + (res.not_applicable && res.not_applicable[step] ? " (not applicable)" : "") }), table(r, ["field", "value", "unit"]));
+    box.append(det);
+  }
+}
+function drawDrift(raw, d, parts) {   // the drift step: raw signal against time, its baselines; then the compliance lines
+  const dr = d.drift, co = d.compliance;
+  if (!raw) return;
+  const [fs, us] = U[raw.unit] || [1, raw.unit];
+  const start = (k) => raw.time[raw.segment.indexOf(k)];
+  const base = (t, k) => (!dr ? 0 : k === 1 ? dr.offset_retract + dr.slope_retract * (t - start(1)) : dr.offset_approach + dr.slope_approach * (t - start(0)));
+  const tt = [];
+  for (const [k, label, color] of parts) {
+    if (!raw.segment.includes(k)) continue;
+    const t = raw.time.map((x, i) => (raw.segment[i] === k ? x : null));
+    tt.push({ x: t, y: sc(raw.signal.map((x, i) => (raw.segment[i] === k ? x : null)), fs), name: label, mode: "lines", line: { color }, hovertemplate: `t = %{x:.4f} s<br>%{y:.4g} ${us}<extra>${label}</extra>` });
+    if (dr && k !== 2) tt.push({ x: t, y: sc(t.map((x) => (x === null ? null : base(x, k))), fs), name: `${label} baseline`, mode: "lines", line: { color, dash: "dash" }, hovertemplate: `baseline %{y:.4g} ${us}<extra>${label}</extra>` });
+  }
+  Plotly.react("an-plot-time", tt, { ...LAYOUT, title: { text: `Drift: raw signal and baselines (${dr ? dr.retract_line + " retract line" : "no drift step"})` }, xaxis: { title: { text: "time t [s]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
+  if (!co || !co.approach) { Plotly.purge("an-plot-compliance"); return; }
+  const ct = [], lo = Math.min(co.approach.z_min, (co.retract || co.approach).z_min), hi = Math.max(co.approach.z_max, (co.retract || co.approach).z_max), w = (hi - lo) * 2;
+  for (const [k, label, color] of parts) {
+    if (k === 2 || !raw.segment.includes(k)) continue;
+    const keep = raw.piezo.map((z, i) => raw.segment[i] === k && z >= lo - w && z <= hi + w);
+    ct.push({ x: sc(raw.piezo.map((z, i) => (keep[i] ? z : null)), 1e9), y: sc(raw.signal.map((x, i) => (keep[i] ? x - base(raw.time[i], k) : null)), fs), name: label, mode: "markers", marker: { size: 3, color }, hovertemplate: `z = %{x:.2f} nm<br>%{y:.4g} ${us}<extra>${label}</extra>` });
+    const line = k === 1 ? co.retract : co.approach;
+    if (line) ct.push({ x: [line.z_min * 1e9, line.z_max * 1e9], y: [(line.intercept + line.slope * line.z_min) * fs, (line.intercept + line.slope * line.z_max) * fs], name: `${label} compliance, slope ${Number(line.slope.toPrecision(4))} ${raw.unit}/m`, mode: "lines", line: { color, width: 3, dash: "dot" } });
+  }
+  Plotly.react("an-plot-compliance", ct, { ...LAYOUT, title: { text: "Compliance: drift-corrected signal near contact" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `signal − baseline [${us}]` } } }, CONFIG);
+}
+function drawMaps(maps) {
+  const div = $("an-plot-map");
+  if (!maps.length) { div.classList.add("hidden"); return; }
+  div.classList.remove("hidden");
+  const m = maps[0], f = m.unit === "N" ? 1e9 : m.unit === "m" ? 1e9 : 1, u = m.unit === "N" ? "nN" : m.unit === "m" ? "nm" : m.unit;
+  const z = m.z.map((row) => row.map((v) => (v === null ? null : v * f)));
+  Plotly.react(div, [{ type: "heatmap", z, x: m.x_um || undefined, y: m.y_um || undefined, customdata: m.curves, colorbar: { title: { text: u } },
+    hovertemplate: `x = %{x} ${m.axes === "um" ? "µm" : ""}<br>y = %{y} ${m.axes === "um" ? "µm" : ""}<br>${m.quantity} = %{z:.4g} ${u}<br>%{customdata}<extra>click: open</extra>` }],
+  { ...LAYOUT, title: { text: `${m.file}: ${m.label}` }, xaxis: { title: m.axes === "um" ? "x [µm]" : "x (column)", scaleanchor: "y" }, yaxis: { title: m.axes === "um" ? "y [µm]" : "y (row)" } }, CONFIG);
+  div.removeAllListeners && div.removeAllListeners("plotly_click");
+  div.on("plotly_click", (ev) => { const n = ev.points[0].customdata; if (n && AN.payload.results[n]) { $("an-curve").value = n; drawCurve(); } });
+}
+function buildOptions() {
+  const box = $("an-options"); box.replaceChildren(); AN.controls = [];
+  for (const [step, fields] of Object.entries(SCHEMA.analysis)) {
+    const det = el("details", {}, el("summary", { text: step }));
+    for (const f of fields) {
+      const c = control(f, () => { if (AN.files.length || AN.examples.length) analyse(false); });
+      c.dataset.option = `${step}.${f.name}`;
+      det.append(c); AN.controls.push({ step, f, box: c });
+    }
+    box.append(det);
+  }
+}
+$("an-run").addEventListener("click", () => {
+  AN.examples = $("an-example").value ? [$("an-example").value] : [];
+  if (!$("an-files").files.length && !AN.examples.length) { $("an-error").textContent = "choose a file or an example"; return; }
+  AN.files = []; analyse(true);
+});
+$("an-curve").addEventListener("change", drawCurve);
+$("an-json").addEventListener("click", () => AN.payload && download("afmforce-analysis.json", new Blob([JSON.stringify(AN.payload, null, 2)], { type: "application/json" })));
+$("an-csv").addEventListener("click", () => {
+  const n = $("an-curve").value, r = AN.payload && AN.payload.results[n]; if (!r) return;
+  const lines = [`# afmforce force-vs-separation table; source: ${n}`, "segment,time [s],position [m],separation [m],deflection [m],force [N]"];
+  r.time.forEach((t, i) => lines.push([r.segment[i], t, r.position[i], r.separation[i], r.deflection[i], r.force[i]].map((v) => (v === null ? "" : v)).join(",")));
+  download(n + ".afmforce.csv", new Blob([lines.join("\n") + "\n"], { type: "text/csv" }));
+});
+$("an-png").addEventListener("click", () => Plotly.downloadImage("an-plot-force", { format: "png", filename: $("an-curve").value + ".afmforce", scale: 2 }));
+
+// ---- Simulate ---------------------------------------------------------------------------------
+const SIM = { controls: [], busy: false, again: false, last: null, ref: null, done: false };
+function simConfig() {
+  const model = SIM.controls.find((c) => c.f.name === "model").box.get();
+  const cfg = {};
+  for (const c of SIM.controls) {
+    if (!c.f.models.includes(model)) continue;
+    const v = c.box.get();
+    if (v !== null && v !== "" && v !== c.f.default) cfg[c.f.name] = v;
+  }
+  cfg.model = model;
+  return cfg;
+}
+async function simulate() {
+  if (SIM.busy) { SIM.again = true; return; }
+  SIM.busy = true; SIM.done = true;
+  const t0 = performance.now();
+  try {
+    const r = await api("api/simulate?max_points=600&columns=piezo_position,deflection,apparent_deflection,separation,normal_force", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(simConfig()) });
+    const t1 = performance.now();
+    SIM.last = r; $("sim-error").textContent = "";
+    drawSim();
+    const t2 = performance.now();
+    await new Promise((done) => requestAnimationFrame(() => setTimeout(done, 0)));   // painted
+    (window.SIM_LATENCY = window.SIM_LATENCY || []).push(performance.now() - t0);
+    (window.SIM_PARTS = window.SIM_PARTS || []).push([r.wall_time * 1e3, t1 - t0, t2 - t1, performance.now() - t2]);
+    $("sim-time").textContent = `${r.n_samples} samples; ${(performance.now() - t0).toFixed(0)} ms to redraw (server ${(r.wall_time * 1000).toFixed(0)} ms)`;
+    document.body.dataset.simCount = String(Number(document.body.dataset.simCount || 0) + 1);
+  } catch (e) { $("sim-error").textContent = e.message; }
+  SIM.busy = false;
+  if (SIM.again) { SIM.again = false; simulate(); }
+}
+function simTraces(r, tag, dash) {
+  const c = r.columns, z = sc(c.piezo_position, 1e9);
+  return [
+    [{ x: z, y: sc(c.deflection, 1e9), name: `actual ${tag}`, mode: "lines", line: { dash, color: "#2f6db5" }, hovertemplate: "z = %{x:.2f} nm<br>deflection = %{y:.4f} nm<extra>actual " + tag + "</extra>" },
+     { x: z, y: sc(c.apparent_deflection, 1e9), name: `apparent ${tag}`, mode: "lines", line: { dash, color: "#d0632b" }, hovertemplate: "z = %{x:.2f} nm<br>apparent = %{y:.4f} nm<extra>apparent " + tag + "</extra>" }],
+    [{ x: sc(c.separation, 1e9), y: sc(c.normal_force, 1e9), name: `force ${tag}`, mode: "lines", line: { dash, color: "#1a7f37" }, hovertemplate: "h = %{x:.3f} nm<br>F = %{y:.4f} nN<extra>" + tag + "</extra>" }],
+  ];
+}
+function box(traces, key) {   // the data's range, padded: a fixed range spares Plotly its autorange (3x faster)
+  let lo = Infinity, hi = -Infinity;
+  for (const t of traces) for (const v of t[key]) if (v !== null) { if (v < lo) lo = v; if (v > hi) hi = v; }
+  if (!isFinite(lo) || !isFinite(hi)) return { autorange: true };
+  const pad = (hi - lo) * 0.05 || Math.abs(hi) * 0.05 || 1;
+  return { range: [lo - pad, hi + pad], autorange: false };
+}
+function drawSim() {
+  const r = SIM.last, a = simTraces(r, "A", "solid"), s = r.summary;
+  let t1 = a[0], t2 = a[1];
+  if (SIM.ref) { const b = simTraces(SIM.ref, "B", "dot"); t1 = t1.concat(b[0]); t2 = t2.concat(b[1]); }
+  const ev = [];
+  if (s.jump_in && s.jump_in.piezo_position !== null) ev.push({ x: [s.jump_in.piezo_position * 1e9], y: [0], name: "jump-in", mode: "markers", marker: { size: 11, symbol: "triangle-down", color: "#6a3d9a" }, hovertemplate: "jump-in at z = %{x:.2f} nm<extra></extra>" });
+  if (s.pull_off && s.pull_off.piezo_position !== null) ev.push({ x: [s.pull_off.piezo_position * 1e9], y: [0], name: "pull-off", mode: "markers", marker: { size: 11, symbol: "x", color: "#b00020" }, hovertemplate: "pull-off at z = %{x:.2f} nm<extra></extra>" });
+  Plotly.react("sim-plot-defl", t1.concat(ev), { ...LAYOUT, title: { text: "Apparent vs actual deflection" }, xaxis: { title: { text: "piezo position z [nm]" }, ...box(t1, "x") }, yaxis: { title: { text: "deflection [nm]" }, ...box(t1, "y") } }, CONFIG);
+  Plotly.react("sim-plot-force", t2, { ...LAYOUT, title: { text: "Force vs separation" }, xaxis: { title: { text: "separation h [nm]" }, ...box(t2, "x") }, yaxis: { title: { text: "normal force [nN]" }, ...box(t2, "y") } }, CONFIG);
+  const rowOf = (x) => x && [fmt(x.summary.jump_in.separation, "m"), fmt(x.summary.jump_in.piezo_position, "m"), fmt(x.summary.pull_off.force, "N"), fmt(x.summary.min_apparent_deflection, "m"), fmt(x.summary.spike_height, "m"), fmt(x.summary.hysteresis_offset, "m"), `${x.summary.solver.status}, ${x.summary.solver.steps} steps`];
+  const heads = ["jump-in separation", "jump-in z", "pull-off force", "min apparent deflection", "spike", "compliance offset", "solver"];
+  const rows = heads.map((h, i) => [h, rowOf(r)[i]].concat(SIM.ref ? [rowOf(SIM.ref)[i]] : []));
+  $("sim-summary").replaceChildren(table(rows, ["event", "run A"].concat(SIM.ref ? ["run B"] : [])));
+}
+function buildSim() {
+  const box = $("sim-controls"); box.replaceChildren(); SIM.controls = [];
+  let part = "";
+  for (const f of SCHEMA.simulation) {
+    if (f.part !== part) { part = f.part; box.append(el("div", { class: "group", text: part })); }
+    const c = control(f, () => { if (f.name === "model") showModel(); simulate(); }, { slider: true });
+    c.dataset.models = f.models.join(",");
+    box.append(c); SIM.controls.push({ f, box: c });
+  }
+  showModel();
+  SCHEMA.instrument_presets.forEach((p) => $("sim-preset").append(el("option", { value: p, text: p })));
+  $("sim-preset").value = SCHEMA.instrument_presets.includes("typical") ? "typical" : SCHEMA.instrument_presets[0];
+}
+function showModel() {
+  const model = SIM.controls.find((c) => c.f.name === "model").box.get();
+  SIM.controls.forEach((c) => c.box.classList.toggle("hidden", !c.f.models.includes(model)));
+}
+$("sim-keep").addEventListener("click", () => { SIM.ref = SIM.last; drawSim(); });
+$("sim-clear").addEventListener("click", () => { SIM.ref = null; drawSim(); });
+$("sim-raw").addEventListener("click", async () => {
+  const r = await fetch(`api/simulate/raw?preset=${$("sim-preset").value}`, { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(simConfig()) });
+  if (!r.ok) { $("sim-error").textContent = (await r.json()).error; return; }
+  download(`virtual-${$("sim-preset").value}.raw`, await r.blob());
+});
+
+// ---- jobs (fit, sweep) ------------------------------------------------------------------------
+function follow(id, prefix, onEnd) {
+  const es = new EventSource(`api/jobs/${id}/events`);
+  $(prefix + "-cancel").disabled = false;
+  es.addEventListener("progress", (e) => {
+    const d = JSON.parse(e.data), p = d.progress || {};
+    if (p.what) (window.PROGRESS = window.PROGRESS || []).push(`${prefix}: ${p.what}`);
+    if (p.fraction !== undefined && p.fraction !== null) $(prefix + "-progress").value = p.fraction;
+    $(prefix + "-state").textContent = `${d.state}${p.what ? ": " + p.what : ""}${p.total ? ` (${p.done}/${p.total} ${p.unit})` : ""}`;
+  });
+  es.addEventListener("end", (e) => {
+    es.close(); const job = JSON.parse(e.data);
+    $(prefix + "-cancel").disabled = true; $(prefix + "-progress").value = job.state === "done" ? 1 : $(prefix + "-progress").value;
+    $(prefix + "-state").textContent = job.state + (job.resumed ? ` (resumed ${job.resumed}x)` : "");
+    if (job.error) $(prefix + "-error").textContent = job.error;
+    if (job.result) onEnd(job.result);
+    listJobs();
+  });
+  $(prefix + "-cancel").onclick = () => api(`api/jobs/${id}/cancel`, { method: "POST" });
+}
+
+// ---- Fit --------------------------------------------------------------------------------------
+$("fit-run").addEventListener("click", async () => {
+  $("fit-error").textContent = ""; $("fit-verdict").textContent = ""; $("fit-progress").value = 0;
+  try {
+    let ids = [];
+    const files = $("fit-files").files;
+    if (files.length) {  // upload them first (an analysis also checks they read)
+      const fd = new FormData(); for (const f of files) fd.append("file", f);
+      ids = (await api("api/analyze", { method: "POST", body: fd })).files.map((f) => f.id);
+    }
+    const free = [...document.querySelectorAll("#fit-free input:checked")].map((c) => c.value);
+    const body = { file_ids: ids, free, seed: Number($("fit-seed").value), compare: $("fit-compare").checked, profile: $("fit-profile").checked,
+      velocities: ids.length ? [] : $("fit-speeds").value.split(",").map((v) => Number(v) * 1e-6),
+      truth: ids.length ? {} : { xi: Number($("fit-xi").value), hamaker: Number($("fit-hamaker").value) * 1e-21 } };
+    const job = await api("api/fit", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
+    $("fit-state").textContent = "started";
+    follow(job.id, "fit", drawFit);
+  } catch (e) { $("fit-error").textContent = e.message; }
+});
+function drawFit(r) {
+  $("fit-verdict").textContent = r.verdict;
+  const rows = Object.entries(r.parameters).map(([n, p]) => [n, `${Number(p.value.toPrecision(4))} ${p.unit}`, `± ${Number(p.stderr.toPrecision(3))}`, `[${p.interval.map((x) => Number(x.toPrecision(4))).join(", ")}] (${p.interval_method})`]);
+  $("fit-table").replaceChildren(table(rows, ["parameter", "value", "std. error", `${r.level * 100}% interval`]), el("p", { class: "muted", text: `reduced chi-square ${r.redchi.toFixed(3)}; ${r.model_evaluations} model evaluations in ${r.wall_time.toFixed(1)} s` }));
+  const tr = [];
+  r.plots.forEach((p, i) => {
+    tr.push({ x: sc(p.position, 1e9), y: sc(p.data, 1e9), name: `${p.name} data`, mode: "markers", marker: { size: 3 }, hovertemplate: "z = %{x:.2f} nm<br>%{y:.4f} nm<extra>data</extra>" });
+    if (p.model) tr.push({ x: sc(p.position, 1e9), y: sc(p.model, 1e9), name: `${p.name} model`, mode: "lines", hovertemplate: "z = %{x:.2f} nm<br>%{y:.4f} nm<extra>model</extra>" });
+  });
+  Plotly.react("fit-plot", tr, { ...LAYOUT, title: { text: "Data and fitted model" }, xaxis: { title: { text: "piezo position z − shift [nm]" } }, yaxis: { title: { text: "apparent deflection [nm]" } } }, CONFIG);
+  const pr = Object.entries(r.profiles || {}).map(([n, p]) => ({ x: p.value || p.values || [], y: p.delta_chi2 || p.chi2 || [], name: n, mode: "lines+markers" }));
+  if (pr.length) Plotly.react("fit-profiles", pr, { ...LAYOUT, title: { text: "Profile likelihoods" }, xaxis: { title: { text: "parameter [SI]" }, type: "log" }, yaxis: { title: { text: "Δχ²" } } }, CONFIG);
+}
+
+// ---- Sweep ------------------------------------------------------------------------------------
+const SW = { result: null };
+$("sw-run").addEventListener("click", async () => {
+  $("sw-error").textContent = ""; $("sw-progress").value = 0;
+  const lines = (id) => $(id).value.split("\n").map((s) => s.trim()).filter(Boolean);
+  try {
+    const job = await api("api/sweep", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify({ grid: lines("sw-grid"), sets: lines("sw-sets"), executor: $("sw-executor").value }) });
+    follow(job.id, "sw", drawSweep); listJobs();
+  } catch (e) { $("sw-error").textContent = e.message; }
+});
+async function listJobs() {
+  const jobs = await api("api/jobs");
+  $("sw-jobs").replaceChildren(table(jobs.map((j) => [j.kind, j.state + (j.resumed ? ` (resumed)` : ""), new Date(j.created * 1000).toLocaleTimeString()]), ["job", "state", "started"]));
+  const rows = $("sw-jobs").querySelectorAll("tr");
+  jobs.forEach((j, i) => { rows[i + 1].style.cursor = "pointer"; rows[i + 1].onclick = async () => { const full = await api(`api/jobs/${j.id}`); if (full.result) (j.kind === "fit" ? drawFit : drawSweep)(full.result); else if (full.state === "running") follow(j.id, j.kind === "fit" ? "fit" : "sw", j.kind === "fit" ? drawFit : drawSweep); }; });
+}
+function drawSweep(r) {
+  SW.result = r;
+  const numeric = r.columns.filter((c, i) => !r.parameters.includes(c) && r.rows.some((row) => typeof row[i] === "number"));
+  const sel = $("sw-metric"), keep = sel.value; sel.innerHTML = "";
+  numeric.forEach((c) => sel.append(el("option", { value: c, text: `${c} [${r.units[c] || "-"}]` })));
+  sel.value = numeric.includes(keep) ? keep : (numeric.includes("min_apparent_deflection") ? "min_apparent_deflection" : numeric[0]);
+  drawSweepPlot();
+  const shown = r.rows.slice(0, 200);
+  $("sw-table").replaceChildren(el("p", { class: "muted", text: `${r.n_runs} runs (${r.n_failed} failed); ${r.chunks_run} chunks run, ${r.chunks_skipped} resumed from the store` }),
+    table(shown.map((row) => row.map((v) => (typeof v === "number" ? Number(v.toPrecision(5)) : v ?? "–"))), r.columns.map((c) => (r.units[c] ? `${c} [${r.units[c]}]` : c))));
+}
+function drawSweepPlot() {
+  const r = SW.result, m = $("sw-metric").value; if (!r || !m) return;
+  const ci = r.columns.indexOf(m), p = r.parameters, i0 = r.columns.indexOf(p[0]);
+  let traces;
+  if (p.length >= 2) {
+    const i1 = r.columns.indexOf(p[1]), groups = {};
+    r.rows.forEach((row) => { (groups[row[i1]] = groups[row[i1]] || []).push(row); });
+    traces = Object.entries(groups).map(([g, rows]) => ({ x: rows.map((w) => w[i0]), y: rows.map((w) => w[ci]), name: `${p[1]} = ${Number(Number(g).toPrecision(3))} ${r.units[p[1]] || ""}`, mode: "lines+markers" }));
+  } else traces = [{ x: r.rows.map((w) => w[i0]), y: r.rows.map((w) => w[ci]), mode: "lines+markers", name: m }];
+  Plotly.react("sw-plot", traces, { ...LAYOUT, title: m, xaxis: { title: { text: `${p[0]} [${r.units[p[0]] || "-"}]` }, type: "log" }, yaxis: { title: { text: `${m} [${r.units[m] || "-"}]` } } }, CONFIG);
+}
+$("sw-metric").addEventListener("change", drawSweepPlot);
+
+// ---- start ------------------------------------------------------------------------------------
+(async () => {
+  try {
+    Object.assign(SCHEMA, await api("api/schema"));
+    SCHEMA.examples.forEach((e) => $("an-example").append(el("option", { value: e.name, text: `${e.name}: ${e.description}` })));
+    buildOptions(); buildSim();
+    SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
+    document.body.dataset.ready = "1";
+  } catch (e) { $("status").textContent = "cannot reach the server: " + e.message; }
+})();

@@ -1,0 +1,65 @@
+"""Fixtures of the web tests: an in-process client and a live server on a free loopback port."""
+
+from __future__ import annotations
+
+import socket
+import threading
+import time
+
+import pytest
+
+fastapi = pytest.importorskip("fastapi")
+
+from afmforce.web import Settings, create_app  # noqa: E402
+
+
+@pytest.fixture
+def make_client(tmp_path):
+    """``make_client(**settings) -> TestClient`` (a fresh cookie jar each call: a new session)."""
+    from fastapi.testclient import TestClient
+
+    apps = {}
+
+    def make(app=None, **kw):
+        if app is None:
+            kw.setdefault("spare_job", False)      # no warm job process per test app (CPU)
+            key = tuple(sorted(kw.items()))
+            if key not in apps:
+                apps[key] = create_app(Settings(data=kw.pop("data", tmp_path / "data"), **kw))
+            app = apps[key]
+        client = TestClient(app, base_url="http://127.0.0.1")
+        client.__enter__()
+        made.append(client)
+        return client
+
+    made: list = []
+    yield make
+    for c in made:
+        c.__exit__(None, None, None)
+
+
+@pytest.fixture
+def client(make_client):
+    return make_client()
+
+
+@pytest.fixture(scope="module")
+def live_server(tmp_path_factory):
+    """``http://127.0.0.1:PORT/`` of a real uvicorn server in a thread (stopped after the module)."""
+    import uvicorn
+
+    data = tmp_path_factory.mktemp("web-data")
+    sock = socket.socket()
+    sock.bind(("127.0.0.1", 0))
+    port = sock.getsockname()[1]
+    app = create_app(Settings(port=port, data=data))
+    server = uvicorn.Server(uvicorn.Config(app, log_level="warning", timeout_graceful_shutdown=2))
+    thread = threading.Thread(target=server.run, kwargs={"sockets": [sock]}, daemon=True)
+    thread.start()
+    deadline = time.monotonic() + 30
+    while not server.started and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert server.started, "the server did not start"
+    yield f"http://127.0.0.1:{port}/"
+    server.should_exit = True
+    thread.join(timeout=10)

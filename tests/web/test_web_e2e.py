@@ -1,0 +1,145 @@
+"""End to end in a real browser: Debian's headless Chromium driven by Playwright (no browser download).
+
+Upload a real file, change an option and see the plot change, move a slider and see a new
+trajectory, run a small fit and read the verdict, and a malformed file as an error in the page.
+Skipped where Chromium or Playwright is missing, unless ``AFMFORCE_REQUIRE_E2E=1`` (``.ci/run``).
+With ``AFMFORCE_SCREENSHOTS=DIR`` each view is saved as a PNG (docs/web-*.png).
+"""
+
+from __future__ import annotations
+
+import os
+import shutil
+import time
+from pathlib import Path
+
+import pytest
+
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def _missing() -> str | None:
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        return "playwright is not installed (pip install playwright)"
+    if not Path(CHROMIUM).exists():
+        return "Debian's chromium is not installed (apt-get install -y chromium)"
+    return None
+
+
+@pytest.fixture(scope="module")
+def page(live_server, tmp_path_factory):
+    why = _missing()
+    if why:
+        if os.environ.get("AFMFORCE_REQUIRE_E2E") == "1":
+            pytest.fail(why)
+        pytest.skip(why)
+    from playwright.sync_api import sync_playwright
+
+    with sync_playwright() as p:
+        ctx = p.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
+                                                   executable_path=CHROMIUM, args=ARGS, headless=True,
+                                                   viewport={"width": 1400, "height": 900})
+        pg = ctx.new_page()
+        pg.errors = []
+        pg.on("pageerror", lambda e: pg.errors.append(str(e)))
+        pg.goto(live_server)
+        pg.wait_for_selector("body[data-ready='1']", timeout=30_000)
+        yield pg
+        ctx.close()
+
+
+def _shot(page, name: str) -> None:
+    folder = os.environ.get("AFMFORCE_SCREENSHOTS")
+    if folder:
+        time.sleep(0.5)
+        page.screenshot(path=str(Path(folder) / f"web-{name}.png"))
+
+
+def _vdw_max(page) -> float:
+    return page.evaluate("""() => {
+        const t = document.getElementById('an-plot-force').data.find(d => d.name.startsWith('vdW fit'));
+        return t ? Math.max(...t.x) : -1; }""")
+
+
+def test_upload_a_real_file_and_change_an_option(page):
+    from afmforce.datasets import path
+
+    page.set_input_files("#an-files", str(path("asylum-air")))        # Asylum MFP-3D .ibw, real
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-plot-force').data", timeout=60_000)
+    assert "asylum" in page.inner_text("#an-curve")
+    before = _vdw_max(page)
+    assert before > 20                                     # default fit window: 30 nm
+    page.click("#an-options details:has([data-option='vdw.max_separation']) summary")
+    box = page.locator("[data-option='vdw.max_separation'] input")
+    box.fill("15")
+    box.dispatch_event("change")
+    page.wait_for_function("""() => {
+        const t = document.getElementById('an-plot-force').data.find(d => d.name.startsWith('vdW fit'));
+        return t && Math.max(...t.x) <= 15.0001; }""", timeout=30_000)
+    assert _vdw_max(page) <= 15.0001 < before
+    assert "diagnosis" in page.inner_text("#an-summary")
+    _shot(page, "analyse")
+
+
+def test_malformed_file_is_an_error_in_the_page(page, live_server, tmp_path):
+    bad = tmp_path / "broken.jpk-force"
+    bad.write_bytes(b"PK\x03\x04 this is no zip archive")
+    page.set_input_files("#an-files", str(bad))
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-error').textContent.includes('broken.jpk-force')",
+                           timeout=30_000)
+    assert page.evaluate("fetch('api/health').then(r => r.json()).then(j => j.status)") == "ok"
+
+
+def test_move_a_slider_and_see_a_new_trajectory(page):
+    page.click("button[data-view=simulate]")
+    page.wait_for_function("Number(document.body.dataset.simCount || 0) >= 1", timeout=60_000)
+    trace = "document.getElementById('sim-plot-defl').data[1].y.slice(0, 1500).join(',')"
+    first = page.evaluate(trace)
+    n = int(page.evaluate("document.body.dataset.simCount"))
+    slider = page.locator("[data-slider='xi']")
+    lo = float(slider.get_attribute("min"))
+    slider.fill(str(lo))                                   # xi to the bottom of the slider
+    page.wait_for_function(f"Number(document.body.dataset.simCount) > {n}", timeout=30_000)
+    page.wait_for_function("!document.getElementById('sim-time').textContent.includes('…')", timeout=5_000)
+    assert page.evaluate(trace) != first
+    xi = float(page.locator(".field[data-name='xi'] input.val").input_value())
+    expected = 10 ** lo if slider.get_attribute("data-log") == "1" else lo
+    assert xi == pytest.approx(expected, rel=1e-4, abs=1e-12)        # the box follows the slider
+    _shot(page, "simulate")
+
+
+def test_run_a_small_fit_and_read_the_verdict(page):
+    page.click("button[data-view=fit]")
+    page.fill("#fit-speeds", "1, 4")
+    page.uncheck("#fit-profile")
+    page.click("#fit-run")
+    page.wait_for_function("document.getElementById('fit-verdict').textContent.includes('friction')",
+                           timeout=180_000)
+    verdict = page.inner_text("#fit-verdict")
+    assert verdict.startswith("friction detected"), verdict     # virtual curves made with xi = 0.005 kg/s
+    assert "xi" in page.inner_text("#fit-table")
+    assert page.evaluate("document.getElementById('fit-progress').value") == 1
+    seen = page.evaluate("window.PROGRESS || []")          # stages pushed by the server (SSE)
+    assert "fit: local fit 1" in seen and "fit: model comparison" in seen, seen
+    _shot(page, "fit")
+    assert not page.errors
+
+
+def test_run_a_small_sweep_and_see_its_table(page):
+    page.click("button[data-view=sweep]")
+    page.fill("#sw-grid", "xi=0.003,0.03,0.3")
+    page.fill("#sw-sets", "velocity=1um/s")
+    page.select_option("#sw-executor", "serial")
+    page.click("#sw-run")
+    page.wait_for_function("document.querySelectorAll('#sw-table tr').length >= 4", timeout=120_000)
+    head = page.inner_text("#sw-table tr:first-child")
+    assert "xi" in head and "min_apparent_deflection" in head
+    assert page.evaluate("document.getElementById('sw-plot').data[0].x.length") == 3
+    assert "done" in page.inner_text("#sw-state")
+    _shot(page, "sweep")
