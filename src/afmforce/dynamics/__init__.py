@@ -29,6 +29,17 @@ from .batch import simulate_many
 from .static import StaticCurve, static_curve, static_deflection, static_jump_in
 from .trajectory import COLUMNS, SolverStats, Trajectory
 
+# numba keys integrate_segment's cache on radau.py alone, yet it inlines models.py and the pieces:
+# a change in any source of the package must recompile (_jit.purge_stale_cache; a stale cache once
+# silently ran the undamped vector field). Here, before anything compiled is called.
+from pathlib import Path as _Path
+
+from ._jit import purge_stale_cache as _purge
+from .radau import integrate_segment as _entry
+
+_purge(_entry, _Path(__file__).parent)
+del _Path, _purge, _entry
+
 __all__ = [
     "simulate",
     "simulate_many",

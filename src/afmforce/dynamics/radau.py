@@ -35,12 +35,11 @@ from __future__ import annotations
 
 import math
 from collections import namedtuple
-from pathlib import Path
 
 import numpy as np
 from numba import njit
 
-from ._jit import ENTRY, fmax, fmin, purge_stale_cache
+from ._jit import ENTRY, fmax, fmin
 from ._locate import (  # noqa: F401  (re-exported: the event layout used by simulate)
     APPROACH, DWELL, E_CONTACT_T, E_CONTACT_Z, E_H_CONTACT, E_IN_CONTACT, E_JUMP_FACTOR,
     E_FAST_T, E_FAST_Z, E_H_STATIC, E_JUMP_H, E_JUMP_T, E_JUMP_Z, E_LAST_OUT, E_MIN_DEFL,
@@ -399,8 +398,3 @@ def integrate_segment(model, p, drive, tolerances, control, sampling, state):
         return TERMINAL
     return DONE
 
-
-# numba keys integrate_segment's cache on this file alone; it inlines models.py and the pieces:
-# a change in any of the package's sources must recompile (issue 23/25 merge: a stale cache
-# silently ran the undamped vector field).
-purge_stale_cache(integrate_segment, Path(__file__).parent)
