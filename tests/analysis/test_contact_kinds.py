@@ -63,8 +63,12 @@ def test_soft_contact_point_agrees_with_stored_nanite(entry):
         slow = [w for w in res.warnings if w.startswith("slowly rising approach")]
         assert slow and f"{cp.position * 1e6:.4g}" in slow[0]
         steep = entry["steep"]
-        assert abs(cp.position - steep["z"]) < 0.6e-6
-        assert abs(cp.position - steep["also"]["gradient_zero_crossing"]) < 0.6e-6
+        # within the tolerance of nanite's gradient_zero_crossing (-25.95 um; before the local refit: 0.26 um
+        # early, -26.21 um); nanite's two gradient methods are 0.22 um apart, more than two tolerances, so
+        # deviation_from_baseline (-25.73 um, later: it waits for the deflection to leave the noise band)
+        # is held to 0.3 um
+        assert abs(cp.position - steep["also"]["gradient_zero_crossing"]) < tol, (cp.position, tol)
+        assert abs(cp.position - steep["z"]) < 0.3e-6
         assert cp.position > entry["z"] + 5e-6  # far after the slow rise nanite's fit_line_polynomial stops at
         return
     assert abs(cp.position - entry["z"]) < tol, (cp.position - entry["z"], tol)

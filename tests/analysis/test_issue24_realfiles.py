@@ -176,3 +176,28 @@ def test_map_image_axes_in_um_and_title_inside_the_figure():
     assert box.x0 <= title.x0 and title.x1 <= box.x1  # not clipped
     (plain,) = map_images(rows.drop(columns=["map_width", "map_height"]), "adhesion")
     assert "index" in plot_map(plain).get_xlabel()
+
+
+def test_hard_pull_off_is_no_unbinding_step_cell_curves_keep_theirs():
+    """Asylum SiN in air: the pull-off jump and the lever's settling after it were counted (and marked) as one
+    unbinding step; the dip ends in that one jump (deepest point to last rupture within 3 nm), so 0 steps.
+    The JPK cell curves keep theirs (the counts before and after the change: spot3 1 at 57 nm, the 2016
+    CellHesion curve 2, the first map curve 1)."""
+    from afmforce.plotting import plot_summary
+
+    curve, hard = _run("asylum-mfp3d_SiN-tip_air.ibw")
+    ad = hard.details["adhesion"]
+    assert hard.contact_kind == "hard" and ad.found and hard.details["jumps"].pull_off.found
+    assert abs(ad.rupture_distance - ad.distance) < 3e-9  # the whole recovery is the one jump
+    assert hard.unbinding_steps == 0 and ad.steps == ()
+    fig = plot_summary(hard, curve)
+    labels = [t.get_text() for ax in fig.axes if ax.get_legend() for t in ax.get_legend().get_texts()]
+    assert not any("unbinding step" in t for t in labels)
+    expected = {"jpk_cellhesion_spot3.jpk-force": 1, "jpkfile_force-save-2016.06.15-13.17.08.jpk-force": 2,
+                "afmformats_jpk-fd_map2x2_extracted.jpk-force-map": 1}
+    for name, n in expected.items():
+        _, soft = _run(name)
+        assert soft.contact_kind == "soft" and soft.unbinding_steps == n, name
+        assert all(0 < s.distance <= soft.rupture_distance + 5e-9 for s in soft.details["adhesion"].steps)
+    _, spot3 = _run("jpk_cellhesion_spot3.jpk-force")
+    assert spot3.details["adhesion"].steps[0].distance == pytest.approx(57e-9, abs=5e-9)

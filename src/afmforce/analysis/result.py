@@ -20,6 +20,7 @@ __all__ = ["AnalysisResult", "SUMMARY_FIELDS"]
 
 #: Summary fields shown in tables: (attribute, label, SI unit).
 SUMMARY_FIELDS: tuple[tuple[str, str, str], ...] = (
+    ("sensitivity_used", "sensitivity used (the forces'; calibration source says which)", "m/V"),
     ("sensitivity", "sensitivity (file or user)", "m/V"),
     ("sensitivity_fit", "sensitivity from the compliance slope", "m/V"),
     ("spring_constant", "spring constant", "N/m"),
@@ -231,7 +232,7 @@ class AnalysisResult:
     details: Mapping[str, Any] = field(default_factory=dict, repr=False)
 
     ARRAYS = ("time", "position", "separation", "deflection", "force", "segment")
-    UNITS = {"sensitivity": "m/V", "sensitivity_fit": "m/V", "spring_constant": "N/m", "adhesion_force": "N",
+    UNITS = {"sensitivity": "m/V", "sensitivity_fit": "m/V", "sensitivity_used": "m/V", "spring_constant": "N/m", "adhesion_force": "N",
              "adhesion_deflection": "m", "adhesion_distance": "m", "adhesion_noise": "N", "rupture_distance": "m",
              "unbinding_steps": "", "indentation": "m", "force_gradient": "N/m", "resonance_frequency": "Hz",
              "shift": "m", "contact_separation": "m", "jump_in_separation": "m", "jump_in_force": "N",
@@ -251,9 +252,16 @@ class AnalysisResult:
             if f.name in self.ARRAYS and not arrays:
                 continue
             out[f.name] = to_jsonable(getattr(self, f.name), use_to_dict=False)
+        out["sensitivity_used"] = to_jsonable(self.sensitivity_used, use_to_dict=False)
         out["units"] = dict(self.UNITS)
         out["details_units"] = {step: units_of(d, self.deflection_unit) for step, d in self.details.items()}
         return out
+
+    @property
+    def sensitivity_used(self) -> float:
+        """The sensitivity the forces were computed with [m/V]: ``sensitivity_fit`` when
+        ``calibration_source`` is ``"fit"``, else ``sensitivity`` (NaN if none)."""
+        return self.sensitivity_fit if self.calibration_source == "fit" else self.sensitivity
 
     def to_json(self, arrays: bool = False, indent: int | None = 2) -> str:
         """The result as JSON text (SI values, units under ``"units"``)."""

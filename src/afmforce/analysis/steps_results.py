@@ -68,9 +68,11 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
     baseline noise, with its position, the last rupture and the unbinding steps.
     """
     st.require("position", step="adhesion")
-    res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma)
-    warn = None
     po = st.details["jumps"].pull_off if "jumps" in st.details else None
+    hard = po is not None and po.found and _kind(st) == "hard"  # the paper's pull-off jump ends the dip
+    res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma,
+                           pull_off=po.index if hard else -1)
+    warn = None
     if (po is not None and po.found and math.isfinite(po.force) and po.force < 0 and math.isfinite(res.force)
             and abs(res.force) < 0.5 * abs(po.force)):
         # both are below zero force; they differ only by the baseline each is measured from

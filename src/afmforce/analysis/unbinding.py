@@ -9,7 +9,7 @@ noise a sample-to-sample estimate misses). With it come its position, the last
 rupture (where the retract comes back to the baseline for good, as a distance
 from the contact point) and the unbinding steps: upward steps of the smoothed
 retract between the deepest point and the last rupture, each larger than
-``nsigma`` noise.
+``nsigma`` noise; on a hard contact the pull-off jump that ends the dip is not one.
 
 This is the adhesion of soft and biological samples (unbinding, tethers) as well
 as of rigid ones; the paper's hard-contact pull-off (:mod:`.jumps`) stays for
@@ -79,7 +79,7 @@ class Adhesion:
 
 
 def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, spring_constant: float, *,
-                     nsigma: float = _A.nsigma, smooth: int | None = None) -> Adhesion:
+                     nsigma: float = _A.nsigma, smooth: int | None = None, pull_off: int = -1) -> Adhesion:
     """The retract's deepest dip below its own baseline, last rupture and unbinding steps.
 
     Parameters
@@ -96,8 +96,14 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
         Multiple of the baseline noise [-].
     smooth : int, optional
         Running-median window for the steps [samples] (default: about 1/400 of the run, at least 3).
+    pull_off : int
+        Sample of the curve at a hard contact's pull-off jump (the jumps step's last contact sample;
+        -1: none). The rise that contains it is the end of the dip, the adhesion itself, not an
+        unbinding step (the Asylum SiN curve in air: its pull-off and the lever's settling after it
+        were counted as one step).
     """
     idx = run.index
+    pull_off = int(np.searchsorted(idx, pull_off)) if pull_off >= 0 and idx[0] <= pull_off <= idx[-1] else -1
     k = spring_constant if math.isfinite(spring_constant) else math.nan
     x, y = position[idx], d[idx]
     free = run.zero_force & ~run.saturated
@@ -136,12 +142,14 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
                 while i + 1 < cand.size and cand[i + 1] - cand[i] <= w:
                     i += 1
                     group.append(cand[i])
+                i += 1
+                if pull_off >= 0 and j + group[0] - w <= pull_off <= j + group[-1] + w:
+                    continue  # the hard contact's pull-off jump (its tail included) ends the dip: not a step of it
                 g = max(group, key=lambda q: rise[q])
                 s_idx = j + g + w
                 steps.append(UnbindingStep(int(idx[min(s_idx, idx.size - 1)]),
                                            float(-x[min(s_idx, x.size - 1)]),
                                            float(rise[g] * (k if math.isfinite(k) else 1.0))))
-                i += 1
     force = depth * k
     unit, scale, val = ("nN", 1e9, force) if math.isfinite(k) else ("nm", 1e9, depth)
     noise_v = sigma * (k if math.isfinite(k) else 1.0)

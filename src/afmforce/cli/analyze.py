@@ -282,7 +282,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         _print_json(result)
     else:
         if len(ok) <= BATCH_CURVES:
-            _print_rows(ok, verbose=args.verbose)
+            _print_rows(ok, verbose=args.verbose, given="user" if args.sensitivity is not None else "file")
         else:
             _print_stats(ok)
         origin = _oscillation_origin(ok)
@@ -346,7 +346,7 @@ def _oscillation_origin(ok):
 
 _COLUMNS = (  # column, header, scale
     ("spring_constant", "k [N/m]", 1.0),
-    ("sensitivity", "sensitivity [nm/V]", 1e9),
+    ("sensitivity_used", "sens. used [nm/V]", 1e9),  # the forces' (file/user or fit: the cell says which)
     ("sensitivity_fit", "sens. fit [nm/V]", 1e9),
     ("adhesion_force", "adhesion [nN]", 1e9),
     ("rupture_distance", "rupture [nm]", 1e9),
@@ -365,15 +365,24 @@ def _fmt(v: float) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.4g}"
 
 
-def _print_rows(ok, verbose: bool = False) -> None:
+def _calibration_tag(row, given: str = "file") -> str:
+    """Which sensitivity the forces used, for the table's cell: `` (fit)`` (the compliance slope) or
+    `` (file)`` / `` (user)`` (the file's, --sensitivity); nothing without a number."""
+    if not math.isfinite(float(row["sensitivity_used"])):
+        return ""
+    return " (fit)" if row["calibration_source"] == "fit" else f" ({given})"
+
+
+def _print_rows(ok, verbose: bool = False, given: str = "file") -> None:
     """One line per curve (small runs), then one short verdict line per curve (``verbose``: in full)."""
     if not len(ok):
         return
     heads = ["file", "contact"] + [h for _, h, _ in _COLUMNS] + ["friction", "dynamic"]
     rows = []
     for _, r in ok.iterrows():
-        vals = [float(r[c]) * s for c, _, s in _COLUMNS]
-        rows.append([r["name"], r["contact_kind"] or "-"] + [_fmt(v) for v in vals]
+        vals = [_fmt(float(r[c]) * s) + (_calibration_tag(r, given) if c == "sensitivity_used" else "")
+                for c, _, s in _COLUMNS]
+        rows.append([r["name"], r["contact_kind"] or "-"] + vals
                     + [r["friction"] or "-", _dynamic_label(r)])
     widths = [max(len(h), *(len(row[i]) for row in rows)) for i, h in enumerate(heads)]
     print("  ".join(h.ljust(w) for h, w in zip(heads, widths)))

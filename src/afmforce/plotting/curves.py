@@ -295,6 +295,10 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
     axes = fig.subplots(2, 2)
     if curve is not None:
         plot_raw(curve, axes[0, 0])
+        if math.isfinite(result.sensitivity_used):  # the table's "sens. used": the one the forces were computed with
+            src = "fit: the compliance slope" if result.calibration_source == "fit" else "the file's or given"
+            axes[0, 0].set_title(f"raw signal (sensitivity used {result.sensitivity_used * 1e9:.4g} nm/V, {src})",
+                                 fontsize="medium")
     else:
         ax = axes[0, 0]
         for seg, label, color, ls in _RUNS:

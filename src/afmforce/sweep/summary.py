@@ -21,7 +21,7 @@ from .results import BatchResult
 __all__ = ["SUMMARY_COLUMNS", "SUMMARY_UNITS", "summary_row", "summary_table", "write_summary", "failures"]
 
 #: Result fields copied into the summary (floats, SI).
-_FLOATS = ("sensitivity", "sensitivity_fit", "spring_constant", "adhesion_force", "adhesion_distance",
+_FLOATS = ("sensitivity_used", "sensitivity", "sensitivity_fit", "spring_constant", "adhesion_force", "adhesion_distance",
            "adhesion_noise", "rupture_distance", "unbinding_steps", "indentation", "force_gradient",
            "resonance_frequency", "shift", "contact_separation",
            "jump_in_separation", "jump_in_force", "jump_in_deflection", "pull_off_force", "pull_off_position",
@@ -35,7 +35,7 @@ _OSC = tuple(f"oscillation_{run}_{what}" for run in ("approach", "retract") for 
 SUMMARY_COLUMNS: dict[str, str] = {
     "item": "int", "source": "str", "name": "str", "file": "str", "curve": "int",
     "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "map_width": "float", "map_height": "float",
-    "deflection_unit": "str",
+    "deflection_unit": "str", "calibration_source": "str",
     **{name: "float" for name in _FLOATS + _OSC},
     "contact_kind": "str", "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str", "error": "str",
 }
@@ -87,7 +87,8 @@ def summary_row(result, curve, *, file: str, index: int, name: str) -> dict[str,
     """The summary of one analysed curve (see :data:`SUMMARY_COLUMNS`)."""
     mx, my, nx, ny = _grid(curve.metadata)
     row: dict[str, Any] = {"name": name, "file": file, "curve": int(index), "map_x": mx, "map_y": my,
-                           "map_nx": nx, "map_ny": ny, "deflection_unit": result.deflection_unit}
+                           "map_nx": nx, "map_ny": ny, "deflection_unit": result.deflection_unit,
+                           "calibration_source": result.calibration_source or None}
     row["map_width"], row["map_height"] = _grid_size(curve.metadata) if mx >= 0 else (math.nan, math.nan)
     row.update({f: float(getattr(result, f, math.nan)) for f in _FLOATS})
     for axis in ("position_x", "position_y"):  # where the map's curve was recorded [m] (NaN: not given)
