@@ -167,7 +167,8 @@ def liquid(st: State, o: LiquidOptions) -> State:
     noise = _robust_std(fs[hs > h_far])
     vmean = 0.5 * (va + vr)
     try:
-        c_fit, beta = velocity_force_fit(hs, fv, vmean, max(10 * o.min_separation, 0.15 * h_far), h_far)
+        c_fit, beta = velocity_force_fit(hs, fv, vmean, max(10 * o.min_separation, 0.25 * h_far),
+                                         float(hs.max()))
     except AnalysisError:
         c_fit = beta = math.nan
     common = dict(medium=o.medium, geometry=o.geometry, double_layer=o.double_layer, viscosity=eta,
