@@ -91,3 +91,17 @@ def test_cli_analyze_liquid_json(tmp_path, capsys):
     assert r["debye_length"] == pytest.approx(10e-9, rel=0.05)
     assert r["units"]["lever_drag"] == "N s/m" and r["details_units"]["liquid"]["surface_potential"] == "V"
     assert raw.deflection_unit == "V"
+
+
+def test_figure_panel_of_a_liquid_curve(tmp_path):
+    from afmforce.plotting.curves import plot_summary
+
+    raw = _record(tmp_path, 1e-6, 2e3, seed=3)
+    res = analyze(raw, steps=["liquid"], options=[OPTS], probe=PROBE)
+    fig = plot_summary(res, raw)
+    ax = fig.axes[2]                       # the lower-left panel: the double layer on a log scale
+    assert ax.get_yscale() == "log" and "DLVO" in ax.get_legend().get_texts()[-2].get_text()
+    fit = [ln for ln in ax.get_lines() if ln.get_label().startswith("DLVO")][0]
+    q = res.details["liquid"]
+    assert np.nanmax(fit.get_ydata()) == pytest.approx(np.max(q.fit_force) * 1e9)
+    fig.savefig(tmp_path / "liquid.png")
