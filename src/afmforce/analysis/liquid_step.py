@@ -156,6 +156,10 @@ def liquid(st: State, o: LiquidOptions) -> State:
         db = drag_baselines(z[ia], d[ia], z[ir], d[ir], far, spring_constant=k, v_app=va, v_ret=vr)
     except AnalysisError as exc:
         return _skip(st, "liquid", str(exc))
+    stuck = [w for w, (_, slope) in (("approach", db.approach), ("retract", db.retract)) if abs(slope) > 0.3]
+    if stuck:  # a free lever barely follows the piezo; in contact d ~ z
+        return _skip(st, "liquid", f"the {' and the '.join(stuck)} is in contact over the far region (deflection "
+                     "follows the piezo: no pull-off within the travel?): no drag baseline; retract further")
     base = 0.5 * (db.approach[0] + db.retract[0] + (db.approach[1] + db.retract[1]) * z)  # zero static force
     force = k * (d - base)
     r_eff = float(effective_radius(radius, o.geometry))
