@@ -95,6 +95,11 @@ def test_cli_analyze_liquid_json(tmp_path, capsys):
     assert r["debye_length"] == pytest.approx(10e-9, rel=0.05)
     assert r["units"]["lever_drag"] == "N s/m" and r["details_units"]["liquid"]["surface_potential"] == "V"
     assert raw.deflection_unit == "V"
+    assert main(["analyze", str(path), "--steps", "liquid", "--medium", "water", "--radius", "5um",
+                 "--option", "liquid.z0=1nm"]) == 0
+    line = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("liquid_3.txt: liquid:")][0]
+    psi = float(line.split("DLVO psi ")[1].split()[0])
+    assert psi == pytest.approx(r["surface_potential"] * 1e3, rel=1e-3) and "Debye length" in line
 
 
 def test_figure_panel_of_a_liquid_curve(tmp_path):

@@ -28,7 +28,7 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping
 
 from .._fields import QUANTITIES, meta, qfield, spec_of
-from ..constants import HAMAKER, Z0
+from ..constants import HAMAKER, MEDIA, Z0
 from ..errors import ParameterError
 
 __all__ = ["ProbeCalibration", "StepOptions", "SmoothOptions", "ContactOptions", "DriftOptions",
@@ -403,7 +403,7 @@ class LiquidOptions(StepOptions):
     step: ClassVar[str] = "liquid"
     medium: str = _opt("none", "choice", "", "medium the curve was measured in (none or air: the step is "
                        "skipped); sets the viscosity and permittivity",
-                       choices=("none", "water", "air", "ethanol", "hexadecane", "glycerol"))
+                       choices=("none", *MEDIA))
     permittivity: float | None = _q("permittivity", None, "relative permittivity (None: the medium's)")
     viscosity: float | None = _q("viscosity", None, "viscosity (None: the medium's)")
     geometry: str = _opt("sphere-flat", "choice", "", "probe geometry (a colloid probe on a flat)",

@@ -25,6 +25,7 @@ from pathlib import Path
 from .. import errors as _errors
 from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
+from ._analyze_liquid import liquid_flags, print_liquid
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
 from ._outcome import reported
 from ._verdicts import MAX_LINE, clip as _clip, dynamic_label as _dynamic_label, plain as _plain, short_verdict
@@ -98,7 +99,7 @@ def register(sub) -> None:
                                   "(the same as --option calibration.source=VALUE; default "),
               lambda: f"{_default('calibration', 'source')})")
     _indentation_flags(p)
-    _liquid_flags(p)
+    liquid_flags(p)
     lazy_help(p.add_argument("--option", action="append", default=[], metavar="STEP.NAME=VALUE",
                              help="any other option of an analysis step, with units (repeatable), e.g. "
                                   "vdw.max_separation=20nm, jumps.nsigma=4, fringes.apply=never "
@@ -119,19 +120,6 @@ def _indentation_flags(p) -> None:
     add_field(g, "half_angle", help="half-angle of a cone, face angle of a pyramid")
     add_field(g, "poisson", default_from=lambda: _default("indentation", "poisson"),
               help="Poisson ratio of the sample")
-
-
-def _liquid_flags(p) -> None:
-    """Short forms of the liquid step's options (docs/liquid.md)."""
-    g = p.add_argument_group("liquid: colloid probe, drag, drainage, DLVO fit (docs/liquid.md; with --radius)")
-    g.add_argument("--medium", default=None, choices=("none", "water", "air", "ethanol", "hexadecane", "glycerol"),
-                   help="medium of the measurement: a liquid runs the liquid step (--option liquid.medium)")
-    add_field(g, "permittivity", help="relative permittivity (default: the medium's)")
-    g.add_argument("--geometry", default=None, choices=("sphere-flat", "sphere-sphere"),
-                   help="probe geometry of the liquid step (default sphere-flat)")
-    g.add_argument("--double-layer", dest="double_layer", default=None,
-                   choices=("weak_overlap", "constant_potential", "constant_charge"),
-                   help="double-layer law of the DLVO fit (default constant_potential)")
 
 
 def _example_names() -> list[str]:
@@ -298,7 +286,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
     else:
         if len(ok) <= BATCH_CURVES:
             _print_rows(ok, verbose=args.verbose)
-            _print_liquid(ok)
+            print_liquid(ok)
         else:
             _print_stats(ok)
         origin = _oscillation_origin(ok)
@@ -431,20 +419,6 @@ def _print_rows(ok, verbose: bool = False) -> None:
         clipped = clipped or line != str(r["verdict"]) or any(_plain(w) != w for w in warnings)
     if clipped:
         print("(short verdicts: --verbose or --json gives them in full)")
-
-
-def _print_liquid(ok) -> None:
-    """One line per curve the liquid step analysed: drag, and the DLVO fit with standard errors."""
-    for _, r in ok.iterrows():
-        if not math.isfinite(float(r["lever_drag"])):
-            continue
-        line = (f"{r['name']}: liquid: drag offset {_fmt(r['drag_offset'] * 1e9)} nm, lever drag "
-                f"{_fmt(r['lever_drag'])} N s/m")
-        if math.isfinite(float(r["surface_potential"])):
-            line += (f"; DLVO psi {_fmt(r['surface_potential'] * 1e3)} +- {_fmt(r['surface_potential_se'] * 1e3)} mV, "
-                     f"Debye length {_fmt(r['debye_length'] * 1e9)} +- {_fmt(r['debye_length_se'] * 1e9)} nm, "
-                     f"A {_fmt(r['dlvo_hamaker'])} +- {_fmt(r['dlvo_hamaker_se'])} J")
-        print(line)
 
 
 def _print_stats(ok) -> None:
