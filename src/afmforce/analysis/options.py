@@ -28,13 +28,14 @@ from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping
 
 from .._fields import QUANTITIES, meta, qfield, spec_of
-from ..constants import HAMAKER, Z0
+from ..constants import HAMAKER, MEDIA, Z0
 from ..errors import ParameterError
 
 __all__ = ["ProbeCalibration", "StepOptions", "SmoothOptions", "ContactOptions", "DriftOptions",
            "FringesOptions", "ComplianceOptions", "CalibrationOptions", "KindOptions", "ShiftOptions",
            "ZeroOptions", "ForceOptions", "JumpsOptions", "AdhesionOptions", "SurfaceEnergyOptions",
-           "VdwOptions", "OscillationOptions", "FrictionOptions", "DiagnosisOptions", "IndentationOptions", "OPTIONS"]
+           "VdwOptions", "OscillationOptions", "FrictionOptions", "DiagnosisOptions", "IndentationOptions",
+           "LiquidOptions", "OPTIONS"]
 
 
 def _opt(default: Any, dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,
@@ -395,8 +396,36 @@ class IndentationOptions(StepOptions):
                                  f"{', '.join(INDENTATION_MODELS)}")
 
 
+@dataclass(frozen=True)
+class LiquidOptions(StepOptions):
+    """Colloid-probe curves in a liquid (docs/liquid.md): quadratic compliance, drag, drainage, DLVO fit."""
+
+    step: ClassVar[str] = "liquid"
+    medium: str = _opt("none", "choice", "", "medium the curve was measured in (none or air: the step is "
+                       "skipped); sets the viscosity and permittivity",
+                       choices=("none", *MEDIA))
+    permittivity: float | None = _q("permittivity", None, "relative permittivity (None: the medium's)")
+    viscosity: float | None = _q("viscosity", None, "viscosity (None: the medium's)")
+    geometry: str = _opt("sphere-flat", "choice", "", "probe geometry (a colloid probe on a flat)",
+                         choices=("sphere-flat", "sphere-sphere"))
+    double_layer: str = _opt("constant_potential", "choice", "", "double-layer law fitted",
+                             choices=("weak_overlap", "constant_potential", "constant_charge"))
+    potential_sign: str = _opt("negative", "choice", "", "sign of the (symmetric) surface potential: the "
+                               "force gives only its magnitude", choices=("negative", "positive"))
+    far_fraction: float = _frac(0.3, "part of the approach travel (farthest out) taken as the far baseline")
+    contact_separation: float = _opt(0.0, "length", "m", "separation given to the compliance line", lo=0.0,
+                                     hi=1e-8)
+    min_separation: float = _opt(2e-9, "length", "m", "smallest separation of the DLVO fit", lo=0.0, hi=1e-6)
+    max_separation: float | None = _opt(None, "length", "m", "largest separation of the DLVO fit (None: ten "
+                                        "Debye lengths of the first estimate, within the far region)", lo=0.0,
+                                        hi=1e-5, lo_open=True)
+    z0: float = _q("z0", Z0, "van der Waals cut-off z0 of the DLVO fit")
+    nsigma: float = _nsigma(3.0, "double-layer repulsion threshold in multiples of the static force noise")
+
+
 #: Step identifier -> its options class (the registry's records point here).
 OPTIONS: dict[str, type[StepOptions]] = {c.step: c for c in (
     SmoothOptions, ContactOptions, DriftOptions, FringesOptions, ComplianceOptions, CalibrationOptions,
     KindOptions, ShiftOptions, ZeroOptions, ForceOptions, JumpsOptions, AdhesionOptions, SurfaceEnergyOptions,
-    VdwOptions, OscillationOptions, FrictionOptions, DiagnosisOptions, IndentationOptions)}
+    VdwOptions, OscillationOptions, FrictionOptions, DiagnosisOptions, IndentationOptions,
+    LiquidOptions)}

@@ -29,6 +29,7 @@ from . import options as O
 from . import steps as S
 from .contact_point import CONTACT_POINT_METHODS
 from .indentation import indentation
+from .liquid_step import liquid
 from .options_text import show_default
 from .plausibility import plausibility_warnings
 from .result import AnalysisResult
@@ -108,6 +109,8 @@ STEPS: dict[str, Step] = {s.identifier: s for s in (
          "Hertz, Sneddon, Bilodeau, Dimitriadis, JKR, DMT, Maugis (docs/contact.md); checked against nanite"),
     Step("diagnosis", "Dynamic diagnosis: inertia parameter, lag, jump-in distance", S.diagnosis,
          O.DiagnosisOptions, ("jumps", "adhesion", "vdw", "friction"), "eqs 3, 4; sections 2.3, 3.2"),
+    Step("liquid", "Colloid probe in a liquid: quadratic compliance, lever drag, drainage vs static force, DLVO fit",
+         liquid, O.LiquidOptions, (), "Attard, arXiv 1212.3019 (2012); Vinogradova et al., RSI 72, 2330 (2001)"),
 )}
 
 #: Steps run when none are named: all of them.
@@ -348,6 +351,11 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
                   youngs_modulus_low=i.youngs_modulus_low, youngs_modulus_high=i.youngs_modulus_high,
                   contact_point=i.contact_point, work_of_adhesion=i.work_of_adhesion,
                   work_of_adhesion_se=i.work_of_adhesion_se)
+    if "liquid" in d:
+        q = d["liquid"]
+        kw.update(drag_offset=q.drag_offset, lever_drag=q.lever_drag, surface_potential=q.surface_potential,
+                  surface_potential_se=q.surface_potential_se, debye_length=q.debye_length,
+                  debye_length_se=q.debye_length_se, dlvo_hamaker=q.hamaker, dlvo_hamaker_se=q.hamaker_se)
     kw["not_applicable"] = dict(st.skipped)
     full = lambda a: a if a is not None else st.z * nan  # noqa: E731
     return AnalysisResult(

@@ -48,6 +48,11 @@ SUMMARY_FIELDS: tuple[tuple[str, str, str], ...] = (
     ("youngs_modulus_se", "its standard error", "Pa"),
     ("contact_point", "contact point (indentation fit; piezo position)", "m"),
     ("work_of_adhesion", "work of adhesion (JKR, DMT, Maugis fit)", "J/m^2"),
+    ("drag_offset", "drag offset (approach - retract far out; liquid)", "m"),
+    ("lever_drag", "lever drag (liquid)", "N s/m"),
+    ("surface_potential", "surface potential (DLVO fit)", "V"),
+    ("debye_length", "Debye length (DLVO fit)", "m"),
+    ("dlvo_hamaker", "Hamaker constant (DLVO fit)", "J"),
 )
 
 
@@ -157,6 +162,11 @@ class AnalysisResult:
         Piezo position at contact from the indentation fit [m].
     work_of_adhesion, work_of_adhesion_se : float
         w from an adhesive model (JKR, DMT, Maugis) [J/m^2].
+    drag_offset, lever_drag : float
+        Liquid curves (step ``liquid``): approach minus retract far-field deflection [m] and the
+        lever drag from it and the speed [N s/m].
+    surface_potential, surface_potential_se, debye_length, debye_length_se, dlvo_hamaker, dlvo_hamaker_se : float
+        The DLVO fit of the static force: psi [V], 1/kappa [m], A [J] and standard errors.
     warnings : tuple of str
     time, position, separation, deflection, force : ndarray
         Per sample [s], [m], [m], [m], [N].
@@ -221,6 +231,14 @@ class AnalysisResult:
     contact_point: float = math.nan
     work_of_adhesion: float = math.nan
     work_of_adhesion_se: float = math.nan
+    drag_offset: float = math.nan
+    lever_drag: float = math.nan
+    surface_potential: float = math.nan
+    surface_potential_se: float = math.nan
+    debye_length: float = math.nan
+    debye_length_se: float = math.nan
+    dlvo_hamaker: float = math.nan
+    dlvo_hamaker_se: float = math.nan
     warnings: tuple[str, ...] = ()
     not_applicable: Mapping[str, str] = field(default_factory=dict)
     time: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
@@ -242,7 +260,9 @@ class AnalysisResult:
              "hamaker_radius_se": "J m", "hamaker": "J", "hamaker_se": "J", "oscillation_frequency": "Hz",
              "velocity": "m/s", "inertia_parameter": "", "youngs_modulus": "Pa", "youngs_modulus_se": "Pa",
              "youngs_modulus_low": "Pa", "youngs_modulus_high": "Pa", "contact_point": "m",
-             "work_of_adhesion": "J/m^2", "work_of_adhesion_se": "J/m^2", "time": "s", "position": "m", "separation": "m",
+             "work_of_adhesion": "J/m^2", "work_of_adhesion_se": "J/m^2", "drag_offset": "m", "lever_drag": "N s/m",
+             "surface_potential": "V", "surface_potential_se": "V", "debye_length": "m", "debye_length_se": "m",
+             "dlvo_hamaker": "J", "dlvo_hamaker_se": "J", "time": "s", "position": "m", "separation": "m",
              "deflection": "m", "force": "N"}
 
     def to_dict(self, arrays: bool = False) -> dict[str, Any]:

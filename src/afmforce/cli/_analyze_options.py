@@ -28,7 +28,9 @@ def option_names() -> str:
 #: Dedicated flags that set a step option: dest -> (step, option).
 _OPTION_FLAGS = {"contact_separation": ("zero", "contact_separation"), "calibration": ("calibration", "source"),
                  "indentation_model": ("indentation", "model"), "tip_radius": ("indentation", "tip_radius"),
-                 "half_angle": ("indentation", "half_angle"), "poisson": ("indentation", "poisson")}
+                 "half_angle": ("indentation", "half_angle"), "poisson": ("indentation", "poisson"),
+                 "medium": ("liquid", "medium"), "permittivity": ("liquid", "permittivity"),
+                 "geometry": ("liquid", "geometry"), "double_layer": ("liquid", "double_layer")}
 
 
 def step_options(args: argparse.Namespace) -> tuple:

@@ -24,6 +24,7 @@ from pathlib import Path
 
 from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
+from ._analyze_liquid import liquid_flags, print_liquid
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
 from ._outcome import reported
 from ._verdicts import MAX_LINE, clip as _clip, dynamic_label as _dynamic_label, plain as _plain, short_verdict
@@ -97,6 +98,7 @@ def register(sub) -> None:
                                   "(the same as --option calibration.source=VALUE; default "),
               lambda: f"{_default('calibration', 'source')})")
     _indentation_flags(p)
+    liquid_flags(p)
     lazy_help(p.add_argument("--option", action="append", default=[], metavar="STEP.NAME=VALUE",
                              help="any other option of an analysis step, with units (repeatable), e.g. "
                                   "vdw.max_separation=20nm, jumps.nsigma=4, fringes.apply=never "
@@ -283,6 +285,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
     else:
         if len(ok) <= BATCH_CURVES:
             _print_rows(ok, verbose=args.verbose, given="user" if args.sensitivity is not None else "file")
+            print_liquid(ok)
         else:
             _print_stats(ok)
         origin = _oscillation_origin(ok)

@@ -309,7 +309,12 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
         ax.legend(fontsize="small")
     plot_force_separation(result, axes[0, 1])
     fit = result.details.get("vdw")
-    if "indentation" in result.details:  # a soft contact's modulus fit: force vs indentation (issue 26)
+    liquid = result.details.get("liquid")
+    if liquid is not None and liquid.fit_force.size:  # a colloid probe in a liquid: the DLVO fit (issue 25)
+        from .liquid import plot_liquid
+
+        plot_liquid(result, axes[1, 0])
+    elif "indentation" in result.details:  # a soft contact's modulus fit: force vs indentation (issue 26)
         from .indentation import plot_indentation
 
         plot_indentation(result, axes[1, 0])

@@ -28,7 +28,9 @@ _FLOATS = ("sensitivity_used", "sensitivity", "sensitivity_fit", "spring_constan
            "jump_out_distance", "surface_energy", "radius", "hamaker_radius", "hamaker_radius_se", "hamaker",
            "hamaker_se", "oscillation_frequency", "velocity", "inertia_parameter",
            "youngs_modulus", "youngs_modulus_se", "youngs_modulus_low", "youngs_modulus_high", "contact_point",
-           "work_of_adhesion", "work_of_adhesion_se", "position_x", "position_y")
+           "work_of_adhesion", "work_of_adhesion_se", "position_x", "position_y",
+           "drag_offset", "lever_drag", "surface_potential", "surface_potential_se", "debye_length",  # liquid
+           "debye_length_se", "dlvo_hamaker", "dlvo_hamaker_se")
 _OSC = tuple(f"oscillation_{run}_{what}" for run in ("approach", "retract") for what in ("frequency", "velocity"))
 
 #: Columns of the summary table and their types (``int``: -1 where not a map).

@@ -1,0 +1,41 @@
+"""``afmforce analyze``: the liquid step's flags and its line under the table (docs/liquid.md)."""
+
+from __future__ import annotations
+
+import math
+
+from ..constants import MEDIA
+from ._validate import add_field
+
+__all__ = ["liquid_flags", "print_liquid"]
+
+
+def fmt(v: float) -> str:
+    return "-" if v is None or not math.isfinite(v) else f"{v:.4g}"
+
+
+def liquid_flags(p) -> None:
+    """Short forms of the liquid step's options (docs/liquid.md)."""
+    g = p.add_argument_group("liquid: colloid probe, drag, drainage, DLVO fit (docs/liquid.md; with --radius)")
+    g.add_argument("--medium", default=None, choices=("none", *MEDIA),
+                   help="medium of the measurement: a liquid runs the liquid step (--option liquid.medium)")
+    add_field(g, "permittivity", help="relative permittivity (default: the medium's)")
+    g.add_argument("--geometry", default=None, choices=("sphere-flat", "sphere-sphere"),
+                   help="probe geometry of the liquid step (default sphere-flat)")
+    g.add_argument("--double-layer", dest="double_layer", default=None,
+                   choices=("weak_overlap", "constant_potential", "constant_charge"),
+                   help="double-layer law of the DLVO fit (default constant_potential)")
+
+
+def print_liquid(ok) -> None:
+    """One line per curve the liquid step analysed: drag, and the DLVO fit with standard errors."""
+    for _, r in ok.iterrows():
+        if not math.isfinite(float(r["lever_drag"])):
+            continue
+        line = (f"{r['name']}: liquid: drag offset {fmt(r['drag_offset'] * 1e9)} nm, lever drag "
+                f"{fmt(r['lever_drag'])} N s/m")
+        if math.isfinite(float(r["surface_potential"])):
+            line += (f"; DLVO psi {fmt(r['surface_potential'] * 1e3)} +- {fmt(r['surface_potential_se'] * 1e3)} mV, "
+                     f"Debye length {fmt(r['debye_length'] * 1e9)} +- {fmt(r['debye_length_se'] * 1e9)} nm, "
+                     f"A {fmt(r['dlvo_hamaker'])} +- {fmt(r['dlvo_hamaker_se'])} J")
+        print(line)
