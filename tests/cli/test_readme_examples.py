@@ -22,6 +22,8 @@ from afmforce.cli.main import build_parser, main
 
 README = Path(__file__).resolve().parents[2] / "README.md"
 SLOW = ("fit", "plan", "sweep", "explore", "reproduce", "demo")
+#: Commands that run until stopped (a server): parsed only, even with AFMFORCE_README_FULL=1.
+SERVERS = ("serve",)
 FULL = os.environ.get("AFMFORCE_README_FULL") == "1"
 
 
@@ -44,6 +46,9 @@ def test_the_readme_shows_every_command_with_runnable_examples():
 def test_every_readme_command_runs_as_written(tmp_path, monkeypatch, capsys):
     monkeypatch.chdir(tmp_path)
     for argv in readme_commands():
+        if argv[0] in SERVERS:
+            build_parser(argv[0]).parse_args(argv)  # a usage error would raise SystemExit
+            continue
         if argv[0] in SLOW and not FULL:
             args = build_parser(argv[0]).parse_args(argv)  # a usage error would raise SystemExit
             files = [Path(f) for f in args.curves] if argv[0] == "fit" else []
