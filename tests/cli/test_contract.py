@@ -114,7 +114,15 @@ PER_COMMAND = {
     "formats": ["--no-such-flag"],
     "fit": ["--example", "speeds", "--level", "2"],
     "plan": ["--speeds", "1e9um/s"],
+    "serve": ["--max-upload", "0MB"],
 }
+
+
+@pytest.mark.parametrize("argv", [["serve", "--port", "70000"], ["serve", "--budget", "-1"],
+                                  ["serve", "--max-upload", "lots"]])
+def test_serve_refuses_bad_values_before_listening(argv, odd_files, capsys, monkeypatch):
+    monkeypatch.chdir(odd_files)
+    check_error(capsys, argv, 2)
 
 
 def test_every_command_is_covered():

@@ -29,8 +29,15 @@ def register(sub) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
+    import math
     import socket
 
+    from ..errors import ParameterError
+
+    if not 0 <= args.port <= 65535:
+        raise ParameterError(f"--port {args.port} is out of range: give 0 (any free port) to 65535")
+    if not (math.isfinite(args.budget) and args.budget > 0):
+        raise ParameterError(f"--budget {args.budget} s is out of range: give a time > 0 s")
     import uvicorn
 
     from ..web import create_app
