@@ -126,6 +126,37 @@ def _ramp(curve: RawCurve, idx: np.ndarray) -> dict:
     return out
 
 
+def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, dict]:
+    """The approach's piezo position [m] and how it was chosen.
+
+    The channel is chosen as the analysis chooses it (:func:`afmforce.analysis.state.prepare`,
+    ``channel="auto"``): the measured (sensor) position when the file has one, else the
+    nominal (commanded) one. The nominal position of a piezo without closed-loop control is
+    not the true one (hysteresis, creep: a 10 % nonlinearity shifts the zero of position by
+    nanometres and bends the ramp); the model is driven at constant speed in true position,
+    so with a measured channel the fit takes the robust line through the measured positions
+    in time (sensor steps and noise removed) and its slope as the speed
+    (:func:`afmforce.analysis.dynamic.run_velocity`).
+    """
+    from ..analysis.dynamic import run_velocity
+    from ..analysis._numeric import robust_line_thin
+    from ..analysis.state import prepare
+
+    try:
+        channel = prepare(curve).channel
+    except AnalysisError:      # e.g. an approach-only file: the analysis needs both runs
+        channel = "measured" if curve.piezo_measured is not None else "nominal"
+    if channel != "measured":
+        return np.asarray(curve.piezo_nominal, float)[idx], {"channel": "nominal"}
+    t = np.asarray(curve.time, float)[idx]
+    zm = np.asarray(curve.piezo_measured, float)[idx]
+    a, b, *_ = robust_line_thin(t - t[0], zm)
+    v = run_velocity(t, zm)
+    dev = float(np.max(np.abs(zm - (a + b * (t - t[0])))))
+    return zm, {"channel": "measured", "velocity": v, "deviation": dev,
+                "line": lambda tt: a + b * np.asarray(tt, float)}
+
+
 def _noise_sigma(y: np.ndarray) -> float:
     """White-noise rms from second differences (var = 6 sigma^2), outliers beyond 4 MADs dropped."""
     d = np.diff(y, 2)
@@ -166,19 +197,31 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
         raise AnalysisError(f"{name}: only {idx.size} approach samples; the fit needs >= 30")
     idx = idx[: np.flatnonzero(np.diff(idx) != 1)[0] + 1] if np.any(np.diff(idx) != 1) else idx
     ramp = _ramp(curve, idx)
-    from_ramp = velocity is None and not (curve.metadata or {}).get("velocity") and ramp["velocity"]
-    v = _meta_value(curve, "velocity", velocity if velocity is not None else
-                    (ramp["velocity"] if from_ramp else None), name, "m/s")
+    z, channel_note = _position(curve, idx, name)
+    v_meas = channel_note.get("velocity") if velocity is None else None
+    if v_meas is not None and not (math.isfinite(v_meas) and v_meas > 0):
+        v_meas = None
+    from_ramp = (velocity is None and v_meas is None and not (curve.metadata or {}).get("velocity")
+                 and ramp["velocity"])
+    v = _meta_value(curve, "velocity", velocity if velocity is not None else v_meas if v_meas
+                    else (ramp["velocity"] if from_ramp else None), name, "m/s")
+    v_file = (curve.metadata or {}).get("velocity")
+    if v_meas and v_file and abs(v_meas / float(v_file) - 1.0) > 0.02:
+        channel_note["speed_note"] = (
+            f"{name}: the measured position moves at {v_meas * 1e6:.4g} um/s, the file says "
+            f"{float(v_file) * 1e6:.4g} um/s (piezo gain or nonlinearity); the fit uses the measured "
+            "speed (give --velocities to override)")
     fs = _meta_value(curve, "sample_rate", sample_rate if sample_rate is not None else
                      (None if (curve.metadata or {}).get("sample_rate") else ramp["sample_rate"]),
                      name, "Hz")
     t = np.asarray(curve.time, float)[idx]
-    z = np.asarray(curve.piezo_nominal, float)[idx]
     y = np.asarray(curve.deflection_signal, float)[idx] * scale
     t = t - t[0]
     n = len(t)
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
         raise FileFormatError(f"{name}: the approach contains NaN or infinite values")
+    if channel_note.get("line") is not None:   # the measured channel: the true drive line
+        z = channel_note.pop("line")(t)
     # constant compliance: the rising tail where the deflection follows z
     dy, dz = np.diff(y), np.diff(z)
     i_c = n - 1
@@ -225,6 +268,9 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
                   guess={"shift": shift, "offset": float(offset), "drift": float(drift),
                          "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
                   metadata=dict(curve.metadata or {}))
+    fc.metadata["position_channel"] = channel_note["channel"]
+    if channel_note.get("speed_note"):
+        fc.metadata["velocity_from_ramp"] = channel_note["speed_note"]
     if from_ramp:
         fc.metadata["velocity_from_ramp"] = (
             f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp "
@@ -256,7 +302,14 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
         raise AnalysisError(f"{fc.name}: only {ridx.size} retract samples; the fit needs >= 30")
     t0 = float(np.asarray(curve.time, float)[idx[0]])
     tr = np.asarray(curve.time, float)[ridx] - t0
-    zr = np.asarray(curve.piezo_nominal, float)[ridx]
+    if fc.metadata.get("position_channel") == "measured":   # the same channel as the approach
+        from ..analysis._numeric import robust_line_thin
+
+        zm = np.asarray(curve.piezo_measured, float)[ridx]
+        a, b, *_ = robust_line_thin(tr - tr[0], zm)
+        zr = a + b * (tr - tr[0])
+    else:
+        zr = np.asarray(curve.piezo_nominal, float)[ridx]
     yr = np.asarray(curve.deflection_signal, float)[ridx] * scale
     if not (np.all(np.isfinite(yr)) and np.all(np.isfinite(zr)) and np.all(np.diff(tr) > 0)):
         raise FileFormatError(f"{fc.name}: the retract contains NaN/infinite values or "
