@@ -200,7 +200,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Bad parameters, a speed-dependent parameter with all curves at one
         speed, uncalibrated or inconsistent curves, a curve without contact.
     """
-    from .uncertainty import compare_models, profile_interval
+    from .adequacy import adequacy, undetermined_verdict
+    from .uncertainty import compare_models, fit_nested, profile_interval
 
     t0 = time.perf_counter()
     if not 0.5 < level < 1.0:
@@ -244,6 +245,15 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         if best is None or chi2 < best[0]:
             best = (chi2, x, res)
     chi2, x, res = best
+    nested_fits = None
+    if compare:   # nested models: the richer one restarts from the nested optimum if that is lower
+        nested_fits = fit_nested(prob, x, fc, base, drift, max_nfev,
+                                 starts=[nested[1]] if nested is not None else ())
+        nf = nested_fits["no_friction"]
+        if nf is not None and nf[0] < chi2:
+            x2, res2 = local_fit(prob, nf[1], max_nfev)
+            c2 = prob.chi2(x2)
+            chi2, x, res = (c2, x2, res2) if c2 <= nf[0] else (nf[0], nf[1], res)
     redchi = chi2 / dof
     J = prob.jacobian(x)
     cov = _covariance(J, max(redchi, 1.0))
@@ -252,9 +262,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     warns = [c.metadata["velocity_from_ramp"] for c in fc if c.metadata.get("velocity_from_ramp")]
     if ev.failures:
         warns.append(f"{ev.failures} trial simulations failed during the fit (last: {ev.last_error})")
-    if redchi > 2.0:
-        warns.append(f"reduced chi-square {redchi:.3g} > 2: the model does not describe the "
-                     "data within their noise; intervals are scaled by it but may be optimistic")
+    adq = adequacy(prob, x, dof, chi2, fc)
+    if not adq["adequate"]:
+        warns.append(f"reduced chi-square {redchi:.3g} > {adq['threshold']:.3g} (the "
+                     f"{adq['quantile']:.1%} quantile, noise estimate's spread included): the model "
+                     "does not describe the data within their noise; no verdict on friction, and "
+                     "the intervals (scaled by it) may be optimistic. " + "; ".join(adq["worst"]))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov)))
     g = len(free)
@@ -267,29 +280,36 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     params = {}
     for j, name in enumerate(free):
         p = PARAMETERS[name]
-        params[name] = Estimate(values[name], float(sd[j]),
-                                wald_interval(values[name], float(sd[j]), level, p.lower, p.upper),
-                                "wald", p.unit)
+        iv, note = wald_interval(values[name], float(sd[j]), level, p.lower, p.upper,
+                                 p.physical_lower)
+        params[name] = Estimate(values[name], float(sd[j]), iv, "wald", p.unit,
+                                f"{name}: {note}" if note else "")
     profiles = {}
     todo = [n for n in (profile if profile is not None else ("hamaker", "radius", "xi"))
             if n in free]
     for name in todo:
-        lo, hi, pts = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
-                                       max(redchi, 1.0), level)
+        lo, hi, pts, note = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
+                                             max(redchi, 1.0), level)
         params[name].interval, params[name].interval_method = (lo, hi), "profile"
+        params[name].note = note
         profiles[name] = pts
+    for e in params.values():
+        if e.note:
+            warns.append(e.note)
     derived = {}
     if "hamaker" in free or "radius" in free:
         name = "hamaker" if "hamaker" in free else "radius"
         other = base.radius if name == "hamaker" else base.hamaker
         e = params[name]
-        derived["hamaker_radius"] = Estimate(e.value * other, e.stderr * other,
-                                             (e.interval[0] * other, e.interval[1] * other),
-                                             e.interval_method, "J m")
+        derived["hamaker_radius"] = Estimate(
+            e.value * other, e.stderr * other,
+            tuple(None if v is None else v * other for v in e.interval),
+            e.interval_method, "J m", e.note)
     comparison = None
     if compare:
-        comparison = compare_models(prob, x, chi2, fc, base, drift, level, max_nfev, warns,
-                                    max(redchi, 1.0))
+        comparison = compare_models(prob, x, chi2, fc, base, drift, level, max(redchi, 1.0),
+                                    nested_fits, None if adq["adequate"]
+                                    else undetermined_verdict(adq))
     coefs = prob.linear_coefficients(x)
     cfits = []
     for i, c in enumerate(fc):
@@ -304,6 +324,6 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     return FitResult(model=base.model, free=free, parameters=params, derived=derived,
                      correlations=correlations, curves=cfits, chi2=chi2, dof=dof, redchi=redchi,
                      n_data=n_data, level=level, comparison=comparison, profiles=profiles,
-                     warnings=warns, model_evaluations=ev.simulations,
+                     warnings=warns, model_evaluations=ev.simulations, adequacy=adq,
                      wall_time=time.perf_counter() - t0, success=bool(res.success),
                      message=str(res.message), config=cfg, _problem=prob, _x=x)

@@ -62,6 +62,9 @@ class FitCurve:
         approach and retract drive lines); NaN for an approach only.
     retract_velocity : float
         Retract speed [m/s] (NaN for an approach only).
+    noise_samples : int
+        Samples the noise estimate ``sigma`` rests on (its relative uncertainty
+        in sigma^2 is about ``2 / sqrt(noise_samples)``; see docs/fit.md).
     """
 
     name: str
@@ -79,6 +82,7 @@ class FitCurve:
     turn_time: float = math.nan
     turn_position: float = math.nan
     retract_velocity: float = math.nan
+    noise_samples: int = 0
 
     @property
     def n(self) -> int:
@@ -245,7 +249,8 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     # the apparent deflection of a tilting beam held back by friction)
     j = int(np.argmax(np.abs(dy[: max(i_c, 1)]))) + 1 if i_c > 1 else 1
     j = min(j, i_c)
-    sigma = max(_noise_sigma(y[: max(12, int(0.8 * j))]), 1e-15)
+    n_noise = max(12, int(0.8 * j))
+    sigma = max(_noise_sigma(y[:n_noise]), 1e-15)
     j_drop = int(np.argmin(dy[: max(j, 1)])) + 1
     if j_drop < j and -dy[j_drop - 1] > 8 * sigma and j - j_drop <= 3 + jump_window * fs:
         j = j_drop          # the drop of the jump-in came first, then the spike
@@ -264,7 +269,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     post = slice(min(max(j, i_c) + win + 2, n - 3), n)
     shift = float(np.median(z[post] - ybl[post]))
     fc = FitCurve(name=name, time=t, position=z, deflection=y, velocity=v, sample_rate=fs,
-                  sigma=sigma, jump_index=j, mask=mask,
+                  sigma=sigma, jump_index=j, mask=mask, noise_samples=min(n_noise, n) - 2,
                   guess={"shift": shift, "offset": float(offset), "drift": float(drift),
                          "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
                   metadata=dict(curve.metadata or {}))
@@ -348,7 +353,7 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
         sample_rate=fc.sample_rate, sigma=fc.sigma, jump_index=fc.jump_index,
         mask=np.concatenate([mask, mask_r]), guess=fc.guess, metadata=fc.metadata,
         retract_start=n_app, turn_time=float(t_turn), turn_position=float(za + va * t_turn),
-        retract_velocity=float(-vr))
+        retract_velocity=float(-vr), noise_samples=fc.noise_samples)
 
 
 def check_consistent(curves: Sequence[RawCurve], names: Sequence[str]) -> None:
