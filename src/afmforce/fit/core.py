@@ -125,6 +125,31 @@ def _ridge(problem: Problem, guess: dict, shifts, max_nfev: int) -> list[tuple[f
     return out
 
 
+def _search(prob: Problem, guess: dict, shifts0, starts: int, max_nfev: int, dof: int,
+            extra=()) -> tuple:
+    """Multi-start: the ridge's best points (xi free), ``extra`` vectors, then scan starts
+    while the best fit looks stuck. Returns ``(chi2, x, lmfit result, nested)``, ``nested``
+    the ridge's xi = 0 point ``(chi2, x)`` (None without xi)."""
+    best, nested = None, None
+    first: list[np.ndarray] = list(extra)
+    if "xi" in prob.free:   # follow the A*R-xi valley first; its best points start the local fits
+        ridge = _ridge(prob, guess, shifts0, RIDGE_NFEV)
+        nested = ridge[0]
+        first += [x0 for _, x0 in sorted(ridge, key=lambda r: r[0])[:max(starts, 1)]]
+        # the richer model starts from the nested optimum too, so chi2(friction) <= chi2(none)
+        first.append(nested[1])
+    scan = _starts(prob, guess, shifts0)
+    todo = first + scan[: 2 * max(starts, 1) + 2]
+    for k, x0 in enumerate(todo):
+        if k >= max(len(first), max(starts, 1)) and best[0] / dof < STUCK_REDCHI:
+            break    # multi-start: the ridge's best points, more scan starts while they look stuck
+        x, res = local_fit(prob, x0, max_nfev)
+        chi2 = prob.chi2(x)
+        if best is None or chi2 < best[0]:
+            best = (chi2, x, res)
+    return (*best, nested)
+
+
 def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
     JTJ = J.T @ J
     try:
@@ -140,7 +165,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 starts: int = 2, level: float = 0.95, profile: Sequence[str] | None = None,
                 compare: bool = True, jump_window: float = 2e-3,
                 max_nfev: int = 40, sampling: str | None = "average",
-                retract: bool = False) -> FitResult:
+                retract: bool = False, noise: str = "auto") -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -190,6 +215,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         without a pause): the outward compliance line and its hysteresis carry
         friction, the pull-off (and ``jump_window`` after it) is left out.
 
+    noise : {"auto", "white"}
+        ``auto``: after a first fit, estimate 1/f detector noise from the residuals of
+        the free approach and, where it is significant, refit with the whitened
+        residuals (generalised least squares; :mod:`afmforce.fit.noise`).
+        ``white``: white noise only (the noise rms of each curve from second differences).
+
     Returns
     -------
     FitResult
@@ -201,9 +232,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         speed, uncalibrated or inconsistent curves, a curve without contact.
     """
     from .adequacy import adequacy, undetermined_verdict
+    from .noise import PINK_SIGNIFICANCE, estimate_pink, set_noise_model
     from .uncertainty import compare_models, fit_nested, profile_interval
 
     t0 = time.perf_counter()
+    if noise not in ("auto", "white"):
+        raise ParameterError(f"noise must be 'auto' or 'white', got {noise!r}")
     if not 0.5 < level < 1.0:
         raise ParameterError(f"level must lie between 0.5 and 1, got {level!r}")
     base = base_config(model, **dict(fixed or {}))
@@ -227,24 +261,13 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     n_data = sum(int(c.mask.sum()) for c in fc)
     n_par = len(shifts0) + len(free) + ev.n_linear()
     dof = max(n_data - n_par, 1)
-    best, nested = None, None
-    first: list[np.ndarray] = []
-    if "xi" in free:   # follow the A*R-xi valley first; its best points start the local fits
-        ridge = _ridge(prob, guess, shifts0, RIDGE_NFEV)
-        nested = ridge[0]
-        first = [x0 for _, x0 in sorted(ridge, key=lambda r: r[0])[:max(starts, 1)]]
-        # the richer model starts from the nested optimum too, so chi2(friction) <= chi2(none)
-        first.append(nested[1])
-    scan = _starts(prob, guess, shifts0)
-    todo = first + scan[: 2 * max(starts, 1) + 2]
-    for k, x0 in enumerate(todo):
-        if k >= max(len(first), max(starts, 1)) and best[0] / dof < STUCK_REDCHI:
-            break    # multi-start: the ridge's best points, more scan starts while they look stuck
-        x, res = local_fit(prob, x0, max_nfev)
-        chi2 = prob.chi2(x)
-        if best is None or chi2 < best[0]:
-            best = (chi2, x, res)
-    chi2, x, res = best
+    chi2, x, res, nested = _search(prob, guess, shifts0, starts, max_nfev, dof)
+    s2p, signif = estimate_pink(prob, x, drift) if noise == "auto" else (0.0, 0.0)
+    if signif > PINK_SIGNIFICANCE:   # 1/f noise: search again with the whitened residuals
+        set_noise_model(fc, s2p)
+        vals, sh = prob.unpack(x)
+        chi2, x, res, nested = _search(prob, {**guess, **vals}, list(sh), starts, max_nfev, dof,
+                                       extra=[x])
     nested_fits = None
     if compare:   # nested models: the richer one restarts from the nested optimum if that is lower
         nested_fits = fit_nested(prob, x, fc, base, drift, max_nfev,
@@ -318,7 +341,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                               float(shifts[i]), float(sd[g + i]), float(coefs[i][0]),
                               float(coefs[i][1]), float(r @ r),
                               float(np.sqrt(np.mean(r ** 2))) * c.sigma,
-                              c.retract_start is not None))
+                              c.retract_start is not None, float(c.pink)))
     cfg = {k: v for k, v in base.to_dict().items()
            if k not in ("velocity", "sample_rate", "start", "turn", "end")}
     return FitResult(model=base.model, free=free, parameters=params, derived=derived,

@@ -83,6 +83,10 @@ class FitCurve:
     turn_position: float = math.nan
     retract_velocity: float = math.nan
     noise_samples: int = 0
+    #: rms of the 1/f noise [m] (0: white noise only; see afmforce.fit.noise)
+    pink: float = 0.0
+    #: Cholesky factor of the noise covariance on the fitted samples [m] (None: white)
+    noise_chol: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -274,6 +278,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
                          "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
                   metadata=dict(curve.metadata or {}))
     fc.metadata["position_channel"] = channel_note["channel"]
+    fc.metadata["record_samples"] = int(np.asarray(curve.time).size)
     if channel_note.get("speed_note"):
         fc.metadata["velocity_from_ramp"] = channel_note["speed_note"]
     if from_ramp:

@@ -174,8 +174,14 @@ class Evaluator:
         m = c.mask
         if model is None or not np.all(np.isfinite(model[m])):
             return np.full(int(m.sum()), FAILED_RESIDUAL), np.full(3, math.nan)
-        X = self.design(i)[m] / c.sigma
-        b = (c.deflection[m] - model[m]) / c.sigma
+        if c.noise_chol is not None:     # correlated noise: whiten (afmforce.fit.noise)
+            from scipy.linalg import solve_triangular
+
+            X = solve_triangular(c.noise_chol, self.design(i)[m], lower=True)
+            b = solve_triangular(c.noise_chol, c.deflection[m] - model[m], lower=True)
+        else:
+            X = self.design(i)[m] / c.sigma
+            b = (c.deflection[m] - model[m]) / c.sigma
         coef, *_ = np.linalg.lstsq(X, b, rcond=None)
         r = b - X @ coef
         return r, np.append(coef, [0.0, 0.0])[:3]

@@ -57,6 +57,7 @@ class CurveFit:
     chi2: float
     rms_residual: float
     retract: bool = False       # the retract run was fitted too
+    pink: float = 0.0           # rms of the 1/f noise in the noise model [m] (0: white only)
 
 
 @dataclass
@@ -138,7 +139,7 @@ class FitResult:
             "correlations": self.correlations,
             "curves": [asdict(c) for c in self.curves],
             "units": {"shift": "m", "offset": "m", "drift": "m/s", "sigma": "m", "velocity": "m/s",
-                      "sample_rate": "Hz", "rms_residual": "m"},
+                      "sample_rate": "Hz", "rms_residual": "m", "pink": "m"},
             "chi2": self.chi2, "dof": self.dof, "redchi": self.redchi, "n_data": self.n_data,
             "level": self.level,
             "profiles": {k: {kk: list(map(float, vv)) for kk, vv in p.items()}
