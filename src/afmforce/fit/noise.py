@@ -34,10 +34,10 @@ PINK_SIGNIFICANCE = 3.0
 def pink_correlation(n_record: int) -> np.ndarray:
     """Autocorrelation ``K[lag]`` (lag 0 .. n_record-1) of unit-variance 1/f noise [-]."""
     n = max(int(n_record), 4)
-    k = np.arange(n + 1, dtype=float)
-    psd = np.zeros(n + 1)
-    psd[1:] = 1.0 / k[1:]
-    acf = np.fft.irfft(psd, 2 * n)[:n]
+    k = np.arange(n // 2 + 1, dtype=float)
+    psd = np.zeros(k.size)
+    psd[1:] = 1.0 / k[1:]     # the record's frequencies k / (n dt), as the instrument makes it
+    acf = np.fft.irfft(psd, n)
     return acf / acf[0]
 
 
