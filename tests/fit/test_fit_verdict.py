@@ -82,3 +82,10 @@ def test_fit_takes_the_measured_piezo_channel():
     assert np.max(np.abs(nominal - z_true)) > 2e-9            # what the nominal channel would give
     # the static guess of the zero of position: from the measured channel, within 0.3 nm
     assert abs(fc.guess["shift"]) < 0.3e-9
+
+
+def test_residual_figure_per_curve(soft_fit, tmp_path):
+    from afmforce.fit.figures import plot_residuals
+
+    p = plot_residuals(soft_fit, soft_fit._problem.ev.curves, tmp_path / "res.png")
+    assert p.exists() and p.stat().st_size > 10_000

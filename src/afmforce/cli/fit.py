@@ -85,6 +85,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="skip the model comparison (static / no friction / friction)")
     g.add_argument("--no-profile", action="store_true",
                    help="Wald intervals only (skip the profile likelihood)")
+    g.add_argument("--noise-model", choices=("auto", "white"), default="auto",
+                   help="auto (default): add 1/f detector noise where the residuals show it "
+                        "(generalised least squares); white: white noise only")
     g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=2e-3,
                    metavar="TIME", help="left out after the jump-in (default 2 ms)")
     add_model_flags(p)
@@ -115,7 +118,7 @@ def _load(paths, meta=None):
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit status."""
     from ..fit import fit_dynamic
-    from ..fit.figures import plot_curves, plot_profiles
+    from ..fit.figures import plot_curves, plot_profiles, plot_residuals
 
     for path in (args.out, args.report):
         if path:
@@ -137,12 +140,14 @@ def run(args: argparse.Namespace) -> int:
                           profile=() if args.no_profile else None,
                           compare=not args.no_compare, jump_window=args.jump_window,
                           sampling=None,    # --sampling (default average) is in cfg
-                          retract=args.retract)
+                          retract=args.retract, noise=args.noise_model)
     d = res.to_dict()
     if args.plots:
         written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)
         prof = plot_profiles(res, Path(args.plots) / "fit_profiles.png", force=True)
-        d["figures"] = [str(p) for p in written] + ([str(prof)] if prof else [])
+        resid = plot_residuals(res, res._problem.ev.curves, Path(args.plots) / "fit_residuals.png",
+                               force=True)
+        d["figures"] = [str(p) for p in written] + ([str(prof)] if prof else []) + [str(resid)]
     if args.out:
         from .common import to_jsonable
         import json

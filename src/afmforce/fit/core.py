@@ -128,8 +128,9 @@ def _ridge(problem: Problem, guess: dict, shifts, max_nfev: int) -> list[tuple[f
 def _search(prob: Problem, guess: dict, shifts0, starts: int, max_nfev: int, dof: int,
             extra=()) -> tuple:
     """Multi-start: the ridge's best points (xi free), ``extra`` vectors, then scan starts
-    while the best fit looks stuck. Returns ``(chi2, x, lmfit result, nested)``, ``nested``
-    the ridge's xi = 0 point ``(chi2, x)`` (None without xi)."""
+    while the best fit looks stuck. Returns ``(chi2, x, lmfit result, nested, first)``,
+    ``nested`` the ridge's xi = 0 point ``(chi2, x)`` (None without xi), ``first`` the
+    starts taken before the scan."""
     best, nested = None, None
     first: list[np.ndarray] = list(extra)
     if "xi" in prob.free:   # follow the A*R-xi valley first; its best points start the local fits
@@ -147,7 +148,7 @@ def _search(prob: Problem, guess: dict, shifts0, starts: int, max_nfev: int, dof
         chi2 = prob.chi2(x)
         if best is None or chi2 < best[0]:
             best = (chi2, x, res)
-    return (*best, nested)
+    return (*best, nested, first)
 
 
 def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
@@ -261,13 +262,19 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     n_data = sum(int(c.mask.sum()) for c in fc)
     n_par = len(shifts0) + len(free) + ev.n_linear()
     dof = max(n_data - n_par, 1)
-    chi2, x, res, nested = _search(prob, guess, shifts0, starts, max_nfev, dof)
+    chi2, x, res, nested, first = _search(prob, guess, shifts0, starts, max_nfev, dof)
     s2p, signif = estimate_pink(prob, x, drift) if noise == "auto" else (0.0, 0.0)
-    if signif > PINK_SIGNIFICANCE:   # 1/f noise: search again with the whitened residuals
-        set_noise_model(fc, s2p)
-        vals, sh = prob.unpack(x)
-        chi2, x, res, nested = _search(prob, {**guess, **vals}, list(sh), starts, max_nfev, dof,
-                                       extra=[x])
+    if signif > PINK_SIGNIFICANCE:   # 1/f noise: refit with the whitened residuals from the
+        set_noise_model(fc, s2p)      # white optimum and the valley's best points
+        best = None
+        for x0 in [x] + first:
+            xx, rr = local_fit(prob, x0, max_nfev)
+            c2 = prob.chi2(xx)
+            if best is None or c2 < best[0]:
+                best = (c2, xx, rr)
+        chi2, x, res = best
+        if nested is not None:
+            nested = (prob.chi2(nested[1]), nested[1])
     nested_fits = None
     if compare:   # nested models: the richer one restarts from the nested optimum if that is lower
         nested_fits = fit_nested(prob, x, fc, base, drift, max_nfev,

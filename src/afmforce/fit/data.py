@@ -1,11 +1,20 @@
 """Curves prepared for the dynamic fit: approach samples, noise, mask, static guesses.
 
 A measured curve enters the fit as its inward (approach) run: time since the
-start of the run, nominal piezo position, calibrated apparent deflection [m].
+start of the run, piezo position, calibrated apparent deflection [m].
 From the data alone (no model) we estimate the noise, find the jump-in and the
 contact, and take the static first guesses of the per-curve nuisance
 parameters: the baseline offset and drift (zero-force region), and the zero of
 position (constant-compliance line: in contact the deflection follows z).
+
+Shared with the analysis (:mod:`afmforce.analysis`), so that a fix serves both:
+the choice of the position channel (:func:`afmforce.analysis.state.prepare`:
+the measured one when the file has it), the speed of a run
+(:func:`afmforce.analysis.dynamic.run_velocity`), the robust line through a
+stepped sensor channel and the robust drift baseline
+(:func:`afmforce.analysis.drift.fit_baseline`). Still the fit's own: the noise
+(second differences, and the 1/f part in :mod:`afmforce.fit.noise`), the
+jump-in and contact masks.
 """
 
 from __future__ import annotations
@@ -16,6 +25,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..analysis.drift import fit_baseline
 from ..errors import AnalysisError, FileFormatError, ParameterError
 from ..io.curve import RawCurve
 
@@ -268,7 +278,8 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
         raise AnalysisError(f"{name}: only {int(mask.sum())} samples left outside the jump-in "
                             "window; record a longer approach or a higher sample rate")
     base = slice(0, max(10, int(0.6 * j)))
-    drift, offset = np.polyfit(t[base], y[base], 1)
+    # the analysis's robust baseline (drift step): a line in time, spikes down-weighted
+    offset, drift, _ = fit_baseline(t[base], y[base], order=1)
     ybl = y - offset - drift * t
     post = slice(min(max(j, i_c) + win + 2, n - 3), n)
     shift = float(np.median(z[post] - ybl[post]))
