@@ -88,6 +88,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--noise-model", choices=("auto", "white"), default="auto",
                    help="auto (default): add 1/f detector noise where the residuals show it "
                         "(generalised least squares); white: white noise only")
+    g.add_argument("--fringes", action="store_true",
+                   help="let the baseline slope change at contact, where interference fringes "
+                        "stop running (one more nuisance per curve)")
     g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=2e-3,
                    metavar="TIME", help="left out after the jump-in (default 2 ms)")
     add_model_flags(p)
@@ -140,7 +143,8 @@ def run(args: argparse.Namespace) -> int:
                           profile=() if args.no_profile else None,
                           compare=not args.no_compare, jump_window=args.jump_window,
                           sampling=None,    # --sampling (default average) is in cfg
-                          retract=args.retract, noise=args.noise_model)
+                          retract=args.retract, noise=args.noise_model,
+                          fringes=args.fringes)
     d = res.to_dict()
     if args.plots:
         written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)

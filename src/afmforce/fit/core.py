@@ -166,7 +166,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 starts: int = 2, level: float = 0.95, profile: Sequence[str] | None = None,
                 compare: bool = True, jump_window: float = 2e-3,
                 max_nfev: int = 40, sampling: str | None = "average",
-                retract: bool = False, noise: str = "auto") -> FitResult:
+                retract: bool = False, noise: str = "auto", fringes: bool = False) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -222,6 +222,11 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         residuals (generalised least squares; :mod:`afmforce.fit.noise`).
         ``white``: white noise only (the noise rms of each curve from second differences).
 
+    fringes : bool
+        Let each curve's baseline slope change at contact (interference fringes run
+        with the separation before contact and stop in contact; one more linear
+        nuisance per curve, see :class:`~afmforce.fit.model.Evaluator`).
+
     Returns
     -------
     FitResult
@@ -255,7 +260,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
             "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
             "(ideally a factor >= 4 apart) or fix " + ", ".join(dep))
-    ev = Evaluator(fc, base, "dynamic", drift)
+    ev = Evaluator(fc, base, "dynamic", drift, fringes)
     prob = Problem(ev, free)
     guess = _guess_globals(fc, base, free)
     shifts0 = [c.guess["shift"] for c in fc]

@@ -170,7 +170,14 @@ def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, 
     zm = np.asarray(curve.piezo_measured, float)[idx]
     a, b, *_ = robust_line_thin(t - t[0], zm)
     v = run_velocity(t, zm)
-    dev = float(np.max(np.abs(zm - (a + b * (t - t[0])))))
+    n = t.size
+    mid = slice(n // 10, n - n // 10)      # as _ramp: the middle 80 % of the run
+    dev = float(np.max(np.abs(zm[mid] - (a + b * (t[mid] - t[0])))))
+    travel = float(abs(zm[-1] - zm[0]))
+    if not dev < 0.05 * travel:    # not a constant speed: the model cannot follow it
+        return zm, {"channel": "measured", "bent": (
+            f"{name}: the measured position deviates from a straight line in time by "
+            f"{dev / max(travel, 1e-300):.1%} of the travel; the model drives at constant speed")}
     return zm, {"channel": "measured", "velocity": v, "deviation": dev,
                 "line": lambda tt: a + b * np.asarray(tt, float)}
 
@@ -289,9 +296,15 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
                          "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
                   metadata=dict(curve.metadata or {}))
     fc.metadata["position_channel"] = channel_note["channel"]
+    if channel_note.get("bent"):
+        fc.metadata["velocity_from_ramp"] = channel_note["bent"]
     fc.metadata["record_samples"] = int(np.asarray(curve.time).size)
     if channel_note.get("speed_note"):
         fc.metadata["velocity_from_ramp"] = channel_note["speed_note"]
+    elif v_meas and velocity is None and not v_file:
+        fc.metadata["velocity_from_ramp"] = (
+            f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp of "
+            "the measured position; give --velocities to override")
     if from_ramp:
         fc.metadata["velocity_from_ramp"] = (
             f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp "

@@ -110,14 +110,15 @@ def fit_nested(prob: Problem, x: np.ndarray, curves, base, drift: bool, max_nfev
     from .params import SPEED_DEPENDENT
     from .problem import local_fit
 
-    n_lin = (2 if drift else 1) * len(curves)
+    n_lin = prob.ev.n_linear()
     values, shifts = prob.unpack(x)
     out: dict = {"static": None, "no_friction": None}
     free_s = tuple(f for f in prob.free if f not in SPEED_DEPENDENT)
     static_start = None
     if free_s:   # static: no inertia, drainage or friction; only the speed-independent parameters
         ev_s = Evaluator(curves, base.replace(**{k: v for k, v in values.items()
-                                                 if k not in SPEED_DEPENDENT}), "static", drift)
+                                                 if k not in SPEED_DEPENDENT}), "static", drift,
+                         prob.ev.fringes)
         ps = Problem(ev_s, free_s)
         xs, _ = local_fit(ps, ps.pack(values, shifts), max_nfev)
         out["static"] = (ps.chi2(xs), len(xs) + n_lin)
@@ -154,7 +155,7 @@ def compare_models(prob: Problem, x: np.ndarray, chi2_full: float, curves, base,
     not describe the data); ``friction_detected`` is then None.
     """
     n = sum(int(c.mask.sum()) for c in curves)
-    n_lin = (2 if drift else 1) * len(curves)
+    n_lin = prob.ev.n_linear()
     chi2, npar = {}, {}
     if nested["static"] is not None:
         chi2["static"], npar["static"] = nested["static"]
