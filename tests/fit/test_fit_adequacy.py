@@ -113,3 +113,28 @@ def test_residual_site_names_the_region_and_positions():
     assert site.startswith("curve 3:") and "in contact" in site
     lo, hi = (float(v) for v in site.split("z - shift = ")[1].split(" nm")[0].split(" to "))
     assert 1.5 < lo < 3.5 and 6.5 < hi < 8.5
+
+
+def test_pink_noise_estimated_from_the_residuals_and_whitened():
+    # a static-model approach with 0.05 nm white + 0.05 nm 1/f noise (as the typical preset)
+    from afmforce.fit.noise import estimate_pink, set_noise_model
+
+    base = base_config("beam")
+    rng = np.random.default_rng(11)
+    got = []
+    for seed in range(6):
+        c, ev = _static_curve(base, 5e-19, seed=seed, sigma=1e-15, n=600)
+        c.deflection = c.deflection + pink_noise(c.n, 0.05e-9, rng) \
+            + rng.normal(0, 0.05e-9, c.n)
+        c.sigma = _noise_sigma(c.deflection[: c.jump_index - 5])
+        c.jump_index = c.n - 100       # the free approach: all but the last 100 samples
+        prob = Problem(ev, ("hamaker",))
+        x, _ = local_fit(prob, prob.pack({"hamaker": 5e-19}, [3e-9]), 40)
+        s2p, signif = estimate_pink(prob, x, drift=False)
+        got.append(math.sqrt(s2p))
+        assert signif > 3.0                                   # the excess is significant
+        chi2_white = prob.chi2(x) / int(c.mask.sum())
+        set_noise_model([c], s2p)
+        chi2_gls = prob.chi2(x) / int(c.mask.sum())
+        assert chi2_white > 1.3 and abs(chi2_gls - 1.0) < 0.25
+    assert np.median(got) == pytest.approx(0.05e-9, rel=0.3)
