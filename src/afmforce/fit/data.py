@@ -255,7 +255,15 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     if n - i_c < 5:     # noisy positions break the chain: the last 10 % of the approach
         i_c = int(0.9 * n)
     n_tail = n - i_c
-    a = np.polyfit(z[i_c + n_tail // 3:], y[i_c + n_tail // 3:], 1)[0] if n_tail >= 3 else 0.0
+    a, a_se = 0.0, 0.0
+    if n_tail >= 3:
+        zz, yy = z[i_c + n_tail // 3:], y[i_c + n_tail // 3:]
+        coef, res, *_ = np.polyfit(zz, yy, 1, full=True)
+        a = float(coef[0])
+        if zz.size > 3 and np.ptp(zz) > 0 and res.size:
+            a_se = float(np.sqrt(res[0] / (zz.size - 2) / np.sum((zz - zz.mean()) ** 2)))
+    if 0.5 < a + 3 * a_se and a - 3 * a_se < 2.0:
+        a = min(max(a, 0.51), 1.99)   # noisy (e.g. a 0.3 nm-noise detector over a few nm): ~1
     if 0.05 < a <= 0.5 or a >= 2.0:
         raise AnalysisError(
             f"{name}: in contact the deflection follows the position with slope {a:.3g}, not ~1: "
