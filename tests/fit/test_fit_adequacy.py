@@ -138,3 +138,19 @@ def test_pink_noise_estimated_from_the_residuals_and_whitened():
         chi2_gls = prob.chi2(x) / int(c.mask.sum())
         assert chi2_white > 1.3 and abs(chi2_gls - 1.0) < 0.25
     assert np.median(got) == pytest.approx(0.05e-9, rel=0.3)
+
+
+def test_fringe_columns_absorb_a_fringe_before_contact():
+    # a 0.4 nm, 335 nm-period fringe in the separation: gone from the residual with --fringes,
+    # not without (the static model and the data share everything else)
+    base = base_config("beam")
+    c, ev = _static_curve(base, 5e-19, seed=7, sigma=0.01e-9)
+    z = c.position - 3e-9
+    h = np.clip(z[c.jump_index] - z, 0.0, None)          # separation before contact
+    clean = c.deflection.copy()
+    c.deflection = clean + 0.4e-9 * np.cos(2 * np.pi * h / 335e-9 + 1.0)
+    for fringes, limit in ((False, 2.5), (True, 1.3)):
+        e = Evaluator([c], base, "static", drift=True, fringes=fringes)
+        prob = Problem(e, ("hamaker",), {})
+        chi = prob.chi2(prob.pack({"hamaker": 5e-19}, [3e-9])) / int(c.mask.sum())
+        assert (chi > limit) if not fringes else (chi < limit)

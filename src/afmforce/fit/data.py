@@ -174,7 +174,9 @@ def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, 
     mid = slice(n // 10, n - n // 10)      # as _ramp: the middle 80 % of the run
     dev = float(np.max(np.abs(zm[mid] - (a + b * (t[mid] - t[0])))))
     travel = float(abs(zm[-1] - zm[0]))
-    if not dev < 0.05 * travel:    # not a constant speed: the model cannot follow it
+    steps = np.abs(np.diff(zm))
+    step = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0   # sensor digits
+    if not dev < 0.05 * travel + step:    # not a constant speed: the model cannot follow it
         return zm, {"channel": "measured", "bent": (
             f"{name}: the measured position deviates from a straight line in time by "
             f"{dev / max(travel, 1e-300):.1%} of the travel; the model drives at constant speed")}
