@@ -1,6 +1,6 @@
 """Recovery and interval coverage of the dynamic fit on the ``typical`` virtual AFM (issue 23).
 
-``python benchmarks/bench_fit_typical.py [--seeds 20] [--first 1] [--json FILE]``
+``python benchmarks/bench_fit_typical.py [--seeds 20] [--first 1] [--fringes] [--json FILE]``
 
 The issue's protocol: four curves ``afmforce simulate --instrument typical --seed N
 --xi 0.005 --velocity V --sampling average`` (V = 0.5, 1, 2, 5 um/s; the beam of
@@ -51,6 +51,7 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first", type=int, default=1)
     ap.add_argument("--json")
+    ap.add_argument("--fringes", action="store_true", help="fit_dynamic(fringes=True)")
     a = ap.parse_args()
     trs = trajectories()
     rows = []
@@ -58,7 +59,7 @@ def main() -> None:
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            r = fit_dynamic(record(trs, seed), "beam", free=("hamaker", "xi"))
+            r = fit_dynamic(record(trs, seed), "beam", free=("hamaker", "xi"), fringes=a.fringes)
         pa, px = r.parameters["hamaker"], r.parameters["xi"]
         row = dict(seed=seed, A=pa.value / A, xi=px.value / XI, A_interval=pa.interval,
                    xi_interval=px.interval, A_covered=covers(pa.interval, A),
