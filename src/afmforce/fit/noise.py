@@ -47,33 +47,45 @@ def _free(c) -> np.ndarray:
     return idx[idx < c.jump_index]
 
 
-def _projected_trace(c, K: np.ndarray, drift: bool) -> float:
-    idx = _free(c)
-    if idx.size < 10:
-        return 0.0
-    X = np.column_stack([np.ones(idx.size)] + ([c.time[idx]] if drift else []))
-    Q, _ = np.linalg.qr(X)
-    Kf = K[np.abs(idx[:, None] - idx[None, :])]
-    return float(np.trace(Kf) - np.trace(Q.T @ Kf @ Q))
-
-
 def estimate_pink(prob, x, drift: bool = True) -> tuple[float, float]:
-    """``(sigma_p^2 [m^2], significance)`` from the residuals of the fit at ``x``."""
+    """``(sigma_p^2 [m^2], significance)`` from the residuals of the white fit at ``x``.
+
+    The residuals ``r = (P - H) b`` of the free approach (``b`` the data noise in units of
+    each curve's white rms, ``P`` the projection that removes each curve's offset and
+    drift, ``H`` the hat matrix of the fit's Jacobian ``J``: the fitted parameters absorb
+    part of the noise) have the expectation ``E[r_S' r_S] = tr_S(P - H) + sigma_p^2
+    tr_S((P - H) G (P - H))``, ``G`` the 1/f covariance per unit sigma_p^2 in the same
+    units; solved for ``sigma_p^2``. ``drift`` is unused (the evaluator's design holds it).
+    """
     values, shifts = prob.unpack(x)
-    excess, trace, var = 0.0, 0.0, 0.0
-    for i, c in enumerate(prob.ev.curves):
-        r = prob.ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
-        pos = np.flatnonzero(c.mask)
-        sel = np.isin(pos, _free(c))
-        if sel.sum() < 10:
-            continue
+    ev = prob.ev
+    blocks, rs, sel = [], [], []
+    for i, c in enumerate(ev.curves):
+        r = ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
+        idx = np.flatnonzero(c.mask)
+        Q, _ = np.linalg.qr(ev.design(i)[c.mask])
         K = pink_correlation(c.metadata.get("record_samples", c.n))
-        excess += c.sigma ** 2 * float(np.sum(r[sel] ** 2) - sel.sum())
-        trace += _projected_trace(c, K, drift)
-        var += 2.0 * c.sigma ** 4 * sel.sum()
-    if trace <= 0 or var <= 0:
+        blocks.append((np.eye(idx.size) - Q @ Q.T, K[np.abs(idx[:, None] - idx[None, :])]
+                       / c.sigma ** 2))
+        rs.append(r)
+        sel.append(idx < c.jump_index)
+    sel = np.concatenate(sel)
+    if sel.sum() < 10:
         return 0.0, 0.0
-    return max(excess / trace, 0.0), excess / math.sqrt(var)
+    from scipy.linalg import block_diag
+
+    P = block_diag(*[b[0] for b in blocks])
+    G = block_diag(*[b[1] for b in blocks])
+    J = prob.jacobian(x)
+    H = J @ np.linalg.pinv(J.T @ J, rcond=1e-12) @ J.T
+    A = (P - H)[sel]
+    r = np.concatenate(rs)[sel]
+    white = float(np.trace(A[:, sel]))
+    trace = float(np.sum((A @ G) * A))
+    excess = float(r @ r) - white
+    if trace <= 0:
+        return 0.0, 0.0
+    return max(excess / trace, 0.0), excess / math.sqrt(2.0 * sel.sum())
 
 
 def set_noise_model(curves, sigma_p2: float) -> None:
