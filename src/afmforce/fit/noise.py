@@ -55,11 +55,16 @@ def estimate_pink(prob, x, drift: bool = True) -> tuple[float, float]:
     drift, ``H`` the hat matrix of the fit's Jacobian ``J``: the fitted parameters absorb
     part of the noise) have the expectation ``E[r_S' r_S] = tr_S(P - H) + sigma_p^2
     tr_S((P - H) G (P - H))``, ``G`` the 1/f covariance per unit sigma_p^2 in the same
-    units; solved for ``sigma_p^2``. ``drift`` is unused (the evaluator's design holds it).
+    units; solved for ``sigma_p^2``. The white rms of each curve came from second
+    differences, which also see the top of the 1/f spectrum: ``sigma_est^2 = sigma_w^2 +
+    c2 sigma_p^2``, ``c2 = (6 - 8 K[1] + 2 K[2]) / 6`` (0.16-0.22 for records of
+    600-6000 samples), so the white part of the residuals is ``(1 - c2 sigma_p^2 /
+    sigma_est^2) tr_S(P - H)``; solved jointly. ``drift`` is unused (the evaluator's
+    design holds it).
     """
     values, shifts = prob.unpack(x)
     ev = prob.ev
-    blocks, rs, sel = [], [], []
+    blocks, rs, sel, c2w = [], [], [], []
     for i, c in enumerate(ev.curves):
         r = ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
         idx = np.flatnonzero(c.mask)
@@ -69,6 +74,7 @@ def estimate_pink(prob, x, drift: bool = True) -> tuple[float, float]:
                        / c.sigma ** 2))
         rs.append(r)
         sel.append(idx < c.jump_index)
+        c2w.append(np.full(idx.size, (6.0 - 8.0 * K[1] + 2.0 * K[2]) / 6.0 / c.sigma ** 2))
     sel = np.concatenate(sel)
     if sel.sum() < 10:
         return 0.0, 0.0
@@ -80,8 +86,10 @@ def estimate_pink(prob, x, drift: bool = True) -> tuple[float, float]:
     H = J @ np.linalg.pinv(J.T @ J, rcond=1e-12) @ J.T
     A = (P - H)[sel]
     r = np.concatenate(rs)[sel]
-    white = float(np.trace(A[:, sel]))
-    trace = float(np.sum((A @ G) * A))
+    diag = np.diag(A[:, sel])
+    white = float(np.sum(diag))
+    white_c2 = float(np.sum(diag * np.concatenate(c2w)[sel]))   # what sigma_p^2 takes off it
+    trace = float(np.sum((A @ G) * A)) - white_c2
     excess = float(r @ r) - white
     if trace <= 0:
         return 0.0, 0.0
@@ -97,6 +105,7 @@ def set_noise_model(curves, sigma_p2: float) -> None:
         K = pink_correlation(c.metadata.get("record_samples", c.n))
         idx = np.flatnonzero(c.mask)
         C = sigma_p2 * K[np.abs(idx[:, None] - idx[None, :])]
-        C[np.diag_indices_from(C)] += c.sigma ** 2
+        c2 = (6.0 - 8.0 * K[1] + 2.0 * K[2]) / 6.0     # the 1/f part of the second differences
+        C[np.diag_indices_from(C)] += max(c.sigma ** 2 - c2 * sigma_p2, 0.25 * c.sigma ** 2)
         c.noise_chol = np.linalg.cholesky(C)
         c.pink = math.sqrt(sigma_p2)
