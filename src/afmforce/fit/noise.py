@@ -12,7 +12,7 @@ noise with a power spectrum ``1/f`` from the record's lowest frequency ``1/(N dt
 up (as :func:`afmforce.instrument.noise.pink_noise` makes it). ``sigma_p^2`` is
 estimated from a first, white-noise fit: the excess of the residuals of the free
 approach over the white noise, divided by what unit 1/f noise leaves there after
-the offset and drift are fitted, pooled over the curves (one detector). When the
+the fit (:func:`estimate_pink`), pooled over the curves (one detector). When the
 excess is significant the fit is repeated with generalised least squares: the
 residual of curve *i* is ``L_i^-1 (data - model - X beta)``, ``C_i = L_i L_i^T`` on
 its fitted samples, so the chi-square, the profiles and the model test keep their
