@@ -32,6 +32,12 @@ DRIVE = dict(start=-30e-9, turn=10e-9, end=-230e-9)
 XI, A = 0.005, 5e-19
 
 
+def covers(interval, truth) -> bool:
+    """Whether ``interval`` (a None end is open: one-sided) holds ``truth``."""
+    lo, hi = interval
+    return (lo is None or lo <= truth) and (hi is None or truth <= hi)
+
+
 def curves(seed, xi=XI, drift=1e-9):
     return virtual_curves(list(SPEEDS), seed=seed, xi=xi, noise=0.01e-9, drift_rms=drift,
                           sample_rates=[v / 0.25e-9 for v in SPEEDS], **DRIVE)
@@ -97,10 +103,8 @@ def main():
         for seed in range(a.calibration):
             r = fit_dynamic(curves(seed=1000 + seed), "beam", free=("hamaker", "xi"),
                             compare=False)
-            lo, hi = r.derived["hamaker_radius"].interval
-            cover["hamaker_radius"] += lo <= A * 100e-9 <= hi
-            lo, hi = r.parameters["xi"].interval
-            cover["xi"] += lo <= XI <= hi
+            cover["hamaker_radius"] += covers(r.derived["hamaker_radius"].interval, A * 100e-9)
+            cover["xi"] += covers(r.parameters["xi"].interval, XI)
             print(f"   seed {seed}: A*R {r.derived['hamaker_radius'].value:.4g} "
                   f"xi {r.parameters['xi'].value:.4g} covered {dict(cover)}", flush=True)
         print(f"4. coverage of 95 % profile intervals over {a.calibration} seeds: "

@@ -110,7 +110,9 @@ def test_speed_and_rate_read_off_the_ramp_when_missing(two):
     # a ramp that is not straight (a sine) is not taken: the user is asked
     c = bare[0]
     t = np.asarray(c.time, float)
-    bent = dataclasses.replace(c, piezo_nominal=np.asarray(c.piezo_nominal) + 5e-9 * np.sin(40 * t / t[-1]))
+    wave = 5e-9 * np.sin(40 * t / t[-1])
+    bent = dataclasses.replace(c, piezo_nominal=np.asarray(c.piezo_nominal) + wave,
+                               piezo_measured=np.asarray(c.piezo_measured) + wave)
     with pytest.raises(FileFormatError, match="--velocities"):
         prepare_curves([bent])
 

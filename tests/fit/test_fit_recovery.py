@@ -44,7 +44,8 @@ def test_cli_json_form(cli_result):
     assert 0.0 <= res["p_value"] <= 1.0
     assert len(res["curves"]) == 4
     assert (d / "r.md").read_text().startswith("# Dynamic fit")
-    assert len(res["figures"]) == 5 and all((d / "plots").glob("*.png"))
+    assert len(res["figures"]) == 6 and all((d / "plots").glob("*.png"))
+    assert (d / "plots" / "fit_residuals.png").stat().st_size > 10_000
 
 
 def test_recovery(cli_result):

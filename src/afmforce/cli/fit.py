@@ -102,6 +102,12 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="skip the model comparison (static / no friction / friction)")
     g.add_argument("--no-profile", action="store_true",
                    help="Wald intervals only (skip the profile likelihood)")
+    g.add_argument("--noise-model", choices=("auto", "white"), default="auto",
+                   help="auto (default): add 1/f detector noise where the residuals show it "
+                        "(generalised least squares); white: white noise only")
+    g.add_argument("--fringes", action="store_true",
+                   help="let the baseline slope change at contact, where interference fringes "
+                        "stop running (one more nuisance per curve)")
     g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=2e-3,
                    metavar="TIME", help="left out after the jump-in (default 2 ms)")
     add_model_flags(p)
@@ -132,7 +138,7 @@ def _load(paths, meta=None):
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit status."""
     from ..fit import fit_dynamic
-    from ..fit.figures import plot_curves, plot_profiles
+    from ..fit.figures import plot_curves, plot_profiles, plot_residuals
 
     if args.example is not None:
         from ..datasets import fit_example
@@ -166,12 +172,15 @@ def run(args: argparse.Namespace) -> int:
                           profile=() if args.no_profile else None,
                           compare=not args.no_compare, jump_window=args.jump_window,
                           sampling=None,    # --sampling (default average) is in cfg
-                          retract=args.retract)
+                          retract=args.retract, noise=args.noise_model,
+                          fringes=args.fringes)
     d = res.to_dict()
     if args.plots:
         written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)
         prof = plot_profiles(res, Path(args.plots) / "fit_profiles.png", force=True)
-        d["figures"] = [str(p) for p in written] + ([str(prof)] if prof else [])
+        resid = plot_residuals(res, res._problem.ev.curves, Path(args.plots) / "fit_residuals.png",
+                               force=True)
+        d["figures"] = [str(p) for p in written] + ([str(prof)] if prof else []) + [str(resid)]
     if args.out:
         from .common import to_jsonable
         import json

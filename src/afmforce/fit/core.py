@@ -22,6 +22,10 @@ __all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "S
 XI_SCAN = (0.0, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1)
 #: Factors on the static guess of A (or R) scanned with xi.
 AR_SCAN = (1.0, 1.6, 2.5)
+#: Fixed values of xi along which the valley of A*R and xi is followed before the local fits [kg/s].
+XI_RIDGE = (0.0, 5e-4, 1e-3, 2e-3, 4e-3, 8e-3, 1.6e-2, 3.2e-2, 0.1)
+#: Iteration budget of each fit along the ridge.
+RIDGE_NFEV = 12
 #: A local fit with a reduced chi-square above this counts as stuck: try the next start.
 STUCK_REDCHI = 1.5
 
@@ -101,6 +105,66 @@ def _starts(problem: Problem, guess: dict, shifts) -> list[np.ndarray]:
     return [t[1] for t in trials]
 
 
+def _ridge(problem: Problem, guess: dict, shifts, max_nfev: int) -> list[tuple[float, np.ndarray]]:
+    """Fits along a grid of fixed xi (:data:`XI_RIDGE`), every other parameter fitted.
+
+    A*R and xi lie on a long, curved valley of the chi-square (friction lowers the
+    apparent attraction like a smaller A*R): a local fit from a scan point can stop on
+    its wall with a reduced chi-square near 1 and A*R 50 % off (measured on the
+    ``typical`` virtual AFM). The profile along xi is smooth; each grid point starts
+    from the optimum of the previous one (continuation) or from the best of the A*R
+    scan, whichever has the lower chi-square. Returns ``(chi2, x)`` per grid point,
+    ``x`` the full scaled vector (xi at its grid value); the first point (xi = 0) is the
+    optimum of the nested friction-free model.
+    """
+    from .uncertainty import _sub_problem
+
+    j = problem.free.index("xi")
+    ar = [problem.free.index(n) for n in ("hamaker", "radius") if n in problem.free]
+    x_guess = problem.pack(guess, shifts)
+    out, prev = [], None
+    for xi in XI_RIDGE:
+        sub = _sub_problem(problem, "xi", xi)
+        trials = [] if prev is None else [np.delete(prev, j)]
+        for f in (AR_SCAN if ar else (1.0,)):
+            xt = x_guess.copy()
+            if ar:
+                xt[ar[0]] *= f
+            trials.append(np.delete(xt, j))
+        x0 = min(trials, key=sub.chi2)
+        xs, _ = local_fit(sub, x0, max_nfev)
+        x_full = np.insert(xs, j, xi / PARAMETERS["xi"].scale)
+        out.append((sub.chi2(xs), x_full))
+        prev = x_full
+    return out
+
+
+def _search(prob: Problem, guess: dict, shifts0, starts: int, max_nfev: int, dof: int,
+            extra=()) -> tuple:
+    """Multi-start: the ridge's best points (xi free), ``extra`` vectors, then scan starts
+    while the best fit looks stuck. Returns ``(chi2, x, lmfit result, nested, first)``,
+    ``nested`` the ridge's xi = 0 point ``(chi2, x)`` (None without xi), ``first`` the
+    starts taken before the scan."""
+    best, nested = None, None
+    first: list[np.ndarray] = list(extra)
+    if "xi" in prob.free:   # follow the A*R-xi valley first; its best points start the local fits
+        ridge = _ridge(prob, guess, shifts0, RIDGE_NFEV)
+        nested = ridge[0]
+        first += [x0 for _, x0 in sorted(ridge, key=lambda r: r[0])[:max(starts, 1)]]
+        # the richer model starts from the nested optimum too, so chi2(friction) <= chi2(none)
+        first.append(nested[1])
+    scan = _starts(prob, guess, shifts0)
+    todo = first + scan[: 2 * max(starts, 1) + 2]
+    for k, x0 in enumerate(todo):
+        if k >= max(len(first), max(starts, 1)) and best[0] / dof < STUCK_REDCHI:
+            break    # multi-start: the ridge's best points, more scan starts while they look stuck
+        x, res = local_fit(prob, x0, max_nfev)
+        chi2 = prob.chi2(x)
+        if best is None or chi2 < best[0]:
+            best = (chi2, x, res)
+    return (*best, nested, first)
+
+
 def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
     JTJ = J.T @ J
     try:
@@ -116,7 +180,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 starts: int = 2, level: float = 0.95, profile: Sequence[str] | None = None,
                 compare: bool = True, jump_window: float = 2e-3,
                 max_nfev: int = 40, sampling: str | None = "average",
-                retract: bool = False, progress=None) -> FitResult:
+                retract: bool = False, noise: str = "auto", fringes: bool = False,
+                progress=None) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -171,6 +236,17 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         without a pause): the outward compliance line and its hysteresis carry
         friction, the pull-off (and ``jump_window`` after it) is left out.
 
+    noise : {"auto", "white"}
+        ``auto``: after a first fit, estimate 1/f detector noise from the residuals of
+        the free approach and, where it is significant, refit with the whitened
+        residuals (generalised least squares; :mod:`afmforce.fit.noise`).
+        ``white``: white noise only (the noise rms of each curve from second differences).
+
+    fringes : bool
+        Let each curve's baseline slope change at contact (interference fringes run
+        with the separation before contact and stop in contact; one more linear
+        nuisance per curve, see :class:`~afmforce.fit.model.Evaluator`).
+
     Returns
     -------
     FitResult
@@ -181,9 +257,13 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Bad parameters, a speed-dependent parameter with all curves at one
         speed, uncalibrated or inconsistent curves, a curve without contact.
     """
-    from .uncertainty import compare_models, profile_interval
+    from .adequacy import adequacy, undetermined_verdict
+    from .noise import PINK_SIGNIFICANCE, estimate_pink, set_noise_model
+    from .uncertainty import compare_models, fit_nested, profile_interval
 
     t0 = time.perf_counter()
+    if noise not in ("auto", "white"):
+        raise ParameterError(f"noise must be 'auto' or 'white', got {noise!r}")
     if not 0.5 < level < 1.0:
         raise ParameterError(f"level must lie between 0.5 and 1, got {level!r}")
     base = base_config(model, **dict(fixed or {}))
@@ -201,7 +281,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
             "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
             "(ideally a factor >= 4 apart) or fix " + ", ".join(dep))
-    ev = Evaluator(fc, base, "dynamic", drift)
+    ev = Evaluator(fc, base, "dynamic", drift, fringes)
     prob = Problem(ev, free)
     guess = _guess_globals(fc, base, free)
     shifts0 = [c.guess["shift"] for c in fc]
@@ -211,7 +291,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     todo = [n for n in (profile if profile is not None else (
         "hamaker", "radius", "xi", "slip_length", "surface_potential", "debye_length"))
             if n in free]
-    stages = {"done": 0, "total": max(starts, 1) + len(todo) + int(compare)}
+    stages = {"done": 0, "total": 2 + len(todo) + 2 * int(compare)}
 
     def report(what: str) -> None:
         if progress is not None:
@@ -219,16 +299,31 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             stages["total"] = max(stages["total"], stages["done"])
             progress(Progress(stages["done"], stages["total"], "stage", what))
 
-    best = None
-    for k, x0 in enumerate(_starts(prob, guess, shifts0)[: 2 * max(starts, 1) + 2]):
-        if k >= max(starts, 1) and best[0] / dof < STUCK_REDCHI:
-            break    # multi-start: `starts` local fits, more while they look stuck
-        x, res = local_fit(prob, x0, max_nfev)
-        chi2 = prob.chi2(x)
-        report(f"local fit {k + 1}")
-        if best is None or chi2 < best[0]:
-            best = (chi2, x, res)
-    chi2, x, res = best
+    chi2, x, res, nested, first = _search(prob, guess, shifts0, starts, max_nfev, dof)
+    report("search")
+    s2p, signif = estimate_pink(prob, x, drift) if noise == "auto" else (0.0, 0.0)
+    if signif > PINK_SIGNIFICANCE:   # 1/f noise: refit with the whitened residuals from the
+        set_noise_model(fc, s2p)      # white optimum and the valley's best points
+        best = None
+        for x0 in [x] + first:
+            xx, rr = local_fit(prob, x0, max_nfev)
+            c2 = prob.chi2(xx)
+            if best is None or c2 < best[0]:
+                best = (c2, xx, rr)
+        chi2, x, res = best
+        if nested is not None:
+            nested = (prob.chi2(nested[1]), nested[1])
+        report("refit with 1/f noise")
+    nested_fits = None
+    if compare:   # nested models: the richer one restarts from the nested optimum if that is lower
+        nested_fits = fit_nested(prob, x, fc, base, drift, max_nfev,
+                                 starts=[nested[1]] if nested is not None else ())
+        nf = nested_fits["no_friction"]
+        if nf is not None and nf[0] < chi2:
+            x2, res2 = local_fit(prob, nf[1], max_nfev)
+            c2 = prob.chi2(x2)
+            chi2, x, res = (c2, x2, res2) if c2 <= nf[0] else (nf[0], nf[1], res)
+        report("nested models")
     redchi = chi2 / dof
     J = prob.jacobian(x)
     cov = _covariance(J, max(redchi, 1.0))
@@ -237,9 +332,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     warns = [c.metadata["velocity_from_ramp"] for c in fc if c.metadata.get("velocity_from_ramp")]
     if ev.failures:
         warns.append(f"{ev.failures} trial simulations failed during the fit (last: {ev.last_error})")
-    if redchi > 2.0:
-        warns.append(f"reduced chi-square {redchi:.3g} > 2: the model does not describe the "
-                     "data within their noise; intervals are scaled by it but may be optimistic")
+    adq = adequacy(prob, x, dof, chi2, fc)
+    if not adq["adequate"]:
+        warns.append(f"reduced chi-square {redchi:.3g} > {adq['threshold']:.3g} (the "
+                     f"{adq['quantile']:.1%} quantile, noise estimate's spread included): the model "
+                     "does not describe the data within their noise; no verdict on friction, and "
+                     "the intervals (scaled by it) may be optimistic. " + "; ".join(adq["worst"]))
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov)))
     g = len(free)
@@ -252,28 +350,35 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     params = {}
     for j, name in enumerate(free):
         p = PARAMETERS[name]
-        params[name] = Estimate(values[name], float(sd[j]),
-                                wald_interval(values[name], float(sd[j]), level, p.lower, p.upper),
-                                "wald", p.unit)
+        iv, note = wald_interval(values[name], float(sd[j]), level, p.lower, p.upper,
+                                 p.physical_lower)
+        params[name] = Estimate(values[name], float(sd[j]), iv, "wald", p.unit,
+                                f"{name}: {note}" if note else "")
     profiles = {}
     for name in todo:
-        lo, hi, pts = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
-                                       max(redchi, 1.0), level)
+        lo, hi, pts, note = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
+                                             max(redchi, 1.0), level)
         params[name].interval, params[name].interval_method = (lo, hi), "profile"
+        params[name].note = note
         profiles[name] = pts
         report(f"profile of {name}")
+    for e in params.values():
+        if e.note:
+            warns.append(e.note)
     derived = {}
     if "hamaker" in free or "radius" in free:
         name = "hamaker" if "hamaker" in free else "radius"
         other = base.radius if name == "hamaker" else base.hamaker
         e = params[name]
-        derived["hamaker_radius"] = Estimate(e.value * other, e.stderr * other,
-                                             (e.interval[0] * other, e.interval[1] * other),
-                                             e.interval_method, "J m")
+        derived["hamaker_radius"] = Estimate(
+            e.value * other, e.stderr * other,
+            tuple(None if v is None else v * other for v in e.interval),
+            e.interval_method, "J m", e.note)
     comparison = None
     if compare:
-        comparison = compare_models(prob, x, chi2, fc, base, drift, level, max_nfev, warns,
-                                    max(redchi, 1.0))
+        comparison = compare_models(prob, x, chi2, fc, base, drift, level, max(redchi, 1.0),
+                                    nested_fits, None if adq["adequate"]
+                                    else undetermined_verdict(adq), max_nfev)
         report("model comparison")
     coefs = prob.linear_coefficients(x)
     cfits = []
@@ -283,12 +388,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                               float(shifts[i]), float(sd[g + i]), float(coefs[i][0]),
                               float(coefs[i][1]), float(r @ r),
                               float(np.sqrt(np.mean(r ** 2))) * c.sigma,
-                              c.retract_start is not None))
+                              c.retract_start is not None, float(c.pink)))
     cfg = {k: v for k, v in base.to_dict().items()
            if k not in ("velocity", "sample_rate", "start", "turn", "end")}
     return FitResult(model=base.model, free=free, parameters=params, derived=derived,
                      correlations=correlations, curves=cfits, chi2=chi2, dof=dof, redchi=redchi,
                      n_data=n_data, level=level, comparison=comparison, profiles=profiles,
-                     warnings=warns, model_evaluations=ev.simulations,
+                     warnings=warns, model_evaluations=ev.simulations, adequacy=adq,
                      wall_time=time.perf_counter() - t0, success=bool(res.success),
                      message=str(res.message), config=cfg, _problem=prob, _x=x)

@@ -1,11 +1,20 @@
 """Curves prepared for the dynamic fit: approach samples, noise, mask, static guesses.
 
 A measured curve enters the fit as its inward (approach) run: time since the
-start of the run, nominal piezo position, calibrated apparent deflection [m].
+start of the run, piezo position, calibrated apparent deflection [m].
 From the data alone (no model) we estimate the noise, find the jump-in and the
 contact, and take the static first guesses of the per-curve nuisance
 parameters: the baseline offset and drift (zero-force region), and the zero of
 position (constant-compliance line: in contact the deflection follows z).
+
+Shared with the analysis (:mod:`afmforce.analysis`), so that a fix serves both:
+the choice of the position channel (:func:`afmforce.analysis.state.prepare`:
+the measured one when the file has it), the speed of a run
+(:func:`afmforce.analysis.dynamic.run_velocity`), the robust line through a
+stepped sensor channel and the robust drift baseline
+(:func:`afmforce.analysis.drift.fit_baseline`). Still the fit's own: the noise
+(second differences, and the 1/f part in :mod:`afmforce.fit.noise`), the
+jump-in and contact masks.
 """
 
 from __future__ import annotations
@@ -16,6 +25,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..analysis.drift import fit_baseline
 from ..errors import AnalysisError, FileFormatError, MissingMetadataError, ParameterError
 from ..io.curve import RawCurve
 
@@ -62,6 +72,9 @@ class FitCurve:
         approach and retract drive lines); NaN for an approach only.
     retract_velocity : float
         Retract speed [m/s] (NaN for an approach only).
+    noise_samples : int
+        Samples the noise estimate ``sigma`` rests on (its relative uncertainty
+        in sigma^2 is about ``2 / sqrt(noise_samples)``; see docs/fit.md).
     """
 
     name: str
@@ -79,6 +92,11 @@ class FitCurve:
     turn_time: float = math.nan
     turn_position: float = math.nan
     retract_velocity: float = math.nan
+    noise_samples: int = 0
+    #: rms of the 1/f noise [m] (0: white noise only; see afmforce.fit.noise)
+    pink: float = 0.0
+    #: Cholesky factor of the noise covariance on the fitted samples [m] (None: white)
+    noise_chol: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -127,6 +145,46 @@ def _ramp(curve: RawCurve, idx: np.ndarray) -> dict:
     return out
 
 
+def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, dict]:
+    """The approach's piezo position [m] and how it was chosen.
+
+    The channel is chosen as the analysis chooses it (:func:`afmforce.analysis.state.prepare`,
+    ``channel="auto"``): the measured (sensor) position when the file has one, else the
+    nominal (commanded) one. The nominal position of a piezo without closed-loop control is
+    not the true one (hysteresis, creep: a 10 % nonlinearity shifts the zero of position by
+    nanometres and bends the ramp); the model is driven at constant speed in true position,
+    so with a measured channel the fit takes the robust line through the measured positions
+    in time (sensor steps and noise removed) and its slope as the speed
+    (:func:`afmforce.analysis.dynamic.run_velocity`).
+    """
+    from ..analysis.dynamic import run_velocity
+    from ..analysis._numeric import robust_line_thin
+    from ..analysis.state import prepare
+
+    try:
+        channel = prepare(curve).channel
+    except AnalysisError:      # e.g. an approach-only file: the analysis needs both runs
+        channel = "measured" if curve.piezo_measured is not None else "nominal"
+    if channel != "measured":
+        return np.asarray(curve.piezo_nominal, float)[idx], {"channel": "nominal"}
+    t = np.asarray(curve.time, float)[idx]
+    zm = np.asarray(curve.piezo_measured, float)[idx]
+    a, b, *_ = robust_line_thin(t - t[0], zm)
+    v = run_velocity(t, zm)
+    n = t.size
+    mid = slice(n // 10, n - n // 10)      # as _ramp: the middle 80 % of the run
+    dev = float(np.max(np.abs(zm[mid] - (a + b * (t[mid] - t[0])))))
+    travel = float(abs(zm[-1] - zm[0]))
+    steps = np.abs(np.diff(zm))
+    step = float(np.median(steps[steps > 0])) if np.any(steps > 0) else 0.0   # sensor digits
+    if not dev < 0.05 * travel + step:    # not a constant speed: the model cannot follow it
+        return zm, {"channel": "measured", "bent": (
+            f"{name}: the measured position deviates from a straight line in time by "
+            f"{dev / max(travel, 1e-300):.1%} of the travel; the model drives at constant speed")}
+    return zm, {"channel": "measured", "velocity": v, "deviation": dev,
+                "line": lambda tt: a + b * np.asarray(tt, float)}
+
+
 def _noise_sigma(y: np.ndarray) -> float:
     """White-noise rms from second differences (var = 6 sigma^2), outliers beyond 4 MADs dropped."""
     d = np.diff(y, 2)
@@ -167,19 +225,31 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
         raise AnalysisError(f"{name}: only {idx.size} approach samples; the fit needs >= 30")
     idx = idx[: np.flatnonzero(np.diff(idx) != 1)[0] + 1] if np.any(np.diff(idx) != 1) else idx
     ramp = _ramp(curve, idx)
-    from_ramp = velocity is None and not (curve.metadata or {}).get("velocity") and ramp["velocity"]
-    v = _meta_value(curve, "velocity", velocity if velocity is not None else
-                    (ramp["velocity"] if from_ramp else None), name, "m/s")
+    z, channel_note = _position(curve, idx, name)
+    v_meas = channel_note.get("velocity") if velocity is None else None
+    if v_meas is not None and not (math.isfinite(v_meas) and v_meas > 0):
+        v_meas = None
+    from_ramp = (velocity is None and v_meas is None and not (curve.metadata or {}).get("velocity")
+                 and ramp["velocity"])
+    v = _meta_value(curve, "velocity", velocity if velocity is not None else v_meas if v_meas
+                    else (ramp["velocity"] if from_ramp else None), name, "m/s")
+    v_file = (curve.metadata or {}).get("velocity")
+    if v_meas and v_file and abs(v_meas / float(v_file) - 1.0) > 0.02:
+        channel_note["speed_note"] = (
+            f"{name}: the measured position moves at {v_meas * 1e6:.4g} um/s, the file says "
+            f"{float(v_file) * 1e6:.4g} um/s (piezo gain or nonlinearity); the fit uses the measured "
+            "speed (give --velocities to override)")
     fs = _meta_value(curve, "sample_rate", sample_rate if sample_rate is not None else
                      (None if (curve.metadata or {}).get("sample_rate") else ramp["sample_rate"]),
                      name, "Hz")
     t = np.asarray(curve.time, float)[idx]
-    z = np.asarray(curve.piezo_nominal, float)[idx]
     y = np.asarray(curve.deflection_signal, float)[idx] * scale
     t = t - t[0]
     n = len(t)
     if not (np.all(np.isfinite(y)) and np.all(np.isfinite(z))):
         raise FileFormatError(f"{name}: the approach contains NaN or infinite values")
+    if channel_note.get("line") is not None:   # the measured channel: the true drive line
+        z = channel_note.pop("line")(t)
     # constant compliance: the rising tail where the deflection follows z
     dy, dz = np.diff(y), np.diff(z)
     i_c = n - 1
@@ -188,7 +258,15 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     if n - i_c < 5:     # noisy positions break the chain: the last 10 % of the approach
         i_c = int(0.9 * n)
     n_tail = n - i_c
-    a = np.polyfit(z[i_c + n_tail // 3:], y[i_c + n_tail // 3:], 1)[0] if n_tail >= 3 else 0.0
+    a, a_se = 0.0, 0.0
+    if n_tail >= 3:
+        zz, yy = z[i_c + n_tail // 3:], y[i_c + n_tail // 3:]
+        coef, res, *_ = np.polyfit(zz, yy, 1, full=True)
+        a = float(coef[0])
+        if zz.size > 3 and np.ptp(zz) > 0 and res.size:
+            a_se = float(np.sqrt(res[0] / (zz.size - 2) / np.sum((zz - zz.mean()) ** 2)))
+    if 0.5 < a + 3 * a_se and a - 3 * a_se < 2.0:
+        a = min(max(a, 0.51), 1.99)   # noisy (e.g. a 0.3 nm-noise detector over a few nm): ~1
     if 0.05 < a <= 0.5 or a >= 2.0:
         raise AnalysisError(
             f"{name}: in contact the deflection follows the position with slope {a:.3g}, not ~1: "
@@ -205,7 +283,8 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     j0 = i_c // 10
     j = j0 + int(np.argmax(np.abs(dy[j0: max(i_c, 1)]))) + 1 if i_c > 1 else 1
     j = min(j, i_c)
-    sigma = max(_noise_sigma(y[: max(12, int(0.8 * j))]), 1e-15)
+    n_noise = max(12, int(0.8 * j))
+    sigma = max(_noise_sigma(y[:n_noise]), 1e-15)
     j_drop = int(np.argmin(dy[: max(j, 1)])) + 1
     if j_drop < j and -dy[j_drop - 1] > 8 * sigma and j - j_drop <= 3 + jump_window * fs:
         j = j_drop          # the drop of the jump-in came first, then the spike
@@ -219,15 +298,26 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
         raise AnalysisError(f"{name}: only {int(mask.sum())} samples left outside the jump-in "
                             "window; record a longer approach or a higher sample rate")
     base = slice(0, max(10, int(0.6 * j)))
-    drift, offset = np.polyfit(t[base], y[base], 1)
+    # the analysis's robust baseline (drift step): a line in time, spikes down-weighted
+    offset, drift, _ = fit_baseline(t[base], y[base], order=1)
     ybl = y - offset - drift * t
     post = slice(min(max(j, i_c) + win + 2, n - 3), n)
     shift = float(np.median(z[post] - ybl[post]))
     fc = FitCurve(name=name, time=t, position=z, deflection=y, velocity=v, sample_rate=fs,
-                  sigma=sigma, jump_index=j, mask=mask,
+                  sigma=sigma, jump_index=j, mask=mask, noise_samples=min(n_noise, n) - 2,
                   guess={"shift": shift, "offset": float(offset), "drift": float(drift),
                          "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
                   metadata=dict(curve.metadata or {}))
+    fc.metadata["position_channel"] = channel_note["channel"]
+    if channel_note.get("bent"):
+        fc.metadata["velocity_from_ramp"] = channel_note["bent"]
+    fc.metadata["record_samples"] = int(np.asarray(curve.time).size)
+    if channel_note.get("speed_note"):
+        fc.metadata["velocity_from_ramp"] = channel_note["speed_note"]
+    elif v_meas and velocity is None and not v_file:
+        fc.metadata["velocity_from_ramp"] = (
+            f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp of "
+            "the measured position; give --velocities to override")
     if from_ramp:
         fc.metadata["velocity_from_ramp"] = (
             f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp "
@@ -259,7 +349,14 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
         raise AnalysisError(f"{fc.name}: only {ridx.size} retract samples; the fit needs >= 30")
     t0 = float(np.asarray(curve.time, float)[idx[0]])
     tr = np.asarray(curve.time, float)[ridx] - t0
-    zr = np.asarray(curve.piezo_nominal, float)[ridx]
+    if fc.metadata.get("position_channel") == "measured":   # the same channel as the approach
+        from ..analysis._numeric import robust_line_thin
+
+        zm = np.asarray(curve.piezo_measured, float)[ridx]
+        a, b, *_ = robust_line_thin(tr - tr[0], zm)
+        zr = a + b * (tr - tr[0])
+    else:
+        zr = np.asarray(curve.piezo_nominal, float)[ridx]
     yr = np.asarray(curve.deflection_signal, float)[ridx] * scale
     if not (np.all(np.isfinite(yr)) and np.all(np.isfinite(zr)) and np.all(np.diff(tr) > 0)):
         raise FileFormatError(f"{fc.name}: the retract contains NaN/infinite values or "
@@ -298,7 +395,7 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
         sample_rate=fc.sample_rate, sigma=fc.sigma, jump_index=fc.jump_index,
         mask=np.concatenate([mask, mask_r]), guess=fc.guess, metadata=fc.metadata,
         retract_start=n_app, turn_time=float(t_turn), turn_position=float(za + va * t_turn),
-        retract_velocity=float(-vr))
+        retract_velocity=float(-vr), noise_samples=fc.noise_samples)
 
 
 def check_consistent(curves: Sequence[RawCurve], names: Sequence[str]) -> None:

@@ -1,4 +1,5 @@
-"""Figures of a dynamic fit: data, model and residuals per curve; profile likelihoods."""
+"""Figures of a dynamic fit: data, model and residuals per curve; the residuals of all
+curves in noise units side by side; profile likelihoods."""
 
 from __future__ import annotations
 
@@ -9,7 +10,7 @@ import numpy as np
 
 from .._files import atomic_path
 
-__all__ = ["plot_curves", "plot_profiles"]
+__all__ = ["plot_curves", "plot_profiles", "plot_residuals"]
 
 
 def _save(fig, path: Path, force: bool) -> Path:
@@ -79,6 +80,40 @@ def plot_profiles(result, path: str | os.PathLike, force: bool = False) -> Path 
         ax.set_ylabel("Δχ² (profiled)")
         ax.set_ylim(0, max(2 * thr, min(max(p["delta_chi2"]), 5 * thr)))
         ax.legend(fontsize=8)
+    fig.tight_layout()
+    path = Path(path)
+    _save(fig, path, force)
+    return path
+
+
+def plot_residuals(result, curves, path: str | os.PathLike, force: bool = False) -> Path:
+    """All curves' residuals in noise units against ``z - shift``, one panel per curve.
+
+    The residuals are those the fit minimises (whitened where the noise model has a
+    1/f part); the title of each panel gives the curve's reduced chi-square, the
+    figure's title the fit's and its threshold (:mod:`afmforce.fit.adequacy`).
+    """
+    from matplotlib.figure import Figure
+
+    prob, x = result._problem, result._x
+    values, shifts = prob.unpack(x)
+    fig = Figure(figsize=(7, 1.9 * len(curves) + 0.8))
+    axes = fig.subplots(len(curves), 1, squeeze=False)[:, 0]
+    for i, (ax, c) in enumerate(zip(axes, curves)):
+        r = prob.ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
+        z = (c.position[c.mask] - shifts[i]) * 1e9
+        ax.plot(z, r, ".", ms=2.5, color="C3")
+        ax.axhline(0, color="k", lw=0.6)
+        for yy in (-3, 3):
+            ax.axhline(yy, color="0.6", lw=0.5, ls="--")
+        ax.set_ylabel("residual / noise")
+        ax.set_title(f"{c.name}: {c.velocity * 1e6:.3g} µm/s, reduced χ² "
+                     f"{float(np.mean(r ** 2)):.3g}", fontsize=9)
+    axes[-1].set_xlabel("piezo position z − shift [nm]")
+    adq = result.adequacy or {}
+    fig.suptitle(f"reduced χ² {result.redchi:.3g} (threshold {adq.get('threshold', np.nan):.3g}): "
+                 + ("the model describes the data" if adq.get("adequate", True)
+                    else "the model does NOT describe the data"), fontsize=10)
     fig.tight_layout()
     path = Path(path)
     _save(fig, path, force)

@@ -39,6 +39,10 @@ class FitParameter:
         Models in which the parameter has an effect.
     meaning : str
         What it is.
+    physical_lower : bool
+        The lower bound is a physical limit (``xi >= 0``): an interval reaching it is
+        an upper bound ``[lower, hi]``. Every other bound is a search bound: an
+        interval that reaches it is one-sided, reported ``None`` on that side.
     """
 
     name: str
@@ -50,6 +54,7 @@ class FitParameter:
     abs_step: float
     models: tuple[str, ...]
     meaning: str
+    physical_lower: bool = False
 
     def step(self, value: float) -> float:
         """Forward-difference step at ``value`` [unit]."""
@@ -63,13 +68,13 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
     FitParameter("radius", "m", 1e-9, 1e-4, 1e-7, 0.01, 1e-11, ("beam", "spring"),
                  "effective radius R (the data fix A*R; A is given)"),
     FitParameter("xi", "kg/s", 0.0, 10.0, 1e-2, 0.02, 2e-4, ("beam",),
-                 "viscous tip friction coefficient (eq 28)"),
+                 "viscous tip friction coefficient (eq 28)", True),
     FitParameter("zeta", "kg/(s N^2)", 0.0, 1e20, 1e14, 0.02, 1e12, ("beam",),
-                 "load-proportional friction coefficient (friction='load')"),
+                 "load-proportional friction coefficient (friction='load')", True),
     FitParameter("z0", "m", 0.1e-9, 2e-9, 1e-9, 0.005, 1e-13, ("beam", "spring"),
                  "soft-wall length of eq 2"),
     FitParameter("viscosity", "Pa s", 0.0, 1.0, 1e-4, 0.02, 1e-6, ("beam", "spring"),
-                 "fluid viscosity (drainage)"),
+                 "fluid viscosity (drainage)", True),
     FitParameter("mass", "kg", 1e-15, 1e-5, 1e-9, 0.02, 1e-16, ("spring",),
                  "effective mass of the simple spring (inertia)"),
     FitParameter("m_joint", "kg", 1e-15, 1e-5, 1e-10, 0.02, 1e-16, ("beam",),

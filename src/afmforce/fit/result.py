@@ -19,19 +19,25 @@ class Estimate:
     value, stderr : float
         Best estimate and standard error from the Jacobian (scaled by the
         reduced chi-square when it exceeds 1) [unit].
-    interval : (float, float)
+    interval : (float or None, float or None)
         Profile-likelihood interval at ``level`` where computed, else
-        ``value +- z stderr`` clipped to the bounds [unit].
+        ``value +- z stderr`` [unit]. A side the data do not bound (the profile
+        reaches a search bound, or stays below the threshold as far as it goes)
+        is ``None`` (one-sided interval, see ``note``); at a physical lower bound
+        (xi = 0) the interval is an upper bound ``[0, hi]``.
     interval_method : str
         ``"profile"`` or ``"wald"``.
     unit : str
+    note : str
+        Why an interval is one-sided ("" when it is two-sided).
     """
 
     value: float
     stderr: float
-    interval: tuple[float, float]
+    interval: tuple[float | None, float | None]
     interval_method: str
     unit: str
+    note: str = ""
 
 
 @dataclass
@@ -51,6 +57,7 @@ class CurveFit:
     chi2: float
     rms_residual: float
     retract: bool = False       # the retract run was fitted too
+    pink: float = 0.0           # rms of the 1/f noise in the noise model [m] (0: white only)
 
 
 @dataclass
@@ -60,6 +67,8 @@ class ModelComparison:
     ``chi2``, ``n_parameters``, ``aic``, ``bic`` per model name; the
     likelihood-ratio statistic of friction (``lr``) and its p-value (boundary
     case xi >= 0: half a chi-square with one degree of freedom).
+    ``friction_detected`` is None (and ``verdict`` says "undetermined: ...") when the
+    best model does not describe the data (:mod:`afmforce.fit.adequacy`).
     """
 
     chi2: dict
@@ -69,7 +78,7 @@ class ModelComparison:
     lr: float
     p_value: float
     level: float
-    friction_detected: bool
+    friction_detected: bool | None
     verdict: str
     best_by_aic: str
     best_by_bic: str
@@ -104,6 +113,8 @@ class FitResult:
     success: bool
     message: str
     config: dict = field(default_factory=dict)
+    #: goodness of fit: ``redchi``, ``threshold``, ``adequate``, ``worst`` (see fit.adequacy)
+    adequacy: dict = field(default_factory=dict)
     _problem: object = field(default=None, repr=False, compare=False)
     _x: object = field(default=None, repr=False, compare=False)
 
@@ -145,7 +156,7 @@ class FitResult:
             "correlations": self.correlations,
             "curves": [asdict(c) for c in self.curves],
             "units": {"shift": "m", "offset": "m", "drift": "m/s", "sigma": "m", "velocity": "m/s",
-                      "sample_rate": "Hz", "rms_residual": "m"},
+                      "sample_rate": "Hz", "rms_residual": "m", "pink": "m"},
             "chi2": self.chi2, "dof": self.dof, "redchi": self.redchi, "n_data": self.n_data,
             "level": self.level,
             "profiles": {k: {kk: list(map(float, vv)) for kk, vv in p.items()}
@@ -154,6 +165,8 @@ class FitResult:
             "model_evaluations": self.model_evaluations,
             "wall_time": self.wall_time, "success": self.success, "message": self.message,
             "config": self.config,
+            "adequacy": dict(self.adequacy),
+            "verdict": None if self.comparison is None else self.comparison.verdict,
         }
         return d
 
@@ -163,11 +176,18 @@ class FitResult:
 
         L = [f"# Dynamic fit ({self.model} model, {len(self.curves)} curves)", ""]
         L += [f"| parameter | value | std. error | {self.level:.0%} interval |", "|---|---|---|---|"]
+        def end(v, unit):
+            return "open" if v is None else fq(v, unit)
+
         for name, e in {**self.parameters, **self.derived}.items():
             L.append(f"| {name} | {fq(e.value, e.unit)} | {fq(e.stderr, e.unit)} | "
-                     f"[{fq(e.interval[0], e.unit)}, {fq(e.interval[1], e.unit)}] "
-                     f"({e.interval_method}) |")
+                     f"[{end(e.interval[0], e.unit)}, {end(e.interval[1], e.unit)}] "
+                     f"({e.interval_method}{', one-sided' if None in e.interval else ''}) |")
         L.append("")
+        if self.adequacy and not self.adequacy.get("adequate", True):
+            L += [f"**The model does not describe the data**: reduced chi-square "
+                  f"{self.redchi:.3g} > {self.adequacy['threshold']:.3g}.", ""]
+            L += [f"- {w}" for w in self.adequacy.get("worst", [])] + [""]
         if self.comparison is not None:
             c = self.comparison
             L += [f"**{c.verdict}** (likelihood ratio {c.lr:.3g}, p = {c.p_value:.3g})", ""]
@@ -194,12 +214,23 @@ class FitResult:
 
 
 def wald_interval(value: float, stderr: float, level: float, lower: float,
-                  upper: float) -> tuple[float, float]:
-    """``value +- z stderr`` clipped to ``[lower, upper]``."""
+                  upper: float, physical_lower: bool = False) -> tuple[tuple, str]:
+    """``value +- z stderr`` and a note; a side beyond a search bound is None (one-sided).
+
+    A side below a physical lower bound (``physical_lower``, e.g. xi >= 0) ends at it.
+    """
     from scipy.stats import norm
 
     z = float(norm.ppf(0.5 + level / 2))
-    if not math.isfinite(stderr):
-        return (lower, upper)
-    return (float(np.clip(value - z * stderr, lower, upper)),
-            float(np.clip(value + z * stderr, lower, upper)))
+    lo = value - z * stderr if math.isfinite(stderr) else -math.inf
+    hi = value + z * stderr if math.isfinite(stderr) else math.inf
+    notes = []
+    if lo <= lower:
+        lo = lower if physical_lower else None
+        if lo is None:
+            notes.append(f"no lower end above the search bound {lower:.3g}")
+    if hi >= upper:
+        hi = None
+        notes.append(f"no upper end below the search bound {upper:.3g}")
+    return (None if lo is None else float(lo), None if hi is None else float(hi)), \
+        ("one-sided Wald interval: " + "; ".join(notes) if notes else "")

@@ -24,7 +24,7 @@ from .params import PARAMETERS
 from .problem import Problem
 from .result import ModelComparison
 
-__all__ = ["profile_interval", "compare_models", "PROFILE_STEPS"]
+__all__ = ["profile_interval", "fit_nested", "compare_models", "PROFILE_STEPS"]
 
 #: Profile points at these multiples of the standard error on each side (until the threshold).
 PROFILE_STEPS = (1.0, 2.0, 3.0, 4.5, 6.5, 9.0, 13.0)
@@ -52,10 +52,12 @@ def profile_interval(prob: Problem, x: np.ndarray, chi2_min: float, name: str, s
                      s2: float, level: float, max_nfev: int = 15):
     """Profile-likelihood interval of ``name`` at ``level``.
 
-    Returns ``(lower, upper, points)``; ``points`` holds the profiled values
+    Returns ``(lower, upper, points, note)``; ``points`` holds the profiled values
     (``value`` [unit]) and ``delta_chi2`` (already divided by ``s2``). A side
-    that reaches the parameter's bound without crossing the threshold ends
-    at the bound (for xi: the interval is an upper bound).
+    that does not cross the threshold is open: ``None`` (one-sided interval, with
+    ``note`` saying how far the profile went), except at a physical lower bound
+    (``FitParameter.physical_lower``, e.g. xi = 0), where the interval is an upper
+    bound ``[lower, hi]``. A search bound's value is never reported as an end.
     """
     p = PARAMETERS[name]
     j = prob.free.index(name)
@@ -63,11 +65,11 @@ def profile_interval(prob: Problem, x: np.ndarray, chi2_min: float, name: str, s
     thr = float(chi2_dist.ppf(level, 1))
     step = stderr if math.isfinite(stderr) and stderr > 0 else 0.2 * max(abs(best), p.abs_step)
     pts = {best: 0.0}
-    ends = []
+    ends, notes = [], []
     for sign in (-1.0, 1.0):
         xs = _drop(x, j)
         prev_v, prev_d = best, 0.0
-        end = p.lower if sign < 0 else p.upper
+        end = p.lower if (sign < 0 and p.physical_lower) else None
         for k in PROFILE_STEPS:
             v = best + sign * k * step
             at_bound = (v <= p.lower) if sign < 0 else (v >= p.upper)
@@ -82,41 +84,84 @@ def profile_interval(prob: Problem, x: np.ndarray, chi2_min: float, name: str, s
             prev_v, prev_d = v, d
             if at_bound:
                 break
+        if end is None:
+            side = "lower" if sign < 0 else "upper"
+            where = (f"the search bound {prev_v:.3g} {p.unit}" if prev_v in (p.lower, p.upper)
+                     else f"{prev_v:.3g} {p.unit} (the last profiled value)")
+            notes.append(f"{name}: one-sided interval, no {side} end: the profile stays below the "
+                         f"{level:.0%} threshold out to {where}")
         ends.append(end)
     keys = sorted(pts)
-    return ends[0], ends[1], {"value": keys, "delta_chi2": [pts[k] for k in keys]}
+    return (ends[0], ends[1], {"value": keys, "delta_chi2": [pts[k] for k in keys]},
+            "; ".join(notes))
 
 
-def compare_models(prob: Problem, x: np.ndarray, chi2_full: float, curves, base, drift: bool,
-                   level: float, max_nfev: int, warns: list, s2: float) -> ModelComparison:
-    """Fit the static and the friction-free dynamic models and compare with the full fit."""
+def fit_nested(prob: Problem, x: np.ndarray, curves, base, drift: bool, max_nfev: int,
+               starts=()) -> dict:
+    """The static and the friction-free dynamic fits nested in the full fit at ``x``.
+
+    Returns ``{"static": (chi2, n_par) or None, "no_friction": (chi2, x_full, n_par) or
+    None}``; ``x_full`` is the friction-free optimum as a vector of the full problem
+    (friction parameters at 0), from which the full model can be restarted. The
+    friction-free model is fitted from the full optimum with friction set to 0, from
+    the static optimum and from each of ``starts`` (full vectors, e.g. the xi = 0 point
+    of the ridge), and keeps the best.
+    """
     from .params import SPEED_DEPENDENT
     from .problem import local_fit
 
-    n = sum(int(c.mask.sum()) for c in curves)
-    n_lin = (2 if drift else 1) * len(curves)
-    chi2, npar = {}, {}
+    n_lin = prob.ev.n_linear()
     values, shifts = prob.unpack(x)
-    # static: no inertia, drainage or friction; only the speed-independent parameters
+    out: dict = {"static": None, "no_friction": None}
     free_s = tuple(f for f in prob.free if f not in SPEED_DEPENDENT)
-    if free_s:
+    static_start = None
+    if free_s:   # static: no inertia, drainage or friction; only the speed-independent parameters
         ev_s = Evaluator(curves, base.replace(**{k: v for k, v in values.items()
-                                                 if k not in SPEED_DEPENDENT}), "static", drift)
+                                                 if k not in SPEED_DEPENDENT}), "static", drift,
+                         prob.ev.fringes)
         ps = Problem(ev_s, free_s)
         xs, _ = local_fit(ps, ps.pack(values, shifts), max_nfev)
-        chi2["static"], npar["static"] = ps.chi2(xs), len(xs) + n_lin
+        out["static"] = (ps.chi2(xs), len(xs) + n_lin)
         prob.ev.simulations += ev_s.simulations
-        static_values, static_shifts = ps.unpack(xs)
+        static_start = ps.unpack(xs)
     fric = [f for f in ("xi", "zeta") if f in prob.free]
-    if fric:
-        sub = Problem(prob.ev, tuple(f for f in prob.free if f not in fric),
-                      {**prob.fixed, **{f: 0.0 for f in fric}})
-        x0 = np.array([xx for nm, xx in zip(prob.names, x) if nm not in fric])
-        c2, _ = _refit(sub, x0, max_nfev)
-        if free_s:   # a second start: the static fit (without friction the jump moves out)
-            c2 = min(c2, _refit(sub, sub.pack({**values, **static_values}, static_shifts),
-                                max_nfev)[0])
-        chi2["dynamic, no friction"], npar["dynamic, no friction"] = c2, len(x0) + n_lin
+    if not fric:
+        return out
+    keep = [k for k, nm in enumerate(prob.names) if nm not in fric]
+    sub = Problem(prob.ev, tuple(f for f in prob.free if f not in fric),
+                  {**prob.fixed, **{f: 0.0 for f in fric}})
+    cands = [np.asarray(x, float)[keep]] + [np.asarray(st, float)[keep] for st in starts]
+    if static_start is not None:   # without friction the jump moves out: the static fit
+        cands.append(sub.pack({**values, **static_start[0]}, static_start[1]))
+    best = None
+    for x0 in cands:
+        c2, xs = _refit(sub, x0, max_nfev)
+        if best is None or c2 < best[0]:
+            best = (c2, xs)
+    x_full = np.asarray(x, float).copy()
+    x_full[keep] = best[1]
+    for f in fric:
+        x_full[prob.names.index(f)] = 0.0
+    out["no_friction"] = (best[0], x_full, len(best[1]) + n_lin)
+    return out
+
+
+def compare_models(prob: Problem, x: np.ndarray, chi2_full: float, curves, base, drift: bool,
+                   level: float, s2: float, nested: dict,
+                   verdict_override: str | None = None, max_nfev: int = 40) -> ModelComparison:
+    """Compare the static, friction-free and full fits (:func:`fit_nested`).
+
+    ``verdict_override``: the words when no verdict can be given (the model does
+    not describe the data); ``friction_detected`` is then None.
+    """
+    n = sum(int(c.mask.sum()) for c in curves)
+    n_lin = prob.ev.n_linear()
+    chi2, npar = {}, {}
+    if nested["static"] is not None:
+        chi2["static"], npar["static"] = nested["static"]
+    if nested["no_friction"] is not None:
+        c2, _, n_nf = nested["no_friction"]
+        chi2["dynamic, no friction"], npar["dynamic, no friction"] = c2, n_nf
         chi2["dynamic, friction"], npar["dynamic, friction"] = chi2_full, len(x) + n_lin
         lr = max((c2 - chi2_full) / s2, 0.0)
         p = 1.0 if lr <= 0 else 0.5 * float(chi2_dist.sf(lr, 1))
@@ -128,11 +173,16 @@ def compare_models(prob: Problem, x: np.ndarray, chi2_full: float, curves, base,
         lr, p, detected = math.nan, math.nan, False
         verdict = "friction not tested (xi is not free" + (
             "; the spring model has no friction)" if base.model == "spring" else ")")
+    if verdict_override is not None:
+        detected, verdict = None, verdict_override
     slip = _compare_slip(prob, x, chi2_full, n_lin, level, max_nfev, s2, chi2, npar)
+    if slip and verdict_override is not None:    # no verdict without a model that fits
+        slip.update(slip_detected=None, slip_verdict=verdict_override)
     aic = {m: chi2[m] / s2 + 2 * npar[m] for m in chi2}
     bic = {m: chi2[m] / s2 + npar[m] * math.log(n) for m in chi2}
     return ModelComparison(chi2=chi2, n_parameters=npar, aic=aic, bic=bic, lr=lr, p_value=p,
-                           level=level, friction_detected=bool(detected), verdict=verdict,
+                           level=level, friction_detected=None if detected is None
+                           else bool(detected), verdict=verdict,
                            best_by_aic=min(aic, key=aic.get), best_by_bic=min(bic, key=bic.get),
                            **slip)
 
