@@ -25,7 +25,6 @@ from typing import Sequence
 
 import numpy as np
 
-from ..analysis.drift import fit_baseline
 from ..errors import AnalysisError, FileFormatError, MissingMetadataError, ParameterError
 from ..io.curve import RawCurve
 
@@ -299,6 +298,8 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
                             "window; record a longer approach or a higher sample rate")
     base = slice(0, max(10, int(0.6 * j)))
     # the analysis's robust baseline (drift step): a line in time, spikes down-weighted
+    from ..analysis.drift import fit_baseline   # lazily: registering `afmforce fit` loads no numba
+
     offset, drift, _ = fit_baseline(t[base], y[base], order=1)
     ybl = y - offset - drift * t
     post = slice(min(max(j, i_c) + win + 2, n - 3), n)
