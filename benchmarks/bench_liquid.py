@@ -33,6 +33,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_fit import covers  # noqa: E402  (a None end is open: one-sided interval)
 from liquid_virtual import reference_curves  # noqa: E402
 
 from afmforce import forces as F  # noqa: E402
@@ -99,7 +100,8 @@ def slip_run(seed: int, slip: float | None) -> dict:
     k = res.parameters["spring_constant"]
     lo, hi = e.interval
     return dict(seed=seed, truth=b, fit=e.value, error_nm=(e.value - b) * 1e9,
-                interval_nm=[lo * 1e9, hi * 1e9], covered=bool(lo <= b <= hi),
+                interval_nm=[None if lo is None else lo * 1e9, None if hi is None else hi * 1e9],
+                covered=covers((lo, hi), b),
                 k_error=k.value / exp["spring_constant"] - 1.0, k_file_error=k_file / exp["spring_constant"] - 1,
                 slip_detected=res.slip_detected, slip_p=res.slip_p_value, redchi=res.redchi, wall_s=wall)
 
@@ -139,8 +141,12 @@ def preset_run(seed: int) -> dict:
     res = fit_dynamic(curves, model="spring", free=("slip_length", "spring_constant"), fixed=fixed,
                       profile=("slip_length",), jump_window=0.3e-3)
     e = res.parameters["slip_length"]
-    return dict(seed=seed, truth=b, error_nm=(e.value - b) * 1e9, covered=bool(e.interval[0] <= b <= e.interval[1]),
+    return dict(seed=seed, truth=b, error_nm=(e.value - b) * 1e9, covered=covers(e.interval, b),
                 k_error=res.parameters["spring_constant"].value / exp["spring_constant"] - 1, redchi=res.redchi)
+
+
+def _end(v) -> str:
+    return "open" if v is None else f"{v:.3f}"
 
 
 def main(argv=None) -> int:
@@ -161,7 +167,7 @@ def main(argv=None) -> int:
         r = slip_run(s, None)
         runs.append(r)
         print(f"slip seed {s}: b {r['truth'] * 1e9:.3f} nm, error {r['error_nm']:+.3f} nm, 95% "
-              f"[{r['interval_nm'][0]:.3f}, {r['interval_nm'][1]:.3f}] covered {r['covered']}, "
+              f"[{_end(r['interval_nm'][0])}, {_end(r['interval_nm'][1])}] covered {r['covered']}, "
               f"k error {r['k_error']:+.2%} (file {r['k_file_error']:+.0%}), {r['wall_s']:.1f} s", flush=True)
     if runs:
         out["slip"] = dict(runs=runs, max_abs_error_nm=max(abs(r["error_nm"]) for r in runs),
