@@ -74,7 +74,8 @@ def plot_profiles(result, path: str | os.PathLike, force: bool = False) -> Path 
         ax.plot(p["value"], p["delta_chi2"], "o-", color="C0", ms=4)
         ax.axhline(thr, color="C3", lw=0.8, ls="--", label=f"{result.level:.0%} threshold")
         for v in e.interval:
-            ax.axvline(v, color="C3", lw=0.6)
+            if v is not None:             # a None end: one-sided interval (search bound reached)
+                ax.axvline(v, color="C3", lw=0.6)
         ax.axvline(e.value, color="k", lw=0.6)
         ax.set_xlabel(f"{name} [{e.unit}]")
         ax.set_ylabel("Δχ² (profiled)")

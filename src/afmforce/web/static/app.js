@@ -373,7 +373,7 @@ $("fit-run").addEventListener("click", async () => {
 });
 function drawFit(r) {
   $("fit-verdict").textContent = r.verdict;
-  const rows = Object.entries(r.parameters).map(([n, p]) => [n, `${Number(p.value.toPrecision(4))} ${p.unit}`, `± ${Number(p.stderr.toPrecision(3))}`, `[${p.interval.map((x) => Number(x.toPrecision(4))).join(", ")}] (${p.interval_method})`]);
+  const rows = Object.entries(r.parameters).map(([n, p]) => [n, `${Number(p.value.toPrecision(4))} ${p.unit}`, `± ${Number(p.stderr.toPrecision(3))}`, `[${p.interval.map((x) => (x === null ? "open" : Number(x.toPrecision(4)))).join(", ")}] (${p.interval_method})`]);
   $("fit-table").replaceChildren(table(rows, ["parameter", "value", "std. error", `${r.level * 100}% interval`]), el("p", { class: "muted", text: `reduced chi-square ${r.redchi.toFixed(3)}; ${r.model_evaluations} model evaluations in ${r.wall_time.toFixed(1)} s` }));
   const tr = [];
   r.plots.forEach((p, i) => {
