@@ -154,3 +154,17 @@ def test_fringe_columns_absorb_a_fringe_before_contact():
         prob = Problem(e, ("hamaker",), {})
         chi = prob.chi2(prob.pack({"hamaker": 5e-19}, [3e-9])) / int(c.mask.sum())
         assert (chi > limit) if not fringes else (chi < limit)
+
+
+def test_profile_figure_draws_a_one_sided_interval(tmp_path):
+    """A profile interval open at a search bound ([lo, None]) is drawn with its one end
+    (matplotlib's axvline(None) raised a TypeError)."""
+    from types import SimpleNamespace
+
+    from afmforce.fit.figures import plot_profiles
+
+    est = SimpleNamespace(value=2.0, interval=(1.0, None), unit="kg/s")
+    res = SimpleNamespace(profiles={"xi": {"value": [1.0, 2.0, 3.0], "delta_chi2": [4.0, 0.0, 1.0]}},
+                          parameters={"xi": est}, level=0.95)
+    path = plot_profiles(res, tmp_path / "profiles.png")
+    assert path.is_file() and path.stat().st_size > 1000
