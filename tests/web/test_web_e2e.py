@@ -126,7 +126,7 @@ def test_run_a_small_fit_and_read_the_verdict(page):
     assert "xi" in page.inner_text("#fit-table")
     assert page.evaluate("document.getElementById('fit-progress').value") == 1
     seen = page.evaluate("window.PROGRESS || []")          # stages pushed by the server (SSE)
-    assert "fit: local fit 1" in seen and "fit: model comparison" in seen, seen
+    assert "fit: search" in seen and "fit: model comparison" in seen, seen
     _shot(page, "fit")
     assert not page.errors
 
