@@ -280,6 +280,14 @@ def _dl_terms(h, kappa, law):
     return x, csch, cothm1, csch * (cothm1 + 1.0), csch * csch
 
 
+def _dl_params(surface_potential, surface_potential_2, debye_length, permittivity):
+    """(psi1 [V], psi2 [V] (psi1 when not given), kappa [1/m], eps eps0 kappa / 2 [F/m^2])."""
+    p1 = float(surface_potential)
+    p2 = p1 if surface_potential_2 is None else float(surface_potential_2)
+    kappa = 1.0 / debye_length
+    return p1, p2, kappa, 0.5 * permittivity * EPS0 * kappa
+
+
 def _dl_check(law: str) -> None:
     if law not in DOUBLE_LAYERS:
         raise ParameterError(f"double_layer must be one of {sorted(DOUBLE_LAYERS)}, got {law!r}")
@@ -303,10 +311,7 @@ def double_layer_energy(h: ArrayLike, surface_potential: float, debye_length: fl
     _dl_check(law)
     if law == "none":
         return _out(np.zeros_like(np.asarray(h, dtype=float)))
-    p1 = float(surface_potential)
-    p2 = p1 if surface_potential_2 is None else float(surface_potential_2)
-    kappa = 1.0 / debye_length
-    c = 0.5 * permittivity * EPS0 * kappa
+    p1, p2, kappa, c = _dl_params(surface_potential, surface_potential_2, debye_length, permittivity)
     _, cs, cm, _, _ = _dl_terms(h, kappa, law)
     sign = -1.0 if law == "constant_potential" else 1.0
     return _out(c * (2.0 * p1 * p2 * cs + sign * (p1 * p1 + p2 * p2) * cm))
@@ -336,10 +341,7 @@ def double_layer_force_gradient(h: ArrayLike, radius: float, surface_potential: 
     _dl_check(law)
     if law == "none":
         return _out(np.zeros_like(np.asarray(h, dtype=float)))
-    p1 = float(surface_potential)
-    p2 = p1 if surface_potential_2 is None else float(surface_potential_2)
-    kappa = 1.0 / debye_length
-    c = 0.5 * permittivity * EPS0 * kappa
+    p1, p2, kappa, c = _dl_params(surface_potential, surface_potential_2, debye_length, permittivity)
     _, cs, _, cscoth, cs2 = _dl_terms(h, kappa, law)
     sign = 1.0 if law == "constant_potential" else -1.0
     dw = c * kappa * (-2.0 * p1 * p2 * cscoth + sign * (p1 * p1 + p2 * p2) * cs2)
