@@ -1,6 +1,6 @@
 """Recovery and interval coverage of the dynamic fit on the ``typical`` virtual AFM (issue 23).
 
-``python benchmarks/bench_fit_typical.py [--seeds 20] [--first 1] [--fringes] [--json FILE]``
+``python benchmarks/bench_fit_typical.py [--seeds 20] [--first 1] [--only 6,12] [--fringes MODE] [--json FILE]``
 
 The issue's protocol: four curves ``afmforce simulate --instrument typical --seed N
 --xi 0.005 --velocity V --sampling average`` (V = 0.5, 1, 2, 5 um/s; the beam of
@@ -51,15 +51,20 @@ def main() -> None:
     ap.add_argument("--seeds", type=int, default=20)
     ap.add_argument("--first", type=int, default=1)
     ap.add_argument("--json")
-    ap.add_argument("--fringes", action="store_true", help="fit_dynamic(fringes=True)")
+    ap.add_argument("--fringes", default=None, choices=("off", "periodic", "parabola"),
+                    help="fit_dynamic(fringes=...) (default: fit_dynamic's default)")
+    ap.add_argument("--only", help="comma-separated seeds (instead of --first/--seeds)")
     a = ap.parse_args()
     trs = trajectories()
     rows = []
-    for seed in range(a.first, a.first + a.seeds):
+    seeds = ([int(s) for s in a.only.split(",")] if a.only
+             else range(a.first, a.first + a.seeds))
+    kw = {} if a.fringes is None else {"fringes": a.fringes}
+    for seed in seeds:
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            r = fit_dynamic(record(trs, seed), "beam", free=("hamaker", "xi"), fringes=a.fringes)
+            r = fit_dynamic(record(trs, seed), "beam", free=("hamaker", "xi"), **kw)
         pa, px = r.parameters["hamaker"], r.parameters["xi"]
         row = dict(seed=seed, A=pa.value / A, xi=px.value / XI, A_interval=pa.interval,
                    xi_interval=px.interval, A_covered=covers(pa.interval, A),

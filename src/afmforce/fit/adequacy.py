@@ -90,8 +90,7 @@ def adequacy(prob, x, dof: int, chi2: float, curves) -> dict:
         return out
     values, shifts = prob.unpack(x)
     per = []
-    for i, c in enumerate(curves):
-        r = prob.ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
+    for i, (c, r) in enumerate(zip(curves, prob.curve_residuals(x))):
         per.append((float(np.mean(r ** 2)), i, r))
     per.sort(key=lambda t: -t[0])
     bad = [p for p in per if p[0] > redchi_threshold(len(p[2]), [curves[p[1]]])][:3] or per[:1]

@@ -11,7 +11,7 @@ import numpy as np
 from ..errors import ParameterError
 from ..progress import Progress
 from .data import FitCurve, prepare_curves
-from .model import Evaluator
+from .model import DEFAULT_FRINGE_PERIOD, Evaluator
 from .params import PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
 from .result import CurveFit, Estimate, FitResult, wald_interval
@@ -180,8 +180,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 starts: int = 2, level: float = 0.95, profile: Sequence[str] | None = None,
                 compare: bool = True, jump_window: float = 2e-3,
                 max_nfev: int = 40, sampling: str | None = "average",
-                retract: bool = False, noise: str = "auto", fringes: bool = False,
-                progress=None) -> FitResult:
+                retract: bool = False, noise: str = "auto", fringes: str | bool = "off",
+                fringe_period: float = DEFAULT_FRINGE_PERIOD, progress=None) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -242,10 +242,14 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         residuals (generalised least squares; :mod:`afmforce.fit.noise`).
         ``white``: white noise only (the noise rms of each curve from second differences).
 
-    fringes : bool
-        Let each curve's baseline slope change at contact (interference fringes run
-        with the separation before contact and stop in contact; one more linear
-        nuisance per curve, see :class:`~afmforce.fit.model.Evaluator`).
+    fringes : {"off", "periodic", "parabola"} or bool
+        Interference fringes in the baseline (they run with the separation and stop in
+        contact; :class:`~afmforce.fit.model.Evaluator`): ``periodic`` (True) two
+        linear nuisances shared by all curves, ``cos`` and ``sin`` of ``2 pi h /
+        fringe_period``; ``parabola`` a line and a parabola before contact per curve.
+    fringe_period : float
+        Period of the ``periodic`` fringes in the separation [m]: half the laser
+        wavelength at normal incidence (default 335 nm, a 670 nm laser diode).
 
     Returns
     -------
@@ -258,6 +262,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         speed, uncalibrated or inconsistent curves, a curve without contact.
     """
     from .adequacy import adequacy, undetermined_verdict
+    from .damping_check import damping_check, undamped_verdict
     from .noise import PINK_SIGNIFICANCE, estimate_pink, set_noise_model
     from .uncertainty import compare_models, fit_nested, profile_interval
 
@@ -281,7 +286,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
             "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
             "(ideally a factor >= 4 apart) or fix " + ", ".join(dep))
-    ev = Evaluator(fc, base, "dynamic", drift, fringes)
+    ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)
     guess = _guess_globals(fc, base, free)
     shifts0 = [c.guess["shift"] for c in fc]
@@ -380,10 +385,17 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                                     nested_fits, None if adq["adequate"]
                                     else undetermined_verdict(adq), max_nfev)
         report("model comparison")
+        if comparison.friction_detected:     # friction standing in for the lever's damping?
+            chk = damping_check(prob, x, nested_fits, level, max(redchi, 1.0), max_nfev)
+            comparison.damping_check = chk
+            if chk is not None and not chk["detected"]:
+                comparison.friction_detected = None
+                comparison.verdict = undamped_verdict(chk, comparison.p_value)
+                warns.append(comparison.verdict)
+            report("damping check")
     coefs = prob.linear_coefficients(x)
     cfits = []
-    for i, c in enumerate(fc):
-        r = ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
+    for i, (c, r) in enumerate(zip(fc, prob.curve_residuals(x))):
         cfits.append(CurveFit(c.name, c.velocity, c.sample_rate, c.n, int(c.mask.sum()), c.sigma,
                               float(shifts[i]), float(sd[g + i]), float(coefs[i][0]),
                               float(coefs[i][1]), float(r @ r),

@@ -100,8 +100,7 @@ def plot_residuals(result, curves, path: str | os.PathLike, force: bool = False)
     values, shifts = prob.unpack(x)
     fig = Figure(figsize=(7, 1.9 * len(curves) + 0.8))
     axes = fig.subplots(len(curves), 1, squeeze=False)[:, 0]
-    for i, (ax, c) in enumerate(zip(axes, curves)):
-        r = prob.ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
+    for i, (ax, c, r) in enumerate(zip(axes, curves, prob.curve_residuals(x))):
         z = (c.position[c.mask] - shifts[i]) * 1e9
         ax.plot(z, r, ".", ms=2.5, color="C3")
         ax.axhline(0, color="k", lw=0.6)

@@ -22,12 +22,16 @@ import numpy as np
 from ..errors import AfmforceError, ParameterError
 from .data import FitCurve
 
-__all__ = ["Evaluator", "MODEL_KINDS", "FAILED_RESIDUAL"]
+__all__ = ["Evaluator", "MODEL_KINDS", "FAILED_RESIDUAL", "FRINGE_MODES", "DEFAULT_FRINGE_PERIOD"]
 
 #: ``dynamic``: simulate(); ``static``: the quasi-static, friction-free curve (no inertia, no drainage).
 MODEL_KINDS = ("dynamic", "static")
 #: Residual (in noise units) given to every sample of a curve whose simulation failed.
 FAILED_RESIDUAL = 1e3
+#: How interference fringes enter the baseline (see :class:`Evaluator`).
+FRINGE_MODES = ("off", "periodic", "parabola")
+#: Fringe period [m]: half of a 670 nm laser diode's wavelength (normal incidence).
+DEFAULT_FRINGE_PERIOD = 335e-9
 
 
 class Evaluator:
@@ -42,26 +46,40 @@ class Evaluator:
     kind : {"dynamic", "static"}
     drift : bool
         Fit a linear drift (slope in time) per curve besides the offset.
-    fringes : bool
+    fringes : {"off", "periodic", "parabola"} or bool
         Interference fringes (light reflected by the sample) run with the separation
-        ``h`` in the free approach and stop in contact: over an approach much shorter
-        than a fringe period (335 nm for a 670 nm laser), ``I0 cos(h / Delta + phi)``
-        is a line and a parabola in ``h`` before contact and a constant in contact;
-        two more linear nuisances per curve, ``u`` and ``u^2``, ``u = min(t -
-        t_contact, 0)`` (``-h / v``). A 0.4 nm fringe has a slope of up to 0.75 %
-        and a curvature of 0.03 nm over the last 20 nm, a fifth of the van der Waals
-        deflection there.
+        ``h`` and stop in contact, ``I0 cos(h / Delta + phi)`` with ``2 pi Delta`` the
+        fringe period. ``periodic`` (True): two linear nuisances shared by all curves,
+        ``cos(h / Delta)`` and ``sin(h / Delta)`` of the model's separation ``h = z2 -
+        z`` (curves taken at one spot see the same fringes); ``parabola``: over an
+        approach much shorter than a period the fringe is a line and a parabola in
+        ``h`` before contact, two linear nuisances per curve, ``u`` and ``u^2``, ``u =
+        min(t - t_contact, 0)`` (``-h / v``): for curves whose fringes differ. A
+        0.4 nm fringe has a slope of up to 0.75 % and a curvature of 0.03 nm over the
+        last 20 nm, a fifth of the van der Waals deflection there.
+    fringe_period : float
+        ``2 pi Delta`` [m] of the ``periodic`` fringes: half the laser wavelength at
+        normal incidence (335 nm for a 670 nm laser diode).
     """
 
     def __init__(self, curves: Sequence[FitCurve], base, kind: str = "dynamic",
-                 drift: bool = True, fringes: bool = False) -> None:
+                 drift: bool = True, fringes: str | bool = "off",
+                 fringe_period: float = DEFAULT_FRINGE_PERIOD) -> None:
         if kind not in MODEL_KINDS:
             raise ParameterError(f"model kind must be one of {MODEL_KINDS}, got {kind!r}")
         self.curves = list(curves)
         self.base = base
         self.kind = kind
         self.drift = drift
+        if fringes is True or fringes is False:
+            fringes = "periodic" if fringes else "off"
+        if fringes not in FRINGE_MODES:
+            raise ParameterError(f"fringes must be one of {FRINGE_MODES}, got {fringes!r}")
+        if not (math.isfinite(fringe_period) and fringe_period > 0):
+            raise ParameterError(f"fringe_period must be a positive length [m], got {fringe_period!r}")
         self.fringes = fringes
+        self.fringe_period = float(fringe_period)
+        self._bases: dict = {}
         self.simulations = 0
         self.failures = 0
         self.last_error = ""
@@ -166,7 +184,7 @@ class Evaluator:
         if self.drift and c.retract_start is not None:
             # the drift rate may change at the turn (a new run): continuous, with a kink
             cols.append(np.clip(c.time - c.turn_time, 0.0, None))
-        if self.fringes:   # fringes run with the separation before contact, stop in contact
+        if self.fringes == "parabola":   # fringes run with the separation, stop in contact
             u = np.minimum(c.time - c.time[c.jump_index], 0.0)   # -(separation) / speed
             cols += [u, (u / max(float(c.time[c.jump_index]), 1e-300)) ** 2]
         return np.column_stack(cols)
@@ -201,11 +219,78 @@ class Evaluator:
         r = b - X @ coef
         return r, np.append(coef, [0.0, 0.0])[:max(3, coef.size)]
 
+    def _whitened_basis(self, i: int) -> tuple[np.ndarray, np.ndarray]:
+        """``(Xw, Q)``: the whitened design of curve ``i`` on its mask and an orthonormal basis of it."""
+        c = self.curves[i]
+        key = (i, id(c.noise_chol))
+        if key not in self._bases:
+            X = self._whiten(c, self.design(i)[c.mask])
+            self._bases[key] = (X, np.linalg.qr(X)[0])
+        return self._bases[key]
+
+    @staticmethod
+    def _whiten(c: FitCurve, a: np.ndarray) -> np.ndarray:
+        if c.noise_chol is not None:
+            from scipy.linalg import solve_triangular
+
+            return solve_triangular(c.noise_chol, a, lower=True)
+        return a / c.sigma
+
+    def fringe_columns(self, i: int, model: np.ndarray, shift: float) -> np.ndarray:
+        """``cos(h / Delta)``, ``sin(h / Delta)`` of curve ``i`` [1], ``h`` = model deflection - (z - shift)."""
+        c = self.curves[i]
+        h = model - (c.position - shift)
+        ph = h * (2.0 * math.pi / self.fringe_period)
+        return np.column_stack([np.cos(ph), np.sin(ph)])
+
+    def project_all(self, models: Sequence[np.ndarray | None], shifts) -> tuple[list, list]:
+        """:meth:`project` of every curve, with the ``periodic`` fringes shared by all.
+
+        Returns ``(projections, fringes)``: per curve ``(residual, coefficients)`` as
+        :meth:`project` gives them, and the fitted fringe signal of each curve at all its
+        samples [m] (zeros without ``periodic`` fringes). The shared coefficients are
+        eliminated jointly (variable projection): each curve's whitened data and fringe
+        columns are projected off its own offset and drift, and the two shared
+        coefficients fitted to the stacked remainders.
+        """
+        if self.fringes != "periodic":
+            return ([self.project(i, m) for i, m in enumerate(models)],
+                    [np.zeros(c.n) for c in self.curves])
+        ok = [m is not None and bool(np.all(np.isfinite(m[c.mask])))
+              for m, c in zip(models, self.curves)]
+        parts = {}
+        for i, m in enumerate(models):
+            if not ok[i]:
+                continue
+            c = self.curves[i]
+            X, Q = self._whitened_basis(i)
+            F = self.fringe_columns(i, m, float(shifts[i]))
+            b = self._whiten(c, (c.deflection - m)[c.mask])
+            Fw = self._whiten(c, F[c.mask])
+            parts[i] = (X, Q, F, b, Fw, b - Q @ (Q.T @ b), Fw - Q @ (Q.T @ Fw))
+        coef_f = np.zeros(2)
+        if parts:
+            A = np.vstack([p[6] for p in parts.values()])
+            y = np.concatenate([p[5] for p in parts.values()])
+            coef_f = np.linalg.lstsq(A, y, rcond=1e-10)[0]
+        out, fr = [], []
+        for i, m in enumerate(models):
+            if i not in parts:
+                out.append(self.project(i, None))
+                fr.append(np.zeros(self.curves[i].n))
+                continue
+            X, Q, F, b, Fw, bt, Ft = parts[i]
+            coef = np.linalg.lstsq(X, b - Fw @ coef_f, rcond=None)[0]
+            out.append((bt - Ft @ coef_f, np.append(coef, [0.0, 0.0])[:max(3, coef.size)]))
+            fr.append(F @ coef_f)
+        return out, fr
+
     def residual(self, i: int, values: dict, shift: float) -> np.ndarray:
         return self.project(i, self.predict(i, values, shift))[0]
 
     def n_linear(self, i: int | None = None) -> int:
-        """Linear nuisance parameters eliminated for curve ``i`` (None: all curves)."""
+        """Linear nuisance parameters eliminated for curve ``i`` (None: all curves, shared ones incl.)."""
         if i is None:
-            return sum(self.n_linear(j) for j in range(len(self.curves)))
+            return (sum(self.n_linear(j) for j in range(len(self.curves)))
+                    + 2 * (self.fringes == "periodic"))
         return self.design(i).shape[1]

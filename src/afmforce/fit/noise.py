@@ -65,8 +65,7 @@ def estimate_pink(prob, x, drift: bool = True) -> tuple[float, float]:
     values, shifts = prob.unpack(x)
     ev = prob.ev
     blocks, rs, sel, c2w = [], [], [], []
-    for i, c in enumerate(ev.curves):
-        r = ev.project(i, prob.curve_prediction(i, values, shifts[i]))[0]
+    for i, (c, r) in enumerate(zip(ev.curves, prob.curve_residuals(x))):
         idx = np.flatnonzero(c.mask)
         Q, _ = np.linalg.qr(ev.design(i)[c.mask])
         K = pink_correlation(c.metadata.get("record_samples", c.n))

@@ -85,11 +85,26 @@ class Problem:
         for (key, _), pred in zip(todo, self.ev.predict_many([r for _, r in todo])):
             self._cache[key] = pred
 
-    def residual(self, x: np.ndarray) -> np.ndarray:
-        values, shifts = self.unpack(x)
+    def projections(self, values: dict, shifts, replace: tuple | None = None) -> tuple[list, list]:
+        """Per curve ``(residual, linear coefficients)`` and fringe signal [m] at ``values, shifts``.
+
+        ``replace = (i, shift)`` evaluates curve ``i`` at another shift (a Jacobian column):
+        with fringes shared by the curves every curve's residual may change.
+        """
+        shifts = np.array(shifts, float)
+        if replace is not None:
+            shifts[replace[0]] = replace[1]
         self.prefetch([(i, values, shifts[i]) for i in range(self.n_curves)])
-        return np.concatenate([self.ev.project(i, self.curve_prediction(i, values, shifts[i]))[0]
-                               for i in range(self.n_curves)])
+        preds = [self.curve_prediction(i, values, shifts[i]) for i in range(self.n_curves)]
+        return self.ev.project_all(preds, shifts)
+
+    def curve_residuals(self, x: np.ndarray) -> list[np.ndarray]:
+        """The weighted residual of each curve at ``x`` (noise units)."""
+        values, shifts = self.unpack(x)
+        return [p[0] for p in self.projections(values, shifts)[0]]
+
+    def residual(self, x: np.ndarray) -> np.ndarray:
+        return np.concatenate(self.curve_residuals(x))
 
     def chi2(self, x: np.ndarray) -> float:
         r = self.residual(x)
@@ -99,52 +114,44 @@ class Problem:
         """Forward-difference Jacobian of :meth:`residual` w.r.t. the scaled vector."""
         values, shifts = self.unpack(x)
         requests = [(i, values, shifts[i]) for i in range(self.n_curves)]
+        steps = {}
         for name in self.free:       # every perturbed run of this Jacobian in one batch
             p = PARAMETERS[name]
             h = p.step(values[name])
             if values[name] + h > p.upper:
                 h = -h
+            steps[name] = h
             requests += [(i, {**values, name: values[name] + h}, shifts[i])
                          for i in range(self.n_curves)]
         requests += [(i, values, shifts[i] + SHIFT_STEP) for i in range(self.n_curves)]
         self.prefetch(requests)
-        base = [self.ev.project(i, self.curve_prediction(i, values, shifts[i]))[0]
-                for i in range(self.n_curves)]
-        sizes = [len(b) for b in base]
-        offs = np.concatenate([[0], np.cumsum(sizes)])
-        J = np.zeros((offs[-1], len(self.free) + self.n_curves))
+        base = np.concatenate([p[0] for p in self.projections(values, shifts)[0]])
+        J = np.zeros((base.size, len(self.free) + self.n_curves))
         for j, name in enumerate(self.free):
-            p = PARAMETERS[name]
-            h = p.step(values[name])
-            if values[name] + h > p.upper:
-                h = -h
-            v2 = {**values, name: values[name] + h}
-            for i in range(self.n_curves):
-                r2 = self.ev.project(i, self.curve_prediction(i, v2, shifts[i]))[0]
-                J[offs[i]:offs[i + 1], j] = (r2 - base[i]) / (h / p.scale)
+            h = steps[name]
+            r2 = np.concatenate([p[0] for p in self.projections(
+                {**values, name: values[name] + h}, shifts)[0]])
+            J[:, j] = (r2 - base) / (h / PARAMETERS[name].scale)
         g = len(self.free)
         for i in range(self.n_curves):
-            r2 = self.ev.project(i, self.curve_prediction(i, values, shifts[i] + SHIFT_STEP))[0]
-            J[offs[i]:offs[i + 1], g + i] = (r2 - base[i]) / (SHIFT_STEP / SHIFT_SCALE)
+            r2 = np.concatenate([p[0] for p in self.projections(
+                values, shifts, (i, shifts[i] + SHIFT_STEP))[0]])
+            J[:, g + i] = (r2 - base) / (SHIFT_STEP / SHIFT_SCALE)
         return J
 
     def linear_coefficients(self, x: np.ndarray) -> list[np.ndarray]:
-        """Per curve ``(offset [m], drift [m/s])`` at ``x``."""
+        """Per curve ``(offset [m], drift [m/s], ...)`` at ``x``."""
         values, shifts = self.unpack(x)
-        return [self.ev.project(i, self.curve_prediction(i, values, shifts[i]))[1]
-                for i in range(self.n_curves)]
+        return [p[1] for p in self.projections(values, shifts)[0]]
 
     def predictions(self, x: np.ndarray) -> list[np.ndarray | None]:
-        """Model deflection of every curve incl. offset and drift [m] at ``x``."""
+        """Model deflection of every curve incl. offset, drift and fringes [m] at ``x``."""
         values, shifts = self.unpack(x)
+        proj, fringes = self.projections(values, shifts)
         out = []
-        for i, c in enumerate(self.ev.curves):
+        for i in range(self.n_curves):
             m = self.curve_prediction(i, values, shifts[i])
-            if m is None:
-                out.append(None)
-                continue
-            coef = self.ev.project(i, m)[1]
-            out.append(m + self.ev.baseline(i, coef))
+            out.append(None if m is None else m + self.ev.baseline(i, proj[i][1]) + fringes[i])
         return out
 
 

@@ -88,6 +88,9 @@ class ModelComparison:
     slip_lr: float = math.nan
     slip_p_value: float = math.nan
     slip_verdict: str = ""
+    #: issue 23: friction against no friction with the lever damped at Q = 30 (None: not run,
+    #: i.e. friction not detected or the model has a quality factor; afmforce.fit.damping_check)
+    damping_check: dict | None = None
 
 
 @dataclass
