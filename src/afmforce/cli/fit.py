@@ -105,9 +105,14 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--noise-model", choices=("auto", "white"), default="auto",
                    help="auto (default): add 1/f detector noise where the residuals show it "
                         "(generalised least squares); white: white noise only")
-    g.add_argument("--fringes", action="store_true",
-                   help="let the baseline slope change at contact, where interference fringes "
-                        "stop running (one more nuisance per curve)")
+    g.add_argument("--fringes", nargs="?", const="periodic", default="periodic",
+                   choices=("periodic", "parabola", "off"),
+                   help="interference fringes in the baseline: periodic (default) cos and sin of "
+                        "the separation shared by all curves (one spot); parabola: a line and a "
+                        "parabola before contact per curve; off")
+    g.add_argument("--fringe-period", type=quantity("length", "--fringe-period", positive=True), default=335e-9,
+                   metavar="LENGTH", help="fringe period in the separation: half the laser "
+                   "wavelength (default 335nm, a 670 nm laser)")
     g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=2e-3,
                    metavar="TIME", help="left out after the jump-in (default 2 ms)")
     add_model_flags(p)
@@ -173,7 +178,7 @@ def run(args: argparse.Namespace) -> int:
                           compare=not args.no_compare, jump_window=args.jump_window,
                           sampling=None,    # --sampling (default average) is in cfg
                           retract=args.retract, noise=args.noise_model,
-                          fringes=args.fringes)
+                          fringes=args.fringes, fringe_period=args.fringe_period)
     d = res.to_dict()
     if args.plots:
         written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)

@@ -180,7 +180,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 starts: int = 2, level: float = 0.95, profile: Sequence[str] | None = None,
                 compare: bool = True, jump_window: float = 2e-3,
                 max_nfev: int = 40, sampling: str | None = "average",
-                retract: bool = False, noise: str = "auto", fringes: str | bool = "off",
+                retract: bool = False, noise: str = "auto", fringes: str | bool = "periodic",
                 fringe_period: float = DEFAULT_FRINGE_PERIOD, progress=None) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
@@ -244,9 +244,10 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
 
     fringes : {"off", "periodic", "parabola"} or bool
         Interference fringes in the baseline (they run with the separation and stop in
-        contact; :class:`~afmforce.fit.model.Evaluator`): ``periodic`` (True) two
-        linear nuisances shared by all curves, ``cos`` and ``sin`` of ``2 pi h /
-        fringe_period``; ``parabola`` a line and a parabola before contact per curve.
+        contact; :class:`~afmforce.fit.model.Evaluator`): ``periodic`` (default, True)
+        two linear nuisances shared by all curves, ``cos`` and ``sin`` of ``2 pi h /
+        fringe_period`` (curves taken at one spot); ``parabola`` a line and a parabola
+        before contact per curve (curves whose fringes differ); ``off``.
     fringe_period : float
         Period of the ``periodic`` fringes in the separation [m]: half the laser
         wavelength at normal incidence (default 335 nm, a 670 nm laser diode).
@@ -362,7 +363,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     profiles = {}
     for name in todo:
         lo, hi, pts, note = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
-                                             max(redchi, 1.0), level)
+                                             max(redchi, 1.0), level, cov=cov)
         params[name].interval, params[name].interval_method = (lo, hi), "profile"
         params[name].note = note
         profiles[name] = pts

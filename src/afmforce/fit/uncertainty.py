@@ -49,8 +49,17 @@ def _refit(sub: Problem, x0: np.ndarray, max_nfev: int) -> tuple[float, np.ndarr
 
 
 def profile_interval(prob: Problem, x: np.ndarray, chi2_min: float, name: str, stderr: float,
-                     s2: float, level: float, max_nfev: int = 15):
+                     s2: float, level: float, max_nfev: int = 15, cov: np.ndarray | None = None):
     """Profile-likelihood interval of ``name`` at ``level``.
+
+    Each profile point is refitted from the point the covariance ``cov`` (of the scaled
+    vector) predicts, ``x + cov[:, j] / cov[j, j] (v - best)``: along the valley of
+    strongly correlated parameters (A and xi correlate at 0.7-0.98), where a start from
+    the previous profile point keeps the others at the wrong place and a short refit
+    stops on the valley's wall (the profile then rises too early and the interval is too
+    short: the truth of seed 6 of the ``typical`` set lay outside such an end). When a point
+    would end the interval, the previous point's optimum is tried
+    too and the lower chi-square kept.
 
     Returns ``(lower, upper, points, note)``; ``points`` holds the profiled values
     (``value`` [unit]) and ``delta_chi2`` (already divided by ``s2``). A side
@@ -66,6 +75,9 @@ def profile_interval(prob: Problem, x: np.ndarray, chi2_min: float, name: str, s
     step = stderr if math.isfinite(stderr) and stderr > 0 else 0.2 * max(abs(best), p.abs_step)
     pts = {best: 0.0}
     ends, notes = [], []
+    x = np.asarray(x, float)
+    slope = (np.asarray(cov, float)[:, j] / cov[j, j] if cov is not None and cov[j, j] > 0
+             else np.eye(len(x))[j])
     for sign in (-1.0, 1.0):
         xs = _drop(x, j)
         prev_v, prev_d = best, 0.0
@@ -74,7 +86,14 @@ def profile_interval(prob: Problem, x: np.ndarray, chi2_min: float, name: str, s
             v = best + sign * k * step
             at_bound = (v <= p.lower) if sign < 0 else (v >= p.upper)
             v = min(max(v, p.lower), p.upper)
-            c2, xs = _refit(_sub_problem(prob, name, v), xs, max_nfev)
+            sub = _sub_problem(prob, name, v)
+            pred = _drop(x + slope * (v - best) / p.scale, j)
+            c2, x_new = _refit(sub, pred, max_nfev)
+            if (c2 - chi2_min) / s2 >= thr:     # would end the interval: the other start too
+                c2b, xb = _refit(sub, xs, max_nfev)
+                if c2b < c2:
+                    c2, x_new = c2b, xb
+            xs = x_new
             d = max((c2 - chi2_min) / s2, 0.0)
             pts[v] = d
             if d >= thr:   # interpolate the signed root sqrt(d), ~linear in the parameter
