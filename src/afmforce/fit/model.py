@@ -243,19 +243,21 @@ class Evaluator:
         ph = h * (2.0 * math.pi / self.fringe_period)
         return np.column_stack([np.cos(ph), np.sin(ph)])
 
-    def project_all(self, models: Sequence[np.ndarray | None], shifts) -> tuple[list, list]:
+    def project_all(self, models: Sequence[np.ndarray | None], shifts) -> tuple[list, list, np.ndarray]:
         """:meth:`project` of every curve, with the ``periodic`` fringes shared by all.
 
-        Returns ``(projections, fringes)``: per curve ``(residual, coefficients)`` as
-        :meth:`project` gives them, and the fitted fringe signal of each curve at all its
-        samples [m] (zeros without ``periodic`` fringes). The shared coefficients are
+        Returns ``(projections, fringes, coefficients)``: per curve ``(residual, coefficients)`` as
+        :meth:`project` gives them (the offset is the baseline in contact, fringe included),
+        and the fitted fringe signal of each curve at all its samples relative to contact
+        [m] (zeros without ``periodic`` fringes), and the shared coefficients of ``cos`` and
+        ``sin`` [m] (zeros without them). The shared coefficients are
         eliminated jointly (variable projection): each curve's whitened data and fringe
         columns are projected off its own offset and drift, and the two shared
         coefficients fitted to the stacked remainders.
         """
         if self.fringes != "periodic":
             return ([self.project(i, m) for i, m in enumerate(models)],
-                    [np.zeros(c.n) for c in self.curves])
+                    [np.zeros(c.n) for c in self.curves], np.zeros(2))
         ok = [m is not None and bool(np.all(np.isfinite(m[c.mask])))
               for m, c in zip(models, self.curves)]
         parts = {}
@@ -281,9 +283,10 @@ class Evaluator:
                 continue
             X, Q, F, b, Fw, bt, Ft = parts[i]
             coef = np.linalg.lstsq(X, b - Fw @ coef_f, rcond=None)[0]
+            coef[0] += coef_f[0]       # the offset: the baseline in contact (h = 0: cos 1, sin 0)
             out.append((bt - Ft @ coef_f, np.append(coef, [0.0, 0.0])[:max(3, coef.size)]))
-            fr.append(F @ coef_f)
-        return out, fr
+            fr.append(F @ coef_f - coef_f[0])
+        return out, fr, coef_f
 
     def residual(self, i: int, values: dict, shift: float) -> np.ndarray:
         return self.project(i, self.predict(i, values, shift))[0]

@@ -85,8 +85,9 @@ class Problem:
         for (key, _), pred in zip(todo, self.ev.predict_many([r for _, r in todo])):
             self._cache[key] = pred
 
-    def projections(self, values: dict, shifts, replace: tuple | None = None) -> tuple[list, list]:
-        """Per curve ``(residual, linear coefficients)`` and fringe signal [m] at ``values, shifts``.
+    def projections(self, values: dict, shifts, replace: tuple | None = None) -> tuple:
+        """Per curve ``(residual, linear coefficients)``, fringe signal [m] and the shared fringe
+        coefficients [m] at ``values, shifts`` (:meth:`Evaluator.project_all`).
 
         ``replace = (i, shift)`` evaluates curve ``i`` at another shift (a Jacobian column):
         with fringes shared by the curves every curve's residual may change.
@@ -144,10 +145,15 @@ class Problem:
         values, shifts = self.unpack(x)
         return [p[1] for p in self.projections(values, shifts)[0]]
 
+    def fringe_amplitude(self, x: np.ndarray) -> float:
+        """Amplitude of the shared periodic fringes at ``x`` [m] (0 without them)."""
+        values, shifts = self.unpack(x)
+        return float(np.hypot(*self.projections(values, shifts)[2]))
+
     def predictions(self, x: np.ndarray) -> list[np.ndarray | None]:
         """Model deflection of every curve incl. offset, drift and fringes [m] at ``x``."""
         values, shifts = self.unpack(x)
-        proj, fringes = self.projections(values, shifts)
+        proj, fringes, _ = self.projections(values, shifts)
         out = []
         for i in range(self.n_curves):
             m = self.curve_prediction(i, values, shifts[i])

@@ -118,6 +118,9 @@ class FitResult:
     config: dict = field(default_factory=dict)
     #: goodness of fit: ``redchi``, ``threshold``, ``adequate``, ``worst`` (see fit.adequacy)
     adequacy: dict = field(default_factory=dict)
+    #: interference fringes in the baseline: ``mode`` used, ``period`` [m], ``amplitude`` [m]
+    #: of the shared periodic fringes (issue 23; see afmforce.fit.model.Evaluator)
+    fringes: dict = field(default_factory=dict)
     _problem: object = field(default=None, repr=False, compare=False)
     _x: object = field(default=None, repr=False, compare=False)
 
@@ -169,6 +172,7 @@ class FitResult:
             "wall_time": self.wall_time, "success": self.success, "message": self.message,
             "config": self.config,
             "adequacy": dict(self.adequacy),
+            "fringes": dict(self.fringes),
             "verdict": None if self.comparison is None else self.comparison.verdict,
         }
         return d
@@ -204,7 +208,12 @@ class FitResult:
             L += ["", f"Best by AIC: {c.best_by_aic}; by BIC: {c.best_by_bic}.", ""]
         L += [f"chi2 = {self.chi2:.1f} for {self.dof} degrees of freedom (reduced "
               f"{self.redchi:.3g}); {self.model_evaluations} model evaluations, "
-              f"{self.wall_time:.1f} s.", "",
+              f"{self.wall_time:.1f} s.", ""]
+        if self.fringes.get("mode") == "periodic":
+            L += [f"Interference fringes (shared by the curves, period "
+                  f"{fq(self.fringes['period'], 'm')}): amplitude "
+                  f"{fq(self.fringes['amplitude'], 'm')}.", ""]
+        L += [
               "| curve | speed | sample rate | points used | noise | shift | offset | drift | rms residual |",
               "|---|---|---|---|---|---|---|---|---|"]
         for c in self.curves:
