@@ -1,6 +1,7 @@
 """Recovery and interval coverage of the dynamic fit on the ``typical`` virtual AFM (issue 23).
 
-``python benchmarks/bench_fit_typical.py [--seeds 20] [--first 1] [--only 6,12] [--fringes MODE] [--json FILE]``
+``python benchmarks/bench_fit_typical.py [--seeds 20] [--first 1] [--only 6,12] [--fringes MODE]
+[--preset typical|paper|ideal] [--json FILE]``
 
 The issue's protocol: four curves ``afmforce simulate --instrument typical --seed N
 --xi 0.005 --velocity V --sampling average`` (V = 0.5, 1, 2, 5 um/s; the beam of
@@ -54,6 +55,7 @@ def main() -> None:
     ap.add_argument("--fringes", default=None, choices=("off", "periodic", "parabola"),
                     help="fit_dynamic(fringes=...) (default: fit_dynamic's default)")
     ap.add_argument("--only", help="comma-separated seeds (instead of --first/--seeds)")
+    ap.add_argument("--preset", default="typical", help="virtual AFM preset (default typical)")
     a = ap.parse_args()
     trs = trajectories()
     rows = []
@@ -64,7 +66,7 @@ def main() -> None:
         t0 = time.perf_counter()
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")
-            r = fit_dynamic(record(trs, seed), "beam", free=("hamaker", "xi"), **kw)
+            r = fit_dynamic(record(trs, seed, a.preset), "beam", free=("hamaker", "xi"), **kw)
         pa, px = r.parameters["hamaker"], r.parameters["xi"]
         row = dict(seed=seed, A=pa.value / A, xi=px.value / XI, A_interval=pa.interval,
                    xi_interval=px.interval, A_covered=covers(pa.interval, A),
