@@ -314,7 +314,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     chi2, x, res, nested, first = _search(prob, guess, shifts0, starts, max_nfev, dof)
     report("search")
     pre_warns = []
-    fringe_amp = prob.fringe_amplitude(x)
+    fringe_amp = prob.fringe_amplitude(x)[0]
     if fringe_amp > FRINGE_AMPLITUDE_MAX:
         # with each curve's drift, the fringe's kink at contact can take up a tilted contact
         # line (a soft sample) or a bent baseline: more than fringes are. Fit without them.
@@ -438,6 +438,6 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                      warnings=warns, model_evaluations=ev.simulations, adequacy=adq,
                      wall_time=time.perf_counter() - t0, success=bool(res.success),
                      message=str(res.message), config=cfg,
-                     fringes={"mode": ev.fringes, "period": fringe_period,
-                              "amplitude": prob.fringe_amplitude(x)},
+                     fringes=dict(zip(("mode", "period", "amplitude", "amplitude_stderr"),
+                                      (ev.fringes, fringe_period, *prob.fringe_amplitude(x)))),
                      _problem=prob, _x=x)

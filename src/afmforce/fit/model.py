@@ -80,6 +80,7 @@ class Evaluator:
         self.fringes = fringes
         self.fringe_period = float(fringe_period)
         self._bases: dict = {}
+        self.fringe_cov = np.zeros((2, 2))
         self.simulations = 0
         self.failures = 0
         self.last_error = ""
@@ -275,6 +276,8 @@ class Evaluator:
             A = np.vstack([p[6] for p in parts.values()])
             y = np.concatenate([p[5] for p in parts.values()])
             coef_f = np.linalg.lstsq(A, y, rcond=1e-10)[0]
+            #: covariance of the last shared fringe coefficients [m^2] (white-noise scale)
+            self.fringe_cov = np.linalg.pinv(A.T @ A)
         out, fr = [], []
         for i, m in enumerate(models):
             if i not in parts:

@@ -145,10 +145,15 @@ class Problem:
         values, shifts = self.unpack(x)
         return [p[1] for p in self.projections(values, shifts)[0]]
 
-    def fringe_amplitude(self, x: np.ndarray) -> float:
-        """Amplitude of the shared periodic fringes at ``x`` [m] (0 without them)."""
+    def fringe_amplitude(self, x: np.ndarray) -> tuple[float, float]:
+        """Amplitude of the shared periodic fringes at ``x`` and its standard error [m] (0, 0
+        without them; the other parameters held at ``x``)."""
         values, shifts = self.unpack(x)
-        return float(np.hypot(*self.projections(values, shifts)[2]))
+        c = np.asarray(self.projections(values, shifts)[2], float)
+        amp = float(np.hypot(*c))
+        if amp == 0.0:
+            return 0.0, 0.0
+        return amp, float(np.sqrt(max(c @ self.ev.fringe_cov @ c, 0.0)) / amp)
 
     def predictions(self, x: np.ndarray) -> list[np.ndarray | None]:
         """Model deflection of every curve incl. offset, drift and fringes [m] at ``x``."""

@@ -118,8 +118,8 @@ class FitResult:
     config: dict = field(default_factory=dict)
     #: goodness of fit: ``redchi``, ``threshold``, ``adequate``, ``worst`` (see fit.adequacy)
     adequacy: dict = field(default_factory=dict)
-    #: interference fringes in the baseline: ``mode`` used, ``period`` [m], ``amplitude`` [m]
-    #: of the shared periodic fringes (issue 23; see afmforce.fit.model.Evaluator)
+    #: interference fringes in the baseline: ``mode`` used, ``period`` [m], ``amplitude`` and
+    #: ``amplitude_stderr`` [m] of the shared periodic fringes (issue 23; fit.model.Evaluator)
     fringes: dict = field(default_factory=dict)
     _problem: object = field(default=None, repr=False, compare=False)
     _x: object = field(default=None, repr=False, compare=False)
@@ -212,7 +212,8 @@ class FitResult:
         if self.fringes.get("mode") == "periodic":
             L += [f"Interference fringes (shared by the curves, period "
                   f"{fq(self.fringes['period'], 'm')}): amplitude "
-                  f"{fq(self.fringes['amplitude'], 'm')}.", ""]
+                  f"{fq(self.fringes['amplitude'], 'm')} ± "
+                  f"{fq(self.fringes['amplitude_stderr'], 'm')}.", ""]
         L += [
               "| curve | speed | sample rate | points used | noise | shift | offset | drift | rms residual |",
               "|---|---|---|---|---|---|---|---|---|"]
