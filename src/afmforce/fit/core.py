@@ -171,6 +171,20 @@ def _search(prob: Problem, guess: dict, shifts0, starts: int, max_nfev: int, dof
     return (*best, nested, first)
 
 
+def _refit_all(prob: Problem, starts, nested, max_nfev: int) -> tuple:
+    """The best local fit from ``starts`` after the residual changed (noise model, fringe
+    terms), and the nested (xi = 0) point's chi-square re-evaluated: ``(chi2, x, res, nested)``."""
+    best = None
+    for x0 in starts:
+        xx, rr = local_fit(prob, x0, max_nfev)
+        c2 = prob.chi2(xx)
+        if best is None or c2 < best[0]:
+            best = (c2, xx, rr)
+    if nested is not None:
+        nested = (prob.chi2(nested[1]), nested[1])
+    return (*best, nested)
+
+
 def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
     JTJ = J.T @ J
     try:
@@ -325,27 +339,11 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             "without fringe terms (--fringes off)")
         ev.fringes = "off"
         dof = max(n_data - (len(shifts0) + len(free) + ev.n_linear()), 1)
-        best = None
-        for x0 in [x] + first:
-            xx, rr = local_fit(prob, x0, max_nfev)
-            c2 = prob.chi2(xx)
-            if best is None or c2 < best[0]:
-                best = (c2, xx, rr)
-        chi2, x, res = best
-        if nested is not None:
-            nested = (prob.chi2(nested[1]), nested[1])
+        chi2, x, res, nested = _refit_all(prob, [x] + first, nested, max_nfev)
     s2p, signif = estimate_pink(prob, x, drift) if noise == "auto" else (0.0, 0.0)
     if signif > PINK_SIGNIFICANCE:   # 1/f noise: refit with the whitened residuals from the
         set_noise_model(fc, s2p)      # white optimum and the valley's best points
-        best = None
-        for x0 in [x] + first:
-            xx, rr = local_fit(prob, x0, max_nfev)
-            c2 = prob.chi2(xx)
-            if best is None or c2 < best[0]:
-                best = (c2, xx, rr)
-        chi2, x, res = best
-        if nested is not None:
-            nested = (prob.chi2(nested[1]), nested[1])
+        chi2, x, res, nested = _refit_all(prob, [x] + first, nested, max_nfev)
         report("refit with 1/f noise")
     nested_fits = None
     if compare:   # nested models: the richer one restarts from the nested optimum if that is lower
