@@ -119,3 +119,29 @@ def test_periodic_fringes_couple_the_curves_in_the_jacobian():
         e[1] = 0.05
         central = (prob.residual(x + e) - prob.residual(x - e)) / 0.1
         assert np.linalg.norm(col - central) < 0.05 * np.linalg.norm(central)
+
+
+def test_cli_fringe_options(tmp_path, capsys):
+    import sys
+
+    sys.path.insert(0, str(__import__("pathlib").Path(__file__).parent))
+    from afmforce.cli.main import main
+    from fit_virtual import make_curves, write_curves
+
+    paths = write_curves(make_curves(0.005, seed=3, speeds=(1e-6, 4e-6), spacing=0.5e-9), tmp_path)
+    rc = main(["fit", *map(str, paths), "--fringe-period", "400nm", "--no-profile", "--no-compare",
+               "--starts", "1", "--json"])
+    d = json.loads(capsys.readouterr().out)
+    assert rc == 0 and d["fringes"]["mode"] == "periodic"
+    assert d["fringes"]["period"] == pytest.approx(4e-7)
+    assert 0 <= d["fringes"]["amplitude"] < 3e-9 and d["fringes"]["amplitude_stderr"] > 0
+    rc = main(["fit", *map(str, paths), "--fringes", "off", "--no-profile", "--no-compare",
+               "--starts", "1", "--json"])
+    d = json.loads(capsys.readouterr().out)
+    assert rc == 0 and d["fringes"] == {"mode": "off", "period": pytest.approx(3.35e-7),
+                                        "amplitude": 0.0, "amplitude_stderr": 0.0}
+    with pytest.raises(SystemExit) as e:
+        main(["fit", *map(str, paths), "--fringe-period", "-5nm", "--json"])
+    out, err = capsys.readouterr()
+    assert e.value.code == 2 and "--fringe-period" in json.loads(out)["error"]["message"]
+    assert err.count("\n") == 1
