@@ -12,6 +12,7 @@ from ..errors import ParameterError
 from ..progress import Progress
 from .data import FitCurve, prepare_curves
 from .model import Evaluator
+from .preprocess import preparation_warnings
 from .params import PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
 from .result import CurveFit, Estimate, FitResult, wald_interval
@@ -330,6 +331,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     sd = np.sqrt(np.clip(np.diag(cov), 0, None)) * prob.scale()
     values, shifts = prob.unpack(x)
     warns = [c.metadata["velocity_from_ramp"] for c in fc if c.metadata.get("velocity_from_ramp")]
+    warns += preparation_warnings(fc, base)     # calibration notes, the files' k vs the model's
     if ev.failures:
         warns.append(f"{ev.failures} trial simulations failed during the fit (last: {ev.last_error})")
     adq = adequacy(prob, x, dof, chi2, fc)
