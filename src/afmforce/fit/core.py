@@ -12,7 +12,7 @@ from ..errors import ParameterError
 from ..progress import Progress
 from .data import FitCurve, prepare_curves
 from .model import Evaluator
-from .preprocess import preparation_warnings
+from .preprocess import preparation_warnings, result_warnings
 from .params import PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
 from .result import CurveFit, Estimate, FitResult, wald_interval
@@ -367,6 +367,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     for e in params.values():
         if e.note:
             warns.append(e.note)
+    warns += result_warnings(params, base)     # a Hamaker constant outside the physical range
     derived = {}
     if "hamaker" in free or "radius" in free:
         name = "hamaker" if "hamaker" in free else "radius"

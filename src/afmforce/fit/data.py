@@ -12,9 +12,14 @@ the choice of the position channel (:func:`afmforce.analysis.state.prepare`:
 the measured one when the file has it), the speed of a run
 (:func:`afmforce.analysis.dynamic.run_velocity`), the robust line through a
 stepped sensor channel and the robust drift baseline
-(:func:`afmforce.analysis.drift.fit_baseline`). Still the fit's own: the noise
-(second differences, and the 1/f part in :mod:`afmforce.fit.noise`), the
-jump-in and contact masks.
+(:func:`afmforce.analysis.drift.fit_baseline`), and through
+:mod:`afmforce.fit.preprocess` the analysis steps ``contact`` ... ``kind``: the
+calibration (the file's; the compliance slope where the file has none or a stale
+sensitivity), the contact kind (a soft contact is refused), the jump-in, the
+contact onset and the compliance line of the rigid-contact test. Still the fit's
+own: the noise (second differences, whose spread the adequacy test of
+:mod:`afmforce.fit.adequacy` is built on, and the 1/f part in
+:mod:`afmforce.fit.noise`) and the mask built from the jump-in and the contact.
 """
 
 from __future__ import annotations

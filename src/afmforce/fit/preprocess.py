@@ -162,6 +162,11 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
         notes.append(f"{name}: {what} from the slope of the approach's constant-compliance line, as "
                      "`afmforce analyze` calibrates (it assumes a rigid contact); give yours with "
                      f"--meta {'sensitivity' if st.unit == 'V' else 'spring_constant'}=VALUE")
+    # the analysis's own checks of the calibration (few contact samples, a contact line steeper than 1)
+    from ..analysis.plausibility import plausibility_warnings
+
+    notes += [f"{name}: {w.replace('give --sensitivity', 'give --meta sensitivity=VALUE')}"
+              for w in plausibility_warnings(st)]
     line = comp.approach if comp.approach.found else comp.retract
     jump, found, contact = _jump(st.deflection, st.z, st.approach, abs(st.noise * factor),
                                  opts["kind"].nsigma, int(idx[0]))
@@ -232,4 +237,21 @@ def preparation_warnings(curves, base) -> list[str]:
                    f"{k_model:.4g} N/m ({base.model} model): the fitted A*R and friction scale with "
                    f"k, so they describe another lever; give the model your lever ({flag}, or "
                    f"--model spring --spring-constant {k:.4g}N/m)")
+    out += [f"{c.name}: no jump into contact (no drop above the analysis's step-noise threshold at the "
+            "contact): the attraction before contact is barely resolved, so A*R rests on the approach's "
+            "curvature alone" for c in curves
+            if (c.metadata.get("calibration") or {}).get("jump_found") is False]
     return out
+
+
+def result_warnings(params: dict, base) -> list[str]:
+    """Warnings on the fitted numbers: a Hamaker constant outside the physical range of the
+    analysis (:data:`afmforce.analysis.plausibility.HAMAKER_RANGE`, same wording)."""
+    from ..analysis.plausibility import hamaker_warning
+
+    e = params.get("hamaker")
+    if e is None:
+        return []
+    note = hamaker_warning(float(e.value), f"with the model's radius {base.radius * 1e9:.3g} nm",
+                           float(e.value) * float(base.radius))
+    return [note] if note else []
