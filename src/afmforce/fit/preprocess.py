@@ -61,6 +61,11 @@ class AnalysisInputs:
         Deflection per position on the approach's constant-compliance line, calibrated [-].
     kind : str
         The analysis's contact kind (``"hard"``; ``"approach only"`` without a retract).
+    unit : str
+        The file's deflection unit.
+    spring_constant : float
+        The analysis's spring constant [N/m] (step ``force``: the file's, rescaled with a refitted
+        sensitivity as a thermal k; from the compliance slope of a force without one; NaN: none).
     notes : tuple of str
         What the fit should warn about (calibration changes).
     """
@@ -77,12 +82,14 @@ class AnalysisInputs:
     kind: str
     notes: tuple[str, ...] = ()
     unit: str = "m"
+    spring_constant: float = math.nan
 
     def as_metadata(self) -> dict:
         """The calibration as the fit reports it (JSON-ready, SI)."""
         return {"source": self.source, "factor": self.factor, "sensitivity": _num(self.sensitivity),
                 "file_sensitivity": _num(self.file_sensitivity), "contact_slope": _num(self.slope),
-                "contact_kind": self.kind, "jump_found": self.jump_found, "unit": self.unit}
+                "contact_kind": self.kind, "jump_found": self.jump_found, "unit": self.unit,
+                "spring_constant": _num(self.spring_constant)}
 
 
 def _num(x: float) -> float | None:
@@ -132,7 +139,7 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
         return _approach_only(curve, name, idx, opts["kind"].nsigma)
     try:
         st = prepare(curve)
-        for step in resolve_steps(["kind"]):
+        for step in resolve_steps(["kind", "force"]):
             st = STEPS[step].func(st, opts[step])
     except NoContact as exc:
         raise AnalysisError(f"{name}: {exc}; the fit needs curves that reach contact (a "
@@ -162,6 +169,10 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
         notes.append(f"{name}: {what} from the slope of the approach's constant-compliance line, as "
                      "`afmforce analyze` calibrates (it assumes a rigid contact); give yours with "
                      f"--meta {'sensitivity' if st.unit == 'V' else 'spring_constant'}=VALUE")
+    k_file = float((curve.metadata or {}).get("spring_constant") or math.nan)
+    if math.isfinite(k_file) and abs(st.spring_constant / k_file - 1.0) > 1e-9:
+        notes.append(f"{name}: spring constant rescaled with the refitted sensitivity as `afmforce analyze` "
+                     f"does (a thermal k goes as 1/InvOLS^2): {k_file:.4g} -> {st.spring_constant:.4g} N/m")
     # the analysis's own checks of the calibration (few contact samples, a contact line steeper than 1)
     from ..analysis.plausibility import plausibility_warnings
 
@@ -172,7 +183,7 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
                                  opts["kind"].nsigma, int(idx[0]))
     return AnalysisInputs(factor, source, sens, float(cal.sensitivity), jump, found, contact,
                           line.slope * factor, line.slope_se * abs(factor), kind.kind, tuple(notes),
-                          st.unit)
+                          st.unit, float(st.spring_constant))
 
 
 def _jump(deflection, z, run, noise: float, nsigma: float, start: int) -> tuple[int, bool, int]:
@@ -224,16 +235,16 @@ def preparation_warnings(curves, base) -> list[str]:
     :class:`~afmforce.dynamics.SimulationConfig`.
     """
     out = [w for c in curves for w in c.metadata.get("preparation_notes", ())]
-    ks = [float(c.metadata["spring_constant"]) if c.metadata.get("spring_constant") else
-          1.0 / c.metadata["calibration"]["factor"]     # a force calibrated by the compliance slope
-          if (c.metadata.get("calibration") or {}).get("unit") == "N" else None for c in curves]
-    ks = [k for k in ks if k]
+    # the analysis's k (the file's, rescaled with a refitted sensitivity, or a force's compliance slope)
+    ks = [(c.metadata.get("calibration") or {}).get("spring_constant") or c.metadata.get("spring_constant")
+          for c in curves]
+    ks = [float(k) for k in ks if k]
     k_model = float(base.force_constant)
     if ks and abs(float(np.median(ks)) / k_model - 1.0) > SPRING_CONSTANT_TOLERANCE:
         k = float(np.median(ks))
         flag = ("--spring-constant" if base.model == "spring" else
                 f"--k0 {base.cantilever.k0 * k / k_model:.4g}N/m (the beam's k0 for this k)")
-        out.append(f"the files' spring constant is {k:.4g} N/m but the model's lever has "
+        out.append(f"the curves' spring constant is {k:.4g} N/m but the model's lever has "
                    f"{k_model:.4g} N/m ({base.model} model): the fitted A*R and friction scale with "
                    f"k, so they describe another lever; give the model your lever ({flag}, or "
                    f"--model spring --spring-constant {k:.4g}N/m)")
