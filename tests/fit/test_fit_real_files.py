@@ -152,16 +152,29 @@ def test_no_contact_refused():
         _prepare(curve, "jpk")
 
 
-@pytest.mark.parametrize("name", ["afmformats_afm-workshop-fd_single_2018-08-01.csv",
-                                  "ntmdt_gel-in-water.txt", "afm-workshop_single.csv"])
-def test_files_without_time_ask_for_the_sample_rate(name, capsys):
-    """AFM Workshop and NT-MDT exports carry the sample index, not the time: the speed read off the
-    ramp would be in metres per sample (0.001 um/s before); the fit asks for the sample rate."""
+def test_files_without_time_refused_for_their_contact_first(capsys):
+    """AFM Workshop and NT-MDT exports carry the sample index, not the time (the speed read off the
+    ramp would be in metres per sample: 0.001 um/s before). Their samples are soft: the contact is
+    what stops the fit, said before the missing time (a sample rate would not help); the missing time
+    alone: test_sample_index_time_rescaled_with_the_given_rate."""
     meta = ["--meta", "spring_constant=0.1N/m", "--meta", "sensitivity=50nm/V"]
-    assert main(["fit", str(real_file(name)), "--free", "hamaker", "--json", *meta]) == 2
-    d = json.loads(capsys.readouterr().out)
-    assert "the file stores no time" in d["error"]["message"]
-    assert "--sample-rates" in d["error"]["message"]
+    for name in ("afm-workshop_single.csv", "ntmdt_gel-in-water.txt",
+                 "afmformats_afm-workshop-fd_single_2018-08-01.csv"):
+        assert main(["fit", str(real_file(name)), "--free", "hamaker", "--json", *meta]) == 1
+        msg = json.loads(capsys.readouterr().out)["error"]["message"]
+        assert msg.startswith(f"{name}: soft contact (") and "--sample-rates" not in msg
+
+
+def test_force_without_spring_constant_implausible_slope_refused():
+    """AFM Workshop force [N] without k: its compliance slope, the k of a rigid contact, is 5e-5 N/m
+    (a plain least-squares line through the deepest approach samples says the same): no cantilever
+    is that soft, so the contact is not rigid (with k = 0.1 N/m it follows the position 0.0005x)."""
+    curve = _load("afm-workshop_single.csv")[0]
+    app = np.flatnonzero(np.asarray(curve.segment) == 0)[-30:]
+    k_slope = np.polyfit(np.asarray(curve.piezo_nominal)[app], np.asarray(curve.deflection_signal)[app], 1)[0]
+    assert 1e-5 < k_slope < 1e-4
+    with pytest.raises(AnalysisError, match=r"compliance slope.*is 5\.\d+e-05 N/m.*--meta spring_constant"):
+        _prepare(curve, "aws")
 
 
 def test_missing_calibration_named_with_the_fit_flags(capsys):

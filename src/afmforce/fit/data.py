@@ -236,7 +236,6 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     AnalysisError
         Too few approach samples, or no contact (no constant-compliance region).
     """
-    curve = _timed(curve, name, sample_rate)
     app = np.asarray(curve.segment) == 0
     idx = np.flatnonzero(app)
     if idx.size < 30:
@@ -245,6 +244,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     from .preprocess import analysis_inputs
 
     ana = analysis_inputs(curve, name, idx)       # calibration, contact kind, jump-in, contact
+    curve = _timed(curve, name, sample_rate)      # (a soft contact is refused before a missing time)
     scale = ana.factor
     ramp = _ramp(curve, idx)
     z, channel_note = _position(curve, idx, name)

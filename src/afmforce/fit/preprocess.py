@@ -163,6 +163,15 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
             f"nm/V instead of the file's {cal.sensitivity * 1e9:.4g} nm/V")
     elif cal.source == "fit":
         source = "compliance"
+        from ..analysis.plausibility import SPRING_CONSTANT_RANGE
+
+        lo, hi = SPRING_CONSTANT_RANGE
+        if st.unit == "N" and not lo <= 1.0 / factor <= hi:
+            raise AnalysisError(
+                f"{name}: the force has no spring constant in the file, and its compliance slope, the "
+                f"spring constant of a rigid contact, is {1.0 / factor:.3g} N/m: outside the range of "
+                f"cantilevers made ({lo:g}..{hi:g} N/m), so the contact is not rigid (a soft sample) or "
+                "the force column is not in newtons; give the lever's (--meta spring_constant=VALUE)")
         what = (f"no sensitivity in the file: {factor * 1e9:.4g} nm/V" if st.unit == "V" else
                 f"no spring constant in the file: the force converts with {1 / factor:.4g} N/m"
                 if st.unit == "N" else f"the deflection is scaled by {factor:.4g}")
