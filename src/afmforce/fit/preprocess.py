@@ -107,7 +107,7 @@ def _refuse_soft(name: str, curve: RawCurve, reason: str) -> AnalysisError:
     return AnalysisError(
         f"{name}: soft contact ({reason}): the sample deforms, but the dynamic model assumes rigid "
         f"surfaces (eq 2), so this curve cannot be fitted{_extra_segments(curve)}; analyse it with "
-        f"`afmforce analyze {name}` (its indentation step fits Young's modulus)")
+        f"`afmforce analyze {name.split('#')[0]}` (its indentation step fits Young's modulus)")
 
 
 def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInputs:
@@ -142,7 +142,8 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
         for step in resolve_steps(["kind", "force"]):
             st = STEPS[step].func(st, opts[step])
     except NoContact as exc:
-        raise AnalysisError(f"{name}: {exc}; the fit needs curves that reach contact (a "
+        why = str(exc).rstrip("?").replace("; is the surface reached", ": the surface is not reached")
+        raise AnalysisError(f"{name}: {why}; the fit needs curves that reach contact (a "
                             "constant-compliance region at the end of the approach)") from None
     except AnalysisError as exc:
         raise AnalysisError(f"{name}: the analysis steps that prepare the curve fail: {exc}") from None
