@@ -136,7 +136,7 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
 
     opts, _ = resolve_options()
     if run_indices(np.asarray(curve.segment), 1).size == 0:
-        return _approach_only(curve, name, idx, opts["kind"].nsigma)
+        return _approach_only(curve, name, idx, opts["kind"].nsigma, int(opts["jumps"].window))
     try:
         st = prepare(curve)
         for step in resolve_steps(["kind", "force"]):
@@ -190,23 +190,40 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
               for w in plausibility_warnings(st)]
     line = comp.approach if comp.approach.found else comp.retract
     jump, found, contact = _jump(st.deflection, st.z, st.approach, abs(st.noise * factor),
-                                 opts["kind"].nsigma, int(idx[0]))
+                                 opts["kind"].nsigma, int(idx[0]), int(opts["jumps"].window))
     return AnalysisInputs(factor, source, sens, float(cal.sensitivity), jump, found, contact,
                           line.slope * factor, line.slope_se * abs(factor), kind.kind, tuple(notes),
                           st.unit, float(st.spring_constant))
 
 
-def _jump(deflection, z, run, noise: float, nsigma: float, start: int) -> tuple[int, bool, int]:
-    """The analysis's jump-in (first sample after it) and contact split, relative to ``start``."""
+def _jump(deflection, z, run, noise: float, nsigma: float, start: int, window: int = 3
+          ) -> tuple[int, bool, int]:
+    """The analysis's jump-in (first sample after it) and contact split, relative to ``start``.
+
+    Without a significant jump (:func:`~afmforce.analysis.jumps.find_jump_in`: none above
+    ``nsigma`` step noises within ``window`` samples of the split) the fit still leaves out
+    the largest drop before the constant-compliance region (after the run's first tenth, where
+    a lever's drag sets in in a liquid; the analysis's
+    :func:`~afmforce.analysis._numeric.largest_step`): a jump hidden in the noise, 15 samples
+    away from a split that a stepped, backlashing position sensor moved (the ``paper`` preset).
+    """
+    from ..analysis._numeric import largest_step
     from ..analysis.jumps import find_jump_in
 
-    ji = find_jump_in(deflection, z, z, run, noise, math.nan, nsigma)
+    ji = find_jump_in(deflection, z, z, run, noise, math.nan, nsigma, window)
     contact = int(run.index[min(run.split, run.index.size - 1)]) - start
-    jump = int(ji.index) + 1 - start if ji.index >= 0 else contact
-    return jump, bool(ji.found), contact
+    if ji.found:
+        return int(ji.index) + 1 - start, True, contact
+    comp = np.flatnonzero(run.compliance)
+    hi = int(comp[0]) + 1 if comp.size else run.index.size
+    lo = min(hi // 10, max(run.split - window, 0))   # not the first tenth: a lever's drag onset
+    hi = max(hi, lo + 2)
+    i = largest_step(np.asarray(deflection)[run.index], lo, hi, -1.0)
+    return (int(run.index[i]) + 1 - start if i >= 0 else contact), False, contact
 
 
-def _approach_only(curve: RawCurve, name: str, idx: np.ndarray, nsigma: float) -> AnalysisInputs:
+def _approach_only(curve: RawCurve, name: str, idx: np.ndarray, nsigma: float,
+                   window: int) -> AnalysisInputs:
     """The same analysis functions on an approach-only curve, with the file's calibration."""
     from ..analysis.compliance import _fit_line, _metadata_factor
     from ..analysis.regions import find_run_regions, saturated_mask
@@ -227,7 +244,8 @@ def _approach_only(curve: RawCurve, name: str, idx: np.ndarray, nsigma: float) -
         line = _fit_line(zz, s, run)
     except AnalysisError as exc:
         raise AnalysisError(f"{name}: {exc}; the fit needs curves that reach contact") from None
-    jump, found, contact = _jump(s * factor, zz, run, abs(run.noise * factor), nsigma, int(idx[0]))
+    jump, found, contact = _jump(s * factor, zz, run, abs(run.noise * factor), nsigma, int(idx[0]),
+                                 window)
     return AnalysisInputs(factor, "file", factor if unit == "V" else math.nan,
                           factor if unit == "V" else math.nan, jump, found, contact,
                           line.slope * factor, line.slope_se * abs(factor), "approach only", (), unit)
@@ -258,9 +276,10 @@ def preparation_warnings(curves, base) -> list[str]:
                    f"{k_model:.4g} N/m ({base.model} model): the fitted A*R and friction scale with "
                    f"k, so they describe another lever; give the model your lever ({flag}, or "
                    f"--model spring --spring-constant {k:.4g}N/m)")
-    out += [f"{c.name}: no jump into contact (no drop above the analysis's step-noise threshold at the "
-            "contact): the attraction before contact is barely resolved, so A*R rests on the approach's "
-            "curvature alone" for c in curves
+    out += [f"{c.name}: no significant jump into contact (none above the analysis's threshold of "
+            "5 step noises at the contact; the largest drop before the compliance region is left out "
+            "as the jump): the attraction before contact is barely resolved, so A*R rests mostly on "
+            "the approach's curvature" for c in curves
             if (c.metadata.get("calibration") or {}).get("jump_found") is False]
     return out
 
