@@ -22,7 +22,8 @@ import numpy as np
 
 from .state import State
 
-__all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE", "MIN_COMPLIANCE_SAMPLES"]
+__all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
+           "MIN_COMPLIANCE_SAMPLES"]
 
 #: Hamaker constants of condensed media across vacuum, air or water [J].
 HAMAKER_RANGE = (1e-21, 1e-18)
