@@ -227,3 +227,27 @@ def test_paper_preset_backlash_and_a_jump_below_the_noise():
         true_j = int(np.flatnonzero(np.asarray(c.truth["separation"])[app] < 0.3e-9)[0])
         assert fc.metadata["calibration"]["jump_found"] is False
         assert fc.jump_index == true_j and not fc.mask[true_j - 2: true_j + 2].any()
+
+
+def test_asylum_air_fit_via_the_cli_warns_like_the_analysis(capsys):
+    """`afmforce fit FILE --free hamaker --json` on the MFP-3D SiN curve in air: one JSON object with
+    the analysis's calibration per curve; the jump-in in air is a capillary one, far beyond van der
+    Waals: both the fit and the analysis (its vdW step) put A above the physical range and say so."""
+    from afmforce.analysis.plausibility import HAMAKER_RANGE
+
+    name = "asylum-mfp3d_SiN-tip_air.ibw"
+    path = real_file(name)
+    assert main(["fit", str(path), "--free", "hamaker", "--no-profile", "--no-compare", "--json"]) == 0
+    out = capsys.readouterr().out
+    d, end = json.JSONDecoder().raw_decode(out)
+    assert end == len(out.rstrip())                  # one JSON object, nothing else on stdout
+    assert d["calibration"][name]["source"] == "recalibrated"
+    a = d["parameters"]["hamaker"]["value"]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ana = analyze(_load(name)[0])
+    hw = [w for w in ana.warnings if w.startswith("Hamaker constant")]   # the pull-off's radius
+    assert hw and "outside the physical range" in hw[0]
+    assert a > HAMAKER_RANGE[1] and float(hw[0].split()[2]) > HAMAKER_RANGE[1]
+    assert any(w.startswith(f"Hamaker constant {a:.3g} J (with the model's radius 100 nm")
+               and "capillary meniscus" in w for w in d["warnings"])
