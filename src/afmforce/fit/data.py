@@ -67,7 +67,8 @@ class FitCurve:
         ``offset`` [m], ``drift`` [m/s], ``min_deflection`` [m] (before the jump,
         baseline removed).
     metadata : dict
-        The curve's metadata.
+        The curve's metadata, with ``calibration`` (how the analysis steps calibrated it:
+        :meth:`afmforce.fit.preprocess.AnalysisInputs.as_metadata`) and ``preparation_notes``.
     retract_start : int or None
         Index of the first retract sample when the retract run is fitted too
         (None: approach only).
@@ -232,9 +233,11 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     Raises
     ------
     FileFormatError
-        The deflection is not calibrated in metres, or speed/sample rate are missing.
+        Speed or sample rate missing (:class:`~afmforce.errors.MissingMetadataError`; also a
+        time axis that is the sample index without a sample rate), NaN or infinite samples.
     AnalysisError
-        Too few approach samples, or no contact (no constant-compliance region).
+        Too few approach samples, no contact, a soft contact or one the deflection does not
+        follow with slope ~1 (:func:`afmforce.fit.preprocess.analysis_inputs`).
     """
     app = np.asarray(curve.segment) == 0
     idx = np.flatnonzero(app)
