@@ -39,11 +39,23 @@ def test_no_contact():
         fit_dynamic(far, "beam", free=("hamaker", "xi"))
 
 
-def test_volts_refused(two):
+def test_volts_without_sensitivity_calibrated_as_the_analysis(two):
+    """Volts without a sensitivity: the analysis's calibration (the approach's compliance slope),
+    the same number `afmforce analyze` reports, with a warning naming it (issue 23 item 4)."""
+    from afmforce.analysis.pipeline import analyze
+    from afmforce.fit import prepare_curves
+
     meta = {k: v for k, v in two[0].metadata.items() if k != "sensitivity"}
-    volts = dataclasses.replace(two[0], deflection_unit="V", metadata=meta)
-    with pytest.raises(FileFormatError, match="no sensitivity"):
-        fit_dynamic([volts, two[1]], "beam", free=("hamaker",))
+    volts = dataclasses.replace(two[0], deflection_signal=np.asarray(two[0].deflection_signal) / 50e-9,
+                                deflection_unit="V", metadata=meta)
+    fc = prepare_curves([volts])[0]
+    ana = analyze(volts, steps=["calibration"])
+    assert ana.calibration_source == "fit"
+    assert fc.metadata["calibration"]["sensitivity"] == pytest.approx(ana.sensitivity_fit, rel=1e-12)
+    assert fc.metadata["calibration"]["source"] == "compliance"
+    assert fc.metadata["calibration"]["sensitivity"] == pytest.approx(50e-9, rel=0.02)   # the truth
+    note = fc.metadata["preparation_notes"][0]
+    assert f"{ana.sensitivity_fit * 1e9:.4g} nm/V" in note and "--meta sensitivity=" in note
 
 
 def test_free_parameter_checks(two):
@@ -118,17 +130,20 @@ def test_speed_and_rate_read_off_the_ramp_when_missing(two):
 
 
 def test_cli_meta_calibrates_volts(two, tmp_path, capsys):
-    """Curves recorded in volts without a sensitivity: the error names --meta; with it they fit."""
+    """Curves recorded in volts without a sensitivity fit with the compliance slope's calibration
+    and a warning naming --meta; with --meta sensitivity they fit with the given one."""
     volts = [dataclasses.replace(c, deflection_signal=np.asarray(c.deflection_signal) / 50e-9,
                                  deflection_unit="V",
                                  metadata={k: v for k, v in c.metadata.items() if k != "sensitivity"})
              for c in two]
     paths = write_curves(volts, tmp_path)
     argv = ["fit", *map(str, paths), "--free", "hamaker", "--no-profile", "--no-compare", "--json"]
-    assert main(argv) == 2
-    assert "--meta sensitivity=" in capsys.readouterr().err
-    assert main(argv + ["--meta", "sensitivity=50nm/V"]) == 0
     import json
 
-    res = json.loads(capsys.readouterr().out)
-    assert res["parameters"]["hamaker"]["value"] == pytest.approx(5e-19, rel=0.05)
+    for extra in ([], ["--meta", "sensitivity=50nm/V"]):
+        assert main(argv + extra) == 0
+        out = capsys.readouterr()
+        res = json.loads(out.out)
+        assert res["parameters"]["hamaker"]["value"] == pytest.approx(5e-19, rel=0.05)
+        # without --meta: calibrated from the compliance slope, said with the flag that overrides it
+        assert ("--meta sensitivity=" in out.err) == (not extra)

@@ -84,6 +84,8 @@ class ComplianceResult:
     approach: ComplianceLine
     retract: ComplianceLine
     unit: str
+    #: why a run has no line although it has a compliance region (a degenerate line)
+    notes: tuple[str, ...] = ()
 
 
 def _fit_line(z: np.ndarray, s: np.ndarray, run: RunRegions) -> ComplianceLine:
@@ -105,8 +107,25 @@ def _fit_line(z: np.ndarray, s: np.ndarray, run: RunRegions) -> ComplianceLine:
 
 def fit_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract: RunRegions,
                    unit: str) -> ComplianceResult:
-    """Fit the constant-compliance line of both runs (a NaN line for a run without one)."""
-    return ComplianceResult(approach=_fit_line(z, s, approach), retract=_fit_line(z, s, retract), unit=unit)
+    """Fit the constant-compliance line of both runs (a NaN line for a run without one).
+
+    A run whose line is degenerate (no spread of its positions: a stepped, backlashing position
+    sensor that barely moves over the region) gets a NaN line and a note, and the other run's
+    line serves (as for a run without a compliance region); both degenerate raise.
+    """
+    lines, notes = {}, []
+    for run in (approach, retract):
+        try:
+            lines[run.kind] = _fit_line(z, s, run)
+        except AnalysisError as exc:
+            if "degenerate" not in str(exc):
+                raise
+            lines[run.kind], why = ComplianceLine.missing(), str(exc)
+            notes.append(f"{why}: the {run.kind} run has no compliance line (its positions barely move "
+                         "there: a stepped or backlashing position sensor); the other run's line is used")
+    if not (lines["approach"].found or lines["retract"].found) and notes:
+        raise AnalysisError("; ".join(notes).replace("; the other run's line is used", ""))
+    return ComplianceResult(approach=lines["approach"], retract=lines["retract"], unit=unit, notes=tuple(notes))
 
 
 @dataclass(frozen=True)

@@ -22,7 +22,8 @@ import numpy as np
 
 from .state import State
 
-__all__ = ["plausibility_warnings", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE", "MIN_COMPLIANCE_SAMPLES"]
+__all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
+           "MIN_COMPLIANCE_SAMPLES"]
 
 #: Hamaker constants of condensed media across vacuum, air or water [J].
 HAMAKER_RANGE = (1e-21, 1e-18)
@@ -40,17 +41,25 @@ def _hamaker(st: State) -> list[str]:
     fit = st.details.get("vdw")
     if fit is None or "vdw" in st.skipped or not math.isfinite(getattr(fit, "hamaker_radius", math.nan)):
         return []
-    lo, hi = HAMAKER_RANGE
     a, how = getattr(fit, "hamaker", math.nan), "with the probe's radius"
     se = st.details.get("surface_energy")
     if not math.isfinite(a) and se is not None and math.isfinite(getattr(se, "radius", math.nan)) and se.radius > 0:
         a, how = fit.hamaker_radius / se.radius, f"with the pull-off's radius {se.radius * 1e9:.3g} nm"
+    note = hamaker_warning(a, how, fit.hamaker_radius)
+    return [note] if note else []
+
+
+def hamaker_warning(a: float, how: str, hamaker_radius: float) -> str | None:
+    """The warning for a Hamaker constant ``a`` [J] outside :data:`HAMAKER_RANGE` (None inside it);
+    ``how`` says which radius gave it, ``hamaker_radius`` [J m] is the fitted product. Shared with
+    the dynamic fit (:mod:`afmforce.fit.preprocess`)."""
+    lo, hi = HAMAKER_RANGE
     if not math.isfinite(a) or lo <= a <= hi:
-        return []
+        return None
     cause = ("an extra attraction (a capillary meniscus in air, electrostatics) or dynamics in the fit" if a > hi
              else "a weak attraction: a fit of noise, or friction hiding the precontact force")
-    return [f"Hamaker constant {a:.3g} J ({how}; A R {fit.hamaker_radius:.3g} J m) is outside the physical range "
-            f"{lo:.0e}..{hi:.0e} J: {cause}"]
+    return (f"Hamaker constant {a:.3g} J ({how}; A R {hamaker_radius:.3g} J m) is outside the physical range "
+            f"{lo:.0e}..{hi:.0e} J: {cause}")
 
 
 def _spring_constant(st: State) -> list[str]:

@@ -33,7 +33,8 @@ __all__ = ["smooth", "contact", "drift", "fringes", "retract_dip", "compliance",
 def compliance(st: State, o: ComplianceOptions) -> State:
     """Robust constant-compliance line of each run."""
     st.require("approach", step="compliance")
-    return st.update("compliance", cc.fit_compliance(st.z, st.signal, st.approach, st.retract, st.unit))
+    res = cc.fit_compliance(st.z, st.signal, st.approach, st.retract, st.unit)
+    return st.update("compliance", res, warn=res.notes)
 
 
 def calibration(st: State, o: CalibrationOptions) -> State:

@@ -128,15 +128,28 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 
 def _load(paths, meta=None):
+    """The curves of ``paths`` and their names: every curve of a file with several (a force map,
+    ``FILE#2``...); a missing calibration asked for with the fit's ``--meta`` (its
+    ``--spring-constant`` is the model lever's)."""
+    from ..errors import MissingMetadataError
     from ..io import load
 
     curves, names = [], []
     for path in paths:
-        got = load(path, meta_override=meta or None)
-        if len(got) != 1:
-            raise ParameterError(f"{path} holds {len(got)} curves; give files with one curve each")
-        curves.append(got[0])
-        names.append(Path(path).name)
+        try:
+            got = load(path, meta_override=meta or None)
+        except MissingMetadataError as exc:
+            if not exc.keys:
+                raise
+            what = str(exc).split("; give ")[0]
+            flags = " ".join(f"--meta {k}=VALUE" for k in exc.keys)
+            raise MissingMetadataError(
+                f"{what}; give them with {flags} (e.g. --meta spring_constant=0.1N/m "
+                "--meta sensitivity=50nm/V; in `afmforce fit` --spring-constant is the model's lever)",
+                keys=exc.keys, flags=("--meta",)) from None
+        name = Path(path).name
+        curves += list(got)
+        names += [name] if len(got) == 1 else [f"{name}#{i + 1}" for i in range(len(got))]
     return curves, names
 
 
@@ -159,13 +172,15 @@ def run(args: argparse.Namespace) -> int:
             check_writable(path, args.force)
     if not 0.5 < args.level < 1:
         raise ParameterError(f"--level must lie between 0.5 and 1, got {args.level}")
-    for flag, vals in (("--velocities", args.velocities), ("--sample-rates", args.sample_rates)):
-        if vals is not None and len(vals) != len(args.curves):
-            raise ParameterError(f"{flag} has {len(vals)} values for {len(args.curves)} curves")
     cfg = model_config(args)
     from ..io._meta import parse_meta_args
 
     curves, names = _load(args.curves, parse_meta_args(args.meta))
+    for flag, vals in (("--velocities", args.velocities), ("--sample-rates", args.sample_rates)):
+        if vals is not None and len(vals) != len(curves):
+            raise ParameterError(f"{flag} has {len(vals)} values for {len(curves)} curves"
+                                 + (f" (in {len(args.curves)} files)" if len(curves) != len(args.curves)
+                                    else ""))
     if args.quadratic_compliance:    # issue 25: volts -> metres by the curved compliance
         from ..analysis.liquid import calibrate_liquid_curve
         curves = [calibrate_liquid_curve(c) if c.deflection_unit == "V" else c for c in curves]
@@ -180,6 +195,8 @@ def run(args: argparse.Namespace) -> int:
                           retract=args.retract, noise=args.noise_model,
                           fringes=args.fringes, fringe_period=args.fringe_period)
     d = res.to_dict()
+    # how each curve was calibrated (the analysis's calibration: the file's, or the compliance slope)
+    d["calibration"] = {c.name: c.metadata.get("calibration") for c in res._problem.ev.curves}
     if args.plots:
         written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)
         prof = plot_profiles(res, Path(args.plots) / "fit_profiles.png", force=True)

@@ -12,6 +12,7 @@ from ..errors import ParameterError
 from ..progress import Progress
 from .data import FitCurve, prepare_curves
 from .model import DEFAULT_FRINGE_PERIOD, Evaluator
+from .preprocess import preparation_warnings, result_warnings
 from .params import PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
 from .result import CurveFit, Estimate, FitResult, wald_interval
@@ -362,6 +363,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     values, shifts = prob.unpack(x)
     warns = pre_warns + [c.metadata["velocity_from_ramp"] for c in fc
                          if c.metadata.get("velocity_from_ramp")]
+    warns += preparation_warnings(fc, base)     # calibration notes, the files' k vs the model's
     if ev.failures:
         warns.append(f"{ev.failures} trial simulations failed during the fit (last: {ev.last_error})")
     adq = adequacy(prob, x, dof, chi2, fc)
@@ -397,6 +399,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     for e in params.values():
         if e.note:
             warns.append(e.note)
+    warns += result_warnings(params, base)     # a Hamaker constant outside the physical range
     derived = {}
     if "hamaker" in free or "radius" in free:
         name = "hamaker" if "hamaker" in free else "radius"

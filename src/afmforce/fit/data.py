@@ -12,9 +12,14 @@ the choice of the position channel (:func:`afmforce.analysis.state.prepare`:
 the measured one when the file has it), the speed of a run
 (:func:`afmforce.analysis.dynamic.run_velocity`), the robust line through a
 stepped sensor channel and the robust drift baseline
-(:func:`afmforce.analysis.drift.fit_baseline`). Still the fit's own: the noise
-(second differences, and the 1/f part in :mod:`afmforce.fit.noise`), the
-jump-in and contact masks.
+(:func:`afmforce.analysis.drift.fit_baseline`), and through
+:mod:`afmforce.fit.preprocess` the analysis steps ``contact`` ... ``kind``: the
+calibration (the file's; the compliance slope where the file has none or a stale
+sensitivity), the contact kind (a soft contact is refused), the jump-in, the
+contact onset and the compliance line of the rigid-contact test. Still the fit's
+own: the noise (second differences, whose spread the adequacy test of
+:mod:`afmforce.fit.adequacy` is built on, and the 1/f part in
+:mod:`afmforce.fit.noise`) and the mask built from the jump-in and the contact.
 """
 
 from __future__ import annotations
@@ -62,7 +67,8 @@ class FitCurve:
         ``offset`` [m], ``drift`` [m/s], ``min_deflection`` [m] (before the jump,
         baseline removed).
     metadata : dict
-        The curve's metadata.
+        The curve's metadata, with ``calibration`` (how the analysis steps calibrated it:
+        :meth:`afmforce.fit.preprocess.AnalysisInputs.as_metadata`) and ``preparation_notes``.
     retract_start : int or None
         Index of the first retract sample when the retract run is fitted too
         (None: approach only).
@@ -192,6 +198,29 @@ def _noise_sigma(y: np.ndarray) -> float:
     return float(np.std(d) / math.sqrt(6.0))
 
 
+def _timed(curve: RawCurve, name: str, sample_rate: float | None) -> RawCurve:
+    """``curve`` with its time in seconds when the file stores only the sample index
+    (``time_is_sample_index``, e.g. AFM Workshop CSV): index / sample rate, the rate given
+    or in the file's metadata; without one the speed read off the ramp would be in metres
+    per sample, so the user is asked."""
+    import dataclasses
+
+    meta = curve.metadata or {}
+    if not meta.get("time_is_sample_index"):
+        return curve
+    fs = sample_rate if sample_rate is not None else meta.get("sample_rate")
+    if not fs:
+        raise MissingMetadataError(
+            f"{name}: the file stores no time (its time column is the sample index), so neither the "
+            "driving speed nor the sample rate can be read off the ramp; give the sample rate "
+            "(--sample-rates F1,F2,.. or --meta sample_rate=VALUE; Python: fit_dynamic(..., "
+            "sample_rates=[...])) and, if the file lacks it, the speed (--velocities)",
+            keys=("sample_rate",), flags=("--sample-rates", "--meta"))
+    t = np.asarray(curve.time, float) / float(fs)
+    return dataclasses.replace(curve, time=t, metadata={**meta, "time_is_sample_index": False,
+                                                        "sample_rate": float(fs)})
+
+
 def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | None = None,
                   sample_rate: float | None = None, jump_window: float = 2e-3,
                   retract: bool = False) -> FitCurve:
@@ -204,25 +233,22 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     Raises
     ------
     FileFormatError
-        The deflection is not calibrated in metres, or speed/sample rate are missing.
+        Speed or sample rate missing (:class:`~afmforce.errors.MissingMetadataError`; also a
+        time axis that is the sample index without a sample rate), NaN or infinite samples.
     AnalysisError
-        Too few approach samples, or no contact (no constant-compliance region).
+        Too few approach samples, no contact, a soft contact or one the deflection does not
+        follow with slope ~1 (:func:`afmforce.fit.preprocess.analysis_inputs`).
     """
-    meta = curve.metadata or {}
-    unit = curve.deflection_unit
-    need = {"N": "spring_constant", "V": "sensitivity"}.get(unit)
-    if unit != "m" and (need is None or not meta.get(need)):
-        raise MissingMetadataError(
-            f"{name}: the deflection is in {unit} and the file has no {need}; the fit needs a "
-            f"calibrated deflection in metres: give it (--meta {need}=VALUE; Python: "
-            f"load(..., meta_override={{'{need}': ...}}))", keys=(need,), flags=("--meta",))
-    # force / k or volts x sensitivity: the file's own calibration
-    scale = 1.0 if unit == "m" else (1.0 / float(meta[need]) if unit == "N" else float(meta[need]))
     app = np.asarray(curve.segment) == 0
     idx = np.flatnonzero(app)
     if idx.size < 30:
         raise AnalysisError(f"{name}: only {idx.size} approach samples; the fit needs >= 30")
     idx = idx[: np.flatnonzero(np.diff(idx) != 1)[0] + 1] if np.any(np.diff(idx) != 1) else idx
+    from .preprocess import analysis_inputs
+
+    ana = analysis_inputs(curve, name, idx)       # calibration, contact kind, jump-in, contact
+    curve = _timed(curve, name, sample_rate)      # (a soft contact is refused before a missing time)
+    scale = ana.factor
     ramp = _ramp(curve, idx)
     z, channel_note = _position(curve, idx, name)
     v_meas = channel_note.get("velocity") if velocity is None else None
@@ -249,44 +275,20 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
         raise FileFormatError(f"{name}: the approach contains NaN or infinite values")
     if channel_note.get("line") is not None:   # the measured channel: the true drive line
         z = channel_note.pop("line")(t)
-    # constant compliance: the rising tail where the deflection follows z
-    dy, dz = np.diff(y), np.diff(z)
-    i_c = n - 1
-    while i_c > 0 and dy[i_c - 1] > 0.5 * dz[i_c - 1]:
-        i_c -= 1
-    if n - i_c < 5:     # noisy positions break the chain: the last 10 % of the approach
-        i_c = int(0.9 * n)
-    n_tail = n - i_c
-    a, a_se = 0.0, 0.0
-    if n_tail >= 3:
-        zz, yy = z[i_c + n_tail // 3:], y[i_c + n_tail // 3:]
-        coef, res, *_ = np.polyfit(zz, yy, 1, full=True)
-        a = float(coef[0])
-        if zz.size > 3 and np.ptp(zz) > 0 and res.size:
-            a_se = float(np.sqrt(res[0] / (zz.size - 2) / np.sum((zz - zz.mean()) ** 2)))
+    # contact, jump-in and the rigid-contact test from the analysis's compliance line
+    a, a_se = ana.slope, ana.slope_se
     if 0.5 < a + 3 * a_se and a - 3 * a_se < 2.0:
         a = min(max(a, 0.51), 1.99)   # noisy (e.g. a 0.3 nm-noise detector over a few nm): ~1
-    if 0.05 < a <= 0.5 or a >= 2.0:
-        raise AnalysisError(
-            f"{name}: in contact the deflection follows the position with slope {a:.3g}, not ~1: "
-            "a deformable sample or a wrong deflection calibration; the dynamic model assumes "
-            "rigid surfaces (eq 2), so this curve cannot be fitted")
     if not 0.5 < a < 2.0:
         raise AnalysisError(
-            f"{name}: no contact on the approach (no constant-compliance region at its end, "
-            f"where the deflection should follow the position with slope ~1; found "
-            f"{n_tail} rising samples, slope {a:.3g}); the fit needs curves that reach contact")
-    # jump-in: the largest change before the compliance region (a drop, or the spike of
-    # the apparent deflection of a tilting beam held back by friction)
-    # (not in the first tenth: in a liquid the lever drag sets in there, issue 25)
-    j0 = i_c // 10
-    j = j0 + int(np.argmax(np.abs(dy[j0: max(i_c, 1)]))) + 1 if i_c > 1 else 1
-    j = min(j, i_c)
+            f"{name}: in contact the deflection follows the position with slope {a:.3g}, not ~1 "
+            f"(calibrated: {ana.source}): a deformable sample or a wrong deflection calibration; "
+            "the dynamic model assumes rigid surfaces (eq 2), so this curve cannot be fitted as it "
+            "is: give the right calibration (--meta sensitivity=VALUE) or analyse it with "
+            f"`afmforce analyze {name}`")
+    i_c, j = min(ana.contact, n - 1), min(max(ana.jump, 1), n - 1)
     n_noise = max(12, int(0.8 * j))
     sigma = max(_noise_sigma(y[:n_noise]), 1e-15)
-    j_drop = int(np.argmin(dy[: max(j, 1)])) + 1
-    if j_drop < j and -dy[j_drop - 1] > 8 * sigma and j - j_drop <= 3 + jump_window * fs:
-        j = j_drop          # the drop of the jump-in came first, then the spike
     win = int(math.ceil(jump_window * fs))
     mask = np.ones(n, bool)
     mask[max(j - 2, 0): min(max(j, i_c) + win + 2, n)] = False
@@ -310,6 +312,9 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
                          "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
                   metadata=dict(curve.metadata or {}))
     fc.metadata["position_channel"] = channel_note["channel"]
+    fc.metadata["calibration"] = ana.as_metadata()
+    if ana.notes:
+        fc.metadata["preparation_notes"] = list(ana.notes)
     if channel_note.get("bent"):
         fc.metadata["velocity_from_ramp"] = channel_note["bent"]
     fc.metadata["record_samples"] = int(np.asarray(curve.time).size)
