@@ -251,3 +251,28 @@ def test_asylum_air_fit_via_the_cli_warns_like_the_analysis(capsys):
     assert a > HAMAKER_RANGE[1] and float(hw[0].split()[2]) > HAMAKER_RANGE[1]
     assert any(w.startswith(f"Hamaker constant {a:.3g} J (with the model's radius 100 nm")
                and "capillary meniscus" in w for w in d["warnings"])
+
+
+def test_stale_sensitivity_on_one_virtual_curve_recalibrated():
+    """Two virtual curves in volts with the file's 50 nm/V; the laser of the second was realigned
+    (its signal 1.6x larger for the same deflection): the analysis's stale-sensitivity rule gives it
+    the compliance slope's calibration (the truth, 31.25 nm/V, within 2 %), and the fit says the
+    curves' calibrations differ."""
+    # 40 nm in contact: the analysis recalibrates only a contact line it finds straight
+    c1, c2 = make_curves(0.005, seed=3, speeds=(1e-6, 4e-6), spacing=0.5e-9, turn=40e-9)
+    s = 50e-9
+
+    def volts(c, gain):
+        return dataclasses.replace(c, deflection_signal=np.asarray(c.deflection_signal) / s * gain,
+                                   deflection_unit="V", metadata={**c.metadata, "sensitivity": s})
+
+    ref = prepare_curves([volts(c2, 1.0)])[0]
+    fc1, fc2 = prepare_curves([volts(c1, 1.0), volts(c2, 1.6)])
+    cal = fc2.metadata["calibration"]
+    assert fc1.metadata["calibration"]["source"] == "file" and cal["source"] == "recalibrated"
+    assert cal["sensitivity"] == pytest.approx(s / 1.6, rel=0.02)     # the truth: 31.25 nm/V
+    np.testing.assert_allclose(fc2.deflection, ref.deflection * cal["sensitivity"] * 1.6 / s, rtol=1e-12)
+    assert fc2.jump_index == ref.jump_index and np.array_equal(fc2.mask, ref.mask)
+    notes = preparation_warnings([fc1, fc2], base_config("beam"))
+    assert any(w.startswith("the curves' sensitivities differ") for w in notes)
+    assert any("stale sensitivity" in w and fc2.name in w for w in notes)

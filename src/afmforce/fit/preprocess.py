@@ -276,6 +276,15 @@ def preparation_warnings(curves, base) -> list[str]:
                    f"{k_model:.4g} N/m ({base.model} model): the fitted A*R and friction scale with "
                    f"k, so they describe another lever; give the model your lever ({flag}, or "
                    f"--model spring --spring-constant {k:.4g}N/m)")
+    cal = [(c.name, c.metadata["calibration"]) for c in curves if c.metadata.get("calibration")]
+    for unit in ("V", "N"):
+        f = [(nm, m["factor"]) for nm, m in cal if m.get("unit") == unit]
+        if len(f) > 1 and max(v for _, v in f) > (1 + SPRING_CONSTANT_TOLERANCE) * min(v for _, v in f):
+            lo, hi = min(f, key=lambda t: t[1]), max(f, key=lambda t: t[1])
+            what = "sensitivities" if unit == "V" else "force calibrations (1/k)"
+            out.append(f"the curves' {what} differ: {lo[1]:.4g} ({lo[0]}) to {hi[1]:.4g} ({hi[0]}) "
+                       f"m/{unit} (the compliance slope recalibrated some): a joint fit assumes one lever "
+                       "and one laser alignment; check the curves' calibrations")
     out += [f"{c.name}: no significant jump into contact (none above the analysis's threshold of "
             "5 step noises at the contact; the largest drop before the compliance region is left out "
             "as the jump): the attraction before contact is barely resolved, so A*R rests mostly on "
