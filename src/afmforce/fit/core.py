@@ -307,7 +307,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             f"{', '.join(dep)} cannot be determined from curves at one driving speed "
             f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
             "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
-            "(ideally a factor >= 4 apart) or fix " + ", ".join(dep))
+            "(ideally a factor >= 4 apart) or fix " + ", ".join(dep)
+            + " (e.g. --free hamaker --xi 0: A*R alone, without friction)")
     ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)
     guess = _guess_globals(fc, base, free)
