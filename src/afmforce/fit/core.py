@@ -31,6 +31,10 @@ RIDGE_NFEV = 12
 STUCK_REDCHI = 1.5
 
 
+#: Above this viscosity [Pa s] the medium is a liquid (air 1.8e-5, hexane 3e-4, water 8.9e-4):
+#: drainage and double-layer forces then bend the approach like an indentation does, so a curve
+#: the analysis calls a soft contact is fitted (with a warning) rather than refused.
+LIQUID_VISCOSITY = 1e-4
 #: Largest amplitude of fitted ``periodic`` fringes taken as fringes [m]: the paper's Park
 #: instrument showed 1.5 nm (section 3.1), present-day ones less; a larger fitted amplitude
 #: means the fringe terms took up something else (docs/fit.md).
@@ -298,7 +302,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         base = base.replace(sampling=sampling)
     free = check_free(free, base.model)
     fc = prepare_curves(curves, names, velocities=velocities, sample_rates=sample_rates,
-                        jump_window=jump_window, retract=retract)
+                        jump_window=jump_window, retract=retract,
+                        soft="warn" if base.viscosity > LIQUID_VISCOSITY else "refuse")
     base = _start_from_file_k(base, fc, free, fixed)
     speeds = sorted({round(c.velocity, 15) for c in fc})
     dep = [n for n in free if n in SPEED_DEPENDENT]

@@ -223,8 +223,11 @@ def _timed(curve: RawCurve, name: str, sample_rate: float | None) -> RawCurve:
 
 def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | None = None,
                   sample_rate: float | None = None, jump_window: float = 2e-3,
-                  retract: bool = False) -> FitCurve:
+                  retract: bool = False, soft: str = "refuse") -> FitCurve:
     """Prepare the approach run of ``curve`` (see the module docstring).
+
+    ``soft``: what to do with a curve the analysis classifies as a soft contact
+    (:func:`prepare_curves`).
 
     With ``retract=True`` the retract run that follows it is appended
     (:func:`_append_retract`): its contact part is fitted, the pull-off and the
@@ -246,7 +249,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     idx = idx[: np.flatnonzero(np.diff(idx) != 1)[0] + 1] if np.any(np.diff(idx) != 1) else idx
     from .preprocess import analysis_inputs
 
-    ana = analysis_inputs(curve, name, idx)       # calibration, contact kind, jump-in, contact
+    ana = analysis_inputs(curve, name, idx, soft)  # calibration, contact kind, jump-in, contact
     curve = _timed(curve, name, sample_rate)      # (a soft contact is refused before a missing time)
     scale = ana.factor
     ramp = _ramp(curve, idx)
@@ -429,8 +432,14 @@ def check_consistent(curves: Sequence[RawCurve], names: Sequence[str]) -> None:
 def prepare_curves(curves: Sequence[RawCurve | FitCurve], names: Sequence[str] | None = None,
                    *, velocities: Sequence[float] | None = None,
                    sample_rates: Sequence[float] | None = None,
-                   jump_window: float = 2e-3, retract: bool = False) -> list[FitCurve]:
-    """Prepare several curves (see :func:`prepare_curve`) and check their calibrations."""
+                   jump_window: float = 2e-3, retract: bool = False,
+                   soft: str = "refuse") -> list[FitCurve]:
+    """Prepare several curves (see :func:`prepare_curve`) and check their calibrations.
+
+    ``soft``: ``refuse`` a curve the analysis classifies as a soft contact, or ``warn`` (in a
+    liquid, drainage and double-layer forces bend the approach like an indentation: the
+    model describes that, and its adequacy test judges the rest).
+    """
     if len(curves) == 0:
         raise ParameterError("give at least one curve")
     names = list(names) if names is not None else [f"curve {i + 1}" for i in range(len(curves))]
@@ -443,5 +452,5 @@ def prepare_curves(curves: Sequence[RawCurve | FitCurve], names: Sequence[str] |
             continue
         out.append(prepare_curve(c, nm, velocity=None if velocities is None else velocities[i],
                                  sample_rate=None if sample_rates is None else sample_rates[i],
-                                 jump_window=jump_window, retract=retract))
+                                 jump_window=jump_window, retract=retract, soft=soft))
     return out

@@ -110,7 +110,7 @@ def _refuse_soft(name: str, curve: RawCurve, reason: str) -> AnalysisError:
         f"`afmforce analyze {name.split('#')[0]}` (its indentation step fits Young's modulus)")
 
 
-def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInputs:
+def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "refuse") -> AnalysisInputs:
     """Run the analysis steps up to ``kind`` on ``curve`` and take the fit's inputs from them.
 
     Parameters
@@ -148,13 +148,18 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray) -> AnalysisInpu
     except AnalysisError as exc:
         raise AnalysisError(f"{name}: the analysis steps that prepare the curve fail: {exc}") from None
     kind = st.details["kind"]
-    if kind.kind == "soft":
+    soft_note = []
+    if kind.kind == "soft" and soft == "refuse":
         raise _refuse_soft(name, curve, kind.reason)
+    if kind.kind == "soft":
+        soft_note.append(f"{name}: the analysis sees a soft contact ({kind.reason}); in a liquid the "
+                         "drainage and double-layer forces the model has bend the approach like that, "
+                         "so the curve is fitted and the fit's adequacy test judges it")
     cal, comp = st.details["calibration"], st.details["compliance"]
     factor = float(st.factor)
     sens = factor if st.unit == "V" else math.nan
     source = "file"
-    notes = []
+    notes = soft_note
     if cal.source == "fit" and math.isfinite(cal.factor_given):
         source = "recalibrated"    # the kind step replaced a stale sensitivity (hard, straight line)
         notes.append(
