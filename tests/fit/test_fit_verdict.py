@@ -57,6 +57,10 @@ def test_no_verdict_when_no_model_describes_the_curves(soft_fit):
     hi = float(worst.split(" to ")[1].split(" nm")[0])
     assert hi > 3.0
     assert "does not describe the data" in r.markdown()
+    # what to check: the misfit sits in contact (the tilted contact line)
+    from afmforce.fit.adequacy import ADVICE
+
+    assert r.adequacy["advice"] == ADVICE["contact"] and v.endswith(ADVICE["contact"])
     # the shared fringe terms could take up the tilted contact line with each curve's drift
     # (a 10 nm "fringe"): refused as fringes, the fit went on without them
     assert r.fringes["mode"] == "off"

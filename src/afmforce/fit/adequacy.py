@@ -23,7 +23,8 @@ import math
 import numpy as np
 from scipy.stats import chi2 as chi2_dist
 
-__all__ = ["ADEQUACY_QUANTILE", "redchi_threshold", "adequacy", "residual_site", "undetermined_verdict"]
+__all__ = ["ADEQUACY_QUANTILE", "ADVICE", "redchi_threshold", "adequacy", "residual_site",
+           "undetermined_verdict", "worst_region"]
 
 #: Quantile of the chi-square distribution above which the model is rejected.
 ADEQUACY_QUANTILE = 0.999
@@ -56,6 +57,30 @@ def _regions(c) -> dict[str, np.ndarray]:
     return {k: v[c.mask] for k, v in out.items()}
 
 
+#: What to check when the misfit sits in a region: the artefacts that put it there.
+ADVICE = {
+    "the free approach": "the misfit is in the free approach: fringes of another period "
+                         "(--fringe-period) or shape, a drift that is not linear, or noise the fit "
+                         "does not model; check the baseline with `afmforce analyze` (drift, fringes)",
+    "contact": "the misfit is in contact: a soft or rough contact, a stepped or backlashing "
+               "position sensor, or a wrong calibration; check the compliance line with "
+               "`afmforce analyze` (compliance, kind)",
+    "the retract's contact line": "the misfit is on the retract's contact line: backlash or creep "
+                                  "at the turn; fit the approaches alone (without --retract)",
+}
+
+
+def worst_region(c, r: np.ndarray) -> str:
+    """The region of curve ``c`` (a key of :data:`ADVICE`) with the largest excess chi-square."""
+    best, excess = None, -math.inf
+    for name, sel in _regions(c).items():
+        if sel.any():
+            e = float(np.sum(r[sel] ** 2) - sel.sum())
+            if e > excess:
+                best, excess = name, e
+    return best
+
+
 def residual_site(c, r: np.ndarray, shift: float) -> str:
     """Where the residuals ``r`` (noise units, on the mask) of curve ``c`` concentrate.
 
@@ -63,12 +88,7 @@ def residual_site(c, r: np.ndarray, shift: float) -> str:
     and the range of ``z - shift`` [nm] holding the middle 80 % of its chi-square.
     """
     z = (c.position[c.mask] - shift) * 1e9
-    best, excess = None, -math.inf
-    for name, sel in _regions(c).items():
-        if sel.any():
-            e = float(np.sum(r[sel] ** 2) - sel.sum())
-            if e > excess:
-                best, excess = name, e
+    best = worst_region(c, r)
     sel = _regions(c)[best]
     zs, r2 = z[sel], r[sel] ** 2
     order = np.argsort(zs)
@@ -95,10 +115,12 @@ def adequacy(prob, x, dof: int, chi2: float, curves) -> dict:
     per.sort(key=lambda t: -t[0])
     bad = [p for p in per if p[0] > redchi_threshold(len(p[2]), [curves[p[1]]])][:3] or per[:1]
     out["worst"] = [residual_site(curves[i], r, float(shifts[i])) for _, i, r in bad]
+    out["advice"] = ADVICE[worst_region(curves[bad[0][1]], bad[0][2])]
     return out
 
 
 def undetermined_verdict(adq: dict) -> str:
     """The verdict when the model does not describe the data."""
     return (f"undetermined: the model does not describe the data (reduced chi-square "
-            f"{adq['redchi']:.3g} > {adq['threshold']:.3g}); worst: " + "; ".join(adq["worst"]))
+            f"{adq['redchi']:.3g} > {adq['threshold']:.3g}); worst: " + "; ".join(adq["worst"])
+            + (f"; {adq['advice']}" if adq.get("advice") else ""))

@@ -377,7 +377,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         warns.append(f"reduced chi-square {redchi:.3g} > {adq['threshold']:.3g} (the "
                      f"{adq['quantile']:.1%} quantile, noise estimate's spread included): the model "
                      "does not describe the data within their noise; no verdict on friction, and "
-                     "the intervals (scaled by it) may be optimistic. " + "; ".join(adq["worst"]))
+                     "the intervals (scaled by it) may be optimistic. " + "; ".join(adq["worst"])
+                     + f"; {adq['advice']}")
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov / np.sqrt(np.outer(np.diag(cov), np.diag(cov)))
     g = len(free)

@@ -194,7 +194,9 @@ class FitResult:
         if self.adequacy and not self.adequacy.get("adequate", True):
             L += [f"**The model does not describe the data**: reduced chi-square "
                   f"{self.redchi:.3g} > {self.adequacy['threshold']:.3g}.", ""]
-            L += [f"- {w}" for w in self.adequacy.get("worst", [])] + [""]
+            L += [f"- {w}" for w in self.adequacy.get("worst", [])]
+            L += ([f"- what to check: {self.adequacy['advice']}"] if self.adequacy.get("advice")
+                  else []) + [""]
         if self.comparison is not None:
             c = self.comparison
             L += [f"**{c.verdict}** (likelihood ratio {c.lr:.3g}, p = {c.p_value:.3g})", ""]
