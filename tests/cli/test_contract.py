@@ -234,3 +234,14 @@ def test_automatic_executor_is_serial_without_a_free_core(monkeypatch):
     assert workers == 2 and plan.seconds_per_run > 0
     assert plan.executor == ("serial" if plan.serial_estimate <= plan.cluster_estimate else "dask") == "serial"
     assert plan.cluster_estimate >= files.ANALYSIS_CLUSTER_START
+
+
+@pytest.mark.parametrize("command", sorted(COMMANDS))
+def test_help_with_json_is_one_object(command, capsys):
+    """`--help --json` prints the help as one JSON object (it printed the text before)."""
+    code, out, _ = run(capsys, [command, "--help", "--json"])
+    obj = json.loads(out)
+    assert code == 0 and obj["exit_status"] == 0 and obj["command"] == command
+    assert obj["help"][0].startswith(f"usage: afmforce {command}")
+    code, out, _ = run(capsys, ["--json", "-h"])
+    assert code == 0 and any(command in line for line in json.loads(out)["help"])

@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import json
 import os
 import re
 import sys
@@ -162,6 +163,12 @@ def main(argv: list[str] | None = None) -> int:
     command = _command_of(argv)
     try:
         parser = build_parser(command)
+        if _outcome.RunState.json and ("-h" in argv or "--help" in argv):
+            # --json always prints one JSON object: the help text as lines, exit status 0
+            text = (_subparser(parser, command) if command else parser).format_help()
+            print(json.dumps({"command": command or "afmforce", "exit_status": 0,
+                              "help": text.splitlines()}, indent=2))
+            return 0
         if command:
             refuse_empty_values(_subparser(parser, command), argv)
         args = parser.parse_args(argv)
