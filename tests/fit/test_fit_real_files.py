@@ -303,3 +303,25 @@ def test_stale_sensitivity_on_one_virtual_curve_recalibrated():
     notes = preparation_warnings([fc1, fc2], base_config("beam"))
     assert any(w.startswith("the curves' sensitivities differ") for w in notes)
     assert any("stale sensitivity" in w and fc2.name in w for w in notes)
+
+
+def test_calibration_file_keeps_the_files_sensitivity():
+    """`calibration="file"` (`--calibration file`): the file's sensitivity even where a hard
+    contact's compliance line calls it stale (a position sensor that is off in contact, the `paper`
+    preset's backlashing one, makes the line lie); `auto` recalibrates as the analysis does."""
+    c1, c2 = make_curves(0.005, seed=3, speeds=(1e-6, 4e-6), spacing=0.5e-9, turn=40e-9)
+    s = 50e-9
+    v2 = dataclasses.replace(c2, deflection_signal=np.asarray(c2.deflection_signal) / s * 1.6,
+                             deflection_unit="V", metadata={**c2.metadata, "sensitivity": s})
+    auto = prepare_curves([v2])[0]
+    kept = prepare_curves([v2], calibration="file")[0]
+    assert auto.metadata["calibration"]["source"] == "recalibrated"
+    assert kept.metadata["calibration"]["source"] == "file"
+    assert kept.metadata["calibration"]["factor"] == pytest.approx(s, rel=1e-12)
+    np.testing.assert_allclose(kept.deflection, np.asarray(v2.deflection_signal)[: kept.n] * s,
+                               rtol=1e-12)
+    from afmforce.errors import ParameterError
+    from afmforce.fit import fit_dynamic
+
+    with pytest.raises(ParameterError, match="calibration must be"):
+        fit_dynamic([v2], "beam", free=("hamaker",), calibration="stale")

@@ -110,6 +110,9 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="interference fringes in the baseline: periodic (default) cos and sin of "
                         "the separation shared by all curves (one spot); parabola: a line and a "
                         "parabola before contact per curve; off")
+    g.add_argument("--calibration", choices=("auto", "file"), default="auto",
+                   help="auto (default): as analyze calibrates (a hard contact's compliance line far "
+                        "off the file's sensitivity replaces it); file: the files' sensitivities always")
     g.add_argument("--fringe-period", type=quantity("length", "--fringe-period", positive=True), default=335e-9,
                    metavar="LENGTH", help="fringe period in the separation: half the laser "
                    "wavelength (default 335nm, a 670 nm laser)")
@@ -193,7 +196,8 @@ def run(args: argparse.Namespace) -> int:
                           compare=not args.no_compare, jump_window=args.jump_window,
                           sampling=None,    # --sampling (default average) is in cfg
                           retract=args.retract, noise=args.noise_model,
-                          fringes=args.fringes, fringe_period=args.fringe_period)
+                          fringes=args.fringes, fringe_period=args.fringe_period,
+                          calibration=args.calibration)
     d = res.to_dict()
     # how each curve was calibrated (the analysis's calibration: the file's, or the compliance slope)
     d["calibration"] = {c.name: c.metadata.get("calibration") for c in res._problem.ev.curves}

@@ -206,7 +206,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 compare: bool = True, jump_window: float = 2e-3,
                 max_nfev: int = 40, sampling: str | None = "average",
                 retract: bool = False, noise: str = "auto", fringes: str | bool = "periodic",
-                fringe_period: float = DEFAULT_FRINGE_PERIOD, progress=None) -> FitResult:
+                fringe_period: float = DEFAULT_FRINGE_PERIOD, calibration: str = "auto",
+                progress=None) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -276,6 +277,11 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     fringe_period : float
         Period of the ``periodic`` fringes in the separation [m]: half the laser
         wavelength at normal incidence (default 335 nm, a 670 nm laser diode).
+    calibration : {"auto", "file"}
+        ``auto``: as ``afmforce analyze`` calibrates (a hard contact's straight compliance
+        line more than 1.25x off the file's sensitivity replaces it: a realigned laser);
+        ``file``: the files' sensitivities always (a position sensor that is off in
+        contact makes the compliance line lie).
 
     Returns
     -------
@@ -293,6 +299,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     from .uncertainty import compare_models, fit_nested, profile_interval
 
     t0 = time.perf_counter()
+    if calibration not in ("auto", "file"):
+        raise ParameterError(f"calibration must be 'auto' or 'file', got {calibration!r}")
     if noise not in ("auto", "white"):
         raise ParameterError(f"noise must be 'auto' or 'white', got {noise!r}")
     if not 0.5 < level < 1.0:
@@ -303,7 +311,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     free = check_free(free, base.model)
     fc = prepare_curves(curves, names, velocities=velocities, sample_rates=sample_rates,
                         jump_window=jump_window, retract=retract,
-                        soft="warn" if base.viscosity > LIQUID_VISCOSITY else "refuse")
+                        soft="warn" if base.viscosity > LIQUID_VISCOSITY else "refuse",
+                        calibration=calibration)
     base = _start_from_file_k(base, fc, free, fixed)
     speeds = sorted({round(c.velocity, 15) for c in fc})
     dep = [n for n in free if n in SPEED_DEPENDENT]

@@ -223,11 +223,13 @@ def _timed(curve: RawCurve, name: str, sample_rate: float | None) -> RawCurve:
 
 def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | None = None,
                   sample_rate: float | None = None, jump_window: float = 2e-3,
-                  retract: bool = False, soft: str = "refuse") -> FitCurve:
+                  retract: bool = False, soft: str = "refuse",
+                  calibration: str = "auto") -> FitCurve:
     """Prepare the approach run of ``curve`` (see the module docstring).
 
     ``soft``: what to do with a curve the analysis classifies as a soft contact
-    (:func:`prepare_curves`).
+    (:func:`prepare_curves`); ``calibration``: ``auto`` as the analysis calibrates (a stale
+    sensitivity replaced by the compliance slope), ``file`` the file's sensitivity always.
 
     With ``retract=True`` the retract run that follows it is appended
     (:func:`_append_retract`): its contact part is fitted, the pull-off and the
@@ -249,7 +251,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     idx = idx[: np.flatnonzero(np.diff(idx) != 1)[0] + 1] if np.any(np.diff(idx) != 1) else idx
     from .preprocess import analysis_inputs
 
-    ana = analysis_inputs(curve, name, idx, soft)  # calibration, contact kind, jump-in, contact
+    ana = analysis_inputs(curve, name, idx, soft, calibration)  # calibration, kind, jump, contact
     curve = _timed(curve, name, sample_rate)      # (a soft contact is refused before a missing time)
     scale = ana.factor
     ramp = _ramp(curve, idx)
@@ -433,12 +435,13 @@ def prepare_curves(curves: Sequence[RawCurve | FitCurve], names: Sequence[str] |
                    *, velocities: Sequence[float] | None = None,
                    sample_rates: Sequence[float] | None = None,
                    jump_window: float = 2e-3, retract: bool = False,
-                   soft: str = "refuse") -> list[FitCurve]:
+                   soft: str = "refuse", calibration: str = "auto") -> list[FitCurve]:
     """Prepare several curves (see :func:`prepare_curve`) and check their calibrations.
 
     ``soft``: ``refuse`` a curve the analysis classifies as a soft contact, or ``warn`` (in a
     liquid, drainage and double-layer forces bend the approach like an indentation: the
-    model describes that, and its adequacy test judges the rest).
+    model describes that, and its adequacy test judges the rest). ``calibration``: ``auto`` or
+    ``file`` (:func:`prepare_curve`).
     """
     if len(curves) == 0:
         raise ParameterError("give at least one curve")
@@ -452,5 +455,6 @@ def prepare_curves(curves: Sequence[RawCurve | FitCurve], names: Sequence[str] |
             continue
         out.append(prepare_curve(c, nm, velocity=None if velocities is None else velocities[i],
                                  sample_rate=None if sample_rates is None else sample_rates[i],
-                                 jump_window=jump_window, retract=retract, soft=soft))
+                                 jump_window=jump_window, retract=retract, soft=soft,
+                                 calibration=calibration))
     return out

@@ -110,7 +110,8 @@ def _refuse_soft(name: str, curve: RawCurve, reason: str) -> AnalysisError:
         f"`afmforce analyze {name.split('#')[0]}` (its indentation step fits Young's modulus)")
 
 
-def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "refuse") -> AnalysisInputs:
+def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "refuse",
+                    calibration: str = "auto") -> AnalysisInputs:
     """Run the analysis steps up to ``kind`` on ``curve`` and take the fit's inputs from them.
 
     Parameters
@@ -134,7 +135,11 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "re
     from ..analysis.regions import run_indices
     from ..analysis.state import NoContact, prepare
 
-    opts, _ = resolve_options()
+    from ..analysis.options import CalibrationOptions
+
+    # "file": the file's sensitivity even where a hard contact's compliance line calls it stale
+    opts, _ = resolve_options([CalibrationOptions(source="metadata")] if calibration == "file"
+                              else None)
     if run_indices(np.asarray(curve.segment), 1).size == 0:
         return _approach_only(curve, name, idx, opts["kind"].nsigma, int(opts["jumps"].window))
     try:
