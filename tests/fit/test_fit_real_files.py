@@ -40,6 +40,16 @@ def _prepare(curve, name="c"):
         return prepare_curves([curve], [name])[0]
 
 
+def _analysed_and_prepared(name: str):
+    """``(curve, analysis with the kind step, fit curve, its calibration)`` of a real file's first curve."""
+    curve = _load(name)[0]
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        ana = analyze(curve, steps=["kind"])
+    fc = _prepare(curve, name)
+    return curve, ana, fc, fc.metadata["calibration"]
+
+
 SOFT = ["ForceMetric_X60_3_x4_0100.ibw", "PyFMlab_20200904_Egel4-Z1.0_00025.spm",
         "jpk_cellhesion_spot3.jpk-force", "afmformats_jpk-sr_cell1-0008.jpk-force",
         "jpkfile_force-save-2016.06.15-13.17.08.jpk-force"]
@@ -105,12 +115,7 @@ def test_stale_sensitivity_recalibrated_as_the_analysis():
     """The MFP-3D SiN curve (hard contact, measured ZSnsr): with the file's InvOLS (44.99 nm/V) the
     deflection follows the position 0.47x in contact; the fit takes the analysis's recalibration."""
     name = "asylum-mfp3d_SiN-tip_air.ibw"
-    curve = _load(name)[0]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        ana = analyze(curve, steps=["kind"])
-    fc = _prepare(curve, name)
-    cal = fc.metadata["calibration"]
+    curve, ana, fc, cal = _analysed_and_prepared(name)
     assert ana.contact_kind == "hard" and ana.calibration_source == "fit"
     assert cal["source"] == "recalibrated"
     factor = ana.details["calibration"].factor
@@ -143,12 +148,7 @@ def test_raw_volts_calibration_curve_gets_the_analysis_sensitivity():
     """JPK calibration curve in raw volts, no sensitivity: the analysis's compliance-slope
     sensitivity, with its own warning (6 contact samples) and the fit's note (no jump-in)."""
     name = "jpk_calibration-curve_raw-volts.jpk-force"
-    curve = _load(name)[0]
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        ana = analyze(curve, steps=["kind"])
-    fc = _prepare(curve, name)
-    cal = fc.metadata["calibration"]
+    curve, ana, fc, cal = _analysed_and_prepared(name)
     assert cal["source"] == "compliance" and cal["unit"] == "V"
     assert cal["sensitivity"] == pytest.approx(ana.sensitivity_fit, rel=1e-12)
     assert cal["sensitivity"] == pytest.approx(934.5e-9, rel=1e-3)
