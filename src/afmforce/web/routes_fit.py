@@ -13,10 +13,10 @@ router = APIRouter(tags=["fit"])
 
 
 class FitRequest(BaseModel):
-    """A fit: uploaded curves (``file_ids``, one curve each, calibrated) or virtual-AFM curves recorded
-    at ``velocities`` from the ``truth`` configuration (flat names, SI)."""
+    """A fit: uploaded curves (``file_ids``, calibrated; every curve of a file, a map's too) or
+    virtual-AFM curves recorded at ``velocities`` from the ``truth`` configuration (flat names, SI)."""
 
-    file_ids: list[str] = Field(default=[], description="this session's uploads, one per speed")
+    file_ids: list[str] = Field(default=[], description="this session's uploads (every curve of each file)")
     velocities: list[float] = Field(default=[], description="virtual curves: driving speeds [m/s]")
     truth: dict[str, Any] = Field(default={}, description="model configuration, flat names, SI (fixed values)")
     seed: int = 0

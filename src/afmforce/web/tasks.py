@@ -32,7 +32,8 @@ def _progress_dict(p) -> dict[str, Any]:
 
 
 def fit_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
-    """A dynamic fit of uploaded curves (``files``: [(path, name)]) or of virtual-AFM curves
+    """A dynamic fit of uploaded curves (``files``: [(path, name)]; every curve of a file, named
+    ``NAME#i`` where it holds several) or of virtual-AFM curves
     recorded at ``velocities`` [m/s] from the ``truth`` configuration (flat names, SI)."""
     from ..dynamics import SimulationConfig
     from ..fit import fit_dynamic, virtual_curves
@@ -44,10 +45,8 @@ def fit_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
         curves, names = [], []
         for path, name in files:
             got = load(path, meta_override=params.get("meta") or None)
-            if len(got) != 1:
-                raise AfmforceError(f"{name} holds {len(got)} curves; give files with one curve each")
-            curves.append(got[0])
-            names.append(name)
+            curves += list(got)      # every curve of a file with several (a map), as `afmforce fit`
+            names += [name] if len(got) == 1 else [f"{name}#{i + 1}" for i in range(len(got))]
     else:
         velocities = [float(v) for v in params.get("velocities") or ()]
         curves = virtual_curves(velocities, seed=int(params.get("seed", 0)), **truth)
