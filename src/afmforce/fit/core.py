@@ -15,21 +15,10 @@ from .model import DEFAULT_FRINGE_PERIOD, Evaluator
 from .preprocess import preparation_warnings, result_warnings
 from .params import PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
+from .search import _refit_all, _search
 from .result import CurveFit, Estimate, FitResult, wald_interval
 
 __all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT"]
-
-#: Starting values of xi scanned before the local fits [kg/s].
-XI_SCAN = (0.0, 3e-4, 1e-3, 3e-3, 1e-2, 3e-2, 0.1)
-#: Factors on the static guess of A (or R) scanned with xi.
-AR_SCAN = (1.0, 1.6, 2.5)
-#: Fixed values of xi along which the valley of A*R and xi is followed before the local fits [kg/s].
-XI_RIDGE = (0.0, 5e-4, 1e-3, 2e-3, 4e-3, 8e-3, 1.6e-2, 3.2e-2, 0.1)
-#: Iteration budget of each fit along the ridge.
-RIDGE_NFEV = 12
-#: A local fit with a reduced chi-square above this counts as stuck: try the next start.
-STUCK_REDCHI = 1.5
-
 
 #: Above this viscosity [Pa s] the medium is a liquid (air 1.8e-5, hexane 3e-4, water 8.9e-4):
 #: drainage and double-layer forces then bend the approach like an indentation does, so a curve
@@ -91,103 +80,6 @@ def _start_from_file_k(base, curves: list[FitCurve], free, fixed):
     if name == "spring_constant":
         return base.replace(spring_constant=k_file)
     return base.replace(k0=base.cantilever.k0 * k_file / base.force_constant)
-
-
-def _starts(problem: Problem, guess: dict, shifts) -> list[np.ndarray]:
-    """Starting vectors ranked by chi-square: a scan of xi x (A or R) where xi is free.
-
-    The static guess of A*R comes from the slowest curve's smallest deflection,
-    which friction lowers: the scan also tries larger A*R.
-    """
-    x = problem.pack(guess, shifts)
-    if "xi" not in problem.free:
-        return [x]
-    j = problem.free.index("xi")
-    ar = [problem.free.index(n) for n in ("hamaker", "radius") if n in problem.free]
-    trials = []
-    for f in AR_SCAN if ar else (1.0,):
-        for xi in XI_SCAN:
-            xt = x.copy()
-            xt[j] = max(xi, PARAMETERS["xi"].abs_step) / PARAMETERS["xi"].scale
-            if ar:
-                xt[ar[0]] *= f
-            trials.append((problem.chi2(xt), xt))
-    trials.sort(key=lambda t: t[0])
-    return [t[1] for t in trials]
-
-
-def _ridge(problem: Problem, guess: dict, shifts, max_nfev: int) -> list[tuple[float, np.ndarray]]:
-    """Fits along a grid of fixed xi (:data:`XI_RIDGE`), every other parameter fitted.
-
-    A*R and xi lie on a long, curved valley of the chi-square (friction lowers the
-    apparent attraction like a smaller A*R): a local fit from a scan point can stop on
-    its wall with a reduced chi-square near 1 and A*R 50 % off (measured on the
-    ``typical`` virtual AFM). The profile along xi is smooth; each grid point starts
-    from the optimum of the previous one (continuation) or from the best of the A*R
-    scan, whichever has the lower chi-square. Returns ``(chi2, x)`` per grid point,
-    ``x`` the full scaled vector (xi at its grid value); the first point (xi = 0) is the
-    optimum of the nested friction-free model.
-    """
-    from .uncertainty import _sub_problem
-
-    j = problem.free.index("xi")
-    ar = [problem.free.index(n) for n in ("hamaker", "radius") if n in problem.free]
-    x_guess = problem.pack(guess, shifts)
-    out, prev = [], None
-    for xi in XI_RIDGE:
-        sub = _sub_problem(problem, "xi", xi)
-        trials = [] if prev is None else [np.delete(prev, j)]
-        for f in (AR_SCAN if ar else (1.0,)):
-            xt = x_guess.copy()
-            if ar:
-                xt[ar[0]] *= f
-            trials.append(np.delete(xt, j))
-        x0 = min(trials, key=sub.chi2)
-        xs, _ = local_fit(sub, x0, max_nfev)
-        x_full = np.insert(xs, j, xi / PARAMETERS["xi"].scale)
-        out.append((sub.chi2(xs), x_full))
-        prev = x_full
-    return out
-
-
-def _search(prob: Problem, guess: dict, shifts0, starts: int, max_nfev: int, dof: int,
-            extra=()) -> tuple:
-    """Multi-start: the ridge's best points (xi free), ``extra`` vectors, then scan starts
-    while the best fit looks stuck. Returns ``(chi2, x, lmfit result, nested, first)``,
-    ``nested`` the ridge's xi = 0 point ``(chi2, x)`` (None without xi), ``first`` the
-    starts taken before the scan."""
-    best, nested = None, None
-    first: list[np.ndarray] = list(extra)
-    if "xi" in prob.free:   # follow the A*R-xi valley first; its best points start the local fits
-        ridge = _ridge(prob, guess, shifts0, RIDGE_NFEV)
-        nested = ridge[0]
-        first += [x0 for _, x0 in sorted(ridge, key=lambda r: r[0])[:max(starts, 1)]]
-        # the richer model starts from the nested optimum too, so chi2(friction) <= chi2(none)
-        first.append(nested[1])
-    scan = _starts(prob, guess, shifts0)
-    todo = first + scan[: 2 * max(starts, 1) + 2]
-    for k, x0 in enumerate(todo):
-        if k >= max(len(first), max(starts, 1)) and best[0] / dof < STUCK_REDCHI:
-            break    # multi-start: the ridge's best points, more scan starts while they look stuck
-        x, res = local_fit(prob, x0, max_nfev)
-        chi2 = prob.chi2(x)
-        if best is None or chi2 < best[0]:
-            best = (chi2, x, res)
-    return (*best, nested, first)
-
-
-def _refit_all(prob: Problem, starts, nested, max_nfev: int) -> tuple:
-    """The best local fit from ``starts`` after the residual changed (noise model, fringe
-    terms), and the nested (xi = 0) point's chi-square re-evaluated: ``(chi2, x, res, nested)``."""
-    best = None
-    for x0 in starts:
-        xx, rr = local_fit(prob, x0, max_nfev)
-        c2 = prob.chi2(xx)
-        if best is None or c2 < best[0]:
-            best = (c2, xx, rr)
-    if nested is not None:
-        nested = (prob.chi2(nested[1]), nested[1])
-    return (*best, nested)
 
 
 def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
