@@ -187,7 +187,8 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
     except (zipfile.BadZipFile, OSError, ValueError) as exc:
         raise FileFormatError(f"{path}: not a JPK zip archive ({exc})") from None
     with arc:
-        if any(n.startswith("segments/") for n in arc.namelist()):  # one curve: decode it directly
+        single = any(n.startswith("segments/") for n in arc.namelist())
+        if single:  # one curve: decode it directly
             try:
                 return [_jpk_force(load_jpk_zip(path, meta_override=meta_override, callback=callback)[0])]
             except FileFormatError:
@@ -197,10 +198,14 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
                                    styles=lambda dd: segment_styles(arc, dd.metadata.get("enum"), str(path)))
         except MissingMetadataError:
             return load_jpk_zip(path, meta_override=meta_override, callback=callback)
-        except FileFormatError:  # e.g. CellHesion pause segments: afmformats cannot, our zip reader can
-            if not any(n.startswith("segments/") for n in arc.namelist()):
-                raise
-            return load_jpk_zip(path, meta_override=meta_override, callback=callback)
+        except FileFormatError as exc:
+            # maps with segments afmformats does not know (modulation, float data): our decoder, or both reasons
+            if single:
+                return load_jpk_zip(path, meta_override=meta_override, callback=callback)
+            try:
+                return [_jpk_force(c) for c in load_jpk_zip(path, meta_override=meta_override, callback=callback)]
+            except FileFormatError as ours:
+                raise FileFormatError(f"{ours}; afmformats' reader: {str(exc).split(': ', 1)[-1]}") from None
 
 
 def _jpk_force(curve: RawCurve) -> RawCurve:

@@ -62,6 +62,8 @@ METADATA: dict[str, MetaField] = {
     "theta0": MetaField("Cantilever inclination", "rad", _finite),
     "radius": MetaField("Probe radius", "m", _positive),
     "instrument": MetaField("Instrument", "", _text),
+    "date": MetaField("Date of the measurement (as the file or the user writes it)", "", _text,
+                      "--meta date=..."),
     "format": MetaField("File format", "", _text),
     "source_file": MetaField("Source file", "", _text),
     "reader": MetaField("afmforce reader identifier", "", _text),

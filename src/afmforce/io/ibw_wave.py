@@ -143,29 +143,41 @@ def afmformats_igor(path: str | Path, callback: Callable | None = None) -> list 
         if line.count(":"):
             key, val = line.split(":", 1)
             notes[key] = val.strip()
+    # afmformats reads every key below and refuses a wave whose note lacks one (KeyError: 'Date' on
+    # waves exported from ARDF force maps). Only the calibration is needed to read the curve; a
+    # missing note key leaves its metadata out (a user gives it with meta_override).
     try:
         metadata: dict[str, Any] = {}
         metadata["imaging mode"] = "force-distance"
-        metadata["feedback mode"] = notes["ImagingMode"].lower()
-        metadata["rate approach"] = float(notes["NumPtsPerSec"])
-        metadata["rate retract"] = float(notes["NumPtsPerSec"])
+        if "ImagingMode" in notes:
+            metadata["feedback mode"] = notes["ImagingMode"].lower()
+        if "NumPtsPerSec" in notes:
+            metadata["rate approach"] = float(notes["NumPtsPerSec"])
+            metadata["rate retract"] = float(notes["NumPtsPerSec"])
         metadata["sensitivity"] = float(notes["InvOLS"])
-        if notes["TriggerChannel"] == "Force":
+        if notes.get("TriggerChannel") == "Force" and "TriggerPoint" in notes:
             metadata["setpoint"] = float(notes["TriggerPoint"])
         metadata["spring constant"] = float(notes["SpringConstant"])
-        metadata["duration"] = float(notes["InputTime"])
+        for key, name in (("InputTime", "duration"),):
+            if key in notes:
+                metadata[name] = float(notes[key])
         metadata["enum"] = 1
-        metadata["speed approach"] = float(notes["ApproachVelocity"])
-        metadata["speed retract"] = float(notes["RetractVelocity"])
-        metadata["instrument"] = notes["MicroscopeModel"]
+        for key, name in (("ApproachVelocity", "speed approach"), ("RetractVelocity", "speed retract")):
+            if key in notes:
+                metadata[name] = float(notes[key])
+        for key, name in (("MicroscopeModel", "instrument"),):
+            if key in notes:
+                metadata[name] = notes[key]
         metadata["software"] = "Asylum Research"
-        metadata["software version"] = notes["Version"]
-        metadata["date"] = notes["Date"]
+        for key, name in (("Version", "software version"), ("Date", "date")):
+            if key in notes:
+                metadata[name] = notes[key]
         metadata["path"] = pathlib.Path(path)
         metadata["point count"] = wdata.shape[0]
-        metadata["time"] = notes["Time"]
+        if "Time" in notes:
+            metadata["time"] = notes["Time"]
     except (KeyError, ValueError):
-        return None  # afmformats raises on it, with its own message
+        return None  # no calibration in the note (or not a number): afmformats says what is wrong
     labels = [li.decode() for ll in wave.labels for li in ll if li]
     if len(labels) != wdata.shape[1]:
         return None

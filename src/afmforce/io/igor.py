@@ -33,22 +33,18 @@ POSITIONS = ("ZSnsr", "LVDT", "Height")
 
 
 def _ibw_segments(path: Path, z: np.ndarray) -> np.ndarray:
-    """Segments of a one-segment Igor wave from the note's ``Indexes`` (ends of the segments:
-    ``0,turn,end`` for approach and retract, ``0,a,b,end`` with a dwell between), else the extreme of z."""
-    n = len(z)
+    """Segments of a one-segment Igor wave from the note's ``Indexes`` and ``Direction``, else
+    the extreme of z (:func:`_segments_from_note`)."""
+    entries = {}
     try:
         note = _ibw_note(path)
         for line in note.replace("\\r", "\r").replace("\n", "\r").split("\r"):
-            if line.startswith("Indexes:"):
-                idx = [int(float(v)) for v in line.split(":", 1)[1].split(",") if v.strip()]
-                if len(idx) == 3 and 0 < idx[1] < n - 1:
-                    return np.where(np.arange(n) < idx[1], 0, 1).astype(np.int8)
-                if len(idx) == 4 and 0 < idx[1] < idx[2] < n - 1:  # approach, dwell, retract
-                    return np.select([np.arange(n) < idx[1], np.arange(n) < idx[2]], [0, 2], 1).astype(np.int8)
+            if ":" in line:
+                key, value = line.split(":", 1)
+                entries.setdefault(key.strip(), value.strip())
     except Exception:  # the note is optional; fall back on the data
         pass
-    turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
-    return np.where(np.arange(n) < turn, 0, 1).astype(np.int8)
+    return _segments_from_note(entries.get("Indexes", ""), z, entries.get("Direction", ""))
 
 
 def _ibw_note(path: Path) -> str:
@@ -238,7 +234,7 @@ def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCur
     time = np.arange(signal.size) / rate if rate else np.arange(signal.size, dtype=float)
     if not rate:
         meta["time_is_sample_index"] = True
-    seg = _segments_from_note(note.get("Indexes", ""), z)
+    seg = _segments_from_note(note.get("Indexes", ""), z, note.get("Direction", ""))
     zn, _, sign = orient(z, None, seg)
     meta.update(source_file=where, reader="asylum-ibw", format="Asylum Igor binary waves (one per channel)",
                 position_sign=sign, position_channel=pos_ch)
@@ -247,12 +243,29 @@ def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCur
     return finalize_curve(curve, where)
 
 
-def _segments_from_note(indexes: str, z: np.ndarray) -> np.ndarray:
+def _segments_from_note(indexes: str, z: np.ndarray, direction: str = "") -> np.ndarray:
+    """Segment codes from the note: ``Indexes`` are the ends of the segments (``0,a,b,...,end``),
+    ``Direction`` what the piezo does in each (``NaN,1,-1,0``: a leading NaN, then 1 extend,
+    -1 retract, 0 dwell). ARDF force maps write extend, retract, then a dwell at the end; without
+    ``Direction`` three indexes are approach and retract, four approach, dwell and retract
+    (a dwell at the surface). Without usable indexes the curve turns at the extreme of z."""
     n = len(z)
     try:
         idx = [int(float(v)) for v in indexes.split(",") if v.strip()]
     except ValueError:
         idx = []
+    try:
+        dirs = [float(v) for v in direction.split(",") if v.strip()]
+    except ValueError:
+        dirs = []
+    dirs = [d for d in dirs if np.isfinite(d)]
+    ok = len(idx) >= 3 and idx[0] == 0 and all(a < b for a, b in zip(idx, idx[1:])) and idx[-2] < n - 1
+    if ok and len(dirs) == len(idx) - 1 and 1 in dirs and -1 in dirs:
+        seg = np.full(n, 2, dtype=np.int8)
+        for (start, end), d in zip(zip(idx, idx[1:]), dirs):
+            seg[start:min(end, n)] = 0 if d > 0 else 1 if d < 0 else 2
+        seg[min(idx[-1], n - 1):] = seg[min(idx[-1], n - 1) - 1]  # the last index is the last sample
+        return seg
     if len(idx) == 3 and 0 < idx[1] < n - 1:
         return np.where(np.arange(n) < idx[1], 0, 1).astype(np.int8)
     if len(idx) == 4 and 0 < idx[1] < idx[2] < n - 1:

@@ -32,8 +32,13 @@ from ._meta import finalize_curve, orient, segment_code
 
 __all__ = ["load_jpk_zip", "detect_jpk_zip", "parse_properties", "segment_styles"]
 
+#: Encoders (``encoder.type``) of integer data, and the stored types of data without one
+#: (``lcd-info.N.type``: JPK Data Processing re-saves channels as ``float-data`` volts).
 _DTYPES = {"signedshort": ">i2", "unsignedshort": ">u2", "signedinteger": ">i4",
-           "unsignedinteger": ">u4", "signedlong": ">i8", "float": ">f4", "double": ">f8"}
+           "unsignedinteger": ">u4", "signedlong": ">i8", "unsignedlong": ">u8", "signedbyte": ">i1",
+           "unsignedbyte": ">u1", "float": ">f4", "double": ">f8"}
+_DATA_TYPES = {"float-data": ">f4", "double-data": ">f8", "float": ">f4", "double": ">f8",
+               "short-data": ">i2", "integer-data": ">i4", "long-data": ">i8"}
 _MEASURED = ("measuredHeight", "capacitiveSensorHeight", "strainGaugeHeight")
 _ESCAPE = re.compile(r"\\(u[0-9a-fA-F]{4}|.)")
 _LINE = re.compile(r"((?:\\.|[^=:\\])*)\s*[=:]\s*(.*)$")
@@ -89,30 +94,73 @@ def detect_jpk_zip(path: Path) -> bool:
 
 
 def _style(props: Mapping[str, str], index: int) -> str:
-    """A segment's type: ``extend``, ``retract`` or ``pause`` (JPK ``settings.style``)."""
+    """A segment's type by what the piezo does: ``extend``, ``retract``, ``pause`` or
+    ``modulation`` (JPK ``settings.style``; older files: the segment settings' type, e.g.
+    ``z-extend-height``, ``constant-force-pause``, ``sine-z-modulation-segment-settings``)."""
     style = props.get("force-segment-header.settings.style")
-    if style is None:  # older files: only the segment settings' type, e.g. "z-extend-height"
+    if style is None:
         kind = props.get("force-segment-header.settings.segment-settings.type", "")
-        style = next((w for w in ("extend", "retract", "pause") if w in kind), None)
+        style = next((w for w in ("extend", "retract", "pause", "modulation") if w in kind), None)
     if style is None:
         style = "extend" if index == 0 else "retract"
     return style
 
 
 def _identifier(props: Mapping[str, str]) -> str:
-    return props.get("force-segment-header.settings.segment-settings.identifier.name", "")
+    """The segment's name (``extend-spm``, ``pause-at-start-cellhesion200``); a modulation
+    segment is named by its drive (``modulation sine-z 300 Hz 15 nm``)."""
+    name = props.get("force-segment-header.settings.segment-settings.identifier.name", "")
+    if name or _style(props, 1) != "modulation":
+        return name
+    pre = "force-segment-header.settings.segment-settings."
+    kind = props.get(pre + "type", "").replace("-modulation-segment-settings", "")
+    parts = ["modulation", kind]
+    for key, scale, unit in (("frequency", 1.0, "Hz"), ("amplitude", 1e9, "nm")):
+        try:
+            parts.append(f"{float(props[pre + key]) * scale:.4g} {unit}")
+        except (KeyError, ValueError):
+            pass
+    return " ".join(p for p in parts if p)
+
+
+def _segment_header(arc: zipfile.ZipFile, name: str, shared: Mapping[str, str]) -> dict[str, str]:
+    """A segment header with its shared part resolved: force maps and QI data keep the settings
+    of each segment once, in ``shared-data/header.properties`` (``force-segment-header-info.N.*``),
+    and the segment header points to them (``force-segment-header.force-segment-header-info.*=N``)."""
+    props = _read_props(arc, name)
+    ref = props.get("force-segment-header.force-segment-header-info.*")
+    if ref is not None and shared:
+        lp = f"force-segment-header-info.{ref}."
+        for k, v in shared.items():
+            if k.startswith(lp):
+                props.setdefault("force-segment-header." + k[len(lp):], v)
+    return props
+
+
+def _shared(arc: zipfile.ZipFile) -> dict[str, str]:
+    name = "shared-data/header.properties"
+    return _read_props(arc, name) if name in arc.namelist() else {}
+
+
+def _curve_prefixes(names) -> list[str]:
+    """``""`` for a single curve (``segments/``), else ``index/<i>/`` of every curve of a map or QI file."""
+    if any(n.startswith("segments/") for n in names):
+        return [""]
+    found = {int(m.group(1)) for n in names if (m := re.match(r"index/(\d+)/segments/\d+/segment-header", n))}
+    return [f"index/{i}/" for i in sorted(found)]
 
 
 def segment_styles(arc: zipfile.ZipFile, enum: int | None, where: str) -> list[str]:
     """Segment types of one curve, in file order (``index/<enum>/`` in maps and QI data)."""
     names = set(arc.namelist())
     prefix = "" if "segments/0/segment-header.properties" in names or enum is None else f"index/{int(enum)}/"
+    shared = _shared(arc)
     out = []
     for j in range(10_000):
         name = f"{prefix}segments/{j}/segment-header.properties"
         if name not in names:
             break
-        out.append(_style(_read_props(arc, name), j))
+        out.append(_style(_segment_header(arc, name, shared), j))
     if not out:
         raise FileFormatError(f"{where}: no segment headers for curve {enum}")
     return out
@@ -147,25 +195,39 @@ def _num(props: Mapping[str, str], key: str, where: str) -> float:
 
 
 def _decode(arc: zipfile.ZipFile, seg_dir: str, props: dict[str, str], name: str, where: str) -> np.ndarray:
-    """Read a channel's integers and apply its encoder (volts or the base unit)."""
+    """Read a channel's stored values and apply its encoder (volts or the base unit).
+
+    Integer data carry an encoder (``encoder.type`` with ``encoder.scaling.offset`` and
+    ``multiplier``); float and double data (``type=float-data``, as JPK Data Processing saves)
+    are the values themselves, unless an encoder scales them too.
+    """
     fname = props.get("data.file.name")
     if fname is None:
         raise FileFormatError(f"{where}: channel {name} has no data file")
     enc = props.get("data.encoder.type", props.get("encoder.type"))
-    if enc not in _DTYPES:
-        raise FileFormatError(f"{where}: channel {name} has unsupported encoder {enc!r}")
+    kind = props.get("data.type", props.get("type", ""))
+    if enc is not None and enc in _DTYPES:
+        dtype = _DTYPES[enc]
+    elif enc is None and kind in _DATA_TYPES:
+        dtype = _DATA_TYPES[kind]
+    else:
+        raise FileFormatError(f"{where}: channel {name}: unknown data encoding (encoder {enc!r}, data type "
+                              f"{kind!r}); known encoders: {', '.join(_DTYPES)}; data types: {', '.join(_DATA_TYPES)}")
     try:
         raw = arc.read(f"{seg_dir}/{fname}")
     except KeyError:
         raise FileFormatError(f"{where}: data file {seg_dir}/{fname} is missing") from None
-    dt = np.dtype(_DTYPES[enc])
+    dt = np.dtype(dtype)
     if len(raw) % dt.itemsize:
         raise FileFormatError(f"{where}: {seg_dir}/{fname} is truncated ({len(raw)} bytes)")
-    ints = np.frombuffer(raw, dtype=dt).astype(float)
+    values = np.frombuffer(raw, dtype=dt).astype(float)
     key = "data.encoder.scaling." if "data.encoder.scaling.multiplier" in props else "encoder.scaling."
-    if enc in ("float", "double") and key + "multiplier" not in props:
-        return ints
-    return ints * _num(props, key + "multiplier", where) + _num(props, key + "offset", where)
+    if key + "multiplier" not in props:
+        if dt.kind == "f":
+            return values
+        raise FileFormatError(f"{where}: channel {name}: integer data ({enc or kind}) without an encoder's "
+                              f"scaling (offset and multiplier); cannot turn them into volts")
+    return values * _num(props, key + "multiplier", where) + _num(props, key + "offset", where)
 
 
 def _convert(values: np.ndarray, props: dict[str, str], slot: str, where: str) -> np.ndarray | None:
@@ -200,7 +262,8 @@ def _calibration(props: dict[str, str]) -> dict[str, float]:
 
 def load_jpk_zip(path: Path, *, meta_override: Mapping[str, Any] | None = None,
                  callback: Callable | None = None) -> list[RawCurve]:
-    """Read a single-curve ``.jpk-force`` archive with the deflection in volts."""
+    """Read a JPK archive (a single curve, a force map or QI data) with the deflection in volts:
+    one curve per ``segments/`` folder (a single curve) or ``index/<i>/segments/`` (maps)."""
     path = Path(path)
     where = str(path)
     try:
@@ -209,7 +272,21 @@ def load_jpk_zip(path: Path, *, meta_override: Mapping[str, Any] | None = None,
         raise FileFormatError(f"{where}: not a JPK zip archive ({exc})") from None
     with arc:
         try:
-            return [_read_archive(arc, where, dict(meta_override or {}), callback)]
+            names = arc.namelist()
+            if "header.properties" not in names:
+                raise FileFormatError(f"{where}: header.properties missing; not a JPK force file")
+            prefixes = _curve_prefixes(names)
+            if not prefixes:
+                raise FileFormatError(f"{where}: no segments in the archive (neither segments/ nor index/N/segments/)")
+            shared = _shared(arc)
+            general = _read_props(arc, "header.properties")
+            out = []
+            for i, prefix in enumerate(prefixes):
+                out.append(_read_archive(arc, where, dict(meta_override or {}), None, prefix=prefix,
+                                         shared=shared, general=general))
+                if callback is not None:
+                    callback((i + 1) / len(prefixes))
+            return out
         except FileFormatError:
             raise
         except (zipfile.BadZipFile, KeyError, ValueError, OSError, EOFError, RuntimeError,
@@ -218,25 +295,51 @@ def load_jpk_zip(path: Path, *, meta_override: Mapping[str, Any] | None = None,
             raise FileFormatError(f"{where}: damaged JPK archive ({type(exc).__name__}: {str(exc)[:200]})") from None
 
 
+def _map_position(gen: Mapping[str, str], index: int) -> dict[str, Any]:
+    """Grid cell and position [m] of curve ``index`` of a map (JPK grids run back and forth)."""
+    out: dict[str, Any] = {}
+    for ours, key in (("position_x", "position.x"), ("position_y", "position.y")):
+        for pre in ("force-scan-series.header.", "quantitative-imaging-series.header."):
+            try:
+                out[ours] = float(gen[pre + key])
+                break
+            except (KeyError, ValueError):
+                continue
+    for pre in ("force-scan-map.position-pattern.grid.", "quantitative-imaging-map.position-pattern.grid."):
+        try:
+            nx, ny = int(gen[pre + "ilength"]), int(gen[pre + "jlength"])
+        except (KeyError, ValueError):
+            continue
+        if nx > 0 and ny > 0:
+            iy, ix = divmod(index, nx)
+            if gen.get(pre.replace("grid.", "back-and-forth")) == "true" and iy % 2:
+                ix = nx - 1 - ix
+            out.update(map_x=ix, map_y=iy, map_nx=nx, map_ny=ny)
+        break
+    return out
+
+
 def _read_props(arc: zipfile.ZipFile, name: str) -> dict[str, str]:
     return parse_properties(arc.read(name).decode("utf-8", errors="replace"))
 
 
-def _read_archive(arc: zipfile.ZipFile, where: str, meta_override: dict, callback) -> RawCurve:
+def _read_archive(arc: zipfile.ZipFile, where: str, meta_override: dict, callback, prefix: str = "",
+                  shared: Mapping[str, str] | None = None, general: Mapping[str, str] | None = None) -> RawCurve:
+    """One curve: the segments under ``prefix`` (``""`` or ``index/<i>/``), in time order."""
     names = arc.namelist()
-    if "header.properties" not in names:
-        raise FileFormatError(f"{where}: header.properties missing; not a JPK force file")
-    shared = _read_props(arc, "shared-data/header.properties") if "shared-data/header.properties" in names else {}
-    seg_ids = sorted({int(m.group(1)) for n in names if (m := re.match(r"segments/(\d+)/segment-header", n))})
+    shared = _shared(arc) if shared is None else shared
+    pat = re.compile(re.escape(prefix) + r"segments/(\d+)/segment-header")
+    seg_ids = sorted({int(m.group(1)) for n in names if (m := pat.match(n))})
     if not seg_ids:
-        raise FileFormatError(f"{where}: no segments in the archive (a force map? use the jpk-force reader)")
+        raise FileFormatError(f"{where}: no segments under {prefix or 'the archive root'}")
     cols: dict[str, list[np.ndarray]] = {"t": [], "zn": [], "zm": [], "s": [], "seg": []}
     meta: dict[str, Any] = {"segment_types": []}
     t0 = 0.0
-    headers = {sid: _read_props(arc, f"segments/{sid}/segment-header.properties") for sid in seg_ids}
+    headers = {sid: _segment_header(arc, f"{prefix}segments/{sid}/segment-header.properties", shared)
+               for sid in seg_ids}
     seg_ids = _time_order(seg_ids, headers)
     for i, sid in enumerate(seg_ids):
-        seg_dir = f"segments/{sid}"
+        seg_dir = f"{prefix}segments/{sid}"
         props = headers[sid]
         style = _style(props, sid)
         meta["segment_types"].append(_identifier(props) or style)
@@ -288,11 +391,15 @@ def _read_archive(arc: zipfile.ZipFile, where: str, meta_override: dict, callbac
     zm = None if any(m is None for m in cols["zm"]) else np.concatenate(cols["zm"])
     seg = np.concatenate(cols["seg"])
     zn, zm, sign = orient(np.concatenate(cols["zn"]), zm, seg)
-    gen = _read_props(arc, "header.properties")
+    gen = dict(_read_props(arc, "header.properties") if general is None else general)
+    if prefix and f"{prefix}header.properties" in names:
+        gen.update(_read_props(arc, f"{prefix}header.properties"))
     instrument = gen.get("force-scan-series.description.instrument") or gen.get(
-        "force-scan-map.description.instrument")
+        "force-scan-map.description.instrument") or gen.get("quantitative-imaging-map.description.instrument")
     if instrument:
         meta["instrument"] = instrument
+    if prefix:
+        meta.update(_map_position(gen, int(prefix.split("/")[1])))
     meta.update(meta_override)
     meta.update(source_file=where, reader="jpk-zip", format="JPK force archive (raw volts)",
                 position_sign=sign)
