@@ -84,13 +84,13 @@ def detect_jpk(path: Path) -> bool:
 
 
 def detect_jpk_zip(path: Path) -> bool:
-    """True for a zip archive with ``header.properties`` and a ``segments/`` folder."""
+    """True for a zip archive with ``header.properties`` and ``segments/`` (or ``index/<i>/segments/``)."""
     try:
         with zipfile.ZipFile(path) as arc:
             names = arc.namelist()
     except (zipfile.BadZipFile, OSError, ValueError):
         return False
-    return "header.properties" in names and any(n.startswith("segments/") for n in names)
+    return "header.properties" in names and bool(_curve_prefixes(names))
 
 
 def _style(props: Mapping[str, str], index: int) -> str:
