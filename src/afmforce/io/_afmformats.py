@@ -194,8 +194,9 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
             except FileFormatError:
                 pass  # a variant our decoder does not know: afmformats may
         try:
-            return load_afmformats(path, meta_override=meta_override, callback=callback, reader="jpk-force",
-                                   styles=lambda dd: segment_styles(arc, dd.metadata.get("enum"), str(path)))
+            curves = load_afmformats(path, meta_override=meta_override, callback=callback, reader="jpk-force",
+                                     styles=lambda dd: segment_styles(arc, dd.metadata.get("enum"), str(path)))
+            return [_header_rate(c, arc, meta_override) for c in curves]
         except MissingMetadataError:
             return load_jpk_zip(path, meta_override=meta_override, callback=callback)
         except FileFormatError as exc:
@@ -206,6 +207,19 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
                 return [_jpk_force(c) for c in load_jpk_zip(path, meta_override=meta_override, callback=callback)]
             except FileFormatError as ours:
                 raise FileFormatError(f"{ours}; afmformats' reader: {str(exc).split(': ', 1)[-1]}") from None
+
+
+def _header_rate(curve: RawCurve, arc: zipfile.ZipFile, meta_override: Mapping[str, Any]) -> RawCurve:
+    """The sample rate of the curve's own extend segment: afmformats divides a triggered extend's
+    points by the nominal duration (271 Hz for a 2005 Hz curve of a map that stopped early)."""
+    from .jpk_zip import extend_rate
+
+    if "sample_rate" in meta_override:
+        return curve
+    rate = extend_rate(arc, curve.metadata.get("afmformats:enum"))
+    if rate is None or rate == curve.metadata.get("sample_rate"):
+        return curve
+    return dataclasses.replace(curve, metadata={**curve.metadata, "sample_rate": rate})
 
 
 def _jpk_force(curve: RawCurve) -> RawCurve:

@@ -30,7 +30,7 @@ from ..errors import FileFormatError
 from .curve import RawCurve
 from ._meta import finalize_curve, orient, segment_code
 
-__all__ = ["load_jpk_zip", "detect_jpk_zip", "parse_properties", "segment_styles"]
+__all__ = ["load_jpk_zip", "detect_jpk_zip", "parse_properties", "segment_styles", "extend_rate"]
 
 #: Encoders (``encoder.type``) of integer data, and the stored types of data without one
 #: (``lcd-info.N.type``: JPK Data Processing re-saves channels as ``float-data`` volts).
@@ -164,6 +164,26 @@ def segment_styles(arc: zipfile.ZipFile, enum: int | None, where: str) -> list[s
     if not out:
         raise FileFormatError(f"{where}: no segment headers for curve {enum}")
     return out
+
+
+def extend_rate(arc: zipfile.ZipFile, enum: int | None) -> float | None:
+    """Sample rate [Hz] of a curve's extend segment: its points over its duration (the segment
+    header's own; a triggered extend of a map stops early, with fewer points in less time)."""
+    names = set(arc.namelist())
+    prefix = "" if "segments/0/segment-header.properties" in names or enum is None else f"index/{int(enum)}/"
+    shared = _shared(arc)
+    for j in range(10_000):
+        name = f"{prefix}segments/{j}/segment-header.properties"
+        if name not in names:
+            return None
+        props = _segment_header(arc, name, shared)
+        if segment_code(_style(props, j)) == 0:
+            try:
+                n, duration = int(props["force-segment-header.num-points"]), float(props["force-segment-header.duration"])
+            except (KeyError, ValueError):
+                return None
+            return n / duration if n > 0 and duration > 0 else None
+    return None
 
 
 def _time_order(seg_ids: list[int], props: dict[int, dict[str, str]]) -> list[int]:
