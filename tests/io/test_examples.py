@@ -22,6 +22,8 @@ from realdata import real_path  # noqa: E402  (tests/ is on sys.path: tests/conf
 DATA = Path(__file__).resolve().parents[1] / "data"
 OVERRIDES = json.loads((DATA / "meta_override.json").read_text())
 FILES = sorted(p for p in DATA.iterdir() if is_supported(p))
+#: the real-file corpus (tests/data/corpus, its own table and gallery test): counts for the coverage
+CORPUS = json.loads((DATA / "corpus" / "corpus.json").read_text())
 SHARED_MAP = real_path("afmformats_jpk-fd_map2x2_extracted.jpk-force-map")  # 0.95 MB: not copied
 
 
@@ -30,9 +32,13 @@ def test_every_registered_format_has_a_file():
     for path in FILES:
         for curve in load(path, meta_override=OVERRIDES.get(path.name)):
             readers.setdefault(curve.metadata["reader"], []).append(path.name)
+    for name, entry in CORPUS.items():
+        if entry["expect"]["read"] == "read":
+            for curve in load(DATA / "corpus" / name, meta_override=entry.get("given")):
+                readers.setdefault(curve.metadata["reader"], []).append(name)
     assert set(readers) <= set(FORMATS)  # every recorded reader is a registry identifier
     missing = sorted(set(FORMATS) - set(readers))
-    assert not missing, (f"formats without a file in tests/data: {missing}; add a small example "
+    assert not missing, (f"formats without a file in tests/data or tests/data/corpus: {missing}; add a small example "
                          "(tests/data/make_format_examples.py) and list it in tests/data/README.md")
 
 
