@@ -216,6 +216,23 @@ def _jpk_text(path: Path) -> dict:
     return {"spring_constant": k, "sensitivity": s, "sample_rate": None, "curves": 1, "segments": segs}
 
 
+def _workshop(path: Path) -> dict:
+    """AFM Workshop CSV: the extend and retract columns side by side, counted row by row."""
+    ext = ret = 0
+    for line in path.read_text("latin-1").splitlines():
+        cells = line.strip().split(",")
+        if len(cells) != 4:
+            continue
+        try:
+            [float(c) for c in cells if c.strip()]
+        except ValueError:
+            continue  # the column names
+        ext += bool(cells[0].strip() and cells[1].strip())
+        ret += bool(cells[2].strip() and cells[3].strip())
+    return {"spring_constant": None, "sensitivity": None, "sample_rate": None, "curves": 1,
+            "segments": [["extend", ext], ["retract", ret]]}
+
+
 def _chiaro(path: Path) -> dict:
     text = path.read_text("latin-1")
     k = float(re.search(r"k \(N/m\)\t([\d.]+)", text).group(1))
@@ -234,7 +251,46 @@ def header(path: Path) -> dict:
         return _jpk_text(path)
     if name.startswith("chiaro"):
         return _chiaro(path)
+    if name.startswith("afm-workshop"):
+        return _workshop(path)
     return {"spring_constant": None, "sensitivity": None, "sample_rate": None, "curves": 1, "segments": None}
+
+
+def _fmt(v, scale=1.0, digits=5):
+    return "-" if v is None else f"{v * scale:.{digits}g}"
+
+
+def readme(table: dict) -> str:
+    """The corpus README: provenance, licence and the header values of every file."""
+    lines = [
+        "# Real-file corpus (issue 32)",
+        "",
+        "Public force-curve files as instruments and vendor software wrote them (never edited; a file",
+        "taken out of a published zip archive is the member as published). Written by",
+        "`make_corpus_table.py` (this table and `corpus.json`); tested by `tests/io/test_corpus_gallery.py`.",
+        "Header values are read without afmforce: JPK archives through `zipfile` and the `.properties`",
+        "text, Asylum waves through igor2, Bruker files from their header text, text exports from their",
+        "header lines; `-`: the file does not store it (the gallery gives the stand-ins in `given`).",
+        "",
+        "Licences: MIT (afmformats (c) 2019 Paul Mueller; SciFiDatasets (c) 2021 pycroscopy; PyFMlab_DyNaMo",
+        "(c) 2023 Javier Lopez Alonso; ForceMetric (c) 2018 Jacob Kienast; jpkfile (c) 2016 Ilyas Kuhlemann),",
+        "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018),",
+        "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). Commits: "
+        + "; ".join(f"{r} `{c[:10]}`" for r, c in COMMITS.items()) + ".",
+        "",
+        "| file | family | bytes | k [N/m] | InvOLS [nm/V] | rate [Hz] | curves | segments (points) | expected | source (repository: path) | licence |",
+        "|---|---|---|---|---|---|---|---|---|---|---|",
+    ]
+    for name, e in table.items():
+        h = e["header"]
+        segs = ", ".join(f"{t} {n}" for t, n in h["segments"]) if h["segments"] else "-"
+        exp = e["expect"]
+        expect = "read, plausible" if exp == {"read": "read", "analysis": "plausible"} else (
+            exp["read"] if exp["read"] != "read" else "read; analysis: " + exp["analysis"])
+        lines.append(f"| `{name}` | {e['family']} | {e['bytes']} | {_fmt(h['spring_constant'])} | "
+                     f"{_fmt(h['sensitivity'], 1e9)} | {_fmt(h['sample_rate'], 1, 6)} | {h['curves']} | {segs} | "
+                     f"{expect} | {e['source']['repository']}: `{e['source']['path']}` | {e['source']['licence']} |")
+    return "\n".join(lines) + "\n"
 
 
 def main() -> None:
@@ -249,6 +305,7 @@ def main() -> None:
         entry["expect"] = {"read": PENDING_READ.get(name, "read"), "analysis": PENDING_ANALYSIS.get(name, "plausible")}
         table[name] = entry
     (HERE / "corpus.json").write_text(json.dumps(table, indent=1) + "\n")
+    (HERE / "README.md").write_text(readme(table))
     print(f"{len(table)} files, {sum(e['bytes'] for e in table.values()) / 1e6:.1f} MB")
 
 
