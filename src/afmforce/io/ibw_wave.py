@@ -124,9 +124,13 @@ def read_wave5(path: str | Path) -> IgorWave5 | None:
     return IgorWave5(data, note_b, _labels(block, dim_labels), sfa)
 
 
-def afmformats_igor(path: str | Path, callback: Callable | None = None) -> list | None:
+def afmformats_igor(path: str | Path, callback: Callable | None = None,
+                    calibration: dict[str, float] | None = None) -> list | None:
     """What ``afmformats.load_data(path)`` returns for an Asylum ``.ibw`` force curve, from
     :func:`read_wave5` instead of igor2 (``None``: not recognised; use afmformats).
+
+    ``calibration`` (``{"SpringConstant": k [N/m], "InvOLS": s [m/V]}``) stands in for note keys
+    the wave lacks (the user's values); a note key, when present, is used as afmformats uses it.
 
     The body is afmformats 0.18.7's ``formats/fmt_igor.py:load_igor`` (metadata keys,
     note parsing, label lookup, force = Defl x spring constant), then the
@@ -144,8 +148,8 @@ def afmformats_igor(path: str | Path, callback: Callable | None = None) -> list 
             key, val = line.split(":", 1)
             notes[key] = val.strip()
     # afmformats reads every key below and refuses a wave whose note lacks one (KeyError: 'Date' on
-    # waves exported from ARDF force maps). Only the calibration is needed to read the curve; a
-    # missing note key leaves its metadata out (a user gives it with meta_override).
+    # waves exported from ARDF force maps). Only the spring constant is needed to read the curve
+    # (Defl is in metres); a missing note key leaves its metadata out (a user gives it).
     try:
         metadata: dict[str, Any] = {}
         metadata["imaging mode"] = "force-distance"
@@ -154,10 +158,13 @@ def afmformats_igor(path: str | Path, callback: Callable | None = None) -> list 
         if "NumPtsPerSec" in notes:
             metadata["rate approach"] = float(notes["NumPtsPerSec"])
             metadata["rate retract"] = float(notes["NumPtsPerSec"])
-        metadata["sensitivity"] = float(notes["InvOLS"])
+        cal = dict(calibration or {})
+        if "InvOLS" in notes or "InvOLS" in cal:
+            metadata["sensitivity"] = float(notes["InvOLS"]) if "InvOLS" in notes else float(cal["InvOLS"])
         if notes.get("TriggerChannel") == "Force" and "TriggerPoint" in notes:
             metadata["setpoint"] = float(notes["TriggerPoint"])
-        metadata["spring constant"] = float(notes["SpringConstant"])
+        metadata["spring constant"] = (float(notes["SpringConstant"]) if "SpringConstant" in notes
+                                       else float(cal["SpringConstant"]))
         for key, name in (("InputTime", "duration"),):
             if key in notes:
                 metadata[name] = float(notes[key])

@@ -95,6 +95,15 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
     # the fast path builds what afmformats builds, from a numpy read of the wave (None: not a plain
     # version-5 wave, or a note afmformats would refuse: afmformats reads it, or says what is wrong)
     data = afmformats_igor(path, callback)
+    if data is None and read_wave5(path) is not None:
+        # a plain wave whose note lacks the spring constant (or InvOLS): the user's, or say which
+        note = _ibw_note(path).replace("\\r", "\r").replace("\n", "\r").split("\r")
+        keys = {line.split(":", 1)[0].strip() for line in note if ":" in line}
+        given = {"SpringConstant": meta_override.get("spring_constant"), "InvOLS": meta_override.get("sensitivity")}
+        if "SpringConstant" not in keys:
+            if given["SpringConstant"] is None:
+                raise missing_metadata(str(path), ["spring_constant"], what="the wave note stores")
+            data = afmformats_igor(path, callback, {k: float(v) for k, v in given.items() if v is not None})
     if data is None:
         data = _load_data(path, {}, callback)  # afmformats' Igor reader takes no meta_override
     out = []
