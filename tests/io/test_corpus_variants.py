@@ -201,3 +201,17 @@ def test_jpk_text_export_of_several_curves_and_in_volts(tmp_path):
     for c in curves:
         np.testing.assert_allclose(c.deflection_signal, ref, rtol=1e-6, atol=1e-12)
         assert np.bincount(c.segment).tolist() == [2048, 4096, 1024]
+
+
+@pytest.mark.parametrize("name", ["jpk-txt_dp-export_SMFS_0441.txt", "jpk-dp_float-data_SMFS_0441.jpk-force",
+                                  "asylum-ibw_no-date_ForceMap.ibw", "jpk-qi-data_2020.02.07.jpk-qi-data"])
+def test_mutated_variants_load_cleanly_or_fail_with_one_named_error(name, tmp_path):
+    """The readers of these variants (JPK text, float data, maps read directly, Asylum notes without
+    keys) under the fuzz test's mutations: a valid curve or one FileFormatError naming the file."""
+    from afmforce.io._guard import run_with_timeout
+    from test_fuzz import SECONDS_PER_FILE, SLOW, _fuzz
+
+    result = run_with_timeout(_fuzz, CORPUS / name, tmp_path, sum(map(ord, name)), None,
+                              timeout=SECONDS_PER_FILE + 8 * (SLOW + 1) + 60, path=name)
+    assert result["n"] >= 20 and not result["bad"], result["bad"]
+    assert not result["slow"], result["slow"]
