@@ -8,7 +8,7 @@ k = 0.009727 N/m, s = 38.48 nm/V, six sine modulations of 15 nm at 300, 3, 100, 
 
 from __future__ import annotations
 
-import io
+import json
 import zipfile
 from pathlib import Path
 
@@ -215,3 +215,25 @@ def test_mutated_variants_load_cleanly_or_fail_with_one_named_error(name, tmp_pa
                               timeout=SECONDS_PER_FILE + 8 * (SLOW + 1) + 60, path=name)
     assert result["n"] >= 20 and not result["bad"], result["bad"]
     assert not result["slow"], result["slow"]
+
+
+def test_cli_reads_the_asylum_wave_without_date_and_takes_meta_date(tmp_path, capsys):
+    from afmforce.cli.main import main
+
+    code = main(["analyze", str(NODATE), "--meta", "date=2016-11-06", "--json", "--no-plot",
+                 "--out", str(tmp_path / "out")])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    res = json.loads(out.out)["results"][NODATE.name]
+    assert res["deflection_unit"] == "N" and "error" not in res
+
+
+def test_cli_reads_the_microrheology_map_raw_with_format_jpk_zip(tmp_path, capsys):
+    from afmforce.cli.main import main
+
+    code = main(["analyze", str(RHEO), "--format", "jpk-zip", "--json", "--no-plot", "--out", str(tmp_path / "o")])
+    out = capsys.readouterr()
+    assert code == 0, out.err
+    results = json.loads(out.out)["results"]
+    assert len(results) == 16 and all(r.get("deflection_unit") == "V" for r in results.values())  # raw volts
+    assert all(r["spring_constant"] == pytest.approx(0.009727, rel=1e-3) for r in results.values())
