@@ -21,7 +21,8 @@ from afmforce.io import load
 
 CORPUS = Path(__file__).resolve().parents[1] / "data" / "corpus"
 TABLE = json.loads((CORPUS / "corpus.json").read_text())
-FILES = sorted(p.name for p in CORPUS.iterdir() if p.suffix not in (".json", ".md", ".py"))
+#: every data file (not the table, READMEs, the table's script or the collected LICENSES)
+FILES = sorted(p.name for p in CORPUS.iterdir() if p.suffix not in (".json", ".md", ".py") and p.name != "LICENSES")
 #: vendor segment word -> afmforce code (approach 0, retract 1, anything else a dwell 2)
 CODES = {"extend": 0, "retract": 1}
 #: the photodiode's ADC spans about +-10 V on every instrument here; a little margin

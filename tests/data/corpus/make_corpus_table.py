@@ -275,7 +275,8 @@ def readme(table: dict) -> str:
         "Licences: MIT (afmformats (c) 2019 Paul Mueller; SciFiDatasets (c) 2021 pycroscopy; PyFMlab_DyNaMo",
         "(c) 2023 Javier Lopez Alonso; ForceMetric (c) 2018 Jacob Kienast; jpkfile (c) 2016 Ilyas Kuhlemann),",
         "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018),",
-        "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). Commits: "
+        "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). The full licence texts are in",
+        "`LICENSES`. Commits: "
         + "; ".join(f"{r} `{c[:10]}`" for r, c in COMMITS.items()) + ".",
         "",
         "| file | family | bytes | k [N/m] | InvOLS [nm/V] | rate [Hz] | curves | segments (points) | expected | source (repository: path) | licence |",
