@@ -197,10 +197,6 @@ def _nanoscope(path: Path) -> dict:
             "curves": int(grid) ** 2 if fv else 1, "segments": [["extend", ext], ["retract", ret]]}
 
 
-def _rows(path: Path, skip_comment: str = "#") -> int:
-    return sum(1 for line in path.read_text("latin-1").splitlines() if line.strip() and line[:1].lstrip("-").replace(".", "").isdigit())
-
-
 def _jpk_text(path: Path) -> dict:
     segs, k, s, cur = [], None, None, None
     for line in path.read_text("latin-1").splitlines():
