@@ -1,0 +1,264 @@
+"""Thermal spectra on disk: afmforce's own format and the instruments' thermal files.
+
+* **afmforce spectrum** (``.txt``/``.csv``): ``#`` header lines ``key: value [unit]`` (first
+  line ``# afmforce thermal spectrum 1``), then a header row ``frequency [Hz],psd [m^2/Hz]``
+  (or ``[V^2/Hz]``) and comma-separated rows. Written atomically (:func:`write_spectrum`).
+* **JPK thermal noise data** (``.tnd``, JPK/Bruker NanoWizard "Calibration manager" export):
+  ``#`` header with the vendor's calibration (``sensitivity``, ``spring constant``,
+  ``parameter.f``, ``parameter.Q``, ``settings.temperature``, ``settings.environment``,
+  ``cantilever.angle``, ``cantilever.correction factor``) and four columns ``Frequency``,
+  ``Vertical Deflection`` (the last spectrum), ``average`` (the averaged one, fitted here),
+  ``fit-data`` [V^2/Hz].
+
+The reader never modifies its input; :class:`ThermalSpectrum` keeps the spectrum in the file's
+unit and converts to m^2/Hz with the sensitivity on request.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._files import atomic_write_text
+from ..errors import FileFormatError, MissingMetadataError, ParameterError
+
+__all__ = ["ThermalSpectrum", "read_spectrum", "write_spectrum", "SPECTRUM_SUFFIXES"]
+
+_MAGIC = "# afmforce thermal spectrum 1"
+#: suffixes the thermal readers accept
+SPECTRUM_SUFFIXES = (".tnd", ".txt", ".csv")
+
+
+@dataclass(frozen=True, eq=False)
+class ThermalSpectrum:
+    """A one-sided deflection power spectrum and what the file says about it.
+
+    Attributes
+    ----------
+    frequency : ndarray  [Hz]
+    psd : ndarray  [unit]
+    unit : str  ``"m^2/Hz"`` or ``"V^2/Hz"``
+    temperature : float or None  [K]
+    medium : str or None  ``"air"``, ``"water"``, ...
+    sensitivity : float or None  InvOLS [m/V]
+    correction : float or None  chi of equipartition stored by the file [-]
+    tilt : float or None  lever tilt [rad]
+    averages : int or None  periodograms averaged [-]
+    vendor : dict  the file's own calibration, SI (``spring_constant`` [N/m],
+        ``resonance_frequency`` [Hz], ``quality_factor`` [-], ...)
+    source : str  where it came from
+    """
+
+    frequency: np.ndarray
+    psd: np.ndarray
+    unit: str = "m^2/Hz"
+    temperature: float | None = None
+    medium: str | None = None
+    sensitivity: float | None = None
+    correction: float | None = None
+    tilt: float | None = None
+    averages: int | None = None
+    vendor: dict[str, Any] = field(default_factory=dict)
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if self.unit not in ("m^2/Hz", "V^2/Hz"):
+            raise ParameterError(f"spectrum unit {self.unit!r}: expected m^2/Hz or V^2/Hz")
+        f, p = np.asarray(self.frequency, float), np.asarray(self.psd, float)
+        if f.ndim != 1 or f.shape != p.shape or f.size < 8:
+            raise ParameterError("a thermal spectrum needs 1-D frequency and psd of one length (>= 8 bins)")
+        object.__setattr__(self, "frequency", f)
+        object.__setattr__(self, "psd", p)
+
+    def displacement_psd(self, sensitivity: float | None = None) -> np.ndarray:
+        """The PSD in m^2/Hz: as stored, or V^2/Hz times ``sensitivity^2`` (given, else the file's)."""
+        if self.unit == "m^2/Hz":
+            return self.psd
+        s = sensitivity if sensitivity is not None else self.sensitivity
+        if s is None:
+            raise MissingMetadataError("the spectrum is in V^2/Hz and carries no sensitivity (InvOLS); "
+                                       "give the sensitivity", keys=("sensitivity",))
+        return self.psd * s * s
+
+
+# -- afmforce's own format ----------------------------------------------------------------
+
+_HEADER_UNITS = {"temperature": "K", "sensitivity": "m/V", "tilt": "rad"}
+
+
+def write_spectrum(path, spectrum: ThermalSpectrum, force: bool = True) -> Path:
+    """Write ``spectrum`` in afmforce's own format, atomically; returns the path."""
+    lines = [_MAGIC, f"# unit: {spectrum.unit}"]
+    for key in ("temperature", "medium", "sensitivity", "correction", "tilt", "averages"):
+        value = getattr(spectrum, key)
+        if value is not None:
+            unit = _HEADER_UNITS.get(key, "")
+            lines.append(f"# {key}: {value!r}{' ' + unit if unit else ''}".replace("'", ""))
+    for key, value in spectrum.vendor.items():
+        lines.append(f"# vendor.{key}: {value!r}".replace("'", ""))
+    if spectrum.source:
+        lines.append(f"# source: {spectrum.source}")
+    lines.append(f"frequency [Hz],psd [{spectrum.unit}]")
+    body = "\n".join(f"{f:.10g},{p:.10g}" for f, p in zip(spectrum.frequency, spectrum.psd))
+    return atomic_write_text(path, "\n".join(lines) + "\n" + body + "\n", force=force)
+
+
+def _read_own(path: Path, text: str) -> ThermalSpectrum:
+    head: dict[str, str] = {}
+    rows = []
+    for n, line in enumerate(text.splitlines(), 1):
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            key, sep, value = s[1:].partition(":")
+            if sep:
+                head[key.strip()] = value.strip()
+            continue
+        if s.lower().startswith("frequency"):
+            if "[" in s:
+                unit = s.rsplit("[", 1)[1].rstrip("]").strip()
+                head.setdefault("unit", unit)
+            continue
+        try:
+            f, p = (float(x) for x in s.split(","))
+        except ValueError:
+            raise FileFormatError(f"{path}, line {n}: expected 'frequency,psd', got {s[:60]!r}") from None
+        rows.append((f, p))
+    if not rows:
+        raise FileFormatError(f"{path}: no spectrum rows")
+    data = np.array(rows)
+
+    def num(key):
+        v = head.get(key)
+        return None if v is None else float(v.split()[0])
+
+    vendor = {k[len("vendor."):]: _maybe_float(v) for k, v in head.items() if k.startswith("vendor.")}
+    averages = num("averages")
+    return ThermalSpectrum(data[:, 0], data[:, 1], unit=head.get("unit", "m^2/Hz"),
+                           temperature=num("temperature"), medium=head.get("medium"),
+                           sensitivity=num("sensitivity"), correction=num("correction"),
+                           tilt=num("tilt"), averages=None if averages is None else int(averages),
+                           vendor=vendor, source=head.get("source", str(path)))
+
+
+def _maybe_float(v: str):
+    try:
+        return float(v)
+    except ValueError:
+        return v
+
+
+# -- JPK thermal noise data (.tnd) ---------------------------------------------------------
+
+_SUPERSCRIPT = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+_PREFIX = {"": 1.0, "k": 1e3, "M": 1e6, "m": 1e-3, "µ": 1e-6, "u": 1e-6, "n": 1e-9, "p": 1e-12}
+
+
+def _jpk_number(text: str) -> tuple[float, str]:
+    """``'4.501×10⁻¹⁰ V²/Hz'`` -> (4.501e-10, 'V²/Hz'); ``'11.0399 nm/V'`` -> (11.0399, 'nm/V')."""
+    s = text.strip().translate(_SUPERSCRIPT)
+    m = re.match(r"^([+-]?[\d.]+(?:[eE][+-]?\d+)?)(?:×10(-?\d+))?\s*(.*)$", s)
+    if not m:
+        raise ValueError(text)
+    value = float(m.group(1)) * (10.0 ** int(m.group(2)) if m.group(2) else 1.0)
+    return value, m.group(3).strip()
+
+
+def _jpk_si(text: str, base: str) -> float:
+    """A JPK header value in unit ``<prefix><base>`` -> SI."""
+    value, unit = _jpk_number(text)
+    prefix = unit[: len(unit) - len(base)] if unit.endswith(base) else None
+    if prefix is None or prefix not in _PREFIX:
+        raise ValueError(f"{text!r}: expected a value in {base}")
+    return value * _PREFIX[prefix]
+
+
+def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
+    head: dict[str, str] = {}
+    rows = []
+    for line in text.splitlines():
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            key, sep, value = s[1:].partition(":")
+            if sep:
+                head[key.strip()] = value.strip()
+            continue
+        parts = s.split()
+        if len(parts) >= 3:
+            rows.append([float(x) for x in parts[:4]])
+    if "thermal noise data" not in text[:200] or not rows:
+        raise FileFormatError(f"{path}: not a JPK thermal noise data file (no '# thermal noise data' "
+                              "header or no rows)")
+    names = re.findall(r"'([^']*)'", head.get("Channels", ""))
+    data = np.array([r for r in rows if len(r) == len(rows[0])])
+    col = names.index("average") if "average" in names else 1
+    vendor: dict[str, Any] = {}
+    try:
+        sensitivity = _jpk_si(head["sensitivity"], "m/V")
+    except (KeyError, ValueError):
+        sensitivity = None
+    for key, name, base in (("spring constant", "spring_constant", "N/m"),
+                            ("parameter.f", "resonance_frequency", "Hz"),
+                            ("parameter.noise", "white", "V²/Hz")):
+        try:
+            vendor[name] = _jpk_si(head[key], base)
+        except (KeyError, ValueError):
+            pass
+    if "parameter.Q" in head:
+        vendor["quality_factor"] = _jpk_number(head["parameter.Q"])[0]
+    if sensitivity is not None:
+        vendor["sensitivity"] = sensitivity
+    temperature = None
+    if "settings.temperature" in head:
+        value, unit = _jpk_number(head["settings.temperature"])
+        temperature = value + 273.15 if unit in ("℃", "°C", "C") else value
+    correction = None
+    if "cantilever.correction factor" in head:
+        correction = _jpk_number(head["cantilever.correction factor"])[0]
+    tilt = None
+    if "cantilever.angle" in head:   # '10° + 0.0 °': nominal angle plus the user's offset
+        degrees = [float(x) for x in re.findall(r"[-+]?\d+(?:\.\d+)?", head["cantilever.angle"])]
+        tilt = math.radians(sum(degrees)) if degrees else None
+    medium = head.get("settings.environment")
+    for key, name, base in (("settings.environment density", "density", "kg/m³"),
+                            ("settings.environment viscosity", "viscosity", "Pa·s"),
+                            ("cantilever.width", "width", "m"), ("cantilever.length", "length", "m")):
+        try:
+            vendor[name] = _jpk_si(head[key], base)
+        except (KeyError, ValueError):
+            pass
+    if "settings.method" in head:
+        vendor["method"] = head["settings.method"]
+    return ThermalSpectrum(data[:, 0], data[:, col], unit="V^2/Hz", temperature=temperature,
+                           medium=medium.lower() if medium else None, sensitivity=sensitivity,
+                           correction=correction, tilt=tilt, vendor=vendor, source=str(path))
+
+
+def read_spectrum(path) -> ThermalSpectrum:
+    """Read a thermal spectrum: JPK ``.tnd`` or afmforce's own format (by content).
+
+    Raises
+    ------
+    FileFormatError
+        Neither format, or malformed rows.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise FileFormatError(f"cannot read {path}: {exc.strerror or exc}") from None
+    first = text.lstrip()[:200]
+    if first.startswith(_MAGIC):
+        return _read_own(path, text)
+    if first.startswith("# thermal noise data"):
+        return _read_tnd(path, text)
+    raise FileFormatError(f"{path}: not a thermal spectrum afmforce reads (JPK .tnd thermal noise data "
+                          "or the afmforce spectrum format, docs/calibration.md)")
