@@ -71,11 +71,11 @@ def reynolds_number(frequency, width: float, density: float, viscosity: float):
 
 def gamma_circular(re):
     """Eq (2): the hydrodynamic function of a circular cylinder (Sader 1998, eq 18) [-]."""
-    from scipy.special import kv
+    from scipy.special import kve   # exponentially scaled: the ratio K1/K0 without underflow
 
     re = np.asarray(re, dtype=float)
     s = np.sqrt(1j * re)
-    return 1.0 + 4j * kv(1, -1j * s) / (s * kv(0, -1j * s))
+    return 1.0 + 4j * kve(1, -1j * s) / (s * kve(0, -1j * s))
 
 
 _OR_NUM = (0.91324, -0.48274, 0.46842, -0.12886, 0.044055, -0.0035117, 0.00069085)

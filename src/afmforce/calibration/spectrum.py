@@ -104,7 +104,7 @@ def write_spectrum(path, spectrum: ThermalSpectrum, force: bool = True) -> Path:
     if spectrum.source:
         lines.append(f"# source: {spectrum.source}")
     lines.append(f"frequency [Hz],psd [{spectrum.unit}]")
-    body = "\n".join(f"{f:.10g},{p:.10g}" for f, p in zip(spectrum.frequency, spectrum.psd))
+    body = "\n".join(f"{f!r},{p!r}" for f, p in zip(spectrum.frequency.tolist(), spectrum.psd.tolist()))
     return atomic_write_text(path, "\n".join(lines) + "\n" + body + "\n", force=force)
 
 
