@@ -272,3 +272,42 @@ def run_invols(args: argparse.Namespace) -> int:
     if len(results) > 1:
         rows.append(("curves", len(results), "(the first shown; --json lists each)"))
     return _finish(args, "invols", values, units, rows, f"afmforce calibrate invols {path}", r.verdict)
+
+
+def add_probe_calibration_flag(group) -> None:
+    """``--probe-calibration FILE`` for analyze and simulate (a file of ``calibrate --out``)."""
+    group.add_argument("--probe-calibration", dest="probe_calibration", metavar="FILE", default=None,
+                       help="probe values from 'afmforce calibrate ... --out FILE' (spring constant, "
+                            "sensitivity, resonance frequency, quality factor); flags given explicitly win")
+
+
+def fill_from_calibration(args: argparse.Namespace, names) -> dict:
+    """Set ``args.<name>`` from the calibration file where the user gave none; returns what was set."""
+    path = getattr(args, "probe_calibration", None)
+    if not path:
+        return {}
+    from ..calibration.record import read_calibration
+
+    values = read_calibration(path)
+    used = {n: values[n] for n in names if n in values and getattr(args, n, None) is None}
+    for name, value in used.items():
+        setattr(args, name, value)
+    return used
+
+
+def calibrated_probe(args: argparse.Namespace) -> dict:
+    """``simulate --probe-calibration``: the quality factor for either model; for the spring
+    model also k and the mass ``k / (2 pi f0)^2`` that gives the calibrated resonance."""
+    if not getattr(args, "probe_calibration", None):
+        return {}
+    used = fill_from_calibration(args, ("quality_factor",))
+    if getattr(args, "model", None) == "spring":
+        from ..calibration.record import read_calibration
+
+        values = read_calibration(args.probe_calibration)
+        used.update(fill_from_calibration(args, ("spring_constant",)))
+        f0 = values.get("resonance_frequency")
+        if f0 and getattr(args, "mass", None) is None and args.spring_constant is not None:
+            args.mass = args.spring_constant / (2.0 * math.pi * f0) ** 2
+            used["mass"] = args.mass
+    return used
