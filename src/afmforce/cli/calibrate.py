@@ -32,7 +32,7 @@ def _common(p, method: bool = True) -> None:
 
 
 def register(sub) -> None:
-    p = sub.add_parser("calibrate", help="calibrate the probe: thermal noise, Sader method, InvOLS",
+    p = sub.add_parser("calibrate", help="calibrate the probe: thermal noise spectrum, Sader method, InvOLS",
                        description="Calibrate the probe (docs/calibration.md): the spring constant, resonance "
                                    "and quality factor from a thermal spectrum or the Sader method, the InvOLS "
                                    "from a force curve's compliance line.")
