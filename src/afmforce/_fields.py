@@ -269,8 +269,6 @@ QUANTITIES: dict[str, FieldSpec] = {
     "density": _q("density", "kg/m^3", "density of the medium", hi=2e4, **_POS),
     "sader_exponent": _q("dimensionless", "", "exponent a of Gamma_i ~ Re^-a (general Sader method)",
                          0.0, 1.0, lo_open=True),
-    "sader_constant": _q("dimensionless", "", "constant A of the general Sader method (SI)", hi=1e30,
-                         **_POS),
     # analysis and diagnosis
     "resolution": _q("length", "m", "deflection resolution", hi=1e-6, **_POS),
     "separation": _q("length", "m", "separation where the force gradient is taken", hi=1e-6, **_POS),

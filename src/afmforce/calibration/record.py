@@ -35,12 +35,7 @@ def write_calibration(path, method: str, values: Mapping[str, Any], units: Mappi
     """Write a calibration file atomically: ``values`` (SI) with their ``units``."""
     obj = {"afmforce_calibration": _VERSION, "method": method, **to_jsonable(dict(values)),
            "units": dict(units)}
-    return atomic_write_text(path, json.dumps(obj, indent=1, allow_nan=False, default=_nan) + "\n",
-                             force=force)
-
-
-def _nan(obj):  # pragma: no cover - to_jsonable maps NaN to None already
-    return None
+    return atomic_write_text(path, json.dumps(obj, indent=1, allow_nan=False) + "\n", force=force)
 
 
 def read_calibration(path) -> dict[str, float]:
