@@ -107,3 +107,20 @@ def test_given_window_and_refusals():
         fit_thermal(f, psd, temperature=-1.0)
     with pytest.raises(ParameterError, match="correction"):
         fit_thermal(f, psd, correction=0.0)
+
+
+def test_electrical_lines_are_masked():
+    """Mains harmonics (one bin each, 1000x the floor) below and inside the window: the resonance
+    is still found and k is that of the clean spectrum; the lines in the window are reported."""
+    k, m, c = _spring(q=30.0)
+    f = np.arange(1, 6001) * 10.0
+    clean = linear_thermal_psd(f, k, m, c, [1.0], 295.0) + 1e-28
+    dirty = clean.copy()
+    for line in (50, 150, 250, 13_000, 16_000):
+        dirty[f == line] *= 1e3 if line < 1000 else 30
+    dirty[f == 50] = 1e3 * clean.max()                  # the highest bin of the spectrum
+    r0 = fit_thermal(f, clean, correction=1.0)
+    r = fit_thermal(f, dirty, correction=1.0)
+    assert r.resonance_frequency == pytest.approx(15e3, rel=1e-6)
+    assert r.spring_constant == pytest.approx(r0.spring_constant, rel=1e-6)
+    assert r.masked == 2 and r0.masked == 0

@@ -44,6 +44,9 @@ __all__ = ["BOLTZMANN", "DEFAULT_TEMPERATURE", "BUTT_JASCHKE", "sho_psd", "Therm
 BOLTZMANN = 1.380649e-23
 #: Temperature used when none is given or stored [K] (22 C, a laboratory).
 DEFAULT_TEMPERATURE = 295.0
+#: A bin this many times above the fitted model is an electrical line, not thermal noise (the
+#: chance of a chi-square(2) bin reaching it is e^-20): masked and the fit redone.
+SPIKE = 20.0
 #: Butt & Jaschke's factor for the first mode of an end-loaded rectangular lever read by an
 #: optical lever calibrated on a static compliance line: k = 0.817 kB T / <z*^2>.
 BUTT_JASCHKE = 0.817
@@ -104,6 +107,7 @@ class ThermalFit:
     tilt : float  lever tilt [rad]
     f_min, f_max : float  frequency window fitted [Hz]
     n_bins : int  bins fitted [-]
+    masked : int  bins in the window masked as electrical lines (> SPIKE x the model) [-]
     averages : float  number of averaged periodograms, from the scatter of P/M [-]
     reduced_deviance : float  mean gamma deviance times the averages (about 1 for a good fit) [-]
     """
@@ -124,6 +128,7 @@ class ThermalFit:
     f_min: float
     f_max: float
     n_bins: int
+    masked: int
     averages: float
     reduced_deviance: float
 
@@ -132,7 +137,7 @@ class ThermalFit:
              "quality_factor_se": "", "mean_square": "m^2", "spring_constant": "N/m",
              "spring_constant_se": "N/m", "spring_constant_normal": "N/m", "white": "m^2/Hz",
              "pink": "m^2", "temperature": "K", "correction": "", "tilt": "rad", "f_min": "Hz",
-             "f_max": "Hz", "n_bins": "", "averages": "", "reduced_deviance": ""}
+             "f_max": "Hz", "n_bins": "", "masked": "", "averages": "", "reduced_deviance": ""}
 
     def model(self, f):
         """The fitted PSD at ``f`` [m^2/Hz]."""
@@ -155,7 +160,10 @@ def _guess(f: np.ndarray, p: np.ndarray, f_range) -> tuple[float, float]:
     sel &= f > 0
     if sel.sum() < 8:
         raise AnalysisError("the thermal spectrum has fewer than 8 bins in the frequency window")
-    fs, ps = f[sel], p[sel]
+    from scipy.ndimage import median_filter
+
+    # a 5-bin running median removes the narrow electrical lines (1-2 bins) that are no resonance
+    fs, ps = f[sel], median_filter(p[sel], size=5, mode="nearest")
     edges = np.geomspace(fs[0], fs[-1] * (1 + 1e-12), min(300, fs.size // 2) + 1)
     band = np.clip(np.searchsorted(edges, fs, side="right") - 1, 0, edges.size - 2)
     counts = np.bincount(band, minlength=edges.size - 1)
@@ -271,6 +279,11 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
             raise AnalysisError(f"{int(sel.sum())} spectrum bins between {window[0]:.4g} and "
                                 f"{window[1]:.4g} Hz; need 8 to fit a resonance")
         th, m = _fit(f[sel], p[sel], f0, q, pink)
+        spikes = p[sel] > SPIKE * m          # lines (mains, electronics): masked, refitted
+        masked = int(spikes.sum())
+        if masked:
+            sel[np.flatnonzero(sel)[spikes]] = False
+            th, m = _fit(f[sel], p[sel], math.exp(th[0]), math.exp(th[1]), pink)
         f0, q = math.exp(th[0]), math.exp(th[1])
         if not window[0] < f0 < window[1]:
             raise AnalysisError(f"the fitted resonance {f0:.4g} Hz lies outside the window "
@@ -312,7 +325,7 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
         mean_square=area, spring_constant=k, spring_constant_se=k * math.sqrt(max(var_lnk, 0.0)),
         spring_constant_normal=k / cos2, white=math.exp(th[3]),
         pink=math.exp(th[4]) if pink else 0.0, temperature=T, correction=float(correction),
-        tilt=float(tilt), f_min=float(fs[0]), f_max=float(fs[-1]), n_bins=int(fs.size),
+        tilt=float(tilt), f_min=float(fs[0]), f_max=float(fs[-1]), n_bins=int(fs.size), masked=masked,
         averages=float(averages), reduced_deviance=dev * averages)
 
 
