@@ -101,3 +101,18 @@ def test_refusals(tmp_path):
         read_spectrum(bad)
     with pytest.raises(ParameterError, match="unit"):
         ThermalSpectrum(np.arange(10.0), np.ones(10), unit="W")
+
+
+def test_tnd_variants(tmp_path):
+    """Two columns in m²/Hz, the temperature in K, a Greek mu, an unreadable Q: read as written."""
+    text = ("# thermal noise data\n# sensitivity: 50.0 μm/V\n# spring constant: 0.2 N/m\n# parameter.Q: n/a\n"
+            "# settings.temperature: 300 K\n# Channels: 'Frequency' 'average' \n# Units: 'Hz' 'm²/Hz' \n"
+            + "".join(f"{f} 1e-26\n" for f in range(1, 20)))
+    path = tmp_path / "v.tnd"
+    path.write_text(text, encoding="utf-8")
+    sp = read_spectrum(path)
+    assert sp.unit == "m^2/Hz" and sp.temperature == 300.0 and sp.sensitivity == pytest.approx(50e-6)
+    assert "quality_factor" not in sp.vendor and sp.psd[0] == 1e-26
+    path.write_text(text.replace("5 1e-26", "5 oops"), encoding="utf-8")
+    with pytest.raises(FileFormatError, match="line"):
+        read_spectrum(path)

@@ -157,7 +157,8 @@ def _maybe_float(v: str):
 # -- JPK thermal noise data (.tnd) ---------------------------------------------------------
 
 _SUPERSCRIPT = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
-_PREFIX = {"": 1.0, "k": 1e3, "M": 1e6, "m": 1e-3, "µ": 1e-6, "u": 1e-6, "n": 1e-9, "p": 1e-12}
+_PREFIX = {"": 1.0, "k": 1e3, "M": 1e6, "m": 1e-3, "µ": 1e-6, "μ": 1e-6, "u": 1e-6, "n": 1e-9, "p": 1e-12,
+           "f": 1e-15}
 
 
 def _jpk_number(text: str) -> tuple[float, str]:
@@ -179,10 +180,20 @@ def _jpk_si(text: str, base: str) -> float:
     return value * _PREFIX[prefix]
 
 
+def _try(parse, text):
+    """``parse(text)``, or None for a missing or unreadable header value."""
+    if text is None:
+        return None
+    try:
+        return parse(text)
+    except ValueError:
+        return None
+
+
 def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
     head: dict[str, str] = {}
     rows = []
-    for line in text.splitlines():
+    for n, line in enumerate(text.splitlines(), 1):
         s = line.strip()
         if not s:
             continue
@@ -192,14 +203,22 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
                 head[key.strip()] = value.strip()
             continue
         parts = s.split()
-        if len(parts) >= 3:
+        try:
             rows.append([float(x) for x in parts[:4]])
+        except ValueError:
+            raise FileFormatError(f"{path}, line {n}: expected numbers, got {s[:60]!r}") from None
     if "thermal noise data" not in text[:200] or not rows:
         raise FileFormatError(f"{path}: not a JPK thermal noise data file (no '# thermal noise data' "
                               "header or no rows)")
     names = re.findall(r"'([^']*)'", head.get("Channels", ""))
     data = np.array([r for r in rows if len(r) == len(rows[0])])
-    col = names.index("average") if "average" in names else 1
+    if data.shape[1] < 2:
+        raise FileFormatError(f"{path}: the rows hold one column; expected frequency and spectrum")
+    col = names.index("average") if "average" in names and names.index("average") < data.shape[1] else 1
+    units = re.findall(r"'([^']*)'", head.get("Units", ""))
+    unit = units[col].replace("²", "^2") if col < len(units) else "V^2/Hz"
+    if unit not in ("V^2/Hz", "m^2/Hz"):
+        raise FileFormatError(f"{path}: the spectrum column is in {units[col]!r}; expected V²/Hz or m²/Hz")
     vendor: dict[str, Any] = {}
     try:
         sensitivity = _jpk_si(head["sensitivity"], "m/V")
@@ -212,17 +231,17 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
             vendor[name] = _jpk_si(head[key], base)
         except (KeyError, ValueError):
             pass
-    if "parameter.Q" in head:
-        vendor["quality_factor"] = _jpk_number(head["parameter.Q"])[0]
+    quality = _try(_jpk_number, head.get("parameter.Q"))
+    if quality is not None:
+        vendor["quality_factor"] = quality[0]
     if sensitivity is not None:
         vendor["sensitivity"] = sensitivity
     temperature = None
-    if "settings.temperature" in head:
-        value, unit = _jpk_number(head["settings.temperature"])
-        temperature = value + 273.15 if unit in ("℃", "°C", "C") else value
-    correction = None
-    if "cantilever.correction factor" in head:
-        correction = _jpk_number(head["cantilever.correction factor"])[0]
+    t = _try(_jpk_number, head.get("settings.temperature"))
+    if t is not None:
+        temperature = t[0] + 273.15 if t[1] in ("℃", "°C", "C", "degC") else t[0]
+    c = _try(_jpk_number, head.get("cantilever.correction factor"))
+    correction = c[0] if c is not None else None
     tilt = None
     if "cantilever.angle" in head:   # '10° + 0.0 °': nominal angle plus the user's offset
         degrees = [float(x) for x in re.findall(r"[-+]?\d+(?:\.\d+)?", head["cantilever.angle"])]
@@ -237,7 +256,7 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
             pass
     if "settings.method" in head:
         vendor["method"] = head["settings.method"]
-    return ThermalSpectrum(data[:, 0], data[:, col], unit="V^2/Hz", temperature=temperature,
+    return ThermalSpectrum(data[:, 0], data[:, col], unit=unit, temperature=temperature,
                            medium=medium.lower() if medium else None, sensitivity=sensitivity,
                            correction=correction, tilt=tilt, vendor=vendor, source=str(path))
 
