@@ -124,3 +124,13 @@ def test_probe_calibration_feeds_analyze_and_simulate(capsys, tmp_path):
     assert cfg.probe.quality_factor == saved["quality_factor"]
     assert math.sqrt(cfg.probe.spring_constant / cfg.probe.mass) / (2 * math.pi) == pytest.approx(
         saved["resonance_frequency"])
+
+
+def test_probe_calibration_gives_the_fit_its_damping(capsys, tmp_path):
+    """afmforce fit shares simulate's model flags: the calibrated Q damps the fitted model."""
+    calib = tmp_path / "calib.json"
+    run(capsys, ["calibrate", "thermal", "--example", "virtual-air", "--out", str(calib)])
+    from afmforce.cli.fit import model_config
+
+    args = build_parser("fit").parse_args(["fit", "a.txt", "b.txt", "--probe-calibration", str(calib)])
+    assert model_config(args).probe.quality_factor == json.loads(calib.read_text())["quality_factor"]

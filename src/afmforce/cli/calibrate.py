@@ -274,11 +274,11 @@ def run_invols(args: argparse.Namespace) -> int:
     return _finish(args, "invols", values, units, rows, f"afmforce calibrate invols {path}", r.verdict)
 
 
-def add_probe_calibration_flag(group) -> None:
-    """``--probe-calibration FILE`` for analyze and simulate (a file of ``calibrate --out``)."""
+def add_probe_calibration_flag(group, takes: str = "spring constant, sensitivity, resonance frequency") -> None:
+    """``--probe-calibration FILE`` for analyze, simulate and fit (a file of ``calibrate --out``)."""
     group.add_argument("--probe-calibration", dest="probe_calibration", metavar="FILE", default=None,
-                       help="probe values from 'afmforce calibrate ... --out FILE' (spring constant, "
-                            "sensitivity, resonance frequency, quality factor); flags given explicitly win")
+                       help=f"probe values from 'afmforce calibrate ... --out FILE': {takes}; flags given "
+                            "explicitly win")
 
 
 def fill_from_calibration(args: argparse.Namespace, names) -> dict:
