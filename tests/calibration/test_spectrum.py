@@ -93,7 +93,7 @@ def test_volts_spectrum_needs_a_sensitivity():
 
 def test_refusals(tmp_path):
     bad = tmp_path / "x.psd"
-    bad.write_text("hello\n1,2\n")
+    bad.write_text("hello\n1,2\n")                       # one row: no spectrum
     with pytest.raises(FileFormatError, match="not a thermal spectrum"):
         read_spectrum(bad)
     bad.write_text("# afmforce thermal spectrum 1\nfrequency [Hz],psd [m^2/Hz]\n1;2\n")
@@ -116,3 +116,23 @@ def test_tnd_variants(tmp_path):
     path.write_text(text.replace("5 1e-26", "5 oops"), encoding="utf-8")
     with pytest.raises(FileFormatError, match="line"):
         read_spectrum(path)
+
+
+def test_plain_text_spectra(tmp_path):
+    """Two columns with the unit in the header (a power or an amplitude spectral density, which is
+    squared), or given; a header without a unit is refused, naming the quantity."""
+    rows = "".join(f"{f}\t{2e-4}\n" for f in range(1, 20))
+    a = tmp_path / "a.txt"
+    a.write_text("Frequency (Hz)\tAmplitude (V/sqrt(Hz))\n" + rows)
+    sp = read_spectrum(a)
+    assert sp.unit == "V^2/Hz" and sp.psd[0] == pytest.approx(4e-8) and sp.frequency[-1] == 19.0
+    b = tmp_path / "b.csv"
+    b.write_text("f,psd [m^2/Hz]\n" + rows.replace("\t", ","))
+    assert read_spectrum(b).unit == "m^2/Hz" and read_spectrum(b).psd[0] == 2e-4
+    c = tmp_path / "c.txt"
+    c.write_text("frequency spectrum\n" + rows)
+    with pytest.raises(FileFormatError, match="psd_unit"):
+        read_spectrum(c)
+    assert read_spectrum(c, unit="m^2/Hz").unit == "m^2/Hz"
+    with pytest.raises(ParameterError, match="psd_unit"):
+        read_spectrum(c, unit="W")

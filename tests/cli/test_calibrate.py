@@ -134,3 +134,19 @@ def test_probe_calibration_gives_the_fit_its_damping(capsys, tmp_path):
 
     args = build_parser("fit").parse_args(["fit", "a.txt", "b.txt", "--probe-calibration", str(calib)])
     assert model_config(args).probe.quality_factor == json.loads(calib.read_text())["quality_factor"]
+
+
+def test_plain_text_spectrum_with_its_unit_given(capsys, tmp_path):
+    """The virtual spectrum's two columns without its header: --psd-unit, and the flags give what
+    the file would (295 K default, correction 1): the same k as from the own format."""
+    src = datasets.thermal_example("virtual-air")
+    rows = [line for line in src.read_text().splitlines() if line[:1].isdigit()]
+    plain = tmp_path / "plain.txt"
+    plain.write_text("\n".join(r.replace(",", "\t") for r in rows) + "\n")
+    code, out, err = run(capsys, ["calibrate", "thermal", str(plain), "--psd-unit", "m^2/Hz", "--correction", "1",
+                                  "--json"])
+    assert code == 0, err
+    code, ref, _ = run(capsys, ["calibrate", "thermal", "--example", "virtual-air", "--json"])
+    assert json.loads(out)["spring_constant"] == pytest.approx(json.loads(ref)["spring_constant"], rel=1e-9)
+    code, _, err = run(capsys, ["calibrate", "thermal", str(plain)])
+    assert code == 2 and "--psd-unit" in err

@@ -3,6 +3,9 @@
 * **afmforce spectrum** (``.txt``/``.csv``): ``#`` header lines ``key: value [unit]`` (first
   line ``# afmforce thermal spectrum 1``), then a header row ``frequency [Hz],psd [m^2/Hz]``
   (or ``[V^2/Hz]``) and comma-separated rows. Written atomically (:func:`write_spectrum`).
+* **Plain text**: two numeric columns, frequency (in Hz) and the spectrum, with the unit stated in
+  a header line (``m^2/Hz``, ``V^2/Hz``, or an amplitude ``m/sqrt(Hz)``, ``V/sqrt(Hz)``, squared
+  here) or given by the caller.
 * **JPK thermal noise data** (``.tnd``, JPK/Bruker NanoWizard "Calibration manager" export):
   ``#`` header with the vendor's calibration (``sensitivity``, ``spring constant``,
   ``parameter.f``, ``parameter.Q``, ``settings.temperature``, ``settings.environment``,
@@ -27,11 +30,11 @@ import numpy as np
 from .._files import atomic_write_text
 from ..errors import FileFormatError, MissingMetadataError, ParameterError
 
-__all__ = ["ThermalSpectrum", "read_spectrum", "write_spectrum", "SPECTRUM_SUFFIXES"]
+__all__ = ["ThermalSpectrum", "read_spectrum", "write_spectrum", "SPECTRUM_SUFFIXES", "TEXT_UNITS"]
 
 _MAGIC = "# afmforce thermal spectrum 1"
 #: suffixes the thermal readers accept
-SPECTRUM_SUFFIXES = (".tnd", ".txt", ".csv")
+SPECTRUM_SUFFIXES = (".tnd", ".psd", ".txt", ".csv")
 
 
 @dataclass(frozen=True, eq=False)
@@ -261,13 +264,60 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
                            correction=correction, tilt=tilt, vendor=vendor, source=str(path))
 
 
-def read_spectrum(path) -> ThermalSpectrum:
-    """Read a thermal spectrum: JPK ``.tnd`` or afmforce's own format (by content).
+# -- plain two-column text (any instrument's export) -----------------------------------------
+
+_UNIT_WORDS = (  # header text -> (unit of the PSD, squared: an amplitude spectral density)
+    (r"m\^?2/Hz|m²/Hz", "m^2/Hz", False), (r"V\^?2/Hz|V²/Hz", "V^2/Hz", False),
+    (r"m/(?:√|sqrt\(?)Hz", "m^2/Hz", True), (r"V/(?:√|sqrt\(?)Hz", "V^2/Hz", True))
+#: the PSD units a plain text spectrum may state (``unit=`` of :func:`read_spectrum`)
+TEXT_UNITS = ("m^2/Hz", "V^2/Hz", "m/sqrt(Hz)", "V/sqrt(Hz)")
+
+
+def _read_text(path: Path, text: str, unit: str | None) -> ThermalSpectrum:
+    """Two or more numeric columns (frequency, spectrum), any separators, header lines kept as text."""
+    header, rows = [], []
+    for line in text.splitlines():
+        parts = re.split(r"[,;\t ]+", line.strip())
+        try:
+            values = [float(x) for x in parts if x]
+        except ValueError:
+            header.append(line)
+            continue
+        if len(values) >= 2:
+            rows.append(values[:2])
+    if len(rows) < 8:
+        raise FileFormatError(f"{path}: not a thermal spectrum afmforce reads (JPK .tnd, the afmforce "
+                              "spectrum format, or two numeric columns: frequency and spectrum)")
+    data = np.array(rows)
+    head = " ".join(header)
+    squared = False
+    if unit is None:
+        for pattern, found, amp in _UNIT_WORDS:
+            m = re.search(r"(?<![A-Za-z])([pnuµμm]?)(" + pattern + ")", head)
+            if m and not m.group(1):
+                unit, squared = found, amp
+                break
+        else:
+            raise MissingMetadataError(f"{path}: two numeric columns, but the header states no spectrum "
+                                       "unit (m^2/Hz, V^2/Hz, m/sqrt(Hz) or V/sqrt(Hz)); give it (psd_unit)",
+                                       keys=("psd_unit",))
+    elif unit in ("m/sqrt(Hz)", "V/sqrt(Hz)"):
+        unit, squared = unit[0] + "^2/Hz", True
+    elif unit not in ("m^2/Hz", "V^2/Hz"):
+        raise ParameterError(f"psd_unit {unit!r}: choose one of {', '.join(TEXT_UNITS)}")
+    psd = data[:, 1] ** 2 if squared else data[:, 1]
+    return ThermalSpectrum(data[:, 0], psd, unit=unit, source=str(path))
+
+
+def read_spectrum(path, unit: str | None = None) -> ThermalSpectrum:
+    """Read a thermal spectrum: JPK ``.tnd``, afmforce's own format, or two numeric columns
+    (frequency [Hz], spectrum) whose header states the unit or ``unit`` gives it (one of
+    :data:`TEXT_UNITS`; an amplitude spectral density is squared).
 
     Raises
     ------
     FileFormatError
-        Neither format, or malformed rows.
+        None of these, or malformed rows.
     """
     path = Path(path)
     try:
@@ -279,5 +329,4 @@ def read_spectrum(path) -> ThermalSpectrum:
         return _read_own(path, text)
     if first.startswith("# thermal noise data"):
         return _read_tnd(path, text)
-    raise FileFormatError(f"{path}: not a thermal spectrum afmforce reads (JPK .tnd thermal noise data "
-                          "or the afmforce spectrum format, docs/calibration.md)")
+    return _read_text(path, text, unit)

@@ -42,7 +42,8 @@ def register(sub) -> None:
     t = kinds.add_parser("thermal", help="thermal noise spectrum: SHO fit and equipartition",
                          description="Fit a simple harmonic oscillator with a white (and optionally 1/f) "
                                      "background to the first mode of a thermal spectrum; k = chi kB T / <z^2>.")
-    t.add_argument("file", nargs="?", help="thermal spectrum: JPK .tnd or afmforce .psd")
+    t.add_argument("file", nargs="?", help="thermal spectrum: JPK .tnd, afmforce .psd, or two columns of text "
+                   "(frequency in Hz, spectrum)")
     t.add_argument("--example", default=None, metavar="NAME",
                    help="a shipped spectrum instead of FILE: virtual-air (simulated), jpk-water (real)")
     add_field(t, "temperature", help="temperature (default: the file's, else 295 K)")
@@ -54,6 +55,8 @@ def register(sub) -> None:
     add_field(t, "frequency_min", help="lowest frequency fitted (default: from the peak)")
     add_field(t, "frequency_max", help="highest frequency fitted (default: from the peak)")
     t.add_argument("--pink", action="store_true", help="fit a 1/f background term as well")
+    t.add_argument("--psd-unit", default=None, choices=("m^2/Hz", "V^2/Hz", "m/sqrt(Hz)", "V/sqrt(Hz)"),
+                   help="unit of a plain two-column text spectrum whose header does not state it")
     t.add_argument("--medium", default=None, choices=("air", "water"),
                    help="medium, for the Sader cross-check with --length/--width (default: the file's)")
     add_field(t, "lever_length", flag="--length", help="lever length, for a Sader cross-check")
@@ -127,7 +130,15 @@ def run_thermal(args: argparse.Namespace) -> int:
         path = thermal_example(args.example)
     else:
         path = args.file
-    sp = read_spectrum(path)
+    from ..errors import MissingMetadataError
+
+    try:
+        sp = read_spectrum(path, unit=args.psd_unit)
+    except MissingMetadataError as exc:
+        if "psd_unit" not in exc.keys:
+            raise
+        raise MissingMetadataError(str(exc).replace("(psd_unit)", "with --psd-unit"), exc.keys,
+                                   ("--psd-unit",)) from None
     sources = {}
 
     def pick(name, given, stored, default, what):
