@@ -124,3 +124,12 @@ def test_electrical_lines_are_masked():
     assert r.resonance_frequency == pytest.approx(15e3, rel=1e-6)
     assert r.spring_constant == pytest.approx(r0.spring_constant, rel=1e-6)
     assert r.masked == 2 and r0.masked == 0
+
+
+def test_a_resonance_three_bins_wide_is_found():
+    """A high-Q lever on a coarse grid (line width f0/Q = 50 Hz, bins of 20 Hz) is no electrical line."""
+    k, m, c = _spring(f0=15e3, q=300.0)
+    f = np.arange(1, 3001) * 20.0 + 7.0
+    psd = linear_thermal_psd(f, k, m, c, [1.0], 295.0) + 1e-30
+    r = fit_thermal(f, psd, correction=1.0)
+    assert r.resonance_frequency == pytest.approx(15e3, rel=1e-6) and r.spring_constant == pytest.approx(k, rel=1e-4)

@@ -162,8 +162,9 @@ def _guess(f: np.ndarray, p: np.ndarray, f_range) -> tuple[float, float]:
         raise AnalysisError("the thermal spectrum has fewer than 8 bins in the frequency window")
     from scipy.ndimage import median_filter
 
-    # a 5-bin running median removes the narrow electrical lines (1-2 bins) that are no resonance
-    fs, ps = f[sel], median_filter(p[sel], size=5, mode="nearest")
+    # a 3-bin running median removes one-bin electrical lines (a resonance spans more bins; the
+    # fit masks wider lines in its window)
+    fs, ps = f[sel], median_filter(p[sel], size=3, mode="nearest")
     edges = np.geomspace(fs[0], fs[-1] * (1 + 1e-12), min(300, fs.size // 2) + 1)
     band = np.clip(np.searchsorted(edges, fs, side="right") - 1, 0, edges.size - 2)
     counts = np.bincount(band, minlength=edges.size - 1)
