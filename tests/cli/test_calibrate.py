@@ -150,3 +150,14 @@ def test_plain_text_spectrum_with_its_unit_given(capsys, tmp_path):
     assert json.loads(out)["spring_constant"] == pytest.approx(json.loads(ref)["spring_constant"], rel=1e-9)
     code, _, err = run(capsys, ["calibrate", "thermal", str(plain)])
     assert code == 2 and "--psd-unit" in err
+
+
+def test_out_is_not_replaced_without_force(capsys, tmp_path):
+    out_file = tmp_path / "calib.json"
+    out_file.write_text("{}")
+    argv = ["calibrate", "sader", "--length", "200um", "--width", "20um", "--frequency", "13kHz",
+            "--quality-factor", "30", "--out", str(out_file)]
+    code, _, err = run(capsys, argv)
+    assert code == 2 and "--force" in err and out_file.read_text() == "{}"
+    code, out, _ = run(capsys, argv + ["--force"])
+    assert code == 0 and json.loads(out_file.read_text())["method"] == "rectangular" and f"wrote {out_file}" in out

@@ -106,7 +106,6 @@ def _finish(args, method: str, values: dict, units: dict, rows: list, title: str
     if args.out:
         from ..calibration.record import write_calibration
 
-        check_output(args.out, force=args.force)
         write_calibration(args.out, method, values, units, force=args.force)
     if args.json:
         print_json({"method": method, **values, "units": units})
@@ -118,7 +117,14 @@ def _finish(args, method: str, values: dict, units: dict, rows: list, title: str
     return 0
 
 
+def _check_out(args) -> None:
+    """Refuse an --out that cannot be written before any work (exit 2)."""
+    if args.out:
+        check_output(args.out, force=args.force)
+
+
 def run_thermal(args: argparse.Namespace) -> int:
+    _check_out(args)
     from ..calibration import BUTT_JASCHKE, DEFAULT_TEMPERATURE, fit_thermal, read_spectrum
     from ..calibration.thermal import ThermalFit
 
@@ -218,6 +224,7 @@ def _pm(value: float, se: float, scale: float) -> str:
 
 
 def run_sader(args: argparse.Namespace) -> int:
+    _check_out(args)
     from ..calibration.sader import (SaderResult, general_constant, sader_general, sader_rectangular)
 
     if args.resonance_frequency is None or args.quality_factor is None:
@@ -255,6 +262,7 @@ def run_sader(args: argparse.Namespace) -> int:
 
 
 def run_invols(args: argparse.Namespace) -> int:
+    _check_out(args)
     from ..analysis.invols import InvolsResult, measure_invols
     from ..analysis._units import units_of
     from ..io import load
