@@ -161,3 +161,15 @@ def test_out_is_not_replaced_without_force(capsys, tmp_path):
     assert code == 2 and "--force" in err and out_file.read_text() == "{}"
     code, out, _ = run(capsys, argv + ["--force"])
     assert code == 0 and json.loads(out_file.read_text())["method"] == "rectangular" and f"wrote {out_file}" in out
+
+
+@pytest.mark.parametrize("model", ["spring", "beam"])
+def test_virtual_spectrum_round_trip(capsys, tmp_path, model):
+    """calibrate virtual writes a spectrum of known k; calibrate thermal gives it back within 2 %."""
+    spectrum = tmp_path / "v.psd"
+    code, out, err = run(capsys, ["calibrate", "virtual", "--model", model, "--quality-factor", "20",
+                                  "--averages", "2048", "--spectrum", str(spectrum), "--json"])
+    assert code == 0, err
+    truth = json.loads(out)["spring_constant"]
+    code, out, _ = run(capsys, ["calibrate", "thermal", str(spectrum), "--json"])
+    assert json.loads(out)["spring_constant"] == pytest.approx(truth, rel=0.02)

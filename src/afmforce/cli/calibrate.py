@@ -95,11 +95,30 @@ def register(sub) -> None:
     i.add_argument("--format", default=None, help="reader (afmforce formats lists them)")
     _common(i)
     i.set_defaults(func=run_invols)
+
+    v = kinds.add_parser("virtual", help="record the thermal spectrum of a virtual lever (known k)",
+                         description="The virtual AFM's thermal tune: the thermal spectrum of the spring or the "
+                                     "beam probe (both free modes) with the lever's damping, averaged periodograms "
+                                     "over a white floor, written in the afmforce spectrum format (.psd).")
+    v.add_argument("--model", choices=("spring", "beam"), default="spring", help="probe (default spring)")
+    add_field(v, "spring_constant", default=0.2, help="spring constant k (spring model)")
+    add_field(v, "resonance_frequency", default=20e3, help="resonance frequency (spring model)")
+    add_field(v, "quality_factor", default=50.0, help="quality factor (beam: both modes unless "
+              "--quality-factor-2)")
+    add_field(v, "quality_factor_2", help="quality factor of the beam's second mode")
+    add_field(v, "temperature", default=295.0)
+    v.add_argument("--averages", type=int, default=64, help="periodograms averaged (default 64)")
+    v.add_argument("--white", type=float, default=1e-27, metavar="M2_PER_HZ",
+                   help="white detector floor [m^2/Hz] (default 1e-27)")
+    v.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+    v.add_argument("--spectrum", metavar="FILE.psd", required=True, help="the spectrum file to write")
+    _common(v)
+    v.set_defaults(func=run_virtual)
     p.set_defaults(func=_no_method)
 
 
 def _no_method(args) -> int:
-    raise ParameterError("choose a method: afmforce calibrate thermal|sader|invols (--help for each)")
+    raise ParameterError("choose a method: afmforce calibrate thermal|sader|invols|virtual (--help for each)")
 
 
 def _finish(args, method: str, values: dict, units: dict, rows: list, title: str, verdict: str = "") -> int:
@@ -330,3 +349,37 @@ def calibrated_probe(args: argparse.Namespace) -> dict:
             args.mass = args.spring_constant / (2.0 * math.pi * f0) ** 2
             used["mass"] = args.mass
     return used
+
+
+def run_virtual(args: argparse.Namespace) -> int:
+    from ..calibration import write_spectrum
+    from ..dynamics.parts import BeamProbe, SpringProbe
+    from ..dynamics.thermal import thermal_spectrum
+
+    _check_out(args)
+    check_output(args.spectrum, flag="--spectrum", force=args.force)
+    if args.averages < 1:
+        raise ParameterError(f"--averages must be at least 1, got {args.averages}")
+    if not args.white >= 0:
+        raise ParameterError(f"--white must be a non-negative PSD [m^2/Hz], got {args.white}")
+    if args.model == "spring":
+        if args.quality_factor_2 is not None:
+            raise ParameterError("--quality-factor-2 is the beam's second mode; the spring has one")
+        k = args.spring_constant
+        probe = SpringProbe(spring_constant=k, mass=k / (2 * math.pi * args.resonance_frequency) ** 2,
+                            quality_factor=args.quality_factor)
+    else:
+        probe = BeamProbe(quality_factor=args.quality_factor, quality_factor_2=args.quality_factor_2)
+    sp = thermal_spectrum(probe, temperature=args.temperature, averages=args.averages, white=args.white,
+                          seed=args.seed)
+    write_spectrum(args.spectrum, sp, force=args.force)
+    values = {"spring_constant": float(probe.force_constant), "resonance_frequency": sp.vendor["resonance_frequency"],
+              "quality_factor": args.quality_factor, "correction": sp.correction, "temperature": args.temperature,
+              "bins": int(sp.frequency.size), "spectrum": str(args.spectrum)}
+    units = {"spring_constant": "N/m", "resonance_frequency": "Hz", "quality_factor": "", "correction": "",
+             "temperature": "K", "bins": ""}
+    rows = [("probe", args.model, ""), ("spring constant k (truth)", probe.force_constant * 1e3, "mN/m"),
+            ("first mode", sp.vendor["resonance_frequency"] * 1e-3, "kHz"),
+            ("first mode's share chi", sp.correction, ""),
+            ("bins", f"{sp.frequency.size} up to {sp.frequency[-1] * 1e-3:.4g} kHz", "")]
+    return _finish(args, "virtual", values, units, rows, f"afmforce calibrate virtual -> {args.spectrum}")
