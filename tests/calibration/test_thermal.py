@@ -44,6 +44,7 @@ def test_exact_spectrum_gives_k_f0_q(q):
     assert r.resonance_frequency == pytest.approx(15e3, rel=1e-7)
     assert r.quality_factor == pytest.approx(q, rel=1e-6)
     assert r.white == pytest.approx(1e-29, rel=1e-3)
+    assert r.spring_constant_se_window < 1e-5 * k          # an exact oscillator: no window effect
 
 
 @pytest.mark.parametrize("seed", range(5))

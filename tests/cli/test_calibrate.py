@@ -173,3 +173,9 @@ def test_virtual_spectrum_round_trip(capsys, tmp_path, model):
     truth = json.loads(out)["spring_constant"]
     code, out, _ = run(capsys, ["calibrate", "thermal", str(spectrum), "--json"])
     assert json.loads(out)["spring_constant"] == pytest.approx(truth, rel=0.02)
+
+
+def test_thermal_plot(capsys, tmp_path):
+    png = tmp_path / "fit.png"
+    code, out, _ = run(capsys, ["calibrate", "thermal", "--example", "jpk-water", "--plot", str(png)])
+    assert code == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"wrote {png}" in out

@@ -97,9 +97,12 @@ class ThermalFit:
     Attributes
     ----------
     resonance_frequency, resonance_frequency_se : float  f0 and its standard error [Hz]
-    quality_factor, quality_factor_se : float  Q [-]
+    quality_factor, quality_factor_se : float  Q [-] (both errors include the window's, as k's)
     mean_square : float  area of the resonance <z^2> [m^2]
-    spring_constant, spring_constant_se : float  k by eq (2) [N/m]
+    spring_constant, spring_constant_se : float  k by eq (2) and its standard error, the window's
+        systematic part included [N/m]
+    spring_constant_se_window : float  that systematic part: how much k moves with the window
+        beyond the statistics of nested windows [N/m] (0 for a window given)
     spring_constant_normal : float  k / cos^2(tilt), normal to the sample [N/m] (= k, tilt 0)
     white, pink : float  background: white floor [m^2/Hz], 1/f coefficient [m^2]
     temperature : float  [K]
@@ -129,6 +132,7 @@ class ThermalFit:
     f_max: float
     n_bins: int
     masked: int
+    spring_constant_se_window: float
     averages: float
     reduced_deviance: float
 
@@ -137,7 +141,7 @@ class ThermalFit:
              "quality_factor_se": "", "mean_square": "m^2", "spring_constant": "N/m",
              "spring_constant_se": "N/m", "spring_constant_normal": "N/m", "white": "m^2/Hz",
              "pink": "m^2", "temperature": "K", "correction": "", "tilt": "rad", "f_min": "Hz",
-             "f_max": "Hz", "n_bins": "", "masked": "", "averages": "", "reduced_deviance": ""}
+             "f_max": "Hz", "n_bins": "", "masked": "", "spring_constant_se_window": "N/m", "averages": "", "reduced_deviance": ""}
 
     def model(self, f):
         """The fitted PSD at ``f`` [m^2/Hz]."""
@@ -200,10 +204,62 @@ def _guess(f: np.ndarray, p: np.ndarray, f_range) -> tuple[float, float]:
     return float(f0), float(min(max(f0 / width, 0.5), 1e5))
 
 
-def _window(f0: float, q: float, f: np.ndarray) -> tuple[float, float]:
-    span = min(0.85, 12.0 / q) if q > 1 else 0.85
-    upper = min(2.5, 1.0 + 12.0 / q) if q > 1 else 2.5
-    return max(f0 * (1.0 - span), f[f > 0][0]), min(f0 * upper, f[-1])
+def _window(f0: float, q: float, f: np.ndarray, scale: float = 1.0) -> tuple[float, float]:
+    """Twelve line widths f0/Q each side (at most -85 % / +150 % of f0), times ``scale``."""
+    below = min(0.85, 12.0 / q) * scale
+    above = min(1.5, 12.0 / q) * scale
+    return max(f0 * max(1.0 - below, 0.05), f[0]), min(f0 * (1.0 + above), f[-1])
+
+
+def _fit_in(f, p, window, f0, q, pink):
+    """The fit in ``window``, electrical lines masked: (theta, model, bins used, lines masked)."""
+    sel = (f >= window[0]) & (f <= window[1])
+    if sel.sum() < 8:
+        raise AnalysisError(f"{int(sel.sum())} spectrum bins between {window[0]:.4g} and "
+                            f"{window[1]:.4g} Hz; need 8 to fit a resonance")
+    th, m = _fit(f[sel], p[sel], f0, q, pink)
+    spikes = p[sel] > SPIKE * m          # lines (mains, electronics): masked, refitted
+    masked = int(spikes.sum())
+    if masked:
+        sel[np.flatnonzero(sel)[spikes]] = False
+        th, m = _fit(f[sel], p[sel], math.exp(th[0]), math.exp(th[1]), pink)
+    if not window[0] < math.exp(th[0]) < window[1]:
+        raise AnalysisError(f"the fitted resonance {math.exp(th[0]):.4g} Hz lies outside the window "
+                            f"[{window[0]:.4g}, {window[1]:.4g}] Hz: no resonance found; "
+                            "give the frequency window (f_range)")
+    return th, m, sel, masked
+
+
+def _covariance(fs, ps, th, m):
+    """(covariance of theta, averages N from the scatter, mean deviance) of the Whittle fit."""
+    ratio = ps / m
+    spread = float(np.var(ratio - 1.0))
+    averages = 1.0 / spread if spread > 0 else math.inf
+    dev = float(np.mean(2.0 * (ratio - 1.0 - np.log(ratio))))
+    # Fisher information of the Whittle likelihood: N J^T J, J = d ln M / d theta
+    eps = 1e-6
+    J = np.empty((fs.size, th.size))
+    for j in range(th.size):
+        t1, t2 = th.copy(), th.copy()
+        t1[j] += eps
+        t2[j] -= eps
+        J[:, j] = (np.log(_model_at(fs, t1)) - np.log(_model_at(fs, t2))) / (2 * eps)
+    # a background term the data do not see (its derivative vanishes) is dropped from the
+    # information matrix instead of making it singular
+    seen = np.linalg.norm(J, axis=0) > 1e-6 * np.sqrt(fs.size)
+    cov = np.zeros((th.size, th.size))
+    try:
+        cov[np.ix_(seen, seen)] = np.linalg.inv(J[:, seen].T @ J[:, seen]) / averages
+    except np.linalg.LinAlgError:
+        cov[:] = np.nan
+    return cov, averages, dev
+
+
+def _lnk(th, cov) -> tuple[float, float]:
+    """(ln of the area P_dc f0 Q, its variance): ln k = const - ln P_dc - ln f0 - ln Q."""
+    g = np.zeros(th.size)
+    g[:3] = 1.0
+    return float(th[0] + th[1] + th[2]), float(g @ cov @ g)
 
 
 def _fit(f, p, f0, q, pink: bool):
@@ -275,50 +331,36 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
     f0, q = _guess(f, p, f_range)
     window = f_range if f_range else _window(f0, q, f)
     for _ in range(2 if not f_range else 1):
-        sel = (f >= window[0]) & (f <= window[1])
-        if sel.sum() < 8:
-            raise AnalysisError(f"{int(sel.sum())} spectrum bins between {window[0]:.4g} and "
-                                f"{window[1]:.4g} Hz; need 8 to fit a resonance")
-        th, m = _fit(f[sel], p[sel], f0, q, pink)
-        spikes = p[sel] > SPIKE * m          # lines (mains, electronics): masked, refitted
-        masked = int(spikes.sum())
-        if masked:
-            sel[np.flatnonzero(sel)[spikes]] = False
-            th, m = _fit(f[sel], p[sel], math.exp(th[0]), math.exp(th[1]), pink)
+        th, m, sel, masked = _fit_in(f, p, window, f0, q, pink)
         f0, q = math.exp(th[0]), math.exp(th[1])
-        if not window[0] < f0 < window[1]:
-            raise AnalysisError(f"the fitted resonance {f0:.4g} Hz lies outside the window "
-                                f"[{window[0]:.4g}, {window[1]:.4g}] Hz: no resonance found; "
-                                "give the frequency window (f_range)")
         if not f_range:
             window = _window(f0, q, f)
     fs, ps = f[sel], p[sel]
-    ratio = ps / m
-    spread = float(np.var(ratio - 1.0))
-    averages = 1.0 / spread if spread > 0 else math.inf
-    dev = float(np.mean(2.0 * (ratio - 1.0 - np.log(ratio))))
-    # Fisher information of the Whittle likelihood: N J^T J, J = d ln M / d theta
-    eps = 1e-6
-    J = np.empty((fs.size, th.size))
-    for j in range(th.size):
-        t1, t2 = th.copy(), th.copy()
-        t1[j] += eps
-        t2[j] -= eps
-        J[:, j] = (np.log(_model_at(fs, t1)) - np.log(_model_at(fs, t2))) / (2 * eps)
-    # a background term the data do not see (its derivative vanishes) is dropped from the
-    # information matrix instead of making it singular
-    seen = np.linalg.norm(J, axis=0) > 1e-6 * np.sqrt(fs.size)
-    cov = np.zeros((th.size, th.size))
-    try:
-        cov[np.ix_(seen, seen)] = np.linalg.inv(J[:, seen].T @ J[:, seen]) / averages
-    except np.linalg.LinAlgError:
-        cov[:] = np.nan
-    p_dc = math.exp(th[2])
-    area = math.pi * p_dc * f0 * q / 2.0
+    cov, averages, dev = _covariance(fs, ps, th, m)
+    ln_area, var_lnk = _lnk(th, cov)
+    # the window's influence (a lever whose resonance is not exactly a harmonic oscillator, e.g.
+    # in a liquid): refits in windows half and 1.5 times as wide; their differences beyond what
+    # the statistics of nested windows explain (var_narrow - var_wide) count as a systematic error
+    # (the same for ln f0 and ln Q)
+    systematic = np.zeros(3)                            # ln f0, ln Q, ln area
+    if not f_range:
+        for scale in (0.5, 1.5):
+            try:
+                th_s, m_s, sel_s, _ = _fit_in(f, p, _window(f0, q, f, scale), f0, q, pink)
+            except AnalysisError:
+                continue
+            cov_s = _covariance(f[sel_s], p[sel_s], th_s, m_s)[0]
+            ln_s, var_s = _lnk(th_s, cov_s)
+            d2 = np.array([(th_s[0] - th[0]) ** 2 - abs(cov_s[0, 0] - cov[0, 0]),
+                           (th_s[1] - th[1]) ** 2 - abs(cov_s[1, 1] - cov[1, 1]),
+                           (ln_s - ln_area) ** 2 - abs(var_s - var_lnk)])
+            systematic = np.maximum(systematic, d2)
+    area = math.pi * math.exp(ln_area) / 2.0
     k = spring_constant_from_area(area, T, correction)
-    g = np.zeros(th.size)
-    g[:3] = -1.0                                     # ln k = const - ln P_dc - ln f0 - ln Q
-    var_lnk = float(g @ cov @ g)
+    window_se = k * math.sqrt(systematic[2])
+    var_lnk += systematic[2]
+    cov[0, 0] += systematic[0]
+    cov[1, 1] += systematic[1]
     cos2 = math.cos(tilt) ** 2
     return ThermalFit(
         resonance_frequency=f0, resonance_frequency_se=f0 * math.sqrt(max(cov[0, 0], 0.0)),
@@ -327,6 +369,7 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
         spring_constant_normal=k / cos2, white=math.exp(th[3]),
         pink=math.exp(th[4]) if pink else 0.0, temperature=T, correction=float(correction),
         tilt=float(tilt), f_min=float(fs[0]), f_max=float(fs[-1]), n_bins=int(fs.size), masked=masked,
+        spring_constant_se_window=window_se,
         averages=float(averages), reduced_deviance=dev * averages)
 
 

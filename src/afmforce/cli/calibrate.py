@@ -55,6 +55,7 @@ def register(sub) -> None:
     add_field(t, "frequency_min", help="lowest frequency fitted (default: from the peak)")
     add_field(t, "frequency_max", help="highest frequency fitted (default: from the peak)")
     t.add_argument("--pink", action="store_true", help="fit a 1/f background term as well")
+    t.add_argument("--plot", metavar="FILE.png", default=None, help="draw the spectrum and the fit")
     t.add_argument("--psd-unit", default=None, choices=("m^2/Hz", "V^2/Hz", "m/sqrt(Hz)", "V/sqrt(Hz)"),
                    help="unit of a plain two-column text spectrum whose header does not state it")
     t.add_argument("--medium", default=None, choices=("air", "water"),
@@ -144,6 +145,8 @@ def _check_out(args) -> None:
 
 def run_thermal(args: argparse.Namespace) -> int:
     _check_out(args)
+    if args.plot:
+        check_output(args.plot, flag="--plot", force=args.force)
     from ..calibration import BUTT_JASCHKE, DEFAULT_TEMPERATURE, fit_thermal, read_spectrum
     from ..calibration.thermal import ThermalFit
 
@@ -196,6 +199,10 @@ def run_thermal(args: argparse.Namespace) -> int:
         f_range = (lo, hi)
     fit = fit_thermal(sp.frequency, sp.displacement_psd(sensitivity), temperature=temperature,
                       correction=correction, tilt=tilt, f_range=f_range, pink=args.pink)
+    if args.plot:
+        from ..plotting.calibration import write_thermal_png
+
+        write_thermal_png(sp.frequency, sp.displacement_psd(sensitivity), fit, args.plot, force=args.force)
     values = {f: getattr(fit, f) for f in ThermalFit.UNITS}
     units = dict(ThermalFit.UNITS)
     values["sensitivity"] = sensitivity
@@ -229,6 +236,10 @@ def run_thermal(args: argparse.Namespace) -> int:
         rows.append(("InvOLS", f"{sensitivity * 1e9:.5g} nm/V ({sources['sensitivity']})", ""))
     rows.append(("window fitted", f"{fit.f_min * 1e-3:.4g} - {fit.f_max * 1e-3:.4g} kHz ({fit.n_bins} bins)", ""))
     rows.append(("averages (from scatter), deviance", f"{fit.averages:.3g}, {fit.reduced_deviance:.3g}", ""))
+    if fit.spring_constant_se_window > 0.25 * fit.spring_constant_se:
+        rows.append(("k's error from the window", f"{fit.spring_constant_se_window * 1e3:.2g} mN/m (in the +-)", ""))
+    if fit.masked:
+        rows.append(("electrical lines masked", fit.masked, "bins"))
     if vendor_k:
         rows.append(("the file's k", f"{vendor_k * 1e3:.5g} mN/m (ratio {fit.spring_constant / vendor_k:.4f})", ""))
     if "spring_constant_sader" in values:
