@@ -78,3 +78,16 @@ def test_beam_spectrum_holds_both_modes():
     near = np.abs(sp.frequency - f2) < 0.02 * f2
     assert sp.frequency[-1] > f2 and sp.psd[near].max() > 5 * np.interp(0.8 * f2, sp.frequency, sp.psd)
     assert 0.99 < sp.correction < 1.0
+
+
+def test_beam_modes_are_the_dynamics_free_modes():
+    """mode_shares (scipy's generalized eigenproblem) against the closed-form 2x2 free modes of
+    afmforce.dynamics.damping that the lever damping is built on."""
+    from afmforce.dynamics.damping import free_modes
+    from afmforce.dynamics.models import beam_matrices
+
+    probe = BeamProbe(quality_factor=10.0)
+    K, M, _, out = probe_matrices(probe)
+    A, masses = beam_matrices(probe.cantilever, probe.m_joint, probe.m_base)
+    freqs, _ = mode_shares(K, M, out)
+    np.testing.assert_allclose(freqs, free_modes(A, masses) / (2 * math.pi), rtol=1e-10)
