@@ -107,7 +107,9 @@ def test_exponent_is_the_local_slope():
 def test_refusals():
     with pytest.raises(ParameterError, match="medium"):
         sader_rectangular(1e-4, 1e-5, 1e4, 10, "honey")
-    with pytest.raises(ParameterError, match="width"):
+    with pytest.raises(ParameterError, match="lever_width"):
         sader_rectangular(1e-4, -1e-5, 1e4, 10, "air")
+    with pytest.raises(ParameterError, match="quality_factor"):
+        sader_rectangular(1e-4, 1e-5, 1e4, float("nan"), "air")
     with pytest.raises(ParameterError, match="exponent"):
         general_constant(0.1, 1e4, 10, "air")

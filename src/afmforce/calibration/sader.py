@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._fields import QUANTITIES
 from ..constants import MEDIA
 from ..errors import ParameterError
 
@@ -137,10 +138,11 @@ class SaderResult:
              "density": "kg/m^3", "viscosity": "Pa s", "method": ""}
 
 
-def _positive(name, value, unit):
-    if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-        raise ParameterError(f"{name} = {value} {unit} must be a positive number")
-    return float(value)
+def _checked(name: str, value) -> float:
+    """``value`` as a float within the range :data:`afmforce._fields.QUANTITIES` declares for ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ParameterError(f"{name} = {value!r} must be a finite number")
+    return float(QUANTITIES[name].check(float(value), name))
 
 
 def sader_rectangular(length: float, width: float, resonance_frequency: float,
@@ -155,10 +157,10 @@ def sader_rectangular(length: float, width: float, resonance_frequency: float,
     quality_factor : float  Q_f there [-]
     medium : str  ``"air"`` or ``"water"`` (:data:`FLUIDS`); density, viscosity override it
     """
-    L = _positive("length", length, "m")
-    b = _positive("width", width, "m")
-    f = _positive("resonance_frequency", resonance_frequency, "Hz")
-    q = _positive("quality_factor", quality_factor, "")
+    L = _checked("lever_length", length)
+    b = _checked("lever_width", width)
+    f = _checked("resonance_frequency", resonance_frequency)
+    q = _checked("quality_factor", quality_factor)
     rho, eta = fluid(medium, density, viscosity)
     re = float(reynolds_number(f, b, rho, eta))
     g = complex(hydrodynamic_function(re))
@@ -190,15 +192,15 @@ def general_constant(spring_constant: float, resonance_frequency: float, quality
     The exponent ``a`` is given, or the local slope of the rectangular beam's ``Gamma_i`` at
     the reference's Reynolds number (which needs the lever's ``width`` [m]).
     """
-    k = _positive("spring_constant", spring_constant, "N/m")
-    f = _positive("resonance_frequency", resonance_frequency, "Hz")
-    q = _positive("quality_factor", quality_factor, "")
+    k = _checked("spring_constant", spring_constant)
+    f = _checked("resonance_frequency", resonance_frequency)
+    q = _checked("quality_factor", quality_factor)
     rho, eta = fluid(medium, density, viscosity)
     if exponent is None:
         if width is None:
             raise ParameterError("the general Sader method needs the exponent a or the lever width "
                                  "to compute it")
-        exponent = hydrodynamic_exponent(float(reynolds_number(f, _positive("width", width, "m"), rho, eta)))
+        exponent = hydrodynamic_exponent(float(reynolds_number(f, _checked("lever_width", width), rho, eta)))
     a = float(exponent)
     return GeneralConstant(k / (rho ** (1 - a) * eta**a * q * f ** (2 - a)), a)
 
@@ -207,8 +209,8 @@ def sader_general(resonance_frequency: float, quality_factor: float, constant: G
                   medium: str | None = "air", *, density: float | None = None,
                   viscosity: float | None = None) -> SaderResult:
     """Eq (3): k [N/m] of a lever of the reference's type from its f [Hz] and Q [-]."""
-    f = _positive("resonance_frequency", resonance_frequency, "Hz")
-    q = _positive("quality_factor", quality_factor, "")
+    f = _checked("resonance_frequency", resonance_frequency)
+    q = _checked("quality_factor", quality_factor)
     rho, eta = fluid(medium, density, viscosity)
     a = constant.exponent
     k = constant.constant * rho ** (1 - a) * eta**a * q * f ** (2 - a)
