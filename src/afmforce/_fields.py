@@ -259,8 +259,8 @@ QUANTITIES: dict[str, FieldSpec] = {
     "equipartition_correction": _q("dimensionless", "", "chi of k = chi kB T / <z^2> (0.817: optical "
                                    "lever, static InvOLS; 1: true displacement, one mode)", 0.0, 2.0,
                                    lo_open=True),
-    "lever_tilt": _q("angle", "rad", "tilt of the lever to the sample (k normal = k / cos^2)", 0.0,
-                     math.radians(45), display="deg"),
+    "lever_tilt": _q("angle", "rad", "tilt of the lever to the sample (k normal = k / cos^2)",
+                     -math.radians(45), math.radians(45), display="deg"),
     "frequency_min": _q("frequency", "Hz", "lowest frequency fitted", 0.0, 1e8, display="kHz"),
     "frequency_max": _q("frequency", "Hz", "highest frequency fitted", 0.0, 1e8, lo_open=True,
                         display="kHz"),

@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .._fields import QUANTITIES
 from ..errors import AnalysisError, ParameterError
 
 __all__ = ["BOLTZMANN", "DEFAULT_TEMPERATURE", "BUTT_JASCHKE", "sho_psd", "ThermalFit",
@@ -324,10 +325,10 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
     ok = np.isfinite(f) & np.isfinite(p) & (f > 0) & (p > 0)
     f, p = f[ok], p[ok]
     T = DEFAULT_TEMPERATURE if temperature is None else float(temperature)
-    if not T > 0:
-        raise ParameterError(f"temperature = {T} K must be positive")
-    if not 0 < correction <= 2:
-        raise ParameterError(f"correction = {correction} must lie in (0, 2]")
+    for name, value in (("temperature", T), ("equipartition_correction", correction), ("lever_tilt", tilt)):
+        if not math.isfinite(float(value)):
+            raise ParameterError(f"{name} = {value!r} must be a finite number")
+        QUANTITIES[name].check(float(value), name)      # the ranges declared once
     f0, q = _guess(f, p, f_range)
     window = f_range if f_range else _window(f0, q, f)
     for _ in range(2 if not f_range else 1):
