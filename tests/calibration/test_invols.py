@@ -37,3 +37,23 @@ def test_virtual_curve_gives_its_invols():
     r = measure_invols(c)
     assert r.determined and r.file_sensitivity == pytest.approx(50e-9)
     assert r.sensitivity == pytest.approx(50e-9, rel=0.02)
+
+
+def test_soft_contact_is_no_calibration():
+    """A cell (JPK CellHesion, soft; the file's 70 nm/V): the slope is the sample's, the runs
+    disagree, and the verdict says it is twice the file's InvOLS and why that may be."""
+    c = load(DATA / "jpk_cellhesion_spot3.jpk-force")[0]
+    r = measure_invols(c)
+    assert not r.determined and r.file_sensitivity == pytest.approx(70e-9, rel=1e-4)
+    assert "x the file's 70 nm/V" in r.verdict and "soft sample" in r.verdict
+
+
+def test_no_contact_is_an_analysis_error():
+    """The approach never reaches the surface: no line, a clear error (not a KeyError)."""
+    from afmforce.errors import AnalysisError
+
+    c = load(DATA / "jpk_calibration-curve_raw-volts.jpk-force")[0]
+    away = c.segment == 0
+    far = type(c)(**{**c.__dict__, "deflection_signal": np.where(away, c.deflection_signal[0], c.deflection_signal[0])})
+    with pytest.raises(AnalysisError):
+        measure_invols(far)

@@ -68,6 +68,9 @@ def measure_invols(curve, *, run: str = "approach", channel: str = "auto") -> In
         raise AnalysisError(f"run must be approach or retract, got {run!r}")
     res = analyze(curve, steps=["calibration"], options=[CalibrationOptions(source="fit", run=run)],
                   channel=channel)
+    if "compliance" not in res.details or "calibration" not in res.details:
+        why = res.not_applicable.get("compliance") or res.not_applicable.get("calibration") or "no contact"
+        raise AnalysisError(f"no constant-compliance line to calibrate on: {why}")
     comp, cal = res.details["compliance"], res.details["calibration"]
     scale = _scale(cal)
     inv = {}
@@ -91,9 +94,13 @@ def measure_invols(curve, *, run: str = "approach", channel: str = "auto") -> In
                          f"{inv['retract'] * 1e9:.4g} nm/V ({mismatch:.0%} apart): the contact is not a "
                          "constant-compliance line (a curved or sliding contact)")
     determined = not notes
+    file_s = float(curve.metadata.get("sensitivity") or math.nan)
     verdict = ("determined: " + f"{line.n_points} samples, both runs agree" if determined
                else "not determined: " + "; ".join(notes))
-    file_s = float(curve.metadata.get("sensitivity") or math.nan)
+    if math.isfinite(file_s) and abs(value / file_s - 1) > MAX_RUN_MISMATCH:
+        verdict += (f"; {value / file_s:.3g} x the file's {file_s * 1e9:.4g} nm/V (a soft sample the tip "
+                    "indents, a changed laser alignment, or a position channel that is not the tip-sample "
+                    "distance: an InvOLS needs a hard, clean surface)")
     return InvolsResult(sensitivity=float(value), sensitivity_se=float(se),
                         sensitivity_approach=float(inv["approach"]), sensitivity_retract=float(inv["retract"]),
                         n_points=int(line.n_points), run=run, file_sensitivity=file_s,
