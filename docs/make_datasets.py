@@ -6,6 +6,12 @@
   in the afmforce raw text format with the velocity and sample rate in the header;
   ``afmforce fit --example speeds`` fits them (the answer: xi ~ 0.01 kg/s, friction detected).
 * ``sweep-example.toml``: a small sweep file (``afmforce sweep --example``).
+* ``thermal-virtual-air.psd``: the thermal spectrum of a spring probe in air (k = 0.2 N/m,
+  f0 = 20 kHz, Q = 50, 295 K, 64 averages, white floor 1e-27 m^2/Hz), recorded by
+  :func:`afmforce.dynamics.thermal.thermal_spectrum` (``afmforce calibrate thermal --example virtual-air``:
+  the answer, k ~ 0.2 N/m).
+* ``thermal-jpk-water.tnd``: a copy of ``tests/data/jpk-tnd_PFQNM-water_thermal-noise_0-80kHz.tnd``
+  (real, MIT; ``afmforce calibrate thermal --example jpk-water``).
 
 Run ``python docs/make_datasets.py`` to regenerate them.
 """
@@ -45,7 +51,28 @@ def main() -> list[Path]:
         paths.append(path)
     sweep = OUT / "sweep-example.toml"
     sweep.write_text(SWEEP, encoding="utf-8")
-    return paths + [sweep]
+    return paths + [sweep] + thermal_examples()
+
+
+#: the virtual lever of ``thermal-virtual-air.psd``
+THERMAL_PROBE = dict(spring_constant=0.2, resonance_frequency=20e3, quality_factor=50.0)
+
+
+def thermal_examples() -> list[Path]:
+    import math
+    import shutil
+
+    from afmforce.calibration import write_spectrum
+    from afmforce.dynamics.parts import SpringProbe
+    from afmforce.dynamics.thermal import thermal_spectrum
+
+    k, f0, q = (THERMAL_PROBE[n] for n in ("spring_constant", "resonance_frequency", "quality_factor"))
+    probe = SpringProbe(spring_constant=k, mass=k / (2 * math.pi * f0) ** 2, quality_factor=q)
+    spectrum = thermal_spectrum(probe, temperature=295.0, averages=64, white=1e-27, seed=34, medium="air")
+    out = [write_spectrum(OUT / "thermal-virtual-air.psd", spectrum)]
+    src = Path(__file__).resolve().parents[1] / "tests" / "data" / "jpk-tnd_PFQNM-water_thermal-noise_0-80kHz.tnd"
+    shutil.copyfile(src, OUT / "thermal-jpk-water.tnd")
+    return out + [OUT / "thermal-jpk-water.tnd"]
 
 
 if __name__ == "__main__":

@@ -254,6 +254,21 @@ QUANTITIES: dict[str, FieldSpec] = {
     "jump_factor": _q("dimensionless", "", "jump-in criterion dh/dt < -factor dz/dt", hi=1e3, **_POS),
     "spike_window": _q("time", "s", "jump-in transient window (0: no spike)", 0.0, 10.0),
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
+    # probe calibration (issue 34; docs/calibration.md): thermal noise, Sader, InvOLS
+    "temperature": _q("temperature", "K", "temperature of the lever and its medium", 1.0, 1000.0),
+    "equipartition_correction": _q("dimensionless", "", "chi of k = chi kB T / <z^2> (0.817: optical "
+                                   "lever, static InvOLS; 1: true displacement, one mode)", 0.0, 2.0,
+                                   lo_open=True),
+    "lever_tilt": _q("angle", "rad", "tilt of the lever to the sample (k normal = k / cos^2)",
+                     -math.radians(45), math.radians(45), display="deg"),
+    "frequency_min": _q("frequency", "Hz", "lowest frequency fitted", 0.0, 1e8, display="kHz"),
+    "frequency_max": _q("frequency", "Hz", "highest frequency fitted", 0.0, 1e8, lo_open=True,
+                        display="kHz"),
+    "lever_length": _q("length", "m", "length L of the rectangular lever", hi=1e-3, **_POS),
+    "lever_width": _q("length", "m", "width b of the rectangular lever", hi=1e-3, **_POS),
+    "density": _q("density", "kg/m^3", "density of the medium", hi=2e4, **_POS),
+    "sader_exponent": _q("dimensionless", "", "exponent a of Gamma_i ~ Re^-a (general Sader method)",
+                         0.0, 1.0, lo_open=True),
     # analysis and diagnosis
     "resolution": _q("length", "m", "deflection resolution", hi=1e-6, **_POS),
     "separation": _q("length", "m", "separation where the force gradient is taken", hi=1e-6, **_POS),

@@ -126,7 +126,7 @@ def diagnose(*, spring_constant: float, mass: float, radius: float, velocity: fl
     mass : float
         Effective mass [kg].
     radius : float
-        Effective radius R [m].
+        The paper's R = 2 R_eff [m] (eq 2; :func:`afmforce.forces.vdw_force`).
     velocity : float
         Driving speed [m/s].
     resolution : float

@@ -48,7 +48,8 @@ def vdw_force(h: ArrayLike, radius: float, hamaker: float = HAMAKER, z0: float =
     h : array_like
         Separation [m], > 0.
     radius : float
-        Effective radius of curvature R [m].
+        The paper's R [m]: R = 2 R_eff (R_eff the Derjaguin effective radius), the radius of
+        each of two equal spheres; 2a for a sphere of radius a on a flat.
     hamaker : float
         Hamaker constant A [J].
     z0 : float
@@ -85,7 +86,8 @@ def drainage_force(h: ArrayLike, h_dot: ArrayLike, radius: float, viscosity: flo
     h_dot : array_like
         Rate of change of separation [m/s]; negative on approach.
     radius : float
-        Effective radius R [m].
+        The paper's R [m]: R = 2 R_eff (R_eff the Derjaguin effective radius); 2a for a sphere
+        of radius a on a flat.
     viscosity : float
         Fluid viscosity eta [Pa s] (air: 1.8e-5).
 
@@ -140,7 +142,7 @@ def pull_off_force_dmt(surface_energy: ArrayLike, radius: ArrayLike):
 
 
 def radius_from_jump_out(spring_constant: ArrayLike, jump_out: ArrayLike, surface_energy: float):
-    """Effective radius from a measured jump-out (pull-off) distance [m].
+    """The paper's R (= 2 R_eff) from a measured jump-out (pull-off) distance [m].
 
     JKR: ``k d_out = 3 pi gamma R / 4``, so ``R = 4 k d_out / (3 pi gamma)``
     (section 2.1: 200 nm with k = 0.21 N/m gives R = 220 nm).

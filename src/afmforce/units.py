@@ -34,6 +34,8 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "friction_per_force2": ("kg/s/N**2", "a coefficient in kg/(s N^2)"),
     "surface_energy": ("J/m**2", "an energy per area"),
     "concentration": ("mol/m**3", "a concentration (1 mM = 1 mol/m^3)"),
+    "temperature": ("K", "a temperature (K, or degC)"),
+    "density": ("kg/m**3", "a density"),
     "dimensionless": ("", "a plain number"),
 }
 
@@ -111,7 +113,9 @@ def _parse_with_pint(s: str, si: str, word: str, name: str, original) -> float:
 
     ureg = _registry()
     try:
-        q = ureg.Quantity(s)
+        m = re.match(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.+)$", s)
+        # an offset unit (25 degC) needs the number apart from its unit
+        q = ureg.Quantity(float(m.group(1)), m.group(2)) if m and si == "K" else ureg.Quantity(s)
     except (pint.errors.UndefinedUnitError, pint.errors.DefinitionSyntaxError, AttributeError,
             TypeError, ValueError, SyntaxError, KeyError, AssertionError) as exc:
         raise UnitError(f"{name} expects {word}, got {original} (unknown unit)") from exc

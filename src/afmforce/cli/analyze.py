@@ -89,6 +89,7 @@ def register(sub) -> None:
     add_field(g, "L2", help="rigid probe length")
     add_field(g, "radius", help="probe radius R (gives gamma from the pull-off, A from A R)")
     add_field(g, "resonance_frequency", help="resonance frequency (inertia diagnosis)")
+    from .calibrate import add_probe_calibration_flag; add_probe_calibration_flag(g)  # noqa: E702 (issue 34)
     add_field(g, "compliance_separation", flag="--contact-separation", dest="contact_separation",
               default_from=lambda: _default("zero", "contact_separation"),
               help="separation given to the compliance line (paper: z0; 0 also common); the same as "
@@ -174,6 +175,7 @@ def _check(args: argparse.Namespace) -> list[str] | None:
         raise ParameterError(f"no such file or folder: {', '.join(missing)}")
     steps = None if args.steps is None else [s.strip() for s in args.steps.split(",") if s.strip()]
     resolve_steps(steps)  # unknown step: ParameterError -> exit 2
+    from .calibrate import fill_from_calibration; fill_from_calibration(args, ("spring_constant", "sensitivity", "resonance_frequency"))  # noqa: E501,E702
     args.records, args.probe = _options(args)  # unknown or out-of-range option: exit 2
     if args.format is not None and args.format not in FORMATS:
         raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")

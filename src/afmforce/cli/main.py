@@ -42,6 +42,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "formats": ("formats", "list the force-curve file formats afmforce reads"),
     "fit": ("fit", "fit the dynamic model to curves at several driving speeds (friction, A*R)"),
     "plan": ("plan", "design a multi-speed measurement: speeds and sample rates that fix xi best"),
+    "calibrate": ("calibrate", "calibrate the probe: thermal noise spectrum, Sader method, InvOLS"),
     "serve": ("serve", "a local web application: analyse, simulate, fit and sweep in the browser"),
 }
 

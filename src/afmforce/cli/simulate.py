@@ -53,6 +53,7 @@ def _model_group(parser):
        dest="quality_factor")
     _q(g, "--quality-factor-2", "dimensionless", "", "Q of the beam's second free mode "
        "(default: --quality-factor)", dest="quality_factor_2")
+    from .calibrate import add_probe_calibration_flag; add_probe_calibration_flag(g, "the quality factor; the spring model also k and the mass giving f0")  # noqa: E501,E702 (issue 34)
 
 
 def _beam_group(parser):
@@ -195,6 +196,7 @@ def config_from_args(args: argparse.Namespace):
     from ..dynamics import SimulationConfig
     from ..dynamics.config import FLAT
 
+    from .calibrate import calibrated_probe; calibrated_probe(args)  # noqa: E702 (issue 34: --probe-calibration)
     overrides = {k: v for k, v in vars(args).items() if k in FLAT and v is not None}
     if getattr(args, "medium", None):
         from ..constants import MEDIA

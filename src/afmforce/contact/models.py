@@ -143,7 +143,8 @@ def dimitriadis_factor(delta: ArrayLike, radius: float, thickness: float, nu: fl
     """Finite-thickness factor of the Hertz sphere on a layer of thickness h (Dimitriadis et al. 2002, eqs 12-13).
 
     ``1 + c1 chi + c2 chi^2 + c3 chi^3 + c4 chi^4`` with ``chi = sqrt(R delta)/h``; for a layer
-    bonded to the substrate and nu = 0.5: 1.133 chi + 1.283 chi^2 + 0.769 chi^3 + 0.0975 chi^4.
+    bonded to the substrate and nu = 0.5: 1.133 chi + 1.283 chi^2 + 0.769 chi^3 - 0.0975 chi^4
+    (eq 11's sign; eq 12 prints +0.0975, docs/contact.md).
     """
     _check_nu(nu)
     c1, c2, c3, c4 = _dimitriadis_coefficients(nu, bonded)

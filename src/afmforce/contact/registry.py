@@ -64,7 +64,7 @@ _ADH = "sphere, indentation << R; w and E of one elastic half space; "
 #: The registry.
 INDENTATION_MODELS: dict[str, IndentationModel] = {m.key: m for m in (
     IndentationModel("hertz_paraboloid", "paraboloid (Hertz)", ("radius",),
-                     "indentation < the tip radius (10 % stiffer than the exact sphere at delta = R); " + _THIN,
+                     "indentation < the tip radius (11.1 % stiffer than the exact sphere at delta = R); " + _THIN,
                      "Hertz 1882; Sneddon 1965 eq 6.9", _m.hertz_paraboloid, max_depth_over_radius=1.0,
                      nanite_key="hertz_para"),
     IndentationModel("sneddon_sphere", "sphere, exact (Sneddon)", ("radius",),

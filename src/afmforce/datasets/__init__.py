@@ -20,7 +20,8 @@ from pathlib import Path
 
 from ..errors import ParameterError
 
-__all__ = ["Dataset", "DATASETS", "path", "FIT_EXAMPLES", "SWEEP_EXAMPLE", "fit_example"]
+__all__ = ["Dataset", "DATASETS", "path", "FIT_EXAMPLES", "SWEEP_EXAMPLE", "fit_example",
+           "THERMAL_EXAMPLES", "thermal_example"]
 
 _HERE = Path(__file__).resolve().parent / "data"
 
@@ -99,3 +100,27 @@ def fit_example(name: str) -> list[Path]:
         return [_HERE / f for f in FIT_EXAMPLES[name][1]]
     except KeyError:
         raise ParameterError(f"--example {name}: unknown; choose one of {', '.join(FIT_EXAMPLES)}") from None
+
+
+#: Thermal spectra for ``afmforce calibrate thermal --example NAME``: name -> (description, file).
+THERMAL_EXAMPLES: dict[str, tuple[str, str]] = {
+    "virtual-air": ("SIMULATED spring probe in air: k = 0.2 N/m, f0 = 20 kHz, Q = 50, 295 K, 64 averages "
+                    "(docs/make_datasets.py)", "thermal-virtual-air.psd"),
+    "jpk-water": ("JPK NanoWizard thermal noise data, PFQNM-LC-A lever in water at 25 C; the vendor's k "
+                  "45.88 mN/m, f 24.25 kHz, Q 2.05 (DyNaMo-INSERM/PyFMlab tests, MIT; 0-80 kHz)",
+                  "thermal-jpk-water.tnd"),
+}
+
+
+def thermal_example(name: str) -> Path:
+    """The shipped thermal spectrum of :data:`THERMAL_EXAMPLES` ``[name]``.
+
+    Raises
+    ------
+    ParameterError
+        Unknown name.
+    """
+    try:
+        return _HERE / THERMAL_EXAMPLES[name][1]
+    except KeyError:
+        raise ParameterError(f"unknown thermal example {name!r}; choose one of {', '.join(THERMAL_EXAMPLES)}") from None

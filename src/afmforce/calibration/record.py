@@ -1,0 +1,66 @@
+"""The probe calibration file (``afmforce calibrate ... --out calib.json``) and its reader.
+
+One JSON object, SI values::
+
+    {"afmforce_calibration": 1, "method": "thermal", "spring_constant": 0.0451,
+     "resonance_frequency": 25323.6, "quality_factor": 1.99, "sensitivity": 1.104e-08,
+     "temperature": 298.15, ..., "units": {"spring_constant": "N/m", ...}}
+
+``afmforce analyze --probe-calibration calib.json`` and ``afmforce simulate
+--probe-calibration calib.json`` take the probe's values from it (:func:`read_calibration`);
+a value given on the command line wins.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from pathlib import Path
+from typing import Any, Mapping
+
+from .._files import atomic_write_text
+from .._json import to_jsonable
+from ..errors import FileFormatError
+
+__all__ = ["PROBE_KEYS", "write_calibration", "read_calibration"]
+
+#: the probe values a calibration file hands on: name -> unit
+PROBE_KEYS = {"spring_constant": "N/m", "resonance_frequency": "Hz", "quality_factor": "",
+              "sensitivity": "m/V"}
+_VERSION = 1
+
+
+def write_calibration(path, method: str, values: Mapping[str, Any], units: Mapping[str, str],
+                      force: bool = True) -> Path:
+    """Write a calibration file atomically: ``values`` (SI) with their ``units``."""
+    obj = {"afmforce_calibration": _VERSION, "method": method, **to_jsonable(dict(values)),
+           "units": dict(units)}
+    return atomic_write_text(path, json.dumps(obj, indent=1, allow_nan=False) + "\n", force=force)
+
+
+def read_calibration(path) -> dict[str, float]:
+    """The probe values of a calibration file: the finite ones of :data:`PROBE_KEYS` [SI]
+    (not the sensitivity of an InvOLS marked ``"determined": false``).
+
+    Raises
+    ------
+    FileFormatError
+        Not an afmforce calibration file.
+    """
+    path = Path(path)
+    try:
+        obj = json.loads(path.read_text(encoding="utf-8"))
+    except (OSError, ValueError) as exc:
+        raise FileFormatError(f"{path}: not a readable JSON calibration file ({exc})") from None
+    if not isinstance(obj, dict) or "afmforce_calibration" not in obj:
+        raise FileFormatError(f"{path}: not an afmforce calibration file (afmforce calibrate ... --out FILE "
+                              "writes one)")
+    out = {}
+    undetermined = obj.get("determined") is False     # an InvOLS the curve did not determine
+    for key in PROBE_KEYS:
+        if undetermined and key == "sensitivity":
+            continue
+        value = obj.get(key)
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+            out[key] = float(value)
+    return out

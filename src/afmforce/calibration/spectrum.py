@@ -1,0 +1,332 @@
+"""Thermal spectra on disk: afmforce's own format and the instruments' thermal files.
+
+* **afmforce spectrum** (``.txt``/``.csv``): ``#`` header lines ``key: value [unit]`` (first
+  line ``# afmforce thermal spectrum 1``), then a header row ``frequency [Hz],psd [m^2/Hz]``
+  (or ``[V^2/Hz]``) and comma-separated rows. Written atomically (:func:`write_spectrum`).
+* **Plain text**: two numeric columns, frequency (in Hz) and the spectrum, with the unit stated in
+  a header line (``m^2/Hz``, ``V^2/Hz``, or an amplitude ``m/sqrt(Hz)``, ``V/sqrt(Hz)``, squared
+  here) or given by the caller.
+* **JPK thermal noise data** (``.tnd``, JPK/Bruker NanoWizard "Calibration manager" export):
+  ``#`` header with the vendor's calibration (``sensitivity``, ``spring constant``,
+  ``parameter.f``, ``parameter.Q``, ``settings.temperature``, ``settings.environment``,
+  ``cantilever.angle``, ``cantilever.correction factor``) and four columns ``Frequency``,
+  ``Vertical Deflection`` (the last spectrum), ``average`` (the averaged one, fitted here),
+  ``fit-data`` [V^2/Hz].
+
+The reader never modifies its input; :class:`ThermalSpectrum` keeps the spectrum in the file's
+unit and converts to m^2/Hz with the sensitivity on request.
+"""
+
+from __future__ import annotations
+
+import math
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .._files import atomic_write_text
+from ..errors import FileFormatError, MissingMetadataError, ParameterError
+
+__all__ = ["ThermalSpectrum", "read_spectrum", "write_spectrum", "SPECTRUM_SUFFIXES", "TEXT_UNITS"]
+
+_MAGIC = "# afmforce thermal spectrum 1"
+#: suffixes the thermal readers accept
+SPECTRUM_SUFFIXES = (".tnd", ".psd", ".txt", ".csv")
+
+
+@dataclass(frozen=True, eq=False)
+class ThermalSpectrum:
+    """A one-sided deflection power spectrum and what the file says about it.
+
+    Attributes
+    ----------
+    frequency : ndarray  [Hz]
+    psd : ndarray  [unit]
+    unit : str  ``"m^2/Hz"`` or ``"V^2/Hz"``
+    temperature : float or None  [K]
+    medium : str or None  ``"air"``, ``"water"``, ...
+    sensitivity : float or None  InvOLS [m/V]
+    correction : float or None  chi of equipartition stored by the file [-]
+    tilt : float or None  lever tilt [rad]
+    averages : int or None  periodograms averaged [-]
+    vendor : dict  the file's own calibration, SI (``spring_constant`` [N/m],
+        ``resonance_frequency`` [Hz], ``quality_factor`` [-], ...)
+    source : str  where it came from
+    """
+
+    frequency: np.ndarray
+    psd: np.ndarray
+    unit: str = "m^2/Hz"
+    temperature: float | None = None
+    medium: str | None = None
+    sensitivity: float | None = None
+    correction: float | None = None
+    tilt: float | None = None
+    averages: int | None = None
+    vendor: dict[str, Any] = field(default_factory=dict)
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if self.unit not in ("m^2/Hz", "V^2/Hz"):
+            raise ParameterError(f"spectrum unit {self.unit!r}: expected m^2/Hz or V^2/Hz")
+        f, p = np.asarray(self.frequency, float), np.asarray(self.psd, float)
+        if f.ndim != 1 or f.shape != p.shape or f.size < 8:
+            raise ParameterError("a thermal spectrum needs 1-D frequency and psd of one length (>= 8 bins)")
+        object.__setattr__(self, "frequency", f)
+        object.__setattr__(self, "psd", p)
+
+    def displacement_psd(self, sensitivity: float | None = None) -> np.ndarray:
+        """The PSD in m^2/Hz: as stored, or V^2/Hz times ``sensitivity^2`` (given, else the file's)."""
+        if self.unit == "m^2/Hz":
+            return self.psd
+        s = sensitivity if sensitivity is not None else self.sensitivity
+        if s is None:
+            raise MissingMetadataError("the spectrum is in V^2/Hz and carries no sensitivity (InvOLS); "
+                                       "give the sensitivity", keys=("sensitivity",))
+        return self.psd * s * s
+
+
+# -- afmforce's own format ----------------------------------------------------------------
+
+_HEADER_UNITS = {"temperature": "K", "sensitivity": "m/V", "tilt": "rad"}
+
+
+def write_spectrum(path, spectrum: ThermalSpectrum, force: bool = True) -> Path:
+    """Write ``spectrum`` in afmforce's own format, atomically; returns the path."""
+    lines = [_MAGIC, f"# unit: {spectrum.unit}"]
+    for key in ("temperature", "medium", "sensitivity", "correction", "tilt", "averages"):
+        value = getattr(spectrum, key)
+        if value is not None:
+            unit = _HEADER_UNITS.get(key, "")
+            lines.append(f"# {key}: {value!r}{' ' + unit if unit else ''}".replace("'", ""))
+    for key, value in spectrum.vendor.items():
+        lines.append(f"# vendor.{key}: {value!r}".replace("'", ""))
+    if spectrum.source:
+        lines.append(f"# source: {spectrum.source}")
+    lines.append(f"frequency [Hz],psd [{spectrum.unit}]")
+    body = "\n".join(f"{f!r},{p!r}" for f, p in zip(spectrum.frequency.tolist(), spectrum.psd.tolist()))
+    return atomic_write_text(path, "\n".join(lines) + "\n" + body + "\n", force=force)
+
+
+def _read_own(path: Path, text: str) -> ThermalSpectrum:
+    head: dict[str, str] = {}
+    rows = []
+    for n, line in enumerate(text.splitlines(), 1):
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            key, sep, value = s[1:].partition(":")
+            if sep:
+                head[key.strip()] = value.strip()
+            continue
+        if s.lower().startswith("frequency"):
+            if "[" in s:
+                unit = s.rsplit("[", 1)[1].rstrip("]").strip()
+                head.setdefault("unit", unit)
+            continue
+        try:
+            f, p = (float(x) for x in s.split(","))
+        except ValueError:
+            raise FileFormatError(f"{path}, line {n}: expected 'frequency,psd', got {s[:60]!r}") from None
+        rows.append((f, p))
+    if not rows:
+        raise FileFormatError(f"{path}: no spectrum rows")
+    data = np.array(rows)
+
+    def num(key):
+        v = head.get(key)
+        return None if v is None else float(v.split()[0])
+
+    vendor = {k[len("vendor."):]: _maybe_float(v) for k, v in head.items() if k.startswith("vendor.")}
+    averages = num("averages")
+    return ThermalSpectrum(data[:, 0], data[:, 1], unit=head.get("unit", "m^2/Hz"),
+                           temperature=num("temperature"), medium=head.get("medium"),
+                           sensitivity=num("sensitivity"), correction=num("correction"),
+                           tilt=num("tilt"), averages=None if averages is None else int(averages),
+                           vendor=vendor, source=head.get("source", str(path)))
+
+
+def _maybe_float(v: str):
+    try:
+        return float(v)
+    except ValueError:
+        return v
+
+
+# -- JPK thermal noise data (.tnd) ---------------------------------------------------------
+
+_SUPERSCRIPT = str.maketrans("⁻⁰¹²³⁴⁵⁶⁷⁸⁹", "-0123456789")
+_PREFIX = {"": 1.0, "k": 1e3, "M": 1e6, "m": 1e-3, "µ": 1e-6, "μ": 1e-6, "u": 1e-6, "n": 1e-9, "p": 1e-12,
+           "f": 1e-15}
+
+
+def _jpk_number(text: str) -> tuple[float, str]:
+    """``'4.501×10⁻¹⁰ V²/Hz'`` -> (4.501e-10, 'V²/Hz'); ``'11.0399 nm/V'`` -> (11.0399, 'nm/V')."""
+    s = text.strip().translate(_SUPERSCRIPT)
+    m = re.match(r"^([+-]?[\d.]+(?:[eE][+-]?\d+)?)(?:×10(-?\d+))?\s*(.*)$", s)
+    if not m:
+        raise ValueError(text)
+    value = float(m.group(1)) * (10.0 ** int(m.group(2)) if m.group(2) else 1.0)
+    return value, m.group(3).strip()
+
+
+def _jpk_si(text: str, base: str) -> float:
+    """A JPK header value in unit ``<prefix><base>`` -> SI."""
+    value, unit = _jpk_number(text)
+    prefix = unit[: len(unit) - len(base)] if unit.endswith(base) else None
+    if prefix is None or prefix not in _PREFIX:
+        raise ValueError(f"{text!r}: expected a value in {base}")
+    return value * _PREFIX[prefix]
+
+
+def _try(parse, text):
+    """``parse(text)``, or None for a missing or unreadable header value."""
+    if text is None:
+        return None
+    try:
+        return parse(text)
+    except ValueError:
+        return None
+
+
+def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
+    head: dict[str, str] = {}
+    rows = []
+    for n, line in enumerate(text.splitlines(), 1):
+        s = line.strip()
+        if not s:
+            continue
+        if s.startswith("#"):
+            key, sep, value = s[1:].partition(":")
+            if sep:
+                head[key.strip()] = value.strip()
+            continue
+        parts = s.split()
+        try:
+            rows.append([float(x) for x in parts[:4]])
+        except ValueError:
+            raise FileFormatError(f"{path}, line {n}: expected numbers, got {s[:60]!r}") from None
+    if "thermal noise data" not in text[:200] or not rows:
+        raise FileFormatError(f"{path}: not a JPK thermal noise data file (no '# thermal noise data' "
+                              "header or no rows)")
+    names = re.findall(r"'([^']*)'", head.get("Channels", ""))
+    data = np.array([r for r in rows if len(r) == len(rows[0])])
+    if data.shape[1] < 2:
+        raise FileFormatError(f"{path}: the rows hold one column; expected frequency and spectrum")
+    col = names.index("average") if "average" in names and names.index("average") < data.shape[1] else 1
+    units = re.findall(r"'([^']*)'", head.get("Units", ""))
+    unit = units[col].replace("²", "^2") if col < len(units) else "V^2/Hz"
+    if unit not in ("V^2/Hz", "m^2/Hz"):
+        raise FileFormatError(f"{path}: the spectrum column is in {units[col]!r}; expected V²/Hz or m²/Hz")
+    vendor: dict[str, Any] = {}
+    try:
+        sensitivity = _jpk_si(head["sensitivity"], "m/V")
+    except (KeyError, ValueError):
+        sensitivity = None
+    for key, name, base in (("spring constant", "spring_constant", "N/m"),
+                            ("parameter.f", "resonance_frequency", "Hz"),
+                            ("parameter.noise", "white", "V²/Hz")):
+        try:
+            vendor[name] = _jpk_si(head[key], base)
+        except (KeyError, ValueError):
+            pass
+    quality = _try(_jpk_number, head.get("parameter.Q"))
+    if quality is not None:
+        vendor["quality_factor"] = quality[0]
+    if sensitivity is not None:
+        vendor["sensitivity"] = sensitivity
+    temperature = None
+    t = _try(_jpk_number, head.get("settings.temperature"))
+    if t is not None:
+        temperature = t[0] + 273.15 if t[1] in ("℃", "°C", "C", "degC") else t[0]
+    c = _try(_jpk_number, head.get("cantilever.correction factor"))
+    correction = c[0] if c is not None else None
+    tilt = None
+    if "cantilever.angle" in head:   # '10° + 0.0 °': nominal angle plus the user's offset
+        degrees = [float(x) for x in re.findall(r"[-+]?\d+(?:\.\d+)?", head["cantilever.angle"])]
+        tilt = math.radians(sum(degrees)) if degrees else None
+    medium = head.get("settings.environment")
+    for key, name, base in (("settings.environment density", "density", "kg/m³"),
+                            ("settings.environment viscosity", "viscosity", "Pa·s"),
+                            ("cantilever.width", "width", "m"), ("cantilever.length", "length", "m")):
+        try:
+            vendor[name] = _jpk_si(head[key], base)
+        except (KeyError, ValueError):
+            pass
+    if "settings.method" in head:
+        vendor["method"] = head["settings.method"]
+    return ThermalSpectrum(data[:, 0], data[:, col], unit=unit, temperature=temperature,
+                           medium=medium.lower() if medium else None, sensitivity=sensitivity,
+                           correction=correction, tilt=tilt, vendor=vendor, source=str(path))
+
+
+# -- plain two-column text (any instrument's export) -----------------------------------------
+
+_UNIT_WORDS = (  # header text -> (unit of the PSD, squared: an amplitude spectral density)
+    (r"m\^?2/Hz|m²/Hz", "m^2/Hz", False), (r"V\^?2/Hz|V²/Hz", "V^2/Hz", False),
+    (r"m/(?:√|sqrt\(?)Hz", "m^2/Hz", True), (r"V/(?:√|sqrt\(?)Hz", "V^2/Hz", True))
+#: the PSD units a plain text spectrum may state (``unit=`` of :func:`read_spectrum`)
+TEXT_UNITS = ("m^2/Hz", "V^2/Hz", "m/sqrt(Hz)", "V/sqrt(Hz)")
+
+
+def _read_text(path: Path, text: str, unit: str | None) -> ThermalSpectrum:
+    """Two or more numeric columns (frequency, spectrum), any separators, header lines kept as text."""
+    header, rows = [], []
+    for line in text.splitlines():
+        parts = re.split(r"[,;\t ]+", line.strip())
+        try:
+            values = [float(x) for x in parts if x]
+        except ValueError:
+            header.append(line)
+            continue
+        if len(values) >= 2:
+            rows.append(values[:2])
+    if len(rows) < 8:
+        raise FileFormatError(f"{path}: not a thermal spectrum afmforce reads (JPK .tnd, the afmforce "
+                              "spectrum format, or two numeric columns: frequency and spectrum)")
+    data = np.array(rows)
+    head = " ".join(header)
+    squared = False
+    if unit is None:
+        for pattern, found, amp in _UNIT_WORDS:
+            m = re.search(r"(?<![A-Za-z])([pnuµμm]?)(" + pattern + ")", head)
+            if m and not m.group(1):
+                unit, squared = found, amp
+                break
+        else:
+            raise MissingMetadataError(f"{path}: two numeric columns, but the header states no spectrum "
+                                       "unit (m^2/Hz, V^2/Hz, m/sqrt(Hz) or V/sqrt(Hz)); give it (psd_unit)",
+                                       keys=("psd_unit",))
+    elif unit in ("m/sqrt(Hz)", "V/sqrt(Hz)"):
+        unit, squared = unit[0] + "^2/Hz", True
+    elif unit not in ("m^2/Hz", "V^2/Hz"):
+        raise ParameterError(f"psd_unit {unit!r}: choose one of {', '.join(TEXT_UNITS)}")
+    psd = data[:, 1] ** 2 if squared else data[:, 1]
+    return ThermalSpectrum(data[:, 0], psd, unit=unit, source=str(path))
+
+
+def read_spectrum(path, unit: str | None = None) -> ThermalSpectrum:
+    """Read a thermal spectrum: JPK ``.tnd``, afmforce's own format, or two numeric columns
+    (frequency [Hz], spectrum) whose header states the unit or ``unit`` gives it (one of
+    :data:`TEXT_UNITS`; an amplitude spectral density is squared).
+
+    Raises
+    ------
+    FileFormatError
+        None of these, or malformed rows.
+    """
+    path = Path(path)
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as exc:
+        raise FileFormatError(f"cannot read {path}: {exc.strerror or exc}") from None
+    first = text.lstrip()[:200]
+    if first.startswith(_MAGIC):
+        return _read_own(path, text)
+    if first.startswith("# thermal noise data"):
+        return _read_tnd(path, text)
+    return _read_text(path, text, unit)
