@@ -122,8 +122,9 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("bruker-nanoscope", "Bruker NanoScope binary force file (v5-v9)", (".spm", ".pfc"),
                  _lazy("nanoscope", "detect_nanoscope"), _lazy("nanoscope", "load_nanoscope"),
                  via="afmforce", deflection="V", pattern=r"\.\d{3}$",
-                 signature="first line \\*Force file list; header, then int16/int32 data",
-                 supplies=(*_CAL, "velocity", "sample_rate")),
+                 signature="first line \\*Force file list (single curves, force volumes); header, then int16/int32 "
+                           "data (\\*File list: an image, refused)",
+                 supplies=(*_CAL, "velocity", "sample_rate", "radius")),
     ReaderFormat("bruker-ascii", "Bruker NanoScope ASCII export", (".txt", ".asc", ".csv"),
                  _lazy("bruker", "detect_bruker_ascii"), _lazy("bruker", "load_bruker_ascii"),
                  via="afmforce", deflection="V, m or N",
