@@ -59,7 +59,7 @@ from ..errors import FileFormatError
 from .curve import RawCurve
 from ._meta import finalize_curve
 
-__all__ = ["load_nanoscope", "detect_nanoscope", "parse_header", "MAX_HEADER"]
+__all__ = ["load_nanoscope", "detect_nanoscope", "parse_header", "count_curves", "MAX_HEADER", "ADC_COUNTS"]
 
 #: Headers longer than this are not NanoScope force files (v9 headers are ~40-90 kB).
 MAX_HEADER = 4 * 2**20
@@ -184,6 +184,15 @@ def _grid(sections, where: str) -> tuple[int, int, float] | None:
         unit = size.strip().split()[-1] if len(size.split()) > 1 else "nm"
         width = _number(size, where, "Scan Size", 0) * _UNITS.get(unit, 1e-9)
     return int(_number(nx, where, "Samps/line")), int(_number(ny, where, "Lines")), width
+
+
+def count_curves(path: Path) -> int | None:
+    """Curves in a NanoScope force volume, from its header alone (None: a single-curve file)."""
+    path = Path(path)
+    with open(path, "rb") as fh:
+        head = fh.read(MAX_HEADER + 64)
+    grid = _grid(parse_header(head, str(path)), str(path))
+    return None if grid is None else grid[0] * grid[1]
 
 
 def _grid_point(grid, i: int) -> dict[str, Any]:
