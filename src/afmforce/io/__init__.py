@@ -128,8 +128,8 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("bruker-ascii", "Bruker NanoScope ASCII export", (".txt", ".asc", ".csv"),
                  _lazy("bruker", "detect_bruker_ascii"), _lazy("bruker", "load_bruker_ascii"),
                  via="afmforce", deflection="V, m or N",
-                 signature='\\* header lines (or "\\..." quoted: NanoScope Analysis), then tab-separated '
-                           '<Name>_<unit>_<Ex or Rt> columns',
+                 signature='\\* header lines (or "\\..." quoted: NanoScope Analysis), then tab- or comma-separated '
+                           '<Name>_<unit>_<Ex or Rt> columns (or processed Force and Separation only: force in N)',
                  supplies=(*_CAL, "velocity", "sample_rate")),
     ReaderFormat("jpk-force", "JPK force curve / force map / QI data (calibrated)",
                  (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series"),
