@@ -7,8 +7,9 @@
   the file's data scale (the real v9.2 force volume read 256 x too large reached 312-637 V).
 * A hard contact whose compliance slope is more than 10 x off the file's sensitivity: no force.
 * The stiff lever on sapphire (k = 90 N/m, shared/data/real README): the contact begins at the
-  onset of the curved region (about 20-30 nm before the turning point, not the last 7 samples), so
-  neither a +137 nN jump-in nor a +163 nN pull-off is reported, and no van der Waals fit is drawn.
+  onset of the curved region (about 20 nm before the steep compliance line, 29 nm before the turning
+  point, not the last 14 samples), so neither a +137 nN jump-in nor a +163 nN pull-off is reported
+  (the pull-off found on the curved contact is refused by name), and no van der Waals fit is drawn.
 """
 
 from __future__ import annotations
@@ -53,10 +54,13 @@ def test_sapphire_contact_at_the_curved_onset_and_no_repulsive_jumps():
     # no repulsive jump-in or pull-off reported; the reason says why and names the suspect input
     for f in (r.jump_in_force, r.pull_off_force):
         assert not f > 0
-    assert math.isnan(r.pull_off_force)
-    assert r.not_applicable["jumps"].startswith(IMPOSSIBLE) and "suspect input: the contact region" in r.verdict
-    # no van der Waals law from a curve without attraction before contact
-    assert "vdw" not in r.details and math.isnan(r.hamaker_radius)
+    assert math.isnan(r.pull_off_force) and math.isnan(r.jump_in_force)
+    assert r.not_applicable["pull_off"].startswith(IMPOSSIBLE) and "suspect input: the contact region" in r.verdict
+    assert "surface_energy" in r.not_applicable and math.isnan(r.surface_energy)
+    # the contact begins at the onset of the curved region, about 20 nm before the steep (compliance) line
+    assert 12e-9 < r.contact_onset_separation < 25e-9
+    # no van der Waals law from a curve without attraction before contact: nothing kept, nothing drawn
+    assert "vdw" not in r.details and math.isnan(r.hamaker_radius) and "A R" in r.not_applicable["vdw"]
     # the contact starts where the curved region does: 20-35 nm before the turning point, in the rise
     z = c.piezo_measured[c.approach]
     d = c.deflection_signal[c.approach]

@@ -40,7 +40,7 @@ def _check_force_volume(curves, n: int, nx: int, width: float) -> None:
         assert md["velocity"] == pytest.approx(2 * ramp * 1.01725, rel=1e-4)  # the ramp, twice per cycle
         assert md["sample_rate"] == pytest.approx(2083.33, rel=1e-4)  # Effective BW
         v = c.deflection_signal
-        assert np.abs(v).max() < ADC  # within the photodiode ADC's range
+        assert np.abs(v).max() < ADC and md["adc_range"] == pytest.approx(ADC)  # within the ADC's range
         a = v[c.approach]
         assert a.max() - np.median(a[:200]) == pytest.approx(1.2, rel=0.07)  # relative trigger 1.2 V (+ overshoot)
         assert (md["map_x"], md["map_y"], md["map_nx"], md["map_ny"]) == (i % nx, i // nx, nx, nx)

@@ -155,10 +155,11 @@ def plausibility_warnings(st: State) -> tuple[str, ...]:
 def beyond_detector(curve) -> str | None:
     """Why a curve's deflection signal [V] cannot be a photodiode's: beyond the ADC's range (None: within).
 
-    The range is the reader's ``adc_range`` metadata [V] when given, else :data:`DETECTOR_RANGE`.
+    The range is the reader's ``adc_range`` metadata [V] when given, else :data:`DETECTOR_RANGE`
+    (a simulated curve, with its truth, is checked only against a stated ``adc_range``).
     """
-    if curve.deflection_unit != "V":
-        return None
+    if curve.deflection_unit != "V" or (curve.truth is not None and "adc_range" not in curve.metadata):
+        return None  # a simulation without a stated ADC has no photodiode range
     try:
         limit = float(curve.metadata.get("adc_range", DETECTOR_RANGE))
     except (TypeError, ValueError):

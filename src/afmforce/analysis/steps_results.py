@@ -50,11 +50,18 @@ def jumps(st: State, o: JumpsOptions) -> State:
         po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
     else:
         po = find_pull_off(st.deflection, st.position, ret, noise, k, nsigma, window)
-    repulsive = _repulsive(ji, po, nsigma * noise)
-    if repulsive:  # no number: the jumps found are not there (the later steps see none)
+    tol = nsigma * noise
+    bad_in, bad_off = _repulsive(ji, None, tol), _repulsive(None, po, tol)
+    if bad_in and bad_off:  # no number: the jumps found are not there (the later steps see none)
         nan = math.nan
-        return _skip(st, "jumps", repulsive, Jumps(JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
-                                                   PullOff(False, -1, nan, nan, nan, nan, 0.0, False)))
+        return _skip(st, "jumps", _repulsive(ji, po, tol), Jumps(JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
+                                                                 PullOff(False, -1, nan, nan, nan, nan, 0.0, False)))
+    if bad_in:  # the one impossible number goes, the other stays; the reason is kept under its name
+        st = st.update(skipped={**st.skipped, "jump_in": bad_in})
+        ji = JumpIn(False, -1, *([math.nan] * 6), 0.0)
+    if bad_off:
+        st = st.update(skipped={**st.skipped, "pull_off": bad_off})
+        po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
     warn = jump_warnings(ji, po, k, clipped)
     z0 = st.details["zero"].contact_separation if "zero" in st.details else Z0
     if 0 <= ji.index < st.separation.size - 1:
@@ -67,14 +74,14 @@ def jumps(st: State, o: JumpsOptions) -> State:
     return st.update("jumps", Jumps(ji, po), warn=warn)
 
 
-def _repulsive(ji: JumpIn, po: PullOff, tolerance: float) -> str | None:
+def _repulsive(ji: JumpIn | None, po: PullOff | None, tolerance: float) -> str | None:
     """Why the jumps are physically impossible: a jump into contact or a pull-off landing at a repulsive
     (positive) deflection beyond ``tolerance`` [m]. Both are attractions (F < 0): the zero of force or the
-    contact point is misplaced (None: both plausible)."""
+    contact point is misplaced (None: both plausible, or not given)."""
     bad = []
-    if ji.found and ji.deflection_after > tolerance:
+    if ji is not None and ji.found and ji.deflection_after > tolerance:
         bad.append(f"the jump into contact lands at {ji.force_after * 1e9:+.4g} nN")
-    if po.found and po.deflection > tolerance:
+    if po is not None and po.found and po.deflection > tolerance:
         bad.append(f"the pull-off is at {po.force * 1e9:+.4g} nN")
     if not bad:
         return None
@@ -112,8 +119,8 @@ def surface_energy(st: State, o: SurfaceEnergyOptions) -> State:
         raise AnalysisError("step 'surface_energy' needs the jumps")
     if _kind(st) == "soft":
         return _skip(st, "surface_energy", "soft contact: JKR/DMT from a pull-off jump need a rigid contact")
-    if "jumps" in st.skipped:
-        return _skip(st, "surface_energy", f"no pull-off: {st.skipped['jumps']}")
+    if "jumps" in st.skipped or "pull_off" in st.skipped:
+        return _skip(st, "surface_energy", f"no pull-off: {st.skipped.get('jumps') or st.skipped['pull_off']}")
     if not j.pull_off.found:
         return _skip(st, "surface_energy", "no pull-off found")
     radius = st.probe.value("radius", st.metadata)
@@ -128,8 +135,9 @@ def vdw(st: State, o: VdwOptions) -> State:
         raise AnalysisError("step 'vdw' needs the jumps")
     if _kind(st) == "soft":
         return _skip(st, "vdw", "soft contact: the van der Waals law of eq 2 is for a rigid contact with a jump")
-    if "jumps" in st.skipped:
-        return _skip(st, "vdw", f"no jump into contact to fit before: {st.skipped['jumps']}")
+    if "jumps" in st.skipped or "jump_in" in st.skipped:
+        return _skip(st, "vdw", f"no jump into contact to fit before: "
+                                f"{st.skipped.get('jumps') or st.skipped['jump_in']}")
     radius = st.probe.value("radius", st.metadata)
     idx = st.approach.index
     ji = j.jump_in

@@ -319,7 +319,8 @@ def load_nanoscope(path: Path, *, meta_override: Mapping[str, Any] | None = None
         if not rate > 0:
             raise FileFormatError(f"{where}: no velocity and no scan rate in the header")
         v_app = v_ret = 2 * ramp_m * rate
-    meta.update(velocity=v_app, retract_velocity=v_ret, sample_rate=v_app * n_app / ramp_m)
+    meta.update(velocity=v_app, retract_velocity=v_ret, sample_rate=v_app * n_app / ramp_m,
+                adc_range=ADC_COUNTS * d_vlsb)  # [V]: the deflection channel's 16-bit ADC
     dt_app, dt_ret = ramp_m / (v_app * n_app), ramp_m / (v_ret * n_ret)
     time = np.concatenate([dt_app * np.arange(n_app), dt_app * n_app + dt_ret * np.arange(n_ret)])
     z_app = np.linspace(0.0, ramp_m, n_app, endpoint=False) + ramp_m / n_app  # towards the sample
