@@ -141,10 +141,6 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
     far, near = order[:k], order[k:]
     # contrast test: the contact line must rise well above the baseline noise
     own = float(mad_sigma(np.diff(sr[far])) / np.sqrt(2.0)) if far.size > 2 else 0.0
-    if own == 0 and far.size > 2:  # a quiet signal on a coarse ADC: its noise is the quantisation's
-        steps = np.abs(np.diff(sr[far]))
-        steps = steps[steps > 0]
-        own = float(steps.min() / np.sqrt(12.0)) if steps.size else 0.0
     sigma = own if noise is None or not np.isfinite(noise) else min(own, float(noise))
     span = np.ptp(sr[near]) if near.size else 0.0
     if not (span > min_contrast * max(sigma, 1e-300)) or near.size < min_points:
@@ -168,7 +164,11 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
     if compliance.sum() < min_points:
         compliance[near] = True
     if kind == "approach":  # a curved (repulsive) contact onset the two lines left on the free side
-        onset = _repulsive_onset(zr, sr, far, zero_force, split, max(own, 1e-300))
+        sigma = own
+        if not sigma > 0:  # a quiet signal on a coarse ADC: the quantisation's noise (step / sqrt 12)
+            steps = np.abs(np.diff(sr[far]))
+            sigma = float(steps[steps > 0].min() / np.sqrt(12.0)) if np.any(steps > 0) else 1e-300
+        onset = _repulsive_onset(zr, sr, far, zero_force, split, sigma)
         if onset < split:
             contact[far[far >= onset]] = True
             zero_force[far[far >= onset]] = False
@@ -181,6 +181,10 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
 #: contact already: a repulsive, curved contact onset (a stiff lever on a hard sample, issue 32: about
 #: 200 sigma there), not a baseline bent by fringes or drift (a few sigma: the paper's Fig 7 runs).
 ONSET_NSIGMA = 10.0
+#: ... and only when that curved onset spans at most this many times the steep contact's own position
+#: travel (the sapphire lever: 14 nm before 15 nm); a rise over much longer (the JPK calibration curve:
+#: 0.93 um before 0.24 um) is left to the contact kind (a slow rise, a soft or long-range contact).
+MAX_ONSET_RATIO = 2.0
 
 
 def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
@@ -189,7 +193,8 @@ def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
     The baseline is the robust line through the zero-force samples. When the last free samples before
     the split lie more than :data:`ONSET_NSIGMA` noise sigmas above it (a force that is already
     repulsive: no attractive jump ends the free branch), the contact begins where the signal last
-    crossed the baseline before them: the onset of the curved region, not the start of its steep part.
+    crossed the baseline before them: the onset of the curved region, not the start of its steep part
+    (when it spans at most :data:`MAX_ONSET_RATIO` times the steep part's position travel).
     """
     base = far[zero_force[far]]
     if base.size < 3 or split < 1 or far.size < 3:
@@ -205,7 +210,11 @@ def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
     below = np.flatnonzero(res <= 0)
     if below.size == 0:
         return split
-    return int(free[below[-1] + 1])
+    onset = int(free[below[-1] + 1])
+    steep = float(np.ptp(zr[split:])) if split < zr.size else 0.0
+    if abs(float(zr[split] - zr[onset])) > MAX_ONSET_RATIO * steep:  # a slow rise, not a curved onset
+        return split
+    return onset
 
 
 def _slope(z: np.ndarray, s: np.ndarray) -> float:

@@ -42,6 +42,10 @@ def jumps(st: State, o: JumpsOptions) -> State:
                      Jumps(JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
                            PullOff(False, -1, nan, nan, nan, nan, 0.0, False)))
     noise = abs(st.noise * st.factor)
+    if not noise > 0:  # a quiet signal on a coarse ADC: its noise is the quantisation's, not zero
+        steps = np.abs(np.diff(np.asarray(st.curve.deflection_signal, float)))  # as recorded: ADC steps
+        steps = steps[steps > 0]
+        noise = float(steps.min()) * abs(st.factor) / math.sqrt(12.0) if steps.size else noise
     k = st.spring_constant
     ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window)
     ret = st.retract
