@@ -128,8 +128,10 @@ def test_damaged_files_are_named(tmp_path):
     nohead.write_bytes(data[: data.find(b"\\*File list end")])
     with pytest.raises(FileFormatError, match="nohead.spm"):
         load(nohead)
-    with pytest.raises(FileFormatError, match="not a NanoScope force file"):
+    with pytest.raises(FileFormatError, match="image file.*not a force file"):
         parse_header(b"\\*File list\r\n\\*File list end\r\n", "x")
+    with pytest.raises(FileFormatError, match="not a NanoScope force file"):
+        parse_header(b"\\*Scanner list\r\n\\*File list end\r\n", "x")
 
 
 # --- NanoScope ASCII exports as NanoScope Analysis writes them (issue 14 item 2) -------------------

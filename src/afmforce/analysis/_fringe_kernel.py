@@ -69,6 +69,8 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
         P = P0 * math.exp(q[0])
     a2 = q[1] if n_map >= 1 else 0.0
     a3 = q[2] if n_map >= 2 else 0.0
+    if not (P > 0.0 and P < math.inf):  # exp(q) under- or overflowed: a trial step far off, rejected
+        return math.inf
     w = 2.0 * math.pi / P
     cs = np.empty(n)
     sn = np.empty(n)
@@ -103,6 +105,8 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
     A00 += reg
     A11 += reg
     det = A00 * A11 - A01 * A01
+    if not det > 0.0:  # cos and sin collinear to rounding (underflow): no amplitude to solve for
+        return math.inf
     i00, i01, i11 = A11 / det, -A01 / det, A00 / det
     c0 = i00 * b0 + i01 * b1
     c1c = i01 * b0 + i11 * b1
@@ -155,6 +159,8 @@ def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, fto
     J = np.empty((n, m))
     empty = np.empty((0, m))
     cost = vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, True)
+    if not cost < math.inf:  # no fit at the start (see vp_eval)
+        return q, cost, 1
     nfev = 1
     lam = 1e-3
     resn = np.empty(n)

@@ -31,7 +31,7 @@ from .contact_point import CONTACT_POINT_METHODS
 from .indentation import indentation
 from .liquid_step import liquid
 from .options_text import show_default
-from .plausibility import plausibility_warnings
+from .plausibility import beyond_detector, impossible_reasons, impossible_steps, plausibility_warnings
 from .result import AnalysisResult
 from .state import NoContact, State, prepare
 from ..errors import ParameterError
@@ -257,6 +257,9 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
     order = resolve_steps(steps)
     opts, probe = resolve_options(options, probe)
     st = prepare(curve, channel, probe)
+    misread = beyond_detector(curve)
+    if misread:  # no photodiode gives this signal: every number from it would be impossible
+        return _refused(st, tuple(order), misread)
     for name in order:
         try:
             st = STEPS[name].func(st, opts[name])
@@ -293,8 +296,25 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
         not_applicable={s: "no contact reached" for s in order if s not in ("smooth", "contact")})
 
 
+def _refused(st: State, order: tuple[str, ...], why: str) -> AnalysisResult:
+    """The result of a curve whose signal itself is impossible: no step's number, the reason as the verdict."""
+    nan = st.z * math.nan
+    md = st.metadata
+    return AnalysisResult(
+        source=str(md.get("source_file", "")), steps_run=(), deflection_unit=st.unit, position_channel=st.channel,
+        contact_kind="none", contact_kind_reason=why,
+        sensitivity=float(st.probe.value("sensitivity", md) or math.nan),
+        spring_constant=float(st.probe.value("spring_constant", md) or math.nan), verdict=why,
+        warnings=st.warnings + (why,), time=st.time, position=st.z, separation=nan, deflection=nan, force=nan,
+        segment=st.curve.segment.astype("int8"), not_applicable={s: why for s in order})
+
+
 def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
     st = st.update(warn=plausibility_warnings(st))
+    bad = impossible_steps(st)
+    if bad:  # numbers no physics allows are not results: the steps say why, their details are dropped
+        st = st.update(skipped={**st.skipped, **bad},
+                       details={k: v for k, v in st.details.items() if k not in bad or k == "jumps"})
     d = st.details
     nan = math.nan
     kw: dict[str, Any] = {}
@@ -357,6 +377,9 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
                   surface_potential_se=q.surface_potential_se, debye_length=q.debye_length,
                   debye_length_se=q.debye_length_se, dlvo_hamaker=q.hamaker, dlvo_hamaker_se=q.hamaker_se)
     kw["not_applicable"] = dict(st.skipped)
+    impossible = impossible_reasons(st.skipped)
+    if impossible:  # the verdict says first why numbers are missing, naming the suspect input
+        kw["verdict"] = "; ".join(impossible + ([kw["verdict"]] if kw.get("verdict") else []))
     full = lambda a: a if a is not None else st.z * nan  # noqa: E731
     return AnalysisResult(
         source=str(st.metadata.get("source_file", "")), steps_run=order, deflection_unit=st.unit,

@@ -23,7 +23,20 @@ import numpy as np
 from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
-           "MIN_COMPLIANCE_SAMPLES"]
+           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
+           "beyond_detector", "impossible_steps", "impossible_reasons"]
+
+#: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
+#: the verdict repeats every such reason, each naming the suspect input.
+IMPOSSIBLE = "physically impossible"
+#: The widest photodiode ADC of the instruments read [V]: a 16-bit NanoScope channel at 0.375 mV/LSB
+#: (+-12.3 V; JPK and Asylum digitise +-10 V). A reader may give its own as metadata ``adc_range`` [V].
+DETECTOR_RANGE = 2**15 * 0.000375
+#: A hard contact's compliance slope and the file's sensitivity may differ by at most this factor [-]:
+#: beyond it one of them is wrong (a stale or mistyped sensitivity, a file read with a wrong scale).
+MAX_CALIBRATION_RATIO = 10.0
+#: Steps whose numbers are forces or come from them (not reported when the calibration is impossible).
+FORCE_STEPS = ("jumps", "adhesion", "surface_energy", "vdw", "indentation")
 
 #: Hamaker constants of condensed media across vacuum, air or water [J].
 HAMAKER_RANGE = (1e-21, 1e-18)
@@ -137,3 +150,57 @@ def plausibility_warnings(st: State) -> tuple[str, ...]:
     for check in (_hamaker, _spring_constant, _sensitivity, _contact_slopes, _span):
         out.extend(check(st))
     return tuple(w for w in out if w not in st.warnings)
+
+
+def beyond_detector(curve) -> str | None:
+    """Why a curve's deflection signal [V] cannot be a photodiode's: beyond the ADC's range (None: within).
+
+    The range is the reader's ``adc_range`` metadata [V] when given, else :data:`DETECTOR_RANGE`
+    (a simulated curve, with its truth, is checked only against a stated ``adc_range``).
+    """
+    if curve.deflection_unit != "V" or (curve.truth is not None and "adc_range" not in curve.metadata):
+        return None  # a simulation without a stated ADC has no photodiode range
+    try:
+        limit = float(curve.metadata.get("adc_range", DETECTOR_RANGE))
+    except (TypeError, ValueError):
+        limit = DETECTOR_RANGE
+    signal = np.asarray(curve.deflection_signal, float)
+    peak = float(np.nanmax(np.abs(signal))) if signal.size else 0.0
+    if not peak > 1.01 * limit:
+        return None
+    reader = curve.metadata.get("reader", "the reader")
+    return (f"{IMPOSSIBLE}: the deflection signal reaches {peak:.4g} V, beyond the photodiode ADC's range "
+            f"(+-{limit:.3g} V): the file is read with a wrong scale, or damaged; no force can come from it; "
+            f"suspect input: the file's data scale (reader {reader})")
+
+
+def impossible_steps(st: State) -> dict[str, str]:
+    """``{step: reason}`` of the steps whose numbers would be physically impossible on this curve.
+
+    A hard contact whose compliance slope gives a sensitivity more than :data:`MAX_CALIBRATION_RATIO`
+    times off the file's (or the user's): one of the two is wrong, so no force is a result
+    (:data:`FORCE_STEPS`), even when the pipeline recalibrated from the slope: a realigned laser moves the
+    sensitivity by tens of per cent, not ten times. A soft contact's slope is the sample's, not the lever's,
+    and ``calibration.source=fit`` says the user wants the slope's: neither is checked.
+    """
+    cal, kind = st.details.get("calibration"), st.details.get("kind")
+    if cal is None or st.unit != "V" or (kind is not None and kind.kind != "hard") or \
+            getattr(cal, "requested", "") == "fit":  # the user asked for the slope's calibration, not the file's
+        return {}
+    given = st.probe.value("sensitivity", st.metadata)
+    fit = getattr(cal, "factor_fit", math.nan)
+    try:
+        ratio = float(fit) / float(given)
+    except (TypeError, ValueError, ZeroDivisionError):
+        return {}
+    if not math.isfinite(ratio) or ratio <= 0 or 1 / MAX_CALIBRATION_RATIO <= ratio <= MAX_CALIBRATION_RATIO:
+        return {}
+    why = (f"{IMPOSSIBLE}: on this hard contact the compliance slope gives a sensitivity {ratio:.3g} x the file's "
+           f"{float(given) * 1e9:.4g} nm/V (more than {MAX_CALIBRATION_RATIO:g} x off): the file's sensitivity is "
+           "stale or mistyped, or the file is read with a wrong scale; suspect input: sensitivity")
+    return {step: why for step in FORCE_STEPS if step in st.details or step in st.skipped}
+
+
+def impossible_reasons(skipped) -> list[str]:
+    """The distinct physically-impossible reasons among a result's ``not_applicable`` (for the verdict)."""
+    return list(dict.fromkeys(r for r in dict(skipped).values() if str(r).startswith(IMPOSSIBLE)))

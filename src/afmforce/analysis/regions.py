@@ -163,8 +163,58 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
     compliance[near[keep]] = True
     if compliance.sum() < min_points:
         compliance[near] = True
+    if kind == "approach":  # a curved (repulsive) contact onset the two lines left on the free side
+        sigma = own
+        if not sigma > 0:  # a quiet signal on a coarse ADC: the quantisation's noise (step / sqrt 12)
+            steps = np.abs(np.diff(sr[far]))
+            sigma = float(steps[steps > 0].min() / np.sqrt(12.0)) if np.any(steps > 0) else 1e-300
+        onset = _repulsive_onset(zr, sr, far, zero_force, split, sigma)
+        if onset < split:
+            contact[far[far >= onset]] = True
+            zero_force[far[far >= onset]] = False
+            split = onset
     return RunRegions(kind=kind, index=index, split=split, contact=contact, zero_force=zero_force,
                       compliance=compliance, saturated=sat, noise=own)
+
+
+#: Samples before the two lines' split lying this many noise sigmas above the baseline line are in
+#: contact already: a repulsive, curved contact onset (a stiff lever on a hard sample, issue 32: about
+#: 200 sigma there), not a baseline bent by fringes or drift (a few sigma: the paper's Fig 7 runs).
+ONSET_NSIGMA = 10.0
+#: ... and only when that curved onset spans at most this many times the steep contact's own position
+#: travel (the sapphire lever: 14 nm before 15 nm); a rise over much longer (the JPK calibration curve:
+#: 0.93 um before 0.24 um) is left to the contact kind (a slow rise, a soft or long-range contact).
+MAX_ONSET_RATIO = 2.0
+
+
+def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
+    """First sample of a repulsive contact onset before ``split`` on the approach (``split`` if none).
+
+    The baseline is the robust line through the zero-force samples. When the last free samples before
+    the split lie more than :data:`ONSET_NSIGMA` noise sigmas above it (a force that is already
+    repulsive: no attractive jump ends the free branch), the contact begins where the signal last
+    crossed the baseline before them: the onset of the curved region, not the start of its steep part
+    (when it spans at most :data:`MAX_ONSET_RATIO` times the steep part's position travel).
+    """
+    base = far[zero_force[far]]
+    if base.size < 3 or split < 1 or far.size < 3:
+        return split
+    x0 = float(zr[base].mean())
+    a, b, *_ = robust_line_thin(zr[base] - x0, sr[base])
+    if not (np.isfinite(a) and np.isfinite(b)):
+        return split
+    free = np.sort(far[far < split])
+    res = sr[free] - (a + b * (zr[free] - x0))
+    if free.size == 0 or free[-1] != split - 1 or not res[-1] > ONSET_NSIGMA * sigma:
+        return split
+    below = np.flatnonzero(res <= 0)
+    if below.size == 0:
+        return split
+    onset = int(free[below[-1] + 1])
+    steep = float(np.ptp(zr[split:])) if split < zr.size else 0.0
+    if abs(float(zr[split] - zr[onset])) > MAX_ONSET_RATIO * steep:  # a slow rise, not a curved onset
+        return split
+    return onset
 
 
 def _slope(z: np.ndarray, s: np.ndarray) -> float:

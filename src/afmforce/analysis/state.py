@@ -156,7 +156,9 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
         if run_indices(seg, which).size == 0:
             raise AnalysisError(f"the curve has no {word} segment (one segment only); the analysis needs "
                                 "both runs: split the curve at its turning point")
+    processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
     return State(curve=curve, time=t, z=z, signal=s, unit=curve.deflection_unit,
                  channel="measured" if use_measured else "nominal",
                  time_known=not bool(curve.metadata.get("time_is_sample_index", False)),
-                 probe=probe if probe is not None else ProbeCalibration())
+                 probe=probe if probe is not None else ProbeCalibration(),
+                 warnings=(f"read as a processed export: {processed}",) if processed else ())

@@ -18,6 +18,7 @@ from .jumps import JumpIn, Jumps, PullOff, adhesion, find_jump_in, find_pull_off
 from .options import (AdhesionOptions, DiagnosisOptions, FrictionOptions, JumpsOptions, OscillationOptions,
                       SurfaceEnergyOptions, VdwOptions)
 from .oscillation import OscillationResult, both_runs, find_peak
+from .plausibility import IMPOSSIBLE
 from .state import State
 from .unbinding import retract_adhesion
 from .vdw import fit_vdw
@@ -41,6 +42,10 @@ def jumps(st: State, o: JumpsOptions) -> State:
                      Jumps(JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
                            PullOff(False, -1, nan, nan, nan, nan, 0.0, False)))
     noise = abs(st.noise * st.factor)
+    if not noise > 0:  # a quiet signal on a coarse ADC: its noise is the quantisation's, not zero
+        steps = np.abs(np.diff(np.asarray(st.curve.deflection_signal, float)))  # as recorded: ADC steps
+        steps = steps[steps > 0]
+        noise = float(steps.min()) * abs(st.factor) / math.sqrt(12.0) if steps.size else noise
     k = st.spring_constant
     ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window)
     ret = st.retract
@@ -49,6 +54,18 @@ def jumps(st: State, o: JumpsOptions) -> State:
         po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
     else:
         po = find_pull_off(st.deflection, st.position, ret, noise, k, nsigma, window)
+    tol = nsigma * noise
+    bad_in, bad_off = _repulsive(ji, None, tol), _repulsive(None, po, tol)
+    if bad_in and bad_off:  # no number: the jumps found are not there (the later steps see none)
+        nan = math.nan
+        return _skip(st, "jumps", _repulsive(ji, po, tol), Jumps(JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0),
+                                                                 PullOff(False, -1, nan, nan, nan, nan, 0.0, False)))
+    if bad_in:  # the one impossible number goes, the other stays; the reason is kept under its name
+        st = st.update(skipped={**st.skipped, "jump_in": bad_in})
+        ji = JumpIn(False, -1, *([math.nan] * 6), 0.0)
+    if bad_off:
+        st = st.update(skipped={**st.skipped, "pull_off": bad_off})
+        po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
     warn = jump_warnings(ji, po, k, clipped)
     z0 = st.details["zero"].contact_separation if "zero" in st.details else Z0
     if 0 <= ji.index < st.separation.size - 1:
@@ -59,6 +76,22 @@ def jumps(st: State, o: JumpsOptions) -> State:
                         "nonlinear contact, or a line displaced by friction or hysteresis (dynamic run); "
                         "separations near contact are uncertain by about that much")
     return st.update("jumps", Jumps(ji, po), warn=warn)
+
+
+def _repulsive(ji: JumpIn | None, po: PullOff | None, tolerance: float) -> str | None:
+    """Why the jumps are physically impossible: a jump into contact or a pull-off landing at a repulsive
+    (positive) deflection beyond ``tolerance`` [m]. Both are attractions (F < 0): the zero of force or the
+    contact point is misplaced (None: both plausible, or not given)."""
+    bad = []
+    if ji is not None and ji.found and ji.deflection_after > tolerance:
+        bad.append(f"the jump into contact lands at {ji.force_after * 1e9:+.4g} nN")
+    if po is not None and po.found and po.deflection > tolerance:
+        bad.append(f"the pull-off is at {po.force * 1e9:+.4g} nN")
+    if not bad:
+        return None
+    return (f"{IMPOSSIBLE}: {' and '.join(bad)}, repulsive, where both are attractions (F < 0, the lever bent "
+            "towards the surface): the zero of force or the contact point is misplaced (a curved contact onset "
+            "taken for the free branch, a baseline fitted in contact); suspect input: the contact region")
 
 
 def adhesion_step(st: State, o: AdhesionOptions) -> State:
@@ -90,6 +123,8 @@ def surface_energy(st: State, o: SurfaceEnergyOptions) -> State:
         raise AnalysisError("step 'surface_energy' needs the jumps")
     if _kind(st) == "soft":
         return _skip(st, "surface_energy", "soft contact: JKR/DMT from a pull-off jump need a rigid contact")
+    if "jumps" in st.skipped or "pull_off" in st.skipped:
+        return _skip(st, "surface_energy", f"no pull-off: {st.skipped.get('jumps') or st.skipped['pull_off']}")
     if not j.pull_off.found:
         return _skip(st, "surface_energy", "no pull-off found")
     radius = st.probe.value("radius", st.metadata)
@@ -104,6 +139,9 @@ def vdw(st: State, o: VdwOptions) -> State:
         raise AnalysisError("step 'vdw' needs the jumps")
     if _kind(st) == "soft":
         return _skip(st, "vdw", "soft contact: the van der Waals law of eq 2 is for a rigid contact with a jump")
+    if "jumps" in st.skipped or "jump_in" in st.skipped:
+        return _skip(st, "vdw", f"no jump into contact to fit before: "
+                                f"{st.skipped.get('jumps') or st.skipped['jump_in']}")
     radius = st.probe.value("radius", st.metadata)
     idx = st.approach.index
     ji = j.jump_in
@@ -112,6 +150,9 @@ def vdw(st: State, o: VdwOptions) -> State:
     res = fit_vdw(st.separation[pre], st.force[pre], spring_constant=st.spring_constant, radius=radius, z0=o.z0,
                   max_separation=o.max_separation, baseline=o.baseline,
                   fit_separation_offset=bool(o.fit_separation_offset))
+    if math.isfinite(res.hamaker_radius) and not res.hamaker_radius > 0:  # a repulsion: no vdW law to draw
+        return _skip(st, "vdw", f"no attraction before contact (fitted A R = {res.hamaker_radius:.3g} J m <= 0): "
+                                "no van der Waals law to report or draw")
     warn = None if res.status == "ok" else f"van der Waals fit: {res.status}"
     return st.update("vdw", res, warn=warn)
 

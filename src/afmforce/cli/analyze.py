@@ -272,11 +272,14 @@ def run(args: argparse.Namespace) -> int:
 
 
 def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
-    from ..sweep.files import failures, summary_table, write_summary
+    from ..sweep.files import summary_table, write_summary
+    from ..sweep.summary import failure_records
+    from ._outcome import RunState
 
     table = summary_table(result, with_json=args.json)
     ok = table[table["error"].isna()]
-    failed = failures(result)
+    records = failure_records(result)
+    failed = [(r["source"], r["error"]) for r in records]
     written = {}
     if folder is not None:
         written = write_summary(result, folder)
@@ -302,10 +305,12 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
                       "(delete that folder to recompute)")
         if written:
             print(f"summary in {folder}/: " + ", ".join(p.name for p in written.values()))
-    for name, error in failed[:_MAX_LISTED if batch else None]:  # one line per failed file or curve
-        error = " ".join(_clean(error).split())
+    for record in records[:_MAX_LISTED if batch else None]:  # one line per failed file or curve
+        name, error = record["source"], " ".join(_clean(record["error"]).split())
         named = error.split(": ", 1)[0].endswith(name.split("#")[0])  # the message starts with the path
         eprint(f"failed: {error}" if named else f"failed: {name}: {error}")
+        if RunState.debug and record["traceback"]:  # --debug: where it failed, in a batch too
+            eprint(record["traceback"].rstrip())
     if len(failed) > 1:
         if batch and len(failed) > _MAX_LISTED:
             eprint(f"  ... and {len(failed) - _MAX_LISTED} more" + (f" (all in {written['errors']})"

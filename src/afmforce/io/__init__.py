@@ -29,7 +29,7 @@ from .curve import RawCurve
 from . import native
 from ._meta import METADATA, check_meta_override, require_metadata
 
-__all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA",
+__all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA", "refusal",
            "supported_suffixes", "is_supported", "require_metadata", "formats_markdown"]
 
 Loader = Callable[..., list]
@@ -122,13 +122,14 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("bruker-nanoscope", "Bruker NanoScope binary force file (v5-v9)", (".spm", ".pfc"),
                  _lazy("nanoscope", "detect_nanoscope"), _lazy("nanoscope", "load_nanoscope"),
                  via="afmforce", deflection="V", pattern=r"\.\d{3}$",
-                 signature="first line \\*Force file list; header, then int16/int32 data",
-                 supplies=(*_CAL, "velocity", "sample_rate")),
+                 signature="first line \\*Force file list (single curves, force volumes); header, then int16/int32 "
+                           "data (\\*File list: an image, refused)",
+                 supplies=(*_CAL, "velocity", "sample_rate", "radius")),
     ReaderFormat("bruker-ascii", "Bruker NanoScope ASCII export", (".txt", ".asc", ".csv"),
                  _lazy("bruker", "detect_bruker_ascii"), _lazy("bruker", "load_bruker_ascii"),
                  via="afmforce", deflection="V, m or N",
-                 signature='\\* header lines (or "\\..." quoted: NanoScope Analysis), then tab-separated '
-                           '<Name>_<unit>_<Ex or Rt> columns',
+                 signature='\\* header lines (or "\\..." quoted: NanoScope Analysis), then tab- or comma-separated '
+                           '<Name>_<unit>_<Ex or Rt> columns (or processed Force and Separation only: force in N)',
                  supplies=(*_CAL, "velocity", "sample_rate")),
     ReaderFormat("jpk-txt", "JPK Data Processing text export", (".txt", ".out", ".tsv"),
                  _lazy("jpk_text", "detect_jpk_text"), _lazy("jpk_text", "load_jpk_text"),
@@ -214,7 +215,9 @@ def _find_format(path: Path) -> ReaderFormat:
         except Exception:  # a detector must never crash the search
             continue
     raise FileFormatError(
-        f"{path}: content not recognised as any of: {', '.join(f.name for f in candidates)}")
+        f"{path}: content not recognised as any of: {', '.join(f.name for f in candidates)}; if it is one of "
+        f"them, name its reader (command line --format ID, Python load(..., format=ID); IDs: "
+        f"{', '.join(f.identifier for f in candidates)}): its reader then says what it finds wrong")
 
 
 def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
@@ -300,18 +303,67 @@ def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
         fmt = find_format(path)
     try:
         curves = fmt.loader(path, meta_override=meta, callback=callback)
+    except FileFormatError as exc:
+        if type(exc) is not FileFormatError:  # missing metadata, time budget: already say what to do
+            raise
+        raise FileFormatError(_named(str(exc), path, fmt, chosen=format is not None)) from None
     except (AfmforceError, KeyboardInterrupt, SystemExit, GeneratorExit):
         raise
     except MemoryError:
         raise FileFormatError(f"{path}: too large or damaged (out of memory while reading)") from None
     except BaseException as exc:  # third-party parsers raise anything (afmformats: BaseException subclasses)
-        text = str(exc) if len(str(exc)) <= 200 else str(exc)[:200] + "..."
-        raise FileFormatError(f"{path}: cannot read as {fmt.name} ({type(exc).__name__}: {text})") from None
+        raise FileFormatError(refusal(path, fmt, exc, chosen=format is not None)) from None
     if not curves:
         raise FileFormatError(f"{path}: no force curve in the file")
     for curve in curves:
         require_metadata(curve, tuple(require), str(path))
     return curves
+
+
+def _unexpected(exc: BaseException) -> str:
+    """What a reader found unexpected, in words (never the bare upstream text)."""
+    text = " ".join(str(exc).split())
+    text = text if len(text) <= 160 else text[:160] + "..."
+    if isinstance(exc, KeyError):
+        return f"the file lacks the entry {text} that the reader looks up"
+    if isinstance(exc, (ValueError, TypeError, IndexError, EOFError, UnicodeError)) or \
+            type(exc).__name__ in ("error", "BadZipFile", "StructError"):
+        return f"the content is not laid out as the reader expects ({type(exc).__name__}: {text or 'no detail'})"
+    return f"the reader stopped on {type(exc).__name__}: {text or 'no detail'}"
+
+
+def _others(path: str | Path, fmt: ReaderFormat) -> list[ReaderFormat]:
+    return [f for f in FORMATS.values() if f is not fmt and f.claims(Path(path).name)]
+
+
+def _named(message: str, path: str | Path, fmt: ReaderFormat, *, chosen: bool) -> str:
+    """A reader's own refusal, with which reader it was and the other readers of the file's ending."""
+    how = "chosen with format" if chosen else "detected from the content"
+    others = [f.identifier for f in _others(path, fmt)]
+    tail = f" (reader '{fmt.identifier}', {how}"
+    if others:
+        tail += (f"; other readers of this ending: command line --format ID, Python load(..., format=ID), ID one "
+                 f"of {', '.join(repr(o) for o in others)}")
+    return message.rstrip(". ") + tail + ")"
+
+
+def refusal(path: str | Path, fmt: ReaderFormat, exc: BaseException, *, chosen: bool = False) -> str:
+    """The message of a file a reader could not read: which reader tried (and whether it was chosen with
+    ``format``), what it found unexpected, and what to do (another reader of the same ending; metadata
+    the file lacks given as ``meta_override``; a report with the file)."""
+    how = "chosen with format" if chosen else "detected from the content"
+    out = [f"{path}: the {fmt.name} reader ('{fmt.identifier}', {how}, via {fmt.via}) could not read it: "
+           f"{_unexpected(exc)}"]
+    others = _others(path, fmt)
+    todo = []
+    if others:
+        todo.append("try another reader of this ending (command line --format ID, Python load(..., format=ID): "
+                    + ", ".join(f"'{f.identifier}' ({f.name})" for f in others) + ")")
+    if isinstance(exc, KeyError):
+        todo.append("if the entry is metadata afmforce knows, give it (command line --meta KEY=VALUE, "
+                    f"Python meta_override={{KEY: VALUE}}; keys: {', '.join(sorted(METADATA))})")
+    todo.append("if the file is valid, report it to afmforce with the file attached")
+    return out[0] + "; " + "; ".join(todo)
 
 
 def formats_table() -> list[dict[str, str]]:

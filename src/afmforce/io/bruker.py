@@ -37,7 +37,13 @@ Conventions chosen here (documented because exports differ between versions):
   ``\Scan rate`` (ramps per second), else the sample index
   (``time_is_sample_index``); ``velocity`` from the slope of the first run's
   position against time;
-* an export of the extend run only gives a curve without a retract.
+* an export of the extend run only gives a curve without a retract;
+* comma-separated tables may quote their cells; a blank line after every line (CR CR LF read as
+  text) is read; of several ``\Spring Constant`` lines (a whole NanoScope header) the one of the
+  list whose ``Image Data`` is the deflection counts (others may be stale);
+* a processed export with only ``Force`` and ``Separation`` columns (NanoScope Analysis' "force vs
+  separation") is read as such: the force in N (no spring constant or sensitivity needed), the
+  position ``-separation``, ``metadata["processed"]`` saying so.
 """
 
 from __future__ import annotations
@@ -81,7 +87,9 @@ _RUNS = {"ex": "Ex", "extend": "Ex", "approach": "Ex", "trace": "Ex", "rt": "Rt"
 #: Column base names seen in NanoScope versions -> the name this reader uses.
 _BASES = {"defl": "Defl", "deflection": "Defl", "deflectionerror": "Defl", "verticaldeflection": "Defl",
           "calcramp": "Calc_Ramp", "ramp": "Calc_Ramp", "z": "Calc_Ramp", "zramp": "Calc_Ramp",
-          "heightsensor": "Height_Sensor", "pfzsensor": "PF_Z_Sensor", "zsensor": "ZSensor", "time": "Time"}
+          "heightsensor": "Height_Sensor", "pfzsensor": "PF_Z_Sensor", "zsensor": "ZSensor", "time": "Time",
+          "force": "Force", "calcforce": "Force", "separation": "Separation", "tipsampleseparation": "Separation",
+          "calcseparation": "Separation"}
 
 
 def parse_column_name(name: str) -> tuple[str, str, str] | None:
@@ -141,13 +149,23 @@ def _header_value(header: dict[str, str], key: str) -> float | None:
 def _parse(text: str, where: str):
     lines = text.splitlines()
     header: dict[str, str] = {}
+    sections: list[dict[str, str]] = [{}]
     i = 0
     while i < len(lines) and (lines[i].startswith("\\") or not lines[i].strip()):
         line = lines[i][1:]
-        if not line.startswith("*") and ":" in line:
+        if line.startswith("*"):
+            sections.append({})
+        elif ":" in line:
             key, value = line.split(":", 1)
-            header[key.strip().lstrip("@").strip()] = value.strip()
+            key = key.strip().lstrip("@").strip()
+            header[key] = value.strip()
+            entry = re.match(r"^@?((?:\d+:)?[^:]*):\s*(.*)$", line)  # \@4:Image Data: ... -> "4:Image Data"
+            if entry is not None:
+                sections[-1].setdefault(entry.group(1).strip(), entry.group(2).strip())
         i += 1
+    k = _deflection_list_value(sections, "Spring Constant")
+    if k is not None:  # the deflection channel's list: other channels' lists may hold stale values
+        header["Spring Constant"] = k
     while i < len(lines) and not lines[i].strip():
         i += 1
     if i >= len(lines):
@@ -158,7 +176,7 @@ def _parse(text: str, where: str):
     for j, line in enumerate(lines[i + 1:], start=i + 2):
         if not line.strip():
             continue
-        cells = line.rstrip("\r\n").split(sep)
+        cells = [c.strip().strip('"') for c in line.rstrip("\r\n").split(sep)]  # CSV: cells may be quoted
         while len(cells) > len(names) and not cells[-1].strip():  # trailing tabs
             cells.pop()
         if len(cells) > len(names):
@@ -171,6 +189,15 @@ def _parse(text: str, where: str):
     if len(rows) < 2:
         raise FileFormatError(f"{where}: fewer than two data rows")
     return header, names, np.array(rows, dtype=float)
+
+
+def _deflection_list_value(sections: list[dict[str, str]], key: str) -> str | None:
+    """``key`` of the header list whose image data is the deflection (else None)."""
+    for entries in sections:
+        data = next((v for k, v in entries.items() if k.split(":")[-1].strip().lower() == "image data"), "")
+        if key in entries and "defl" in data.lower():
+            return entries[key]
+    return None
 
 
 def _column(table: dict, bases: tuple[str, ...], run: str, units: tuple[str, ...] | None = None):
@@ -264,8 +291,11 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
             base, unit, run = parsed
             table.setdefault((canonical_base(base), unit, run), data[:, k])  # a duplicate: the first wins
     present = tuple(r for r in ("Ex", "Rt") if any(key[2] == r and key[0] == "Defl" for key in table))
+    if not present and any(key[0] == "Force" for key in table):
+        return _force_separation(table, header, where, source, meta_override)
     if not present:
-        raise FileFormatError(f"{where}: no deflection column (Defl_V_Ex, Defl_nm_Rt, Defl_pN_Ex, ...)")
+        raise FileFormatError(f"{where}: no deflection column (Defl_V_Ex, Defl_nm_Rt, Defl_pN_Ex, ...), and no "
+                              "processed Force and Separation columns (Force_nN_Ex, Separation_nm_Ex, ...)")
     if present == ("Rt",):
         raise FileFormatError(f"{where}: only retract (_Rt) columns; export the extend (_Ex) run too")
     unit_in, unit_out = _deflection_unit(table, where, present)
@@ -327,4 +357,59 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
     curve = RawCurve(time=time, piezo_nominal=zn, piezo_measured=zm,
                      deflection_signal=np.concatenate([c["defl"] for c in parts]), segment=seg,
                      metadata=meta, deflection_unit=unit_out)
+    return finalize_curve(curve, where)
+
+
+def _force_separation(table: dict, header: dict[str, str], where: str, source: str, meta_override) -> RawCurve:
+    """A processed export: force [N] against tip-sample separation (NanoScope Analysis' "Force vs Separation").
+
+    The force needs neither spring constant nor sensitivity (``deflection_unit`` N). The separation is
+    the only position: it is the position channel, oriented to increase towards the sample (``-h``),
+    and the metadata say so (``processed``, ``position_is_separation``): a compliance line is vertical
+    in it, and separations need no zero of their own.
+    """
+    runs = {}
+    for run in ("Ex", "Rt"):
+        force, _ = _column(table, ("Force",), run, ("pN", "nN", "N"))
+        sep, _ = _column(table, ("Separation",), run, ("nm", "um", "µm", "m"))
+        if force is None:
+            continue
+        if sep is None:
+            raise FileFormatError(f"{where}: a Force column for run {run} without its Separation column")
+        t, _ = _column(table, ("Time",), run, ("s", "ms"))
+        cols = {"defl": _trim(force, where, f"Force_{run}"), "zn": _trim(-sep, where, f"Separation_{run}"), "zm": None,
+                "t": None if t is None else _trim(t, where, f"Time_{run}")}
+        if len(cols["zn"]) != len(cols["defl"]) or (cols["t"] is not None and len(cols["t"]) != len(cols["defl"])):
+            raise FileFormatError(f"{where}: columns of run {run} have different lengths")
+        runs[run] = cols
+    if "Ex" not in runs:
+        raise FileFormatError(f"{where}: only retract (_Rt) force columns; export the extend (_Ex) run too")
+    for run, cols in runs.items():
+        if _reversed(run, cols, runs):
+            runs[run] = {k: (None if v is None else v[::-1].copy()) for k, v in cols.items()}
+    parts = list(runs.values())
+    seg = np.concatenate([np.full(len(c["defl"]), 0 if r == "Ex" else 1, np.int8) for r, c in runs.items()])
+    meta: dict[str, Any] = {"processed": "force vs separation (NanoScope Analysis): force in N, position = "
+                                         "-separation; no spring constant or sensitivity needed",
+                            "position_is_separation": True}
+    for key, name in (("Spring Constant", "spring_constant"), ("Sens. DeflSens", "sensitivity")):
+        value = _header_value(header, key)
+        if value and value > 0:
+            meta[name] = value * (1e-9 if name == "sensitivity" else 1.0)
+    n = len(seg)
+    if all(c["t"] is not None for c in parts):
+        time = np.concatenate([c["t"] for c in parts])
+    else:
+        rate = _header_value(header, "Scan rate")
+        time = np.arange(n, dtype=float) / (rate * n * (2 if len(parts) == 1 else 1)) if rate and rate > 0 \
+            else np.arange(n, dtype=float)
+        meta["time_is_sample_index"] = not (rate and rate > 0)
+    if not meta.get("time_is_sample_index") and np.all(np.diff(time) > 0):
+        meta["sample_rate"] = 1.0 / float(np.median(np.diff(time)))
+    meta.update(dict(meta_override or {}))
+    meta.update(source_file=source, reader="bruker-ascii", position_sign=-1.0,
+                format="Bruker NanoScope ASCII export (processed force vs separation)")
+    curve = RawCurve(time=time, piezo_nominal=np.concatenate([c["zn"] for c in parts]),
+                     deflection_signal=np.concatenate([c["defl"] for c in parts]), segment=seg, metadata=meta,
+                     deflection_unit="N")
     return finalize_curve(curve, where)

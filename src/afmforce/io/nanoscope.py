@@ -22,19 +22,33 @@ A NanoScope file (versions 5 to 9) is a text header followed by binary data::
 
 Each channel holds, per curve, the approach then the retract as little-endian
 integers of ``Data length / (curves x points)`` bytes (2, or 4 from version 9 on,
-whatever ``Bytes/pixel`` says); value [V] = integer x the channel's ``V/LSB``;
-deflection [m] = value x DeflSens. Both runs are indexed from the turning point
+whatever ``Bytes/pixel`` says: the sample width comes from the data length and the
+number of curves); value [V] = integer x the channel's ``V/LSB``; deflection [m] =
+value x DeflSens. The ``V/LSB`` is that of the 16-bit ADC: 4-byte samples beyond its
+range whose low bits carry nothing (v9 force volumes: every value a multiple of 256,
+or one less for negatives) are those 16-bit numbers shifted, and are shifted back; a
+signal still beyond the ADC's range is refused rather than read 256 x too large.
+
+A force volume (``\Start context: FVOL``) holds ``Samps/line x Lines`` curves of
+the ``\*Ciao scan list`` (one grid point each, row by row from the first line);
+each curve carries its grid indices (``map_x``, ``map_y``, ``map_nx``, ``map_ny``)
+and its position (``position_x``, ``position_y`` [m]: the grid point's centre in
+the ``Scan Size`` square). The spring constant is the deflection channel's (other
+channels' lists may hold stale values). Image files (first line ``\*File list``)
+are refused by name: they hold no force curve. Both runs are indexed from the turning point
 (the piezo's extended end): the approach is reversed into time order. Z is the
 nominal ramp (``Ramp Size`` [V] x Zsens, evenly spaced), or the Z-sensor channel
 (``ZSensor``, value x ZsensSens) when recorded. Time comes from the ramp size and
 the forward/reverse velocities, else from the scan rate.
 
-The reader returns the deflection in volts with ``sensitivity`` = DeflSens and
-``spring_constant`` from the header (the user's ``meta_override`` wins).
+The reader returns the deflection in volts with ``sensitivity`` = DeflSens,
+``spring_constant`` and ``radius`` (``\Tip Radius`` [nm]) from the header (the user's
+``meta_override`` wins).
 """
 
 from __future__ import annotations
 
+import math
 import re
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -45,7 +59,7 @@ from ..errors import FileFormatError
 from .curve import RawCurve
 from ._meta import finalize_curve
 
-__all__ = ["load_nanoscope", "detect_nanoscope", "parse_header", "MAX_HEADER"]
+__all__ = ["load_nanoscope", "detect_nanoscope", "parse_header", "count_curves", "MAX_HEADER", "ADC_COUNTS"]
 
 #: Headers longer than this are not NanoScope force files (v9 headers are ~40-90 kB).
 MAX_HEADER = 4 * 2**20
@@ -57,13 +71,15 @@ _UNITS = {"nm": 1e-9, "um": 1e-6, "µm": 1e-6, "m": 1.0, "pm": 1e-12, "V": 1.0, 
 
 
 def detect_nanoscope(path: Path) -> bool:
-    r"""True if the file starts with ``\*Force file list`` (a NanoScope force file)."""
+    r"""True if the file starts with ``\*Force file list`` (a NanoScope force file) or ``\*File list``
+    (a NanoScope image: accepted here so that the reader refuses it by name)."""
     try:
         with open(path, "rb") as fh:
             head = fh.read(64)
     except OSError:
         return False
-    return head.lstrip(b"\"\xef\xbb\xbf").startswith(b"\\*Force file list")
+    head = head.lstrip(b"\"\xef\xbb\xbf")
+    return head.startswith(b"\\*Force file list") or head.startswith(b"\\*File list")  # images: refused by name
 
 
 def parse_header(data: bytes, where: str) -> list[tuple[str, dict[str, str]]]:
@@ -82,6 +98,11 @@ def parse_header(data: bytes, where: str) -> list[tuple[str, dict[str, str]]]:
             sections.append((line[2:].strip(), {}))
         elif sections and (m := _ENTRY.match(line)) is not None:
             sections[-1][1].setdefault(m.group(1).strip(), m.group(2).strip())
+    if sections and sections[0][0].lower() == "file list":
+        raise FileFormatError(
+            f"{where}: a Bruker NanoScope image file (first line '\\*File list'), not a force file: it holds "
+            "images, no force curve; export the force curves from NanoScope as a force file ('\\*Force file "
+            "list', .spm/.pfc/.000) or as NanoScope Analysis text")
     if not sections or sections[0][0].lower() != "force file list":
         raise FileFormatError(f"{where}: not a NanoScope force file (no '\\*Force file list')")
     return sections
@@ -143,6 +164,89 @@ def _channel_name(entries: dict[str, str]) -> str:
     return m.group(1) if m else text.strip().strip('"')
 
 
+
+#: The ADC's range in the units of a channel's ``V/LSB`` (16-bit signed numbers).
+ADC_COUNTS = 2**15
+
+
+def _grid(sections, where: str) -> tuple[int, int, float] | None:
+    r"""``(nx, ny, scan size [m])`` of a force volume (``\Start context: FVOL``); None for single curves."""
+    if (_find(sections[:1], "Start context") or "").strip().upper() != "FVOL":
+        return None
+    nx = _find(sections, "Samps/line", "Ciao scan list")
+    ny = _find(sections, "Lines", "Ciao scan list")
+    if nx is None or ny is None:
+        raise FileFormatError(f"{where}: NanoScope force volume without 'Samps/line' and 'Lines' in its "
+                              "'\\*Ciao scan list': the grid of curves is unknown")
+    size = _find(sections, "Scan Size", "Ciao scan list")
+    width = math.nan
+    if size is not None and re.search(_NUMBER, size):
+        unit = size.strip().split()[-1] if len(size.split()) > 1 else "nm"
+        width = _number(size, where, "Scan Size", 0) * _UNITS.get(unit, 1e-9)
+    return int(_number(nx, where, "Samps/line")), int(_number(ny, where, "Lines")), width
+
+
+def count_curves(path: Path) -> int | None:
+    """Curves in a NanoScope force volume, from its header alone (None: a single-curve file)."""
+    path = Path(path)
+    with open(path, "rb") as fh:
+        head = fh.read(MAX_HEADER + 64)
+    grid = _grid(parse_header(head, str(path)), str(path))
+    return None if grid is None else grid[0] * grid[1]
+
+
+def _grid_point(grid, i: int) -> dict[str, Any]:
+    """Grid indices (row by row) and the position [m] of curve ``i`` of a force volume."""
+    if grid is None:
+        return {}
+    nx, ny, width = grid
+    x, y = i % nx, i // nx
+    out: dict[str, Any] = {"map_x": x, "map_y": y, "map_nx": nx, "map_ny": ny}
+    if math.isfinite(width) and width > 0:
+        out.update(map_width=width, map_height=width * ny / nx, position_x=(x + 0.5) * width / nx,
+                   position_y=(y + 0.5) * width / nx)
+    return out
+
+
+def _sample_width(length: int, per: int, n_curves: int, entries: Mapping[str, str], where: str) -> int:
+    """Bytes per sample: from the data length and the number of curves (the header's ``Bytes/pixel``
+    is 2 in v9 files whose data are 4-byte integers)."""
+    said = entries.get("Bytes/pixel")
+    said_bpp = int(_number(said, where, "Bytes/pixel")) if said is not None else None
+    if length % (per * n_curves) == 0 and length // (per * n_curves) in (2, 4):
+        return length // (per * n_curves)
+    for bpp in (said_bpp, 4, 2):  # curves of unknown number: the header's width first
+        if bpp in (2, 4) and length % (per * bpp) == 0:
+            return bpp
+    raise FileFormatError(f"{where}: channel length {length} bytes is not a whole number of curves of {per} "
+                          f"points ({n_curves} curve(s) expected) in 2- or 4-byte samples; damaged file")
+
+
+def _adc_counts(ints: np.ndarray, bpp: int, channel: str, where: str) -> np.ndarray:
+    """The samples in 16-bit ADC counts (the unit of the channel's ``V/LSB``).
+
+    4-byte samples beyond the 16-bit range whose low 8 (or 16) bits carry nothing (all 0, or all 1
+    for negatives: an arithmetic shift) are those counts shifted; they are shifted back. Samples
+    still beyond the range are refused: read with the 16-bit scale they would put the signal
+    far outside what the photodiode's ADC can give (a v9 force volume read so: approach 312 V).
+    """
+    values = ints.astype(float)
+    if bpp == 2 or not values.size or np.abs(values).max() <= ADC_COUNTS:
+        return values
+    for shift in (16, 8):
+        low = ints & ((1 << shift) - 1)
+        if np.all((low == 0) | (low == (1 << shift) - 1)):
+            values = values / float(1 << shift)
+            break
+    peak = np.abs(values).max()
+    if peak > ADC_COUNTS:
+        raise FileFormatError(
+            f"{where}: channel {channel!r} holds 4-byte samples up to {peak:.0f} counts, beyond the 16-bit ADC "
+            f"range ({ADC_COUNTS}) its V/LSB scale is for, and their low bits carry data: the scale of this "
+            "NanoScope version is not known to afmforce; export the curves as NanoScope Analysis text")
+    return values
+
+
 def load_nanoscope(path: Path, *, meta_override: Mapping[str, Any] | None = None,
                    callback: Callable | None = None) -> list[RawCurve]:
     """Read every force curve of a NanoScope binary force file (see module docstring)."""
@@ -164,22 +268,19 @@ def load_nanoscope(path: Path, *, meta_override: Mapping[str, Any] | None = None
     defl = next((c for c in chans if "defl" in _channel_name(c).lower()), chans[0])
     zsen = next((c for c in chans if _channel_name(c).lower() in ("zsensor", "height sensor", "heightsensor")), None)
 
+    grid = _grid(sections, where)
+    n_curves = grid[0] * grid[1] if grid is not None else 1
+
     def read(entries) -> tuple[np.ndarray, float, float]:
         offset = int(_number(entries.get("Data offset"), where, "Data offset"))
         length = int(_number(entries.get("Data length"), where, "Data length"))
-        per = n_app + n_ret
         if length <= 0 or offset < 0 or offset + length > len(data):
             raise FileFormatError(f"{where}: channel data ({length} bytes at {offset}) lies outside the file "
                                   f"({len(data)} bytes); truncated or damaged")
-        for bpp in (4, 2):
-            if length % (per * bpp) == 0:
-                break
-        else:
-            raise FileFormatError(f"{where}: channel length {length} bytes is not a whole number of curves "
-                                  f"of {per} points")
-        ints = np.frombuffer(data, dtype=f"<i{bpp}", count=length // bpp, offset=offset).astype(float)
+        bpp = _sample_width(length, n_app + n_ret, n_curves, entries, where)
+        ints = np.frombuffer(data, dtype=f"<i{bpp}", count=length // bpp, offset=offset)
         vlsb, sens, _ = _channel_scale(entries, sections, where)
-        return ints.reshape(-1, per), vlsb, sens
+        return _adc_counts(ints, bpp, _channel_name(entries), where).reshape(-1, n_app + n_ret), vlsb, sens
 
     d_ints, d_vlsb, defl_sens = read(defl)
     z_ints = None
@@ -189,12 +290,15 @@ def load_nanoscope(path: Path, *, meta_override: Mapping[str, Any] | None = None
             z_ints = None
     meta: dict[str, Any] = {"instrument": _find(sections, "Microscope") or "Bruker NanoScope",
                             "nanoscope_version": _find(sections, "Version") or ""}
-    k = _find(sections, "Spring Constant")
+    k = _find([("", defl)], "Spring Constant") or _find(sections, "Spring Constant")  # the deflection's list
     if k is not None and _number(k, where, "Spring Constant") > 0:
         meta["spring_constant"] = _number(k, where, "Spring Constant")
     sens = _sens(sections, "DeflSens") or _sens(sections, "Deflection")
     if sens is not None and sens[0] > 0:
         meta["sensitivity"] = sens[0] * 1e-9  # [nm/V]
+    tip = _find(sections, "Tip Radius", "Ciao scan list")  # [nm], as typed into NanoScope
+    if tip is not None and re.search(_NUMBER, tip) and _number(tip, where, "Tip Radius", 0) > 0:
+        meta["radius"] = _number(tip, where, "Tip Radius", 0) * 1e-9
     corr = _find(sections, "Deflection Sensitivity Correction")
     if corr is not None:
         meta["nanoscope_deflection_sensitivity_correction"] = _number(corr, where, "Deflection Sensitivity Correction")
@@ -215,7 +319,8 @@ def load_nanoscope(path: Path, *, meta_override: Mapping[str, Any] | None = None
         if not rate > 0:
             raise FileFormatError(f"{where}: no velocity and no scan rate in the header")
         v_app = v_ret = 2 * ramp_m * rate
-    meta.update(velocity=v_app, retract_velocity=v_ret, sample_rate=v_app * n_app / ramp_m)
+    meta.update(velocity=v_app, retract_velocity=v_ret, sample_rate=v_app * n_app / ramp_m,
+                adc_range=ADC_COUNTS * d_vlsb)  # [V]: the deflection channel's 16-bit ADC
     dt_app, dt_ret = ramp_m / (v_app * n_app), ramp_m / (v_ret * n_ret)
     time = np.concatenate([dt_app * np.arange(n_app), dt_app * n_app + dt_ret * np.arange(n_ret)])
     z_app = np.linspace(0.0, ramp_m, n_app, endpoint=False) + ramp_m / n_app  # towards the sample
@@ -236,8 +341,8 @@ def load_nanoscope(path: Path, *, meta_override: Mapping[str, Any] | None = None
                 zm = -zm
         curve = RawCurve(time=time, piezo_nominal=np.concatenate([z_app, z_ret]), piezo_measured=zm,
                          deflection_signal=signal, segment=seg,
-                         metadata={**meta, "curve_index": i} if len(d_ints) > 1 else dict(meta),
-                         deflection_unit="V")
+                         metadata={**meta, "curve_index": i, **_grid_point(grid, i)} if len(d_ints) > 1
+                         else dict(meta), deflection_unit="V")
         out.append(finalize_curve(curve, where))
         if callback is not None:
             callback((i + 1) / len(d_ints))

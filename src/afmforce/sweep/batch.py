@@ -12,6 +12,8 @@ import hashlib
 import itertools
 import math
 import os
+import sys
+import traceback
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
@@ -20,7 +22,7 @@ from ..progress import Progress
 from .chunks import _check_errors, _error_text, _func_name, _open_store, execute, flatten
 from .results import BatchResult
 
-__all__ = ["run_batch", "batch_key"]
+__all__ = ["run_batch", "batch_key", "error_record"]
 
 
 def _item_chunk(func: Callable, start: int, items: list, labels: list[str], record_errors: bool):
@@ -33,14 +35,22 @@ def _item_chunk(func: Callable, start: int, items: list, labels: list[str], reco
         try:
             out = func(item)
             records = out if isinstance(out, (list, tuple)) else [out]
-            flat = [dict(flatten(r), error=None) for r in records]
+            flat = [{"error": None, **flatten(r)} for r in records]  # a record may carry its own error
         except Exception as exc:
             if not record_errors:
                 raise
-            flat = [{"error": _error_text(exc)}]
+            flat = [error_record(exc)]
         for k, r in enumerate(flat):
             rows.append({**base, "record": k, **r})
     return pd.DataFrame(rows)
+
+
+def error_record(exc: BaseException) -> dict[str, str]:
+    """The columns of a failed item's (or curve's) row: ``error`` (``Type: message``), ``error_type``
+    (the exception's class name) and ``traceback`` (shown with ``--debug``)."""
+    return {"error": _error_text(exc), "error_type": type(exc).__name__,
+            "traceback": traceback.format_exc() if exc is sys.exc_info()[1] else
+            "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))}
 
 
 def _default_label(item: Any, index: int) -> str:
@@ -73,7 +83,10 @@ def run_batch(items: Iterable, func: Callable[[Any], Any], *, chunk_size: int | 
     curve of a map file); each becomes a row with ``item`` (position in
     ``items``), ``source`` (``label(item, position)``: the path by default),
     ``record`` (position in the list) and ``error`` (None, or the error the
-    call raised: that item gets one row and the batch goes on).
+    call raised: that item gets one row and the batch goes on; ``error_type`` and
+    ``traceback`` beside it). A record may carry its own ``error`` (and
+    ``error_type``, ``traceback``: :func:`error_record`): one failed curve of a
+    file's many, the others kept.
 
     ``items`` may be a generator: it is consumed chunk by chunk and never held
     whole, and finished chunks go to the store (when given) as they arrive. A

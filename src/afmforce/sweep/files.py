@@ -28,7 +28,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 from .._files import atomic_path, atomic_write_text
 from ..errors import FileFormatError, OutputExistsError
-from .batch import run_batch
+from .batch import error_record, run_batch
 from .results import BatchResult
 from .summary import SUMMARY_COLUMNS, SUMMARY_UNITS, failures, summary_row, summary_table, write_summary
 
@@ -79,6 +79,10 @@ def _count_curves(path: Path, fmt) -> int | None:
         from afmformats.formats.fmt_jpk.jpk_reader import JPKReader
 
         return len(JPKReader(path))
+    if fmt.identifier == "bruker-nanoscope":  # a force volume: its grid, from the header alone
+        from ..io.nanoscope import count_curves
+
+        return count_curves(path)
     return None
 
 
@@ -158,8 +162,10 @@ class CurveAnalysis:
     """The function a batch runs on each item: load, :func:`~afmforce.analysis.pipeline.analyze`, summarise.
 
     Picklable (Dask workers run it). Returns one summary row per curve of the
-    item; a curve that cannot be read or analysed raises, and the batch records
-    the error under the item's name.
+    item; an item that cannot be read, or whose one curve cannot be analysed,
+    raises, and the batch records the error under the item's name. Of an item of
+    several curves (a file read whole), a curve that fails gives its own error row
+    (``error``, ``error_type``, ``traceback``) and every other curve's row is kept.
 
     Attributes
     ----------
@@ -239,33 +245,44 @@ class CurveAnalysis:
         return [(ref.index, curves[ref.index])]
 
     def __call__(self, ref: CurveRef) -> list[dict[str, Any]]:
-        from ..analysis.pipeline import analyze
-
         pairs = self.load(ref)
         several = ref.index is not None or len(pairs) > 1
         base = Path(ref.path).name
         rows = []
         for index, curve in pairs:
-            stem = f"{base}_{index:04d}" if several else base
-            if self.out is not None and not self.force:
-                row = self.finished(stem)
-                if row is not None:  # a rerun resumes: this curve's outputs are complete
-                    rows.append(row)
-                    continue
-                if self.foreign(stem):
-                    raise OutputExistsError(
-                        f"{self._paths(stem)['json']} holds another analysis (other steps, options or "
-                        "metadata); choose another --out, or pass --force to replace it")
-            res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
-                          channel=self.channel)
-            row = summary_row(res, curve, file=ref.path, index=index,
-                              name=f"{base}#{index}" if several else base)
-            if self.keep_json:
-                row["json"] = res.to_json(indent=None, arrays=self.json_arrays)
-            if self.out is not None:
-                self.write_outputs(res, curve, stem, row)
-            rows.append(row)
+            if len(pairs) == 1:  # the item is this curve: its failure is the item's (the batch records it)
+                rows.append(self.analyze_curve(ref, index, curve, several))
+                continue
+            try:  # one of a file's many curves: its failure is its own row, the others are kept
+                rows.append(self.analyze_curve(ref, index, curve, several))
+            except OutputExistsError:
+                raise
+            except Exception as exc:
+                rows.append({"name": f"{base}#{index}", "file": ref.path, "curve": int(index), **error_record(exc)})
         return rows
+
+    def analyze_curve(self, ref: CurveRef, index: int, curve, several: bool) -> dict[str, Any]:
+        """The summary row of one curve of the item (its outputs written, or read back when complete)."""
+        from ..analysis.pipeline import analyze
+
+        base = Path(ref.path).name
+        stem = f"{base}_{index:04d}" if several else base
+        if self.out is not None and not self.force:
+            row = self.finished(stem)
+            if row is not None:  # a rerun resumes: this curve's outputs are complete
+                return row
+            if self.foreign(stem):
+                raise OutputExistsError(
+                    f"{self._paths(stem)['json']} holds another analysis (other steps, options or "
+                    "metadata); choose another --out, or pass --force to replace it")
+        res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
+                      channel=self.channel)
+        row = summary_row(res, curve, file=ref.path, index=index, name=f"{base}#{index}" if several else base)
+        if self.keep_json:
+            row["json"] = res.to_json(indent=None, arrays=self.json_arrays)
+        if self.out is not None:
+            self.write_outputs(res, curve, stem, row)
+        return row
 
     def _settings(self) -> str:
         fields = {k: v for k, v in self.key_fields().items() if k != "json"}

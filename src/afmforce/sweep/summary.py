@@ -18,7 +18,8 @@ from typing import Any, Mapping
 from .._files import atomic_path
 from .results import BatchResult
 
-__all__ = ["SUMMARY_COLUMNS", "SUMMARY_UNITS", "summary_row", "summary_table", "write_summary", "failures"]
+__all__ = ["SUMMARY_COLUMNS", "SUMMARY_UNITS", "ERROR_COLUMNS", "summary_row", "summary_table", "write_summary",
+           "failures", "failure_records"]
 
 #: Result fields copied into the summary (floats, SI).
 _FLOATS = ("sensitivity_used", "sensitivity", "sensitivity_fit", "spring_constant", "adhesion_force", "adhesion_distance",
@@ -40,6 +41,7 @@ SUMMARY_COLUMNS: dict[str, str] = {
     "deflection_unit": "str", "calibration_source": "str",
     **{name: "float" for name in _FLOATS + _OSC},
     "contact_kind": "str", "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str", "error": "str",
+    "error_type": "str",
 }
 
 
@@ -149,7 +151,7 @@ def _csv_header() -> list[str]:
 def write_summary(result: BatchResult, folder: str | os.PathLike) -> dict[str, Path]:
     """Stream the batch's rows into ``summary.parquet`` (units in the schema metadata
     key ``afmforce.units``) and ``summary.csv`` (units in the header), a chunk at a
-    time, plus ``errors.csv`` (items that failed, with their error) when any did.
+    time, plus ``errors.csv`` (items and curves that failed: :data:`ERROR_COLUMNS`) when any did.
     Returns the paths by kind."""
     import pandas as pd
     import pyarrow as pa
@@ -168,34 +170,61 @@ def write_summary(result: BatchResult, folder: str | os.PathLike) -> dict[str, P
             with open(ctmp, "w", encoding="utf-8", newline="") as fh:
                 fh.write(",".join(_csv_header()) + "\n")
                 for frame in result.iter_tables():
+                    errors.extend(_failed_rows(frame))
                     frame = _normalise(frame)
                     writer.write_table(pa.Table.from_pandas(frame, schema=schema, preserve_index=False))
                     frame.to_csv(fh, header=False, index=False)
-                    bad = frame[frame["error"].notna()]
-                    errors.extend(zip(bad["source"], bad["error"]))
         finally:
             writer.close()
     errors.extend(_chunk_failures(result))
     if errors:
         paths["errors"] = folder / "errors.csv"
         with atomic_path(paths["errors"]) as tmp:
-            pd.DataFrame(errors, columns=["source", "error"]).to_csv(tmp, index=False)
+            pd.DataFrame(errors, columns=list(ERROR_COLUMNS)).to_csv(tmp, index=False)
     else:  # a resumed batch that now has none
         (folder / "errors.csv").unlink(missing_ok=True)
     return paths
 
 
-def _chunk_failures(result: BatchResult) -> list[tuple[str, str]]:
-    return [(str(p.get("source", i)), f"chunk failed: {f.error}")
+#: Columns of ``errors.csv``: the failed item or curve (``file#curve``), the exception's class, its message.
+ERROR_COLUMNS = ("source", "error_type", "error")
+
+
+def _failed_rows(frame) -> list[dict[str, str]]:
+    """The failed rows of a chunk: source (``file#curve`` for one failed curve of a file read whole, else
+    the item's label), error type, error, traceback."""
+    if "error" not in frame.columns:
+        return []
+    bad = frame[frame["error"].notna()]
+    out = []
+    for _, row in bad.iterrows():
+        file, curve = row.get("file"), row.get("curve")
+        named = isinstance(file, str) and file and curve is not None and curve == curve  # one curve of a file
+        error = str(row["error"])
+        kind = row.get("error_type")
+        tb = row.get("traceback")
+        out.append({"source": f"{file}#{int(curve)}" if named else str(row["source"]),
+                    "error_type": str(kind) if isinstance(kind, str) and kind else error.partition(":")[0],
+                    "error": error, "traceback": str(tb) if isinstance(tb, str) else ""})
+    return out
+
+
+def _chunk_failures(result: BatchResult) -> list[dict[str, str]]:
+    return [{"source": str(p.get("source", i)), "error_type": f.error.partition(":")[0],
+             "error": f"chunk failed: {f.error}", "traceback": f.traceback or ""}
             for f in result.failures for i, p in zip(f.items, f.parameters)]
 
 
-def failures(result: BatchResult) -> list[tuple[str, str]]:
-    """``(item name, error)`` of every item that failed: rows with an error, then
-    items of chunks that failed as a whole."""
+def failure_records(result: BatchResult) -> list[dict[str, str]]:
+    """Every failed item or curve: ``source`` (``file`` or ``file#curve``), ``error_type`` (the
+    exception's class), ``error`` (``Type: message``) and ``traceback`` (what ``--debug`` shows):
+    rows with an error, then items of chunks that failed as a whole."""
     out = []
     for frame in result.iter_tables():
-        if "error" in frame.columns:
-            bad = frame[frame["error"].notna()]
-            out.extend(zip(bad["source"].astype(str), bad["error"].astype(str)))
+        out.extend(_failed_rows(frame))
     return out + _chunk_failures(result)
+
+
+def failures(result: BatchResult) -> list[tuple[str, str]]:
+    """``(item name, error)`` of every item that failed (see :func:`failure_records`)."""
+    return [(r["source"], r["error"]) for r in failure_records(result)]

@@ -92,12 +92,7 @@ PENDING_READ = {
 }
 PENDING_ANALYSIS = {
     **PENDING_READ,
-    "bruker-nanoscope_force-volume_v9.2_Egel2_00023.spm": "issue 32 item 2 (force volume: int32 data although Bytes/pixel: 2)",
-    "bruker-nanoscope_v8.15_sapphire_TAP525.001": "issue 32 item 6 (repulsive jump-in and pull-off on a 90 N/m lever)",
-    "afm-workshop_mapping-16_13.07.00.csv": "issue 32 item 6 (repulsive pull-off +0.86 nN reported)",
     "afm-workshop_single_2021-10-22.csv": "issue 32 item 6 (spring constant 5e-5 N/m inferred from the slope, reported)",
-    "asylum-ibw_no-date_ForceMap.ibw": "issue 32 item 6 (repulsive pull-off +0.08 nN reported)",
-    "jpk-dp_float-data_SMFS_1126.jpk-force": "issue 32 item 6 (repulsive pull-off +0.37 nN reported)",
 }
 
 

@@ -1,0 +1,105 @@
+"""A physically impossible number is not a result (issue 32, item 6).
+
+* A repulsive jump into contact or pull-off (both are attractions: F < 0 in afmforce's convention,
+  ``JumpIn.force_after`` and ``PullOff.force`` = k x deflection, negative when the lever bends
+  towards the surface): the jumps step is not applicable, the verdict names the contact region.
+* A deflection signal beyond the photodiode ADC's range: no step gives a number, the verdict names
+  the file's data scale (the real v9.2 force volume read 256 x too large reached 312-637 V).
+* A hard contact whose compliance slope is more than 10 x off the file's sensitivity: no force.
+* The stiff lever on sapphire (k = 90 N/m, shared/data/real README): the contact begins at the
+  onset of the curved region (about 20 nm before the steep compliance line, 29 nm before the turning
+  point, not the last 14 samples), so neither a +137 nN jump-in nor a +163 nN pull-off is reported
+  (the pull-off found on the curved contact is refused by name), and no van der Waals fit is drawn.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from afmforce.analysis.jumps import JumpIn, PullOff
+from afmforce.analysis.pipeline import analyze
+from afmforce.analysis.regions import find_run_regions, run_indices, saturated_mask
+from afmforce.analysis.plausibility import DETECTOR_RANGE, IMPOSSIBLE, beyond_detector
+from afmforce.analysis.steps_results import _repulsive
+from afmforce.analysis.synthetic import static_curve
+from afmforce.io import load
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+SAPPHIRE = DATA / "bruker-nanoscope_sapphire_TAP525.001"
+VOLUME = DATA / "bruker-nanoscope_force-volume_2x2_trimmed.spm"
+
+
+def test_repulsive_jumps_are_named():
+    nan = math.nan
+    attractive = JumpIn(True, 10, nan, 1e-9, 0.0, -2e-9, 0.0, -2e-10, 30.0)
+    repulsive = dataclasses.replace(attractive, deflection_after=1.5e-9, force_after=1.37e-7)
+    no_pull = PullOff(False, -1, nan, nan, nan, nan, 0.0, False)
+    assert _repulsive(attractive, no_pull, 1e-10) is None
+    why = _repulsive(repulsive, no_pull, 1e-10)
+    assert why.startswith(IMPOSSIBLE) and "+137 nN" in why and "suspect input: the contact region" in why
+    pull = PullOff(True, 20, 0.0, 1.8e-9, 1.63e-7, 1.8e-9, 20.0, False)
+    assert "pull-off is at +163 nN" in _repulsive(attractive, pull, 1e-10)
+    assert _repulsive(repulsive, no_pull, 2e-9) is None  # within the tolerance (noise): not claimed
+
+
+def test_sapphire_contact_at_the_curved_onset_and_no_repulsive_jumps():
+    c = load(SAPPHIRE)[0]
+    r = analyze(c)
+    assert r.contact_kind == "hard" and r.spring_constant == 90.0
+    # no repulsive jump-in or pull-off reported; the reason says why and names the suspect input
+    for f in (r.jump_in_force, r.pull_off_force):
+        assert not f > 0
+    assert math.isnan(r.pull_off_force) and math.isnan(r.jump_in_force)
+    assert r.not_applicable["pull_off"].startswith(IMPOSSIBLE) and "suspect input: the contact region" in r.verdict
+    assert "surface_energy" in r.not_applicable and math.isnan(r.surface_energy)
+    # the contact begins at the onset of the curved region, about 20 nm before the steep (compliance) line
+    assert 12e-9 < r.contact_onset_separation < 25e-9
+    # no van der Waals law from a curve without attraction before contact: nothing kept, nothing drawn
+    assert "vdw" not in r.details and math.isnan(r.hamaker_radius) and "A R" in r.not_applicable["vdw"]
+    # the contact starts where the curved region does: 20-35 nm before the turning point, in the rise
+    z = c.piezo_measured[c.approach]
+    d = c.deflection_signal[c.approach]
+    run = find_run_regions(c.piezo_measured, c.deflection_signal, run_indices(c.segment, 0), "approach",
+                           saturated=saturated_mask(c.deflection_signal))
+    split = run.split
+    assert 20e-9 < z[-1] - z[split] < 35e-9
+    base = np.median(d[:300])
+    assert d[split] - base < 0.01 < d[-1] - base  # the onset is near the baseline, the end far above it
+    # the adhesion (the retract's dip, no jump on a 90 N/m lever) stays: an attraction of about
+    # k x DeflSens x (retract minimum - baseline) = 90 x 72.77 nm/V x (-0.0383 + 0.0098) V = -187 nN
+    ret = c.deflection_signal[c.retract]
+    expected = 90.0 * 72.76923e-9 * (ret.min() - base)
+    assert r.adhesion_force < 0 and r.adhesion_force == pytest.approx(expected, rel=0.3)
+
+
+def test_signal_beyond_the_adc_is_refused_with_its_suspect():
+    c = load(VOLUME)[2]
+    assert beyond_detector(c) is None
+    misread = dataclasses.replace(c, deflection_signal=c.deflection_signal * 256)  # the 16-bit scale on int32
+    why = beyond_detector(misread)
+    assert why.startswith(IMPOSSIBLE) and f"+-{DETECTOR_RANGE:.3g} V" in why
+    r = analyze(misread)
+    assert r.verdict == why and "suspect input: the file's data scale" in r.verdict
+    assert set(r.not_applicable) >= {"jumps", "adhesion", "indentation", "vdw"}
+    assert math.isnan(r.adhesion_force) and math.isnan(r.youngs_modulus) and np.isnan(r.force).all()
+    good = analyze(c)
+    assert good.adhesion_force < 0 and not good.verdict.startswith(IMPOSSIBLE)
+
+
+@pytest.mark.parametrize("factor", [20.0, 1 / 20])
+def test_calibration_ten_times_off_on_a_hard_contact(factor):
+    c = static_curve(seed=1)  # eq 2 with a spring, its sensitivity known (truth)
+    true = c.truth["sensitivity"]
+    ok = analyze(dataclasses.replace(c, metadata={**c.metadata, "sensitivity": true}))
+    assert ok.contact_kind == "hard" and ok.pull_off_force < 0  # control: the right sensitivity
+    r = analyze(dataclasses.replace(c, metadata={**c.metadata, "sensitivity": true * factor}))
+    assert r.contact_kind == "hard"
+    for step in ("jumps", "adhesion", "vdw", "surface_energy"):
+        assert r.not_applicable[step].startswith(IMPOSSIBLE)
+    assert f"{1 / factor:.3g} x the file's" in r.verdict and "suspect input: sensitivity" in r.verdict
+    assert all(math.isnan(v) for v in (r.pull_off_force, r.jump_in_force, r.adhesion_force, r.hamaker_radius))
