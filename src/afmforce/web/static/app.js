@@ -19,11 +19,17 @@ const fmt = (v, unit) => {
   if (p && v !== 0) { for (const [lim, u, f] of p) if (Math.abs(v) >= lim) return `${(v * f).toPrecision(4)} ${u}`; }
   return `${Number(v.toPrecision(4))} ${unit || ""}`.trim();
 };
+// every refusal of the server is {"error": {"type", "message", "field"}} (docs/web.md)
+function errorText(body, r) {
+  const e = body && body.error;
+  if (e && typeof e === "object") return e.message || e.type || r.statusText;
+  return (typeof e === "string" && e) || `${r.status} ${r.statusText}`;
+}
 async function api(path, opts = {}) {
   const r = await fetch(path, opts);
   const text = await r.text();
-  let body; try { body = JSON.parse(text); } catch { body = { error: text }; }
-  if (!r.ok) throw new Error(body.error || (body.detail && JSON.stringify(body.detail)) || r.statusText);
+  let body; try { body = JSON.parse(text); } catch { body = { error: { message: `${r.status} ${r.statusText}` } }; }
+  if (!r.ok) { const err = new Error(errorText(body, r)); err.field = body.error && body.error.field; throw err; }
   return body;
 }
 function table(rows, head) {
@@ -327,7 +333,7 @@ $("sim-keep").addEventListener("click", () => { SIM.ref = SIM.last; drawSim(); }
 $("sim-clear").addEventListener("click", () => { SIM.ref = null; drawSim(); });
 $("sim-raw").addEventListener("click", async () => {
   const r = await fetch(`api/simulate/raw?preset=${$("sim-preset").value}`, { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(simConfig()) });
-  if (!r.ok) { $("sim-error").textContent = (await r.json()).error; return; }
+  if (!r.ok) { let b = {}; try { b = await r.json(); } catch { /* not JSON */ } $("sim-error").textContent = errorText(b, r); return; }
   download(`virtual-${$("sim-preset").value}.raw`, await r.blob());
 });
 
@@ -363,9 +369,13 @@ $("fit-run").addEventListener("click", async () => {
       ids = (await api("api/analyze", { method: "POST", body: fd })).files.map((f) => f.id);
     }
     const free = [...document.querySelectorAll("#fit-free input:checked")].map((c) => c.value);
-    const body = { file_ids: ids, free, seed: Number($("fit-seed").value), compare: $("fit-compare").checked, profile: $("fit-profile").checked,
-      velocities: ids.length ? [] : $("fit-speeds").value.split(",").map((v) => Number(v) * 1e-6),
-      truth: ids.length ? {} : { xi: Number($("fit-xi").value), hamaker: Number($("fit-hamaker").value) * 1e-21 } };
+    // a plain number is in the field's unit; anything else goes as typed (a value with units, or a
+    // mistake the server names): never NaN, which JSON.stringify would turn into null
+    const val = (t, f) => { t = String(t).trim(); return t !== "" && isFinite(Number(t)) ? Number(t) * f : t; };
+    const seed = $("fit-seed").value.trim();
+    const body = { file_ids: ids, free, seed: /^\d+$/.test(seed) ? Number(seed) : seed, compare: $("fit-compare").checked, profile: $("fit-profile").checked,
+      velocities: ids.length ? [] : $("fit-speeds").value.split(",").map((v) => val(v, 1e-6)),
+      truth: ids.length ? {} : { xi: val($("fit-xi").value, 1), hamaker: val($("fit-hamaker").value, 1e-21) } };
     const job = await api("api/fit", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
     $("fit-state").textContent = "started";
     follow(job.id, "fit", drawFit);
