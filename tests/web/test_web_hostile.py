@@ -60,17 +60,17 @@ def _valid_number(spec, value) -> bool:
 
 
 @pytest.fixture(scope="module")
-def hostile(tmp_path_factory):
+def hostile(tmp_path_factory, workers):
     from fastapi.testclient import TestClient
 
     from afmforce.web import Settings, create_app
 
     app = create_app(Settings(data=tmp_path_factory.mktemp("hostile"), spare_job=False))
     with TestClient(app, base_url="http://127.0.0.1") as client:
-        before = len(psutil.Process().children(recursive=True))
+        before = workers()
         yield client, before
         assert client.get("/api/health").json()["status"] == "ok"
-        assert len(psutil.Process().children(recursive=True)) == before
+        assert workers() == before
         print(f"\nhostile requests: {sum(SEEN.values())} sent, answers {dict(STATUS)}; by endpoint {dict(SEEN)}")
 
 
