@@ -86,6 +86,54 @@ def test_upload_a_real_file_and_change_an_option(page):
     _shot(page, "analyse")
 
 
+def test_a_reload_restores_the_uploads_and_the_analysis(page):
+    """Issue 33.3: a reload loses nothing: the session's uploads are listed, the last analysis is
+    reopened with the option changed before (vdw.max_separation = 15 nm)."""
+    page.reload()
+    page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+    assert "asylum" in page.inner_text("#an-uploads")
+    page.wait_for_function("document.getElementById('an-plot-force').data", timeout=60_000)
+    assert "asylum" in page.inner_text("#an-curve")
+    assert _vdw_max(page) <= 15.0001
+    assert page.locator("[data-option='vdw.max_separation'] input").input_value() == "15"
+
+
+def test_a_sandboxed_frame_cannot_write(page, live_server):
+    """Issue 33.2: a sandboxed iframe (Origin: null) on a page can neither upload, analyse nor start a
+    fit: its form posts get 403, and the session holds no more than before."""
+    before = page.evaluate("fetch('api/session').then(r => r.json())")
+    html = f"""<form id=a method=post enctype=multipart/form-data action="{live_server}api/analyze" target=_self>
+      <input type=hidden name=example value=asylum-air><input type=file name=file></form>
+      <script>document.getElementById('a').submit();</script>"""
+    page.evaluate("""(html) => { const f = document.createElement('iframe');
+        f.setAttribute('sandbox', 'allow-scripts allow-forms'); f.id = 'evil'; f.srcdoc = html;
+        document.body.append(f); }""", html)
+    deadline = time.monotonic() + 30
+    frame = None
+    while time.monotonic() < deadline:
+        frame = next((f for f in page.frames if "/api/analyze" in f.url), None)
+        if frame is not None and "error" in (frame.inner_text("body") or ""):
+            break
+        page.wait_for_timeout(200)        # lets Playwright see the frame's navigation (time.sleep would not)
+    assert frame is not None, [f.url for f in page.frames]
+    text = frame.inner_text("body")
+    assert "forbidden" in text and "opaque origin" in text, text
+    fit = """<form id=b method=post enctype=text/plain action="%sapi/fit" target=_self>
+      <input type=hidden name='{"velocities":[1e-6,2e-6],"x":"' value='"}'></form>
+      <script>document.getElementById('b').submit();</script>""" % live_server
+    page.evaluate("(html) => { const f = document.getElementById('evil'); f.srcdoc = html; }", fit)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        frame = next((f for f in page.frames if "/api/fit" in f.url), None)
+        if frame is not None and "error" in (frame.inner_text("body") or ""):
+            break
+        page.wait_for_timeout(200)        # lets Playwright see the frame's navigation (time.sleep would not)
+    assert frame is not None and "forbidden" in frame.inner_text("body")
+    after = page.evaluate("fetch('api/session').then(r => r.json())")
+    assert after["files"] == before["files"] and len(after["jobs"]) == len(before["jobs"])
+    page.evaluate("document.getElementById('evil').remove()")
+
+
 def test_malformed_file_is_an_error_in_the_page(page, live_server, tmp_path):
     bad = tmp_path / "broken.jpk-force"
     bad.write_bytes(b"PK\x03\x04 this is no zip archive")
@@ -143,3 +191,27 @@ def test_run_a_small_sweep_and_see_its_table(page):
     assert page.evaluate("document.getElementById('sw-plot').data[0].x.length") == 3
     assert "done" in page.inner_text("#sw-state")
     _shot(page, "sweep")
+
+
+PLOTS = ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance", "sim-plot-defl", "sw-plot"]
+
+
+def test_every_drawn_axis_has_a_title_with_its_unit(page):
+    """Issue 33.5: every rendered axis of every drawn plot carries a title (Plotly title objects,
+    read from the SVG the browser drew), with its unit in square brackets."""
+    drawn = page.evaluate("""(ids) => ids.map((id) => {
+        const gd = document.getElementById(id);
+        if (!gd || !gd.data || !gd.data.length) return [id, null];
+        const q = (sel) => [...gd.querySelectorAll(sel)].map((t) => t.textContent.trim());
+        return [id, {x: q('.g-xtitle text'), y: q('.g-ytitle text')}];
+    })""", PLOTS + [d for d in page.evaluate(
+        "[...document.querySelectorAll('.plot')].map(e => e.id).filter(Boolean)") if d not in PLOTS])
+    seen = 0
+    for pid, titles in drawn:
+        if titles is None:
+            continue
+        seen += 1
+        for axis in ("x", "y"):
+            assert titles[axis] and all(titles[axis]), (pid, axis, titles)
+            assert all("[" in t and "]" in t or "index" in t for t in titles[axis]), (pid, axis, titles)
+    assert seen >= 4, drawn          # the analysis, the simulation and the sweep were drawn before

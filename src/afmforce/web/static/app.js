@@ -123,19 +123,71 @@ async function analyse(upload) {
   try {
     const t0 = performance.now();
     const p = await api("api/analyze", { method: "POST", body: fd });
-    if (upload) AN.files = p.files;
+    if (upload) { AN.files = p.files; listUploads(); }
     AN.payload = p;
     $("an-time").textContent = `${((performance.now() - t0) / 1000).toFixed(2)} s, server ${p.wall_time.toFixed(2)} s`;
     const names = Object.keys(p.results);
     const sel = $("an-curve"), keep = sel.value;
     sel.innerHTML = ""; names.forEach((n) => sel.append(el("option", { value: n, text: n })));
     if (names.includes(keep)) sel.value = keep;
+    if (AN.restoreCurve && names.includes(AN.restoreCurve)) { sel.value = AN.restoreCurve; AN.restoreCurve = null; }
     if (p.failed.length) $("an-error").textContent = p.failed.map((f) => (f.error.startsWith(f.file) ? f.error : `${f.file}${f.curve !== undefined ? "#" + f.curve : ""}: ${f.error}`)).join("\n");
     drawMaps(p.maps || []);
     if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance"].forEach((i) => Plotly.purge(i));
   } catch (e) { $("an-error").textContent = e.message; }
+  saveAnalyse();
   AN.busy = false; $("status").textContent = "";
   if (AN.next) { const up = AN.next === "upload"; AN.next = null; analyse(up); }
+}
+// ---- the session: uploads kept on the server, the page restored after a reload -----------------------
+const SAVED = "afmforce.analyse";
+function saveAnalyse() {   // what to reopen after a reload: the uploads shown, the options changed, the curve
+  try {
+    const changed = new Set(optionTexts().map((o) => o.split("=")[0]));
+    const options = {};
+    for (const c of AN.controls) {
+      const key = `${c.step}.${c.f.name}`;
+      const input = c.box.querySelector("input.val, select, input[type=checkbox]");
+      if (changed.has(key) && input) options[key] = input.type === "checkbox" ? input.checked : input.value;
+    }
+    localStorage.setItem(SAVED, JSON.stringify({ files: AN.files.map((f) => f.id), examples: AN.examples, options, curve: $("an-curve").value }));
+  } catch { /* storage off: nothing restored */ }
+}
+async function listUploads() {
+  const s = await api("api/session");
+  const box = $("an-uploads"); box.replaceChildren();
+  if (s.expires) $("an-kept").textContent = `Kept on this server until ${new Date(s.expires * 1000).toLocaleString()} (${Math.round(s.ttl / 3600)} h after your last use).`;
+  const chosen = new Set(AN.files.map((f) => f.id));
+  for (const f of s.files) {
+    const c = el("input", { type: "checkbox", "data-upload": f.id }); c.checked = chosen.has(f.id);
+    c.addEventListener("change", () => {
+      const ids = [...box.querySelectorAll("input[data-upload]:checked")].map((x) => x.dataset.upload);
+      AN.files = s.files.filter((x) => ids.includes(x.id)); AN.examples = [];
+      if (AN.files.length) analyse(false);
+    });
+    const del = el("button", { class: "small", title: "remove from the server", text: "×" });
+    del.addEventListener("click", async () => { await api(`api/files/${f.id}`, { method: "DELETE" }); AN.files = AN.files.filter((x) => x.id !== f.id); listUploads(); });
+    box.append(el("div", { class: "upload" }, el("label", {}, c, ` ${f.name} `, el("span", { class: "muted", text: `${(f.size / 1e3).toFixed(0)} kB` })), del));
+  }
+  return s;
+}
+async function restoreAnalyse() {
+  const s = await listUploads();
+  let saved; try { saved = JSON.parse(localStorage.getItem(SAVED) || "null"); } catch { saved = null; }
+  if (!saved) return;
+  const have = new Set(s.files.map((f) => f.id));
+  AN.files = s.files.filter((f) => (saved.files || []).includes(f.id));
+  AN.examples = (saved.examples || []).filter((e) => SCHEMA.examples.some((x) => x.name === e));
+  for (const [key, v] of Object.entries(saved.options || {})) {
+    const input = document.querySelector(`[data-option="${CSS.escape(key)}"] input.val, [data-option="${CSS.escape(key)}"] select, [data-option="${CSS.escape(key)}"] input[type=checkbox]`);
+    if (!input) continue;
+    if (input.type === "checkbox") input.checked = !!v; else input.value = v;
+  }
+  if (!AN.files.length && !AN.examples.length) return;
+  for (const f of AN.files) { const c = document.querySelector(`input[data-upload="${f.id}"]`); if (c) c.checked = true; }
+  if (saved.curve) AN.restoreCurve = saved.curve;
+  await analyse(false);
+  if (have.size) $("status").textContent = "restored your last analysis";
 }
 function drawCurve() {
   const name = $("an-curve").value, res = AN.payload.results[name], raw = (AN.payload.raw || {})[name];
@@ -220,7 +272,7 @@ function drawMaps(maps) {
   const z = m.z.map((row) => row.map((v) => (v === null ? null : v * f)));
   Plotly.react(div, [{ type: "heatmap", z, x: m.x_um || undefined, y: m.y_um || undefined, customdata: m.curves, colorbar: { title: { text: u } },
     hovertemplate: `x = %{x} ${m.axes === "um" ? "µm" : ""}<br>y = %{y} ${m.axes === "um" ? "µm" : ""}<br>${m.quantity} = %{z:.4g} ${u}<br>%{customdata}<extra>click: open</extra>` }],
-  { ...LAYOUT, title: { text: `${m.file}: ${m.label}` }, xaxis: { title: m.axes === "um" ? "x [µm]" : "x (column)", scaleanchor: "y" }, yaxis: { title: m.axes === "um" ? "y [µm]" : "y (row)" } }, CONFIG);
+  { ...LAYOUT, title: { text: `${m.file}: ${m.label}` }, xaxis: { title: { text: m.axes === "um" ? "x [µm]" : "x (column index)" }, scaleanchor: "y" }, yaxis: { title: { text: m.axes === "um" ? "y [µm]" : "y (row index)" } } }, CONFIG);
   div.removeAllListeners && div.removeAllListeners("plotly_click");
   div.on("plotly_click", (ev) => { const n = ev.points[0].customdata; if (n && AN.payload.results[n]) { $("an-curve").value = n; drawCurve(); } });
 }
@@ -431,7 +483,7 @@ function drawSweepPlot() {
     r.rows.forEach((row) => { (groups[row[i1]] = groups[row[i1]] || []).push(row); });
     traces = Object.entries(groups).map(([g, rows]) => ({ x: rows.map((w) => w[i0]), y: rows.map((w) => w[ci]), name: `${p[1]} = ${Number(Number(g).toPrecision(3))} ${r.units[p[1]] || ""}`, mode: "lines+markers" }));
   } else traces = [{ x: r.rows.map((w) => w[i0]), y: r.rows.map((w) => w[ci]), mode: "lines+markers", name: m }];
-  Plotly.react("sw-plot", traces, { ...LAYOUT, title: m, xaxis: { title: { text: `${p[0]} [${r.units[p[0]] || "-"}]` }, type: "log" }, yaxis: { title: { text: `${m} [${r.units[m] || "-"}]` } } }, CONFIG);
+  Plotly.react("sw-plot", traces, { ...LAYOUT, title: { text: m }, xaxis: { title: { text: `${p[0]} [${r.units[p[0]] || "-"}]` }, type: "log" }, yaxis: { title: { text: `${m} [${r.units[m] || "-"}]` } } }, CONFIG);
 }
 $("sw-metric").addEventListener("change", drawSweepPlot);
 
@@ -442,6 +494,7 @@ $("sw-metric").addEventListener("change", drawSweepPlot);
     SCHEMA.examples.forEach((e) => $("an-example").append(el("option", { value: e.name, text: `${e.name}: ${e.description}` })));
     buildOptions(); buildSim();
     SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
+    await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
   } catch (e) { $("status").textContent = "cannot reach the server: " + e.message; }
 })();
