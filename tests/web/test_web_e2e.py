@@ -98,6 +98,31 @@ def test_a_reload_restores_the_uploads_and_the_analysis(page):
     assert page.locator("[data-option='vdw.max_separation'] input").input_value() == "15"
 
 
+def test_calibration_fields_show_the_used_values_and_the_models_reason(page):
+    """Issue 33.4: k typed in the page is the k the analysis uses (shown under the field); the model
+    dropdown holds the contact registry; a step that cannot run says why."""
+    from afmforce.contact import INDENTATION_MODELS
+
+    options = page.eval_on_selector_all("[data-option='indentation.model'] select option", "os => os.map(o => o.value)")
+    assert options == list(INDENTATION_MODELS)
+    used = page.locator("[data-probe='spring_constant'] .used")
+    page.wait_for_function("document.querySelector(\"[data-probe='spring_constant'] .used\").textContent.includes('used')",
+                           timeout=30_000)
+    assert "N/m" in used.inner_text()
+    box = page.locator("[data-probe='spring_constant'] input.val")
+    box.fill("0.5")
+    box.dispatch_event("change")
+    page.wait_for_function("document.querySelector(\"[data-probe='spring_constant'] .used\").textContent.includes('used 0.5 N/m')",
+                           timeout=30_000)
+    reason = page.inner_text("[data-option='indentation.model'] .used")
+    assert reason.startswith("not run: hard contact"), reason      # the real Asylum file: a hard contact
+    assert "indentation (not run)" in page.inner_text("#an-summary")
+    box.fill("")                                   # back to the file's value
+    box.dispatch_event("change")
+    page.wait_for_function("!document.querySelector(\"[data-probe='spring_constant'] .used\").textContent.includes('used 0.5 N/m')",
+                           timeout=30_000)
+
+
 def test_a_sandboxed_frame_cannot_write(page, live_server):
     """Issue 33.2: a sandboxed iframe (Origin: null) on a page can neither upload, analyse nor start a
     fit: its form posts get 403, and the session holds no more than before."""
@@ -215,3 +240,34 @@ def test_every_drawn_axis_has_a_title_with_its_unit(page):
             assert titles[axis] and all(titles[axis]), (pid, axis, titles)
             assert all("[" in t and "]" in t or "index" in t for t in titles[axis]), (pid, axis, titles)
     assert seen >= 4, drawn          # the analysis, the simulation and the sweep were drawn before
+
+
+def test_no_legend_over_an_axis_title_and_no_title_clipped(page):
+    """Issue 33.5: in every drawn plot, the rendered legend box overlaps no axis title, and every
+    axis title lies inside its plot's drawing (not clipped)."""
+    boxes = page.evaluate("""() => [...document.querySelectorAll('.plot')].filter(gd => gd.data && gd.data.length
+        && gd.offsetParent !== null).map(gd => {
+        const r = (e) => { const b = e.getBoundingClientRect(); return [b.left, b.top, b.right, b.bottom]; };
+        return {id: gd.id, svg: r(gd.querySelector('.main-svg')), legend: [...gd.querySelectorAll('.legend')].map(r),
+                titles: [...gd.querySelectorAll('.g-xtitle text, .g-ytitle text')].map(r)};
+    })""")
+    # plots of views that are hidden now are checked where they are shown: switch through the views
+    for view in ("simulate", "sweep", "analyse"):
+        page.click(f"button[data-view={view}]")
+        page.wait_for_timeout(300)
+        boxes += page.evaluate("""() => [...document.querySelectorAll('.view.active .plot')].filter(gd => gd.data
+            && gd.data.length).map(gd => {
+            const r = (e) => { const b = e.getBoundingClientRect(); return [b.left, b.top, b.right, b.bottom]; };
+            return {id: gd.id, svg: r(gd.querySelector('.main-svg')), legend: [...gd.querySelectorAll('.legend')].map(r),
+                    titles: [...gd.querySelectorAll('.g-xtitle text, .g-ytitle text')].map(r)};
+        })""")
+    overlap = lambda a, b: a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]   # noqa: E731
+    checked = 0
+    for plot in boxes:
+        for t in plot["titles"]:
+            checked += 1
+            s = plot["svg"]
+            assert s[0] - 1 <= t[0] and t[2] <= s[2] + 1 and s[1] - 1 <= t[1] and t[3] <= s[3] + 1, plot
+            for legend in plot["legend"]:
+                assert not overlap(legend, t), plot
+    assert checked >= 8, boxes

@@ -76,7 +76,14 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
         if name in given.setdefault(step, {}):
             raise ParameterError(f"option {step}.{name} given twice")
         given[step][name] = value
-    records = tuple(OPTIONS[step](**values) for step, values in given.items())
+    records = []
+    for step, values in given.items():     # the record's own checks (a model of the registry, ...)
+        try:
+            records.append(OPTIONS[step](**values))
+        except ParameterError as exc:
+            named = [n for n in values if n in str(exc)] or list(values)
+            raise FieldError(f"option.{step}.{named[0]}" if len(named) == 1 else f"option.{step}", str(exc)) from None
+    records = tuple(records)
     values: dict[str, float] = {}
     fields = _probe_fields()
     for text in probe:

@@ -8,7 +8,9 @@ const el = (tag, attrs = {}, ...kids) => {
   return e;
 };
 const SCHEMA = { simulation: [], analysis: {}, fit: [], examples: [], instrument_presets: [] };
-const LAYOUT = { margin: { l: 70, r: 20, t: 40, b: 50 }, hovermode: "closest", legend: { orientation: "h", y: -0.2 } };
+// the legend outside the plot on the right (Plotly widens the margin for it): never over an axis title
+const LAYOUT = { margin: { l: 70, r: 20, t: 40, b: 50 }, hovermode: "closest",
+  legend: { orientation: "v", x: 1.02, xanchor: "left", y: 1, yanchor: "top", font: { size: 11 } } };
 const CONFIG = { responsive: true, displaylogo: false, toImageButtonOptions: { format: "png", scale: 2 } };
 const U = { m: [1e9, "nm"], N: [1e9, "nN"], s: [1, "s"], V: [1, "V"] };
 const sc = (arr, f) => (arr || []).map((v) => (v === null ? null : v * f));
@@ -62,7 +64,7 @@ function control(f, onChange, { slider = false, value = f.default } = {}) {
   let get;
   if (f.kind === "choice" || (f.choices && f.choices.length && f.kind !== "number")) {
     const s = el("select", { "data-field": f.name });
-    (f.choices.length ? f.choices : [f.default]).forEach((c) => s.append(el("option", { value: c, text: c })));
+    (f.choices.length ? f.choices : [f.default]).forEach((c) => s.append(el("option", { value: c, text: (f.labels && f.labels[c]) ? `${f.labels[c]} (${c})` : c })));
     s.value = value ?? ""; s.addEventListener("change", onChange); box.append(s);
     get = () => s.value;
   } else if (f.kind === "flag") {
@@ -118,6 +120,7 @@ async function analyse(upload) {
   else AN.files.forEach((f) => fd.append("file_id", f.id));
   AN.examples.forEach((e) => fd.append("example", e));
   optionTexts().forEach((o) => fd.append("option", o));
+  probeTexts().forEach((o) => fd.append("probe", o));
   fd.append("arrays", "true");
   fd.append("max_points", "2500");
   try {
@@ -150,7 +153,9 @@ function saveAnalyse() {   // what to reopen after a reload: the uploads shown, 
       const input = c.box.querySelector("input.val, select, input[type=checkbox]");
       if (changed.has(key) && input) options[key] = input.type === "checkbox" ? input.checked : input.value;
     }
-    localStorage.setItem(SAVED, JSON.stringify({ files: AN.files.map((f) => f.id), examples: AN.examples, options, curve: $("an-curve").value }));
+    const probe = {};
+    for (const c of AN.probe || []) { const input = c.box.querySelector("input.val"); if (input && input.value.trim()) probe[c.f.name] = input.value; }
+    localStorage.setItem(SAVED, JSON.stringify({ files: AN.files.map((f) => f.id), examples: AN.examples, options, probe, curve: $("an-curve").value }));
   } catch { /* storage off: nothing restored */ }
 }
 async function listUploads() {
@@ -182,6 +187,9 @@ async function restoreAnalyse() {
     const input = document.querySelector(`[data-option="${CSS.escape(key)}"] input.val, [data-option="${CSS.escape(key)}"] select, [data-option="${CSS.escape(key)}"] input[type=checkbox]`);
     if (!input) continue;
     if (input.type === "checkbox") input.checked = !!v; else input.value = v;
+  }
+  for (const [name, v] of Object.entries(saved.probe || {})) {
+    const input = document.querySelector(`[data-probe="${CSS.escape(name)}"] input.val`); if (input) input.value = v;
   }
   if (!AN.files.length && !AN.examples.length) return;
   for (const f of AN.files) { const c = document.querySelector(`input[data-upload="${f.id}"]`); if (c) c.checked = true; }
@@ -229,7 +237,12 @@ function drawCurve() {
   const rows = [["contact", `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
     ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
     ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", `${res.friction}: ${res.friction_verdict}`],
-    ["diagnosis", res.verdict || "–"], ...res.warnings.map((w) => ["warning", w])];
+    ["diagnosis", res.verdict || "–"]];
+  if (res.youngs_modulus !== null && res.youngs_modulus !== undefined)
+    rows.push(["Young's modulus E", `${fmtPa(res.youngs_modulus)}` + (res.youngs_modulus_low !== null && res.youngs_modulus_high !== null ? ` (interval ${fmtPa(res.youngs_modulus_low)} – ${fmtPa(res.youngs_modulus_high)})` : "") + (res.indentation_model ? `, ${res.indentation_model}` : "")]);
+  for (const [step, why] of Object.entries(res.not_applicable || {})) rows.push([`${step} (not run)`, why]);
+  res.warnings.forEach((w) => rows.push(["warning", w]));
+  showUsed(res);
   $("an-summary").replaceChildren(table(rows));
   const box = $("an-details"); box.replaceChildren(el("h2", { text: "Every step's evidence (SI units)" }));
   for (const [step, vals] of Object.entries(d)) {
@@ -275,6 +288,56 @@ function drawMaps(maps) {
   { ...LAYOUT, title: { text: `${m.file}: ${m.label}` }, xaxis: { title: { text: m.axes === "um" ? "x [µm]" : "x (column index)" }, scaleanchor: "y" }, yaxis: { title: { text: m.axes === "um" ? "y [µm]" : "y (row index)" } } }, CONFIG);
   div.removeAllListeners && div.removeAllListeners("plotly_click");
   div.on("plotly_click", (ev) => { const n = ev.points[0].customdata; if (n && AN.payload.results[n]) { $("an-curve").value = n; drawCurve(); } });
+}
+// ---- calibration and probe: k, InvOLS, resonance frequency, radius (probe); model, tip, sample (indentation) ----
+const shownValue = (v, f) => (typeof v === "number" && isFinite(v) ? `${Number((v / f.factor).toPrecision(4))} ${f.shown}`.trim() : v === null || v === undefined ? "–" : String(v));
+function probeTexts() {
+  const out = [];
+  for (const c of AN.probe || []) {
+    const v = c.box.get();
+    if (v === null || v === "") continue;
+    out.push(`${c.f.name}=${typeof v === "number" ? `${Number((v / c.f.factor).toPrecision(8))}${c.f.shown}` : v}`);
+  }
+  return out;
+}
+function buildCalibration() {
+  const box = $("an-calibration"); box.replaceChildren(); AN.probe = [];
+  const rerun = () => { if (AN.files.length || AN.examples.length) analyse(false); };
+  for (const f of SCHEMA.calibration || []) {
+    let c;
+    if (f.via === "option") {       // the step's own control, moved here (one control, one value)
+      const own = AN.controls.find((x) => `${x.step}.${x.f.name}` === f.key);
+      if (!own) continue;
+      c = own.box;
+    } else {
+      c = control(f, rerun, { value: null });
+      c.dataset.probe = f.name; AN.probe.push({ f, box: c });
+    }
+    c.dataset.shows = f.shows.join(",");
+    c.querySelector(".name").textContent = { spring_constant: "spring constant k", sensitivity: "sensitivity (InvOLS)", resonance_frequency: "resonance frequency", radius: "sphere radius R (vdW, adhesion)", "indentation.model": "indentation model", "indentation.tip_radius": "tip radius", "indentation.half_angle": "tip half angle", "indentation.poisson": "Poisson ratio of the sample" }[f.key] || f.name;
+    c.append(el("div", { class: "used muted" }));
+    box.append(c);
+  }
+}
+function showUsed(res) {   // beside each calibration field: the value the analysis used (and the file's)
+  for (const box of document.querySelectorAll("#an-calibration .field")) {
+    const out = box.querySelector(".used"); if (!out) continue;
+    const f = (SCHEMA.calibration || []).find((x) => box.dataset.shows !== undefined && (x.key === box.dataset.option || x.name === box.dataset.probe)) || {};
+    const keys = (box.dataset.shows || "").split(",").filter(Boolean);
+    let text = "";
+    if (keys[0] === "indentation_model") {
+      const why = (res.not_applicable || {}).indentation;
+      text = why ? `not run: ${why}` : res.youngs_modulus !== null && res.youngs_modulus !== undefined ? `E = ${fmtPa(res.youngs_modulus)}` : "";
+    } else if (keys.length === 2) text = `given or file's ${shownValue(res[keys[0]], f)} · used ${shownValue(res[keys[1]], f)}`;
+    else if (keys.length === 1) text = `used ${shownValue(res[keys[0]], f)}`;
+    out.textContent = text;
+    out.classList.toggle("error", text.startsWith("not run"));
+  }
+}
+function fmtPa(v) {
+  if (v === null || v === undefined || !isFinite(v)) return "–";
+  for (const [f, u] of [[1e9, "GPa"], [1e6, "MPa"], [1e3, "kPa"], [1, "Pa"]]) if (Math.abs(v) >= f) return `${(v / f).toPrecision(4)} ${u}`;
+  return `${v.toPrecision(4)} Pa`;
 }
 function buildOptions() {
   const box = $("an-options"); box.replaceChildren(); AN.controls = [];
@@ -492,7 +555,7 @@ $("sw-metric").addEventListener("change", drawSweepPlot);
   try {
     Object.assign(SCHEMA, await api("api/schema"));
     SCHEMA.examples.forEach((e) => $("an-example").append(el("option", { value: e.name, text: `${e.name}: ${e.description}` })));
-    buildOptions(); buildSim();
+    buildOptions(); buildCalibration(); buildSim();
     SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
     await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
