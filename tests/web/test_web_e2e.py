@@ -159,6 +159,39 @@ def test_a_sandboxed_frame_cannot_write(page, live_server):
     page.evaluate("document.getElementById('evil').remove()")
 
 
+def test_every_map_quantity_is_drawn_with_titled_axes(page):
+    """Issue 33.4/33.5: a force map's every quantity can be drawn (a selector), each heat map with its
+    axes titled in µm and its colour bar titled with the quantity and its unit; the adhesion marker
+    of a curve sits on the curve."""
+    data = Path(__file__).resolve().parents[1] / "data" / "afmforce-map_jpk-map2x2.h5"
+    page.set_input_files("#an-files", str(data))
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-plot-map').data", timeout=60_000)
+    values = page.eval_on_selector_all("#an-map-quantity option", "os => os.map(o => o.value)")
+    assert len(values) >= 2
+    labels = set()
+    for v in values:
+        page.select_option("#an-map-quantity", v)
+        page.wait_for_timeout(200)
+        titles = page.evaluate("""() => { const gd = document.getElementById('an-plot-map');
+            const q = (s) => [...gd.querySelectorAll(s)].map(t => t.textContent.trim());
+            return {x: q('.g-xtitle text'), y: q('.g-ytitle text'), bar: q('.colorbar .cbtitle text, .colorbar [class*=title] text'),
+                    all: [...gd.querySelectorAll('text')].map(t => t.parentNode.getAttribute('class') + ':' + t.textContent)}; }""")
+        assert titles["x"] == ["x [µm]"] and titles["y"] == ["y [µm]"], titles
+        empty = page.evaluate("document.getElementById('an-plot-map').data[0].z.every(r => r.every(v => v === null))")
+        if empty:       # a quantity no curve of the 2x2 extract gives: said so on the plot
+            assert any("no curve of this map gives" in t for t in titles["all"]), " | ".join(titles["all"])
+            continue
+        assert titles["bar"] and "[" in titles["bar"][0], " | ".join(titles["all"])
+        labels.add(titles["bar"][0])
+    assert len(labels) >= 2          # each quantity drawn, not the first again
+    on_curve = page.evaluate("""() => { const gd = document.getElementById('an-plot-force');
+        const m = gd.data.find(d => d.name.startsWith('adhesion')); if (!m) return null;
+        const curve = gd.data.filter(d => d.name === 'retract')[0];
+        return curve.x.some((x, i) => x === m.x[0] && curve.y[i] === m.y[0]); }""")
+    assert on_curve is True
+
+
 def test_malformed_file_is_an_error_in_the_page(page, live_server, tmp_path):
     bad = tmp_path / "broken.jpk-force"
     bad.write_bytes(b"PK\x03\x04 this is no zip archive")

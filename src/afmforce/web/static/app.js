@@ -211,8 +211,14 @@ function drawCurve() {
   const d = res.details || {}, marks = [];
   const j = (d.jumps || {}).jump_in; if (j && j.found !== false && res.jump_in_separation !== null)
     marks.push({ x: [res.jump_in_separation * 1e9], y: [res.jump_in_force * 1e9], name: "jump-in", mode: "markers", marker: { size: 11, symbol: "triangle-down", color: "#1a7f37" }, hovertemplate: "jump-in<br>h = %{x:.3f} nm<br>F = %{y:.4f} nN<extra></extra>" });
-  if (res.adhesion_force !== null && res.adhesion_distance !== null)   // the deepest retract point, at its distance from contact
-    marks.push({ x: [res.adhesion_distance * 1e9], y: [res.adhesion_force * 1e9], name: `adhesion ${fmt(res.adhesion_force, "N")}`, mode: "markers", marker: { size: 10, symbol: "diamond", color: "#b00020" }, hovertemplate: "adhesion %{y:.4f} nN<br>%{x:.2f} nm from contact<extra></extra>" });
+  const adhesionAt = () => {   // the separation of the retract sample at the adhesion force (the marker sits on the curve)
+    let best = null, gap = Infinity;
+    (res.force || []).forEach((F, i) => { if (seg[i] === 1 && F !== null && res.separation[i] !== null && Math.abs(F - res.adhesion_force) < gap) { gap = Math.abs(F - res.adhesion_force); best = i; } });
+    return best;
+  };
+  const iAdh = res.adhesion_force !== null ? adhesionAt() : null;
+  if (iAdh !== null)   // the deepest retract point, drawn where it lies on the curve
+    marks.push({ x: [res.separation[iAdh] * 1e9], y: [res.force[iAdh] * 1e9], name: `adhesion ${fmt(res.adhesion_force, "N")}`, mode: "markers", marker: { size: 10, symbol: "diamond", color: "#b00020" }, hovertemplate: `adhesion ${fmt(res.adhesion_force, "N")}<br>h = %{x:.2f} nm (${fmt(res.adhesion_distance, "m")} from contact)<extra></extra>` });
   if (res.pull_off_force !== null) marks.push({ x: [0], y: [res.pull_off_force * 1e9], name: `pull-off ${fmt(res.pull_off_force, "N")}`, mode: "markers", marker: { size: 11, symbol: "x", color: "#b00020" }, hovertemplate: "pull-off F = %{y:.4f} nN<extra></extra>" });
   const v = d.vdw || {};
   if (v.status === "ok" && v.hamaker_radius) {
@@ -234,9 +240,9 @@ function drawCurve() {
     Plotly.react("an-plot-raw", rt, { ...LAYOUT, title: { text: "Raw signal vs piezo position" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
   }
   drawDrift(raw, d, parts);
-  const rows = [["contact", `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
+  const rows = [["contact", res.contact_kind_reason && String(res.contact_kind_reason).startsWith(res.contact_kind) ? res.contact_kind_reason : `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
     ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
-    ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", `${res.friction}: ${res.friction_verdict}`],
+    ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", res.friction_verdict && String(res.friction_verdict).startsWith(res.friction) ? res.friction_verdict : `${res.friction}: ${res.friction_verdict}`],
     ["diagnosis", res.verdict || "–"]];
   if (res.youngs_modulus !== null && res.youngs_modulus !== undefined)
     rows.push(["Young's modulus E", `${fmtPa(res.youngs_modulus)}` + (res.youngs_modulus_low !== null && res.youngs_modulus_high !== null ? ` (interval ${fmtPa(res.youngs_modulus_low)} – ${fmtPa(res.youngs_modulus_high)})` : "") + (res.indentation_model ? `, ${res.indentation_model}` : "")]);
@@ -273,19 +279,28 @@ function drawDrift(raw, d, parts) {   // the drift step: raw signal against time
     const keep = raw.piezo.map((z, i) => raw.segment[i] === k && z >= lo - w && z <= hi + w);
     ct.push({ x: sc(raw.piezo.map((z, i) => (keep[i] ? z : null)), 1e9), y: sc(raw.signal.map((x, i) => (keep[i] ? x - base(raw.time[i], k) : null)), fs), name: label, mode: "markers", marker: { size: 3, color }, hovertemplate: `z = %{x:.2f} nm<br>%{y:.4g} ${us}<extra>${label}</extra>` });
     const line = k === 1 ? co.retract : co.approach;
-    if (line) ct.push({ x: [line.z_min * 1e9, line.z_max * 1e9], y: [(line.intercept + line.slope * line.z_min) * fs, (line.intercept + line.slope * line.z_max) * fs], name: `${label} compliance, slope ${Number(line.slope.toPrecision(4))} ${raw.unit}/m`, mode: "lines", line: { color, width: 3, dash: "dot" } });
+    if (line) ct.push({ x: [line.z_min * 1e9, line.z_max * 1e9], y: [(line.intercept + line.slope * line.z_min) * fs, (line.intercept + line.slope * line.z_max) * fs], name: `${label} compliance, slope ${slopeText(line.slope, raw.unit)}`, mode: "lines", line: { color, width: 3, dash: "dot" } });
   }
   Plotly.react("an-plot-compliance", ct, { ...LAYOUT, title: { text: "Compliance: drift-corrected signal near contact" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `signal − baseline [${us}]` } } }, CONFIG);
 }
+function slopeText(slope, unit) {   // a compliance slope per nm (29680000 V/m reads 0.02968 V/nm)
+  return unit === "N" ? `${Number(slope.toPrecision(4))} N/m` : `${Number((slope * 1e-9).toPrecision(4))} ${unit}/nm`;
+}
 function drawMaps(maps) {
   const div = $("an-plot-map");
-  if (!maps.length) { div.classList.add("hidden"); return; }
+  if (!maps.length) { div.classList.add("hidden"); $("an-map-quantity").classList.add("hidden"); return; }
   div.classList.remove("hidden");
-  const m = maps[0], f = m.unit === "N" ? 1e9 : m.unit === "m" ? 1e9 : 1, u = m.unit === "N" ? "nN" : m.unit === "m" ? "nm" : m.unit;
+  const sel = $("an-map-quantity"), keep = sel.value;   // every map quantity of every map file
+  sel.classList.remove("hidden"); sel.replaceChildren();
+  maps.forEach((x, i) => sel.append(el("option", { value: String(i), text: `${x.file}: ${x.label} [${x.unit === "N" ? "nN" : x.unit === "m" ? "nm" : x.unit || "-"}]` })));
+  sel.value = keep && Number(keep) < maps.length ? keep : "0";
+  sel.onchange = () => drawMaps(maps);
+  const m = maps[Number(sel.value)], f = m.unit === "N" ? 1e9 : m.unit === "m" ? 1e9 : 1, u = m.unit === "N" ? "nN" : m.unit === "m" ? "nm" : m.unit;
   const z = m.z.map((row) => row.map((v) => (v === null ? null : v * f)));
-  Plotly.react(div, [{ type: "heatmap", z, x: m.x_um || undefined, y: m.y_um || undefined, customdata: m.curves, colorbar: { title: { text: u } },
+  Plotly.react(div, [{ type: "heatmap", z, x: m.x_um || undefined, y: m.y_um || undefined, customdata: m.curves, colorbar: { title: { text: `${m.label} [${u || "-"}]`, side: "right" } },
     hovertemplate: `x = %{x} ${m.axes === "um" ? "µm" : ""}<br>y = %{y} ${m.axes === "um" ? "µm" : ""}<br>${m.quantity} = %{z:.4g} ${u}<br>%{customdata}<extra>click: open</extra>` }],
-  { ...LAYOUT, title: { text: `${m.file}: ${m.label}` }, xaxis: { title: { text: m.axes === "um" ? "x [µm]" : "x (column index)" }, scaleanchor: "y" }, yaxis: { title: { text: m.axes === "um" ? "y [µm]" : "y (row index)" } } }, CONFIG);
+  { ...LAYOUT, title: { text: `${m.file}: ${m.label}` },
+    annotations: z.some((row) => row.some((v) => v !== null)) ? [] : [{ text: `no curve of this map gives a ${m.label}`, showarrow: false, xref: "paper", yref: "paper", x: 0.5, y: 0.5 }], xaxis: { title: { text: m.axes === "um" ? "x [µm]" : "x (column index)" }, scaleanchor: "y" }, yaxis: { title: { text: m.axes === "um" ? "y [µm]" : "y (row index)" } } }, CONFIG);
   div.removeAllListeners && div.removeAllListeners("plotly_click");
   div.on("plotly_click", (ev) => { const n = ev.points[0].customdata; if (n && AN.payload.results[n]) { $("an-curve").value = n; drawCurve(); } });
 }
