@@ -192,6 +192,36 @@ def test_every_map_quantity_is_drawn_with_titled_axes(page):
     assert on_curve is True
 
 
+def test_the_curves_of_a_map_in_one_table_histogram_and_csv(page, tmp_path):
+    """Issue 33.4: the curves of the map above in one table (units in the header), a histogram of a
+    chosen column and a CSV whose numbers are the API's, read back independently."""
+    import csv
+
+    page.wait_for_selector("#an-batch:not(.hidden)", timeout=30_000)
+    rows = page.locator("#an-batch-table tr").count()
+    assert rows == 1 + 4                                  # the four curves of the 2x2 extract
+    page.select_option("#an-batch-col", "adhesion_force")
+    page.wait_for_function("document.getElementById('an-batch-hist').data[0].x.length >= 1", timeout=10_000)
+    titles = page.evaluate("""() => [...document.querySelectorAll('#an-batch-hist .g-xtitle text, #an-batch-hist .g-ytitle text')]
+        .map(t => t.textContent)""")
+    assert titles == ["adhesion_force [N]", "curves [count]"], titles
+    with page.expect_download() as got:
+        page.click("#an-batch-csv")
+    path = tmp_path / "curves.csv"
+    got.value.save_as(path)
+    lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+    table = list(csv.DictReader(lines))
+    assert len(table) == 4 and "adhesion_force [N]" in table[0]
+    fid = page.evaluate("AN.files[0].id")
+    api = page.evaluate(f"""() => {{ const fd = new FormData(); fd.append('file_id', '{fid}');
+        return fetch('api/analyze', {{method: 'POST', body: fd}}).then(r => r.json()); }}""")["results"]
+    for row in table:
+        want = api[row["curve"]]["adhesion_force"]
+        assert (row["adhesion_force [N]"] == "" and want is None) or float(row["adhesion_force [N]"]) == want
+    hist = page.evaluate("document.getElementById('an-batch-hist').data[0].x")
+    assert sorted(hist) == sorted(float(r["adhesion_force [N]"]) for r in table if r["adhesion_force [N]"])
+
+
 def test_malformed_file_is_an_error_in_the_page(page, live_server, tmp_path):
     bad = tmp_path / "broken.jpk-force"
     bad.write_bytes(b"PK\x03\x04 this is no zip archive")

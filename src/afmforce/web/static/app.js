@@ -136,6 +136,7 @@ async function analyse(upload) {
     if (AN.restoreCurve && names.includes(AN.restoreCurve)) { sel.value = AN.restoreCurve; AN.restoreCurve = null; }
     if (p.failed.length) $("an-error").textContent = p.failed.map((f) => (f.error.startsWith(f.file) ? f.error : `${f.file}${f.curve !== undefined ? "#" + f.curve : ""}: ${f.error}`)).join("\n");
     drawMaps(p.maps || []);
+    drawBatch();
     if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance"].forEach((i) => Plotly.purge(i));
   } catch (e) { $("an-error").textContent = e.message; }
   saveAnalyse();
@@ -283,6 +284,42 @@ function drawDrift(raw, d, parts) {   // the drift step: raw signal against time
   }
   Plotly.react("an-plot-compliance", ct, { ...LAYOUT, title: { text: "Compliance: drift-corrected signal near contact" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `signal − baseline [${us}]` } } }, CONFIG);
 }
+// ---- every curve of a batch or map: one table (SI, units in the header), a histogram, CSV ----------
+const BATCH_COLUMNS = ["contact_kind", "adhesion_force", "pull_off_force", "jump_in_separation", "hamaker_radius",
+  "youngs_modulus", "youngs_modulus_se", "work_of_adhesion", "spring_constant", "sensitivity_used", "resonance_frequency", "velocity"];
+function batchRows() {
+  const names = Object.keys(AN.payload.results), units = {};
+  for (const n of names) Object.assign(units, AN.payload.results[n].units || {});
+  return { names, units, rows: names.map((n) => BATCH_COLUMNS.map((c) => { const v = AN.payload.results[n][c]; return v === undefined ? null : v; })) };
+}
+function drawBatch() {
+  const box = $("an-batch"), n = Object.keys((AN.payload || {}).results || {}).length;
+  box.classList.toggle("hidden", n < 2); if (n < 2) return;
+  $("an-batch-n").textContent = `${n} curves`;
+  const { names, units, rows } = batchRows();
+  const head = ["curve", ...BATCH_COLUMNS.map((c) => (units[c] ? `${c} [${units[c]}]` : c))];
+  $("an-batch-table").replaceChildren(table(rows.map((r, i) => [names[i], ...r.map((v) => (v === null ? "–" : typeof v === "number" ? Number(v.toPrecision(5)) : String(v)))]), head));
+  $("an-batch-table").querySelectorAll("tr").forEach((tr, i) => { if (i) { tr.style.cursor = "pointer"; tr.onclick = () => { $("an-curve").value = names[i - 1]; drawCurve(); }; } });
+  const sel = $("an-batch-col"), keep = sel.value; sel.replaceChildren();
+  BATCH_COLUMNS.forEach((c, j) => { if (rows.some((r) => typeof r[j] === "number")) sel.append(el("option", { value: c, text: units[c] ? `${c} [${units[c]}]` : c })); });
+  sel.value = [...sel.options].some((o) => o.value === keep) ? keep : (sel.options[0] || {}).value;
+  drawHistogram();
+}
+function drawHistogram() {
+  const c = $("an-batch-col").value; if (!c) return;
+  const { rows, units } = batchRows(), j = BATCH_COLUMNS.indexOf(c);
+  const xs = rows.map((r) => r[j]).filter((v) => typeof v === "number" && isFinite(v));
+  Plotly.react("an-batch-hist", [{ type: "histogram", x: xs, name: c }], { ...LAYOUT, title: { text: `${c}: ${xs.length} curves` },
+    xaxis: { title: { text: `${c} [${units[c] || "-"}]` } }, yaxis: { title: { text: "curves [count]" } } }, CONFIG);
+}
+$("an-batch-col").addEventListener("change", drawHistogram);
+$("an-batch-csv").addEventListener("click", () => {
+  const { names, units, rows } = batchRows();
+  const q = (v) => (v === null ? "" : typeof v === "string" && /[",\n]/.test(v) ? `"${v.replace(/"/g, '""')}"` : v);
+  const lines = ["# afmforce: every curve analysed (SI units)", ["curve", ...BATCH_COLUMNS.map((c) => (units[c] ? `${c} [${units[c]}]` : c))].map(q).join(",")];
+  rows.forEach((r, i) => lines.push([names[i], ...r].map(q).join(",")));
+  download("afmforce-curves.csv", new Blob([lines.join("\n") + "\n"], { type: "text/csv" }));
+});
 function slopeText(slope, unit) {   // a compliance slope per nm (29680000 V/m reads 0.02968 V/nm)
   return unit === "N" ? `${Number(slope.toPrecision(4))} N/m` : `${Number((slope * 1e-9).toPrecision(4))} ${unit}/nm`;
 }
@@ -521,8 +558,21 @@ function drawFit(r) {
     if (p.model) tr.push({ x: sc(p.position, 1e9), y: sc(p.model, 1e9), name: `${p.name} model`, mode: "lines", hovertemplate: "z = %{x:.2f} nm<br>%{y:.4f} nm<extra>model</extra>" });
   });
   Plotly.react("fit-plot", tr, { ...LAYOUT, title: { text: "Data and fitted model" }, xaxis: { title: { text: "piezo position z − shift [nm]" } }, yaxis: { title: { text: "apparent deflection [nm]" } } }, CONFIG);
-  const pr = Object.entries(r.profiles || {}).map(([n, p]) => ({ x: p.value || p.values || [], y: p.delta_chi2 || p.chi2 || [], name: n, mode: "lines+markers" }));
-  if (pr.length) Plotly.react("fit-profiles", pr, { ...LAYOUT, title: { text: "Profile likelihoods" }, xaxis: { title: { text: "parameter [SI]" }, type: "log" }, yaxis: { title: { text: "Δχ²" } } }, CONFIG);
+  // one panel per profiled parameter, each with its own axis in its unit (two parameters never share
+  // one log axis spanning many decades)
+  const prof = Object.entries(r.profiles || {});
+  const pr = prof.map(([n, p], i) => ({ x: p.value || p.values || [], y: p.delta_chi2 || p.chi2 || [], name: n, mode: "lines+markers",
+    xaxis: i ? `x${i + 1}` : "x", yaxis: i ? `y${i + 1}` : "y", showlegend: false }));
+  if (pr.length) {
+    const layout = { ...LAYOUT, title: { text: "Profile likelihoods" }, grid: { rows: 1, columns: pr.length, pattern: "independent" } };
+    prof.forEach(([n], i) => {
+      const xs = pr[i].x.filter((v) => typeof v === "number" && v > 0), unit = (SCHEMA.fit.find((p) => p.name === n) || {}).unit || "-";
+      const log = xs.length === pr[i].x.length && xs.length > 1 && Math.max(...xs) / Math.min(...xs) > 100;
+      layout[i ? `xaxis${i + 1}` : "xaxis"] = { title: { text: `${n} [${unit}]` }, type: log ? "log" : "linear" };
+      layout[i ? `yaxis${i + 1}` : "yaxis"] = { title: { text: "Δχ² [-]" } };
+    });
+    Plotly.react("fit-profiles", pr, layout, CONFIG);
+  }
 }
 
 // ---- Sweep ------------------------------------------------------------------------------------
