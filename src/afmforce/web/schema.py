@@ -97,7 +97,8 @@ def contact_model_field(spec: FieldSpec | None, default: Any) -> dict[str, Any]:
 #: The probe's calibration the analyse view shows first: ProbeCalibration fields (sent as ``probe``),
 #: then the indentation step's geometry and sample (sent as options). Result keys: the values the
 #: analysis used, shown beside each field.
-CALIBRATION = (("probe", "spring_constant", ("spring_constant",)), ("probe", "sensitivity", ("sensitivity", "sensitivity_used")),
+CALIBRATION = (("probe", "spring_constant", ("spring_constant",)),
+               ("probe", "sensitivity", ("sensitivity", "sensitivity_used")),
                ("probe", "resonance_frequency", ("resonance_frequency",)), ("probe", "radius", ()),
                ("option", "indentation.model", ("indentation_model",)), ("option", "indentation.tip_radius", ()),
                ("option", "indentation.half_angle", ()), ("option", "indentation.poisson", ()))
