@@ -62,3 +62,15 @@ def test_calibration_given_in_the_page_is_what_the_cli_computes(client, tmp_path
     assert "hard contact" in api["not_applicable"]["indentation"]
     bad = client.post("/api/analyze", data={"example": "asylum-air", "option": "indentation.model=nope"})
     assert bad.status_code == 422 and bad.json()["error"]["field"] == "option.indentation.model"
+
+
+def test_the_modulus_fit_samples_obey_the_response_cap(client):
+    """With ``arrays`` the modulus fit's samples are thinned like the curve's (the response's size
+    cap); the fitted E is the one of the full fit."""
+    full = client.post("/api/analyze", data={"example": "jpk-cell", "option": "indentation.tip_radius=5um"}).json()
+    thin = client.post("/api/analyze", data={"example": "jpk-cell", "option": "indentation.tip_radius=5um",
+                                             "arrays": "true", "max_points": "500"}).json()
+    a, b = (next(iter(p["results"].values()))["details"]["indentation"] for p in (full, thin))
+    assert len(a["indentation"]) > 500 >= len(b["indentation"]) == len(b["fit_force"]) == len(b["residuals"])
+    assert b["youngs_modulus"] == a["youngs_modulus"] and b["indentation"][0] == a["indentation"][0]
+    assert b["indentation"][-1] == a["indentation"][-1]

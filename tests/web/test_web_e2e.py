@@ -123,6 +123,34 @@ def test_calibration_fields_show_the_used_values_and_the_models_reason(page):
                            timeout=30_000)
 
 
+def test_the_modulus_fit_on_force_vs_indentation(page):
+    """Issue 33.4: a cell (the shipped JPK curve) with its tip radius typed in the calibration field:
+    E with its interval and the fitted curve drawn on force vs indentation, the numbers of the API."""
+    page.select_option("#an-example", "jpk-cell")
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-curve').value.includes('jpk-cell')", timeout=60_000)
+    reason = page.inner_text("[data-option='indentation.model'] .used")
+    assert reason.startswith("not run") and "radius" in reason, reason      # no tip radius yet: says so
+    box = page.locator("[data-option='indentation.tip_radius'] input.val")
+    box.fill("5000")                                                           # nm: a 5 µm bead
+    box.dispatch_event("change")
+    page.wait_for_function("document.getElementById('an-plot-indentation').data", timeout=60_000)
+    api = page.evaluate("""() => { const fd = new FormData(); fd.append('example', 'jpk-cell');
+        fd.append('option', 'indentation.tip_radius=5um'); fd.append('arrays', 'true'); fd.append('max_points', '2500');
+        return fetch('api/analyze', {method: 'POST', body: fd}).then(r => r.json()); }""")
+    fit = next(iter(api["results"].values()))["details"]["indentation"]
+    drawn = page.evaluate("document.getElementById('an-plot-indentation').data[1]")
+    want = sorted(zip([d * 1e9 for d in fit["indentation"]], [(f - fit["baseline"]) * 1e9 for f in fit["fit_force"]]))
+    assert drawn["x"] == pytest.approx([w[0] for w in want]) and drawn["y"] == pytest.approx([w[1] for w in want])
+    title = page.evaluate("document.querySelector('#an-plot-indentation .g-gtitle text').textContent")
+    assert f"{fit['youngs_modulus'] / 1e3:.4g} kPa" in title, title
+    assert "E = " in page.inner_text("[data-option='indentation.model'] .used")
+    box.fill("")
+    box.dispatch_event("change")
+    page.wait_for_function("document.getElementById('an-plot-indentation').classList.contains('hidden')", timeout=60_000)
+    page.select_option("#an-example", "")
+
+
 def test_a_sandboxed_frame_cannot_write(page, live_server):
     """Issue 33.2: a sandboxed iframe (Origin: null) on a page can neither upload, analyse nor start a
     fit: its form posts get 403, and the session holds no more than before."""

@@ -146,6 +146,12 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
             for key in ("time", "position", "separation", "deflection", "force", "segment"):
                 if res.get(key) is not None:
                     res[key] = [res[key][i] for i in idx]
+            fit = (res.get("details") or {}).get("indentation")
+            if isinstance(fit, dict) and isinstance(fit.get("indentation"), list):   # the modulus fit's samples
+                keep = decimate(len(fit["indentation"]), max_points)
+                for key in ("indentation", "fit_force", "residuals"):
+                    if isinstance(fit.get(key), list):
+                        fit[key] = [fit[key][i] for i in keep]
         from dataclasses import replace
 
         direct = replace(analysis, file_timeout=None)   # read once already, in this call

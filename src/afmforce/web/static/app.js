@@ -241,6 +241,7 @@ function drawCurve() {
     Plotly.react("an-plot-raw", rt, { ...LAYOUT, title: { text: "Raw signal vs piezo position" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
   }
   drawDrift(raw, d, parts);
+  drawIndentation(res);
   const rows = [["contact", res.contact_kind_reason && String(res.contact_kind_reason).startsWith(res.contact_kind) ? res.contact_kind_reason : `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
     ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
     ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", res.friction_verdict && String(res.friction_verdict).startsWith(res.friction) ? res.friction_verdict : `${res.friction}: ${res.friction_verdict}`],
@@ -320,6 +321,20 @@ $("an-batch-csv").addEventListener("click", () => {
   rows.forEach((r, i) => lines.push([names[i], ...r].map(q).join(",")));
   download("afmforce-curves.csv", new Blob([lines.join("\n") + "\n"], { type: "text/csv" }));
 });
+function drawIndentation(res) {   // force above the baseline vs indentation: the data and the fitted model, E in the legend
+  const div = $("an-plot-indentation"), fit = (res.details || {}).indentation;
+  if (!fit || !Array.isArray(fit.indentation) || !fit.indentation.length) { div.classList.add("hidden"); Plotly.purge(div); return; }
+  div.classList.remove("hidden");
+  const x = fit.indentation.map((v) => v * 1e9), data = fit.fit_force.map((F, i) => (F + fit.residuals[i] - fit.baseline) * 1e9);
+  const order = x.map((_, i) => i).sort((a, b) => x[a] - x[b]);
+  let label = `E = ${fmtPa(fit.youngs_modulus)} [${fmtPa(fit.youngs_modulus_low)}, ${fmtPa(fit.youngs_modulus_high)}]`;
+  if (fit.work_of_adhesion !== null && fit.work_of_adhesion !== undefined) label += `, w = ${Number((fit.work_of_adhesion * 1e3).toPrecision(3))} mJ/m²`;
+  Plotly.react(div, [
+    { x, y: data, name: `${fit.run} (data)`, mode: "markers", marker: { size: 3, color: "#777" }, hovertemplate: "δ = %{x:.2f} nm<br>F = %{y:.4f} nN<extra>data</extra>" },
+    { x: order.map((i) => x[i]), y: order.map((i) => (fit.fit_force[i] - fit.baseline) * 1e9), name: `fit: ${fit.model}`, mode: "lines", line: { color: "#b00020", width: 2 }, hovertemplate: "model: F = %{y:.4f} nN at δ = %{x:.2f} nm<extra></extra>" }],
+  { ...LAYOUT, title: { text: `Indentation: ${label}` + (fit.warnings && fit.warnings.length ? ` (${fit.warnings.length} warning${fit.warnings.length > 1 ? "s" : ""})` : "") },
+    xaxis: { title: { text: "indentation δ [nm]" } }, yaxis: { title: { text: "force above the baseline [nN]" } } }, CONFIG);
+}
 function slopeText(slope, unit) {   // a compliance slope per nm (29680000 V/m reads 0.02968 V/nm)
   return unit === "N" ? `${Number(slope.toPrecision(4))} N/m` : `${Number((slope * 1e-9).toPrecision(4))} ${unit}/nm`;
 }
