@@ -248,3 +248,28 @@ def test_bodies_that_are_not_objects(hostile, url, body):
     if body in ("", "null") and url.startswith("/api/simulate"):
         return          # no body: the defaults, a valid request
     _check(client, before, "POST", url, field=None, body=body)
+
+
+def _meta_keys():
+    from afmforce._fields import QUANTITIES
+    from afmforce.io._meta import METADATA
+
+    return [k for k in METADATA if k in QUANTITIES]
+
+
+@pytest.mark.parametrize("key", _meta_keys())
+@pytest.mark.parametrize("url", ["/api/analyze", "/api/fit"])
+def test_every_numeric_metadata_override_refuses_hostile_values(hostile, key, url):
+    """``meta`` (KEY=VALUE, as --meta): each key of the shared vocabulary, hostile texts refused by
+    field (a sensitivity of 1e300 was read and failed the curve with an OverflowError)."""
+    from afmforce._fields import QUANTITIES
+
+    client, before = hostile
+    for text in TEXTS:
+        if text == "" or _valid_number(QUANTITIES[key], text):
+            continue
+        if url == "/api/fit":
+            body = json.dumps({"velocities": [1e-6, 2e-6], "meta": [f"{key}={text}"]})
+            _check(client, before, "POST", url, field="meta[0]", body=body)
+        else:
+            _check(client, before, "POST", url, field="meta[0]", data={"example": "asylum-air", "meta": f"{key}={text}"})

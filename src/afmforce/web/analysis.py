@@ -20,7 +20,7 @@ from ..errors import ParameterError
 from .limits import ANALYSIS_POINTS
 from .replies import PastBudget
 from .tasks import decimate
-from .validate import FieldError, number
+from .validate import FieldError, metadata, number
 from ..sweep.files import CurveAnalysis
 
 __all__ = ["parse_inputs", "run_analysis", "CachedAnalysis"]
@@ -65,7 +65,6 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
     from ..analysis.options import OPTIONS, ProbeCalibration
     from ..analysis.options_text import parse_option
     from ..analysis.pipeline import resolve_options
-    from ..io._meta import parse_meta_args
 
     given: dict[str, dict[str, Any]] = {}
     for text in options:
@@ -94,7 +93,7 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
         values[key] = number(value.strip(), fields[key], key, f"probe.{key}")
     probe_record = ProbeCalibration(**values)
     resolve_options(records, probe_record)
-    override = {**parse_meta_args(meta), **{k: values[k] for k in ("spring_constant", "sensitivity") if k in values}}
+    override = {**metadata(list(meta)), **{k: values[k] for k in ("spring_constant", "sensitivity") if k in values}}
     return records, probe_record, override
 
 

@@ -49,8 +49,11 @@ async def analyze(request: Request,
         data = await up.read()
         stored.append(sessions.save(session, up.filename or "upload", data))
     paths = [sessions.path(session, s["id"]) for s in stored]
-    for fid in file_id:
-        paths.append(sessions.path(session, fid))
+    for i, fid in enumerate(file_id):
+        try:
+            paths.append(sessions.path(session, fid))
+        except ParameterError as exc:
+            raise FieldError(f"file_id[{i}]", str(exc)) from None
     for name in example:
         if name not in DATASETS:
             raise ParameterError(f"example {name}: unknown; choose one of {', '.join(DATASETS)}")

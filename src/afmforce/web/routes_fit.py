@@ -7,6 +7,7 @@ from typing import Any
 from fastapi import APIRouter, Request
 from pydantic import BaseModel, ConfigDict, Field
 
+from ..errors import AfmforceError
 from . import validate
 from .limits import MAX_CURVES, MAX_ITEMS
 
@@ -38,7 +39,6 @@ class FitRequest(BaseModel):
 def fit(request: Request, body: FitRequest) -> dict:
     """Start a fit; returns ``{"id"}``. Follow it at ``GET /api/jobs/{id}`` or ``/api/jobs/{id}/events``."""
     from ..fit import PARAMETERS
-    from ..io._meta import parse_meta_args
 
     session = request.state.session
     unknown = [n for n in body.free if n not in PARAMETERS]
@@ -48,7 +48,14 @@ def fit(request: Request, body: FitRequest) -> dict:
     velocities = validate.velocities(body.velocities)
     truth = validate.flat_config(body.truth, "truth.")
     validate.build_config(truth, "truth.")     # names, ranges and their combination
-    files = [request.app.state.sessions.path(session, fid) for fid in body.file_ids]
+    files = []
+    for i, fid in enumerate(body.file_ids):
+        try:
+            files.append(request.app.state.sessions.path(session, fid))
+        except validate.FieldError:
+            raise
+        except AfmforceError as exc:
+            raise validate.FieldError(f"file_ids[{i}]", str(exc)) from None
     if not files and len(velocities) < 2:
         raise validate.FieldError("velocities", "give >= 2 uploaded curves (file_ids) or >= 2 velocities "
                                                 "for virtual curves")
@@ -61,7 +68,7 @@ def fit(request: Request, body: FitRequest) -> dict:
     params = body.model_dump()
     params.update(velocities=velocities, truth=truth)
     params["files"] = [(str(p), name) for p, name in files]
-    params["meta"] = parse_meta_args(body.meta)
+    params["meta"] = validate.metadata(body.meta)
     request.app.state.sessions.touch(session)
     job = request.app.state.jobs.submit("fit", session, params)
     return {"id": job.id, "state": job.state}

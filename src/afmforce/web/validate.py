@@ -24,7 +24,8 @@ from .._fields import FieldSpec
 from ..errors import AfmforceError, ParameterError
 from .limits import MAX_ITEMS, MAX_RUNS, MAX_SAMPLES
 
-__all__ = ["FieldError", "number", "flat_config", "build_config", "cycle_samples", "velocities", "sweep_spec"]
+__all__ = ["FieldError", "number", "flat_config", "build_config", "cycle_samples", "velocities", "sweep_spec",
+           "metadata"]
 
 #: Longest text accepted for one value (``"0.1 um/s"``).
 _TEXT = 64
@@ -155,6 +156,28 @@ def velocities(values: Any, field: str = "velocities") -> list[float]:
         raise FieldError(field, f"{field} expects a list of speeds [m/s]")
     return [number(v, QUANTITIES["velocity"], "velocity", f"{field}[{i}]", "positive")
             for i, v in enumerate(values)]
+
+
+def metadata(items: Any, field: str = "meta") -> dict[str, Any]:
+    """``KEY=VALUE`` metadata overrides (:func:`afmforce.io._meta.parse_meta_args`, as ``--meta``), one
+    item at a time so that a refusal names it; a key of the shared vocabulary is checked against its
+    declared range (``sensitivity=1e300`` is refused, not read)."""
+    from .._fields import QUANTITIES
+    from ..io._meta import parse_meta_args
+
+    out: dict[str, Any] = {}
+    for i, item in enumerate(_strings(items, field)):
+        where = f"{field}[{i}]"
+        try:
+            parsed = parse_meta_args([item])
+        except ParameterError as exc:
+            raise FieldError(where, str(exc).replace("--meta", where)) from None
+        for key, value in parsed.items():
+            spec = QUANTITIES.get(key)
+            if spec is not None and isinstance(value, (int, float)) and not isinstance(value, bool):
+                number(value, spec, key, where)
+        out.update(parsed)
+    return out
 
 
 def _strings(items: Any, field: str) -> list[str]:
