@@ -362,3 +362,24 @@ def test_no_legend_over_an_axis_title_and_no_title_clipped(page):
             for legend in plot["legend"]:
                 assert not overlap(legend, t), plot
     assert checked >= 8, boxes
+
+
+def test_each_profiled_parameter_has_its_own_axis(page):
+    """Issue 33.5: the profiles of two parameters are drawn in two panels, each x axis titled with its
+    parameter and unit (they were one log axis spanning 15 decades). The result is shaped as the
+    library writes it (FitResult.to_dict: profiles NAME -> {value, delta_chi2})."""
+    page.click("button[data-view=fit]")
+    r = {"verdict": "friction detected", "level": 0.95, "redchi": 1.0, "model_evaluations": 10, "wall_time": 1.0,
+         "plots": [], "parameters": {
+             "hamaker": {"value": 5e-19, "stderr": 1e-20, "unit": "J", "interval": [4.8e-19, 5.2e-19],
+                         "interval_method": "profile"},
+             "xi": {"value": 0.005, "stderr": 1e-4, "unit": "kg/s", "interval": [0.0048, 0.0052],
+                    "interval_method": "profile"}},
+         "profiles": {"hamaker": {"value": [4.8e-19, 5e-19, 5.2e-19], "delta_chi2": [4, 0, 4]},
+                      "xi": {"value": [0.0048, 0.005, 0.0052], "delta_chi2": [4, 0, 4]}}}
+    page.evaluate("(r) => drawFit(r)", r)
+    titles = page.evaluate("""() => [...document.querySelectorAll('#fit-profiles .g-xtitle text, #fit-profiles [class^=g-x] text')]
+        .map(t => t.textContent)""")
+    assert "hamaker [J]" in titles and "xi [kg/s]" in titles, titles
+    axes = page.evaluate("Object.keys(document.getElementById('fit-profiles')._fullLayout).filter(k => /^xaxis\\d*$/.test(k))")
+    assert len(axes) == 2, axes

@@ -581,7 +581,7 @@ function drawFit(r) {
   if (pr.length) {
     const layout = { ...LAYOUT, title: { text: "Profile likelihoods" }, grid: { rows: 1, columns: pr.length, pattern: "independent" } };
     prof.forEach(([n], i) => {
-      const xs = pr[i].x.filter((v) => typeof v === "number" && v > 0), unit = (SCHEMA.fit.find((p) => p.name === n) || {}).unit || "-";
+      const xs = pr[i].x.filter((v) => typeof v === "number" && v > 0), unit = ((r.parameters || {})[n] || {}).unit || (SCHEMA.fit.find((p) => p.name === n) || {}).unit || "-";
       const log = xs.length === pr[i].x.length && xs.length > 1 && Math.max(...xs) / Math.min(...xs) > 100;
       layout[i ? `xaxis${i + 1}` : "xaxis"] = { title: { text: `${n} [${unit}]` }, type: log ? "log" : "linear" };
       layout[i ? `yaxis${i + 1}` : "yaxis"] = { title: { text: "Δχ² [-]" } };
