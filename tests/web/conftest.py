@@ -63,3 +63,25 @@ def live_server(tmp_path_factory):
     yield f"http://127.0.0.1:{port}/"
     server.should_exit = True
     thread.join(timeout=10)
+
+
+def worker_processes() -> int:
+    """Child processes of this test process, but multiprocessing's resource tracker (one helper per
+    interpreter, started with the first job process and kept: not a worker)."""
+    import psutil
+
+    n = 0
+    for p in psutil.Process().children(recursive=True):
+        try:
+            if "resource_tracker" in " ".join(p.cmdline()):
+                continue
+        except psutil.Error:
+            continue
+        n += 1
+    return n
+
+
+@pytest.fixture(scope="session")
+def workers():
+    """``workers() -> int``: the worker processes alive under this test process now."""
+    return worker_processes

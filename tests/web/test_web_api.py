@@ -59,7 +59,7 @@ def test_option_change_reruns_and_changes_the_fit(client):
     assert vdw["separation_max"] <= 20e-9 < vdw0["separation_max"]
     assert vdw["n_points"] < vdw0["n_points"]
     bad = client.post("/api/analyze", data={"file_id": fid, "option": "vdw.max_separation=-3nm"})
-    assert bad.status_code == 422 and "max_separation" in bad.json()["error"]
+    assert bad.status_code == 422 and "max_separation" in bad.json()["error"]["message"]
 
 
 def test_arrays_raw_signal_and_units(client):
@@ -83,7 +83,7 @@ def test_uploaded_names_never_reach_the_file_system(client, tmp_path, name):
         rel = p.relative_to(data)
         assert rel.parts[0] in ("sessions", "jobs"), rel
         if p.is_file() and rel.parts[0] == "sessions":
-            assert len(rel.parts) == 3 and (rel.name == "index.json" or
+            assert len(rel.parts) == 3 and (rel.name in ("index.json", "last-used") or
                                             rel.name.split(".")[0].isalnum() and len(rel.name.split(".")[0]) == 32)
     assert not (tmp_path / "evil.ibw").exists() and not Path("/tmp/evil.ibw").exists()
     if r.status_code == 200:   # a malformed file: an error for the page, no server path in it
@@ -100,7 +100,7 @@ def test_safe_suffix():
 def test_upload_over_the_limit_gets_413(make_client):
     c = make_client(max_upload=1000)
     r = c.post("/api/analyze", files={"file": ("big.ibw", b"x" * 5000)})
-    assert r.status_code == 413 and "1,000" in r.json()["error"]
+    assert r.status_code == 413 and "1,000" in r.json()["error"]["message"]
     assert c.get("/api/health").status_code == 200
 
 
@@ -126,7 +126,7 @@ def test_two_sessions_never_see_each_others_data(make_client):
     assert [f["id"] for f in a.get("/api/files").json()] == [fid]
     assert b.get("/api/files").json() == []
     r = b.post("/api/analyze", data={"file_id": fid})
-    assert r.status_code == 422 and "no uploaded file" in r.json()["error"]
+    assert r.status_code == 422 and "no uploaded file" in r.json()["error"]["message"]
     job = a.post("/api/fit", json={"velocities": [1e-6, 4e-6], "truth": {"xi": 0.005}}).json()["id"]
     assert b.get(f"/api/jobs/{job}").status_code == 404
     assert b.get("/api/jobs").json() == []
@@ -159,13 +159,14 @@ def test_simulate_matches_the_library(client):
                                        ({"sample_rate": 1e8, "velocity": 1e-9}, "samples")])
 def test_simulate_bad_input_is_one_readable_error(client, cfg, word):
     r = client.post("/api/simulate", json=cfg)
-    assert r.status_code == 422 and word in r.json()["error"]
+    assert r.status_code == 422 and word in r.json()["error"]["message"]
 
 
 def test_request_past_its_budget_is_cancelled(make_client):
     c = make_client(request_budget=1e-4)
     r = c.post("/api/simulate", json={"velocity": 1e-8})
-    assert r.status_code == 504 and "budget" in r.json()["detail"]
+    assert r.status_code == 504 and "budget" in r.json()["error"]["message"]
+    assert r.json()["error"]["type"] == "past_budget"
 
 
 def test_raw_export_reads_back(client, tmp_path):
@@ -291,7 +292,7 @@ def test_force_map_image_has_axes_in_um_and_names_its_curves(client):
 def test_requests_from_other_sites_are_refused(client):
     """Another web site's page cannot drive the local server (CSRF), nor a rebound DNS name."""
     evil = client.post("/api/simulate", json={}, headers={"origin": "http://evil.example"})
-    assert evil.status_code == 403 and "cross-site" in evil.json()["error"]
+    assert evil.status_code == 403 and "cross-site" in evil.json()["error"]["message"]
     assert client.get("/api/health", headers={"host": "evil.example:8765"}).status_code == 403
     same = client.get("/api/health", headers={"origin": "http://127.0.0.1"})
     assert same.status_code == 200

@@ -86,6 +86,170 @@ def test_upload_a_real_file_and_change_an_option(page):
     _shot(page, "analyse")
 
 
+def test_a_reload_restores_the_uploads_and_the_analysis(page):
+    """Issue 33.3: a reload loses nothing: the session's uploads are listed, the last analysis is
+    reopened with the option changed before (vdw.max_separation = 15 nm)."""
+    page.reload()
+    page.wait_for_selector("body[data-ready='1']", timeout=60_000)
+    assert "asylum" in page.inner_text("#an-uploads")
+    page.wait_for_function("document.getElementById('an-plot-force').data", timeout=60_000)
+    assert "asylum" in page.inner_text("#an-curve")
+    assert _vdw_max(page) <= 15.0001
+    assert page.locator("[data-option='vdw.max_separation'] input").input_value() == "15"
+
+
+def test_calibration_fields_show_the_used_values_and_the_models_reason(page):
+    """Issue 33.4: k typed in the page is the k the analysis uses (shown under the field); the model
+    dropdown holds the contact registry; a step that cannot run says why."""
+    from afmforce.contact import INDENTATION_MODELS
+
+    options = page.eval_on_selector_all("[data-option='indentation.model'] select option", "os => os.map(o => o.value)")
+    assert options == list(INDENTATION_MODELS)
+    used = page.locator("[data-probe='spring_constant'] .used")
+    page.wait_for_function("document.querySelector(\"[data-probe='spring_constant'] .used\").textContent.includes('used')",
+                           timeout=30_000)
+    assert "N/m" in used.inner_text()
+    box = page.locator("[data-probe='spring_constant'] input.val")
+    box.fill("0.5")
+    box.dispatch_event("change")
+    page.wait_for_function("document.querySelector(\"[data-probe='spring_constant'] .used\").textContent.includes('used 0.5 N/m')",
+                           timeout=30_000)
+    reason = page.inner_text("[data-option='indentation.model'] .used")
+    assert reason.startswith("not run: hard contact"), reason      # the real Asylum file: a hard contact
+    assert "indentation (not run)" in page.inner_text("#an-summary")
+    box.fill("")                                   # back to the file's value
+    box.dispatch_event("change")
+    page.wait_for_function("!document.querySelector(\"[data-probe='spring_constant'] .used\").textContent.includes('used 0.5 N/m')",
+                           timeout=30_000)
+
+
+def test_the_modulus_fit_on_force_vs_indentation(page):
+    """Issue 33.4: a cell (the shipped JPK curve) with its tip radius typed in the calibration field:
+    E with its interval and the fitted curve drawn on force vs indentation, the numbers of the API."""
+    page.select_option("#an-example", "jpk-cell")
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-curve').value.includes('jpk-cell')", timeout=60_000)
+    reason = page.inner_text("[data-option='indentation.model'] .used")
+    assert reason.startswith("not run") and "radius" in reason, reason      # no tip radius yet: says so
+    box = page.locator("[data-option='indentation.tip_radius'] input.val")
+    box.fill("5000")                                                           # nm: a 5 µm bead
+    box.dispatch_event("change")
+    page.wait_for_function("document.getElementById('an-plot-indentation').data", timeout=60_000)
+    api = page.evaluate("""() => { const fd = new FormData(); fd.append('example', 'jpk-cell');
+        fd.append('option', 'indentation.tip_radius=5um'); fd.append('arrays', 'true'); fd.append('max_points', '2500');
+        return fetch('api/analyze', {method: 'POST', body: fd}).then(r => r.json()); }""")
+    fit = next(iter(api["results"].values()))["details"]["indentation"]
+    drawn = page.evaluate("document.getElementById('an-plot-indentation').data[1]")
+    want = sorted(zip([d * 1e9 for d in fit["indentation"]], [(f - fit["baseline"]) * 1e9 for f in fit["fit_force"]]))
+    assert drawn["x"] == pytest.approx([w[0] for w in want]) and drawn["y"] == pytest.approx([w[1] for w in want])
+    title = page.evaluate("document.querySelector('#an-plot-indentation .g-gtitle text').textContent")
+    assert f"{fit['youngs_modulus'] / 1e3:.4g} kPa" in title, title
+    assert "E = " in page.inner_text("[data-option='indentation.model'] .used")
+    box.fill("")
+    box.dispatch_event("change")
+    page.wait_for_function("document.getElementById('an-plot-indentation').classList.contains('hidden')", timeout=60_000)
+    page.select_option("#an-example", "")
+
+
+def test_a_sandboxed_frame_cannot_write(page, live_server):
+    """Issue 33.2: a sandboxed iframe (Origin: null) on a page can neither upload, analyse nor start a
+    fit: its form posts get 403, and the session holds no more than before."""
+    before = page.evaluate("fetch('api/session').then(r => r.json())")
+    html = f"""<form id=a method=post enctype=multipart/form-data action="{live_server}api/analyze" target=_self>
+      <input type=hidden name=example value=asylum-air><input type=file name=file></form>
+      <script>document.getElementById('a').submit();</script>"""
+    page.evaluate("""(html) => { const f = document.createElement('iframe');
+        f.setAttribute('sandbox', 'allow-scripts allow-forms'); f.id = 'evil'; f.srcdoc = html;
+        document.body.append(f); }""", html)
+    deadline = time.monotonic() + 30
+    frame = None
+    while time.monotonic() < deadline:
+        frame = next((f for f in page.frames if "/api/analyze" in f.url), None)
+        if frame is not None and "error" in (frame.inner_text("body") or ""):
+            break
+        page.wait_for_timeout(200)        # lets Playwright see the frame's navigation (time.sleep would not)
+    assert frame is not None, [f.url for f in page.frames]
+    text = frame.inner_text("body")
+    assert "forbidden" in text and "opaque origin" in text, text
+    fit = """<form id=b method=post enctype=text/plain action="%sapi/fit" target=_self>
+      <input type=hidden name='{"velocities":[1e-6,2e-6],"x":"' value='"}'></form>
+      <script>document.getElementById('b').submit();</script>""" % live_server
+    page.evaluate("(html) => { const f = document.getElementById('evil'); f.srcdoc = html; }", fit)
+    deadline = time.monotonic() + 30
+    while time.monotonic() < deadline:
+        frame = next((f for f in page.frames if "/api/fit" in f.url), None)
+        if frame is not None and "error" in (frame.inner_text("body") or ""):
+            break
+        page.wait_for_timeout(200)        # lets Playwright see the frame's navigation (time.sleep would not)
+    assert frame is not None and "forbidden" in frame.inner_text("body")
+    after = page.evaluate("fetch('api/session').then(r => r.json())")
+    assert after["files"] == before["files"] and len(after["jobs"]) == len(before["jobs"])
+    page.evaluate("document.getElementById('evil').remove()")
+
+
+def test_every_map_quantity_is_drawn_with_titled_axes(page):
+    """Issue 33.4/33.5: a force map's every quantity can be drawn (a selector), each heat map with its
+    axes titled in µm and its colour bar titled with the quantity and its unit; the adhesion marker
+    of a curve sits on the curve."""
+    data = Path(__file__).resolve().parents[1] / "data" / "afmforce-map_jpk-map2x2.h5"
+    page.set_input_files("#an-files", str(data))
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-plot-map').data", timeout=60_000)
+    values = page.eval_on_selector_all("#an-map-quantity option", "os => os.map(o => o.value)")
+    assert len(values) >= 2
+    labels = set()
+    for v in values:
+        page.select_option("#an-map-quantity", v)
+        page.wait_for_timeout(200)
+        titles = page.evaluate("""() => { const gd = document.getElementById('an-plot-map');
+            const q = (s) => [...gd.querySelectorAll(s)].map(t => t.textContent.trim());
+            return {x: q('.g-xtitle text'), y: q('.g-ytitle text'), bar: q('.colorbar .cbtitle text, .colorbar [class*=title] text'),
+                    all: [...gd.querySelectorAll('text')].map(t => t.parentNode.getAttribute('class') + ':' + t.textContent)}; }""")
+        assert titles["x"] == ["x [µm]"] and titles["y"] == ["y [µm]"], titles
+        empty = page.evaluate("document.getElementById('an-plot-map').data[0].z.every(r => r.every(v => v === null))")
+        if empty:       # a quantity no curve of the 2x2 extract gives: said so on the plot
+            assert any("no curve of this map gives" in t for t in titles["all"]), " | ".join(titles["all"])
+            continue
+        assert titles["bar"] and "[" in titles["bar"][0], " | ".join(titles["all"])
+        labels.add(titles["bar"][0])
+    assert len(labels) >= 2          # each quantity drawn, not the first again
+    on_curve = page.evaluate("""() => { const gd = document.getElementById('an-plot-force');
+        const m = gd.data.find(d => d.name.startsWith('adhesion')); if (!m) return null;
+        const curve = gd.data.filter(d => d.name === 'retract')[0];
+        return curve.x.some((x, i) => x === m.x[0] && curve.y[i] === m.y[0]); }""")
+    assert on_curve is True
+
+
+def test_the_curves_of_a_map_in_one_table_histogram_and_csv(page, tmp_path):
+    """Issue 33.4: the curves of the map above in one table (units in the header), a histogram of a
+    chosen column and a CSV whose numbers are the API's, read back independently."""
+    import csv
+
+    page.wait_for_selector("#an-batch:not(.hidden)", timeout=30_000)
+    rows = page.locator("#an-batch-table tr").count()
+    assert rows == 1 + 4                                  # the four curves of the 2x2 extract
+    page.select_option("#an-batch-col", "adhesion_force")
+    page.wait_for_function("document.getElementById('an-batch-hist').data[0].x.length >= 1", timeout=10_000)
+    titles = page.evaluate("""() => [...document.querySelectorAll('#an-batch-hist .g-xtitle text, #an-batch-hist .g-ytitle text')]
+        .map(t => t.textContent)""")
+    assert titles == ["adhesion_force [N]", "curves [count]"], titles
+    with page.expect_download() as got:
+        page.click("#an-batch-csv")
+    path = tmp_path / "curves.csv"
+    got.value.save_as(path)
+    lines = [line for line in path.read_text().splitlines() if not line.startswith("#")]
+    table = list(csv.DictReader(lines))
+    assert len(table) == 4 and "adhesion_force [N]" in table[0]
+    fid = page.evaluate("AN.files[0].id")
+    api = page.evaluate(f"""() => {{ const fd = new FormData(); fd.append('file_id', '{fid}');
+        return fetch('api/analyze', {{method: 'POST', body: fd}}).then(r => r.json()); }}""")["results"]
+    for row in table:
+        want = api[row["curve"]]["adhesion_force"]
+        assert (row["adhesion_force [N]"] == "" and want is None) or float(row["adhesion_force [N]"]) == want
+    hist = page.evaluate("document.getElementById('an-batch-hist').data[0].x")
+    assert sorted(hist) == sorted(float(r["adhesion_force [N]"]) for r in table if r["adhesion_force [N]"])
+
+
 def test_malformed_file_is_an_error_in_the_page(page, live_server, tmp_path):
     bad = tmp_path / "broken.jpk-force"
     bad.write_bytes(b"PK\x03\x04 this is no zip archive")
@@ -143,3 +307,79 @@ def test_run_a_small_sweep_and_see_its_table(page):
     assert page.evaluate("document.getElementById('sw-plot').data[0].x.length") == 3
     assert "done" in page.inner_text("#sw-state")
     _shot(page, "sweep")
+
+
+PLOTS = ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance", "sim-plot-defl", "sw-plot"]
+
+
+def test_every_drawn_axis_has_a_title_with_its_unit(page):
+    """Issue 33.5: every rendered axis of every drawn plot carries a title (Plotly title objects,
+    read from the SVG the browser drew), with its unit in square brackets."""
+    drawn = page.evaluate("""(ids) => ids.map((id) => {
+        const gd = document.getElementById(id);
+        if (!gd || !gd.data || !gd.data.length) return [id, null];
+        const q = (sel) => [...gd.querySelectorAll(sel)].map((t) => t.textContent.trim());
+        return [id, {x: q('.g-xtitle text'), y: q('.g-ytitle text')}];
+    })""", PLOTS + [d for d in page.evaluate(
+        "[...document.querySelectorAll('.plot')].map(e => e.id).filter(Boolean)") if d not in PLOTS])
+    seen = 0
+    for pid, titles in drawn:
+        if titles is None:
+            continue
+        seen += 1
+        for axis in ("x", "y"):
+            assert titles[axis] and all(titles[axis]), (pid, axis, titles)
+            assert all("[" in t and "]" in t or "index" in t for t in titles[axis]), (pid, axis, titles)
+    assert seen >= 4, drawn          # the analysis, the simulation and the sweep were drawn before
+
+
+def test_no_legend_over_an_axis_title_and_no_title_clipped(page):
+    """Issue 33.5: in every drawn plot, the rendered legend box overlaps no axis title, and every
+    axis title lies inside its plot's drawing (not clipped)."""
+    boxes = page.evaluate("""() => [...document.querySelectorAll('.plot')].filter(gd => gd.data && gd.data.length
+        && gd.offsetParent !== null).map(gd => {
+        const r = (e) => { const b = e.getBoundingClientRect(); return [b.left, b.top, b.right, b.bottom]; };
+        return {id: gd.id, svg: r(gd.querySelector('.main-svg')), legend: [...gd.querySelectorAll('.legend')].map(r),
+                titles: [...gd.querySelectorAll('.g-xtitle text, .g-ytitle text')].map(r)};
+    })""")
+    # plots of views that are hidden now are checked where they are shown: switch through the views
+    for view in ("simulate", "sweep", "analyse"):
+        page.click(f"button[data-view={view}]")
+        page.wait_for_timeout(300)
+        boxes += page.evaluate("""() => [...document.querySelectorAll('.view.active .plot')].filter(gd => gd.data
+            && gd.data.length).map(gd => {
+            const r = (e) => { const b = e.getBoundingClientRect(); return [b.left, b.top, b.right, b.bottom]; };
+            return {id: gd.id, svg: r(gd.querySelector('.main-svg')), legend: [...gd.querySelectorAll('.legend')].map(r),
+                    titles: [...gd.querySelectorAll('.g-xtitle text, .g-ytitle text')].map(r)};
+        })""")
+    overlap = lambda a, b: a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]   # noqa: E731
+    checked = 0
+    for plot in boxes:
+        for t in plot["titles"]:
+            checked += 1
+            s = plot["svg"]
+            assert s[0] - 1 <= t[0] and t[2] <= s[2] + 1 and s[1] - 1 <= t[1] and t[3] <= s[3] + 1, plot
+            for legend in plot["legend"]:
+                assert not overlap(legend, t), plot
+    assert checked >= 8, boxes
+
+
+def test_each_profiled_parameter_has_its_own_axis(page):
+    """Issue 33.5: the profiles of two parameters are drawn in two panels, each x axis titled with its
+    parameter and unit (they were one log axis spanning 15 decades). The result is shaped as the
+    library writes it (FitResult.to_dict: profiles NAME -> {value, delta_chi2})."""
+    page.click("button[data-view=fit]")
+    r = {"verdict": "friction detected", "level": 0.95, "redchi": 1.0, "model_evaluations": 10, "wall_time": 1.0,
+         "plots": [], "parameters": {
+             "hamaker": {"value": 5e-19, "stderr": 1e-20, "unit": "J", "interval": [4.8e-19, 5.2e-19],
+                         "interval_method": "profile"},
+             "xi": {"value": 0.005, "stderr": 1e-4, "unit": "kg/s", "interval": [0.0048, 0.0052],
+                    "interval_method": "profile"}},
+         "profiles": {"hamaker": {"value": [4.8e-19, 5e-19, 5.2e-19], "delta_chi2": [4, 0, 4]},
+                      "xi": {"value": [0.0048, 0.005, 0.0052], "delta_chi2": [4, 0, 4]}}}
+    page.evaluate("(r) => drawFit(r)", r)
+    titles = page.evaluate("""() => [...document.querySelectorAll('#fit-profiles .g-xtitle text, #fit-profiles [class^=g-x] text')]
+        .map(t => t.textContent)""")
+    assert "hamaker [J]" in titles and "xi [kg/s]" in titles, titles
+    axes = page.evaluate("Object.keys(document.getElementById('fit-profiles')._fullLayout).filter(k => /^xaxis\\d*$/.test(k))")
+    assert len(axes) == 2, axes

@@ -25,7 +25,24 @@ def register(sub) -> None:
                    "(default ~/.afmforce/serve); sweeps left running resume from it")
     p.add_argument("--budget", type=float, default=60.0, metavar="SECONDS",
                    help="time budget of one analysis or simulation request (default 60 s)")
+    p.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN",
+                   help="an origin (https://lab.example.org) besides the server's own whose pages may send "
+                        "requests (repeatable); every other origin, 'null' included, gets HTTP 403")
+    p.add_argument("--session-ttl", default="24h", metavar="TIME",
+                   help="a browser session's uploads and jobs are removed this long after its last use "
+                        "(default 24h; units: s, min, h, d)")
     p.set_defaults(func=run)
+
+
+def session_ttl(text: str) -> float:
+    """``--session-ttl`` as seconds (``"24h"``, ``"30min"``, ``"2d"``, a plain number: seconds)."""
+    from ..errors import ParameterError
+    from ..units import parse_quantity
+
+    try:
+        return parse_quantity(text, "time", "--session-ttl")
+    except ParameterError as exc:
+        raise ParameterError(f"{exc}; give e.g. 24h, 30min or 2d") from None
 
 
 def run(args: argparse.Namespace) -> int:
@@ -45,7 +62,8 @@ def run(args: argparse.Namespace) -> int:
 
     kw = {"data": args.data} if args.data is not None else {}
     settings = Settings(host=args.host, port=args.port, token=args.token, max_upload=parse_size(args.max_upload),
-                        request_budget=args.budget, **kw).resolved()
+                        request_budget=args.budget, allow_origins=tuple(args.allow_origin),
+                        session_ttl=session_ttl(args.session_ttl), **kw).resolved()
     sock = socket.socket(socket.AF_INET6 if ":" in settings.host else socket.AF_INET)
     sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
     try:
@@ -62,7 +80,10 @@ def run(args: argparse.Namespace) -> int:
     print(f"afmforce serve: {settings.url()}", flush=True)
     if settings.token and not settings.loopback:
         print(f"  token: {settings.token} (required on every request)", flush=True)
-    print(f"  data in {settings.data}; Ctrl-C stops", flush=True)
+    if settings.allow_origins:
+        print(f"  pages of {', '.join(settings.allow_origins)} may send requests", flush=True)
+    print(f"  data in {settings.data}; sessions kept {settings.session_ttl / 3600:g} h after their last use; "
+          "Ctrl-C stops", flush=True)
     server = uvicorn.Server(uvicorn.Config(app, log_level="warning", timeout_graceful_shutdown=3))
     server.run(sockets=[sock])
     return 0

@@ -4,6 +4,7 @@ the page, per-sample arrays, the raw signal and force-map images with axes in µ
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import threading
 import time
@@ -14,9 +15,12 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .._fields import QUANTITIES
+from .._fields import spec_of
 from ..errors import ParameterError
+from .limits import ANALYSIS_POINTS
+from .replies import PastBudget
 from .tasks import decimate
+from .validate import FieldError, metadata, number
 from ..sweep.files import CurveAnalysis
 
 __all__ = ["parse_inputs", "run_analysis", "CachedAnalysis"]
@@ -48,7 +52,11 @@ class CachedAnalysis(CurveAnalysis):
                 _CURVES.popitem(last=False)
         return pairs
 
-_PROBE = ("radius", "spring_constant", "theta0", "sensitivity", "resonance_frequency", "L0", "L1", "L2")
+def _probe_fields() -> dict[str, Any]:
+    """The probe record's fields and their specs (:class:`~afmforce.analysis.options.ProbeCalibration`)."""
+    from ..analysis.options import ProbeCalibration
+
+    return {f.name: spec_of(f) for f in dataclasses.fields(ProbeCalibration) if spec_of(f) is not None}
 
 
 def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[str]):
@@ -57,32 +65,41 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
     from ..analysis.options import OPTIONS, ProbeCalibration
     from ..analysis.options_text import parse_option
     from ..analysis.pipeline import resolve_options
-    from ..io._meta import parse_meta_args
-    from ..units import parse_quantity
 
     given: dict[str, dict[str, Any]] = {}
     for text in options:
-        step, name, value = parse_option(text, where="option")
+        try:
+            step, name, value = parse_option(text, where="option")
+        except ParameterError as exc:
+            raise FieldError(f"option.{str(text).partition('=')[0].strip()[:60]}", str(exc)) from None
         if name in given.setdefault(step, {}):
             raise ParameterError(f"option {step}.{name} given twice")
         given[step][name] = value
-    records = tuple(OPTIONS[step](**values) for step, values in given.items())
+    records = []
+    for step, values in given.items():     # the record's own checks (a model of the registry, ...)
+        try:
+            records.append(OPTIONS[step](**values))
+        except ParameterError as exc:
+            named = [n for n in values if n in str(exc)] or list(values)
+            raise FieldError(f"option.{step}.{named[0]}" if len(named) == 1 else f"option.{step}", str(exc)) from None
+    records = tuple(records)
     values: dict[str, float] = {}
+    fields = _probe_fields()
     for text in probe:
         key, sep, value = str(text).partition("=")
         key = key.strip()
-        if not sep or key not in _PROBE:
-            raise ParameterError(f"probe {text!r}: expected NAME=VALUE with NAME one of {', '.join(_PROBE)}")
-        values[key] = parse_quantity(value.strip(), QUANTITIES[key].dimension, key)
+        if not sep or key not in fields:
+            raise FieldError("probe", f"probe {text[:60]!r}: expected NAME=VALUE with NAME one of {', '.join(fields)}")
+        values[key] = number(value.strip(), fields[key], key, f"probe.{key}")
     probe_record = ProbeCalibration(**values)
     resolve_options(records, probe_record)
-    override = {**parse_meta_args(meta), **{k: values[k] for k in ("spring_constant", "sensitivity") if k in values}}
+    override = {**metadata(list(meta)), **{k: values[k] for k in ("spring_constant", "sensitivity") if k in values}}
     return records, probe_record, override
 
 
 def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *, format: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
-                 guard: bool = True) -> dict[str, Any]:
+                 guard: bool = True, deadline: float | None = None) -> dict[str, Any]:
     """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``.
 
     Returns the JSON of ``afmforce analyze --json`` with every stored name replaced by the
@@ -90,7 +107,10 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     samples, evenly spread), ``raw`` the raw signal per curve, ``maps`` the force maps.
     ``budget`` [s] bounds the reading of each file when ``guard`` (a file past it is reported as
     failed; the reader runs in a forked child, :mod:`afmforce.io._guard`); files read before
-    without failing are read here directly (``guard=False``).
+    without failing are read here directly (``guard=False``). Past ``deadline`` (``time.monotonic``)
+    the analysis stops after the curve it is on (:class:`~.replies.PastBudget`): a request that
+    timed out does not keep computing. With ``arrays``, the curves together carry at most
+    :data:`~.limits.ANALYSIS_POINTS` samples (``max_points`` is lowered for many curves).
     """
     from ..sweep.files import analyze_files, plan_curves
     from ..sweep.report import analysis_json
@@ -107,9 +127,16 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     rename.update({Path(p).name: name for p, name in files})
     timeout = budget if guard else None
     refs = plan_curves([p for p, _ in files], format, timeout=timeout)
+    if arrays:     # the response's size cap
+        max_points = max(10, min(max_points, ANALYSIS_POINTS // max(1, len(refs))))
     analysis = CachedAnalysis(options=records, probe=probe_record, meta_override=override, format=format,
                              keep_json=True, json_arrays=arrays, file_timeout=timeout)
-    result = analyze_files(refs, analysis, chunk_size=1, executor="serial")
+
+    def on_curve(_progress) -> None:
+        if deadline is not None and time.monotonic() > deadline:
+            raise PastBudget(f"cancelled: the analysis ran past its budget of {budget:g} s")
+
+    result = analyze_files(refs, analysis, chunk_size=1, executor="serial", progress=on_curve)
     payload = analysis_json(result)
     payload = _renamed(payload, rename)
     if arrays:
@@ -118,6 +145,12 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
             for key in ("time", "position", "separation", "deflection", "force", "segment"):
                 if res.get(key) is not None:
                     res[key] = [res[key][i] for i in idx]
+            fit = (res.get("details") or {}).get("indentation")
+            if isinstance(fit, dict) and isinstance(fit.get("indentation"), list):   # the modulus fit's samples
+                keep = decimate(len(fit["indentation"]), max_points)
+                for key in ("indentation", "fit_force", "residuals"):
+                    if isinstance(fit.get(key), list):
+                        fit[key] = [fit[key][i] for i in keep]
         from dataclasses import replace
 
         direct = replace(analysis, file_timeout=None)   # read once already, in this call
@@ -125,6 +158,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
         maps = any(r.index is not None for r in refs)
         payload["maps"] = _maps(summary_table(result), rename) if maps else []
     payload["wall_time"] = time.perf_counter() - t0
+    payload["max_points"] = max_points if arrays else None
     return payload
 
 

@@ -5,11 +5,10 @@ from __future__ import annotations
 import threading
 from contextlib import asynccontextmanager
 
-from fastapi import FastAPI, Request
-from fastapi.responses import JSONResponse
+from fastapi import FastAPI
 
 from .. import __version__
-from ..errors import AfmforceError
+from . import replies
 from .guard import Guard
 from .jobs import JobManager
 from .sessions import Sessions
@@ -25,6 +24,19 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     settings = (settings or Settings()).resolved()
     settings.data.mkdir(parents=True, exist_ok=True)
     jobs = JobManager(settings.data, budget=settings.job_budget, spare=settings.spare_job)
+    sessions = Sessions(settings.data, ttl=settings.session_ttl)
+    stop = threading.Event()
+
+    def expire() -> None:   # sessions unused past --session-ttl: their uploads and finished jobs go
+        gone = sessions.expire()
+        jobs.expire(gone, settings.session_ttl, live=sessions.keys())
+
+    def expiry_loop() -> None:
+        while not stop.wait(min(600.0, settings.session_ttl / 10)):
+            try:
+                expire()
+            except OSError:
+                pass
 
     warm = threading.Event()
 
@@ -42,25 +54,34 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     async def lifespan(app):
         threading.Thread(target=warm_up, daemon=True, name="afmforce-warm-up").start()
         jobs.load()          # sweeps left running by a previous server resume
+        expire()
+        threading.Thread(target=expiry_loop, daemon=True, name="afmforce-expiry").start()
         if settings.spare_job:
             jobs.start_spare()
-        yield
-        jobs.shutdown()
+        try:
+            yield
+        finally:
+            stop.set()
+            jobs.shutdown()
 
     app = FastAPI(title="afmforce", version=__version__, lifespan=lifespan, docs_url=None, redoc_url=None,
                   description="Analyse force curves, simulate the dynamic AFM, fit and sweep "
                               "(afmforce serve; docs/web.md). Values are SI. (No Swagger page: it loads "
                               "its script from a CDN, and this server works offline.)")
     app.state.settings = settings
-    app.state.sessions = Sessions(settings.data)
+    app.state.sessions = sessions
     app.state.jobs = jobs
     app.state.warm = warm
-
-    @app.exception_handler(AfmforceError)
-    async def _bad_input(request: Request, exc: AfmforceError):  # one readable line, as the CLI prints
-        return JSONResponse({"error": str(exc)}, status_code=422)
+    app.state.expire = expire
+    replies.install(app)     # every refusal: 422 {"error": {"type", "message", "field"}}
 
     for module in (routes_main, routes_analyze, routes_simulate, routes_fit, routes_sweep, routes_jobs):
         app.include_router(module.router)
-    app.add_middleware(Guard, token=settings.token, max_body=settings.max_upload, loopback=settings.loopback)
+    if settings.allow_origins:      # pages of the origins given with --allow-origin may read the answers
+        from starlette.middleware.cors import CORSMiddleware
+
+        app.add_middleware(CORSMiddleware, allow_origins=list(settings.allow_origins), allow_methods=["*"],
+                           allow_headers=["content-type", "authorization"], allow_credentials=True)
+    app.add_middleware(Guard, token=settings.token, max_body=settings.max_upload, loopback=settings.loopback,
+                       allow_origins=settings.allow_origins, session_ttl=settings.session_ttl, seen=sessions.seen)
     return app

@@ -5,27 +5,52 @@
   in an HttpOnly cookie so that the page's own requests carry it). Otherwise 401.
 * Every browser gets a random session id in an HttpOnly, SameSite=Strict cookie;
   uploads and jobs belong to it, so two users never see each other's data.
+  The cookie lives as long as a session (``--session-ttl``); a cookie costs the server
+  nothing until the session stores something (:mod:`.sessions`).
 * A request body larger than the limit gets 413 (from ``Content-Length`` before it
-  is read, and while it is read when the length is not announced).
+  is read, and while it is read when the length is not announced: a chunked upload).
 * Requests sent by another web site are refused (403): a browser's ``Origin`` must be this
-  server's own; bound to loopback, the ``Host`` must be a loopback name (DNS rebinding).
+  server's own or one given with ``--allow-origin``; ``Origin: null`` (a sandboxed frame, a
+  file, a redirect across sites) is refused, and a write without ``Origin`` whose
+  ``Sec-Fetch-Site`` says another site sent it too. Bound to loopback, the ``Host`` must be a
+  loopback name (DNS rebinding). Clients that are not browsers (curl, scripts) send no
+  ``Origin`` and pass.
+* Every refusal has the one shape ``{"error": {"type", "message", "field"}}`` (:mod:`.replies`).
 """
 
 from __future__ import annotations
 
 import hmac
-import json
 import re
 import secrets
 from http.cookies import SimpleCookie
 from urllib.parse import parse_qs, urlsplit
 
-__all__ = ["Guard", "SESSION_COOKIE", "TOKEN_COOKIE"]
+from .replies import error_bytes
+
+__all__ = ["Guard", "SESSION_COOKIE", "TOKEN_COOKIE", "normal_origin"]
 
 SESSION_COOKIE = "afmforce_session"
 TOKEN_COOKIE = "afmforce_token"
 _SESSION = re.compile(r"^[A-Za-z0-9_-]{32,64}$")
 _LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
+_SAFE = ("GET", "HEAD", "OPTIONS")
+_TYPES = {401: "unauthorized", 403: "forbidden", 413: "too_large"}
+
+
+def normal_origin(text: str) -> str | None:
+    """``"HTTP://Lab.example:8443/"`` -> ``"http://lab.example:8443"``; None when ``text`` is not an
+    origin (``scheme://host[:port]`` with http or https, no path, query or user)."""
+    try:
+        parts = urlsplit(str(text).strip())
+        port = parts.port
+    except ValueError:
+        return None
+    if parts.scheme not in ("http", "https") or not parts.hostname or parts.path not in ("", "/") \
+            or parts.query or parts.fragment or parts.username or parts.password:
+        return None
+    host = f"[{parts.hostname}]" if ":" in parts.hostname else parts.hostname
+    return f"{parts.scheme}://{host.lower()}" + (f":{port}" if port is not None else "")
 
 
 class _TooLarge(Exception):
@@ -33,7 +58,7 @@ class _TooLarge(Exception):
 
 
 async def _reply(send, status: int, message: str) -> None:
-    body = json.dumps({"error": message}).encode()
+    body = error_bytes(_TYPES.get(status, "error"), message)
     await send({"type": "http.response.start", "status": status,
                 "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]})
     await send({"type": "http.response.body", "body": body})
@@ -49,20 +74,45 @@ class Guard:
         Required token (None: none required).
     max_body : int
         Largest request body [bytes].
+    loopback : bool
+        Bound to loopback only (then the ``Host`` must be a loopback name).
+    allow_origins : sequence of str
+        Origins besides the server's own whose pages may send requests (``--allow-origin``).
+    session_ttl : float
+        Lifetime of the session cookie [s].
+    seen : callable, optional
+        ``seen(session)`` for every accepted request of a known session (renews its lifetime).
     """
 
-    def __init__(self, app, token: str | None, max_body: int, loopback: bool = True):
+    def __init__(self, app, token: str | None, max_body: int, loopback: bool = True, allow_origins=(),
+                 session_ttl: float = 24 * 3600.0, seen=None):
         self.app, self.token, self.max_body, self.loopback = app, token, max_body, loopback
+        self.seen = seen
+        self.allow_origins = frozenset(o for o in (normal_origin(a) for a in allow_origins) if o)
+        self.max_age = max(1, int(session_ttl))
 
-    def _foreign(self, headers: dict) -> str | None:
-        """Why a request comes from elsewhere (another site's page, a rebound DNS name), or None."""
+    def _foreign(self, method: str, headers: dict) -> str | None:
+        """Why a request comes from elsewhere (another site's page, a sandboxed frame, a rebound
+        DNS name), or None."""
         host = headers.get(b"host", b"").decode("latin-1")
         name = (urlsplit(f"//{host}").hostname or "") if host else ""
         if self.loopback and host and name not in _LOOPBACK_NAMES:
             return f"host {host!r} is not this loopback server"
-        origin = headers.get(b"origin", b"").decode("latin-1")
-        if origin and origin != "null" and urlsplit(origin).netloc != host:
-            return f"cross-site request from {origin} refused"
+        origin = headers.get(b"origin", b"").decode("latin-1").strip()
+        if origin:
+            if origin.lower() == "null":
+                return ("request from an opaque origin (Origin: null: a sandboxed frame, a file or a "
+                        "redirect) refused")
+            try:
+                own = urlsplit(origin).netloc == host
+            except ValueError:
+                own = False
+            if not own and normal_origin(origin) not in self.allow_origins:
+                return f"cross-site request from {origin[:100]} refused (afmforce serve --allow-origin)"
+            return None
+        site = headers.get(b"sec-fetch-site", b"").decode("latin-1")
+        if method not in _SAFE and site in ("cross-site", "same-site"):
+            return "cross-site request refused (Sec-Fetch-Site: " + site + ")"
         return None
 
     def _token_ok(self, headers: dict, cookies: dict, query: dict) -> tuple[bool, bool]:
@@ -86,7 +136,7 @@ class Guard:
             pass
         cookies = {k: m.value for k, m in jar.items()}
         query = parse_qs(scope.get("query_string", b"").decode("latin-1"))
-        foreign = self._foreign(headers)
+        foreign = self._foreign(scope.get("method", "GET"), headers)
         if foreign:
             return await _reply(send, 403, foreign)
         ok, set_token = self._token_ok(headers, cookies, query)
@@ -97,19 +147,26 @@ class Guard:
         new_session = not _SESSION.match(sid)
         if new_session:
             sid = secrets.token_urlsafe(32)
+        elif self.seen is not None:
+            self.seen(sid)
         scope.setdefault("state", {})["session"] = sid
         length = headers.get(b"content-length")
         if length is not None and length.isdigit() and int(length) > self.max_body:
             return await _reply(send, 413, f"upload too large: {int(length):,} bytes; the limit is "
                                            f"{self.max_body:,} (afmforce serve --max-upload)")
         seen = 0
+        too_large = False
+        too_large_text = f"upload too large: more than {self.max_body:,} bytes (afmforce serve --max-upload)"
 
         async def limited():
-            nonlocal seen
+            nonlocal seen, too_large
+            if too_large:      # the app asks again after the refusal: the body has ended for it
+                return {"type": "http.disconnect"}
             message = await receive()
             if message["type"] == "http.request":
                 seen += len(message.get("body", b""))
                 if seen > self.max_body:
+                    too_large = True
                     raise _TooLarge()
             return message
 
@@ -117,11 +174,19 @@ class Guard:
 
         async def send_with_cookies(message):
             nonlocal started
+            if too_large:
+                # the body outgrew the limit while the app read it (a chunked upload): whatever the app
+                # makes of the interrupted body (FastAPI: 400), the client is told 413
+                if message["type"] == "http.response.start" and not started:
+                    started = True
+                    await _reply(send, 413, too_large_text)
+                return
             if message["type"] == "http.response.start":
                 started = True
-                extra = []
-                if new_session:
-                    extra.append((b"set-cookie", f"{SESSION_COOKIE}={sid}; HttpOnly; SameSite=Strict; Path=/".encode()))
+                # sent on every response: the cookie lives --session-ttl after the last request, as the
+                # session's folder does (a new id for a cookie-less request costs nothing on disk)
+                extra = [(b"set-cookie", f"{SESSION_COOKIE}={sid}; HttpOnly; SameSite=Strict; Path=/; "
+                                                 f"Max-Age={self.max_age}".encode())]
                 if set_token:
                     extra.append((b"set-cookie",
                                   f"{TOKEN_COOKIE}={self.token}; HttpOnly; SameSite=Strict; Path=/".encode()))
@@ -132,5 +197,5 @@ class Guard:
             await self.app(scope, limited, send_with_cookies)
         except _TooLarge:
             if not started:
-                await _reply(send, 413, f"upload too large: more than {self.max_body:,} bytes "
-                                        "(afmforce serve --max-upload)")
+                started = True
+                await _reply(send, 413, too_large_text)

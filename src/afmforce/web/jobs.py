@@ -8,11 +8,15 @@ applies the reports, and terminates the process on cancel or when the job's time
 is spent. On start the manager marks the jobs a previous server left running:
 sweeps are started again and resume from their store (as ``afmforce sweep`` does on a
 rerun), fits are marked ``interrupted``.
+
+No process outlives its job: a job that cannot be started or saved is failed and its process
+terminated (:class:`~.replies.JobStartError`); a watcher that meets an error fails its job and
+reaps its process; :meth:`JobManager.shutdown` terminates every process the manager started
+(killed when it does not stop), spares included.
 """
 
 from __future__ import annotations
 
-import hashlib
 import json
 import multiprocessing
 import queue as _queue
@@ -24,6 +28,8 @@ from pathlib import Path
 from typing import Any
 
 from .._files import atomic_write_text
+from .replies import JobStartError
+from .sessions import session_key
 from .tasks import standby
 
 __all__ = ["Job", "JobManager", "FINISHED"]
@@ -32,8 +38,9 @@ FINISHED = ("done", "failed", "cancelled", "interrupted")
 
 
 def owner_of(session: str) -> str:
-    """The stored owner of a session's jobs (a hash: the cookie itself is never written)."""
-    return hashlib.sha256(session.encode()).hexdigest()[:32]
+    """The stored owner of a session's jobs (a hash: the cookie itself is never written; the name
+    of the session's folder, :func:`~.sessions.session_key`)."""
+    return session_key(session)
 
 
 @dataclass
@@ -100,11 +107,42 @@ class JobManager:
         self._closing = False
         self._spare = None
         self._keep_spare = spare
+        self._all: list = []         # every process started: shutdown stops each one
 
     # -- records -----------------------------------------------------------------------
     def _save(self, job: Job) -> None:
         job.updated = time.time()
         atomic_write_text(self.folder / f"{job.id}.json", json.dumps(asdict(job), allow_nan=False), force=True)
+
+    def _save_failed(self, job: Job, error: str) -> None:
+        """Fail ``job`` with ``error`` and save it; a record that cannot be written stays in memory."""
+        job.state, job.error, job.result = "failed", error, None
+        try:
+            self._save(job)
+        except (OSError, ValueError, TypeError):
+            pass
+
+    def running(self) -> int:
+        """Jobs running now."""
+        return sum(1 for j in list(self._jobs.values()) if j.state == "running")
+
+    def processes(self) -> list:
+        """The job processes alive now (spare included)."""
+        return [p for p in self._all if p.is_alive()]
+
+    def expire(self, owners, ttl: float, live=(), now: float | None = None) -> list[str]:
+        """Remove the finished jobs of expired sessions (``owners``: their keys) and the finished jobs
+        of sessions not ``live`` (no folder) not updated for longer than ``ttl`` [s]; returns their ids."""
+        now = time.time() if now is None else now
+        owners, live = set(owners), set(live)
+        gone = []
+        for job in list(self._jobs.values()):
+            if job.state in FINISHED and (job.owner in owners
+                                          or (job.owner not in live and now - job.updated > ttl)):
+                self._jobs.pop(job.id, None)
+                (self.folder / f"{job.id}.json").unlink(missing_ok=True)
+                gone.append(job.id)
+        return gone
 
     def load(self) -> list[Job]:
         """Read the stored jobs; restart the sweeps a previous server left unfinished."""
@@ -167,36 +205,76 @@ class JobManager:
         proc = self._ctx.Process(target=standby, args=(inbox, q, os.getpid(), warm), daemon=False,
                                  name="afmforce-job")
         proc.start()
+        self._all = [p for p in self._all if p.is_alive()] + [proc]
         return proc, inbox, q
 
+    @staticmethod
+    def _reap(proc, wait: float = 5.0) -> None:
+        """Stop ``proc``: terminate, then kill when it does not end within ``wait`` [s]."""
+        if proc.is_alive():
+            proc.terminate()
+        proc.join(timeout=wait)
+        if proc.is_alive():
+            proc.kill()
+            proc.join(timeout=wait)
+
     def shutdown(self) -> None:
-        """Terminate the running processes; their jobs stay ``running`` on disk, so that the
-        next server resumes the sweeps."""
-        self._closing = True
-        procs = list(self._procs.values()) + ([self._spare[0]] if self._spare else [])
+        """Stop every job process the manager started (spares too); the running jobs stay
+        ``running`` on disk, so that the next server resumes the sweeps."""
+        with self._lock:
+            self._closing = True
+            self._spare = None
+        procs = list(self._all)
         for proc in procs:
             if proc.is_alive():
                 proc.terminate()
         for proc in procs:
-            proc.join(timeout=5)
+            self._reap(proc, 3.0)
 
     # -- running -----------------------------------------------------------------------
     def _start(self, job: Job) -> None:
-        with self._lock:   # take the warm spare, start the next one
-            spare, self._spare = self._spare, None
-            if spare is None or not spare[0].is_alive():
-                spare = self._new_spare(warm=False)
-            if not self._closing and self._keep_spare:
-                self._spare = self._new_spare()
-        proc, inbox, q = spare
-        job.state, job.error = "running", None
-        self._save(job)
-        inbox.put((job.kind, job.params))
-        self._procs[job.id] = proc
-        # the queues live as long as the watcher: a queue collected here would vanish under the child
-        threading.Thread(target=self._watch, args=(job, proc, q, inbox), daemon=True).start()
+        """Hand ``job`` to a process; on any failure the job is failed, the process reaped, and
+        :class:`~.replies.JobStartError` raised."""
+        proc = None
+        try:
+            with self._lock:   # take the warm spare, start the next one
+                if self._closing:
+                    raise JobStartError("the server is stopping")
+                spare, self._spare = self._spare, None
+                if spare is None or not spare[0].is_alive():
+                    spare = self._new_spare(warm=False)
+                if self._keep_spare:
+                    self._spare = self._new_spare()
+            proc, inbox, q = spare
+            job.state, job.error = "running", None
+            self._save(job)
+            inbox.put((job.kind, job.params))
+            self._procs[job.id] = proc
+            # the queues live as long as the watcher: a queue collected here would vanish under the child
+            threading.Thread(target=self._watch, args=(job, proc, q, inbox), daemon=True,
+                             name=f"afmforce-job-{job.id}").start()
+        except Exception as exc:
+            self._procs.pop(job.id, None)
+            if proc is not None:
+                self._reap(proc)
+            self._save_failed(job, f"the job could not start: {exc}")
+            raise JobStartError(f"the {job.kind} could not start: {exc}") from None
 
     def _watch(self, job: Job, proc, q, inbox) -> None:
+        """Apply the process's reports to ``job`` until it ends; whatever happens, the process is
+        reaped and the job left in a finished state (or ``running`` on disk at shutdown)."""
+        try:
+            self._follow(job, proc, q)
+        except Exception as exc:   # a report that cannot be applied or saved: the job fails
+            self._reap(proc)
+            self._save_failed(job, f"the job failed on the server: {type(exc).__name__}: {exc}")
+        finally:
+            if not self._closing:     # at shutdown, shutdown() stops the processes
+                self._reap(proc)
+                self._procs.pop(job.id, None)
+                self._cancel.discard(job.id)
+
+    def _follow(self, job: Job, proc, q) -> None:
         deadline = time.monotonic() + self.budget
         last_save = 0.0
         while True:
@@ -235,7 +313,8 @@ class JobManager:
                 except _queue.Empty:
                     job.state, job.error = "failed", f"the job's process ended (exit code {proc.exitcode})"
                     break
-        proc.join(timeout=5)
-        self._procs.pop(job.id, None)
-        self._cancel.discard(job.id)
-        self._save(job)
+        self._reap(proc)
+        try:
+            self._save(job)
+        except (ValueError, TypeError) as exc:   # a result JSON cannot carry (NaN): the job fails
+            self._save_failed(job, f"the job's result could not be saved: {exc}")

@@ -3,14 +3,18 @@
 from __future__ import annotations
 
 import asyncio
+import time
 from typing import Annotated
 
-from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
+from fastapi import APIRouter, File, Form, Request, UploadFile
 from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from ..errors import ParameterError
 from .analysis import run_analysis
+from .limits import MAX_ITEMS, RESPONSE_POINTS
+from .replies import PastBudget
+from .validate import FieldError
 
 router = APIRouter(tags=["analyse"])
 
@@ -27,7 +31,7 @@ async def analyze(request: Request,
                                                                "spring_constant, theta0, sensitivity, ...)")] = [],
                   format: Annotated[str | None, Form(description="reader instead of detection")] = None,
                   arrays: Annotated[bool, Form(description="add per-sample arrays, raw signals, maps")] = False,
-                  max_points: Annotated[int, Form(ge=100, le=200_000)] = 4000) -> JSONResponse:
+                  max_points: Annotated[int, Form(ge=100, le=RESPONSE_POINTS)] = 4000) -> JSONResponse:
     """The JSON of ``afmforce analyze FILE --json`` (``results``, ``failed``, ``oscillation_origin``)
     plus ``files`` (the ids to re-run with ``file_id`` after an option change) and ``wall_time`` [s];
     with ``arrays`` also ``raw`` and ``maps``. A file that cannot be read is listed under ``failed``."""
@@ -35,13 +39,21 @@ async def analyze(request: Request,
 
     settings, sessions = request.app.state.settings, request.app.state.sessions
     session = request.state.session
+    for name, items in (("file", file), ("file_id", file_id), ("example", example), ("option", option),
+                        ("meta", meta), ("probe", probe)):
+        if len(items) > MAX_ITEMS:
+            raise FieldError(name, f"{name}: at most {MAX_ITEMS} per request, got {len(items)}")
+    deadline = time.monotonic() + settings.request_budget
     stored = []
     for up in file:
         data = await up.read()
         stored.append(sessions.save(session, up.filename or "upload", data))
     paths = [sessions.path(session, s["id"]) for s in stored]
-    for fid in file_id:
-        paths.append(sessions.path(session, fid))
+    for i, fid in enumerate(file_id):
+        try:
+            paths.append(sessions.path(session, fid))
+        except ParameterError as exc:
+            raise FieldError(f"file_id[{i}]", str(exc)) from None
     for name in example:
         if name not in DATASETS:
             raise ParameterError(f"example {name}: unknown; choose one of {', '.join(DATASETS)}")
@@ -50,11 +62,12 @@ async def analyze(request: Request,
         raise ParameterError("give a file (field 'file'), an uploaded file's id ('file_id') or an example")
     guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
     work = run_in_threadpool(run_analysis, paths, option, meta, probe, format=format, arrays=arrays,
-                             max_points=max_points, budget=settings.request_budget, guard=guard)
-    try:
+                             max_points=max_points, budget=settings.request_budget, guard=guard,
+                             deadline=deadline)
+    try:      # the thread stops by itself after the curve it is on (run_analysis's deadline)
         payload = await asyncio.wait_for(work, timeout=settings.request_budget)
     except asyncio.TimeoutError:
-        raise HTTPException(504, f"cancelled: the analysis ran past its budget of {settings.request_budget:g} s")
+        raise PastBudget(f"cancelled: the analysis ran past its budget of {settings.request_budget:g} s") from None
     payload["files"] = stored + [{"id": fid, "name": sessions.path(session, fid)[1]} for fid in file_id]
     bad = {f["file"] for f in payload["failed"]}
     sessions.mark_read(session, [f["id"] for f in payload["files"] if f["name"] not in bad])
@@ -65,3 +78,10 @@ async def analyze(request: Request,
 def files(request: Request) -> list[dict]:
     """This session's uploads: ``[{"id", "name", "size"}]`` (other sessions' are never listed)."""
     return request.app.state.sessions.files(request.state.session)
+
+
+@router.delete("/api/files/{file_id}")
+def delete_file(request: Request, file_id: str) -> dict:
+    """Remove one of this session's uploads."""
+    request.app.state.sessions.remove(request.state.session, file_id)
+    return {"id": file_id, "deleted": True}

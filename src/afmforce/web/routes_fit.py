@@ -5,47 +5,70 @@ from __future__ import annotations
 from typing import Any
 
 from fastapi import APIRouter, Request
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
 
-from ..errors import ParameterError
+from ..errors import AfmforceError
+from . import validate
+from .limits import MAX_CURVES, MAX_ITEMS
 
 router = APIRouter(tags=["fit"])
 
 
 class FitRequest(BaseModel):
     """A fit: uploaded curves (``file_ids``, calibrated; every curve of a file, a map's too) or
-    virtual-AFM curves recorded at ``velocities`` from the ``truth`` configuration (flat names, SI)."""
+    virtual-AFM curves recorded at ``velocities`` from the ``truth`` configuration (flat names, SI).
+    Numbers are JSON numbers (SI) or texts with units (``"1um/s"``); each is checked against its
+    declared range before a process starts (:mod:`afmforce.web.validate`)."""
 
-    file_ids: list[str] = Field(default=[], description="this session's uploads (every curve of each file)")
-    velocities: list[float] = Field(default=[], description="virtual curves: driving speeds [m/s]")
+    model_config = ConfigDict(extra="forbid")
+
+    file_ids: list[str] = Field(default=[], max_length=MAX_ITEMS,
+                                description="this session's uploads (every curve of each file)")
+    velocities: list[Any] = Field(default=[], max_length=MAX_CURVES,
+                                  description="virtual curves: driving speeds [m/s] (or texts with units)")
     truth: dict[str, Any] = Field(default={}, description="model configuration, flat names, SI (fixed values)")
-    seed: int = 0
-    free: list[str] = Field(default=["hamaker", "xi"], description="global parameters to fit")
-    meta: list[str] = Field(default=[], description="KEY=VALUE metadata for uploaded curves")
-    starts: int = Field(default=1, ge=1, le=6)
-    profile: bool = Field(default=True, description="profile-likelihood intervals")
-    compare: bool = Field(default=True, description="model comparison (friction verdict)")
+    seed: int = Field(default=0, ge=0, le=2**32 - 1, strict=True)
+    free: list[str] = Field(default=["hamaker", "xi"], max_length=16, description="global parameters to fit")
+    meta: list[str] = Field(default=[], max_length=MAX_ITEMS, description="KEY=VALUE metadata for uploaded curves")
+    starts: int = Field(default=1, ge=1, le=6, strict=True)
+    profile: bool = Field(default=True, strict=True, description="profile-likelihood intervals")
+    compare: bool = Field(default=True, strict=True, description="model comparison (friction verdict)")
 
 
 @router.post("/api/fit", status_code=202)
 def fit(request: Request, body: FitRequest) -> dict:
     """Start a fit; returns ``{"id"}``. Follow it at ``GET /api/jobs/{id}`` or ``/api/jobs/{id}/events``."""
-    from ..dynamics import SimulationConfig
     from ..fit import PARAMETERS
-    from ..io._meta import parse_meta_args
 
     session = request.state.session
     unknown = [n for n in body.free if n not in PARAMETERS]
     if unknown or not body.free:
-        raise ParameterError(f"free parameters {unknown or '[]'}: choose among {', '.join(PARAMETERS)}")
-    SimulationConfig(**body.truth)      # checks names and ranges before a process starts
-    files = [request.app.state.sessions.path(session, fid) for fid in body.file_ids]
-    if not files and len(body.velocities) < 2:
-        raise ParameterError("give >= 2 uploaded curves (file_ids) or >= 2 velocities for virtual curves")
-    if len(body.velocities) > 8:
-        raise ParameterError("at most 8 virtual curves")
+        raise validate.FieldError("free", f"free parameters {unknown[:5] or '[]'}: choose among "
+                                          f"{', '.join(PARAMETERS)}")
+    velocities = validate.velocities(body.velocities)
+    truth = validate.flat_config(body.truth, "truth.")
+    validate.build_config(truth, "truth.")     # names, ranges and their combination
+    files = []
+    for i, fid in enumerate(body.file_ids):
+        try:
+            files.append(request.app.state.sessions.path(session, fid))
+        except validate.FieldError:
+            raise
+        except AfmforceError as exc:
+            raise validate.FieldError(f"file_ids[{i}]", str(exc)) from None
+    if not files and len(velocities) < 2:
+        raise validate.FieldError("velocities", "give >= 2 uploaded curves (file_ids) or >= 2 velocities "
+                                                "for virtual curves")
+    if not files:
+        for i, v in enumerate(velocities):      # every virtual curve within the sample cap
+            try:
+                validate.build_config({**truth, "velocity": v})
+            except validate.FieldError as exc:
+                raise validate.FieldError(f"velocities[{i}]", f"velocities[{i}]: {exc}") from None
     params = body.model_dump()
+    params.update(velocities=velocities, truth=truth)
     params["files"] = [(str(p), name) for p, name in files]
-    params["meta"] = parse_meta_args(body.meta)
+    params["meta"] = validate.metadata(body.meta)
+    request.app.state.sessions.touch(session)
     job = request.app.state.jobs.submit("fit", session, params)
     return {"id": job.id, "state": job.state}

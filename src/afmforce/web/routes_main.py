@@ -47,9 +47,21 @@ def health(request: Request) -> dict:
     """``{"status": "ok", "version", "token_required", "max_upload", "jobs_running", "warm"}`` (warm: the
     simulator is loaded; until then the first simulation waits for it)."""
     s = request.app.state.settings
-    running = sum(1 for j in request.app.state.jobs._jobs.values() if j.state == "running")
     return {"status": "ok", "version": __version__, "token_required": s.token is not None,
-            "max_upload": s.max_upload, "jobs_running": running, "warm": request.app.state.warm.is_set()}
+            "max_upload": s.max_upload, "jobs_running": request.app.state.jobs.running(),
+            "warm": request.app.state.warm.is_set()}
+
+
+@router.get("/api/session", tags=["server"])
+def session(request: Request) -> dict:
+    """This browser's session, for the page to restore after a reload: ``files`` (the uploads, as
+    ``GET /api/files``), ``jobs`` (as ``GET /api/jobs``), ``ttl`` [s] and ``expires`` (s since the
+    epoch; null while the session has stored nothing). Reading it stores nothing."""
+    sid = request.state.session
+    sessions, jobs = request.app.state.sessions, request.app.state.jobs
+    used = sessions.last_used(sid)
+    return {"files": sessions.files(sid), "jobs": [j.public(result=False) for j in jobs.list(sid)],
+            "ttl": sessions.ttl, "expires": None if used is None else used + sessions.ttl}
 
 
 @router.get("/api/schema", tags=["server"])

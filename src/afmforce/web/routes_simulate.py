@@ -2,47 +2,35 @@
 
 from __future__ import annotations
 
-import math
 import time
 from typing import Any
 
-from fastapi import APIRouter, Body, HTTPException, Query, Request
+from fastapi import APIRouter, Body, Query, Request
 from fastapi.responses import JSONResponse, Response
 
 from .._json import to_jsonable
-from ..errors import AfmforceError, ParameterError
+from . import validate
+from .limits import RAW_SAMPLES, RESPONSE_POINTS
+from .replies import PastBudget
 from .tasks import decimate
 
 router = APIRouter(tags=["simulate"])
 
-#: Samples one web request may simulate (a cycle of 10 s at 100 kHz: 1e6).
-MAX_SAMPLES = 2_000_000
 
-
-class _PastBudget(AfmforceError):
+class _PastBudget(PastBudget):
     """A simulation ran past the request's time budget."""
 
 
 def build_config(flat: dict[str, Any]):
-    """The :class:`~afmforce.dynamics.SimulationConfig` of flat names in SI (None values: defaults);
-    ParameterError for unknown names, values out of range or a cycle too long to sample."""
-    from ..dynamics import SimulationConfig
-
-    if not isinstance(flat, dict):
-        raise ParameterError("the body must be a JSON object of flat configuration names (SI)")
-    cfg = SimulationConfig(**{k: v for k, v in flat.items() if v is not None})
-    d = cfg.drive
-    back = d.retract_velocity or d.velocity
-    n = ((d.turn - d.start) / d.velocity + (d.turn - d.end) / back + d.dwell) * cfg.solver.sample_rate
-    if not math.isfinite(n) or n > MAX_SAMPLES:
-        raise ParameterError(f"the cycle would have about {n:.3g} samples, more than the {MAX_SAMPLES:.0e} a "
-                             "request may simulate; lower sample_rate, raise velocity or shorten the drive")
-    cfg.validate()
-    return cfg
+    """The :class:`~afmforce.dynamics.SimulationConfig` of flat names (SI, or texts with units): every
+    value checked against its declaration, the cycle at most :data:`~.limits.MAX_SAMPLES` samples
+    (:func:`afmforce.web.validate.build_config`). FieldError (422) otherwise."""
+    return validate.build_config(flat)
 
 
 def run(cfg, budget: float, check: str = "off"):
-    """Simulate ``cfg``; cancelled (ParameterError-like 504) past ``budget`` [s]."""
+    """Simulate ``cfg``; cancelled past ``budget`` [s]: the integrator's progress callback raises, so
+    the computation stops too (504)."""
     from ..dynamics import simulate
 
     deadline = time.monotonic() + budget
@@ -58,12 +46,14 @@ def run(cfg, budget: float, check: str = "off"):
 def simulate_endpoint(request: Request,
                       config: dict[str, Any] = Body(default={}, examples=[{"xi": 0.01, "velocity": 1e-6}],
                                                     description="flat names of SimulationConfig, SI"),
-                      max_points: int | None = Query(None, ge=10, le=MAX_SAMPLES,
-                                                     description="at most this many samples (evenly spread)"),
+                      max_points: int = Query(RESPONSE_POINTS, ge=10, le=RESPONSE_POINTS,
+                                              description="at most this many samples per column (evenly "
+                                                          "spread; the response's size cap)"),
                       check: str = Query("off", pattern="^(off|auto|always)$",
                                          description="convergence guard (afmforce simulate --check)"),
-                      columns: str | None = Query(None, description="comma-separated subset of the columns "
-                                                                    "(default all)")) -> JSONResponse:
+                      columns: str | None = Query(None, max_length=400,
+                                                  description="comma-separated subset of the columns "
+                                                              "(default all)")) -> JSONResponse:
     """One approach-retract cycle: ``summary`` (as ``afmforce simulate --json``), ``columns`` (the
     trajectory, SI, units under ``units``), ``config`` (every flat name, SI), ``spring_constant``,
     ``calibration_factor``, ``n_samples``, ``wall_time`` [s]."""
@@ -71,14 +61,11 @@ def simulate_endpoint(request: Request,
 
     t0 = time.perf_counter()
     cfg = build_config(config)
-    try:
-        traj = run(cfg, request.app.state.settings.request_budget, check)
-    except _PastBudget as exc:
-        raise HTTPException(504, str(exc)) from None
     wanted = list(COLUMNS) if not columns else [c.strip() for c in columns.split(",") if c.strip()]
     unknown = [c for c in wanted if c not in COLUMNS]
     if unknown:
-        raise ParameterError(f"columns {unknown}: unknown; choose among {', '.join(COLUMNS)}")
+        raise validate.FieldError("columns", f"columns {unknown[:5]}: unknown; choose among {', '.join(COLUMNS)}")
+    traj = run(cfg, request.app.state.settings.request_budget, check)
     idx = decimate(len(traj), max_points)
     out = to_jsonable({"summary": traj.summary(), "units": {c: COLUMNS[c] for c in wanted},
                        "config": cfg.to_dict(), "spring_constant": traj.spring_constant,
@@ -92,18 +79,19 @@ def simulate_endpoint(request: Request,
 @router.post("/api/simulate/raw")
 def raw_file(request: Request, config: dict[str, Any] = Body(default={}),
              preset: str = Query("typical", description="virtual-AFM preset (GET /api/schema)"),
-             seed: int = Query(0, ge=0)) -> Response:
+             seed: int = Query(0, ge=0, le=2**32 - 1)) -> Response:
     """The cycle recorded by the virtual AFM, as an afmforce raw text file (``afmforce analyze`` reads it)."""
     from ..instrument.presets import PRESETS, get_preset
     from ..io.native.rawfile import format_text
 
     if preset not in PRESETS:
-        raise ParameterError(f"preset {preset}: unknown; choose one of {', '.join(PRESETS)}")
+        raise validate.FieldError("preset", f"preset {preset[:40]}: unknown; choose one of {', '.join(PRESETS)}")
     cfg = build_config(config)
-    try:
-        traj = run(cfg, request.app.state.settings.request_budget)
-    except _PastBudget as exc:
-        raise HTTPException(504, str(exc)) from None
+    n = validate.cycle_samples(cfg)
+    if n > RAW_SAMPLES:     # the response's size cap: about 100 bytes a row
+        raise validate.FieldError("sample_rate", f"the raw file would have about {n:.3g} rows, more than the "
+                                  f"{RAW_SAMPLES:,} an export may carry; lower sample_rate or raise velocity")
+    traj = run(cfg, request.app.state.settings.request_budget)
     curve = get_preset(preset).record(traj, seed=seed)
     return Response(format_text(curve), media_type="text/plain",
                     headers={"content-disposition": f'attachment; filename="virtual-{preset}.raw"'})

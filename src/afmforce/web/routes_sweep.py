@@ -3,32 +3,37 @@
 from __future__ import annotations
 
 from fastapi import APIRouter, Request
-from pydantic import BaseModel, Field
+from pydantic import BaseModel, ConfigDict, Field
+
+from . import validate
+from .limits import MAX_ITEMS, MAX_RUNS
 
 router = APIRouter(tags=["sweep"])
 
 
 class SweepRequest(BaseModel):
-    """A sweep in the words of ``afmforce sweep`` (values take units: ``xi=0.001:0.1:5:log``)."""
+    """A sweep in the words of ``afmforce sweep`` (values take units: ``xi=0.001:0.1:5:log``); at most
+    :data:`~afmforce.web.limits.MAX_RUNS` runs, every value in its declared range."""
 
-    grid: list[str] = Field(default=[], description="NAME=LO:HI:N[:log] or NAME=V1,V2,...")
-    ranges: list[str] = Field(default=[], description="NAME=LO:HI[:log], sampled by `sample`")
-    sets: list[str] = Field(default=[], description="NAME=VALUE fixed for every run")
+    model_config = ConfigDict(extra="forbid")
+
+    grid: list[str] = Field(default=[], max_length=MAX_ITEMS, description="NAME=LO:HI:N[:log] or NAME=V1,V2,...")
+    ranges: list[str] = Field(default=[], max_length=MAX_ITEMS, description="NAME=LO:HI[:log], sampled by `sample`")
+    sets: list[str] = Field(default=[], max_length=MAX_ITEMS, description="NAME=VALUE fixed for every run")
     sample: str | None = Field(default=None, pattern="^(random|lhs)$")
-    n: int | None = Field(default=None, ge=1, le=20_000)
-    seed: int | None = None
+    n: int | None = Field(default=None, ge=1, le=MAX_RUNS, strict=True)
+    seed: int | None = Field(default=None, ge=0, le=2**32 - 1, strict=True)
     executor: str = Field(default="auto", pattern="^(auto|serial|dask)$",
                           description="auto: serial when quicker than starting the local cluster")
-    chunk_size: int | None = Field(default=None, ge=1)
+    chunk_size: int | None = Field(default=None, ge=1, le=MAX_RUNS, strict=True)
 
 
 @router.post("/api/sweep", status_code=202)
 def sweep(request: Request, body: SweepRequest) -> dict:
-    """Start a sweep; returns ``{"id"}``. Chunks are stored as they finish; a server restart resumes it."""
-    from ..sweep import build_spec
-    from ..sweep.simulation import simulation_dimensions
-
-    build_spec(body.grid, body.ranges, body.sets, sample=body.sample, n=body.n, seed=body.seed,
-               dimensions=simulation_dimensions())      # bad names and values: 422 before a process starts
-    job = request.app.state.jobs.submit("sweep", request.state.session, body.model_dump())
+    """Start a sweep; returns ``{"id"}``. Chunks are stored as they finish; a server restart resumes it.
+    Bad names and values, too many runs or samples: 422 before a process starts."""
+    validate.sweep_spec(body.grid, body.ranges, body.sets, sample=body.sample, n=body.n, seed=body.seed)
+    request.app.state.sessions.touch(request.state.session)
+    params = {**body.model_dump(), "max_runs": MAX_RUNS}
+    job = request.app.state.jobs.submit("sweep", request.state.session, params)
     return {"id": job.id, "state": job.state}

@@ -15,7 +15,7 @@ from typing import Any
 
 from .._fields import _DISPLAY, FieldSpec
 
-__all__ = ["simulation_fields", "analysis_options", "fit_parameters", "examples", "schema"]
+__all__ = ["simulation_fields", "analysis_options", "calibration_fields", "fit_parameters", "examples", "schema"]
 
 #: SI unit -> the unit a control shows when its spec names none.
 _SHOWN = {"m": "nm", "N": "nN", "kg": "ng", "m/s": "um/s", "Hz": "kHz", "s": "s", "m/V": "nm/V", "rad": "deg"}
@@ -26,11 +26,12 @@ def _num(v):
         or isinstance(v, int) else None
 
 
-def field_json(name: str, spec: FieldSpec | None, default: Any, *, choices=(), help: str = "") -> dict[str, Any]:
+def field_json(name: str, spec: FieldSpec | None, default: Any, *, choices=(), help: str = "",
+               labels: dict[str, str] | None = None) -> dict[str, Any]:
     """One control: ``{name, unit (SI), shown, factor (SI per shown unit), lo, hi, default, help, choices, kind}``."""
     if spec is None:
         return {"name": name, "kind": "choice", "choices": list(choices), "default": default, "help": help,
-                "unit": "", "shown": "", "factor": 1.0, "lo": None, "hi": None}
+                "unit": "", "shown": "", "factor": 1.0, "lo": None, "hi": None, "labels": labels or {}}
     shown = spec.display or _SHOWN.get(spec.unit, spec.unit)
     if shown == "nm" and isinstance(default, float) and abs(default) >= 1e-6:
         shown = "um"  # beam lengths
@@ -40,7 +41,8 @@ def field_json(name: str, spec: FieldSpec | None, default: Any, *, choices=(), h
             "lo": _num(spec.lo), "hi": _num(spec.hi), "lo_open": spec.lo_open, "hi_open": spec.hi_open,
             "range": spec.range_text(), "default": _num(default) if not isinstance(default, tuple) else None,
             "help": help or spec.help, "choices": [c for c in choices if isinstance(c, (str, int, float))],
-            "log": bool(spec.lo is not None and spec.hi is not None and spec.lo > 0 and spec.hi / spec.lo > 1e3)}
+            "log": bool(spec.lo is not None and spec.hi is not None and spec.lo > 0 and spec.hi / spec.lo > 1e3),
+            "labels": labels or {}}
 
 
 @lru_cache(maxsize=1)
@@ -70,9 +72,57 @@ def analysis_options() -> dict[str, list[dict[str, Any]]]:
         for f in dataclasses.fields(cls):
             spec = f.metadata.get("spec")
             default = f.default if f.default is not dataclasses.MISSING else None
+            if (step, f.name) == ("indentation", "model"):     # a choice of the contact registry
+                fields.append(contact_model_field(spec, default))
+                continue
             fields.append(field_json(f.name, spec, default, choices=f.metadata.get("choices", ())))
         if fields:
             out[step] = fields
+    return out
+
+
+def contact_model_field(spec: FieldSpec | None, default: Any) -> dict[str, Any]:
+    """The indentation model as a choice of :data:`afmforce.contact.INDENTATION_MODELS`, each with
+    its name, the geometry it needs and where it holds (``models``)."""
+    from ..contact import INDENTATION_MODELS
+
+    d = field_json("model", spec, default, choices=tuple(INDENTATION_MODELS),
+                   labels={k: m.name for k, m in INDENTATION_MODELS.items()})
+    d["kind"] = "choice"
+    d["models"] = {k: {"name": m.name, "geometry": list(m.geometry), "validity": m.validity,
+                       "reference": m.reference, "adhesive": m.adhesive} for k, m in INDENTATION_MODELS.items()}
+    return d
+
+
+#: The probe's calibration the analyse view shows first: ProbeCalibration fields (sent as ``probe``),
+#: then the indentation step's geometry and sample (sent as options). Result keys: the values the
+#: analysis used, shown beside each field.
+CALIBRATION = (("probe", "spring_constant", ("spring_constant",)),
+               ("probe", "sensitivity", ("sensitivity", "sensitivity_used")),
+               ("probe", "resonance_frequency", ("resonance_frequency",)), ("probe", "radius", ()),
+               ("option", "indentation.model", ("indentation_model",)), ("option", "indentation.tip_radius", ()),
+               ("option", "indentation.half_angle", ()), ("option", "indentation.poisson", ()))
+
+
+@lru_cache(maxsize=1)
+def calibration_fields() -> list[dict[str, Any]]:
+    """The calibration and probe controls of the analyse view: spring constant k, sensitivity
+    (InvOLS, nm/V), resonance frequency, sphere radius (:class:`~afmforce.analysis.options.ProbeCalibration`,
+    ``via: probe``), the indentation model, tip radius, half angle and Poisson ratio (options of the
+    ``indentation`` step, ``via: option``). ``shows``: result keys of the values the analysis used."""
+    from ..analysis.options import ProbeCalibration
+
+    probe = {f.name: f for f in dataclasses.fields(ProbeCalibration)}
+    out = []
+    for via, key, shows in CALIBRATION:
+        if via == "probe":
+            f = probe[key]
+            d = field_json(key, f.metadata["spec"], None)
+        else:
+            step, name = key.split(".")
+            d = dict(next(o for o in analysis_options()[step] if o["name"] == name))
+        d.update(via=via, key=key, shows=list(shows))
+        out.append(d)
     return out
 
 
@@ -95,5 +145,5 @@ def schema() -> dict[str, Any]:
     """Everything the page builds its controls from."""
     from ..instrument.presets import PRESETS
 
-    return {"simulation": simulation_fields(), "analysis": analysis_options(), "fit": fit_parameters(),
-            "examples": examples(), "instrument_presets": list(PRESETS)}
+    return {"simulation": simulation_fields(), "analysis": analysis_options(), "calibration": calibration_fields(),
+            "fit": fit_parameters(), "examples": examples(), "instrument_presets": list(PRESETS)}

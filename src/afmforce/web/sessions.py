@@ -4,6 +4,12 @@ Each session (the browser's random cookie) has a folder named by a hash of its i
 an upload is stored as ``<random hex id><suffix>``, the suffix kept only when it is
 a plain file-type suffix (readers detect the format by it: ``.jpk-force``, ``.ibw``);
 the name the user gave is kept in the session's index, for display only.
+
+A session costs nothing until it stores something: its folder is made by the first
+upload (or job, :meth:`Sessions.touch`), never by a request that only reads. It lives
+``ttl`` seconds after its last use (the folder's ``last-used`` stamp, renewed at most once
+a minute); :meth:`Sessions.expire` removes the folders of sessions past it (the server runs
+it at start and then every few minutes, with the jobs of those sessions).
 """
 
 from __future__ import annotations
@@ -12,14 +18,16 @@ import hashlib
 import json
 import re
 import secrets
+import shutil
 import threading
+import time
 from pathlib import Path
 from typing import Any
 
 from .._files import atomic_write_text
 from ..errors import ParameterError
 
-__all__ = ["Sessions", "safe_suffix"]
+__all__ = ["Sessions", "safe_suffix", "session_key"]
 
 _SUFFIX = re.compile(r"^\.[A-Za-z0-9][A-Za-z0-9-]{0,19}$")
 _ID = re.compile(r"^[0-9a-f]{32}$")
@@ -35,23 +43,101 @@ def safe_suffix(name: str) -> str:
     return suffix.lower() if _SUFFIX.match(suffix) else ""
 
 
+def session_key(session: str) -> str:
+    """The stored name of a session (a hash: the cookie itself is never written); also the owner
+    of its jobs (:func:`afmforce.web.jobs.owner_of`)."""
+    return hashlib.sha256(session.encode()).hexdigest()[:32]
+
+
+_STAMP = "last-used"
+_TOUCH_EVERY = 60.0
+
+
 class Sessions:
-    """Uploads by session, under ``root/sessions/<hash of the session id>/``."""
+    """Uploads by session, under ``root/sessions/<hash of the session id>/``.
 
-    def __init__(self, root: Path):
+    Parameters
+    ----------
+    root : Path
+        The data folder.
+    ttl : float
+        Lifetime of a session after its last use [s].
+    """
+
+    def __init__(self, root: Path, ttl: float = 24 * 3600.0):
         self.root = Path(root) / "sessions"
+        self.ttl = float(ttl)
         self._lock = threading.Lock()
+        self._touched: dict[str, float] = {}
 
-    def folder(self, session: str) -> Path:
-        """The session's folder (created)."""
-        key = hashlib.sha256(session.encode()).hexdigest()[:32]
+    def folder(self, session: str, create: bool = True) -> Path:
+        """The session's folder (made when ``create``, and its use recorded)."""
+        key = session_key(session)
         path = self.root / key
-        path.mkdir(parents=True, exist_ok=True)
+        if create:
+            path.mkdir(parents=True, exist_ok=True)
+            self._stamp(key, path)
         return path
 
+    def _stamp(self, key: str, path: Path) -> None:
+        now = time.monotonic()
+        if now - self._touched.get(key, -1e9) >= _TOUCH_EVERY or not (path / _STAMP).exists():
+            (path / _STAMP).touch()
+            self._touched[key] = now
+
+    def exists(self, session: str) -> bool:
+        """Whether the session has stored anything."""
+        return (self.root / session_key(session)).is_dir()
+
+    def touch(self, session: str) -> None:
+        """Record a use of the session (its folder made: a job or an upload belongs to it now)."""
+        self.folder(session)
+
+    def seen(self, session: str) -> None:
+        """A request of the session: renew its lifetime if it has a folder (nothing made otherwise)."""
+        path = self.root / session_key(session)
+        if path.is_dir():
+            self._stamp(session_key(session), path)
+
+    def last_used(self, session: str) -> float | None:
+        """When the session was last used [s since the epoch], None when it has no folder."""
+        stamp = self.root / session_key(session) / _STAMP
+        try:
+            return stamp.stat().st_mtime
+        except OSError:
+            return None
+
+    def expire(self, now: float | None = None) -> list[str]:
+        """Remove the folders of sessions unused for longer than ``ttl``; returns their keys."""
+        now = time.time() if now is None else now
+        gone = []
+        if not self.root.is_dir():
+            return gone
+        for path in self.root.iterdir():
+            if not path.is_dir():
+                continue
+            try:
+                used = max((path / _STAMP).stat().st_mtime if (path / _STAMP).exists() else 0.0,
+                           path.stat().st_mtime)
+            except OSError:
+                continue
+            if now - used > self.ttl:
+                with self._lock:
+                    shutil.rmtree(path, ignore_errors=True)
+                self._touched.pop(path.name, None)
+                gone.append(path.name)
+        return gone
+
+    def keys(self) -> list[str]:
+        """The stored names of the sessions that have a folder."""
+        return [p.name for p in self.root.iterdir() if p.is_dir()] if self.root.is_dir() else []
+
     def _index(self, session: str) -> dict[str, Any]:
-        path = self.folder(session) / "index.json"
-        return json.loads(path.read_text(encoding="utf-8")) if path.exists() else {}
+        path = self.folder(session, create=False) / "index.json"
+        try:
+            return json.loads(path.read_text(encoding="utf-8"))
+        except (OSError, ValueError):
+            return {}
 
     def save(self, session: str, name: str, data: bytes) -> dict[str, Any]:
         """Store an upload; returns ``{"id", "name", "size"}`` (``name``: as given, display only)."""
@@ -61,7 +147,8 @@ class Sessions:
         shown = re.split(r"[\\/]", name or "")[-1][:200] or "upload"
         with self._lock:
             index = self._index(session)
-            index[file_id] = {"name": shown, "suffix": safe_suffix(name), "size": len(data)}
+            index[file_id] = {"name": shown, "suffix": safe_suffix(name), "size": len(data),
+                              "uploaded": time.time()}
             atomic_write_text(folder / "index.json", json.dumps(index), force=True)
         return {"id": file_id, "name": shown, "size": len(data)}
 
@@ -70,6 +157,8 @@ class Sessions:
         skip the forked time-guarded reader (a re-run after an option change stays fast)."""
         with self._lock:
             index = self._index(session)
+            if not any(fid in index for fid in file_ids):
+                return
             for fid in file_ids:
                 if fid in index:
                     index[fid]["read"] = True
@@ -80,12 +169,23 @@ class Sessions:
         return bool(self._index(session).get(file_id, {}).get("read"))
 
     def files(self, session: str) -> list[dict[str, Any]]:
-        """The session's uploads: ``[{"id", "name", "size"}]``."""
-        return [{"id": k, "name": v["name"], "size": v["size"]} for k, v in self._index(session).items()]
+        """The session's uploads, oldest first: ``[{"id", "name", "size", "uploaded"}]``
+        (``uploaded``: s since the epoch)."""
+        return [{"id": k, "name": v["name"], "size": v["size"], "uploaded": v.get("uploaded")}
+                for k, v in self._index(session).items()]
 
     def path(self, session: str, file_id: str) -> tuple[Path, str]:
         """``(stored path, name given)`` of one of the session's uploads (ParameterError: not this session's)."""
         entry = self._index(session).get(file_id) if _ID.match(file_id or "") else None
         if entry is None:
             raise ParameterError(f"no uploaded file {file_id!r} in this session; upload it again")
-        return self.folder(session) / f"{file_id}{entry['suffix']}", entry["name"]
+        return self.folder(session, create=False) / f"{file_id}{entry['suffix']}", entry["name"]
+
+    def remove(self, session: str, file_id: str) -> None:
+        """Remove one upload of the session (ParameterError: not this session's)."""
+        path, _ = self.path(session, file_id)
+        with self._lock:
+            index = self._index(session)
+            index.pop(file_id, None)
+            path.unlink(missing_ok=True)
+            atomic_write_text(self.folder(session) / "index.json", json.dumps(index), force=True)

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ParameterError
+from .limits import SESSION_TTL
 
 __all__ = ["Settings", "parse_size", "is_loopback"]
 
@@ -65,6 +66,12 @@ class Settings:
         Time budget of one fit or sweep job [s]; past it the job is cancelled.
     spare_job : bool
         Keep one job process warm (compiled integrator loaded), so that a fit or sweep starts at once.
+    allow_origins : tuple of str
+        Origins (``https://lab.example:8443``) besides the server's own whose pages may send
+        requests (``--allow-origin``); every other origin, ``null`` included, gets 403.
+    session_ttl : float
+        Lifetime of a session after its last use [s] (``--session-ttl``): then its uploads and
+        jobs are removed.
     """
 
     host: str = "127.0.0.1"
@@ -75,8 +82,19 @@ class Settings:
     request_budget: float = 60.0
     job_budget: float = 3600.0
     spare_job: bool = True
+    allow_origins: tuple[str, ...] = ()
+    session_ttl: float = SESSION_TTL
 
     def __post_init__(self) -> None:
+        from .guard import normal_origin
+
+        for origin in self.allow_origins:
+            if normal_origin(origin) is None:
+                raise ParameterError(f"--allow-origin {origin!r}: give an origin such as "
+                                     "https://lab.example.org or http://127.0.0.1:9000 (scheme, host, port)")
+        object.__setattr__(self, "allow_origins", tuple(normal_origin(o) for o in self.allow_origins))
+        if not (isinstance(self.session_ttl, (int, float)) and 60 <= self.session_ttl <= 365 * 86400):
+            raise ParameterError(f"--session-ttl must lie in [1 min, 365 d], got {self.session_ttl!r} s")
         if not 0 <= self.port < 65536:
             raise ParameterError(f"--port must lie in [0, 65535], got {self.port}")
         if self.token is not None and len(self.token) < 8:

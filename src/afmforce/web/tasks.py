@@ -88,9 +88,12 @@ def sweep_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
     spec = build_spec(list(params.get("grid") or ()), list(params.get("ranges") or ()),
                       list(params.get("sets") or ()), sample=params.get("sample"), n=params.get("n"),
                       seed=params.get("seed"), dimensions=simulation_dimensions())
-    if spec.n_runs > int(params.get("max_runs", 20_000)):
+    from .limits import MAX_RUNS
+
+    most = int(params.get("max_runs", MAX_RUNS))
+    if spec.n_runs > most:
         raise AfmforceError(f"the sweep has {spec.n_runs:,} runs; the web page runs at most "
-                            f"{int(params.get('max_runs', 20_000)):,} (use afmforce sweep for more)")
+                            f"{most:,} (use afmforce sweep for more)")
     result = run_sweep(simulate_run, spec, chunk_size=params.get("chunk_size"),
                        executor=params.get("executor", "auto"), workers=params.get("workers"),
                        store=params["store"], progress=progress)

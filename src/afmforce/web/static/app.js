@@ -8,7 +8,9 @@ const el = (tag, attrs = {}, ...kids) => {
   return e;
 };
 const SCHEMA = { simulation: [], analysis: {}, fit: [], examples: [], instrument_presets: [] };
-const LAYOUT = { margin: { l: 70, r: 20, t: 40, b: 50 }, hovermode: "closest", legend: { orientation: "h", y: -0.2 } };
+// the legend outside the plot on the right (Plotly widens the margin for it): never over an axis title
+const LAYOUT = { margin: { l: 70, r: 20, t: 40, b: 50 }, hovermode: "closest",
+  legend: { orientation: "v", x: 1.02, xanchor: "left", y: 1, yanchor: "top", font: { size: 11 } } };
 const CONFIG = { responsive: true, displaylogo: false, toImageButtonOptions: { format: "png", scale: 2 } };
 const U = { m: [1e9, "nm"], N: [1e9, "nN"], s: [1, "s"], V: [1, "V"] };
 const sc = (arr, f) => (arr || []).map((v) => (v === null ? null : v * f));
@@ -19,11 +21,17 @@ const fmt = (v, unit) => {
   if (p && v !== 0) { for (const [lim, u, f] of p) if (Math.abs(v) >= lim) return `${(v * f).toPrecision(4)} ${u}`; }
   return `${Number(v.toPrecision(4))} ${unit || ""}`.trim();
 };
+// every refusal of the server is {"error": {"type", "message", "field"}} (docs/web.md)
+function errorText(body, r) {
+  const e = body && body.error;
+  if (e && typeof e === "object") return e.message || e.type || r.statusText;
+  return (typeof e === "string" && e) || `${r.status} ${r.statusText}`;
+}
 async function api(path, opts = {}) {
   const r = await fetch(path, opts);
   const text = await r.text();
-  let body; try { body = JSON.parse(text); } catch { body = { error: text }; }
-  if (!r.ok) throw new Error(body.error || (body.detail && JSON.stringify(body.detail)) || r.statusText);
+  let body; try { body = JSON.parse(text); } catch { body = { error: { message: `${r.status} ${r.statusText}` } }; }
+  if (!r.ok) { const err = new Error(errorText(body, r)); err.field = body.error && body.error.field; throw err; }
   return body;
 }
 function table(rows, head) {
@@ -56,7 +64,7 @@ function control(f, onChange, { slider = false, value = f.default } = {}) {
   let get;
   if (f.kind === "choice" || (f.choices && f.choices.length && f.kind !== "number")) {
     const s = el("select", { "data-field": f.name });
-    (f.choices.length ? f.choices : [f.default]).forEach((c) => s.append(el("option", { value: c, text: c })));
+    (f.choices.length ? f.choices : [f.default]).forEach((c) => s.append(el("option", { value: c, text: (f.labels && f.labels[c]) ? `${f.labels[c]} (${c})` : c })));
     s.value = value ?? ""; s.addEventListener("change", onChange); box.append(s);
     get = () => s.value;
   } else if (f.kind === "flag") {
@@ -112,24 +120,83 @@ async function analyse(upload) {
   else AN.files.forEach((f) => fd.append("file_id", f.id));
   AN.examples.forEach((e) => fd.append("example", e));
   optionTexts().forEach((o) => fd.append("option", o));
+  probeTexts().forEach((o) => fd.append("probe", o));
   fd.append("arrays", "true");
   fd.append("max_points", "2500");
   try {
     const t0 = performance.now();
     const p = await api("api/analyze", { method: "POST", body: fd });
-    if (upload) AN.files = p.files;
+    if (upload) { AN.files = p.files; listUploads(); }
     AN.payload = p;
     $("an-time").textContent = `${((performance.now() - t0) / 1000).toFixed(2)} s, server ${p.wall_time.toFixed(2)} s`;
     const names = Object.keys(p.results);
     const sel = $("an-curve"), keep = sel.value;
     sel.innerHTML = ""; names.forEach((n) => sel.append(el("option", { value: n, text: n })));
     if (names.includes(keep)) sel.value = keep;
+    if (AN.restoreCurve && names.includes(AN.restoreCurve)) { sel.value = AN.restoreCurve; AN.restoreCurve = null; }
     if (p.failed.length) $("an-error").textContent = p.failed.map((f) => (f.error.startsWith(f.file) ? f.error : `${f.file}${f.curve !== undefined ? "#" + f.curve : ""}: ${f.error}`)).join("\n");
     drawMaps(p.maps || []);
+    drawBatch();
     if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance"].forEach((i) => Plotly.purge(i));
   } catch (e) { $("an-error").textContent = e.message; }
+  saveAnalyse();
   AN.busy = false; $("status").textContent = "";
   if (AN.next) { const up = AN.next === "upload"; AN.next = null; analyse(up); }
+}
+// ---- the session: uploads kept on the server, the page restored after a reload -----------------------
+const SAVED = "afmforce.analyse";
+function saveAnalyse() {   // what to reopen after a reload: the uploads shown, the options changed, the curve
+  try {
+    const changed = new Set(optionTexts().map((o) => o.split("=")[0]));
+    const options = {};
+    for (const c of AN.controls) {
+      const key = `${c.step}.${c.f.name}`;
+      const input = c.box.querySelector("input.val, select, input[type=checkbox]");
+      if (changed.has(key) && input) options[key] = input.type === "checkbox" ? input.checked : input.value;
+    }
+    const probe = {};
+    for (const c of AN.probe || []) { const input = c.box.querySelector("input.val"); if (input && input.value.trim()) probe[c.f.name] = input.value; }
+    localStorage.setItem(SAVED, JSON.stringify({ files: AN.files.map((f) => f.id), examples: AN.examples, options, probe, curve: $("an-curve").value }));
+  } catch { /* storage off: nothing restored */ }
+}
+async function listUploads() {
+  const s = await api("api/session");
+  const box = $("an-uploads"); box.replaceChildren();
+  if (s.expires) $("an-kept").textContent = `Kept on this server until ${new Date(s.expires * 1000).toLocaleString()} (${Math.round(s.ttl / 3600)} h after your last use).`;
+  const chosen = new Set(AN.files.map((f) => f.id));
+  for (const f of s.files) {
+    const c = el("input", { type: "checkbox", "data-upload": f.id }); c.checked = chosen.has(f.id);
+    c.addEventListener("change", () => {
+      const ids = [...box.querySelectorAll("input[data-upload]:checked")].map((x) => x.dataset.upload);
+      AN.files = s.files.filter((x) => ids.includes(x.id)); AN.examples = [];
+      if (AN.files.length) analyse(false);
+    });
+    const del = el("button", { class: "small", title: "remove from the server", text: "×" });
+    del.addEventListener("click", async () => { await api(`api/files/${f.id}`, { method: "DELETE" }); AN.files = AN.files.filter((x) => x.id !== f.id); listUploads(); });
+    box.append(el("div", { class: "upload" }, el("label", {}, c, ` ${f.name} `, el("span", { class: "muted", text: `${(f.size / 1e3).toFixed(0)} kB` })), del));
+  }
+  return s;
+}
+async function restoreAnalyse() {
+  const s = await listUploads();
+  let saved; try { saved = JSON.parse(localStorage.getItem(SAVED) || "null"); } catch { saved = null; }
+  if (!saved) return;
+  const have = new Set(s.files.map((f) => f.id));
+  AN.files = s.files.filter((f) => (saved.files || []).includes(f.id));
+  AN.examples = (saved.examples || []).filter((e) => SCHEMA.examples.some((x) => x.name === e));
+  for (const [key, v] of Object.entries(saved.options || {})) {
+    const input = document.querySelector(`[data-option="${CSS.escape(key)}"] input.val, [data-option="${CSS.escape(key)}"] select, [data-option="${CSS.escape(key)}"] input[type=checkbox]`);
+    if (!input) continue;
+    if (input.type === "checkbox") input.checked = !!v; else input.value = v;
+  }
+  for (const [name, v] of Object.entries(saved.probe || {})) {
+    const input = document.querySelector(`[data-probe="${CSS.escape(name)}"] input.val`); if (input) input.value = v;
+  }
+  if (!AN.files.length && !AN.examples.length) return;
+  for (const f of AN.files) { const c = document.querySelector(`input[data-upload="${f.id}"]`); if (c) c.checked = true; }
+  if (saved.curve) AN.restoreCurve = saved.curve;
+  await analyse(false);
+  if (have.size) $("status").textContent = "restored your last analysis";
 }
 function drawCurve() {
   const name = $("an-curve").value, res = AN.payload.results[name], raw = (AN.payload.raw || {})[name];
@@ -145,8 +212,14 @@ function drawCurve() {
   const d = res.details || {}, marks = [];
   const j = (d.jumps || {}).jump_in; if (j && j.found !== false && res.jump_in_separation !== null)
     marks.push({ x: [res.jump_in_separation * 1e9], y: [res.jump_in_force * 1e9], name: "jump-in", mode: "markers", marker: { size: 11, symbol: "triangle-down", color: "#1a7f37" }, hovertemplate: "jump-in<br>h = %{x:.3f} nm<br>F = %{y:.4f} nN<extra></extra>" });
-  if (res.adhesion_force !== null && res.adhesion_distance !== null)   // the deepest retract point, at its distance from contact
-    marks.push({ x: [res.adhesion_distance * 1e9], y: [res.adhesion_force * 1e9], name: `adhesion ${fmt(res.adhesion_force, "N")}`, mode: "markers", marker: { size: 10, symbol: "diamond", color: "#b00020" }, hovertemplate: "adhesion %{y:.4f} nN<br>%{x:.2f} nm from contact<extra></extra>" });
+  const adhesionAt = () => {   // the separation of the retract sample at the adhesion force (the marker sits on the curve)
+    let best = null, gap = Infinity;
+    (res.force || []).forEach((F, i) => { if (seg[i] === 1 && F !== null && res.separation[i] !== null && Math.abs(F - res.adhesion_force) < gap) { gap = Math.abs(F - res.adhesion_force); best = i; } });
+    return best;
+  };
+  const iAdh = res.adhesion_force !== null ? adhesionAt() : null;
+  if (iAdh !== null)   // the deepest retract point, drawn where it lies on the curve
+    marks.push({ x: [res.separation[iAdh] * 1e9], y: [res.force[iAdh] * 1e9], name: `adhesion ${fmt(res.adhesion_force, "N")}`, mode: "markers", marker: { size: 10, symbol: "diamond", color: "#b00020" }, hovertemplate: `adhesion ${fmt(res.adhesion_force, "N")}<br>h = %{x:.2f} nm (${fmt(res.adhesion_distance, "m")} from contact)<extra></extra>` });
   if (res.pull_off_force !== null) marks.push({ x: [0], y: [res.pull_off_force * 1e9], name: `pull-off ${fmt(res.pull_off_force, "N")}`, mode: "markers", marker: { size: 11, symbol: "x", color: "#b00020" }, hovertemplate: "pull-off F = %{y:.4f} nN<extra></extra>" });
   const v = d.vdw || {};
   if (v.status === "ok" && v.hamaker_radius) {
@@ -168,10 +241,16 @@ function drawCurve() {
     Plotly.react("an-plot-raw", rt, { ...LAYOUT, title: { text: "Raw signal vs piezo position" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
   }
   drawDrift(raw, d, parts);
-  const rows = [["contact", `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
+  drawIndentation(res);
+  const rows = [["contact", res.contact_kind_reason && String(res.contact_kind_reason).startsWith(res.contact_kind) ? res.contact_kind_reason : `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
     ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
-    ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", `${res.friction}: ${res.friction_verdict}`],
-    ["diagnosis", res.verdict || "–"], ...res.warnings.map((w) => ["warning", w])];
+    ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", res.friction_verdict && String(res.friction_verdict).startsWith(res.friction) ? res.friction_verdict : `${res.friction}: ${res.friction_verdict}`],
+    ["diagnosis", res.verdict || "–"]];
+  if (res.youngs_modulus !== null && res.youngs_modulus !== undefined)
+    rows.push(["Young's modulus E", `${fmtPa(res.youngs_modulus)}` + (res.youngs_modulus_low !== null && res.youngs_modulus_high !== null ? ` (interval ${fmtPa(res.youngs_modulus_low)} – ${fmtPa(res.youngs_modulus_high)})` : "") + (res.indentation_model ? `, ${res.indentation_model}` : "")]);
+  for (const [step, why] of Object.entries(res.not_applicable || {})) rows.push([`${step} (not run)`, why]);
+  res.warnings.forEach((w) => rows.push(["warning", w]));
+  showUsed(res);
   $("an-summary").replaceChildren(table(rows));
   const box = $("an-details"); box.replaceChildren(el("h2", { text: "Every step's evidence (SI units)" }));
   for (const [step, vals] of Object.entries(d)) {
@@ -202,21 +281,130 @@ function drawDrift(raw, d, parts) {   // the drift step: raw signal against time
     const keep = raw.piezo.map((z, i) => raw.segment[i] === k && z >= lo - w && z <= hi + w);
     ct.push({ x: sc(raw.piezo.map((z, i) => (keep[i] ? z : null)), 1e9), y: sc(raw.signal.map((x, i) => (keep[i] ? x - base(raw.time[i], k) : null)), fs), name: label, mode: "markers", marker: { size: 3, color }, hovertemplate: `z = %{x:.2f} nm<br>%{y:.4g} ${us}<extra>${label}</extra>` });
     const line = k === 1 ? co.retract : co.approach;
-    if (line) ct.push({ x: [line.z_min * 1e9, line.z_max * 1e9], y: [(line.intercept + line.slope * line.z_min) * fs, (line.intercept + line.slope * line.z_max) * fs], name: `${label} compliance, slope ${Number(line.slope.toPrecision(4))} ${raw.unit}/m`, mode: "lines", line: { color, width: 3, dash: "dot" } });
+    if (line) ct.push({ x: [line.z_min * 1e9, line.z_max * 1e9], y: [(line.intercept + line.slope * line.z_min) * fs, (line.intercept + line.slope * line.z_max) * fs], name: `${label} compliance, slope ${slopeText(line.slope, raw.unit)}`, mode: "lines", line: { color, width: 3, dash: "dot" } });
   }
   Plotly.react("an-plot-compliance", ct, { ...LAYOUT, title: { text: "Compliance: drift-corrected signal near contact" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `signal − baseline [${us}]` } } }, CONFIG);
 }
+// ---- every curve of a batch or map: one table (SI, units in the header), a histogram, CSV ----------
+const BATCH_COLUMNS = ["contact_kind", "adhesion_force", "pull_off_force", "jump_in_separation", "hamaker_radius",
+  "youngs_modulus", "youngs_modulus_se", "work_of_adhesion", "spring_constant", "sensitivity_used", "resonance_frequency", "velocity"];
+function batchRows() {
+  const names = Object.keys(AN.payload.results), units = {};
+  for (const n of names) Object.assign(units, AN.payload.results[n].units || {});
+  return { names, units, rows: names.map((n) => BATCH_COLUMNS.map((c) => { const v = AN.payload.results[n][c]; return v === undefined ? null : v; })) };
+}
+function drawBatch() {
+  const box = $("an-batch"), n = Object.keys((AN.payload || {}).results || {}).length;
+  box.classList.toggle("hidden", n < 2); if (n < 2) return;
+  $("an-batch-n").textContent = `${n} curves`;
+  const { names, units, rows } = batchRows();
+  const head = ["curve", ...BATCH_COLUMNS.map((c) => (units[c] ? `${c} [${units[c]}]` : c))];
+  $("an-batch-table").replaceChildren(table(rows.map((r, i) => [names[i], ...r.map((v) => (v === null ? "–" : typeof v === "number" ? Number(v.toPrecision(5)) : String(v)))]), head));
+  $("an-batch-table").querySelectorAll("tr").forEach((tr, i) => { if (i) { tr.style.cursor = "pointer"; tr.onclick = () => { $("an-curve").value = names[i - 1]; drawCurve(); }; } });
+  const sel = $("an-batch-col"), keep = sel.value; sel.replaceChildren();
+  BATCH_COLUMNS.forEach((c, j) => { if (rows.some((r) => typeof r[j] === "number")) sel.append(el("option", { value: c, text: units[c] ? `${c} [${units[c]}]` : c })); });
+  sel.value = [...sel.options].some((o) => o.value === keep) ? keep : (sel.options[0] || {}).value;
+  drawHistogram();
+}
+function drawHistogram() {
+  const c = $("an-batch-col").value; if (!c) return;
+  const { rows, units } = batchRows(), j = BATCH_COLUMNS.indexOf(c);
+  const xs = rows.map((r) => r[j]).filter((v) => typeof v === "number" && isFinite(v));
+  Plotly.react("an-batch-hist", [{ type: "histogram", x: xs, name: c }], { ...LAYOUT, title: { text: `${c}: ${xs.length} curves` },
+    xaxis: { title: { text: `${c} [${units[c] || "-"}]` } }, yaxis: { title: { text: "curves [count]" } } }, CONFIG);
+}
+$("an-batch-col").addEventListener("change", drawHistogram);
+$("an-batch-csv").addEventListener("click", () => {
+  const { names, units, rows } = batchRows();
+  const q = (v) => (v === null ? "" : typeof v === "string" && /[",\n]/.test(v) ? `"${v.replace(/"/g, '""')}"` : v);
+  const lines = ["# afmforce: every curve analysed (SI units)", ["curve", ...BATCH_COLUMNS.map((c) => (units[c] ? `${c} [${units[c]}]` : c))].map(q).join(",")];
+  rows.forEach((r, i) => lines.push([names[i], ...r].map(q).join(",")));
+  download("afmforce-curves.csv", new Blob([lines.join("\n") + "\n"], { type: "text/csv" }));
+});
+function drawIndentation(res) {   // force above the baseline vs indentation: the data and the fitted model, E in the legend
+  const div = $("an-plot-indentation"), fit = (res.details || {}).indentation;
+  if (!fit || !Array.isArray(fit.indentation) || !fit.indentation.length) { div.classList.add("hidden"); Plotly.purge(div); return; }
+  div.classList.remove("hidden");
+  const x = fit.indentation.map((v) => v * 1e9), data = fit.fit_force.map((F, i) => (F + fit.residuals[i] - fit.baseline) * 1e9);
+  const order = x.map((_, i) => i).sort((a, b) => x[a] - x[b]);
+  let label = `E = ${fmtPa(fit.youngs_modulus)} [${fmtPa(fit.youngs_modulus_low)}, ${fmtPa(fit.youngs_modulus_high)}]`;
+  if (fit.work_of_adhesion !== null && fit.work_of_adhesion !== undefined) label += `, w = ${Number((fit.work_of_adhesion * 1e3).toPrecision(3))} mJ/m²`;
+  Plotly.react(div, [
+    { x, y: data, name: `${fit.run} (data)`, mode: "markers", marker: { size: 3, color: "#777" }, hovertemplate: "δ = %{x:.2f} nm<br>F = %{y:.4f} nN<extra>data</extra>" },
+    { x: order.map((i) => x[i]), y: order.map((i) => (fit.fit_force[i] - fit.baseline) * 1e9), name: `fit: ${fit.model}`, mode: "lines", line: { color: "#b00020", width: 2 }, hovertemplate: "model: F = %{y:.4f} nN at δ = %{x:.2f} nm<extra></extra>" }],
+  { ...LAYOUT, title: { text: `Indentation: ${label}` + (fit.warnings && fit.warnings.length ? ` (${fit.warnings.length} warning${fit.warnings.length > 1 ? "s" : ""})` : "") },
+    xaxis: { title: { text: "indentation δ [nm]" } }, yaxis: { title: { text: "force above the baseline [nN]" } } }, CONFIG);
+}
+function slopeText(slope, unit) {   // a compliance slope per nm (29680000 V/m reads 0.02968 V/nm)
+  return unit === "N" ? `${Number(slope.toPrecision(4))} N/m` : `${Number((slope * 1e-9).toPrecision(4))} ${unit}/nm`;
+}
 function drawMaps(maps) {
   const div = $("an-plot-map");
-  if (!maps.length) { div.classList.add("hidden"); return; }
+  if (!maps.length) { div.classList.add("hidden"); $("an-map-quantity").classList.add("hidden"); return; }
   div.classList.remove("hidden");
-  const m = maps[0], f = m.unit === "N" ? 1e9 : m.unit === "m" ? 1e9 : 1, u = m.unit === "N" ? "nN" : m.unit === "m" ? "nm" : m.unit;
+  const sel = $("an-map-quantity"), keep = sel.value;   // every map quantity of every map file
+  sel.classList.remove("hidden"); sel.replaceChildren();
+  maps.forEach((x, i) => sel.append(el("option", { value: String(i), text: `${x.file}: ${x.label} [${x.unit === "N" ? "nN" : x.unit === "m" ? "nm" : x.unit || "-"}]` })));
+  sel.value = keep && Number(keep) < maps.length ? keep : "0";
+  sel.onchange = () => drawMaps(maps);
+  const m = maps[Number(sel.value)], f = m.unit === "N" ? 1e9 : m.unit === "m" ? 1e9 : 1, u = m.unit === "N" ? "nN" : m.unit === "m" ? "nm" : m.unit;
   const z = m.z.map((row) => row.map((v) => (v === null ? null : v * f)));
-  Plotly.react(div, [{ type: "heatmap", z, x: m.x_um || undefined, y: m.y_um || undefined, customdata: m.curves, colorbar: { title: { text: u } },
+  Plotly.react(div, [{ type: "heatmap", z, x: m.x_um || undefined, y: m.y_um || undefined, customdata: m.curves, colorbar: { title: { text: `${m.label} [${u || "-"}]`, side: "right" } },
     hovertemplate: `x = %{x} ${m.axes === "um" ? "µm" : ""}<br>y = %{y} ${m.axes === "um" ? "µm" : ""}<br>${m.quantity} = %{z:.4g} ${u}<br>%{customdata}<extra>click: open</extra>` }],
-  { ...LAYOUT, title: { text: `${m.file}: ${m.label}` }, xaxis: { title: m.axes === "um" ? "x [µm]" : "x (column)", scaleanchor: "y" }, yaxis: { title: m.axes === "um" ? "y [µm]" : "y (row)" } }, CONFIG);
+  { ...LAYOUT, title: { text: `${m.file}: ${m.label}` },
+    annotations: z.some((row) => row.some((v) => v !== null)) ? [] : [{ text: `no curve of this map gives a ${m.label}`, showarrow: false, xref: "paper", yref: "paper", x: 0.5, y: 0.5 }], xaxis: { title: { text: m.axes === "um" ? "x [µm]" : "x (column index)" }, scaleanchor: "y" }, yaxis: { title: { text: m.axes === "um" ? "y [µm]" : "y (row index)" } } }, CONFIG);
   div.removeAllListeners && div.removeAllListeners("plotly_click");
   div.on("plotly_click", (ev) => { const n = ev.points[0].customdata; if (n && AN.payload.results[n]) { $("an-curve").value = n; drawCurve(); } });
+}
+// ---- calibration and probe: k, InvOLS, resonance frequency, radius (probe); model, tip, sample (indentation) ----
+const shownValue = (v, f) => (typeof v === "number" && isFinite(v) ? `${Number((v / f.factor).toPrecision(4))} ${f.shown}`.trim() : v === null || v === undefined ? "–" : String(v));
+function probeTexts() {
+  const out = [];
+  for (const c of AN.probe || []) {
+    const v = c.box.get();
+    if (v === null || v === "") continue;
+    out.push(`${c.f.name}=${typeof v === "number" ? `${Number((v / c.f.factor).toPrecision(8))}${c.f.shown}` : v}`);
+  }
+  return out;
+}
+function buildCalibration() {
+  const box = $("an-calibration"); box.replaceChildren(); AN.probe = [];
+  const rerun = () => { if (AN.files.length || AN.examples.length) analyse(false); };
+  for (const f of SCHEMA.calibration || []) {
+    let c;
+    if (f.via === "option") {       // the step's own control, moved here (one control, one value)
+      const own = AN.controls.find((x) => `${x.step}.${x.f.name}` === f.key);
+      if (!own) continue;
+      c = own.box;
+    } else {
+      c = control(f, rerun, { value: null });
+      c.dataset.probe = f.name; AN.probe.push({ f, box: c });
+    }
+    c.dataset.shows = f.shows.join(",");
+    c.querySelector(".name").textContent = { spring_constant: "spring constant k", sensitivity: "sensitivity (InvOLS)", resonance_frequency: "resonance frequency", radius: "sphere radius R (vdW, adhesion)", "indentation.model": "indentation model", "indentation.tip_radius": "tip radius", "indentation.half_angle": "tip half angle", "indentation.poisson": "Poisson ratio of the sample" }[f.key] || f.name;
+    c.append(el("div", { class: "used muted" }));
+    box.append(c);
+  }
+}
+function showUsed(res) {   // beside each calibration field: the value the analysis used (and the file's)
+  for (const box of document.querySelectorAll("#an-calibration .field")) {
+    const out = box.querySelector(".used"); if (!out) continue;
+    const f = (SCHEMA.calibration || []).find((x) => box.dataset.shows !== undefined && (x.key === box.dataset.option || x.name === box.dataset.probe)) || {};
+    const keys = (box.dataset.shows || "").split(",").filter(Boolean);
+    let text = "";
+    if (keys[0] === "indentation_model") {
+      const why = (res.not_applicable || {}).indentation;
+      text = why ? `not run: ${why}` : res.youngs_modulus !== null && res.youngs_modulus !== undefined ? `E = ${fmtPa(res.youngs_modulus)}` : "";
+    } else if (keys.length === 2) text = `given or file's ${shownValue(res[keys[0]], f)} · used ${shownValue(res[keys[1]], f)}`;
+    else if (keys.length === 1) text = `used ${shownValue(res[keys[0]], f)}`;
+    out.textContent = text;
+    out.classList.toggle("error", text.startsWith("not run"));
+  }
+}
+function fmtPa(v) {
+  if (v === null || v === undefined || !isFinite(v)) return "–";
+  for (const [f, u] of [[1e9, "GPa"], [1e6, "MPa"], [1e3, "kPa"], [1, "Pa"]]) if (Math.abs(v) >= f) return `${(v / f).toPrecision(4)} ${u}`;
+  return `${v.toPrecision(4)} Pa`;
 }
 function buildOptions() {
   const box = $("an-options"); box.replaceChildren(); AN.controls = [];
@@ -327,7 +515,7 @@ $("sim-keep").addEventListener("click", () => { SIM.ref = SIM.last; drawSim(); }
 $("sim-clear").addEventListener("click", () => { SIM.ref = null; drawSim(); });
 $("sim-raw").addEventListener("click", async () => {
   const r = await fetch(`api/simulate/raw?preset=${$("sim-preset").value}`, { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(simConfig()) });
-  if (!r.ok) { $("sim-error").textContent = (await r.json()).error; return; }
+  if (!r.ok) { let b = {}; try { b = await r.json(); } catch { /* not JSON */ } $("sim-error").textContent = errorText(b, r); return; }
   download(`virtual-${$("sim-preset").value}.raw`, await r.blob());
 });
 
@@ -363,9 +551,13 @@ $("fit-run").addEventListener("click", async () => {
       ids = (await api("api/analyze", { method: "POST", body: fd })).files.map((f) => f.id);
     }
     const free = [...document.querySelectorAll("#fit-free input:checked")].map((c) => c.value);
-    const body = { file_ids: ids, free, seed: Number($("fit-seed").value), compare: $("fit-compare").checked, profile: $("fit-profile").checked,
-      velocities: ids.length ? [] : $("fit-speeds").value.split(",").map((v) => Number(v) * 1e-6),
-      truth: ids.length ? {} : { xi: Number($("fit-xi").value), hamaker: Number($("fit-hamaker").value) * 1e-21 } };
+    // a plain number is in the field's unit; anything else goes as typed (a value with units, or a
+    // mistake the server names): never NaN, which JSON.stringify would turn into null
+    const val = (t, f) => { t = String(t).trim(); return t !== "" && isFinite(Number(t)) ? Number(t) * f : t; };
+    const seed = $("fit-seed").value.trim();
+    const body = { file_ids: ids, free, seed: /^\d+$/.test(seed) ? Number(seed) : seed, compare: $("fit-compare").checked, profile: $("fit-profile").checked,
+      velocities: ids.length ? [] : $("fit-speeds").value.split(",").map((v) => val(v, 1e-6)),
+      truth: ids.length ? {} : { xi: val($("fit-xi").value, 1), hamaker: val($("fit-hamaker").value, 1e-21) } };
     const job = await api("api/fit", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
     $("fit-state").textContent = "started";
     follow(job.id, "fit", drawFit);
@@ -381,8 +573,21 @@ function drawFit(r) {
     if (p.model) tr.push({ x: sc(p.position, 1e9), y: sc(p.model, 1e9), name: `${p.name} model`, mode: "lines", hovertemplate: "z = %{x:.2f} nm<br>%{y:.4f} nm<extra>model</extra>" });
   });
   Plotly.react("fit-plot", tr, { ...LAYOUT, title: { text: "Data and fitted model" }, xaxis: { title: { text: "piezo position z − shift [nm]" } }, yaxis: { title: { text: "apparent deflection [nm]" } } }, CONFIG);
-  const pr = Object.entries(r.profiles || {}).map(([n, p]) => ({ x: p.value || p.values || [], y: p.delta_chi2 || p.chi2 || [], name: n, mode: "lines+markers" }));
-  if (pr.length) Plotly.react("fit-profiles", pr, { ...LAYOUT, title: { text: "Profile likelihoods" }, xaxis: { title: { text: "parameter [SI]" }, type: "log" }, yaxis: { title: { text: "Δχ²" } } }, CONFIG);
+  // one panel per profiled parameter, each with its own axis in its unit (two parameters never share
+  // one log axis spanning many decades)
+  const prof = Object.entries(r.profiles || {});
+  const pr = prof.map(([n, p], i) => ({ x: p.value || p.values || [], y: p.delta_chi2 || p.chi2 || [], name: n, mode: "lines+markers",
+    xaxis: i ? `x${i + 1}` : "x", yaxis: i ? `y${i + 1}` : "y", showlegend: false }));
+  if (pr.length) {
+    const layout = { ...LAYOUT, title: { text: "Profile likelihoods" }, grid: { rows: 1, columns: pr.length, pattern: "independent" } };
+    prof.forEach(([n], i) => {
+      const xs = pr[i].x.filter((v) => typeof v === "number" && v > 0), unit = ((r.parameters || {})[n] || {}).unit || (SCHEMA.fit.find((p) => p.name === n) || {}).unit || "-";
+      const log = xs.length === pr[i].x.length && xs.length > 1 && Math.max(...xs) / Math.min(...xs) > 100;
+      layout[i ? `xaxis${i + 1}` : "xaxis"] = { title: { text: `${n} [${unit}]` }, type: log ? "log" : "linear" };
+      layout[i ? `yaxis${i + 1}` : "yaxis"] = { title: { text: "Δχ² [-]" } };
+    });
+    Plotly.react("fit-profiles", pr, layout, CONFIG);
+  }
 }
 
 // ---- Sweep ------------------------------------------------------------------------------------
@@ -421,7 +626,7 @@ function drawSweepPlot() {
     r.rows.forEach((row) => { (groups[row[i1]] = groups[row[i1]] || []).push(row); });
     traces = Object.entries(groups).map(([g, rows]) => ({ x: rows.map((w) => w[i0]), y: rows.map((w) => w[ci]), name: `${p[1]} = ${Number(Number(g).toPrecision(3))} ${r.units[p[1]] || ""}`, mode: "lines+markers" }));
   } else traces = [{ x: r.rows.map((w) => w[i0]), y: r.rows.map((w) => w[ci]), mode: "lines+markers", name: m }];
-  Plotly.react("sw-plot", traces, { ...LAYOUT, title: m, xaxis: { title: { text: `${p[0]} [${r.units[p[0]] || "-"}]` }, type: "log" }, yaxis: { title: { text: `${m} [${r.units[m] || "-"}]` } } }, CONFIG);
+  Plotly.react("sw-plot", traces, { ...LAYOUT, title: { text: m }, xaxis: { title: { text: `${p[0]} [${r.units[p[0]] || "-"}]` }, type: "log" }, yaxis: { title: { text: `${m} [${r.units[m] || "-"}]` } } }, CONFIG);
 }
 $("sw-metric").addEventListener("change", drawSweepPlot);
 
@@ -430,8 +635,9 @@ $("sw-metric").addEventListener("change", drawSweepPlot);
   try {
     Object.assign(SCHEMA, await api("api/schema"));
     SCHEMA.examples.forEach((e) => $("an-example").append(el("option", { value: e.name, text: `${e.name}: ${e.description}` })));
-    buildOptions(); buildSim();
+    buildOptions(); buildCalibration(); buildSim();
     SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
+    await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
   } catch (e) { $("status").textContent = "cannot reach the server: " + e.message; }
 })();

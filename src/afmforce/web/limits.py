@@ -1,0 +1,30 @@
+"""What one request may cost the server: every size limit of ``afmforce serve``, in one place.
+
+Time is bounded by the settings (``--budget``, the job budget); these bound memory: how many
+samples a simulation may have, how many values a response may carry, how many runs a sweep may
+have and how long the lists of a request may be. A request over a limit gets 422 naming the field
+before anything is computed.
+"""
+
+from __future__ import annotations
+
+__all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
+           "MAX_CURVES", "SESSION_TTL"]
+
+#: Samples one simulated cycle may have (a cycle of 10 s at 100 kHz; about 140 MB of trajectory).
+# TODO(merge): use the library's cap (the sample-count cap shared with the CLI).
+MAX_SAMPLES = 1_000_000
+#: Samples per column one simulation response may carry (``max_points``; the page draws 2,000-5,000).
+RESPONSE_POINTS = 20_000
+#: Per-sample values (all curves together) one analysis response may carry with ``arrays``.
+ANALYSIS_POINTS = 2_000_000
+#: Samples of a raw file exported by the virtual AFM (about 100 bytes a row: 25 MB).
+RAW_SAMPLES = 250_000
+#: Runs one sweep may have (grid points times samples); ``afmforce sweep`` runs more.
+MAX_RUNS = 20_000
+#: Entries of a list in a request (grid items, file ids, options, metadata).
+MAX_ITEMS = 64
+#: Virtual curves of one fit.
+MAX_CURVES = 8
+#: Default lifetime of an unused session (its uploads and jobs) [s].
+SESSION_TTL = 24 * 3600.0

@@ -1,0 +1,108 @@
+"""Every refusal of the server in one shape: ``{"error": {"type", "message", "field"}}``.
+
+``type`` says what kind of refusal it is (``invalid_value``, ``invalid_request``,
+``too_large``, ``forbidden``, ``unauthorized``, ``not_found``, ``past_budget``, ``job_failed``;
+a library error's class in snake case, e.g. ``parameter_error``), ``message`` is one readable
+line in the words of the command line, ``field`` names the value refused as the request spells
+it (``velocity``, ``truth.xi``, ``velocities[0]``, ``max_points``) or is null. FastAPI's own
+``{"detail": [...]}`` never reaches a client: :func:`install` replaces its handlers.
+"""
+
+from __future__ import annotations
+
+import json
+import logging
+import re
+from typing import Any
+
+from ..errors import AfmforceError
+
+__all__ = ["error_body", "error_bytes", "install", "JobStartError", "PastBudget"]
+
+_STATUS_TYPES = {400: "invalid_request", 401: "unauthorized", 403: "forbidden", 404: "not_found",
+                 405: "method_not_allowed", 413: "too_large", 422: "invalid_value", 504: "past_budget"}
+_LOG = logging.getLogger("afmforce.web")
+
+
+def error_body(type: str, message: str, field: str | None = None) -> dict[str, Any]:
+    """``{"error": {"type", "message", "field"}}``."""
+    return {"error": {"type": type, "message": message, "field": field}}
+
+
+def error_bytes(type: str, message: str, field: str | None = None) -> bytes:
+    """:func:`error_body` as JSON bytes (for the ASGI middleware)."""
+    return json.dumps(error_body(type, message, field)).encode()
+
+
+def _snake(name: str) -> str:
+    return re.sub(r"(?<!^)(?=[A-Z])", "_", name).lower()
+
+
+def _loc(loc) -> str | None:
+    """``("body", "velocities", 0)`` -> ``"velocities[0]"``; ``("query", "max_points")`` -> ``"max_points"``."""
+    parts = [p for p in loc if p not in ("body", "query", "path", "header", "cookie", "form")] \
+        if loc and loc[0] in ("body", "query", "path", "header", "cookie", "form") else list(loc or ())
+    out = ""
+    for p in parts:
+        out += f"[{p}]" if isinstance(p, int) else (f".{p}" if out else str(p))
+    return out or None
+
+
+def _shown(value: Any) -> str:
+    text = repr(value)
+    return text if len(text) <= 40 else text[:37] + "..."
+
+
+class PastBudget(AfmforceError):
+    """A request ran past its time budget and was cancelled, its computation included (504)."""
+
+
+class JobStartError(Exception):
+    """A job could not be started or saved (a fault of the server, not of the request)."""
+
+
+def install(app) -> None:
+    """Install the handlers that give every refusal the one shape."""
+    from fastapi.exceptions import RequestValidationError
+    from fastapi.responses import JSONResponse
+    from starlette.exceptions import HTTPException
+
+    from .validate import FieldError
+
+    @app.exception_handler(AfmforceError)
+    async def _library(request, exc: AfmforceError):   # one readable line, as the CLI prints
+        field = exc.field if isinstance(exc, FieldError) else None
+        kind = "invalid_value" if isinstance(exc, FieldError) else _snake(type(exc).__name__)
+        return JSONResponse(error_body(kind, str(exc), field), status_code=422)
+
+    @app.exception_handler(RequestValidationError)
+    async def _request(request, exc: RequestValidationError):
+        errors = exc.errors()
+        first = errors[0] if errors else {}
+        field = _loc(first.get("loc"))
+        msg = first.get("msg", "invalid request")
+        if first.get("type") == "json_invalid":
+            field, msg = None, "the body is not valid JSON"
+        elif "input" in first and first.get("type") != "missing":
+            msg = f"{msg}, got {_shown(first['input'])}"
+        return JSONResponse(error_body("invalid_request", f"{field}: {msg}" if field else msg, field),
+                            status_code=422)
+
+    @app.exception_handler(HTTPException)
+    async def _http(request, exc: HTTPException):
+        return JSONResponse(error_body(_STATUS_TYPES.get(exc.status_code, "error"), str(exc.detail)),
+                            status_code=exc.status_code, headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(PastBudget)
+    async def _budget(request, exc: PastBudget):
+        return JSONResponse(error_body("past_budget", str(exc)), status_code=504)
+
+    @app.exception_handler(JobStartError)
+    async def _job(request, exc: JobStartError):
+        return JSONResponse(error_body("job_failed", str(exc)), status_code=503)
+
+    @app.exception_handler(Exception)
+    async def _fault(request, exc: Exception):    # a fault of the server: logged, no traceback to the client
+        _LOG.exception("unexpected error in %s %s", request.method, request.url.path)
+        return JSONResponse(error_body("internal", f"unexpected {type(exc).__name__}; the server logged it"),
+                            status_code=500)

@@ -1,0 +1,76 @@
+"""The analyse view a lab works in (issue 33.4): calibration and probe fields, the model dropdown."""
+
+from __future__ import annotations
+
+import io
+import json
+from contextlib import redirect_stdout
+
+import pytest
+
+fastapi = pytest.importorskip("fastapi")
+
+
+def test_calibration_fields_come_from_the_declarations(client):
+    """k, InvOLS (nm/V), resonance frequency, radius from ProbeCalibration; the indentation model (a
+    choice of the contact registry), tip radius, half angle and Poisson ratio from the step's options."""
+    import dataclasses
+
+    from afmforce.analysis.options import OPTIONS, ProbeCalibration
+    from afmforce.contact import INDENTATION_MODELS
+
+    cal = {f["key"]: f for f in client.get("/api/schema").json()["calibration"]}
+    assert list(cal) == ["spring_constant", "sensitivity", "resonance_frequency", "radius", "indentation.model",
+                         "indentation.tip_radius", "indentation.half_angle", "indentation.poisson"]
+    probe = {f.name: f.metadata["spec"] for f in dataclasses.fields(ProbeCalibration)}
+    for key in ("spring_constant", "sensitivity", "resonance_frequency", "radius"):
+        assert cal[key]["via"] == "probe" and cal[key]["range"] == probe[key].range_text()
+    assert cal["sensitivity"]["shown"] == "nm/V" and cal["sensitivity"]["factor"] == pytest.approx(1e-9)
+    model = cal["indentation.model"]
+    assert model["kind"] == "choice" and model["choices"] == list(INDENTATION_MODELS)
+    assert model["default"] == OPTIONS["indentation"]().model
+    assert model["labels"]["hertz_cone"] == INDENTATION_MODELS["hertz_cone"].name
+    assert model["models"]["hertz_cone"]["geometry"] == ["half_angle"]
+    indentation = {f.name: f.metadata["spec"] for f in dataclasses.fields(OPTIONS["indentation"])
+                   if f.metadata.get("spec") is not None}
+    assert cal["indentation.poisson"]["range"] == indentation["poisson"].range_text()
+    assert cal["indentation.half_angle"]["shown"] == "deg"
+
+
+def test_calibration_given_in_the_page_is_what_the_cli_computes(client, tmp_path):
+    """The page's probe fields give the same result as ``afmforce analyze --spring-constant ...``."""
+    from afmforce.cli.main import main
+    from afmforce.datasets import path
+
+    src = path("asylum-air")
+    local = tmp_path / src.name
+    local.write_bytes(src.read_bytes())
+    out = io.StringIO()
+    with redirect_stdout(out):
+        assert main(["analyze", str(local), "--json", "--spring-constant", "0.5N/m", "--sensitivity", "50nm/V",
+                     "--resonance-frequency", "30kHz", "--option", "indentation.poisson=0.3"]) == 0
+    cli = json.loads(out.getvalue())["results"][src.name]
+    r = client.post("/api/analyze", files={"file": (src.name, src.read_bytes())},
+                    data={"probe": ["spring_constant=0.5N/m", "sensitivity=50nm/V", "resonance_frequency=30kHz"],
+                          "option": ["indentation.poisson=0.3"]})
+    api = r.json()["results"][src.name]
+    assert api["spring_constant"] == 0.5 and api["sensitivity_used"] == pytest.approx(50e-9, rel=1e-12)
+    assert api["resonance_frequency"] == 30e3
+    api.pop("source"), cli.pop("source")
+    assert api == cli
+    # a hard contact: the indentation step cannot run, and the result says why (shown in the page)
+    assert "hard contact" in api["not_applicable"]["indentation"]
+    bad = client.post("/api/analyze", data={"example": "asylum-air", "option": "indentation.model=nope"})
+    assert bad.status_code == 422 and bad.json()["error"]["field"] == "option.indentation.model"
+
+
+def test_the_modulus_fit_samples_obey_the_response_cap(client):
+    """With ``arrays`` the modulus fit's samples are thinned like the curve's (the response's size
+    cap); the fitted E is the one of the full fit."""
+    full = client.post("/api/analyze", data={"example": "jpk-cell", "option": "indentation.tip_radius=5um"}).json()
+    thin = client.post("/api/analyze", data={"example": "jpk-cell", "option": "indentation.tip_radius=5um",
+                                             "arrays": "true", "max_points": "500"}).json()
+    a, b = (next(iter(p["results"].values()))["details"]["indentation"] for p in (full, thin))
+    assert len(a["indentation"]) > 500 >= len(b["indentation"]) == len(b["fit_force"]) == len(b["residuals"])
+    assert b["youngs_modulus"] == a["youngs_modulus"] and b["indentation"][0] == a["indentation"][0]
+    assert b["indentation"][-1] == a["indentation"][-1]
