@@ -1,0 +1,84 @@
+"""The fit guards its own memory (issue 34): an estimate from the sample count, checked
+against what the machine can give before anything large is allocated.
+
+Everything the fit holds grows linearly in the fitted samples ``n`` (the noise model is
+not dense in them: :mod:`afmforce.fit.noise`): the Jacobian (``n`` x parameters), the
+cached model predictions (up to :data:`CACHE_PER_CURVE` per curve), the batched
+simulations and the whitened designs. :func:`fit_bytes` is that estimate with a margin;
+``benchmarks/bench_fit_memory.py`` measures the peak at several sizes (it must stay below
+the estimate).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+
+from ..errors import MemoryLimitError
+
+__all__ = ["fit_bytes", "available_memory", "check_fit_memory", "BYTES_PER_SAMPLE", "BASE_BYTES"]
+
+#: Bytes the fit holds per fitted sample and per free parameter (Jacobian columns, the
+#: batched predictions of a Jacobian), measured with margin (benchmarks/bench_fit_memory.py).
+BYTES_PER_SAMPLE_PARAMETER = 8 * 8
+#: Bytes per sample independent of the parameters (the prediction cache of 64 runs per curve,
+#: the curve's arrays, whitened designs, the solver's dense output), with margin.
+BYTES_PER_SAMPLE = 2200
+#: The interpreter, numpy, scipy, numba and the compiled models [bytes].
+BASE_BYTES = 400e6
+
+
+def fit_bytes(n_samples: int, n_free: int, n_curves: int = 1) -> float:
+    """Estimated peak memory of a fit of ``n_samples`` samples with ``n_free`` global
+    parameters and ``n_curves`` curves [bytes]."""
+    per = BYTES_PER_SAMPLE + BYTES_PER_SAMPLE_PARAMETER * (n_free + n_curves + 4)
+    return BASE_BYTES + per * float(n_samples)
+
+
+def _cgroup_limit() -> float:
+    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
+        try:
+            text = open(path).read().strip()
+        except OSError:
+            continue
+        if text.isdigit() and int(text) < 1 << 60:
+            return float(text)
+    return math.inf
+
+
+def available_memory() -> float:
+    """Memory this process can still take [bytes]: the least of the machine's available memory,
+    the process's address-space and data limits and the container's (cgroup) limit."""
+    limits = [_cgroup_limit()]
+    try:
+        with open("/proc/meminfo") as fh:
+            info = {line.split(":")[0]: line.split()[1] for line in fh}
+        limits.append(float(info["MemAvailable"]) * 1024)
+    except (OSError, KeyError, ValueError, IndexError):
+        pass
+    try:
+        import resource
+
+        for lim in (resource.RLIMIT_AS, resource.RLIMIT_DATA):
+            soft = resource.getrlimit(lim)[0]
+            if soft != resource.RLIM_INFINITY and soft > 0:
+                limits.append(float(soft))
+    except (ImportError, ValueError, OSError):
+        pass
+    if os.name != "posix" and len(limits) == 1:
+        return math.inf
+    return min(limits)
+
+
+def check_fit_memory(n_samples: int, n_free: int, n_curves: int) -> float:
+    """Raise :class:`~afmforce.errors.MemoryLimitError` when the fit's estimated memory exceeds
+    what is available; returns the estimate [bytes]."""
+    need = fit_bytes(n_samples, n_free, n_curves)
+    have = available_memory()
+    if need > have:
+        raise MemoryLimitError(
+            f"the fit of {n_samples} samples in {n_curves} curves with {n_free} free parameters "
+            f"needs about {need / 1e9:.3g} GB but {have / 1e9:.3g} GB are available: fit fewer or "
+            "shorter curves (the approach's free part far from the surface carries little), "
+            "decimate the samples (a lower sample_rate), or free fewer parameters")
+    return need
