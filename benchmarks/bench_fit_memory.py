@@ -30,8 +30,7 @@ import liquid_reference as L
 from afmforce.fit import fit_dynamic
 from afmforce.fit.memory import fit_bytes
 start = {start}
-L.DRIVES["bench"] = dict(start=-start * 1e-9, turn=150e-9, end=-start * 1e-9)
-curves = L.cycles(L.SLIP, "bench")
+curves = L.cycles(L.SLIP, "full", drive=dict(start=-start * 1e-9, end=-start * 1e-9))
 n = sum(c.time.size for c in curves)
 cfg = dict(model="spring", geometry="sphere-flat", radius=10e-6, viscosity=0.05)
 rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024

@@ -159,8 +159,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Confidence level of the intervals and of the friction test.
     profile : sequence of str, optional
         Parameters with profile-likelihood intervals; default: the free ones
-        among ``hamaker``, ``radius``, ``xi``, ``slip_length``, ``surface_potential`` and
-        ``debye_length``.
+        among ``hamaker``, ``radius``, ``xi``, ``slip_length``, ``lever_drag``,
+        ``surface_potential`` and ``debye_length``.
     compare : bool
         Fit the static and the friction-free model too (model comparison).
     jump_window : float, optional
@@ -242,12 +242,10 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     if sampling is not None:
         base = base.replace(sampling=sampling)
     free = check_free(free, base.model)
-    undetermined = []
+    need = [n for n in free if n in NEEDS_RETRACT]
     if retract is None:
-        need = [n for n in free if n in NEEDS_RETRACT]
         retract = bool(need) and all(not isinstance(c, FitCurve) and retract_follows(c)
                                      for c in curves)
-        undetermined = [] if retract else need
     fc = prepare_curves(curves, names, velocities=velocities, sample_rates=sample_rates,
                         jump_window=jump_window, retract=retract,
                         soft="warn" if base.viscosity > LIQUID_VISCOSITY else "refuse",
@@ -269,6 +267,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
             "(ideally a factor >= 4 apart) or fix " + ", ".join(dep)
             + " (e.g. --free hamaker --xi 0: A*R alone, without friction)")
+    undetermined = [] if any(c.retract_start is not None for c in fc) else need
     ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)
     guess = _guess_globals(fc, base, free)
@@ -277,8 +276,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     n_par = len(shifts0) + len(free) + ev.n_linear()
     dof = max(n_data - n_par, 1)
     todo = [n for n in (profile if profile is not None else (
-        "hamaker", "radius", "xi", "slip_length", "surface_potential", "debye_length"))
-            if n in free]
+        "hamaker", "radius", "xi", "slip_length", "lever_drag", "surface_potential",
+        "debye_length")) if n in free and n not in undetermined]
     stages = {"done": 0, "total": 2 + len(todo) + 2 * int(compare)}
 
     def report(what: str) -> None:
@@ -362,8 +361,9 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         e = params[name]
         e.interval, e.interval_method = (None, None), "undetermined"
         e.note = (f"{name}: undetermined: on the approach alone a constant lever drag is a "
-                  "baseline offset (c v / k), taken up by each curve's offset; fit the curves "
-                  "with their retract runs (the retract's offset has the opposite sign)")
+                  "baseline offset (c v / k), taken up by each curve's offset, and otherwise "
+                  "shows only in the ramp's start-up transient (how the instrument starts its "
+                  "ramp); fit the curves with their retract runs")
     for name, e in params.items():
         note = contain_value(name, e)
         e.note = "; ".join(t for t in (e.note, note) if t)
