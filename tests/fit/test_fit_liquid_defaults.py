@@ -93,13 +93,15 @@ def test_lever_drag_from_approaches_alone_is_undetermined(slip_files):
                       compare=False)
     c = res.parameters["lever_drag"]
     assert c.interval == (None, None) and c.interval_method == "undetermined"
+    assert math.isnan(c.stderr)       # no standard error that would make a tight interval
+    assert "| lever_drag |" in res.markdown() and "[open, open] (undetermined)" in res.markdown()
     assert "undetermined" in c.note and "retract" in c.note
     assert any("lever_drag: undetermined" in w for w in res.warnings)
     _assert_values_inside(res.to_dict()["parameters"])
 
 
 def test_water_dlvo_set_recovered_at_defaults(water_files, capsys):
-    for extra in ([], ["--retract"]):       # the retract made the fit diverge before
+    for extra in ([], ["--retract", "--no-compare"]):   # the retract made the fit diverge before
         d = _fit_cli(water_files, WATER_CMD + extra, capsys)
         p = d["parameters"]
         assert d["config"]["spring_constant"] == pytest.approx(L.K_FILE, rel=1e-12)

@@ -359,7 +359,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         report(f"profile of {name}")
     for name in undetermined:     # a constant lever drag on approaches alone (NEEDS_RETRACT)
         e = params[name]
-        e.interval, e.interval_method = (None, None), "undetermined"
+        e.interval, e.interval_method, e.stderr = (None, None), "undetermined", math.nan
         e.note = (f"{name}: undetermined: on the approach alone a constant lever drag is a "
                   "baseline offset (c v / k), taken up by each curve's offset, and otherwise "
                   "shows only in the ramp's start-up transient (how the instrument starts its "

@@ -21,9 +21,11 @@ __all__ = ["fit_bytes", "available_memory", "check_fit_memory", "BYTES_PER_SAMPL
 #: Bytes the fit holds per fitted sample and per free parameter (Jacobian columns, the
 #: batched predictions of a Jacobian), measured with margin (benchmarks/bench_fit_memory.py).
 BYTES_PER_SAMPLE_PARAMETER = 8 * 8
-#: Bytes per sample independent of the parameters (the prediction cache of 64 runs per curve,
-#: the curve's arrays, whitened designs, the solver's dense output), with margin.
-BYTES_PER_SAMPLE = 2200
+#: Bytes per sample independent of the parameters (the trajectories of a batch of runs before
+#: they are reduced to the sampled deflection, the prediction cache of 64 runs per curve, the
+#: curve's arrays, whitened designs), with margin: the fit's own peak grew by 2.9 kB per added
+#: sample on the issue's liquid set (tracemalloc, benchmarks/bench_fit_memory.py).
+BYTES_PER_SAMPLE = 3000
 #: The interpreter, numpy, scipy, numba and the compiled models [bytes].
 BASE_BYTES = 400e6
 

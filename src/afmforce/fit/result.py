@@ -211,7 +211,7 @@ class FitResult:
         for name, e in {**self.parameters, **self.derived}.items():
             L.append(f"| {name} | {fq(e.value, e.unit)} | {fq(e.stderr, e.unit)} | "
                      f"[{end(e.interval[0], e.unit)}, {end(e.interval[1], e.unit)}] "
-                     f"({e.interval_method}{', one-sided' if None in e.interval else ''}) |")
+                     f"({e.interval_method}{', one-sided' if (e.interval[0] is None) != (e.interval[1] is None) else ''}) |")
         L.append("")
         if self.adequacy and not self.adequacy.get("adequate", True):
             L += [f"**The model does not describe the data**: reduced chi-square "
