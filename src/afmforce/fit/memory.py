@@ -12,7 +12,6 @@ the estimate).
 from __future__ import annotations
 
 import math
-import os
 
 from ..errors import MemoryLimitError
 
@@ -37,50 +36,68 @@ def fit_bytes(n_samples: int, n_free: int, n_curves: int = 1) -> float:
     return BASE_BYTES + per * float(n_samples)
 
 
-def _cgroup_limit() -> float:
-    for path in ("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory/memory.limit_in_bytes"):
-        try:
-            text = open(path).read().strip()
-        except OSError:
+def _read(path: str) -> str | None:
+    try:
+        with open(path) as fh:
+            return fh.read()
+    except OSError:
+        return None
+
+
+def _cgroup_headroom() -> float:
+    """The container's (cgroup) limit less its current use [bytes]; inf without one."""
+    for lim, cur in (("/sys/fs/cgroup/memory.max", "/sys/fs/cgroup/memory.current"),
+                     ("/sys/fs/cgroup/memory/memory.limit_in_bytes",
+                      "/sys/fs/cgroup/memory/memory.usage_in_bytes")):
+        a, b = _read(lim), _read(cur)
+        if a is None or not a.strip().isdigit() or int(a) >= 1 << 60:
             continue
-        if text.isdigit() and int(text) < 1 << 60:
-            return float(text)
+        used = int(b) if b is not None and b.strip().isdigit() else 0
+        return float(int(a) - used)
     return math.inf
+
+
+def _status_bytes(key: str) -> float:
+    """A ``VmSize``-like field of /proc/self/status [bytes] (0 when unknown)."""
+    text = _read("/proc/self/status") or ""
+    for line in text.splitlines():
+        if line.startswith(key + ":"):
+            return float(line.split()[1]) * 1024
+    return 0.0
 
 
 def available_memory() -> float:
     """Memory this process can still take [bytes]: the least of the machine's available memory,
-    the process's address-space and data limits and the container's (cgroup) limit."""
-    limits = [_cgroup_limit()]
-    try:
-        with open("/proc/meminfo") as fh:
-            info = {line.split(":")[0]: line.split()[1] for line in fh}
-        limits.append(float(info["MemAvailable"]) * 1024)
-    except (OSError, KeyError, ValueError, IndexError):
-        pass
+    the headroom under the process's address-space and data limits (the limit less what it
+    already uses) and under the container's (cgroup) limit; inf where none is known."""
+    heads = [_cgroup_headroom()]
+    info = _read("/proc/meminfo")
+    if info:
+        for line in info.splitlines():
+            if line.startswith("MemAvailable:"):
+                heads.append(float(line.split()[1]) * 1024)
     try:
         import resource
 
-        for lim in (resource.RLIMIT_AS, resource.RLIMIT_DATA):
+        for lim, key in ((resource.RLIMIT_AS, "VmSize"), (resource.RLIMIT_DATA, "VmData")):
             soft = resource.getrlimit(lim)[0]
             if soft != resource.RLIM_INFINITY and soft > 0:
-                limits.append(float(soft))
+                heads.append(float(soft) - _status_bytes(key))
     except (ImportError, ValueError, OSError):
         pass
-    if os.name != "posix" and len(limits) == 1:
-        return math.inf
-    return min(limits)
+    return max(min(heads), 0.0)
 
 
 def check_fit_memory(n_samples: int, n_free: int, n_curves: int) -> float:
-    """Raise :class:`~afmforce.errors.MemoryLimitError` when the fit's estimated memory exceeds
-    what is available; returns the estimate [bytes]."""
-    need = fit_bytes(n_samples, n_free, n_curves)
+    """Raise :class:`~afmforce.errors.MemoryLimitError` when the memory the fit will add (its
+    estimate less the interpreter's share, already in use) exceeds what is available; returns
+    the estimate [bytes]."""
+    need = fit_bytes(n_samples, n_free, n_curves) - BASE_BYTES
     have = available_memory()
     if need > have:
         raise MemoryLimitError(
             f"the fit of {n_samples} samples in {n_curves} curves with {n_free} free parameters "
-            f"needs about {need / 1e9:.3g} GB but {have / 1e9:.3g} GB are available: fit fewer or "
-            "shorter curves (the approach's free part far from the surface carries little), "
-            "decimate the samples (a lower sample_rate), or free fewer parameters")
+            f"needs about {need / 1e9:.3g} GB more but {have / 1e9:.3g} GB are available: fit "
+            "fewer or shorter curves (the approach's free part far from the surface carries "
+            "little), decimate the samples (a lower sample_rate), or free fewer parameters")
     return need
