@@ -162,6 +162,13 @@ class ARWhitener:
         self.runs = np.split(np.arange(self.idx.size), breaks)
         self.p = int(min(order, max(len(r) for r in self.runs) - 1, acov.size - 1))
         self.phi, self.v = _levinson(np.asarray(acov, float), max(self.p, 0))
+        p = self.p
+        head = np.zeros((p, p))       # a run's first p samples: the predictors of order t < p
+        for t in range(p):
+            head[t, t] = 1.0
+            head[t, :t] = -self.phi[t, :t][::-1]
+            head[t] /= math.sqrt(self.v[t])
+        self.head = head
 
     def __call__(self, a: np.ndarray) -> np.ndarray:
         """The whitened ``a`` (rows: the fitted samples; 1-D or 2-D)."""
@@ -174,9 +181,8 @@ class ARWhitener:
         for run in self.runs:
             x = a[run[0]:run[-1] + 1]
             y = lfilter(full, [1.0], x, axis=0)
-            for t in range(min(p, x.shape[0])):      # the run's start: lower orders
-                y[t] = (x[t] - self.phi[t, :t] @ x[t - 1::-1][:t] if t else x[t]) \
-                    / math.sqrt(self.v[t])
+            m = min(p, x.shape[0])
+            y[:m] = self.head[:m, :m] @ x[:m]           # the run's start: lower orders
             out[run[0]:run[-1] + 1] = y
         return out
 
