@@ -15,6 +15,7 @@ __all__ = [
     "FileFormatError",
     "MissingMetadataError",
     "AnalysisError",
+    "MemoryLimitError",
     "OutputExistsError",
     "MissingDependencyError",
 ]
@@ -62,3 +63,8 @@ class OutputExistsError(AfmforceError, FileExistsError):
 
 class MissingDependencyError(AfmforceError, ImportError):
     """An optional dependency needed for this feature is not installed."""
+
+
+class MemoryLimitError(AfmforceError, MemoryError):
+    """A computation would need more memory than the machine (or its limits) can give: raised
+    from an estimate before it allocates, so the kernel does not have to stop it."""

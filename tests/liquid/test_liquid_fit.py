@@ -64,18 +64,19 @@ def test_plan_slip_scales_with_the_target():
         plan_slip(target=0.5e-9, **{**LIQ, "slip_length": 0.0})
 
 
-def test_free_spring_constant_starts_from_the_files():
+def test_the_model_lever_is_the_files_unless_given():
+    # issue 34: the spring constant comes from the files (a free one starts there too)
     from afmforce.dynamics import SimulationConfig
-    from afmforce.fit.core import _start_from_file_k
+    from afmforce.fit.core import lever_from_files
 
     class C:      # only the metadata matters here
         def __init__(self, k):
             self.metadata = {"spring_constant": k}
     curves = [C(0.108), C(0.108)]
     base = SimulationConfig(model="spring", spring_constant=0.2)
-    assert _start_from_file_k(base, curves, ("slip_length", "spring_constant"), None).spring_constant == 0.108
-    assert _start_from_file_k(base, curves, ("spring_constant",), {"spring_constant": 0.2}) is base
-    assert _start_from_file_k(base, curves, ("slip_length",), None) is base
+    assert lever_from_files(base, curves).spring_constant == 0.108
+    assert lever_from_files(base, curves, "model") is base
+    assert lever_from_files(base, [C(None)]) is base
     beam = SimulationConfig(model="beam", k0=0.1)
-    got = _start_from_file_k(beam, curves, ("k0",), None)
+    got = lever_from_files(beam, curves)
     assert got.force_constant == pytest.approx(0.108, rel=1e-12)     # eq 13 scales with k0

@@ -91,9 +91,12 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="calibrate curves in volts by a quadratic fit of their compliance region "
                         "(a curved photodiode response; both runs needed: analysis.liquid, "
                         "docs/liquid.md) instead of the file's sensitivity")
-    g.add_argument("--retract", action="store_true",
+    g.add_argument("--retract", action="store_true", default=None,
                    help="fit the retract run too (outward compliance and its hysteresis; the "
-                        "pull-off is left out like the jump-in)")
+                        "pull-off is left out like the jump-in); default: when a free parameter "
+                        "needs it (lever_drag) and the files have it")
+    g.add_argument("--no-retract", action="store_false", dest="retract",
+                   help="fit the approach runs only")
     g.add_argument("--level", type=float, default=0.95,
                    help="confidence level of intervals and friction test (default 0.95)")
     g.add_argument("--starts", type=int, default=2,
@@ -116,8 +119,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--fringe-period", type=quantity("length", "--fringe-period", positive=True), default=335e-9,
                    metavar="LENGTH", help="fringe period in the separation: half the laser "
                    "wavelength (default 335nm, a 670 nm laser)")
-    g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=2e-3,
-                   metavar="TIME", help="left out after the jump-in (default 2 ms)")
+    g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=None,
+                   metavar="TIME", help="left out after the jump-in (default: until the deflection "
+                                        "has landed on the contact line, at most 2 ms)")
     add_model_flags(p)
     o = p.add_argument_group("output")
     o.add_argument("--json", action="store_true", help="print the result as JSON (SI units)")
@@ -197,7 +201,10 @@ def run(args: argparse.Namespace) -> int:
                           sampling=None,    # --sampling (default average) is in cfg
                           retract=args.retract, noise=args.noise_model,
                           fringes=args.fringes, fringe_period=args.fringe_period,
-                          calibration=args.calibration)
+                          calibration=args.calibration,
+                          # the model's lever is the files' unless a flag gives one (issue 34)
+                          lever="model" if any(getattr(args, n, None) is not None for n in
+                                               ("spring_constant", "k0", "B")) else "file")
     d = res.to_dict()
     # how each curve was calibrated (the analysis's calibration: the file's, or the compliance slope)
     d["calibration"] = {c.name: c.metadata.get("calibration") for c in res._problem.ev.curves}

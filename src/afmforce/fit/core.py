@@ -11,12 +11,13 @@ import numpy as np
 from ..errors import ParameterError
 from ..progress import Progress
 from .data import FitCurve, prepare_curves
+from .memory import check_fit_memory
 from .model import DEFAULT_FRINGE_PERIOD, Evaluator
 from .preprocess import preparation_warnings, result_warnings
 from .params import PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
 from .search import _refit_all, _search
-from .result import CurveFit, Estimate, FitResult, wald_interval
+from .result import CurveFit, Estimate, FitResult, contain_value, wald_interval
 
 __all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT"]
 
@@ -28,6 +29,24 @@ LIQUID_VISCOSITY = 1e-4
 #: instrument showed 1.5 nm (section 3.1), present-day ones less; a larger fitted amplitude
 #: means the fringe terms took up something else (docs/fit.md).
 FRINGE_AMPLITUDE_MAX = 3e-9
+
+
+#: Free parameters the approach alone cannot determine: the retract is fitted with them when
+#: the curves have it (``retract=None``), otherwise they are reported undetermined. A constant
+#: lever drag (``lever_height`` 0) is an offset ``c v / k`` of the free approach, absorbed by
+#: each curve's baseline offset; the retract's offset has the opposite sign.
+NEEDS_RETRACT = ("lever_drag",)
+
+
+def retract_follows(curve) -> bool:
+    """Whether ``curve`` (a RawCurve) has a retract run directly after its approach."""
+    seg = np.asarray(getattr(curve, "segment", ()))
+    app = np.flatnonzero(seg == 0)
+    if app.size < 30:
+        return False
+    run = app[: np.flatnonzero(np.diff(app) != 1)[0] + 1] if np.any(np.diff(app) != 1) else app
+    nxt = int(run[-1]) + 1
+    return nxt < seg.size and seg[nxt] == 1 and int(np.sum(seg[nxt:] == 1)) >= 30
 
 
 class IdentifiabilityError(ParameterError):
@@ -68,16 +87,27 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
     return g
 
 
-def _start_from_file_k(base, curves: list[FitCurve], free, fixed):
-    """A free spring constant (issue 25) starts from the files' calibration when they have one:
-    ``spring_constant`` as it is, ``k0`` scaled by the beam's k0/k (eq 13)."""
-    name = next((n for n in ("spring_constant", "k0") if n in free and n not in (fixed or {})), None)
-    ks = [float(c.metadata["spring_constant"]) for c in curves
-          if (c.metadata or {}).get("spring_constant")]
-    if name is None or not ks:
+def files_spring_constant(curves: list[FitCurve]) -> float | None:
+    """The curves' spring constant [N/m]: the analysis's (the file's, rescaled with a refitted
+    sensitivity, or a force's compliance slope), median over the curves; None without one."""
+    ks = [(c.metadata.get("calibration") or {}).get("spring_constant")
+          or (c.metadata or {}).get("spring_constant") for c in curves]
+    ks = [float(k) for k in ks if k and math.isfinite(float(k)) and float(k) > 0]
+    return float(np.median(ks)) if ks else None
+
+
+def lever_from_files(base, curves: list[FitCurve], lever: str = "file"):
+    """The model's lever calibrated as the files are (issue 34: defaults right as typed).
+
+    ``lever="file"``: the spring model takes the curves' spring constant, the beam its
+    rigidity scaled so that its spring constant (eq 13) is the curves' (``k0 * k_file / k``);
+    ``"model"``: the lever as ``base`` has it (the user gave one). A free spring constant
+    starts from the files' in either case. Curves without a spring constant leave ``base``.
+    """
+    k_file = files_spring_constant(curves)
+    if k_file is None or lever == "model":
         return base
-    k_file = float(np.median(ks))
-    if name == "spring_constant":
+    if base.model == "spring":
         return base.replace(spring_constant=k_file)
     return base.replace(k0=base.cantilever.k0 * k_file / base.force_constant)
 
@@ -95,11 +125,11 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 velocities: Sequence[float] | None = None,
                 sample_rates: Sequence[float] | None = None, drift: bool = True,
                 starts: int = 2, level: float = 0.95, profile: Sequence[str] | None = None,
-                compare: bool = True, jump_window: float = 2e-3,
+                compare: bool = True, jump_window: float | None = None,
                 max_nfev: int = 40, sampling: str | None = "average",
-                retract: bool = False, noise: str = "auto", fringes: str | bool = "periodic",
+                retract: bool | None = None, noise: str = "auto", fringes: str | bool = "periodic",
                 fringe_period: float = DEFAULT_FRINGE_PERIOD, calibration: str = "auto",
-                progress=None) -> FitResult:
+                lever: str = "file", progress=None) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -129,13 +159,15 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Confidence level of the intervals and of the friction test.
     profile : sequence of str, optional
         Parameters with profile-likelihood intervals; default: the free ones
-        among ``hamaker``, ``radius``, ``xi``, ``slip_length``, ``surface_potential`` and
-        ``debye_length``.
+        among ``hamaker``, ``radius``, ``xi``, ``slip_length``, ``lever_drag``,
+        ``surface_potential`` and ``debye_length``.
     compare : bool
         Fit the static and the friction-free model too (model comparison).
-    jump_window : float
+    jump_window : float, optional
         Samples this long after the jump-in are left out [s] (the jump and the
-        landing transient are timing, not shape; see docs/fit.md).
+        landing transient are timing, not shape; see docs/fit.md). None (default):
+        chosen from each curve, until its deflection has landed on the contact line
+        (:func:`afmforce.fit.data.landing_samples`, at most 2 ms).
     max_nfev : int
         Iteration budget of each local fit.
     sampling : {"average", "point"} or None
@@ -149,10 +181,13 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Called with a :class:`~afmforce.progress.Progress` (unit ``"stage"``: the
         local fits, each profile, the model comparison) after each stage; may raise
         to stop the fit (the web server's cancel).
-    retract : bool
+    retract : bool, optional
         Fit the retract run of each curve too (it must follow the approach
         without a pause): the outward compliance line and its hysteresis carry
-        friction, the pull-off (and ``jump_window`` after it) is left out.
+        friction, the pull-off (and ``jump_window`` after it) is left out. None
+        (default): when a free parameter needs it (:data:`NEEDS_RETRACT`: a constant
+        lever drag is a baseline offset on the approach alone) and every curve has one;
+        otherwise such a parameter is reported undetermined (open interval).
 
     noise : {"auto", "white"}
         ``auto``: after a first fit, estimate 1/f detector noise from the residuals of
@@ -174,6 +209,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         line more than 1.25x off the file's sensitivity replaces it: a realigned laser);
         ``file``: the files' sensitivities always (a position sensor that is off in
         contact makes the compliance line lie).
+    lever : {"file", "model"}
+        ``file`` (default): the model's lever calibrated as the curves are: the spring
+        model's ``spring_constant`` is the curves' (the analysis's k), the beam's rigidity
+        is scaled to give it (:func:`lever_from_files`); ``model``: the lever of ``model``
+        as given (a spring constant in ``fixed`` counts as given too). Curves without a
+        spring constant keep the model's.
 
     Returns
     -------
@@ -201,11 +242,22 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     if sampling is not None:
         base = base.replace(sampling=sampling)
     free = check_free(free, base.model)
+    need = [n for n in free if n in NEEDS_RETRACT]
+    if retract is None:
+        retract = bool(need) and all(not isinstance(c, FitCurve) and retract_follows(c)
+                                     for c in curves)
     fc = prepare_curves(curves, names, velocities=velocities, sample_rates=sample_rates,
                         jump_window=jump_window, retract=retract,
                         soft="warn" if base.viscosity > LIQUID_VISCOSITY else "refuse",
                         calibration=calibration)
-    base = _start_from_file_k(base, fc, free, fixed)
+    check_fit_memory(sum(c.n for c in fc), len(free), len(fc))   # before the large arrays
+    if lever not in ("file", "model"):
+        raise ParameterError(f"lever must be 'file' or 'model', got {lever!r}")
+    if {"spring_constant", "k0"} & set(fixed or {}):
+        lever = "model"                      # given by the caller
+    base = lever_from_files(base, fc, lever)
+    if lever == "model" and {"spring_constant", "k0"} & set(free):
+        base = lever_from_files(base, fc, "file")   # a free k starts from the files' (issue 25)
     speeds = sorted({round(c.velocity, 15) for c in fc})
     dep = [n for n in free if n in SPEED_DEPENDENT]
     if dep and (len(speeds) < 2 or speeds[-1] / speeds[0] < 1.2):
@@ -215,6 +267,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
             "(ideally a factor >= 4 apart) or fix " + ", ".join(dep)
             + " (e.g. --free hamaker --xi 0: A*R alone, without friction)")
+    undetermined = [] if any(c.retract_start is not None for c in fc) else need
     ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)
     guess = _guess_globals(fc, base, free)
@@ -223,8 +276,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     n_par = len(shifts0) + len(free) + ev.n_linear()
     dof = max(n_data - n_par, 1)
     todo = [n for n in (profile if profile is not None else (
-        "hamaker", "radius", "xi", "slip_length", "surface_potential", "debye_length"))
-            if n in free]
+        "hamaker", "radius", "xi", "slip_length", "lever_drag", "surface_potential",
+        "debye_length")) if n in free and n not in undetermined]
     stages = {"done": 0, "total": 2 + len(todo) + 2 * int(compare)}
 
     def report(what: str) -> None:
@@ -304,6 +357,16 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         params[name].note = note
         profiles[name] = pts
         report(f"profile of {name}")
+    for name in undetermined:     # a constant lever drag on approaches alone (NEEDS_RETRACT)
+        e = params[name]
+        e.interval, e.interval_method, e.stderr = (None, None), "undetermined", math.nan
+        e.note = (f"{name}: undetermined: on the approach alone a constant lever drag is a "
+                  "baseline offset (c v / k), taken up by each curve's offset, and otherwise "
+                  "shows only in the ramp's start-up transient (how the instrument starts its "
+                  "ramp); fit the curves with their retract runs")
+    for name, e in params.items():
+        note = contain_value(name, e)
+        e.note = "; ".join(t for t in (e.note, note) if t)
     for e in params.values():
         if e.note:
             warns.append(e.note)

@@ -101,8 +101,9 @@ class FitCurve:
     noise_samples: int = 0
     #: rms of the 1/f noise [m] (0: white noise only; see afmforce.fit.noise)
     pink: float = 0.0
-    #: Cholesky factor of the noise covariance on the fitted samples [m] (None: white)
-    noise_chol: np.ndarray | None = None
+    #: whitening filter of the noise on the fitted samples (afmforce.fit.noise.ARWhitener;
+    #: None: white noise of rms ``sigma``)
+    whitener: object | None = None
 
     @property
     def n(self) -> int:
@@ -117,12 +118,42 @@ def _noise_sigma(y: np.ndarray) -> float:
     return float(np.std(d) / math.sqrt(6.0))
 
 
+#: Longest window left out after the jump-in [s] (the old fixed default).
+JUMP_WINDOW_MAX = 2e-3
+
+
+def landing_samples(z: np.ndarray, y: np.ndarray, m0: int, sigma: float, fs: float) -> int:
+    """Samples after ``m0`` (the jump-in or contact) until the deflection has landed on the
+    contact line (issue 34: the jump window chosen from the data).
+
+    The contact line is the straight line through the deflection against the position on
+    the second half of the contact samples; the landing ends where the deviation from it
+    stays within 4 noise rms for 10 samples. At most :data:`JUMP_WINDOW_MAX`; that long when
+    the contact is too short to tell (fewer than 20 samples) or never settles.
+    """
+    cap = int(math.ceil(JUMP_WINDOW_MAX * fs))
+    n = len(y)
+    if n - m0 < 20:
+        return cap
+    late = slice(m0 + (n - m0) // 2, n)
+    a, b = np.polyfit(z[late], y[late], 1)
+    ok = np.abs(y[m0:] - (a * z[m0:] + b)) < 4.0 * sigma
+    run = 10
+    if ok.size < run:
+        return cap
+    settled = np.convolve(ok.astype(float), np.ones(run), "valid") >= run   # 10 in a row
+    first = np.flatnonzero(settled)
+    return int(min(first[0], cap)) if first.size else cap
+
+
 def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | None = None,
-                  sample_rate: float | None = None, jump_window: float = 2e-3,
+                  sample_rate: float | None = None, jump_window: float | None = None,
                   retract: bool = False, soft: str = "refuse",
                   calibration: str = "auto") -> FitCurve:
     """Prepare the approach run of ``curve`` (see the module docstring).
 
+    ``jump_window``: samples this long after the jump-in [s] are left out; None (default):
+    until the deflection has landed on the contact line (:func:`landing_samples`).
     ``soft``: what to do with a curve the analysis classifies as a soft contact
     (:func:`prepare_curves`); ``calibration``: ``auto`` as the analysis calibrates (a stale
     sensitivity replaced by the compliance slope), ``file`` the file's sensitivity always.
@@ -190,7 +221,8 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     i_c, j = min(ana.contact, n - 1), min(max(ana.jump, 1), n - 1)
     n_noise = max(12, int(0.8 * j))
     sigma = max(_noise_sigma(y[:n_noise]), 1e-15)
-    win = int(math.ceil(jump_window * fs))
+    win = (landing_samples(z, y, max(j, i_c), sigma, fs) if jump_window is None
+           else int(math.ceil(jump_window * fs)))
     mask = np.ones(n, bool)
     mask[max(j - 2, 0): min(max(j, i_c) + win + 2, n)] = False
     # the last approach sample: an averaging detector's window may straddle the turn,
@@ -213,7 +245,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
                          "min_deflection": float(np.min(ybl[max(j - 3, 0):j]))},
                   metadata=dict(curve.metadata or {}))
     fc.metadata["position_channel"] = channel_note["channel"]
-    fc.metadata["calibration"] = ana.as_metadata()
+    fc.metadata["calibration"] = {**ana.as_metadata(), "jump_window": win / fs}
     if ana.notes:
         fc.metadata["preparation_notes"] = list(ana.notes)
     if channel_note.get("bent"):
@@ -330,7 +362,7 @@ def check_consistent(curves: Sequence[RawCurve], names: Sequence[str]) -> None:
 def prepare_curves(curves: Sequence[RawCurve | FitCurve], names: Sequence[str] | None = None,
                    *, velocities: Sequence[float] | None = None,
                    sample_rates: Sequence[float] | None = None,
-                   jump_window: float = 2e-3, retract: bool = False,
+                   jump_window: float | None = None, retract: bool = False,
                    soft: str = "refuse", calibration: str = "auto") -> list[FitCurve]:
     """Prepare several curves (see :func:`prepare_curve`) and check their calibrations.
 

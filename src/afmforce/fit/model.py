@@ -208,14 +208,8 @@ class Evaluator:
         if model is None or not np.all(np.isfinite(model[m])):
             return (np.full(int(m.sum()), FAILED_RESIDUAL),
                     np.full(max(3, self.design(i).shape[1]), math.nan))
-        if c.noise_chol is not None:     # correlated noise: whiten (afmforce.fit.noise)
-            from scipy.linalg import solve_triangular
-
-            X = solve_triangular(c.noise_chol, self.design(i)[m], lower=True)
-            b = solve_triangular(c.noise_chol, c.deflection[m] - model[m], lower=True)
-        else:
-            X = self.design(i)[m] / c.sigma
-            b = (c.deflection[m] - model[m]) / c.sigma
+        X = self._whitened_basis(i)[0]     # correlated noise: whitened (afmforce.fit.noise)
+        b = self._whiten(c, c.deflection[m] - model[m])
         coef, *_ = np.linalg.lstsq(X, b, rcond=None)
         r = b - X @ coef
         return r, np.append(coef, [0.0, 0.0])[:max(3, coef.size)]
@@ -223,7 +217,7 @@ class Evaluator:
     def _whitened_basis(self, i: int) -> tuple[np.ndarray, np.ndarray]:
         """``(Xw, Q)``: the whitened design of curve ``i`` on its mask and an orthonormal basis of it."""
         c = self.curves[i]
-        key = (i, id(c.noise_chol))
+        key = (i, id(c.whitener))
         if key not in self._bases:
             X = self._whiten(c, self.design(i)[c.mask])
             self._bases[key] = (X, np.linalg.qr(X)[0])
@@ -231,10 +225,8 @@ class Evaluator:
 
     @staticmethod
     def _whiten(c: FitCurve, a: np.ndarray) -> np.ndarray:
-        if c.noise_chol is not None:
-            from scipy.linalg import solve_triangular
-
-            return solve_triangular(c.noise_chol, a, lower=True)
+        if c.whitener is not None:
+            return c.whitener(a)
         return a / c.sigma
 
     def fringe_columns(self, i: int, model: np.ndarray, shift: float) -> np.ndarray:

@@ -14,9 +14,17 @@ estimated from a first, white-noise fit: the excess of the residuals of the free
 approach over the white noise, divided by what unit 1/f noise leaves there after
 the fit (:func:`estimate_pink`), pooled over the curves (one detector). When the
 excess is significant the fit is repeated with generalised least squares: the
-residual of curve *i* is ``L_i^-1 (data - model - X beta)``, ``C_i = L_i L_i^T`` on
-its fitted samples, so the chi-square, the profiles and the model test keep their
-meaning.
+residual of curve *i* is ``W_i (data - model - X beta)``, ``W_i`` the whitening filter
+of its noise (:class:`ARWhitener`), so the chi-square, the profiles and the model test
+keep their meaning.
+
+**Memory linear in the samples** (issue 34). Nothing here is dense in the samples: the
+expectation of :func:`estimate_pink` is exact, with the projections written as low-rank
+updates of the identity and ``K`` applied as a Toeplitz product by FFT; the whitening is
+the innovations filter of an autoregressive model of order ``AR_ORDER`` fitted to ``C``'s
+autocorrelation by Levinson-Durbin (exact for the first ``AR_ORDER`` samples of each
+contiguous run of fitted samples, the maximum-entropy extension beyond; a gap in the
+fitted samples restarts it). Memory ``O(n)``, time ``O(n p)`` per whitened vector.
 """
 
 from __future__ import annotations
@@ -25,10 +33,13 @@ import math
 
 import numpy as np
 
-__all__ = ["pink_correlation", "estimate_pink", "set_noise_model", "PINK_SIGNIFICANCE"]
+__all__ = ["pink_correlation", "estimate_pink", "set_noise_model", "ARWhitener",
+           "PINK_SIGNIFICANCE", "AR_ORDER"]
 
 #: The 1/f term is used when the pooled excess exceeds this many of its standard deviations.
 PINK_SIGNIFICANCE = 3.0
+#: Order of the autoregressive whitening filter (lags of C matched exactly).
+AR_ORDER = 200
 
 
 def pink_correlation(n_record: int) -> np.ndarray:
@@ -41,70 +52,153 @@ def pink_correlation(n_record: int) -> np.ndarray:
     return acf / acf[0]
 
 
-def _free(c) -> np.ndarray:
-    """Fitted samples of the free approach (before the jump-in)."""
-    idx = np.flatnonzero(c.mask)
-    return idx[idx < c.jump_index]
+def _toeplitz_matvec(K: np.ndarray, idx: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """``K[|idx_a - idx_b|] @ V`` (``V``: rows on ``idx``) by FFT, without the matrix."""
+    V = np.asarray(V, float).reshape(idx.size, -1)
+    L = int(idx[-1] - idx[0]) + 1
+    nfft = 1 << int(math.ceil(math.log2(2 * L)))
+    lags = np.zeros(nfft)
+    m = min(L, K.size)
+    lags[:m] = K[:m]
+    lags[nfft - m + 1:] = K[1:m][::-1]          # symmetric: K[-l] = K[l]
+    full = np.zeros((nfft, V.shape[1]))
+    full[idx - idx[0]] = V
+    out = np.fft.irfft(np.fft.rfft(lags)[:, None] * np.fft.rfft(full, axis=0), nfft, axis=0)
+    return out[idx - idx[0]]
 
 
 def estimate_pink(prob, x, drift: bool = True) -> tuple[float, float]:
     """``(sigma_p^2 [m^2], significance)`` from the residuals of the white fit at ``x``.
 
-    The residuals ``r = (P - H) b`` of the free approach (``b`` the data noise in units of
-    each curve's white rms, ``P`` the projection that removes each curve's offset and
-    drift, ``H`` the hat matrix of the fit's Jacobian ``J``: the fitted parameters absorb
-    part of the noise) have the expectation ``E[r_S' r_S] = tr_S(P - H) + sigma_p^2
-    tr_S((P - H) G (P - H))``, ``G`` the 1/f covariance per unit sigma_p^2 in the same
+    The residuals ``r = D b``, ``D = P - H`` (``b`` the data noise in units of each curve's
+    white rms, ``P`` the projection that removes each curve's offset and drift, ``H`` the
+    hat matrix of the fit's Jacobian ``J``: the fitted parameters absorb part of the
+    noise), have on the free approach ``S`` the expectation ``E[r_S' r_S] = tr_S(D) +
+    sigma_p^2 tr_S(D G D)``, ``G`` the 1/f covariance per unit sigma_p^2 in the same
     units; solved for ``sigma_p^2``. The white rms of each curve came from second
     differences, which also see the top of the 1/f spectrum: ``sigma_est^2 = sigma_w^2 +
     c2 sigma_p^2``, ``c2 = (6 - 8 K[1] + 2 K[2]) / 6`` (0.16-0.22 for records of
     600-6000 samples), so the white part of the residuals is ``(1 - c2 sigma_p^2 /
-    sigma_est^2) tr_S(P - H)``; solved jointly. ``drift`` is unused (the evaluator's
-    design holds it).
+    sigma_est^2) tr_S(D)``; solved jointly. ``D = I - U V'`` with ``U = [Q, J M]``,
+    ``V = [Q, J]`` (``Q`` the orthonormal designs, ``M = (J'J)^-1``), so the diagonal of
+    ``D G D`` needs only ``G V`` (Toeplitz products by FFT) and ``V' G V``: O(n) memory.
+    ``drift`` is unused (the evaluator's design holds it).
     """
-    values, shifts = prob.unpack(x)
     ev = prob.ev
-    blocks, rs, sel, c2w = [], [], [], []
-    for i, (c, r) in enumerate(zip(ev.curves, prob.curve_residuals(x))):
+    rs = prob.curve_residuals(x)
+    J = prob.jacobian(x)
+    M = np.linalg.pinv(J.T @ J, rcond=1e-12)
+    JM = J @ M
+    diagH = np.einsum("ij,ij->i", JM, J)
+    sizes = [int(c.mask.sum()) for c in ev.curves]
+    starts = np.concatenate([[0], np.cumsum(sizes)])
+    Qs = [np.linalg.qr(ev.design(i)[c.mask])[0] for i, c in enumerate(ev.curves)]
+    nq = sum(q.shape[1] for q in Qs)
+    N = int(starts[-1])
+    Qblk = np.zeros((N, nq))      # block-diagonal designs: N x (a few per curve)
+    col = 0
+    for i, Q in enumerate(Qs):
+        Qblk[starts[i]:starts[i + 1], col:col + Q.shape[1]] = Q
+        col += Q.shape[1]
+    U = np.hstack([Qblk, JM])
+    V = np.hstack([Qblk, J])
+    GV = np.zeros_like(V)
+    gdiag, c2w, sel = np.zeros(N), np.zeros(N), np.zeros(N, bool)
+    for i, c in enumerate(ev.curves):
+        s = slice(starts[i], starts[i + 1])
         idx = np.flatnonzero(c.mask)
-        Q, _ = np.linalg.qr(ev.design(i)[c.mask])
         K = pink_correlation(c.metadata.get("record_samples", c.n))
-        blocks.append((np.eye(idx.size) - Q @ Q.T, K[np.abs(idx[:, None] - idx[None, :])]
-                       / c.sigma ** 2))
-        rs.append(r)
-        sel.append(idx < c.jump_index)
-        c2w.append(np.full(idx.size, (6.0 - 8.0 * K[1] + 2.0 * K[2]) / 6.0 / c.sigma ** 2))
-    sel = np.concatenate(sel)
+        GV[s] = _toeplitz_matvec(K, idx, V[s]) / c.sigma ** 2
+        gdiag[s] = K[0] / c.sigma ** 2
+        c2w[s] = (6.0 - 8.0 * K[1] + 2.0 * K[2]) / 6.0 / c.sigma ** 2
+        sel[s] = idx < c.jump_index
     if sel.sum() < 10:
         return 0.0, 0.0
-    from scipy.linalg import block_diag
-
-    P = block_diag(*[b[0] for b in blocks])
-    G = block_diag(*[b[1] for b in blocks])
-    J = prob.jacobian(x)
-    H = J @ np.linalg.pinv(J.T @ J, rcond=1e-12) @ J.T
-    A = (P - H)[sel]
+    W = V.T @ GV
+    d = 1.0 - np.einsum("ij,ij->i", Qblk, Qblk) - diagH                 # diag(D)
+    dgd = (gdiag - 2.0 * np.einsum("ij,ij->i", U, GV)
+           + np.einsum("ij,jk,ik->i", U, W, U, optimize=True))          # diag(D G D)
+    white = float(np.sum(d[sel]))
+    white_c2 = float(np.sum((d * c2w)[sel]))   # what sigma_p^2 takes off it
+    trace = float(np.sum(dgd[sel])) - white_c2
     r = np.concatenate(rs)[sel]
-    diag = np.diag(A[:, sel])
-    white = float(np.sum(diag))
-    white_c2 = float(np.sum(diag * np.concatenate(c2w)[sel]))   # what sigma_p^2 takes off it
-    trace = float(np.sum((A @ G) * A)) - white_c2
     excess = float(r @ r) - white
     if trace <= 0:
         return 0.0, 0.0
     return max(excess / trace, 0.0), excess / math.sqrt(2.0 * sel.sum())
 
 
+def _levinson(acov: np.ndarray, order: int) -> tuple[np.ndarray, np.ndarray]:
+    """Predictors of every order up to ``order`` for the autocovariance ``acov``.
+
+    Returns ``(phi, v)``: ``phi[m, :m]`` the coefficients of the order-``m`` predictor
+    (``x_t ~ sum_j phi[m, j] x_(t-1-j)``), ``v[m]`` its innovation variance.
+    """
+    phi = np.zeros((order + 1, order))
+    v = np.zeros(order + 1)
+    v[0] = acov[0]
+    for m in range(1, order + 1):
+        prev = phi[m - 1, :m - 1]
+        kappa = (acov[m] - prev @ acov[1:m][::-1]) / v[m - 1]
+        phi[m, :m - 1] = prev - kappa * prev[::-1]
+        phi[m, m - 1] = kappa
+        v[m] = v[m - 1] * (1.0 - kappa ** 2)
+    return phi, v
+
+
+class ARWhitener:
+    """Whitening filter of stationary noise with autocovariance ``acov`` on the fitted samples.
+
+    Each contiguous run of fitted samples (sample indices ``idx``) is filtered by the
+    innovations of the autoregressive model of order ``p`` fitted to ``acov`` (Levinson-Durbin):
+    sample ``t`` of a run becomes ``(x_t - sum_j phi_j x_(t-j)) / sqrt(v)``, with the predictor
+    of order ``min(t, p)``; exact (the Cholesky factor of the covariance) for runs of at most
+    ``p + 1`` samples. O(n p) time, O(n + p^2) memory.
+    """
+
+    def __init__(self, acov: np.ndarray, idx: np.ndarray, order: int = AR_ORDER):
+        self.idx = np.asarray(idx)
+        breaks = np.flatnonzero(np.diff(self.idx) != 1) + 1
+        self.runs = np.split(np.arange(self.idx.size), breaks)
+        self.p = int(min(order, max(len(r) for r in self.runs) - 1, acov.size - 1))
+        self.phi, self.v = _levinson(np.asarray(acov, float), max(self.p, 0))
+        p = self.p
+        head = np.zeros((p, p))       # a run's first p samples: the predictors of order t < p
+        for t in range(p):
+            head[t, t] = 1.0
+            head[t, :t] = -self.phi[t, :t][::-1]
+            head[t] /= math.sqrt(self.v[t])
+        self.head = head
+
+    def __call__(self, a: np.ndarray) -> np.ndarray:
+        """The whitened ``a`` (rows: the fitted samples; 1-D or 2-D)."""
+        from scipy.signal import lfilter
+
+        a = np.asarray(a, float)
+        out = np.empty_like(a)
+        p = self.p
+        full = np.concatenate([[1.0], -self.phi[p, :p]]) / math.sqrt(self.v[p])
+        for run in self.runs:
+            x = a[run[0]:run[-1] + 1]
+            y = lfilter(full, [1.0], x, axis=0)
+            m = min(p, x.shape[0])
+            y[:m] = self.head[:m, :m] @ x[:m]           # the run's start: lower orders
+            out[run[0]:run[-1] + 1] = y
+        return out
+
+
 def set_noise_model(curves, sigma_p2: float) -> None:
-    """Attach the Cholesky factor of ``C_i`` on the fitted samples to every curve (in place)."""
+    """Attach the whitening filter of ``C_i`` on the fitted samples to every curve (in place)."""
     for c in curves:
         if sigma_p2 <= 0:
-            c.noise_chol = None
+            c.whitener = None
+            c.pink = 0.0
             continue
         K = pink_correlation(c.metadata.get("record_samples", c.n))
         idx = np.flatnonzero(c.mask)
-        C = sigma_p2 * K[np.abs(idx[:, None] - idx[None, :])]
         c2 = (6.0 - 8.0 * K[1] + 2.0 * K[2]) / 6.0     # the 1/f part of the second differences
-        C[np.diag_indices_from(C)] += max(c.sigma ** 2 - c2 * sigma_p2, 0.25 * c.sigma ** 2)
-        c.noise_chol = np.linalg.cholesky(C)
+        lags = min(AR_ORDER + 1, K.size)
+        acov = sigma_p2 * K[:lags]
+        acov[0] += max(c.sigma ** 2 - c2 * sigma_p2, 0.25 * c.sigma ** 2)
+        c.whitener = ARWhitener(acov, idx)
         c.pink = math.sqrt(sigma_p2)

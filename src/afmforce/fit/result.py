@@ -10,6 +10,27 @@ import numpy as np
 __all__ = ["Estimate", "CurveFit", "ModelComparison", "FitResult"]
 
 
+def contain_value(name: str, e: "Estimate") -> str:
+    """Make ``e``'s interval contain its value (in place; issue 34: a reported value is always
+    inside its own interval); returns a note when it had to be extended ("" otherwise).
+
+    A profile refit that finds a lower chi-square than the optimum's moves the threshold's
+    crossing past the estimate; the interval then reaches the estimate (and the note says
+    that the optimum may not be the global one)."""
+    lo, hi = e.interval
+    v = float(e.value)
+    if not math.isfinite(v):
+        return ""
+    new = (v if lo is not None and v < lo else lo, v if hi is not None and v > hi else hi)
+    if new == (lo, hi):
+        return ""
+    e.interval = new
+    fmt = (lambda t: "open" if t is None else f"{t:.4g}")
+    return (f"{name}: the estimate {v:.4g} {e.unit} lay outside its {e.interval_method} interval "
+            f"[{fmt(lo)}, {fmt(hi)}]; extended to it (the profile found a lower chi-square "
+            "elsewhere: the optimum may not be the global one)")
+
+
 @dataclass
 class Estimate:
     """One fitted parameter.
@@ -26,7 +47,8 @@ class Estimate:
         is ``None`` (one-sided interval, see ``note``); at a physical lower bound
         (xi = 0) the interval is an upper bound ``[0, hi]``.
     interval_method : str
-        ``"profile"`` or ``"wald"``.
+        ``"profile"``, ``"wald"`` or ``"undetermined"`` (both ends open: the data cannot
+        determine it, see ``note``).
     unit : str
     note : str
         Why an interval is one-sided ("" when it is two-sided).
@@ -189,7 +211,7 @@ class FitResult:
         for name, e in {**self.parameters, **self.derived}.items():
             L.append(f"| {name} | {fq(e.value, e.unit)} | {fq(e.stderr, e.unit)} | "
                      f"[{end(e.interval[0], e.unit)}, {end(e.interval[1], e.unit)}] "
-                     f"({e.interval_method}{', one-sided' if None in e.interval else ''}) |")
+                     f"({e.interval_method}{', one-sided' if (e.interval[0] is None) != (e.interval[1] is None) else ''}) |")
         L.append("")
         if self.adequacy and not self.adequacy.get("adequate", True):
             L += [f"**The model does not describe the data**: reduced chi-square "

@@ -57,7 +57,9 @@ def fit_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
         warnings.simplefilter("ignore")
         res = fit_dynamic(curves, model, free=free, names=names, starts=int(params.get("starts", 1)),
                           profile=None if params.get("profile", True) else (),
-                          compare=bool(params.get("compare", True)), progress=progress)
+                          compare=bool(params.get("compare", True)), progress=progress,
+                          # the files' lever unless the form gives one, as `afmforce fit` (issue 34)
+                          lever="model" if any(n in truth for n in ("spring_constant", "k0", "B")) else "file")
     out = res.to_dict()
     out["markdown"] = res.markdown()
     out["verdict"] = _verdict(res)
