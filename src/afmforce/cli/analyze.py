@@ -210,6 +210,10 @@ def run(args: argparse.Namespace) -> int:
     from ..sweep.chunks import default_chunk_size
 
     steps = _check(args)
+    from ..io._meta import parse_meta_args
+
+    meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
+                                                              ("sensitivity", args.sensitivity)) if v is not None}}
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
@@ -224,10 +228,6 @@ def run(args: argparse.Namespace) -> int:
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)
     per_curve = args.out is not None and (not batch or args.per_curve)
-    from ..io._meta import parse_meta_args
-
-    meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
-                                                              ("sensitivity", args.sensitivity)) if v is not None}}
     analysis = CurveAnalysis(
         steps=None if steps is None else tuple(steps), options=args.records, probe=args.probe, meta_override=meta,
         format=args.format, channel=args.channel, keep_json=args.json,

@@ -4,7 +4,7 @@ A :class:`SweepSpec` turns into a parameter table (:meth:`SweepSpec.table`),
 one row per run, whose columns are the keyword arguments of the function the
 sweep calls. Values are SI floats (or text, e.g. ``model = "spring"``); the
 command line and TOML files accept units through
-:func:`afmforce.units.parse_quantity`.
+:func:`afmforce.units.parse_value`.
 
 Text forms (command line and TOML)::
 
@@ -29,7 +29,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import ParameterError
-from ..units import parse_quantity
+from ..units import normalize_number_text, parse_value
 
 __all__ = [
     "GridAxis",
@@ -43,7 +43,7 @@ __all__ = [
     "chunk_size_from_config",
 ]
 
-#: Parameter name -> dimension for :func:`afmforce.units.parse_quantity`, or
+#: Parameter name -> dimension for :func:`afmforce.units.parse_value`, or
 #: ``None`` for a text parameter. A sweep over an unlisted name is refused.
 Dimensions = Mapping[str, "str | None"]
 
@@ -231,10 +231,10 @@ def _value(name: str, text: Any, dimensions: Dimensions | None, where: str):
         return float(text)
     if dim is None:  # generic use without a dimension table: a plain number or text
         try:
-            return float(text)
+            return float(normalize_number_text(text))
         except ValueError:
             return str(text).strip()
-    return parse_quantity(str(text).strip(), dim, f"{where} {name}")
+    return parse_value(str(text).strip(), dim, f"{where} {name}")
 
 
 def _split(item: str, flag: str) -> tuple[str, str]:
