@@ -23,6 +23,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from .._fields import QUANTITIES, FieldSpec
+from ..limits import CONFIRM_RUNS, MAX_SAMPLES, check_samples, simulation_samples  # noqa: F401  (re-export)
 from ..errors import OutputExistsError, ParameterError, UnitError
 
 __all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "refuse_ignored", "confirm_size",
@@ -177,28 +178,11 @@ def confirm_size(n: int, limit: int, *, yes: bool, what: str) -> None:
 
 def check_beam(L0: float, L1: float, L2: float, *, k0: float | None = None, B: float | None = None,
                prefix: str = "--") -> None:
-    """Refuse an inclined cantilever that is not one: rigid parts longer than the beam, or a
-    rigidity that makes the intrinsic spring constant ``k0 = 3 B / L0^3`` leave its range.
-    """
-    for name, value in (("L1", L1), ("L2", L2)):
-        if value is not None and L0 is not None and value > L0:
-            raise ParameterError(
-                f"{prefix}{name} {QUANTITIES[name].show(value)} is longer than the flexible beam "
-                f"{prefix}L0 {QUANTITIES['L0'].show(L0)}; the base and the probe are short rigid parts "
-                "of the cantilever (Fig 2)")
-    if B is not None and L0 is not None and k0 is None:
-        k = 3.0 * B / L0**3
-        spec = QUANTITIES["k0"]
-        if not spec.contains(k):
-            raise ParameterError(
-                f"{prefix}B {QUANTITIES['B'].show(B)} with {prefix}L0 {QUANTITIES['L0'].show(L0)} gives "
-                f"k0 = 3B/L0^3 = {spec.show(k)}, out of range: k0 must lie in {spec.range_text()}")
+    """:func:`afmforce._fields.check_beam` with the names written as flags (``prefix``)."""
+    from .._fields import check_beam as check
 
+    check(L0, L1, L2, k0=k0, B=B, prefix=prefix)
 
-#: The most samples one simulated cycle may have (a real force curve has at most ~1e6).
-MAX_SAMPLES = 10_000_000
-#: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
-_BYTES_PER_SAMPLE = 88
 
 def _flag(dest: str) -> str:
     return "--" + dest.replace("_", "-")
@@ -236,24 +220,6 @@ def check_simulation_options(args: argparse.Namespace, overrides: dict) -> None:
                                      "(and --instrument ideal|typical|paper|liquid), or drop it")
 
 
-def simulation_samples(start: float, turn: float, end: float, velocity: float,
-                       retract_velocity: float | None, dwell: float, sample_rate: float) -> float:
-    """Samples of one cycle: (approach + retract) / speed + dwell, times the sample rate."""
-    retract = velocity if retract_velocity is None else retract_velocity
-    return ((turn - start) / velocity + (turn - end) / retract + dwell) * sample_rate
-
-
-def check_samples(n: float, where: str = "") -> None:
-    """Refuse a cycle of more than :data:`MAX_SAMPLES` samples before anything is allocated."""
-    if n > MAX_SAMPLES:
-        size = n * _BYTES_PER_SAMPLE
-        mem = next(f"{size / f:.3g} {u}" for f, u in ((1e15, "PB"), (1e12, "TB"), (1e9, "GB"), (1e6, "MB"))
-                   if size >= f or u == "MB")
-        raise ParameterError(
-            f"{where}the cycle would have about {n:.3g} samples ({mem} of trajectory), more than the "
-            f"{MAX_SAMPLES:.0e} a run may have; lower --sample-rate, raise --velocity or shorten the drive")
-
-
 def check_simulation_config(cfg) -> None:
     """Checks of a built :class:`~afmforce.dynamics.SimulationConfig` before it is run:
     the beam is a cantilever (:func:`check_beam`) and the sample count is sane."""
@@ -279,8 +245,6 @@ def check_choices(values: dict, prefix: str = "--") -> None:
             raise ParameterError(f"{prefix}{name} {values[name]}: unknown; choose one of {', '.join(registry)}")
 
 
-#: Sweeps of more runs than this need ``--yes``.
-CONFIRM_RUNS = 100_000
 
 _SAMPLE_WORST = {"start": min, "turn": max, "end": min, "velocity": min, "retract_velocity": min,
                  "dwell": max, "sample_rate": max}

@@ -114,8 +114,7 @@ def _indentation_flags(p) -> None:
                    help="hertz_paraboloid (default), sneddon_sphere, hertz_cone, bilodeau_pyramid3, "
                         "bilodeau_pyramid4, hertz_thin_layer, jkr, dmt, maugis (the same as --option "
                         "indentation.model=KEY)")
-    add_field(g, "radius", flag="--tip-radius", dest="tip_radius",
-              help="tip radius of a sphere model (default: --radius)")
+    add_field(g, "tip_radius", help="tip radius of a sphere model (default: --radius)")
     add_field(g, "half_angle", help="half-angle of a cone, face angle of a pyramid")
     add_field(g, "poisson", default_from=lambda: _default("indentation", "poisson"),
               help="Poisson ratio of the sample")

@@ -19,7 +19,7 @@ from typing import Callable
 
 from .._files import check_writable
 from ..errors import ParameterError
-from ._validate import add_field, check_output, check_simulation_config, check_simulation_options, lazy_help
+from ._validate import add_field, check_beam, check_output, check_simulation_config, check_simulation_options, lazy_help
 from .common import print_json, print_table
 
 __all__ = ["register", "run", "ARGUMENT_GROUPS", "OUTPUT_FLAGS", "POST_HOOKS", "config_from_args"]
@@ -200,6 +200,12 @@ def config_from_args(args: argparse.Namespace):
         from ..constants import MEDIA
         overrides = {**MEDIA[args.medium], **overrides}
     check_simulation_options(args, overrides)  # ranges were checked while parsing
+    if overrides.get("model", "beam") == "beam":     # the record checks it too, naming fields, not flags
+        from ..dynamics.config import flat_defaults
+
+        probe = {**flat_defaults(), **overrides}
+        check_beam(probe["L0"], probe["L1"], probe["L2"], k0=overrides.get("k0"),
+                   B=overrides.get("B", None if "k0" in overrides else probe["B"]))
     cfg = SimulationConfig(**overrides)
     check_simulation_config(cfg)
     return cfg

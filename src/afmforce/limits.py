@@ -1,0 +1,68 @@
+"""Caps on the work one request may ask for, declared once for every face.
+
+The command line, the web application and the Python records
+(:class:`~afmforce.dynamics.SimulationConfig`) refuse the same sizes with the
+same message, before anything is allocated or computed. A cap is a size no
+force measurement needs (a real force curve has at most ~1e6 samples) and
+that would exhaust the memory or the patience of the machine.
+
+This module imports nothing heavy: the command line checks with it while parsing.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .errors import ParameterError
+
+__all__ = ["MAX_SAMPLES", "CONFIRM_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+           "MAX_GRID_POINTS", "simulation_samples", "check_samples", "check_count"]
+
+#: The most samples one simulated cycle may have (a real force curve has at most ~1e6).
+MAX_SAMPLES = 10_000_000
+#: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
+CONFIRM_RUNS = 100_000
+#: The most curves one measurement design (``plan``) may choose.
+MAX_DESIGN_CURVES = 50
+#: The most candidate speeds one measurement design may weigh.
+MAX_SPEEDS = 50
+#: The most samples of all candidate curves of one design together (``plan``).
+MAX_PLAN_SAMPLES = 20_000_000
+#: The most grid points of one precomputed parameter grid (``explore``).
+MAX_GRID_POINTS = 10_000
+
+#: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
+_BYTES_PER_SAMPLE = 88
+
+
+def simulation_samples(start: float, turn: float, end: float, velocity: float,
+                       retract_velocity: float | None, dwell: float, sample_rate: float) -> float:
+    """Samples of one cycle: (approach + retract) / speed + dwell, times the sample rate [-]."""
+    retract = velocity if retract_velocity is None else retract_velocity
+    return ((turn - start) / velocity + (turn - end) / retract + dwell) * sample_rate
+
+
+def _memory(n_bytes: float) -> str:
+    return next(f"{n_bytes / f:.3g} {u}" for f, u in ((1e15, "PB"), (1e12, "TB"), (1e9, "GB"), (1e6, "MB"))
+                if n_bytes >= f or u == "MB")
+
+
+def check_samples(n: float, where: str = "") -> None:
+    """Refuse a cycle of more than :data:`MAX_SAMPLES` samples before anything is allocated.
+
+    Raises
+    ------
+    ParameterError
+        Naming the quantities that set the count (sample_rate, velocity, the drive).
+    """
+    if not math.isfinite(n) or n > MAX_SAMPLES:
+        raise ParameterError(
+            f"{where}the cycle would have about {n:.3g} samples ({_memory(n * _BYTES_PER_SAMPLE)} of "
+            f"trajectory), more than the {MAX_SAMPLES:.0e} a run may have; lower sample_rate, raise "
+            "velocity or shorten the drive (start, turn, end)")
+
+
+def check_count(name: str, n: float, cap: int, what: str) -> None:
+    """Refuse ``n`` > ``cap`` (``name``: the quantity, e.g. ``curves``; ``what``: the unit counted)."""
+    if not math.isfinite(n) or n > cap:
+        raise ParameterError(f"{name}: {n:,.0f} {what} is more than the {cap:,} one request may ask for")
