@@ -16,20 +16,24 @@ import math
 from .errors import ParameterError
 
 __all__ = ["MAX_SAMPLES", "CONFIRM_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
-           "MAX_GRID_POINTS", "simulation_samples", "check_samples", "check_count"]
+           "MAX_DESIGNS", "MAX_GRID_POINTS", "CONFIRM_GRID_POINTS", "simulation_samples", "check_samples", "check_count", "check_design"]
 
 #: The most samples one simulated cycle may have (a real force curve has at most ~1e6).
 MAX_SAMPLES = 10_000_000
 #: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
 CONFIRM_RUNS = 100_000
 #: The most curves one measurement design (``plan``) may choose.
-MAX_DESIGN_CURVES = 50
+MAX_DESIGN_CURVES = 20
 #: The most candidate speeds one measurement design may weigh.
-MAX_SPEEDS = 50
-#: The most samples of all candidate curves of one design together (``plan``).
+MAX_SPEEDS = 40
+#: The most designs (choices of curves among the candidate speeds, repeats allowed) one plan weighs.
+MAX_DESIGNS = 1_000_000
+#: The most samples of all candidate curves of one design together (``plan``; each is simulated).
 MAX_PLAN_SAMPLES = 20_000_000
-#: The most grid points of one precomputed parameter grid (``explore``).
+#: The most grid points (one simulation each) of one precomputed parameter grid (``explore``).
 MAX_GRID_POINTS = 10_000
+#: Grids of more points than this need an explicit yes (``explore --yes``): each point is a simulation.
+CONFIRM_GRID_POINTS = 100
 
 #: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
 _BYTES_PER_SAMPLE = 88
@@ -66,3 +70,28 @@ def check_count(name: str, n: float, cap: int, what: str) -> None:
     """Refuse ``n`` > ``cap`` (``name``: the quantity, e.g. ``curves``; ``what``: the unit counted)."""
     if not math.isfinite(n) or n > cap:
         raise ParameterError(f"{name}: {n:,.0f} {what} is more than the {cap:,} one request may ask for")
+
+
+def check_design(n_speeds: int, n_curves: int, samples: float) -> None:
+    """Refuse a measurement design too large to weigh, before any curve is simulated.
+
+    Parameters
+    ----------
+    n_speeds : int
+        Candidate speeds (at most :data:`MAX_SPEEDS`).
+    n_curves : int
+        Curves in a design (at most :data:`MAX_DESIGN_CURVES`); the designs,
+        ``C(n_speeds + n_curves - 1, n_curves)``, at most :data:`MAX_DESIGNS`.
+    samples : float
+        Samples of all candidate curves together (at most :data:`MAX_PLAN_SAMPLES`).
+    """
+    check_count("speeds", n_speeds, MAX_SPEEDS, "candidate speeds")
+    check_count("n_curves", n_curves, MAX_DESIGN_CURVES, "curves in a design")
+    designs = math.comb(n_speeds + n_curves - 1, n_curves) if n_speeds > 0 and n_curves > 0 else 0
+    if designs > MAX_DESIGNS:
+        raise ParameterError(f"{n_curves} curves among {n_speeds} candidate speeds make {designs:,} designs to "
+                             f"weigh, more than {MAX_DESIGNS:,}; give fewer speeds or curves")
+    if not math.isfinite(samples) or samples > MAX_PLAN_SAMPLES:
+        raise ParameterError(f"the candidate curves would have about {samples:.3g} samples together, more than "
+                             f"{MAX_PLAN_SAMPLES:.0e}; lower points_per_nm (or the sample rates) or shorten the "
+                             "drive (start, turn)")

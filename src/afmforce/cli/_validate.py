@@ -26,7 +26,7 @@ from .._fields import QUANTITIES, FieldSpec
 from ..limits import CONFIRM_RUNS, MAX_SAMPLES, check_samples, simulation_samples  # noqa: F401  (re-export)
 from ..errors import OutputExistsError, ParameterError, UnitError
 
-__all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "refuse_ignored", "confirm_size",
+__all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "check_outputs", "check_folder_outputs", "refuse_ignored", "confirm_size",
            "lazy_help", "given", "quantity_list", "check_common", "refuse_empty_values", "COUNTS"]
 
 
@@ -169,10 +169,52 @@ def check_output(path, *, flag: str = "--out", force: bool = True, folder: bool 
     return path
 
 
-def confirm_size(n: int, limit: int, *, yes: bool, what: str) -> None:
+def check_outputs(outputs: Iterable[tuple[str, Any]], *, force: bool) -> list[Path]:
+    """Every output file of one command, checked before any work.
+
+    ``outputs``: ``(flag, path)`` pairs (a ``None`` path is skipped). Each must be
+    writable (:func:`check_output`), an existing file is refused without ``force``,
+    and no two flags may name the same file (the second would replace the first).
+
+    Raises
+    ------
+    OutputExistsError, ParameterError
+    """
+    from .._files import check_writable
+
+    seen: dict[str, str] = {}
+    out = []
+    for flag, path in outputs:
+        if not path:
+            continue
+        check_writable(path, force)
+        p = check_output(path, flag=flag, force=force)
+        key = os.path.normcase(os.path.realpath(p))
+        if key in seen:
+            raise ParameterError(f"{seen[key]} and {flag} name the same file {path}; give each output its own name")
+        seen[key] = flag
+        out.append(p)
+    return out
+
+
+def check_folder_outputs(folder, names: Iterable[str], *, flag: str, force: bool) -> None:
+    """Refuse, without ``force``, to write into ``folder`` files that exist already (written by an
+    earlier run, not this one): ``names`` are glob patterns of what the command writes there."""
+    folder = Path(folder)
+    check_output(folder, flag=flag, folder=True)
+    if force or not folder.is_dir():
+        return
+    existing = sorted({p for pattern in names for p in folder.glob(pattern) if p.is_file()})
+    if existing:
+        raise OutputExistsError(
+            f"{flag} {folder} holds {len(existing)} file(s) this command would replace (e.g. {existing[0].name}); "
+            "choose another folder or pass --force to overwrite")
+
+
+def confirm_size(n: int, limit: int, *, yes: bool, what: str, unit: str = "runs") -> None:
     """Refuse ``n`` > ``limit`` units of work unless ``yes``."""
     if n > limit and not yes:
-        raise ParameterError(f"{what}: {n:,} runs is more than {limit:,}; check the numbers, "
+        raise ParameterError(f"{what}: {n:,} {unit} is more than {limit:,}; check the numbers, "
                              "then pass --yes to run them")
 
 
@@ -305,15 +347,20 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
 
 
 #: Integer options of any command (dest -> smallest valid value), checked by :func:`check_common`.
-COUNTS = {"workers": 1, "chunk_size": 1, "starts": 1, "curves": 2, "n": 1}
+COUNTS = {"workers": 1, "chunk_size": 1, "starts": 1, "curves": 2, "n": 1, "seed": 0}
 
 
 def check_common(args: argparse.Namespace) -> None:
-    """Checks made for every command before it runs: the counts of :data:`COUNTS`."""
+    """Checks made for every command before it runs: the counts of :data:`COUNTS`, a Dask
+    scheduler's address."""
     for dest, lo in COUNTS.items():
         value = getattr(args, dest, None)
         if isinstance(value, int) and not isinstance(value, bool) and value < lo:
             raise ParameterError(f"{_flag(dest)} must be at least {lo}, got {value}")
+    if getattr(args, "scheduler", None) is not None:
+        from ..sweep.executors import check_scheduler
+
+        check_scheduler(args.scheduler)
 
 
 def refuse_empty_values(parser: argparse.ArgumentParser, argv: list[str]) -> None:

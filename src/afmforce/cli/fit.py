@@ -11,8 +11,9 @@ import argparse
 import warnings
 from pathlib import Path
 
-from .._files import atomic_write_text, check_writable
+from .._files import atomic_write_text
 from ..errors import AfmforceError, ParameterError
+from ._validate import check_folder_outputs, check_outputs
 from .common import busy, eprint, print_json, quantity
 
 __all__ = ["register", "run", "model_config", "add_model_flags"]
@@ -170,9 +171,10 @@ def run(args: argparse.Namespace) -> int:
     missing = [c for c in args.curves if not Path(c).is_file()]
     if missing:
         raise ParameterError(f"no such file: {', '.join(missing)}")
-    for path in (args.out, args.report):
-        if path:
-            check_writable(path, args.force)
+    check_outputs([("--out", args.out), ("--report", args.report)], force=args.force)
+    if args.plots:   # never replace an earlier run's figures silently
+        check_folder_outputs(args.plots, ("fit_curve*.png", "fit_profiles.png", "fit_residuals.png"),
+                             flag="--plots", force=args.force)
     if not 0.5 < args.level < 1:
         raise ParameterError(f"--level must lie between 0.5 and 1, got {args.level}")
     cfg = model_config(args)

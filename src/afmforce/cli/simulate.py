@@ -17,9 +17,9 @@ import sys
 from pathlib import Path
 from typing import Callable
 
-from .._files import check_writable
 from ..errors import ParameterError
-from ._validate import add_field, check_beam, check_output, check_simulation_config, check_simulation_options, lazy_help
+from ._validate import (add_field, check_beam, check_outputs, check_simulation_config, check_simulation_options,
+                        lazy_help)
 from .common import print_json, print_table
 
 __all__ = ["register", "run", "ARGUMENT_GROUPS", "OUTPUT_FLAGS", "POST_HOOKS", "config_from_args"]
@@ -226,11 +226,8 @@ def run(args: argparse.Namespace) -> int:
     from ..dynamics import DynamicsWarning, simulate
     from ..dynamics.guard import ConvergenceWarning
 
-    for dest in OUTPUT_FLAGS:
-        path = getattr(args, dest, None)
-        if path:
-            check_writable(path, args.force)
-            check_output(path, flag="--" + dest.replace("_", "-"), force=args.force)
+    check_outputs([("--" + dest.replace("_", "-"), getattr(args, dest, None)) for dest in OUTPUT_FLAGS],
+                  force=args.force)
     if args.out and Path(args.out).suffix.lower() not in (".csv", ".h5", ".hdf5"):
         raise ParameterError(f"cannot write {args.out}: --out takes a .csv or .h5 file")
     if args.plot and Path(args.plot).suffix.lower() != ".png":

@@ -165,6 +165,8 @@ class SweepSpec:
             raise ParameterError(f"--sample {self.sample} needs at least one --range name=lo:hi")
         if not self.grid and not self.ranges:
             raise ParameterError("nothing to sweep: give at least one --grid or --range")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ParameterError(f"seed must be a whole number >= 0 (the sampler's seed), got {self.seed!r}")
 
     @property
     def is_grid(self) -> bool:
