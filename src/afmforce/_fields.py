@@ -256,6 +256,7 @@ QUANTITIES: dict[str, FieldSpec] = {
     "contact_separation": _q("length", "m", "separation counted as contact", hi=1e-8, **_POS),
     "jump_factor": _q("dimensionless", "", "jump-in criterion dh/dt < -factor dz/dt", hi=1e3, **_POS),
     "spike_window": _q("time", "s", "jump-in transient window (0: no spike)", 0.0, 10.0),
+    "jump_window": _q("time", "s", "time after the jump-in left out of the dynamic fit", 0.0, 1.0, display="ms"),
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
     # analysis and diagnosis
     "resolution": _q("length", "m", "deflection resolution", hi=1e-6, **_POS),

@@ -69,6 +69,10 @@ def _records(name: str, value: float) -> list:
     if name in statics:
         friction, kw = statics[name]
         out.append(lambda: static_analysis(cant, friction, **kw))
+    if name == "jump_window":
+        from afmforce.fit import fit_dynamic
+
+        out.append(lambda: fit_dynamic([], "beam", jump_window=value))
     if name in ("resolution", "separation"):
         out.append(lambda: diagnose(spring_constant=0.2, mass=1e-8, radius=1e-7, velocity=1e-6,
                                     **{name: value}))

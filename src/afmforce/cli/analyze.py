@@ -172,6 +172,9 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     if missing:  # before any work: no output folder for a typo
         raise ParameterError(f"no such file or folder: {', '.join(missing)}")
     steps = None if args.steps is None else [s.strip() for s in args.steps.split(",") if s.strip()]
+    if steps == []:
+        raise ParameterError(f"--steps {args.steps!r}: no step named; give comma-separated steps (e.g. "
+                             "drift,compliance,calibration) or drop --steps for all")
     resolve_steps(steps)  # unknown step: ParameterError -> exit 2
     args.records, args.probe = _options(args)  # unknown or out-of-range option: exit 2
     if args.format is not None and args.format not in FORMATS:
@@ -213,6 +216,7 @@ def run(args: argparse.Namespace) -> int:
 
     meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
                                                               ("sensitivity", args.sensitivity)) if v is not None}}
+    _check_liquid_radius(args, meta)
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
@@ -268,6 +272,16 @@ def run(args: argparse.Namespace) -> int:
     return _report(args, result, refs, folder, batch)
 
 
+def _check_liquid_radius(args, meta: dict) -> None:
+    """A liquid medium runs the liquid step, which needs the probe radius; no reader gives one, so
+    without --radius (or --meta radius=...) the step would be skipped silently: refused instead."""
+    medium = next((getattr(r, "medium", None) for r in args.records if r.step == "liquid"), None)
+    if medium in (None, "none", "air") or args.probe.radius is not None or "radius" in meta:
+        return
+    raise ParameterError(f"--medium {medium}: the liquid analysis (drag, drainage, DLVO fit) needs the probe "
+                         "radius; give --radius (e.g. --radius 2.5um for a colloid probe), or drop --medium")
+
+
 def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
     from ..sweep.files import failures, summary_table, write_summary
 
@@ -280,7 +294,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         reported(folder)  # "summary in FOLDER/: ..." below
         written.update(_write_maps(table, folder, args.map_quantity))
     if args.json:
-        _print_json(result)
+        _print_json(result, len(refs))
     else:
         if len(ok) <= BATCH_CURVES:
             _print_rows(ok, verbose=args.verbose, given="user" if args.sensitivity is not None else "file")
@@ -334,10 +348,25 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
     return out
 
 
-def _print_json(result) -> None:
+def _print_json(result, n_items: int | None = None) -> None:
+    """The analysis JSON; when a file or curve failed, also the contract's ``error`` object
+    (type, message, exit status 1) beside the results of the others."""
+    import re
+
     from ..sweep.report import analysis_json
 
-    print(json.dumps(analysis_json(result), indent=2, allow_nan=False))
+    payload = analysis_json(result)
+    failed = payload["failed"]
+    if failed:
+        first = failed[0]
+        kind = re.match(r"^(?:chunk failed: )?(?:unexpected )?([A-Z]\w*(?:Error|Exception|Interrupt))\b",
+                        first["error"])
+        where = first["file"] + (f"#{first['curve']}" if "curve" in first else "")
+        total = f" of {n_items}" if n_items else ""
+        payload["error"] = {"type": kind.group(1) if kind else "AnalysisError",
+                            "message": f"{len(failed)}{total} file(s) or curve(s) failed; first {where}: "
+                                       f"{first['error']}", "exit_status": 1}
+    print(json.dumps(payload, indent=2, allow_nan=False))
 
 
 def _oscillation_origin(ok):

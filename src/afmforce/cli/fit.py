@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .._files import atomic_write_text
 from ..errors import AfmforceError, ParameterError
-from ._validate import check_folder_outputs, check_outputs
+from ._validate import add_field, check_folder_outputs, check_outputs
 from .common import busy, eprint, print_json, quantity
 
 __all__ = ["register", "run", "model_config", "add_model_flags"]
@@ -117,8 +117,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--fringe-period", type=quantity("length", "--fringe-period", positive=True), default=335e-9,
                    metavar="LENGTH", help="fringe period in the separation: half the laser "
                    "wavelength (default 335nm, a 670 nm laser)")
-    g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=2e-3,
-                   metavar="TIME", help="left out after the jump-in (default 2 ms)")
+    add_field(g, "jump_window", default=2e-3, help="left out after the jump-in")
     add_model_flags(p)
     o = p.add_argument_group("output")
     o.add_argument("--json", action="store_true", help="print the result as JSON (SI units)")
@@ -178,6 +177,9 @@ def run(args: argparse.Namespace) -> int:
     if not 0.5 < args.level < 1:
         raise ParameterError(f"--level must lie between 0.5 and 1, got {args.level}")
     cfg = model_config(args)
+    from ..fit.params import check_free
+
+    check_free(args.free.split(","), cfg.model, cfg.friction.law if cfg.model == "beam" else None)  # before loading
     from ..io._meta import parse_meta_args
 
     curves, names = _load(args.curves, parse_meta_args(args.meta))

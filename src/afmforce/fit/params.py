@@ -116,14 +116,15 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
 )}
 
 
-def check_free(free, model: str) -> tuple[str, ...]:
-    """Validate the free parameter names for ``model``; returns them as a tuple.
+def check_free(free, model: str, friction: str | None = None) -> tuple[str, ...]:
+    """Validate the free parameter names for ``model`` (and its ``friction`` law); returns them.
 
     Raises
     ------
     ParameterError
-        Unknown name, a parameter without effect in this model, or both
-        ``hamaker`` and ``radius`` (only their product is determined).
+        Unknown name, a parameter without effect in this model or friction law
+        (``xi`` with ``friction="none"``: the fit would report its start value with
+        no error), or both ``hamaker`` and ``radius`` (only their product is determined).
     """
     names = tuple(dict.fromkeys(n.strip() for n in free if n.strip()))
     if not names:
@@ -136,6 +137,16 @@ def check_free(free, model: str) -> tuple[str, ...]:
                 if n in ("xi", "zeta") else ""
             raise ParameterError(f"{n} has no effect in the {model} model{why}; "
                                  f"use --model {PARAMETERS[n].models[0]} or drop it from --free")
+    if friction is not None:
+        from ..dynamics.registries import FRICTION_LAWS
+
+        law = FRICTION_LAWS[friction]
+        for n in names:
+            if n in ("xi", "zeta") and n not in law.parameters:
+                uses = [k for k, v in FRICTION_LAWS.items() if n in v.parameters]
+                raise ParameterError(f"{n} has no effect with the friction law {friction!r}: the fit cannot "
+                                     f"determine it; choose friction {' or '.join(map(repr, uses))}, or drop it "
+                                     "from the free parameters")
     if "hamaker" in names and "radius" in names:
         raise ParameterError("hamaker and radius cannot both be free: the van der Waals force "
                              "fixes only A*R; free one and give the other")

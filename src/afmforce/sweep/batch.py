@@ -15,6 +15,7 @@ import os
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+from .._files import display_path
 from ..errors import ParameterError
 from ..progress import Progress
 from .chunks import _check_errors, _error_text, _func_name, _open_store, execute, flatten
@@ -37,7 +38,7 @@ def _item_chunk(func: Callable, start: int, items: list, labels: list[str], reco
         except Exception as exc:
             if not record_errors:
                 raise
-            flat = [{"error": _error_text(exc)}]
+            flat = [{"error": display_path(_error_text(exc))}]   # it may quote a file name
         for k, r in enumerate(flat):
             rows.append({**base, "record": k, **r})
     return pd.DataFrame(rows)
@@ -45,11 +46,11 @@ def _item_chunk(func: Callable, start: int, items: list, labels: list[str], reco
 
 def _default_label(item: Any, index: int) -> str:
     if isinstance(item, (str, os.PathLike)):
-        return str(item)
+        return display_path(item)
     for attr in ("path", "name", "label"):
         value = getattr(item, attr, None)
         if isinstance(value, (str, os.PathLike)):
-            return str(value)
+            return display_path(value)
     return f"item {index}"
 
 
@@ -59,7 +60,8 @@ def batch_key(func: Callable, paths: list) -> str:
     for p in paths:
         path = Path(p).resolve()
         st = path.stat() if path.exists() else None
-        h.update(f"{path}|{st.st_size if st else -1}|{st.st_mtime_ns if st else -1}\n".encode())
+        line = f"{path}|{st.st_size if st else -1}|{st.st_mtime_ns if st else -1}\n"
+        h.update(line.encode("utf-8", "surrogateescape"))      # a file name that is not UTF-8 too
     return h.hexdigest()
 
 
@@ -100,7 +102,7 @@ def run_batch(items: Iterable, func: Callable[[Any], Any], *, chunk_size: int | 
             if not group:
                 return
             if i not in skipped:
-                labels = [label(x, i * size + j) for j, x in enumerate(group)]
+                labels = [display_path(label(x, i * size + j)) for j, x in enumerate(group)]
                 in_flight[i] = labels
                 yield i, (func, i * size, group, labels, errors == "record"), len(group)
 
