@@ -15,13 +15,15 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "CONFIRM_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "MAX_GRID_POINTS", "CONFIRM_GRID_POINTS", "simulation_samples", "check_samples", "check_count", "check_design"]
 
 #: The most samples one simulated cycle may have (a real force curve has at most ~1e6).
 MAX_SAMPLES = 10_000_000
 #: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
 CONFIRM_RUNS = 100_000
+#: The most runs of one sweep, even with a yes (its parameter table is built before any run).
+MAX_RUNS = 5_000_000
 #: The most curves one measurement design (``plan``) may choose.
 MAX_DESIGN_CURVES = 20
 #: The most candidate speeds one measurement design may weigh.

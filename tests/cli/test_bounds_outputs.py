@@ -27,7 +27,9 @@ def no_work(monkeypatch):
     import afmforce.fit as fit
     import afmforce.fit.plan as plan
     import afmforce.paper.reproduce as reproduce
+    import afmforce.sweep as sweep
 
+    monkeypatch.setattr(sweep, "run_sweep", _boom)
     monkeypatch.setattr(plan, "curve_information", _boom)
     monkeypatch.setattr(explore, "compute_grid", _boom)
     monkeypatch.setattr(fit, "fit_dynamic", _boom)
@@ -68,6 +70,12 @@ def _speeds(n: int) -> str:
     (["analyze", CURVE, "--scheduler", "not a url"], ["is not a Dask scheduler address"]),
     (["sweep", "--range", "velocity=1um/s:2um/s", "--sample", "random", "--n", "3", "--seed", "-1"],
      ["--seed must be at least 0, got -1"]),
+    (["sweep", "--grid", "velocity=1um/s:2um/s:1000000000000", "--yes"],         # no axis of 1e12 values
+     ["--grid velocity: 1,000,000,000,000 values is more than the 5,000,000"]),
+    (["sweep", "--range", "velocity=1um/s:2um/s", "--sample", "random", "--n", "1000000000000", "--yes"],
+     ["runs: 1,000,000,000,000 runs in one sweep is more than the 5,000,000"]),
+    (["sweep", "--grid", "velocity=1um/s:2um/s:3000", "--grid", "xi=0:1:3000", "--yes"],
+     ["runs: 9,000,000 runs in one sweep is more than the 5,000,000"]),
 ])
 def test_sizes_and_outputs_are_refused_before_work(capsys, tmp_path, monkeypatch, no_work, argv, fragments):
     monkeypatch.chdir(tmp_path)

@@ -97,8 +97,8 @@ CASES = [
     (["sweep", "--range", "velocity=1e-15:1e-6", "--n", "3"], ["--range velocity", "out of range"]),
     (["sweep", "--grid", "velocity=1nm/s,1um/s", "--set", "sample_rate=10MHz"],
      ["the most demanding run of this sweep", "samples"]),
-    (["sweep", "--grid", "velocity=1e-6:1e-5:10000", "--grid", "xi=0.01:0.1:1000"],
-     ["10,000,000 runs is more than 100,000", "--yes"]),
+    (["sweep", "--grid", "velocity=1e-6:1e-5:10000", "--grid", "xi=0.01:0.1:100"],
+     ["1,000,000 runs is more than 100,000", "--yes"]),   # above limits.MAX_RUNS: refused even with --yes
 ]
 
 

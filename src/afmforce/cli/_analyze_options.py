@@ -46,7 +46,7 @@ def step_options(args: argparse.Namespace) -> tuple:
 
     given: dict[str, dict] = {}
     for text in args.option:
-        step, name, value = parse_option(text)
+        step, name, value = parse_option(text, where="--option")
         if name in given.setdefault(step, {}):
             raise ParameterError(f"--option {step}.{name} given twice")
         given[step][name] = value

@@ -26,7 +26,7 @@ from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
 from ._analyze_liquid import liquid_flags, print_liquid
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
-from ._outcome import reported
+from ._outcome import render, reported
 from ._verdicts import MAX_LINE, clip as _clip, dynamic_label as _dynamic_label, plain as _plain, short_verdict
 from .common import add_quantity, chunk_progress_bar, eprint, progress_bar
 
@@ -314,7 +314,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         if written:
             print(f"summary in {folder}/: " + ", ".join(p.name for p in written.values()))
     for name, error in failed[:_MAX_LISTED if batch else None]:  # one line per failed file or curve
-        error = " ".join(_clean(error).split())
+        error = " ".join(render(_clean(error)).split())
         named = error.split(": ", 1)[0].endswith(name.split("#")[0])  # the message starts with the path
         eprint(f"failed: {error}" if named else f"failed: {name}: {error}")
     if len(failed) > 1:
@@ -420,10 +420,12 @@ def _print_rows(ok, verbose: bool = False, given: str = "file") -> None:
     for row in rows:
         print("  ".join(c.ljust(w) for c, w in zip(row, widths)))
     clipped = False
+    ok = ok.assign(verdict=[render(v) if isinstance(v, str) else v for v in ok["verdict"]])
     for _, r in ok.iterrows():
         warnings = [w for w in (r["warnings"] or "").split(" | ") if w]
         if not (warnings or r["verdict"]):
             continue
+        warnings = [render(w) for w in warnings]     # `spring_constant` -> --spring-constant
         if verbose:
             print(f"{r['name']}: {r['verdict']}" + "".join(f"\n  warning: {w}" for w in warnings))
             continue

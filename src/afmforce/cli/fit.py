@@ -13,6 +13,7 @@ from pathlib import Path
 
 from .._files import atomic_write_text
 from ..errors import AfmforceError, ParameterError
+from ._outcome import RunState, render
 from ._validate import add_field, check_folder_outputs, check_outputs
 from .common import busy, eprint, print_json, quantity
 
@@ -159,6 +160,9 @@ def _load(paths, meta=None):
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit status."""
     from ..fit import fit_dynamic
+
+    # the files' calibration is given with --meta here: --spring-constant is the model's lever
+    RunState.flags.update(spring_constant="--meta spring_constant=VALUE", sensitivity="--meta sensitivity=VALUE")
     from ..fit.figures import plot_curves, plot_profiles, plot_residuals
 
     if args.example is not None:
@@ -223,5 +227,5 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(res.markdown())
     for w in res.warnings:
-        eprint(f"warning: {w}")
+        eprint(f"warning: {render(w)}")
     return 0

@@ -136,7 +136,7 @@ def check_free(free, model: str, friction: str | None = None) -> tuple[str, ...]
             why = " (the spring model has no lateral motion, hence no friction)" \
                 if n in ("xi", "zeta") else ""
             raise ParameterError(f"{n} has no effect in the {model} model{why}; "
-                                 f"use --model {PARAMETERS[n].models[0]} or drop it from --free")
+                                 f"use `model` {PARAMETERS[n].models[0]} or drop it from `free`")
     if friction is not None:
         from ..dynamics.registries import FRICTION_LAWS
 

@@ -75,7 +75,7 @@ def check_scheduler(address: str) -> str:
     """
     text = str(address).strip()
     if not text or not _SCHEDULER.match(text):
-        raise ParameterError(f"--scheduler {address!r} is not a Dask scheduler address; give one such as "
+        raise ParameterError(f"`scheduler` {address!r} is not a Dask scheduler address; give one such as "
                              "tcp://127.0.0.1:8786 (printed by `dask scheduler`)")
     return text
 

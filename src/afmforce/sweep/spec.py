@@ -29,6 +29,7 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import ParameterError
+from ..limits import MAX_RUNS, check_count
 from ..units import normalize_number_text, parse_value
 
 __all__ = [
@@ -165,6 +166,7 @@ class SweepSpec:
             raise ParameterError(f"--sample {self.sample} needs at least one --range name=lo:hi")
         if not self.grid and not self.ranges:
             raise ParameterError("nothing to sweep: give at least one --grid or --range")
+        check_count("runs", self.n_runs, MAX_RUNS, "runs in one sweep")   # before the table is built
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ParameterError(f"seed must be a whole number >= 0 (the sampler's seed), got {self.seed!r}")
 
@@ -262,6 +264,7 @@ def _grid_from_text(name: str, rest: str, dimensions: Dimensions | None, flag: s
         raise ParameterError(f"{flag} {name}: the number of values must be an integer, got {parts[2]!r}") from None
     if isinstance(lo, str) or isinstance(hi, str):
         raise ParameterError(f"{flag} {name}: a spaced grid needs numeric bounds")
+    check_count(f"{flag} {name}", n, MAX_RUNS, "values")      # before the axis is allocated
     return GridAxis.spaced(name, lo, hi, n, log=spacing == "log")
 
 
