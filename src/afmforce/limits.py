@@ -64,12 +64,13 @@ def check_samples(n: float, where: str = "") -> None:
     if not math.isfinite(n) or n > MAX_SAMPLES:
         raise ParameterError(
             f"{where}the cycle would have about {n:.3g} samples ({_memory(n * _BYTES_PER_SAMPLE)} of "
-            f"trajectory), more than the {MAX_SAMPLES:.0e} a run may have; lower sample_rate, raise "
-            "velocity or shorten the drive (start, turn, end)")
+            f"trajectory), more than the {MAX_SAMPLES:.0e} a run may have; lower `sample_rate`, raise "
+            "`velocity` or shorten the drive (`start`, `turn`, `end`)")
 
 
 def check_count(name: str, n: float, cap: int, what: str) -> None:
-    """Refuse ``n`` > ``cap`` (``name``: the quantity, e.g. ``curves``; ``what``: the unit counted)."""
+    """Refuse ``n`` > ``cap`` (``name``: what is counted, a quantity as `` `key` ``, e.g. `` `n_curves` ``;
+    ``what``: the unit counted)."""
     if not math.isfinite(n) or n > cap:
         raise ParameterError(f"{name}: {n:,.0f} {what} is more than the {cap:,} one request may ask for")
 
@@ -87,13 +88,13 @@ def check_design(n_speeds: int, n_curves: int, samples: float) -> None:
     samples : float
         Samples of all candidate curves together (at most :data:`MAX_PLAN_SAMPLES`).
     """
-    check_count("speeds", n_speeds, MAX_SPEEDS, "candidate speeds")
-    check_count("n_curves", n_curves, MAX_DESIGN_CURVES, "curves in a design")
+    check_count("`speeds`", n_speeds, MAX_SPEEDS, "candidate speeds")
+    check_count("`n_curves`", n_curves, MAX_DESIGN_CURVES, "curves in a design")
     designs = math.comb(n_speeds + n_curves - 1, n_curves) if n_speeds > 0 and n_curves > 0 else 0
     if designs > MAX_DESIGNS:
         raise ParameterError(f"{n_curves} curves among {n_speeds} candidate speeds make {designs:,} designs to "
                              f"weigh, more than {MAX_DESIGNS:,}; give fewer speeds or curves")
     if not math.isfinite(samples) or samples > MAX_PLAN_SAMPLES:
         raise ParameterError(f"the candidate curves would have about {samples:.3g} samples together, more than "
-                             f"{MAX_PLAN_SAMPLES:.0e}; lower points_per_nm (or the sample rates) or shorten the "
-                             "drive (start, turn)")
+                             f"{MAX_PLAN_SAMPLES:.0e}; lower `points_per_nm` (or the sample rates) or shorten the "
+                             "drive (`start`, `turn`)")

@@ -50,8 +50,8 @@ def _speeds(n: int) -> str:
 
 
 @pytest.mark.parametrize("argv, fragments", [
-    (["plan", "--curves", "1000000"], ["n_curves: 1,000,000 curves in a design is more than the 20"]),
-    (["plan", "--speeds", _speeds(200)], ["speeds: 200 candidate speeds is more than the 40"]),
+    (["plan", "--curves", "1000000"], ["--curves: 1,000,000 curves in a design is more than the 20"]),
+    (["plan", "--speeds", _speeds(200)], ["--speeds: 200 candidate speeds is more than the 40"]),
     (["plan", "--speeds", _speeds(40), "--curves", "10"], ["make 8,217,822,536 designs to weigh"]),
     (["plan", "--points-per-nm", "1e5"], ["sample_rate", "is out of range", "[1 Hz, 100 MHz]"]),
     (["plan", "--points-per-nm", "1e3", "--start", "-50um"], ["samples together, more than 2e+07"]),
@@ -90,7 +90,7 @@ def test_plan_caps_are_the_library_s(monkeypatch):
     import afmforce.fit.plan as plan
 
     monkeypatch.setattr(plan, "curve_information", _boom)
-    with pytest.raises(ParameterError, match="n_curves: 21 curves in a design is more than the 20"):
+    with pytest.raises(ParameterError, match="`n_curves`: 21 curves in a design is more than the 20"):
         plan.plan_experiment(n_curves=limits.MAX_DESIGN_CURVES + 1)
     with pytest.raises(WorkStarted):       # at the cap: allowed (the work starts)
         plan.plan_experiment(n_curves=limits.MAX_DESIGN_CURVES, speeds=(1e-6, 2e-6))

@@ -46,7 +46,7 @@ class RunState:
 
 #: Quantity key (the `` `key` `` of a library message) -> how the command line gives it, where that
 #: is not ``--`` + the key with dashes (``spring_constant`` -> ``--spring-constant``).
-FLAGS: dict[str, str] = {}
+FLAGS: dict[str, str] = {"n_curves": "--curves"}
 
 
 def flag_of(key: str) -> str:

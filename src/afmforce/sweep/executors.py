@@ -113,7 +113,7 @@ class DaskExecutor:
     def __init__(self, workers: int | None = None, scheduler: str | None = None, client=None,
                  window: int | None = None, warmup: Callable[[], Any] | None = None) -> None:
         if workers is not None and int(workers) < 1:
-            raise ParameterError(f"--workers must be at least 1, got {workers}")
+            raise ParameterError(f"`workers` must be at least 1, got {workers}")
         if client is not None and scheduler is not None:
             raise ParameterError("give a scheduler address or a client, not both")
         if scheduler is not None:
@@ -137,7 +137,7 @@ class DaskExecutor:
                     self._client = Client(self.scheduler, timeout="20s")
                 except (OSError, TimeoutError, ValueError, TypeError) as exc:
                     raise ParameterError(
-                        f"--scheduler {self.scheduler}: cannot reach the Dask scheduler ({exc}); "
+                        f"`scheduler` {self.scheduler}: cannot reach the Dask scheduler ({exc}); "
                         "check the address or start one with `dask scheduler`"
                     ) from None
             else:
@@ -258,12 +258,12 @@ def make_executor(executor=None, *, workers: int | None = None, scheduler: str |
     ``warmup`` is passed to a cluster this function creates.
     """
     if workers is not None and scheduler:
-        raise ParameterError("--workers sizes the local cluster; a --scheduler cluster has its own workers")
+        raise ParameterError("`workers` sizes the local cluster; a `scheduler` cluster has its own workers")
     if executor is None or executor in ("dask", "local"):
         return DaskExecutor(workers=workers, scheduler=scheduler, warmup=warmup), True
     if executor == "serial":
         if scheduler:
-            raise ParameterError("--serial and --scheduler exclude each other")
+            raise ParameterError("`serial` and `scheduler` exclude each other")
         return SerialExecutor(), True
     if hasattr(executor, "imap_unordered"):
         return executor, False
