@@ -16,7 +16,7 @@ import math
 from .errors import ParameterError
 
 __all__ = ["MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
-           "MAX_DESIGNS", "MAX_GRID_POINTS", "CONFIRM_GRID_POINTS", "simulation_samples", "check_samples", "check_count", "check_design"]
+           "MAX_DESIGNS", "MAX_GRID_POINTS", "CONFIRM_GRID_POINTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (a real force curve has at most ~1e6).
 MAX_SAMPLES = 10_000_000
@@ -98,3 +98,19 @@ def check_design(n_speeds: int, n_curves: int, samples: float) -> None:
         raise ParameterError(f"the candidate curves would have about {samples:.3g} samples together, more than "
                              f"{MAX_PLAN_SAMPLES:.0e}; lower `points_per_nm` (or the sample rates) or shorten the "
                              "drive (`start`, `turn`)")
+
+
+def caps_markdown() -> str:
+    """The docs table of the caps (docs/ranges.md holds it verbatim)."""
+    rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
+            ("runs of one sweep without `--yes`", CONFIRM_RUNS, "sweep"),
+            ("runs of one sweep", MAX_RUNS, "sweep"),
+            ("curves in a design", MAX_DESIGN_CURVES, "plan"),
+            ("candidate speeds of a design", MAX_SPEEDS, "plan"),
+            ("designs weighed (curves among speeds, repeats allowed)", MAX_DESIGNS, "plan"),
+            ("samples of all candidate curves of a design", MAX_PLAN_SAMPLES, "plan"),
+            ("grid points without `--yes`", CONFIRM_GRID_POINTS, "explore"),
+            ("grid points", MAX_GRID_POINTS, "explore")]
+    lines = ["| what | at most | where |", "|---|---|---|"]
+    lines += [f"| {what} | {cap:,} | {where} |" for what, cap, where in rows]
+    return "\n".join(lines)

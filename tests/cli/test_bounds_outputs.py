@@ -136,3 +136,8 @@ def test_a_sweep_that_fails_to_start_leaves_no_manifest(tmp_path):
     with pytest.raises(ParameterError, match="not a Dask scheduler address"):
         run_sweep(_boom, {"x": [1.0, 2.0]}, executor="dask", scheduler="not a url", store=tmp_path / "sw")
     assert not list(tmp_path.rglob("manifest.json")) and not list(tmp_path.rglob("parameters.parquet"))
+
+
+def test_docs_ranges_lists_the_caps():
+    text = (Path(__file__).parents[2] / "docs" / "ranges.md").read_text()
+    assert limits.caps_markdown() in text, "docs/ranges.md is stale: regenerate it from afmforce.limits.caps_markdown()"
