@@ -24,11 +24,13 @@ from afmforce.errors import ParameterError
 CURVE = str(Path(__file__).parents[1] / "data" / "asylum-mfp3d_SiN-tip_air.ibw")
 
 
-def _outside(spec: FieldSpec) -> float:
-    """A value just outside the declared range (above it when it has an upper bound)."""
-    if spec.hi is not None:
-        return spec.hi * 2 if spec.hi > 0 else spec.hi + 1.0
-    return spec.lo - abs(spec.lo) - 1.0 if spec.lo else -1.0
+def _outside(spec: FieldSpec, side: str) -> float | None:
+    """A value outside the declared range above it (``hi``) or below it (``lo``); None: no bound there."""
+    if side == "hi":
+        return None if spec.hi is None else (spec.hi * 2 if spec.hi > 0 else spec.hi + 1.0)
+    if spec.lo is None:
+        return None
+    return spec.lo if spec.lo_open else (spec.lo / 2 if spec.lo > 0 else spec.lo - abs(spec.lo) - 1.0)
 
 
 def _tail(message: str) -> str:
@@ -106,11 +108,15 @@ def _cli(capsys, argv) -> str:
     return err
 
 
+@pytest.mark.parametrize("side", ["hi", "lo"])
 @pytest.mark.parametrize("name", list(QUANTITIES))
-def test_python_and_cli_refuse_the_same_value_with_the_same_message(capsys, tmp_path, monkeypatch, name):
+def test_python_and_cli_refuse_the_same_value_with_the_same_message(capsys, tmp_path, monkeypatch, name, side):
     monkeypatch.chdir(tmp_path)
     spec = QUANTITIES[name]
-    value = _outside(spec)
+    value = _outside(spec, side)
+    if value is None:
+        assert spec.hi is None if side == "hi" else spec.lo is None
+        return
     assert not spec.contains(value)
     messages = []
     records = _records(name, value)
