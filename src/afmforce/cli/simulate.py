@@ -20,6 +20,7 @@ from typing import Callable
 from ..errors import ParameterError
 from ._validate import (add_field, check_beam, check_outputs, check_simulation_config, check_simulation_options,
                         lazy_help)
+from ._outcome import render
 from .common import print_json, print_table
 
 __all__ = ["register", "run", "ARGUMENT_GROUPS", "OUTPUT_FLAGS", "POST_HOOKS", "config_from_args"]
@@ -243,7 +244,7 @@ def run(args: argparse.Namespace) -> int:
             if bar is not None:
                 bar.close()
     for w in caught:
-        print(f"warning: {w.message}", file=sys.stderr)
+        print(f"warning: {render(str(w.message))}", file=sys.stderr)   # `quality_factor` -> --quality-factor
     if args.out:
         traj.write(args.out, force=args.force)
     if args.plot:
