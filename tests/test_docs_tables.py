@@ -17,12 +17,12 @@ def test_analysis_steps_table_matches_registry():
 
 
 def test_readme_raw_text_example_reads(tmp_path):
-    # the README's afmforce raw text example is a valid file, read into SI
+    # the afmforce raw text example (docs/formats.md, linked from the README) is a valid file, read into SI
     import re
 
     from afmforce.io.native.rawfile import read_raw
 
-    readme = (DOCS.parent / "README.md").read_text()
+    readme = (DOCS / "formats.md").read_text()
     block = re.search(r"```text\n(# format: afmforce-raw.*?)```", readme, re.S).group(1)
     path = tmp_path / "example.txt"
     path.write_text(block)

@@ -25,7 +25,8 @@ from typing import Any, Mapping
 
 from .errors import ParameterError
 
-__all__ = ["FieldSpec", "meta", "qfield", "spec_of", "QUANTITIES", "check", "show", "ranges_markdown"]
+__all__ = ["FieldSpec", "meta", "qfield", "spec_of", "QUANTITIES", "check", "check_beam", "show",
+           "ranges_markdown"]
 
 #: Display unit -> its size in SI (the only conversions the help and messages need).
 _DISPLAY = {
@@ -212,6 +213,8 @@ QUANTITIES: dict[str, FieldSpec] = {
     # surfaces (eq 2, drainage)
     "radius": _q("length", "m", "effective radius R", hi=1e-3, **_POS),
     # contact mechanics (docs/contact.md)
+    "tip_radius": _q("length", "m", "tip radius of the indentation model (none: the probe's radius)", hi=1e-3,
+                     **_POS),
     "half_angle": _q("angle", "rad", "half-angle of a cone, face angle of a pyramid", hi=math.radians(89),
                      display="deg", **_POS),
     "poisson": _q("dimensionless", "", "Poisson ratio of the sample", -1.0, 0.5, lo_open=True),
@@ -253,6 +256,7 @@ QUANTITIES: dict[str, FieldSpec] = {
     "contact_separation": _q("length", "m", "separation counted as contact", hi=1e-8, **_POS),
     "jump_factor": _q("dimensionless", "", "jump-in criterion dh/dt < -factor dz/dt", hi=1e3, **_POS),
     "spike_window": _q("time", "s", "jump-in transient window (0: no spike)", 0.0, 10.0),
+    "jump_window": _q("time", "s", "time after the jump-in left out of the dynamic fit", 0.0, 1.0, display="ms"),
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
     # probe calibration (issue 34; docs/calibration.md): thermal noise, Sader, InvOLS
     "temperature": _q("temperature", "K", "temperature of the lever and its medium", 1.0, 1000.0),
@@ -267,13 +271,19 @@ QUANTITIES: dict[str, FieldSpec] = {
     "lever_length": _q("length", "m", "length L of the rectangular lever", hi=1e-3, **_POS),
     "lever_width": _q("length", "m", "width b of the rectangular lever", hi=1e-3, **_POS),
     "density": _q("density", "kg/m^3", "density of the medium", hi=2e4, **_POS),
+    "reference_spring_constant": _q("stiffness", "N/m", "spring constant of the reference lever (general "
+                                    "Sader method)", 1e-4, 1e3),
+    "reference_frequency": _q("frequency", "Hz", "resonance frequency of the reference lever", 1.0, 1e8,
+                              display="kHz"),
+    "reference_quality_factor": _q("dimensionless", "", "quality factor of the reference lever", 0.1, 1e6),
     "sader_exponent": _q("dimensionless", "", "exponent a of Gamma_i ~ Re^-a (general Sader method)",
                          0.0, 1.0, lo_open=True),
     # analysis and diagnosis
     "resolution": _q("length", "m", "deflection resolution", hi=1e-6, **_POS),
     "separation": _q("length", "m", "separation where the force gradient is taken", hi=1e-6, **_POS),
     "gap_deflection": _q("length", "m", "deflection where the load-friction gap is taken", hi=1e-6, **_POS),
-    "compliance_separation": _q("length", "m", "separation given to the compliance line", 0.0, 1e-8),
+    "compliance_separation": _q("length", "m", "separation given to the compliance line (paper: z0; 0 also "
+                                "common)", 0.0, 1e-8),
 }
 
 
@@ -292,6 +302,34 @@ def check_all(values: Mapping[str, Any], where: str = "") -> None:
     """Check every ``name -> value`` of the vocabulary; ``where`` prefixes the name (``--set``)."""
     for name, value in values.items():
         check(name, value, f"{where} {name}".strip() if where else None)
+
+
+def check_beam(L0: float | None, L1: float | None, L2: float | None, *, k0: float | None = None,
+               B: float | None = None, prefix: str = "") -> None:
+    """The cross-field rules of the inclined cantilever (Fig 2), for every face.
+
+    The base ``L1`` and the probe ``L2`` are short rigid parts of the beam
+    (``L1 < L0``, ``L2 < L0``), and a rigidity ``B`` must give an intrinsic spring
+    constant ``k0 = 3 B / L0^3`` inside k0's range. ``prefix`` is written before
+    each name (the command line gives ``"--"``).
+
+    Raises
+    ------
+    ParameterError
+    """
+    for name, value in (("L1", L1), ("L2", L2)):
+        if value is not None and L0 is not None and value >= L0:
+            raise ParameterError(
+                f"{prefix}{name} {QUANTITIES[name].show(value)} is not shorter than the flexible beam "
+                f"{prefix}L0 {QUANTITIES['L0'].show(L0)}; the base and the probe are short rigid parts "
+                "of the cantilever (Fig 2)")
+    if B is not None and L0 is not None and k0 is None:
+        k = 3.0 * B / L0**3
+        spec = QUANTITIES["k0"]
+        if not spec.contains(k):
+            raise ParameterError(
+                f"{prefix}B {QUANTITIES['B'].show(B)} with {prefix}L0 {QUANTITIES['L0'].show(L0)} gives "
+                f"k0 = 3B/L0^3 = {spec.show(k)}, out of range: k0 must lie in {spec.range_text()}")
 
 
 def ranges_markdown() -> str:

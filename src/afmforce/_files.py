@@ -14,10 +14,27 @@ from typing import Iterator
 
 from .errors import OutputExistsError, ParameterError
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable", "LISTENERS"]
+__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable", "display_path",
+           "LISTENERS"]
 
 #: Callables ``f(path)`` told of every file written (in this process): the command line lists them.
 LISTENERS: list = []
+
+
+def display_path(path: str | os.PathLike) -> str:
+    """``path`` (or any text quoting one: an error message) as text every writer takes (tables, Parquet, JSON, the terminal).
+
+    A file name that is not UTF-8 (bytes from another system; Python keeps them
+    as lone surrogates) shows its undecodable bytes as ``\\xNN``: ``curve-\\xff.ibw``.
+    The file itself is still opened by its real name; only the text shown changes.
+    """
+    text = os.fspath(path)
+    if isinstance(text, bytes):
+        return text.decode("utf-8", "backslashreplace")
+    try:
+        return text.encode("utf-8", "surrogateescape").decode("utf-8", "backslashreplace")
+    except UnicodeEncodeError:      # a surrogate no file system made: keep it visible, escaped
+        return text.encode("utf-8", "backslashreplace").decode("utf-8")
 
 
 def check_writable(path: str | os.PathLike, force: bool = True) -> Path:
@@ -71,5 +88,6 @@ def atomic_write_bytes(path: str | os.PathLike, data: bytes, force: bool = True)
 
 
 def atomic_write_text(path: str | os.PathLike, text: str, force: bool = True) -> Path:
-    """Write UTF-8 ``text`` to ``path`` atomically."""
-    return atomic_write_bytes(path, text.encode("utf-8"), force)
+    """Write UTF-8 ``text`` to ``path`` atomically (a file name in it that is not UTF-8 keeps its
+    own bytes, as the file system has them)."""
+    return atomic_write_bytes(path, text.encode("utf-8", "surrogateescape"), force)

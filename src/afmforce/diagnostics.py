@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ._fields import check
 from ._validate import positive
 from .constants import HAMAKER, Z0
 from .forces import (
@@ -136,6 +137,10 @@ def diagnose(*, spring_constant: float, mass: float, radius: float, velocity: fl
     hamaker, z0 : float
         Surface-force parameters [J], [m].
     """
+    for name, value in (("spring_constant", spring_constant), ("mass", mass), ("radius", radius),
+                        ("velocity", abs(velocity)), ("resolution", resolution), ("separation", separation),
+                        ("hamaker", hamaker), ("z0", z0)):
+        check(name, value)          # the declared valid range (afmforce._fields.QUANTITIES)
     k = positive("spring_constant", spring_constant, "N/m")
     m = positive("mass", mass, "kg")
     R = positive("radius", radius, "m")

@@ -7,7 +7,12 @@ message says what is wrong and what to do about it.
 
 from __future__ import annotations
 
+import re
+from typing import Callable
+
 __all__ = [
+    "QUANTITY_KEY",
+    "render_keys",
     "AfmforceError",
     "ParameterError",
     "UnitError",
@@ -21,8 +26,34 @@ __all__ = [
 ]
 
 
+#: How a library message names a quantity the user can give: its key in backquotes
+#: (``give `spring_constant```). Each face renders it its own way: the command line as its
+#: flag (``--spring-constant``), the web as its form field; Python users read the key they
+#: pass (``ProbeCalibration(spring_constant=...)``, ``meta_override={"spring_constant": ...}``).
+QUANTITY_KEY = re.compile(r"`([A-Za-z_][A-Za-z0-9_.]*)`")
+
+
+def render_keys(text: str, render: Callable[[str], str | None]) -> str:
+    """``text`` with every `` `key` `` of :data:`QUANTITY_KEY` replaced by ``render(key)``
+    (``None``: the key stays as written, without the backquotes)."""
+    return QUANTITY_KEY.sub(lambda m: render(m.group(1)) or m.group(1), str(text))
+
+
 class AfmforceError(Exception):
-    """Base class of every error raised by afmforce."""
+    """Base class of every error raised by afmforce.
+
+    ``keys``: the quantities the message asks the user to give (its `` `key` `` marks,
+    :data:`QUANTITY_KEY`), for a face to render as its own flags or fields
+    (:func:`render_keys`).
+    """
+
+    @property
+    def keys(self) -> tuple[str, ...]:
+        """The quantity keys the message names (`` `key` ``), in order."""
+        explicit = self.__dict__.get("_keys")
+        if explicit:
+            return explicit
+        return tuple(dict.fromkeys(QUANTITY_KEY.findall(str(self))))
 
 
 class ParameterError(AfmforceError, ValueError):
@@ -49,7 +80,7 @@ class MissingMetadataError(FileFormatError):
 
     def __init__(self, message: str, keys: tuple[str, ...] = (), flags: tuple[str, ...] = ()) -> None:
         super().__init__(message)
-        self.keys = tuple(keys)
+        self._keys = tuple(keys)
         self.flags = tuple(flags)
 
 

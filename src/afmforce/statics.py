@@ -12,6 +12,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Callable
 
+from ._fields import check
 from ._validate import non_negative, positive
 from .cantilever import InclinedCantilever
 from .errors import ParameterError
@@ -190,7 +191,7 @@ def _none(c):
 
 
 def _constant(c, mu):
-    mu = non_negative("mu", mu, "N")
+    mu = non_negative("mu", check("mu", mu), "N")
     return ({"friction_force": mu,
              "force_difference": constant_friction_force_difference(c, mu),
              "hysteresis_offset": constant_friction_offset(c, mu)},
@@ -198,7 +199,8 @@ def _constant(c, mu):
 
 
 def _load(c, lam, deflection=10e-9):
-    lam = non_negative("lambda", lam)
+    lam = non_negative("lambda", check("lam", lam))
+    deflection = check("gap_deflection", deflection)
     k_in, b_in = load_friction_constants(c, lam, +1)
     k_out, b_out = load_friction_constants(c, lam, -1)
     extra = {
@@ -218,8 +220,8 @@ def _pinned(c):
 
 
 def _viscous(c, xi, velocity):
-    xi = non_negative("xi", xi, "kg/s")
-    velocity = positive("velocity", abs(velocity), "m/s")
+    xi = non_negative("xi", check("xi", xi), "kg/s")
+    velocity = positive("velocity", check("velocity", abs(velocity)), "m/s")
     fy = viscous_friction_force(c, xi, velocity)
     return ({"friction_force": fy, "hysteresis_offset": constant_friction_offset(c, fy),
              "slide_ratio": c.slide_ratio},

@@ -1,8 +1,16 @@
 """Values with units for the command line and configuration files.
 
 The library itself works in SI floats. Users type ``200nm``, ``0.1um/s``,
-``-15deg`` or plain SI numbers; :func:`parse_quantity` turns them into SI
-floats of the expected dimension using pint.
+``-15deg`` or plain SI numbers; :func:`parse_value` (every face: the command
+line's typed options, ``--option``, ``--meta``, ``--set``, sweep grids, the web
+forms) turns them into SI floats of the expected dimension, and
+:func:`parse_field` also checks a quantity of :data:`afmforce._fields.QUANTITIES`
+against its valid range.
+
+The grammar is strict: a number (any Unicode minus sign reads as ``-``),
+then optionally one unit expression (unit names, ``/``, ``*``, ``^``/``**``
+exponents, parentheses) and nothing else: ``5um/s=3``, ``10um/s,`` and a unit
+without a number (``um/s``) are refused, never read as another value.
 """
 
 from __future__ import annotations
@@ -13,7 +21,8 @@ import re
 
 from .errors import ParameterError, UnitError
 
-__all__ = ["DIMENSIONS", "parse_quantity", "parse_typed", "format_quantity"]
+__all__ = ["DIMENSIONS", "MINUS_SIGNS", "parse_value", "parse_field", "parse_quantity", "parse_typed",
+           "normalize_number_text", "format_quantity"]
 
 #: Expected dimension name -> (SI unit understood by pint, human word).
 DIMENSIONS: dict[str, tuple[str, str]] = {
@@ -36,10 +45,30 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "concentration": ("mol/m**3", "a concentration (1 mM = 1 mol/m^3)"),
     "temperature": ("K", "a temperature (K, or degC)"),
     "density": ("kg/m**3", "a density"),
+    "voltage_rate": ("V/s", "a signal drift rate (e.g. 0.2V/s)"),
     "dimensionless": ("", "a plain number"),
 }
 
 _NUMBER = re.compile(r"^[+-]?(\d+\.?\d*|\.\d+)([eE][+-]?\d+)?$")
+#: A number followed by the rest of the text (the unit expression, checked by :data:`_UNIT`).
+_LEADING_NUMBER = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.*)$", re.S)
+#: One unit name with an optional exponent (``m``, ``um``, ``s^-1``, ``m**2``, ``m2`` is not one).
+_UNIT_NAME = r"[A-Za-z\u00b0\u03a9\u2126%_]++(?:\s*(?:\^|\*\*)\s*[+-]?\d+(?:\.\d+)?)?"
+#: A unit expression: names joined by ``/``, ``*``, ``·`` or spaces, with parentheses.
+_UNIT = re.compile(r"^(?:" + _UNIT_NAME + r"|[()/*\u00b7\s])++$")
+
+#: Characters read as a minus sign: U+2212 minus, U+2010 hyphen, U+2011 non-breaking hyphen,
+#: U+2012 figure dash, U+2013 en dash, U+FE63 small hyphen-minus, U+FF0D fullwidth hyphen-minus
+#: (a value pasted from a paper or a word processor).
+MINUS_SIGNS = "\u2212\u2010\u2011\u2012\u2013\ufe63\uff0d"
+_TO_ASCII = str.maketrans({**{c: "-" for c in MINUS_SIGNS}, "\u00b5": "u", "\u03bc": "u", "\uff0b": "+",
+                           "\u00a0": " ", "\u202f": " "})
+
+
+def normalize_number_text(text: str) -> str:
+    """``text`` with every minus sign of :data:`MINUS_SIGNS` as ``-``, ``µ``/``μ`` as ``u``
+    and non-breaking spaces as spaces, stripped."""
+    return str(text).translate(_TO_ASCII).strip()
 
 
 @functools.lru_cache(maxsize=1)
@@ -77,35 +106,107 @@ def parse_quantity(text: str | float | int, dimension: str, name: str = "value")
     if dimension not in DIMENSIONS:
         raise ValueError(f"unknown dimension {dimension!r}")
     si, word = DIMENSIONS[dimension]
+    if isinstance(text, bool):
+        raise UnitError(f"{name} expects {word}, got {text!r}")
     if isinstance(text, (int, float)):
         value = float(text)
     else:
-        s = str(text).strip().replace("µ", "u").replace("μ", "u")
+        s = normalize_number_text(text)
         if _NUMBER.match(s):
             value = float(s)
         else:
+            match = _LEADING_NUMBER.match(s)
+            if match is None:
+                why = ("not a finite number" if s.lower().lstrip("+-") in ("nan", "inf", "infinity")
+                       else "a unit without a number" if s and _UNIT.match(s) else "not a number")
+                raise UnitError(f"{name} expects {word}, got {text} ({why}; e.g. "
+                                f"{_EXAMPLE.get(dimension, '1.5')})")
+            if not _UNIT.match(match.group(2)) or not re.search(r"[A-Za-z\u00b0\u03a9\u2126%]", match.group(2)):
+                raise UnitError(f"{name} expects {word}, got {text} (only a number and a unit; "
+                                f"e.g. {_EXAMPLE.get(dimension, '1.5')})")
             value = _parse_with_pint(s, si, word, name, text)
     if not math.isfinite(value):
         raise UnitError(f"{name} expects {word}, got {text}")
     return value
 
 
+#: An example value of each dimension, for the messages.
+_EXAMPLE = {"length": "200nm", "force": "5nN", "stiffness": "0.1N/m", "angle": "-15deg", "mass": "10ug",
+            "velocity": "0.5um/s", "energy": "1e-19J", "damping": "0.002kg/s", "frequency": "10kHz",
+            "time": "5ms", "viscosity": "1mPa*s", "voltage": "-50mV", "sensitivity": "50nm/V",
+            "concentration": "1mM"}
 
-def parse_typed(text: str, dimension: str, name: str = "value") -> float | int:
-    """Parse the text of an option of ``dimension``: ``"integer"`` (a whole number, e.g.
-    ``"3"`` or ``"3.0"``), a key of :data:`DIMENSIONS` (a value with optional units -> SI,
-    :func:`parse_quantity`), else a plain float. Raises ParameterError/UnitError naming ``name``."""
+
+def parse_value(text: str | float | int, dimension: str, name: str = "value") -> float | int:
+    """Parse what a user typed for a value of ``dimension`` -- the one parser of every face.
+
+    Parameters
+    ----------
+    text : str or float
+        ``"200nm"``, ``"−15 deg"`` (any minus of :data:`MINUS_SIGNS`), ``"3"``,
+        or a number (taken as SI).
+    dimension : str
+        ``"integer"`` (a whole number), a key of :data:`DIMENSIONS` (a value with
+        optional units -> SI), or anything else: a plain number.
+    name : str
+        What the value is, for the message (``"--velocity"``, ``"radius"``).
+
+    Returns
+    -------
+    float or int
+        The value in SI units (an int for ``"integer"``).
+
+    Raises
+    ------
+    UnitError
+        Unknown unit, wrong dimension, a unit without a number, text after
+        the unit, or not a finite number.
+    ParameterError
+        ``"integer"`` and not a whole number.
+    """
     if dimension == "integer":
+        plain = normalize_number_text(text) if isinstance(text, str) else text
         try:
-            number = float(text)
-        except ValueError:
+            number = float(plain)
+        except (TypeError, ValueError):
             raise ParameterError(f"{name} expects a whole number, got {text}") from None
-        if not number.is_integer():
+        if isinstance(text, bool) or not number.is_integer():
             raise ParameterError(f"{name} expects a whole number, got {text}")
         return int(number)
     if dimension in DIMENSIONS:
         return parse_quantity(text, dimension, name)
-    return float(text)
+    return parse_quantity(text, "dimensionless", name)
+
+
+def parse_field(name: str, text: str | float | int, where: str | None = None) -> float | int:
+    """Parse ``text`` as the quantity ``name`` of :data:`afmforce._fields.QUANTITIES` and check
+    its valid range: the command line's flags, ``--set``, sweep grids and the web forms.
+
+    Parameters
+    ----------
+    name : str
+        Key of ``QUANTITIES`` (``"radius"``).
+    text : str or float
+        What the user typed (``"-5nm"``) or an SI number.
+    where : str or None
+        How the user typed it (``"--radius"``), to prefix the message; default the name.
+
+    Raises
+    ------
+    UnitError, ParameterError
+        Not a value of the quantity's dimension, or out of its range (the message
+        of :meth:`afmforce._fields.FieldSpec.check`: the name, its meaning and the range).
+    """
+    from ._fields import QUANTITIES
+
+    spec = QUANTITIES[name]
+    value = parse_value(text, spec.dimension, where or name)
+    return spec.check(value, name, where, typed=str(text).strip() if isinstance(text, str) else None)
+
+
+def parse_typed(text: str, dimension: str, name: str = "value") -> float | int:
+    """The same as :func:`parse_value` (kept for its callers)."""
+    return parse_value(text, dimension, name)
 
 
 def _parse_with_pint(s: str, si: str, word: str, name: str, original) -> float:

@@ -75,4 +75,4 @@ def test_missing_geometry_is_skipped_naming_the_flag():
     entry = REF[0]
     curve = _curves(entry["folder"], entry["file"], json.dumps(entry["meta"]))[0]
     res = analyze(curve, steps=["indentation"], options=[IndentationOptions(model="hertz_cone")])
-    assert "--half-angle" in res.not_applicable["indentation"]
+    assert "`half_angle`" in res.not_applicable["indentation"]   # the key; the CLI renders --half-angle

@@ -63,7 +63,7 @@ CASES = [
     # (argv, fragments the one line must contain)
     (["statics", "--k0", "1e30N/m"], ["--k0 1e30N/m", "out of range", "[0.0001 N/m, 1000 N/m]"]),
     (["statics", "--L1", "1m", "--L0", "1um"], ["--L1 1m", "out of range", "1 mm"]),
-    (["statics", "--L1", "1mm", "--L0", "1um"], ["--L1 1 mm is longer than the flexible beam --L0 1 um"]),
+    (["statics", "--L1", "1mm", "--L0", "1um"], ["--L1 1 mm is not shorter than the flexible beam --L0 1 um"]),
     (["statics", "--B", "1e-5"], ["k0 = 3B/L0^3", "out of range"]),
     (["statics", "--friction", "none", "--mu", "5nN"], ["--mu is ignored by --friction none"]),
     (["statics", "--friction", "constant", "--mu", "5nN", "--xi", "0.1"], ["--xi is ignored by --friction constant"]),
@@ -83,7 +83,7 @@ CASES = [
     (["simulate", "--friction", "none", "--xi", "0.1kg/s"], ["--xi is ignored by --friction none"]),
     (["simulate", "--zeta", "1"], ["--zeta is ignored by --friction viscous (the default)"]),
     (["simulate", "--friction", "bogus"], ["--friction bogus: unknown; choose one of none, viscous, load"]),
-    (["simulate", "--L1", "300um"], ["--L1 300 um is longer than the flexible beam --L0 200 um"]),
+    (["simulate", "--L1", "300um"], ["--L1 300 um is not shorter than the flexible beam --L0 200 um"]),
     (["simulate", "--max-steps", "1.5"], ["--max-steps expects a whole number"]),
     (["sweep", "--grid", "velocity=1um/s,2um/s", "--set", "model=bogus"], ["--set model bogus: unknown"]),
     (["sweep", "--grid", "velocity=1um/s,2um/s", "--set", "theta0=95deg"],
@@ -97,8 +97,8 @@ CASES = [
     (["sweep", "--range", "velocity=1e-15:1e-6", "--n", "3"], ["--range velocity", "out of range"]),
     (["sweep", "--grid", "velocity=1nm/s,1um/s", "--set", "sample_rate=10MHz"],
      ["the most demanding run of this sweep", "samples"]),
-    (["sweep", "--grid", "velocity=1e-6:1e-5:10000", "--grid", "xi=0.01:0.1:1000"],
-     ["10,000,000 runs is more than 100,000", "--yes"]),
+    (["sweep", "--grid", "velocity=1e-6:1e-5:10000", "--grid", "xi=0.01:0.1:100"],
+     ["1,000,000 runs is more than 100,000", "--yes"]),   # above limits.MAX_RUNS: refused even with --yes
 ]
 
 

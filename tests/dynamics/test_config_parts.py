@@ -133,7 +133,11 @@ def _other_value(name):
         return next(k for k in choices if k != where.default)
     special = {"k0": 0.2, "B": 2e-13, "retract_velocity": 2e-7, "turn_force": 1e-9,
                "turn_deflection": 1e-9, "max_steps": 1000}
-    return special.get(name, where.default * 1.1 if where.default else 1e-3)
+    if name in special:
+        return special[name]
+    if where.default:
+        return where.default * 1.1
+    return 1e-3 if where.spec.contains(1e-3) else 2 * where.spec.lo   # inside the declared range
 
 
 @pytest.mark.parametrize("name", [n for n in FLAT if n != "model"])

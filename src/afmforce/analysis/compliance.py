@@ -214,7 +214,7 @@ def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, sour
     f_fit = 1.0 / slope
     f_meta = _metadata_factor(unit, metadata)
     if source == "metadata" and not math.isfinite(f_meta):
-        raise AnalysisError("no calibration in the file: give the sensitivity (--sensitivity) "
+        raise AnalysisError("no calibration in the file: give the sensitivity (`sensitivity`) "
                             "or use the fitted compliance slope (source='fit')")
     use_meta = source == "metadata" or (source == "auto" and math.isfinite(f_meta))
     sens = float(metadata.get("sensitivity", math.nan) or math.nan)

@@ -156,7 +156,7 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
         words.append("inertia not assessed: speed unknown (no time base)")
     elif not (math.isfinite(f) and f > 0):
         words.append("inertia not assessed: resonance frequency unknown (not in the file; give "
-                     "--resonance-frequency)")
+                     "`resonance_frequency`)")
     elif not (math.isfinite(resolution) and resolution > 0):
         words.append("inertia not assessed: deflection resolution unknown")
     elif not (math.isfinite(k) and k > 0):

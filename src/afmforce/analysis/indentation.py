@@ -82,16 +82,15 @@ def indentation(st: State, o: IndentationOptions) -> State:
         return _skip(st, "indentation", "hard contact: the tip does not indent the sample (a constant-compliance "
                      "line), so there is no modulus to fit")
     if st.force is None or not math.isfinite(st.spring_constant):
-        return _skip(st, "indentation", "no spring constant (give --spring-constant): no force to fit")
+        return _skip(st, "indentation", "no spring constant (give `spring_constant`): no force to fit")
     m = indentation_model(o.model)
     radius = o.tip_radius if o.tip_radius is not None else st.probe.value("radius", st.metadata)
     geom = {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
     missing = [g for g in m.geometry if geom.get(g) is None]
     if missing:
-        flags = {"radius": "--tip-radius", "half_angle": "--half-angle", "thickness":
-                 "--option indentation.thickness=..."}
+        keys = {"radius": "tip_radius", "half_angle": "half_angle", "thickness": "indentation.thickness"}
         return _skip(st, "indentation", f"the {m.name} model needs the " + " and the ".join(
-            f"{g.replace('_', ' ')} ({flags[g]})" for g in missing))
+            f"{g.replace('_', ' ')} (`{keys[g]}`)" for g in missing))
     regions = st.approach if o.run == "approach" else st.retract
     idx = regions.index
     if o.run == "retract":
@@ -161,12 +160,12 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
     sig = np.asarray(curve.deflection_signal, dtype=float)[idx]
     k = p.value("spring_constant", md)
     if not k:
-        raise AnalysisError("no spring constant (give --spring-constant): no force to fit")
+        raise AnalysisError("no spring constant (give `spring_constant`): no force to fit")
     unit = curve.deflection_unit
     if unit == "V":
         sens = p.value("sensitivity", md)
         if not sens:
-            raise AnalysisError("the deflection is in volts and no sensitivity is known (give --sensitivity)")
+            raise AnalysisError("the deflection is in volts and no sensitivity is known (give `sensitivity`)")
         d = sig * float(sens)
     else:
         d = sig if unit == "m" else sig / float(k)

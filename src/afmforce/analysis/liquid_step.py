@@ -125,7 +125,7 @@ def liquid(st: State, o: LiquidOptions) -> State:
     from ..forces import effective_radius
 
     if o.medium in ("none", "air"):
-        why = ("no liquid medium given (--medium water, or --option liquid.medium=NAME)" if o.medium == "none"
+        why = ("no liquid medium given (`medium`, e.g. water)" if o.medium == "none"
                else "measured in air: no double layer, and drainage and lever drag are negligible")
         return _skip(st, "liquid", why)
     md = st.metadata
@@ -135,7 +135,7 @@ def liquid(st: State, o: LiquidOptions) -> State:
         st.probe.value("spring_constant", md) or math.nan)
     radius = float(st.probe.value("radius", md) or math.nan)
     if not math.isfinite(k) or not math.isfinite(radius):
-        return _skip(st, "liquid", "needs the spring constant and the probe radius (--spring-constant, --radius)")
+        return _skip(st, "liquid", "needs the spring constant and the probe radius (`spring_constant`, `radius`)")
     seg = np.asarray(st.curve.segment)
     ia, ir = run_indices(seg, 0), run_indices(seg, 1)
     z = np.asarray(st.curve.piezo_measured if st.curve.piezo_measured is not None else st.curve.piezo_nominal,

@@ -75,7 +75,7 @@ def map_quantity(name: str) -> MapQuantity:
     try:
         return MAP_QUANTITIES[name]
     except KeyError:
-        raise ParameterError(f"--map-quantity {name}: unknown; choose from {', '.join(MAP_QUANTITIES)}") from None
+        raise ParameterError(f"`map_quantity` {name}: unknown; choose from {', '.join(MAP_QUANTITIES)}") from None
 
 
 @dataclass(frozen=True)

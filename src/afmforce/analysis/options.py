@@ -27,7 +27,7 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Any, ClassVar, Mapping
 
-from .._fields import QUANTITIES, meta, qfield, spec_of
+from .._fields import QUANTITIES, check_beam, meta, qfield, spec_of
 from ..constants import HAMAKER, MEDIA, Z0
 from ..errors import ParameterError
 
@@ -145,6 +145,10 @@ class ProbeCalibration(_Validated):
     L0: float | None = qfield("L0", None)
     L1: float | None = qfield("L1", None)
     L2: float | None = qfield("L2", None)
+
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        check_beam(self.L0, self.L1, self.L2)      # the base and the probe are shorter than the beam
 
     def value(self, name: str, metadata: Mapping[str, Any]) -> Any:
         """The user's ``name`` if given, else the file's (``metadata[name]``, ``None`` if absent)."""
@@ -269,8 +273,7 @@ class ZeroOptions(StepOptions):
     """Zero of separation at the compliance line."""
 
     step: ClassVar[str] = "zero"
-    contact_separation: float = _q("compliance_separation", Z0, "separation given to the compliance line "
-                                   "(paper: z0; 0 also common)")
+    contact_separation: float = _q("compliance_separation", Z0)
     run: str = _opt("auto", "choice", "", "compliance line that defines the zero",
                     choices=("auto", "approach", "retract"))
     parallel_tolerance: float = _opt(0.25, "dimensionless", "", "largest relative slope difference of the two "
@@ -372,7 +375,7 @@ class IndentationOptions(StepOptions):
     step: ClassVar[str] = "indentation"
     model: str = _opt("hertz_paraboloid", "text", "", "indentation model (a key of "
                       "afmforce.contact.INDENTATION_MODELS)")
-    tip_radius: float | None = _q("radius", None, "tip radius of the indentation model (None: the probe's radius)")
+    tip_radius: float | None = _q("tip_radius", None)
     half_angle: float | None = _q("half_angle", None)
     poisson: float = _q("poisson", 0.5)
     thickness: float | None = _opt(None, "length", "m", "sample (layer) thickness: the thin-layer model's h, "

@@ -38,7 +38,7 @@ def show_default(f: dataclasses.Field) -> str:
     return spec.show(v)
 
 
-def parse_option(text: str, where: str = "--option") -> tuple[str, str, Any]:
+def parse_option(text: str, where: str = "option") -> tuple[str, str, Any]:
     """``"vdw.max_separation=20nm"`` -> ``("vdw", "max_separation", 2e-08)`` (SI, checked).
 
     Words (``auto``, ``line``), ``true``/``false`` and ``none`` are accepted where

@@ -281,8 +281,8 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
         to_force = {"N": 1.0, "m": k, "V": k * sens}.get(st.unit, math.nan)
         force, noise = -depth * to_force, sigma * to_force
         what = (f"{-force * 1e9:.4g} nN ({depth / sigma:.3g} x the noise)" if math.isfinite(force)
-                else f"{depth:.4g} {st.unit} ({depth / sigma:.3g} x the noise; in force with --spring-constant"
-                     + (" and --sensitivity" if st.unit == "V" and not math.isfinite(sens) else "") + ")")
+                else f"{depth:.4g} {st.unit} ({depth / sigma:.3g} x the noise; in force with `spring_constant`"
+                     + (" and `sensitivity`" if st.unit == "V" and not math.isfinite(sens) else "") + ")")
         verdict = (f"no repulsive contact on the approach ({why}), but the retract pulls off {what} below its "
                    "baseline: the tip touched the surface; adhesion only")
         why = "the approach never pushed; the retract shows the pull-off"

@@ -87,7 +87,7 @@ def _spring_constant(st: State) -> list[str]:
         src = ("inferred from the compliance slope of the force signal (a rigid contact assumed; on a soft "
                "sample the slope is the contact's, not the lever's)" if inferred else "of the file or the user")
         out.append(f"spring constant {k:.3g} N/m {src} is outside the range of cantilevers made "
-                   f"({lo:g}..{hi:g} N/m): give --spring-constant")
+                   f"({lo:g}..{hi:g} N/m): give `spring_constant`")
     header = float(st.metadata.get("spring_constant", math.nan) or math.nan)
     if inferred and math.isfinite(header) and header > 0 and not 1 / 3 <= k / header <= 3:
         out.append(f"spring constant {k:.3g} N/m inferred from the compliance slope is {k / header:.3g} x the "
@@ -109,7 +109,7 @@ def _sensitivity(st: State) -> list[str]:
                 value = cal.sensitivity_fit if math.isfinite(cal.sensitivity_fit) else cal.factor
                 out.append(f"sensitivity {value * 1e9:.4g} {unit} fitted on only {n} contact samples (fewer than "
                            f"{MIN_COMPLIANCE_SAMPLES}; slope standard error {rel * 100:.2g} %): record more samples in "
-                           "contact (slower ramp, higher rate) or give --sensitivity")
+                           "contact (slower ramp, higher rate) or give `sensitivity`")
             break
     return out
 

@@ -54,7 +54,7 @@ def calibration(st: State, o: CalibrationOptions) -> State:
         ratio = res.factor_fit / res.factor
         if abs(ratio - 1) > 0.1:
             warn.append(f"the compliance slope gives a calibration {ratio:.3g} x the file's: a soft contact, or a "
-                        "stale sensitivity (calibration source 'fit', --calibration fit, uses the slope)")
+                        "stale sensitivity (calibration source 'fit', `calibration` fit, uses the slope)")
     if not (math.isfinite(res.factor) and res.factor != 0):
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
     res = dataclasses.replace(res, requested=o.source)
@@ -141,7 +141,7 @@ def _recalibrate_hard(st: State, cal, curvature: float, max_curvature: float) ->
     warn = (f"hard contact whose straight compliance line follows the position {1 / ratio:.3g} x with the file's "
             f"sensitivity (1 on a rigid contact): the file's sensitivity is stale, the compliance slope calibrates ("
             f"{cal.sensitivity_fit * 1e9:.4g} nm/V instead of {cal.sensitivity * 1e9:.4g}; "
-            "--calibration metadata keeps the file's)")
+            "`calibration` metadata keeps the file's)")
     return st.update("calibration", new, warn=warn, factor=new.factor, deflection=st.signal * new.factor)
 
 
@@ -276,12 +276,12 @@ def force(st: State, o: ForceOptions) -> State:
         k_new = float(k) * (cal.sensitivity / cal.sensitivity_fit) ** 2
         warn.append(f"spring constant rescaled with the refitted sensitivity: {float(k):.4g} -> {k_new:.4g} N/m "
                     f"(a thermal k goes as 1/InvOLS^2: {cal.sensitivity * 1e9:.4g} -> {cal.sensitivity_fit * 1e9:.4g} "
-                    "nm/V); give --spring-constant if the file's k did not come from a thermal tune "
-                    "(or --option force.thermal_k=false)")
+                    "nm/V); give `spring_constant` if the file's k did not come from a thermal tune "
+                    "(or set `force.thermal_k` to false)")
         k = k_new
     conv = effective_spring_constant(k, theta0=theta0, L0=p.L0, L1=p.L1, L2=p.L2, from_slope=slope_k)
     if conv.method == "none":
-        warn.append("no spring constant (give --spring-constant): forces not computed")
+        warn.append("no spring constant (give `spring_constant`): forces not computed")
     elif conv.method == "compliance slope":
         warn.append("spring constant taken from the compliance slope of the force signal (rigid contact assumed)")
     return st.update("force", conv, warn=warn, spring_constant=conv.spring_constant,

@@ -59,13 +59,14 @@ def fluid(medium: str | None, density: float | None = None,
     if medium is None:
         if density is None or viscosity is None:
             raise ParameterError("give the medium (air, water) or both its density and viscosity")
-        return float(density), float(viscosity)
+        return _checked("density", density), _checked("viscosity", viscosity)
     key = medium.lower()
     if key not in FLUIDS:
         raise ParameterError(f"medium {medium!r}: the Sader presets are {', '.join(FLUIDS)}; "
                              "give the density and viscosity of another fluid")
     rho, eta = FLUIDS[key]
-    return (rho if density is None else float(density)), (eta if viscosity is None else float(viscosity))
+    return (rho if density is None else _checked("density", density)), \
+        (eta if viscosity is None else _checked("viscosity", viscosity))
 
 
 def reynolds_number(frequency, width: float, density: float, viscosity: float):
@@ -192,16 +193,16 @@ def general_constant(spring_constant: float, resonance_frequency: float, quality
     The exponent ``a`` is given, or the local slope of the rectangular beam's ``Gamma_i`` at
     the reference's Reynolds number (which needs the lever's ``width`` [m]).
     """
-    k = _checked("spring_constant", spring_constant)
-    f = _checked("resonance_frequency", resonance_frequency)
-    q = _checked("quality_factor", quality_factor)
+    k = _checked("reference_spring_constant", spring_constant)
+    f = _checked("reference_frequency", resonance_frequency)
+    q = _checked("reference_quality_factor", quality_factor)
     rho, eta = fluid(medium, density, viscosity)
     if exponent is None:
         if width is None:
             raise ParameterError("the general Sader method needs the exponent a or the lever width "
                                  "to compute it")
         exponent = hydrodynamic_exponent(float(reynolds_number(f, _checked("lever_width", width), rho, eta)))
-    a = float(exponent)
+    a = _checked("sader_exponent", exponent)
     return GeneralConstant(k / (rho ** (1 - a) * eta**a * q * f ** (2 - a)), a)
 
 

@@ -329,6 +329,9 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
         if not math.isfinite(float(value)):
             raise ParameterError(f"{name} = {value!r} must be a finite number")
         QUANTITIES[name].check(float(value), name)      # the ranges declared once
+    if f_range is not None:
+        for name, value in zip(("frequency_min", "frequency_max"), f_range):
+            QUANTITIES[name].check(float(value), name)
     f0, q = _guess(f, p, f_range)
     window = f_range if f_range else _window(f0, q, f)
     for _ in range(2 if not f_range else 1):

@@ -40,12 +40,13 @@ def step_options(args: argparse.Namespace) -> tuple:
     its range, or an option given twice.
     """
     from ..analysis.options import OPTIONS, ProbeCalibration
+    from ._validate import check_beam
     from ..analysis.options_text import parse_option
     from ..analysis.pipeline import resolve_options
 
     given: dict[str, dict] = {}
     for text in args.option:
-        step, name, value = parse_option(text)
+        step, name, value = parse_option(text, where="--option")
         if name in given.setdefault(step, {}):
             raise ParameterError(f"--option {step}.{name} given twice")
         given[step][name] = value
@@ -58,6 +59,7 @@ def step_options(args: argparse.Namespace) -> tuple:
                                  "give one")
         given.setdefault(step, {})[name] = value
     records = tuple(OPTIONS[step](**values) for step, values in given.items())
+    check_beam(args.L0, args.L1, args.L2)   # as the record does, naming the flags
     probe = ProbeCalibration(**{k: getattr(args, k) for k in ("radius", "spring_constant", "theta0", "sensitivity",
                                                               "resonance_frequency", "L0", "L1", "L2")})
     resolve_options(records, probe)  # what only the registries know (a contact point method's name)

@@ -24,7 +24,7 @@ import sys
 from pathlib import Path
 
 from .. import _files
-from ..errors import AfmforceError, MissingMetadataError, OutputExistsError, ParameterError
+from ..errors import AfmforceError, MissingMetadataError, OutputExistsError, ParameterError, render_keys
 
 EXIT_OK, EXIT_FAILURE, EXIT_USAGE = 0, 1, 2
 #: Files named one per line up to this many per folder; more are one line for the folder.
@@ -41,6 +41,26 @@ class RunState:
     reported: list[Path] = []  # files or folders the command named itself
     captured: io.StringIO | None = None
     stdout = None              # sys.stdout while captured
+    flags: dict[str, str] = {}  # this command's own way to give a quantity (fit: --meta spring_constant=...)
+
+
+#: Quantity key (the `` `key` `` of a library message) -> how the command line gives it, where that
+#: is not ``--`` + the key with dashes (``spring_constant`` -> ``--spring-constant``).
+FLAGS: dict[str, str] = {"n_curves": "--curves"}
+
+
+def flag_of(key: str) -> str:
+    """The command-line form of quantity ``key`` in this command."""
+    if key in RunState.flags or key in FLAGS:
+        return RunState.flags.get(key) or FLAGS[key]
+    if "." in key:                       # a step option: STEP.NAME
+        return f"--option {key}"
+    return "--" + key.replace("_", "-")
+
+
+def render(text: str) -> str:
+    """A library message as the command line shows it: each `` `key` `` as its flag."""
+    return render_keys(text, flag_of)
 
 
 def start(argv: list[str]) -> None:
@@ -51,6 +71,7 @@ def start(argv: list[str]) -> None:
     RunState.written = []
     RunState.reported = []
     RunState.captured = None
+    RunState.flags = {}
     if _note_written not in _files.LISTENERS:
         _files.LISTENERS.append(_note_written)
 
@@ -78,7 +99,7 @@ def one_line(text: str) -> str:
 def message_of(exc: BaseException) -> tuple[str, str]:
     """``(type, readable one-line message)`` of any exception."""
     if isinstance(exc, AfmforceError):
-        return type(exc).__name__, one_line(str(exc))
+        return type(exc).__name__, one_line(render(str(exc)))
     if isinstance(exc, UnicodeDecodeError):
         return "FileFormatError", f"not a text file in {exc.encoding} ({one_line(exc.reason)} at byte {exc.start})"
     if isinstance(exc, OSError):

@@ -23,9 +23,10 @@ from pathlib import Path
 from typing import Any, Callable, Iterable
 
 from .._fields import QUANTITIES, FieldSpec
+from ..limits import CONFIRM_RUNS, MAX_SAMPLES, check_samples, simulation_samples  # noqa: F401  (re-export)
 from ..errors import OutputExistsError, ParameterError, UnitError
 
-__all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "refuse_ignored", "confirm_size",
+__all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "check_outputs", "check_folder_outputs", "refuse_ignored", "confirm_size",
            "lazy_help", "given", "quantity_list", "check_common", "refuse_empty_values", "COUNTS"]
 
 
@@ -168,37 +169,62 @@ def check_output(path, *, flag: str = "--out", force: bool = True, folder: bool 
     return path
 
 
-def confirm_size(n: int, limit: int, *, yes: bool, what: str) -> None:
+def check_outputs(outputs: Iterable[tuple[str, Any]], *, force: bool) -> list[Path]:
+    """Every output file of one command, checked before any work.
+
+    ``outputs``: ``(flag, path)`` pairs (a ``None`` path is skipped). Each must be
+    writable (:func:`check_output`), an existing file is refused without ``force``,
+    and no two flags may name the same file (the second would replace the first).
+
+    Raises
+    ------
+    OutputExistsError, ParameterError
+    """
+    from .._files import check_writable
+
+    seen: dict[str, str] = {}
+    out = []
+    for flag, path in outputs:
+        if not path:
+            continue
+        check_writable(path, force)
+        p = check_output(path, flag=flag, force=force)
+        key = os.path.normcase(os.path.realpath(p))
+        if key in seen:
+            raise ParameterError(f"{seen[key]} and {flag} name the same file {path}; give each output its own name")
+        seen[key] = flag
+        out.append(p)
+    return out
+
+
+def check_folder_outputs(folder, names: Iterable[str], *, flag: str, force: bool) -> None:
+    """Refuse, without ``force``, to write into ``folder`` files that exist already (written by an
+    earlier run, not this one): ``names`` are glob patterns of what the command writes there."""
+    folder = Path(folder)
+    check_output(folder, flag=flag, folder=True)
+    if force or not folder.is_dir():
+        return
+    existing = sorted({p for pattern in names for p in folder.glob(pattern) if p.is_file()})
+    if existing:
+        raise OutputExistsError(
+            f"{flag} {folder} holds {len(existing)} file(s) this command would replace (e.g. {existing[0].name}); "
+            "choose another folder or pass --force to overwrite")
+
+
+def confirm_size(n: int, limit: int, *, yes: bool, what: str, unit: str = "runs") -> None:
     """Refuse ``n`` > ``limit`` units of work unless ``yes``."""
     if n > limit and not yes:
-        raise ParameterError(f"{what}: {n:,} runs is more than {limit:,}; check the numbers, "
+        raise ParameterError(f"{what}: {n:,} {unit} is more than {limit:,}; check the numbers, "
                              "then pass --yes to run them")
 
 
 def check_beam(L0: float, L1: float, L2: float, *, k0: float | None = None, B: float | None = None,
                prefix: str = "--") -> None:
-    """Refuse an inclined cantilever that is not one: rigid parts longer than the beam, or a
-    rigidity that makes the intrinsic spring constant ``k0 = 3 B / L0^3`` leave its range.
-    """
-    for name, value in (("L1", L1), ("L2", L2)):
-        if value is not None and L0 is not None and value > L0:
-            raise ParameterError(
-                f"{prefix}{name} {QUANTITIES[name].show(value)} is longer than the flexible beam "
-                f"{prefix}L0 {QUANTITIES['L0'].show(L0)}; the base and the probe are short rigid parts "
-                "of the cantilever (Fig 2)")
-    if B is not None and L0 is not None and k0 is None:
-        k = 3.0 * B / L0**3
-        spec = QUANTITIES["k0"]
-        if not spec.contains(k):
-            raise ParameterError(
-                f"{prefix}B {QUANTITIES['B'].show(B)} with {prefix}L0 {QUANTITIES['L0'].show(L0)} gives "
-                f"k0 = 3B/L0^3 = {spec.show(k)}, out of range: k0 must lie in {spec.range_text()}")
+    """:func:`afmforce._fields.check_beam` with the names written as flags (``prefix``)."""
+    from .._fields import check_beam as check
 
+    check(L0, L1, L2, k0=k0, B=B, prefix=prefix)
 
-#: The most samples one simulated cycle may have (a real force curve has at most ~1e6).
-MAX_SAMPLES = 10_000_000
-#: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
-_BYTES_PER_SAMPLE = 88
 
 def _flag(dest: str) -> str:
     return "--" + dest.replace("_", "-")
@@ -236,24 +262,6 @@ def check_simulation_options(args: argparse.Namespace, overrides: dict) -> None:
                                      "(and --instrument ideal|typical|paper|liquid), or drop it")
 
 
-def simulation_samples(start: float, turn: float, end: float, velocity: float,
-                       retract_velocity: float | None, dwell: float, sample_rate: float) -> float:
-    """Samples of one cycle: (approach + retract) / speed + dwell, times the sample rate."""
-    retract = velocity if retract_velocity is None else retract_velocity
-    return ((turn - start) / velocity + (turn - end) / retract + dwell) * sample_rate
-
-
-def check_samples(n: float, where: str = "") -> None:
-    """Refuse a cycle of more than :data:`MAX_SAMPLES` samples before anything is allocated."""
-    if n > MAX_SAMPLES:
-        size = n * _BYTES_PER_SAMPLE
-        mem = next(f"{size / f:.3g} {u}" for f, u in ((1e15, "PB"), (1e12, "TB"), (1e9, "GB"), (1e6, "MB"))
-                   if size >= f or u == "MB")
-        raise ParameterError(
-            f"{where}the cycle would have about {n:.3g} samples ({mem} of trajectory), more than the "
-            f"{MAX_SAMPLES:.0e} a run may have; lower --sample-rate, raise --velocity or shorten the drive")
-
-
 def check_simulation_config(cfg) -> None:
     """Checks of a built :class:`~afmforce.dynamics.SimulationConfig` before it is run:
     the beam is a cantilever (:func:`check_beam`) and the sample count is sane."""
@@ -279,8 +287,6 @@ def check_choices(values: dict, prefix: str = "--") -> None:
             raise ParameterError(f"{prefix}{name} {values[name]}: unknown; choose one of {', '.join(registry)}")
 
 
-#: Sweeps of more runs than this need ``--yes``.
-CONFIRM_RUNS = 100_000
 
 _SAMPLE_WORST = {"start": min, "turn": max, "end": min, "velocity": min, "retract_velocity": min,
                  "dwell": max, "sample_rate": max}
@@ -341,15 +347,20 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
 
 
 #: Integer options of any command (dest -> smallest valid value), checked by :func:`check_common`.
-COUNTS = {"workers": 1, "chunk_size": 1, "starts": 1, "curves": 2, "n": 1}
+COUNTS = {"workers": 1, "chunk_size": 1, "starts": 1, "curves": 2, "n": 1, "seed": 0}
 
 
 def check_common(args: argparse.Namespace) -> None:
-    """Checks made for every command before it runs: the counts of :data:`COUNTS`."""
+    """Checks made for every command before it runs: the counts of :data:`COUNTS`, a Dask
+    scheduler's address."""
     for dest, lo in COUNTS.items():
         value = getattr(args, dest, None)
         if isinstance(value, int) and not isinstance(value, bool) and value < lo:
             raise ParameterError(f"{_flag(dest)} must be at least {lo}, got {value}")
+    if getattr(args, "scheduler", None) is not None:
+        from ..sweep.executors import check_scheduler
+
+        check_scheduler(args.scheduler)
 
 
 def refuse_empty_values(parser: argparse.ArgumentParser, argv: list[str]) -> None:

@@ -26,7 +26,7 @@ from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
 from ._analyze_liquid import liquid_flags, print_liquid
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
-from ._outcome import reported
+from ._outcome import render, reported
 from ._verdicts import MAX_LINE, clip as _clip, dynamic_label as _dynamic_label, plain as _plain, short_verdict
 from .common import add_quantity, chunk_progress_bar, eprint, progress_bar
 
@@ -115,8 +115,7 @@ def _indentation_flags(p) -> None:
                    help="hertz_paraboloid (default), sneddon_sphere, hertz_cone, bilodeau_pyramid3, "
                         "bilodeau_pyramid4, hertz_thin_layer, jkr, dmt, maugis (the same as --option "
                         "indentation.model=KEY)")
-    add_field(g, "radius", flag="--tip-radius", dest="tip_radius",
-              help="tip radius of a sphere model (default: --radius)")
+    add_field(g, "tip_radius", help="tip radius of a sphere model (default: --radius)")
     add_field(g, "half_angle", help="half-angle of a cone, face angle of a pyramid")
     add_field(g, "poisson", default_from=lambda: _default("indentation", "poisson"),
               help="Poisson ratio of the sample")
@@ -174,6 +173,9 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     if missing:  # before any work: no output folder for a typo
         raise ParameterError(f"no such file or folder: {', '.join(missing)}")
     steps = None if args.steps is None else [s.strip() for s in args.steps.split(",") if s.strip()]
+    if steps == []:
+        raise ParameterError(f"--steps {args.steps!r}: no step named; give comma-separated steps (e.g. "
+                             "drift,compliance,calibration) or drop --steps for all")
     resolve_steps(steps)  # unknown step: ParameterError -> exit 2
     from .calibrate import fill_from_calibration; fill_from_calibration(args, ("spring_constant", "sensitivity", "resonance_frequency"))  # noqa: E501,E702
     args.records, args.probe = _options(args)  # unknown or out-of-range option: exit 2
@@ -212,6 +214,11 @@ def run(args: argparse.Namespace) -> int:
     from ..sweep.chunks import default_chunk_size
 
     steps = _check(args)
+    from ..io._meta import parse_meta_args
+
+    meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
+                                                              ("sensitivity", args.sensitivity)) if v is not None}}
+    _check_liquid_radius(args, meta)
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
@@ -226,10 +233,6 @@ def run(args: argparse.Namespace) -> int:
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)
     per_curve = args.out is not None and (not batch or args.per_curve)
-    from ..io._meta import parse_meta_args
-
-    meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
-                                                              ("sensitivity", args.sensitivity)) if v is not None}}
     analysis = CurveAnalysis(
         steps=None if steps is None else tuple(steps), options=args.records, probe=args.probe, meta_override=meta,
         format=args.format, channel=args.channel, keep_json=args.json,
@@ -271,6 +274,16 @@ def run(args: argparse.Namespace) -> int:
     return _report(args, result, refs, folder, batch)
 
 
+def _check_liquid_radius(args, meta: dict) -> None:
+    """A liquid medium runs the liquid step, which needs the probe radius; no reader gives one, so
+    without --radius (or --meta radius=...) the step would be skipped silently: refused instead."""
+    medium = next((getattr(r, "medium", None) for r in args.records if r.step == "liquid"), None)
+    if medium in (None, "none", "air") or args.probe.radius is not None or "radius" in meta:
+        return
+    raise ParameterError(f"--medium {medium}: the liquid analysis (drag, drainage, DLVO fit) needs the probe "
+                         "radius; give --radius (e.g. --radius 2.5um for a colloid probe), or drop --medium")
+
+
 def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
     from ..sweep.files import summary_table, write_summary
     from ..sweep.summary import failure_records
@@ -286,7 +299,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         reported(folder)  # "summary in FOLDER/: ..." below
         written.update(_write_maps(table, folder, args.map_quantity))
     if args.json:
-        _print_json(result)
+        _print_json(result, len(refs))
     else:
         if len(ok) <= BATCH_CURVES:
             _print_rows(ok, verbose=args.verbose, given="user" if args.sensitivity is not None else "file")
@@ -306,7 +319,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         if written:
             print(f"summary in {folder}/: " + ", ".join(p.name for p in written.values()))
     for record in records[:_MAX_LISTED if batch else None]:  # one line per failed file or curve
-        name, error = record["source"], " ".join(_clean(record["error"]).split())
+        name, error = record["source"], " ".join(render(_clean(record["error"])).split())
         named = error.split(": ", 1)[0].endswith(name.split("#")[0])  # the message starts with the path
         eprint(f"failed: {error}" if named else f"failed: {name}: {error}")
         if RunState.debug and record["traceback"]:  # --debug: where it failed, in a batch too
@@ -342,10 +355,25 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
     return out
 
 
-def _print_json(result) -> None:
+def _print_json(result, n_items: int | None = None) -> None:
+    """The analysis JSON; when a file or curve failed, also the contract's ``error`` object
+    (type, message, exit status 1) beside the results of the others."""
+    import re
+
     from ..sweep.report import analysis_json
 
-    print(json.dumps(analysis_json(result), indent=2, allow_nan=False))
+    payload = analysis_json(result)
+    failed = payload["failed"]
+    if failed:
+        first = failed[0]
+        kind = re.match(r"^(?:chunk failed: )?(?:unexpected )?([A-Z]\w*(?:Error|Exception|Interrupt))\b",
+                        first["error"])
+        where = first["file"] + (f"#{first['curve']}" if "curve" in first else "")
+        total = f" of {n_items}" if n_items else ""
+        payload["error"] = {"type": kind.group(1) if kind else "AnalysisError",
+                            "message": f"{len(failed)}{total} file(s) or curve(s) failed; first {where}: "
+                                       f"{first['error']}", "exit_status": 1}
+    print(json.dumps(payload, indent=2, allow_nan=False))
 
 
 def _oscillation_origin(ok):
@@ -399,10 +427,12 @@ def _print_rows(ok, verbose: bool = False, given: str = "file") -> None:
     for row in rows:
         print("  ".join(c.ljust(w) for c, w in zip(row, widths)))
     clipped = False
+    ok = ok.assign(verdict=[render(v) if isinstance(v, str) else v for v in ok["verdict"]])
     for _, r in ok.iterrows():
         warnings = [w for w in (r["warnings"] or "").split(" | ") if w]
         if not (warnings or r["verdict"]):
             continue
+        warnings = [render(w) for w in warnings]     # `spring_constant` -> --spring-constant
         if verbose:
             print(f"{r['name']}: {r['verdict']}" + "".join(f"\n  warning: {w}" for w in warnings))
             continue

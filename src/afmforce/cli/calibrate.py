@@ -76,12 +76,9 @@ def register(sub) -> None:
     add_field(s, "density", help="density of the medium (default: the preset's)")
     add_field(s, "viscosity", help="viscosity of the medium (default: the preset's)")
     g = s.add_argument_group("general method (any plan view): a reference lever of the same type")
-    add_field(g, "spring_constant", flag="--reference-spring-constant", dest="reference_k",
-              help="spring constant of the reference lever")
-    add_field(g, "resonance_frequency", flag="--reference-frequency", dest="reference_f",
-              help="resonance frequency of the reference lever")
-    add_field(g, "quality_factor", flag="--reference-quality-factor", dest="reference_q",
-              help="quality factor of the reference lever")
+    add_field(g, "reference_spring_constant")
+    add_field(g, "reference_frequency")
+    add_field(g, "reference_quality_factor")
     add_field(g, "sader_exponent", flag="--exponent", help="exponent a (default: from --width)")
     _common(s)
     s.set_defaults(func=run_sader)
@@ -259,7 +256,7 @@ def run_sader(args: argparse.Namespace) -> int:
 
     if args.resonance_frequency is None or args.quality_factor is None:
         raise ParameterError("give --frequency and --quality-factor (the lever's resonance in its medium)")
-    refs = (args.reference_k, args.reference_f, args.reference_q)
+    refs = (args.reference_spring_constant, args.reference_frequency, args.reference_quality_factor)
     general = any(v is not None for v in refs)
     if general:
         if any(v is None for v in refs):

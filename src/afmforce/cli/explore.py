@@ -4,9 +4,9 @@ from __future__ import annotations
 
 import argparse
 
-from .._files import check_writable
 from ._outcome import reported
-from ._validate import check_output
+from ..limits import CONFIRM_GRID_POINTS, MAX_GRID_POINTS, check_count
+from ._validate import check_outputs, confirm_size
 
 
 def _list(dimension: str, flag: str):
@@ -26,6 +26,8 @@ def register(sub) -> None:
     p.add_argument("--xis", type=_list("damping", "--xis"), default=None,
                    help="comma-separated friction coefficients (default 0.001,0.01,0.1 kg/s)")
     p.add_argument("--force", action="store_true", help="overwrite an existing output file")
+    p.add_argument("--yes", action="store_true",
+                   help=f"simulate a grid of more than {CONFIRM_GRID_POINTS} points (refused without it)")
     p.set_defaults(func=run)
 
 
@@ -33,8 +35,10 @@ def run(args: argparse.Namespace) -> int:
     from ..explore import build_page, compute_grid
     from ..explore.page import DEFAULT_VELOCITIES, DEFAULT_XIS
 
-    check_writable(args.out, args.force)
-    check_output(args.out, force=args.force)
+    check_outputs([("--out", args.out)], force=args.force)
+    n = len(args.velocities or DEFAULT_VELOCITIES) * len(args.xis or DEFAULT_XIS)
+    check_count("--velocities x --xis", n, MAX_GRID_POINTS, "grid points (one simulation each)")
+    confirm_size(n, CONFIRM_GRID_POINTS, yes=args.yes, what="this explore grid", unit="simulations")
     from .common import progress_bar
 
     bar, _ = progress_bar("explore", unit="run", leave=False)

@@ -11,8 +11,10 @@ import argparse
 import warnings
 from pathlib import Path
 
-from .._files import atomic_write_text, check_writable
+from .._files import atomic_write_text
 from ..errors import AfmforceError, ParameterError
+from ._outcome import RunState, render
+from ._validate import add_field, check_folder_outputs, check_outputs
 from .common import busy, eprint, print_json, quantity
 
 __all__ = ["register", "run", "model_config", "add_model_flags"]
@@ -119,9 +121,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--fringe-period", type=quantity("length", "--fringe-period", positive=True), default=335e-9,
                    metavar="LENGTH", help="fringe period in the separation: half the laser "
                    "wavelength (default 335nm, a 670 nm laser)")
-    g.add_argument("--jump-window", type=quantity("time", "--jump-window"), default=None,
-                   metavar="TIME", help="left out after the jump-in (default: until the deflection "
-                                        "has landed on the contact line, at most 2 ms)")
+    add_field(g, "jump_window", default=None,
+              help="left out after the jump-in (default: until the deflection has landed on the "
+                   "contact line, at most 2 ms)")
     add_model_flags(p)
     o = p.add_argument_group("output")
     o.add_argument("--json", action="store_true", help="print the result as JSON (SI units)")
@@ -163,6 +165,9 @@ def _load(paths, meta=None):
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit status."""
     from ..fit import fit_dynamic
+
+    # the files' calibration is given with --meta here: --spring-constant is the model's lever
+    RunState.flags.update(spring_constant="--meta spring_constant=VALUE", sensitivity="--meta sensitivity=VALUE")
     from ..fit.figures import plot_curves, plot_profiles, plot_residuals
 
     if args.example is not None:
@@ -174,12 +179,16 @@ def run(args: argparse.Namespace) -> int:
     missing = [c for c in args.curves if not Path(c).is_file()]
     if missing:
         raise ParameterError(f"no such file: {', '.join(missing)}")
-    for path in (args.out, args.report):
-        if path:
-            check_writable(path, args.force)
+    check_outputs([("--out", args.out), ("--report", args.report)], force=args.force)
+    if args.plots:   # never replace an earlier run's figures silently
+        check_folder_outputs(args.plots, ("fit_curve*.png", "fit_profiles.png", "fit_residuals.png"),
+                             flag="--plots", force=args.force)
     if not 0.5 < args.level < 1:
         raise ParameterError(f"--level must lie between 0.5 and 1, got {args.level}")
     cfg = model_config(args)
+    from ..fit.params import check_free
+
+    check_free(args.free.split(","), cfg.model, cfg.friction.law if cfg.model == "beam" else None)  # before loading
     from ..io._meta import parse_meta_args
 
     curves, names = _load(args.curves, parse_meta_args(args.meta))
@@ -226,5 +235,5 @@ def run(args: argparse.Namespace) -> int:
     else:
         print(res.markdown())
     for w in res.warnings:
-        eprint(f"warning: {w}")
+        eprint(f"warning: {render(w)}")
     return 0

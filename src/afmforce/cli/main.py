@@ -157,13 +157,28 @@ def _compile_notice() -> None:
     _helper.BEFORE_COMPILE[:] = [notice]
 
 
+def _text_never_fails() -> None:
+    """A file name that is not UTF-8 (its bytes kept as lone surrogates) is printed with the
+    undecodable bytes escaped, never as a UnicodeEncodeError in the middle of the output."""
+    for stream in (sys.stdout, sys.stderr):
+        if getattr(stream, "errors", None) == "strict" and hasattr(stream, "reconfigure"):
+            try:
+                stream.reconfigure(errors="backslashreplace")
+            except (ValueError, OSError):   # pragma: no cover - a stream that cannot change
+                pass
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (argparse usage errors raise SystemExit(2))."""
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
+    _text_never_fails()
     _outcome.start(argv)
     command = _command_of(argv)
     try:
         parser = build_parser(command)
+        if _outcome.RunState.json and not command and "--version" in argv:
+            print(json.dumps({"command": "afmforce", "exit_status": 0, "version": __version__}, indent=2))
+            return 0
         if _outcome.RunState.json and ("-h" in argv or "--help" in argv):
             # --json always prints one JSON object: the help text as lines, exit status 0
             text = (_subparser(parser, command) if command else parser).format_help()

@@ -7,7 +7,9 @@ from __future__ import annotations
 
 import argparse
 
-from .._files import atomic_write_text, check_writable
+from .._files import atomic_write_text
+from ..limits import MAX_DESIGN_CURVES
+from ._validate import add_field, check_outputs
 from .common import add_quantity, busy, print_json, quantity
 
 __all__ = ["register", "run"]
@@ -33,13 +35,11 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--points-per-nm", type=quantity("dimensionless", "--points-per-nm", positive=True), default=2.0,
                    help="samples per nm of drive travel when no rates are given (default 2)")
     add_quantity(g, "--noise", "length", 0.05e-9, "deflection noise rms", unit="m", positive=True)
-    g.add_argument("--curves", type=int, default=4, help="curves in a design (default 4)")
+    g.add_argument("--curves", type=int, default=4, help=f"curves in a design (default 4; at most {MAX_DESIGN_CURVES})")
     add_quantity(g, "--force-error", "force", None,
                  "allowed error of the static pull-in force (default 10 %% of it)", unit="N", positive=True)
-    g.add_argument("--start", type=quantity("length", "--start"), default=None, metavar="VALUE",
-                   help="start of each approach (default -40 nm)")
-    g.add_argument("--turn", type=quantity("length", "--turn"), default=None, metavar="VALUE",
-                   help="turn of each approach (default +20 nm)")
+    add_field(g, "start", help="start of each approach (default -40 nm)")
+    add_field(g, "turn", help="turn of each approach (default +20 nm)")
     add_quantity(g, "--slip-target", "length", None,
                  "plan the slip length instead: the 95 %% half-width wanted (issue 25; with "
                  "--slip-length, --medium, --geometry ...; docs/liquid.md)", unit="m")
@@ -63,8 +63,7 @@ def run(args: argparse.Namespace) -> int:
     from ..fit.plan import plan_experiment
     from .fit import model_config
 
-    if args.report:
-        check_writable(args.report, args.force)
+    check_outputs([("--report", args.report)], force=args.force)
     drive = {"start": -40e-9 if args.start is None else args.start,
              "turn": 20e-9 if args.turn is None else args.turn}
     args.start = args.turn = None

@@ -16,6 +16,8 @@ def register(sub) -> None:
                    help="comma-separated figures: fig1,fig3,fig4,fig5,fig6,fig7,fig9")
     p.add_argument("--fast", action="store_true", help="quicker, lower-resolution run")
     p.add_argument("--svg", action="store_true", help="also write SVG figures")
+    p.add_argument("--force", action="store_true",
+                   help="replace the figures and reports of an earlier run in --out")
     p.set_defaults(func=run)
 
 
@@ -52,13 +54,15 @@ def summarize(res) -> str:
 
 def run(args: argparse.Namespace) -> int:
     from ._outcome import reported
-    from ._validate import check_output
+    from ._validate import check_folder_outputs
 
-    check_output(args.out, folder=True)
     only = None if args.only is None else [s.strip() for s in args.only.split(",") if s.strip()]
     if only == []:
         raise ParameterError("--only: no figure named; give some of fig1,fig3,fig4,fig5,fig6,fig7,fig9 "
                              "(or drop --only for all)")
+    from ..paper.reproduce import planned_files
+
+    check_folder_outputs(args.out, planned_files(only, args.svg), flag="--out", force=args.force)
     res = run_reproduce(args.out, only, args.fast, args.svg)
     reported(res.out_dir)  # summarize() names the folder
     print(summarize(res))

@@ -17,9 +17,10 @@ import sys
 from pathlib import Path
 from typing import Callable
 
-from .._files import check_writable
 from ..errors import ParameterError
-from ._validate import add_field, check_output, check_simulation_config, check_simulation_options, lazy_help
+from ._validate import (add_field, check_beam, check_outputs, check_simulation_config, check_simulation_options,
+                        lazy_help)
+from ._outcome import render
 from .common import print_json, print_table
 
 __all__ = ["register", "run", "ARGUMENT_GROUPS", "OUTPUT_FLAGS", "POST_HOOKS", "config_from_args"]
@@ -202,6 +203,12 @@ def config_from_args(args: argparse.Namespace):
         from ..constants import MEDIA
         overrides = {**MEDIA[args.medium], **overrides}
     check_simulation_options(args, overrides)  # ranges were checked while parsing
+    if overrides.get("model", "beam") == "beam":     # the record checks it too, naming fields, not flags
+        from ..dynamics.config import flat_defaults
+
+        probe = {**flat_defaults(), **overrides}
+        check_beam(probe["L0"], probe["L1"], probe["L2"], k0=overrides.get("k0"),
+                   B=overrides.get("B", None if "k0" in overrides else probe["B"]))
     cfg = SimulationConfig(**overrides)
     check_simulation_config(cfg)
     return cfg
@@ -222,11 +229,8 @@ def run(args: argparse.Namespace) -> int:
     from ..dynamics import DynamicsWarning, simulate
     from ..dynamics.guard import ConvergenceWarning
 
-    for dest in OUTPUT_FLAGS:
-        path = getattr(args, dest, None)
-        if path:
-            check_writable(path, args.force)
-            check_output(path, flag="--" + dest.replace("_", "-"), force=args.force)
+    check_outputs([("--" + dest.replace("_", "-"), getattr(args, dest, None)) for dest in OUTPUT_FLAGS],
+                  force=args.force)
     if args.out and Path(args.out).suffix.lower() not in (".csv", ".h5", ".hdf5"):
         raise ParameterError(f"cannot write {args.out}: --out takes a .csv or .h5 file")
     if args.plot and Path(args.plot).suffix.lower() != ".png":
@@ -242,7 +246,7 @@ def run(args: argparse.Namespace) -> int:
             if bar is not None:
                 bar.close()
     for w in caught:
-        print(f"warning: {w.message}", file=sys.stderr)
+        print(f"warning: {render(str(w.message))}", file=sys.stderr)   # `quality_factor` -> --quality-factor
     if args.out:
         traj.write(args.out, force=args.force)
     if args.plot:

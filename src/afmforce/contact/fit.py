@@ -368,9 +368,8 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     for g in m.geometry:
         v = geom.get(g)
         if v is None or not (float(v) > 0):
-            flag = {"radius": "--tip-radius", "half_angle": "--half-angle",
-                    "thickness": "--option indentation.thickness=..."}[g]
-            raise ParameterError(f"indentation model {model!r} needs the {g.replace('_', ' ')} ({flag})")
+            key = {"radius": "tip_radius", "thickness": "indentation.thickness"}.get(g, g)     # the quantity the user gives (`key`: each face's flag)
+            raise ParameterError(f"indentation model {model!r} needs the {g.replace('_', ' ')} (`{key}`)")
     u = np.asarray(depth, dtype=float)
     F = np.asarray(force, dtype=float)
     ok = np.isfinite(u) & np.isfinite(F)

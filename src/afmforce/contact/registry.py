@@ -91,7 +91,7 @@ INDENTATION_MODELS: dict[str, IndentationModel] = {m.key: m for m in (
                      "(Maugis lambda < 0.1)", "Derjaguin, Muller & Toporov 1975", _a.dmt, linear=False,
                      adhesive=True, max_depth_over_radius=1.0),
     IndentationModel("maugis", "adhesive sphere, Maugis-Dugdale", ("radius",), _ADH + "any lambda (given: "
-                     "--option indentation.transition=...)", "Maugis 1992, J Colloid Interface Sci 150, 243",
+                     "`indentation.transition`)", "Maugis 1992, J Colloid Interface Sci 150, 243",
                      _a.maugis, linear=False, adhesive=True, max_depth_over_radius=1.0),
 )}
 assert all(k in INDENTATION_MODELS for k in _m.LINEAR_KEYS)

@@ -3,7 +3,9 @@
 A part field declares its quantity's metadata (:data:`afmforce._fields.QUANTITIES`:
 dimension, SI unit, help, valid range) and the ``domain`` the model itself
 needs, once (:func:`quantity`); :func:`validate` checks every field of a part
-against it with the one message style of :mod:`afmforce._validate`.
+against it: first the declared valid range (the message of
+:meth:`afmforce._fields.FieldSpec.check`, the same the command line and the web give),
+then the domain, with the one message style of :mod:`afmforce._validate`.
 """
 
 from __future__ import annotations
@@ -57,8 +59,10 @@ DOMAINS = {
 }
 
 
-def _checker(f: dataclasses.Field):
-    """check(value) of one field: its domain (or its spec's range, or its registry)."""
+def _checker(f: dataclasses.Field, domain_too: bool = True):
+    """check(value) of one field: its registry, or its spec's valid range (the message of
+    :meth:`afmforce._fields.FieldSpec.check`, the same the command line gives) and then the
+    model's domain (``domain_too``)."""
     name, md = f.name, f.metadata
     if "choices" in md:
         choices, name = md["choices"], md["name"] or name
@@ -68,19 +72,21 @@ def _checker(f: dataclasses.Field):
                 raise ParameterError(f"{name} must be one of {sorted(choices)}, got {value!r}")
             return value
         return check_choice
-    unit, domain = md["unit"], md["domain"]
+    unit, domain, spec = md["unit"], md["domain"], md["spec"]
     if domain == "range":
-        spec = md["spec"]
         return lambda value: spec.check(finite(name, value, unit), name)
     check = DOMAINS[domain]
-    return lambda value: check(name, value, unit)
+    if not domain_too:
+        return lambda value: spec.check(value, name)
+    return lambda value: check(name, spec.check(value, name), unit)
 
 
 @cache
 def _checks(cls, skip: tuple[str, ...]) -> tuple:
-    """(name, check) of every field of part class ``cls`` checked on construction."""
-    return tuple((f.name, _checker(f)) for f in dataclasses.fields(cls)
-                 if ("domain" in f.metadata or "choices" in f.metadata) and f.name not in skip)
+    """(name, check) of every field of part class ``cls`` checked on construction
+    (``skip``: fields whose domain another check owns; their range is still checked here)."""
+    return tuple((f.name, _checker(f, f.name not in skip)) for f in dataclasses.fields(cls)
+                 if "domain" in f.metadata or "choices" in f.metadata)
 
 
 @cache

@@ -33,6 +33,7 @@ from typing import Any
 
 from ..cantilever import InclinedCantilever
 from ..errors import ParameterError
+from ..limits import check_samples, simulation_samples
 from .parts import (
     DEFAULT_B,
     MODELS,
@@ -226,6 +227,8 @@ class SimulationConfig:
             raise ParameterError(
                 f"sample_rate {parts['solver'].sample_rate:.4g} Hz gives only {n_app:.1f} samples on "
                 "the approach; raise it (at least 10 samples per run)")
+        check_samples(simulation_samples(drive.start, drive.turn, drive.end, drive.velocity,
+                                         drive.retract_velocity, drive.dwell, parts["solver"].sample_rate))
 
     def __getstate__(self) -> dict[str, Any]:
         # pickled (sweep workers, caches): the parts and the solved start deflection, not

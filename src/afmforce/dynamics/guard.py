@@ -231,8 +231,8 @@ def lever_damping_check(check: str, cfg, events, resolve) -> str:
         parts.append(f"{n} {getattr(events, n) * 1e9:.4g} {unit} undamped vs " + ", ".join(
             f"{getattr(d, n) * 1e9:.4g} {unit} at Q = {q:g}" for q, d in damped.items()))
     msg = "hangs on damping the model lacks: " + ", ".join(parts)
-    warnings.warn(msg + "; real levers have Q of tens to a few hundred: give quality_factor "
-                  "(--quality-factor)", LeverDampingWarning, stacklevel=4)
+    warnings.warn(msg + "; real levers have Q of tens to a few hundred: give `quality_factor`",
+                  LeverDampingWarning, stacklevel=4)
     return "; " + msg
 
 

@@ -14,8 +14,9 @@ read with :func:`afmforce._fields.spec_of`) plus the ``domain`` the model
 itself needs (checked on construction, :mod:`._part`): ``positive``, ``non_negative``, ``finite``,
 ``range`` (the spec's range), ``optional_positive`` (None or > 0) or
 ``count`` (None or a whole number >= 1). The valid *ranges* of the vocabulary
-(what an AFM experiment means) are enforced where a user types a value: the
-command line and sweeps.
+(what an AFM experiment means) are enforced on construction too, with the
+message the command line and the web give, and so are the cross-field rules
+(:func:`afmforce._fields.check_beam`: L1, L2 < L0).
 """
 
 from __future__ import annotations
@@ -25,6 +26,7 @@ from dataclasses import dataclass
 from functools import lru_cache
 from typing import ClassVar
 
+from .._fields import check_beam
 from ..cantilever import InclinedCantilever
 from ..constants import FIG1, FIG5
 from ..errors import ParameterError
@@ -121,6 +123,7 @@ class BeamProbe(Part):
         if self.k0 is None and self.B is None:
             object.__setattr__(self, "B", DEFAULT_B)
         validate(self, skip=("L0", "L1", "L2", "theta0"))   # the cantilever checks its geometry
+        check_beam(self.L0, self.L1, self.L2, k0=self.k0, B=self.B)   # L1, L2 < L0; k0 of B in range
         cant = _cantilever(self.L0, self.L1, self.L2, self.theta0, self.k0, self.B)
         for name in ("L0", "L1", "L2", "theta0"):
             object.__setattr__(self, name, getattr(cant, name))

@@ -13,6 +13,7 @@ import numpy as np
 from .. import constants as C
 from .._files import atomic_write_text
 from ..errors import ParameterError
+from ..limits import MAX_GRID_POINTS, check_count
 
 __all__ = ["ExploreGrid", "compute_grid", "build_page", "DEFAULT_VELOCITIES", "DEFAULT_XIS"]
 
@@ -82,6 +83,7 @@ def compute_grid(velocities: Sequence[float] = DEFAULT_VELOCITIES, xis: Sequence
         raise ParameterError("the explore grid needs at least one velocity and one xi")
     runs = []
     n = len(velocities) * len(xis)
+    check_count("velocities x xis", n, MAX_GRID_POINTS, "grid points (one simulation each)")
     k = None
     for i, v in enumerate(velocities):
         for j, xi in enumerate(xis):

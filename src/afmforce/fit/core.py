@@ -14,6 +14,7 @@ from .data import FitCurve, prepare_curves
 from .memory import check_fit_memory
 from .model import DEFAULT_FRINGE_PERIOD, Evaluator
 from .preprocess import preparation_warnings, result_warnings
+from .._fields import check as check_value
 from .params import PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
 from .search import _refit_all, _search
@@ -232,6 +233,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     from .uncertainty import compare_models, fit_nested, profile_interval
 
     t0 = time.perf_counter()
+    check_value("jump_window", jump_window)        # the declared range (afmforce._fields.QUANTITIES)
     if calibration not in ("auto", "file"):
         raise ParameterError(f"calibration must be 'auto' or 'file', got {calibration!r}")
     if noise not in ("auto", "white"):
@@ -241,7 +243,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     base = base_config(model, **dict(fixed or {}))
     if sampling is not None:
         base = base.replace(sampling=sampling)
-    free = check_free(free, base.model)
+    free = check_free(free, base.model, base.friction.law if base.model == "beam" else None)
     need = [n for n in free if n in NEEDS_RETRACT]
     if retract is None:
         retract = bool(need) and all(not isinstance(c, FitCurve) and retract_follows(c)

@@ -1,8 +1,10 @@
 """Registry of the global parameters the dynamic fit can free (``--free``).
 
 Each entry maps a user name to a flat name of :class:`~afmforce.dynamics.SimulationConfig`
-(:data:`afmforce.dynamics.config.FLAT`), with its unit, bounds, the scale used inside the optimiser and the
-finite-difference step of the Jacobian. Per-curve nuisance parameters (the zero
+(:data:`afmforce.dynamics.config.FLAT`), with the scale used inside the optimiser and the
+finite-difference step of the Jacobian. Its unit and search bounds come from the quantity's
+declaration (:data:`afmforce._fields.QUANTITIES`): the declared valid range, or a narrower
+search window inside it (never wider: the fit never tries a value the records refuse). Per-curve nuisance parameters (the zero
 of the piezo position ``shift``, the baseline ``offset`` and the ``drift``
 slope) are always fitted and are not in this registry.
 """
@@ -11,6 +13,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from .._fields import QUANTITIES
 from ..errors import ParameterError
 
 __all__ = ["FitParameter", "PARAMETERS", "SPEED_DEPENDENT", "check_free"]
@@ -26,11 +29,13 @@ class FitParameter:
     Attributes
     ----------
     name : str
-        User name (``--free`` key) and flat name of SimulationConfig.
+        User name (``--free`` key) and flat name of SimulationConfig; a key of
+        :data:`afmforce._fields.QUANTITIES`.
     unit : str
-        SI unit.
+        SI unit (default, and it must be: the declared one).
     lower, upper : float
-        Bounds [unit].
+        Search bounds [unit]; default the declared valid range. A narrower
+        window must lie inside the declared range (checked on construction).
     scale : float
         Typical size [unit]; the optimiser works in units of ``scale``.
     rel_step, abs_step : float
@@ -46,15 +51,30 @@ class FitParameter:
     """
 
     name: str
-    unit: str
-    lower: float
-    upper: float
+    unit: str | None
+    lower: float | None
+    upper: float | None
     scale: float
     rel_step: float
     abs_step: float
     models: tuple[str, ...]
     meaning: str
     physical_lower: bool = False
+
+    def __post_init__(self) -> None:
+        spec = QUANTITIES[self.name]
+        if self.unit is None:
+            object.__setattr__(self, "unit", spec.unit)
+        for side, value, declared in (("lower", self.lower, spec.lo), ("upper", self.upper, spec.hi)):
+            if value is None:
+                if declared is None:
+                    raise ValueError(f"fit parameter {self.name}: the declared range has no {side} "
+                                     "bound; give a search bound")
+                object.__setattr__(self, side, float(declared))
+        if self.unit != spec.unit or not (spec.contains(self.lower) or self.lower == spec.lo) \
+                or not (spec.contains(self.upper) or self.upper == spec.hi) or not self.lower < self.upper:
+            raise ValueError(f"fit parameter {self.name}: search bounds [{self.lower:g}, {self.upper:g}] "
+                             f"{self.unit} must lie in the declared range {spec.range_text()} [{spec.unit}]")
 
     def step(self, value: float) -> float:
         """Forward-difference step at ``value`` [unit]."""
@@ -63,46 +83,48 @@ class FitParameter:
 
 #: Parameters that ``fit_dynamic(free=...)`` and ``afmforce fit --free`` accept.
 PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
-    FitParameter("hamaker", "J", 1e-22, 1e-16, 1e-19, 0.01, 1e-23, ("beam", "spring"),
+    # unit, lower, upper None: the declaration's (afmforce._fields.QUANTITIES); numbers: a narrower search window
+    FitParameter("hamaker", None, None, None, 1e-19, 0.01, 1e-23, ("beam", "spring"),
                  "Hamaker constant A (the data fix A*R; R is given)"),
-    FitParameter("radius", "m", 1e-9, 1e-4, 1e-7, 0.01, 1e-11, ("beam", "spring"),
+    FitParameter("radius", None, 1e-9, 1e-4, 1e-7, 0.01, 1e-11, ("beam", "spring"),
                  "effective radius R (the data fix A*R; A is given)"),
-    FitParameter("xi", "kg/s", 0.0, 10.0, 1e-2, 0.02, 2e-4, ("beam",),
+    FitParameter("xi", None, None, 10.0, 1e-2, 0.02, 2e-4, ("beam",),
                  "viscous tip friction coefficient (eq 28)", True),
-    FitParameter("zeta", "kg/(s N^2)", 0.0, 1e20, 1e14, 0.02, 1e12, ("beam",),
+    FitParameter("zeta", None, None, None, 1e14, 0.02, 1e12, ("beam",),
                  "load-proportional friction coefficient (friction='load')", True),
-    FitParameter("z0", "m", 0.1e-9, 2e-9, 1e-9, 0.005, 1e-13, ("beam", "spring"),
+    FitParameter("z0", None, 0.1e-9, 2e-9, 1e-9, 0.005, 1e-13, ("beam", "spring"),
                  "soft-wall length of eq 2"),
-    FitParameter("viscosity", "Pa s", 0.0, 1.0, 1e-4, 0.02, 1e-6, ("beam", "spring"),
+    FitParameter("viscosity", None, None, 1.0, 1e-4, 0.02, 1e-6, ("beam", "spring"),
                  "fluid viscosity (drainage)", True),
-    FitParameter("mass", "kg", 1e-15, 1e-5, 1e-9, 0.02, 1e-16, ("spring",),
+    FitParameter("mass", None, 1e-15, None, 1e-9, 0.02, 1e-16, ("spring",),
                  "effective mass of the simple spring (inertia)"),
-    FitParameter("m_joint", "kg", 1e-15, 1e-5, 1e-10, 0.02, 1e-16, ("beam",),
+    FitParameter("m_joint", None, 1e-15, None, 1e-10, 0.02, 1e-16, ("beam",),
                  "point mass at the beam-base joint (inertia)"),
     # liquids (issue 25; docs/liquid.md)
-    FitParameter("slip_length", "m", 0.0, 1e-6, 1e-9, 0.02, 2e-11, ("beam", "spring"),
+    FitParameter("slip_length", None, None, None, 1e-9, 0.02, 2e-11, ("beam", "spring"),
                  "slip length b of the drainage force (Vinogradova f*)"),
-    FitParameter("spring_constant", "N/m", 1e-4, 1e3, 0.1, 0.002, 1e-6, ("spring",),
+    FitParameter("spring_constant", None, None, None, 0.1, 0.002, 1e-6, ("spring",),
                  "spring constant k, in situ (the drainage force fixes it: eta and R are given)"),
-    FitParameter("k0", "N/m", 1e-4, 1e3, 0.1, 0.002, 1e-6, ("beam",),
+    FitParameter("k0", None, None, None, 0.1, 0.002, 1e-6, ("beam",),
                  "intrinsic spring constant of the beam, in situ (from the drainage force)"),
-    FitParameter("lever_drag", "N s/m", 0.0, 1.0, 1e-5, 0.02, 1e-8, ("beam", "spring"),
+    FitParameter("lever_drag", None, None, None, 1e-5, 0.02, 1e-8, ("beam", "spring"),
                  "drag coefficient of the lever body (approach and retract together fix it)"),
-    FitParameter("surface_potential", "V", -1.0, 1.0, 0.01, 0.01, 1e-5, ("beam", "spring"),
+    FitParameter("surface_potential", None, None, None, 0.01, 0.01, 1e-5, ("beam", "spring"),
                  "surface potential psi1 (double layer)"),
-    FitParameter("debye_length", "m", 1e-10, 1e-5, 1e-8, 0.01, 1e-12, ("beam", "spring"),
+    FitParameter("debye_length", None, None, None, 1e-8, 0.01, 1e-12, ("beam", "spring"),
                  "Debye length of the double layer"),
 )}
 
 
-def check_free(free, model: str) -> tuple[str, ...]:
-    """Validate the free parameter names for ``model``; returns them as a tuple.
+def check_free(free, model: str, friction: str | None = None) -> tuple[str, ...]:
+    """Validate the free parameter names for ``model`` (and its ``friction`` law); returns them.
 
     Raises
     ------
     ParameterError
-        Unknown name, a parameter without effect in this model, or both
-        ``hamaker`` and ``radius`` (only their product is determined).
+        Unknown name, a parameter without effect in this model or friction law
+        (``xi`` with ``friction="none"``: the fit would report its start value with
+        no error), or both ``hamaker`` and ``radius`` (only their product is determined).
     """
     names = tuple(dict.fromkeys(n.strip() for n in free if n.strip()))
     if not names:
@@ -114,7 +136,17 @@ def check_free(free, model: str) -> tuple[str, ...]:
             why = " (the spring model has no lateral motion, hence no friction)" \
                 if n in ("xi", "zeta") else ""
             raise ParameterError(f"{n} has no effect in the {model} model{why}; "
-                                 f"use --model {PARAMETERS[n].models[0]} or drop it from --free")
+                                 f"use `model` {PARAMETERS[n].models[0]} or drop it from `free`")
+    if friction is not None:
+        from ..dynamics.registries import FRICTION_LAWS
+
+        law = FRICTION_LAWS[friction]
+        for n in names:
+            if n in ("xi", "zeta") and n not in law.parameters:
+                uses = [k for k, v in FRICTION_LAWS.items() if n in v.parameters]
+                raise ParameterError(f"{n} has no effect with the friction law {friction!r}: the fit cannot "
+                                     f"determine it; choose friction {' or '.join(map(repr, uses))}, or drop it "
+                                     "from the free parameters")
     if "hamaker" in names and "radius" in names:
         raise ParameterError("hamaker and radius cannot both be free: the van der Waals force "
                              "fixes only A*R; free one and give the other")

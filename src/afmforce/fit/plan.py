@@ -73,6 +73,20 @@ class Plan:
         return "\n".join(L) + "\n"
 
 
+def check_plan_size(base, speeds: Sequence[float], sample_rates: Sequence[float], n_curves: int) -> None:
+    """Refuse a design too large to weigh before any curve is simulated (:func:`afmforce.limits.check_design`):
+    the speeds, the curves, the designs and the samples of all candidate curves (approach and retract)."""
+    from .._fields import check
+    from ..limits import check_design
+
+    for v, rate in zip(speeds, sample_rates):
+        check("velocity", v)
+        check("sample_rate", rate)
+    d = base.drive
+    samples = sum(rate * ((d.turn - d.start) + (d.turn - d.end)) / v for v, rate in zip(speeds, sample_rates))
+    check_design(len(speeds), n_curves, samples)
+
+
 def curve_information(base, speeds: Sequence[float], sample_rates: Sequence[float],
                       noise: float, free=("hamaker", "xi")) -> list[np.ndarray]:
     """Fisher information on ``free`` [SI] of one noiseless curve per speed (nuisances profiled)."""
@@ -168,6 +182,7 @@ def plan_experiment(model="beam", *, xi: float | None = None, noise: float = 0.0
         points_per_nm * v * 1e9 for v in speeds]
     if len(rates) != len(speeds):
         raise ParameterError(f"{len(rates)} sample rates for {len(speeds)} speeds")
+    check_plan_size(base, speeds, rates, n_curves)
     infos = curve_information(base, speeds, rates, noise)
     cands = []
     for v, fs, F in zip(speeds, rates, infos):

@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import ParameterError
 from .core import base_config
-from .plan import curve_information
+from .plan import check_plan_size, curve_information
 
 __all__ = ["SlipPlan", "plan_slip"]
 
@@ -69,11 +69,12 @@ def plan_slip(model="spring", *, target: float, noise: float = 0.05e-9,
     """
     base = base_config(model, **fields)
     if not base.surface.slip_length > 0 or not base.viscosity > 0:
-        raise ParameterError("plan --slip-target needs the slip length to expect (> 0) and a "
-                             "viscosity (--slip-length 3nm --medium water)")
+        raise ParameterError("planning the slip length (`slip_target`) needs the slip length to expect (> 0) and a "
+                             "viscosity (`slip_length`, and `viscosity` or `medium`)")
     if target <= 0 or noise <= 0 or n_curves < 2 or len(speeds) < 2:
         raise ParameterError("plan needs target > 0 [m], noise > 0 [m], n_curves >= 2 and >= 2 speeds")
     speeds = sorted(float(v) for v in speeds)
+    check_plan_size(base, speeds, [points_per_nm * v * 1e9 for v in speeds], n_curves)
     k_name = "spring_constant" if base.model == "spring" else "k0"
     infos = curve_information(base, speeds, [points_per_nm * v * 1e9 for v in speeds], noise,
                               free=("slip_length", k_name))

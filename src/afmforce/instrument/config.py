@@ -23,14 +23,13 @@ The same tables may sit under an ``[instrument]`` table of a larger file.
 from __future__ import annotations
 
 import dataclasses
-import math
 import os
 import tomllib
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from ..errors import FileFormatError, ParameterError, UnitError
-from ..units import DIMENSIONS, parse_quantity
+from ..errors import FileFormatError, ParameterError
+from ..units import DIMENSIONS, parse_value
 from .instrument import COMPONENTS, Instrument
 from .presets import get_preset
 
@@ -94,41 +93,17 @@ PARAMETERS: dict[str, Parameter] = _table()
 
 
 def _scalar(value: Any, p: Parameter, where: str):
-    if p.dimension == "integer":
-        try:
-            f = float(value)
-        except (TypeError, ValueError):
-            raise ParameterError(f"{where} expects a whole number, got {value!r}") from None
-        if not f.is_integer():
-            raise ParameterError(f"{where} expects a whole number, got {value!r}")
-        return int(f)
     if isinstance(value, bool):
         raise ParameterError(f"{where} expects a number, got {value!r}")
+    if p.dimension == "integer":
+        return parse_value(value, "integer", where)
     if isinstance(value, (int, float)):
         return float(value)
     if not isinstance(value, str):
         raise ParameterError(f"{where} expects a number or a value with units, got {value!r}")
     if p.dimension in DIMENSIONS:
-        return parse_quantity(value, p.dimension, where)
-    if p.dimension == "voltage_rate":
-        return _parse_rate(value, where)
+        return parse_value(value, p.dimension, where)
     raise ParameterError(f"{where}: unknown dimension {p.dimension!r}")  # pragma: no cover
-
-
-def _parse_rate(text: str, where: str) -> float:
-    try:
-        return float(text)
-    except ValueError:
-        pass
-    from ..units import _registry
-
-    try:
-        value = float(_registry().Quantity(text.strip().replace("µ", "u")).to("V/s").magnitude)
-    except Exception:
-        raise UnitError(f"{where} expects a signal drift rate such as 0.2V/s, got {text}") from None
-    if not math.isfinite(value):
-        raise UnitError(f"{where} expects a finite drift rate, got {text}")
-    return value
 
 
 def parse_parameter(key: str, value: Any, where: str | None = None):

@@ -14,6 +14,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from .._fields import QUANTITIES
 from ..errors import FileFormatError, MissingMetadataError, ParameterError
 from .curve import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
 
@@ -90,7 +91,7 @@ def parse_meta_args(items) -> dict[str, Any]:
     Values with units are parsed in the key's unit (:data:`METADATA`); a plain
     number is taken as SI. Raises ParameterError for an unknown key or a bad value.
     """
-    from ..units import parse_quantity
+    from ..units import parse_value
 
     out: dict[str, Any] = {}
     for item in items or ():
@@ -101,7 +102,9 @@ def parse_meta_args(items) -> dict[str, Any]:
         if key not in METADATA:
             raise ParameterError(f"--meta {key}: unknown metadata key; known keys: {', '.join(sorted(METADATA))}")
         dim = _DIMENSION.get(METADATA[key].unit)
-        out[key] = parse_quantity(value.strip(), dim, f"--meta {key}") if dim else value.strip()
+        out[key] = parse_value(value.strip(), dim, f"--meta {key}") if dim else value.strip()
+        if key in QUANTITIES:   # the same range as the flag (--spring-constant) and the records
+            QUANTITIES[key].check(out[key], key, f"--meta {key}", typed=value.strip())
     return check_meta_override(out)
 
 
@@ -124,6 +127,8 @@ def check_meta_override(meta_override: Mapping[str, Any] | None) -> dict[str, An
             out[name] = field.validate(value)
         except (TypeError, ValueError) as exc:
             raise ParameterError(f"metadata {name} [{field.unit}] {exc}, got {value!r}") from None
+        if name in QUANTITIES:
+            QUANTITIES[name].check(out[name], name)
     return out
 
 

@@ -18,7 +18,7 @@ from ..errors import ParameterError
 from ..progress import Progress
 from .numbers import KINDS, MAX_TOLERANCE, CheckResult, evaluate_checks
 
-__all__ = ["FIGURES", "ReproduceResult", "reproduce", "report_markdown"]
+__all__ = ["FIGURES", "ReproduceResult", "planned_files", "reproduce", "report_markdown"]
 
 
 def _fig(name):
@@ -158,6 +158,22 @@ def report_markdown(checks: list[CheckResult], figures: dict[str, list[Path]], o
             lines += [f"### {FIGURES[key][1]}", "", f"![{key}]({png[0].relative_to(out_dir).as_posix()})", ""]
     lines += ["", DECISIONS]
     return "\n".join(lines)
+
+
+def planned_files(only: list[str] | None = None, svg: bool = False) -> list[str]:
+    """The names of the files :func:`reproduce` writes into its folder (figures and reports).
+
+    Raises
+    ------
+    ParameterError
+        An unknown figure key in ``only``.
+    """
+    keys = list(FIGURES) if only is None else list(only)
+    bad = [k for k in keys if k not in FIGURES]
+    if bad:
+        raise ParameterError(f"unknown figure(s) {', '.join(bad)}; choose from {', '.join(FIGURES)}")
+    return [f"{FIGURES[k][0]}.{ext}" for k in keys for ext in (("png", "svg") if svg else ("png",))] + [
+        "report.md", "report.json"]
 
 
 def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None = None, fast: bool = False,

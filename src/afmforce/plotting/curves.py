@@ -12,6 +12,7 @@ import math
 
 import numpy as np
 
+from .._files import display_path
 from .. import forces
 from ..analysis.result import AnalysisResult
 from ..io.curve import RawCurve
@@ -325,7 +326,7 @@ def plot_summary(result: AnalysisResult, curve: RawCurve | None = None, fig=None
     else:
         plot_residuals(result, axes[1, 0])
     plot_spectrum(result, axes[1, 1])
-    name = result.source.rsplit("/", 1)[-1] if result.source else "force curve"
+    name = display_path(result.source.rsplit("/", 1)[-1]) if result.source else "force curve"
     adh = (f"adhesion {result.adhesion_force * 1e9:.3g} nN" if math.isfinite(result.adhesion_force)
            else "no adhesion above the noise")
     ad = result.details.get("adhesion")

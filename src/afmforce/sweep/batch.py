@@ -17,6 +17,7 @@ import traceback
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+from .._files import display_path
 from ..errors import ParameterError
 from ..progress import Progress
 from .chunks import _check_errors, _error_text, _func_name, _open_store, execute, flatten
@@ -48,18 +49,18 @@ def _item_chunk(func: Callable, start: int, items: list, labels: list[str], reco
 def error_record(exc: BaseException) -> dict[str, str]:
     """The columns of a failed item's (or curve's) row: ``error`` (``Type: message``), ``error_type``
     (the exception's class name) and ``traceback`` (shown with ``--debug``)."""
-    return {"error": _error_text(exc), "error_type": type(exc).__name__,
+    return {"error": display_path(_error_text(exc)), "error_type": type(exc).__name__,
             "traceback": traceback.format_exc() if exc is sys.exc_info()[1] else
             "".join(traceback.format_exception(type(exc), exc, exc.__traceback__))}
 
 
 def _default_label(item: Any, index: int) -> str:
     if isinstance(item, (str, os.PathLike)):
-        return str(item)
+        return display_path(item)
     for attr in ("path", "name", "label"):
         value = getattr(item, attr, None)
         if isinstance(value, (str, os.PathLike)):
-            return str(value)
+            return display_path(value)
     return f"item {index}"
 
 
@@ -69,7 +70,8 @@ def batch_key(func: Callable, paths: list) -> str:
     for p in paths:
         path = Path(p).resolve()
         st = path.stat() if path.exists() else None
-        h.update(f"{path}|{st.st_size if st else -1}|{st.st_mtime_ns if st else -1}\n".encode())
+        line = f"{path}|{st.st_size if st else -1}|{st.st_mtime_ns if st else -1}\n"
+        h.update(line.encode("utf-8", "surrogateescape"))      # a file name that is not UTF-8 too
     return h.hexdigest()
 
 
@@ -113,7 +115,7 @@ def run_batch(items: Iterable, func: Callable[[Any], Any], *, chunk_size: int | 
             if not group:
                 return
             if i not in skipped:
-                labels = [label(x, i * size + j) for j, x in enumerate(group)]
+                labels = [display_path(label(x, i * size + j)) for j, x in enumerate(group)]
                 in_flight[i] = labels
                 yield i, (func, i * size, group, labels, errors == "record"), len(group)
 

@@ -177,7 +177,12 @@ def execute(task_fn: Callable, make_tasks: Callable[[set[int]], Iterable], *, ex
     ``warmup()`` runs once on every worker of a Dask cluster before the first chunk.
     """
     t0 = time.perf_counter()
-    ex, owned = make_executor(executor, workers=workers, scheduler=scheduler, warmup=warmup)
+    try:
+        ex, owned = make_executor(executor, workers=workers, scheduler=scheduler, warmup=warmup)
+    except BaseException:
+        if store is not None:
+            store.discard_if_empty()      # a new store with no work in it: no manifest left behind
+        raise
     try:
         if store is not None:
             store.lock()
@@ -187,6 +192,15 @@ def execute(task_fn: Callable, make_tasks: Callable[[set[int]], Iterable], *, ex
         frames, failures, ran = _drive(task_fn, make_tasks(skipped), executor=ex, store=store, totals=totals,
                                        skipped=skipped, progress=progress, describe=describe)
         description = ex.description if ran else "none (all chunks stored)"
+    except BaseException:
+        if owned:
+            ex.close(quiet=True)
+            owned = False
+        if store is not None:
+            store.unlock()
+            store.discard_if_empty()
+            store = None
+        raise
     finally:
         if owned:
             ex.close()

@@ -8,16 +8,21 @@ other tasks go on; ``KeyboardInterrupt`` stops everything.
 
 from __future__ import annotations
 
+import contextlib
 import itertools
 import logging
+import re
+import signal
+import threading
 import traceback
+import warnings
 from dataclasses import dataclass
 from typing import Any, Callable, Hashable, Iterable, Iterator
 
 from .._cores import available_cores
 from ..errors import ParameterError
 
-__all__ = ["Outcome", "SerialExecutor", "DaskExecutor", "make_executor", "available_cores"]
+__all__ = ["Outcome", "SerialExecutor", "DaskExecutor", "make_executor", "available_cores", "check_scheduler"]
 
 
 @dataclass(frozen=True)
@@ -47,7 +52,7 @@ class SerialExecutor:
             else:
                 yield Outcome(key, value)
 
-    def close(self) -> None:
+    def close(self, quiet: bool = False) -> None:
         """Nothing to release."""
 
     def __enter__(self):
@@ -55,6 +60,39 @@ class SerialExecutor:
 
     def __exit__(self, *exc) -> None:
         self.close()
+
+
+#: A Dask scheduler address: ``tcp://host:port``, ``host:port``, ``tls://...``, ``inproc://...``.
+_SCHEDULER = re.compile(r"^(?:(?:tcp|tls|inproc|ucx|ws|wss)://)?[A-Za-z0-9._\-\[\]:]+(?::\d{1,5})?/?$")
+
+
+def check_scheduler(address: str) -> str:
+    """Refuse a Dask scheduler address that is not one (before any store or cluster is made).
+
+    Raises
+    ------
+    ParameterError
+    """
+    text = str(address).strip()
+    if not text or not _SCHEDULER.match(text):
+        raise ParameterError(f"`scheduler` {address!r} is not a Dask scheduler address; give one such as "
+                             "tcp://127.0.0.1:8786 (printed by `dask scheduler`)")
+    return text
+
+
+@contextlib.contextmanager
+def _workers_ignore_sigint():
+    """Start worker processes with Ctrl-C (SIGINT) ignored: the terminal sends it to the whole
+    process group, and only this process should stop (with one line), not print a traceback
+    per worker. Spawned processes inherit an ignored signal; the main thread only can set it."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    previous = signal.signal(signal.SIGINT, signal.SIG_IGN)
+    try:
+        yield
+    finally:
+        signal.signal(signal.SIGINT, previous)
 
 
 class DaskExecutor:
@@ -75,9 +113,11 @@ class DaskExecutor:
     def __init__(self, workers: int | None = None, scheduler: str | None = None, client=None,
                  window: int | None = None, warmup: Callable[[], Any] | None = None) -> None:
         if workers is not None and int(workers) < 1:
-            raise ParameterError(f"--workers must be at least 1, got {workers}")
+            raise ParameterError(f"`workers` must be at least 1, got {workers}")
         if client is not None and scheduler is not None:
             raise ParameterError("give a scheduler address or a client, not both")
+        if scheduler is not None:
+            check_scheduler(scheduler)
         self.workers = None if workers is None else int(workers)
         self.scheduler = scheduler
         self._client = client
@@ -95,9 +135,9 @@ class DaskExecutor:
             if self.scheduler:
                 try:
                     self._client = Client(self.scheduler, timeout="20s")
-                except (OSError, TimeoutError) as exc:
+                except (OSError, TimeoutError, ValueError, TypeError) as exc:
                     raise ParameterError(
-                        f"--scheduler {self.scheduler}: cannot reach the Dask scheduler ({exc}); "
+                        f"`scheduler` {self.scheduler}: cannot reach the Dask scheduler ({exc}); "
                         "check the address or start one with `dask scheduler`"
                     ) from None
             else:
@@ -105,7 +145,10 @@ class DaskExecutor:
 
                 # no dashboard, so no statistical profiler either: it samples the
                 # task thread every 10 ms and slows short compiled runs measurably
-                with dask.config.set({"distributed.worker.profile.enabled": False}):
+                with dask.config.set({"distributed.worker.profile.enabled": False}), _workers_ignore_sigint(), \
+                        warnings.catch_warnings():
+                    # another cluster on this machine holds the HTTP port: dask takes another one itself
+                    warnings.filterwarnings("ignore", message="Port .* is already in use")
                     self._cluster = LocalCluster(
                         n_workers=self.workers or available_cores(), threads_per_worker=1, processes=True,
                         host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR,
@@ -176,14 +219,27 @@ class DaskExecutor:
             for future in list(done.futures):
                 future.cancel()
 
-    def close(self) -> None:
-        """Close the client and the local cluster this executor started."""
-        if self._own_client and self._client is not None:
-            self._client.close()
-            self._client = None
-        if self._cluster is not None:
-            self._cluster.close()
-            self._cluster = None
+    def close(self, quiet: bool = False) -> None:
+        """Close the client and the local cluster this executor started.
+
+        ``quiet``: after an interruption (Ctrl-C) or an error, the cluster's own log
+        lines about the tasks it cancels are not printed (the caller reports one line).
+        """
+        loggers = [logging.getLogger(n) for n in ("distributed", "tornado", "asyncio")] if quiet else []
+        levels = [lg.level for lg in loggers]
+        for lg in loggers:
+            lg.setLevel(logging.CRITICAL + 1)
+        try:   # a second Ctrl-C (every worker's, or the user's again) must not break the shutdown half-way
+            with _workers_ignore_sigint() if quiet else contextlib.nullcontext():
+                if self._own_client and self._client is not None:
+                    self._client.close()
+                    self._client = None
+                if self._cluster is not None:
+                    self._cluster.close()
+                    self._cluster = None
+        finally:
+            for lg, level in zip(loggers, levels):
+                lg.setLevel(level)
 
     def __enter__(self):
         return self
@@ -202,12 +258,12 @@ def make_executor(executor=None, *, workers: int | None = None, scheduler: str |
     ``warmup`` is passed to a cluster this function creates.
     """
     if workers is not None and scheduler:
-        raise ParameterError("--workers sizes the local cluster; a --scheduler cluster has its own workers")
+        raise ParameterError("`workers` sizes the local cluster; a `scheduler` cluster has its own workers")
     if executor is None or executor in ("dask", "local"):
         return DaskExecutor(workers=workers, scheduler=scheduler, warmup=warmup), True
     if executor == "serial":
         if scheduler:
-            raise ParameterError("--serial and --scheduler exclude each other")
+            raise ParameterError("`serial` and `scheduler` exclude each other")
         return SerialExecutor(), True
     if hasattr(executor, "imap_unordered"):
         return executor, False

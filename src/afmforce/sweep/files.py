@@ -26,7 +26,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
-from .._files import atomic_path, atomic_write_text
+from .._files import atomic_path, atomic_write_text, display_path
 from ..errors import FileFormatError, OutputExistsError
 from .batch import error_record, run_batch
 from .results import BatchResult
@@ -258,7 +258,7 @@ class CurveAnalysis:
             except OutputExistsError:
                 raise
             except Exception as exc:
-                rows.append({"name": f"{base}#{index}", "file": ref.path, "curve": int(index), **error_record(exc)})
+                rows.append({"name": f"{display_path(base)}#{index}", "file": display_path(ref.path), "curve": int(index), **error_record(exc)})
         return rows
 
     def analyze_curve(self, ref: CurveRef, index: int, curve, several: bool) -> dict[str, Any]:
@@ -277,7 +277,9 @@ class CurveAnalysis:
                     "metadata); choose another --out, or pass --force to replace it")
         res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
                       channel=self.channel)
-        row = summary_row(res, curve, file=ref.path, index=index, name=f"{base}#{index}" if several else base)
+        shown = display_path(base)      # a file name that is not UTF-8: \xNN in the tables
+        row = summary_row(res, curve, file=display_path(ref.path), index=index,
+                          name=f"{shown}#{index}" if several else shown)
         if self.keep_json:
             row["json"] = res.to_json(indent=None, arrays=self.json_arrays)
         if self.out is not None:
@@ -369,7 +371,7 @@ def analysis_key(refs: list[CurveRef], analysis: CurveAnalysis) -> str:
             path = Path(ref.path).resolve()
             st = path.stat() if path.exists() else None
             stats[ref.path] = f"{path}|{st.st_size if st else -1}|{st.st_mtime_ns if st else -1}"
-        h.update(f"{stats[ref.path]}|{ref.index}\n".encode())
+        h.update(f"{stats[ref.path]}|{ref.index}\n".encode("utf-8", "surrogateescape"))
     return h.hexdigest()
 
 

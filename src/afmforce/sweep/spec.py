@@ -4,7 +4,7 @@ A :class:`SweepSpec` turns into a parameter table (:meth:`SweepSpec.table`),
 one row per run, whose columns are the keyword arguments of the function the
 sweep calls. Values are SI floats (or text, e.g. ``model = "spring"``); the
 command line and TOML files accept units through
-:func:`afmforce.units.parse_quantity`.
+:func:`afmforce.units.parse_value`.
 
 Text forms (command line and TOML)::
 
@@ -29,7 +29,8 @@ from typing import Any, Callable, Mapping
 import numpy as np
 
 from ..errors import ParameterError
-from ..units import parse_quantity
+from ..limits import MAX_RUNS, check_count
+from ..units import normalize_number_text, parse_value
 
 __all__ = [
     "GridAxis",
@@ -43,7 +44,7 @@ __all__ = [
     "chunk_size_from_config",
 ]
 
-#: Parameter name -> dimension for :func:`afmforce.units.parse_quantity`, or
+#: Parameter name -> dimension for :func:`afmforce.units.parse_value`, or
 #: ``None`` for a text parameter. A sweep over an unlisted name is refused.
 Dimensions = Mapping[str, "str | None"]
 
@@ -165,6 +166,9 @@ class SweepSpec:
             raise ParameterError(f"--sample {self.sample} needs at least one --range name=lo:hi")
         if not self.grid and not self.ranges:
             raise ParameterError("nothing to sweep: give at least one --grid or --range")
+        check_count("runs", self.n_runs, MAX_RUNS, "runs in one sweep")   # before the table is built
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
+            raise ParameterError(f"seed must be a whole number >= 0 (the sampler's seed), got {self.seed!r}")
 
     @property
     def is_grid(self) -> bool:
@@ -231,10 +235,10 @@ def _value(name: str, text: Any, dimensions: Dimensions | None, where: str):
         return float(text)
     if dim is None:  # generic use without a dimension table: a plain number or text
         try:
-            return float(text)
+            return float(normalize_number_text(text))
         except ValueError:
             return str(text).strip()
-    return parse_quantity(str(text).strip(), dim, f"{where} {name}")
+    return parse_value(str(text).strip(), dim, f"{where} {name}")
 
 
 def _split(item: str, flag: str) -> tuple[str, str]:
@@ -260,6 +264,7 @@ def _grid_from_text(name: str, rest: str, dimensions: Dimensions | None, flag: s
         raise ParameterError(f"{flag} {name}: the number of values must be an integer, got {parts[2]!r}") from None
     if isinstance(lo, str) or isinstance(hi, str):
         raise ParameterError(f"{flag} {name}: a spaced grid needs numeric bounds")
+    check_count(f"{flag} {name}", n, MAX_RUNS, "values")      # before the axis is allocated
     return GridAxis.spaced(name, lo, hi, n, log=spacing == "log")
 
 

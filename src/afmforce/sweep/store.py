@@ -85,7 +85,21 @@ class SweepStore:
         store.chunk_dir.mkdir(parents=True, exist_ok=True)
         record = dict(manifest, key=key, kind=kind, chunk_size=int(chunk_size))
         atomic_write_text(store.root / "manifest.json", json.dumps(record, indent=2, default=repr))
+        store.created = True
         return store
+
+    #: Whether :meth:`open` created this store in this process (a new, not a resumed, store).
+    created: bool = False
+
+    def discard_if_empty(self) -> bool:
+        """Remove a store this process created if it holds no chunk and no failure record
+        (a run that failed before any work: no manifest is left behind). Returns whether it did."""
+        if not self.created or self.completed() or self.failures():
+            return False
+        import shutil
+
+        shutil.rmtree(self.root, ignore_errors=True)
+        return True
 
     def manifest(self) -> dict | None:
         """The stored manifest, or None for a new store."""

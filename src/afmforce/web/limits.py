@@ -11,9 +11,8 @@ from __future__ import annotations
 __all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
            "MAX_CURVES", "SESSION_TTL"]
 
-#: Samples one simulated cycle may have (a cycle of 10 s at 100 kHz; about 140 MB of trajectory).
-# TODO(merge): use the library's cap (the sample-count cap shared with the CLI).
-MAX_SAMPLES = 1_000_000
+#: Samples one simulated cycle may have: the library's one cap, shared with the CLI and the records.
+from ..limits import MAX_SAMPLES  # noqa: E402
 #: Samples per column one simulation response may carry (``max_points``; the page draws 2,000-5,000).
 RESPONSE_POINTS = 20_000
 #: Per-sample values (all curves together) one analysis response may carry with ``arrays``.

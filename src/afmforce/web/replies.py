@@ -15,7 +15,7 @@ import logging
 import re
 from typing import Any
 
-from ..errors import AfmforceError
+from ..errors import AfmforceError, render_keys
 
 __all__ = ["error_body", "error_bytes", "install", "JobStartError", "PastBudget"]
 
@@ -25,8 +25,9 @@ _LOG = logging.getLogger("afmforce.web")
 
 
 def error_body(type: str, message: str, field: str | None = None) -> dict[str, Any]:
-    """``{"error": {"type", "message", "field"}}``."""
-    return {"error": {"type": type, "message": message, "field": field}}
+    """``{"error": {"type", "message", "field"}}``; the quantities a library message names
+    (`` `key` ``) are shown as the web's field names (the keys themselves)."""
+    return {"error": {"type": type, "message": render_keys(message, lambda key: key), "field": field}}
 
 
 def error_bytes(type: str, message: str, field: str | None = None) -> bytes:

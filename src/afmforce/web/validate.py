@@ -130,6 +130,25 @@ def _too_many(n: float, field: str | None) -> FieldError:
                              "request may simulate; lower sample_rate, raise velocity or shorten the drive")
 
 
+def _samples_of(values: dict[str, Any]) -> float | None:
+    """Samples of the cycle ``values`` describe, also when the record refuses it for its size
+    (its drive at 1 Hz, times the sample rate); None when the drive itself is refused."""
+    from ..dynamics import SimulationConfig
+
+    from ..limits import simulation_samples
+
+    default = SimulationConfig()
+    d = {k: values.get(k, getattr(default.drive, k)) for k in
+         ("start", "turn", "end", "velocity", "retract_velocity", "dwell")}
+    try:
+        n = simulation_samples(float(d["start"]), float(d["turn"]), float(d["end"]), float(d["velocity"]),
+                               None if d["retract_velocity"] is None else float(d["retract_velocity"]),
+                               float(d["dwell"]), float(values.get("sample_rate", default.solver.sample_rate)))
+    except (TypeError, ValueError, ZeroDivisionError):
+        return None
+    return abs(n)
+
+
 def build_config(flat: Any, prefix: str = ""):
     """The checked :class:`~afmforce.dynamics.SimulationConfig` of a request's flat names.
 
@@ -140,7 +159,14 @@ def build_config(flat: Any, prefix: str = ""):
     from ..dynamics import SimulationConfig
 
     values = flat_config(flat, prefix)
-    cfg = SimulationConfig(**values)
+    try:
+        cfg = SimulationConfig(**values)
+    except ParameterError:
+        # the record refuses a cycle over the cap itself (afmforce.limits): name the field that sets it
+        n = _samples_of(values)
+        if n is not None and (not math.isfinite(n) or n > MAX_SAMPLES):
+            raise _too_many(n, f"{prefix}sample_rate") from None
+        raise
     n = cycle_samples(cfg)
     if not math.isfinite(n) or n > MAX_SAMPLES:
         raise _too_many(n, f"{prefix}sample_rate")
@@ -275,10 +301,8 @@ def _check_samples(fixed: dict[str, Any], values: dict[str, Iterable]) -> None:
     if "model" in values:
         base.pop("model", None)
     for combo in product(*(swept[k] for k in names)):
-        try:
-            cfg = SimulationConfig(**{**base, **dict(zip(names, combo))})
-        except ParameterError:
+        n = _samples_of({**base, **dict(zip(names, combo))})
+        if n is None:
             continue            # an impossible combination fails as that run, not the request
-        n = cycle_samples(cfg)
         if not math.isfinite(n) or n > MAX_SAMPLES:
             raise _too_many(n, "grid")

@@ -1,0 +1,118 @@
+"""Caps on the work one request may ask for, declared once for every face.
+
+The command line, the web application and the Python records
+(:class:`~afmforce.dynamics.SimulationConfig`) refuse the same sizes with the
+same message, before anything is allocated or computed. A cap is a size no
+force measurement needs (a real force curve has at most ~1e6 samples) and
+that would exhaust the memory or the patience of the machine.
+
+This module imports nothing heavy: the command line checks with it while parsing.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .errors import ParameterError
+
+__all__ = ["MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+           "MAX_DESIGNS", "MAX_GRID_POINTS", "CONFIRM_GRID_POINTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
+
+#: The most samples one simulated cycle may have, on every face (CLI, web, records): twice the
+#: largest real force curve (~1e6 samples), about 180 MB of trajectory. One cap for all faces
+#: (issues 31, 33): the web server shares it, so it must be safe for a server too.
+MAX_SAMPLES = 2_000_000
+#: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
+CONFIRM_RUNS = 100_000
+#: The most runs of one sweep, even with a yes (its parameter table is built before any run).
+MAX_RUNS = 5_000_000
+#: The most curves one measurement design (``plan``) may choose.
+MAX_DESIGN_CURVES = 20
+#: The most candidate speeds one measurement design may weigh.
+MAX_SPEEDS = 40
+#: The most designs (choices of curves among the candidate speeds, repeats allowed) one plan weighs.
+MAX_DESIGNS = 1_000_000
+#: The most samples of all candidate curves of one design together (``plan``; each is simulated).
+MAX_PLAN_SAMPLES = 20_000_000
+#: The most grid points (one simulation each) of one precomputed parameter grid (``explore``).
+MAX_GRID_POINTS = 10_000
+#: Grids of more points than this need an explicit yes (``explore --yes``): each point is a simulation.
+CONFIRM_GRID_POINTS = 100
+
+#: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
+_BYTES_PER_SAMPLE = 88
+
+
+def simulation_samples(start: float, turn: float, end: float, velocity: float,
+                       retract_velocity: float | None, dwell: float, sample_rate: float) -> float:
+    """Samples of one cycle: (approach + retract) / speed + dwell, times the sample rate [-]."""
+    retract = velocity if retract_velocity is None else retract_velocity
+    return ((turn - start) / velocity + (turn - end) / retract + dwell) * sample_rate
+
+
+def _memory(n_bytes: float) -> str:
+    return next(f"{n_bytes / f:.3g} {u}" for f, u in ((1e15, "PB"), (1e12, "TB"), (1e9, "GB"), (1e6, "MB"))
+                if n_bytes >= f or u == "MB")
+
+
+def check_samples(n: float, where: str = "") -> None:
+    """Refuse a cycle of more than :data:`MAX_SAMPLES` samples before anything is allocated.
+
+    Raises
+    ------
+    ParameterError
+        Naming the quantities that set the count (sample_rate, velocity, the drive).
+    """
+    if not math.isfinite(n) or n > MAX_SAMPLES:
+        raise ParameterError(
+            f"{where}the cycle would have about {n:.3g} samples ({_memory(n * _BYTES_PER_SAMPLE)} of "
+            f"trajectory), more than the {MAX_SAMPLES:.0e} a run may have; lower `sample_rate`, raise "
+            "`velocity` or shorten the drive (`start`, `turn`, `end`)")
+
+
+def check_count(name: str, n: float, cap: int, what: str) -> None:
+    """Refuse ``n`` > ``cap`` (``name``: what is counted, a quantity as `` `key` ``, e.g. `` `n_curves` ``;
+    ``what``: the unit counted)."""
+    if not math.isfinite(n) or n > cap:
+        raise ParameterError(f"{name}: {n:,.0f} {what} is more than the {cap:,} one request may ask for")
+
+
+def check_design(n_speeds: int, n_curves: int, samples: float) -> None:
+    """Refuse a measurement design too large to weigh, before any curve is simulated.
+
+    Parameters
+    ----------
+    n_speeds : int
+        Candidate speeds (at most :data:`MAX_SPEEDS`).
+    n_curves : int
+        Curves in a design (at most :data:`MAX_DESIGN_CURVES`); the designs,
+        ``C(n_speeds + n_curves - 1, n_curves)``, at most :data:`MAX_DESIGNS`.
+    samples : float
+        Samples of all candidate curves together (at most :data:`MAX_PLAN_SAMPLES`).
+    """
+    check_count("`speeds`", n_speeds, MAX_SPEEDS, "candidate speeds")
+    check_count("`n_curves`", n_curves, MAX_DESIGN_CURVES, "curves in a design")
+    designs = math.comb(n_speeds + n_curves - 1, n_curves) if n_speeds > 0 and n_curves > 0 else 0
+    if designs > MAX_DESIGNS:
+        raise ParameterError(f"{n_curves} curves among {n_speeds} candidate speeds make {designs:,} designs to "
+                             f"weigh, more than {MAX_DESIGNS:,}; give fewer speeds or curves")
+    if not math.isfinite(samples) or samples > MAX_PLAN_SAMPLES:
+        raise ParameterError(f"the candidate curves would have about {samples:.3g} samples together, more than "
+                             f"{MAX_PLAN_SAMPLES:.0e}; lower `points_per_nm` (or the sample rates) or shorten the "
+                             "drive (`start`, `turn`)")
+
+
+def caps_markdown() -> str:
+    """The docs table of the caps (docs/ranges.md holds it verbatim)."""
+    rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
+            ("runs of one sweep without `--yes`", CONFIRM_RUNS, "sweep"),
+            ("runs of one sweep", MAX_RUNS, "sweep"),
+            ("curves in a design", MAX_DESIGN_CURVES, "plan"),
+            ("candidate speeds of a design", MAX_SPEEDS, "plan"),
+            ("designs weighed (curves among speeds, repeats allowed)", MAX_DESIGNS, "plan"),
+            ("samples of all candidate curves of a design", MAX_PLAN_SAMPLES, "plan"),
+            ("grid points without `--yes`", CONFIRM_GRID_POINTS, "explore"),
+            ("grid points", MAX_GRID_POINTS, "explore")]
+    lines = ["| what | at most | where |", "|---|---|---|"]
+    lines += [f"| {what} | {cap:,} | {where} |" for what, cap, where in rows]
+    return "\n".join(lines)
