@@ -198,7 +198,7 @@ SURFACE_DECAY_RANGE = (0.2e-9, 200e-9)
 #: ... and keeps at least this fraction of it on the near half (an exponential: 1, within the noise; a
 #: power of the separation such as drainage: above 1, less where the lever's deflection widens the gap;
 #: a contact, a power of the indentation: it falls). Measured: the virtual liquid runs 0.66-1.22, the
-#: sapphire lever's contact 0.46, an ideal Hertz onset from 5 to 100 sigma 0.38.
+#: sapphire lever's contact 0.46, an ideal Hertz onset from 5 to 100 sigma 0.42.
 SURFACE_MIN_SLOPE_RATIO = 0.6
 
 
