@@ -185,6 +185,21 @@ ONSET_NSIGMA = 10.0
 #: travel (the sapphire lever: 14 nm before 15 nm); a rise over much longer (the JPK calibration curve:
 #: 0.93 um before 0.24 um) is left to the contact kind (a slow rise, a soft or long-range contact).
 MAX_ONSET_RATIO = 2.0
+#: ... and not when an attractive jump ends the rise: the signal falls by this many noise sigmas from
+#: the rise's last samples to the split (a jump into contact: the tip was not touching during the rise,
+#: which is a surface force: hydrodynamic drainage, a double layer; the liquid runs: 9-15 sigma).
+ONSET_JUMP_NSIGMA = 5.0
+#: ... and not when the rise grows like a surface force of the separation (:func:`_surface_force_like`):
+#: its logarithmic slope, over the samples this many sigmas above the baseline (log noise < 0.2) ...
+SURFACE_MIN_NSIGMA = 5.0
+#: ... corresponds to a decay length in this range [m] on the rise's far half (double layer, hydration,
+#: steric: eq 5's Debye lengths are 0.3-300 nm; drainage's 1/h over tens of nm) ...
+SURFACE_DECAY_RANGE = (0.2e-9, 200e-9)
+#: ... and keeps at least this fraction of it on the near half (an exponential: 1, within the noise; a
+#: power of the separation such as drainage: above 1, less where the lever's deflection widens the gap;
+#: a contact, a power of the indentation: it falls). Measured: the virtual liquid runs 0.66-1.22, the
+#: sapphire lever's contact 0.46, an ideal Hertz onset from 5 to 100 sigma 0.42.
+SURFACE_MIN_SLOPE_RATIO = 0.6
 
 
 def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
@@ -195,6 +210,22 @@ def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
     repulsive: no attractive jump ends the free branch), the contact begins where the signal last
     crossed the baseline before them: the onset of the curved region, not the start of its steep part
     (when it spans at most :data:`MAX_ONSET_RATIO` times the steep part's position travel).
+
+    A repulsive rise is a contact only when its shape is one: a long-range repulsive *surface* force
+    (in a liquid: hydrodynamic drainage, an electrical double layer, hydration, steric) also lifts the
+    signal above the baseline before contact, and it stays out of the contact region (the liquid step
+    fits it) when either
+
+    * an attractive jump ends the rise (the signal falls by :data:`ONSET_JUMP_NSIGMA` sigmas into the
+      split: the tip jumped into contact, so it was not touching before), or
+    * the rise grows like a surface force of the separation: ``ln(rise)`` linear in the piezo
+      position (an exponential, decay length in :data:`SURFACE_DECAY_RANGE`) or steepening towards
+      the surface (drainage's ``1/h``), not flattening (:func:`_surface_force_like`).
+
+    A contact's onset is a power of the indentation (Hertz: ``delta**1.5``), zero before a definite
+    position and with a falling logarithmic slope: no exponential describes it (the sapphire lever).
+    The curve's medium is not used: readers and virtual curves do not carry it (it is an analysis
+    option of the liquid step), and the shape decides in air and in liquid alike.
     """
     base = far[zero_force[far]]
     if base.size < 3 or split < 1 or far.size < 3:
@@ -214,7 +245,42 @@ def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
     steep = float(np.ptp(zr[split:])) if split < zr.size else 0.0
     if abs(float(zr[split] - zr[onset])) > MAX_ONSET_RATIO * steep:  # a slow rise, not a curved onset
         return split
+    at_split = float(sr[split] - (a + b * (zr[split] - x0)))
+    if float(res[-4:].max()) - at_split > ONSET_JUMP_NSIGMA * sigma:  # a jump into contact ends it
+        return split
+    width = abs(float(zr[split] - zr[onset]))
+    window = np.abs(zr[free] - zr[split]) <= 2.0 * width
+    if _surface_force_like(zr[free][window], res[window], float(zr[split]), sigma):
+        return split
     return onset
+
+
+def _surface_force_like(z: np.ndarray, rise: np.ndarray, z_split: float, sigma: float) -> bool:
+    """The rise above the baseline grows like a surface force: its logarithmic slope does not fall.
+
+    Over the samples of the rise more than :data:`SURFACE_MIN_NSIGMA` sigmas above the baseline, the
+    slope of ``ln(rise)`` against the distance travelled towards the split is fitted on the far and on
+    the near half: a surface force of the separation (exponential: constant, ``1/lambda`` with
+    ``lambda`` in :data:`SURFACE_DECAY_RANGE`; a power of the separation such as drainage: growing)
+    keeps the near slope at least :data:`SURFACE_MIN_SLOPE_RATIO` times the far one; a contact (a power
+    of the indentation, Hertz ``delta**1.5``: slope ``1.5/delta``) has it fall.
+    """
+    if not sigma > 0:
+        return False
+    toward = np.sign(z_split - float(np.mean(z))) or 1.0
+    x = (z - z_split) * toward          # <= 0, growing towards the split
+    up = rise > SURFACE_MIN_NSIGMA * sigma
+    x, y = x[up], np.log(rise[up])
+    if x.size < 6 or np.ptp(x) == 0:
+        return False
+    mid = 0.5 * (x.min() + x.max())
+    far, near = x <= mid, x > mid
+    if far.sum() < 3 or near.sum() < 3 or np.ptp(x[far]) == 0 or np.ptp(x[near]) == 0:
+        return False
+    s_far = float(np.polyfit(x[far], y[far], 1)[0])
+    s_near = float(np.polyfit(x[near], y[near], 1)[0])
+    lo, hi = SURFACE_DECAY_RANGE
+    return bool(1.0 / hi <= s_far <= 1.0 / lo and s_near >= SURFACE_MIN_SLOPE_RATIO * s_far)
 
 
 def _slope(z: np.ndarray, s: np.ndarray) -> float:
