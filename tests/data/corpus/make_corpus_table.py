@@ -87,7 +87,6 @@ GIVEN = {
 PENDING_READ: dict[str, str] = {}
 PENDING_ANALYSIS = {
     **PENDING_READ,
-    "afm-workshop_single_2021-10-22.csv": "issue 32 item 6 (spring constant 5e-5 N/m inferred from the slope, reported)",
 }
 
 
