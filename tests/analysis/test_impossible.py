@@ -131,3 +131,17 @@ def test_spring_constant_inferred_from_the_slope_outside_any_lever_is_refused():
         for step in ("jumps", "adhesion", "vdw", "indentation"):
             assert r.not_applicable[step].startswith(IMPOSSIBLE)
         assert all(math.isnan(v) for v in (r.pull_off_force, r.jump_in_force, r.adhesion_force, r.youngs_modulus))
+
+
+def test_slope_of_a_separation_or_a_soft_contact_is_not_the_levers_spring_constant():
+    c = static_curve(seed=1)
+    export = _force_export(c)
+    sep = dataclasses.replace(export, metadata={**export.metadata, "position_is_separation": True})
+    r = analyze(sep)
+    assert math.isnan(r.spring_constant) and r.pull_off_force < 0  # the forces are the file's, and stay
+    assert any("not reported: the position is the tip-sample separation" in w for w in r.warnings)
+    # a real soft contact in force units without k (AFM Workshop CSV; the slope gives 2.7 N/m)
+    r = analyze(load(DATA / "corpus" / "afm-workshop_single_2020-02-14.csv")[0])
+    assert r.contact_kind == "soft" and math.isnan(r.spring_constant) and math.isnan(r.youngs_modulus)
+    assert "the contact is soft" in r.not_applicable["indentation"]
+    assert any("2.7 N/m from the compliance slope not reported" in w for w in r.warnings)

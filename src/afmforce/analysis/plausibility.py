@@ -25,7 +25,7 @@ from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
            "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
-           "beyond_detector", "impossible_steps", "impossible_reasons"]
+           "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers"]
 
 #: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
 #: the verdict repeats every such reason, each naming the suspect input.
@@ -227,6 +227,25 @@ def _inferred_spring_constant(st: State) -> str | None:
             f"is outside the range of cantilevers made ({lo:g}..{hi:g} N/m): {cause}, so the slope is not the "
             "lever's; suspect input: "
             "spring_constant (give the lever's spring constant, and its sensitivity for a signal in volts)")
+
+
+def slope_not_the_levers(st: State) -> str | None:
+    """Why a spring constant inferred from a force signal's compliance slope is not the lever's, though
+    within the levers' range (None: it may be): the contact is soft (curved: the slope is the series
+    stiffness of lever and sample, below the lever's), or the position is already the tip-sample
+    separation (a processed export: the slope is the sample's alone). The forces are the file's and
+    stay; the spring constant is not reported, nor the modulus (its indentation needs the lever's)."""
+    conv, kind = st.details.get("force"), st.details.get("kind")
+    if conv is None or getattr(conv, "method", "") != "compliance slope" or "force" in st.skipped:
+        return None
+    if st.metadata.get("position_is_separation"):
+        why = "the position is the tip-sample separation (a processed export): the slope is the sample's"
+    elif kind is not None and kind.kind == "soft":
+        why = "the contact is soft (curved): the slope is the lever and the sample in series, not the lever"
+    else:
+        return None
+    return (f"spring constant {conv.spring_constant:.3g} N/m from the compliance slope not reported: {why}; "
+            "give the lever's spring constant (the forces are the file's)")
 
 
 def impossible_reasons(skipped) -> list[str]:
