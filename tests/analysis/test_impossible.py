@@ -6,6 +6,8 @@
 * A deflection signal beyond the photodiode ADC's range: no step gives a number, the verdict names
   the file's data scale (the real v9.2 force volume read 256 x too large reached 312-637 V).
 * A hard contact whose compliance slope is more than 10 x off the file's sensitivity: no force.
+* A force signal without a spring constant whose compliance slope (the k inferred) is no cantilever's
+  (outside 1e-3..100 N/m): no force step, and the k is not reported.
 * The stiff lever on sapphire (k = 90 N/m, shared/data/real README): the contact begins at the
   onset of the curved region (about 20 nm before the steep compliance line, 29 nm before the turning
   point, not the last 14 samples), so neither a +137 nN jump-in nor a +163 nN pull-off is reported
@@ -103,3 +105,43 @@ def test_calibration_ten_times_off_on_a_hard_contact(factor):
         assert r.not_applicable[step].startswith(IMPOSSIBLE)
     assert f"{1 / factor:.3g} x the file's" in r.verdict and "suspect input: sensitivity" in r.verdict
     assert all(math.isnan(v) for v in (r.pull_off_force, r.jump_in_force, r.adhesion_force, r.hamaker_radius))
+
+
+def _force_export(curve, position_scale: float = 1.0):
+    """``curve`` as a processed export: force = k x its true deflection [N], no k or sensitivity stored."""
+    t = curve.truth
+    md = {key: v for key, v in curve.metadata.items() if key not in ("spring_constant", "sensitivity")}
+    return dataclasses.replace(curve, deflection_signal=t["deflection"] * t["spring_constant"], deflection_unit="N",
+                               piezo_nominal=curve.piezo_nominal * position_scale,
+                               piezo_measured=curve.piezo_measured * position_scale, metadata=md, truth=None)
+
+
+def test_spring_constant_inferred_from_the_slope_outside_any_lever_is_refused():
+    c = static_curve(seed=1)  # k = 0.21 N/m, a hard contact: the force's contact slope is k
+    ok = analyze(_force_export(c))
+    assert ok.spring_constant == pytest.approx(0.21, rel=0.05)  # control: the slope's k is the lever's
+    assert ok.pull_off_force < 0 and not ok.verdict.startswith(IMPOSSIBLE)
+    for scale, cause in ((1e4, "2.1e-05 N/m inferred from the compliance slope of the force signal is outside the "
+                                "range of cantilevers made (0.001..100 N/m): the contact is soft"),  # 1e4 x the travel
+                         (1e-3, "the position is mis-scaled")):  # 1e-3 x the travel: k about 200 N/m
+        r = analyze(_force_export(c, scale))
+        assert math.isnan(r.spring_constant)  # no lever is 2e-5 or 2e2 N/m: not reported
+        assert r.verdict.startswith(IMPOSSIBLE) and "suspect input: spring_constant" in r.verdict
+        assert cause in r.verdict
+        for step in ("jumps", "adhesion", "vdw", "indentation"):
+            assert r.not_applicable[step].startswith(IMPOSSIBLE)
+        assert all(math.isnan(v) for v in (r.pull_off_force, r.jump_in_force, r.adhesion_force, r.youngs_modulus))
+
+
+def test_slope_of_a_separation_or_a_soft_contact_is_not_the_levers_spring_constant():
+    c = static_curve(seed=1)
+    export = _force_export(c)
+    sep = dataclasses.replace(export, metadata={**export.metadata, "position_is_separation": True})
+    r = analyze(sep)
+    assert math.isnan(r.spring_constant) and r.pull_off_force < 0  # the forces are the file's, and stay
+    assert any("not reported: the position is the tip-sample separation" in w for w in r.warnings)
+    # a real soft contact in force units without k (AFM Workshop CSV; the slope gives 2.7 N/m)
+    r = analyze(load(DATA / "corpus" / "afm-workshop_single_2020-02-14.csv")[0])
+    assert r.contact_kind == "soft" and math.isnan(r.spring_constant) and math.isnan(r.youngs_modulus)
+    assert "the contact is soft" in r.not_applicable["indentation"]
+    assert any("2.7 N/m from the compliance slope not reported" in w for w in r.warnings)

@@ -100,6 +100,18 @@ def test_image_file_refused_by_name(tmp_path):
             load(path)
 
 
+def test_peakforce_capture_refused_by_name(tmp_path):
+    """An image file that also holds force image lists (PeakForce capture: a curve per pixel): named as such."""
+    header = ("\\*File list\r\n\\Version: 0x09200000\r\n\\*Ciao image list\r\n\\Data offset: 40960\r\n"
+              "\\Data length: 8\r\n\\@2:Image Data: S [Height] \"Height\"\r\n\\*Ciao force image list\r\n"
+              "\\Data offset: 40968\r\n\\Data length: 8\r\n\\@4:Image Data: S [DeflectionError] \"Deflection Error\"\r\n"
+              "\\*File list end\r\n").encode("latin-1")
+    path = tmp_path / "capture.pfc"
+    path.write_bytes(header + b"\0" * (40960 - len(header)) + bytes(16))
+    with pytest.raises(FileFormatError, match=r"PeakForce capture file.*does not read"):
+        load(path)
+
+
 def test_shifted_and_out_of_range_four_byte_samples(tmp_path):
     n = 100
     rng = np.random.default_rng(7)

@@ -357,13 +357,22 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True) -
     nonlin = float(np.max(np.abs(u - lin)) / max(np.ptp(u), 1e-300))
     explained = 1.0 - float(np.var(res)) / float(np.var(r))
     cycles = float(np.ptp(u) / P)
-    found = converged and explained >= min_explained and cycles >= min_cycles
+    found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
     if xt is None:
         base = (float(coef[2]), float(coef[3]) / L, float(zm), "position")
     else:
         base = (float(coef[2]), float(coef[3]) / tL, float(tm), "time")
     return FringeRun(bool(found), float(P), amp, phase, float(c1), float(a2), float(a3), float(zm), float(L),
                      nonlin, float(explained), cycles, float(np.sqrt(np.mean(res**2))), *base, converged=converged)
+
+
+def monotonic_map(c1: float, a2: float, a3: float, reach: float = 1.5) -> bool:
+    """Does the map ``u(x) = c1 (x + a2 x^2 + a3 x^3)`` increase over ``|x| <= reach`` (as far as
+    :func:`position_map` uses the polynomial)? A piezo moves one way while its drive does: a map
+    that turns back (``du/dx <= 0`` somewhere) is no position, whatever it explains of a baseline
+    (a fit of a slow wobble over barely one period), and is not taken for fringes."""
+    x = np.linspace(-reach, reach, 301)
+    return bool(c1 > 0 and np.all(1.0 + 2.0 * a2 * x + 3.0 * a3 * x**2 > 0))
 
 
 def loop_width(fa: FringeRun, fr: FringeRun, z: np.ndarray) -> float:

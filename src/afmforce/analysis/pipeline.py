@@ -31,7 +31,8 @@ from .contact_point import CONTACT_POINT_METHODS
 from .indentation import indentation
 from .liquid_step import liquid
 from .options_text import show_default
-from .plausibility import beyond_detector, impossible_reasons, impossible_steps, plausibility_warnings
+from .plausibility import (beyond_detector, impossible_reasons, impossible_steps, plausibility_warnings,
+                           slope_not_the_levers)
 from .result import AnalysisResult
 from .state import NoContact, State, prepare
 from ..errors import ParameterError
@@ -315,6 +316,11 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
     if bad:  # numbers no physics allows are not results: the steps say why, their details are dropped
         st = st.update(skipped={**st.skipped, **bad},
                        details={k: v for k, v in st.details.items() if k not in bad or k == "jumps"})
+    not_levers = slope_not_the_levers(st)
+    if not_levers:  # a soft contact's (or a separation's) slope: no spring constant, no modulus from it
+        st = st.update(warn=(not_levers,), skipped={**st.skipped, **(
+            {"indentation": not_levers} if "indentation" in st.details or "indentation" in st.skipped else {})},
+            details={k: v for k, v in st.details.items() if k != "indentation"})
     d = st.details
     nan = math.nan
     kw: dict[str, Any] = {}
@@ -325,7 +331,7 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
         kw.update(contact_kind=d["kind"].kind, contact_kind_reason=d["kind"].reason)
     if "contact_point" in d:
         kw["indentation"] = d["contact_point"].indentation
-    if "force" in d:
+    if "force" in d and not not_levers:
         kw["spring_constant"] = d["force"].spring_constant
     if "shift" in d:
         kw["shift"] = d["shift"].shift

@@ -7,7 +7,8 @@ Each check says the number, its range and what usually causes it:
   fitted ``A R``) outside :data:`HAMAKER_RANGE` (1e-21 to 1e-18 J: condensed media across vacuum,
   air or water);
 * a spring constant outside :data:`SPRING_CONSTANT_RANGE` (1e-3 to 100 N/m, the cantilevers made),
-  and one inferred from a compliance slope far from the file's;
+  and one inferred from a compliance slope far from the file's (one inferred outside that range: the
+  force steps refuse, :func:`impossible_steps`);
 * a sensitivity fitted on fewer than :data:`MIN_COMPLIANCE_SAMPLES` contact samples;
 * a contact line the deflection follows faster than the position (the separation then runs
   backwards in contact: the force panel curls back on itself);
@@ -24,7 +25,7 @@ from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
            "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
-           "beyond_detector", "impossible_steps", "impossible_reasons"]
+           "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers"]
 
 #: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
 #: the verdict repeats every such reason, each naming the suspect input.
@@ -183,6 +184,9 @@ def impossible_steps(st: State) -> dict[str, str]:
     sensitivity by tens of per cent, not ten times. A soft contact's slope is the sample's, not the lever's,
     and ``calibration.source=fit`` says the user wants the slope's: neither is checked.
     """
+    inferred = _inferred_spring_constant(st)
+    if inferred:
+        return {step: inferred for step in ("force", *FORCE_STEPS) if step in st.details or step in st.skipped}
     cal, kind = st.details.get("calibration"), st.details.get("kind")
     if cal is None or st.unit != "V" or (kind is not None and kind.kind != "hard") or \
             getattr(cal, "requested", "") == "fit":  # the user asked for the slope's calibration, not the file's
@@ -199,6 +203,49 @@ def impossible_steps(st: State) -> dict[str, str]:
            f"{float(given) * 1e9:.4g} nm/V (more than {MAX_CALIBRATION_RATIO:g} x off): the file's sensitivity is "
            "stale or mistyped, or the file is read with a wrong scale; suspect input: sensitivity")
     return {step: why for step in FORCE_STEPS if step in st.details or step in st.skipped}
+
+
+def _inferred_spring_constant(st: State) -> str | None:
+    """Why a spring constant inferred from a compliance slope cannot be the lever's (None: it can be).
+
+    With no spring constant given, a force signal's contact slope is taken for the lever's stiffness
+    (a rigid contact); it is inferred only when neither the file nor the user gives one (a given one is
+    used, never compared). A value outside :data:`SPRING_CONSTANT_RANGE` (no cantilever is made so soft
+    or so stiff) says the contact was not rigid or not reached: the separations and every number from
+    them would be wrong.
+    """
+    conv = st.details.get("force")
+    if conv is None or getattr(conv, "method", "") != "compliance slope" or "force" in st.skipped:
+        return None
+    k = float(conv.spring_constant)
+    lo, hi = SPRING_CONSTANT_RANGE
+    if not math.isfinite(k) or lo <= k <= hi:
+        return None
+    cause = ("the contact is soft or was not reached" if k < lo else
+             "the position is mis-scaled or does not move the lever's base")
+    return (f"{IMPOSSIBLE}: the spring constant {k:.3g} N/m inferred from the compliance slope of the force signal "
+            f"is outside the range of cantilevers made ({lo:g}..{hi:g} N/m): {cause}, so the slope is not the "
+            "lever's; suspect input: "
+            "spring_constant (give the lever's spring constant, and its sensitivity for a signal in volts)")
+
+
+def slope_not_the_levers(st: State) -> str | None:
+    """Why a spring constant inferred from a force signal's compliance slope is not the lever's, though
+    within the levers' range (None: it may be): the contact is soft (curved: the slope is the series
+    stiffness of lever and sample, below the lever's), or the position is already the tip-sample
+    separation (a processed export: the slope is the sample's alone). The forces are the file's and
+    stay; the spring constant is not reported, nor the modulus (its indentation needs the lever's)."""
+    conv, kind = st.details.get("force"), st.details.get("kind")
+    if conv is None or getattr(conv, "method", "") != "compliance slope" or "force" in st.skipped:
+        return None
+    if st.metadata.get("position_is_separation"):
+        why = "the position is the tip-sample separation (a processed export): the slope is the sample's"
+    elif kind is not None and kind.kind == "soft":
+        why = "the contact is soft (curved): the slope is the lever and the sample in series, not the lever"
+    else:
+        return None
+    return (f"spring constant {conv.spring_constant:.3g} N/m from the compliance slope not reported: {why}; "
+            "give the lever's spring constant (the forces are the file's)")
 
 
 def impossible_reasons(skipped) -> list[str]:

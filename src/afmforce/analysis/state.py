@@ -154,6 +154,10 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     seg = np.asarray(curve.segment)
     for which, word in ((0, "approach"), (1, "retract")):
         if run_indices(seg, which).size == 0:
+            single = curve.metadata.get("single_run")
+            if single:  # an export of one run: nothing to split
+                raise AnalysisError(f"the file holds the {single} run only (no {word}); the analysis needs both "
+                                    "runs: export the whole curve (approach and retract)")
             raise AnalysisError(f"the curve has no {word} segment (one segment only); the analysis needs "
                                 "both runs: split the curve at its turning point")
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)

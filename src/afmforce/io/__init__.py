@@ -128,8 +128,9 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("bruker-ascii", "Bruker NanoScope ASCII export", (".txt", ".asc", ".csv"),
                  _lazy("bruker", "detect_bruker_ascii"), _lazy("bruker", "load_bruker_ascii"),
                  via="afmforce", deflection="V, m or N",
-                 signature='\\* header lines (or "\\..." quoted: NanoScope Analysis), then tab- or comma-separated '
-                           '<Name>_<unit>_<Ex or Rt> columns (or processed Force and Separation only: force in N)',
+                 signature='\\* or \\? header lines (or "\\..." quoted: NanoScope Analysis), then tab- or comma-'
+                           'separated <Name>_<unit>_<Ex or Rt> columns (or processed Force and Separation only: force '
+                           'in N); or one plotted run: a unit row (nm nN), position and force',
                  supplies=(*_CAL, "velocity", "sample_rate")),
     ReaderFormat("jpk-txt", "JPK Data Processing text export", (".txt", ".out", ".tsv"),
                  _lazy("jpk_text", "detect_jpk_text"), _lazy("jpk_text", "load_jpk_text"),

@@ -226,7 +226,7 @@ def finalize_curve(curve: RawCurve, path: str) -> RawCurve:
             raise FileFormatError(
                 f"{path}: column {name} has {int(bad.sum())} non-finite values (first at sample "
                 f"{int(np.argmax(bad))}); the file is damaged or padded: remove those rows")
-    if not np.any(curve.approach):
+    if not np.any(curve.approach) and curve.metadata.get("single_run") != "retract":  # an export of the retract only
         raise FileFormatError(f"{path}: no approach (extend) segment found")
     if not curve.metadata.get("time_is_sample_index"):
         step = np.diff(np.asarray(curve.time, dtype=float))

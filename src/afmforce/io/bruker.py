@@ -79,7 +79,24 @@ def detect_bruker_ascii(path: Path) -> bool:
         return False
     if head[:2] in (b"\xff\xfe", b"\xfe\xff"):  # UTF-16 (Windows "Unicode" text)
         head = head.decode("utf-16", errors="ignore").encode("utf-8", errors="ignore")
-    return head.lstrip(b"\xef\xbb\xbf").lstrip().lstrip(b'"').startswith(b"\\*")
+    head = head.lstrip(b"\xef\xbb\xbf").lstrip().lstrip(b'"')
+    if head.startswith((b"\\*", b"\\?")):  # "\?Force file list": NanoScope Analysis 1.x-2.x exports
+        return True
+    return _unit_row(head.decode("latin-1").split("\n")[0]) is not None
+
+
+#: the units a headerless export's first row may name: length of the position, then force
+_LENGTH = {"nm": 1e-9, "um": 1e-6, "µm": 1e-6, "m": 1.0}
+_FORCE = {"pN": 1e-12, "nN": 1e-9, "uN": 1e-6, "µN": 1e-6, "N": 1.0}
+
+
+def _unit_row(line: str) -> tuple[str, str] | None:
+    """``'    nm   <TAB>nN'`` (a NanoScope Analysis export of one plotted run: a unit row, no header)
+    -> ``('nm', 'nN')``; None if the line is anything else."""
+    cells = line.replace("\xb5", "µ").strip().split()
+    if len(cells) == 2 and cells[0] in _LENGTH and cells[1] in _FORCE:
+        return cells[0], cells[1]
+    return None
 
 
 _RUNS = {"ex": "Ex", "extend": "Ex", "approach": "Ex", "trace": "Ex", "rt": "Rt", "retract": "Rt",
@@ -119,7 +136,7 @@ def canonical_base(base: str) -> str:
 def _blocks(text: str) -> list[str]:
     r"""Force-curve blocks: each starts at a ``\*Force file list`` line (several may follow each other)."""
     lines = text.split("\n")
-    starts = [i for i, ln in enumerate(lines) if ln.startswith("\\*Force file list")]
+    starts = [i for i, ln in enumerate(lines) if re.match(r"\\[*?]Force file list\s*$", ln)]  # not "... list end"
     if len(starts) <= 1:
         return [text]
     starts[0] = 0
@@ -153,7 +170,7 @@ def _parse(text: str, where: str):
     i = 0
     while i < len(lines) and (lines[i].startswith("\\") or not lines[i].strip()):
         line = lines[i][1:]
-        if line.startswith("*"):
+        if line.startswith(("*", "?")):  # "\?Force file list" opens older NanoScope Analysis exports
             sections.append({})
         elif ":" in line:
             key, value = line.split(":", 1)
@@ -237,7 +254,15 @@ def load_bruker_ascii(path: Path, *, meta_override: Mapping[str, Any] | None = N
         raise FileFormatError(f"{where}: cannot read ({exc})") from None
     if "\0" in text:
         raise FileFormatError(f"{where}: binary content; a NanoScope binary file needs the ending .spm, .pfc or .000")
-    blocks = _blocks(_normalise(text))
+    text = _normalise(text)
+    first = text.lstrip("\ufeff").lstrip("\n").split("\n", 1)[0]
+    units = _unit_row(first)
+    if units is not None:
+        curve = _one_run(text, units, where, meta_override)
+        if callback is not None:
+            callback(1.0)
+        return [curve]
+    blocks = _blocks(text)
     out = []
     for b, block in enumerate(blocks):
         label = where if len(blocks) == 1 else f"{where} (block {b + 1})"
@@ -411,5 +436,54 @@ def _force_separation(table: dict, header: dict[str, str], where: str, source: s
                 format="Bruker NanoScope ASCII export (processed force vs separation)")
     curve = RawCurve(time=time, piezo_nominal=np.concatenate([c["zn"] for c in parts]),
                      deflection_signal=np.concatenate([c["defl"] for c in parts]), segment=seg, metadata=meta,
+                     deflection_unit="N")
+    return finalize_curve(curve, where)
+
+
+def _one_run(text: str, units: tuple[str, str], where: str, meta_override) -> RawCurve:
+    """A NanoScope Analysis export of one plotted run: a unit row (``nm  nN``), then position and force.
+
+    Nothing names the run or the position: the x column is the Z (ramp or sensor) or the tip-sample
+    separation, whichever the plot showed. The rows are in time order (as plotted), so the run is the
+    approach when the larger force (the contact) is at the end and the retract when it is at the start;
+    the position is oriented to increase towards the contact (the end with the larger force), as every
+    reader's position does. The force needs neither spring constant nor sensitivity (``deflection_unit``
+    N); ``metadata["processed"]`` and ``metadata["single_run"]`` say what was read.
+    """
+    rows = []
+    for j, line in enumerate(text.split("\n")[1:], start=2):
+        if not line.strip():
+            continue
+        cells = line.split()
+        try:
+            values = [float(c) for c in cells]
+        except ValueError:
+            raise FileFormatError(f"{where}: line {j} is not numeric: {line[:60]!r}") from None
+        if len(values) != 2:
+            raise FileFormatError(f"{where}: line {j} has {len(values)} cells; a one-run export has two "
+                                  f"(position [{units[0]}], force [{units[1]}])")
+        rows.append(values)
+    if len(rows) < 8:
+        raise FileFormatError(f"{where}: {len(rows)} data rows; too few for a force curve")
+    data = np.array(rows, dtype=float)
+    x = data[:, 0] * _LENGTH[units[0]]
+    force = data[:, 1] * _FORCE[units[1]]
+    m = max(2, len(force) // 20)
+    contact_at_end = float(np.median(force[-m:])) > float(np.median(force[:m]))
+    run = "approach" if contact_at_end else "retract"
+    x_contact = float(np.median(x[-m:] if contact_at_end else x[:m]))
+    x_far = float(np.median(x[:m] if contact_at_end else x[-m:]))
+    sign = 1.0 if x_contact >= x_far else -1.0  # the position increases towards the contact
+    n = len(force)
+    meta: dict[str, Any] = {
+        "processed": f"force vs position, one run ({run}) exported by NanoScope Analysis with a unit row and no "
+                     f"header: force in N, no spring constant or sensitivity needed; the position column is the "
+                     f"Z or the tip-sample separation (the export does not name it)",
+        "single_run": run, "time_is_sample_index": True}
+    meta.update(dict(meta_override or {}))
+    meta.update(source_file=where, reader="bruker-ascii", position_sign=sign,
+                format="Bruker NanoScope Analysis export of one run (processed force)")
+    curve = RawCurve(time=np.arange(n, dtype=float), piezo_nominal=sign * x, deflection_signal=force,
+                     segment=np.full(n, 0 if run == "approach" else 1, np.int8), metadata=meta,
                      deflection_unit="N")
     return finalize_curve(curve, where)

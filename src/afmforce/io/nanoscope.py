@@ -98,6 +98,12 @@ def parse_header(data: bytes, where: str) -> list[tuple[str, dict[str, str]]]:
             sections.append((line[2:].strip(), {}))
         elif sections and (m := _ENTRY.match(line)) is not None:
             sections[-1][1].setdefault(m.group(1).strip(), m.group(2).strip())
+    if sections and sections[0][0].lower() == "file list" and any(
+            name.lower() == "ciao force image list" for name, _ in sections):
+        raise FileFormatError(
+            f"{where}: a Bruker PeakForce capture file (first line '\\*File list' with force image lists: a "
+            "force curve per image pixel), a layout afmforce does not read (no public file of it to check the "
+            "sample layout against); export the curves from NanoScope Analysis as force files or as text")
     if sections and sections[0][0].lower() == "file list":
         raise FileFormatError(
             f"{where}: a Bruker NanoScope image file (first line '\\*File list'), not a force file: it holds "

