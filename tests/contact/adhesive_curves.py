@@ -31,22 +31,24 @@ def _estar(E, nu):
     return E / (1 - nu * nu)
 
 
-def jkr_force(delta, E, w, R, nu=NU):
-    """JKR force [N] on the approach (0 for delta <= 0), a by brentq in metres (rtol 1e-15)."""
+def jkr_force(delta, E, w, R, nu=NU, retract=False):
+    """JKR force [N] on the approach (0 for delta <= 0; ``retract``: the neck down to the branch's
+    smallest indentation, 0 past it), a by brentq in metres (rtol 1e-15)."""
     es = _estar(E, nu)
     a_star = (math.pi * w * R * R / (8 * es)) ** (1 / 3)  # d delta / d a = 0: the branch's minimum
 
     def dl(a, d):
         return a * a / R - math.sqrt(2 * math.pi * w * a / es) - d
 
+    d_min = dl(a_star, 0.0)
     out = np.zeros(np.shape(delta))
     for i, d in enumerate(np.ravel(delta)):
-        if d <= 0:
+        if d <= 0 and not (retract and d >= d_min):
             continue
-        hi = 2 * a_star + math.sqrt(R * d)
+        hi = 2 * a_star + math.sqrt(R * max(d, 0.0))
         while dl(hi, d) <= 0:
             hi *= 2
-        a = brentq(dl, a_star, hi, args=(d,), xtol=1e-30, rtol=1e-15, maxiter=500)
+        a = a_star if d == d_min else brentq(dl, a_star, hi, args=(d,), xtol=1e-30, rtol=1e-15, maxiter=500)
         out.flat[i] = 4 * es * a ** 3 / (3 * R) - math.sqrt(8 * math.pi * w * es * a ** 3)
     return out
 

@@ -339,7 +339,8 @@ def _solve_small(M, y):  # pragma: no cover - compiled
 def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind,
                 max_iter):  # pragma: no cover - compiled
     """Bounded Levenberg-Marquardt on (E, w, cj, b) of :func:`adhesive_normal` (Marquardt's diagonal
-    scaling; a variable on a bound that the gradient pushes outwards is held there). Returns
+    scaling; a variable on a bound that the gradient pushes outwards is held there, one with lo = hi
+    fixed). Returns
     (x, sum of squares, J^T J at x, iterations)."""
     x = np.minimum(np.maximum(x0.copy(), lo), hi)
     A = np.zeros((4, 4))
@@ -356,7 +357,7 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, 
         free = np.ones(4, dtype=np.bool_)
         nfree = 0
         for j in range(4):
-            if (x[j] <= lo[j] and g[j] < 0) or (x[j] >= hi[j] and g[j] > 0):
+            if lo[j] >= hi[j] or (x[j] <= lo[j] and g[j] < 0) or (x[j] >= hi[j] and g[j] > 0):
                 free[j] = False
             else:
                 nfree += 1

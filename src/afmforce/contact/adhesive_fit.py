@@ -51,6 +51,9 @@ class AdhesiveFit:
     ssr : float  weighted sum of squares at the optimum [N^2]
     n : int  points with a non-zero weight [-]
     weights : ndarray  the residuals' weights at the optimum [-]
+    E_low, E_high : float  95 % interval of E [Pa] (the covariance's; the lower end at least 0)
+    w_low, w_high : float  95 % interval of w [J/m^2]; when it reaches 0, [0, the profile likelihood's upper
+        end] (NaN: open, the data do not bound w)
     """
 
     E: float
@@ -61,6 +64,10 @@ class AdhesiveFit:
     ssr: float
     n: int
     weights: np.ndarray
+    E_low: float = math.nan
+    E_high: float = math.nan
+    w_low: float = math.nan
+    w_high: float = math.nan
 
 
 class _Problem:
@@ -109,7 +116,7 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     Raises AnalysisError when no contact point gives E > 0.
     """
     from ._kernels import scan_dmt
-    from .fit import _weights
+    from .fit import _t95, _weights
 
     def weights(d):
         return _weights(d, width, max_ind)
@@ -137,45 +144,17 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     prob = _Problem(u, F, key, R, nu, lam, branch, width, max_ind)
     P0 = float(_branch(key, np.array([0.0]), lam)[0][0])  # the jump at contact [pi w R]
     w0 = float(W0[i]) * 2.0 / abs(P0) if W0[i] > 0 else 0.0
-    fs_floor = 1e-6 * max(float(np.std(F)), 1e-30) / (math.pi * R)  # w below this: no adhesion measurable
-    x0 = np.array([float(E0[i]), max(w0, 10 * fs_floor), float(cand[i]), float(B0[i])])
+    w_small = 1e-5 * max(float(np.std(F)), 1e-30) / (math.pi * R)  # an adhesion far below the noise
+    x0 = np.array([float(E0[i]), max(w0, w_small), float(cand[i]), float(B0[i])])
     if prob.d_end != 0.0:
         x0[2] = float(cand[i]) + prob.d_end * prob.scales(x0[0], x0[1])[1]
-    w_floor = 1e-9 * x0[1] if x0[1] > 0 else 1e-300
-
-    def gap_of(cj: float) -> int:
-        return int(np.clip(np.searchsorted(us, cj, side="right") - 1, 0, us.size - 2))
-
-    def fit_gap(k: int, start: np.ndarray):
-        gap = us[k + 1] - us[k]
-        lo_c, hi_c = us[k] + 1e-9 * gap, us[k + 1] - 1e-9 * gap
-        lo = np.array([1e-12 * start[0], w_floor, lo_c, -np.inf])
-        hi = np.array([np.inf, np.inf, hi_c, np.inf])
-        s = start.copy()
-        s[2] = min(max(s[2], lo_c), hi_c)
-        return prob.lm(s, lo, hi)
-
-    k0 = gap_of(x0[2])
-    best = fit_gap(k0, x0)
-    tried = {k0: best[1]}
-    kbest = k0
-    for direction in (-1, 1):  # walk while the sum of squares falls (one gap's look-ahead)
-        k, x_from, misses = kbest, best[0], 0
-        while misses < 2:
-            k += direction
-            if k < 0 or k > us.size - 2 or k in tried:
-                break
-            got = fit_gap(k, x_from)
-            tried[k] = got[1]
-            if got[1] < best[1]:
-                best, kbest, misses = got, k, 0
-                x_from = got[0]
-            else:
-                misses += 1
-    x, S, JtJ = best
+    gaps = _Gaps(prob, us, w_floor=1e-9 * x0[1])
+    best = gaps.walk(gaps.gap_of(x0[2]), x0)
+    x, S, JtJ = best[1:]
     q = weights(u - prob.contact(x))
     n = int((q > 0).sum())
-    s2 = S / max(n - 4, 1)
+    dof = n - 4
+    s2 = S / max(dof, 1)
     try:
         cov = _covariance(JtJ, s2)
     except np.linalg.LinAlgError:
@@ -187,8 +166,74 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
         T = np.eye(4)
         T[2] = grad
         cov = T @ cov @ T.T
+    t = _t95(dof)
+    se = np.sqrt(np.clip(np.diag(cov), 0, None))
+    E_low, E_high = max(x[0] - t * se[0], 0.0), x[0] + t * se[0]  # E > 0: the bound ends the interval
+    w_low, w_high = x[1] - t * se[1], x[1] + t * se[1]
+    if not w_low > 0:  # the interval reaches w = 0, where the law's Jacobian fails (JKR: F ~ sqrt(w)): profile
+        w_low = 0.0
+        w_high = gaps.profile_w(best, S, s2, t * t, se[1])
     return AdhesiveFit(E=float(x[0]), w=float(x[1]), c=float(prob.contact(x)), b=float(x[3]), cov=cov,
-                       ssr=float(S), n=n, weights=q)
+                       ssr=float(S), n=n, weights=q, E_low=float(E_low), E_high=float(E_high),
+                       w_low=float(w_low), w_high=float(w_high))
+
+
+class _Gaps:
+    """The search over the gaps between consecutive samples (the contact set fixed within one)."""
+
+    def __init__(self, prob: _Problem, us: np.ndarray, w_floor: float):
+        self.prob, self.us, self.w_floor = prob, us, w_floor
+
+    def gap_of(self, cj: float) -> int:
+        return int(np.clip(np.searchsorted(self.us, cj, side="right") - 1, 0, self.us.size - 2))
+
+    def fit(self, k: int, start: np.ndarray, w_fixed: float | None = None):
+        """LM with the jump confined to gap k (and w held at ``w_fixed``): (k, x, ssr, J^T J)."""
+        us = self.us
+        gap = us[k + 1] - us[k]
+        lo_c, hi_c = us[k] + 1e-9 * gap, us[k + 1] - 1e-9 * gap
+        lo = np.array([1e-12 * start[0], self.w_floor, lo_c, -np.inf])
+        hi = np.array([np.inf, np.inf, hi_c, np.inf])
+        s = start.copy()
+        if w_fixed is not None:
+            lo[1] = hi[1] = s[1] = w_fixed
+        s[2] = min(max(s[2], lo_c), hi_c)
+        return (k, *self.prob.lm(s, lo, hi))
+
+    def walk(self, k0: int, x0: np.ndarray, w_fixed: float | None = None):
+        """From gap k0, to the neighbouring gaps while the sum of squares falls (two gaps' look-ahead)."""
+        best = self.fit(k0, x0, w_fixed)
+        tried = {k0}
+        for direction in (-1, 1):
+            k, x_from, misses = best[0], best[1], 0
+            while misses < 2:
+                k += direction
+                if k < 0 or k > self.us.size - 2 or k in tried:
+                    break
+                got = self.fit(k, x_from, w_fixed)
+                tried.add(k)
+                if got[2] < best[2]:
+                    best, misses, x_from = got, 0, got[1]
+                else:
+                    misses += 1
+        return best
+
+    def profile_w(self, best, S_min: float, s2: float, thr: float, w_se: float) -> float:
+        """The upper end of w's interval by profile likelihood: the w above the optimum where the sum of
+        squares, re-minimised over (E, c, b), exceeds its minimum by thr s^2. NaN (open) if it stays
+        below out to 13 steps (the data do not bound w)."""
+        x = best[1]
+        step = w_se if math.isfinite(w_se) and w_se > 0 else max(x[1], 1e-12)
+        prev_v, prev_d, cur = x[1], 0.0, best
+        for m in (1.0, 2.0, 3.0, 4.5, 6.5, 9.0, 13.0):
+            v = x[1] + m * step
+            cur = self.walk(cur[0], cur[1], w_fixed=v)
+            d = max((cur[2] - S_min) / s2, 0.0)
+            if d >= thr:  # the signed root sqrt(d) is ~linear in w: interpolate it
+                a, b = math.sqrt(prev_d), math.sqrt(d)
+                return prev_v + (v - prev_v) * (math.sqrt(thr) - a) / max(b - a, 1e-300)
+            prev_v, prev_d = v, d
+        return math.nan
 
 
 def _covariance(A: np.ndarray, s2: float) -> np.ndarray:

@@ -10,8 +10,9 @@ fitted jointly, and residuals weighted down linearly within ``weight_width`` of 
 (nanite's ``weight_cp``; 0: unweighted). For a given c the model is linear in (E, b): the fit
 solves it in closed form for a few dozen contact points at once (one array operation), refines
 the best one twice, and ends with Gauss-Newton steps on (E, c, b), whose Jacobian gives the
-standard errors. Adhesive laws (JKR, DMT, Maugis) add the work of adhesion w [J/m^2] and are
-finished with a bounded least-squares solve started from the elastic fit.
+standard errors. Adhesive laws (JKR, DMT, Maugis) add the work of adhesion w [J/m^2]: all four
+parameters, the contact point included, are fitted together and get their covariance
+(:mod:`afmforce.contact.adhesive_fit`).
 
 >>> fit = fit_indentation(u, F, "hertz_paraboloid", {"radius": 5e-6}, nu=0.5)   # doctest: +SKIP
 >>> fit.youngs_modulus, fit.youngs_modulus_se, fit.contact                     # doctest: +SKIP
@@ -53,6 +54,8 @@ class IndentationFit:
     contact, contact_se : float  contact point as a tip depth and its standard error [m]
     baseline : float  force before contact [N]
     work_of_adhesion, work_of_adhesion_se : float  w [J/m^2] (adhesive laws; NaN otherwise)
+    work_of_adhesion_low, work_of_adhesion_high : float  95 % interval of w [J/m^2] (adhesive laws); when it
+        reaches 0: [0, the profile likelihood's upper end], NaN upper end: open (the data do not bound w)
     max_indentation : float  deepest indentation fitted [m]
     max_force : float  force there above the baseline [N]
     n_points, n_contact : int  points fitted, of them in contact [-]
@@ -80,6 +83,8 @@ class IndentationFit:
     residuals: np.ndarray = field(repr=False)
     fitted: np.ndarray = field(repr=False)
     warnings: tuple[str, ...] = ()
+    work_of_adhesion_low: float = math.nan
+    work_of_adhesion_high: float = math.nan
 
 
 def model_force(key: str, delta, E: float, geometry: dict, nu: float, w: float = 0.0, lam: float = 1.0,
@@ -283,7 +288,7 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     u, F = u[ok], F[ok]
     if u.size < 8:
         raise AnalysisError(f"only {u.size} points to fit the indentation model (at least 8 are needed)")
-    w = w_se = math.nan
+    w = w_se = w_low = w_high = math.nan
     if m.linear:
         E, c, b = _linear_fit(u, F, model, geom, nu, weight_width, max_indentation, contact_guess)
         d = u - c
@@ -298,6 +303,7 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
         d = u - c
         q = a.weights
         se_a = np.sqrt(np.clip(np.diag(a.cov), 0, None))
+        w_low, w_high = a.w_low, a.w_high
         names = 4
     used = q > 0
     n = int(used.sum())
@@ -312,6 +318,7 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     else:
         E_se, w_se, c_se = float(se_a[0]), float(se_a[1]), float(se_a[2])
     t = _t95(dof)
+    E_low, E_high = (E - t * E_se, E + t * E_se) if m.linear else (a.E_low, a.E_high)
     in_contact = used & (d > 0)
     dmax = float(d[in_contact].max()) if in_contact.any() else 0.0
     fmodel = model_force(model, d, E, geom, nu, w if not m.linear else 0.0, transition, branch)
@@ -319,10 +326,14 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     warn = list(validity(model, geom, dmax, thickness, int(in_contact.sum())))
     if math.isfinite(E_se) and E_se > 0.5 * E:
         warn.append(f"the modulus is poorly determined: standard error {E_se / E:.0%} of the value")
+    if m.adhesive and w_low == 0.0:
+        bound = "no upper bound" if math.isnan(w_high) else f"95 % upper bound {w_high:.3g} J/m^2"
+        warn.append(f"the work of adhesion is not distinguishable from 0 ({bound})")
     return IndentationFit(
-        model=model, youngs_modulus=float(E), youngs_modulus_se=E_se, youngs_modulus_low=float(E - t * E_se),
-        youngs_modulus_high=float(E + t * E_se), contact=float(c), contact_se=c_se, baseline=float(b),
+        model=model, youngs_modulus=float(E), youngs_modulus_se=E_se, youngs_modulus_low=float(E_low),
+        youngs_modulus_high=float(E_high), contact=float(c), contact_se=c_se, baseline=float(b),
         work_of_adhesion=float(w), work_of_adhesion_se=w_se, max_indentation=dmax,
         max_force=float(F[in_contact].max() - b) if in_contact.any() else math.nan, n_points=n,
         n_contact=int(in_contact.sum()), rms=float(np.sqrt(np.mean(resid ** 2))) if resid.size else math.nan,
-        residuals=resid, fitted=idx[used], warnings=tuple(warn))
+        residuals=resid, fitted=idx[used], warnings=tuple(warn), work_of_adhesion_low=float(w_low),
+        work_of_adhesion_high=float(w_high))
