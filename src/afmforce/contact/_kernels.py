@@ -268,11 +268,10 @@ def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, D_tab, width, max_i
     K = kc * E
     ds = (math.pi * math.pi * w * w * R / (K * K)) ** (1.0 / 3.0)
     c = cj - d_end * ds
-    if jac:
-        A[:, :] = 0.0
-        g[:] = 0.0
+    cE, cw, cc = fs * 2.0 / (3.0 * E), fs / w, -fs / ds  # d_s ~ E^(-2/3) w^(2/3); fs ~ w
+    a00 = a01 = a02 = a03 = a11 = a12 = a13 = a22 = a23 = a33 = 0.0
+    g0 = g1 = g2 = g3 = 0.0
     S = 0.0
-    row = np.zeros(4)
     for i in range(u.size):
         d = u[i] - c
         q = 1.0
@@ -283,27 +282,38 @@ def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, D_tab, width, max_i
         if q == 0.0:
             continue
         model = b
-        row[0] = row[1] = row[2] = 0.0
+        j0 = j1 = j2 = 0.0
         if u[i] > cj:
             rel = (u[i] - cj) / ds
             _, P, dP = branch_point(law, rel + d_end, lam, lt_tab, D_tab)
             model += fs * P
-            if jac:
-                row[0] = q * fs * dP * rel * (2.0 / (3.0 * E))
-                row[1] = q * fs / w * (P - 2.0 / 3.0 * rel * dP)
-                row[2] = -q * fs * dP / ds
-        row[3] = q
+            j0 = q * cE * dP * rel
+            j1 = q * cw * (P - 2.0 / 3.0 * rel * dP)
+            j2 = q * cc * dP
         r = q * (F[i] - model)
         S += r * r
         if jac:
-            for j in range(4):
-                g[j] += row[j] * r
-                for k in range(j + 1):
-                    A[j, k] += row[j] * row[k]
+            j3 = q
+            a00 += j0 * j0
+            a01 += j0 * j1
+            a02 += j0 * j2
+            a03 += j0 * j3
+            a11 += j1 * j1
+            a12 += j1 * j2
+            a13 += j1 * j3
+            a22 += j2 * j2
+            a23 += j2 * j3
+            a33 += j3 * j3
+            g0 += j0 * r
+            g1 += j1 * r
+            g2 += j2 * r
+            g3 += j3 * r
     if jac:
-        for j in range(4):
-            for k in range(j + 1, 4):
-                A[j, k] = A[k, j]
+        A[0, 0], A[0, 1], A[0, 2], A[0, 3] = a00, a01, a02, a03
+        A[1, 0], A[1, 1], A[1, 2], A[1, 3] = a01, a11, a12, a13
+        A[2, 0], A[2, 1], A[2, 2], A[2, 3] = a02, a12, a22, a23
+        A[3, 0], A[3, 1], A[3, 2], A[3, 3] = a03, a13, a23, a33
+        g[0], g[1], g[2], g[3] = g0, g1, g2, g3
     return S
 
 
@@ -390,8 +400,65 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, 
             break
         gain = S - Sn
         x[:] = xn
+        S = Sn
+        if gain <= 1e-11 * S:  # the sum of squares to 1e-11: the parameters to ~1e-5 of their errors (J^T J
+            break             # kept from the step before: as good for the covariance)
         S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind, A, g)
         mu = max(mu / 5.0, 1e-9)
-        if gain <= 1e-13 * S:
-            break
     return x, S, A, it
+
+
+@njit(cache=True)
+def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind,
+                  max_iter):  # pragma: no cover - compiled
+    """:func:`adhesive_lm` with the jump cj confined to the gap ``[us[k], us[k+1]]`` between two
+    consecutive sample depths (where the set of points in contact is fixed), first the gap k0, then the
+    neighbouring gaps on each side while the sum of squares falls (one gap's look-ahead, two where the
+    best point lies at that end of its gap: the smooth part of the fit pulls on). ``fixed``: E and w
+    held at its first two entries where they are not NaN. Returns (gap, x, sum of squares, J^T J) of the
+    best."""
+    m = us.size - 1
+    lo = np.empty(4)
+    hi = np.empty(4)
+    best_k = -1
+    best_x = x0.copy()
+    best_S = np.inf
+    best_A = np.zeros((4, 4))
+    tried = np.zeros(m, dtype=np.bool_)
+    for phase in range(3):  # 0: the gap k0; 1: downwards; 2: upwards
+        k = k0 if phase == 0 else best_k
+        direction = -1 if phase == 1 else 1
+        misses = 0
+        start = x0.copy() if phase == 0 else best_x.copy()
+        while True:
+            if phase > 0:
+                # one gap's look-ahead; two where the best point is pressed against this end of its gap
+                edge = us[best_k] if direction < 0 else us[best_k + 1]
+                pressed = abs(best_x[2] - edge) <= 1e-6 * (us[best_k + 1] - us[best_k])
+                if misses >= (2 if pressed else 1):
+                    break
+                k += direction
+            if k < 0 or k >= m or (phase > 0 and tried[k]):
+                break
+            tried[k] = True
+            gap = us[k + 1] - us[k]
+            lo[0], hi[0] = 1e-12 * start[0], np.inf
+            lo[1], hi[1] = w_floor, np.inf
+            for j in range(2):
+                if not math.isnan(fixed[j]):
+                    lo[j] = hi[j] = start[j] = fixed[j]
+            lo[2], hi[2] = us[k] + 1e-9 * gap, us[k + 1] - 1e-9 * gap
+            lo[3], hi[3] = -np.inf, np.inf
+            x, S, A, _ = adhesive_lm(u, F, law, start, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind,
+                                     max_iter)
+            if S < best_S:
+                best_k, best_S = k, S
+                best_x[:] = x
+                best_A[:, :] = A
+                start = x.copy()
+                misses = 0
+            else:
+                misses += 1
+            if phase == 0:
+                break
+    return best_k, best_x, best_S, best_A

@@ -25,6 +25,7 @@ at ``c + D_end d_s``, and that position is the fitted parameter; c follows from 
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -99,13 +100,6 @@ class _Problem:
                                        self.d_end, self.lam, *self.tables, self.width, self.max_ind,
                                        np.zeros((0, 0)), np.zeros(0))
 
-    def lm(self, x0, lo, hi, max_iter: int = 200):
-        """Bounded Levenberg-Marquardt from x0: (x, sum of squares, J^T J)."""
-        x, S, A, _ = self._k.adhesive_lm(self.u, self.F, self.law, np.asarray(x0, float), lo, hi, self.R,
-                                          self.kc, self.d_end, self.lam, *self.tables, self.width,
-                                          self.max_ind, max_iter)
-        return x, S, A
-
 
 def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.0, branch: str = "approach",
                  width: float = 0.0, max_ind: float = math.inf) -> AdhesiveFit:
@@ -129,9 +123,12 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
         raise AnalysisError(f"{key}: the tip depth takes only {us.size} values: no contact to fit")
     mids = 0.5 * (us[:-1] + us[1:])  # one contact point between every two consecutive samples
     kh = 4.0 / 3.0 * math.sqrt(R) / (1.0 - nu * nu)
-    stride = max(1, mids.size // 400)
+    # DMT at a point in every gap; long runs: every stride-th gap on every stride-th sample, then every gap
+    # near the best on all samples
+    stride = max(1, mids.size // 60)
+    args = (kh, 2 * math.pi * R, float(width), float(max_ind))
     cand = np.ascontiguousarray(mids[::stride])
-    E0, W0, B0, S0 = scan_dmt(u, F, cand, kh, 2 * math.pi * R, float(width), float(max_ind))
+    S0 = scan_dmt(np.ascontiguousarray(u[::stride]), np.ascontiguousarray(F[::stride]), cand, *args)[3]
     i = int(np.argmin(S0))
     if not math.isfinite(S0[i]):
         raise AnalysisError(f"{key}: no contact point gives a positive modulus (the curve does not rise into "
@@ -139,16 +136,18 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     if stride > 1:
         k = i * stride
         cand = np.ascontiguousarray(mids[max(k - 2 * stride, 0):k + 2 * stride + 1])
-        E0, W0, B0, S0 = scan_dmt(u, F, cand, kh, 2 * math.pi * R, float(width), float(max_ind))
-        i = int(np.argmin(S0))
+    E0, W0, B0, S0 = scan_dmt(u, F, cand, *args)
+    i = int(np.argmin(S0))
+    if not math.isfinite(S0[i]):
+        raise AnalysisError(f"{key}: no contact point gives a positive modulus (the curve does not rise into "
+                            "contact)")
     prob = _Problem(u, F, key, R, nu, lam, branch, width, max_ind)
-    P0 = float(_branch(key, np.array([0.0]), lam)[0][0])  # the jump at contact [pi w R]
-    w0 = float(W0[i]) * 2.0 / abs(P0) if W0[i] > 0 else 0.0
-    w_small = 1e-5 * max(float(np.std(F)), 1e-30) / (math.pi * R)  # an adhesion far below the noise
+    w0 = float(W0[i]) * 2.0 / abs(_jump(key, float(lam))) if W0[i] > 0 else 0.0  # DMT's jump is -2 pi w R
+    w_small = 1e-5 * max(float(np.abs(F).max()), 1e-30) / (math.pi * R)  # an adhesion far below the forces
     x0 = np.array([float(E0[i]), max(w0, w_small), float(cand[i]), float(B0[i])])
     if prob.d_end != 0.0:
         x0[2] = float(cand[i]) + prob.d_end * prob.scales(x0[0], x0[1])[1]
-    gaps = _Gaps(prob, us, w_floor=1e-9 * x0[1])
+    gaps = _Gaps(prob, us, w_floor=1e-7 * w_small)  # no adhesion: the Hertz limit
     best = gaps.walk(gaps.gap_of(x0[2]), x0)
     x, S, JtJ = best[1:]
     q = weights(u - prob.contact(x))
@@ -170,12 +169,28 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     se = np.sqrt(np.clip(np.diag(cov), 0, None))
     E_low, E_high = max(x[0] - t * se[0], 0.0), x[0] + t * se[0]  # E > 0: the bound ends the interval
     w_low, w_high = x[1] - t * se[1], x[1] + t * se[1]
-    if not w_low > 0:  # the interval reaches w = 0, where the law's Jacobian fails (JKR: F ~ sqrt(w)): profile
+    if not w_low > 0:
+        # w's interval reaches 0, where the law's Jacobian fails (JKR: F - Hertz ~ sqrt(w)); the optimum may
+        # lie there (no adhesion): try it, then both intervals by profile likelihood
+        hertz = gaps.walk(best[0], x, w=gaps.w_floor)
+        if hertz[2] < S:
+            best = hertz
+            x, S = best[1], best[2]
+            q = weights(u - prob.contact(x))
+        thr = t * t
         w_low = 0.0
-        w_high = gaps.profile_w(best, S, s2, t * t, se[1])
+        w_high = gaps.profile(1, 1.0, best, S, s2, thr, se[1])
+        E_low = gaps.profile(0, -1.0, best, S, s2, thr, se[0], lower=0.0)
+        E_high = gaps.profile(0, 1.0, best, S, s2, thr, se[0])
     return AdhesiveFit(E=float(x[0]), w=float(x[1]), c=float(prob.contact(x)), b=float(x[3]), cov=cov,
                        ssr=float(S), n=n, weights=q, E_low=float(E_low), E_high=float(E_high),
                        w_low=float(w_low), w_high=float(w_high))
+
+
+@functools.lru_cache(maxsize=32)
+def _jump(key: str, lam: float) -> float:
+    """The force at the start of contact on the approach [pi w R]: JKR -4/3, DMT -2."""
+    return float(_branch(key, np.array([0.0]), lam)[0][0])
 
 
 class _Gaps:
@@ -185,51 +200,35 @@ class _Gaps:
         self.prob, self.us, self.w_floor = prob, us, w_floor
 
     def gap_of(self, cj: float) -> int:
-        return int(np.clip(np.searchsorted(self.us, cj, side="right") - 1, 0, self.us.size - 2))
+        return min(max(int(np.searchsorted(self.us, cj, side="right")) - 1, 0), self.us.size - 2)
 
-    def fit(self, k: int, start: np.ndarray, w_fixed: float | None = None):
-        """LM with the jump confined to gap k (and w held at ``w_fixed``): (k, x, ssr, J^T J)."""
-        us = self.us
-        gap = us[k + 1] - us[k]
-        lo_c, hi_c = us[k] + 1e-9 * gap, us[k + 1] - 1e-9 * gap
-        lo = np.array([1e-12 * start[0], self.w_floor, lo_c, -np.inf])
-        hi = np.array([np.inf, np.inf, hi_c, np.inf])
-        s = start.copy()
-        if w_fixed is not None:
-            lo[1] = hi[1] = s[1] = w_fixed
-        s[2] = min(max(s[2], lo_c), hi_c)
-        return (k, *self.prob.lm(s, lo, hi))
+    def walk(self, k0: int, x0: np.ndarray, E: float = math.nan, w: float = math.nan):
+        """The jump confined to the gap k0 between two samples, then to the neighbouring gaps while the sum
+        of squares falls (_kernels.adhesive_walk); E, w held where given: (gap, x, ssr, J^T J) of the best."""
+        p = self.prob
+        k, x, S, A = p._k.adhesive_walk(p.u, p.F, p.law, self.us, int(k0), np.asarray(x0, float), self.w_floor,
+                                        np.array([E, w]), p.R, p.kc, p.d_end, p.lam, *p.tables, p.width,
+                                        p.max_ind, 200)
+        return int(k), x, float(S), A
 
-    def walk(self, k0: int, x0: np.ndarray, w_fixed: float | None = None):
-        """From gap k0, to the neighbouring gaps while the sum of squares falls (two gaps' look-ahead)."""
-        best = self.fit(k0, x0, w_fixed)
-        tried = {k0}
-        for direction in (-1, 1):
-            k, x_from, misses = best[0], best[1], 0
-            while misses < 2:
-                k += direction
-                if k < 0 or k > self.us.size - 2 or k in tried:
-                    break
-                got = self.fit(k, x_from, w_fixed)
-                tried.add(k)
-                if got[2] < best[2]:
-                    best, misses, x_from = got, 0, got[1]
-                else:
-                    misses += 1
-        return best
-
-    def profile_w(self, best, S_min: float, s2: float, thr: float, w_se: float) -> float:
-        """The upper end of w's interval by profile likelihood: the w above the optimum where the sum of
-        squares, re-minimised over (E, c, b), exceeds its minimum by thr s^2. NaN (open) if it stays
-        below out to 13 steps (the data do not bound w)."""
+    def profile(self, j: int, sign: float, best, S_min: float, s2: float, thr: float, step: float,
+                lower: float = -math.inf) -> float:
+        """One end of parameter j's (0: E, 1: w) interval by profile likelihood: where the sum of squares,
+        re-minimised over the others, exceeds its minimum by thr s^2, on the side ``sign``. ``lower``: the
+        parameter's physical bound, the end if the profile reaches it below the threshold; NaN (open) if the
+        profile stays below out to 13 steps (the data do not bound it)."""
         x = best[1]
-        step = w_se if math.isfinite(w_se) and w_se > 0 else max(x[1], 1e-12)
-        prev_v, prev_d, cur = x[1], 0.0, best
+        step = step if math.isfinite(step) and step > 0 else 0.2 * abs(x[j])
+        prev_v, prev_d, cur = x[j], 0.0, best
         for m in (1.0, 2.0, 3.0, 4.5, 6.5, 9.0, 13.0):
-            v = x[1] + m * step
-            cur = self.walk(cur[0], cur[1], w_fixed=v)
+            v = x[j] + sign * m * step
+            if v <= lower:
+                return lower
+            fix = [math.nan, math.nan]
+            fix[j] = v
+            cur = self.walk(cur[0], cur[1], *fix)
             d = max((cur[2] - S_min) / s2, 0.0)
-            if d >= thr:  # the signed root sqrt(d) is ~linear in w: interpolate it
+            if d >= thr:  # the signed root sqrt(d) is ~linear in the parameter: interpolate it
                 a, b = math.sqrt(prev_d), math.sqrt(d)
                 return prev_v + (v - prev_v) * (math.sqrt(thr) - a) / max(b - a, 1e-300)
             prev_v, prev_d = v, d
