@@ -170,18 +170,18 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     E_low, E_high = max(x[0] - t * se[0], 0.0), x[0] + t * se[0]  # E > 0: the bound ends the interval
     w_low, w_high = x[1] - t * se[1], x[1] + t * se[1]
     if not w_low > 0:
-        # w's interval reaches 0, where the law's Jacobian fails (JKR: F - Hertz ~ sqrt(w)); the optimum may
-        # lie there (no adhesion): try it, then both intervals by profile likelihood
+        # w's interval reaches 0 (no adhesion measurable): the optimum may lie on that bound (the Hertz
+        # limit), and the interval is [0, the profile likelihood's upper end]. E keeps the covariance's
+        # interval: near w = 0 every law departs from Hertz linearly in w (JKR's sqrt(w) terms cancel), so
+        # the linearisation holds, and it is that of w unconstrained (a profile over w >= 0 undercovers
+        # E there: 91 of 100 seeds against 98)
         hertz = gaps.walk(best[0], x, w=gaps.w_floor)
         if hertz[2] < S:
             best = hertz
             x, S = best[1], best[2]
             q = weights(u - prob.contact(x))
-        thr = t * t
         w_low = 0.0
-        w_high = gaps.profile(1, 1.0, best, S, s2, thr, se[1])
-        E_low = gaps.profile(0, -1.0, best, S, s2, thr, se[0], lower=0.0)
-        E_high = gaps.profile(0, 1.0, best, S, s2, thr, se[0])
+        w_high = gaps.profile(1, 1.0, best, S, s2, t * t, se[1])
     return AdhesiveFit(E=float(x[0]), w=float(x[1]), c=float(prob.contact(x)), b=float(x[3]), cov=cov,
                        ssr=float(S), n=n, weights=q, E_low=float(E_low), E_high=float(E_high),
                        w_low=float(w_low), w_high=float(w_high))
