@@ -19,7 +19,8 @@ w's and the contact point's 95 % intervals (contact: +- 1.97 se), the largest |E
 and |E/E_true - 1|, and the sum of squares of before's optimum over after's (> 1: before missed the
 minimum). Then the non-adhesive laws' E before and after (the same code: expected identical), and a
 work-of-adhesion map's cost per curve through the pipeline (``fast_modulus`` and
-``analyze(steps=["indentation"])`` with the JKR model on a calibrated raw curve of 300 + 300 points).
+``analyze(steps=["indentation"])``, JKR on the retract, ``indentation.run=retract``, on calibrated raw
+curves of 300 + 300 points: an approach without adhesion, a retract with JKR's neck).
 """
 
 from __future__ import annotations
@@ -166,7 +167,7 @@ def _elastic_part(args, tmp: Path, src_before: Path) -> None:
 
 
 def map_part(args) -> None:
-    """A work-of-adhesion map's cost per curve: JKR through fast_modulus and analyze on a raw curve."""
+    """A work-of-adhesion map's cost per curve: JKR on the retract through fast_modulus and analyze."""
     import warnings
 
     from afmforce.analysis.indentation import fast_modulus
@@ -174,18 +175,22 @@ def map_part(args) -> None:
     from afmforce.analysis.pipeline import analyze
     from afmforce.io.curve import RawCurve
 
+    from afmforce.contact.models import hertz_paraboloid
+
     k, sens, n = 0.05, 40e-9, 300
     curves = []
-    for s in range(args.map_curves):
-        u, F, tr = ac.curve("jkr", s, n=n)
-        delta = u  # the tip depth; the piezo adds the lever's deflection F/k
-        z = 5e-6 + delta + F / k
-        volts = F / k / sens + 0.3
-        curves.append(RawCurve(time=np.arange(2 * n) * 1e-3, piezo_nominal=np.concatenate((z, z[::-1])),
-                               deflection_signal=np.concatenate((volts, volts[::-1])),
+    for s in range(args.map_curves):  # the approach without adhesion (no jump-in: a soft contact), the
+        rng = np.random.default_rng(s)  # retract with JKR's neck down to the pull-off
+        c = float(rng.uniform(0.2e-6, 0.4e-6))
+        u = np.linspace(-2e-6, 1.5e-6, n)
+        Fa = hertz_paraboloid(u - c, ac.E_TRUE, ac.R_TIP, ac.NU) + rng.normal(0, ac.NOISE, n)
+        Fr = ac.jkr_force(u - c, ac.E_TRUE, ac.W_TRUE, ac.R_TIP, retract=True) + rng.normal(0, ac.NOISE, n)
+        z = 5e-6 + np.concatenate((u + Fa / k, (u + Fr / k)[::-1]))  # the piezo adds the lever's deflection
+        volts = np.concatenate((Fa, Fr[::-1])) / k / sens + 0.3
+        curves.append(RawCurve(time=np.arange(2 * n) * 1e-3, piezo_nominal=z, deflection_signal=volts,
                                segment=np.repeat(np.array([0, 1], dtype=np.int8), n), deflection_unit="V",
                                metadata={"spring_constant": k, "sensitivity": sens}))
-    opts = IndentationOptions(model="jkr", tip_radius=ac.R_TIP)
+    opts = IndentationOptions(model="jkr", tip_radius=ac.R_TIP, run="retract")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         fast_modulus(curves[0], opts)

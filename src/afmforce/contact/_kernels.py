@@ -146,16 +146,20 @@ DMT, JKR, MAUGIS = 0, 1, 2  # law codes of the kernels
 @njit(cache=True)
 def jkr_point(D):  # pragma: no cover - compiled
     """JKR at dimensionless indentation D: (A, P, dP/dD). s = sqrt(A) is the root of s^4 - C s = D with
-    dD/ds > 0, by Newton's method from above (increasing and convex there: monotone, quadratic); D below
-    the branch's minimum gives its end."""
-    s_min = (_C_JKR / 4.0) ** (1.0 / 3.0)
-    s = max(max(D, 0.0) ** 0.25 + _C_JKR ** (1.0 / 3.0), s_min)
+    dD/ds > 0 (s >= s_m, s_m^3 = C/4), by Newton's method from above on y(s) = sqrt(D(s) - D(s_m)) =
+    (s - s_m) sqrt(s^2 + 2 s s_m + 3 s_m^2) (exact: no cancellation; linear at the branch's end, where D(s)
+    has a double root, so the convergence stays quadratic there). D below the branch's end gives its end."""
+    sm = (_C_JKR / 4.0) ** (1.0 / 3.0)
+    d_end = sm ** 4 - _C_JKR * sm
+    yt = math.sqrt(max(D - d_end, 0.0))
+    s = max(max(D, 0.0) ** 0.25 + _C_JKR ** (1.0 / 3.0), sm)  # above the root
     for _ in range(100):
-        slope = 4.0 * s * s * s - _C_JKR
-        if slope <= 0.0:
-            break
-        step = (s * s * s * s - _C_JKR * s - D) / slope
-        s = max(s - step, s_min)
+        e = s - sm
+        q = s * s + 2.0 * s * sm + 3.0 * sm * sm
+        rq = math.sqrt(q)
+        slope = rq + e * (s + sm) / rq
+        step = (e * rq - yt) / slope
+        s = max(s - step, sm)
         if abs(step) <= 1e-15 * s:
             break
     s2 = s * s
@@ -204,27 +208,32 @@ def maugis_params(t, lam):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def maugis_branch_point(D, lam, lt_tab, D_tab):  # pragma: no cover - compiled
-    """Maugis-Dugdale's stable branch at D: (A, P, dP/dD). Start from the table (ln t against D
-    increasing; ``lt_tab[0]`` the branch's end), then Newton's method in ln t to rounding."""
-    n = D_tab.size
-    Dc = min(max(D, D_tab[0]), D_tab[n - 1])
+def maugis_branch_point(D, lam, lt_tab, y_tab):  # pragma: no cover - compiled
+    """Maugis-Dugdale's stable branch at D: (A, P, dP/dD). The table: y = sqrt(D - D_end) (increasing)
+    against ln t, from the branch's end (``lt_tab[0]``, y = 0, dD/dt = 0) on. A start by interpolation in
+    y, then Newton's method in ln t on y(ln t) -- linear at the end, where D has a double root -- to
+    rounding."""
+    n = y_tab.size
+    d_end = maugis_point(math.exp(lt_tab[0]), lam)[2]
+    yt = math.sqrt(max(D - d_end, 0.0))
+    yc = min(yt, y_tab[n - 1])
     lo, hi = 0, n - 1
     while hi - lo > 1:
         mid = (lo + hi) // 2
-        if D_tab[mid] <= Dc:
+        if y_tab[mid] <= yc:
             lo = mid
         else:
             hi = mid
-    f = (Dc - D_tab[lo]) / (D_tab[hi] - D_tab[lo]) if D_tab[hi] > D_tab[lo] else 0.0
+    f = (yc - y_tab[lo]) / (y_tab[hi] - y_tab[lo]) if y_tab[hi] > y_tab[lo] else 0.0
     lt = lt_tab[lo] + f * (lt_tab[hi] - lt_tab[lo])
     lt_end = lt_tab[0]
     A, P, Dt, dP, dD = maugis_point(math.exp(lt), lam)
     for _ in range(40):
-        slope = dD * math.exp(lt)  # dD / d ln t (< 0 on the branch)
-        if not slope < 0.0:
+        y = math.sqrt(max(Dt - d_end, 0.0))
+        slope = dD * math.exp(lt) / (2.0 * y) if y > 0 else -np.inf  # dy / d ln t (< 0 on the branch)
+        if not (slope < 0.0 and math.isfinite(slope)):
             break
-        step = (Dt - Dc) / slope
+        step = (y - yt) / slope
         lt = min(lt - step, lt_end)
         A, P, Dt, dP, dD = maugis_point(math.exp(lt), lam)
         if abs(step) <= 1e-14:
@@ -233,28 +242,28 @@ def maugis_branch_point(D, lam, lt_tab, D_tab):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def branch_point(law, D, lam, lt_tab, D_tab):  # pragma: no cover - compiled
+def branch_point(law, D, lam, lt_tab, y_tab):  # pragma: no cover - compiled
     """The law's stable branch at dimensionless indentation D: (A, P, dP/dD)."""
     if law == DMT:
         Dp = max(D, 0.0)
         return math.sqrt(Dp), Dp * math.sqrt(Dp) - 2.0, 1.5 * math.sqrt(Dp)
     if law == JKR:
         return jkr_point(D)
-    return maugis_branch_point(D, lam, lt_tab, D_tab)
+    return maugis_branch_point(D, lam, lt_tab, y_tab)
 
 
 @njit(cache=True)
-def branch_values(law, D, lam, lt_tab, D_tab):  # pragma: no cover - compiled
+def branch_values(law, D, lam, lt_tab, y_tab):  # pragma: no cover - compiled
     """:func:`branch_point` on an array: arrays (A, P, dP/dD)."""
     n = D.size
     A, P, dP = np.empty(n), np.empty(n), np.empty(n)
     for i in range(n):
-        A[i], P[i], dP[i] = branch_point(law, D[i], lam, lt_tab, D_tab)
+        A[i], P[i], dP[i] = branch_point(law, D[i], lam, lt_tab, y_tab)
     return A, P, dP
 
 
 @njit(cache=True)
-def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind, A, g):  # pragma: no cover
+def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, A, g):  # pragma: no cover
     """The sum of squares [N^2] of an adhesive law at x = (E, w, cj, b); fills ``A`` (4 x 4) with J^T J
     and ``g`` (4) with J^T r of the weighted model Jacobian J = d model / d (E, w, cj, b) and the weighted
     residuals r = q (F - model); ``A.size == 0``: the sum of squares alone.
@@ -285,7 +294,7 @@ def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, D_tab, width, max_i
         j0 = j1 = j2 = 0.0
         if u[i] > cj:
             rel = (u[i] - cj) / ds
-            _, P, dP = branch_point(law, rel + d_end, lam, lt_tab, D_tab)
+            _, P, dP = branch_point(law, rel + d_end, lam, lt_tab, y_tab)
             model += fs * P
             j0 = q * cE * dP * rel
             j1 = q * cw * (P - 2.0 / 3.0 * rel * dP)
@@ -346,7 +355,7 @@ def _solve_small(M, y):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind,
+def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
                 max_iter):  # pragma: no cover - compiled
     """Bounded Levenberg-Marquardt on (E, w, cj, b) of :func:`adhesive_normal` (Marquardt's diagonal
     scaling; a variable on a bound that the gradient pushes outwards is held there, one with lo = hi
@@ -356,7 +365,7 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, 
     A = np.zeros((4, 4))
     g = np.zeros(4)
     empty = np.zeros((0, 0))
-    S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind, A, g)
+    S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, A, g)
     mu = 1e-4
     M = np.zeros((4, 4))
     y = np.zeros(4)
@@ -391,7 +400,7 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, 
                 continue
             for j in range(4):
                 xn[j] = min(max(x[j] + y[j] / nrm[j], lo[j]), hi[j])
-            Sn = adhesive_normal(u, F, law, xn, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind, empty, g[:0])
+            Sn = adhesive_normal(u, F, law, xn, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, empty, g[:0])
             if Sn < S:
                 improved = True
                 break
@@ -403,13 +412,13 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, 
         S = Sn
         if gain <= 1e-11 * S:  # the sum of squares to 1e-11: the parameters to ~1e-5 of their errors (J^T J
             break             # kept from the step before: as good for the covariance)
-        S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind, A, g)
+        S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, A, g)
         mu = max(mu / 5.0, 1e-9)
     return x, S, A, it
 
 
 @njit(cache=True)
-def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind,
+def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
                   max_iter):  # pragma: no cover - compiled
     """:func:`adhesive_lm` with the jump cj confined to the gap ``[us[k], us[k+1]]`` between two
     consecutive sample depths (where the set of points in contact is fixed), first the gap k0, then the
@@ -449,7 +458,7 @@ def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_t
                     lo[j] = hi[j] = start[j] = fixed[j]
             lo[2], hi[2] = us[k] + 1e-9 * gap, us[k + 1] - 1e-9 * gap
             lo[3], hi[3] = -np.inf, np.inf
-            x, S, A, _ = adhesive_lm(u, F, law, start, lo, hi, R, kc, d_end, lam, lt_tab, D_tab, width, max_ind,
+            x, S, A, _ = adhesive_lm(u, F, law, start, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
                                      max_iter)
             if S < best_S:
                 best_k, best_S = k, S
@@ -462,3 +471,18 @@ def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_t
             if phase == 0:
                 break
     return best_k, best_x, best_S, best_A
+
+
+@njit(cache=True)
+def adhesive_model(u, law, x, R, kc, d_end, lam, lt_tab, y_tab):  # pragma: no cover - compiled
+    """The law's force [N] at each tip depth u, baseline excluded, at x = (E, w, cj, b) (as in
+    :func:`adhesive_normal`: contact where u > cj)."""
+    E, w, cj = x[0], x[1], x[2]
+    fs = math.pi * w * R
+    K = kc * E
+    ds = (math.pi * math.pi * w * w * R / (K * K)) ** (1.0 / 3.0)
+    out = np.zeros(u.size)
+    for i in range(u.size):
+        if u[i] > cj:
+            out[i] = fs * branch_point(law, (u[i] - cj) / ds + d_end, lam, lt_tab, y_tab)[1]
+    return out

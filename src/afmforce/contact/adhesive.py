@@ -90,16 +90,26 @@ def _jkr_table(n: int = 6000) -> tuple[np.ndarray, np.ndarray]:
 
 @functools.lru_cache(maxsize=16)
 def _maugis_table(lam: float, n: int = 6000) -> tuple[np.ndarray, np.ndarray]:
-    """Maugis-Dugdale's stable branch for ``lambda`` on a grid of ln t (t = sqrt(m^2 - 1)):
-    (ln t, D) with D increasing, from the branch's end (dD/dt = 0) on."""
+    """Maugis-Dugdale's stable branch for ``lambda`` on a grid of ln t (t = sqrt(m^2 - 1)), from its end
+    (dD/dt = 0, refined by bisection) on: (ln t, y = sqrt(D - D_end)), y increasing (t decreasing)."""
     if not lam > 0:
         raise ParameterError(f"Maugis transition parameter lambda = {lam} must be > 0")
+    k = _kernels()
     lt = np.linspace(math.log(1e-8), math.log(1e4), n)
-    D = _kernels().maugis_params(np.exp(lt), float(lam))[2]
+    D = k.maugis_params(np.exp(lt), float(lam))[2]
     end = int(np.argmin(D))  # t beyond it: the unstable branch
-    lt, D = lt[:end + 1][::-1], D[:end + 1][::-1]
+    lo, hi = lt[max(end - 1, 0)], lt[min(end + 1, n - 1)]
+    for _ in range(100):  # dD/dt = 0 by bisection
+        mid = 0.5 * (lo + hi)
+        if k.maugis_point(math.exp(mid), float(lam))[4] < 0:
+            lo = mid
+        else:
+            hi = mid
+    d_end = k.maugis_point(math.exp(lo), float(lam))[2]
+    lt, D = np.concatenate(([lo], lt[:end][::-1])), np.concatenate(([d_end], D[:end][::-1]))
     keep = np.concatenate(([True], np.diff(D) > 0))
-    return np.ascontiguousarray(lt[keep]), np.ascontiguousarray(D[keep])
+    lt, D = lt[keep], D[keep]
+    return np.ascontiguousarray(lt), np.sqrt(np.maximum(D - d_end, 0.0))
 
 
 def maugis_dimensionless(lam: float) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -121,15 +131,7 @@ def branch_end(key: str, lam: float = 1.0) -> tuple[float, float]:
         s = (_C / 4.0) ** (1.0 / 3.0)
         return s ** 4 - _C * s, s ** 6 - math.sqrt(6.0) * s ** 3
     lt, _ = _maugis_table(float(lam))
-    k = _kernels()
-    lo, hi = math.exp(lt[0]) * 0.99, math.exp(lt[0]) * 1.01  # dD/dt = 0, by bisection near the table's end
-    for _ in range(80):
-        mid = 0.5 * (lo + hi)
-        if k.maugis_point(mid, float(lam))[4] < 0:
-            lo = mid
-        else:
-            hi = mid
-    _, P, D, _, _ = k.maugis_point(lo, float(lam))
+    _, P, D, _, _ = _kernels().maugis_point(math.exp(lt[0]), float(lam))
     return float(D), float(P)
 
 

@@ -52,6 +52,7 @@ class AdhesiveFit:
     ssr : float  weighted sum of squares at the optimum [N^2]
     n : int  points with a non-zero weight [-]
     weights : ndarray  the residuals' weights at the optimum [-]
+    model : ndarray  the law's force at each sample at the optimum, baseline excluded [N]
     E_low, E_high : float  95 % interval of E [Pa] (the covariance's; the lower end at least 0)
     w_low, w_high : float  95 % interval of w [J/m^2]; when it reaches 0, [0, the profile likelihood's upper
         end] (NaN: open, the data do not bound w)
@@ -65,6 +66,7 @@ class AdhesiveFit:
     ssr: float
     n: int
     weights: np.ndarray
+    model: np.ndarray
     E_low: float = math.nan
     E_high: float = math.nan
     w_low: float = math.nan
@@ -148,6 +150,8 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     if prob.d_end != 0.0:
         x0[2] = float(cand[i]) + prob.d_end * prob.scales(x0[0], x0[1])[1]
     gaps = _Gaps(prob, us, w_floor=1e-7 * w_small)  # no adhesion: the Hertz limit
+    if prob.d_end != 0.0:  # a retract's neck: DMT's jump may lie tens of gaps from the law's
+        x0 = gaps.glide(x0)
     best = gaps.walk(gaps.gap_of(x0[2]), x0)
     x, S, JtJ = best[1:]
     q = weights(u - prob.contact(x))
@@ -182,8 +186,9 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
             q = weights(u - prob.contact(x))
         w_low = 0.0
         w_high = gaps.profile(1, 1.0, best, S, s2, t * t, se[1])
+    model = prob._k.adhesive_model(u, prob.law, x, prob.R, prob.kc, prob.d_end, prob.lam, *prob.tables)
     return AdhesiveFit(E=float(x[0]), w=float(x[1]), c=float(prob.contact(x)), b=float(x[3]), cov=cov,
-                       ssr=float(S), n=n, weights=q, E_low=float(E_low), E_high=float(E_high),
+                       ssr=float(S), n=n, weights=q, model=model, E_low=float(E_low), E_high=float(E_high),
                        w_low=float(w_low), w_high=float(w_high))
 
 
@@ -201,6 +206,17 @@ class _Gaps:
 
     def gap_of(self, cj: float) -> int:
         return min(max(int(np.searchsorted(self.us, cj, side="right")) - 1, 0), self.us.size - 2)
+
+    def glide(self, x0: np.ndarray) -> np.ndarray:
+        """LM with the jump free over the whole run (the sum of squares jumps where a sample changes side,
+        which the smooth Jacobian ignores): a start some gaps away -- DMT's on a retract's neck -- reaches
+        the right gap's neighbourhood in a few steps instead of gap by gap."""
+        p = self.prob
+        lo = np.array([1e-12 * x0[0], self.w_floor, self.us[0], -np.inf])
+        hi = np.array([np.inf, np.inf, self.us[-1], np.inf])
+        x, S, _, _ = p._k.adhesive_lm(p.u, p.F, p.law, np.asarray(x0, float), lo, hi, p.R, p.kc, p.d_end, p.lam,
+                                      *p.tables, p.width, p.max_ind, 100)
+        return x if S < p.ssr(x0) else np.asarray(x0, float)
 
     def walk(self, k0: int, x0: np.ndarray, E: float = math.nan, w: float = math.nan):
         """The jump confined to the gap k0 between two samples, then to the neighbouring gaps while the sum

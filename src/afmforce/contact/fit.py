@@ -20,6 +20,7 @@ parameters, the contact point included, are fitted together and get their covari
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -33,6 +34,7 @@ from .registry import indentation_model
 
 __all__ = ["IndentationFit", "fit_indentation", "validity", "model_force"]
 
+@functools.lru_cache(maxsize=256)
 def _t95(dof: int) -> float:
     """Two-sided 95 % Student t quantile for ``dof`` degrees of freedom (NaN for none)."""
     if dof <= 0:
@@ -321,7 +323,7 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     E_low, E_high = (E - t * E_se, E + t * E_se) if m.linear else (a.E_low, a.E_high)
     in_contact = used & (d > 0)
     dmax = float(d[in_contact].max()) if in_contact.any() else 0.0
-    fmodel = model_force(model, d, E, geom, nu, w if not m.linear else 0.0, transition, branch)
+    fmodel = model_force(model, d, E, geom, nu, 0.0, transition, branch) if m.linear else a.model
     resid = (F - fmodel - b)[used]
     warn = list(validity(model, geom, dmax, thickness, int(in_contact.sum())))
     if math.isfinite(E_se) and E_se > 0.5 * E:
