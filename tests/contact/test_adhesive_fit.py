@@ -179,3 +179,29 @@ def test_fit_adhesive_refuses_a_curve_without_contact():
     u = np.linspace(0, 1e-6, 50)
     with pytest.raises(AnalysisError, match="positive modulus"):
         fit_adhesive(u, -1e-9 * u / 1e-6, "jkr", ac.R_TIP)
+
+
+def test_pipeline_step_fits_jkr_on_the_retract():
+    """The analysis step and the fast path (as a map runs them) with JKR on the retract of a calibrated raw
+    curve: an approach without adhesion (a soft contact, no jump-in), a retract with JKR's neck."""
+    from afmforce.analysis.indentation import fast_modulus
+    from afmforce.analysis.options import IndentationOptions
+    from afmforce.analysis.pipeline import analyze
+    from afmforce.contact.models import hertz_paraboloid
+    from afmforce.io.curve import RawCurve
+
+    k, sens, n, c = 0.05, 40e-9, 300, 0.31e-6
+    rng = np.random.default_rng(11)
+    u = np.linspace(-2e-6, 1.5e-6, n)
+    Fa = hertz_paraboloid(u - c, ac.E_TRUE, ac.R_TIP, ac.NU) + rng.normal(0, ac.NOISE, n)
+    Fr = ac.jkr_force(u - c, ac.E_TRUE, ac.W_TRUE, ac.R_TIP, retract=True) + rng.normal(0, ac.NOISE, n)
+    z = 5e-6 + np.concatenate((u + Fa / k, (u + Fr / k)[::-1]))  # the piezo: tip depth + the lever's deflection
+    volts = np.concatenate((Fa, Fr[::-1])) / k / sens + 0.3
+    curve = RawCurve(time=np.arange(2 * n) * 1e-3, piezo_nominal=z, deflection_signal=volts,
+                     segment=np.repeat(np.array([0, 1], dtype=np.int8), n), deflection_unit="V",
+                     metadata={"spring_constant": k, "sensitivity": sens})
+    opts = IndentationOptions(model="jkr", tip_radius=ac.R_TIP, run="retract")
+    for res in (fast_modulus(curve, opts), analyze(curve, steps=["indentation"], options=[opts])):
+        assert abs(res.youngs_modulus / ac.E_TRUE - 1) < 0.02, res.youngs_modulus
+        assert abs(res.work_of_adhesion / ac.W_TRUE - 1) < 0.02, res.work_of_adhesion
+        assert abs(res.contact_point - (5e-6 + c)) < 5e-9  # piezo position at contact [m]
