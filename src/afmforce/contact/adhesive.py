@@ -16,6 +16,9 @@ Greenwood (1997)::
 ``branch``: ``"approach"`` -- no force before contact (delta <= 0), the contact's stable
 branch from delta = 0 on; ``"retract"`` -- the displacement-controlled branch down to its
 smallest indentation (a neck: delta < 0), zero force past it.
+
+The branches are exact (:func:`branch`, compiled in :mod:`._kernels`): JKR's quartic and Maugis's
+parametric equations inverted by Newton's method to rounding, not interpolated.
 """
 
 from __future__ import annotations

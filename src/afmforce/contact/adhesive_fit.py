@@ -14,10 +14,13 @@ samples. The fit therefore
    every two consecutive samples (a compiled kernel; long runs: every k-th, then all near the best),
 2. fits all four parameters (E, w, the contact point c, b) by a bounded Levenberg-Marquardt with
    the analytic Jacobian, c confined to the gap between two samples where the set of points in
-   contact is fixed, and walks to the neighbouring gaps while the sum of squares falls,
+   contact is fixed, and walks to the neighbouring gaps while the sum of squares falls
+   (:func:`afmforce.contact._kernels.adhesive_walk`; on the retract a free glide first),
 3. reports the lowest sum of squares found, and the covariance ``s^2 (J^T J)^-1`` of all four
    (the Jacobian's contact-point column is the smooth slope of the law; the jump's own information
-   about c is left out, so the intervals are, if anything, conservative).
+   about c is left out, so the intervals are, if anything, conservative): E and w +- t(0.975, n-4) se.
+   Where w's interval reaches 0 (no adhesion measurable), the Hertz limit is tried as the optimum
+   and w's upper end comes from the profile likelihood.
 
 The retract branch (``branch="retract"``) ends at the law's pull-off (D_end < 0): the jump is there,
 at ``c + D_end d_s``, and that position is the fitted parameter; c follows from it.
@@ -36,9 +39,6 @@ from .adhesive import _code, _tables, branch_end
 from .adhesive import branch as _branch
 
 __all__ = ["AdhesiveFit", "fit_adhesive"]
-
-_NAMES = ("E", "w", "c", "b")
-
 
 @dataclass(frozen=True)
 class AdhesiveFit:
