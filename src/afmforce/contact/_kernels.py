@@ -418,58 +418,72 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, 
 
 
 @njit(cache=True)
+def gap_fit(u, F, law, us, k, start, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
+             max_iter):  # pragma: no cover - compiled
+    """:func:`adhesive_lm` with the jump cj confined to gap k, E and w held where ``fixed`` says."""
+    lo = np.empty(4)
+    hi = np.empty(4)
+    s = start.copy()
+    gap = us[k + 1] - us[k]
+    lo[0], hi[0] = 1e-12 * s[0], np.inf
+    lo[1], hi[1] = w_floor, np.inf
+    for j in range(2):
+        if not math.isnan(fixed[j]):
+            lo[j] = hi[j] = s[j] = fixed[j]
+    lo[2], hi[2] = us[k] + 1e-9 * gap, us[k + 1] - 1e-9 * gap
+    lo[3], hi[3] = -np.inf, np.inf
+    x, S, A, _ = adhesive_lm(u, F, law, s, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, max_iter)
+    return x, S, A
+
+
+@njit(cache=True)
 def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
                   max_iter):  # pragma: no cover - compiled
     """:func:`adhesive_lm` with the jump cj confined to the gap ``[us[k], us[k+1]]`` between two
-    consecutive sample depths (where the set of points in contact is fixed), first the gap k0, then the
-    neighbouring gaps on each side while the sum of squares falls (one gap's look-ahead, two where the
-    best point lies at that end of its gap: the smooth part of the fit pulls on). ``fixed``: E and w
-    held at its first two entries where they are not NaN. Returns (gap, x, sum of squares, J^T J) of the
-    best."""
+    consecutive sample depths (where the set of points in contact is fixed): first the gap k0, then the
+    gaps on each side while the sum of squares falls. One gap's look-ahead, two where the best point is
+    pressed against that end of its gap (the smooth part of the fit pulls on); while the sum of squares
+    falls the steps grow (1, 2, 4, ... gaps: a start far from the optimum, as on a retract's neck where
+    each gap gains a little), and an overshoot (no gain after a long step) resumes gap by gap from the
+    best. ``fixed``: E and w held at its first two
+    entries where they are not NaN. Returns (gap, x, sum of squares, J^T J) of the best."""
     m = us.size - 1
-    lo = np.empty(4)
-    hi = np.empty(4)
-    best_k = -1
-    best_x = x0.copy()
-    best_S = np.inf
-    best_A = np.zeros((4, 4))
+    best_k = k0
+    best_x, best_S, best_A = gap_fit(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab,
+                                      width, max_ind, max_iter)
     tried = np.zeros(m, dtype=np.bool_)
-    for phase in range(3):  # 0: the gap k0; 1: downwards; 2: upwards
-        k = k0 if phase == 0 else best_k
-        direction = -1 if phase == 1 else 1
+    tried[k0] = True
+    for direction in (-1, 1):
+        k = best_k
+        step = 1
         misses = 0
-        start = x0.copy() if phase == 0 else best_x.copy()
         while True:
-            if phase > 0:
-                # one gap's look-ahead; two where the best point is pressed against this end of its gap
-                edge = us[best_k] if direction < 0 else us[best_k + 1]
-                pressed = abs(best_x[2] - edge) <= 1e-6 * (us[best_k + 1] - us[best_k])
-                if misses >= (2 if pressed else 1):
-                    break
-                k += direction
-            if k < 0 or k >= m or (phase > 0 and tried[k]):
+            edge = us[best_k] if direction < 0 else us[best_k + 1]
+            pressed = abs(best_x[2] - edge) <= 1e-6 * (us[best_k + 1] - us[best_k])
+            if misses >= (2 if pressed else 1):
                 break
+            k = best_k + direction * step if misses == 0 else k + direction
+            if k < 0 or k >= m:
+                if step > 1:  # past the end after a long step: back to single gaps
+                    step = 1
+                    continue
+                break
+            if tried[k]:
+                misses += 1
+                continue
             tried[k] = True
-            gap = us[k + 1] - us[k]
-            lo[0], hi[0] = 1e-12 * start[0], np.inf
-            lo[1], hi[1] = w_floor, np.inf
-            for j in range(2):
-                if not math.isnan(fixed[j]):
-                    lo[j] = hi[j] = start[j] = fixed[j]
-            lo[2], hi[2] = us[k] + 1e-9 * gap, us[k + 1] - 1e-9 * gap
-            lo[3], hi[3] = -np.inf, np.inf
-            x, S, A, _ = adhesive_lm(u, F, law, start, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
-                                     max_iter)
+            x, S, A = gap_fit(u, F, law, us, k, best_x, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width,
+                               max_ind, max_iter)
             if S < best_S:
                 best_k, best_S = k, S
                 best_x[:] = x
                 best_A[:, :] = A
-                start = x.copy()
                 misses = 0
+                step *= 2
+            elif step > 1:  # an overshoot: resume gap by gap from the best
+                step = 1
             else:
                 misses += 1
-            if phase == 0:
-                break
     return best_k, best_x, best_S, best_A
 
 
