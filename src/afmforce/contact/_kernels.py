@@ -76,34 +76,58 @@ def scan_dmt(u, F, cands, k, g, width, max_ind):  # pragma: no cover - compiled
     for i in range(F.size):
         f0 += F[i]
     f0 /= F.size  # the force centred: the sums of squares without cancellation
+    plain = width <= 0 and not max_ind < np.inf  # unit weights: only the points in contact need a loop
+    order = np.argsort(u)
+    us = u[order]
+    fs = F[order] - f0
+    n = u.size
+    sy = 0.0
+    syy = 0.0
+    for i in range(n):
+        sy += fs[i]
+        syy += fs[i] * fs[i]
     for j in range(m):
         c = cands[j]
         s00 = s01 = s02 = s11 = s12 = s22 = y0 = y1 = y2 = yy = 0.0
-        for i in range(u.size):
-            d = u[i] - c
-            if d > max_ind:
-                continue
-            q = 1.0
-            if width > 0:
-                q = min(abs(d) / width, 1.0)
-            q = q * q
-            if d > 0:
+        if plain:
+            s22, y2, yy = float(n), sy, syy
+            for i in range(np.searchsorted(us, c, side="right"), n):
+                d = us[i] - c
                 phi = k * d * math.sqrt(d)
-                psi = -g
-            else:
-                phi = 0.0
-                psi = 0.0
-            f = F[i] - f0
-            s00 += q * phi * phi
-            s01 += q * phi * psi
-            s02 += q * phi
-            s11 += q * psi * psi
-            s12 += q * psi
-            s22 += q
-            y0 += q * phi * f
-            y1 += q * psi * f
-            y2 += q * f
-            yy += q * f * f
+                f = fs[i]
+                s00 += phi * phi
+                s01 -= phi * g
+                s02 += phi
+                s11 += g * g
+                s12 -= g
+                y0 += phi * f
+                y1 -= g * f
+        else:
+            for i in range(n):
+                d = us[i] - c
+                if d > max_ind:
+                    continue
+                q = 1.0
+                if width > 0:
+                    q = min(abs(d) / width, 1.0)
+                q = q * q
+                if d > 0:
+                    phi = k * d * math.sqrt(d)
+                    psi = -g
+                else:
+                    phi = 0.0
+                    psi = 0.0
+                f = fs[i]
+                s00 += q * phi * phi
+                s01 += q * phi * psi
+                s02 += q * phi
+                s11 += q * psi * psi
+                s12 += q * psi
+                s22 += q
+                y0 += q * phi * f
+                y1 += q * psi * f
+                y2 += q * f
+                yy += q * f * f
         if not (s00 > 0 and s11 > 0 and s22 > 0):
             continue
         # unit diagonal (the columns differ by ~1e13), then Cramer's rule on the 3 x 3 system

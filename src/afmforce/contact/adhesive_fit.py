@@ -125,9 +125,9 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
         raise AnalysisError(f"{key}: the tip depth takes only {us.size} values: no contact to fit")
     mids = 0.5 * (us[:-1] + us[1:])  # one contact point between every two consecutive samples
     kh = 4.0 / 3.0 * math.sqrt(R) / (1.0 - nu * nu)
-    # DMT at a point in every gap; long runs: every stride-th gap, then every gap near the best (on all
-    # samples: thinned ones misplace the best on real curves whose jump is within the noise)
-    stride = max(1, mids.size // 60)
+    # DMT at a point in every gap: every stride-th gap, then every gap near the best (on all samples:
+    # thinned ones misplace the best on real curves whose jump is within the noise)
+    stride = max(1, round(math.sqrt(mids.size / 4)))  # the fewest candidates: m/stride + 4 stride
     args = (kh, 2 * math.pi * R, float(width), float(max_ind))
     cand = np.ascontiguousarray(mids[::stride])
     S0 = scan_dmt(u, F, cand, *args)[3]
@@ -232,26 +232,30 @@ class _Gaps:
                                         p.max_ind, 200)
         return int(k), x, float(S), A
 
-    def sweep(self, best):
-        """Gaps 2, 3, 5, ... 233 away from the best on each side, each fitted from the best; from the first
-        better one a walk, and again from there, until none is better."""
+    def sweep(self, best, rounds: int = 3):
+        """Gaps 2, 3, 5, ... 233 away from the best on each side, each probed from the best (a short LM);
+        from the first better one a walk, and again from there, until none is better (at most
+        ``rounds`` times)."""
         p = self.prob
         fixed = np.array([math.nan, math.nan])
-        while True:
+        for _ in range(rounds):
             k0 = best[0]
             for off in (2, 3, 5, 8, 13, 21, 34, 55, 89, 144, 233):
                 better = None
                 for k in (k0 - off, k0 + off):
                     if 0 <= k < self.us.size - 1:
                         x, S, _ = p._k.gap_fit(p.u, p.F, p.law, self.us, k, best[1], self.w_floor, fixed, p.R, p.kc,
-                                               p.d_end, p.lam, *p.tables, p.width, p.max_ind, 200)
+                                               p.d_end, p.lam, *p.tables, p.width, p.max_ind, 8)
                         if S < best[2] and (better is None or S < better[1]):
                             better = (k, S, x)
                 if better is not None:
                     break
             if better is None:
                 return best
-            best = self.walk(better[0], better[2])
+            got = self.walk(better[0], better[2])
+            if got[2] < best[2]:
+                best = got
+        return best
 
     def profile(self, j: int, sign: float, best, S_min: float, s2: float, thr: float, step: float,
                 lower: float = -math.inf) -> float:
