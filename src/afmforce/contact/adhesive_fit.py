@@ -157,6 +157,24 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     # local minima a walk stops at (a retract's small neck on real curves): look further away
     P_jump = branch_end(key, lam)[1] if prob.d_end != 0.0 else _jump(key, float(lam))
     if abs(P_jump) * math.pi * best[1][1] * R < 10.0 * math.sqrt(best[2] / u.size):
+        # DMT at every gap (closed form): a walk from each of its three best basins, then the sweep
+        Ea, Wa, Ba, Sa = scan_dmt(u, F, np.ascontiguousarray(mids), *args)
+        starts = []
+        for j in np.argsort(Sa):
+            if not math.isfinite(Sa[j]) or len(starts) == 3:
+                break
+            if all(abs(int(j) - k) > 5 for k in starts):
+                starts.append(int(j))
+        for j in starts:
+            if j == best[0]:
+                continue
+            xs = np.array([Ea[j], max(float(Wa[j]) * 2.0 / abs(_jump(key, float(lam))), w_small), mids[j], Ba[j]])
+            if prob.d_end != 0.0:
+                xs[2] = mids[j] + prob.d_end * prob.scales(xs[0], xs[1])[1]
+                xs = gaps.glide(xs)
+            got = gaps.walk(gaps.gap_of(xs[2]), xs)
+            if got[2] < best[2]:
+                best = got
         best = gaps.sweep(best)
     x, S, JtJ = best[1:]
     q = weights(u - prob.contact(x))
