@@ -50,7 +50,7 @@ def test_analytic_jacobian_is_the_gradient(key):
     u, F, tr = ac.curve(key, 0, n=200)
     prob = _Problem(u, F, key, ac.R_TIP, ac.NU, ac.LAM, "approach", 0.0, math.inf)
     x = np.array([tr["E"] * 1.05, tr["w"] * 0.9, tr["c"], tr["b"] + 1e-11])
-    from afmforce.contact import _kernels as K
+    from afmforce.contact import _adhesive_kernels as K
 
     Amat, g = np.zeros((4, 4)), np.zeros(4)
     K.adhesive_normal(u, F, prob.law, x, prob.R, prob.kc, prob.d_end, prob.lam, *prob.tables, 0.0, math.inf, Amat, g)

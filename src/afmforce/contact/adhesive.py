@@ -17,7 +17,7 @@ Greenwood (1997)::
 branch from delta = 0 on; ``"retract"`` -- the displacement-controlled branch down to its
 smallest indentation (a neck: delta < 0), zero force past it.
 
-The branches are exact (:func:`branch`, compiled in :mod:`._kernels`): JKR's quartic and Maugis's
+The branches are exact (:func:`branch`, compiled in :mod:`._adhesive_kernels`): JKR's quartic and Maugis's
 parametric equations inverted by Newton's method to rounding, not interpolated.
 """
 
@@ -51,9 +51,9 @@ def scales(E: float, w: float, radius: float, nu: float) -> tuple[float, float]:
 
 
 def _kernels():
-    from . import _kernels
+    from . import _adhesive_kernels
 
-    return _kernels
+    return _adhesive_kernels
 
 
 _NO_TABLE = (np.zeros(1), np.zeros(1))
@@ -63,7 +63,7 @@ def _tables(key: str, lam: float):
     return _maugis_table(float(lam)) if key == "maugis" else _NO_TABLE
 
 
-_LAW = {"dmt": 0, "jkr": 1, "maugis": 2}  # the kernels' law codes (_kernels.DMT, JKR, MAUGIS)
+_LAW = {"dmt": 0, "jkr": 1, "maugis": 2}  # the kernels' law codes (_adhesive_kernels.DMT, JKR, MAUGIS)
 
 
 def _code(key: str) -> int:

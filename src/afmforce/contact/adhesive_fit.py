@@ -15,7 +15,7 @@ samples. The fit therefore
 2. fits all four parameters (E, w, the contact point c, b) by a bounded Levenberg-Marquardt with
    the analytic Jacobian, c confined to the gap between two samples where the set of points in
    contact is fixed, and walks to the neighbouring gaps while the sum of squares falls
-   (:func:`afmforce.contact._kernels.adhesive_walk`; on the retract a free glide first),
+   (:func:`afmforce.contact._adhesive_kernels.adhesive_walk`; on the retract a free glide first),
 3. reports the lowest sum of squares found, and the covariance ``s^2 (J^T J)^-1`` of all four
    (the Jacobian's contact-point column is the smooth slope of the law; the jump's own information
    about c is left out, so the intervals are, if anything, conservative): E and w +- t(0.975, n-4) se.
@@ -78,7 +78,7 @@ class _Problem:
     jump): c on the approach, c + D_end d_s on the retract (D_end < 0, the branch's end)."""
 
     def __init__(self, u, F, key, R, nu, lam, branch, width, max_ind):
-        from . import _kernels
+        from . import _adhesive_kernels as _kernels
 
         self.u, self.F, self.R, self.lam = u, F, R, float(lam)
         self.law = _code(key)
@@ -243,7 +243,7 @@ class _Gaps:
 
     def walk(self, k0: int, x0: np.ndarray, E: float = math.nan, w: float = math.nan):
         """The jump confined to the gap k0 between two samples, then to the neighbouring gaps while the sum
-        of squares falls (_kernels.adhesive_walk); E, w held where given: (gap, x, ssr, J^T J) of the best."""
+        of squares falls (_adhesive_kernels.adhesive_walk); E, w held where given: (gap, x, ssr, J^T J) of the best."""
         p = self.prob
         k, x, S, A = p._k.adhesive_walk(p.u, p.F, p.law, self.us, int(k0), np.asarray(x0, float), self.w_floor,
                                         np.array([E, w]), p.R, p.kc, p.d_end, p.lam, *p.tables, p.width,
