@@ -7,6 +7,7 @@ importing only the base modules. See docs/contact.md.
 * :mod:`.adhesive` -- JKR, DMT, Maugis-Dugdale
 * :mod:`.registry` -- :data:`INDENTATION_MODELS`
 * :mod:`.fit` -- :func:`fit_indentation`: modulus and contact point (and w) of one curve
+* :mod:`.adhesive_fit` -- the adhesive laws' fit: E, w, contact point and baseline with their covariance
 """
 
 from .registry import INDENTATION_MODELS, IndentationModel, indentation_model

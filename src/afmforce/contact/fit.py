@@ -10,8 +10,9 @@ fitted jointly, and residuals weighted down linearly within ``weight_width`` of 
 (nanite's ``weight_cp``; 0: unweighted). For a given c the model is linear in (E, b): the fit
 solves it in closed form for a few dozen contact points at once (one array operation), refines
 the best one twice, and ends with Gauss-Newton steps on (E, c, b), whose Jacobian gives the
-standard errors. Adhesive laws (JKR, DMT, Maugis) add the work of adhesion w [J/m^2] and are
-finished with a bounded least-squares solve started from the elastic fit.
+standard errors. Adhesive laws (JKR, DMT, Maugis) add the work of adhesion w [J/m^2]: all four
+parameters, the contact point included, are fitted together and get their covariance
+(:mod:`afmforce.contact.adhesive_fit`).
 
 >>> fit = fit_indentation(u, F, "hertz_paraboloid", {"radius": 5e-6}, nu=0.5)   # doctest: +SKIP
 >>> fit.youngs_modulus, fit.youngs_modulus_se, fit.contact                     # doctest: +SKIP
@@ -19,6 +20,7 @@ finished with a bounded least-squares solve started from the elastic fit.
 
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 
@@ -26,11 +28,13 @@ import numpy as np
 
 from ..errors import AnalysisError, ParameterError
 from .adhesive import adhesive_force
+from .adhesive_fit import fit_adhesive
 from .models import BILODEAU_FOUR_SIDED, BILODEAU_THREE_SIDED, shape_and_slope
 from .registry import indentation_model
 
 __all__ = ["IndentationFit", "fit_indentation", "validity", "model_force"]
 
+@functools.lru_cache(maxsize=256)
 def _t95(dof: int) -> float:
     """Two-sided 95 % Student t quantile for ``dof`` degrees of freedom (NaN for none)."""
     if dof <= 0:
@@ -52,6 +56,8 @@ class IndentationFit:
     contact, contact_se : float  contact point as a tip depth and its standard error [m]
     baseline : float  force before contact [N]
     work_of_adhesion, work_of_adhesion_se : float  w [J/m^2] (adhesive laws; NaN otherwise)
+    work_of_adhesion_low, work_of_adhesion_high : float  95 % interval of w [J/m^2] (adhesive laws); when it
+        reaches 0: [0, the profile likelihood's upper end], NaN upper end: open (the data do not bound w)
     max_indentation : float  deepest indentation fitted [m]
     max_force : float  force there above the baseline [N]
     n_points, n_contact : int  points fitted, of them in contact [-]
@@ -79,6 +85,8 @@ class IndentationFit:
     residuals: np.ndarray = field(repr=False)
     fitted: np.ndarray = field(repr=False)
     warnings: tuple[str, ...] = ()
+    work_of_adhesion_low: float = math.nan
+    work_of_adhesion_high: float = math.nan
 
 
 def model_force(key: str, delta, E: float, geometry: dict, nu: float, w: float = 0.0, lam: float = 1.0,
@@ -193,102 +201,6 @@ def _covariance(J: np.ndarray, s2: float) -> np.ndarray:
     return np.linalg.inv(A / np.outer(n, n)) / np.outer(n, n) * s2
 
 
-def _lstsq(J: np.ndarray, y: np.ndarray) -> np.ndarray:
-    """Least squares with the columns scaled to unit norm (they differ by ~1e13: E multiplies m^1.5)."""
-    norm = np.linalg.norm(J, axis=0)
-    norm[norm == 0] = 1.0
-    return np.linalg.lstsq(J / norm, y, rcond=None)[0] / norm
-
-
-def _dmt_solve(u, F, c, R, nu, geom, width, max_ind):
-    """DMT at contact point c: linear in (E, w, b). Returns (ssr, E, w, b, J without the c column)."""
-    d = u - c
-    phi = shape_and_slope("hertz_paraboloid", d, geom, nu)[0]
-    q = _weights(d, width, max_ind)
-    J = q[:, None] * np.column_stack((phi, -2 * math.pi * R * (d > 0), np.ones_like(phi)))
-    x = _lstsq(J, q * F)
-    if x[1] < 0:  # w >= 0: on the bound, the Hertz fit
-        x2 = _lstsq(J[:, [0, 2]], q * F)
-        x = np.array([x2[0], 0.0, x2[1]])
-    r = q * F - J @ x
-    return float(r @ r), x, J
-
-
-def _adhesive_at(u, F, key, c, geom, nu, width, max_ind, lam, start, branch="approach"):
-    """JKR/Maugis at contact point c: (E, w) by least squares, b in closed form (variable projection)."""
-    from scipy.optimize import least_squares
-
-    R = geom["radius"]
-    d = u - c
-    q = _weights(d, width, max_ind)
-    qs = float(q @ q)
-
-    def resid(x):
-        f = adhesive_force(key, d, math.exp(min(x[0], 700)), math.exp(max(min(x[1], 700), -200)), R, nu, lam,
-                           branch)
-        r = q * (F - f)
-        return r - q * (float(q @ r) / qs)
-
-    sol = least_squares(resid, np.log(start), method="lm", x_scale=1.0, max_nfev=60)
-    E, w = np.exp(np.clip(sol.x, -200, 700))
-    w = max(w, 1e-300)
-    f = adhesive_force(key, d, E, w, R, nu, lam, branch)
-    b = float(q @ (q * (F - f))) / qs
-    J = np.column_stack((sol.jac[:, 0] / E, sol.jac[:, 1] / w, -q))  # d resid / d (E, w, b)
-    return float(sol.fun @ sol.fun), np.array([E, w, b]), -J
-
-
-def _adhesive_fit(u, F, key, geom, nu, width, max_ind, p_elastic, lam, branch="approach"):
-    """Scan the contact point (DMT in closed form, wide; then the law itself, near the DMT point); at
-    each, the law's other parameters by least squares. Returns ((E, w, c, b), standard errors (E, w, c))."""
-    R = geom["radius"]
-    span = float(np.ptp(u))
-
-    def run(cands, law):
-        out = []
-        for c in cands:
-            ssr, x, J = _dmt_solve(u, F, c, R, nu, geom, width, max_ind)
-            if law != "dmt":
-                # two starts: DMT's (E, w) and Hertz's E with a weak adhesion (1 % of the largest force)
-                E_h = float(_scan(u, F, np.array([c]), "hertz_paraboloid", geom, nu, width, max_ind)[0][0])
-                starts = [(x[0], max(x[1], 1e-6 * x[0] * R))] if x[0] > 0 else []
-                if E_h > 0:
-                    starts.append((E_h, max(0.01 * float(np.ptp(F)) / (math.pi * R), 1e-12)))
-                best = None
-                for start in starts:
-                    got = _adhesive_at(u, F, law, c, geom, nu, width, max_ind, lam, start, branch)
-                    if best is None or got[0] < best[0]:
-                        best = got
-                if best is None:
-                    continue
-                ssr, x, J = best
-            if x[0] > 0 and x[1] >= 0 and math.isfinite(ssr):
-                out.append((ssr, float(c), x, J))
-        if not out:
-            raise AnalysisError(f"{key}: no contact point gives a positive modulus and work of adhesion")
-        return sorted(out, key=lambda t: t[0])
-
-    plan = [(span * np.linspace(-0.25, 0.25, 51), "dmt"), (span * 0.01 * np.linspace(-1, 1, 9), "dmt")]
-    if key != "dmt":
-        plan += [(span * np.linspace(-0.03, 0.03, 13), key), (span * 0.005 * np.linspace(-1, 1, 7), key)]
-    c = float(p_elastic[1])
-    for offsets, law in plan:
-        last = run(c + offsets, law)
-        c = last[0][1]
-    ssr, c, x, J = last[0]
-    n = int((J[:, 2] != 0).sum())
-    s2 = ssr / max(n - 4, 1)
-    try:
-        se = np.sqrt(np.clip(np.diag(_covariance(J, s2)), 0, None))
-    except np.linalg.LinAlgError:
-        se = np.full(3, math.nan)
-    c_se = math.nan  # the profile's curvature near the best point: delta chi^2 = 1
-    if len(last) >= 3:
-        k = np.polyfit([t[1] - c for t in last], [t[0] for t in last], 2)[0]
-        c_se = math.sqrt(s2 / k) if k > 0 else math.nan
-    return (x[0], x[1], c, x[2]), (se[0], se[1], c_se)
-
-
 def validity(key: str, geometry: dict, max_indentation: float, thickness: float | None = None,
              n_contact: int = 0) -> tuple[str, ...]:
     """Where the law is used outside its range, in words (empty: within it).
@@ -377,11 +289,9 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     u, F = u[ok], F[ok]
     if u.size < 8:
         raise AnalysisError(f"only {u.size} points to fit the indentation model (at least 8 are needed)")
-    lin_key = model if m.linear else "hertz_paraboloid"
-    p = _linear_fit(u, F, lin_key, geom, nu, weight_width, max_indentation, contact_guess)
-    w = w_se = math.nan
+    w = w_se = w_low = w_high = math.nan
     if m.linear:
-        E, c, b = p
+        E, c, b = _linear_fit(u, F, model, geom, nu, weight_width, max_indentation, contact_guess)
         d = u - c
         phi, dphi = shape_and_slope(model, d, geom, nu)
         q = _weights(d, weight_width, max_indentation)
@@ -389,11 +299,12 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
         J = q[:, None] * np.column_stack((phi, -E * dphi, np.ones_like(phi)))
         names = 3
     else:
-        (E, w, c, b), se_a = _adhesive_fit(u, F, model, geom, nu, weight_width, max_indentation, p, transition,
-                                           branch)
+        a = fit_adhesive(u, F, model, geom["radius"], nu, transition, branch, weight_width, max_indentation)
+        E, w, c, b = a.E, a.w, a.c, a.b
         d = u - c
-        q = _weights(d, weight_width, max_indentation)
-        r = q * (F - model_force(model, d, E, geom, nu, w, transition, branch) - b)
+        q = a.weights
+        se_a = np.sqrt(np.clip(np.diag(a.cov), 0, None))
+        w_low, w_high = a.w_low, a.w_high
         names = 4
     used = q > 0
     n = int(used.sum())
@@ -406,19 +317,24 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
             se = np.full(names, math.nan)
         E_se, c_se = float(se[0]), float(se[1])
     else:
-        E_se, w_se, c_se = (float(v) for v in se_a)
+        E_se, w_se, c_se = float(se_a[0]), float(se_a[1]), float(se_a[2])
     t = _t95(dof)
+    E_low, E_high = (E - t * E_se, E + t * E_se) if m.linear else (a.E_low, a.E_high)
     in_contact = used & (d > 0)
     dmax = float(d[in_contact].max()) if in_contact.any() else 0.0
-    fmodel = model_force(model, d, E, geom, nu, w if not m.linear else 0.0, transition, branch)
+    fmodel = model_force(model, d, E, geom, nu, 0.0, transition, branch) if m.linear else a.model
     resid = (F - fmodel - b)[used]
     warn = list(validity(model, geom, dmax, thickness, int(in_contact.sum())))
     if math.isfinite(E_se) and E_se > 0.5 * E:
         warn.append(f"the modulus is poorly determined: standard error {E_se / E:.0%} of the value")
+    if m.adhesive and w_low == 0.0:
+        bound = "no upper bound" if math.isnan(w_high) else f"95 % upper bound {w_high:.3g} J/m^2"
+        warn.append(f"the work of adhesion is not distinguishable from 0 ({bound})")
     return IndentationFit(
-        model=model, youngs_modulus=float(E), youngs_modulus_se=E_se, youngs_modulus_low=float(E - t * E_se),
-        youngs_modulus_high=float(E + t * E_se), contact=float(c), contact_se=c_se, baseline=float(b),
+        model=model, youngs_modulus=float(E), youngs_modulus_se=E_se, youngs_modulus_low=float(E_low),
+        youngs_modulus_high=float(E_high), contact=float(c), contact_se=c_se, baseline=float(b),
         work_of_adhesion=float(w), work_of_adhesion_se=w_se, max_indentation=dmax,
         max_force=float(F[in_contact].max() - b) if in_contact.any() else math.nan, n_points=n,
         n_contact=int(in_contact.sum()), rms=float(np.sqrt(np.mean(resid ** 2))) if resid.size else math.nan,
-        residuals=resid, fitted=idx[used], warnings=tuple(warn))
+        residuals=resid, fitted=idx[used], warnings=tuple(warn), work_of_adhesion_low=float(w_low),
+        work_of_adhesion_high=float(w_high))
