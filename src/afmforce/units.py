@@ -34,6 +34,8 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "friction_per_force2": ("kg/s/N**2", "a coefficient in kg/(s N^2)"),
     "surface_energy": ("J/m**2", "an energy per area"),
     "concentration": ("mol/m**3", "a concentration (1 mM = 1 mol/m^3)"),
+    "pressure": ("Pa", "a pressure"),
+    "temperature": ("K", "a temperature in kelvin"),
     "dimensionless": ("", "a plain number"),
 }
 

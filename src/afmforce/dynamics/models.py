@@ -42,6 +42,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .. import surface_laws
 from ._jit import piece
 from .damping import beam_damping, spring_damping
 
@@ -78,7 +79,9 @@ DL_EXACT = 27   # 1: Hogg-Healy-Fuerstenau terms; 0: weak overlap (csch -> 2 exp
 SLIP6B = 28     # 6 b, b the slip length [m] (0: no slip; Fd = -CD f*(h)/h h')
 LEVER = 29      # lever drag coefficient c [N s/m] (F = -c g(h) h')
 LEVER_H = 30    # lever height H [m]: g = H / (h + H); 0: g = 1
-P_SIZE = 31
+# surface force laws (issue 31): the block afmforce.surface_laws packs, its slots assigned there
+P_LAWS = 31
+P_SIZE = P_LAWS + surface_laws.N_SLOTS
 
 #: Number of monitored observables returned by :func:`observe`.
 N_OBS = 9
@@ -101,6 +104,38 @@ def surface_force(h, ar, z0):
     return fs, dfs
 
 
+def _no_law(h, p, fs, dfs):
+    return fs, dfs
+
+
+def _add_law(total, kernel, o):
+    """``total`` followed by one law: its kernel adds (F, F') when its switch ``p[o]`` is on."""
+    def add(h, p, fs, dfs):
+        fs, dfs = total(h, p, fs, dfs)
+        if p[o] > 0.0:
+            f, df = kernel(h, p, o + 1)
+            fs += f
+            dfs += df
+        return fs, dfs
+    return add
+
+
+def _laws_chain():
+    """One compiled function adding every law of :data:`afmforce.surface_laws.LAWS` to (F, F'):
+    a chain of pieces, one per law, each with its kernel and its slot (no code generation; the
+    pieces are inlined into the cached entry point, whose cache the sources' digest guards)."""
+    total = piece(inline=True, python=True)(_no_law)
+    for name, law in surface_laws.LAWS.items():
+        kernel = piece(inline=True, python=True)(law.kernel)
+        total = piece(inline=True, python=True)(_add_law(total, kernel,
+                                                         P_LAWS + surface_laws.SLOTS[name]))
+    return total
+
+
+#: ``laws_force(h, p, fs, dfs) -> (fs + F_laws, dfs + F_laws')``; with no law on, (fs, dfs) as given.
+laws_force = _laws_chain()
+
+
 @piece()
 def static_force(h, p):
     """Static normal force and its gradient: eq 2 plus the double layer [N, N/m]."""
@@ -119,7 +154,7 @@ def static_force(h, p):
             w = p[DL_A] * 2.0 * e1
             fs += w
             dfs -= kappa * w
-    return fs, dfs
+    return laws_force(h, p, fs, dfs)
 
 
 @piece()

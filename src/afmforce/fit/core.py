@@ -13,7 +13,7 @@ from ..progress import Progress
 from .data import FitCurve, prepare_curves
 from .model import DEFAULT_FRINGE_PERIOD, Evaluator
 from .preprocess import preparation_warnings, result_warnings
-from .params import PARAMETERS, SPEED_DEPENDENT, check_free
+from .params import LAW_PARAMETERS, PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
 from .search import _refit_all, _search
 from .result import CurveFit, Estimate, FitResult, wald_interval
@@ -62,7 +62,7 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
             dj = surface_jump_in(k, base.surface.replace(**{name: math.exp(mid)}))[2]
             lo, hi = (mid, hi) if dj > target else (lo, mid)
         g[name] = math.exp(0.5 * (lo + hi))
-    for name in ("xi", "zeta", "slip_length"):
+    for name in ("xi", "zeta", "slip_length", *LAW_PARAMETERS):
         if name in free:
             g[name] = max(g[name], PARAMETERS[name].abs_step)
     return g
