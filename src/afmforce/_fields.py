@@ -242,8 +242,8 @@ QUANTITIES: dict[str, FieldSpec] = {
     "temperature": _q("temperature", "K", "temperature T", 1.0, 1000.0),
     "relative_humidity": _q("dimensionless", "", "relative humidity RH of the air (0: no meniscus)",
                             0.0, 1.0, hi_open=True),
-    "surface_tension": _q("surface_energy", "N/m", "surface tension gamma of the meniscus liquid",
-                          1e-3, 1.0),
+    "surface_tension": _q("surface_energy", "J/m^2", "surface tension gamma of the meniscus liquid "
+                          "(J/m^2 = N/m)", 1e-3, 1.0),
     "contact_angle": _q("angle", "rad", "contact angle theta1 of the liquid on the probe", 0.0,
                         math.pi, display="deg"),
     "contact_angle_2": _q("angle", "rad", "contact angle theta2 of the liquid on the substrate", 0.0,

@@ -39,7 +39,9 @@ NEW_FLAT_NAMES = ("quality_factor", "quality_factor_2")
 #: Surface fields added by issue 25 (liquids).
 LIQUID_FLAT_NAMES = (
     "geometry", "double_layer", "surface_potential", "surface_potential_2", "debye_length",
-    "salt_concentration", "valence", "permittivity", "slip_length", "lever_drag", "lever_height")
+    "salt_concentration", "valence", "permittivity", "slip_length", "lever_drag", "lever_height",
+    # issue 31: the surface force laws' parameters, from their records (a new law adds its own)
+    *__import__("afmforce.surface_laws", fromlist=["PARAMETERS"]).PARAMETERS)
 
 #: Trajectory headers written by the version before issue 11.7 (every field of both probes).
 OLD_HEADERS = [
@@ -67,10 +69,18 @@ BAD = {"positive": (0.0, -1.0, math.nan), "non_negative": (-1e-3, math.inf), "fi
        "optional_finite": (math.nan, math.inf)}
 
 
+def _outside(spec):
+    """Values outside a ``range`` field's valid range (issue 31: laws' parameters use it)."""
+    return tuple(v for v in (None if spec.hi is None else spec.hi + abs(spec.hi) + 1.0,
+                             None if spec.lo is None else spec.lo - abs(spec.lo) - 1.0) if v is not None)
+
+
 def _bad_cases():
     for cls in PART_CLASSES:
         for f in dataclasses.fields(cls):
-            values = ("bogus",) if "choices" in f.metadata else BAD[f.metadata["domain"]]
+            domain = f.metadata.get("domain")
+            values = ("bogus",) if "choices" in f.metadata else (
+                _outside(f.metadata["spec"]) if domain == "range" else BAD[domain])
             for v in values:
                 yield pytest.param(cls, f.name, v, id=f"{cls.__name__}.{f.name}={v}")
 
@@ -133,7 +143,9 @@ def _other_value(name):
         return next(k for k in choices if k != where.default)
     special = {"k0": 0.2, "B": 2e-13, "retract_velocity": 2e-7, "turn_force": 1e-9,
                "turn_deflection": 1e-9, "max_steps": 1000}
-    return special.get(name, where.default * 1.1 if where.default else 1e-3)
+    hi = where.spec.hi if where.spec is not None else None
+    return special.get(name, where.default * 1.1 if where.default else
+                       (1e-3 if hi is None or hi >= 2e-3 else hi / 2))
 
 
 @pytest.mark.parametrize("name", [n for n in FLAT if n != "model"])
