@@ -25,7 +25,10 @@ one call.
 In a liquid (issue 25, docs/liquid.md) ``Fz`` also holds the double layer
 (:func:`static_force`: weak overlap or Hogg-Healy-Fuerstenau), drainage with
 Vinogradova's slip factor and the drag on the lever (:func:`drainage`); the geometry
-(sphere-sphere or sphere-flat) is in the packed ``AR`` and ``CD``.
+(sphere-sphere or sphere-flat) is in the packed ``AR`` and ``CD``. The surface force laws of
+:mod:`afmforce.surface_laws` (issue 31: hydration, steric brushes, capillary meniscus, ...) add
+to ``Fs``: their slots follow the model's (``P_LAWS``), assigned by that registry, and
+:data:`laws_force` chains their compiled kernels.
 
 The parameters are packed into one float64 vector ``p`` (layout below) so that
 the integrator can be compiled once for both models. ``p[H_GUARD]`` is the
@@ -138,7 +141,8 @@ laws_force = _laws_chain()
 
 @piece()
 def static_force(h, p):
-    """Static normal force and its gradient: eq 2 plus the double layer [N, N/m]."""
+    """Static normal force and its gradient: eq 2, the double layer and the surface force laws of
+    :mod:`afmforce.surface_laws` (:data:`laws_force`) [N, N/m]."""
     fs, dfs = surface_force(h, p[AR], p[Z0])
     kappa = p[DL_KAPPA]
     if kappa > 0.0:
