@@ -78,6 +78,11 @@ def test_parameters_reach_config_cli_and_fit_from_the_record(name):
         fp, spec = PARAMETERS[p.name], QUANTITIES[p.name]
         assert fp.lower == spec.lo and fp.unit == spec.unit and fp.upper <= spec.hi
         assert check_free([p.name], "spring") == (p.name,)
+    # the web's simulate form (generated from the configuration's fields)
+    from afmforce.web.schema import simulation_fields
+    web = {d["name"]: d for d in simulation_fields()}
+    for p in law.parameters:
+        assert web[p.name]["part"] == "surface" and web[p.name]["range"] == QUANTITIES[p.name].range_text()
     # out of range: refused on construction
     for p in law.parameters:
         spec = QUANTITIES[p.name]
