@@ -31,7 +31,7 @@ NAMES = list(L.LAWS)
 def test_every_module_of_the_package_is_one_registered_law_and_slots_do_not_overlap():
     modules = sorted(p.stem for p in SRC.glob("*.py") if not p.stem.startswith("_"))
     assert modules == sorted(L.LAWS) and {"hydration", "steric", "capillary"} <= set(L.LAWS)
-    used = []
+    used = [0]                          # the block's "any law on"
     for name, law in L.LAWS.items():
         o = L.SLOTS[name]
         used += list(range(o, o + 1 + law.n_slots))
@@ -102,7 +102,7 @@ def test_compiled_force_and_jacobian_are_the_records_law(name):
     cfg = SimulationConfig(model="spring", spring_constant=0.5, mass=1e-11, radius=20e-9,
                            geometry="sphere-flat", hamaker=1e-20, viscosity=0.0, **law.example)
     s, p = cfg.surface, parameter_vector(cfg)
-    assert p[M.P_LAWS + L.SLOTS[name]] == 1.0
+    assert p[M.P_LAWS + L.SLOTS[name]] == 1.0 == p[M.P_LAWS]
     for h in (0.6e-9, 1.0e-9, 2.3e-9, 4e-9, 15e-9):
         y, out = np.array([h, -1e-6]), np.empty(2)
         assert M.rhs(M.MODEL_SPRING, p, 0.0, 0.0, y, out)

@@ -158,7 +158,9 @@ def static_force(h, p):
             w = p[DL_A] * 2.0 * e1
             fs += w
             dfs -= kappa * w
-    return laws_force(h, p, fs, dfs)
+    if p[P_LAWS] > 0.0:                      # any surface force law on (issue 31)
+        return laws_force(h, p, fs, dfs)
+    return fs, dfs
 
 
 @piece()

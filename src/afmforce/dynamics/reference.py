@@ -51,6 +51,8 @@ class ReferenceModel:
         s, probe, fr = cfg.surface, cfg.probe, cfg.friction
         self.R, self.A, self.z0, self.eta = s.paper_radius, s.hamaker, s.z0, s.viscosity
         self.surface = s
+        # the surface force laws (issue 31): (R_eff, parameter values) when one acts, else None
+        self.laws = (s.radius_eff, s.law_values) if s.laws else None
         if cfg.model == "spring":
             self.beam = False
             self.k, self.m = probe.spring_constant, probe.mass
@@ -85,10 +87,7 @@ class ReferenceModel:
 
     def _laws(self, h):
         """(F, F') of the surface force laws of :mod:`afmforce.surface_laws` (their numpy forms)."""
-        s = self.surface
-        if not s.laws:
-            return 0.0, 0.0
-        f, df = total_force(h, s.radius_eff, s.law_values)
+        f, df = total_force(h, *self.laws)
         return float(f), float(df)
 
     def _drag(self, h, hd):
@@ -98,7 +97,9 @@ class ReferenceModel:
 
     def _forces(self, h, hd):
         fz = float(vdw_force(h, self.R, self.A, self.z0)) + self._dl(h, double_layer_force) \
-            + self._drag(h, hd) + self._laws(h)[0]
+            + self._drag(h, hd)
+        if self.laws is not None:
+            fz += self._laws(h)[0]
         return fz
 
     def separation(self, y, z, v):
@@ -122,7 +123,9 @@ class ReferenceModel:
         z = z_of_t(t)
         h, hd = self.separation(y, z, v)
         dfs = float(vdw_force_gradient(h, self.R, self.A, self.z0)) + self._dl(
-            h, double_layer_force_gradient) + self._laws(h)[1]
+            h, double_layer_force_gradient)
+        if self.laws is not None:
+            dfs += self._laws(h)[1]
         dd = 1e-6 * h      # drainage and drag: linear in h', differentiated numerically in h
         dfz_dh = dfs + (self._drag(h + dd, hd) - self._drag(h - dd, hd)) / (2.0 * dd)
         dfz_dhd = self._drag(h, 1.0)

@@ -4,8 +4,9 @@ One module per law in this package, each defining ``LAW``, a :class:`SurfaceLaw`
 vectorised force (and dF/dh), its parameters (keys of :data:`afmforce._fields.QUANTITIES`),
 its compiled kernel ``(h, p, o)``, its reference and validity. The registry imports every
 module of the package (sorted by name: no list to edit) and assigns each law its slots in the
-laws block of the packed parameter vector: slot ``SLOTS[name]`` is the law's switch (1.0: on),
-the next ``law.n_slots`` are what ``law.pack`` returns. Everything else comes from these
+laws block of the packed parameter vector: slot 0 of the block says whether any law acts (the
+paper's runs test that one slot only), slot ``SLOTS[name]`` is the law's switch (1.0: on), the
+next ``law.n_slots`` are what ``law.pack`` returns. Everything else comes from these
 records: the configuration's fields (``dynamics.parts.Surface``), the compiled vector field and
 its Jacobian (``dynamics.models``), the non-compiled reference (``dynamics.reference``), the
 static solve, ``afmforce simulate``'s flags and the fit's free parameters (``fit.params``).
@@ -49,14 +50,15 @@ LAWS: dict[str, SurfaceLaw] = _discover()
 
 
 def _slots() -> tuple[dict[str, int], int]:
-    slots, n = {}, 0
+    slots, n = {}, 1                    # slot 0: any law on
     for name, rec in LAWS.items():
         slots[name] = n
         n += 1 + rec.n_slots
     return slots, n
 
 
-#: Law name -> offset of its switch in the laws block (its parameters follow); the block's size.
+#: Law name -> offset of its switch in the laws block (its parameters follow; offset 0 is the
+#: block's "any law on"); the block's size.
 SLOTS, N_SLOTS = _slots()
 
 
@@ -98,7 +100,7 @@ def pack(values: Mapping[str, float], radius_eff: float) -> np.ndarray:
         v = _of(values, rec)
         if rec.active(v):
             o = SLOTS[name]
-            out[o] = 1.0
+            out[0] = out[o] = 1.0
             out[o + 1:o + 1 + rec.n_slots] = rec.pack(radius_eff, v)
     return out
 
