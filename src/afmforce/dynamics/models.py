@@ -107,14 +107,14 @@ def surface_force(h, ar, z0):
     return fs, dfs
 
 
-def _no_law(h, p, fs, dfs):
-    return fs, dfs
+def _no_law(h, p):
+    return 0.0, 0.0
 
 
 def _add_law(total, kernel, o):
     """``total`` followed by one law: its kernel adds (F, F') when its switch ``p[o]`` is on."""
-    def add(h, p, fs, dfs):
-        fs, dfs = total(h, p, fs, dfs)
+    def add(h, p):
+        fs, dfs = total(h, p)
         if p[o] > 0.0:
             f, df = kernel(h, p, o + 1)
             fs += f
@@ -128,14 +128,17 @@ def _laws_chain():
     a chain of pieces, one per law, each with its kernel and its slot (no code generation; the
     pieces are inlined into the cached entry point, whose cache the sources' digest guards)."""
     total = piece(inline=True, python=True)(_no_law)
-    for name, law in surface_laws.LAWS.items():
-        kernel = piece(inline=True, python=True)(law.kernel)
-        total = piece(inline=True, python=True)(_add_law(total, kernel,
-                                                         P_LAWS + surface_laws.SLOTS[name]))
+    names = list(surface_laws.LAWS)
+    for name in names:
+        kernel = piece(inline=True, python=True)(surface_laws.LAWS[name].kernel)
+        # the last link is not forced inline: static_force stays small (LLVM inlines it into
+        # rhs and jac as before) and calls the chain only when a law is on
+        total = piece(inline=name != names[-1], python=True)(
+            _add_law(total, kernel, P_LAWS + surface_laws.SLOTS[name]))
     return total
 
 
-#: ``laws_force(h, p, fs, dfs) -> (fs + F_laws, dfs + F_laws')``; with no law on, (fs, dfs) as given.
+#: ``laws_force(h, p) -> (F, F')`` of every law that is on (its switch), summed.
 laws_force = _laws_chain()
 
 
@@ -159,7 +162,9 @@ def static_force(h, p):
             fs += w
             dfs -= kappa * w
     if p[P_LAWS] > 0.0:                      # any surface force law on (issue 31)
-        return laws_force(h, p, fs, dfs)
+        fl, dfl = laws_force(h, p)
+        fs += fl
+        dfs += dfl
     return fs, dfs
 
 
