@@ -235,6 +235,22 @@ QUANTITIES: dict[str, FieldSpec] = {
                              hi=1e4, display="mM", **_POS),
     "valence": _q("dimensionless", "", "valence z of the symmetric salt", 1.0, 4.0),
     "permittivity": _q("dimensionless", "", "relative permittivity of the medium", 1.0, 200.0),
+    # surface force laws (issue 31; afmforce.surface_laws, docs/dynamics.md "Surface force laws")
+    "hydration_pressure": _q("pressure", "Pa", "hydration pressure P0 between planes in contact "
+                             "(0: no hydration force)", 0.0, 1e10),
+    "hydration_length": _q("length", "m", "decay length lambda of the hydration force", 1e-11, 1e-8),
+    "brush_length": _q("length", "m", "polymer brush thickness L0 (0: no brush)", 0.0, 1e-6),
+    "brush_spacing": _q("length", "m", "mean distance s between the brush's grafting points",
+                        1e-10, 1e-6),
+    # temperature: declared once below (probe calibration), shared by the laws that need kT
+    "relative_humidity": _q("dimensionless", "", "relative humidity RH of the air (0: no meniscus)",
+                            0.0, 1.0, hi_open=True),
+    "surface_tension": _q("surface_energy", "J/m^2", "surface tension gamma of the meniscus liquid "
+                          "(J/m^2 = N/m)", 1e-3, 1.0),
+    "contact_angle": _q("angle", "rad", "contact angle theta1 of the liquid on the probe", 0.0,
+                        math.pi, display="deg"),
+    "contact_angle_2": _q("angle", "rad", "contact angle theta2 of the liquid on the substrate", 0.0,
+                          math.pi, display="deg"),
     # friction (section 2.2, eq 28)
     "xi": _q("damping", "kg/s", "viscous friction coefficient xi", 0.0, 100.0),
     "zeta": _q("friction_per_force2", "kg/(s N^2)", "load-dependent friction coefficient zeta", 0.0, 1e20),

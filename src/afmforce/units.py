@@ -46,6 +46,7 @@ DIMENSIONS: dict[str, tuple[str, str]] = {
     "temperature": ("K", "a temperature (K, or degC)"),
     "density": ("kg/m**3", "a density"),
     "voltage_rate": ("V/s", "a signal drift rate (e.g. 0.2V/s)"),
+    "pressure": ("Pa", "a pressure"),
     "dimensionless": ("", "a plain number"),
 }
 

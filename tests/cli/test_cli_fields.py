@@ -78,8 +78,9 @@ def test_simulate_flags_are_the_config_fields():
     sim = parser._subparsers._group_actions[0].choices["simulate"]
     flags = [a for a in sim._actions if hasattr(a.type, "spec")]
     # every numeric field but contact_separation, jump_factor, spike_window (28); + 2 lever quality
-    # factors (issue 23) + 9 liquid ones (issue 25)
-    assert len(flags) == 28 + 2 + 9
+    # factors (issue 23) + 9 liquid ones (issue 25) + the surface force laws' parameters (issue 31)
+    from afmforce.surface_laws import PARAMETERS as LAW_PARAMETERS
+    assert len(flags) == 28 + 2 + 9 + len(LAW_PARAMETERS)
     for action in flags:
         assert action.dest in fields, action.option_strings
         assert spec_of(fields[action.dest]) is QUANTITIES[action.dest] is action.type.spec

@@ -39,7 +39,9 @@ NEW_FLAT_NAMES = ("quality_factor", "quality_factor_2")
 #: Surface fields added by issue 25 (liquids).
 LIQUID_FLAT_NAMES = (
     "geometry", "double_layer", "surface_potential", "surface_potential_2", "debye_length",
-    "salt_concentration", "valence", "permittivity", "slip_length", "lever_drag", "lever_height")
+    "salt_concentration", "valence", "permittivity", "slip_length", "lever_drag", "lever_height",
+    # issue 31: the surface force laws' parameters, from their records (a new law adds its own)
+    *__import__("afmforce.surface_laws", fromlist=["PARAMETERS"]).PARAMETERS)
 
 #: Trajectory headers written by the version before issue 11.7 (every field of both probes).
 OLD_HEADERS = [
@@ -67,10 +69,18 @@ BAD = {"positive": (0.0, -1.0, math.nan), "non_negative": (-1e-3, math.inf), "fi
        "optional_finite": (math.nan, math.inf)}
 
 
+def _outside(spec):
+    """Values outside a ``range`` field's valid range (issue 31: laws' parameters use it)."""
+    return tuple(v for v in (None if spec.hi is None else spec.hi + abs(spec.hi) + 1.0,
+                             None if spec.lo is None else spec.lo - abs(spec.lo) - 1.0) if v is not None)
+
+
 def _bad_cases():
     for cls in PART_CLASSES:
         for f in dataclasses.fields(cls):
-            values = ("bogus",) if "choices" in f.metadata else BAD[f.metadata["domain"]]
+            domain = f.metadata.get("domain")
+            values = ("bogus",) if "choices" in f.metadata else (
+                _outside(f.metadata["spec"]) if domain == "range" else BAD[domain])
             for v in values:
                 yield pytest.param(cls, f.name, v, id=f"{cls.__name__}.{f.name}={v}")
 
@@ -137,7 +147,12 @@ def _other_value(name):
         return special[name]
     if where.default:
         return where.default * 1.1
-    return 1e-3 if where.spec.contains(1e-3) else 2 * where.spec.lo   # inside the declared range
+    spec = where.spec
+    if spec is None or spec.contains(1e-3):
+        return 1e-3
+    if spec.hi is not None and spec.hi < 1e-3:
+        return spec.hi / 2                      # inside the declared range
+    return 2 * spec.lo
 
 
 @pytest.mark.parametrize("name", [n for n in FLAT if n != "model"])

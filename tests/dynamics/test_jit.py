@@ -155,7 +155,7 @@ def test_a_change_in_any_dynamics_source_purges_the_numba_cache(tmp_path):
     from types import SimpleNamespace
 
     from afmforce.dynamics import radau
-    from afmforce.dynamics._jit import SOURCES_DIGEST, purge_stale_cache, sources_digest
+    from afmforce.dynamics._jit import SOURCES_DIGEST, cache_sources, purge_stale_cache, sources_digest
 
     src, cache = tmp_path / "src", tmp_path / "cache"
     src.mkdir()
@@ -179,4 +179,14 @@ def test_a_change_in_any_dynamics_source_purges_the_numba_cache(tmp_path):
     assert (cache / SOURCES_DIGEST).read_text() == sources_digest(src)
     # the package itself: its cache folder carries the digest of the sources as they are now
     stamp = __import__("pathlib").Path(radau.integrate_segment._cache._cache_path) / SOURCES_DIGEST
-    assert stamp.read_text() == sources_digest(__import__("pathlib").Path(radau.__file__).parent)
+    assert stamp.read_text() == sources_digest(cache_sources())
+    # issue 31: the surface force laws' sources (their kernels are inlined) are in that digest
+    laws = cache_sources()[1]
+    assert laws.name == "surface_laws" and (laws / "hydration.py").is_file()
+    copy = tmp_path / "laws"
+    copy.mkdir()
+    for f in laws.glob("*.py"):
+        (copy / f.name).write_bytes(f.read_bytes())
+    before = sources_digest((cache_sources()[0], copy))
+    (copy / "hydration.py").write_text((copy / "hydration.py").read_text() + "\n# edited\n")
+    assert sources_digest((cache_sources()[0], copy)) != before

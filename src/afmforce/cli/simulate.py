@@ -110,6 +110,21 @@ def _liquid_group(parser):
        dest="lever_height")
 
 
+def _laws_groups(parser):
+    """One group per surface force law of :mod:`afmforce.surface_laws`, its flags from the record
+    (a parameter shared by two laws, e.g. temperature, appears with the first)."""
+    from ..surface_laws import LAWS
+
+    seen: set[str] = set()
+    for name, law in LAWS.items():
+        g = parser.add_argument_group(f"surface force law {name}: {law.title}",
+                                      f"{law.reference}. Valid: {law.validity}.")
+        for p in law.parameters:
+            if p.name not in seen:
+                seen.add(p.name)
+                add_field(g, p.name, default_from=lambda n=p.name: _defaults().get(n))
+
+
 def _friction_group(parser):
     g = parser.add_argument_group("tip friction (beam model; eq 28)")
     lazy_help(g.add_argument("--friction", default=None, metavar="LAW", help="friction law: "),
@@ -169,7 +184,8 @@ def _output_group(parser):
 
 #: Functions ``(parser) -> None`` adding the argument groups, in help order.
 ARGUMENT_GROUPS: list[Callable[[argparse.ArgumentParser], None]] = [
-    _model_group, _beam_group, _spring_group, _surface_group, _liquid_group, _friction_group,
+    _model_group, _beam_group, _spring_group, _surface_group, _liquid_group, _laws_groups,
+    _friction_group,
     _drive_group,
     _solver_group, _output_group,
 ]

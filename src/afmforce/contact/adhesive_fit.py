@@ -112,7 +112,7 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     Raises AnalysisError when no contact point gives E > 0.
     """
     from ._kernels import scan_dmt
-    from .fit import _t95, _weights
+    from ._weights import t95 as _t95, weights as _weights
 
     def weights(d):
         return _weights(d, width, max_ind)

@@ -28,21 +28,12 @@ import numpy as np
 
 from ..errors import AnalysisError, ParameterError
 from .adhesive import adhesive_force
+from ._weights import t95 as _t95, weights as _weights
 from .adhesive_fit import fit_adhesive
 from .models import BILODEAU_FOUR_SIDED, BILODEAU_THREE_SIDED, shape_and_slope
 from .registry import indentation_model
 
 __all__ = ["IndentationFit", "fit_indentation", "validity", "model_force"]
-
-@functools.lru_cache(maxsize=256)
-def _t95(dof: int) -> float:
-    """Two-sided 95 % Student t quantile for ``dof`` degrees of freedom (NaN for none)."""
-    if dof <= 0:
-        return math.nan
-    from scipy.special import stdtrit
-
-    return float(stdtrit(dof, 0.975))
-
 
 @dataclass(frozen=True)
 class IndentationFit:
@@ -97,13 +88,6 @@ def model_force(key: str, delta, E: float, geometry: dict, nu: float, w: float =
     if m.linear:
         return E * shape_and_slope(key, delta, geometry, nu)[0]
     return np.asarray(adhesive_force(key, delta, E, w, geometry["radius"], nu, lam, branch))
-
-
-def _weights(d: np.ndarray, width: float, max_indentation: float) -> np.ndarray:
-    q = np.ones_like(d) if width <= 0 else np.minimum(np.abs(d) / width, 1.0)
-    if math.isfinite(max_indentation):
-        q = np.where(d > max_indentation, 0.0, q)
-    return q
 
 
 #: Power laws F = E k delta^p: key -> (k(geometry, nu), p), scanned by the compiled kernel.

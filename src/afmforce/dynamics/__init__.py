@@ -32,13 +32,13 @@ from .trajectory import COLUMNS, SolverStats, Trajectory
 # numba keys integrate_segment's cache on radau.py alone, yet it inlines models.py and the pieces:
 # a change in any source of the package must recompile (_jit.purge_stale_cache; a stale cache once
 # silently ran the undamped vector field). Here, before anything compiled is called.
-from pathlib import Path as _Path
-
+# The laws' kernels (afmforce.surface_laws) are inlined too: their sources are in the digest.
+from ._jit import cache_sources as _sources
 from ._jit import purge_stale_cache as _purge
 from .radau import integrate_segment as _entry
 
-_purge(_entry, _Path(__file__).parent)
-del _Path, _purge, _entry
+_purge(_entry, _sources())
+del _sources, _purge, _entry
 
 __all__ = [
     "simulate",

@@ -109,22 +109,33 @@ def cache_index_fresh(disp) -> bool | None:
 SOURCES_DIGEST = "afmforce-sources.digest"
 
 
-def sources_digest(folder: Path) -> str:
-    """Digest of every ``*.py`` file in ``folder`` (names and contents) [hex]."""
+def cache_sources() -> tuple[Path, Path]:
+    """The folders whose sources the integrator's cache depends on: the dynamics and the
+    surface force laws (their kernels are inlined into the vector field; issue 31)."""
+    here = Path(__file__).parent
+    return here, here.parent / "surface_laws"
+
+
+def sources_digest(folder) -> str:
+    """Digest of every ``*.py`` file in ``folder`` (a folder or a sequence of folders; names and
+    contents) [hex]."""
+    folders = [folder] if isinstance(folder, (str, os.PathLike)) else list(folder)
     h = hashlib.blake2b(digest_size=16)
-    for f in sorted(Path(folder).glob("*.py")):
-        h.update(f.name.encode())
-        h.update(f.read_bytes())
+    for d in folders:
+        for f in sorted(Path(d).glob("*.py")):
+            h.update(f.name.encode())
+            h.update(f.read_bytes())
     return h.hexdigest()
 
 
-def purge_stale_cache(disp, folder: Path) -> bool:
+def purge_stale_cache(disp, folder) -> bool:
     """Delete the numba cache files beside ``disp``'s when the sources in ``folder`` changed.
 
     numba keys a function's cache on its own source file only, but the integrator
     (``radau.integrate_segment``) inlines the vector field of ``models.py`` and the pieces of
     the other modules: after an edit or an upgrade that leaves ``radau.py`` as it was, the
-    cache would silently return the old model. A digest of all the package's sources, kept
+    cache would silently return the old model. ``folder`` may be a sequence of folders (the
+    dynamics and the surface force laws, whose kernels the vector field inlines: issue 31). A digest of all the package's sources, kept
     beside the cache files, makes any change of any of them recompile everything (once).
     Returns whether files were deleted. Never raises (an unwritable cache is numba's affair).
     """

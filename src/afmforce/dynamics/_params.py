@@ -8,6 +8,7 @@ from functools import lru_cache
 
 import numpy as np
 
+from .. import surface_laws
 from .config import SimulationConfig
 from .damping import beam_damping
 from .models import MODEL_BEAM, beam_matrices, pack_beam, pack_spring
@@ -100,6 +101,8 @@ def fill_liquid(p: np.ndarray, s) -> np.ndarray:
     p[M.SLIP6B] = 6.0 * s.slip_length
     p[M.LEVER] = s.lever_drag
     p[M.LEVER_H] = s.lever_height
+    if s.laws:
+        p[M.P_LAWS:] = surface_laws.pack(s.law_values, s.radius_eff)
     return p
 
 

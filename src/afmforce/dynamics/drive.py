@@ -102,7 +102,7 @@ def start_deflection(cfg) -> float:
         raise ParameterError(
             f"start {start * 1e9:.4g} nm is already in contact: the static jump-in is at "
             f"z = {zj * 1e9:.4g} nm (h = {hj * 1e9:.4g} nm); start further out (more negative)")
-    if s.double_layer == "none":
+    if s.eq2_only:
         d = _static_start(start, k, s.paper_radius, s.hamaker, s.z0)
     else:
         d = surface_static_deflection(start, k, s)
@@ -134,7 +134,7 @@ def initial_state(cfg) -> np.ndarray:
     h = d - cfg.drive.start      # eq 2 (forces.vdw_force) on a scalar
     r = s.paper_radius
     fz = -(s.hamaker * r / (12.0 * h * h)) * (1.0 - 0.25 * (s.z0 / h) ** 6)
-    if s.double_layer != "none":
+    if not s.eq2_only:
         fz = float(surface_static_force(s, h)[0])
     gx, gt = _unit_load_response(cant)
     x, theta = gx * fz, gt * fz

@@ -25,7 +25,10 @@ one call.
 In a liquid (issue 25, docs/liquid.md) ``Fz`` also holds the double layer
 (:func:`static_force`: weak overlap or Hogg-Healy-Fuerstenau), drainage with
 Vinogradova's slip factor and the drag on the lever (:func:`drainage`); the geometry
-(sphere-sphere or sphere-flat) is in the packed ``AR`` and ``CD``.
+(sphere-sphere or sphere-flat) is in the packed ``AR`` and ``CD``. The surface force laws of
+:mod:`afmforce.surface_laws` (issue 31: hydration, steric brushes, capillary meniscus, ...) add
+to ``Fs``: their slots follow the model's (``P_LAWS``), assigned by that registry, and
+:data:`laws_force` chains their compiled kernels.
 
 The parameters are packed into one float64 vector ``p`` (layout below) so that
 the integrator can be compiled once for both models. ``p[H_GUARD]`` is the
@@ -42,6 +45,7 @@ import math
 import numpy as np
 from numba import njit
 
+from .. import surface_laws
 from ._jit import piece
 from .damping import beam_damping, spring_damping
 
@@ -78,7 +82,9 @@ DL_EXACT = 27   # 1: Hogg-Healy-Fuerstenau terms; 0: weak overlap (csch -> 2 exp
 SLIP6B = 28     # 6 b, b the slip length [m] (0: no slip; Fd = -CD f*(h)/h h')
 LEVER = 29      # lever drag coefficient c [N s/m] (F = -c g(h) h')
 LEVER_H = 30    # lever height H [m]: g = H / (h + H); 0: g = 1
-P_SIZE = 31
+# surface force laws (issue 31): the block afmforce.surface_laws packs, its slots assigned there
+P_LAWS = 31
+P_SIZE = P_LAWS + surface_laws.N_SLOTS
 
 #: Number of monitored observables returned by :func:`observe`.
 N_OBS = 9
@@ -101,9 +107,45 @@ def surface_force(h, ar, z0):
     return fs, dfs
 
 
+def _no_law(h, p):
+    return 0.0, 0.0
+
+
+def _add_law(total, kernel, o):
+    """``total`` followed by one law: its kernel adds (F, F') when its switch ``p[o]`` is on."""
+    def add(h, p):
+        fs, dfs = total(h, p)
+        if p[o] > 0.0:
+            f, df = kernel(h, p, o + 1)
+            fs += f
+            dfs += df
+        return fs, dfs
+    return add
+
+
+def _laws_chain():
+    """One compiled function adding every law of :data:`afmforce.surface_laws.LAWS` to (F, F'):
+    a chain of pieces, one per law, each with its kernel and its slot (no code generation; the
+    pieces are inlined into the cached entry point, whose cache the sources' digest guards)."""
+    total = piece(inline=True, python=True)(_no_law)
+    names = list(surface_laws.LAWS)
+    for name in names:
+        kernel = piece(inline=True, python=True)(surface_laws.LAWS[name].kernel)
+        # the last link is not forced inline: static_force stays small (LLVM inlines it into
+        # rhs and jac as before) and calls the chain only when a law is on
+        total = piece(inline=name != names[-1], python=True)(
+            _add_law(total, kernel, P_LAWS + surface_laws.SLOTS[name]))
+    return total
+
+
+#: ``laws_force(h, p) -> (F, F')`` of every law that is on (its switch), summed.
+laws_force = _laws_chain()
+
+
 @piece()
 def static_force(h, p):
-    """Static normal force and its gradient: eq 2 plus the double layer [N, N/m]."""
+    """Static normal force and its gradient: eq 2, the double layer and the surface force laws of
+    :mod:`afmforce.surface_laws` (:data:`laws_force`) [N, N/m]."""
     fs, dfs = surface_force(h, p[AR], p[Z0])
     kappa = p[DL_KAPPA]
     if kappa > 0.0:
@@ -119,6 +161,10 @@ def static_force(h, p):
             w = p[DL_A] * 2.0 * e1
             fs += w
             dfs -= kappa * w
+    if p[P_LAWS] > 0.0:                      # any surface force law on (issue 31)
+        fl, dfl = laws_force(h, p)
+        fs += fl
+        dfs += dfl
     return fs, dfs
 
 

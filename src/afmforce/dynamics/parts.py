@@ -22,7 +22,7 @@ message the command line and the web give, and so are the cross-field rules
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, make_dataclass
 from functools import lru_cache
 from typing import ClassVar
 
@@ -31,6 +31,9 @@ from ..cantilever import InclinedCantilever
 from ..constants import FIG1, FIG5
 from ..errors import ParameterError
 from ..forces import DOUBLE_LAYERS, GEOMETRIES, debye_length
+from ..surface_laws import PARAMETERS as LAW_PARAMETERS
+from ..surface_laws import active_laws
+from ..surface_laws import reach as law_reach
 from ._part import Part, choice, quantity, validate
 from .registries import FRICTION_LAWS, RINGING
 
@@ -195,7 +198,7 @@ PROBES: dict[str, type] = {"beam": BeamProbe, "spring": SpringProbe}
 
 # --- surfaces, friction, drive, numerics ---------------------------------------
 @dataclass(frozen=True)
-class Surface(Part):
+class _SurfaceBase(Part):
     """The surfaces: van der Waals force with a soft wall (eq 2) and drainage; in a liquid also
     the double layer, slip and the drag on the lever (issue 25; docs/liquid.md).
 
@@ -227,6 +230,10 @@ class Surface(Part):
         Drag coefficient of the lever body [N s/m] on the relative velocity of lever and substrate.
     lever_height : float
         Lever height above the substrate at contact [m]: drag ``c H/(h + H)``; 0: constant.
+
+    The parameters of the surface force laws of :mod:`afmforce.surface_laws` follow (issue 31:
+    hydration, steric brushes, capillary meniscus ...), one field each, made from the laws'
+    records; every law is off at its defaults.
     """
 
     radius: float = quantity("radius", FIG5["radius"], "positive")
@@ -278,6 +285,40 @@ class Surface(Part):
     def paper_radius(self) -> float:
         """The radius the paper's sphere-sphere formulas take (R, or 2R on a flat) [m]."""
         return self.radius if self.geometry == "sphere-sphere" else 2.0 * self.radius
+
+    @property
+    def eq2_only(self) -> bool:
+        """True when the static force is the paper's eq 2 alone (no double layer, no law of
+        :mod:`afmforce.surface_laws`): the closed-form static solutions apply."""
+        return self.double_layer == "none" and not self.laws
+
+    @property
+    def law_values(self) -> dict[str, float]:
+        """The surface force laws' parameters (:data:`afmforce.surface_laws.PARAMETERS`) [SI]."""
+        return {n: getattr(self, n) for n in LAW_PARAMETERS}
+
+    @property
+    def laws(self) -> tuple[str, ...]:
+        """Names of the surface force laws that act (:mod:`afmforce.surface_laws`; () in the paper)."""
+        return active_laws(self.law_values)
+
+    @property
+    def law_reach(self) -> float:
+        """Separation beyond which the active surface force laws are negligible [m] (0: none)."""
+        return law_reach(self.law_values)
+
+    @property
+    def radius_eff(self) -> float:
+        """The Derjaguin radius R_eff [m] (R/2 for two spheres, R on a flat)."""
+        return 0.5 * self.paper_radius
+
+
+#: The surfaces (:class:`_SurfaceBase`) with one field per parameter of the surface force laws
+#: (:data:`afmforce.surface_laws.PARAMETERS`), made from the laws' records.
+Surface = make_dataclass(
+    "Surface", [(n, float, quantity(n, p.default, p.domain)) for n, p in LAW_PARAMETERS.items()],
+    bases=(_SurfaceBase,), frozen=True,
+    namespace={"__doc__": _SurfaceBase.__doc__, "__module__": __name__})
 
 
 @dataclass(frozen=True)

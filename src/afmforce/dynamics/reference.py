@@ -21,6 +21,7 @@ import numpy as np
 
 from ..forces import (double_layer_force, double_layer_force_gradient, lever_drag_force,
                       slip_drainage_force, vdw_force, vdw_force_gradient)
+from ..surface_laws import total_force
 from .config import SimulationConfig
 from .drive import initial_state, segments
 from .static import surface_jump_in
@@ -50,6 +51,8 @@ class ReferenceModel:
         s, probe, fr = cfg.surface, cfg.probe, cfg.friction
         self.R, self.A, self.z0, self.eta = s.paper_radius, s.hamaker, s.z0, s.viscosity
         self.surface = s
+        # the surface force laws (issue 31): (R_eff, parameter values) when one acts, else None
+        self.laws = (s.radius_eff, s.law_values) if s.laws else None
         if cfg.model == "spring":
             self.beam = False
             self.k, self.m = probe.spring_constant, probe.mass
@@ -82,6 +85,11 @@ class ReferenceModel:
         return float(law(h, s.radius, s.surface_potential, s.debye_length, s.surface_potential_2,
                          s.permittivity, s.double_layer, s.geometry))
 
+    def _laws(self, h):
+        """(F, F') of the surface force laws of :mod:`afmforce.surface_laws` (their numpy forms)."""
+        f, df = total_force(h, *self.laws)
+        return float(f), float(df)
+
     def _drag(self, h, hd):
         s = self.surface
         return float(slip_drainage_force(h, hd, s.radius, s.viscosity, s.slip_length, s.geometry)) \
@@ -90,6 +98,8 @@ class ReferenceModel:
     def _forces(self, h, hd):
         fz = float(vdw_force(h, self.R, self.A, self.z0)) + self._dl(h, double_layer_force) \
             + self._drag(h, hd)
+        if self.laws is not None:
+            fz += self._laws(h)[0]
         return fz
 
     def separation(self, y, z, v):
@@ -114,6 +124,8 @@ class ReferenceModel:
         h, hd = self.separation(y, z, v)
         dfs = float(vdw_force_gradient(h, self.R, self.A, self.z0)) + self._dl(
             h, double_layer_force_gradient)
+        if self.laws is not None:
+            dfs += self._laws(h)[1]
         dd = 1e-6 * h      # drainage and drag: linear in h', differentiated numerically in h
         dfz_dh = dfs + (self._drag(h + dd, hd) - self._drag(h - dd, hd)) / (2.0 * dd)
         dfz_dhd = self._drag(h, 1.0)

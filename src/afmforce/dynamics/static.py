@@ -23,6 +23,8 @@ from .._validate import positive
 from ..constants import HAMAKER, Z0
 from ..errors import ParameterError
 from ..forces import static_jump_in_separation, vdw_force, vdw_force_gradient
+from ..surface_laws import reach as law_reach
+from ..surface_laws import total_force
 
 __all__ = ["StaticCurve", "static_curve", "static_deflection", "static_jump_in", "surface_jump_in",
            "surface_static_deflection", "surface_static_force"]
@@ -174,7 +176,8 @@ def static_deflection(piezo_position: ArrayLike, spring_constant: float, radius:
 # --- any surface (issue 25): the paper's eq 2 on the geometry, plus the double layer ----------
 def surface_static_force(surface, h: ArrayLike):
     """(F(h) [N], F'(h) [N/m]) of a :class:`~afmforce.dynamics.parts.Surface`: eq 2 with its
-    geometry (:attr:`Surface.paper_radius`) plus its double layer (drainage and drag vanish at rest)."""
+    geometry (:attr:`Surface.paper_radius`) plus its double layer and the surface force laws of
+    :mod:`afmforce.surface_laws` (drainage and drag vanish at rest)."""
     from ..forces import double_layer_force, double_layer_force_gradient
     s = surface
     r = s.paper_radius
@@ -185,6 +188,9 @@ def surface_static_force(surface, h: ArrayLike):
                 s.permittivity, s.double_layer, s.geometry)
         f = f + double_layer_force(h, *args)
         df = df + double_layer_force_gradient(h, *args)
+    if s.laws:
+        fl, dfl = total_force(h, s.radius_eff, s.law_values)
+        f, df = f + fl, df + dfl
     return f, df
 
 
@@ -196,7 +202,7 @@ def surface_jump_in(spring_constant: float, surface) -> tuple[float, float, floa
     crossing refined by Brent's method. NaN when there is no instability.
     """
     s = surface
-    if s.double_layer == "none":
+    if s.eq2_only:
         return static_jump_in(spring_constant, s.paper_radius, s.hamaker, s.z0)
     return _surface_jump_in(float(spring_constant), s)
 
@@ -204,7 +210,7 @@ def surface_jump_in(spring_constant: float, surface) -> tuple[float, float, floa
 @lru_cache(maxsize=1024)
 def _surface_jump_in(k: float, s) -> tuple[float, float, float]:
     from scipy.optimize import brentq
-    hi = max(60.0 * s.debye_length, 200e-9)
+    hi = max(60.0 * s.debye_length, 200e-9, 2.0 * law_reach(s.law_values))
     h = np.geomspace(0.5 * s.z0, hi, 6000)[::-1]
     _, df = surface_static_force(s, h)
     above = np.nonzero(df >= k)[0]
@@ -223,7 +229,7 @@ def _surface_jump_in(k: float, s) -> tuple[float, float, float]:
 def surface_static_deflection(start: float, spring_constant: float, surface) -> float:
     """Deflection [m] on the out-of-contact static branch at drive position ``start`` (any surface)."""
     s = surface
-    if s.double_layer == "none":
+    if s.eq2_only:
         return float(static_deflection(start, spring_constant, s.paper_radius, s.hamaker, s.z0))
     return _surface_start(float(start), float(spring_constant), s)
 

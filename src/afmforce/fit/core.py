@@ -15,7 +15,7 @@ from .memory import check_fit_memory
 from .model import DEFAULT_FRINGE_PERIOD, Evaluator
 from .preprocess import preparation_warnings, result_warnings
 from .._fields import check as check_value
-from .params import PARAMETERS, SPEED_DEPENDENT, check_free
+from .params import LAW_PARAMETERS, PARAMETERS, SPEED_DEPENDENT, check_free
 from .problem import Problem, local_fit
 from .search import _refit_all, _search
 from .result import CurveFit, Estimate, FitResult, contain_value, wald_interval
@@ -82,7 +82,7 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
             dj = surface_jump_in(k, base.surface.replace(**{name: math.exp(mid)}))[2]
             lo, hi = (mid, hi) if dj > target else (lo, mid)
         g[name] = math.exp(0.5 * (lo + hi))
-    for name in ("xi", "zeta", "slip_length"):
+    for name in ("xi", "zeta", "slip_length", *LAW_PARAMETERS):
         if name in free:
             g[name] = max(g[name], PARAMETERS[name].abs_step)
     return g

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 from .._fields import QUANTITIES
 from ..errors import ParameterError
 
-__all__ = ["FitParameter", "PARAMETERS", "SPEED_DEPENDENT", "check_free"]
+__all__ = ["FitParameter", "LAW_PARAMETERS", "PARAMETERS", "SPEED_DEPENDENT", "check_free"]
 
 #: Parameters only curves at several driving speeds can separate from A*R.
 SPEED_DEPENDENT = ("xi", "zeta", "viscosity", "mass", "m_joint", "slip_length", "lever_drag")
@@ -114,6 +114,34 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
     FitParameter("debye_length", None, None, None, 1e-8, 0.01, 1e-12, ("beam", "spring"),
                  "Debye length of the double layer"),
 )}
+
+
+def _law_parameters() -> dict[str, FitParameter]:
+    """The fittable parameters of the surface force laws (:mod:`afmforce.surface_laws`): bounds
+    from their quantities' ranges, scale and steps from the law's record."""
+    from .._fields import QUANTITIES
+    from ..surface_laws import LAWS
+
+    out = {}
+    for law in LAWS.values():
+        for p in law.parameters:
+            if p.fit is None or p.name in out:
+                continue
+            spec = QUANTITIES[p.name]
+            scale, rel, step = p.fit
+            lower = spec.lo if spec.lo is not None else -1e300
+            upper = spec.hi if spec.hi is not None else 1e300
+            if spec.hi_open:
+                upper -= max(step, 1e-9 * abs(upper))
+            out[p.name] = FitParameter(p.name, spec.unit, lower, upper, scale, rel, step,
+                                       ("beam", "spring"), f"{spec.help} ({law.name} law)",
+                                       spec.lo == 0.0)
+    return out
+
+
+#: The surface force laws' fittable parameters (issue 31), from their records.
+LAW_PARAMETERS: tuple[str, ...] = tuple(_law_parameters())
+PARAMETERS.update(_law_parameters())
 
 
 def check_free(free, model: str, friction: str | None = None) -> tuple[str, ...]:

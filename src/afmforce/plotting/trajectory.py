@@ -39,12 +39,12 @@ def plot_trajectory(traj, axes=None):
             ax1.plot(traj.apparent_separation[m] * nm, traj.apparent_deflection[m] * nm,
                      color=color, lw=1, ls="--", label=f"{name}: apparent")
     s = cfg.surface
-    if s.double_layer == "none":   # eq 2 on the geometry (issue 25: 2R on a flat)
+    if s.eq2_only:                 # eq 2 on the geometry (issue 25: 2R on a flat)
         sc = static_curve(traj.spring_constant, s.paper_radius, cfg.hamaker, cfg.z0, h_max=40e-9)
         hs, ds, st, jd, hmax = sc.separation, sc.deflection, sc.stable, sc.jump_in_deflection, 12.0
     else:                          # with a double layer: the static force of the surface
         from ..dynamics.static import surface_static_force
-        hs = np.geomspace(0.8 * cfg.z0, max(40e-9, 8 * s.debye_length), 2000)
+        hs = np.geomspace(0.8 * cfg.z0, max(40e-9, 8 * s.debye_length, s.law_reach), 2000)
         f, df = surface_static_force(s, hs)
         ds, st = f / traj.spring_constant, df < traj.spring_constant
         from ..dynamics.static import surface_jump_in

@@ -138,7 +138,7 @@ def _static_jump_in(k: float, radius: float, hamaker: float, z0: float) -> tuple
 def _row(config, trajectory, caught) -> dict:
     row = flatten(trajectory.summary())
     k, s = config.force_constant, config.surface
-    if s.double_layer == "none":
+    if s.eq2_only:
         h_s, d_s = _static_jump_in(k, s.paper_radius, s.hamaker, s.z0)
     else:   # issue 25: the double layer moves the static jump-in
         from ..dynamics.static import surface_jump_in

@@ -1,0 +1,30 @@
+"""Shared by the modulus fit (:mod:`.fit`) and the adhesive fit (:mod:`.adhesive_fit`): the
+weights of the fitted samples and the 95 % Student t quantile of the intervals."""
+
+from __future__ import annotations
+
+import functools
+import math
+
+import numpy as np
+
+__all__ = ["t95", "weights"]
+
+
+@functools.lru_cache(maxsize=256)
+def t95(dof: int) -> float:
+    """Two-sided 95 % Student t quantile for ``dof`` degrees of freedom (NaN for none)."""
+    if dof <= 0:
+        return math.nan
+    from scipy.special import stdtrit
+
+    return float(stdtrit(dof, 0.975))
+
+
+def weights(d: np.ndarray, width: float, max_indentation: float) -> np.ndarray:
+    """Weight of each sample at indentation ``d`` [m]: ramped up over ``width`` [m] from the
+    contact point (none: all 1), 0 beyond ``max_indentation`` [m]."""
+    q = np.ones_like(d) if width <= 0 else np.minimum(np.abs(d) / width, 1.0)
+    if math.isfinite(max_indentation):
+        q = np.where(d > max_indentation, 0.0, q)
+    return q
