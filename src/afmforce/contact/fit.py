@@ -20,7 +20,6 @@ parameters, the contact point included, are fitted together and get their covari
 
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 
