@@ -15,13 +15,16 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "SERVER_MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "MAX_GRID_POINTS", "CONFIRM_GRID_POINTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
-#: The most samples one simulated cycle may have, on every face (CLI, web, records): twice the
-#: largest real force curve (~1e6 samples), about 180 MB of trajectory. One cap for all faces
-#: (issues 31, 33): the web server shares it, so it must be safe for a server too.
-MAX_SAMPLES = 2_000_000
+#: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
+#: (Fig 9 at 1 nm/s, 4.3e6 samples) fits; a real force curve has at most ~1e6.
+MAX_SAMPLES = 10_000_000
+#: The most samples of one cycle a request to ``afmforce serve`` may simulate: a server shares its
+#: memory among its clients (about 90 MB of trajectory per request; issue 33). Declared here, beside
+#: :data:`MAX_SAMPLES`, so that every face reads its caps from one module.
+SERVER_MAX_SAMPLES = 1_000_000
 #: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
 CONFIRM_RUNS = 100_000
 #: The most runs of one sweep, even with a yes (its parameter table is built before any run).
@@ -105,6 +108,7 @@ def check_design(n_speeds: int, n_curves: int, samples: float) -> None:
 def caps_markdown() -> str:
     """The docs table of the caps (docs/ranges.md holds it verbatim)."""
     rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
+            ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
             ("runs of one sweep without `--yes`", CONFIRM_RUNS, "sweep"),
             ("runs of one sweep", MAX_RUNS, "sweep"),
             ("curves in a design", MAX_DESIGN_CURVES, "plan"),

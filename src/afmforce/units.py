@@ -56,7 +56,9 @@ _LEADING_NUMBER = re.compile(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.
 #: One unit name with an optional exponent (``m``, ``um``, ``s^-1``, ``m**2``, ``m2`` is not one).
 _UNIT_NAME = r"[A-Za-z\u00b0\u03a9\u2126%_]++(?:\s*(?:\^|\*\*)\s*[+-]?\d+(?:\.\d+)?)?"
 #: A unit expression: names joined by ``/``, ``*``, ``·`` or spaces, with parentheses.
-_UNIT = re.compile(r"^(?:" + _UNIT_NAME + r"|[()/*\u00b7\s])++$")
+_UNIT = re.compile(r"^(?:" + _UNIT_NAME + r"|[()/*\u00b7\s]|(?<=[A-Za-z])\.(?=[A-Za-z]))++$")
+#: A dot between two unit names is a product (``Pa.s``, ``N.s/m``), as engineers write it.
+_DOT_PRODUCT = re.compile(r"(?<=[A-Za-z])\.(?=[A-Za-z])")
 
 #: Characters read as a minus sign: U+2212 minus, U+2010 hyphen, U+2011 non-breaking hyphen,
 #: U+2012 figure dash, U+2013 en dash, U+FE63 small hyphen-minus, U+FF0D fullwidth hyphen-minus
@@ -125,6 +127,8 @@ def parse_quantity(text: str | float | int, dimension: str, name: str = "value")
             if not _UNIT.match(match.group(2)) or not re.search(r"[A-Za-z\u00b0\u03a9\u2126%]", match.group(2)):
                 raise UnitError(f"{name} expects {word}, got {text} (only a number and a unit; "
                                 f"e.g. {_EXAMPLE.get(dimension, '1.5')})")
+            if _DOT_PRODUCT.search(match.group(2)):
+                s = match.group(1) + " " + _DOT_PRODUCT.sub("*", match.group(2))
             value = _parse_with_pint(s, si, word, name, text)
     if not math.isfinite(value):
         raise UnitError(f"{name} expects {word}, got {text}")

@@ -64,7 +64,7 @@ def test_double_layer_rise_is_not_contact(monkeypatch):
 def test_virtual_liquid_double_layer_stays_out_of_contact(monkeypatch):
     from afmforce.fit import virtual_curves
     liq = dict(model="spring", spring_constant=0.1, mass=1e-11, radius=5e-6, geometry="sphere-flat",
-               hamaker=1e-23, viscosity=0.89e-3, lever_drag=1e-5, start=-100e-9, turn=40e-9, end=-100e-9)
+               hamaker=1e-22, viscosity=0.89e-3, lever_drag=1e-5, start=-100e-9, turn=40e-9, end=-100e-9)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         c = virtual_curves([10e-6], seed=3, sample_rates=[1e4], surface_potential=-0.05,

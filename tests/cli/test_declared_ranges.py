@@ -212,15 +212,15 @@ def test_the_sample_cap_is_one_constant_for_every_face(capsys):
     from afmforce.cli import _validate
     from afmforce.dynamics import SimulationConfig
 
-    assert _validate.MAX_SAMPLES is limits.MAX_SAMPLES == 2_000_000
+    assert _validate.MAX_SAMPLES is limits.MAX_SAMPLES == 10_000_000
     # start -40 nm, turn 20 nm, end -230 nm at 1 nm/s: 310 s of drive; 40 kHz gives 1.24e7 samples
     n = limits.simulation_samples(-40e-9, 20e-9, -230e-9, 1e-9, None, 0.0, 40e3)
     assert n == pytest.approx(310.0 * 40e3, rel=1e-12)
-    with pytest.raises(ParameterError, match=r"about 1.24e\+07 samples .* more than the 2e\+06 a run may have"):
+    with pytest.raises(ParameterError, match=r"about 1.24e\+07 samples .* more than the 1e\+07 a run may have"):
         SimulationConfig(velocity=1e-9, sample_rate=40e3)
-    SimulationConfig(velocity=1e-9, sample_rate=6e3)      # 1.86e6 samples: allowed
+    SimulationConfig(velocity=1e-9, sample_rate=30e3)      # 9.3e6 samples: allowed
     err = _cli(capsys, ["simulate", "--velocity", "1nm/s", "--sample-rate", "40kHz"])
-    assert "about 1.24e+07 samples" in err and "more than the 2e+06" in err
+    assert "about 1.24e+07 samples" in err and "more than the 1e+07" in err
 
 
 def test_the_fit_searches_inside_the_declared_ranges():

@@ -122,3 +122,16 @@ def _instrument_keys():
     from afmforce.instrument.config import PARAMETERS
 
     return [(k, p.dimension) for k, p in PARAMETERS.items()]
+
+
+def test_a_dot_between_unit_names_is_a_product():
+    """Issue 34's command line types ``--viscosity 0.05Pa.s``: a dot between two unit names is a
+    product (Pa.s = Pa*s), while a dot followed by a digit after the unit is still refused."""
+    from afmforce.errors import UnitError
+    from afmforce.units import parse_value
+
+    assert parse_value("0.05Pa.s", "viscosity") == parse_value("0.05Pa*s", "viscosity") == 0.05
+    assert parse_value("2e-5 N.s/m", "damping") == pytest.approx(2e-5, rel=1e-15)
+    for bad in ("5um/s.3", "5 um.", "0.05Pa..s"):
+        with pytest.raises(UnitError):
+            parse_value(bad, "velocity" if "um" in bad else "viscosity")

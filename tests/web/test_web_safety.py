@@ -114,10 +114,10 @@ def test_simulation_size_is_bounded(client):
 
     err = _error(client.post("/api/simulate?max_points=2000000", json={"sample_rate": 6e5}))
     assert err["field"] == "max_points"
-    err = _error(client.post("/api/simulate", json={"sample_rate": 1e6}))   # 3.1e6 samples
+    err = _error(client.post("/api/simulate", json={"sample_rate": 6e5}))   # 1.86e6 samples
     assert err["field"] == "sample_rate" and f"{MAX_SAMPLES:,}" in err["message"]
     from afmforce import limits
-    assert MAX_SAMPLES is limits.MAX_SAMPLES      # one cap, shared with the CLI and the records
+    assert MAX_SAMPLES is limits.SERVER_MAX_SAMPLES     # declared with the library's caps
     r = client.post("/api/simulate", json={"sample_rate": 1e5}).json()       # 310,001 samples
     assert r["n_samples"] > RESPONSE_POINTS and len(r["columns"]["time"]) <= RESPONSE_POINTS
     err = _error(client.post("/api/simulate/raw", json={"sample_rate": 1e5}))

@@ -11,8 +11,8 @@ from __future__ import annotations
 __all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
            "MAX_CURVES", "SESSION_TTL"]
 
-#: Samples one simulated cycle may have: the library's one cap, shared with the CLI and the records.
-from ..limits import MAX_SAMPLES  # noqa: E402
+#: Samples one simulated cycle may have: the library's cap for a server (``afmforce.limits``).
+from ..limits import SERVER_MAX_SAMPLES as MAX_SAMPLES  # noqa: E402
 #: Samples per column one simulation response may carry (``max_points``; the page draws 2,000-5,000).
 RESPONSE_POINTS = 20_000
 #: Per-sample values (all curves together) one analysis response may carry with ``arrays``.
