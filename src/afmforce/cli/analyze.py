@@ -332,8 +332,12 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
             per_map.setdefault(image.source, []).append(image)
     from ..analysis.maps import write_map_hdf5
 
-    for source, images in per_map.items():  # the numbers, with the grid positions
+    from ..plotting.maps import write_map_histograms
+
+    for source, images in per_map.items():  # the numbers, with the grid positions; the histograms
         out[f"map {source} numbers"] = write_map_hdf5(images, folder / f"{images[0].name}.maps.h5")
+        for path in write_map_histograms(images, folder / images[0].name):
+            out[f"map {source} {path.name}"] = path
     return out
 
 
