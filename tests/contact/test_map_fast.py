@@ -119,3 +119,24 @@ def test_jkr_closed_form_and_bad_model():
     assert math.isclose(ADHESION_MODELS["jkr"] / ADHESION_MODELS["dmt"], 4 / 3)
     with pytest.raises(ParameterError, match="adhesion_model"):
         PixelAnalysis(adhesion_model="maugis")
+
+
+def test_a_damaged_curve_is_named(mapped, tmp_path):
+    """The map reader opens a curve's datasets directly: a missing one is still named."""
+    import shutil
+
+    import h5py
+
+    from afmforce.errors import FileFormatError
+    from afmforce.io.native.rawmap import MapReader
+
+    path = tmp_path / "damaged.h5"
+    shutil.copy(mapped[0], path)
+    with h5py.File(path, "r+") as f:
+        del f["curves/000003/segment"]
+    with MapReader(path) as reader:
+        assert reader.read(2).segment.size == 2 * CFG.points
+        with pytest.raises(FileFormatError, match=r"#3: dataset\(s\) segment missing"):
+            reader.read(3)
+        with pytest.raises(FileFormatError, match="no curve 64"):
+            reader.read(64)
