@@ -122,16 +122,27 @@ def read_curve_group(group, where: str) -> RawCurve:
             for key in g:
                 truth[key] = np.asarray(g[key][()], dtype=np.float64)
         measured = f.get("piezo_measured")
-        measured = None if measured is None else np.asarray(measured[()], np.float64)
-        return RawCurve(time=np.asarray(data["time"][()], np.float64),
-                        piezo_nominal=np.asarray(data["piezo_nominal"][()], np.float64),
-                        deflection_signal=np.asarray(data["deflection_signal"][()], np.float64),
+        measured = None if measured is None else _floats(measured)
+        return RawCurve(time=_floats(data["time"]),
+                        piezo_nominal=_floats(data["piezo_nominal"]),
+                        deflection_signal=_floats(data["deflection_signal"]),
                         segment=np.asarray(data["segment"][()]).astype(np.int8),
                         piezo_measured=measured, metadata=metadata, truth=truth, deflection_unit=dunit)
     except FileFormatError as exc:
         raise FileFormatError(str(exc) if str(exc).startswith(where) else f"{where}: {exc}") from None
     except (KeyError, ValueError, TypeError, OSError, json.JSONDecodeError) as exc:
         raise FileFormatError(f"{where}: malformed afmforce raw HDF5 file ({exc})") from exc
+
+
+def _floats(dataset) -> np.ndarray:
+    """A dataset read as float64 by HDF5's own conversion into a new array (the same values as
+    ``np.asarray(dataset[()], np.float64)``, without h5py's selection machinery: a map reads
+    thousands of small datasets)."""
+    h5py = _h5py()
+    dset = dataset.id
+    out = np.empty(dset.get_space().get_simple_extent_dims(), dtype=np.float64)
+    dset.read(h5py.h5s.ALL, h5py.h5s.ALL, out)
+    return out
 
 
 #: Largest attribute afmforce reads [bytes]; a larger declared size means a damaged file.
