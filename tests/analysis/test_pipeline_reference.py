@@ -44,9 +44,21 @@ def _compare(new, old, where: str, out: list[str]) -> None:
         out.append(f"{where}: {str(new)[:80]!r} != {str(old)[:80]!r}")
 
 
+def _bug(result) -> bool:
+    """The reference holds an exception that is no AfmforceError (e.g. a ZeroDivisionError)."""
+    import afmforce.errors as E
+
+    if "error" not in result:
+        return False
+    cls = getattr(E, result["error"].split(":", 1)[0], None)
+    return not (isinstance(cls, type) and issubclass(cls, E.AfmforceError))
+
+
 def test_reference_covers_the_cases():
     assert len(REFERENCE) == 34
     assert sum("error" not in v for v in REFERENCE.values()) >= 30
+    # two 300-point thinnings of the JPK map raised ZeroDivisionError on main (8787912): not compared
+    assert sum(_bug(v) for v in REFERENCE.values()) == 2
 
 
 @pytest.fixture(scope="module")
@@ -61,5 +73,7 @@ def test_every_number_unchanged(today):
     assert set(today) == set(REFERENCE)
     diffs: list[str] = []
     for key, old in REFERENCE.items():
+        if _bug(old):  # main raised a bare Python error here (a bug, not a refusal): fixing it is no regression
+            continue
         _compare(today[key], old, key, diffs)
     assert not diffs, f"{len(diffs)} differences, first: " + "; ".join(diffs[:8])
