@@ -149,14 +149,15 @@ def _read(ref):
 
 
 def analyze_map(paths: Iterable[str | os.PathLike], analysis: PixelAnalysis | None = None, *,
-                workers: int | None = None, executor=None, store=None, chunk_size: int | None = None,
-                progress=None):
+                workers: int | None = None, executor=None, scheduler: str | None = None, store=None,
+                chunk_size: int | None = None, progress=None):
     """Every pixel of the force maps ``paths`` through :class:`PixelAnalysis` on the batch engine.
 
     Returns the :class:`~afmforce.sweep.BatchResult` (``.table()``: one row per curve, the map's
     grid columns included; ``store``: a parent folder where the rows go chunk by chunk, and where a
-    rerun resumes). ``executor``/``workers`` as in :func:`~afmforce.sweep.run_batch` (default: a
-    local Dask cluster sized to this machine).
+    rerun resumes). ``executor``/``workers``/``scheduler`` as in :func:`~afmforce.sweep.run_batch`
+    (default: a local Dask cluster; ``scheduler="tcp://HOST:8786"``: a running cluster of several
+    machines, each able to read the map files at the same path).
     """
     from ..sweep import run_batch
     from ..sweep.files import _close_open, plan_curves
@@ -168,7 +169,8 @@ def analyze_map(paths: Iterable[str | os.PathLike], analysis: PixelAnalysis | No
     # the store's key: the files (path, size, modification time) and the analysis's settings
     key = None if store is None else f"{batch_key(analysis, paths)[:20]}-{_hash(repr(analysis))}"
     try:
-        return run_batch(refs, analysis, chunk_size=chunk_size, executor=executor, workers=workers, store=store,
+        return run_batch(refs, analysis, chunk_size=chunk_size, executor=executor, workers=workers,
+                         scheduler=scheduler, store=store,
                          key=key, progress=progress, label=lambda ref, i: ref.label)
     finally:
         _close_open()
