@@ -140,3 +140,34 @@ def test_a_damaged_curve_is_named(mapped, tmp_path):
             reader.read(3)
         with pytest.raises(FileFormatError, match="no curve 64"):
             reader.read(64)
+
+
+def test_cli_fast_map(mapped, tmp_path, capsys):
+    """``afmforce analyze MAP --fast-map --tip-radius 5um --out DIR``: the rows of analyze_map, the four
+    maps as PNG, histograms, HDF5 and tables; a rerun resumes from the store."""
+    import pandas as pd
+
+    from afmforce.cli.main import main
+
+    path, _, table = mapped
+    argv = ["analyze", str(path), "--fast-map", "--tip-radius", "5um", "--serial", "--out", str(tmp_path)]
+    assert main(argv) == 0, capsys.readouterr().err
+    text = capsys.readouterr().out
+    assert "64 of 64 curves analysed" in text and "modulus" in text and "kPa" in text
+    (folder,) = tmp_path.glob("batch-*")
+    names = {p.name for p in folder.iterdir()}
+    for q in ("modulus", "topography", "adhesion", "work_of_adhesion"):
+        assert f"soft.h5.{q}.png" in names and f"soft.h5.{q}.hist.png" in names
+    assert {"soft.h5.maps.h5", "soft.h5.histograms.csv", "summary.parquet", "summary.csv"} <= names
+    summary = pd.read_parquet(folder / "summary.parquet").sort_values(["map_y", "map_x"])
+    ref = table.sort_values(["map_y", "map_x"])
+    assert np.array_equal(summary["youngs_modulus"].to_numpy(), ref["youngs_modulus"].to_numpy())
+    assert main(argv) == 0 and "0 chunks run" in capsys.readouterr().out  # resumed
+
+
+def test_cli_fast_map_needs_a_map(tmp_path, capsys):
+    from afmforce.cli.main import main
+
+    curve = __import__("pathlib").Path(__file__).resolve().parents[1] / "data" / "jpk_cellhesion_spot3.jpk-force"
+    assert main(["analyze", str(curve), "--fast-map", "--serial"]) == 2
+    assert "force maps" in capsys.readouterr().err

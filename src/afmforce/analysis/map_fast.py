@@ -35,7 +35,7 @@ from ..errors import AnalysisError, ParameterError
 from .indentation import fast_modulus
 from .options import IndentationOptions, ProbeCalibration
 
-__all__ = ["PixelAnalysis", "ADHESION_MODELS", "PIXEL_COLUMNS", "analyze_map"]
+__all__ = ["PixelAnalysis", "ADHESION_MODELS", "PIXEL_COLUMNS", "analyze_map", "analyze_refs"]
 
 #: Work of adhesion from the adhesion force F_ad and the tip radius R: model -> w / (F_ad / R).
 ADHESION_MODELS: dict[str, float] = {"dmt": 1.0 / (2.0 * math.pi), "jkr": 2.0 / (3.0 * math.pi)}
@@ -159,13 +159,22 @@ def analyze_map(paths: Iterable[str | os.PathLike], analysis: PixelAnalysis | No
     (default: a local Dask cluster; ``scheduler="tcp://HOST:8786"``: a running cluster of several
     machines, each able to read the map files at the same path).
     """
+    from ..sweep.files import plan_curves
+
+    paths = [str(p) for p in paths]
+    return analyze_refs(plan_curves(paths), analysis, workers=workers, executor=executor, scheduler=scheduler,
+                        store=store, chunk_size=chunk_size, progress=progress)
+
+
+def analyze_refs(refs: list, analysis: PixelAnalysis | None = None, *, workers: int | None = None, executor=None,
+                 scheduler: str | None = None, store=None, chunk_size: int | None = None, progress=None):
+    """:func:`analyze_map` of planned curves (:func:`~afmforce.sweep.files.plan_curves`)."""
     from ..sweep import run_batch
-    from ..sweep.files import _close_open, plan_curves
     from ..sweep.batch import batch_key
+    from ..sweep.files import _close_open
 
     analysis = analysis or PixelAnalysis()
-    paths = [str(p) for p in paths]
-    refs = plan_curves(paths)
+    paths = sorted({r.path for r in refs})
     # the store's key: the files (path, size, modification time) and the analysis's settings
     key = None if store is None else f"{batch_key(analysis, paths)[:20]}-{_hash(repr(analysis))}"
     try:

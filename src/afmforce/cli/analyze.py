@@ -64,6 +64,9 @@ def register(sub) -> None:
     lazy_help(p.add_argument("--map-quantity", action="append", default=[], metavar="Q",
                              help="quantity drawn as a heat map per force map (repeatable; default "
                                   f"{DEFAULT_MAP_QUANTITY}): "), _map_quantities)
+    p.add_argument("--fast-map", action="store_true",
+                   help="force maps at instrument speed: per pixel only the indentation fit (modulus, topography), "
+                        "the adhesion and the DMT work of adhesion, about 1 ms a curve (docs/contact.md)")
     p.add_argument("--per-curve", action="store_true",
                    help=f"with --out: write each curve's JSON, CSV and figure also in runs of {BATCH_CURVES} "
                         "curves or more")
@@ -222,6 +225,10 @@ def run(args: argparse.Namespace) -> int:
         refs = plan_curves(files, args.format, timeout=args.file_timeout, on_file=lambda: bar.update())
     finally:
         bar.close()
+    if args.fast_map:
+        from ._analyze_fast import run_fast_map
+
+        return run_fast_map(args, refs)
     n = len(refs)
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)

@@ -11,7 +11,7 @@ recorded by a virtual AFM (:class:`~afmforce.instrument.Instrument`: photodiode,
   ``F_ad`` below the baseline, and ``w = F_ad / (2 pi R)``.
 
 :func:`soft_map_curves` yields the curves one at a time (a map of any size in constant memory),
-with ``map_x``, ``map_y``, ``position_x``, ``position_y`` in their metadata and the pixel's truth
+with ``map_x``, ``map_y``, ``position_x``, ``position_y`` and the tip's ``radius`` in their metadata and the pixel's truth
 (``youngs_modulus``, ``topography``, ``adhesion``, ``work_of_adhesion``) in ``truth``;
 :func:`soft_map_fields` gives the fields themselves;
 :func:`write_soft_map` writes them to an afmforce map file (:mod:`afmforce.io.native.rawmap`).
@@ -157,14 +157,14 @@ def soft_map_curves(cfg: SoftMapConfig) -> Iterator[RawCurve]:
             c = soft_curve(cfg, truth["youngs_modulus"], truth["topography"], truth["work_of_adhesion"],
                            instrument=inst, seed=cfg.seed * 1_000_003 + y * cfg.nx + x)
             md = {**c.metadata, "map_x": x, "map_y": y, "position_x": x * cfg.step, "position_y": y * cfg.step,
-                  "tip_radius": cfg.radius}
+                  "radius": cfg.radius}
             yield RawCurve(time=c.time, piezo_nominal=c.piezo_nominal, deflection_signal=c.deflection_signal,
                            segment=c.segment, piezo_measured=None, metadata=md, truth={**truth},
                            deflection_unit=c.deflection_unit)
 
 
 #: Metadata every curve of a virtual map shares (written once per map file).
-_SHARED = ("source", "instrument", "velocity", "sample_rate", "spring_constant", "sensitivity", "tip_radius")
+_SHARED = ("source", "instrument", "velocity", "sample_rate", "spring_constant", "sensitivity", "radius")
 
 
 def write_soft_map(cfg: SoftMapConfig, path: str | os.PathLike, *, force: bool = False) -> Path:
