@@ -64,14 +64,14 @@ def map_file(side: int, points: int) -> Path:
 
 
 def _analysis(cfg):
-    from afmforce.analysis.map_fast import PixelAnalysis
+    from afmforce.sweep.map_fast import PixelAnalysis
     from afmforce.analysis.options import IndentationOptions
 
     return PixelAnalysis(IndentationOptions(tip_radius=cfg.radius, poisson=cfg.poisson))
 
 
 def bench_map(side: int, points: int, workers: int, cpu_curves: int) -> None:
-    from afmforce.analysis.map_fast import analyze_map
+    from afmforce.sweep.map_fast import analyze_map
     from afmforce.instrument.soft_map import config_of, soft_map_fields
     from afmforce.io.native.rawmap import map_info
     from afmforce.sweep import executors
@@ -170,7 +170,7 @@ def bench_curve(repeat: int) -> None:
     from afmforce.io import load
 
     try:  # absent from trees before issue 35 (an A/B run: PYTHONPATH=<old tree>/src)
-        from afmforce.analysis.map_fast import PixelAnalysis
+        from afmforce.sweep.map_fast import PixelAnalysis
     except ImportError:
         PixelAnalysis = None
 

@@ -10,7 +10,7 @@ import warnings
 import numpy as np
 import pytest
 
-from afmforce.analysis.map_fast import ADHESION_MODELS, PixelAnalysis, analyze_map
+from afmforce.sweep.map_fast import ADHESION_MODELS, PixelAnalysis, analyze_map
 from afmforce.analysis.maps import map_histogram, map_images
 from afmforce.analysis.options import IndentationOptions
 from afmforce.errors import ParameterError

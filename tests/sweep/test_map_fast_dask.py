@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from afmforce.analysis.map_fast import PixelAnalysis, analyze_map
+from afmforce.sweep.map_fast import PixelAnalysis, analyze_map
 from afmforce.analysis.options import IndentationOptions
 from afmforce.instrument.soft_map import SoftMapConfig, write_soft_map
 from afmforce.sweep.executors import DaskExecutor

@@ -1,6 +1,6 @@
 """``afmforce analyze MAP --fast-map``: force maps at instrument speed (issue 35).
 
-Every pixel through :class:`afmforce.analysis.map_fast.PixelAnalysis` (the indentation fit,
+Every pixel through :class:`afmforce.sweep.map_fast.PixelAnalysis` (the indentation fit,
 the adhesion, the work of adhesion in closed form) on the batch engine; with ``--out`` the rows
 are stored chunk by chunk (a rerun resumes) and the maps are written as by ``analyze``: a PNG in
 um with a colour bar and a histogram per quantity, ``<map>.maps.h5``, ``summary.parquet`` and
@@ -18,11 +18,11 @@ from ..errors import ParameterError
 FAST_MAP_QUANTITIES = ("modulus", "topography", "adhesion", "work_of_adhesion")
 
 
-def run_fast_map(args: argparse.Namespace, refs: list) -> int:
+def run_fast_map(args: argparse.Namespace, refs: list, write_maps) -> int:
+    """``write_maps(table, folder, quantities)``: analyze's map writer (images, HDF5, histograms)."""
     from .._files import atomic_path, atomic_write_text
-    from ..analysis.map_fast import PixelAnalysis, analyze_refs
+    from ..sweep.map_fast import PixelAnalysis, analyze_refs
     from ..analysis.options import IndentationOptions
-    from .analyze import _write_maps
     from .common import eprint
 
     maps = [r for r in refs if r.index is not None]
@@ -54,7 +54,7 @@ def run_fast_map(args: argparse.Namespace, refs: list) -> int:
         with atomic_path(folder / "summary.parquet") as tmp:
             table.to_parquet(tmp)
         atomic_write_text(folder / "summary.csv", table.to_csv(index=False))
-        written = _write_maps(table, folder, args.map_quantity or list(FAST_MAP_QUANTITIES))
+        written = write_maps(table, folder, args.map_quantity or list(FAST_MAP_QUANTITIES))
         print(f"summary in {folder}/: summary.parquet, summary.csv, " + ", ".join(p.name for p in written.values()))
     failed = table[table["error"].notna()]
     for _, row in failed.head(20).iterrows():

@@ -228,7 +228,7 @@ def run(args: argparse.Namespace) -> int:
     if args.fast_map:
         from ._analyze_fast import run_fast_map
 
-        return run_fast_map(args, refs)
+        return run_fast_map(args, refs, _write_maps)
     n = len(refs)
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)

@@ -31,9 +31,9 @@ from typing import Any, Iterable
 
 import numpy as np
 
+from ..analysis.indentation import fast_modulus
+from ..analysis.options import IndentationOptions, ProbeCalibration
 from ..errors import AnalysisError, ParameterError
-from .indentation import fast_modulus
-from .options import IndentationOptions, ProbeCalibration
 
 __all__ = ["PixelAnalysis", "ADHESION_MODELS", "PIXEL_COLUMNS", "analyze_map", "analyze_refs"]
 
@@ -79,7 +79,7 @@ class PixelAnalysis:
 
     def __call__(self, ref) -> dict[str, Any]:
         """The row of one curve: a :class:`~afmforce.sweep.files.CurveRef` of a map, or a RawCurve."""
-        from ..sweep.files import CurveRef
+        from .files import CurveRef
 
         if isinstance(ref, CurveRef):
             curve, file, index = _read(ref), ref.path, int(ref.index or 0)
@@ -89,7 +89,7 @@ class PixelAnalysis:
 
     def row(self, curve, *, file: str = "", index: int = -1) -> dict[str, Any]:
         """The pixel's numbers (:data:`PIXEL_COLUMNS`) and its place in the map."""
-        from ..sweep.summary import _grid, _grid_size
+        from .summary import _grid, _grid_size
 
         fit = fast_modulus(curve, self.indentation, self.probe)
         md = curve.metadata
@@ -139,7 +139,7 @@ class PixelAnalysis:
 
 def _read(ref):
     """The curve of ``ref``: from the worker's open afmforce map reader, else the file's curves (cached)."""
-    from ..sweep import files as F
+    from . import files as F
 
     if ref.index is None:
         raise AnalysisError(f"{ref.path}: not a force map (one curve per pixel expected)")
@@ -159,7 +159,7 @@ def analyze_map(paths: Iterable[str | os.PathLike], analysis: PixelAnalysis | No
     (default: a local Dask cluster; ``scheduler="tcp://HOST:8786"``: a running cluster of several
     machines, each able to read the map files at the same path).
     """
-    from ..sweep.files import plan_curves
+    from .files import plan_curves
 
     paths = [str(p) for p in paths]
     return analyze_refs(plan_curves(paths), analysis, workers=workers, executor=executor, scheduler=scheduler,
@@ -169,9 +169,8 @@ def analyze_map(paths: Iterable[str | os.PathLike], analysis: PixelAnalysis | No
 def analyze_refs(refs: list, analysis: PixelAnalysis | None = None, *, workers: int | None = None, executor=None,
                  scheduler: str | None = None, store=None, chunk_size: int | None = None, progress=None):
     """:func:`analyze_map` of planned curves (:func:`~afmforce.sweep.files.plan_curves`)."""
-    from ..sweep import run_batch
-    from ..sweep.batch import batch_key
-    from ..sweep.files import _close_open
+    from .batch import batch_key, run_batch
+    from .files import _close_open
 
     analysis = analysis or PixelAnalysis()
     paths = sorted({r.path for r in refs})
