@@ -78,7 +78,11 @@ def test_cli_writes_the_modulus_map(gel_map, tmp_path, capsys):
     assert code == 0, capsys.readouterr().err
     (folder,) = out.glob("batch-*")
     names = {p.name for p in folder.iterdir()}
-    assert {"gel-map.h5.modulus.png", "gel-map.h5.topography.png", "gel-map.h5.maps.h5", "summary.csv"} <= names
+    assert {"gel-map.h5.modulus.png", "gel-map.h5.topography.png", "gel-map.h5.maps.h5", "summary.csv",
+            "gel-map.h5.modulus.hist.png", "gel-map.h5.adhesion.hist.png", "gel-map.h5.histograms.csv"} <= names
+    hist = (folder / "gel-map.h5.histograms.csv").read_text().splitlines()
+    assert hist[0] == "quantity,unit,low,high,count"
+    assert sum(int(line.rsplit(",", 1)[1]) for line in hist[1:] if line.startswith("modulus,")) == NX * NY
     import pandas as pd
 
     summary = pd.read_parquet(folder / "summary.parquet")

@@ -219,7 +219,8 @@ def test_cli_batch_resume_outputs_and_exit_codes(map_file, serial_table, tmp_pat
     table = pd.read_parquet(folder / "summary.parquet")
     assert json.loads(pq.read_schema(folder / "summary.parquet").metadata[b"afmforce.units"])["pull_off_force"] == "N"
     np.testing.assert_array_equal(table["pull_off_force"].to_numpy()[:14], serial_table["pull_off_force"])
-    assert {p.name for p in folder.glob("*.png")} == {"map.h5.adhesion.png", "map.h5.sensitivity_fit.png"}
+    assert {p.name for p in folder.glob("*.png")} == {"map.h5.adhesion.png", "map.h5.sensitivity_fit.png",
+                                                      "map.h5.adhesion.hist.png", "map.h5.sensitivity_fit.hist.png"}
     assert "broken.ibw" in (folder / "errors.csv").read_text()
     # rerun: every chunk is stored; remove one and only that one runs again
     code, text, _ = _run(argv, capsys)
@@ -252,4 +253,5 @@ def test_cli_small_run_keeps_per_curve_outputs(map_file, tmp_path, capsys):
     assert len(list(out.glob("map.h5_*.afmforce.json"))) == 14
     (folder,) = out.glob("batch-*")
     assert {p.name for p in folder.iterdir()} == {"summary.parquet", "summary.csv", "map.h5.adhesion.png",
-                                                  "map.h5.maps.h5"}  # the image's numbers (issue 26)
+                                                  "map.h5.maps.h5",  # the image's numbers (issue 26)
+                                                  "map.h5.adhesion.hist.png", "map.h5.histograms.csv"}  # issue 35

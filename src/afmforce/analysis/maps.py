@@ -24,7 +24,8 @@ import numpy as np
 from ..errors import ParameterError
 from .result import SUMMARY_FIELDS
 
-__all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_images", "write_map_hdf5", "EXTENT_KEY"]
+__all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_images", "write_map_hdf5", "EXTENT_KEY",
+           "map_histogram"]
 
 #: PNG text key holding the heat map's pixel box in the image: "left top right bottom".
 EXTENT_KEY = "afmforce.map_extent"
@@ -199,3 +200,14 @@ def write_map_hdf5(images: list[MapImage], path, *, force: bool = True) -> Path:
             d = h5.create_dataset(image.quantity.identifier, data=image.values, compression="gzip")
             d.attrs.update(unit=image.quantity.unit, label=image.quantity.label, column=image.quantity.column)
     return path
+
+
+def map_histogram(image: MapImage, bins: int = 50) -> tuple[np.ndarray, np.ndarray]:
+    """Histogram of the map's finite values: ``(counts, edges)``, edges in SI (``quantity.unit``);
+    ``bins`` equal bins from the smallest to the largest value (``numpy.histogram``)."""
+    if not (isinstance(bins, int) and bins >= 1):
+        raise ParameterError(f"bins must be a positive integer, got {bins!r}")
+    values = image.values[np.isfinite(image.values)]
+    if values.size == 0:
+        return np.zeros(bins, dtype=int), np.full(bins + 1, np.nan)
+    return np.histogram(values, bins=bins)

@@ -179,6 +179,18 @@ def options_from_dict(options: Mapping[str, Mapping[str, Any]]) -> tuple[list[O.
     return records, probe
 
 
+#: Each options class's default record: records are frozen, so one instance serves every curve
+#: (building and checking the 20 records took about a sixth of a QI curve's analysis; issue 35).
+_DEFAULTS: dict[type, O.StepOptions] = {}
+
+
+def _default_options(cls: type[O.StepOptions]) -> O.StepOptions:
+    rec = _DEFAULTS.get(cls)
+    if rec is None:
+        rec = _DEFAULTS[cls] = cls()
+    return rec
+
+
 def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
                     ) -> tuple[dict[str, O.StepOptions], O.ProbeCalibration]:
     """Every step's options record (the registry's defaults unless given) and the probe.
@@ -205,7 +217,7 @@ def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
         given = [options]
     else:
         given = list(options)
-    out = {name: step.options() for name, step in STEPS.items()}
+    out = {name: _default_options(step.options) for name, step in STEPS.items()}
     seen = set()
     for rec in given:
         if not isinstance(rec, O.StepOptions):

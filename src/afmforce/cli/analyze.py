@@ -64,6 +64,9 @@ def register(sub) -> None:
     lazy_help(p.add_argument("--map-quantity", action="append", default=[], metavar="Q",
                              help="quantity drawn as a heat map per force map (repeatable; default "
                                   f"{DEFAULT_MAP_QUANTITY}): "), _map_quantities)
+    p.add_argument("--fast-map", action="store_true",
+                   help="force maps at instrument speed: per pixel only the indentation fit (modulus, topography), "
+                        "the adhesion and the DMT work of adhesion, about 1 ms a curve (docs/contact.md)")
     p.add_argument("--per-curve", action="store_true",
                    help=f"with --out: write each curve's JSON, CSV and figure also in runs of {BATCH_CURVES} "
                         "curves or more")
@@ -229,6 +232,10 @@ def run(args: argparse.Namespace) -> int:
         refs = plan_curves(files, args.format, timeout=args.file_timeout, on_file=lambda: bar.update())
     finally:
         bar.close()
+    if args.fast_map:
+        from ._analyze_fast import run_fast_map
+
+        return run_fast_map(args, refs, _write_maps)
     n = len(refs)
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)
@@ -350,8 +357,12 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
             per_map.setdefault(image.source, []).append(image)
     from ..analysis.maps import write_map_hdf5
 
-    for source, images in per_map.items():  # the numbers, with the grid positions
+    from ..plotting.maps import write_map_histograms
+
+    for source, images in per_map.items():  # the numbers, with the grid positions; the histograms
         out[f"map {source} numbers"] = write_map_hdf5(images, folder / f"{images[0].name}.maps.h5")
+        for path in write_map_histograms(images, folder / images[0].name):
+            out[f"map {source} {path.name}"] = path
     return out
 
 

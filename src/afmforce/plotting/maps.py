@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 
-from .._files import atomic_path
-from ..analysis.maps import _DISPLAY, EXTENT_KEY, MapImage
+from .._files import atomic_path, atomic_write_text
+from ..analysis.maps import _DISPLAY, EXTENT_KEY, MapImage, map_histogram
 
-__all__ = ["plot_map", "write_map_png"]
+__all__ = ["plot_map", "write_map_png", "plot_map_histogram", "write_map_histograms"]
 
 
 def _display(unit: str) -> tuple[float, str]:
@@ -77,3 +77,48 @@ def write_map_png(image: MapImage, path: str | os.PathLike, *, dpi: int = 100, f
     with atomic_path(path, force) as tmp:
         fig.savefig(tmp, dpi=dpi, format="png", metadata=meta)
     return path
+
+
+def plot_map_histogram(image: MapImage, bins: int = 50, ax=None):
+    """Histogram of the map's values (in the heat map's display unit), with the median and the
+    number of points. Returns the matplotlib Axes."""
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        ax = Figure(figsize=(6, 4), layout="constrained").add_subplot()
+    factor, shown = _display(image.quantity.unit)
+    counts, edges = map_histogram(image, bins)
+    finite = image.values[np.isfinite(image.values)] * factor
+    if finite.size:
+        ax.stairs(counts, edges * factor, fill=True, alpha=0.8)
+        med = float(np.median(finite))
+        ax.axvline(med, color="k", lw=1, ls="--", label=f"median {med:.4g} {shown}")
+        ax.legend(fontsize="small")
+    ax.set_xlabel(image.quantity.label + (f" [{shown}]" if shown else ""))
+    ax.set_ylabel("curves")
+    ax.set_title(f"{image.name}: {image.quantity.identifier}, {finite.size} of {image.values.size} points",
+                 fontsize="small")
+    return ax
+
+
+def write_map_histograms(images: list[MapImage], stem: str | os.PathLike, *, bins: int = 50, dpi: int = 100,
+                         force: bool = True) -> list[Path]:
+    """Write each image's histogram as ``<stem>.<quantity>.hist.png`` and every count in one table,
+    ``<stem>.histograms.csv`` (columns ``quantity``, ``unit``, ``low``, ``high`` [SI], ``count``),
+    atomically. Returns the paths (the PNGs, then the CSV)."""
+    stem = Path(stem)
+    out: list[Path] = []
+    lines = ["quantity,unit,low,high,count"]
+    for image in images:
+        ax = plot_map_histogram(image, bins)
+        path = stem.with_name(f"{stem.name}.{image.quantity.identifier}.hist.png")
+        with atomic_path(path, force) as tmp:
+            ax.figure.savefig(tmp, dpi=dpi, format="png", metadata={"Software": "afmforce"})
+        out.append(path)
+        counts, edges = map_histogram(image, bins)
+        lines += [f"{image.quantity.identifier},{image.quantity.unit},{lo!r},{hi!r},{int(c)}"
+                  for c, lo, hi in zip(counts, edges[:-1].tolist(), edges[1:].tolist())]
+    path = stem.with_name(f"{stem.name}.histograms.csv")
+    atomic_write_text(path, "\n".join(lines) + "\n", force=force)
+    out.append(path)
+    return out

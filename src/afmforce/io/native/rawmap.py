@@ -217,9 +217,11 @@ class MapReader:
         if not 0 <= i < self.info.n_curves:
             raise FileFormatError(f"{self.path}: no curve {i} (the map holds {self.info.n_curves})")
         name = f"{i:06d}"
-        if name not in self._group:
-            raise FileFormatError(f"{self.path}: curve group {name} is missing")
-        curve = read_curve_group(self._group[name], f"{self.path}#{i}")
+        try:
+            group = self._group[name]
+        except KeyError:
+            raise FileFormatError(f"{self.path}: curve group {name} is missing") from None
+        curve = read_curve_group(group, f"{self.path}#{i}")
         ny, nx = self.info.shape
         return replace(curve, metadata={**self.info.metadata, **curve.metadata, "map_nx": nx, "map_ny": ny})
 

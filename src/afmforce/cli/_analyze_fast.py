@@ -1,0 +1,64 @@
+"""``afmforce analyze MAP --fast-map``: force maps at instrument speed (issue 35).
+
+Every pixel through :class:`afmforce.sweep.map_fast.PixelAnalysis` (the indentation fit,
+the adhesion, the work of adhesion in closed form) on the batch engine; with ``--out`` the rows
+are stored chunk by chunk (a rerun resumes) and the maps are written as by ``analyze``: a PNG in
+um with a colour bar and a histogram per quantity, ``<map>.maps.h5``, ``summary.parquet`` and
+``summary.csv``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+
+from ..errors import ParameterError
+
+#: Quantities mapped when no --map-quantity is given.
+FAST_MAP_QUANTITIES = ("modulus", "topography", "adhesion", "work_of_adhesion")
+
+
+def run_fast_map(args: argparse.Namespace, refs: list, write_maps) -> int:
+    """``write_maps(table, folder, quantities)``: analyze's map writer (images, HDF5, histograms)."""
+    from .._files import atomic_path, atomic_write_text
+    from ..sweep.map_fast import PixelAnalysis, analyze_refs
+    from ..analysis.options import IndentationOptions
+    from .common import eprint
+
+    maps = [r for r in refs if r.index is not None]
+    if not maps:
+        raise ParameterError("--fast-map analyses force maps (one curve per pixel); the inputs hold none")
+    indentation = next((r for r in args.records if r.step == "indentation"), IndentationOptions())
+    analysis = PixelAnalysis(indentation, probe=args.probe)
+    executor = "serial" if args.serial else None
+    result = analyze_refs(maps, analysis, executor=executor, workers=args.workers, scheduler=args.scheduler,
+                          store=args.out, chunk_size=args.chunk_size)
+    table = result.table()
+    ok = table[table["error"].isna()]
+    print(f"afmforce analyze --fast-map: {len(ok)} of {len(table)} curves analysed "
+          f"({result.chunks_run} chunks run on {result.executor} in {result.wall_time:.1f} s, "
+          f"{result.chunks_skipped} already stored)")
+    for label, col, factor, unit in (("modulus", "youngs_modulus", 1e-3, "kPa"),
+                                     ("topography", "contact_point", -1e9, "nm"),
+                                     ("adhesion", "adhesion_force", -1e9, "nN"),
+                                     ("work of adhesion", "work_of_adhesion", 1e3, "mJ/m^2")):
+        if col not in ok:
+            continue
+        v = ok[col].to_numpy(float) * factor
+        v = v[[math.isfinite(x) for x in v]]
+        if v.size:
+            print(f"  {label:17s} median {float(sorted(v)[v.size // 2]):.4g} {unit}, from {v.min():.4g} to "
+                  f"{v.max():.4g}")
+    if result.store is not None:
+        folder = result.store.root
+        with atomic_path(folder / "summary.parquet") as tmp:
+            table.to_parquet(tmp)
+        atomic_write_text(folder / "summary.csv", table.to_csv(index=False))
+        written = write_maps(table, folder, args.map_quantity or list(FAST_MAP_QUANTITIES))
+        print(f"summary in {folder}/: summary.parquet, summary.csv, " + ", ".join(p.name for p in written.values()))
+    failed = table[table["error"].notna()]
+    for _, row in failed.head(20).iterrows():
+        eprint(f"failed: {row['source']}: {row['error']}")
+    if len(failed):
+        eprint(f"{len(failed)} of {len(table)} curves failed")
+    return 1 if len(failed) else 0

@@ -1,0 +1,190 @@
+"""Force maps at instrument speed: modulus, topography, adhesion and work of adhesion per pixel.
+
+:class:`PixelAnalysis` is the map's per-curve work, about 1 ms a curve (issue 35): the
+indentation fit of :func:`~afmforce.analysis.indentation.fast_modulus` (the file's calibration,
+the tip depth, the contact point, E and the force baseline fitted together: nanite's work) and,
+from the same calibrated curve, the adhesion (the retract's deepest point below the fitted
+baseline) and the work of adhesion from it in closed form:
+
+* ``dmt`` (default): ``w = F_ad / (2 pi R)`` (Derjaguin, Muller & Toporov 1975; stiff, small,
+  weakly adhesive contacts, Tabor/Maugis lambda < 0.1);
+* ``jkr``: ``w = 2 F_ad / (3 pi R)`` (Johnson, Kendall & Roberts 1971; soft, large, strongly
+  adhesive contacts, lambda > 5).
+
+The fitted work of adhesion (a JKR, DMT or Maugis fit of the whole retract, ``analyze`` with
+``IndentationOptions(model="jkr", run="retract")``) costs 10 ms to 2 s a curve; the closed form
+is what a map of 16,384 curves can afford. Nothing else of the pipeline runs (no smoothing,
+drift line, contact kind, hard-contact check): for those, analyse the map with ``analyze``.
+
+:func:`analyze_map` runs it over the curves of afmforce map files (or any force map) on the batch
+engine: curves read one at a time by each worker, rows stored chunk by chunk (resumable), the
+summary table with the map's grid columns, so that :func:`~afmforce.analysis.maps.map_images`
+draws every quantity.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from dataclasses import dataclass, field
+from typing import Any, Iterable
+
+import numpy as np
+
+from ..analysis.indentation import fast_modulus
+from ..analysis.options import IndentationOptions, ProbeCalibration
+from ..errors import AnalysisError, ParameterError
+
+__all__ = ["PixelAnalysis", "ADHESION_MODELS", "PIXEL_COLUMNS", "analyze_map", "analyze_refs"]
+
+#: Work of adhesion from the adhesion force F_ad and the tip radius R: model -> w / (F_ad / R).
+ADHESION_MODELS: dict[str, float] = {"dmt": 1.0 / (2.0 * math.pi), "jkr": 2.0 / (3.0 * math.pi)}
+
+#: The numbers of each pixel's row, with their SI units.
+PIXEL_COLUMNS: dict[str, str] = {
+    "youngs_modulus": "Pa", "youngs_modulus_se": "Pa", "youngs_modulus_low": "Pa", "youngs_modulus_high": "Pa",
+    "contact_point": "m", "contact_point_se": "m", "max_indentation": "m", "max_force": "N",
+    "adhesion_force": "N", "adhesion_noise": "N", "work_of_adhesion": "J/m^2", "work_of_adhesion_se": "J/m^2",
+    "spring_constant": "N/m", "sensitivity": "m/V", "tip_radius": "m", "position_x": "m", "position_y": "m",
+}
+
+
+@dataclass(frozen=True)
+class PixelAnalysis:
+    """One map pixel: a picklable callable for the batch engine (``func(ref) -> row``).
+
+    Parameters
+    ----------
+    indentation : IndentationOptions
+        The indentation fit (model, tip radius, Poisson's ratio, run, ...).
+    adhesion_model : str
+        ``"dmt"`` or ``"jkr"``: the closed form giving the work of adhesion.
+    probe : ProbeCalibration or None
+        Spring constant [N/m], sensitivity [m/V], radius [m] given by the user (None: the file's).
+    nsigma : float
+        An adhesion under this many baseline-noise sigmas is reported as none (0) [-].
+    """
+
+    indentation: IndentationOptions = field(default_factory=IndentationOptions)
+    adhesion_model: str = "dmt"
+    probe: ProbeCalibration | None = None
+    nsigma: float = 5.0
+
+    def __post_init__(self) -> None:
+        if self.adhesion_model not in ADHESION_MODELS:
+            raise ParameterError(f"adhesion_model = {self.adhesion_model!r}: choose one of "
+                                 f"{', '.join(ADHESION_MODELS)}")
+        if not (self.nsigma > 0):
+            raise ParameterError(f"nsigma must be > 0, got {self.nsigma!r}")
+
+    def __call__(self, ref) -> dict[str, Any]:
+        """The row of one curve: a :class:`~afmforce.sweep.files.CurveRef` of a map, or a RawCurve."""
+        from .files import CurveRef
+
+        if isinstance(ref, CurveRef):
+            curve, file, index = _read(ref), ref.path, int(ref.index or 0)
+        else:
+            curve, file, index = ref, str(ref.metadata.get("source_file", "")), -1
+        return self.row(curve, file=file, index=index)
+
+    def row(self, curve, *, file: str = "", index: int = -1) -> dict[str, Any]:
+        """The pixel's numbers (:data:`PIXEL_COLUMNS`) and its place in the map."""
+        from .summary import _grid, _grid_size
+
+        fit = fast_modulus(curve, self.indentation, self.probe)
+        md = curve.metadata
+        p = self.probe if self.probe is not None else ProbeCalibration()
+        k = float(p.value("spring_constant", md))
+        seg = np.asarray(curve.segment)
+        sig = np.asarray(curve.deflection_signal, dtype=float)
+        sens = float(p.value("sensitivity", md) or math.nan) if curve.deflection_unit == "V" else math.nan
+        scale = {"V": sens * k, "m": k, "N": 1.0}.get(curve.deflection_unit, math.nan)
+        z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal)
+        force = sig * scale
+        app, ret = seg == 0, seg == 1
+        # the baseline's noise: the approach's free part, before the fitted contact (tip depth above it)
+        free = app & (z - sig * scale / k < fit.contact_depth - 0.05 * max(fit.max_indentation, 0.0))
+        resid = force[free] - fit.baseline
+        noise = float(np.std(resid)) if resid.size >= 8 else math.nan
+        dip = float(force[ret].min() - fit.baseline) if ret.any() else math.nan
+        if not math.isfinite(dip):
+            adhesion = math.nan
+        elif math.isfinite(noise) and -dip < self.nsigma * noise:
+            adhesion = 0.0  # no dip above the noise: no adhesion
+        else:
+            adhesion = min(dip, 0.0)
+        radius = fit.tip_radius
+        factor = ADHESION_MODELS[self.adhesion_model] / radius if radius > 0 else math.nan
+        mx, my, nx, ny = _grid(md)
+        width, height = _grid_size(md) if mx >= 0 else (math.nan, math.nan)
+        row: dict[str, Any] = {"name": f"{os.path.basename(file)}#{index}", "file": file, "curve": index,
+                               "map_x": mx, "map_y": my, "map_nx": nx, "map_ny": ny, "map_width": width,
+                               "map_height": height}
+        for axis in ("position_x", "position_y"):
+            try:
+                row[axis] = float(md.get(axis, math.nan))
+            except (TypeError, ValueError):
+                row[axis] = math.nan
+        row.update(
+            youngs_modulus=fit.youngs_modulus, youngs_modulus_se=fit.youngs_modulus_se,
+            youngs_modulus_low=fit.youngs_modulus_low, youngs_modulus_high=fit.youngs_modulus_high,
+            contact_point=fit.contact_point, contact_point_se=fit.contact_point_se,
+            max_indentation=fit.max_indentation, max_force=fit.max_force,
+            adhesion_force=adhesion, adhesion_noise=noise,
+            work_of_adhesion=-adhesion * factor, work_of_adhesion_se=noise * factor,
+            spring_constant=k, sensitivity=sens, tip_radius=radius,
+            adhesion_model=self.adhesion_model, indentation_model=fit.model)
+        return row
+
+
+def _read(ref):
+    """The curve of ``ref``: from the worker's open afmforce map reader, else the file's curves (cached)."""
+    from . import files as F
+
+    if ref.index is None:
+        raise AnalysisError(f"{ref.path}: not a force map (one curve per pixel expected)")
+    if ref.format == "afmforce-map":
+        return F._map_reader(ref.location).read(ref.index)
+    return F._load_cached(ref.location, {}, ref.format)[ref.index]
+
+
+def analyze_map(paths: Iterable[str | os.PathLike], analysis: PixelAnalysis | None = None, *,
+                workers: int | None = None, executor=None, scheduler: str | None = None, store=None,
+                chunk_size: int | None = None, progress=None):
+    """Every pixel of the force maps ``paths`` through :class:`PixelAnalysis` on the batch engine.
+
+    Returns the :class:`~afmforce.sweep.BatchResult` (``.table()``: one row per curve, the map's
+    grid columns included; ``store``: a parent folder where the rows go chunk by chunk, and where a
+    rerun resumes). ``executor``/``workers``/``scheduler`` as in :func:`~afmforce.sweep.run_batch`
+    (default: a local Dask cluster; ``scheduler="tcp://HOST:8786"``: a running cluster of several
+    machines, each able to read the map files at the same path).
+    """
+    from .files import plan_curves
+
+    paths = [str(p) for p in paths]
+    return analyze_refs(plan_curves(paths), analysis, workers=workers, executor=executor, scheduler=scheduler,
+                        store=store, chunk_size=chunk_size, progress=progress)
+
+
+def analyze_refs(refs: list, analysis: PixelAnalysis | None = None, *, workers: int | None = None, executor=None,
+                 scheduler: str | None = None, store=None, chunk_size: int | None = None, progress=None):
+    """:func:`analyze_map` of planned curves (:func:`~afmforce.sweep.files.plan_curves`)."""
+    from .batch import batch_key, run_batch
+    from .files import _close_open
+
+    analysis = analysis or PixelAnalysis()
+    paths = sorted({r.path for r in refs})
+    # the store's key: the files (path, size, modification time) and the analysis's settings
+    key = None if store is None else f"{batch_key(analysis, paths)[:20]}-{_hash(repr(analysis))}"
+    try:
+        return run_batch(refs, analysis, chunk_size=chunk_size, executor=executor, workers=workers,
+                         scheduler=scheduler, store=store,
+                         key=key, progress=progress, label=lambda ref, i: ref.label)
+    finally:
+        _close_open()
+
+
+def _hash(text: str) -> str:
+    import hashlib
+
+    return hashlib.sha256(text.encode()).hexdigest()[:12]

@@ -1,0 +1,79 @@
+"""The pipeline's speed work changes no number (issue 35, item 2).
+
+``pipeline_reference.json.gz`` holds the full ``analyze`` JSON (per-sample arrays included) of
+34 soft curves, produced by ``make_pipeline_reference.py`` with the code of main before the
+speed work (commit 8787912). Today's code must give the same keys, the same strings and every
+number within 1e-9 relative (NaN where NaN).
+"""
+
+from __future__ import annotations
+
+import gzip
+import json
+import math
+import sys
+from pathlib import Path
+
+import pytest
+
+HERE = Path(__file__).resolve().parent
+sys.path.insert(0, str(HERE))
+import make_pipeline_reference as M  # noqa: E402
+
+REFERENCE = json.loads(gzip.decompress(M.OUT.read_bytes()))
+RTOL = 1e-9
+
+
+def _compare(new, old, where: str, out: list[str]) -> None:
+    if isinstance(old, dict):
+        if not isinstance(new, dict) or set(new) != set(old):
+            out.append(f"{where}: keys {sorted(set(new) ^ set(old)) if isinstance(new, dict) else type(new)}")
+            return
+        for k in old:
+            _compare(new[k], old[k], f"{where}.{k}", out)
+    elif isinstance(old, list):
+        if not isinstance(new, list) or len(new) != len(old):
+            out.append(f"{where}: length {len(new) if isinstance(new, list) else new!r} != {len(old)}")
+            return
+        for i, (a, b) in enumerate(zip(new, old)):
+            _compare(a, b, f"{where}[{i}]", out)
+    elif isinstance(old, (int, float)) and not isinstance(old, bool) and isinstance(new, (int, float)):
+        if not math.isclose(new, old, rel_tol=RTOL, abs_tol=0.0) and not (old == 0 and abs(new) < 1e-300):
+            out.append(f"{where}: {new!r} != {old!r}")
+    elif new != old:
+        out.append(f"{where}: {str(new)[:80]!r} != {str(old)[:80]!r}")
+
+
+def _bug(result) -> bool:
+    """The reference holds an exception that is no AfmforceError (e.g. a ZeroDivisionError)."""
+    import afmforce.errors as E
+
+    if "error" not in result:
+        return False
+    cls = getattr(E, result["error"].split(":", 1)[0], None)
+    return not (isinstance(cls, type) and issubclass(cls, E.AfmforceError))
+
+
+def test_reference_covers_the_cases():
+    assert len(REFERENCE) == 34
+    assert sum("error" not in v for v in REFERENCE.values()) >= 30
+    # two 300-point thinnings of the JPK map raised ZeroDivisionError on main (8787912): not compared
+    assert sum(_bug(v) for v in REFERENCE.values()) == 2
+
+
+@pytest.fixture(scope="module")
+def today():
+    import warnings
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        return dict(M.results())
+
+
+def test_every_number_unchanged(today):
+    assert set(today) == set(REFERENCE)
+    diffs: list[str] = []
+    for key, old in REFERENCE.items():
+        if _bug(old):  # main raised a bare Python error here (a bug, not a refusal): fixing it is no regression
+            continue
+        _compare(today[key], old, key, diffs)
+    assert not diffs, f"{len(diffs)} differences, first: " + "; ".join(diffs[:8])
