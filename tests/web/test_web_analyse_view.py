@@ -100,6 +100,9 @@ def test_calibration_file_is_what_the_cli_computes(client, tmp_path):
     local = tmp_path / src.name
     local.write_bytes(src.read_bytes())
     # what the page fills its fields with: the file's values, checked, SI
+    refused = client.post("/api/calibration", files={"file": ("calib.json", cal.read_bytes())},
+                          headers={"Origin": "null"})          # a sandboxed frame reads nothing either
+    assert refused.status_code == 403
     r = client.post("/api/calibration", files={"file": ("calib.json", cal.read_bytes())})
     assert r.status_code == 200 and r.json()["source"] == "calib.json"
     assert r.json()["values"] == {"spring_constant": written["spring_constant"], "resonance_frequency": 30e3}
@@ -127,6 +130,9 @@ def test_calibration_file_is_what_the_cli_computes(client, tmp_path):
     (b" " * 70_000, "calibration", "bytes is not a calibration file"),
     (b'{"afmforce_calibration": 1, "spring_constant": 5e3}', "calibration.spring_constant", "spring_constant"),
     (b'{"afmforce_calibration": 1, "sensitivity": -1e-8}', "calibration.sensitivity", "sensitivity"),
+    (b'{"afmforce_calibration": 1, "spring_constant": NaN}', "calibration", "not a finite number"),
+    (b'{"afmforce_calibration": 1, "resonance_frequency": 1e999}', "calibration", "not a finite number"),
+    (b'{"afmforce_calibration": 1, "spring_constant": ' + b"9" * 400 + b"}", "calibration", "not a finite"),
 ])
 def test_a_bad_or_foreign_calibration_file_is_refused(client, body, field, words):
     """422 naming the field (never 500), in the page's reader and in the analysis alike; nothing runs."""

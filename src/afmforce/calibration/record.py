@@ -58,7 +58,8 @@ def read_calibration(path) -> dict[str, float]:
 
 
 def parse_calibration(text: str, source: str = "calibration") -> dict[str, float]:
-    """:func:`read_calibration` of a file's text (an upload); ``source`` names it in errors."""
+    """:func:`read_calibration` of a file's text (an upload); ``source`` names it in errors.
+    A probe value that is not finite (NaN, Infinity: never written by afmforce) is refused."""
     try:
         obj = json.loads(text)
     except ValueError as exc:
@@ -73,7 +74,8 @@ def parse_calibration(text: str, source: str = "calibration") -> dict[str, float
             continue
         value = obj.get(key)
         if isinstance(value, (int, float)) and not isinstance(value, bool):
-            value = float(value) if abs(value) < 1e308 else math.inf     # a 400-digit integer
-            if math.isfinite(value):
-                out[key] = value
+            if not abs(value) < 1e308:      # NaN, Infinity, 1e999, a 400-digit integer: a damaged file
+                raise FileFormatError(f"{source}: {key} is {str(value)[:20]}, not a finite number; "
+                                      "calibrate again (afmforce calibrate ... --out FILE)")
+            out[key] = float(value)
     return out
