@@ -74,3 +74,71 @@ def test_the_modulus_fit_samples_obey_the_response_cap(client):
     assert len(a["indentation"]) > 500 >= len(b["indentation"]) == len(b["fit_force"]) == len(b["residuals"])
     assert b["youngs_modulus"] == a["youngs_modulus"] and b["indentation"][0] == a["indentation"][0]
     assert b["indentation"][-1] == a["indentation"][-1]
+
+
+def _calibrate(tmp_path):
+    """A probe calibration file as users make it: ``afmforce calibrate --out calib.json sader ...``."""
+    from afmforce.cli.main import main
+
+    out = tmp_path / "calib.json"
+    with redirect_stdout(io.StringIO()):
+        assert main(["calibrate", "--out", str(out), "sader", "--length", "200um", "--width", "30um",
+                     "--frequency", "30kHz", "--quality-factor", "2"]) == 0
+    return out
+
+
+def test_calibration_file_is_what_the_cli_computes(client, tmp_path):
+    """An uploaded ``calib.json`` gives the JSON of ``afmforce analyze FILE --probe-calibration calib.json
+    --json``; a typed value wins over the file's, as on the command line."""
+    from afmforce.calibration.record import read_calibration
+    from afmforce.cli.main import main
+    from afmforce.datasets import path
+
+    cal = _calibrate(tmp_path)
+    written = json.loads(cal.read_text())
+    src = path("asylum-air")
+    local = tmp_path / src.name
+    local.write_bytes(src.read_bytes())
+    # what the page fills its fields with: the file's values, checked, SI
+    refused = client.post("/api/calibration", files={"file": ("calib.json", cal.read_bytes())},
+                          headers={"Origin": "null"})          # a sandboxed frame reads nothing either
+    assert refused.status_code == 403
+    r = client.post("/api/calibration", files={"file": ("calib.json", cal.read_bytes())})
+    assert r.status_code == 200 and r.json()["source"] == "calib.json"
+    assert r.json()["values"] == {"spring_constant": written["spring_constant"], "resonance_frequency": 30e3}
+    assert r.json()["values"] == {k: v for k, v in read_calibration(cal).items() if k != "quality_factor"}
+    for typed in ([], ["--sensitivity", "50nm/V"], ["--spring-constant", "0.5N/m"]):
+        out = io.StringIO()
+        with redirect_stdout(out):
+            assert main(["analyze", str(local), "--json", "--probe-calibration", str(cal), *typed]) == 0
+        cli = json.loads(out.getvalue())["results"][src.name]
+        probe = [f"{typed[0][2:].replace('-', '_')}={typed[1]}"] if typed else []
+        api = client.post("/api/analyze", files={"file": (src.name, src.read_bytes()),
+                                                 "calibration": ("calib.json", cal.read_bytes())},
+                          data={"probe": probe}).json()["results"][src.name]
+        assert api["spring_constant"] == (0.5 if "0.5N/m" in typed else written["spring_constant"])
+        assert api["resonance_frequency"] == 30e3
+        api.pop("source"), cli.pop("source")
+        assert api == cli
+
+
+@pytest.mark.parametrize("body, field, words", [
+    (b"not json", "calibration", "not a readable JSON"),
+    (b'{"spring_constant": 0.1}', "calibration", "not an afmforce calibration file"),
+    (b"[1, 2]", "calibration", "not an afmforce calibration file"),
+    (b"\xff\xfe\x00binary", "calibration", "not UTF-8"),
+    (b" " * 70_000, "calibration", "bytes is not a calibration file"),
+    (b'{"afmforce_calibration": 1, "spring_constant": 5e3}', "calibration.spring_constant", "spring_constant"),
+    (b'{"afmforce_calibration": 1, "sensitivity": -1e-8}', "calibration.sensitivity", "sensitivity"),
+    (b'{"afmforce_calibration": 1, "spring_constant": NaN}', "calibration", "not a finite number"),
+    (b'{"afmforce_calibration": 1, "resonance_frequency": 1e999}', "calibration", "not a finite number"),
+    (b'{"afmforce_calibration": 1, "spring_constant": ' + b"9" * 400 + b"}", "calibration", "not a finite"),
+])
+def test_a_bad_or_foreign_calibration_file_is_refused(client, body, field, words):
+    """422 naming the field (never 500), in the page's reader and in the analysis alike; nothing runs."""
+    for url, files, data in (("/api/calibration", {"file": ("calib.json", body)}, {}),
+                             ("/api/analyze", {"calibration": ("calib.json", body)}, {"example": "asylum-air"})):
+        r = client.post(url, files=files, data=data)
+        assert r.status_code == 422, (url, r.text)
+        err = r.json()["error"]
+        assert err["field"] == field and words in err["message"], err

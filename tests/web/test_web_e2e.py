@@ -8,9 +8,12 @@ With ``AFMFORCE_SCREENSHOTS=DIR`` each view is saved as a PNG (docs/web-*.png).
 
 from __future__ import annotations
 
+import io
+import json
 import os
 import shutil
 import time
+from contextlib import redirect_stdout
 from pathlib import Path
 
 import pytest
@@ -121,6 +124,35 @@ def test_calibration_fields_show_the_used_values_and_the_models_reason(page):
     box.dispatch_event("change")
     page.wait_for_function("!document.querySelector(\"[data-probe='spring_constant'] .used\").textContent.includes('used 0.5 N/m')",
                            timeout=30_000)
+
+
+def test_a_calibration_file_fills_the_fields(page, tmp_path):
+    """Issue 34.4: calib.json (afmforce calibrate --out) fills k and f0, each marked "from calib.json",
+    and the analysis uses them; a foreign file is refused in the page."""
+    from afmforce.cli.main import main
+
+    cal = tmp_path / "calib.json"
+    with redirect_stdout(io.StringIO()):
+        assert main(["calibrate", "--out", str(cal), "sader", "--length", "200um", "--width", "30um",
+                     "--frequency", "30kHz", "--quality-factor", "2"]) == 0
+    k = json.loads(cal.read_text())["spring_constant"]
+    page.set_input_files("#an-calfile", str(cal))
+    for name in ("spring_constant", "resonance_frequency"):
+        page.wait_for_function(f"document.querySelector(\"[data-probe='{name}'] .from\")?.textContent === 'from calib.json'",
+                               timeout=30_000)
+    assert float(page.locator("[data-probe='spring_constant'] input.val").input_value()) == pytest.approx(k, rel=1e-5)
+    page.wait_for_function(f"document.querySelector(\"[data-probe='spring_constant'] .used\").textContent.includes('used {k:.4g} N/m')",
+                           timeout=30_000)
+    foreign = tmp_path / "other.json"
+    foreign.write_text('{"spring_constant": 0.1}')
+    page.set_input_files("#an-calfile", str(foreign))
+    page.wait_for_function("document.getElementById('an-calfile-error').textContent.includes('not an afmforce calibration file')",
+                           timeout=30_000)
+    for name in ("spring_constant", "resonance_frequency"):      # back to the file's values
+        box = page.locator(f"[data-probe='{name}'] input.val")
+        box.fill("")
+        box.dispatch_event("change")
+    assert page.inner_text("[data-probe='spring_constant'] .from") == ""
 
 
 def test_the_modulus_fit_on_force_vs_indentation(page):

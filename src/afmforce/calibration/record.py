@@ -22,11 +22,13 @@ from .._files import atomic_write_text
 from .._json import to_jsonable
 from ..errors import FileFormatError
 
-__all__ = ["PROBE_KEYS", "write_calibration", "read_calibration"]
+__all__ = ["PROBE_KEYS", "ANALYSIS_KEYS", "write_calibration", "read_calibration", "parse_calibration"]
 
 #: the probe values a calibration file hands on: name -> unit
 PROBE_KEYS = {"spring_constant": "N/m", "resonance_frequency": "Hz", "quality_factor": "",
               "sensitivity": "m/V"}
+#: the probe values ``afmforce analyze`` (and the web's analyse view) take from a calibration file
+ANALYSIS_KEYS = ("spring_constant", "sensitivity", "resonance_frequency")
 _VERSION = 1
 
 
@@ -49,11 +51,21 @@ def read_calibration(path) -> dict[str, float]:
     """
     path = Path(path)
     try:
-        obj = json.loads(path.read_text(encoding="utf-8"))
+        text = path.read_text(encoding="utf-8")
     except (OSError, ValueError) as exc:
         raise FileFormatError(f"{path}: not a readable JSON calibration file ({exc})") from None
+    return parse_calibration(text, str(path))
+
+
+def parse_calibration(text: str, source: str = "calibration") -> dict[str, float]:
+    """:func:`read_calibration` of a file's text (an upload); ``source`` names it in errors.
+    A probe value that is not finite (NaN, Infinity: never written by afmforce) is refused."""
+    try:
+        obj = json.loads(text)
+    except ValueError as exc:
+        raise FileFormatError(f"{source}: not a readable JSON calibration file ({exc})") from None
     if not isinstance(obj, dict) or "afmforce_calibration" not in obj:
-        raise FileFormatError(f"{path}: not an afmforce calibration file (afmforce calibrate ... --out FILE "
+        raise FileFormatError(f"{source}: not an afmforce calibration file (afmforce calibrate ... --out FILE "
                               "writes one)")
     out = {}
     undetermined = obj.get("determined") is False     # an InvOLS the curve did not determine
@@ -61,6 +73,9 @@ def read_calibration(path) -> dict[str, float]:
         if undetermined and key == "sensitivity":
             continue
         value = obj.get(key)
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value):
+        if isinstance(value, (int, float)) and not isinstance(value, bool):
+            if not abs(value) < 1e308:      # NaN, Infinity, 1e999, a 400-digit integer: a damaged file
+                raise FileFormatError(f"{source}: {key} is {str(value)[:20]}, not a finite number; "
+                                      "calibrate again (afmforce calibrate ... --out FILE)")
             out[key] = float(value)
     return out

@@ -180,7 +180,10 @@ def _check(args: argparse.Namespace) -> list[str] | None:
         raise ParameterError(f"--steps {args.steps!r}: no step named; give comma-separated steps (e.g. "
                              "drift,compliance,calibration) or drop --steps for all")
     resolve_steps(steps)  # unknown step: ParameterError -> exit 2
-    from .calibrate import fill_from_calibration; fill_from_calibration(args, ("spring_constant", "sensitivity", "resonance_frequency"))  # noqa: E501,E702
+    from ..calibration.record import ANALYSIS_KEYS
+    from .calibrate import fill_from_calibration
+
+    fill_from_calibration(args, ANALYSIS_KEYS)
     args.records, args.probe = _options(args)  # unknown or out-of-range option: exit 2
     if args.format is not None and args.format not in FORMATS:
         raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")

@@ -9,7 +9,7 @@ before anything is computed.
 from __future__ import annotations
 
 __all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
-           "MAX_CURVES", "SESSION_TTL"]
+           "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL"]
 
 #: Samples one simulated cycle may have: the library's cap for a server (``afmforce.limits``).
 from ..limits import SERVER_MAX_SAMPLES as MAX_SAMPLES  # noqa: E402
@@ -25,5 +25,7 @@ MAX_RUNS = 20_000
 MAX_ITEMS = 64
 #: Virtual curves of one fit.
 MAX_CURVES = 8
+#: Bytes of an uploaded probe calibration file (``afmforce calibrate --out`` writes about 1 kB).
+CALIBRATION_BYTES = 65_536
 #: Default lifetime of an unused session (its uploads and jobs) [s].
 SESSION_TTL = 24 * 3600.0

@@ -14,7 +14,7 @@ from ..errors import ParameterError
 from .analysis import run_analysis
 from .limits import MAX_ITEMS, RESPONSE_POINTS
 from .replies import PastBudget
-from .validate import FieldError
+from .validate import FieldError, calibration_file
 
 router = APIRouter(tags=["analyse"])
 
@@ -29,12 +29,16 @@ async def analyze(request: Request,
                   meta: Annotated[list[str], Form(description="KEY=VALUE file metadata, as --meta")] = [],
                   probe: Annotated[list[str], Form(description="NAME=VALUE probe calibration (radius, "
                                                                "spring_constant, theta0, sensitivity, ...)")] = [],
+                  calibration: Annotated[UploadFile | None, File(description="probe calibration file (afmforce "
+                                                                    "calibrate --out): k, InvOLS, f0 where "
+                                                                    "'probe' gives none")] = None,
                   format: Annotated[str | None, Form(description="reader instead of detection")] = None,
                   arrays: Annotated[bool, Form(description="add per-sample arrays, raw signals, maps")] = False,
                   max_points: Annotated[int, Form(ge=100, le=RESPONSE_POINTS)] = 4000) -> JSONResponse:
     """The JSON of ``afmforce analyze FILE --json`` (``results``, ``failed``, ``oscillation_origin``)
     plus ``files`` (the ids to re-run with ``file_id`` after an option change) and ``wall_time`` [s];
-    with ``arrays`` also ``raw`` and ``maps``. A file that cannot be read is listed under ``failed``."""
+    with ``arrays`` also ``raw`` and ``maps``. A file that cannot be read is listed under ``failed``.
+    ``calibration`` gives what ``--probe-calibration`` gives; a ``probe`` value wins over it."""
     from ..datasets import DATASETS, path as example_path
 
     settings, sessions = request.app.state.settings, request.app.state.sessions
@@ -44,6 +48,10 @@ async def analyze(request: Request,
         if len(items) > MAX_ITEMS:
             raise FieldError(name, f"{name}: at most {MAX_ITEMS} per request, got {len(items)}")
     deadline = time.monotonic() + settings.request_budget
+    if calibration is not None:     # as `afmforce analyze --probe-calibration`: the typed value wins
+        given = {str(t).partition("=")[0].strip() for t in probe}
+        values = calibration_file(await calibration.read(), calibration.filename or "calibration")
+        probe = list(probe) + [f"{k}={v!r}" for k, v in values.items() if k not in given]
     stored = []
     for up in file:
         data = await up.read()
@@ -72,6 +80,15 @@ async def analyze(request: Request,
     bad = {f["file"] for f in payload["failed"]}
     sessions.mark_read(session, [f["id"] for f in payload["files"] if f["name"] not in bad])
     return JSONResponse(payload)   # plain JSON already: no second walk through every value
+
+
+@router.post("/api/calibration")
+async def calibration(file: Annotated[UploadFile, File(description="the JSON of afmforce calibrate --out")]) -> dict:
+    """The probe values [SI] the analyse view takes from a calibration file: ``{"source", "values"}``
+    with ``values`` the spring constant, sensitivity (InvOLS) and resonance frequency it holds,
+    each checked as its field; 422 naming ``calibration`` for a file that is not one."""
+    name = file.filename or "calibration"
+    return {"source": name, "values": calibration_file(await file.read(), name)}
 
 
 @router.get("/api/files")

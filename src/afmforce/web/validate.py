@@ -22,10 +22,10 @@ from typing import Any, Iterable
 
 from .._fields import FieldSpec
 from ..errors import AfmforceError, ParameterError
-from .limits import MAX_ITEMS, MAX_RUNS, MAX_SAMPLES
+from .limits import CALIBRATION_BYTES, MAX_ITEMS, MAX_RUNS, MAX_SAMPLES
 
 __all__ = ["FieldError", "number", "flat_config", "build_config", "cycle_samples", "velocities", "sweep_spec",
-           "metadata"]
+           "metadata", "calibration_file"]
 
 #: Longest text accepted for one value (``"0.1 um/s"``).
 _TEXT = 64
@@ -204,6 +204,31 @@ def metadata(items: Any, field: str = "meta") -> dict[str, Any]:
                 number(value, spec, key, where)
         out.update(parsed)
     return out
+
+
+def calibration_file(data: bytes, name: str, field: str = "calibration") -> dict[str, float]:
+    """The probe values [SI] the analysis takes from an uploaded calibration file (the JSON of
+    ``afmforce calibrate ... --out``, read by :func:`afmforce.calibration.record.parse_calibration`,
+    the values of :data:`~afmforce.calibration.record.ANALYSIS_KEYS` it holds), each checked
+    against its declared range as the probe field (``calibration.spring_constant``)."""
+    import dataclasses
+
+    from .._fields import spec_of
+    from ..analysis.options import ProbeCalibration
+    from ..calibration.record import ANALYSIS_KEYS, parse_calibration
+
+    if len(data) > CALIBRATION_BYTES:
+        raise FieldError(field, f"{name}: {len(data):,} bytes is not a calibration file (afmforce calibrate "
+                                f"--out writes about 1 kB; at most {CALIBRATION_BYTES:,} accepted)")
+    try:
+        values = parse_calibration(data.decode("utf-8"), name)
+    except UnicodeDecodeError:
+        raise FieldError(field, f"{name}: not a calibration file (not UTF-8 text; afmforce calibrate ... "
+                                "--out FILE writes one)") from None
+    except AfmforceError as exc:
+        raise FieldError(field, str(exc)) from None
+    specs = {f.name: spec_of(f) for f in dataclasses.fields(ProbeCalibration)}
+    return {k: number(values[k], specs[k], k, f"{field}.{k}") for k in ANALYSIS_KEYS if k in values}
 
 
 def _strings(items: Any, field: str) -> list[str]:

@@ -363,6 +363,8 @@ function probeTexts() {
   for (const c of AN.probe || []) {
     const v = c.box.get();
     if (v === null || v === "") continue;
+    const from = c.box.fromFile;   // a value from the calibration file, untouched: its SI value, exactly
+    if (from && c.box.querySelector("input.val").value === from.text) { out.push(`${c.f.name}=${from.value}`); continue; }
     out.push(`${c.f.name}=${typeof v === "number" ? `${Number((v / c.f.factor).toPrecision(8))}${c.f.shown}` : v}`);
   }
   return out;
@@ -385,6 +387,25 @@ function buildCalibration() {
     c.append(el("div", { class: "used muted" }));
     box.append(c);
   }
+}
+async function loadCalibrationFile(file) {   // fills k, InvOLS, f0 from the file; "from calib.json" under each
+  $("an-calfile-error").textContent = "";
+  const fd = new FormData(); fd.append("file", file);
+  let r;
+  try { r = await api("api/calibration", { method: "POST", body: fd }); } catch (e) { $("an-calfile-error").textContent = e.message; return; }
+  const names = Object.keys(r.values);
+  if (!names.length) { $("an-calfile-error").textContent = `${r.source} holds no spring constant, sensitivity or resonance frequency`; return; }
+  for (const c of AN.probe || []) {
+    if (!(c.f.name in r.values)) continue;
+    const input = c.box.querySelector("input.val"), v = r.values[c.f.name];
+    input.value = String(Number((v / c.f.factor).toPrecision(6)));
+    c.box.fromFile = { value: v, text: input.value };
+    let tag = c.box.querySelector(".from");
+    if (!tag) { tag = el("div", { class: "from muted" }); c.box.querySelector(".used").before(tag); }
+    tag.textContent = `from ${r.source}`;
+    input.addEventListener("input", () => { if (input.value !== (c.box.fromFile || {}).text) tag.textContent = ""; });
+  }
+  if (AN.files.length || AN.examples.length) analyse(false);
 }
 function showUsed(res) {   // beside each calibration field: the value the analysis used (and the file's)
   for (const box of document.querySelectorAll("#an-calibration .field")) {
@@ -629,6 +650,7 @@ function drawSweepPlot() {
   Plotly.react("sw-plot", traces, { ...LAYOUT, title: { text: m }, xaxis: { title: { text: `${p[0]} [${r.units[p[0]] || "-"}]` }, type: "log" }, yaxis: { title: { text: `${m} [${r.units[m] || "-"}]` } } }, CONFIG);
 }
 $("sw-metric").addEventListener("change", drawSweepPlot);
+$("an-calfile").addEventListener("change", (e) => { if (e.target.files[0]) loadCalibrationFile(e.target.files[0]); e.target.value = ""; });
 
 // ---- start ------------------------------------------------------------------------------------
 (async () => {
