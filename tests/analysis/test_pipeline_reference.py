@@ -40,6 +40,9 @@ def _compare(new, old, where: str, out: list[str]) -> None:
     elif isinstance(old, (int, float)) and not isinstance(old, bool) and isinstance(new, (int, float)):
         if not math.isclose(new, old, rel_tol=RTOL, abs_tol=0.0) and not (old == 0 and abs(new) < 1e-300):
             out.append(f"{where}: {new!r} != {old!r}")
+    elif where.endswith(".source") and isinstance(new, str) and isinstance(old, str):
+        if Path(new).name != Path(old).name:          # the checkout's folder differs (CI, worktrees)
+            out.append(f"{where}: {Path(new).name!r} != {Path(old).name!r}")
     elif new != old:
         out.append(f"{where}: {str(new)[:80]!r} != {str(old)[:80]!r}")
 

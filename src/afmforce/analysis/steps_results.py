@@ -167,7 +167,8 @@ def oscillation(st: State, o: OscillationOptions) -> State:
         if not st.time_known or idx.size < 8:
             nyq = math.nan
             if st.time_known and run.index.size > 1:
-                nyq = 0.5 / float(np.median(np.diff(st.time[run.index])))
+                dt = float(np.median(np.diff(st.time[run.index])))
+                nyq = 0.5 / dt if dt > 0 else math.nan   # repeated time stamps: no Nyquist frequency
             peaks[run.kind] = dataclasses.replace(find_peak(np.array([]), np.array([]), v, run.kind), nyquist=nyq)
             continue
         x = st.z[idx] - st.z[idx].mean()
