@@ -111,9 +111,8 @@ def write_spectrum(path, spectrum: ThermalSpectrum, force: bool = True) -> Path:
     return atomic_write_text(path, "\n".join(lines) + "\n" + body + "\n", force=force)
 
 
-def _read_own(path: Path, text: str) -> ThermalSpectrum:
-    head: dict[str, str] = {}
-    rows = []
+def _lines(text: str, head: dict[str, str]):
+    """The data lines of a ``# key: value`` headed text, numbered from 1; the header lines fill ``head``."""
     for n, line in enumerate(text.splitlines(), 1):
         s = line.strip()
         if not s:
@@ -123,6 +122,13 @@ def _read_own(path: Path, text: str) -> ThermalSpectrum:
             if sep:
                 head[key.strip()] = value.strip()
             continue
+        yield n, s
+
+
+def _read_own(path: Path, text: str) -> ThermalSpectrum:
+    head: dict[str, str] = {}
+    rows = []
+    for n, s in _lines(text, head):
         if s.lower().startswith("frequency"):
             if "[" in s:
                 unit = s.rsplit("[", 1)[1].rstrip("]").strip()
@@ -196,15 +202,7 @@ def _try(parse, text):
 def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
     head: dict[str, str] = {}
     rows = []
-    for n, line in enumerate(text.splitlines(), 1):
-        s = line.strip()
-        if not s:
-            continue
-        if s.startswith("#"):
-            key, sep, value = s[1:].partition(":")
-            if sep:
-                head[key.strip()] = value.strip()
-            continue
+    for n, s in _lines(text, head):
         parts = s.split()
         try:
             rows.append([float(x) for x in parts[:4]])
