@@ -231,11 +231,22 @@ class DaskExecutor:
             lg.setLevel(logging.CRITICAL + 1)
         try:   # a second Ctrl-C (every worker's, or the user's again) must not break the shutdown half-way
             with _workers_ignore_sigint() if quiet else contextlib.nullcontext():
+                # after an interruption a worker may still be busy in its task (workers ignore
+                # SIGINT): a close that times out must not replace the one-line report, and the
+                # cluster is closed (its worker processes ended) all the same
                 if self._own_client and self._client is not None:
-                    self._client.close()
+                    try:
+                        self._client.close(**({"timeout": 10} if quiet else {}))
+                    except (TimeoutError, OSError):
+                        if not quiet:
+                            raise
                     self._client = None
                 if self._cluster is not None:
-                    self._cluster.close()
+                    try:
+                        self._cluster.close(**({"timeout": 10} if quiet else {}))
+                    except (TimeoutError, OSError):
+                        if not quiet:
+                            raise
                     self._cluster = None
         finally:
             for lg, level in zip(loggers, levels):
