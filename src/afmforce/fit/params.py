@@ -140,8 +140,9 @@ def _law_parameters() -> dict[str, FitParameter]:
 
 
 #: The surface force laws' fittable parameters (issue 31), from their records.
-LAW_PARAMETERS: tuple[str, ...] = tuple(_law_parameters())
-PARAMETERS.update(_law_parameters())
+_LAWS = _law_parameters()
+LAW_PARAMETERS: tuple[str, ...] = tuple(_LAWS)
+PARAMETERS.update(_LAWS)
 
 
 def check_free(free, model: str, friction: str | None = None) -> tuple[str, ...]:
