@@ -6,7 +6,10 @@ simulation configuration and its parts, the analysis probe and step options,
 the statics and diagnosis functions) and to every command-line flag declared
 from it (found by walking the parsers, so a new flag is tested without an
 edit here), and to ``sweep --set`` for the simulation's names. Every refusal
-carries the same text: "is out of range: NAME, the HELP, must lie in RANGE".
+carries the same text: "is out of range: NAME, the HELP, must lie in RANGE". The web
+(``afmforce serve``) is the third face: the simulation's names in ``/api/simulate``, the probe
+fields and step options in ``/api/analyze``, each answered 422 with the same text, and its
+OpenAPI document publishes the same ranges.
 """
 
 from __future__ import annotations
@@ -137,6 +140,43 @@ def _flags() -> dict[str, list[tuple[str, str]]]:
 FLAGS = _flags()
 
 
+@pytest.fixture(scope="module")
+def web(tmp_path_factory):
+    """A test client of the web application, or None without the web extra."""
+    try:
+        from fastapi.testclient import TestClient
+    except ImportError:
+        yield None
+        return
+    from afmforce.web import Settings, create_app
+
+    app = create_app(Settings(data=tmp_path_factory.mktemp("web"), spare_job=False))
+    with TestClient(app, base_url="http://127.0.0.1") as client:
+        yield client
+
+
+def _web_requests(name: str, text: str) -> list[tuple[str, dict]]:
+    """(url, request keyword arguments) of every web field declared by quantity ``name``."""
+    import dataclasses
+
+    from afmforce.analysis.options import OPTIONS, ProbeCalibration
+    from afmforce.dynamics.config import FLAT
+
+    out = []
+    if name in FLAT and FLAT[name].spec is QUANTITIES[name]:
+        models = FLAT[name].models
+        out.append(("/api/simulate", {"json": {name: float(text), **({} if "beam" in models
+                                                                      else {"model": models[0]})}}))
+    if name in {f.name for f in dataclasses.fields(ProbeCalibration)}:
+        out.append(("/api/analyze", {"data": {"example": "asylum-air", "probe": f"{name}={text}"}}))
+    for step, cls in OPTIONS.items():
+        for f in dataclasses.fields(cls):
+            if f.metadata.get("spec") == QUANTITIES[name]:
+                out.append(("/api/analyze", {"data": {"example": "asylum-air",
+                                                      "option": f"{step}.{f.name}={text}"}}))
+    return out
+
+
 def _cli(capsys, argv) -> str:
     try:
         code = main(argv)
@@ -149,7 +189,8 @@ def _cli(capsys, argv) -> str:
 
 @pytest.mark.parametrize("side", ["hi", "lo"])
 @pytest.mark.parametrize("name", list(QUANTITIES))
-def test_python_and_cli_refuse_the_same_value_with_the_same_message(capsys, tmp_path, monkeypatch, name, side):
+def test_python_and_cli_refuse_the_same_value_with_the_same_message(capsys, tmp_path, monkeypatch, web, name,
+                                                                    side):
     monkeypatch.chdir(tmp_path)
     spec = QUANTITIES[name]
     value = _outside(spec, side)
@@ -174,6 +215,10 @@ def test_python_and_cli_refuse_the_same_value_with_the_same_message(capsys, tmp_
     assert routes, f"no command-line route sets {name}"
     for argv in routes:
         messages.append((" ".join(argv), _cli(capsys, argv)))
+    for url, request in (_web_requests(name, text) if web is not None else []):
+        r = web.post(url, **request)
+        assert r.status_code == 422, (url, request, r.status_code, r.text[:300])
+        messages.append((f"{url} {request}", r.json()["error"]["message"]))
     for where, message in messages:   # the name (or the field that holds it), the meaning, the range
         assert _tail(message).endswith(f", the {spec.help}, must lie in {spec.range_text()}"), (where, message)
         assert _tail(message) == _tail(messages[0][1]), (where, message, messages[0])
@@ -234,3 +279,55 @@ def test_the_fit_searches_inside_the_declared_ranges():
             assert spec.contains(bound) or bound == declared, (p.name, bound, spec.range_text())
     assert PARAMETERS["hamaker"].upper == QUANTITIES["hamaker"].hi == 1e-17
     assert PARAMETERS["lever_drag"].unit == "kg/s"
+
+
+def test_the_openapi_document_publishes_the_declared_ranges(web):
+    """``/openapi.json``: every simulation name, probe field and step option typed, with the
+    declared unit and range; every result field with its unit; refusals in one shape."""
+    import dataclasses
+
+    from afmforce.analysis.options import OPTIONS, ProbeCalibration
+    from afmforce.analysis.result import AnalysisResult
+    from afmforce.dynamics.config import FLAT
+
+    if web is None:
+        pytest.skip("web extra not installed")
+    doc = web.get("/openapi.json").json()
+    schemas = doc["components"]["schemas"]
+
+    def check(prop, spec):
+        number = prop["anyOf"][0]
+        lo = number.get("exclusiveMinimum" if spec.lo_open else "minimum")
+        hi = number.get("exclusiveMaximum" if spec.hi_open else "maximum")
+        assert (lo, hi) == (spec.lo, spec.hi) and prop["x-unit"] == spec.unit, (prop, spec)
+        assert spec.range_text() in prop["description"]
+
+    config = schemas["SimulationConfig"]["properties"]
+    assert set(config) == set(FLAT)
+    for name, where in FLAT.items():
+        if where.spec is not None:
+            check(config[name], where.spec)
+        else:
+            assert config[name]["enum"], name
+    probe = schemas["ProbeCalibration"]["properties"]
+    for f in dataclasses.fields(ProbeCalibration):
+        spec = f.metadata.get("spec")
+        if spec is not None and spec.dimension not in ("choice", "flag", "text"):
+            check(probe[f.name], spec)
+    options = schemas["AnalysisOptions"]["properties"]
+    for step, cls in OPTIONS.items():
+        for f in dataclasses.fields(cls):
+            spec = f.metadata.get("spec")
+            if spec is not None and spec.dimension not in ("choice", "flag", "text"):
+                check(options[f"{step}.{f.name}"], spec)
+    result = schemas["AnalysisResult"]["properties"]
+    assert {k: v["x-unit"] for k, v in result.items()} == dict(AnalysisResult.UNITS)
+    for url in ("/api/simulate", "/api/simulate/raw"):
+        assert doc["paths"][url]["post"]["requestBody"]["content"]["application/json"]["schema"] == {
+            "$ref": "#/components/schemas/SimulationConfig"}
+    assert schemas["FitRequest"]["properties"]["truth"]["$ref"] == "#/components/schemas/SimulationConfig"
+    for methods in doc["paths"].values():
+        for op in methods.values():
+            assert op["responses"]["422"]["content"]["application/json"]["schema"] == {
+                "$ref": "#/components/schemas/Error"}
+    assert "HTTPValidationError" not in schemas

@@ -8,7 +8,7 @@ from contextlib import asynccontextmanager
 from fastapi import FastAPI
 
 from .. import __version__
-from . import replies
+from . import openapi, replies
 from .guard import Guard
 from .jobs import JobManager
 from .sessions import Sessions
@@ -74,6 +74,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.warm = warm
     app.state.expire = expire
     replies.install(app)     # every refusal: 422 {"error": {"type", "message", "field"}}
+    openapi.install(app)     # typed request and response models from the declarations
 
     for module in (routes_main, routes_analyze, routes_simulate, routes_fit, routes_sweep, routes_jobs):
         app.include_router(module.router)
