@@ -38,7 +38,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
                            "diagnosis"),
     "sweep": ("sweep", "parameter sweeps of the simulation (grids, random/LHS samples) on Dask"),
     "reproduce": ("reproduce", "reproduce the paper's figures and numbers (report.md, PNG)"),
-    "explore": ("explore", "write an interactive HTML page: speed x friction on the Fig 5-6 run"),
     "formats": ("formats", "list the force-curve file formats afmforce reads"),
     "fit": ("fit", "fit the dynamic model to curves at several driving speeds (friction, A*R)"),
     "plan": ("plan", "design a multi-speed measurement: speeds and sample rates that fix xi best"),
@@ -141,7 +140,7 @@ def _join_negative_values(argv: list[str]) -> list[str]:
 
 
 #: Commands that run the dynamic model (and compile it on the first run).
-SIMULATING = ("simulate", "demo", "reproduce", "explore", "fit", "plan", "sweep")
+SIMULATING = ("simulate", "demo", "reproduce", "fit", "plan", "sweep")
 
 
 def _compile_notice() -> None:
