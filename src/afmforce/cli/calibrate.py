@@ -291,7 +291,7 @@ def run_sader(args: argparse.Namespace) -> int:
 def run_invols(args: argparse.Namespace) -> int:
     _check_out(args)
     from ..analysis.invols import InvolsResult, measure_invols
-    from ..analysis._units import units_of
+    from ..analysis import units_of
     from ..io import load
 
     if (args.file is None) == (not args.example):

@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
     from ..fit.params import check_free
 
     check_free(args.free.split(","), cfg.model, cfg.friction.law if cfg.model == "beam" else None)  # before loading
-    from ..io._meta import parse_meta_args
+    from ..io import parse_meta_args
 
     curves, names = _load(args.curves, parse_meta_args(args.meta))
     for flag, vals in (("--velocities", args.velocities), ("--sample-rates", args.sample_rates)):

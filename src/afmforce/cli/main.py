@@ -147,13 +147,13 @@ def _compile_notice() -> None:
     """One line on stderr when the integrator is about to be compiled (first run, empty or
     stale numba cache): 7-10 s of silence otherwise looks like a hang. Registered with the
     dynamics, so that it is printed only when a compile really starts (never before a usage error)."""
-    from ..dynamics import _helper
+    from ..dynamics import BEFORE_COMPILE
 
     def notice() -> None:
         print("afmforce: compiling the integrator, ~10 s (first run; later runs load it from "
               "numba's cache)...", file=sys.stderr, flush=True)
 
-    _helper.BEFORE_COMPILE[:] = [notice]
+    BEFORE_COMPILE[:] = [notice]
 
 
 def _text_never_fails() -> None:

@@ -289,7 +289,7 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
     t0 = float(np.asarray(curve.time, float)[idx[0]])
     tr = np.asarray(curve.time, float)[ridx] - t0
     if fc.metadata.get("position_channel") == "measured":   # the same channel as the approach
-        from ..analysis._numeric import robust_line_thin
+        from ..analysis import robust_line_thin
 
         zm = np.asarray(curve.piezo_measured, float)[ridx]
         a, b, *_ = robust_line_thin(tr - tr[0], zm)

@@ -217,7 +217,7 @@ def _jump(deflection, z, run, noise: float, nsigma: float, start: int, window: i
     :func:`~afmforce.analysis._numeric.largest_step`): a jump hidden in the noise, 15 samples
     away from a split that a stepped, backlashing position sensor moved (the ``paper`` preset).
     """
-    from ..analysis._numeric import largest_step
+    from ..analysis import largest_step
     from ..analysis.jumps import find_jump_in
 
     ji = find_jump_in(deflection, z, z, run, noise, math.nan, nsigma, window)
@@ -235,23 +235,22 @@ def _jump(deflection, z, run, noise: float, nsigma: float, start: int, window: i
 def _approach_only(curve: RawCurve, name: str, idx: np.ndarray, nsigma: float,
                    window: int) -> AnalysisInputs:
     """The same analysis functions on an approach-only curve, with the file's calibration."""
-    from ..analysis.compliance import _fit_line, _metadata_factor
+    from ..analysis import compliance_line
     from ..analysis.regions import find_run_regions, saturated_mask
 
     unit = curve.deflection_unit
-    factor = _metadata_factor(unit, curve.metadata or {})
+    factor = curve.deflection_factor()
     if not math.isfinite(factor):
         need = "sensitivity" if unit == "V" else "spring_constant"
         raise MissingMetadataError(
             f"{name}: the deflection is in {unit}, the file has no {need} and the curve has no retract "
             f"run to check a calibration from its compliance line against: give it (--meta {need}=VALUE; "
             f"Python: load(..., meta_override={{'{need}': ...}}))", keys=(need,), flags=("--meta",))
-    zz = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal,
-                    float)
+    zz = np.asarray(curve.position(), float)
     s = np.asarray(curve.deflection_signal, float)
     try:
         run = find_run_regions(zz, s, idx, "approach", saturated=saturated_mask(s))
-        line = _fit_line(zz, s, run)
+        line = compliance_line(zz, s, run)
     except AnalysisError as exc:
         raise AnalysisError(f"{name}: {exc}; the fit needs curves that reach contact") from None
     jump, found, contact = _jump(s * factor, zz, run, abs(run.noise * factor), nsigma, int(idx[0]),

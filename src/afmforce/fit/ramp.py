@@ -74,13 +74,13 @@ def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, 
     (:func:`afmforce.analysis.dynamic.run_velocity`).
     """
     from ..analysis.dynamic import run_velocity
-    from ..analysis._numeric import robust_line_thin
+    from ..analysis import robust_line_thin
     from ..analysis.state import prepare
 
     try:
         channel = prepare(curve).channel
     except AnalysisError:      # e.g. an approach-only file: the analysis needs both runs
-        channel = "measured" if curve.piezo_measured is not None else "nominal"
+        channel = curve.position_channel()
     if channel != "measured":
         return np.asarray(curve.piezo_nominal, float)[idx], {"channel": "nominal"}
     t = np.asarray(curve.time, float)[idx]

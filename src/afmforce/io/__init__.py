@@ -27,10 +27,12 @@ from ..errors import AfmforceError, FileFormatError, ParameterError
 from ..progress import Progress
 from .curve import RawCurve
 from . import native
-from ._meta import METADATA, check_meta_override, require_metadata
+from ._guard import FileTimeoutError, run_with_timeout
+from ._meta import METADATA, check_meta_override, parse_meta_args, require_metadata
 
 __all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA", "refusal",
-           "supported_suffixes", "is_supported", "require_metadata", "formats_markdown"]
+           "supported_suffixes", "is_supported", "require_metadata", "formats_markdown", "check_meta_override",
+           "parse_meta_args", "run_with_timeout", "FileTimeoutError"]
 
 Loader = Callable[..., list]
 

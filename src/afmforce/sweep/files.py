@@ -101,7 +101,7 @@ def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None,
     ``timeout`` [s] bounds the detection of each file (see :func:`afmforce.io.load`);
     ``on_file()`` is called after each file (a progress bar).
     """
-    from ..io._guard import run_with_timeout
+    from ..io import run_with_timeout
 
     refs: list[CurveRef] = []
     for p in paths:
@@ -228,7 +228,7 @@ class CurveAnalysis:
     def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
         """``(index in the file, RawCurve)`` of the item's curves."""
         from ..io import FORMATS, load
-        from ..io._meta import check_meta_override
+        from ..io import check_meta_override
 
         path = ref.location
         if ref.index is None:

@@ -16,14 +16,11 @@ import html
 import json
 import math
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Mapping
+from typing import Any, Mapping
 
 import numpy as np
 
 from .._files import atomic_write_text
-
-if TYPE_CHECKING:  # pragma: no cover
-    from .results import SweepResult
 
 __all__ = ["sweep_payload", "write_page", "PAGE_ROWS"]
 
@@ -43,9 +40,10 @@ def _cell(v: Any) -> Any:
     return v if v is None or isinstance(v, (int, str, bool)) else str(v)
 
 
-def sweep_payload(result: "SweepResult", units: Mapping[str, str] | None = None, *,
+def sweep_payload(result: Any, units: Mapping[str, str] | None = None, *,
                   max_rows: int | None = None) -> dict[str, Any]:
-    """The result as JSON-ready rows (SI values; ``units``: column -> unit).
+    """A :class:`~afmforce.sweep.results.SweepResult` as JSON-ready rows (SI values;
+    ``units``: column -> unit).
 
     Returns ``{"n_runs", "n_failed", "chunks_run", "chunks_skipped", "parameters",
     "columns", "units", "rows"}``; ``rows`` holds the first ``max_rows`` runs (all when None).
@@ -60,14 +58,14 @@ def sweep_payload(result: "SweepResult", units: Mapping[str, str] | None = None,
             "rows": [[_cell(v) for v in row] for row in table.itertuples(index=False)]}
 
 
-def _fixed(result: "SweepResult", units: Mapping[str, str]) -> list[list[str]]:
+def _fixed(result: Any, units: Mapping[str, str]) -> list[list[str]]:
     spec = result.spec
     if spec is None:
         return []
     return [[str(k), str(v), units.get(k, "")] for k, v in spec.fixed]
 
 
-def write_page(result: "SweepResult", path: str | Path, units: Mapping[str, str] | None = None, *,
+def write_page(result: Any, path: str | Path, units: Mapping[str, str] | None = None, *,
                title: str = "afmforce sweep", max_rows: int = PAGE_ROWS) -> Path:
     """Write the sweep as one self-contained HTML page (atomically); returns its path.
 

@@ -73,7 +73,7 @@ def number(value: Any, spec: FieldSpec, name: str, field: str | None = None, dom
     try:
         spec.check(v, name, where=None if field == name else field)
         if domain is not None:
-            from ..dynamics._part import DOMAINS
+            from ..dynamics.parts import DOMAINS
 
             DOMAINS[domain](name, v, spec.unit)
     except ParameterError as exc:
@@ -189,7 +189,7 @@ def metadata(items: Any, field: str = "meta") -> dict[str, Any]:
     item at a time so that a refusal names it; a key of the shared vocabulary is checked against its
     declared range (``sensitivity=1e300`` is refused, not read)."""
     from .._fields import QUANTITIES
-    from ..io._meta import parse_meta_args
+    from ..io import parse_meta_args
 
     out: dict[str, Any] = {}
     for i, item in enumerate(_strings(items, field)):
