@@ -105,7 +105,7 @@ def caps_markdown() -> str:
     """The docs table of the caps (docs/ranges.md holds it verbatim)."""
     rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
-            ("runs of one sweep without `--yes`", CONFIRM_RUNS, "sweep"),
+            ("runs of one sweep run without asking for a yes", CONFIRM_RUNS, "sweep"),
             ("runs of one sweep", MAX_RUNS, "sweep"),
             ("curves in a design", MAX_DESIGN_CURVES, "plan"),
             ("candidate speeds of a design", MAX_SPEEDS, "plan"),

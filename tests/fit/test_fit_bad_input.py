@@ -55,7 +55,7 @@ def test_volts_without_sensitivity_calibrated_as_the_analysis(two):
     assert fc.metadata["calibration"]["source"] == "compliance"
     assert fc.metadata["calibration"]["sensitivity"] == pytest.approx(50e-9, rel=0.02)   # the truth
     note = fc.metadata["preparation_notes"][0]
-    assert f"{ana.sensitivity_fit * 1e9:.4g} nm/V" in note and "--meta sensitivity=" in note
+    assert f"{ana.sensitivity_fit * 1e9:.4g} nm/V" in note and "(`sensitivity`)" in note
 
 
 def test_free_parameter_checks(two):

@@ -153,7 +153,7 @@ def test_raw_volts_calibration_curve_gets_the_analysis_sensitivity():
     assert cal["sensitivity"] == pytest.approx(ana.sensitivity_fit, rel=1e-12)
     assert cal["sensitivity"] == pytest.approx(934.5e-9, rel=1e-3)
     notes = preparation_warnings([fc], base_config("beam"))
-    assert any("934.5 nm/V from the slope" in w and "--meta sensitivity=VALUE" in w for w in notes)
+    assert any("934.5 nm/V from the slope" in w and "(`sensitivity`)" in w for w in notes)   # the key: the CLI renders --meta
     assert any("fitted on only 6 contact samples" in w for w in notes)
     assert any("no significant jump into contact" in w for w in notes)
 
@@ -200,7 +200,7 @@ def test_force_without_spring_constant_implausible_slope_refused():
     app = np.flatnonzero(np.asarray(curve.segment) == 0)[-30:]
     k_slope = np.polyfit(np.asarray(curve.piezo_nominal)[app], np.asarray(curve.deflection_signal)[app], 1)[0]
     assert 1e-5 < k_slope < 1e-4
-    with pytest.raises(AnalysisError, match=r"compliance slope.*is 5\.\d+e-05 N/m.*--meta spring_constant"):
+    with pytest.raises(AnalysisError, match=r"compliance slope.*is 5\.\d+e-05 N/m.*\(`spring_constant`\)"):
         _prepare(curve, "aws")
 
 

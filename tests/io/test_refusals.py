@@ -50,7 +50,7 @@ def test_layout_error_and_chosen_reader(tmp_path, raising_reader):
     msg = str(err.value)
     assert "('bruker-nanoscope', chosen with format" in msg
     assert "not laid out as the reader expects (ValueError: buffer size" in msg
-    assert "--meta" not in msg  # nothing is missing: no metadata to give
+    assert "meta_override" not in msg  # nothing is missing: no metadata to give
 
 
 def test_a_readers_own_refusal_names_it_and_the_other_readers(tmp_path):
@@ -60,13 +60,13 @@ def test_a_readers_own_refusal_names_it_and_the_other_readers(tmp_path):
         load(path)
     msg = str(err.value)
     assert "(reader 'afm-workshop-csv', detected from the content" in msg
-    assert "--format ID" in msg and "'bruker-ascii'" in msg  # the other reader of .csv
+    assert "named as `format`" in msg and "'bruker-ascii'" in msg  # the other reader of .csv (key, no flag)
 
 
 def test_unrecognised_content_says_how_to_name_a_reader(tmp_path):
     path = tmp_path / "curve.txt"
     path.write_text("nothing a force file would hold\n")
-    with pytest.raises(FileFormatError, match=r"content not recognised as any of: .*--format ID.*bruker-ascii"):
+    with pytest.raises(FileFormatError, match=r"content not recognised as any of: .*as `format` \(one of .*bruker-ascii"):
         load(path)
 
 

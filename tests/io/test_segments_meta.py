@@ -153,7 +153,7 @@ def test_require_metadata_rules(tmp_path):
     c = load(DATA / "jpk_calibration-curve_raw-volts.jpk-force")[0]  # volts, neither k nor sensitivity
     with pytest.raises(MissingMetadataError) as err:
         require_metadata(c)
-    assert err.value.flags == ("--spring-constant", "--sensitivity")
+    assert err.value.keys == ("spring_constant", "sensitivity") and "--" not in str(err.value)   # keys, no flags
     with pytest.raises(ParameterError, match="unknown metadata"):
         require_metadata(c, ("colour",))
     forces = load(DATA / "afm-workshop_single.csv")[0]  # force in N: needs neither

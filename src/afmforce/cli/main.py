@@ -109,6 +109,17 @@ def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.Argume
     return sub.choices[command]
 
 
+def _option_strings(parser: argparse.ArgumentParser) -> frozenset:
+    """Every option string of ``parser`` and of its sub-commands (``calibrate thermal``)."""
+    out: set[str] = set()
+    for action in parser._actions:
+        out.update(action.option_strings)
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                out |= _option_strings(sub)
+    return frozenset(out)
+
+
 def _command_of(argv: list[str]) -> str:
     """The sub-command named in ``argv`` ("" when none: top-level help, version, a typo)."""
     for tok in argv:
@@ -186,6 +197,7 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if command:
             refuse_empty_values(_subparser(parser, command), argv)
+            _outcome.RunState.options = _option_strings(_subparser(parser, command))
         args = parser.parse_args(argv)
     except SystemExit:
         raise
