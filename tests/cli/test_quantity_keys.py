@@ -127,3 +127,11 @@ def test_calibrate_medium_choices_are_the_sader_presets():
     for method in ("thermal", "sader"):
         (medium,) = [a for a in methods[method]._actions if "--medium" in a.option_strings]
         assert tuple(medium.choices) == tuple(FLUIDS) == ("air", "water")
+
+
+def test_a_reader_s_missing_metadata_is_given_with_the_command_s_flags(capsys):
+    """The reader names keys; `analyze` renders its own flags for them (it has both)."""
+    gel = str(Path(__file__).parents[1] / "data" / "ntmdt_gel-in-water.txt")
+    assert main(["analyze", gel]) == 1
+    err = capsys.readouterr().err
+    assert "give --spring-constant and --sensitivity" in err and "`" not in err

@@ -39,7 +39,7 @@ def test_missing_entry_names_reader_entry_and_meta(tmp_path, raising_reader):
     assert msg.startswith(f"{tmp_path / 'curve.spm'}: the Bruker NanoScope binary force file (v5-v9) reader "
                           "('bruker-nanoscope', detected from the content, via afmforce) could not read it")
     assert "the file lacks the entry 'Date'" in msg
-    assert "--meta KEY=VALUE" in msg and "meta_override" in msg and "spring_constant" in msg
+    assert "`meta_override` KEY=VALUE" in msg and "spring_constant" in msg and "--" not in msg  # key; the CLI: --meta
     assert "report it" in msg and "KeyError: 'Date'" not in msg
 
 
@@ -76,4 +76,4 @@ def test_missing_metadata_is_left_as_the_reader_says_it(tmp_path):
     path.write_text("1,0\t2,0\t3,0\n" * 20)  # NT-MDT: three numeric columns, no k or InvOLS
     with pytest.raises(MissingMetadataError) as err:
         load(path, require=("spring_constant", "sensitivity"))
-    assert "(reader " not in str(err.value) and "--spring-constant" in str(err.value)
+    assert "(reader " not in str(err.value) and "give `spring_constant` and `sensitivity`" in str(err.value)
