@@ -66,7 +66,7 @@ def test_a_readers_own_refusal_names_it_and_the_other_readers(tmp_path):
 def test_unrecognised_content_says_how_to_name_a_reader(tmp_path):
     path = tmp_path / "curve.txt"
     path.write_text("nothing a force file would hold\n")
-    with pytest.raises(FileFormatError, match=r"content not recognised as any of: .*as `format` \(one of .*bruker-ascii"):
+    with pytest.raises(FileFormatError, match=r"not recognised as any of: .*as `format` \(one of .*bruker-ascii"):
         load(path)
 
 

@@ -101,7 +101,8 @@ def test_jpk_without_spring_constant_uses_the_flag():
     assert volts.metadata["sensitivity"] == pytest.approx(89.32e-9, rel=1e-4)
     with pytest.raises(MissingMetadataError, match="give `spring_constant`") as err:
         load(path, require=("spring_constant", "sensitivity"))
-    assert str(path) in str(err.value) and "sensitivity`" not in str(err.value) and err.value.keys == ("spring_constant",)
+    assert str(path) in str(err.value) and "sensitivity`" not in str(err.value)
+    assert err.value.keys == ("spring_constant",)
     c = load(path, meta_override={"spring_constant": 12.0})[0]
     assert c.deflection_unit == "N" and c.metadata["spring_constant"] == 12.0
     assert c.deflection_signal[0] == pytest.approx(-5.2617e-7, rel=1e-4)

@@ -310,7 +310,8 @@ def _from_toml(path: Path, dimensions: Dimensions | None) -> dict:
         raise ParameterError(f"`config` {path}: not valid TOML ({exc})") from None
     unknown = set(data) - {"sweep", "grid", "range", "set"}
     if unknown:
-        raise ParameterError(f"`config` {path}: unknown table(s) {sorted(unknown)}; use [sweep], [grid], [range], [set]")
+        raise ParameterError(f"`config` {path}: unknown table(s) {sorted(unknown)}; "
+                             "use [sweep], [grid], [range], [set]")
     out: dict[str, Any] = dict(data.get("sweep", {}))
     grid = []
     for name, v in data.get("grid", {}).items():
