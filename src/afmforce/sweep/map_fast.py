@@ -97,7 +97,8 @@ class PixelAnalysis:
         k = float(p.value("spring_constant", md))
         seg = np.asarray(curve.segment)
         sig = np.asarray(curve.deflection_signal, dtype=float)
-        scale = curve.force_factor(p.value("sensitivity", md), k)
+        sens = float(p.value("sensitivity", md) or math.nan) if curve.deflection_unit == "V" else math.nan
+        scale = curve.force_factor(sens, k)
         z = curve.position()
         force = sig * scale
         app, ret = seg == 0, seg == 1
