@@ -26,10 +26,10 @@ from typing import Any, Mapping
 from .errors import ParameterError
 
 __all__ = ["FieldSpec", "meta", "qfield", "spec_of", "QUANTITIES", "check", "check_beam", "show",
-           "ranges_markdown"]
+           "ranges_markdown", "DISPLAY_UNITS"]
 
 #: Display unit -> its size in SI (the only conversions the help and messages need).
-_DISPLAY = {
+DISPLAY_UNITS = {
     "nm": 1e-9, "um": 1e-6, "mm": 1e-3, "m": 1.0,
     "ng": 1e-12, "ug": 1e-9, "mg": 1e-6, "kg": 1.0,
     "um/s": 1e-6, "m/s": 1.0, "deg": math.pi / 180, "rad": 1.0,
@@ -72,8 +72,8 @@ def show(value: float | None, unit: str, display: str = "") -> str:
     if isinstance(value, int) and not isinstance(value, bool) and not unit:
         return str(value)
     v = float(value)
-    if display and display in _DISPLAY:
-        return f"{_num(v / _DISPLAY[display])} {display}"
+    if display and display in DISPLAY_UNITS:
+        return f"{_num(v / DISPLAY_UNITS[display])} {display}"
     if unit in _AUTO and v != 0 and math.isfinite(v):
         return _auto(v, unit)
     return f"{_num(v)} {unit}".rstrip()

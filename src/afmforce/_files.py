@@ -49,7 +49,7 @@ def check_writable(path: str | os.PathLike, force: bool = True) -> Path:
     if path.is_dir():
         raise ParameterError(f"{path} is a folder; give a file name (a folder is never replaced by a file)")
     if path.exists() and not force:
-        raise OutputExistsError(f"{path} exists; choose another name or pass --force to overwrite")
+        raise OutputExistsError(f"{path} exists; choose another name or pass `force` to overwrite")
     return path
 
 

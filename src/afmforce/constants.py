@@ -49,3 +49,12 @@ MEDIA = {
     "hexadecane": dict(viscosity=3.03e-3, permittivity=2.05),
     "glycerol": dict(viscosity=0.934, permittivity=42.5),
 }
+
+#: The Sader method's preset media (``afmforce calibrate --medium``; :data:`afmforce.calibration.sader.FLUIDS`):
+#: medium -> (density [kg/m^3], viscosity [Pa s]) at 25 C and 1 atm (CRC Handbook). Water's viscosity
+#: is that of :data:`MEDIA`; air's is 18.49 uPa s, not the paper's round 1.8e-5 that the simulations
+#: use (MEDIA["air"]): Sader's k scales as eta^a (a ~ 0.7), so the round value would bias k by 2 %.
+SADER_FLUIDS: dict[str, tuple[float, float]] = {
+    "air": (1.184, 1.849e-5),
+    "water": (997.05, MEDIA["water"]["viscosity"]),
+}

@@ -16,7 +16,7 @@ import math
 from .errors import ParameterError
 
 __all__ = ["MAX_SAMPLES", "SERVER_MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
-           "MAX_DESIGNS", "MAX_GRID_POINTS", "CONFIRM_GRID_POINTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
+           "MAX_DESIGNS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
 #: (Fig 9 at 1 nm/s, 4.3e6 samples) fits; a real force curve has at most ~1e6.
@@ -37,10 +37,6 @@ MAX_SPEEDS = 40
 MAX_DESIGNS = 1_000_000
 #: The most samples of all candidate curves of one design together (``plan``; each is simulated).
 MAX_PLAN_SAMPLES = 20_000_000
-#: The most grid points (one simulation each) of one precomputed parameter grid (``explore``).
-MAX_GRID_POINTS = 10_000
-#: Grids of more points than this need an explicit yes (``explore --yes``): each point is a simulation.
-CONFIRM_GRID_POINTS = 100
 
 #: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
 _BYTES_PER_SAMPLE = 88
@@ -109,14 +105,12 @@ def caps_markdown() -> str:
     """The docs table of the caps (docs/ranges.md holds it verbatim)."""
     rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
-            ("runs of one sweep without `--yes`", CONFIRM_RUNS, "sweep"),
+            ("runs of one sweep run without asking for a yes", CONFIRM_RUNS, "sweep"),
             ("runs of one sweep", MAX_RUNS, "sweep"),
             ("curves in a design", MAX_DESIGN_CURVES, "plan"),
             ("candidate speeds of a design", MAX_SPEEDS, "plan"),
             ("designs weighed (curves among speeds, repeats allowed)", MAX_DESIGNS, "plan"),
-            ("samples of all candidate curves of a design", MAX_PLAN_SAMPLES, "plan"),
-            ("grid points without `--yes`", CONFIRM_GRID_POINTS, "explore"),
-            ("grid points", MAX_GRID_POINTS, "explore")]
+            ("samples of all candidate curves of a design", MAX_PLAN_SAMPLES, "plan")]
     lines = ["| what | at most | where |", "|---|---|---|"]
     lines += [f"| {what} | {cap:,} | {where} |" for what, cap, where in rows]
     return "\n".join(lines)

@@ -22,7 +22,7 @@ import re
 from .errors import ParameterError, UnitError
 
 __all__ = ["DIMENSIONS", "MINUS_SIGNS", "parse_value", "parse_field", "parse_quantity", "parse_typed",
-           "normalize_number_text", "format_quantity"]
+           "normalize_number_text", "format_quantity", "unit_registry"]
 
 #: Expected dimension name -> (SI unit understood by pint, human word).
 DIMENSIONS: dict[str, tuple[str, str]] = {
@@ -75,7 +75,8 @@ def normalize_number_text(text: str) -> str:
 
 
 @functools.lru_cache(maxsize=1)
-def _registry():
+def unit_registry():
+    """The one pint registry of afmforce (built once; ``micron`` defined)."""
     import pint
 
     ureg = pint.UnitRegistry()
@@ -217,7 +218,7 @@ def parse_typed(text: str, dimension: str, name: str = "value") -> float | int:
 def _parse_with_pint(s: str, si: str, word: str, name: str, original) -> float:
     import pint
 
-    ureg = _registry()
+    ureg = unit_registry()
     try:
         m = re.match(r"^([+-]?(?:\d+\.?\d*|\.\d+)(?:[eE][+-]?\d+)?)\s*(.+)$", s)
         # an offset unit (25 degC) needs the number apart from its unit

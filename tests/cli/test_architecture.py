@@ -21,24 +21,20 @@ LAWS = ("constants", "units", "errors", "progress", "_validate", "_fields", "lim
         "_cores", "forces", "friction", "cantilever", "statics", "diagnostics", "contact", "calibration",
         "surface_laws")
 IO = ("io",)
-ABOVE_DYNAMICS = ("instrument", "io", "analysis", "plotting", "sweep", "paper", "explore",
-                  "cli")
+ABOVE_DYNAMICS = ("instrument", "io", "analysis", "plotting", "sweep", "paper", "cli")
 
 #: layer name -> (units in it, units it never imports). The docs table shows the same.
 RULES: dict[str, tuple[tuple[str, ...], tuple[str, ...]]] = {
     "laws": (LAWS, ("dynamics", "instrument", *IO, "analysis", "plotting", "sweep",
-                    "paper", "explore", "cli")),
+                    "paper", "cli")),
     "dynamics": (("dynamics",), ABOVE_DYNAMICS),
-    "instrument": (("instrument",), ("dynamics", "analysis", "plotting", "sweep", "paper",
-                                     "explore", "cli")),
-    "io": (IO, ("dynamics", "instrument", "analysis", "plotting", "sweep", "paper",
-                "explore", "cli")),
-    "analysis": (("analysis",), ("dynamics", "instrument", "plotting", "sweep", "paper",
-                                            "explore", "cli")),
-    "plotting": (("plotting",), ("sweep", "paper", "explore", "cli")),
-    "sweep": (("sweep",), ("paper", "explore", "cli")),
-    "fit": (("fit",), ("paper", "explore", "cli")),
-    "paper": (("paper", "explore"), ("sweep", "cli")),
+    "instrument": (("instrument",), ("dynamics", "analysis", "plotting", "sweep", "paper", "cli")),
+    "io": (IO, ("dynamics", "instrument", "analysis", "plotting", "sweep", "paper", "cli")),
+    "analysis": (("analysis",), ("dynamics", "instrument", "plotting", "sweep", "paper", "cli")),
+    "plotting": (("plotting",), ("sweep", "paper", "cli")),
+    "sweep": (("sweep",), ("paper", "cli")),
+    "fit": (("fit",), ("paper", "cli")),
+    "paper": (("paper",), ("sweep", "cli")),
     "web": (("web",), ("cli",)),
 }
 

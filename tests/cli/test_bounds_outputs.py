@@ -23,7 +23,6 @@ CURVE = str(Path(__file__).parents[1] / "data" / "asylum-mfp3d_SiN-tip_air.ibw")
 @pytest.fixture
 def no_work(monkeypatch):
     import afmforce.dynamics as dynamics
-    import afmforce.explore as explore
     import afmforce.fit as fit
     import afmforce.fit.plan as plan
     import afmforce.paper.reproduce as reproduce
@@ -31,7 +30,6 @@ def no_work(monkeypatch):
 
     monkeypatch.setattr(sweep, "run_sweep", _boom)
     monkeypatch.setattr(plan, "curve_information", _boom)
-    monkeypatch.setattr(explore, "compute_grid", _boom)
     monkeypatch.setattr(fit, "fit_dynamic", _boom)
     monkeypatch.setattr(dynamics, "simulate", _boom)
     monkeypatch.setattr(reproduce, "reproduce", _boom)
@@ -56,11 +54,6 @@ def _speeds(n: int) -> str:
     (["plan", "--points-per-nm", "1e5"], ["sample_rate", "is out of range", "[1 Hz, 100 MHz]"]),
     (["plan", "--points-per-nm", "1e3", "--start", "-50um"], ["samples together, more than 2e+07"]),
     (["plan", "--start", "-1m"], ["--start -1m is out of range: start, the drive start position"]),
-    (["explore", "--velocities", ",".join(f"{i + 1}um/s" for i in range(300)), "--xis",
-      ",".join(f"{0.001 * (i + 1):.3f}kg/s" for i in range(40)), "--yes"],
-     ["12,000 grid points (one simulation each) is more than the 10,000"]),
-    (["explore", "--velocities", ",".join(f"{i + 1}um/s" for i in range(60)), "--xis", "0.01kg/s,0.1kg/s"],
-     ["this explore grid: 120 simulations is more than 100", "--yes"]),
     (["fit", CURVE, "--report", "/proc/x.md"], ["--report /proc/x.md cannot be written"]),
     (["fit", CURVE, "--plots", "/proc/plots"], ["--plots /proc/plots cannot be written"]),
     (["simulate", "--out", "a.csv", "--raw", "a.csv"], ["--out and --raw name the same file a.csv"]),
@@ -94,12 +87,6 @@ def test_plan_caps_are_the_library_s(monkeypatch):
         plan.plan_experiment(n_curves=limits.MAX_DESIGN_CURVES + 1)
     with pytest.raises(WorkStarted):       # at the cap: allowed (the work starts)
         plan.plan_experiment(n_curves=limits.MAX_DESIGN_CURVES, speeds=(1e-6, 2e-6))
-
-
-def test_explore_runs_a_large_grid_with_yes(capsys, tmp_path, monkeypatch, no_work):
-    monkeypatch.chdir(tmp_path)
-    started(capsys, ["explore", "--velocities", ",".join(f"{i + 1}um/s" for i in range(60)), "--xis",
-                     "0.01kg/s,0.1kg/s", "--yes"])
 
 
 def test_fit_plots_does_not_replace_an_earlier_run_s_figures(capsys, tmp_path, monkeypatch, no_work):

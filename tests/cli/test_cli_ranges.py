@@ -38,10 +38,8 @@ def no_work(monkeypatch):
     monkeypatch.setattr(sweep_analysis, "plan_curves", _boom)
     monkeypatch.setattr(sweep_analysis, "analyze_files", _boom)
     import afmforce.paper.reproduce as reproduce
-    import afmforce.explore as explore
 
     monkeypatch.setattr(reproduce, "reproduce", _boom)
-    monkeypatch.setattr(explore, "compute_grid", _boom)
 
 
 def refused(capsys, argv) -> str:
@@ -133,11 +131,10 @@ def _outputs(tmp_path):
         ["sweep", "--grid", "velocity=1um/s,2um/s", "--out", str(blocker)],
         ["reproduce", "--out", bad],
         ["demo", "--out", bad],
-        ["explore", "--out", bad + ".html"],
     ]
 
 
-@pytest.mark.parametrize("i", range(9))
+@pytest.mark.parametrize("i", range(8))
 def test_unwritable_out_is_refused_before_work(capsys, tmp_path, monkeypatch, no_work, i):
     monkeypatch.chdir(tmp_path)
     argv = _outputs(tmp_path)[i]

@@ -65,10 +65,9 @@ ISSUE_CASES = [
     (["fit", str(CURVE), str(CURVE), "--out", "{tmp}/folder", "--force"], 2, "is a folder"),
     (["plan", "--force-error", "-1"], 2, "--force-error must be positive"),
     (["plan", "--noise", "0nm"], 2, "--noise must be positive"),
-    (["explore", "--xis", "1e9"], 2, "must lie in [0, 100 kg/s]"),
-    (["explore", "--xis", "0.1,1e9kg/s"], 2, "must lie in [0, 100 kg/s]"),
-    (["explore", "--velocities", ""], 2, "--velocities: empty value"),
-    (["explore", "--velocities", ","], 2, "--velocities: empty list"),
+    (["plan", "--speeds", "1um/s,1e9um/s"], 2, "must lie in [0.1 nm/s, 10 mm/s]"),
+    (["plan", "--speeds", ""], 2, "--speeds: empty value"),
+    (["plan", "--speeds", ","], 2, "--speeds: empty list"),
     (["fit", str(CURVE), "--velocities", "1um/s,,2um/s"], 2, "an empty value between commas"),
     (["sweep", "--range", "xi=1:0", "--n", "4", "--out", "{tmp}/o"], 2, "the low end must lie below"),
     (["sweep", "--grid", "xi=0.1,0.2", "--workers", "0", "--out", "{tmp}/o"], 2, "--workers must be at least 1"),
@@ -79,7 +78,7 @@ ISSUE_CASES = [
     (["analyze", str(CURVE), "--out", ""], 2, "--out: empty value"),
     (["analyze", str(CURVE), "--out="], 2, "--out: empty value"),
     (["simulate", "--out", ""], 2, "--out: empty value"),
-    (["explore", "--out", ""], 2, "--out: empty value"),
+    (["sweep", "--grid", "xi=0.1", "--out", ""], 2, "--out: empty value"),
     (["fit", str(CURVE), "--out", ""], 2, "--out: empty value"),
     (["analyze", ""], 2, "an empty argument"),
     (["analyze", "{tmp}/typo.ibw"], 2, "no such file"),
@@ -110,7 +109,6 @@ PER_COMMAND = {
     "analyze": ["--example", "asylum-air", "--radius", "0nm"],
     "sweep": ["--grid", "xi=1e9", "--out", "{tmp}/o"],
     "reproduce": ["--only", "fig99", "--out", "{tmp}/o"],
-    "explore": ["--velocities", "0um/s"],
     "formats": ["--no-such-flag"],
     "fit": ["--example", "speeds", "--level", "2"],
     "plan": ["--speeds", "1e9um/s"],
@@ -154,14 +152,17 @@ def test_unexpected_exceptions_are_one_line_exit_1_and_json(capsys, monkeypatch)
 
 
 def test_commands_without_a_json_result_print_one_object(tmp_path, capsys, monkeypatch):
-    """explore/sweep/reproduce have no JSON result of their own: exit status, text and files written."""
+    """sweep/reproduce have no JSON result of their own: exit status, text and files written."""
     monkeypatch.chdir(tmp_path)
-    code, out, err = run(capsys, ["explore", "--velocities", "1um/s", "--xis", "0.1kg/s", "--json"])
+    code, out, err = run(capsys, ["sweep", "--grid", "velocity=1um/s", "--set", "xi=0.1kg/s", "--set", "start=-20nm",
+                                  "--serial", "--out", "o", "--json"])
     assert code == 0
     obj = json.loads(out)
-    assert obj["exit_status"] == 0 and obj["command"] == "explore"
-    assert obj["wrote"] == ["afmforce-explore.html"] and (tmp_path / "afmforce-explore.html").is_file()
-    assert any("afmforce-explore.html" in line for line in obj["output"])
+    assert obj["exit_status"] == 0 and obj["command"] == "sweep"
+    html = [w for w in obj["wrote"] if w.endswith("results.html")] or [
+        f"{w}/results.html" for w in obj["wrote"] if (tmp_path / w / "results.html").is_file()]
+    assert len(html) == 1 and (tmp_path / html[0]).is_file()
+    assert any("results.html" in line for line in obj["output"])
 
 
 def test_json_is_one_object_for_listings(capsys):

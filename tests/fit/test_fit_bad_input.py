@@ -55,7 +55,7 @@ def test_volts_without_sensitivity_calibrated_as_the_analysis(two):
     assert fc.metadata["calibration"]["source"] == "compliance"
     assert fc.metadata["calibration"]["sensitivity"] == pytest.approx(50e-9, rel=0.02)   # the truth
     note = fc.metadata["preparation_notes"][0]
-    assert f"{ana.sensitivity_fit * 1e9:.4g} nm/V" in note and "--meta sensitivity=" in note
+    assert f"{ana.sensitivity_fit * 1e9:.4g} nm/V" in note and "(`sensitivity`)" in note
 
 
 def test_free_parameter_checks(two):
@@ -125,7 +125,7 @@ def test_speed_and_rate_read_off_the_ramp_when_missing(two):
     wave = 5e-9 * np.sin(40 * t / t[-1])
     bent = dataclasses.replace(c, piezo_nominal=np.asarray(c.piezo_nominal) + wave,
                                piezo_measured=np.asarray(c.piezo_measured) + wave)
-    with pytest.raises(FileFormatError, match="--velocities"):
+    with pytest.raises(FileFormatError, match="`velocities`"):       # the key; the CLI renders --velocities
         prepare_curves([bent])
 
 

@@ -134,14 +134,14 @@ def test_stale_sensitivity_recalibrated_as_the_analysis():
     s = ana.details["calibration"]
     assert any(f"{s.sensitivity_fit * 1e9:.4g} nm/V instead of the file's 44.99 nm/V" in w for w in notes)
     # the file's thermal k rescaled as the analysis does (x (44.99 / 96.3)^2), and that lever is not
-    # the model's (0.1387 N/m): said, with the flags
+    # the model's (0.1387 N/m): said, with the keys (`k0`, `model`: the CLI renders --k0, --model)
     k = 1.1841 * (44.99e-9 / s.sensitivity_fit) ** 2
     assert cal["spring_constant"] == pytest.approx(k, rel=1e-6)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         assert cal["spring_constant"] == pytest.approx(analyze(curve, steps=["kind", "force"]).spring_constant,
                                                        rel=1e-12)
-    assert any(f"spring constant is {k:.4g} N/m" in w and "--k0" in w for w in notes)
+    assert any(f"spring constant is {k:.4g} N/m" in w and "(`k0` " in w and "`model` spring" in w for w in notes)
 
 
 def test_raw_volts_calibration_curve_gets_the_analysis_sensitivity():
@@ -153,7 +153,7 @@ def test_raw_volts_calibration_curve_gets_the_analysis_sensitivity():
     assert cal["sensitivity"] == pytest.approx(ana.sensitivity_fit, rel=1e-12)
     assert cal["sensitivity"] == pytest.approx(934.5e-9, rel=1e-3)
     notes = preparation_warnings([fc], base_config("beam"))
-    assert any("934.5 nm/V from the slope" in w and "--meta sensitivity=VALUE" in w for w in notes)
+    assert any("934.5 nm/V from the slope" in w and "(`sensitivity`)" in w for w in notes)   # CLI: --meta
     assert any("fitted on only 6 contact samples" in w for w in notes)
     assert any("no significant jump into contact" in w for w in notes)
 
@@ -200,7 +200,7 @@ def test_force_without_spring_constant_implausible_slope_refused():
     app = np.flatnonzero(np.asarray(curve.segment) == 0)[-30:]
     k_slope = np.polyfit(np.asarray(curve.piezo_nominal)[app], np.asarray(curve.deflection_signal)[app], 1)[0]
     assert 1e-5 < k_slope < 1e-4
-    with pytest.raises(AnalysisError, match=r"compliance slope.*is 5\.\d+e-05 N/m.*--meta spring_constant"):
+    with pytest.raises(AnalysisError, match=r"compliance slope.*is 5\.\d+e-05 N/m.*\(`spring_constant`\)"):
         _prepare(curve, "aws")
 
 

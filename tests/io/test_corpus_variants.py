@@ -42,7 +42,7 @@ def test_asylum_wave_without_spring_constant_asks_for_it_and_reads_with_it(tmp_p
     bad = NODATE.read_bytes().replace(b"SpringConstant", b"SpringKonstant")  # same length: sizes hold
     path = tmp_path / "no_k.ibw"
     path.write_bytes(bad)
-    with pytest.raises(MissingMetadataError, match="spring constant.*--spring-constant"):
+    with pytest.raises(MissingMetadataError, match="spring constant.*give `spring_constant`"):
         load(path)
     c = load(path, meta_override={"spring_constant": 0.02})[0]
     ref = load(NODATE)[0]

@@ -39,7 +39,7 @@ def test_missing_entry_names_reader_entry_and_meta(tmp_path, raising_reader):
     assert msg.startswith(f"{tmp_path / 'curve.spm'}: the Bruker NanoScope binary force file (v5-v9) reader "
                           "('bruker-nanoscope', detected from the content, via afmforce) could not read it")
     assert "the file lacks the entry 'Date'" in msg
-    assert "--meta KEY=VALUE" in msg and "meta_override" in msg and "spring_constant" in msg
+    assert "`meta_override` KEY=VALUE" in msg and "spring_constant" in msg and "--" not in msg  # key; the CLI: --meta
     assert "report it" in msg and "KeyError: 'Date'" not in msg
 
 
@@ -50,7 +50,7 @@ def test_layout_error_and_chosen_reader(tmp_path, raising_reader):
     msg = str(err.value)
     assert "('bruker-nanoscope', chosen with format" in msg
     assert "not laid out as the reader expects (ValueError: buffer size" in msg
-    assert "--meta" not in msg  # nothing is missing: no metadata to give
+    assert "meta_override" not in msg  # nothing is missing: no metadata to give
 
 
 def test_a_readers_own_refusal_names_it_and_the_other_readers(tmp_path):
@@ -60,13 +60,13 @@ def test_a_readers_own_refusal_names_it_and_the_other_readers(tmp_path):
         load(path)
     msg = str(err.value)
     assert "(reader 'afm-workshop-csv', detected from the content" in msg
-    assert "--format ID" in msg and "'bruker-ascii'" in msg  # the other reader of .csv
+    assert "named as `format`" in msg and "'bruker-ascii'" in msg  # the other reader of .csv (key, no flag)
 
 
 def test_unrecognised_content_says_how_to_name_a_reader(tmp_path):
     path = tmp_path / "curve.txt"
     path.write_text("nothing a force file would hold\n")
-    with pytest.raises(FileFormatError, match=r"content not recognised as any of: .*--format ID.*bruker-ascii"):
+    with pytest.raises(FileFormatError, match=r"not recognised as any of: .*as `format` \(one of .*bruker-ascii"):
         load(path)
 
 
@@ -76,4 +76,4 @@ def test_missing_metadata_is_left_as_the_reader_says_it(tmp_path):
     path.write_text("1,0\t2,0\t3,0\n" * 20)  # NT-MDT: three numeric columns, no k or InvOLS
     with pytest.raises(MissingMetadataError) as err:
         load(path, require=("spring_constant", "sensitivity"))
-    assert "(reader " not in str(err.value) and "--spring-constant" in str(err.value)
+    assert "(reader " not in str(err.value) and "give `spring_constant` and `sensitivity`" in str(err.value)

@@ -94,14 +94,15 @@ def test_jpk_map_grid_positions():
 
 def test_jpk_without_spring_constant_uses_the_flag():
     """afmformats with meta_override k = 12 N/m gives force[0] = -5.2617e-7 N (README); so must we.
-    Without k the curve is read in volts and asking for k names --spring-constant."""
+    Without k the curve is read in volts and asking for k names `spring_constant` (the CLI: --spring-constant)."""
     path = _real("afmformats_jpk-fd_single-modified_2023.jpk-force")
     volts = load(path)[0]
     assert volts.deflection_unit == "V" and "spring_constant" not in volts.metadata
     assert volts.metadata["sensitivity"] == pytest.approx(89.32e-9, rel=1e-4)
-    with pytest.raises(MissingMetadataError, match="--spring-constant") as err:
+    with pytest.raises(MissingMetadataError, match="give `spring_constant`") as err:
         load(path, require=("spring_constant", "sensitivity"))
-    assert str(path) in str(err.value) and "--sensitivity" not in str(err.value)
+    assert str(path) in str(err.value) and "sensitivity`" not in str(err.value)
+    assert err.value.keys == ("spring_constant",)
     c = load(path, meta_override={"spring_constant": 12.0})[0]
     assert c.deflection_unit == "N" and c.metadata["spring_constant"] == 12.0
     assert c.deflection_signal[0] == pytest.approx(-5.2617e-7, rel=1e-4)
@@ -112,7 +113,7 @@ def test_jpk_without_spring_constant_uses_the_flag():
 
 def test_workshop_volts_csv_needs_both_flags_and_then_loads():
     path = DATA / "afmformats_afm-workshop-fd_single_2018-08-01.csv"
-    with pytest.raises(MissingMetadataError, match="--spring-constant and --sensitivity") as err:
+    with pytest.raises(MissingMetadataError, match="give `spring_constant` and `sensitivity`") as err:
         load(path)
     assert str(path) in str(err.value) and "\n" not in str(err.value)
     c = load(path, meta_override=OVERRIDES[path.name])[0]
@@ -153,7 +154,7 @@ def test_require_metadata_rules(tmp_path):
     c = load(DATA / "jpk_calibration-curve_raw-volts.jpk-force")[0]  # volts, neither k nor sensitivity
     with pytest.raises(MissingMetadataError) as err:
         require_metadata(c)
-    assert err.value.flags == ("--spring-constant", "--sensitivity")
+    assert err.value.keys == ("spring_constant", "sensitivity") and "--" not in str(err.value)   # keys, no flags
     with pytest.raises(ParameterError, match="unknown metadata"):
         require_metadata(c, ("colour",))
     forces = load(DATA / "afm-workshop_single.csv")[0]  # force in N: needs neither
@@ -209,7 +210,7 @@ def test_every_shared_real_file_loads_or_names_the_flag(path):
     try:
         curves = load(path)
     except MissingMetadataError as exc:
-        assert "\n" not in str(exc) and ("--spring-constant" in str(exc) or "--sensitivity" in str(exc))
+        assert "\n" not in str(exc) and set(exc.keys) & {"spring_constant", "sensitivity"}
         curves = load(path, meta_override={k: 1.0 if k == "spring_constant" else 50e-9 for k in exc.keys})
     for c in curves:
         assert np.isfinite(c.deflection_signal).all() and np.all(np.diff(c.time) > 0)

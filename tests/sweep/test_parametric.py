@@ -161,7 +161,7 @@ def test_failing_chunk_is_recorded_and_retried_on_rerun(tmp_path):
 def test_store_refuses_a_different_chunk_size_and_a_live_writer(tmp_path):
     spec = grid(3, 2)
     run_sweep(f.counted, spec, executor="serial", chunk_size=2, store=tmp_path, key="cs")
-    with pytest.raises(ParameterError, match="--chunk-size 2"):
+    with pytest.raises(ParameterError, match="`chunk_size` 2"):
         run_sweep(f.counted, spec, executor="serial", chunk_size=3, store=tmp_path, key="cs")
     store = SweepStore(next(tmp_path.iterdir()))
     sleeper = subprocess.Popen([sys.executable, "-c", "import time; time.sleep(30)"])

@@ -85,11 +85,11 @@ def test_bad_grids_are_refused_with_a_clear_message(text, error, words):
 def test_inconsistent_specs_are_refused():
     with pytest.raises(ParameterError, match="more than once"):
         build_spec(["xi=0.01,0.1"], sets=["xi=0.1"], dimensions=DIMS)
-    with pytest.raises(ParameterError, match="needs --n"):
+    with pytest.raises(ParameterError, match="needs `n`"):
         build_spec(ranges=["xi=0.01:0.1"], sample="lhs", dimensions=DIMS)
     with pytest.raises(ParameterError, match="nothing to sweep"):
         build_spec(sets=["xi=0.1"], dimensions=DIMS)
-    with pytest.raises(ParameterError, match="needs at least one --range"):
+    with pytest.raises(ParameterError, match="needs at least one `ranges`"):
         SweepSpec(grid=(GridAxis("xi", (1.0,)),), sample="lhs", n=3)
     with pytest.raises(ParameterError, match="log sampling"):
         SampledRange("xi", -1.0, 1.0, log=True)

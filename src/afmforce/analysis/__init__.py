@@ -9,6 +9,9 @@ table into map images.
 
 from __future__ import annotations
 
+from ._numeric import largest_step, robust_line, robust_line_thin
+from ._units import units_of
+from .compliance import _fit_line as compliance_line  # its public name (compliance.py: rename after issue 31)
 from .compliance import (CalibrationResult, ComplianceLine, ComplianceResult, FrictionSignature, ShiftResult,
                          calibrate, compliance_shift, fit_compliance, friction_signature)
 from .drift import DriftResult, fit_baseline, remove_drift
@@ -39,4 +42,5 @@ __all__ = [
     "find_run_regions", "fit_baseline", "fit_compliance", "fit_fringes", "fit_vdw", "friction_signature",
     "fringe_baseline", "fringe_signal", "jump_warnings", "loop_width", "oscillation_origin", "position_map",
     "pull_off_estimate", "remove_drift", "run_velocity", "saturated_mask", "zero_of_separation",
+    "compliance_line", "largest_step", "robust_line", "robust_line_thin", "units_of",
 ]

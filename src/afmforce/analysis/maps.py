@@ -31,7 +31,7 @@ __all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_ima
 EXTENT_KEY = "afmforce.map_extent"
 
 #: SI unit -> (factor, unit shown on the image).
-_DISPLAY = {"m": (1e9, "nm"), "N": (1e9, "nN"), "m/V": (1e9, "nm/V"), "J/m^2": (1e3, "mJ/m^2"),
+MAP_DISPLAY_UNITS = {"m": (1e9, "nm"), "N": (1e9, "nN"), "m/V": (1e9, "nm/V"), "J/m^2": (1e3, "mJ/m^2"),
             "J m": (1e27, "1e-27 J m"), "J": (1e21, "zJ"), "m/s": (1e6, "µm/s"), "Pa": (1e-3, "kPa")}
 
 

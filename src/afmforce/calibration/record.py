@@ -65,8 +65,8 @@ def parse_calibration(text: str, source: str = "calibration") -> dict[str, float
     except ValueError as exc:
         raise FileFormatError(f"{source}: not a readable JSON calibration file ({exc})") from None
     if not isinstance(obj, dict) or "afmforce_calibration" not in obj:
-        raise FileFormatError(f"{source}: not an afmforce calibration file (afmforce calibrate ... --out FILE "
-                              "writes one)")
+        raise FileFormatError(f"{source}: not an afmforce calibration file (one is written by afmforce "
+                              "calibrate, or by write_calibration in Python)")
     out = {}
     undetermined = obj.get("determined") is False     # an InvOLS the curve did not determine
     for key in PROBE_KEYS:
@@ -76,6 +76,6 @@ def parse_calibration(text: str, source: str = "calibration") -> dict[str, float
         if isinstance(value, (int, float)) and not isinstance(value, bool):
             if not abs(value) < 1e308:      # NaN, Infinity, 1e999, a 400-digit integer: a damaged file
                 raise FileFormatError(f"{source}: {key} is {str(value)[:20]}, not a finite number; "
-                                      "calibrate again (afmforce calibrate ... --out FILE)")
+                                      "calibrate again (afmforce calibrate)")
             out[key] = float(value)
     return out

@@ -36,21 +36,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._fields import QUANTITIES
-from ..constants import MEDIA
+from ..constants import SADER_FLUIDS
 from ..errors import ParameterError
 
 __all__ = ["FLUIDS", "fluid", "reynolds_number", "gamma_circular", "omega_rectangular",
            "hydrodynamic_function", "hydrodynamic_exponent", "SaderResult", "sader_rectangular",
            "GeneralConstant", "general_constant", "sader_general"]
 
-#: medium -> (density [kg/m^3], viscosity [Pa s]) at 25 C and 1 atm (CRC Handbook): water's
-#: viscosity is that of :data:`afmforce.constants.MEDIA`; air's is 18.49 uPa s, not the paper's
-#: round 1.8e-5 that the simulations use (MEDIA["air"]): Sader's k scales as eta^a (a ~ 0.7), so
-#: the round value would bias k by 2 %.
-FLUIDS: dict[str, tuple[float, float]] = {
-    "air": (1.184, 1.849e-5),
-    "water": (997.05, MEDIA["water"]["viscosity"]),
-}
+#: medium -> (density [kg/m^3], viscosity [Pa s]) of the Sader method's preset media: declared in
+#: :data:`afmforce.constants.SADER_FLUIDS` (a module the command line reads without numpy).
+FLUIDS: dict[str, tuple[float, float]] = SADER_FLUIDS
 
 
 def fluid(medium: str | None, density: float | None = None,

@@ -42,20 +42,29 @@ class RunState:
     captured: io.StringIO | None = None
     stdout = None              # sys.stdout while captured
     flags: dict[str, str] = {}  # this command's own way to give a quantity (fit: --meta spring_constant=...)
+    options: frozenset = frozenset()  # the option strings of the command being run (set by main)
 
 
 #: Quantity key (the `` `key` `` of a library message) -> how the command line gives it, where that
 #: is not ``--`` + the key with dashes (``spring_constant`` -> ``--spring-constant``).
-FLAGS: dict[str, str] = {"n_curves": "--curves"}
+FLAGS: dict[str, str] = {"n_curves": "--curves", "ranges": "--range", "sets": "--set", "store": "--out",
+                         "meta_override": "--meta", "format": "--format"}
 
 
 def flag_of(key: str) -> str:
-    """The command-line form of quantity ``key`` in this command."""
+    """The command-line form of quantity ``key`` in this command: its own flag, or, for a file's
+    metadata key the command has no flag for, ``--meta KEY=VALUE``."""
     if key in RunState.flags or key in FLAGS:
         return RunState.flags.get(key) or FLAGS[key]
     if "." in key:                       # a step option: STEP.NAME
         return f"--option {key}"
-    return "--" + key.replace("_", "-")
+    flag = "--" + key.replace("_", "-")
+    if RunState.options and flag not in RunState.options and "--meta" in RunState.options:
+        from ..io import METADATA
+
+        if key in METADATA:
+            return f"--meta {key}=VALUE"
+    return flag
 
 
 def render(text: str) -> str:
@@ -72,6 +81,7 @@ def start(argv: list[str]) -> None:
     RunState.reported = []
     RunState.captured = None
     RunState.flags = {}
+    RunState.options = frozenset()
     if _note_written not in _files.LISTENERS:
         _files.LISTENERS.append(_note_written)
 

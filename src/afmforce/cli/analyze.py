@@ -220,7 +220,7 @@ def run(args: argparse.Namespace) -> int:
     from ..sweep.chunks import default_chunk_size
 
     steps = _check(args)
-    from ..io._meta import parse_meta_args
+    from ..io import parse_meta_args
 
     meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
                                                               ("sensitivity", args.sensitivity)) if v is not None}}

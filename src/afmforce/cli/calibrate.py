@@ -17,6 +17,7 @@ import dataclasses
 import math
 
 from ..errors import ParameterError
+from ..constants import SADER_FLUIDS as FLUIDS
 from ._validate import add_field, check_output
 from .common import print_json, print_table
 
@@ -58,7 +59,7 @@ def register(sub) -> None:
     t.add_argument("--plot", metavar="FILE.png", default=None, help="draw the spectrum and the fit")
     t.add_argument("--psd-unit", default=None, choices=("m^2/Hz", "V^2/Hz", "m/sqrt(Hz)", "V/sqrt(Hz)"),
                    help="unit of a plain two-column text spectrum whose header does not state it")
-    t.add_argument("--medium", default=None, choices=("air", "water"),
+    t.add_argument("--medium", default=None, choices=tuple(FLUIDS),
                    help="medium, for the Sader cross-check with --length/--width (default: the file's)")
     add_field(t, "lever_length", flag="--length", help="lever length, for a Sader cross-check")
     add_field(t, "lever_width", flag="--width", help="lever width, for a Sader cross-check")
@@ -72,7 +73,7 @@ def register(sub) -> None:
     add_field(s, "lever_width", flag="--width")
     add_field(s, "resonance_frequency", flag="--frequency", help="resonance frequency in the medium")
     add_field(s, "quality_factor", help="quality factor in the medium")
-    s.add_argument("--medium", default="air", choices=("air", "water"), help="medium (default air)")
+    s.add_argument("--medium", default="air", choices=tuple(FLUIDS), help="medium (default air)")
     add_field(s, "density", help="density of the medium (default: the preset's)")
     add_field(s, "viscosity", help="viscosity of the medium (default: the preset's)")
     g = s.add_argument_group("general method (any plan view): a reference lever of the same type")
@@ -215,7 +216,7 @@ def run_thermal(args: argparse.Namespace) -> int:
     length = args.lever_length if args.lever_length is not None else sp.vendor.get("length")
     width = args.lever_width if args.lever_width is not None else sp.vendor.get("width")
     medium = args.medium or sp.medium
-    if length and width and medium in ("air", "water"):
+    if length and width and medium in FLUIDS:
         from ..calibration import sader_rectangular
 
         sader = sader_rectangular(length, width, fit.resonance_frequency, fit.quality_factor, medium)
@@ -291,7 +292,7 @@ def run_sader(args: argparse.Namespace) -> int:
 def run_invols(args: argparse.Namespace) -> int:
     _check_out(args)
     from ..analysis.invols import InvolsResult, measure_invols
-    from ..analysis._units import units_of
+    from ..analysis import units_of
     from ..io import load
 
     if (args.file is None) == (not args.example):

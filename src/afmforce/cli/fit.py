@@ -189,7 +189,7 @@ def run(args: argparse.Namespace) -> int:
     from ..fit.params import check_free
 
     check_free(args.free.split(","), cfg.model, cfg.friction.law if cfg.model == "beam" else None)  # before loading
-    from ..io._meta import parse_meta_args
+    from ..io import parse_meta_args
 
     curves, names = _load(args.curves, parse_meta_args(args.meta))
     for flag, vals in (("--velocities", args.velocities), ("--sample-rates", args.sample_rates)):
@@ -229,11 +229,11 @@ def run(args: argparse.Namespace) -> int:
 
         atomic_write_text(args.out, json.dumps(to_jsonable(d), indent=2) + "\n", force=args.force)
     if args.report:
-        atomic_write_text(args.report, res.markdown(), force=args.force)
+        atomic_write_text(args.report, render(res.markdown()), force=args.force)   # keys as flags
     if args.json:
         print_json(d)
     else:
-        print(res.markdown())
+        print(render(res.markdown()))
     for w in res.warnings:
         eprint(f"warning: {render(w)}")
     return 0

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import argparse
 
+from ._outcome import flag_of
+
 
 def register(sub) -> None:
     p = sub.add_parser("formats", help="list the force-curve file formats afmforce reads",
@@ -33,6 +35,7 @@ def run(args: argparse.Namespace) -> int:
             print(f"{r['identifier']:<18} {r['name']}")
             print(f"{'':<18} endings: {r['suffixes']}; via {r['via']}; deflection in {r['deflection']}")
             print(f"{'':<18} content: {r['signature']}")
-            print(f"{'':<18} from the file: {r['supplies']}; user must give: {r['requires']}")
+            needs = ", ".join(f"{k} ({flag_of(k)})" for k in r["requires"].split(", ")) if r["requires"] != "-" else "-"
+            print(f"{'':<18} from the file: {r['supplies']}; user must give: {needs}")
         print("Give missing metadata with --spring-constant and --sensitivity (afmforce analyze).")
     return 0

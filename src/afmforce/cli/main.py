@@ -38,7 +38,6 @@ COMMANDS: dict[str, tuple[str, str]] = {
                            "diagnosis"),
     "sweep": ("sweep", "parameter sweeps of the simulation (grids, random/LHS samples) on Dask"),
     "reproduce": ("reproduce", "reproduce the paper's figures and numbers (report.md, PNG)"),
-    "explore": ("explore", "write an interactive HTML page: speed x friction on the Fig 5-6 run"),
     "formats": ("formats", "list the force-curve file formats afmforce reads"),
     "fit": ("fit", "fit the dynamic model to curves at several driving speeds (friction, A*R)"),
     "plan": ("plan", "design a multi-speed measurement: speeds and sample rates that fix xi best"),
@@ -110,6 +109,17 @@ def _subparser(parser: argparse.ArgumentParser, command: str) -> argparse.Argume
     return sub.choices[command]
 
 
+def _option_strings(parser: argparse.ArgumentParser) -> frozenset:
+    """Every option string of ``parser`` and of its sub-commands (``calibrate thermal``)."""
+    out: set[str] = set()
+    for action in parser._actions:
+        out.update(action.option_strings)
+        if isinstance(action, argparse._SubParsersAction):
+            for sub in action.choices.values():
+                out |= _option_strings(sub)
+    return frozenset(out)
+
+
 def _command_of(argv: list[str]) -> str:
     """The sub-command named in ``argv`` ("" when none: top-level help, version, a typo)."""
     for tok in argv:
@@ -141,20 +151,20 @@ def _join_negative_values(argv: list[str]) -> list[str]:
 
 
 #: Commands that run the dynamic model (and compile it on the first run).
-SIMULATING = ("simulate", "demo", "reproduce", "explore", "fit", "plan", "sweep")
+SIMULATING = ("simulate", "demo", "reproduce", "fit", "plan", "sweep")
 
 
 def _compile_notice() -> None:
     """One line on stderr when the integrator is about to be compiled (first run, empty or
     stale numba cache): 7-10 s of silence otherwise looks like a hang. Registered with the
     dynamics, so that it is printed only when a compile really starts (never before a usage error)."""
-    from ..dynamics import _helper
+    from ..dynamics import BEFORE_COMPILE
 
     def notice() -> None:
         print("afmforce: compiling the integrator, ~10 s (first run; later runs load it from "
               "numba's cache)...", file=sys.stderr, flush=True)
 
-    _helper.BEFORE_COMPILE[:] = [notice]
+    BEFORE_COMPILE[:] = [notice]
 
 
 def _text_never_fails() -> None:
@@ -187,6 +197,7 @@ def main(argv: list[str] | None = None) -> int:
             return 0
         if command:
             refuse_empty_values(_subparser(parser, command), argv)
+            _outcome.RunState.options = _option_strings(_subparser(parser, command))
         args = parser.parse_args(argv)
     except SystemExit:
         raise

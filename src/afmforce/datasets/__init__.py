@@ -99,7 +99,7 @@ def fit_example(name: str) -> list[Path]:
     try:
         return [_HERE / f for f in FIT_EXAMPLES[name][1]]
     except KeyError:
-        raise ParameterError(f"--example {name}: unknown; choose one of {', '.join(FIT_EXAMPLES)}") from None
+        raise ParameterError(f"`example` {name}: unknown; choose one of {', '.join(FIT_EXAMPLES)}") from None
 
 
 #: Thermal spectra for ``afmforce calibrate thermal --example NAME``: name -> (description, file).

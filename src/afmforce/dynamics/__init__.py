@@ -25,6 +25,7 @@ from .events import Events
 from .registries import FRICTION_LAWS, RINGING, FrictionLaw, RingingTreatment
 from .guard import ConvergenceWarning
 from .simulate import DynamicsWarning, simulate
+from ._helper import BEFORE_COMPILE
 from .batch import simulate_many
 from .static import StaticCurve, static_curve, static_deflection, static_jump_in
 from .trajectory import COLUMNS, SolverStats, Trajectory
@@ -41,6 +42,7 @@ _purge(_entry, _sources())
 del _sources, _purge, _entry
 
 __all__ = [
+    "BEFORE_COMPILE",
     "simulate",
     "simulate_many",
     "SimulationConfig",

@@ -34,11 +34,12 @@ from ..forces import DOUBLE_LAYERS, GEOMETRIES, debye_length
 from ..surface_laws import PARAMETERS as LAW_PARAMETERS
 from ..surface_laws import active_laws
 from ..surface_laws import reach as law_reach
-from ._part import Part, choice, quantity, validate
+from ._part import DOMAINS, Part, choice, quantity, validate
 from .registries import FRICTION_LAWS, RINGING
 
 __all__ = [
     "DEFAULT_B",
+    "DOMAINS",
     "MODELS",
     "PROBES",
     "SAMPLING",

@@ -60,13 +60,13 @@ def _regions(c) -> dict[str, np.ndarray]:
 #: What to check when the misfit sits in a region: the artefacts that put it there.
 ADVICE = {
     "the free approach": "the misfit is in the free approach: fringes of another period "
-                         "(--fringe-period) or shape, a drift that is not linear, or noise the fit "
+                         "(`fringe_period`) or shape, a drift that is not linear, or noise the fit "
                          "does not model; check the baseline with `afmforce analyze` (drift, fringes)",
     "contact": "the misfit is in contact: a soft or rough contact, a stepped or backlashing "
                "position sensor, or a wrong calibration; check the compliance line with "
                "`afmforce analyze` (compliance, kind)",
     "the retract's contact line": "the misfit is on the retract's contact line: backlash or creep "
-                                  "at the turn; fit the approaches alone (without --retract)",
+                                  "at the turn; fit the approaches alone (without `retract`)",
 }
 
 

@@ -268,7 +268,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
             "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
             "(ideally a factor >= 4 apart) or fix " + ", ".join(dep)
-            + " (e.g. --free hamaker --xi 0: A*R alone, without friction)")
+            + " (e.g. `free` hamaker and `xi` 0: A*R alone, without friction)")
     undetermined = [] if any(c.retract_start is not None for c in fc) else need
     ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)
@@ -299,7 +299,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             f"the fitted interference fringes ({fringe_amp * 1e9:.3g} nm, period "
             f"{fringe_period * 1e9:.3g} nm) exceed the {FRINGE_AMPLITUDE_MAX * 1e9:g} nm that "
             "fringes reach: they took up a misfit (a soft contact? a bent baseline?); fitted "
-            "without fringe terms (--fringes off)")
+            "without fringe terms (`fringes` off)")
         ev.fringes = "off"
         dof = max(n_data - (len(shifts0) + len(free) + ev.n_linear()), 1)
         chi2, x, res, nested = _refit_all(prob, [x] + first, nested, max_nfev)

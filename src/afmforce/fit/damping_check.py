@@ -90,4 +90,4 @@ def undamped_verdict(check: dict, p_undamped: float) -> str:
     return (f"undetermined: friction is detected only in the undamped model (p = "
             f"{p_undamped:.2g}); with a lever damped at Q = {check['quality_factor']:g} the "
             f"friction-free model fits as well (p = {check['p_value']:.2g}): give the lever's "
-            "quality factor (--quality-factor, from its thermal spectrum)")
+            "quality factor (`quality_factor`, from its thermal spectrum)")

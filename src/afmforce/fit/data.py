@@ -195,7 +195,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
         channel_note["speed_note"] = (
             f"{name}: the measured position moves at {v_meas * 1e6:.4g} um/s, the file says "
             f"{float(v_file) * 1e6:.4g} um/s (piezo gain or nonlinearity); the fit uses the measured "
-            "speed (give --velocities to override)")
+            "speed (give `velocities` to override)")
     fs = _meta_value(curve, "sample_rate", sample_rate if sample_rate is not None else
                      (None if (curve.metadata or {}).get("sample_rate") else ramp["sample_rate"]),
                      name, "Hz")
@@ -216,7 +216,7 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
             f"{name}: in contact the deflection follows the position with slope {a:.3g}, not ~1 "
             f"(calibrated: {ana.source}): a deformable sample or a wrong deflection calibration; "
             "the dynamic model assumes rigid surfaces (eq 2), so this curve cannot be fitted as it "
-            "is: give the right calibration (--meta sensitivity=VALUE) or analyse it with "
+            "is: give the right calibration (`sensitivity`) or analyse it with "
             f"`afmforce analyze {name}`")
     i_c, j = min(ana.contact, n - 1), min(max(ana.jump, 1), n - 1)
     n_noise = max(12, int(0.8 * j))
@@ -256,12 +256,12 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     elif v_meas and velocity is None and not v_file:
         fc.metadata["velocity_from_ramp"] = (
             f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp of "
-            "the measured position; give --velocities to override")
+            "the measured position; give `velocities` to override")
     if from_ramp:
         fc.metadata["velocity_from_ramp"] = (
             f"{name}: no velocity in the file; {v * 1e6:.4g} um/s read off the approach ramp "
             f"(positions deviate from a straight line by up to {ramp['ramp_deviation']:.1%} of the "
-            "travel; the model drives at constant speed); give --velocities to override")
+            "travel; the model drives at constant speed); give `velocities` to override")
     return _append_retract(fc, curve, idx, scale, jump_window) if retract else fc
 
 
@@ -280,7 +280,7 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
     if nxt >= seg.size or seg[nxt] != 1:
         raise AnalysisError(
             f"{fc.name}: no retract run directly after the approach (a dwell or pause in "
-            "between, or an approach-only file); fit the approach only (no --retract)")
+            "between, or an approach-only file); fit the approach only (no `retract`)")
     ridx = np.arange(nxt, seg.size)
     stop = np.flatnonzero(seg[ridx] != 1)
     ridx = ridx[: stop[0]] if stop.size else ridx
@@ -289,7 +289,7 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
     t0 = float(np.asarray(curve.time, float)[idx[0]])
     tr = np.asarray(curve.time, float)[ridx] - t0
     if fc.metadata.get("position_channel") == "measured":   # the same channel as the approach
-        from ..analysis._numeric import robust_line_thin
+        from ..analysis import robust_line_thin
 
         zm = np.asarray(curve.piezo_measured, float)[ridx]
         a, b, *_ = robust_line_thin(tr - tr[0], zm)

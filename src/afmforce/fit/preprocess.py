@@ -182,13 +182,13 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "re
                 f"{name}: the force has no spring constant in the file, and its compliance slope, the "
                 f"spring constant of a rigid contact, is {1.0 / factor:.3g} N/m: outside the range of "
                 f"cantilevers made ({lo:g}..{hi:g} N/m), so the contact is not rigid (a soft sample) or "
-                "the force column is not in newtons; give the lever's (--meta spring_constant=VALUE)")
+                "the force column is not in newtons; give the lever's (`spring_constant`)")
         what = (f"no sensitivity in the file: {factor * 1e9:.4g} nm/V" if st.unit == "V" else
                 f"no spring constant in the file: the force converts with {1 / factor:.4g} N/m"
                 if st.unit == "N" else f"the deflection is scaled by {factor:.4g}")
         notes.append(f"{name}: {what} from the slope of the approach's constant-compliance line, as "
-                     "`afmforce analyze` calibrates (it assumes a rigid contact); give yours with "
-                     f"--meta {'sensitivity' if st.unit == 'V' else 'spring_constant'}=VALUE")
+                     "`afmforce analyze` calibrates (it assumes a rigid contact); give yours "
+                     f"(`{'sensitivity' if st.unit == 'V' else 'spring_constant'}`)")
     k_file = float((curve.metadata or {}).get("spring_constant") or math.nan)
     if math.isfinite(k_file) and abs(st.spring_constant / k_file - 1.0) > 1e-9:
         notes.append(f"{name}: spring constant rescaled with the refitted sensitivity as `afmforce analyze` "
@@ -196,8 +196,7 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "re
     # the analysis's own checks of the calibration (few contact samples, a contact line steeper than 1)
     from ..analysis.plausibility import plausibility_warnings
 
-    notes += [f"{name}: {w.replace('give --sensitivity', 'give --meta sensitivity=VALUE')}"
-              for w in plausibility_warnings(st)]
+    notes += [f"{name}: {w}" for w in plausibility_warnings(st)]
     line = comp.approach if comp.approach.found else comp.retract
     jump, found, contact = _jump(st.deflection, st.z, st.approach, abs(st.noise * factor),
                                  opts["kind"].nsigma, int(idx[0]), int(opts["jumps"].window))
@@ -217,7 +216,7 @@ def _jump(deflection, z, run, noise: float, nsigma: float, start: int, window: i
     :func:`~afmforce.analysis._numeric.largest_step`): a jump hidden in the noise, 15 samples
     away from a split that a stepped, backlashing position sensor moved (the ``paper`` preset).
     """
-    from ..analysis._numeric import largest_step
+    from ..analysis import largest_step
     from ..analysis.jumps import find_jump_in
 
     ji = find_jump_in(deflection, z, z, run, noise, math.nan, nsigma, window)
@@ -235,23 +234,21 @@ def _jump(deflection, z, run, noise: float, nsigma: float, start: int, window: i
 def _approach_only(curve: RawCurve, name: str, idx: np.ndarray, nsigma: float,
                    window: int) -> AnalysisInputs:
     """The same analysis functions on an approach-only curve, with the file's calibration."""
-    from ..analysis.compliance import _fit_line, _metadata_factor
+    from ..analysis import compliance_line
     from ..analysis.regions import find_run_regions, saturated_mask
 
     unit = curve.deflection_unit
-    factor = _metadata_factor(unit, curve.metadata or {})
+    factor = curve.deflection_factor()
     if not math.isfinite(factor):
         need = "sensitivity" if unit == "V" else "spring_constant"
         raise MissingMetadataError(
             f"{name}: the deflection is in {unit}, the file has no {need} and the curve has no retract "
-            f"run to check a calibration from its compliance line against: give it (--meta {need}=VALUE; "
-            f"Python: load(..., meta_override={{'{need}': ...}}))", keys=(need,), flags=("--meta",))
-    zz = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal,
-                    float)
+            f"run to check a calibration from its compliance line against: give it (`{need}`)", keys=(need,))
+    zz = np.asarray(curve.position(), float)
     s = np.asarray(curve.deflection_signal, float)
     try:
         run = find_run_regions(zz, s, idx, "approach", saturated=saturated_mask(s))
-        line = _fit_line(zz, s, run)
+        line = compliance_line(zz, s, run)
     except AnalysisError as exc:
         raise AnalysisError(f"{name}: {exc}; the fit needs curves that reach contact") from None
     jump, found, contact = _jump(s * factor, zz, run, abs(run.noise * factor), nsigma, int(idx[0]),
@@ -280,12 +277,12 @@ def preparation_warnings(curves, base) -> list[str]:
     k_model = float(base.force_constant)
     if ks and abs(float(np.median(ks)) / k_model - 1.0) > SPRING_CONSTANT_TOLERANCE:
         k = float(np.median(ks))
-        flag = ("--spring-constant" if base.model == "spring" else
-                f"--k0 {base.cantilever.k0 * k / k_model:.4g}N/m (the beam's k0 for this k)")
+        how = (f"the spring model's spring constant, {k:.4g} N/m" if base.model == "spring" else
+               f"`k0` {base.cantilever.k0 * k / k_model:.4g}N/m, the beam's k0 for this k; or `model` spring "
+               f"with the spring constant {k:.4g} N/m")
         out.append(f"the curves' spring constant is {k:.4g} N/m but the model's lever has "
                    f"{k_model:.4g} N/m ({base.model} model): the fitted A*R and friction scale with "
-                   f"k, so they describe another lever; give the model your lever ({flag}, or "
-                   f"--model spring --spring-constant {k:.4g}N/m)")
+                   f"k, so they describe another lever; give the model your lever ({how})")
     cal = [(c.name, c.metadata["calibration"]) for c in curves if c.metadata.get("calibration")]
     for unit in ("V", "N"):
         f = [(nm, m["factor"]) for nm, m in cal if m.get("unit") == unit]

@@ -22,11 +22,9 @@ __all__: list[str] = []
 def _meta_value(curve: RawCurve, key: str, override, name: str, unit: str) -> float:
     value = override if override is not None else (curve.metadata or {}).get(key)
     if value is None:
-        flag, kw = {"velocity": ("--velocities", "velocities"),
-                    "sample_rate": ("--sample-rates", "sample_rates")}[key]
-        raise MissingMetadataError(f"{name}: no {key} [{unit}] in the file; give it ({flag} V1,V2,.. "
-                                   f"or --meta {key}=VALUE; Python: fit_dynamic(..., {kw}=[...]))",
-                                   keys=(key,), flags=(flag, "--meta"))
+        kw = {"velocity": "velocities", "sample_rate": "sample_rates"}[key]
+        raise MissingMetadataError(f"{name}: no {key} [{unit}] in the file; give it (`{kw}` V1,V2,.. "
+                                   f"or `meta_override` {key}=VALUE)", keys=(key,))
     value = float(value)
     if not math.isfinite(value) or value <= 0:
         raise FileFormatError(f"{name}: {key} must be positive, got {value!r} {unit}")
@@ -74,13 +72,13 @@ def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, 
     (:func:`afmforce.analysis.dynamic.run_velocity`).
     """
     from ..analysis.dynamic import run_velocity
-    from ..analysis._numeric import robust_line_thin
+    from ..analysis import robust_line_thin
     from ..analysis.state import prepare
 
     try:
         channel = prepare(curve).channel
     except AnalysisError:      # e.g. an approach-only file: the analysis needs both runs
-        channel = "measured" if curve.piezo_measured is not None else "nominal"
+        channel = curve.position_channel()
     if channel != "measured":
         return np.asarray(curve.piezo_nominal, float)[idx], {"channel": "nominal"}
     t = np.asarray(curve.time, float)[idx]
@@ -116,9 +114,8 @@ def _timed(curve: RawCurve, name: str, sample_rate: float | None) -> RawCurve:
         raise MissingMetadataError(
             f"{name}: the file stores no time (its time column is the sample index), so neither the "
             "driving speed nor the sample rate can be read off the ramp; give the sample rate "
-            "(--sample-rates F1,F2,.. or --meta sample_rate=VALUE; Python: fit_dynamic(..., "
-            "sample_rates=[...])) and, if the file lacks it, the speed (--velocities)",
-            keys=("sample_rate",), flags=("--sample-rates", "--meta"))
+            "(`sample_rates` F1,F2,.. or `meta_override` sample_rate=VALUE) and, if the file lacks it, "
+            "the speed (`velocities`)", keys=("sample_rate",))
     t = np.asarray(curve.time, float) / float(fs)
     return dataclasses.replace(curve, time=t, metadata={**meta, "time_is_sample_index": False,
                                                         "sample_rate": float(fs)})

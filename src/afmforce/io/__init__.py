@@ -27,10 +27,12 @@ from ..errors import AfmforceError, FileFormatError, ParameterError
 from ..progress import Progress
 from .curve import RawCurve
 from . import native
-from ._meta import METADATA, check_meta_override, require_metadata
+from ._guard import FileTimeoutError, run_with_timeout
+from ._meta import METADATA, check_meta_override, parse_meta_args, require_metadata
 
 __all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA", "refusal",
-           "supported_suffixes", "is_supported", "require_metadata", "formats_markdown"]
+           "supported_suffixes", "is_supported", "require_metadata", "formats_markdown", "check_meta_override",
+           "parse_meta_args", "run_with_timeout", "FileTimeoutError"]
 
 Loader = Callable[..., list]
 
@@ -217,8 +219,8 @@ def _find_format(path: Path) -> ReaderFormat:
             continue
     raise FileFormatError(
         f"{path}: content not recognised as any of: {', '.join(f.name for f in candidates)}; if it is one of "
-        f"them, name its reader (command line --format ID, Python load(..., format=ID); IDs: "
-        f"{', '.join(f.identifier for f in candidates)}): its reader then says what it finds wrong")
+        f"them, name its reader as `format` (one of {', '.join(f.identifier for f in candidates)}): its "
+        "reader then says what it finds wrong")
 
 
 def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
@@ -343,8 +345,7 @@ def _named(message: str, path: str | Path, fmt: ReaderFormat, *, chosen: bool) -
     others = [f.identifier for f in _others(path, fmt)]
     tail = f" (reader '{fmt.identifier}', {how}"
     if others:
-        tail += (f"; other readers of this ending: command line --format ID, Python load(..., format=ID), ID one "
-                 f"of {', '.join(repr(o) for o in others)}")
+        tail += f"; other readers of this ending, named as `format`: {', '.join(repr(o) for o in others)}"
     return message.rstrip(". ") + tail + ")"
 
 
@@ -358,11 +359,11 @@ def refusal(path: str | Path, fmt: ReaderFormat, exc: BaseException, *, chosen: 
     others = _others(path, fmt)
     todo = []
     if others:
-        todo.append("try another reader of this ending (command line --format ID, Python load(..., format=ID): "
+        todo.append("try another reader of this ending, named as `format` ("
                     + ", ".join(f"'{f.identifier}' ({f.name})" for f in others) + ")")
     if isinstance(exc, KeyError):
-        todo.append("if the entry is metadata afmforce knows, give it (command line --meta KEY=VALUE, "
-                    f"Python meta_override={{KEY: VALUE}}; keys: {', '.join(sorted(METADATA))})")
+        todo.append("if the entry is metadata afmforce knows, give it as `meta_override` KEY=VALUE "
+                    f"(keys: {', '.join(sorted(METADATA))})")
     todo.append("if the file is valid, report it to afmforce with the file attached")
     return out[0] + "; " + "; ".join(todo)
 
@@ -373,7 +374,7 @@ def formats_table() -> list[dict[str, str]]:
              "suffixes": " ".join(f.suffixes) + (" .000-.999" if f.pattern else ""),
              "signature": f.signature, "via": f.via, "deflection": f.deflection,
              "supplies": ", ".join(f.supplies) or "-",
-             "requires": ", ".join(f"{k} ({METADATA[k].flag})" for k in f.requires) or "-"}
+             "requires": ", ".join(f.requires) or "-"}
             for f in FORMATS.values()]
 
 

@@ -230,7 +230,7 @@ def _jpk_force(curve: RawCurve) -> RawCurve:
     if curve.deflection_unit != "V" or not k or not sens:
         return curve
     meta = {**md, "reader": "jpk-force", "format": "JPK force curve"}
-    return finalize_curve(dataclasses.replace(curve, deflection_signal=curve.deflection_signal * (float(sens) * float(k)),
+    return finalize_curve(dataclasses.replace(curve, deflection_signal=curve.deflection_signal * curve.force_factor(),
                                               deflection_unit="N", metadata=meta), str(md.get("source_file", "")))
 
 
@@ -326,7 +326,7 @@ def _split_at_turn(curve: RawCurve, path: Path) -> RawCurve:
     """Approach/retract at the turning point of z for a curve stored as one segment."""
     if np.any(curve.segment != 0):
         return curve
-    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal, float)
+    z = np.asarray(curve.position(), float)
     n = z.size
     turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
     out, back = abs(z[turn] - z[0]), abs(z[turn] - z[-1])
@@ -349,7 +349,7 @@ def detect_afmformats_hdf5(path: Path) -> bool:
                 return False
         import h5py
 
-        from .native._hdf5 import safe_attr
+        from .native import safe_attr
 
         with h5py.File(path, "r") as f:
             value = safe_attr(f, "software", limit=256)

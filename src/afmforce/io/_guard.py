@@ -27,7 +27,7 @@ __all__ = ["FileTimeoutError", "run_with_timeout"]
 
 
 class FileTimeoutError(FileFormatError):
-    """Reading a file took longer than its time budget (``--file-timeout``)."""
+    """Reading a file took longer than its time budget (``file_timeout``)."""
 
 
 def _child(write_fd: int, func: Callable, args, kwargs) -> None:
@@ -77,7 +77,7 @@ def run_with_timeout(func: Callable, *args: Any, timeout: float | None, path: st
             left = deadline - time.monotonic()
             if left <= 0:
                 raise FileTimeoutError(
-                    f"{path}: reading took longer than {timeout:g} s (--file-timeout); the file is damaged "
+                    f"{path}: reading took longer than {timeout:g} s (`file_timeout`); the file is damaged "
                     "or very large: skipped")
             ready, _, _ = select.select([read_fd], [], [], min(left, 0.5))
             if ready:

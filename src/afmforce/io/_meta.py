@@ -47,24 +47,21 @@ class MetaField:
     label: str
     unit: str
     validate: Callable[[Any], Any]
-    flag: str = ""
 
 
 #: The metadata keys afmforce understands (SI values).
 METADATA: dict[str, MetaField] = {
-    "spring_constant": MetaField("Spring constant", "N/m", _positive, "--spring-constant"),
-    "sensitivity": MetaField("Deflection sensitivity (InvOLS)", "m/V", _positive, "--sensitivity"),
-    "velocity": MetaField("Approach speed", "m/s", _positive, "--meta velocity=..."),
-    "retract_velocity": MetaField("Retract speed", "m/s", _positive, "--meta retract_velocity=..."),
-    "sample_rate": MetaField("Sample rate", "Hz", _positive, "--meta sample_rate=..."),
-    "resonance_frequency": MetaField("Resonance frequency", "Hz", _positive, "--resonance-frequency"),
-    "quality_factor": MetaField("Quality factor of the free resonance (tells air from liquid)", "", _positive,
-                                "--meta quality_factor=..."),
+    "spring_constant": MetaField("Spring constant", "N/m", _positive),
+    "sensitivity": MetaField("Deflection sensitivity (InvOLS)", "m/V", _positive),
+    "velocity": MetaField("Approach speed", "m/s", _positive),
+    "retract_velocity": MetaField("Retract speed", "m/s", _positive),
+    "sample_rate": MetaField("Sample rate", "Hz", _positive),
+    "resonance_frequency": MetaField("Resonance frequency", "Hz", _positive),
+    "quality_factor": MetaField("Quality factor of the free resonance (tells air from liquid)", "", _positive),
     "theta0": MetaField("Cantilever inclination", "rad", _finite),
     "radius": MetaField("Probe radius", "m", _positive),
     "instrument": MetaField("Instrument", "", _text),
-    "date": MetaField("Date of the measurement (as the file or the user writes it)", "", _text,
-                      "--meta date=..."),
+    "date": MetaField("Date of the measurement (as the file or the user writes it)", "", _text),
     "format": MetaField("File format", "", _text),
     "source_file": MetaField("Source file", "", _text),
     "reader": MetaField("afmforce reader identifier", "", _text),
@@ -86,7 +83,7 @@ _DIMENSION = {"N/m": "stiffness", "m/V": "sensitivity", "m/s": "velocity", "Hz":
 
 
 def parse_meta_args(items) -> dict[str, Any]:
-    """``["sample_rate=6kHz", "instrument=MFP-3D"]`` (``--meta KEY=VALUE``) -> SI metadata.
+    """``["sample_rate=6kHz", "instrument=MFP-3D"]`` (the command line's ``KEY=VALUE`` items) -> SI metadata.
 
     Values with units are parsed in the key's unit (:data:`METADATA`); a plain
     number is taken as SI. Raises ParameterError for an unknown key or a bad value.
@@ -98,13 +95,14 @@ def parse_meta_args(items) -> dict[str, Any]:
         key, sep, value = str(item).partition("=")
         key = key.strip()
         if not sep or not key:
-            raise ParameterError(f"--meta {item!r}: expected KEY=VALUE, e.g. sample_rate=6kHz")
+            raise ParameterError(f"`meta_override` {item!r}: expected KEY=VALUE, e.g. sample_rate=6kHz")
         if key not in METADATA:
-            raise ParameterError(f"--meta {key}: unknown metadata key; known keys: {', '.join(sorted(METADATA))}")
+            raise ParameterError(f"`meta_override` {key}: unknown metadata key; known keys: "
+                                 f"{', '.join(sorted(METADATA))}")
         dim = _DIMENSION.get(METADATA[key].unit)
-        out[key] = parse_value(value.strip(), dim, f"--meta {key}") if dim else value.strip()
-        if key in QUANTITIES:   # the same range as the flag (--spring-constant) and the records
-            QUANTITIES[key].check(out[key], key, f"--meta {key}", typed=value.strip())
+        out[key] = parse_value(value.strip(), dim, f"`meta_override` {key}") if dim else value.strip()
+        if key in QUANTITIES:   # the same range as the quantity's own flag or field and the records
+            QUANTITIES[key].check(out[key], key, f"`meta_override` {key}", typed=value.strip())
     return check_meta_override(out)
 
 
@@ -180,15 +178,12 @@ def _needed(curve: RawCurve, key: str) -> bool:
 
 
 def missing_metadata(path: str, keys, what: str = "the file stores") -> MissingMetadataError:
-    """The one-line error for metadata a user must give: names the keys, units and CLI flags."""
+    """The one-line error for metadata a user must give: names the keys (`` `key` ``) and units."""
     keys = tuple(keys)
     fields = [METADATA[k] for k in keys]
     names = " and no ".join(f"{f.label[0].lower()}{f.label[1:]} [{f.unit}]" for f in fields)
-    flags = tuple(f.flag or f"--meta {k}=..." for k, f in zip(keys, fields))
-    example = ", ".join(f"{k!r}: ..." for k in keys)
-    return MissingMetadataError(
-        f"{path}: {what} no {names}; give {' and '.join(flags)} "
-        f"(Python: load(..., meta_override={{{example}}}))", keys=keys, flags=flags)
+    return MissingMetadataError(f"{path}: {what} no {names}; give {' and '.join(f'`{k}`' for k in keys)}",
+                                keys=keys)
 
 
 def require_metadata(curve: RawCurve, keys=("spring_constant", "sensitivity"), path: str | None = None) -> None:
@@ -242,6 +237,6 @@ def finalize_curve(curve: RawCurve, path: str) -> RawCurve:
             field.validate(value)
         except (TypeError, ValueError) as exc:
             raise FileFormatError(f"{path}: metadata {key} [{field.unit}] {exc}, got {value!r}; "
-                                  f"the file is damaged, give the right value ({field.flag or 'meta_override'})"
+                                  f"the file is damaged, give the right value (`{key}`)"
                                   ) from None
     return curve

@@ -21,19 +21,28 @@ Conventions (spec section 1)
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
 
-from ..errors import FileFormatError
+from ..errors import AnalysisError, FileFormatError
 
-__all__ = ["RawCurve", "SEGMENT_APPROACH", "SEGMENT_RETRACT", "SEGMENT_DWELL", "DEFLECTION_UNITS"]
+__all__ = ["RawCurve", "SEGMENT_APPROACH", "SEGMENT_RETRACT", "SEGMENT_DWELL", "DEFLECTION_UNITS",
+           "POSITION_CHANNELS"]
 
 SEGMENT_APPROACH = 0
 SEGMENT_RETRACT = 1
 SEGMENT_DWELL = 2
 DEFLECTION_UNITS = ("V", "m", "N")
+#: The position channels one may ask for: ``auto`` is the measured one when recorded, else the nominal.
+POSITION_CHANNELS = ("auto", "measured", "nominal")
+
+
+def _known(value: Any) -> float:
+    """A calibration value as a float; NaN when it is unknown (None, 0 or missing)."""
+    return float(value) if value else math.nan
 
 
 @dataclass(frozen=True)
@@ -101,3 +110,55 @@ class RawCurve:
     def retract(self) -> np.ndarray:
         """Boolean mask of the outward (retract) samples."""
         return np.asarray(self.segment) == SEGMENT_RETRACT
+
+    def position_channel(self, channel: str = "auto") -> str:
+        """The position channel a request reads: ``"measured"`` or ``"nominal"``.
+
+        Parameters
+        ----------
+        channel : str
+            ``"auto"`` (the measured position when the curve has one, else the nominal),
+            ``"measured"`` or ``"nominal"``.
+
+        Raises
+        ------
+        AnalysisError
+            An unknown channel, or ``"measured"`` for a curve without a measured position.
+        """
+        if channel not in POSITION_CHANNELS:
+            raise AnalysisError(f"position channel must be auto, measured or nominal, got {channel!r}")
+        if channel == "measured" and self.piezo_measured is None:
+            raise AnalysisError("the curve has no measured position channel; use the nominal one")
+        return "measured" if self.piezo_measured is not None and channel != "nominal" else "nominal"
+
+    def position(self, channel: str = "auto") -> np.ndarray:
+        """The substrate position z of :meth:`position_channel` ``(channel)`` [m] (the column
+        itself, not a copy)."""
+        return np.asarray(self.piezo_measured if self.position_channel(channel) == "measured"
+                          else self.piezo_nominal)
+
+    def deflection_factor(self, sensitivity: float | None = None, spring_constant: float | None = None) -> float:
+        """Deflection per unit of ``deflection_signal`` [m/V, 1 or m/N]: the sensitivity (InvOLS)
+        [m/V] for volts, 1 for metres, 1/k [m/N] for newtons.
+
+        ``sensitivity`` [m/V] and ``spring_constant`` [N/m] default to the curve's metadata;
+        NaN when the one the unit needs is unknown (None, 0 or missing).
+        """
+        md = self.metadata or {}
+        if self.deflection_unit == "V":
+            return _known(sensitivity if sensitivity is not None else md.get("sensitivity"))
+        if self.deflection_unit == "m":
+            return 1.0
+        k = spring_constant if spring_constant is not None else md.get("spring_constant")
+        return 1.0 / float(k) if k else math.nan
+
+    def force_factor(self, sensitivity: float | None = None, spring_constant: float | None = None) -> float:
+        """Force per unit of ``deflection_signal`` [N/V, N/m or 1]: sensitivity x k for volts, k for
+        metres, 1 for newtons (defaults and NaN as :meth:`deflection_factor`)."""
+        md = self.metadata or {}
+        if self.deflection_unit == "N":
+            return 1.0
+        k = _known(spring_constant if spring_constant is not None else md.get("spring_constant"))
+        if self.deflection_unit == "m":
+            return k
+        return _known(sensitivity if sensitivity is not None else md.get("sensitivity")) * k

@@ -34,8 +34,8 @@ def _new_ax(ax):
 def plot_raw(curve: RawCurve, ax=None, channel: str = "auto"):
     """Raw deflection signal against position (both runs), as recorded."""
     ax = _new_ax(ax)
-    use_measured = curve.piezo_measured is not None and channel != "nominal"
-    z = np.asarray(curve.piezo_measured if use_measured else curve.piezo_nominal)
+    use_measured = curve.position_channel(channel) == "measured"
+    z = curve.position(channel)
     s = np.asarray(curve.deflection_signal)
     scale, unit = (1e9, "nm") if curve.deflection_unit in ("m", "N") else (1.0, curve.deflection_unit)
     if curve.deflection_unit == "N":

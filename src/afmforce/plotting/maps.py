@@ -12,13 +12,13 @@ from typing import Any
 import numpy as np
 
 from .._files import atomic_path, atomic_write_text
-from ..analysis.maps import _DISPLAY, EXTENT_KEY, MapImage, map_histogram
+from ..analysis.maps import EXTENT_KEY, MAP_DISPLAY_UNITS, MapImage, map_histogram
 
 __all__ = ["plot_map", "write_map_png", "plot_map_histogram", "write_map_histograms"]
 
 
 def _display(unit: str) -> tuple[float, str]:
-    return _DISPLAY.get(unit, (1.0, unit))
+    return MAP_DISPLAY_UNITS.get(unit, (1.0, unit))
 
 
 def plot_map(image: MapImage, ax=None):

@@ -101,7 +101,7 @@ def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None,
     ``timeout`` [s] bounds the detection of each file (see :func:`afmforce.io.load`);
     ``on_file()`` is called after each file (a progress bar).
     """
-    from ..io._guard import run_with_timeout
+    from ..io import run_with_timeout
 
     refs: list[CurveRef] = []
     for p in paths:
@@ -228,7 +228,7 @@ class CurveAnalysis:
     def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
         """``(index in the file, RawCurve)`` of the item's curves."""
         from ..io import FORMATS, load
-        from ..io._meta import check_meta_override
+        from ..io import check_meta_override
 
         path = ref.location
         if ref.index is None:
@@ -274,7 +274,7 @@ class CurveAnalysis:
             if self.foreign(stem):
                 raise OutputExistsError(
                     f"{self._paths(stem)['json']} holds another analysis (other steps, options or "
-                    "metadata); choose another --out, or pass --force to replace it")
+                    "metadata); choose another `out`, or pass `force` to replace it")
         res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
                       channel=self.channel)
         shown = display_path(base)      # a file name that is not UTF-8: \xNN in the tables
@@ -345,7 +345,7 @@ class CurveAnalysis:
         paths = self._paths(stem)
         for path in paths.values():
             if str(path.resolve()) in self.protect:
-                raise OutputExistsError(f"an output would replace an input file ({path}); choose another --out")
+                raise OutputExistsError(f"an output would replace an input file ({path}); choose another `out`")
         result.write_table(paths["csv"])
         if self.plot:
             from ..plotting import plot_summary

@@ -98,8 +98,8 @@ class PixelAnalysis:
         seg = np.asarray(curve.segment)
         sig = np.asarray(curve.deflection_signal, dtype=float)
         sens = float(p.value("sensitivity", md) or math.nan) if curve.deflection_unit == "V" else math.nan
-        scale = {"V": sens * k, "m": k, "N": 1.0}.get(curve.deflection_unit, math.nan)
-        z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal)
+        scale = curve.force_factor(sens, k)
+        z = curve.position()
         force = sig * scale
         app, ret = seg == 0, seg == 1
         # the baseline's noise: the approach's free part, before the fitted contact (tip depth above it)

@@ -150,8 +150,11 @@ class SweepResult:
         return xr.Dataset(data, coords=coords, attrs=attrs)
 
     def write(self, folder: str | Path, units: Mapping[str, str] | None = None) -> dict[str, Path]:
-        """Write ``results.parquet``, ``results.csv``, ``errors.csv`` (if any) and, for
-        grids, ``results.nc`` (NetCDF) into ``folder``. Returns the paths by kind."""
+        """Write ``results.parquet``, ``results.csv``, ``errors.csv`` (if any), ``results.html``
+        (one self-contained page: :func:`~afmforce.sweep.page.write_page`) and, for grids,
+        ``results.nc`` (NetCDF) into ``folder``. Returns the paths by kind."""
+        from .page import write_page
+
         folder = Path(folder)
         paths = {
             "parquet": write_table(self.table, folder / "results.parquet", units),
@@ -163,6 +166,7 @@ class SweepResult:
             with atomic_path(folder / "results.nc") as tmp:
                 self.to_xarray(units).to_netcdf(tmp)
             paths["netcdf"] = folder / "results.nc"
+        paths["html"] = write_page(self, folder / "results.html", units)
         return paths
 
 

@@ -156,16 +156,16 @@ class SweepSpec:
         names = [a.name for a in self.grid] + [r.name for r in self.ranges] + [k for k, _ in self.fixed]
         dup = sorted({x for x in names if names.count(x) > 1})
         if dup:
-            raise ParameterError(f"parameter(s) {', '.join(dup)} given more than once (grid, range or --set)")
+            raise ParameterError(f"parameter(s) {', '.join(dup)} given more than once (`grid`, `ranges` or `sets`)")
         if self.ranges:
             if self.sample not in SAMPLERS:
-                raise ParameterError(f"ranges need a sampler: --sample {' or '.join(SAMPLERS)} (got {self.sample!r})")
+                raise ParameterError(f"ranges need a sampler: `sample` {' or '.join(SAMPLERS)} (got {self.sample!r})")
             if self.n < 1:
-                raise ParameterError(f"--sample {self.sample} needs --n, a positive number of samples")
+                raise ParameterError(f"`sample` {self.sample} needs `n`, a positive number of samples")
         elif self.sample is not None:
-            raise ParameterError(f"--sample {self.sample} needs at least one --range name=lo:hi")
+            raise ParameterError(f"`sample` {self.sample} needs at least one `ranges` entry name=lo:hi")
         if not self.grid and not self.ranges:
-            raise ParameterError("nothing to sweep: give at least one --grid or --range")
+            raise ParameterError("nothing to sweep: give at least one `grid` or `ranges` entry")
         check_count("runs", self.n_runs, MAX_RUNS, "runs in one sweep")   # before the table is built
         if isinstance(self.seed, bool) or not isinstance(self.seed, int) or self.seed < 0:
             raise ParameterError(f"seed must be a whole number >= 0 (the sampler's seed), got {self.seed!r}")
@@ -270,27 +270,27 @@ def _grid_from_text(name: str, rest: str, dimensions: Dimensions | None, flag: s
 
 def parse_grid(item: str, dimensions: Dimensions | None = None) -> GridAxis:
     """Parse ``name=lo:hi:n[:log]`` or ``name=v1,v2,...`` into a :class:`GridAxis`."""
-    name, rest = _split(item, "--grid")
-    return _grid_from_text(name, rest, dimensions, "--grid")
+    name, rest = _split(item, "`grid`")
+    return _grid_from_text(name, rest, dimensions, "`grid`")
 
 
 def parse_range(item: str, dimensions: Dimensions | None = None) -> SampledRange:
     """Parse ``name=lo:hi[:log]`` into a :class:`SampledRange`."""
-    name, rest = _split(item, "--range")
+    name, rest = _split(item, "`ranges`")
     parts = [p.strip() for p in rest.split(":")]
     log = parts[-1].lower() in ("log", "lin") and parts.pop().lower() == "log"
     if len(parts) != 2:
-        raise ParameterError(f"--range expects name=lo:hi[:log], got {item!r}")
-    lo, hi = (_value(name, p, dimensions, "--range") for p in parts)
+        raise ParameterError(f"`ranges` expects name=lo:hi[:log], got {item!r}")
+    lo, hi = (_value(name, p, dimensions, "`ranges`") for p in parts)
     if isinstance(lo, str) or isinstance(hi, str):
-        raise ParameterError(f"--range {name}: needs numeric bounds")
+        raise ParameterError(f"`ranges` {name}: needs numeric bounds")
     return SampledRange(name, lo, hi, log)
 
 
 def parse_setting(item: str, dimensions: Dimensions | None = None) -> tuple[str, Any]:
     """Parse ``name=value`` into ``(name, SI value)``."""
-    name, rest = _split(item, "--set")
-    return name, _value(name, rest, dimensions, "--set")
+    name, rest = _split(item, "`sets`")
+    return name, _value(name, rest, dimensions, "`sets`")
 
 
 def _from_toml(path: Path, dimensions: Dimensions | None) -> dict:
@@ -298,19 +298,20 @@ def _from_toml(path: Path, dimensions: Dimensions | None) -> dict:
     try:
         data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
     except FileNotFoundError:
-        raise ParameterError(f"--config {path}: no such file") from None
+        raise ParameterError(f"`config` {path}: no such file") from None
     except IsADirectoryError:
-        raise ParameterError(f"--config {path} is a folder; give a .toml sweep file") from None
+        raise ParameterError(f"`config` {path} is a folder; give a .toml sweep file") from None
     except UnicodeDecodeError:
-        raise ParameterError(f"--config {path}: not a UTF-8 text file (TOML sweep file expected; "
+        raise ParameterError(f"`config` {path}: not a UTF-8 text file (TOML sweep file expected; "
                              "save it as UTF-8)") from None
     except OSError as exc:
-        raise ParameterError(f"--config {path}: cannot read ({exc.strerror or exc})") from None
+        raise ParameterError(f"`config` {path}: cannot read ({exc.strerror or exc})") from None
     except tomllib.TOMLDecodeError as exc:
-        raise ParameterError(f"--config {path}: not valid TOML ({exc})") from None
+        raise ParameterError(f"`config` {path}: not valid TOML ({exc})") from None
     unknown = set(data) - {"sweep", "grid", "range", "set"}
     if unknown:
-        raise ParameterError(f"--config {path}: unknown table(s) {sorted(unknown)}; use [sweep], [grid], [range], [set]")
+        raise ParameterError(f"`config` {path}: unknown table(s) {sorted(unknown)}; "
+                             "use [sweep], [grid], [range], [set]")
     out: dict[str, Any] = dict(data.get("sweep", {}))
     grid = []
     for name, v in data.get("grid", {}).items():
@@ -357,7 +358,7 @@ def build_spec(
     base: dict[str, Any] = _from_toml(config, dimensions) if config else {}
     unknown = set(base) - {"grid", "ranges", "fixed", "sample", "n", "seed", "chunk_size"}
     if unknown:
-        raise ParameterError(f"--config {config}: unknown [sweep] option(s) {sorted(unknown)}")
+        raise ParameterError(f"`config` {config}: unknown [sweep] option(s) {sorted(unknown)}")
     axes = _merge(base.get("grid", []), [parse_grid(g, dimensions) for g in grid], lambda a: a.name)
     rngs = _merge(base.get("ranges", []), [parse_range(r, dimensions) for r in ranges], lambda r: r.name)
     fixed = _merge(base.get("fixed", []), [parse_setting(s, dimensions) for s in sets], lambda f: f[0])

@@ -72,11 +72,11 @@ class SweepStore:
         stored = store.manifest()
         if stored is not None:
             if stored.get("key") != key or stored.get("n_items") != manifest.get("n_items"):
-                raise ParameterError(f"{store.root} holds different work (key or size differ); use another --out")
+                raise ParameterError(f"{store.root} holds different work (key or size differ); use another `store`")
             if chunk_size is not None and chunk_size != stored["chunk_size"]:
                 raise ParameterError(
                     f"{store.root} was started with chunk size {stored['chunk_size']}; rerun with "
-                    f"--chunk-size {stored['chunk_size']} (or without it) to resume, or use another --out"
+                    f"`chunk_size` {stored['chunk_size']} (or leave it out) to resume, or use another `store`"
                 )
             return store
         chunk_size = chunk_size if chunk_size is not None else default_chunk_size
@@ -124,7 +124,8 @@ class SweepStore:
                 info = {}
             pid = int(info.get("pid", -1))
             if info.get("host") == host and pid > 0 and pid != os.getpid() and _pid_alive(pid):
-                raise StoreBusyError(f"{self.root} is being written by process {pid}; wait for it or use another --out")
+                raise StoreBusyError(f"{self.root} is being written by process {pid}; wait for it or use "
+                                     "another `store`")
         atomic_write_text(path, json.dumps({"pid": os.getpid(), "host": host}))
         self._locked = True
         for stale in self.chunk_dir.glob(".chunk-*"):  # temp files of an interrupted write

@@ -190,7 +190,7 @@ def _raw_signals(refs, analysis, rename, max_points) -> dict[str, Any]:
         base = rename.get(Path(ref.path).name, Path(ref.path).name)
         for index, curve in pairs:
             name = f"{base}#{index}" if several else base
-            piezo = curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal
+            piezo = curve.position()
             idx = decimate(len(curve.time), max_points)
             out[name] = {"time": curve.time[idx].tolist(), "piezo": np.asarray(piezo)[idx].tolist(),
                          "signal": curve.deflection_signal[idx].tolist(), "segment": curve.segment[idx].tolist(),

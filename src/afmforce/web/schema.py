@@ -13,7 +13,7 @@ import math
 from functools import lru_cache
 from typing import Any
 
-from .._fields import _DISPLAY, FieldSpec
+from .._fields import DISPLAY_UNITS, FieldSpec
 
 __all__ = ["simulation_fields", "analysis_options", "calibration_fields", "fit_parameters", "examples", "schema"]
 
@@ -35,7 +35,7 @@ def field_json(name: str, spec: FieldSpec | None, default: Any, *, choices=(), h
     shown = spec.display or _SHOWN.get(spec.unit, spec.unit)
     if shown == "nm" and isinstance(default, float) and abs(default) >= 1e-6:
         shown = "um"  # beam lengths
-    factor = _DISPLAY.get(shown, 1.0) if shown != spec.unit else 1.0
+    factor = DISPLAY_UNITS.get(shown, 1.0) if shown != spec.unit else 1.0
     kind = {"integer": "integer", "flag": "flag", "choice": "choice", "text": "text"}.get(spec.dimension, "number")
     return {"name": name, "kind": kind, "unit": spec.unit, "shown": shown, "factor": factor,
             "lo": _num(spec.lo), "hi": _num(spec.hi), "lo_open": spec.lo_open, "hi_open": spec.hi_open,

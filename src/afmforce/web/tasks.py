@@ -85,6 +85,7 @@ def sweep_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
     """A parameter sweep of the simulation on the local Dask cluster (serial when small),
     stored under ``store``: the same command resumes from the chunks already stored."""
     from ..sweep import build_spec, run_sweep
+    from ..sweep.page import sweep_payload
     from ..sweep.simulation import OUTPUT_UNITS, parameter_units, simulate_run, simulation_dimensions
 
     spec = build_spec(list(params.get("grid") or ()), list(params.get("ranges") or ()),
@@ -101,21 +102,8 @@ def sweep_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
                        store=params["store"], progress=progress)
     units = {**parameter_units(result.parameter_names), **OUTPUT_UNITS}
     result.write(result.store.root, units)
-    table = result.table.head(int(params.get("max_rows", 2000)))
-    columns = [c for c in table.columns]
-    return to_jsonable({"store": str(result.store.root), "n_runs": int(len(result.table)),
-                        "n_failed": int(result.n_failed), "chunks_run": result.chunks_run,
-                        "chunks_skipped": result.chunks_skipped, "parameters": list(result.parameter_names),
-                        "columns": columns, "units": {c: units.get(c, "") for c in columns},
-                        "rows": [[_cell(v) for v in row] for row in table.itertuples(index=False)]})
-
-
-def _cell(v):
-    if isinstance(v, (float, np.floating)):
-        return float(v) if math.isfinite(v) else None
-    if isinstance(v, (np.integer,)):
-        return int(v)
-    return v if v is None or isinstance(v, (int, str, bool)) else str(v)
+    return to_jsonable({"store": str(result.store.root),
+                        **sweep_payload(result, units, max_rows=int(params.get("max_rows", 2000)))})
 
 
 TASKS = {"fit": fit_task, "sweep": sweep_task}

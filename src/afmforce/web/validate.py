@@ -73,7 +73,7 @@ def number(value: Any, spec: FieldSpec, name: str, field: str | None = None, dom
     try:
         spec.check(v, name, where=None if field == name else field)
         if domain is not None:
-            from ..dynamics._part import DOMAINS
+            from ..dynamics.parts import DOMAINS
 
             DOMAINS[domain](name, v, spec.unit)
     except ParameterError as exc:
@@ -189,7 +189,7 @@ def metadata(items: Any, field: str = "meta") -> dict[str, Any]:
     item at a time so that a refusal names it; a key of the shared vocabulary is checked against its
     declared range (``sensitivity=1e300`` is refused, not read)."""
     from .._fields import QUANTITIES
-    from ..io._meta import parse_meta_args
+    from ..io import parse_meta_args
 
     out: dict[str, Any] = {}
     for i, item in enumerate(_strings(items, field)):
@@ -197,7 +197,7 @@ def metadata(items: Any, field: str = "meta") -> dict[str, Any]:
         try:
             parsed = parse_meta_args([item])
         except ParameterError as exc:
-            raise FieldError(where, str(exc).replace("--meta", where)) from None
+            raise FieldError(where, str(exc).replace("`meta_override`", where)) from None
         for key, value in parsed.items():
             spec = QUANTITIES.get(key)
             if spec is not None and isinstance(value, (int, float)) and not isinstance(value, bool):
@@ -279,13 +279,13 @@ def sweep_spec(grid: Any, ranges: Any, sets: Any, *, sample=None, n=None, seed=N
     from ..sweep.spec import parse_grid, parse_range, parse_setting
 
     dims = simulation_dimensions()
-    for key, items, parse, flag in (("grid", grid, parse_grid, "--grid"), ("ranges", ranges, parse_range, "--range"),
-                                    ("sets", sets, parse_setting, "--set")):
+    for key, items, parse in (("grid", grid, parse_grid), ("ranges", ranges, parse_range),
+                              ("sets", sets, parse_setting)):
         for i, item in enumerate(items):     # each item on its own: the error names it
             try:
                 parse(item, dims)
             except ParameterError as exc:
-                raise FieldError(f"{key}[{i}]", str(exc).replace(flag, f"{key}[{i}]")) from None
+                raise FieldError(f"{key}[{i}]", str(exc).replace(f"`{key}`", f"{key}[{i}]")) from None
     spec = build_spec(grid, ranges, sets, sample=sample, n=n, seed=seed, dimensions=dims)
     if spec.n_runs > MAX_RUNS:
         raise FieldError("n", f"the sweep has {spec.n_runs:,} runs; the web page runs at most {MAX_RUNS:,}")

@@ -12,8 +12,9 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..curve import RawCurve
+from ._hdf5 import safe_attr
 
-__all__ = ["detect_raw_text", "detect_raw_hdf5", "detect_raw_map", "load_rawfile", "load_rawmap"]
+__all__ = ["detect_raw_text", "detect_raw_hdf5", "detect_raw_map", "load_rawfile", "load_rawmap", "safe_attr"]
 
 
 def rawfile_available() -> bool:
@@ -41,8 +42,6 @@ def detect_raw_hdf5(path: Path) -> bool:
             if fh.read(8) != b"\x89HDF\r\n\x1a\n":
                 return False
         import h5py
-
-        from ._hdf5 import safe_attr
 
         with h5py.File(path, "r") as f:
             fmt = safe_attr(f, "format", limit=256)  # sizes checked before reading: a damaged file must not hang

@@ -283,10 +283,10 @@ def _factor(unit: str, si: str, where: str) -> float | None:
     """Multiplier from ``unit`` to ``si`` (None: already SI)."""
     if unit == si or (unit in _DIMENSIONLESS and si in _DIMENSIONLESS):
         return None
-    from ...units import _registry
+    from ...units import unit_registry
 
     try:
-        return float(_registry().Quantity(1.0, unit.replace("µ", "u")).to(si or "dimensionless").magnitude)
+        return float(unit_registry().Quantity(1.0, unit.replace("µ", "u")).to(si or "dimensionless").magnitude)
     except Exception:
         raise FileFormatError(f"{where}: unit {unit!r} is not {si or 'dimensionless'} or convertible to it") from None
 
@@ -316,10 +316,10 @@ def _value_si(value: Any, unit: str, si: str | None, where: str) -> Any:
         return value
     if si is None:  # unknown key with a unit: SI base units if pint knows it, else keep the text
         if isinstance(value, (int, float)) and not isinstance(value, bool):
-            from ...units import _registry
+            from ...units import unit_registry
 
             try:
-                return float(_registry().Quantity(value, unit).to_base_units().magnitude)
+                return float(unit_registry().Quantity(value, unit).to_base_units().magnitude)
             except Exception:
                 pass
         return f"{json.dumps(value) if not isinstance(value, str) else value} {unit}"
@@ -332,10 +332,10 @@ def _value_si(value: Any, unit: str, si: str | None, where: str) -> Any:
 
 
 def _text_quantity(text: str, si: str, where: str) -> float:
-    from ...units import _registry
+    from ...units import unit_registry
 
     try:
-        return float(_registry().Quantity(text.replace("µ", "u")).to(si).magnitude)
+        return float(unit_registry().Quantity(text.replace("µ", "u")).to(si).magnitude)
     except Exception:
         raise FileFormatError(f"{where}: expected a number in {si} (or with a unit convertible to it), "
                               f"got {text!r}") from None
