@@ -30,9 +30,10 @@ from ._units import unit as _u
 from .liquid import calibrate_liquid_curve, drag_baselines, fit_dlvo, split_drainage, velocity_force_fit
 from .options import LiquidOptions
 from .regions import run_indices
+from .registry import AnalysisStep, ResultField
 from .state import State
 
-__all__ = ["LiquidResult", "liquid"]
+__all__ = ["LiquidResult", "liquid", "LIQUID"]
 
 _EPS0 = 8.8541878128e-12
 
@@ -227,3 +228,26 @@ def _no_double_layer(hs, fs, noise, o: LiquidOptions, h_far: float):
     lam0 = float(np.clip(-1.0 / slope, 0.3e-9, 1e-6))
     hi = o.max_separation if o.max_separation is not None else min(h_far, 10.0 * lam0)
     return lam0, float(np.exp(icpt)), hi
+
+
+# --- the registry's record (afmforce.analysis.registry) --------------------------------------------
+def _liquid_fields(st: State) -> dict:
+    q = st.details["liquid"]
+    return dict(drag_offset=q.drag_offset, lever_drag=q.lever_drag, surface_potential=q.surface_potential,
+                surface_potential_se=q.surface_potential_se, debye_length=q.debye_length,
+                debye_length_se=q.debye_length_se, dlvo_hamaker=q.hamaker, dlvo_hamaker_se=q.hamaker_se)
+
+
+LIQUID = AnalysisStep(
+    "liquid", "Colloid probe in a liquid: quadratic compliance, lever drag, drainage vs static force, DLVO fit",
+    liquid, LiquidOptions, reference="Attard, arXiv 1212.3019 (2012); Vinogradova et al., RSI 72, 2330 (2001)",
+    fields=(ResultField("drag_offset", "m", "drag offset (approach - retract far out; liquid)", summary=True,
+                        column=True),
+            ResultField("lever_drag", "N s/m", "lever drag (liquid)", summary=True, column=True),
+            ResultField("surface_potential", "V", "surface potential (DLVO fit)", summary=True, column=True),
+            ResultField("surface_potential_se", "V", "standard error of the surface potential", column=True),
+            ResultField("debye_length", "m", "Debye length (DLVO fit)", summary=True, column=True),
+            ResultField("debye_length_se", "m", "standard error of the Debye length", column=True),
+            ResultField("dlvo_hamaker", "J", "Hamaker constant (DLVO fit)", summary=True, column=True),
+            ResultField("dlvo_hamaker_se", "J", "standard error of the DLVO Hamaker constant", column=True)),
+    collect=_liquid_fields)

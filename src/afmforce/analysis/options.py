@@ -2,11 +2,13 @@
 
 :class:`ProbeCalibration` holds what the user knows about the probe and its
 calibration (radius, spring constant, inclination, sensitivity, ...); a field
-left ``None`` takes the file's value. Each step of
+left ``None`` takes the file's value. Each built-in step of
 :data:`afmforce.analysis.pipeline.STEPS` has an options dataclass here
 (:class:`VdwOptions`, :class:`ZeroOptions`, ...) whose field defaults are the
 step's defaults -- declared once, here, and nowhere else (the step functions
-take the record, not keyword defaults). Every field carries a
+take the record, not keyword defaults); a :class:`StepOptions` subclass registers
+itself in :data:`OPTIONS` when defined (a step added in its own module defines
+its record there). Every field carries a
 :class:`~afmforce._fields.FieldSpec` in its metadata (dimension, SI unit, help,
 valid range), from which the records validate themselves
 (:class:`~afmforce.errors.ParameterError` naming the option and its range), and
@@ -160,9 +162,25 @@ class ProbeCalibration(_Validated):
         return {k: v for k, v in self.to_dict().items() if v is not None}
 
 
+#: Step identifier -> its options class: every subclass of :class:`StepOptions` that names its
+#: ``step`` registers itself here when it is defined (the step's record points to it).
+OPTIONS: dict[str, type["StepOptions"]] = {}
+
+
 @dataclass(frozen=True)
 class StepOptions(_Validated):
-    """Base of the per-step options records (the registry names each step's class)."""
+    """Base of the per-step options records: a subclass sets ``step`` (its step's identifier) and
+    is registered in :data:`OPTIONS` when defined."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        step = cls.__dict__.get("step")
+        if not step:
+            return
+        old = OPTIONS.get(step)
+        if old is not None and (old.__module__, old.__qualname__) != (cls.__module__, cls.__qualname__):
+            raise TypeError(f"options of step {step!r} are declared twice: {old.__qualname__} and {cls.__qualname__}")
+        OPTIONS[step] = cls
 
 
 @dataclass(frozen=True)
@@ -424,11 +442,3 @@ class LiquidOptions(StepOptions):
                                         hi=1e-5, lo_open=True)
     z0: float = _q("z0", Z0, "van der Waals cut-off z0 of the DLVO fit")
     nsigma: float = _nsigma(3.0, "double-layer repulsion threshold in multiples of the static force noise")
-
-
-#: Step identifier -> its options class (the registry's records point here).
-OPTIONS: dict[str, type[StepOptions]] = {c.step: c for c in (
-    SmoothOptions, ContactOptions, DriftOptions, FringesOptions, ComplianceOptions, CalibrationOptions,
-    KindOptions, ShiftOptions, ZeroOptions, ForceOptions, JumpsOptions, AdhesionOptions, SurfaceEnergyOptions,
-    VdwOptions, OscillationOptions, FrictionOptions, DiagnosisOptions, IndentationOptions,
-    LiquidOptions)}

@@ -1,12 +1,11 @@
-"""The pipeline steps: each takes a :class:`~.state.State` and options, returns a new State.
+"""The pipeline steps that calibrate a curve: compliance, calibration, contact kind, shift, zero, force.
 
-They live in three modules by what they do: :mod:`.steps_prepare` (smooth, contact, drift,
-fringes), this one (compliance, calibration, kind, shift, zero, force) and
-:mod:`.steps_results` (jumps, adhesion, surface energy, van der Waals, oscillation, friction,
-diagnosis); all are importable from here. The registry that names them, gives their options
-and requirements lives in
-:mod:`afmforce.analysis.pipeline`. Each function stores its result dataclass under its
-step identifier in ``state.details``.
+Each step takes a :class:`~.state.State` and its options record and returns a new State, its
+result dataclass stored under its identifier in ``state.details``; each is declared once, by its
+:class:`~.registry.AnalysisStep` record at the end of this module (requirements, options, result
+fields and how they are read off the details). The other steps: :mod:`.steps_prepare` (smooth,
+contact, drift, fringes), :mod:`.steps_results` (jumps, adhesion, surface energy, van der Waals,
+oscillation, friction), :mod:`.indentation_step`, :mod:`.diagnosis_step`, :mod:`.liquid_step`.
 """
 
 from __future__ import annotations
@@ -21,18 +20,16 @@ from .jumps import find_jump_in
 from .options import (CalibrationOptions, ComplianceOptions, ForceOptions, KindOptions, ShiftOptions,
                       ZeroOptions)
 from .separation import ZeroResult, effective_spring_constant, zero_of_separation
+from .registry import AnalysisStep, ResultField
 from .state import State
 from ._step_helpers import _kind, _skip
-from .steps_prepare import contact, drift, fringes, retract_dip, smooth
-from .steps_results import adhesion_step, diagnosis, friction, jumps, oscillation, surface_energy, vdw
 
-__all__ = ["smooth", "contact", "drift", "fringes", "retract_dip", "compliance", "calibration", "kind", "shift", "zero", "force",
-           "jumps", "adhesion_step", "surface_energy", "vdw", "oscillation", "friction", "diagnosis"]
+__all__ = ["compliance", "calibration", "kind", "shift", "zero", "force", "COMPLIANCE", "CALIBRATION", "KIND",
+           "SHIFT", "ZERO", "FORCE"]
 
 
 def compliance(st: State, o: ComplianceOptions) -> State:
     """Robust constant-compliance line of each run."""
-    st.require("approach", step="compliance")
     res = cc.fit_compliance(st.z, st.signal, st.approach, st.retract, st.unit)
     return st.update("compliance", res, warn=res.notes)
 
@@ -70,7 +67,6 @@ def kind(st: State, o: KindOptions) -> State:
     deflection per position at least ``min_stiffness`` when the calibration is
     the file's); soft otherwise, with the contact point by ``method``.
     """
-    st.require("deflection", step="kind")
     nsigma, method, force_fraction, window = o.nsigma, o.method, o.force_fraction, o.window
     o.check_method(CONTACT_POINT_METHODS)
     noise = abs(st.noise * st.factor)
@@ -224,7 +220,6 @@ def zero(st: State, o: ZeroOptions) -> State:
     then the inward line, which carries the jump-in and the van der Waals
     attraction.
     """
-    st.require("deflection", step="zero")
     if _kind(st) == "soft":
         cp = st.details["contact_point"]
         c0 = cp.deflection - cp.position
@@ -264,7 +259,6 @@ def force(st: State, o: ForceOptions) -> State:
     scales by (file's / fitted sensitivity)^2 (the deflections by fitted / file's, so forces by
     file's / fitted), never by one factor alone.
     """
-    st.require("deflection", step="force")
     md, p = st.metadata, st.probe
     k = p.value("spring_constant", md)
     theta0 = p.value("theta0", md)
@@ -286,3 +280,53 @@ def force(st: State, o: ForceOptions) -> State:
         warn.append("spring constant taken from the compliance slope of the force signal (rigid contact assumed)")
     return st.update("force", conv, warn=warn, spring_constant=conv.spring_constant,
                      force=st.deflection * conv.spring_constant)
+
+
+# --- the registry's records (afmforce.analysis.registry) -------------------------------------------
+COMPLIANCE = AnalysisStep("compliance", "Constant-compliance lines (robust fit)", compliance, ComplianceOptions,
+                          requires=("drift",), after=("fringes",), channels=("approach",), reference="section 3.1")
+
+
+def _calibration_fields(st: State) -> dict:
+    c = st.details["calibration"]
+    return dict(sensitivity=c.sensitivity, sensitivity_fit=c.sensitivity_fit, calibration_source=c.source)
+
+
+CALIBRATION = AnalysisStep(
+    "calibration", "Deflection sensitivity (InvOLS): the file's, or from the compliance slope", calibration,
+    CalibrationOptions, requires=("compliance",), reference="section 3.1; eq 15",
+    fields=(ResultField("sensitivity_used", "m/V", "sensitivity used (the forces'; calibration source says which)",
+                        summary=True, column=True, compute=lambda r: r.sensitivity_fit
+                        if r.calibration_source == "fit" else r.sensitivity),
+            ResultField("sensitivity", "m/V", "sensitivity (file or user)", summary=True, column=True),
+            ResultField("sensitivity_fit", "m/V", "sensitivity from the compliance slope", summary=True, column=True),
+            ResultField("calibration_source", None, default="")),
+    collect=_calibration_fields)
+
+
+def _kind_fields(st: State) -> dict:
+    k, cp = st.details["kind"], st.details.get("contact_point")
+    return dict(contact_kind=k.kind, contact_kind_reason=k.reason,
+                **({"indentation": cp.indentation} if cp is not None else {}))
+
+
+KIND = AnalysisStep(
+    "kind", "Contact kind (hard: jump-in or straight line; soft: curved) and a soft contact point", kind, KindOptions,
+    requires=("calibration",), channels=("deflection",),
+    reference="afmforce (baseline line + power-law contact term; checked against nanite's fit_line_polynomial)",
+    fields=(ResultField("contact_kind", None, default=""), ResultField("contact_kind_reason", None, default=""),
+            ResultField("indentation", "m", "indentation (soft contact)", summary=True, column=True)),
+    collect=_kind_fields)
+SHIFT = AnalysisStep("shift", "Inward/outward shift overlaying the compliance lines", shift, ShiftOptions,
+                     requires=("kind",), reference="section 3.2, Fig 9; Fig 7C",
+                     fields=(ResultField("shift", "m", "inward shift", summary=True, column=True),),
+                     collect=lambda st: {"shift": st.details["shift"].shift})
+ZERO = AnalysisStep("zero", "Zero of separation at the compliance line", zero, ZeroOptions, requires=("kind",),
+                    after=("shift",), channels=("deflection",), reference="section 3.2, Fig 9",
+                    fields=(ResultField("contact_separation", "m", "separation given to the compliance line",
+                                        column=True),),
+                    collect=lambda st: {"contact_separation": st.details["zero"].contact_separation})
+FORCE = AnalysisStep("force", "Deflection to force (tilt-corrected spring constant)", force, ForceOptions,
+                     requires=("calibration",), channels=("deflection",), reference="eqs 13, 14",
+                     fields=(ResultField("spring_constant", "N/m", "spring constant", summary=True, column=True),),
+                     collect=lambda st: {"spring_constant": st.details["force"].spring_constant})

@@ -12,12 +12,13 @@ from ._numeric import running_mean
 from .drift import remove_drift
 from .fringes import FringeResult, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
 from .options import ContactOptions, DriftOptions, FringesOptions, SmoothOptions
+from .registry import AnalysisStep
 from .regions import check_compliance, find_run_regions, run_indices, saturated_mask
 from .state import ContactSummary, NoContact, SmoothResult, State
 
 from ._step_helpers import _zero_deflection_position
 
-__all__ = ["smooth", "contact", "drift", "fringes"]
+__all__ = ["smooth", "contact", "drift", "fringes", "retract_dip", "SMOOTH", "CONTACT", "DRIFT", "FRINGES"]
 
 
 def _staircase_window(z: np.ndarray, minimum: int = 11) -> int:
@@ -147,7 +148,6 @@ _BORROWED = {"offset": "no slope", "approach slope": "the approach's drift rate"
 
 def drift(st: State, o: DriftOptions) -> State:
     """Subtract a baseline line in time fitted in each run's zero-force region."""
-    st.require("approach", step="drift")
     signal, res = remove_drift(st.time, st.signal, st.curve.segment, st.approach, st.retract, st.unit,
                                int(o.order), z=st.z if o.tail else None)
     warn = None
@@ -179,7 +179,6 @@ def fringes(st: State, o: FringesOptions) -> State:
     contact the fringe term is held at its value where the run's own contact
     line crosses zero signal (the separation no longer changes there).
     """
-    st.require("approach", step="fringes")
     apply, margin = o.apply, o.margin
     runs = {}
     for run in (st.approach, st.retract):
@@ -231,3 +230,15 @@ def fringes(st: State, o: FringesOptions) -> State:
         verdict = "no interference fringes detected in the baseline"
     res = FringeResult(fa, fr, width, applied, verdict)
     return st.update("fringes", res, z=z, signal=s)
+
+
+
+# --- the registry's records (afmforce.analysis.registry) -------------------------------------------
+SMOOTH = AnalysisStep("smooth", "Digitization smoothing of the position (running average)", smooth, SmoothOptions,
+                      reference="section 3.1, Fig 7C")
+CONTACT = AnalysisStep("contact", "Contact, constant-compliance and zero-force regions", contact, ContactOptions,
+                       after=("smooth",), reference="section 3.1, Fig 7")
+DRIFT = AnalysisStep("drift", "Thermal drift: line in time in the zero-force region, per run", drift, DriftOptions,
+                     requires=("contact",), channels=("approach",), reference="section 3.1, Fig 7")
+FRINGES = AnalysisStep("fringes", "Interferometric calibration from baseline fringes", fringes, FringesOptions,
+                       requires=("drift",), channels=("approach",), reference="section 3.1, Fig 7A; spec section 6")

@@ -1,5 +1,6 @@
 """Pipeline steps that read physics off a calibrated curve: jumps, adhesion, surface energy,
-van der Waals fit, oscillations, friction signature, dynamic diagnosis."""
+van der Waals fit, oscillations, friction signature (each declared by its record at the end;
+the dynamic diagnosis is :mod:`.diagnosis_step`)."""
 
 from __future__ import annotations
 
@@ -12,20 +13,21 @@ from ..constants import Z0
 from ..errors import AnalysisError
 from . import compliance as cc
 from ._numeric import robust_line
-from .dynamic import diagnose_curve
 from .contact_point import curvature_ratio
 from .jumps import JumpIn, Jumps, PullOff, adhesion, find_jump_in, find_pull_off, jump_warnings, pull_off_estimate
-from .options import (AdhesionOptions, DiagnosisOptions, FrictionOptions, JumpsOptions, OscillationOptions,
-                      SurfaceEnergyOptions, VdwOptions)
+from .options import (AdhesionOptions, FrictionOptions, JumpsOptions, OscillationOptions, SurfaceEnergyOptions,
+                      VdwOptions)
 from .oscillation import OscillationResult, both_runs, find_peak
 from .plausibility import IMPOSSIBLE
+from .registry import AnalysisStep, ResultField
 from .state import State
 from .unbinding import retract_adhesion
 from .vdw import fit_vdw
 
 from ._step_helpers import _kind, _skip
 
-__all__ = ["jumps", "adhesion_step", "surface_energy", "vdw", "oscillation", "friction", "diagnosis"]
+__all__ = ["jumps", "adhesion_step", "surface_energy", "vdw", "oscillation", "friction", "JUMPS", "ADHESION",
+           "SURFACE_ENERGY", "VDW", "OSCILLATION", "FRICTION"]
 
 
 def jumps(st: State, o: JumpsOptions) -> State:
@@ -34,7 +36,6 @@ def jumps(st: State, o: JumpsOptions) -> State:
     Warns when the first contact sample lies more than ``o.onset_tolerance`` (or
     ``o.nsigma`` noise) off the compliance line the zero of separation was put on.
     """
-    st.require("separation", step="jumps")
     nsigma, window = o.nsigma, int(o.window)
     if _kind(st) == "soft":
         nan = math.nan
@@ -100,7 +101,6 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
     See :mod:`~afmforce.analysis.unbinding`; the dip counts above ``o.nsigma``
     baseline noise, with its position, the last rupture and the unbinding steps.
     """
-    st.require("position", step="adhesion")
     po = st.details["jumps"].pull_off if "jumps" in st.details else None
     hard = po is not None and po.found and _kind(st) == "hard"  # the paper's pull-off jump ends the dip
     res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma,
@@ -159,7 +159,6 @@ def vdw(st: State, o: VdwOptions) -> State:
 
 def oscillation(st: State, o: OscillationOptions) -> State:
     """Post-contact oscillation of each run; temporal versus spatial origin."""
-    st.require("deflection", step="oscillation")
     peaks = {}
     for run in (st.approach, st.retract):
         idx = run.index[run.compliance & ~run.saturated]
@@ -270,71 +269,99 @@ def _drift_uncertainty(st: State, comp) -> tuple[float, float, float]:
     return rate / (v * slope), rate * lever / slope, rate
 
 
-def _force_gradient(st: State, window: int = 5) -> tuple[float, str]:
-    """Measured |dF/dh| [N/m] where the tip meets the surface, and how it was measured."""
-    if st.force is None or not math.isfinite(st.spring_constant):
-        return math.nan, "no force (spring constant unknown)"
-    idx = st.approach.index
-    h, f = st.separation[idx], st.force[idx]
-    if _kind(st) == "soft":
-        cp = st.details["contact_point"]
-        k = int(np.searchsorted(idx, cp.index))
-        stop = np.flatnonzero((np.arange(idx.size) > k) & (h < -0.1 * max(cp.indentation, 0.0)))
-        end = int(stop[0]) if stop.size else idx.size
-        sel = slice(k, max(end, k + 3))
-        what = "contact stiffness over the first 10 % of the indentation"
-    else:
-        ji = st.details["jumps"].jump_in
-        if not ji.found:
-            return math.nan, "no jump into contact: the attraction's gradient is below the noise"
-        k = int(np.searchsorted(idx, ji.index))
-        sel = slice(max(k - window + 1, 0), k + 1)
-        what = f"attraction over the last {window} samples before the jump"
-    hs, fs = h[sel], f[sel]
-    if hs.size < 3 or np.ptp(hs) == 0:
-        return math.nan, "too few samples to measure the force gradient"
-    return float(abs(np.polyfit(hs - hs.mean(), fs, 1)[0])), what
+# --- the registry's records (afmforce.analysis.registry) -------------------------------------------
+def _jumps_fields(st: State) -> dict:
+    if "jumps" in st.skipped:
+        return {}
+    d = st.details
+    ji, po = d["jumps"].jump_in, d["jumps"].pull_off
+    out = dict(contact_onset_separation=ji.separation, pull_off_force=po.force, pull_off_position=po.position,
+               jump_out_distance=po.jump_out_distance, pull_off_saturated=po.saturated,
+               pull_off_force_extrapolated=(po.deflection_extrapolated * d["force"].spring_constant
+                                            if "force" in d else math.nan))
+    if ji.found:  # without a significant jump the tip crept in: only the onset of contact
+        out.update(jump_in_separation=ji.separation, jump_in_force=ji.force_after,
+                   jump_in_deflection=ji.deflection_after)
+    return out
 
 
-def diagnosis(st: State, o: DiagnosisOptions) -> State:
-    """Dynamic diagnosis: eq 3, eq 4, jump-in distance, friction and adhesion consistency.
+JUMPS = AnalysisStep(
+    "jumps", "Jump into contact and pull-off", jumps, JumpsOptions, requires=("zero", "force"),
+    channels=("separation",), reference="section 2.1, Fig 9",
+    fields=(ResultField("jump_in_separation", "m", "jump-in separation", summary=True, column=True),
+            ResultField("jump_in_force", "N", "jump-in force", summary=True, column=True),
+            ResultField("jump_in_deflection", "m", "jump-in deflection", column=True),
+            ResultField("contact_onset_separation", "m", "contact onset separation", summary=True),
+            ResultField("pull_off_force", "N", "pull-off force", summary=True, column=True),
+            ResultField("pull_off_saturated", None, default=False),
+            ResultField("pull_off_force_extrapolated", "N", "pull-off force (extrapolated past clipping)",
+                        summary=True),
+            ResultField("pull_off_position", "m", "pull-off position", summary=True, column=True),
+            ResultField("jump_out_distance", "m", "jump-out distance", summary=True, column=True)),
+    collect=_jumps_fields)
 
-    Flags the van der Waals fit as unreliable when the run is judged dynamic.
-    """
-    j = st.details.get("jumps")
-    if j is None:
-        raise AnalysisError("step 'diagnosis' needs the jumps")
-    idx = st.approach.index
-    v = st.velocity(idx) if st.time_known else math.nan
-    f = st.probe.value("resonance_frequency", st.metadata)
-    dx = o.resolution if o.resolution is not None else max(abs(st.noise * st.factor), o.min_resolution)
-    fit = st.details.get("vdw")
-    fit = fit if fit is not None and hasattr(fit, "static_jump_in_separation") else None
-    h_static = fit.static_jump_in_separation if fit is not None else math.nan
-    step = float(np.median(np.abs(np.diff(st.z[idx])))) if idx.size > 1 else 0.0
-    fr = st.details.get("friction")
-    z0 = st.details["zero"].contact_separation if "zero" in st.details else math.nan
-    grad, grad_how = _force_gradient(st)
-    res = diagnose_curve(velocity=v, spring_constant=st.spring_constant, resonance_frequency=f, resolution=dx,
-                         force_gradient=grad, force_gradient_method=grad_how,
-                         jump_in_separation=j.jump_in.separation if j.jump_in.found else math.nan,
-                         static_jump_in_separation=h_static,
-                         sample_step=step, friction=None if fr is None else fr.kind,
-                         friction_verdict="" if fr is None else fr.verdict,
-                         hamaker_radius=fit.hamaker_radius if fit is not None else math.nan,
-                         pull_off_force=pull_off_estimate(j.pull_off, st.spring_constant), contact_separation=z0,
-                         attraction_ratio=o.attraction_ratio,
-                         quality_factor=float(st.metadata.get("quality_factor", math.nan) or math.nan))
-    ret = st.retract
-    if ret is not None and not ret.has_compliance and ret.contact.any() and bool(
-            np.all(st.signal[ret.index[ret.contact]] > 0)):
-        # static pull-off needs adhesion (negative deflection): leaving while pushed is dynamics
-        res = dataclasses.replace(res, dynamic=True, verdict=res.verdict + "; " + (
-            "the tip left the surface while the cantilever was still pushed (deflection above the photodiode's "
-            "saturation on the whole retract contact), where a static pull-off needs adhesion: drag or friction "
-            "held the cantilever bent -- a dynamic run, not a static force curve"))
-    new = st.update("diagnosis", res)
-    if res.dynamic and fit is not None:
-        new = new.update("vdw", dataclasses.replace(fit, reliable=False),
-                         warn="dynamic run: the van der Waals fit is NOT a static force law (see diagnosis)")
-    return new
+
+def _adhesion_fields(st: State) -> dict:
+    a = st.details["adhesion"]
+    return dict(adhesion_force=a.force, adhesion_deflection=a.deflection, adhesion_distance=a.distance,
+                adhesion_noise=a.noise, rupture_distance=a.rupture_distance, unbinding_steps=len(a.steps),
+                adhesion_verdict=a.verdict)
+
+
+ADHESION = AnalysisStep(
+    "adhesion", "Adhesion: deepest retract dip below its own baseline, last rupture, unbinding steps",
+    adhesion_step, AdhesionOptions, requires=("zero", "force"), channels=("position",),
+    reference="afmforce (every contact kind)",
+    fields=(ResultField("adhesion_force", "N", "adhesion (deepest retract dip)", summary=True, column=True),
+            ResultField("adhesion_deflection", "m", "adhesion as a deflection"),
+            ResultField("adhesion_distance", "m", "adhesion position from contact", summary=True, column=True),
+            ResultField("adhesion_noise", "N", "baseline noise of the retract", column=True),
+            ResultField("rupture_distance", "m", "last rupture from contact", summary=True, column=True),
+            ResultField("unbinding_steps", "", "unbinding steps", default=0, column=True),
+            ResultField("adhesion_verdict", None, default="")),
+    collect=_adhesion_fields)
+SURFACE_ENERGY = AnalysisStep(
+    "surface_energy", "Surface energy and radius from the pull-off (JKR/DMT; hard contacts)", surface_energy,
+    SurfaceEnergyOptions, requires=("jumps",), reference="section 2.1",
+    fields=(ResultField("surface_energy", "J/m^2", "surface energy", summary=True, column=True),
+            ResultField("radius", "m", "radius", summary=True, column=True)),
+    collect=lambda st: {"surface_energy": st.details["surface_energy"].surface_energy,
+                        "radius": st.details["surface_energy"].radius})
+
+
+def _vdw_fields(st: State) -> dict:
+    if "vdw" in st.skipped:
+        return {}
+    v = st.details["vdw"]
+    return dict(hamaker_radius=v.hamaker_radius, hamaker_radius_se=v.hamaker_radius_se, hamaker=v.hamaker,
+                hamaker_se=v.hamaker_se)
+
+
+VDW = AnalysisStep(
+    "vdw", "van der Waals fit before the jump (A R or A)", vdw, VdwOptions, requires=("jumps",), reference="eq 2",
+    fields=(ResultField("hamaker_radius", "J m", "A R", summary=True, column=True),
+            ResultField("hamaker_radius_se", "J m", "standard error of A R", column=True),
+            ResultField("hamaker", "J", "Hamaker constant", summary=True, column=True),
+            ResultField("hamaker_se", "J", "standard error of A", column=True)),
+    collect=_vdw_fields)
+
+
+def _oscillation_fields(st: State) -> dict:
+    o = st.details["oscillation"]
+    out = {"oscillation_verdict": o.verdict}
+    if o.origin != "none" and o.approach.found and o.retract.found:
+        out["oscillation_frequency"] = 0.5 * (o.approach.frequency + o.retract.frequency)
+    return out
+
+
+OSCILLATION = AnalysisStep(
+    "oscillation", "Post-contact oscillation: frequency, temporal or spatial", oscillation, OscillationOptions,
+    requires=("calibration",), channels=("deflection",), reference="section 3.2",
+    fields=(ResultField("oscillation_frequency", "Hz", "oscillation", summary=True, column=True),
+            ResultField("oscillation_verdict", None, default="")),
+    collect=_oscillation_fields)
+FRICTION = AnalysisStep(
+    "friction", "Friction signature of the compliance lines (hard contacts, straight lines)", friction,
+    FrictionOptions, requires=("kind",), after=("shift",), reference="sections 2.2.2-2.2.4, eqs 16-21",
+    fields=(ResultField("friction", None, default=""), ResultField("friction_verdict", None, default="")),
+    collect=lambda st: {"friction": st.details["friction"].kind, "friction_verdict": st.details["friction"].verdict})
