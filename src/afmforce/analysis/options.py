@@ -37,7 +37,7 @@ __all__ = ["ProbeCalibration", "StepOptions", "SmoothOptions", "ContactOptions",
            "FringesOptions", "ComplianceOptions", "CalibrationOptions", "KindOptions", "ShiftOptions",
            "ZeroOptions", "ForceOptions", "JumpsOptions", "AdhesionOptions", "SurfaceEnergyOptions",
            "VdwOptions", "OscillationOptions", "FrictionOptions", "DiagnosisOptions", "IndentationOptions",
-           "LiquidOptions", "OPTIONS"]
+           "LiquidOptions", "OPTIONS", "option_field"]
 
 
 def _opt(default: Any, dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,
@@ -50,6 +50,11 @@ def _opt(default: Any, dimension: str, unit: str, help: str, *, lo: float | None
     md = dict(meta(dimension, unit, help, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, display=display))
     md["choices"] = tuple(choices)
     return dataclasses.field(default=default, metadata=md)
+
+
+#: The public name of :func:`_opt`: an option field of a step's options record (a step added in its
+#: own module declares its options with it).
+option_field = _opt
 
 
 def _q(name: str, default: Any, help: str | None = None) -> Any:

@@ -51,9 +51,12 @@ class ResultField:
     default : Any
         Its value when the step did not run or found nothing (NaN for numbers).
     summary : bool
-        A row of the printed summary (:data:`~.result.SUMMARY_FIELDS`) and a map quantity.
+        A row of the printed summary (:data:`~.result.SUMMARY_FIELDS`).
     column : bool
         A float column of the batch summary table.
+    map : bool or None
+        A map quantity (:data:`afmforce.analysis.maps.MAP_QUANTITIES`; maps are drawn from the
+        summary table's columns); None: when both ``summary`` and ``column``.
     compute : callable, optional
         ``compute(result) -> value`` for a field computed from other fields (not stored).
     """
@@ -64,7 +67,14 @@ class ResultField:
     default: Any = math.nan
     summary: bool = False
     column: bool = False
+    map: bool | None = None
     compute: Callable[[Any], Any] | None = field(default=None, compare=False)
+
+
+    @property
+    def mapped(self) -> bool:
+        """A map quantity (see :attr:`map`)."""
+        return (self.summary and self.column) if self.map is None else (self.map and self.column)
 
 
 @dataclass(frozen=True)
