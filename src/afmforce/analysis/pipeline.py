@@ -33,7 +33,7 @@ from .plausibility import (beyond_detector, impossible_reasons, impossible_steps
 from .registry import AnalysisStep, ResultField, register_step
 from .result import AnalysisResult
 from .state import NoContact, State, prepare
-from .steps_prepare import retract_dip
+from .steps.contact import retract_dip
 from ..errors import ParameterError
 from ..io.curve import RawCurve
 

@@ -16,8 +16,8 @@ and the web's step list.
 Add a step: write one module that defines its options record (a ``StepOptions`` subclass:
 :data:`~.options.OPTIONS` registers it) and calls :func:`register_step` with its record
 (docs/architecture.md, "Analysis steps"). The built-in steps' modules are listed in
-:data:`BUILTIN_MODULES`; on first use each is imported and the ``AnalysisStep`` records it
-defines at module level are registered, in the order they are defined.
+:data:`BUILTIN_MODULES` (one module per step in :mod:`afmforce.analysis.steps`); on first use each
+is imported and the ``AnalysisStep`` record it defines at module level is registered.
 
 This module imports nothing heavy.
 """
@@ -123,9 +123,11 @@ class AnalysisStep:
         return self.func(state, options)
 
 
-#: Modules that declare the built-in steps, imported on first use (their order breaks ties of the
-#: pipeline's order: :func:`order`).
-BUILTIN_MODULES = ("steps_prepare", "steps", "steps_results", "indentation_step", "diagnosis_step", "liquid_step")
+#: The built-in steps: their modules in :mod:`afmforce.analysis.steps`, imported on first use, in the
+#: pipeline's order (which breaks the ties of :func:`order`).
+BUILTIN_MODULES = ("smooth", "contact", "drift", "fringes", "compliance", "calibration", "kind", "shift", "zero",
+                   "force", "jumps", "adhesion", "surface_energy", "vdw", "oscillation", "friction", "indentation",
+                   "diagnosis", "liquid")
 
 _STEPS: dict[str, AnalysisStep] = {}
 _ORDER: list[str] = []
@@ -138,7 +140,7 @@ def _load() -> None:
     _STATE["loading"] = True
     try:
         for name in BUILTIN_MODULES:
-            module = importlib.import_module(f"{__package__}.{name}")
+            module = importlib.import_module(f"{__package__}.steps.{name}")
             for rec in list(vars(module).values()):
                 if isinstance(rec, AnalysisStep) and _STEPS.get(rec.identifier) is not rec:
                     _add(rec)

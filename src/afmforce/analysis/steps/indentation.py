@@ -1,15 +1,14 @@
-"""The ``indentation`` step's record: Young's modulus (and work of adhesion) of a soft contact.
+"""The ``indentation`` step: young's modulus (and work of adhesion) of a soft contact: indentation model fitted with the contact point.
 
-The step function and its result are :mod:`.indentation` (the numerical work); this module
-declares the step once for the registry (:mod:`.registry`).
+Declared once by its record :data:`INDENTATION` (:mod:`afmforce.analysis.registry`).
 """
 
 from __future__ import annotations
 
-from .indentation import indentation
-from .options import IndentationOptions
-from .registry import AnalysisStep, ResultField
-from .state import State
+from ..indentation import indentation
+from ..options import IndentationOptions
+from ..registry import AnalysisStep, ResultField
+from ..state import State
 
 __all__ = ["INDENTATION"]
 

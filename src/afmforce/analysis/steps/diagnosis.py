@@ -1,5 +1,7 @@
-"""The ``diagnosis`` step: is the run dynamic? Inertia parameter (eq 3), lag (eq 4), jump-in distance,
-friction and adhesion consistency (sections 2.3, 3.2), declared by its record :data:`DIAGNOSIS`."""
+"""The ``diagnosis`` step: dynamic diagnosis: inertia parameter, lag, jump-in distance.
+
+Declared once by its record :data:`DIAGNOSIS` (:mod:`afmforce.analysis.registry`).
+"""
 
 from __future__ import annotations
 
@@ -8,14 +10,13 @@ import math
 
 import numpy as np
 
-from ..errors import AnalysisError
-from .dynamic import diagnose_curve
-from .jumps import pull_off_estimate
-from .options import DiagnosisOptions
-from .registry import AnalysisStep, ResultField
-from .state import State
-
-from ._step_helpers import _kind
+from ...errors import AnalysisError
+from .._step_helpers import _kind
+from ..dynamic import diagnose_curve
+from ..jumps import pull_off_estimate
+from ..options import DiagnosisOptions
+from ..registry import AnalysisStep, ResultField
+from ..state import State
 
 __all__ = ["diagnosis", "DIAGNOSIS"]
 

@@ -1,13 +1,13 @@
-"""The ``liquid`` step: a colloid-probe curve measured in a liquid, from the raw signal (docs/liquid.md).
+"""The ``liquid`` step (its record :data:`LIQUID`): a colloid-probe curve measured in a liquid, from the raw signal (docs/liquid.md).
 
-Built on :mod:`.liquid` (P. Attard, arXiv 1212.3019, 2012; Vinogradova et al. 2001): the
+Built on :mod:`afmforce.analysis.liquid` (P. Attard, arXiv 1212.3019, 2012; Vinogradova et al. 2001): the
 photodiode calibrated with a quadratic on the compliance region and the zero of separation
-put on it without a human (:func:`~.liquid.calibrate_liquid_curve`), the approach and retract
+put on it without a human (:func:`~afmforce.analysis.liquid.calibrate_liquid_curve`), the approach and retract
 far-field baselines and the lever drag from their gap and the speed
-(:func:`~.liquid.drag_baselines`, the colloid's long-ranged drainage at that distance
+(:func:`~afmforce.analysis.liquid.drag_baselines`, the colloid's long-ranged drainage at that distance
 subtracted), force against separation per run, the static and velocity-dependent forces at
-equal separation (:func:`~.liquid.split_drainage`, :func:`~.liquid.velocity_force_fit`), and a
-DLVO fit of the static force (:func:`~.liquid.fit_dlvo`). It works on the raw signal (not the
+equal separation (:func:`~afmforce.analysis.liquid.split_drainage`, :func:`~afmforce.analysis.liquid.velocity_force_fit`), and a
+DLVO fit of the static force (:func:`~afmforce.analysis.liquid.fit_dlvo`). It works on the raw signal (not the
 drift-corrected one: the drift step would take the drag offset for drift) and, when it
 applies, replaces the result's separation and force arrays by its own.
 
@@ -23,15 +23,15 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..constants import MEDIA
-from ..errors import AnalysisError
-from ._step_helpers import _skip
-from ._units import unit as _u
-from .liquid import calibrate_liquid_curve, drag_baselines, fit_dlvo, split_drainage, velocity_force_fit
-from .options import LiquidOptions
-from .regions import run_indices
-from .registry import AnalysisStep, ResultField
-from .state import State
+from ...constants import MEDIA
+from ...errors import AnalysisError
+from .._step_helpers import _skip
+from .._units import unit as _u
+from ..liquid import calibrate_liquid_curve, drag_baselines, fit_dlvo, split_drainage, velocity_force_fit
+from ..options import LiquidOptions
+from ..regions import run_indices
+from ..registry import AnalysisStep, ResultField
+from ..state import State
 
 __all__ = ["LiquidResult", "liquid", "LIQUID"]
 
@@ -123,7 +123,7 @@ def _robust_std(x: np.ndarray) -> float:
 
 def liquid(st: State, o: LiquidOptions) -> State:
     """Analyse a colloid-probe curve in a liquid (module docstring); skip it with the reason elsewhere."""
-    from ..forces import effective_radius
+    from ...forces import effective_radius
 
     if o.medium in ("none", "air"):
         why = ("no liquid medium given (`medium`, e.g. water)" if o.medium == "none"
@@ -146,7 +146,7 @@ def liquid(st: State, o: LiquidOptions) -> State:
         cal_curve = calibrate_liquid_curve(st.curve, far=far)
     except AnalysisError as exc:
         return _skip(st, "liquid", f"no liquid calibration: {exc}")
-    from .liquid import ComplianceCalibration
+    from ..liquid import ComplianceCalibration
 
     cal = ComplianceCalibration(**cal_curve.metadata["liquid_calibration"])
     sig = np.asarray(st.curve.deflection_signal, float)
@@ -199,7 +199,7 @@ def liquid(st: State, o: LiquidOptions) -> State:
     sign = -1.0 if o.potential_sign == "negative" else 1.0
     fit = fit_dlvo(ha[sel], fa[sel], radius, sigma=noise * math.sqrt(2.0), geometry=o.geometry,
                    law=o.double_layer, permittivity=eps, z0=o.z0, guess=(sign * psi0, lam0, 1e-20))
-    from ..forces import double_layer_force, paper_radius, vdw_force
+    from ...forces import double_layer_force, paper_radius, vdw_force
 
     hf = ha[sel]
     model = np.asarray(vdw_force(hf, float(paper_radius(radius, o.geometry)), fit.hamaker, o.z0)) + np.asarray(
@@ -230,7 +230,6 @@ def _no_double_layer(hs, fs, noise, o: LiquidOptions, h_far: float):
     return lam0, float(np.exp(icpt)), hi
 
 
-# --- the registry's record (afmforce.analysis.registry) --------------------------------------------
 def _liquid_fields(st: State) -> dict:
     q = st.details["liquid"]
     return dict(drag_offset=q.drag_offset, lever_drag=q.lever_drag, surface_potential=q.surface_potential,
