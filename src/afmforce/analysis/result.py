@@ -65,6 +65,9 @@ class AnalysisResult:
         Deflection sensitivity (InvOLS) the file or the user gives [m/V] (NaN if none).
     sensitivity_fit : float
         Sensitivity implied by the constant-compliance slope [m/V] (rigid contact assumed).
+    sensitivity_used : float
+        The sensitivity the forces were computed with [m/V]: ``sensitivity_fit`` when
+        ``calibration_source`` is ``"fit"``, else ``sensitivity`` (computed, not stored).
     calibration_source : str
         ``"metadata"`` (the file's or user's calibration) or ``"fit"`` (the compliance slope).
     spring_constant : float
@@ -152,6 +155,8 @@ class AnalysisResult:
     surface_potential, surface_potential_se, debye_length, debye_length_se, dlvo_hamaker, dlvo_hamaker_se : float
         The DLVO fit of the static force: psi [V], 1/kappa [m], A [J] and standard errors.
     warnings : tuple of str
+    values : mapping
+        The steps' fields that were filled (name -> value); the others take their declared defaults.
     time, position, separation, deflection, force : ndarray
         Per sample [s], [m], [m], [m], [N].
     segment : ndarray of int8
