@@ -15,7 +15,8 @@ from typing import Any
 
 from .._fields import _DISPLAY, FieldSpec
 
-__all__ = ["simulation_fields", "analysis_steps", "analysis_options", "calibration_fields", "fit_parameters", "examples", "schema"]
+__all__ = ["simulation_fields", "analysis_steps", "analysis_options", "calibration_fields", "fit_parameters",
+           "examples", "schema"]
 
 #: SI unit -> the unit a control shows when its spec names none.
 _SHOWN = {"m": "nm", "N": "nN", "kg": "ng", "m/s": "um/s", "Hz": "kHz", "s": "s", "m/V": "nm/V", "rad": "deg"}

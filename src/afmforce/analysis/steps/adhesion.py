@@ -1,4 +1,4 @@
-"""The ``adhesion`` step: adhesion: deepest retract dip below its own baseline, last rupture, unbinding steps.
+"""The ``adhesion`` step: the deepest retract dip below its own baseline, last rupture, unbinding steps.
 
 Declared once by its record :data:`ADHESION` (:mod:`afmforce.analysis.registry`).
 """

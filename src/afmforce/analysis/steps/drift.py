@@ -13,7 +13,8 @@ from ..state import State
 __all__ = ["drift", "DRIFT"]
 
 
-#: Retract baselines of a free part too noisy for its own line (:func:`~afmforce.analysis.drift.borrowed_line`), in words.
+#: Retract baselines of a free part too noisy for its own line
+#: (:func:`~afmforce.analysis.drift.borrowed_line`), in words.
 _BORROWED = {"offset": "no slope", "approach slope": "the approach's drift rate",
              "position tilt": "the approach baseline's tilt in position"}
 

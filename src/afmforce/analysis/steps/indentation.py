@@ -1,4 +1,5 @@
-"""The ``indentation`` step: young's modulus (and work of adhesion) of a soft contact: indentation model fitted with the contact point.
+"""The ``indentation`` step: Young's modulus (and work of adhesion) of a soft contact, an indentation
+model fitted with the contact point (the fit itself: :mod:`afmforce.analysis.indentation`).
 
 Declared once by its record :data:`INDENTATION` (:mod:`afmforce.analysis.registry`).
 """

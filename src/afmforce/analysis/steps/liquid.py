@@ -1,19 +1,21 @@
-"""The ``liquid`` step (its record :data:`LIQUID`): a colloid-probe curve measured in a liquid, from the raw signal (docs/liquid.md).
+"""The ``liquid`` step (its record :data:`LIQUID`): a colloid-probe curve measured in a liquid,
+from the raw signal (docs/liquid.md).
 
-Built on :mod:`afmforce.analysis.liquid` (P. Attard, arXiv 1212.3019, 2012; Vinogradova et al. 2001): the
-photodiode calibrated with a quadratic on the compliance region and the zero of separation
-put on it without a human (:func:`~afmforce.analysis.liquid.calibrate_liquid_curve`), the approach and retract
-far-field baselines and the lever drag from their gap and the speed
-(:func:`~afmforce.analysis.liquid.drag_baselines`, the colloid's long-ranged drainage at that distance
-subtracted), force against separation per run, the static and velocity-dependent forces at
-equal separation (:func:`~afmforce.analysis.liquid.split_drainage`, :func:`~afmforce.analysis.liquid.velocity_force_fit`), and a
-DLVO fit of the static force (:func:`~afmforce.analysis.liquid.fit_dlvo`). It works on the raw signal (not the
-drift-corrected one: the drift step would take the drag offset for drift) and, when it
-applies, replaces the result's separation and force arrays by its own.
+Built on :mod:`afmforce.analysis.liquid` (P. Attard, arXiv 1212.3019, 2012; Vinogradova et al.
+2001): the photodiode calibrated with a quadratic on the compliance region and the zero of
+separation put on it without a human (:func:`~afmforce.analysis.liquid.calibrate_liquid_curve`), the
+approach and retract far-field baselines and the lever drag from their gap and the speed
+(:func:`~afmforce.analysis.liquid.drag_baselines`, the colloid's long-ranged drainage at that
+distance subtracted), force against separation per run, the static and velocity-dependent forces at
+equal separation (:func:`~afmforce.analysis.liquid.split_drainage`,
+:func:`~afmforce.analysis.liquid.velocity_force_fit`), and a DLVO fit of the static force
+(:func:`~afmforce.analysis.liquid.fit_dlvo`). It works on the raw signal (not the drift-corrected
+one: the drift step would take the drag offset for drift) and, when it applies, replaces the
+result's separation and force arrays by its own.
 
 Skipped with the reason: no liquid medium given (or air), no spring constant or radius, no
-compliance region; a curve without double-layer repulsion above the noise keeps the
-calibration and the drag and is reported skipped for the DLVO fit.
+compliance region; a curve without double-layer repulsion above the noise keeps the calibration and
+the drag and is reported skipped for the DLVO fit.
 """
 
 from __future__ import annotations
