@@ -219,3 +219,16 @@ def test_a_new_step_needs_its_own_module_only(tmp_path):
     assert got["cli"] == got["web"]
     # the force behind it: 3 x the approach's largest force, from the file's own spring constant
     assert got["cli"][0][2] > 0
+
+
+def test_the_web_checks_the_steps_it_is_sent_against_the_registry():
+    pytest.importorskip("fastapi")
+    from afmforce.web.analysis import parse_steps
+    from afmforce.web.schema import analysis_steps
+    from afmforce.web.validate import FieldError
+
+    assert [s["identifier"] for s in analysis_steps()] == list(STEPS)
+    assert parse_steps([]) is None and parse_steps(["vdw", " jumps "]) == ("vdw", "jumps")
+    with pytest.raises(FieldError, match="unknown analysis step 'vwd'; choose from smooth, contact") as err:
+        parse_steps(["vdw", "vwd"])
+    assert err.value.field == "step[1]"
