@@ -232,3 +232,101 @@ def test_the_web_checks_the_steps_it_is_sent_against_the_registry():
     with pytest.raises(FieldError, match="unknown analysis step 'vwd'; choose from smooth, contact") as err:
         parse_steps(["vdw", "vwd"])
     assert err.value.field == "step[1]"
+
+
+_SHIPPED_STEP = '''
+"""The ``zz_valley`` step (a test's): the deepest force of the retract, scaled."""
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..options import StepOptions, option_field
+from ..registry import AnalysisStep, ResultField
+
+
+@dataclass(frozen=True)
+class ValleyOptions(StepOptions):
+    step = "zz_valley"
+    scale: float = option_field(1.0, "dimensionless", "", "factor on the valley force", lo=0.0, hi=10.0,
+                                lo_open=True)
+
+
+@dataclass(frozen=True)
+class ValleyResult:
+    valley_force: float
+
+
+def valley(st, o):
+    return st.update("zz_valley", ValleyResult(float(np.min(st.force[st.retract.index])) * o.scale))
+
+
+VALLEY = AnalysisStep(
+    "zz_valley", "Deepest force of the retract (a test's step)", valley, ValleyOptions, requires=("force",),
+    channels=("force",), reference="a test",
+    fields=(ResultField("zz_valley_force", "N", "valley force of the retract", summary=True, column=True),),
+    collect=lambda st: {"zz_valley_force": st.details["zz_valley"].valley_force})
+'''
+
+_SHIPPED_RUN = '''
+import contextlib, io, json
+import numpy as np
+from afmforce.analysis.options_text import options_markdown, parse_option
+option = parse_option("zz_valley.scale=2.5")     # first: the registry is not loaded yet
+from afmforce.analysis.maps import MAP_QUANTITIES
+from afmforce.analysis.pipeline import STEPS, analyze
+from afmforce.analysis.options import OPTIONS
+from afmforce.analysis.result import AnalysisResult, SUMMARY_FIELDS
+from afmforce.analysis.synthetic import static_curve
+from afmforce.sweep.summary import SUMMARY_COLUMNS, summary_row
+from afmforce.web.schema import analysis_options, analysis_steps
+from afmforce.cli.main import main
+
+curve = static_curve(noise=0.05e-9, drift=0.01, seed=11)
+res = analyze(curve, steps=["zz_valley"], options=[OPTIONS["zz_valley"](scale=2.0)])
+buf = io.StringIO()
+with contextlib.redirect_stdout(buf):
+    try:
+        main(["analyze", "--help"])
+    except SystemExit:
+        pass
+print(json.dumps({
+    "option": list(option), "steps": list(STEPS), "steps_run": list(res.steps_run), "value": res.zz_valley_force,
+    "independent": float(np.min(res.force[res.segment == 1])) * 2.0,
+    "json": json.loads(res.to_json())["zz_valley_force"], "unit": AnalysisResult.UNITS["zz_valley_force"],
+    "summary": [r for r in SUMMARY_FIELDS if r[0] == "zz_valley_force"],
+    "row": summary_row(res, curve, file="c", index=0, name="c")["zz_valley_force"],
+    "column": SUMMARY_COLUMNS.get("zz_valley_force"), "map": MAP_QUANTITIES["zz_valley_force"].unit,
+    "help": " ".join(buf.getvalue().split()).count("zz_valley"), "docs": "`zz_valley.scale`" in options_markdown(),
+    "web_steps": [s["identifier"] for s in analysis_steps()], "web_options": list(analysis_options()["zz_valley"]
+                                                                                   [0].values())[:1],
+}))
+'''
+
+
+def test_a_new_step_shipped_in_the_package_is_one_module_in_steps(tmp_path):
+    """Copy the package, write one module into analysis/steps/ (its options record, function and record;
+    no list edited, no registration call), and find the step on every face. The compiled kernels run as
+    plain Python (NUMBA_DISABLE_JIT: the copy would compile them again)."""
+    import shutil
+    from pathlib import Path
+
+    import afmforce
+
+    root = tmp_path / "src"
+    shutil.copytree(Path(afmforce.__file__).parent, root / "afmforce",
+                    ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    (root / "afmforce" / "analysis" / "steps" / "zz_valley.py").write_text(textwrap.dedent(_SHIPPED_STEP))
+    env = {**os.environ, "PYTHONPATH": str(root), "NUMBA_DISABLE_JIT": "1"}
+    out = subprocess.run([sys.executable, "-c", _SHIPPED_RUN], capture_output=True, text=True, env=env,
+                         cwd=tmp_path, timeout=900)
+    assert out.returncode == 0, out.stderr[-3000:]
+    got = json.loads(out.stdout.strip().splitlines()[-1])
+    assert got["option"] == ["zz_valley", "scale", 2.5]
+    assert got["steps"] == [*STEPS, "zz_valley"]                       # after the built-ins, in their order
+    assert got["steps_run"] == ["contact", "drift", "compliance", "calibration", "force", "zz_valley"]
+    assert got["value"] == pytest.approx(got["independent"], rel=1e-12) and got["value"] < 0
+    assert got["json"] == pytest.approx(got["value"], rel=1e-12) and got["row"] == pytest.approx(got["value"])
+    assert got["unit"] == got["map"] == "N" and got["column"] == "float"
+    assert got["summary"] == [["zz_valley_force", "valley force of the retract", "N"]]
+    assert got["help"] >= 2 and got["docs"]                            # --steps and --option help; docs table
+    assert got["web_steps"] == got["steps"] and got["web_options"] == ["scale"]

@@ -14,10 +14,11 @@ summary (:data:`afmforce.sweep.summary.SUMMARY_COLUMNS`), the map quantities
 and the web's step list.
 
 Add a step: write one module that defines its options record (a ``StepOptions`` subclass:
-:data:`~.options.OPTIONS` registers it) and calls :func:`register_step` with its record
-(docs/architecture.md, "Analysis steps"). The built-in steps' modules are listed in
-:data:`BUILTIN_MODULES` (one module per step in :mod:`afmforce.analysis.steps`); on first use each
-is imported and the ``AnalysisStep`` record it defines at module level is registered.
+:data:`~.options.OPTIONS` registers it), its function and its ``AnalysisStep`` record
+(docs/architecture.md, "Analysis steps"): in :mod:`afmforce.analysis.steps` (one module per step;
+on first use the registry imports every module there, those of :data:`BUILTIN_MODULES` first, in
+that order, and registers the records they define), or anywhere else, calling
+:func:`register_step` with the record.
 
 This module imports nothing heavy.
 """
@@ -26,6 +27,7 @@ from __future__ import annotations
 
 import importlib
 import math
+import pkgutil
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator
@@ -123,8 +125,9 @@ class AnalysisStep:
         return self.func(state, options)
 
 
-#: The built-in steps: their modules in :mod:`afmforce.analysis.steps`, imported on first use, in the
-#: pipeline's order (which breaks the ties of :func:`order`).
+#: The order of the built-in steps: their modules in :mod:`afmforce.analysis.steps`, imported on first
+#: use in this order (which breaks the ties of :func:`order`); any other module of that package is
+#: imported after them (sorted by name), so a new step needs no edit here.
 BUILTIN_MODULES = ("smooth", "contact", "drift", "fringes", "compliance", "calibration", "kind", "shift", "zero",
                    "force", "jumps", "adhesion", "surface_energy", "vdw", "oscillation", "friction", "indentation",
                    "diagnosis", "liquid")
@@ -139,10 +142,15 @@ def _load() -> None:
         return
     _STATE["loading"] = True
     try:
-        for name in BUILTIN_MODULES:
-            module = importlib.import_module(f"{__package__}.steps.{name}")
-            for rec in list(vars(module).values()):
-                if isinstance(rec, AnalysisStep) and _STEPS.get(rec.identifier) is not rec:
+        package = importlib.import_module(f"{__package__}.steps")
+        found = sorted(m.name for m in pkgutil.iter_modules(package.__path__) if not m.name.startswith("_"))
+        for name in (*BUILTIN_MODULES, *(n for n in found if n not in BUILTIN_MODULES)):
+            module = importlib.import_module(f"{package.__name__}.{name}")
+            records = [r for r in vars(module).values() if isinstance(r, AnalysisStep)]
+            if not records:
+                raise TypeError(f"{module.__name__} defines no AnalysisStep record")
+            for rec in records:
+                if _STEPS.get(rec.identifier) is not rec:
                     _add(rec)
         _STATE["loaded"] = True
     finally:
