@@ -330,3 +330,54 @@ def test_a_new_step_shipped_in_the_package_is_one_module_in_steps(tmp_path):
     assert got["summary"] == [["zz_valley_force", "valley force of the retract", "N"]]
     assert got["help"] >= 2 and got["docs"]                            # --steps and --option help; docs table
     assert got["web_steps"] == got["steps"] and got["web_options"] == ["scale"]
+
+
+def test_a_step_runs_after_the_steps_it_follows_and_checks_its_channels():
+    """``after`` moves a step behind one registered later; ``channels`` are checked before it runs."""
+    from dataclasses import dataclass, replace
+
+    from afmforce.analysis.options import StepOptions
+    from afmforce.analysis.state import prepare
+    from afmforce.analysis.synthetic import static_curve
+    from afmforce.errors import AnalysisError
+
+    @dataclass(frozen=True)
+    class FirstOptions(StepOptions):
+        step = "zz_first"
+
+    @dataclass(frozen=True)
+    class SecondOptions(StepOptions):
+        step = "zz_second"
+
+    def note(st, o):
+        return st.update(o.step, {"seen": sorted(k for k in st.details if k.startswith("zz_"))})
+
+    first = R.AnalysisStep("zz_first", "first", note, FirstOptions, requires=("force",), after=("zz_second",))
+    second = R.AnalysisStep("zz_second", "second", note, SecondOptions, requires=("zero",))
+    try:
+        R.register_step(first)
+        R.register_step(second)
+        assert list(STEPS)[-2:] == ["zz_second", "zz_first"]          # registered first, runs second
+        from afmforce.analysis.pipeline import analyze
+
+        res = analyze(static_curve(noise=0.05e-9, drift=0.01, seed=11), steps=["zz_first", "zz_second"])
+        assert res.steps_run[-2:] == ("zz_second", "zz_first") and res.details["zz_first"]["seen"] == ["zz_second"]
+    finally:
+        for name in ("zz_first", "zz_second"):
+            if name in STEPS:
+                R.unregister_step(name)
+            OPTIONS.pop(name, None)
+    assert "zz_first" not in STEPS and "zz_first" not in OPTIONS
+    st = prepare(static_curve(noise=0.05e-9, drift=0.01, seed=11))
+    with pytest.raises(AnalysisError, match="step 'jumps' needs separation"):
+        STEPS["jumps"].run(st, STEPS["jumps"].options())
+    R.register_step(replace(first, requires=("force",)))
+    try:
+        with pytest.raises(TypeError, match="cycle"):
+            R.register_step(replace(second, after=("zz_first",)))    # each after the other: refused
+        assert list(STEPS)[-1] == "zz_first" and "zz_second" not in STEPS
+    finally:
+        R.unregister_step("zz_first")
+        OPTIONS.pop("zz_first", None)
+        OPTIONS.pop("zz_second", None)
+    assert list(STEPS)[-1] == "liquid"

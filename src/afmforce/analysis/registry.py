@@ -192,8 +192,9 @@ def _add(step: AnalysisStep) -> AnalysisStep:
         if f.name in taken:
             raise TypeError(f"step {step.identifier!r}: result field {f.name!r} is declared by step "
                             f"{taken[f.name]!r}")
+    order = _sorted({**_STEPS, step.identifier: step})   # a cycle refuses the step, the registry unchanged
     _STEPS[step.identifier] = step
-    _ORDER[:] = _sorted(list(_STEPS))
+    _ORDER[:] = order
     _STATE["version"] += 1
     return step
 
@@ -205,18 +206,18 @@ def unregister_step(identifier: str) -> None:
     if users:
         raise TypeError(f"step {identifier!r} is required by {', '.join(users)}")
     del _STEPS[identifier]
-    _ORDER[:] = _sorted(list(_STEPS))
+    _ORDER[:] = _sorted(_STEPS)
     _STATE["version"] += 1
 
 
-def _sorted(names: list[str]) -> list[str]:
+def _sorted(steps: dict[str, AnalysisStep]) -> list[str]:
     """Registration order, each step moved after its requirements and the ``after`` steps present."""
     done: list[str] = []
-    left = list(names)
+    left = list(steps)
     while left:
         for n in left:
-            s = _STEPS[n]
-            if all(r in done or r not in _STEPS for r in (*s.requires, *s.after)):
+            s = steps[n]
+            if all(r in done or r not in steps for r in (*s.requires, *s.after)):
                 done.append(n)
                 left.remove(n)
                 break
