@@ -135,6 +135,7 @@ BUILTIN_MODULES = ("smooth", "contact", "drift", "fringes", "compliance", "calib
 _STEPS: dict[str, AnalysisStep] = {}
 _ORDER: list[str] = []
 _STATE = {"version": 0, "loading": False, "loaded": False}
+_CACHE: dict[str, tuple[int, Any]] = {}
 
 
 def _load() -> None:
@@ -227,9 +228,18 @@ def _sorted(steps: dict[str, AnalysisStep]) -> list[str]:
 
 
 def steps() -> dict[str, AnalysisStep]:
-    """Identifier -> record, in the pipeline's order (a new dict)."""
-    _load()
-    return {n: _STEPS[n] for n in _ORDER}
+    """Identifier -> record, in the pipeline's order (one dict per state of the registry: read it, do not
+    change it)."""
+    return _cached("steps", lambda: {n: _STEPS[n] for n in _ORDER})
+
+
+def _cached(key: str, build: Callable[[], Any]) -> Any:
+    """``build()``, computed once per state of the registry (results read per curve and per field)."""
+    v = version()
+    hit = _CACHE.get(key)
+    if hit is None or hit[0] != v:
+        hit = _CACHE[key] = (v, build())
+    return hit[1]
 
 
 def order() -> tuple[str, ...]:
@@ -248,8 +258,9 @@ def step(identifier: str) -> AnalysisStep:
 
 
 def result_fields() -> dict[str, ResultField]:
-    """Every step's result fields, name -> record, in the pipeline's order."""
-    return {f.name: f for n in order() for f in _STEPS[n].fields}
+    """Every step's result fields, name -> record, in the pipeline's order (one dict per state of the
+    registry: read it, do not change it)."""
+    return _cached("fields", lambda: {f.name: f for n in _ORDER for f in _STEPS[n].fields})
 
 
 class LiveDict(dict):
