@@ -27,7 +27,7 @@ from afmforce.analysis.jumps import JumpIn, PullOff
 from afmforce.analysis.pipeline import analyze
 from afmforce.analysis.regions import find_run_regions, run_indices, saturated_mask
 from afmforce.analysis.plausibility import DETECTOR_RANGE, IMPOSSIBLE, beyond_detector
-from afmforce.analysis.steps_results import _repulsive
+from afmforce.analysis.steps.jumps import _repulsive
 from afmforce.analysis.synthetic import static_curve
 from afmforce.io import load
 

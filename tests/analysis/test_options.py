@@ -1,5 +1,5 @@
 """Typed step options (issue 11, item 6): the probe record, one options dataclass per step,
-defaults declared once (in the registry's records), validation with units, the deprecated dict."""
+defaults declared once (in the registry's records), validation with units; the old dict form refused."""
 
 from __future__ import annotations
 
@@ -102,7 +102,7 @@ def test_parse_option_takes_units_words_and_flags():
             parse_option(bad)
 
 
-# --- the pipeline takes records; the old dict still works, with a warning -----------------------
+# --- the pipeline takes records (the old dict form is removed) -----------------------------------
 def test_defaults_come_from_the_records():
     opts, probe = resolve_options()
     assert set(opts) == set(STEPS) and probe == O.ProbeCalibration()
@@ -110,23 +110,20 @@ def test_defaults_come_from_the_records():
         assert rec == STEPS[name].options()
 
 
-def test_records_and_deprecated_dict_give_identical_results(curve):
+def test_records_change_the_results(curve):
     new = analyze(curve, options=[O.VdwOptions(max_separation=20e-9), O.ZeroOptions(contact_separation=0.0)],
                   probe=O.ProbeCalibration(radius=20e-9, spring_constant=0.2))
-    with pytest.warns(DeprecationWarning, match="deprecated"):
-        old = analyze(curve, options={"vdw": {"radius": 20e-9, "max_separation": 20e-9},
-                                      "zero": {"contact_separation": 0.0},
-                                      "force": {"spring_constant": 0.2}})
-    assert new.to_json() == old.to_json()
     default = analyze(curve)
     assert new.hamaker_radius != default.hamaker_radius  # the options did something
     assert new.spring_constant == 0.2 and new.contact_separation == 0.0
     assert new.hamaker == pytest.approx(new.hamaker_radius / 20e-9)
 
 
-def test_deprecated_dict_refuses_two_radii(curve):
-    with pytest.warns(DeprecationWarning), pytest.raises(ParameterError, match="radius"):
+def test_the_old_dict_form_is_an_afmforce_error_naming_the_records(curve):
+    with pytest.raises(AfmforceError, match="VdwOptions.*ProbeCalibration.*no longer accepted"):
         analyze(curve, options={"vdw": {"radius": 20e-9}, "surface_energy": {"radius": 30e-9}})
+    with pytest.raises(AfmforceError, match="no longer accepted"):
+        resolve_options({"force": {"spring_constant": 0.2}})
 
 
 def test_options_given_twice_or_of_the_wrong_type_are_refused(curve):

@@ -55,13 +55,14 @@ def test_steps_run_are_reported(curve):
     assert full.steps_run == DEFAULT_STEPS
 
 
-def test_unknown_options_in_the_deprecated_dict_are_rejected(curve):
-    with pytest.warns(DeprecationWarning), pytest.raises(ParameterError, match="unknown option"):
-        analyze(curve, options={"vdw": {"radius_nm": 3}})
-    with pytest.warns(DeprecationWarning), pytest.raises(ParameterError, match="unknown step"):
-        analyze(curve, options={"vwd": {}})
-    with pytest.warns(DeprecationWarning), pytest.raises(ParameterError, match="smooth.window"):
-        analyze(curve, options={"smooth": {"window": 4}})
+def test_the_removed_dict_form_of_the_options_is_refused_saying_what_to_pass(curve):
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # refused outright, no DeprecationWarning any more
+        for old in ({"vdw": {"max_separation": 20e-9}}, {}):
+            with pytest.raises(ParameterError, match=r"VdwOptions\(max_separation=20e-9\).*ProbeCalibration"):
+                analyze(curve, options=old)
 
 
 def test_input_curve_is_not_modified(curve):

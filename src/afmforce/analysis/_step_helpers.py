@@ -1,4 +1,4 @@
-"""Helpers shared by the pipeline steps (:mod:`.steps`, :mod:`.steps_prepare`, :mod:`.steps_results`)."""
+"""Helpers shared by the pipeline steps (:mod:`afmforce.analysis.steps`)."""
 
 from __future__ import annotations
 

@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ParameterError
-from .result import SUMMARY_FIELDS
+from .registry import LiveDict, result_fields
 
 __all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_images", "write_map_hdf5", "EXTENT_KEY",
            "map_histogram"]
@@ -60,15 +60,21 @@ class MapQuantity:
     sign: float = 1.0
 
 
-#: The registry: the named map quantities, then every numeric summary field by its own name.
-MAP_QUANTITIES: dict[str, MapQuantity] = {q.identifier: q for q in (
-    MapQuantity("adhesion", "adhesion_force", "adhesion (depth of the retract dip below its baseline)", "N", -1.0),
-    MapQuantity("jump_in_distance", "jump_in_separation", "jump-in distance (separation before the jump)", "m"),
-    *(MapQuantity(name, name, label, unit) for name, label, unit in SUMMARY_FIELDS),
-    MapQuantity("jump_in_deflection", "jump_in_deflection", "jump-in deflection", "m"),
-    MapQuantity("modulus", "youngs_modulus", "Young's modulus (indentation fit)", "Pa"),
-    MapQuantity("topography", "contact_point", "height: minus the piezo position at contact", "m", -1.0),
-)}
+def _quantities() -> dict[str, "MapQuantity"]:
+    return {q.identifier: q for q in (
+        MapQuantity("adhesion", "adhesion_force", "adhesion (depth of the retract dip below its baseline)", "N", -1.0),
+        MapQuantity("jump_in_distance", "jump_in_separation", "jump-in distance (separation before the jump)", "m"),
+        *(MapQuantity(f.name, f.name, f.label, f.unit or "") for f in result_fields().values() if f.mapped),
+        MapQuantity("jump_in_deflection", "jump_in_deflection", "jump-in deflection", "m"),
+        MapQuantity("modulus", "youngs_modulus", "Young's modulus (indentation fit)", "Pa"),
+        MapQuantity("topography", "contact_point", "height: minus the piezo position at contact", "m", -1.0),
+    )}
+
+
+#: The registry: the named map quantities, then every field the steps' records map (by default those
+#: both in the printed summary and in the summary table: :mod:`.registry`) by its own name (kept up to
+#: date with the registered steps).
+MAP_QUANTITIES: dict[str, MapQuantity] = LiveDict(_quantities)
 
 
 def map_quantity(name: str) -> MapQuantity:

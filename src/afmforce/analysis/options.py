@@ -2,11 +2,13 @@
 
 :class:`ProbeCalibration` holds what the user knows about the probe and its
 calibration (radius, spring constant, inclination, sensitivity, ...); a field
-left ``None`` takes the file's value. Each step of
+left ``None`` takes the file's value. Each built-in step of
 :data:`afmforce.analysis.pipeline.STEPS` has an options dataclass here
 (:class:`VdwOptions`, :class:`ZeroOptions`, ...) whose field defaults are the
 step's defaults -- declared once, here, and nowhere else (the step functions
-take the record, not keyword defaults). Every field carries a
+take the record, not keyword defaults); a :class:`StepOptions` subclass registers
+itself in :data:`OPTIONS` when defined (a step added in its own module defines
+its record there). Every field carries a
 :class:`~afmforce._fields.FieldSpec` in its metadata (dimension, SI unit, help,
 valid range), from which the records validate themselves
 (:class:`~afmforce.errors.ParameterError` naming the option and its range), and
@@ -35,7 +37,7 @@ __all__ = ["ProbeCalibration", "StepOptions", "SmoothOptions", "ContactOptions",
            "FringesOptions", "ComplianceOptions", "CalibrationOptions", "KindOptions", "ShiftOptions",
            "ZeroOptions", "ForceOptions", "JumpsOptions", "AdhesionOptions", "SurfaceEnergyOptions",
            "VdwOptions", "OscillationOptions", "FrictionOptions", "DiagnosisOptions", "IndentationOptions",
-           "LiquidOptions", "OPTIONS"]
+           "LiquidOptions", "OPTIONS", "option_field"]
 
 
 def _opt(default: Any, dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,
@@ -48,6 +50,11 @@ def _opt(default: Any, dimension: str, unit: str, help: str, *, lo: float | None
     md = dict(meta(dimension, unit, help, lo=lo, hi=hi, lo_open=lo_open, hi_open=hi_open, display=display))
     md["choices"] = tuple(choices)
     return dataclasses.field(default=default, metadata=md)
+
+
+#: The public name of :func:`_opt`: an option field of a step's options record (a step added in its
+#: own module declares its options with it).
+option_field = _opt
 
 
 def _q(name: str, default: Any, help: str | None = None) -> Any:
@@ -160,9 +167,25 @@ class ProbeCalibration(_Validated):
         return {k: v for k, v in self.to_dict().items() if v is not None}
 
 
+#: Step identifier -> its options class: every subclass of :class:`StepOptions` that names its
+#: ``step`` registers itself here when it is defined (the step's record points to it).
+OPTIONS: dict[str, type["StepOptions"]] = {}
+
+
 @dataclass(frozen=True)
 class StepOptions(_Validated):
-    """Base of the per-step options records (the registry names each step's class)."""
+    """Base of the per-step options records: a subclass sets ``step`` (its step's identifier) and
+    is registered in :data:`OPTIONS` when defined."""
+
+    def __init_subclass__(cls, **kwargs: Any) -> None:
+        super().__init_subclass__(**kwargs)
+        step = cls.__dict__.get("step")
+        if not step:
+            return
+        old = OPTIONS.get(step)
+        if old is not None and (old.__module__, old.__qualname__) != (cls.__module__, cls.__qualname__):
+            raise TypeError(f"options of step {step!r} are declared twice: {old.__qualname__} and {cls.__qualname__}")
+        OPTIONS[step] = cls
 
 
 @dataclass(frozen=True)
@@ -424,11 +447,3 @@ class LiquidOptions(StepOptions):
                                         hi=1e-5, lo_open=True)
     z0: float = _q("z0", Z0, "van der Waals cut-off z0 of the DLVO fit")
     nsigma: float = _nsigma(3.0, "double-layer repulsion threshold in multiples of the static force noise")
-
-
-#: Step identifier -> its options class (the registry's records point here).
-OPTIONS: dict[str, type[StepOptions]] = {c.step: c for c in (
-    SmoothOptions, ContactOptions, DriftOptions, FringesOptions, ComplianceOptions, CalibrationOptions,
-    KindOptions, ShiftOptions, ZeroOptions, ForceOptions, JumpsOptions, AdhesionOptions, SurfaceEnergyOptions,
-    VdwOptions, OscillationOptions, FrictionOptions, DiagnosisOptions, IndentationOptions,
-    LiquidOptions)}

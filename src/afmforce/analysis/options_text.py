@@ -13,7 +13,20 @@ from .._fields import FieldSpec, spec_of
 from ..errors import ParameterError
 from .options import OPTIONS, ProbeCalibration
 
-__all__ = ["option_spec", "show_default", "parse_option", "options_markdown"]
+__all__ = ["step_options", "option_spec", "show_default", "parse_option", "options_markdown"]
+
+
+def step_options() -> dict[str, type]:
+    """Step -> options class of every registered step (a step declared in its own module, options
+    included, is found once the registry has imported the step modules)."""
+    from .registry import steps
+
+    return {k: s.options for k, s in steps().items()}
+
+
+def _options_of(step: str) -> type | None:
+    cls = OPTIONS.get(step)   # the records of options.py: no step module imported
+    return cls if cls is not None else step_options().get(step)
 
 
 def option_spec(cls: type, name: str) -> tuple[FieldSpec, tuple, Any]:
@@ -48,10 +61,11 @@ def parse_option(text: str, where: str = "option") -> tuple[str, str, Any]:
     step, dot, name = key.strip().partition(".")
     if not (sep and dot and step and name):
         raise ParameterError(f"{where} {text!r}: expected STEP.NAME=VALUE, e.g. vdw.max_separation=20nm")
-    if step not in OPTIONS:
+    cls = _options_of(step)
+    if cls is None:
         raise ParameterError(f"{where} {key}: unknown step {step!r}; steps with options: "
-                             + ", ".join(s for s, c in OPTIONS.items() if dataclasses.fields(c)))
-    spec, choices, default = option_spec(OPTIONS[step], name)
+                             + ", ".join(s for s, c in step_options().items() if dataclasses.fields(c)))
+    spec, choices, default = option_spec(cls, name)
     value = value.strip()
     flag = f"{where} {key}"
     low = value.lower()
@@ -77,7 +91,7 @@ def parse_option(text: str, where: str = "option") -> tuple[str, str, Any]:
 def options_markdown() -> str:
     """The docs table of the probe's fields and every step option: meaning, SI unit, default, valid range."""
     lines = ["| option | meaning | SI unit | default | valid values |", "|---|---|---|---|---|"]
-    for prefix, cls in (("probe", ProbeCalibration), *OPTIONS.items()):
+    for prefix, cls in (("probe", ProbeCalibration), *step_options().items()):
         for f in dataclasses.fields(cls):
             spec = spec_of(f)
             choices = f.metadata.get("choices", ())

@@ -1,10 +1,11 @@
-"""Analysis pipeline: named steps from a raw curve to an :class:`AnalysisResult`.
+"""Analysis pipeline: the registered steps from a raw curve to an :class:`AnalysisResult`.
 
-The paper's recipe (section 3, spec section 6) as an explicit registry
-(:data:`STEPS`): each step has an identifier, a name, an options dataclass
-(:mod:`.options`, whose field defaults are the only defaults),
-the steps it requires, and its source in the paper. :func:`analyze` runs the
-steps asked for (all by default) plus whatever they require, in registry order.
+The paper's recipe (section 3, spec section 6) as a registry of steps (:mod:`.registry`), each
+declared once by its record in its own module: identifier, name, options record
+(:mod:`.options`, whose field defaults are the only defaults), the steps it requires, the
+state channels it needs, its source in the paper, and its result fields with their units.
+:func:`analyze` runs the steps asked for (all by default) plus whatever they require, in the
+registry's order, and reads each step's fields off its details with the step's ``collect``.
 
 >>> from afmforce.io import load
 >>> from afmforce.analysis.pipeline import analyze
@@ -19,164 +20,54 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import warnings
-from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
 from . import options as O
-from . import steps as S
+from . import registry
 from .contact_point import CONTACT_POINT_METHODS
-from .indentation import indentation
-from .liquid_step import liquid
 from .options_text import show_default
 from .plausibility import (beyond_detector, impossible_reasons, impossible_steps, plausibility_warnings,
                            slope_not_the_levers)
+from .registry import AnalysisStep, ResultField, register_step
 from .result import AnalysisResult
 from .state import NoContact, State, prepare
+from .steps.contact import retract_dip
 from ..errors import ParameterError
 from ..io.curve import RawCurve
 
-__all__ = ["Step", "STEPS", "DEFAULT_STEPS", "analyze", "resolve_steps", "resolve_options", "options_from_dict",
-           "steps_table", "AnalysisResult"]
+__all__ = ["Step", "AnalysisStep", "ResultField", "register_step", "STEPS", "DEFAULT_STEPS", "analyze",
+           "resolve_steps", "resolve_options", "steps_table", "AnalysisResult"]
 
+#: The record of one step (the name it had before the registry moved to :mod:`.registry`).
+Step = AnalysisStep
 
-@dataclass(frozen=True)
-class Step:
-    """One analysis step.
-
-    Attributes
-    ----------
-    identifier : str
-        Name used in ``steps=`` and ``--steps``.
-    name : str
-        Human-readable name.
-    func : callable
-        ``func(state, options) -> state``; ``options`` an instance of :attr:`options`.
-    options : type
-        The step's options dataclass (:mod:`.options`): its field defaults are the
-        step's defaults, its field metadata their units and valid ranges.
-    requires : tuple of str
-        Steps that must run before.
-    reference : str
-        Where the method comes from.
-    """
-
-    identifier: str
-    name: str
-    func: Callable[[State, Any], State]
-    options: type[O.StepOptions]
-    requires: tuple[str, ...] = ()
-    reference: str = ""
-
-
-#: The registry, in execution order.
-STEPS: dict[str, Step] = {s.identifier: s for s in (
-    Step("smooth", "Digitization smoothing of the position (running average)", S.smooth, O.SmoothOptions,
-         (), "section 3.1, Fig 7C"),
-    Step("contact", "Contact, constant-compliance and zero-force regions", S.contact, O.ContactOptions,
-         (), "section 3.1, Fig 7"),
-    Step("drift", "Thermal drift: line in time in the zero-force region, per run", S.drift, O.DriftOptions,
-         ("contact",), "section 3.1, Fig 7"),
-    Step("fringes", "Interferometric calibration from baseline fringes", S.fringes, O.FringesOptions,
-         ("drift",), "section 3.1, Fig 7A; spec section 6"),
-    Step("compliance", "Constant-compliance lines (robust fit)", S.compliance, O.ComplianceOptions, ("drift",),
-         "section 3.1"),
-    Step("calibration", "Deflection sensitivity (InvOLS): the file's, or from the compliance slope", S.calibration,
-         O.CalibrationOptions, ("compliance",), "section 3.1; eq 15"),
-    Step("kind", "Contact kind (hard: jump-in or straight line; soft: curved) and a soft contact point",
-         S.kind, O.KindOptions, ("calibration",),
-         "afmforce (baseline line + power-law contact term; checked against nanite's fit_line_polynomial)"),
-    Step("shift", "Inward/outward shift overlaying the compliance lines", S.shift, O.ShiftOptions, ("kind",),
-         "section 3.2, Fig 9; Fig 7C"),
-    Step("zero", "Zero of separation at the compliance line", S.zero, O.ZeroOptions, ("kind",),
-         "section 3.2, Fig 9"),
-    Step("force", "Deflection to force (tilt-corrected spring constant)", S.force, O.ForceOptions,
-         ("calibration",), "eqs 13, 14"),
-    Step("jumps", "Jump into contact and pull-off", S.jumps, O.JumpsOptions, ("zero", "force"),
-         "section 2.1, Fig 9"),
-    Step("adhesion", "Adhesion: deepest retract dip below its own baseline, last rupture, unbinding steps",
-         S.adhesion_step, O.AdhesionOptions, ("zero", "force"), "afmforce (every contact kind)"),
-    Step("surface_energy", "Surface energy and radius from the pull-off (JKR/DMT; hard contacts)", S.surface_energy,
-         O.SurfaceEnergyOptions, ("jumps",), "section 2.1"),
-    Step("vdw", "van der Waals fit before the jump (A R or A)", S.vdw, O.VdwOptions, ("jumps",), "eq 2"),
-    Step("oscillation", "Post-contact oscillation: frequency, temporal or spatial", S.oscillation,
-         O.OscillationOptions, ("calibration",), "section 3.2"),
-    Step("friction", "Friction signature of the compliance lines (hard contacts, straight lines)", S.friction,
-         O.FrictionOptions, ("kind",), "sections 2.2.2-2.2.4, eqs 16-21"),
-    Step("indentation", "Young's modulus (and work of adhesion) of a soft contact: indentation model fitted with "
-         "the contact point", indentation, O.IndentationOptions, ("kind", "force"),
-         "Hertz, Sneddon, Bilodeau, Dimitriadis, JKR, DMT, Maugis (docs/contact.md); checked against nanite"),
-    Step("diagnosis", "Dynamic diagnosis: inertia parameter, lag, jump-in distance", S.diagnosis,
-         O.DiagnosisOptions, ("jumps", "adhesion", "vdw", "friction"), "eqs 3, 4; sections 2.3, 3.2"),
-    Step("liquid", "Colloid probe in a liquid: quadratic compliance, lever drag, drainage vs static force, DLVO fit",
-         liquid, O.LiquidOptions, (), "Attard, arXiv 1212.3019 (2012); Vinogradova et al., RSI 72, 2330 (2001)"),
-)}
+#: The registry: identifier -> record, in execution order (kept up to date by :func:`register_step`).
+STEPS: registry.LiveDict = registry.LiveDict(registry.steps)
 
 #: Steps run when none are named: all of them.
-DEFAULT_STEPS: tuple[str, ...] = tuple(STEPS)
+DEFAULT_STEPS: registry.LiveTuple = registry.LiveTuple(registry.order)
 
 
 def resolve_steps(steps: Sequence[str] | None) -> list[str]:
     """The steps to run: those asked for plus their requirements, in registry order."""
+    known = registry.steps()
     if steps is None:
-        return list(DEFAULT_STEPS)
+        return list(known)
     wanted = set()
 
     def add(name: str) -> None:
-        if name not in STEPS:
-            raise ParameterError(f"unknown analysis step {name!r}; choose from {', '.join(STEPS)}")
+        if name not in known:
+            raise ParameterError(f"unknown analysis step {name!r}; choose from {', '.join(known)}")
         if name not in wanted:
             wanted.add(name)
-            for r in STEPS[name].requires:
+            for r in known[name].requires:
                 add(r)
 
     for s in steps:
         add(s)
-    return [s for s in STEPS if s in wanted]
-
-
-#: Options of the old ``{step: {option: value}}`` form that are now the probe's.
-_PROBE_OPTIONS = {("force", "spring_constant"): "spring_constant", ("force", "theta0"): "theta0",
-                  ("force", "L0"): "L0", ("force", "L1"): "L1", ("force", "L2"): "L2",
-                  ("surface_energy", "radius"): "radius", ("vdw", "radius"): "radius",
-                  ("diagnosis", "resonance_frequency"): "resonance_frequency"}
-
-
-def options_from_dict(options: Mapping[str, Mapping[str, Any]]) -> tuple[list[O.StepOptions], dict[str, Any]]:
-    """The old ``{step: {option: value}}`` form -> (options records, probe fields).
-
-    ``radius``, ``spring_constant``, ``theta0``, ``L0``-``L2`` and ``resonance_frequency``
-    go to the probe (:class:`~.options.ProbeCalibration`); ``None`` values are dropped.
-
-    Raises
-    ------
-    ParameterError
-        Unknown step or option, an invalid value, or two different radii.
-    """
-    records, probe = [], {}
-    for step, opts in options.items():
-        if step not in STEPS:
-            raise ParameterError(f"options for unknown step {step!r}; steps: {', '.join(STEPS)}")
-        cls = STEPS[step].options
-        known = [f.name for f in dataclasses.fields(cls)]
-        moved = [n for (s, n) in _PROBE_OPTIONS if s == step]
-        bad = set(opts) - set(known) - set(moved)
-        if bad:
-            raise ParameterError(f"unknown option(s) {', '.join(sorted(bad))} for step {step!r}; known: "
-                                 f"{', '.join(known + moved) or 'none'}")
-        for name in moved:
-            value = opts.get(name)
-            if value is None:
-                continue
-            field_name = _PROBE_OPTIONS[(step, name)]
-            if probe.get(field_name, value) != value:
-                raise ParameterError(f"two different values of {field_name} ({probe[field_name]!r}, {value!r}): "
-                                     "the probe has one (ProbeCalibration)")
-            probe[field_name] = value
-        records.append(cls(**{k: v for k, v in opts.items() if k in known}))
-    return records, probe
+    return [s for s in known if s in wanted]
 
 
 #: Each options class's default record: records are frozen, so one instance serves every curve
@@ -195,35 +86,35 @@ def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
                     ) -> tuple[dict[str, O.StepOptions], O.ProbeCalibration]:
     """Every step's options record (the registry's defaults unless given) and the probe.
 
-    ``options``: options records (one per step at most), or the deprecated
-    ``{step: {option: value}}`` dict (a :class:`DeprecationWarning`).
+    ``options``: options records (one per step at most).
+
+    Raises
+    ------
+    ParameterError
+        Not an options record (the ``{step: {option: value}}`` dict of earlier versions is
+        refused, saying what to pass instead), two records for one step, or a bad value.
     """
     if options is None:
         given: list[Any] = []
     elif isinstance(options, Mapping):
-        warnings.warn("analyze(options={step: {option: value}}) is deprecated and will be removed in the next "
-                      "release: pass option records (e.g. options=[VdwOptions(max_separation=20e-9)]) and the "
-                      "probe as probe=ProbeCalibration(radius=..., spring_constant=...)",
-                      DeprecationWarning, stacklevel=3)
-        given, moved = options_from_dict(options)
-        if moved:
-            mine = probe.given() if probe is not None else {}
-            clash = {k for k in set(mine) & set(moved) if mine[k] != moved[k]}
-            if clash:
-                raise ParameterError(f"{', '.join(sorted(clash))} given twice with different values (options "
-                                     "and probe)")
-            probe = O.ProbeCalibration(**{**moved, **mine})
+        raise ParameterError("options must be step options records, e.g. options=[VdwOptions(max_separation=20e-9)]"
+                             ", with the probe's radius, spring constant, inclination, lengths, sensitivity and "
+                             "resonance frequency as probe=ProbeCalibration(radius=..., spring_constant=...); the "
+                             "{step: {option: value}} dict of earlier versions is no longer accepted")
     elif isinstance(options, O.StepOptions):
         given = [options]
     else:
         given = list(options)
-    out = {name: _default_options(step.options) for name, step in STEPS.items()}
+    known = registry.steps()
+    out = {name: _default_options(step.options) for name, step in known.items()}
     seen = set()
     for rec in given:
         if not isinstance(rec, O.StepOptions):
             raise ParameterError(f"options must be step options records (e.g. VdwOptions(...)), got {rec!r}")
         if rec.step in seen:
             raise ParameterError(f"options for step {rec.step!r} given twice")
+        if rec.step not in known:
+            raise ParameterError(f"options {type(rec).__name__} are for step {rec.step!r}, which is not registered")
         seen.add(rec.step)
         out[rec.step] = rec
     out["kind"].check_method(CONTACT_POINT_METHODS)
@@ -245,8 +136,7 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
     options : sequence of StepOptions, optional
         Options records of the steps whose defaults you change, e.g.
         ``[VdwOptions(max_separation=20e-9), ZeroOptions(contact_separation=0.0)]``
-        (SI; see :mod:`afmforce.analysis.options`). The old ``{step: {option: value}}``
-        dict is still accepted for one release, with a :class:`DeprecationWarning`.
+        (SI; see :mod:`afmforce.analysis.options`).
     probe : ProbeCalibration, optional
         Radius [m], spring constant [N/m], inclination [rad], sensitivity [m/V], ...
         given by the user; a field left ``None`` takes the file's value.
@@ -262,23 +152,24 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
     AnalysisError
         The curve cannot be analysed (no contact, flat, one segment, NaNs...).
     ParameterError
-        Unknown step or option, or an invalid option value.
+        Unknown step or option, an invalid option value, or options not given as records.
     """
     if steps is not None and (isinstance(steps, str) or not all(isinstance(s, str) for s in steps)):
         raise ParameterError(f"steps are step names (e.g. ['vdw']), got {steps!r}; options records go to "
                              "options=[...]")
     order = resolve_steps(steps)
     opts, probe = resolve_options(options, probe)
+    known = registry.steps()
     st = prepare(curve, channel, probe)
     misread = beyond_detector(curve)
     if misread:  # no photodiode gives this signal: every number from it would be impossible
         return _refused(st, tuple(order), misread)
     for name in order:
         try:
-            st = STEPS[name].func(st, opts[name])
+            st = known[name].run(st, opts[name])
         except NoContact as exc:  # a curve that never touches: contact kind "none", not a failure
             return _no_contact(st, tuple(order), str(exc))
-    return _result(st, tuple(order))
+    return _result(st, tuple(order), known)
 
 
 def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.0) -> AnalysisResult:
@@ -288,7 +179,7 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
     sens = float(st.probe.value("sensitivity", md) or math.nan)
     verdict = f"no contact reached ({why}): nothing to analyse beyond the baseline"
     extra: dict[str, Any] = {}
-    depth, sigma = S.retract_dip(st.signal, st.curve.run_indices(1) if hasattr(st.curve, "run_indices")
+    depth, sigma = retract_dip(st.signal, st.curve.run_indices(1) if hasattr(st.curve, "run_indices")
                                  else np.flatnonzero(st.curve.segment == 1))
     if math.isfinite(depth) and sigma > 0 and depth > nsigma * sigma:
         to_force = {"N": 1.0, "m": k, "V": k * sens}.get(st.unit, math.nan)
@@ -322,7 +213,7 @@ def _refused(st: State, order: tuple[str, ...], why: str) -> AnalysisResult:
         segment=st.curve.segment.astype("int8"), not_applicable={s: why for s in order})
 
 
-def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
+def _result(st: State, order: tuple[str, ...], known: Mapping[str, AnalysisStep]) -> AnalysisResult:
     st = st.update(warn=plausibility_warnings(st))
     bad = impossible_steps(st)
     if bad:  # numbers no physics allows are not results: the steps say why, their details are dropped
@@ -334,81 +225,26 @@ def _result(st: State, order: tuple[str, ...]) -> AnalysisResult:
             {"indentation": not_levers} if "indentation" in st.details or "indentation" in st.skipped else {})},
             details={k: v for k, v in st.details.items() if k != "indentation"})
     d = st.details
-    nan = math.nan
     kw: dict[str, Any] = {}
-    if "calibration" in d:
-        c = d["calibration"]
-        kw.update(sensitivity=c.sensitivity, sensitivity_fit=c.sensitivity_fit, calibration_source=c.source)
-    if "kind" in d:
-        kw.update(contact_kind=d["kind"].kind, contact_kind_reason=d["kind"].reason)
-    if "contact_point" in d:
-        kw["indentation"] = d["contact_point"].indentation
-    if "force" in d and not not_levers:
-        kw["spring_constant"] = d["force"].spring_constant
-    if "shift" in d:
-        kw["shift"] = d["shift"].shift
-    if "zero" in d:
-        kw["contact_separation"] = d["zero"].contact_separation
-    if "jumps" in d and "jumps" not in st.skipped:
-        ji, po = d["jumps"].jump_in, d["jumps"].pull_off
-        kw.update(contact_onset_separation=ji.separation, pull_off_force=po.force,
-                  pull_off_position=po.position, jump_out_distance=po.jump_out_distance,
-                  pull_off_saturated=po.saturated, pull_off_force_extrapolated=(
-                      po.deflection_extrapolated * d["force"].spring_constant if "force" in d else nan))
-        if ji.found:  # without a significant jump the tip crept in: only the onset of contact
-            kw.update(jump_in_separation=ji.separation, jump_in_force=ji.force_after,
-                      jump_in_deflection=ji.deflection_after)
-    if "adhesion" in d:
-        a = d["adhesion"]
-        kw.update(adhesion_force=a.force, adhesion_deflection=a.deflection, adhesion_distance=a.distance,
-                  adhesion_noise=a.noise, rupture_distance=a.rupture_distance, unbinding_steps=len(a.steps),
-                  adhesion_verdict=a.verdict)
-    if "surface_energy" in d:
-        kw.update(surface_energy=d["surface_energy"].surface_energy, radius=d["surface_energy"].radius)
-    if "vdw" in d and "vdw" not in st.skipped:
-        v = d["vdw"]
-        kw.update(hamaker_radius=v.hamaker_radius, hamaker_radius_se=v.hamaker_radius_se, hamaker=v.hamaker,
-                  hamaker_se=v.hamaker_se)
-    if "oscillation" in d:
-        o = d["oscillation"]
-        if o.origin != "none" and o.approach.found and o.retract.found:
-            kw["oscillation_frequency"] = 0.5 * (o.approach.frequency + o.retract.frequency)
-        kw["oscillation_verdict"] = o.verdict
-    if "friction" in d:
-        kw["friction"] = d["friction"].kind
-    if "diagnosis" in d:
-        g = d["diagnosis"]
-        kw.update(velocity=g.velocity, inertia_parameter=g.inertia_parameter, force_gradient=g.force_gradient,
-                  resonance_frequency=g.resonance_frequency, dynamic=g.dynamic, verdict=g.verdict,
-                  dynamic_assessed=g.assessed)
-    if "friction" in d:
-        kw["friction_verdict"] = d["friction"].verdict
-    if "indentation" in d:
-        i = d["indentation"]
-        kw.update(indentation_model=i.model, youngs_modulus=i.youngs_modulus, youngs_modulus_se=i.youngs_modulus_se,
-                  youngs_modulus_low=i.youngs_modulus_low, youngs_modulus_high=i.youngs_modulus_high,
-                  contact_point=i.contact_point, work_of_adhesion=i.work_of_adhesion,
-                  work_of_adhesion_se=i.work_of_adhesion_se)
-    if "liquid" in d:
-        q = d["liquid"]
-        kw.update(drag_offset=q.drag_offset, lever_drag=q.lever_drag, surface_potential=q.surface_potential,
-                  surface_potential_se=q.surface_potential_se, debye_length=q.debye_length,
-                  debye_length_se=q.debye_length_se, dlvo_hamaker=q.hamaker, dlvo_hamaker_se=q.hamaker_se)
-    kw["not_applicable"] = dict(st.skipped)
+    for name, step in known.items():  # each step reads its own fields off its details
+        if step.collect is not None and name in d:
+            kw.update(step.collect(st))
+    if not_levers:
+        kw.pop("spring_constant", None)
     impossible = impossible_reasons(st.skipped)
     if impossible:  # the verdict says first why numbers are missing, naming the suspect input
         kw["verdict"] = "; ".join(impossible + ([kw["verdict"]] if kw.get("verdict") else []))
-    full = lambda a: a if a is not None else st.z * nan  # noqa: E731
+    full = lambda a: a if a is not None else st.z * math.nan  # noqa: E731
     return AnalysisResult(
         source=str(st.metadata.get("source_file", "")), steps_run=order, deflection_unit=st.unit,
         position_channel=st.channel, warnings=st.warnings, time=st.time,
         position=st.position if st.position is not None else st.z, separation=full(st.separation),
         deflection=full(st.deflection), force=full(st.force), segment=st.curve.segment.astype("int8"),
-        details=dict(d), **kw)
+        details=dict(d), not_applicable=dict(st.skipped), values=kw)
 
 
 def steps_table() -> list[dict[str, str]]:
     """One row per step (the docs table is built from this)."""
     return [{"identifier": s.identifier, "name": s.name, "requires": ", ".join(s.requires) or "-",
              "options": ", ".join(f"{f.name}={show_default(f)}" for f in dataclasses.fields(s.options)) or "-",
-             "reference": s.reference or "-"} for s in STEPS.values()]
+             "reference": s.reference or "-"} for s in registry.steps().values()]

@@ -8,57 +8,41 @@ import json
 import math
 import os
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any, ClassVar, Mapping
 
 import numpy as np
 
 from .._files import atomic_write_text
 from .._json import to_jsonable
 from ._units import units_of
+from .registry import LiveDict, LiveTuple, result_fields
 
 __all__ = ["AnalysisResult", "SUMMARY_FIELDS"]
 
-#: Summary fields shown in tables: (attribute, label, SI unit).
-SUMMARY_FIELDS: tuple[tuple[str, str, str], ...] = (
-    ("sensitivity_used", "sensitivity used (the forces'; calibration source says which)", "m/V"),
-    ("sensitivity", "sensitivity (file or user)", "m/V"),
-    ("sensitivity_fit", "sensitivity from the compliance slope", "m/V"),
-    ("spring_constant", "spring constant", "N/m"),
-    ("adhesion_force", "adhesion (deepest retract dip)", "N"),
-    ("adhesion_distance", "adhesion position from contact", "m"),
-    ("rupture_distance", "last rupture from contact", "m"),
-    ("indentation", "indentation (soft contact)", "m"),
-    ("shift", "inward shift", "m"),
-    ("jump_in_separation", "jump-in separation", "m"),
-    ("jump_in_force", "jump-in force", "N"),
-    ("contact_onset_separation", "contact onset separation", "m"),
-    ("pull_off_force", "pull-off force", "N"),
-    ("pull_off_force_extrapolated", "pull-off force (extrapolated past clipping)", "N"),
-    ("pull_off_position", "pull-off position", "m"),
-    ("jump_out_distance", "jump-out distance", "m"),
-    ("surface_energy", "surface energy", "J/m^2"),
-    ("radius", "radius", "m"),
-    ("hamaker_radius", "A R", "J m"),
-    ("hamaker", "Hamaker constant", "J"),
-    ("oscillation_frequency", "oscillation", "Hz"),
-    ("velocity", "approach speed", "m/s"),
-    ("force_gradient", "force gradient at contact", "N/m"),
-    ("inertia_parameter", "inertia parameter", ""),
-    ("youngs_modulus", "Young's modulus (indentation fit)", "Pa"),
-    ("youngs_modulus_se", "its standard error", "Pa"),
-    ("contact_point", "contact point (indentation fit; piezo position)", "m"),
-    ("work_of_adhesion", "work of adhesion (JKR, DMT, Maugis fit)", "J/m^2"),
-    ("drag_offset", "drag offset (approach - retract far out; liquid)", "m"),
-    ("lever_drag", "lever drag (liquid)", "N s/m"),
-    ("surface_potential", "surface potential (DLVO fit)", "V"),
-    ("debye_length", "Debye length (DLVO fit)", "m"),
-    ("dlvo_hamaker", "Hamaker constant (DLVO fit)", "J"),
-)
+def _summary_fields() -> tuple[tuple[str, str, str], ...]:
+    return tuple((f.name, f.label, f.unit or "") for f in result_fields().values() if f.summary)
 
 
-@dataclass(frozen=True)
+#: Summary fields shown in tables: (attribute, label, SI unit), from the steps' records
+#: (:mod:`.registry`: the result fields marked ``summary``), in the pipeline's order.
+SUMMARY_FIELDS: LiveTuple = LiveTuple(_summary_fields)
+
+#: SI units of the per-sample arrays.
+_ARRAY_UNITS = {"time": "s", "position": "m", "separation": "m", "deflection": "m", "force": "N"}
+
+
+def _units() -> dict[str, str]:
+    return {**{f.name: f.unit for f in result_fields().values() if f.unit is not None}, **_ARRAY_UNITS}
+
+
+@dataclass(frozen=True, init=False)
 class AnalysisResult:
     """Analysis of one force curve (SI units; NaN where a step did not run or found nothing).
+
+    The fields after ``position_channel`` are the steps' (each declared by its step's record,
+    :mod:`.registry`; ``UNITS`` and :data:`SUMMARY_FIELDS` come from there): they are attributes
+    (``res.hamaker``), held in :attr:`values`, and take their declared default when their step
+    did not fill them. Those of the built-in steps:
 
     Attributes
     ----------
@@ -81,6 +65,9 @@ class AnalysisResult:
         Deflection sensitivity (InvOLS) the file or the user gives [m/V] (NaN if none).
     sensitivity_fit : float
         Sensitivity implied by the constant-compliance slope [m/V] (rigid contact assumed).
+    sensitivity_used : float
+        The sensitivity the forces were computed with [m/V]: ``sensitivity_fit`` when
+        ``calibration_source`` is ``"fit"``, else ``sensitivity`` (computed, not stored).
     calibration_source : str
         ``"metadata"`` (the file's or user's calibration) or ``"fit"`` (the compliance slope).
     spring_constant : float
@@ -168,6 +155,8 @@ class AnalysisResult:
     surface_potential, surface_potential_se, debye_length, debye_length_se, dlvo_hamaker, dlvo_hamaker_se : float
         The DLVO fit of the static force: psi [V], 1/kappa [m], A [J] and standard errors.
     warnings : tuple of str
+    values : mapping
+        The steps' fields that were filled (name -> value); the others take their declared defaults.
     time, position, separation, deflection, force : ndarray
         Per sample [s], [m], [m], [m], [N].
     segment : ndarray of int8
@@ -181,64 +170,6 @@ class AnalysisResult:
     steps_run: tuple[str, ...]
     deflection_unit: str
     position_channel: str
-    contact_kind: str = ""
-    contact_kind_reason: str = ""
-    sensitivity: float = math.nan
-    sensitivity_fit: float = math.nan
-    calibration_source: str = ""
-    spring_constant: float = math.nan
-    adhesion_force: float = math.nan
-    adhesion_deflection: float = math.nan
-    adhesion_distance: float = math.nan
-    adhesion_noise: float = math.nan
-    rupture_distance: float = math.nan
-    unbinding_steps: int = 0
-    adhesion_verdict: str = ""
-    indentation: float = math.nan
-    shift: float = math.nan
-    contact_separation: float = math.nan
-    jump_in_separation: float = math.nan
-    jump_in_force: float = math.nan
-    jump_in_deflection: float = math.nan
-    contact_onset_separation: float = math.nan
-    pull_off_force: float = math.nan
-    pull_off_saturated: bool = False
-    pull_off_force_extrapolated: float = math.nan
-    pull_off_position: float = math.nan
-    jump_out_distance: float = math.nan
-    surface_energy: float = math.nan
-    radius: float = math.nan
-    hamaker_radius: float = math.nan
-    hamaker_radius_se: float = math.nan
-    hamaker: float = math.nan
-    hamaker_se: float = math.nan
-    oscillation_frequency: float = math.nan
-    oscillation_verdict: str = ""
-    velocity: float = math.nan
-    force_gradient: float = math.nan
-    resonance_frequency: float = math.nan
-    inertia_parameter: float = math.nan
-    friction: str = ""
-    friction_verdict: str = ""
-    dynamic: bool = False
-    dynamic_assessed: bool = False
-    verdict: str = ""
-    indentation_model: str = ""
-    youngs_modulus: float = math.nan
-    youngs_modulus_se: float = math.nan
-    youngs_modulus_low: float = math.nan
-    youngs_modulus_high: float = math.nan
-    contact_point: float = math.nan
-    work_of_adhesion: float = math.nan
-    work_of_adhesion_se: float = math.nan
-    drag_offset: float = math.nan
-    lever_drag: float = math.nan
-    surface_potential: float = math.nan
-    surface_potential_se: float = math.nan
-    debye_length: float = math.nan
-    debye_length_se: float = math.nan
-    dlvo_hamaker: float = math.nan
-    dlvo_hamaker_se: float = math.nan
     warnings: tuple[str, ...] = ()
     not_applicable: Mapping[str, str] = field(default_factory=dict)
     time: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
@@ -248,40 +179,58 @@ class AnalysisResult:
     force: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False)
     segment: np.ndarray = field(default_factory=lambda: np.zeros(0, np.int8), repr=False)
     details: Mapping[str, Any] = field(default_factory=dict, repr=False)
+    values: Mapping[str, Any] = field(default_factory=dict)
 
     ARRAYS = ("time", "position", "separation", "deflection", "force", "segment")
-    UNITS = {"sensitivity": "m/V", "sensitivity_fit": "m/V", "sensitivity_used": "m/V", "spring_constant": "N/m", "adhesion_force": "N",
-             "adhesion_deflection": "m", "adhesion_distance": "m", "adhesion_noise": "N", "rupture_distance": "m",
-             "unbinding_steps": "", "indentation": "m", "force_gradient": "N/m", "resonance_frequency": "Hz",
-             "shift": "m", "contact_separation": "m", "jump_in_separation": "m", "jump_in_force": "N",
-             "jump_in_deflection": "m", "contact_onset_separation": "m", "pull_off_force": "N",
-             "pull_off_force_extrapolated": "N", "pull_off_position": "m",
-             "jump_out_distance": "m", "surface_energy": "J/m^2", "radius": "m", "hamaker_radius": "J m",
-             "hamaker_radius_se": "J m", "hamaker": "J", "hamaker_se": "J", "oscillation_frequency": "Hz",
-             "velocity": "m/s", "inertia_parameter": "", "youngs_modulus": "Pa", "youngs_modulus_se": "Pa",
-             "youngs_modulus_low": "Pa", "youngs_modulus_high": "Pa", "contact_point": "m",
-             "work_of_adhesion": "J/m^2", "work_of_adhesion_se": "J/m^2", "drag_offset": "m", "lever_drag": "N s/m",
-             "surface_potential": "V", "surface_potential_se": "V", "debye_length": "m", "debye_length_se": "m",
-             "dlvo_hamaker": "J", "dlvo_hamaker_se": "J", "time": "s", "position": "m", "separation": "m",
-             "deflection": "m", "force": "N"}
+    #: SI unit of every numeric field (the steps' result fields and the arrays), from the registry.
+    UNITS: ClassVar[LiveDict] = LiveDict(_units)
+
+    def __init__(self, source: str, steps_run: tuple[str, ...], deflection_unit: str, position_channel: str, *,
+                 warnings: tuple[str, ...] = (), not_applicable: Mapping[str, str] | None = None,
+                 time: np.ndarray | None = None, position: np.ndarray | None = None,
+                 separation: np.ndarray | None = None, deflection: np.ndarray | None = None,
+                 force: np.ndarray | None = None, segment: np.ndarray | None = None,
+                 details: Mapping[str, Any] | None = None, values: Mapping[str, Any] | None = None,
+                 **fields: Any) -> None:
+        known = result_fields()
+        bad = [k for k in fields if k not in known or known[k].compute is not None]
+        if bad:
+            raise TypeError(f"AnalysisResult got unknown field(s) {', '.join(bad)} (not declared by any step)")
+        z = lambda a, dtype=float: a if a is not None else np.zeros(0, dtype)  # noqa: E731
+        for name, value in (("source", source), ("steps_run", tuple(steps_run)), ("deflection_unit", deflection_unit),
+                            ("position_channel", position_channel), ("warnings", tuple(warnings)),
+                            ("not_applicable", dict(not_applicable or {})), ("time", z(time)),
+                            ("position", z(position)), ("separation", z(separation)),
+                            ("deflection", z(deflection)), ("force", z(force)), ("segment", z(segment, np.int8)),
+                            ("details", dict(details or {})), ("values", {**(values or {}), **fields})):
+            object.__setattr__(self, name, value)
+
+    def __getattr__(self, name: str) -> Any:
+        """A step's result field: its value, or its declared default when its step did not fill it."""
+        if name.startswith("__") or name == "values":
+            raise AttributeError(name)
+        f = result_fields().get(name)
+        if f is None:
+            raise AttributeError(f"{type(self).__name__} has no field {name!r}")
+        if f.compute is not None:
+            return f.compute(self)
+        return self.values.get(name, f.default)
 
     def to_dict(self, arrays: bool = False) -> dict[str, Any]:
         """JSON-ready dict (NaN -> None); the per-sample arrays only if ``arrays``."""
         out: dict[str, Any] = {}
+        head = ("source", "steps_run", "deflection_unit", "position_channel")
+        for name in head:
+            out[name] = to_jsonable(getattr(self, name), use_to_dict=False)
+        for name in result_fields():
+            out[name] = to_jsonable(getattr(self, name), use_to_dict=False)
         for f in dataclasses.fields(self):
-            if f.name in self.ARRAYS and not arrays:
+            if f.name in head or f.name == "values" or (f.name in self.ARRAYS and not arrays):
                 continue
             out[f.name] = to_jsonable(getattr(self, f.name), use_to_dict=False)
-        out["sensitivity_used"] = to_jsonable(self.sensitivity_used, use_to_dict=False)
         out["units"] = dict(self.UNITS)
         out["details_units"] = {step: units_of(d, self.deflection_unit) for step, d in self.details.items()}
         return out
-
-    @property
-    def sensitivity_used(self) -> float:
-        """The sensitivity the forces were computed with [m/V]: ``sensitivity_fit`` when
-        ``calibration_source`` is ``"fit"``, else ``sensitivity`` (NaN if none)."""
-        return self.sensitivity_fit if self.calibration_source == "fit" else self.sensitivity
 
     def to_json(self, arrays: bool = False, indent: int | None = 2) -> str:
         """The result as JSON text (SI values, units under ``"units"``)."""

@@ -17,11 +17,12 @@ def default(step: str, name: str):
 
 
 def option_names() -> str:
+    """Every registered step's options (the help of ``--option``; computed when the help is printed)."""
     import dataclasses
 
-    from ..analysis.options import OPTIONS
+    from ..analysis.options_text import step_options as registered
 
-    return "; ".join(f"{s}: {', '.join(f.name for f in dataclasses.fields(c))}" for s, c in OPTIONS.items()
+    return "; ".join(f"{s}: {', '.join(f.name for f in dataclasses.fields(c))}" for s, c in registered().items()
                      if dataclasses.fields(c))
 
 

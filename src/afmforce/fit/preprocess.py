@@ -10,7 +10,7 @@ in one place serves both:
   constant-compliance line (the paper's section 3.1; the rigid contact the dynamic
   model assumes anyway); a *stale* sensitivity (a hard, straight compliance line on a
   measured position channel that follows the position more than 1.25x away from 1)
-  replaced by the compliance slope (:func:`afmforce.analysis.steps._recalibrate_hard`).
+  replaced by the compliance slope (:func:`afmforce.analysis.steps.kind._recalibrate_hard`).
   Each change is said in a note with its numbers.
 * **Contact kind.** A soft (curved) contact is refused with the analysis's reason: the
   dynamic model's surfaces are rigid (eq 2); ``afmforce analyze`` fits the indentation.

@@ -173,8 +173,7 @@ class CurveAnalysis:
         Analysis steps (None: all).
     options : tuple of StepOptions
         Options records of the steps (:mod:`afmforce.analysis.options`; the registry's
-        defaults for the others). The deprecated ``{step: {option: value}}`` dict is
-        still accepted (:func:`~afmforce.analysis.pipeline.analyze` warns).
+        defaults for the others).
     probe : ProbeCalibration or None
         The user's probe record (radius, spring constant, theta0, sensitivity, ...).
     meta_override : mapping

@@ -21,41 +21,52 @@ from .results import BatchResult
 __all__ = ["SUMMARY_COLUMNS", "SUMMARY_UNITS", "ERROR_COLUMNS", "summary_row", "summary_table", "write_summary",
            "failures", "failure_records"]
 
-#: Result fields copied into the summary (floats, SI).
-_FLOATS = ("sensitivity_used", "sensitivity", "sensitivity_fit", "spring_constant", "adhesion_force", "adhesion_distance",
-           "adhesion_noise", "rupture_distance", "unbinding_steps", "indentation", "force_gradient",
-           "resonance_frequency", "shift", "contact_separation",
-           "jump_in_separation", "jump_in_force", "jump_in_deflection", "pull_off_force", "pull_off_position",
-           "jump_out_distance", "surface_energy", "radius", "hamaker_radius", "hamaker_radius_se", "hamaker",
-           "hamaker_se", "oscillation_frequency", "velocity", "inertia_parameter",
-           "youngs_modulus", "youngs_modulus_se", "youngs_modulus_low", "youngs_modulus_high", "contact_point",
-           "work_of_adhesion", "work_of_adhesion_se", "position_x", "position_y",
-           "drag_offset", "lever_drag", "surface_potential", "surface_potential_se", "debye_length",  # liquid
-           "debye_length_se", "dlvo_hamaker", "dlvo_hamaker_se")
+#: Where a map's curve was recorded [m] (the curve's metadata; NaN: not given).
+_POSITIONS = ("position_x", "position_y")
 _OSC = tuple(f"oscillation_{run}_{what}" for run in ("approach", "retract") for what in ("frequency", "velocity"))
 
-#: Columns of the summary table and their types (``int``: -1 where not a map).
-SUMMARY_COLUMNS: dict[str, str] = {
-    "item": "int", "source": "str", "name": "str", "file": "str", "curve": "int",
-    "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "map_width": "float", "map_height": "float",
-    "deflection_unit": "str", "calibration_source": "str",
-    **{name: "float" for name in _FLOATS + _OSC},
-    "contact_kind": "str", "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str", "error": "str",
-    "error_type": "str",
-}
+
+def _floats() -> tuple[str, ...]:
+    """Result fields copied into the summary (floats, SI): those the steps' records mark ``column``
+    (:mod:`afmforce.analysis.registry`), in the pipeline's order."""
+    from ..analysis.registry import result_fields
+
+    return tuple(f.name for f in result_fields().values() if f.column)
+
+
+def _columns() -> dict[str, str]:
+    return {
+        "item": "int", "source": "str", "name": "str", "file": "str", "curve": "int",
+        "map_x": "int", "map_y": "int", "map_nx": "int", "map_ny": "int", "map_width": "float",
+        "map_height": "float", "deflection_unit": "str", "calibration_source": "str",
+        **{name: "float" for name in _floats() + _POSITIONS + _OSC},
+        "contact_kind": "str", "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str",
+        "error": "str", "error_type": "str",
+    }
 
 
 def _units() -> dict[str, str]:
     from ..analysis.result import AnalysisResult
 
-    units = {name: AnalysisResult.UNITS.get(name, "m") for name in _FLOATS}  # position_x/y: m
+    units = {name: AnalysisResult.UNITS[name] for name in _floats()}
+    units.update({n: "m" for n in _POSITIONS})
     units.update({n: ("Hz" if n.endswith("frequency") else "m/s") for n in _OSC})
     units.update(map_width="m", map_height="m")
     return units
 
 
+def _live(builder):
+    from ..analysis.registry import LiveDict
+
+    return LiveDict(builder)
+
+
+#: Columns of the summary table and their types (``int``: -1 where not a map), kept up to date
+#: with the registered analysis steps.
+SUMMARY_COLUMNS: dict[str, str] = _live(_columns)
+
 #: SI unit of each numeric summary column.
-SUMMARY_UNITS: dict[str, str] = _units()
+SUMMARY_UNITS: dict[str, str] = _live(_units)
 
 
 def _grid(meta: Mapping[str, Any]) -> tuple[int, int, int, int]:
@@ -94,8 +105,8 @@ def summary_row(result, curve, *, file: str, index: int, name: str) -> dict[str,
                            "map_nx": nx, "map_ny": ny, "deflection_unit": result.deflection_unit,
                            "calibration_source": result.calibration_source or None}
     row["map_width"], row["map_height"] = _grid_size(curve.metadata) if mx >= 0 else (math.nan, math.nan)
-    row.update({f: float(getattr(result, f, math.nan)) for f in _FLOATS})
-    for axis in ("position_x", "position_y"):  # where the map's curve was recorded [m] (NaN: not given)
+    row.update({f: float(getattr(result, f, math.nan)) for f in _floats()})
+    for axis in _POSITIONS:  # where the map's curve was recorded [m] (NaN: not given)
         try:
             row[axis] = float(curve.metadata.get(axis, math.nan))
         except (TypeError, ValueError):
@@ -162,7 +173,7 @@ def write_summary(result: BatchResult, folder: str | os.PathLike) -> dict[str, P
     paths = {"parquet": folder / "summary.parquet", "csv": folder / "summary.csv"}
     types = {"int": pa.int64(), "float": pa.float64(), "bool": pa.bool_(), "str": pa.string()}
     schema = pa.schema([(c, types[k]) for c, k in SUMMARY_COLUMNS.items()],
-                       metadata={b"afmforce.units": json.dumps(SUMMARY_UNITS).encode()})
+                       metadata={b"afmforce.units": json.dumps(dict(SUMMARY_UNITS)).encode()})
     errors = []
     with atomic_path(paths["parquet"]) as ptmp, atomic_path(paths["csv"]) as ctmp:
         writer = pq.ParquetWriter(ptmp, schema)

@@ -23,7 +23,7 @@ from .tasks import decimate
 from .validate import FieldError, metadata, number
 from ..sweep.files import CurveAnalysis
 
-__all__ = ["parse_inputs", "run_analysis", "CachedAnalysis"]
+__all__ = ["parse_inputs", "parse_steps", "run_analysis", "CachedAnalysis"]
 
 #: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)].
 _CURVES: OrderedDict = OrderedDict()
@@ -97,10 +97,28 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
     return records, probe_record, override
 
 
-def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *, format: str | None = None,
+def parse_steps(steps: Sequence[str] | None) -> tuple[str, ...] | None:
+    """The steps asked for (None: all), checked against the registry (FieldError ``step[i]`` naming the
+    unknown one and the choices)."""
+    if not steps:
+        return None
+    from ..analysis.pipeline import resolve_steps
+
+    out = tuple(str(s).strip() for s in steps)
+    for i, name in enumerate(out):
+        try:
+            resolve_steps([name])
+        except ParameterError as exc:
+            raise FieldError(f"step[{i}]", str(exc)) from None
+    return out
+
+
+def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *,
+                 steps: Sequence[str] | None = None, format: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
                  guard: bool = True, deadline: float | None = None) -> dict[str, Any]:
-    """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``.
+    """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``; ``steps``: the
+    analysis steps to run (their requirements added; None: all).
 
     Returns the JSON of ``afmforce analyze --json`` with every stored name replaced by the
     user's; with ``arrays``: each result holds its per-sample arrays (at most ``max_points``
@@ -122,6 +140,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
         if format not in FORMATS:
             raise ParameterError(f"format {format}: unknown; choose one of {', '.join(FORMATS)}")
     records, probe_record, override = parse_inputs(options, meta, probe)
+    chosen = parse_steps(steps)
     t0 = time.perf_counter()
     rename = {str(p): name for p, name in files}        # full stored paths first, then bare names
     rename.update({Path(p).name: name for p, name in files})
@@ -129,7 +148,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     refs = plan_curves([p for p, _ in files], format, timeout=timeout)
     if arrays:     # the response's size cap
         max_points = max(10, min(max_points, ANALYSIS_POINTS // max(1, len(refs))))
-    analysis = CachedAnalysis(options=records, probe=probe_record, meta_override=override, format=format,
+    analysis = CachedAnalysis(steps=chosen, options=records, probe=probe_record, meta_override=override,
+                             format=format,
                              keep_json=True, json_arrays=arrays, file_timeout=timeout)
 
     def on_curve(_progress) -> None:

@@ -26,6 +26,9 @@ async def analyze(request: Request,
                   example: Annotated[list[str], Form(description="shipped example files (GET /api/schema)")] = [],
                   option: Annotated[list[str], Form(description="STEP.NAME=VALUE with units, as "
                                                                 "afmforce analyze --option")] = [],
+                  step: Annotated[list[str], Form(description="analysis steps to run (GET /api/schema 'steps'; "
+                                                              "their requirements are added), as --steps; "
+                                                              "none: all")] = [],
                   meta: Annotated[list[str], Form(description="KEY=VALUE file metadata, as --meta")] = [],
                   probe: Annotated[list[str], Form(description="NAME=VALUE probe calibration (radius, "
                                                                "spring_constant, theta0, sensitivity, ...)")] = [],
@@ -44,7 +47,7 @@ async def analyze(request: Request,
     settings, sessions = request.app.state.settings, request.app.state.sessions
     session = request.state.session
     for name, items in (("file", file), ("file_id", file_id), ("example", example), ("option", option),
-                        ("meta", meta), ("probe", probe)):
+                        ("step", step), ("meta", meta), ("probe", probe)):
         if len(items) > MAX_ITEMS:
             raise FieldError(name, f"{name}: at most {MAX_ITEMS} per request, got {len(items)}")
     deadline = time.monotonic() + settings.request_budget
@@ -69,7 +72,8 @@ async def analyze(request: Request,
     if not paths:
         raise ParameterError("give a file (field 'file'), an uploaded file's id ('file_id') or an example")
     guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
-    work = run_in_threadpool(run_analysis, paths, option, meta, probe, format=format, arrays=arrays,
+    work = run_in_threadpool(run_analysis, paths, option, meta, probe, steps=step or None, format=format,
+                             arrays=arrays,
                              max_points=max_points, budget=settings.request_budget, guard=guard,
                              deadline=deadline)
     try:      # the thread stops by itself after the curve it is on (run_analysis's deadline)

@@ -2,7 +2,7 @@
 
 Built from the declarations, never written twice: the simulation's flat names
 (:data:`afmforce.dynamics.config.FLAT`, specs from :data:`afmforce._fields.QUANTITIES`),
-the analysis steps' options (:data:`afmforce.analysis.options.OPTIONS`), the fit's
+the analysis steps and their options (:mod:`afmforce.analysis.registry`), the fit's
 parameters (:data:`afmforce.fit.PARAMETERS`) and the shipped example files.
 """
 
@@ -15,7 +15,8 @@ from typing import Any
 
 from .._fields import DISPLAY_UNITS, FieldSpec
 
-__all__ = ["simulation_fields", "analysis_options", "calibration_fields", "fit_parameters", "examples", "schema"]
+__all__ = ["simulation_fields", "analysis_steps", "analysis_options", "calibration_fields", "fit_parameters",
+           "examples", "schema"]
 
 #: SI unit -> the unit a control shows when its spec names none.
 _SHOWN = {"m": "nm", "N": "nN", "kg": "ng", "m/s": "um/s", "Hz": "kHz", "s": "s", "m/V": "nm/V", "rad": "deg"}
@@ -61,13 +62,28 @@ def simulation_fields() -> list[dict[str, Any]]:
     return out
 
 
-@lru_cache(maxsize=1)
+def analysis_steps() -> list[dict[str, Any]]:
+    """The analysis steps the page offers, from the registry (:mod:`afmforce.analysis.registry`), in
+    the pipeline's order: identifier, name, required steps, reference, whether it has options."""
+    from ..analysis.registry import steps
+
+    return [{"identifier": s.identifier, "name": s.name, "requires": list(s.requires), "reference": s.reference,
+             "options": bool(dataclasses.fields(s.options))} for s in steps().values()]
+
+
 def analysis_options() -> dict[str, list[dict[str, Any]]]:
-    """Step -> its options (the typed options of ``afmforce analyze --option``)."""
-    from ..analysis.options import OPTIONS
+    """Step -> its options (the typed options of ``afmforce analyze --option``), for every registered step."""
+    from ..analysis.registry import version
+
+    return _analysis_options(version())
+
+
+@lru_cache(maxsize=2)
+def _analysis_options(version: int) -> dict[str, list[dict[str, Any]]]:
+    from ..analysis.registry import steps
 
     out = {}
-    for step, cls in OPTIONS.items():
+    for step, cls in ((s.identifier, s.options) for s in steps().values()):
         fields = []
         for f in dataclasses.fields(cls):
             spec = f.metadata.get("spec")
@@ -145,5 +161,6 @@ def schema() -> dict[str, Any]:
     """Everything the page builds its controls from."""
     from ..instrument.presets import PRESETS
 
-    return {"simulation": simulation_fields(), "analysis": analysis_options(), "calibration": calibration_fields(),
+    return {"simulation": simulation_fields(), "analysis": analysis_options(), "steps": analysis_steps(),
+            "calibration": calibration_fields(),
             "fit": fit_parameters(), "examples": examples(), "instrument_presets": list(PRESETS)}

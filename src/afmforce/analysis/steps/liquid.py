@@ -1,19 +1,21 @@
-"""The ``liquid`` step: a colloid-probe curve measured in a liquid, from the raw signal (docs/liquid.md).
+"""The ``liquid`` step (its record :data:`LIQUID`): a colloid-probe curve measured in a liquid,
+from the raw signal (docs/liquid.md).
 
-Built on :mod:`.liquid` (P. Attard, arXiv 1212.3019, 2012; Vinogradova et al. 2001): the
-photodiode calibrated with a quadratic on the compliance region and the zero of separation
-put on it without a human (:func:`~.liquid.calibrate_liquid_curve`), the approach and retract
-far-field baselines and the lever drag from their gap and the speed
-(:func:`~.liquid.drag_baselines`, the colloid's long-ranged drainage at that distance
-subtracted), force against separation per run, the static and velocity-dependent forces at
-equal separation (:func:`~.liquid.split_drainage`, :func:`~.liquid.velocity_force_fit`), and a
-DLVO fit of the static force (:func:`~.liquid.fit_dlvo`). It works on the raw signal (not the
-drift-corrected one: the drift step would take the drag offset for drift) and, when it
-applies, replaces the result's separation and force arrays by its own.
+Built on :mod:`afmforce.analysis.liquid` (P. Attard, arXiv 1212.3019, 2012; Vinogradova et al.
+2001): the photodiode calibrated with a quadratic on the compliance region and the zero of
+separation put on it without a human (:func:`~afmforce.analysis.liquid.calibrate_liquid_curve`), the
+approach and retract far-field baselines and the lever drag from their gap and the speed
+(:func:`~afmforce.analysis.liquid.drag_baselines`, the colloid's long-ranged drainage at that
+distance subtracted), force against separation per run, the static and velocity-dependent forces at
+equal separation (:func:`~afmforce.analysis.liquid.split_drainage`,
+:func:`~afmforce.analysis.liquid.velocity_force_fit`), and a DLVO fit of the static force
+(:func:`~afmforce.analysis.liquid.fit_dlvo`). It works on the raw signal (not the drift-corrected
+one: the drift step would take the drag offset for drift) and, when it applies, replaces the
+result's separation and force arrays by its own.
 
 Skipped with the reason: no liquid medium given (or air), no spring constant or radius, no
-compliance region; a curve without double-layer repulsion above the noise keeps the
-calibration and the drag and is reported skipped for the DLVO fit.
+compliance region; a curve without double-layer repulsion above the noise keeps the calibration and
+the drag and is reported skipped for the DLVO fit.
 """
 
 from __future__ import annotations
@@ -23,16 +25,17 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..constants import MEDIA
-from ..errors import AnalysisError
-from ._step_helpers import _skip
-from ._units import unit as _u
-from .liquid import calibrate_liquid_curve, drag_baselines, fit_dlvo, split_drainage, velocity_force_fit
-from .options import LiquidOptions
-from .regions import run_indices
-from .state import State
+from ...constants import MEDIA
+from ...errors import AnalysisError
+from .._step_helpers import _skip
+from .._units import unit as _u
+from ..liquid import calibrate_liquid_curve, drag_baselines, fit_dlvo, split_drainage, velocity_force_fit
+from ..options import LiquidOptions
+from ..regions import run_indices
+from ..registry import AnalysisStep, ResultField
+from ..state import State
 
-__all__ = ["LiquidResult", "liquid"]
+__all__ = ["LiquidResult", "liquid", "LIQUID"]
 
 _EPS0 = 8.8541878128e-12
 
@@ -122,7 +125,7 @@ def _robust_std(x: np.ndarray) -> float:
 
 def liquid(st: State, o: LiquidOptions) -> State:
     """Analyse a colloid-probe curve in a liquid (module docstring); skip it with the reason elsewhere."""
-    from ..forces import effective_radius
+    from ...forces import effective_radius
 
     if o.medium in ("none", "air"):
         why = ("no liquid medium given (`medium`, e.g. water)" if o.medium == "none"
@@ -145,7 +148,7 @@ def liquid(st: State, o: LiquidOptions) -> State:
         cal_curve = calibrate_liquid_curve(st.curve, far=far)
     except AnalysisError as exc:
         return _skip(st, "liquid", f"no liquid calibration: {exc}")
-    from .liquid import ComplianceCalibration
+    from ..liquid import ComplianceCalibration
 
     cal = ComplianceCalibration(**cal_curve.metadata["liquid_calibration"])
     sig = np.asarray(st.curve.deflection_signal, float)
@@ -198,7 +201,7 @@ def liquid(st: State, o: LiquidOptions) -> State:
     sign = -1.0 if o.potential_sign == "negative" else 1.0
     fit = fit_dlvo(ha[sel], fa[sel], radius, sigma=noise * math.sqrt(2.0), geometry=o.geometry,
                    law=o.double_layer, permittivity=eps, z0=o.z0, guess=(sign * psi0, lam0, 1e-20))
-    from ..forces import double_layer_force, paper_radius, vdw_force
+    from ...forces import double_layer_force, paper_radius, vdw_force
 
     hf = ha[sel]
     model = np.asarray(vdw_force(hf, float(paper_radius(radius, o.geometry)), fit.hamaker, o.z0)) + np.asarray(
@@ -227,3 +230,25 @@ def _no_double_layer(hs, fs, noise, o: LiquidOptions, h_far: float):
     lam0 = float(np.clip(-1.0 / slope, 0.3e-9, 1e-6))
     hi = o.max_separation if o.max_separation is not None else min(h_far, 10.0 * lam0)
     return lam0, float(np.exp(icpt)), hi
+
+
+def _liquid_fields(st: State) -> dict:
+    q = st.details["liquid"]
+    return dict(drag_offset=q.drag_offset, lever_drag=q.lever_drag, surface_potential=q.surface_potential,
+                surface_potential_se=q.surface_potential_se, debye_length=q.debye_length,
+                debye_length_se=q.debye_length_se, dlvo_hamaker=q.hamaker, dlvo_hamaker_se=q.hamaker_se)
+
+
+LIQUID = AnalysisStep(
+    "liquid", "Colloid probe in a liquid: quadratic compliance, lever drag, drainage vs static force, DLVO fit",
+    liquid, LiquidOptions, reference="Attard, arXiv 1212.3019 (2012); Vinogradova et al., RSI 72, 2330 (2001)",
+    fields=(ResultField("drag_offset", "m", "drag offset (approach - retract far out; liquid)", summary=True,
+                        column=True),
+            ResultField("lever_drag", "N s/m", "lever drag (liquid)", summary=True, column=True),
+            ResultField("surface_potential", "V", "surface potential (DLVO fit)", summary=True, column=True),
+            ResultField("surface_potential_se", "V", "standard error of the surface potential", column=True),
+            ResultField("debye_length", "m", "Debye length (DLVO fit)", summary=True, column=True),
+            ResultField("debye_length_se", "m", "standard error of the Debye length", column=True),
+            ResultField("dlvo_hamaker", "J", "Hamaker constant (DLVO fit)", summary=True, column=True),
+            ResultField("dlvo_hamaker_se", "J", "standard error of the DLVO Hamaker constant", column=True)),
+    collect=_liquid_fields)

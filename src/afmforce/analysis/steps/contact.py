@@ -1,0 +1,86 @@
+"""The ``contact`` step: contact, constant-compliance and zero-force regions.
+
+Declared once by its record :data:`CONTACT` (:mod:`afmforce.analysis.registry`).
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ...errors import AnalysisError
+from ..options import ContactOptions
+from ..regions import check_compliance, find_run_regions, run_indices, saturated_mask
+from ..registry import AnalysisStep
+from ..state import ContactSummary, NoContact, State
+
+__all__ = ["retract_dip", "contact", "CONTACT"]
+
+
+def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
+    """Depth of the retract's pull-off below its own far baseline, and the noise [signal units].
+
+    Depth: the retract's last 30 % (median) less the lowest level held for two consecutive
+    samples (a single spike does not count; a stiff lever rings after the release, the first
+    swing is the pull-off); noise: from sample-to-sample differences there (blind to drift).
+    Evidence of a contact the approach does not show (a stiff lever, an attractive approach end).
+    """
+    if idx.size < 50:
+        return math.nan, math.nan
+    s = signal[idx]
+    far = s[int(0.7 * s.size):]
+    sigma = float(np.median(np.abs(np.diff(far)))) / (0.6745 * math.sqrt(2.0))
+    low = float(np.min(np.maximum(s[:-1], s[1:])))
+    return float(np.median(far)) - low, sigma
+
+
+def contact(st: State, o: ContactOptions) -> State:
+    """Contact, constant-compliance and zero-force regions of both runs.
+
+    A run clipped at its turning point whose contact region is no
+    constant-compliance line (see :func:`~afmforce.analysis.regions.check_compliance`: not
+    ``1 / flat_ratio`` times steeper than its free part, or, on the measured
+    channel, ``max_slope_ratio`` times shallower than the other run's;
+    ``"auto"``: 2 on the measured channel, no limit on the nominal one, whose
+    creep changes the local gain) keeps no compliance line; later steps use
+    the other run's and say what could not be measured.
+    """
+    max_slope_ratio = o.max_slope_ratio  # the record checked the ranges (> 1; flat_ratio in (0, 1])
+    if max_slope_ratio == "auto":
+        max_slope_ratio = 2.0 if st.channel == "measured" else math.inf
+    max_slope_ratio, flat_ratio = float(max_slope_ratio), o.flat_ratio
+    sat = saturated_mask(st.signal)
+    kw = dict(saturated=sat, min_points=int(o.min_points), baseline_fraction=o.baseline_fraction,
+              compliance_fraction=o.compliance_fraction)
+    try:
+        app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach", **kw)
+    except AnalysisError as exc:
+        if not str(exc).startswith("no contact region"):
+            raise
+        app = None
+        try:  # a stiff lever barely deflects on the approach: the retract's adhesion shows the contact
+            find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", **kw)
+            app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach",
+                                   min_contrast=5.0, **kw)
+        except AnalysisError:
+            pass
+        if app is None:
+            raise NoContact(str(exc).replace("no contact region found on the approach run", "no contact reached")
+                            ) from None
+    ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
+    app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
+    summary = ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
+                             int(app.zero_force.sum()), int(ret.zero_force.sum()), int(app.compliance.sum()),
+                             int(ret.compliance.sum()), int(sat.sum()))
+    warn = []
+    if sat.any():
+        warn.append(f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits")
+    warn += [r.note for r in (app, ret) if r.note]
+    # noise of the signal from sample-to-sample differences in the approach's free part: blind to
+    # slow structure (drift, fringes), so it measures the resolution the jump tests need
+    return st.update("contact", summary, warn=warn, approach=app, retract=ret, noise=app.noise)
+
+
+CONTACT = AnalysisStep("contact", "Contact, constant-compliance and zero-force regions", contact, ContactOptions,
+                       after=("smooth",), reference="section 3.1, Fig 7")

@@ -1,0 +1,89 @@
+"""The ``fringes`` step: interferometric calibration from baseline fringes.
+
+Declared once by its record :data:`FRINGES` (:mod:`afmforce.analysis.registry`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from .._step_helpers import _zero_deflection_position
+from ..fringes import FringeResult, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
+from ..options import FringesOptions
+from ..registry import AnalysisStep
+from ..state import State
+
+__all__ = ["fringes", "FRINGES"]
+
+
+def fringes(st: State, o: FringesOptions) -> State:
+    """Fit interference fringes in the baseline; remove them, remap nominal positions.
+
+    ``apply="auto"``: when both runs show fringes, subtract them from the signal,
+    and remap the positions if they are the piezo's *nominal* ones (a measured
+    position is taken as linear, as the paper found for its detector, Fig 7B);
+    ``"always"``: subtract and remap; ``"never"``: report only.
+
+    The fit carries a line in time (what the drift step's line, pulled by the
+    fringes, left of the baseline); it is subtracted with the fringes. In
+    contact the fringe term is held at its value where the run's own contact
+    line crosses zero signal (the separation no longer changes there).
+    """
+    apply, margin = o.apply, o.margin
+    runs = {}
+    for run in (st.approach, st.retract):
+        idx = run.index[run.zero_force & ~run.saturated]  # the baseline: not the attraction, nor a settling tail
+        zf = st.z[idx]
+        z_split = st.z[run.index[min(run.split, run.index.size - 1)]]
+        far = np.abs(zf - z_split) > margin * (np.ptp(zf) if zf.size else 0.0)  # not the attraction near contact
+        if run.kind == "retract" and not runs["approach"].found and apply != "always":
+            # fringes are a property of the optics, present on both runs: without them on the
+            # approach nothing is changed whatever the retract shows, so it is not searched
+            runs["retract"] = dataclasses.replace(runs["approach"], found=False, explained=math.nan,
+                                                  period=math.nan, cycles=math.nan, residual=math.nan)
+            searched = False
+            continue
+        runs[run.kind] = fit_fringes(zf[far], st.signal[idx][far], period=o.period, order=o.order,
+                                     t=st.time[idx][far] if st.time_known else None)
+        searched = True
+    fa, fr = runs["approach"], runs["retract"]
+    # real fringes are periodic in the true position: both runs show the same period
+    both = fa.found and fr.found and abs(fa.period - fr.period) < 0.05 * 0.5 * (fa.period + fr.period)
+    z, s = st.z.copy(), st.signal.copy()
+    remove = apply == "always" or (apply == "auto" and both)
+    remap = apply == "always" or (apply == "auto" and both and st.channel == "nominal")
+    for run, fit in ((st.approach, fa), (st.retract, fr)):
+        if not (remove and math.isfinite(fit.period)):
+            continue
+        idx = run.index
+        term = fringe_signal(st.z[idx], fit)
+        if o.in_contact == "hold":
+            z_contact = _zero_deflection_position(st, run if run.has_compliance else st.approach)
+            term = np.where(run.contact, fringe_signal(np.array([z_contact]), fit)[0], term)
+        s[idx] = st.signal[idx] - term - fringe_baseline(st.time[idx], st.z[idx], fit)
+        if remap:
+            z[idx] = position_map(st.z[idx], fit)
+    applied = remap
+    width = loop_width(fa, fr, st.z[np.concatenate([st.approach.index, st.retract.index])])
+    if both:
+        verdict = (f"fringes of period {0.5 * (fa.period + fr.period) * 1e9:.4g} nm; position nonlinearity "
+                   f"{max(fa.nonlinearity, fr.nonlinearity) * 100:.3g} %; loop width {width * 1e9:.3g} nm "
+                   "(modulo one period)")
+    elif fa.found or fr.found:
+        verdict = "periodic baseline on one run only, or periods that differ: not fringes; nothing changed"
+    elif not searched:
+        why = "" if fa.converged else "; the fit wanders: no clean period"
+        verdict = (f"no interference fringes in the approach baseline (a periodic term explains "
+                   f"{max(fa.explained, 0.0):.2g} of its variance{why}); the retract was not "
+                   "searched (fringes come from the optics and show on both runs)")
+    else:
+        verdict = "no interference fringes detected in the baseline"
+    res = FringeResult(fa, fr, width, applied, verdict)
+    return st.update("fringes", res, z=z, signal=s)
+
+
+FRINGES = AnalysisStep("fringes", "Interferometric calibration from baseline fringes", fringes, FringesOptions,
+                       requires=("drift",), channels=("approach",), reference="section 3.1, Fig 7A; spec section 6")

@@ -1,0 +1,164 @@
+"""The ``kind`` step: contact kind (hard: jump-in or straight line; soft: curved) and a soft contact point.
+
+Declared once by its record :data:`KIND` (:mod:`afmforce.analysis.registry`).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+from ...errors import AnalysisError
+from ..contact_point import CONTACT_POINT_METHODS, classify_contact, curvature_ratio
+from ..jumps import find_jump_in
+from ..options import KindOptions
+from ..registry import AnalysisStep, ResultField
+from ..state import State
+
+__all__ = ["kind", "KIND"]
+
+
+def kind(st: State, o: KindOptions) -> State:
+    """Contact kind (hard with jump-in or straight line / soft curved) and a soft contact's contact point.
+
+    See :mod:`~afmforce.analysis.contact_point`: hard when the approach jumps
+    into contact (above ``nsigma`` step noise) or its contact is a straight line
+    the deflection follows (late/early slope ratio at most ``max_curvature``,
+    deflection per position at least ``min_stiffness`` when the calibration is
+    the file's); soft otherwise, with the contact point by ``method``.
+    """
+    nsigma, method, force_fraction, window = o.nsigma, o.method, o.force_fraction, o.window
+    o.check_method(CONTACT_POINT_METHODS)
+    noise = abs(st.noise * st.factor)
+    app = st.approach
+    ji = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma)
+    sig = ji.significance if ji.index >= 0 else 0.0
+    cal = st.details["calibration"]
+    comp = st.details["compliance"]
+    stiff = (comp.approach.slope * cal.factor if cal.source == "metadata" and comp.approach.found else math.nan)
+    contact_idx = app.index[app.contact & ~app.saturated]
+    curv = curvature_ratio(st.z, st.deflection, contact_idx)
+    res = classify_contact(jump_significance=sig, stiffness_ratio=stiff, curvature=curv, nsigma=nsigma,
+                           min_stiffness=o.min_stiffness, max_curvature=o.max_curvature)
+    new = st.update("kind", res)
+    if res.kind == "hard":
+        new = _recalibrate_hard(new, cal, curv, o.max_curvature)
+    if res.kind == "soft":
+        cp = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=force_fraction,
+                                           window=window)
+        if cp.index < 0:
+            raise AnalysisError("soft contact: no contact point found on the approach (too few samples before "
+                                "the largest deflection)")
+        warn = None
+        width = cp.position_high - cp.position_low
+        steep = _steep_contact(st, cp, method, window) if width > max(100e-9, 0.1 * abs(cp.indentation)) else None
+        if steep is not None:  # a slow rise, then a distinct steep contact: the contact is where it steepens
+            warn = (f"slowly rising approach before contact: fitted over the whole approach the contact lies anywhere "
+                    f"in [{cp.position_low * 1e6:.4g}, {cp.position_high * 1e6:.4g}] um (2 sigma); the steep contact "
+                    f"after it begins at {steep.position * 1e6:.4g} um (indentation {steep.indentation * 1e6:.3g} um), "
+                    "taken as the contact point")
+            cp = steep
+        elif width > max(100e-9, 0.1 * abs(cp.indentation)):
+            warn = (f"contact point uncertain: {cp.position * 1e6:.4g} um, but fits with the contact anywhere in "
+                    f"[{cp.position_low * 1e6:.4g}, {cp.position_high * 1e6:.4g}] um are as good within 2 sigma "
+                    f"({width * 1e6:.3g} um, {width / abs(cp.indentation):.0%} of the {cp.indentation * 1e6:.3g} um "
+                    "indentation): a slowly rising baseline or a long-range force before contact makes the onset "
+                    "ambiguous")
+        elif force_fraction < 1.0:  # how much the point depends on the fitted range: the whole approach
+            alt = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=1.0, window=window)
+            if alt.index >= 0:
+                gap = alt.position - cp.position
+                if abs(gap) > max(100e-9, 0.5 * abs(cp.indentation)):  # the indentation uncertain by ~2x
+                    warn = (f"contact point uncertain: fitted up to {force_fraction:.0%} of the deflection it lies at "
+                            f"{cp.position * 1e6:.4g} um (indentation {cp.indentation * 1e6:.3g} um), fitted to the "
+                            f"whole approach at {alt.position * 1e6:.4g} um ({gap * 1e6:+.3g} um): a slowly rising "
+                            "baseline or a long-range force before contact makes the onset ambiguous")
+        new = new.update("contact_point", cp, warn=warn)
+    return new
+
+
+#: A hard contact's straight compliance line this far from the file's sensitivity (ratio) recalibrates it.
+STALE_SENSITIVITY = 1.25
+
+
+def _recalibrate_hard(st: State, cal, curvature: float, max_curvature: float) -> State:
+    """A hard contact on a measured (linear) position channel whose straight compliance line disagrees
+    with the file's sensitivity by more than :data:`STALE_SENSITIVITY`: on a rigid contact the
+    deflection follows the position one to one, so the file's sensitivity is stale (a realigned laser)
+    and the compliance slope is the calibration (the paper's, section 3.1). Not with a sensitivity the
+    user gave, nor with ``calibration.source=metadata`` (the result's source stays the file's then)."""
+    ratio = cal.factor_fit / cal.factor if cal.source == "metadata" and cal.factor else math.nan
+    straight = math.isfinite(curvature) and 1 / max_curvature <= curvature <= max_curvature
+    if (st.probe.sensitivity is not None or st.channel != "measured" or not straight or not math.isfinite(ratio)
+            or ratio <= 0 or 1 / STALE_SENSITIVITY <= ratio <= STALE_SENSITIVITY
+            or cal.requested == "metadata"):
+        return st
+    new = dataclasses.replace(cal, factor=cal.factor_fit, source="fit")
+    warn = (f"hard contact whose straight compliance line follows the position {1 / ratio:.3g} x with the file's "
+            f"sensitivity (1 on a rigid contact): the file's sensitivity is stale, the compliance slope calibrates ("
+            f"{cal.sensitivity_fit * 1e9:.4g} nm/V instead of {cal.sensitivity * 1e9:.4g}; "
+            "`calibration` metadata keeps the file's)")
+    return st.update("calibration", new, warn=warn, factor=new.factor, deflection=st.signal * new.factor)
+
+
+#: The repeated fit's baseline spans this many times the steep contact's own position travel (see _steep_contact).
+LOCAL_BASELINE = 4.0
+
+
+#: At most this many refits on the shortened run.
+LOCAL_ROUNDS = 3
+
+
+def _steep_contact(st: State, cp, method: str, window: float):
+    """On an approach whose whole-run fit leaves the onset ambiguous (a slow rise over many um before a
+    steep contact, e.g. a long cell-adhesion curve), the same fit once more on the approach after that
+    onset, up to the largest deflection: its contact point when it lies clearly after the ambiguous range
+    and is itself well defined (its range within 2.5 x the usual bound, max(10 % of its indentation, 100 nm)),
+    else None.
+
+    The fit's baseline is a straight line; the slow rise curves (convex) over the ~10 um before the
+    contact, so a line through all of it lies below the rise just before the contact and the power
+    term starts early to make up the difference (the 2016 CellHesion curve: 0.26 um before nanite's
+    gradient_zero_crossing). The fit is therefore repeated on a local run, the baseline spanning
+    :data:`LOCAL_BASELINE` times the steep contact's own position travel before it (over which the rise is
+    straight), until the point moves less than half its 2-sigma range (at most :data:`LOCAL_ROUNDS`
+    times). On that curve spans of 2-8 times give -25.93..-25.99 um; 1.5 times leaves too little
+    baseline (-25.81 um)."""
+    idx = st.approach.index
+    sub = idx[st.z[idx] >= cp.position]
+    if sub.size < 64:
+        return None
+    new = CONTACT_POINT_METHODS[method](st.z, st.deflection, sub, force_fraction=1.0, window=window)
+    if new.index < 0 or not new.position > cp.position_high or not new.indentation > 0:
+        return None
+    z_end = float(st.z[sub].max())
+    for _ in range(LOCAL_ROUNDS):  # the baseline line local: a slow rise curves over the um before the contact
+        start = new.position - LOCAL_BASELINE * (z_end - new.position)
+        local = idx[st.z[idx] >= start]
+        if local.size < 64 or local.size >= sub.size:
+            break
+        again = CONTACT_POINT_METHODS[method](st.z, st.deflection, local, force_fraction=1.0, window=window)
+        if again.index < 0 or not again.indentation > 0:
+            break
+        moved = abs(again.position - new.position)
+        sub, new = local, again
+        if moved <= 0.5 * (new.position_high - new.position_low):
+            break
+    if new.position_high - new.position_low > max(0.1 * new.indentation, 100e-9) * 2.5:
+        return None
+    return new
+
+
+def _kind_fields(st: State) -> dict:
+    k, cp = st.details["kind"], st.details.get("contact_point")
+    return dict(contact_kind=k.kind, contact_kind_reason=k.reason,
+                **({"indentation": cp.indentation} if cp is not None else {}))
+
+
+KIND = AnalysisStep(
+    "kind", "Contact kind (hard: jump-in or straight line; soft: curved) and a soft contact point", kind, KindOptions,
+    requires=("calibration",), channels=("deflection",),
+    reference="afmforce (baseline line + power-law contact term; checked against nanite's fit_line_polynomial)",
+    fields=(ResultField("contact_kind", None, default=""), ResultField("contact_kind_reason", None, default=""),
+            ResultField("indentation", "m", "indentation (soft contact)", summary=True, column=True)),
+    collect=_kind_fields)
