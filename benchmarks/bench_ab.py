@@ -51,6 +51,16 @@ runs["no_spike"] = dict(spike_window=0.0)
 runs["tight"] = dict(atol=1e-14)
 runs["resolve"] = dict(ringing="resolve", model="spring", end=-60e-9)
 runs["spring_fig1"] = dict(model="spring", velocity=10e-6, start=-5e-6, turn=100e-9, end=-5e-6)
+# the terms beyond the paper's (compiled only where a run uses them, issue 35)
+runs["damped"] = dict(quality_factor=300.0)
+runs["damped_spring"] = dict(model="spring", quality_factor=30.0, velocity=10e-6, start=-5e-6,
+                             turn=100e-9, end=-5e-6)
+runs["liquid"] = dict(model="spring", spring_constant=0.1, mass=1e-11, radius=2e-6,
+                      geometry="sphere-flat", hamaker=1e-20, viscosity=0.89e-3, permittivity=78.5,
+                      double_layer="constant_potential", surface_potential=-0.04,
+                      debye_length=9.6e-9, slip_length=5e-9, lever_drag=5e-5, velocity=10e-6,
+                      start=-500e-9, turn=30e-9, end=-500e-9, sample_rate=20e3)
+runs["hydration"] = dict(hydration_pressure=3e7, hydration_length=0.5e-9)
 out = {}
 for name, kw in runs.items():
     try:

@@ -45,6 +45,7 @@ from . import _locate as _L
 from . import _radau_control as _C
 from . import _radau_newton as _N
 from . import _sampling as _S
+from . import models as _M
 from . import events as _E
 from . import radau as _R
 from .._cores import available_cores
@@ -65,19 +66,20 @@ def tasks() -> list[tuple[str, Dispatcher, tuple]]:
     from numba import types as T
 
     f8, i8, b1 = T.float64, T.int64, T.boolean
+    m = typeof(_M.PLAIN(0))      # the model id of a run with the paper's terms only (issue 35)
     a1, a2, i1 = T.Array(f8, 1, "C"), T.Array(f8, 2, "C"), T.Array(i8, 1, "C")
     a1a, i1a, c1 = T.Array(f8, 1, "A"), T.Array(i8, 1, "A"), T.Array(T.int8, 1, "C")
     drive = typeof(_R.Drive(0, 0.0, 0.0, 0.0, 0.0, 0, 0.0))
     table = [
         (_C, "error_norm", (f8, a1, a1, a2, a2, f8, a2, a1, f8, a1, a1, a1, a1)),
-        (_C, "improved_error_norm", (i8, a1, drive, f8, f8, a1, a2, a2, f8, a2, a1, a1, a1,
+        (_C, "improved_error_norm", (m, a1, drive, f8, f8, a1, a2, a2, f8, a2, a1, a1, a1,
                                      a1, i1, f8)),
-        (_C, "left_hard_contact", (i8, a1, drive, f8, a1, f8)),
+        (_C, "left_hard_contact", (m, a1, drive, f8, a1, f8)),
         (_N, "dense_coefficients", (a1, a2, a1, a2)),
-        (_L, "_terminal_event", (i8, a1, f8, f8, f8, f8, f8, a1, a2, f8, a1, i8, f8, a1, a1, a1)),
+        (_L, "_terminal_event", (m, a1, f8, f8, f8, f8, f8, a1, a2, f8, a1, i8, f8, a1, a1, a1)),
         (_S, "sample_step", (f8, f8, f8, a1, a2, f8, f8, b1, i1, a2, a1)),
-        (_L, "_events", (i8, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1)),
-        (_L, "sample_columns", (i8, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
+        (_L, "_events", (m, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1)),
+        (_L, "sample_columns", (m, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
                                 a1, a1, c1, a2, a1, a1)),
         (_E, "fit_compliance", (a1, a1, a1a, c1, f8, f8, f8, f8)),
     ]

@@ -20,7 +20,8 @@ import numpy as np
 from numba import njit
 
 from ._jit import fmax, fmin, piece
-from .models import N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z, observe
+from .models import (HQA, HQB, MODEL_SPRING, N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z,
+                     TH_A, TH_B, drainage, observe, static_force)
 
 # --- events array layout (float, NaN = not found) ---------------------------
 E_JUMP_T, E_JUMP_Z, E_JUMP_H = 0, 1, 2     # leaves the static branch (h < h_s)
@@ -69,12 +70,51 @@ def _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o):
 
 
 @piece()
+def _value(model, p, zd, vd, y, idx, o):
+    """``observe(model, p, zd, vd, y, o)[idx]`` by the same arithmetic, computing only what that
+    observable needs (issue 35): no force for h, h', the deflection and the angle, no friction
+    for Fz; any other ``idx``: :func:`~afmforce.dynamics.models.observe` into ``o``. The scans,
+    bisections and golden sections read one observable at many points of a step."""
+    if model == MODEL_SPRING:
+        defl = y[0]
+        hd = y[1] - vd
+        theta = 0.0
+    else:
+        defl = p[HQA] * y[0] + p[HQB] * y[1]
+        hd = p[HQA] * y[2] + p[HQB] * y[3] - vd
+        theta = p[TH_A] * y[0] + p[TH_B] * y[1]
+    if idx == O_DEFL:
+        return defl
+    if idx == O_THETA:
+        return theta
+    h = defl - zd
+    if idx == O_H:
+        return h
+    if idx == O_HDOT:
+        return hd
+    if idx == O_FZ:
+        fs, _ = static_force(model, h, p)
+        fd, _, _ = drainage(model, h, hd, p)
+        return fs + fd
+    observe(model, p, zd, vd, y, o)
+    return o[idx]
+
+
+@piece()
+def _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, idx, o):
+    """Observable ``idx`` at step fraction ``s`` (:func:`_eval_obs`'s ``o[idx]``)."""
+    _dense(y_old, Q, s, ytmp)
+    t = t0 + s * h
+    return _value(model, p, z_a + v * (t - t_a), v, ytmp, idx, o)
+
+
+@piece()
 def _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, level, sign, ytmp, o):
     """Step fraction where obs[idx] crosses level (sign*(obs-level) turns > 0)."""
     for _ in range(50):
         s_mid = 0.5 * (s_lo + s_hi)
-        _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s_mid, ytmp, o)
-        if sign * (o[idx] - level) > 0.0:
+        val = _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, s_mid, ytmp, idx, o)
+        if sign * (val - level) > 0.0:
             s_hi = s_mid
         else:
             s_lo = s_mid
@@ -93,10 +133,8 @@ def _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, sign, ytm
     b = s_hi
     c = b - (1.0 - _GOLD) * (b - a)
     d = a + (1.0 - _GOLD) * (b - a)
-    _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, c, ytmp, o)
-    fc = sign * o[idx]
-    _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, d, ytmp, o)
-    fd = sign * o[idx]
+    fc = sign * _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, c, ytmp, idx, o)
+    fd = sign * _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, d, ytmp, idx, o)
     for _ in range(60):
         if b - a < 1e-9:
             break
@@ -105,15 +143,13 @@ def _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, sign, ytm
             d = c
             fd = fc
             c = b - (1.0 - _GOLD) * (b - a)
-            _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, c, ytmp, o)
-            fc = sign * o[idx]
+            fc = sign * _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, c, ytmp, idx, o)
         else:
             a = c
             c = d
             fc = fd
             d = a + (1.0 - _GOLD) * (b - a)
-            _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, d, ytmp, o)
-            fd = sign * o[idx]
+            fd = sign * _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, d, ytmp, idx, o)
     s = c if fc < fd else d
     _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
     return s, o[idx]
@@ -152,9 +188,9 @@ def _scan_extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, 
     vals_s = s_a
     for k in range(NSUB + 1):
         s = s_a + (s_b - s_a) * k / NSUB
-        _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
-        if sign * o[idx] < vbest:
-            vbest = sign * o[idx]
+        val = _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, idx, o)
+        if sign * val < vbest:
+            vbest = sign * val
             kbest = k
             vals_s = s
     if kbest < 0:
@@ -254,7 +290,7 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
                     ev[E_SPIKE_T] = tc
                     ev[E_SPIKE_Z] = ev[E_CONTACT_Z]
         else:
-            _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o)
+            _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, O_H + r0, ytmp, o)
         # spike: largest angle from jump-in (or contact) to contact + window
         if not math.isnan(ev[E_SPIKE_T]):
             s_hi = 1.0
@@ -266,16 +302,15 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
                             -1.0, E_SPIKE_THETA + r0, E_SPIKE_Z + r0, E_SPIKE_T + r0, ev, ytmp, o)
     elif kind == DWELL:
         if ev[E_IN_CONTACT] == 1.0:
-            _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o)
+            _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, O_H + r0, ytmp, o)
     elif kind == RETRACT:
         if ev[E_IN_CONTACT] == 1.0:
-            _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, 0.0, ytmp, oprev)
             sp = math.nan
             s_prev = 0.0
             for k in range(1, NSUB + 1):
                 s = k / NSUB
-                _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
-                if o[O_H] > hc:
+                if _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, O_H + r0,
+                               o) > hc:
                     sp = _bisect(model, p, t_a, z_a, v, t0, h, y_old, Q, s_prev, s,
                                  O_H + r0, hc, 1.0, ytmp, o)
                     break
@@ -291,12 +326,12 @@ def _events(model, p, kind, t_a, z_a, v, t0, h, y_old, Q, ev, ytmp, o, oprev):
 
 
 @piece()
-def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, ytmp, o):
-    """In contact: remember the last time the tip bounced out (h > hc)."""
+def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, i_h, ytmp, o):
+    """In contact: remember the last time the tip bounced out (h > hc; ``i_h`` = O_H)."""
     for k in range(NSUB, -1, -1):
         s = k / NSUB
-        t = _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, o)
-        if o[O_H] > hc:
+        t = t0 + s * h
+        if _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, s, ytmp, i_h, o) > hc:
             if t > ev[E_LAST_OUT]:
                 ev[E_LAST_OUT] = t
             return
@@ -322,21 +357,29 @@ def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kin
     ns = ybuf.shape[1] - 1 if averaged else ybuf.shape[1]
     yk = np.empty(ns)
     finite = True
+    # one pass over the rows (issue 35: three passes read and wrote ~4 MB on Fig 5, more than
+    # the cache holds); the segments' sample ranges are in order and do not overlap, as
+    # simulate builds them; a row in none of them gets code 0 and no observables
+    nseg = seg_first.shape[0]
+    j = 0
     for k in range(n):
-        tt[k] = k * dt
-        code[k] = 0
+        t = k * dt
+        tt[k] = t
         for i in range(ns):
             v = ybuf[k, i] / ybuf[k, ns] if averaged else ybuf[k, i]
+            yk[i] = v
             if not math.isfinite(v):
                 finite = False
-    for j in range(seg_first.shape[0]):
-        for k in range(seg_first[j], seg_last[j]):
+        while j < nseg and k >= seg_last[j]:
+            j += 1
+        if j < nseg and k >= seg_first[j]:
             code[k] = seg_kind[j]
-            zd[k] = seg_z0[j] + seg_v[j] * (tt[k] - seg_t0[j])
-            for i in range(ns):
-                yk[i] = ybuf[k, i] / ybuf[k, ns] if averaged else ybuf[k, i]
-            observe(model, p, zd[k], seg_v[j], yk, obs[k])
-    for k in range(n):
-        app[k] = beta * obs[k, O_THETA] if beam else obs[k, O_DEFL]
-        app_sep[k] = app[k] - zd[k]
+            z = seg_z0[j] + seg_v[j] * (t - seg_t0[j])
+            zd[k] = z
+            observe(model, p, z, seg_v[j], yk, obs[k])
+        else:
+            code[k] = 0
+        a = beta * obs[k, O_THETA] if beam else obs[k, O_DEFL]
+        app[k] = a
+        app_sep[k] = a - zd[k]
     return finite

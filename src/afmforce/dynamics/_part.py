@@ -11,6 +11,7 @@ then the domain, with the one message style of :mod:`afmforce._validate`.
 from __future__ import annotations
 
 import dataclasses
+import threading
 from functools import cache
 from typing import Any
 
@@ -99,11 +100,24 @@ def _names(cls) -> frozenset[str]:
     return frozenset(f.name for f in dataclasses.fields(cls))
 
 
+#: The part :meth:`Part.replace` copies (per thread): its fields passed the same checks.
+_SOURCE = threading.local()
+_MISSING = object()
+
+
 def validate(part, skip: tuple[str, ...] = ()) -> None:
-    """Check every field of ``part`` against its declared domain or registry; store floats."""
+    """Check every field of ``part`` against its declared domain or registry; store floats.
+
+    A field holding the very object the part being replaced holds there (:meth:`Part.replace`)
+    passed the same check already and is not checked again (a check depends on the field and
+    its value only; a fit or ``simulate(**flat)`` changes a few fields of a part: issue 35)."""
     d = part.__dict__
+    src = getattr(_SOURCE, "part", None)
+    known = src.__dict__ if src is not None and type(src) is type(part) else {}
     for name, check in _checks(type(part), skip):
         value = d[name]
+        if known.get(name, _MISSING) is value:
+            continue
         checked = check(value)
         if checked is not value:
             object.__setattr__(part, name, checked)
@@ -118,7 +132,12 @@ class Part:
         if not known.issuperset(changes):
             raise ParameterError(f"{type(self).__name__} has no field(s) {sorted(set(changes) - known)}; "
                                  f"known: {', '.join(sorted(known))}")
-        return type(self)(**{**self.to_dict(), **changes})
+        before = getattr(_SOURCE, "part", None)
+        _SOURCE.part = self
+        try:
+            return type(self)(**{**self.to_dict(), **changes})
+        finally:
+            _SOURCE.part = before
 
     def to_dict(self) -> dict[str, Any]:
         """The fields as a plain dict (SI values)."""

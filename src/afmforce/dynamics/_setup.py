@@ -16,7 +16,7 @@ from .drive import initial_state, segments
 from .guard import _stiff_load_friction
 from .load_friction import load_friction_controls
 from .models import XI as _XI, ZETA as _ZETA
-from .models import MODEL_BEAM, MODEL_IDS, state_size
+from .models import MODEL_BEAM, MODEL_IDS, kernel_model, state_size
 from .registries import RINGING
 from .static import surface_jump_in
 from ._params import _beam_fmax, free_frequency_max, parameter_vector
@@ -49,7 +49,7 @@ class _Setup:
     configuration): the packed model, start state, tolerances, drive plan, the event
     record's inputs and the compiled call's records. Read-only: runs copy what they change."""
 
-    __slots__ = ("model", "n", "p", "y0", "atol", "rtolv", "t_total_max", "dt", "nbuf",
+    __slots__ = ("model", "kmodel", "n", "p", "y0", "atol", "rtolv", "t_total_max", "dt", "nbuf",
                  "averaged", "ev0", "h_s", "z_s", "hmax_dz", "damp_cycles", "term", "f_max",
                  "budget", "tolerances", "control", "beta", "k", "beam", "plan", "records",
                  "seg_table", "rate",
@@ -107,6 +107,7 @@ def _base(cfg: SimulationConfig) -> _Setup:
     s.model = model = MODEL_IDS[cfg.model]
     s.n = n = state_size(model)
     s.p = p = parameter_vector(cfg.replace(friction="none") if model == MODEL_BEAM else cfg)
+    s.kmodel = kernel_model(model, p)       # its type: the paper's terms only, or all
     s.y0 = initial_state(cfg)
     atol = np.full(n, cfg.atol)
     atol[n // 2:] = cfg.atol * 2.0 * math.pi * VELOCITY_ATOL_FREQUENCY

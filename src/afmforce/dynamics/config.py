@@ -139,7 +139,7 @@ def _unknown(names) -> ParameterError:
 
 def _resolve(parts: dict[str, Any], flat: dict[str, Any]) -> dict:
     """The five parts from given parts (None: default) and flat-name changes."""
-    unknown = set(flat) - set(FLAT)
+    unknown = flat.keys() - FLAT.keys()        # not set(FLAT): ~100 names per call
     if unknown:
         raise _unknown(unknown)
     probe = parts["probe"]

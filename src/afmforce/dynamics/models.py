@@ -44,6 +44,8 @@ import math
 
 import numpy as np
 from numba import njit
+from numba.core import types as _types
+from numba.extending import overload
 
 from .. import surface_laws
 from ._jit import piece
@@ -90,6 +92,44 @@ P_SIZE = P_LAWS + surface_laws.N_SLOTS
 N_OBS = 9
 # indices into the observable vector
 O_H, O_HDOT, O_DEFL, O_THETA, O_FZ, O_Y2, O_Y2DOT, O_FY, O_Z = range(N_OBS)
+
+
+#: The type of the compiled calls' model id when the run uses none of the terms beyond the
+#: paper's (issue 35): numba compiles the integrator, the event location and the sampling once
+#: per type of their ``model`` argument, and :func:`extras` is a compile-time constant there, so
+#: the paper's runs (``np.int8`` ids, :func:`kernel_model`) carry no code of the liquids, the
+#: lever damping or the surface force laws, while any other integer (a plain Python ``int``:
+#: int64) compiles every term, each tested at run time on its slots as before.
+PLAIN = np.int8
+
+
+def extras(model) -> bool:
+    """Whether ``model`` (an id as the compiled calls get it) compiles the terms beyond the
+    paper's: double layer, slip, lever drag, lever damping, surface force laws. In compiled
+    code a constant of the argument's type (:data:`PLAIN`: False)."""
+    return not isinstance(model, PLAIN)
+
+
+@overload(extras, inline="always")
+def _extras_compiled(model):
+    plain = isinstance(model, _types.Integer) and model.bitwidth == 8 and model.signed
+    if plain:
+        return lambda model: False
+    return lambda model: True
+
+
+def uses_extras(p) -> bool:
+    """Whether the packed vector ``p`` turns on a term beyond the paper's (the same tests as
+    the compiled terms': a double layer, slip, lever drag, a surface force law, or any lever
+    damping coefficient)."""
+    return bool(p[DL_KAPPA] > 0.0 or p[SLIP6B] > 0.0 or p[LEVER] > 0.0 or p[P_LAWS] > 0.0
+                or p[C00] != 0.0 or p[C01] != 0.0 or p[C10] != 0.0 or p[C11] != 0.0)
+
+
+def kernel_model(model: int, p):
+    """The model id the compiled calls get for the packed vector ``p``: ``PLAIN(model)`` when
+    ``p`` uses no term beyond the paper's (:func:`uses_extras`), else the Python ``int``."""
+    return int(model) if uses_extras(p) else PLAIN(model)
 
 
 def state_size(model: int) -> int:
@@ -143,10 +183,13 @@ laws_force = _laws_chain()
 
 
 @piece()
-def static_force(h, p):
+def static_force(model, h, p):
     """Static normal force and its gradient: eq 2, the double layer and the surface force laws of
-    :mod:`afmforce.surface_laws` (:data:`laws_force`) [N, N/m]."""
+    :mod:`afmforce.surface_laws` (:data:`laws_force`) [N, N/m]; eq 2 alone where ``model`` has
+    no extras (:func:`extras`)."""
     fs, dfs = surface_force(h, p[AR], p[Z0])
+    if not extras(model):
+        return fs, dfs
     kappa = p[DL_KAPPA]
     if kappa > 0.0:
         x = kappa * h
@@ -169,13 +212,15 @@ def static_force(h, p):
 
 
 @piece()
-def drainage(h, hd, p):
+def drainage(model, h, hd, p):
     """Drainage (with slip) and lever drag: (F [N], dF/dh [N/m], dF/dh' [N s/m]).
 
     ``F = -CD phi(h) h' - c g(h) h'`` with ``phi = f*(h)/h`` (Vinogradova 1995; 1/h
     without slip, computed exactly as before issue 25) and ``g = H/(h + H)`` (or 1).
     """
     cd = p[CD]
+    if not extras(model):                # the paper's eq 3 (as the no-slip branch below)
+        return -cd * hd / h, cd * hd / (h * h), -cd / h
     b6 = p[SLIP6B]
     if b6 > 0.0:
         u = b6 / h
@@ -222,11 +267,14 @@ def rhs(model, p, zd, vd, y, out):
         if not h > p[H_GUARD]:
             return False
         hd = xd - vd
-        fs, _ = static_force(h, p)
-        fd, _, _ = drainage(h, hd, p)
+        fs, _ = static_force(model, h, p)
+        fd, _, _ = drainage(model, h, hd, p)
         fz = fs + fd
         out[0] = xd
-        out[1] = p[INV_M] * (-p[K] * x + fz - p[C00] * xd)
+        g = -p[K] * x + fz
+        if extras(model):
+            g -= p[C00] * xd
+        out[1] = p[INV_M] * g
         return True
     qa = y[0]
     qb = y[1]
@@ -240,17 +288,20 @@ def rhs(model, p, zd, vd, y, out):
     if not h > p[H_GUARD]:
         return False
     hd = hqa * va + hqb * vb - vd
-    fs, _ = static_force(h, p)
-    fd, _, _ = drainage(h, hd, p)
+    fs, _ = static_force(model, h, p)
+    fd, _, _ = drainage(model, h, hd, p)
     fz = fs + fd
     yd = yqa * va + yqb * vb
     fy = -(p[XI] + p[ZETA] * fz * fz) * yd
     out[0] = va
     out[1] = vb
-    out[2] = p[INV_MA] * (p[A00] * qa + p[A01] * qb + fz * hqa + fy * yqa
-                          - (p[C00] * va + p[C01] * vb))
-    out[3] = p[INV_MB] * (p[A10] * qa + p[A11] * qb + fz * hqb + fy * yqb
-                          - (p[C10] * va + p[C11] * vb))
+    ga = p[A00] * qa + p[A01] * qb + fz * hqa + fy * yqa
+    gb = p[A10] * qa + p[A11] * qb + fz * hqb + fy * yqb
+    if extras(model):                     # lever damping -C q'
+        ga -= p[C00] * va + p[C01] * vb
+        gb -= p[C10] * va + p[C11] * vb
+    out[2] = p[INV_MA] * ga
+    out[3] = p[INV_MB] * gb
     return True
 
 
@@ -262,13 +313,16 @@ def jac(model, p, zd, vd, y, J):
         if not h > p[H_GUARD]:
             return False
         hd = y[1] - vd
-        _, dfs = static_force(h, p)
-        _, dfh, dfv = drainage(h, hd, p)
+        _, dfs = static_force(model, h, p)
+        _, dfh, dfv = drainage(model, h, hd, p)
         im = p[INV_M]
         J[0, 0] = 0.0
         J[0, 1] = 1.0
         J[1, 0] = im * (-p[K] + dfs + dfh)
-        J[1, 1] = im * dfv - im * p[C00]
+        j11 = im * dfv
+        if extras(model):
+            j11 -= im * p[C00]
+        J[1, 1] = j11
         return True
     qa = y[0]
     qb = y[1]
@@ -282,8 +336,8 @@ def jac(model, p, zd, vd, y, J):
     if not h > p[H_GUARD]:
         return False
     hd = hqa * va + hqb * vb - vd
-    fs, dfs = static_force(h, p)
-    fd, dfh, dfv = drainage(h, hd, p)
+    fs, dfs = static_force(model, h, p)
+    fd, dfh, dfv = drainage(model, h, hd, p)
     fz = fs + fd
     dfz_dh = dfs + dfh                    # dFz/dh
     dfz_dhd = dfv                         # dFz/dh'
@@ -306,10 +360,19 @@ def jac(model, p, zd, vd, y, J):
     J[3, 1] = imb * (p[A11] + gb * dfz_dh * hqb)
     # velocities: through Fd (hq_j dFz/dh') and friction (-xi_eff yq_j)
     # and the lever damping -C q'
-    J[2, 2] = ima * (ga * dfz_dhd * hqa - xi_eff * yqa * yqa - p[C00])
-    J[2, 3] = ima * (ga * dfz_dhd * hqb - xi_eff * yqa * yqb - p[C01])
-    J[3, 2] = imb * (gb * dfz_dhd * hqa - xi_eff * yqb * yqa - p[C10])
-    J[3, 3] = imb * (gb * dfz_dhd * hqb - xi_eff * yqb * yqb - p[C11])
+    j22 = ga * dfz_dhd * hqa - xi_eff * yqa * yqa
+    j23 = ga * dfz_dhd * hqb - xi_eff * yqa * yqb
+    j32 = gb * dfz_dhd * hqa - xi_eff * yqb * yqa
+    j33 = gb * dfz_dhd * hqb - xi_eff * yqb * yqb
+    if extras(model):
+        j22 -= p[C00]
+        j23 -= p[C01]
+        j32 -= p[C10]
+        j33 -= p[C11]
+    J[2, 2] = ima * j22
+    J[2, 3] = ima * j23
+    J[3, 2] = imb * j32
+    J[3, 3] = imb * j33
     return True
 
 
@@ -334,8 +397,8 @@ def observe(model, p, zd, vd, y, o):
         y2 = p[YQA] * y[0] + p[YQB] * y[1]
         y2d = p[YQA] * y[2] + p[YQB] * y[3]
     h = defl - zd
-    fs, _ = static_force(h, p)
-    fd, _, _ = drainage(h, hd, p)
+    fs, _ = static_force(model, h, p)
+    fd, _, _ = drainage(model, h, hd, p)
     fz = fs + fd
     o[O_H] = h
     o[O_HDOT] = hd
@@ -362,7 +425,7 @@ def contact_frequency(model, p, zd, y):
         h = y[0] - zd
     else:
         h = p[HQA] * y[0] + p[HQB] * y[1] - zd
-    _, dfs = static_force(h, p)
+    _, dfs = static_force(model, h, p)
     kappa = -dfs
     w2 = (kappa + p[K_EFF]) * p[MOBILITY]
     return math.sqrt(w2) if w2 > 0.0 else 0.0, kappa
@@ -386,7 +449,7 @@ def error_frequency(model, p, zd, vd, y):
     else:
         h = p[HQA] * y[0] + p[HQB] * y[1] - zd
         hd = p[HQA] * y[2] + p[HQB] * y[3] - vd
-    fs, dfs = static_force(h, p)
+    fs, dfs = static_force(model, h, p)
     kappa = -dfs if dfs < 0.0 else 0.0
     w = math.sqrt((kappa + p[K_EFF]) * p[MOBILITY])
     return w

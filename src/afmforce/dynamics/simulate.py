@@ -184,7 +184,7 @@ class _Run:
             labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
         lab = np.array(labels, dtype=np.int64)
         finite = sample_columns(
-            s.model, s.p, ybuf, n_samp, s.averaged, s.dt, lab[:, 0], lab[:, 1],
+            s.kmodel, s.p, ybuf, n_samp, s.averaged, s.dt, lab[:, 0], lab[:, 1],
             lab[:, 2].astype(np.int8), seg_table[:, 0], seg_table[:, 1], seg_table[:, 2],
             s.beam, s.beta, *self.out)
         # the first n_samp rows; a copy where they are well short of the buffer (a run
@@ -212,7 +212,7 @@ class _Run:
         work[R.W_HAVE_JAC] = 0.0
         work[R.W_VFAC] = self.setup.vfac
         first = int(s_next[0])
-        args = (self.setup.model, self.setup.p, record) + fixed
+        args = (self.setup.kmodel, self.setup.p, record) + fixed
         while True:
             status = R.integrate_segment(*args)
             if status == R.PAUSED:
