@@ -270,10 +270,10 @@ function drawDrift(raw, d, parts) {   // the drift step: raw signal against time
   for (const [k, label, color] of parts) {
     if (!raw.segment.includes(k)) continue;
     const t = raw.time.map((x, i) => (raw.segment[i] === k ? x : null));
-    tt.push({ x: t, y: sc(raw.signal.map((x, i) => (raw.segment[i] === k ? x : null)), fs), name: label, mode: "lines", line: { color }, hovertemplate: `t = %{x:.4f} s<br>%{y:.4g} ${us}<extra>${label}</extra>` });
+    tt.push({ x: t, y: sc(raw.signal.map((x, i) => (raw.segment[i] === k ? x : null)), fs), name: label, mode: "lines", line: { color }, hovertemplate: `${timeAxis(raw).hover}<br>%{y:.4g} ${us}<extra>${label}</extra>` });
     if (dr && k !== 2) tt.push({ x: t, y: sc(t.map((x) => (x === null ? null : base(x, k))), fs), name: `${label} baseline`, mode: "lines", line: { color, dash: "dash" }, hovertemplate: `baseline %{y:.4g} ${us}<extra>${label}</extra>` });
   }
-  Plotly.react("an-plot-time", tt, { ...LAYOUT, title: { text: `Drift: raw signal and baselines (${dr ? dr.retract_line + " retract line" : "no drift step"})` }, xaxis: { title: { text: "time t [s]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
+  Plotly.react("an-plot-time", tt, { ...LAYOUT, title: { text: `Drift: raw signal and baselines (${dr ? dr.retract_line + " retract line" : "no drift step"})` }, xaxis: { title: { text: timeAxis(raw).title } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
   if (!co || !co.approach) { Plotly.purge("an-plot-compliance"); return; }
   const ct = [], lo = Math.min(co.approach.z_min, (co.retract || co.approach).z_min), hi = Math.max(co.approach.z_max, (co.retract || co.approach).z_max), w = (hi - lo) * 2;
   for (const [k, label, color] of parts) {
@@ -334,6 +334,10 @@ function drawIndentation(res) {   // force above the baseline vs indentation: th
     { x: order.map((i) => x[i]), y: order.map((i) => (fit.fit_force[i] - fit.baseline) * 1e9), name: `fit: ${fit.model}`, mode: "lines", line: { color: "#b00020", width: 2 }, hovertemplate: "model: F = %{y:.4f} nN at δ = %{x:.2f} nm<extra></extra>" }],
   { ...LAYOUT, title: { text: `Indentation: ${label}` + (fit.warnings && fit.warnings.length ? ` (${fit.warnings.length} warning${fit.warnings.length > 1 ? "s" : ""})` : "") },
     xaxis: { title: { text: "indentation δ [nm]" } }, yaxis: { title: { text: "force above the baseline [nN]" } } }, CONFIG);
+}
+function timeAxis(raw) {   // a file without a time base (no sample rate): its "time" is the sample index
+  return raw.time_base === false ? { title: "sample index n [-] (the file has no time base)", hover: "sample %{x:.0f}" }
+    : { title: "time t [s]", hover: "t = %{x:.4f} s" };
 }
 function slopeText(slope, unit) {   // a compliance slope per nm (29680000 V/m reads 0.02968 V/nm)
   return unit === "N" ? `${Number(slope.toPrecision(4))} N/m` : `${Number((slope * 1e-9).toPrecision(4))} ${unit}/nm`;
