@@ -329,11 +329,15 @@ function drawIndentation(res) {   // force above the baseline vs indentation: th
   const order = x.map((_, i) => i).sort((a, b) => x[a] - x[b]);
   let label = `E = ${fmtPa(fit.youngs_modulus)} [${fmtPa(fit.youngs_modulus_low)}, ${fmtPa(fit.youngs_modulus_high)}]`;
   if (fit.work_of_adhesion !== null && fit.work_of_adhesion !== undefined) label += `, w = ${Number((fit.work_of_adhesion * 1e3).toPrecision(3))} mJ/m²`;
+  const range = fitRangeLayout($("an-curve").value, fit, x);   // drag.js: the fit limit, dragged
   Plotly.react(div, [
     { x, y: data, name: `${fit.run} (data)`, mode: "markers", marker: { size: 3, color: "#777" }, hovertemplate: "δ = %{x:.2f} nm<br>F = %{y:.4f} nN<extra>data</extra>" },
-    { x: order.map((i) => x[i]), y: order.map((i) => (fit.fit_force[i] - fit.baseline) * 1e9), name: `fit: ${fit.model}`, mode: "lines", line: { color: "#b00020", width: 2 }, hovertemplate: "model: F = %{y:.4f} nN at δ = %{x:.2f} nm<extra></extra>" }],
+    { x: order.map((i) => x[i]), y: order.map((i) => (fit.fit_force[i] - fit.baseline) * 1e9), name: `fit: ${fit.model}`, mode: "lines", line: { color: "#b00020", width: 2 }, hovertemplate: "model: F = %{y:.4f} nN at δ = %{x:.2f} nm<extra></extra>" },
+    contactPointTrace(fit, data)],
   { ...LAYOUT, title: { text: `Indentation: ${label}` + (fit.warnings && fit.warnings.length ? ` (${fit.warnings.length} warning${fit.warnings.length > 1 ? "s" : ""})` : "") },
-    xaxis: { title: { text: "indentation δ [nm]" } }, yaxis: { title: { text: "force above the baseline [nN]" } } }, CONFIG);
+    xaxis: { title: { text: "indentation δ [nm]" }, range: range.xrange, autorange: false }, yaxis: { title: { text: "force above the baseline [nN]" } },
+    shapes: range.shapes, annotations: range.annotations }, { ...CONFIG, edits: { shapePosition: true } });
+  fitRangeBind(div);
 }
 function timeAxis(raw) {   // a file without a time base (no sample rate): its "time" is the sample index
   return raw.time_base === false ? { title: "sample index n [-] (the file has no time base)", hover: "sample %{x:.0f}" }
