@@ -127,6 +127,7 @@ def test_a_click_on_a_map_pixel_opens_its_curve(page):  # noqa: F811
     page.click("#an-run")
     page.wait_for_function("document.getElementById('an-plot-map').data", timeout=60_000)
     _settled(page, 0)
+    page.locator("#an-plot-map").scroll_into_view_if_needed()
     pixels = page.evaluate("""() => { const gd = document.getElementById('an-plot-map'), L = gd._fullLayout, t = gd.data[0];
         const r = gd.getBoundingClientRect(), out = [];
         t.customdata.forEach((row, j) => row.forEach((name, i) => { if (name) out.push({name,
