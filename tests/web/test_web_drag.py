@@ -183,3 +183,38 @@ def test_per_channel_asylum_waves_uploaded_together_in_the_page(page, tmp_path):
     assert sorted(names) == sorted([f"{PREFIX}Defl.ibw", f"{PREFIX}ZSnsr.ibw"])
     a, b = (page.evaluate("(n) => AN.payload.results[n]", n) for n in names)
     assert a["contact_kind"] == b["contact_kind"] and a["adhesion_force"] == b["adhesion_force"]
+
+
+def test_the_fit_view_takes_the_calibration(page, tmp_path):  # noqa: F811
+    """The fit view has the analyse view's calibration: a calibration file (``afmforce calibrate
+    --out``) fills k and f0 (marked "from calib.json"), a typed InvOLS joins them, and the fit of
+    the uploaded curves is sent them as its metadata, read by the CLI's parser (``afmforce fit
+    --meta``) to the file's exact values; the job starts (and is cancelled here)."""
+    from afmforce.datasets import path
+    from afmforce.io._meta import parse_meta_args
+    from test_web_analyse_view import _calibrate
+
+    cal = _calibrate(tmp_path)
+    written = json.loads(cal.read_text())
+    page.click("button[data-view=fit]")
+    page.set_input_files("#fit-calfile", str(cal))
+    page.wait_for_function("""() => { const t = document.querySelector("[data-fit-meta='spring_constant'] .from");
+        return t && t.textContent === 'from calib.json'; }""", timeout=30_000)
+    assert page.inner_text("[data-fit-meta='resonance_frequency'] .from") == "from calib.json"
+    page.locator("[data-fit-meta='sensitivity'] input.val").fill("50")              # nm/V, the field's unit
+    page.set_input_files("#fit-files", [str(path("asylum-air")), str(DATA / "asylum-mfp3d_SiN-tip_air.ibw")])
+    page.uncheck("#fit-profile")
+    page.uncheck("#fit-compare")
+    with page.expect_response(lambda r: r.url.endswith("/api/fit"), timeout=120_000) as got:
+        page.click("#fit-run")
+    body = json.loads(got.value.request.post_data)
+    assert len(body["file_ids"]) == 2
+    meta = parse_meta_args(body["meta"])
+    assert meta == {"spring_constant": written["spring_constant"], "sensitivity": pytest.approx(50e-9, rel=1e-12),
+                    "resonance_frequency": 30e3}
+    assert got.value.status == 202
+    page.click("#fit-cancel")
+    page.wait_for_function("['cancelled', 'done', 'failed'].some(s => document.getElementById('fit-state').textContent.startsWith(s))",
+                           timeout=60_000)
+    page.click("button[data-view=analyse]")
+    assert not page.errors

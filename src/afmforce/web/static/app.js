@@ -584,7 +584,7 @@ $("fit-run").addEventListener("click", async () => {
     // mistake the server names): never NaN, which JSON.stringify would turn into null
     const val = (t, f) => { t = String(t).trim(); return t !== "" && isFinite(Number(t)) ? Number(t) * f : t; };
     const seed = $("fit-seed").value.trim();
-    const body = { file_ids: ids, free, seed: /^\d+$/.test(seed) ? Number(seed) : seed, compare: $("fit-compare").checked, profile: $("fit-profile").checked,
+    const body = { file_ids: ids, meta: ids.length ? fitMetaTexts() : [], free, seed: /^\d+$/.test(seed) ? Number(seed) : seed, compare: $("fit-compare").checked, profile: $("fit-profile").checked,
       velocities: ids.length ? [] : $("fit-speeds").value.split(",").map((v) => val(v, 1e-6)),
       truth: ids.length ? {} : { xi: val($("fit-xi").value, 1), hamaker: val($("fit-hamaker").value, 1e-21) } };
     const job = await api("api/fit", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
@@ -665,7 +665,7 @@ $("an-calfile").addEventListener("change", (e) => { if (e.target.files[0]) loadC
   try {
     Object.assign(SCHEMA, await api("api/schema"));
     SCHEMA.examples.forEach((e) => $("an-example").append(el("option", { value: e.name, text: `${e.name}: ${e.description}` })));
-    buildOptions(); buildCalibration(); buildSim();
+    buildOptions(); buildCalibration(); buildFitCalibration(); buildSim();
     SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
     await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
