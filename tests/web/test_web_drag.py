@@ -218,3 +218,46 @@ def test_the_fit_view_takes_the_calibration(page, tmp_path):  # noqa: F811
                            timeout=60_000)
     page.click("button[data-view=analyse]")
     assert not page.errors
+
+
+def test_drag_the_vdw_fit_window(page):  # noqa: F811
+    """A hard contact (the shipped MFP-3D curve): the van der Waals fit's window, vdw.max_separation
+    (30 nm by default), dragged on force vs separation; A R that comes back is the library's with
+    the dragged value, the fit drawn within it."""
+    from afmforce.datasets import path
+
+    page.select_option("#an-example", "asylum-air")
+    page.set_input_files("#an-files", [])
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-curve').value.includes('asylum')", timeout=60_000)
+    _settled(page, 0)
+    drops = page.evaluate("window.FIT_RANGE_DROPS || 0")
+    page.locator("#an-plot-force").scroll_into_view_if_needed()
+    at = page.evaluate("""() => { const gd = document.getElementById('an-plot-force'), L = gd._fullLayout;
+        const r = gd.getBoundingClientRect();
+        return {x0: L.shapes[0].x0, left: r.left + L.xaxis._offset, top: r.top + L.yaxis._offset, h: L.yaxis._length,
+                lo: L.xaxis.range[0], hi: L.xaxis.range[1], w: L.xaxis._length}; }""")
+    assert at["x0"] == pytest.approx(30.0)                                 # the option's default, nm
+    px = at["left"] + (at["x0"] - at["lo"]) / (at["hi"] - at["lo"]) * at["w"]
+    y = at["top"] + at["h"] * 0.3
+    page.mouse.move(px, y)
+    page.mouse.down()
+    page.mouse.move(px + 20, y, steps=5)
+    page.mouse.move(px + 40, y, steps=5)
+    page.mouse.up()
+    _settled(page, drops + 1)
+    typed = page.locator("[data-option='vdw.max_separation'] input.val").input_value()
+    want = at["x0"] + 40 / at["w"] * (at["hi"] - at["lo"])
+    assert float(typed) == pytest.approx(want, rel=0.05)
+    cli = _cli(path("asylum-air"), f"vdw.max_separation={typed}nm")
+    got = page.evaluate("AN.payload.results[document.getElementById('an-curve').value]")
+    assert got["hamaker_radius"] == pytest.approx(cli["hamaker_radius"], rel=1e-12)
+    assert got["details"]["vdw"]["separation_max"] <= float(typed) * 1e-9 * (1 + 1e-12)
+    default = _cli(path("asylum-air"))
+    assert got["hamaker_radius"] != default["hamaker_radius"]
+    page.evaluate("""() => { const i = document.querySelector("[data-option='vdw.max_separation'] input.val");
+        i.value = ''; i.dispatchEvent(new Event('change')); }""")                # back to the default
+    _settled(page, 0)
+    assert page.evaluate("AN.payload.results[document.getElementById('an-curve').value].hamaker_radius") == default["hamaker_radius"]
+    page.select_option("#an-example", "")
+    assert not page.errors

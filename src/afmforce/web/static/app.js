@@ -229,7 +229,8 @@ function drawCurve() {
     }
     marks.push({ x: xs, y: ys, name: `vdW fit A R = ${fmt(v.hamaker_radius, "")} J m`, mode: "lines", line: { dash: "dash", color: "#6a3d9a" }, hovertemplate: "fit: F = %{y:.4f} nN at %{x:.2f} nm<extra></extra>" });
   }
-  Plotly.react("an-plot-force", f.concat(marks), { ...LAYOUT, title: { text: `Force vs separation — ${name}` }, xaxis: { title: { text: "separation h [nm]" } }, yaxis: { title: { text: "force F [nN]" } } }, CONFIG);
+  Plotly.react("an-plot-force", f.concat(marks), { ...LAYOUT, title: { text: `Force vs separation — ${name}` }, xaxis: { title: { text: "separation h [nm]" } }, yaxis: { title: { text: "force F [nN]" } }, ...vdwRangeLayout(res) }, { ...CONFIG, edits: { shapePosition: true } });
+  optionHandleBind($("an-plot-force"), "vdw", "max_separation");   // drag.js: the vdW fit's window, dragged
   if (raw) {
     const u = raw.unit || "";
     const [fs, us] = U[u] || [1, u];

@@ -40,17 +40,36 @@ function contactPointTrace(fit, ys) {
 // a dropped handle -> the option's value (SI -> its control's unit) and a re-run; dragged to the
 // right end (past the whole run) -> the option cleared: the whole run again
 function fitRangeBind(div) {
-  if (div.dataset.fitRange) return;
-  div.dataset.fitRange = "1";
+  optionHandleBind(div, "indentation", "max_indentation", () => FIT_RANGE.room[$("an-curve").value]);
+}
+
+// the handle of one option on a plot (its only shape): dropped, its x [nm] is typed in the option's
+// field and the analysis re-runs (past clearAt(): the field emptied, the option's default again)
+function optionHandleBind(div, step, name, clearAt = () => undefined) {
+  if (div.dataset.handle) return;
+  div.dataset.handle = `${step}.${name}`;
   div.on("plotly_relayout", (ev) => {
     const x0 = ev["shapes[0].x0"], x1 = ev["shapes[0].x1"];
     if (x0 === undefined && x1 === undefined) return;
-    const c = fitRangeControl(); if (!c) return;
-    const nm = (Number(x0 ?? x1) + Number(x1 ?? x0)) / 2, room = FIT_RANGE.room[$("an-curve").value];
+    const c = (typeof AN === "undefined" ? [] : AN.controls).find((x) => x.step === step && x.f.name === name); if (!c) return;
+    const nm = (Number(x0 ?? x1) + Number(x1 ?? x0)) / 2, end = clearAt();
     const input = c.box.querySelector("input.val");
-    if (room !== undefined && nm >= room) input.value = "";
+    if (end !== undefined && nm >= end) input.value = "";
     else input.value = String(Number((Math.max(nm, 1e-3) * 1e-9 / c.f.factor).toPrecision(4)));
     window.FIT_RANGE_DROPS = (window.FIT_RANGE_DROPS || 0) + 1;
     input.dispatchEvent(new Event("change"));
   });
+}
+
+// the van der Waals fit's window on force vs separation: a handle for vdw.max_separation (hard
+// contacts: the paper's eq 2 fitted up to it)
+function vdwRangeLayout(res) {
+  const v = ((res.details || {}).vdw) || {};
+  const c = (typeof AN === "undefined" ? [] : AN.controls).find((x) => x.step === "vdw" && x.f.name === "max_separation");
+  if (v.status !== "ok" || !c) return {};
+  const given = c.box.get(), limit = (typeof given === "number" ? given : c.f.default) * 1e9;
+  return { shapes: [{ type: "line", xref: "x", yref: "paper", x0: limit, x1: limit, y0: 0, y1: 1, name: "vdW fit range",
+      line: { color: "#6a3d9a", width: 4, dash: "dot" } }],
+    annotations: [{ xref: "x", yref: "paper", x: limit, y: 0.02, xanchor: "left", yanchor: "bottom", showarrow: false,
+      text: `vdW fit to h ≤ ${Number(limit.toPrecision(4))} nm ⇠ drag ⇢`, font: { size: 11, color: "#6a3d9a" }, bgcolor: "rgba(255,255,255,0.8)" }] };
 }
