@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import re
 import threading
 import time
 from collections import OrderedDict
@@ -144,6 +145,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     t0 = time.perf_counter()
     rename = {str(p): name for p, name in files}        # full stored paths first, then bare names
     rename.update({Path(p).name: name for p, name in files})
+    rename.update(_channel_prefixes(files))
     timeout = budget if guard else None
     refs = plan_curves([p for p, _ in files], format, timeout=timeout)
     if arrays:     # the response's size cap
@@ -182,6 +184,18 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     return payload
 
 
+def _channel_prefixes(files: Sequence[tuple[Path, str]]) -> dict[str, str]:
+    """The stored prefix of each uploaded one-channel Asylum wave -> the user's prefix
+    (:func:`afmforce.web.sessions.channel_name`): a message naming the partner wave names it as
+    the user does (``Map1Point0000ZSnsr.ibw``), never by its stored name."""
+    out = {}
+    for p, name in files:
+        stored = Path(p).name
+        if re.fullmatch(r"[0-9a-f]{32}[A-Za-z]+\.ibw", stored) and name.endswith(stored[32:]):
+            out.setdefault(stored[:32], name[: -len(stored[32:])])
+    return out
+
+
 def _renamed(payload: dict[str, Any], rename: dict[str, str]) -> dict[str, Any]:
     def fix(text: str) -> str:
         for stored, name in rename.items():   # full paths first (dict order)
@@ -215,6 +229,8 @@ def _raw_signals(refs, analysis, rename, max_points) -> dict[str, Any]:
             out[name] = {"time": curve.time[idx].tolist(), "piezo": np.asarray(piezo)[idx].tolist(),
                          "signal": curve.deflection_signal[idx].tolist(), "segment": curve.segment[idx].tolist(),
                          "unit": curve.deflection_unit,
+                         # False: the file has no time base, "time" is the sample index (the page says so)
+                         "time_base": not curve.metadata.get("time_is_sample_index", False),
                          "position": [curve.metadata.get("position_x"), curve.metadata.get("position_y")]}
     return out
 

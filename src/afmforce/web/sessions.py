@@ -3,7 +3,12 @@
 Each session (the browser's random cookie) has a folder named by a hash of its id;
 an upload is stored as ``<random hex id><suffix>``, the suffix kept only when it is
 a plain file-type suffix (readers detect the format by it: ``.jpk-force``, ``.ibw``);
-the name the user gave is kept in the session's index, for display only.
+the name the user gave is kept in the session's index, for display only. An Asylum wave of
+one channel (``...Point0000Defl.ibw``, ``...Point0000ZSnsr.ibw``: :data:`afmforce.io.igor.CHANNELS`,
+``POSITIONS``) is stored as ``<hash of the session and its prefix><channel>.ibw``, so that the
+waves of one curve sit side by side under one stored prefix and the reader pairs them, as it
+does in a folder (:func:`afmforce.io.igor.load_channel_pair`); an upload of the same wave name
+replaces the earlier one, as a copy into a folder would.
 
 A session costs nothing until it stores something: its folder is made by the first
 upload (or job, :meth:`Sessions.touch`), never by a request that only reads. It lives
@@ -27,7 +32,7 @@ from typing import Any
 from .._files import atomic_write_text
 from ..errors import ParameterError
 
-__all__ = ["Sessions", "safe_suffix", "session_key"]
+__all__ = ["Sessions", "channel_name", "safe_suffix", "session_key"]
 
 _SUFFIX = re.compile(r"^\.[A-Za-z0-9][A-Za-z0-9-]{0,19}$")
 _ID = re.compile(r"^[0-9a-f]{32}$")
@@ -41,6 +46,24 @@ def safe_suffix(name: str) -> str:
         return ""
     suffix = "." + base.rsplit(".", 1)[1]
     return suffix.lower() if _SUFFIX.match(suffix) else ""
+
+
+def channel_name(name: str, session: str) -> str | None:
+    """The stored name of a one-channel Asylum wave (``'Map1Point0000Defl.ibw' -> '<hex>Defl.ibw'``:
+    the hex a hash of the session and the prefix ``Map1Point0000``), None for any other file."""
+    from ..io.igor import CHANNELS, POSITIONS
+
+    base = re.split(r"[\\/]", name or "")[-1]
+    suffix = safe_suffix(base)
+    if suffix != ".ibw":
+        return None
+    stem = base[: -len(suffix)]
+    for channel in (*CHANNELS, *POSITIONS):
+        if stem.endswith(channel) and len(stem) > len(channel):
+            prefix = stem[: -len(channel)]
+            key = hashlib.sha256(f"{session_key(session)}/{prefix}".encode()).hexdigest()[:32]
+            return f"{key}{channel}{suffix}"
+    return None
 
 
 def session_key(session: str) -> str:
@@ -143,12 +166,16 @@ class Sessions:
         """Store an upload; returns ``{"id", "name", "size"}`` (``name``: as given, display only)."""
         file_id = secrets.token_hex(16)
         folder = self.folder(session)
-        (folder / f"{file_id}{safe_suffix(name)}").write_bytes(data)
+        paired = channel_name(name, session)     # one channel of an Asylum curve: beside its partner
+        stored = paired or f"{file_id}{safe_suffix(name)}"
         shown = re.split(r"[\\/]", name or "")[-1][:200] or "upload"
         with self._lock:
+            (folder / stored).write_bytes(data)
             index = self._index(session)
+            if paired:       # the same wave name uploaded again replaces the earlier upload
+                index = {k: v for k, v in index.items() if v.get("stored") != paired}
             index[file_id] = {"name": shown, "suffix": safe_suffix(name), "size": len(data),
-                              "uploaded": time.time()}
+                              "uploaded": time.time(), **({"stored": paired} if paired else {})}
             atomic_write_text(folder / "index.json", json.dumps(index), force=True)
         return {"id": file_id, "name": shown, "size": len(data)}
 
@@ -179,7 +206,8 @@ class Sessions:
         entry = self._index(session).get(file_id) if _ID.match(file_id or "") else None
         if entry is None:
             raise ParameterError(f"no uploaded file {file_id!r} in this session; upload it again")
-        return self.folder(session, create=False) / f"{file_id}{entry['suffix']}", entry["name"]
+        stored = entry.get("stored") or f"{file_id}{entry['suffix']}"
+        return self.folder(session, create=False) / stored, entry["name"]
 
     def remove(self, session: str, file_id: str) -> None:
         """Remove one upload of the session (ParameterError: not this session's)."""

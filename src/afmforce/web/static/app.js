@@ -229,7 +229,8 @@ function drawCurve() {
     }
     marks.push({ x: xs, y: ys, name: `vdW fit A R = ${fmt(v.hamaker_radius, "")} J m`, mode: "lines", line: { dash: "dash", color: "#6a3d9a" }, hovertemplate: "fit: F = %{y:.4f} nN at %{x:.2f} nm<extra></extra>" });
   }
-  Plotly.react("an-plot-force", f.concat(marks), { ...LAYOUT, title: { text: `Force vs separation — ${name}` }, xaxis: { title: { text: "separation h [nm]" } }, yaxis: { title: { text: "force F [nN]" } } }, CONFIG);
+  Plotly.react("an-plot-force", f.concat(marks), { ...LAYOUT, title: { text: `Force vs separation — ${name}` }, xaxis: { title: { text: "separation h [nm]" } }, yaxis: { title: { text: "force F [nN]" } }, ...vdwRangeLayout(res) }, { ...CONFIG, edits: { shapePosition: true } });
+  optionHandleBind($("an-plot-force"), "vdw", "max_separation");   // drag.js: the vdW fit's window, dragged
   if (raw) {
     const u = raw.unit || "";
     const [fs, us] = U[u] || [1, u];
@@ -270,10 +271,10 @@ function drawDrift(raw, d, parts) {   // the drift step: raw signal against time
   for (const [k, label, color] of parts) {
     if (!raw.segment.includes(k)) continue;
     const t = raw.time.map((x, i) => (raw.segment[i] === k ? x : null));
-    tt.push({ x: t, y: sc(raw.signal.map((x, i) => (raw.segment[i] === k ? x : null)), fs), name: label, mode: "lines", line: { color }, hovertemplate: `t = %{x:.4f} s<br>%{y:.4g} ${us}<extra>${label}</extra>` });
+    tt.push({ x: t, y: sc(raw.signal.map((x, i) => (raw.segment[i] === k ? x : null)), fs), name: label, mode: "lines", line: { color }, hovertemplate: `${timeAxis(raw).hover}<br>%{y:.4g} ${us}<extra>${label}</extra>` });
     if (dr && k !== 2) tt.push({ x: t, y: sc(t.map((x) => (x === null ? null : base(x, k))), fs), name: `${label} baseline`, mode: "lines", line: { color, dash: "dash" }, hovertemplate: `baseline %{y:.4g} ${us}<extra>${label}</extra>` });
   }
-  Plotly.react("an-plot-time", tt, { ...LAYOUT, title: { text: `Drift: raw signal and baselines (${dr ? dr.retract_line + " retract line" : "no drift step"})` }, xaxis: { title: { text: "time t [s]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
+  Plotly.react("an-plot-time", tt, { ...LAYOUT, title: { text: `Drift: raw signal and baselines (${dr ? dr.retract_line + " retract line" : "no drift step"})` }, xaxis: { title: { text: timeAxis(raw).title } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
   if (!co || !co.approach) { Plotly.purge("an-plot-compliance"); return; }
   const ct = [], lo = Math.min(co.approach.z_min, (co.retract || co.approach).z_min), hi = Math.max(co.approach.z_max, (co.retract || co.approach).z_max), w = (hi - lo) * 2;
   for (const [k, label, color] of parts) {
@@ -329,11 +330,19 @@ function drawIndentation(res) {   // force above the baseline vs indentation: th
   const order = x.map((_, i) => i).sort((a, b) => x[a] - x[b]);
   let label = `E = ${fmtPa(fit.youngs_modulus)} [${fmtPa(fit.youngs_modulus_low)}, ${fmtPa(fit.youngs_modulus_high)}]`;
   if (fit.work_of_adhesion !== null && fit.work_of_adhesion !== undefined) label += `, w = ${Number((fit.work_of_adhesion * 1e3).toPrecision(3))} mJ/m²`;
+  const range = fitRangeLayout($("an-curve").value, fit, x);   // drag.js: the fit limit, dragged
   Plotly.react(div, [
     { x, y: data, name: `${fit.run} (data)`, mode: "markers", marker: { size: 3, color: "#777" }, hovertemplate: "δ = %{x:.2f} nm<br>F = %{y:.4f} nN<extra>data</extra>" },
-    { x: order.map((i) => x[i]), y: order.map((i) => (fit.fit_force[i] - fit.baseline) * 1e9), name: `fit: ${fit.model}`, mode: "lines", line: { color: "#b00020", width: 2 }, hovertemplate: "model: F = %{y:.4f} nN at δ = %{x:.2f} nm<extra></extra>" }],
+    { x: order.map((i) => x[i]), y: order.map((i) => (fit.fit_force[i] - fit.baseline) * 1e9), name: `fit: ${fit.model}`, mode: "lines", line: { color: "#b00020", width: 2 }, hovertemplate: "model: F = %{y:.4f} nN at δ = %{x:.2f} nm<extra></extra>" },
+    contactPointTrace(fit, data)],
   { ...LAYOUT, title: { text: `Indentation: ${label}` + (fit.warnings && fit.warnings.length ? ` (${fit.warnings.length} warning${fit.warnings.length > 1 ? "s" : ""})` : "") },
-    xaxis: { title: { text: "indentation δ [nm]" } }, yaxis: { title: { text: "force above the baseline [nN]" } } }, CONFIG);
+    xaxis: { title: { text: "indentation δ [nm]" }, range: range.xrange, autorange: false }, yaxis: { title: { text: "force above the baseline [nN]" } },
+    shapes: range.shapes, annotations: range.annotations }, { ...CONFIG, edits: { shapePosition: true } });
+  fitRangeBind(div);
+}
+function timeAxis(raw) {   // a file without a time base (no sample rate): its "time" is the sample index
+  return raw.time_base === false ? { title: "sample index n [-] (the file has no time base)", hover: "sample %{x:.0f}" }
+    : { title: "time t [s]", hover: "t = %{x:.4f} s" };
 }
 function slopeText(slope, unit) {   // a compliance slope per nm (29680000 V/m reads 0.02968 V/nm)
   return unit === "N" ? `${Number(slope.toPrecision(4))} N/m` : `${Number((slope * 1e-9).toPrecision(4))} ${unit}/nm`;
@@ -576,7 +585,7 @@ $("fit-run").addEventListener("click", async () => {
     // mistake the server names): never NaN, which JSON.stringify would turn into null
     const val = (t, f) => { t = String(t).trim(); return t !== "" && isFinite(Number(t)) ? Number(t) * f : t; };
     const seed = $("fit-seed").value.trim();
-    const body = { file_ids: ids, free, seed: /^\d+$/.test(seed) ? Number(seed) : seed, compare: $("fit-compare").checked, profile: $("fit-profile").checked,
+    const body = { file_ids: ids, meta: ids.length ? fitMetaTexts() : [], free, seed: /^\d+$/.test(seed) ? Number(seed) : seed, compare: $("fit-compare").checked, profile: $("fit-profile").checked,
       velocities: ids.length ? [] : $("fit-speeds").value.split(",").map((v) => val(v, 1e-6)),
       truth: ids.length ? {} : { xi: val($("fit-xi").value, 1), hamaker: val($("fit-hamaker").value, 1e-21) } };
     const job = await api("api/fit", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(body) });
@@ -657,7 +666,7 @@ $("an-calfile").addEventListener("change", (e) => { if (e.target.files[0]) loadC
   try {
     Object.assign(SCHEMA, await api("api/schema"));
     SCHEMA.examples.forEach((e) => $("an-example").append(el("option", { value: e.name, text: `${e.name}: ${e.description}` })));
-    buildOptions(); buildCalibration(); buildSim();
+    buildOptions(); buildCalibration(); buildFitCalibration(); buildSim();
     SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
     await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
