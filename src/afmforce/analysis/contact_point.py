@@ -51,6 +51,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import ParameterError
+from ._numeric import polyfit
 from ._units import unit as _u
 from .options import KindOptions as _K  # the defaults: declared once, in the step's record
 
@@ -246,7 +247,7 @@ class ContactKind:
 def _slope(x: np.ndarray, y: np.ndarray) -> float:
     if x.size < 3 or np.ptp(x) == 0:
         return math.nan
-    return float(np.polyfit(x - x.mean(), y, 1)[0])
+    return float(polyfit(x - x.mean(), y, 1)[0])
 
 
 def curvature_ratio(z: np.ndarray, d: np.ndarray, contact: np.ndarray, min_points: int = 30) -> float:

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._numeric import irls_bisquare, mad_sigma
+from ._numeric import irls_bisquare, mad_sigma, polyfit
 from .regions import RunRegions
 from ._units import unit as _u
 from .options import DriftOptions as _D  # the default: declared once, in the step's record
@@ -262,8 +262,8 @@ def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
     # a relaxation decays: both halves slope the same way, the first at least twice as steeply
     # (a bow of the baseline, e.g. optical, slopes the two ways and is not this)
     half = t.size // 2
-    s1 = float(np.polyfit(t[:half], s[:half], 1)[0])
-    s2 = float(np.polyfit(t[half:], s[half:], 1)[0])
+    s1 = float(polyfit(t[:half], s[:half], 1)[0])
+    s2 = float(polyfit(t[half:], s[half:], 1)[0])
     return s1 * s2 > 0 and abs(s1) > 2 * abs(s2)
 
 
@@ -382,7 +382,7 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
         if noise > 0 and noise_r > max_noise_ratio * noise:
             tilt = math.nan
             if zpos is not None and ia.size > 2 and np.ptp(t[ia]) > 0:
-                v = float(np.polyfit(t[ia] - t0a, zpos[ia], 1)[0])
+                v = float(polyfit(t[ia] - t0a, zpos[ia], 1)[0])
                 tilt = slope_a / v if v != 0 else math.nan
             line, off, slope, tl = borrowed_line(t[ir], s[ir], None if zpos is None else zpos[ir], off_a, slope_a,
                                                  t0a, tilt, noise_r)

@@ -29,6 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._fringe_kernel import _Prep, _prepare, lm_fit
+from ._numeric import lstsq_qr, polyfit
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
 
@@ -176,7 +177,7 @@ def _periodogram(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     full = counts > 0
     centres = np.arange(nb, dtype=float)
     y = np.interp(centres, centres[full], sums[full] / counts[full])
-    y = y - np.polyval(np.polyfit(centres, y, 1), centres)
+    y = y - np.polyval(polyfit(centres, y, 1), centres)
     p_min, p_max = max(4 * step, span / 400, 2.5 * width), span / 1.5
     pad = 8 * nb
     spec = np.abs(np.fft.rfft(y, pad)) ** 2
@@ -349,11 +350,13 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True) -
         tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
         xt = (t - tm) / tL
     X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
-    coef, *_ = np.linalg.lstsq(X, r, rcond=None)
+    coef, ok = lstsq_qr(X, np.ascontiguousarray(r, dtype=float))
+    if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
+        coef, *_ = np.linalg.lstsq(X, r, rcond=None)
     res = X @ coef - r
     amp = float(math.hypot(coef[0], coef[1]))
     phase = float(math.atan2(-coef[1], coef[0]))
-    lin = np.polyval(np.polyfit(z, u, 1), z)
+    lin = np.polyval(np.polyfit(z, u, 1), z)  # np.polyfit: a linear map gives rounding noise, kept bit for bit
     nonlin = float(np.max(np.abs(u - lin)) / max(np.ptp(u), 1e-300))
     explained = 1.0 - float(np.var(res)) / float(np.var(r))
     cycles = float(np.ptp(u) / P)

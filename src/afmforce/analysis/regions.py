@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AnalysisError
-from ._numeric import mad_sigma, robust_line_thin, two_line_split
+from ._numeric import mad_sigma, polyfit, robust_line_thin, two_line_split
 
 __all__ = ["RunRegions", "find_run_regions", "saturated_mask", "run_indices", "check_compliance",
            "contact_slopes"]
@@ -277,8 +277,8 @@ def _surface_force_like(z: np.ndarray, rise: np.ndarray, z_split: float, sigma: 
     far, near = x <= mid, x > mid
     if far.sum() < 3 or near.sum() < 3 or np.ptp(x[far]) == 0 or np.ptp(x[near]) == 0:
         return False
-    s_far = float(np.polyfit(x[far], y[far], 1)[0])
-    s_near = float(np.polyfit(x[near], y[near], 1)[0])
+    s_far = float(polyfit(x[far], y[far], 1)[0])
+    s_near = float(polyfit(x[near], y[near], 1)[0])
     lo, hi = SURFACE_DECAY_RANGE
     return bool(1.0 / hi <= s_far <= 1.0 / lo and s_near >= SURFACE_MIN_SLOPE_RATIO * s_far)
 
