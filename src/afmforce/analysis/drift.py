@@ -29,8 +29,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-from ._numeric import irls_bisquare, mad_sigma, polyfit
+from ._numeric import irls_bisquare, mad_sigma, polyfit, solve_small
 from .regions import RunRegions
 from ._units import unit as _u
 from .options import DriftOptions as _D  # the default: declared once, in the step's record
@@ -149,6 +150,56 @@ def _transient(t: np.ndarray, min_points: int = 12, n_tau: int = 16) -> np.ndarr
     return np.exp(-np.divide.outer(t - t[0], taus))
 
 
+@njit(cache=True)
+def _family_costs(X, y, E, cap):
+    """The capped residual sums of :func:`_family`'s candidates ``[X, E_k]`` in compiled loops (the
+    same normal equations, sums in another order; infinite where the settling term's coefficient
+    is not negative): ``(costs, ok)``; ``ok`` False when a system is singular."""
+    n, p = X.shape
+    K = E.shape[1]
+    q = p + 1
+    G = np.zeros((p, p))  # X^T X, X^T y, X^T E, E^T y, diag(E^T E)
+    gy = np.zeros(p)
+    xe = np.zeros((p, K))
+    ey = np.zeros(K)
+    ee = np.zeros(K)
+    for i in range(n):
+        for j in range(p):
+            gy[j] += X[i, j] * y[i]
+            for l in range(p):
+                G[j, l] += X[i, j] * X[i, l]
+            for k in range(K):
+                xe[j, k] += X[i, j] * E[i, k]
+        for k in range(K):
+            ey[k] += E[i, k] * y[i]
+            ee[k] += E[i, k] * E[i, k]
+    costs = np.full(K, np.inf)
+    M = np.empty((q, q))
+    rhs = np.empty(q)
+    for k in range(K):
+        for j in range(p):
+            for l in range(p):
+                M[j, l] = G[j, l]
+            M[j, p] = xe[j, k]
+            M[p, j] = xe[j, k]
+            rhs[j] = gy[j]
+        M[p, p] = ee[k]
+        rhs[p] = ey[k]
+        c = solve_small(M, rhs)
+        if math.isnan(c[0]):
+            return costs, False
+        if not c[p] < 0:
+            continue
+        cost = 0.0
+        for i in range(n):
+            r = y[i] - E[i, k] * c[p]
+            for j in range(p):
+                r -= X[i, j] * c[j]
+            cost += min(r * r, cap)
+        costs[k] = cost
+    return costs, True
+
+
 def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[float, np.ndarray, int]:
     """Least squares of ``y`` on ``X`` (n, p; p may be 0) and on ``[X, E_k]`` for every column of
     ``E`` at once (the settling candidates; kept only with a negative coefficient: rising from below).
@@ -156,6 +207,8 @@ def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[fl
     Returns the smallest capped residual sum (squares capped at ``cap``, so a spike costs the same
     in every model), the coefficients of ``X`` there, and the column of ``E`` used (-1: none).
     Plain least squares on normal equations: 16 candidates cost one matrix product, not 16 robust fits.
+    The candidates' sums are compiled (:func:`_family_costs`); the numpy solve below runs only when
+    a candidate wins (its coefficients then are those of these numpy calls, bit for bit).
     """
     p = X.shape[1]
     if p:
@@ -166,6 +219,10 @@ def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[fl
     best, coef, used = float(np.sum(np.minimum(r0 * r0, cap))), c0, -1
     K = E.shape[1]
     if K == 0 or y.size <= p + 2:
+        return best, coef, used
+    costs, ok = _family_costs(np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(y, dtype=float),
+                              np.ascontiguousarray(E, dtype=float), float(cap))
+    if ok and not float(np.min(costs)) < best:
         return best, coef, used
     M = np.empty((K, p + 1, p + 1))
     rhs = np.empty((K, p + 1))
@@ -382,7 +439,7 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
         if noise > 0 and noise_r > max_noise_ratio * noise:
             tilt = math.nan
             if zpos is not None and ia.size > 2 and np.ptp(t[ia]) > 0:
-                v = float(polyfit(t[ia] - t0a, zpos[ia], 1)[0])
+                v = float(np.polyfit(t[ia] - t0a, zpos[ia], 1)[0])  # numpy: the tilt reaches every retract sample
                 tilt = slope_a / v if v != 0 else math.nan
             line, off, slope, tl = borrowed_line(t[ir], s[ir], None if zpos is None else zpos[ir], off_a, slope_a,
                                                  t0a, tilt, noise_r)

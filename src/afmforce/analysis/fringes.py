@@ -341,8 +341,13 @@ class _Solution:
     status: int  # 0: evaluation budget spent; 1: converged
 
 
-def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True) -> FringeRun:
-    """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample."""
+def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False) -> FringeRun:
+    """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample.
+
+    The linear solve is the compiled :func:`~._numeric.lstsq_qr` (equal to rounding); when the run
+    has fringes (they are then subtracted from every sample) it is redone by LAPACK (``lapack``),
+    the solver the numbers were first computed with, so the corrected curve stays the same bit for bit.
+    """
     zm = 0.5 * (z.max() + z.min())
     L = 0.5 * float(np.ptp(z)) or 1.0
     xt = None
@@ -350,7 +355,7 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True) -
         tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
         xt = (t - tm) / tL
     X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
-    coef, ok = lstsq_qr(X, np.ascontiguousarray(r, dtype=float))
+    coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float))
     if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
         coef, *_ = np.linalg.lstsq(X, r, rcond=None)
     res = X @ coef - r
@@ -361,6 +366,8 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True) -
     explained = 1.0 - float(np.var(res)) / float(np.var(r))
     cycles = float(np.ptp(u) / P)
     found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
+    if found and ok:
+        return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True)
     if xt is None:
         base = (float(coef[2]), float(coef[3]) / L, float(zm), "position")
     else:
