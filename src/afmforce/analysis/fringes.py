@@ -28,6 +28,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from numba import njit
+
 from ._fringe_kernel import _Prep, _prepare, lm_fit
 from ._numeric import lstsq_qr, polyfit
 from ._units import unit as _u
@@ -194,6 +196,93 @@ def _periodogram(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     return peak, min(band_var / var, 1.0)
 
 
+@njit(cache=True)
+def _binned(z, r, nb):
+    """:func:`_periodogram`'s series: ``r`` (less its mean) averaged in ``nb`` uniform bins of ``z``,
+    empty bins interpolated (held beyond the ends), a line removed; and the median sample step."""
+    n = z.size
+    zmin = z.min()
+    span = z.max() - zmin
+    width = span / nb
+    mean = r.mean()
+    counts = np.zeros(nb)
+    sums = np.zeros(nb)
+    for i in range(n):
+        k = min(int((z[i] - zmin) / width), nb - 1)
+        counts[k] += 1.0
+        sums[k] += r[i] - mean
+    y = np.empty(nb)
+    last = -1
+    for i in range(nb):
+        if counts[i] > 0:
+            y[i] = sums[i] / counts[i]
+            if last < 0:
+                for j in range(i):
+                    y[j] = y[i]
+            elif i - last > 1:
+                slope = (y[i] - y[last]) / (i - last)
+                for j in range(last + 1, i):
+                    y[j] = slope * (j - last) + y[last]
+            last = i
+    for j in range(last + 1, nb):
+        y[j] = y[last]
+    cm = 0.5 * (nb - 1)  # the least-squares line over the bin index, removed
+    sxx = 0.0
+    sxy = 0.0
+    ym = y.mean()
+    for i in range(nb):
+        sxx += (i - cm) * (i - cm)
+        sxy += (i - cm) * (y[i] - ym)
+    b = sxy / sxx
+    for i in range(nb):
+        y[i] -= ym + b * (i - cm)
+    zs = np.sort(z)
+    d = np.empty(n - 1)
+    for i in range(n - 1):
+        d[i] = abs(zs[i + 1] - zs[i])
+    return y, np.median(d)
+
+
+@njit(cache=True)
+def _peak_and_band(spec, coarse, pad, width, p_min, p_max, nb):
+    """:func:`_periodogram`'s peak period in the search range (NaN: none) and the band's variance."""
+    best = -1.0
+    peak = math.nan
+    for k in range(spec.size):
+        period = pad * width / max(k, 1e-300)
+        if period >= p_min and period <= p_max and spec[k] > best:
+            best = spec[k]
+            peak = period
+    if math.isnan(peak):
+        return peak, 0.0
+    k_peak = nb * width / peak
+    half = max(0.2 * k_peak, 1.0)
+    band = 0.0
+    for c in range(1, coarse.size):
+        if abs(c - k_peak) <= half:
+            band += coarse[c]
+    return peak, 2.0 * band / nb**2
+
+
+def _periodogram_fast(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
+    """:func:`_periodogram` with the binning and the search compiled (equal to rounding; used where
+    the fit's result is reported, not subtracted from the curve)."""
+    span = float(np.ptp(z))
+    var = float(np.var(r))
+    if not span > 0 or not var > 0:
+        return math.nan, 0.0
+    nb = int(min(BINS, max(64, z.size)))
+    y, step = _binned(np.ascontiguousarray(z, dtype=float), np.ascontiguousarray(r, dtype=float), nb)
+    step = float(step) or span / z.size
+    width = span / nb
+    p_min, p_max = max(4 * step, span / 400, 2.5 * width), span / 1.5
+    pad = 8 * nb
+    spec = np.abs(np.fft.rfft(y, pad)) ** 2
+    coarse = np.abs(np.fft.rfft(y)) ** 2
+    peak, band_var = _peak_and_band(spec, coarse, float(pad), width, p_min, p_max, nb)
+    return float(peak), min(float(band_var) / var, 1.0) if math.isfinite(peak) else 0.0
+
+
 def _initial_period(z: np.ndarray, r: np.ndarray) -> float:
     """Strongest period of the baseline residual (see :func:`_periodogram`) [m]."""
     return _periodogram(z, r)[0]
@@ -242,7 +331,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     t = None if t is None else np.asarray(t, float)
     p0 = None
     if not (period or z.size < 16 or np.var(r) == 0):
-        p0, fraction = _periodogram(z, r)
+        p0, fraction = _periodogram_fast(z, r)  # compiled: the same starting period (a grid value)
         if not math.isfinite(p0) or fraction < min_explained / 3:
             return _not_found(z, r, fraction, p0 if math.isfinite(p0) else math.nan)
     keep = None
@@ -344,9 +433,11 @@ class _Solution:
 def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False) -> FringeRun:
     """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample.
 
-    The linear solve is the compiled :func:`~._numeric.lstsq_qr` (equal to rounding); when the run
-    has fringes (they are then subtracted from every sample) it is redone by LAPACK (``lapack``),
-    the solver the numbers were first computed with, so the corrected curve stays the same bit for bit.
+    The linear solve is the compiled :func:`~._numeric.lstsq_qr` (equal to rounding) where the map is
+    well posed (converged, at least one period in the range); LAPACK's, the solver these numbers were
+    first computed with, with ``lapack``, where the map is ill-posed (cos and sin then nearly the
+    baseline's line: rounding moves the amplitude by percent, the JPK stress-relaxation curve) and
+    where fringes are found (they are subtracted from every sample: the same bits).
     """
     zm = 0.5 * (z.max() + z.min())
     L = 0.5 * float(np.ptp(z)) or 1.0
@@ -355,6 +446,7 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
         tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
         xt = (t - tm) / tL
     X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
+    lapack = lapack or not (converged and float(np.ptp(u) / P) >= 1.0)
     coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float))
     if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
         coef, *_ = np.linalg.lstsq(X, r, rcond=None)
