@@ -115,14 +115,16 @@ def _fit_grid(x: np.ndarray, y: np.ndarray, cands: np.ndarray, exponent: float) 
     v = np.empty(3)
     # u ** 1.75 and u ** 1.5 by square roots (a few times faster than pow; equal to ~1 ulp)
     kind = 1 if exponent == 1.75 else 2 if exponent == 1.5 else 0
-    rising = True  # x in increasing order (an approach): the samples before a candidate add nothing
-    for i in range(1, n):
-        if x[i] < x[i - 1]:
-            rising = False
-            break
+    # the samples before the first one beyond a candidate add nothing: start there (the same terms in
+    # the same order), found on the running maximum of x (an approach rises, a measured one with noise)
+    top = np.empty(n)
+    run = -np.inf
+    for i in range(n):
+        run = max(run, x[i])
+        top[i] = run
     for k in range(cands.size):
         sg = sgg = sxg = syg = 0.0
-        start = np.searchsorted(x, cands[k], side="right") if rising else 0  # the same terms, the same order
+        start = np.searchsorted(top, cands[k], side="right")
         for i in range(start, n):
             u = x[i] - cands[k]
             if u > 0.0:

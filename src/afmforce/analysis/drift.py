@@ -208,7 +208,8 @@ def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[fl
     in every model), the coefficients of ``X`` there, and the column of ``E`` used (-1: none).
     Plain least squares on normal equations: 16 candidates cost one matrix product, not 16 robust fits.
     The candidates' sums are compiled (:func:`_family_costs`); the numpy solve below runs only when
-    a candidate wins (its coefficients then are those of these numpy calls, bit for bit).
+    a candidate wins with coefficients to give (they are then those of these numpy calls, bit for bit:
+    the retract's line reaches every sample).
     """
     p = X.shape[1]
     if p:
@@ -222,8 +223,12 @@ def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[fl
         return best, coef, used
     costs, ok = _family_costs(np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(y, dtype=float),
                               np.ascontiguousarray(E, dtype=float), float(cap))
-    if ok and not float(np.min(costs)) < best:
-        return best, coef, used
+    if ok:
+        k = int(np.argmin(costs))
+        if not costs[k] < best:
+            return best, coef, used
+        if p == 0:  # no coefficients to give: the winner's sum is all
+            return float(costs[k]), c0, k
     M = np.empty((K, p + 1, p + 1))
     rhs = np.empty((K, p + 1))
     M[:, :p, :p] = X.T @ X
