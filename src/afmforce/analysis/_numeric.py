@@ -12,7 +12,7 @@ import numpy as np
 from numba import njit
 
 __all__ = ["running_mean", "two_line_split", "line_fit", "robust_line", "robust_line_thin", "largest_step",
-           "mad_sigma", "lstsq_qr", "polyfit"]
+           "mad_sigma", "lstsq_qr", "polyfit", "ptp"]
 
 
 @njit(cache=True)
@@ -404,3 +404,10 @@ def polyfit(x: np.ndarray, y: np.ndarray, deg: int) -> np.ndarray:
         if ok and np.isfinite(c).all():
             return c
     return np.polyfit(x, y, deg)
+
+
+def ptp(a) -> np.ndarray:
+    """``np.ptp(a)`` (of the whole array) as ``a.max() - a.min()``: the same number, without the ~5 us
+    of its wrappers (a curve's analysis takes some eighty)."""
+    a = np.asarray(a)
+    return a.max() - a.min()

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._numeric import irls_bisquare, mad_sigma, polyfit, solve_small
+from ._numeric import irls_bisquare, mad_sigma, polyfit, ptp, solve_small
 from .regions import RunRegions
 from ._units import unit as _u
 from .options import DriftOptions as _D  # the default: declared once, in the step's record
@@ -266,10 +266,10 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
         t, s = t[keep], s[keep]
         tail = None if tail is None else tail[keep]
     tt = t - t[0]
-    if order == 0 or np.ptp(tt) == 0:
+    if order == 0 or ptp(tt) == 0:
         X = np.ones((s.size, 1))
     else:
-        X = np.column_stack([np.ones_like(tt), tt / max(np.ptp(tt), 1e-300)])
+        X = np.column_stack([np.ones_like(tt), tt / max(ptp(tt), 1e-300)])
     coef, sigma, ssr = _irls(X, s)
     extra = [(tail, False)] if tail is not None else []
     if transient and X.shape[1] > 1 and sigma > 0:  # the best settling candidate, then one robust fit
@@ -279,7 +279,7 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
             extra.append((E[:, k], True))
     best = None
     for col, settles in extra:
-        if s.size > X.shape[1] + 5 and np.ptp(col) > 0:
+        if s.size > X.shape[1] + 5 and ptp(col) > 0:
             Xt = np.column_stack([X, col / np.max(np.abs(col))])
             coef_t, sigma_t, ssr_t = _irls(Xt, s)
             if settles and not coef_t[-1] < 0:  # a lever settling after a pull-off rises from below
@@ -288,7 +288,7 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
                 best = (coef_t, sigma_t, ssr_t)
     if best is not None:
         coef, sigma = best[0], best[1]
-    slope = float(coef[1]) / max(np.ptp(tt), 1e-300) if X.shape[1] > 1 else 0.0
+    slope = float(coef[1]) / max(ptp(tt), 1e-300) if X.shape[1] > 1 else 0.0
     return float(coef[0]), slope, float(sigma)
 
 
@@ -304,12 +304,12 @@ def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
     paper preset's Fig 5 run, 1.14 V/s against a true drift of 0.098 V/s), and it tilts the
     whole retract. Drift over a fraction of a second is a line to well within the noise.
     """
-    if t.size < 12 or np.ptp(t) == 0:
+    if t.size < 12 or ptp(t) == 0:
         return False
     if t.size > MAX_POINTS:
         keep = np.linspace(0, t.size - 1, MAX_POINTS).astype(np.int64)
         t, s = t[keep], s[keep]
-    x = (t - t.mean()) / np.ptp(t)
+    x = (t - t.mean()) / ptp(t)
     X = np.column_stack([np.ones_like(x), x, x * x - np.mean(x * x)])
     coef, sigma, _ = _irls(X, s)
     if not sigma > 0:
@@ -318,7 +318,7 @@ def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
     sigma = max(sigma, float(np.std(r)))
     cov = np.linalg.pinv(X.T @ X) * sigma**2
     c, se = float(coef[2]), float(np.sqrt(max(cov[2, 2], 0.0)))
-    bow = abs(c) * float(np.ptp(X[:, 2]))  # signal change the curvature accounts for
+    bow = abs(c) * float(ptp(X[:, 2]))  # signal change the curvature accounts for
     if not (abs(c) > nsigma * se and bow > nsigma * sigma):
         return False
     # a relaxation decays: both halves slope the same way, the first at least twice as steeply
@@ -443,7 +443,7 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
         off, slope, noise_r = fit_baseline(t[ir], s[ir], order, transient=order != 1)  # order 1: retract_line
         if noise > 0 and noise_r > max_noise_ratio * noise:
             tilt = math.nan
-            if zpos is not None and ia.size > 2 and np.ptp(t[ia]) > 0:
+            if zpos is not None and ia.size > 2 and ptp(t[ia]) > 0:
                 v = float(np.polyfit(t[ia] - t0a, zpos[ia], 1)[0])  # numpy: the tilt reaches every retract sample
                 tilt = slope_a / v if v != 0 else math.nan
             line, off, slope, tl = borrowed_line(t[ir], s[ir], None if zpos is None else zpos[ir], off_a, slope_a,

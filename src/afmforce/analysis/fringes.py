@@ -31,7 +31,7 @@ import numpy as np
 from numba import njit
 
 from ._fringe_kernel import _Prep, _prepare, lm_fit
-from ._numeric import lstsq_qr, polyfit
+from ._numeric import lstsq_qr, polyfit, ptp
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
 
@@ -166,7 +166,7 @@ def _periodogram(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     period : float  [m]
     fraction : float  [-]
     """
-    span = float(np.ptp(z))
+    span = float(ptp(z))
     var = float(np.var(r))
     if not span > 0 or not var > 0:
         return math.nan, 0.0
@@ -267,7 +267,7 @@ def _peak_and_band(spec, coarse, pad, width, p_min, p_max, nb):
 def _periodogram_fast(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     """:func:`_periodogram` with the binning and the search compiled (equal to rounding; used where
     the fit's result is reported, not subtracted from the curve)."""
-    span = float(np.ptp(z))
+    span = float(ptp(z))
     var = float(np.var(r))
     if not span > 0 or not var > 0:
         return math.nan, 0.0
@@ -290,9 +290,9 @@ def _initial_period(z: np.ndarray, r: np.ndarray) -> float:
 
 def _not_found(z: np.ndarray, r: np.ndarray, explained: float, period: float) -> FringeRun:
     zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(np.ptp(z)) or 1.0
+    L = 0.5 * float(ptp(z)) or 1.0
     return FringeRun(False, period, 0.0, 0.0, 1.0, 0.0, 0.0, float(zm), float(L), 0.0, float(explained),
-                     float(np.ptp(z) / period) if period > 0 else 0.0, float(np.std(r)))
+                     float(ptp(z) / period) if period > 0 else 0.0, float(np.std(r)))
 
 
 def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.period, order: int | str = _Fr.order,
@@ -337,7 +337,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     keep = None
     per = float(period) if period else p0
     if per and z.size > 16:
-        m = int(min(FIT_POINTS, max(MIN_FIT_POINTS, POINTS_PER_PERIOD * np.ptp(z) / per)))
+        m = int(min(FIT_POINTS, max(MIN_FIT_POINTS, POINTS_PER_PERIOD * ptp(z) / per)))
         if z.size > m:
             keep = np.unique(np.linspace(0, z.size - 1, m).round().astype(np.int64))
     zs, rs, ts = (z, r, t) if keep is None else (z[keep], r[keep], None if t is None else t[keep])
@@ -420,7 +420,7 @@ def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=N
     # the map only (the line, amplitude and verdict come from _finish on every sample)
     rms = math.sqrt(2.0 * best.cost / z.size)
     return FringeRun(False, float(P), 0.0, 0.0, float(c1), float(a2), float(a3), float(zm), float(L), 0.0,
-                     1.0 - rms**2 / var0, float(np.ptp(z)) / P if P > 0 else 0.0, rms, converged=best.status > 0)
+                     1.0 - rms**2 / var0, float(ptp(z)) / P if P > 0 else 0.0, rms, converged=best.status > 0)
 
 
 @dataclass
@@ -440,13 +440,13 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     where fringes are found (they are subtracted from every sample: the same bits).
     """
     zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(np.ptp(z)) or 1.0
+    L = 0.5 * float(ptp(z)) or 1.0
     xt = None
     if t is not None:
-        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
+        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(ptp(t)) or 1.0
         xt = (t - tm) / tL
     X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
-    lapack = lapack or not (converged and float(np.ptp(u) / P) >= 1.0)
+    lapack = lapack or not (converged and float(ptp(u) / P) >= 1.0)
     coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float))
     if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
         coef, *_ = np.linalg.lstsq(X, r, rcond=None)
@@ -454,9 +454,9 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     amp = float(math.hypot(coef[0], coef[1]))
     phase = float(math.atan2(-coef[1], coef[0]))
     lin = np.polyval(np.polyfit(z, u, 1), z)  # np.polyfit: a linear map gives rounding noise, kept bit for bit
-    nonlin = float(np.max(np.abs(u - lin)) / max(np.ptp(u), 1e-300))
+    nonlin = float(np.max(np.abs(u - lin)) / max(ptp(u), 1e-300))
     explained = 1.0 - float(np.var(res)) / float(np.var(r))
-    cycles = float(np.ptp(u) / P)
+    cycles = float(ptp(u) / P)
     found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
     if found and ok:
         return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True)
