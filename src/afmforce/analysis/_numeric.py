@@ -127,6 +127,24 @@ def mad_sigma(r: np.ndarray) -> float:
 
 
 @njit(cache=True)
+def _middle_pair(r):
+    """The two middle order statistics of ``r`` (the same one for an odd size; NaN if empty):
+    ``np.median(r)`` is their mean, ``(lo + hi) / 2``, as numba computes it."""
+    n = r.size
+    if n == 0:
+        return np.nan, np.nan
+    half = n // 2
+    s = np.partition(r, half)
+    hi = s[half]
+    if n % 2:
+        return hi, hi
+    lo = s[0]
+    for i in range(1, half):
+        lo = max(lo, s[i])
+    return lo, hi
+
+
+@njit(cache=True)
 def robust_line(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
     """Line fit with Tukey bisquare weights (IRLS), robust to spikes and transients.
 
@@ -147,10 +165,15 @@ def robust_line(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4
     sigma = np.nan
     for _ in range(n_iter):
         r = y - (a + b * x)
-        med = np.median(r)  # outliers pull least squares off: recentre on the bulk first
+        lo, hi = _middle_pair(r)
+        even = n % 2 == 0
+        med = (lo + hi) / 2 if even else lo  # np.median(r): outliers pull least squares off: recentre first
         a += med
         r -= med
-        sigma = mad_sigma(r)
+        # mad_sigma(r) without its first selection: subtracting one number keeps the order (rounding is
+        # monotonic), so the shifted middle pair is the old one shifted, and np.median(r) is this exactly
+        m2 = ((lo - med) + (hi - med)) / 2 if even else lo - med
+        sigma = 1.4826 * np.median(np.abs(r - m2)) if n > 0 else np.nan
         if not sigma > 0:
             break
         w_new = np.empty(n)
