@@ -453,7 +453,10 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     res = X @ coef - r
     amp = float(math.hypot(coef[0], coef[1]))
     phase = float(math.atan2(-coef[1], coef[0]))
-    lin = np.polyval(np.polyfit(z, u, 1), z)  # np.polyfit: a linear map gives rounding noise, kept bit for bit
+    # a linear map (a2 = a3 = 0) leaves rounding noise here: np.polyfit's, kept bit for bit; a curved one
+    # a nonlinearity far above rounding, which the compiled fit gives to ~1e-13 of it
+    curved = not lapack and abs(a2) + abs(a3) > 1e-3
+    lin = np.polyval((polyfit if curved else np.polyfit)(z, u, 1), z)
     nonlin = float(np.max(np.abs(u - lin)) / max(ptp(u), 1e-300))
     explained = 1.0 - float(np.var(res)) / float(np.var(r))
     cycles = float(ptp(u) / P)
