@@ -118,7 +118,7 @@ class State:
             raise TypeError(f"State has no field(s) {', '.join(sorted(changes.keys() - _FIELDS))}")
         # the instance dict copied: dataclasses.replace re-runs the frozen __init__ over all 21 fields
         # (a curve's 24 updates were 4 % of its analysis; issue 35)
-        out = object.__new__(State)
+        out = object.__new__(type(self))
         object.__setattr__(out, "__dict__", {**self.__dict__, **changes})
         return out
 
