@@ -17,8 +17,8 @@ whole run < 2 GB), the recovered fields against the known ones, and the time of 
 
 **curve**: per curve, the whole default pipeline (``analyze(curve)``, every step with its default
 options: what ``afmforce analyze FILE`` runs; issue 35 item 2 asks >= 5x nanite on every file), the
-pipeline up to the modulus (``analyze(curve, steps=["indentation"])``) and the map's fast path (``PixelAnalysis``, which also gives the
-adhesion and work of adhesion) against nanite's preprocessing + fit (tip position, force
+pipeline up to the modulus (``analyze(curve, steps=["indentation"])``) and the map's fast path
+(``PixelAnalysis``, which also gives the adhesion and work of adhesion) against nanite's preprocessing + fit (tip position, force
 offset, contact point by its default method, Hertz fit of the approach) on each soft real file
 (the files of tests/analysis/make_nanite_modulus_reference.py), best of ``--repeat``, interleaved,
 in CPU time of this process (``time.process_time``: on the shared machine wall times swing 10x).

@@ -22,7 +22,8 @@ def test_polyfit_equals_numpy(deg):
     rng = np.random.default_rng(deg)
     for _ in range(40):
         n = int(rng.integers(deg + 2, 3000))
-        x = np.sort(rng.uniform(-1, 1, n)) * 10.0 ** rng.uniform(-9, 2) + rng.uniform(-1, 1) * 10.0 ** rng.uniform(-9, 2)
+        scale, offset = 10.0 ** rng.uniform(-9, 2), rng.uniform(-1, 1) * 10.0 ** rng.uniform(-9, 2)
+        x = np.sort(rng.uniform(-1, 1, n)) * scale + offset
         y = rng.normal(size=n) * 10.0 ** rng.uniform(-12, 2) + 3.0 * x
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # the worst-scaled draws: both hand over to / are numpy's lstsq

@@ -27,7 +27,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-
 from numba import njit
 
 from ._fringe_kernel import _Prep, _prepare, lm_fit
