@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._numeric import solve_small as _solve_small
+from ._numeric import ptp, solve_small as _solve_small
 
 __all__ = ["vp_eval", "lm_fit"]
 
@@ -40,11 +40,11 @@ class _Prep:
 def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
     """Normalised position and its powers, and the residual with the line projected out."""
     zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(np.ptp(z)) or 1.0
+    L = 0.5 * float(ptp(z)) or 1.0
     xt = None
     if t is not None:
         t = np.asarray(t, float)
-        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
+        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(ptp(t)) or 1.0
         xt = (t - tm) / tL
     var0 = float(np.var(r))
     x = np.ascontiguousarray((z - zm) / L)

@@ -51,6 +51,7 @@ import numpy as np
 from numba import njit
 
 from ..errors import ParameterError
+from ._numeric import polyfit, ptp
 from ._units import unit as _u
 from .options import KindOptions as _K  # the defaults: declared once, in the step's record
 
@@ -114,9 +115,17 @@ def _fit_grid(x: np.ndarray, y: np.ndarray, cands: np.ndarray, exponent: float) 
     v = np.empty(3)
     # u ** 1.75 and u ** 1.5 by square roots (a few times faster than pow; equal to ~1 ulp)
     kind = 1 if exponent == 1.75 else 2 if exponent == 1.5 else 0
+    # the samples before the first one beyond a candidate add nothing: start there (the same terms in
+    # the same order), found on the running maximum of x (an approach rises, a measured one with noise)
+    top = np.empty(n)
+    run = -np.inf
+    for i in range(n):
+        run = max(run, x[i])
+        top[i] = run
     for k in range(cands.size):
         sg = sgg = sxg = syg = 0.0
-        for i in range(n):
+        start = np.searchsorted(top, cands[k], side="right")
+        for i in range(start, n):
             u = x[i] - cands[k]
             if u > 0.0:
                 if kind == 1:
@@ -176,14 +185,14 @@ def soft_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, *, expon
     if imax < 8:
         return SoftContactPoint(method, -1, nan, nan, nan, nan, exponent)
     zb, db = _block(zi[: imax + 1], max_points), _block(di[: imax + 1], max_points)
-    above = np.flatnonzero(db - db.min() > force_fraction * np.ptp(db))
+    above = np.flatnonzero(db - db.min() > force_fraction * ptp(db))
     cut = int(above[0]) + 1 if above.size and above[0] > 8 else db.size
     zb, db = zb[:cut], db[:cut]
     span = zb[-1] - zb[0] if zb.size > 1 else 0.0
     if not span > 0 or zb.size < 8:
         return SoftContactPoint(method, -1, nan, nan, nan, nan, exponent)
     x = (zb - zb[0]) / span
-    y = (db - db.min()) / max(np.ptp(db), 1e-300)
+    y = (db - db.min()) / max(ptp(db), 1e-300)
     straight = np.linspace(0.0, 1.0, x.size)
     x_init = float(x[int(np.argmin(y - straight))])
     cands = np.linspace(max(x_init - window, 0.0), min(x_init + window, 1.0), grid)
@@ -203,7 +212,7 @@ def soft_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, *, expon
     k = int(np.searchsorted(zr, zc)) if np.all(np.diff(zr) >= 0) else int(np.argmin(np.abs(zr - zc)))
     k = min(max(k - 1, 0), zr.size - 1)
     a, b = coef[j, 0], coef[j, 1]
-    d_c = float(db.min() + (a + b * cands[j]) * np.ptp(db))
+    d_c = float(db.min() + (a + b * cands[j]) * ptp(db))
     indentation = float((zi[imax] - zc) - (di[imax] - d_c))
     return SoftContactPoint(method, int(index[k]), zc, d_c, float(zb[0] + x_init * span), indentation,
                             float(exponent), min(low, high), max(low, high))
@@ -244,9 +253,9 @@ class ContactKind:
 
 
 def _slope(x: np.ndarray, y: np.ndarray) -> float:
-    if x.size < 3 or np.ptp(x) == 0:
+    if x.size < 3 or ptp(x) == 0:
         return math.nan
-    return float(np.polyfit(x - x.mean(), y, 1)[0])
+    return float(polyfit(x - x.mean(), y, 1)[0])
 
 
 def curvature_ratio(z: np.ndarray, d: np.ndarray, contact: np.ndarray, min_points: int = 30) -> float:

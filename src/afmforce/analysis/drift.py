@@ -29,8 +29,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
-from ._numeric import irls_bisquare, mad_sigma
+from ._numeric import irls_bisquare, mad_sigma, polyfit, ptp, solve_small
 from .regions import RunRegions
 from ._units import unit as _u
 from .options import DriftOptions as _D  # the default: declared once, in the step's record
@@ -149,6 +150,56 @@ def _transient(t: np.ndarray, min_points: int = 12, n_tau: int = 16) -> np.ndarr
     return np.exp(-np.divide.outer(t - t[0], taus))
 
 
+@njit(cache=True)
+def _family_costs(X, y, E, cap):
+    """The capped residual sums of :func:`_family`'s candidates ``[X, E_k]`` in compiled loops (the
+    same normal equations, sums in another order; infinite where the settling term's coefficient
+    is not negative): ``(costs, ok)``; ``ok`` False when a system is singular."""
+    n, p = X.shape
+    K = E.shape[1]
+    q = p + 1
+    G = np.zeros((p, p))  # X^T X, X^T y, X^T E, E^T y, diag(E^T E)
+    gy = np.zeros(p)
+    xe = np.zeros((p, K))
+    ey = np.zeros(K)
+    ee = np.zeros(K)
+    for i in range(n):
+        for j in range(p):
+            gy[j] += X[i, j] * y[i]
+            for l in range(p):
+                G[j, l] += X[i, j] * X[i, l]
+            for k in range(K):
+                xe[j, k] += X[i, j] * E[i, k]
+        for k in range(K):
+            ey[k] += E[i, k] * y[i]
+            ee[k] += E[i, k] * E[i, k]
+    costs = np.full(K, np.inf)
+    M = np.empty((q, q))
+    rhs = np.empty(q)
+    for k in range(K):
+        for j in range(p):
+            for l in range(p):
+                M[j, l] = G[j, l]
+            M[j, p] = xe[j, k]
+            M[p, j] = xe[j, k]
+            rhs[j] = gy[j]
+        M[p, p] = ee[k]
+        rhs[p] = ey[k]
+        c = solve_small(M, rhs)
+        if math.isnan(c[0]):
+            return costs, False
+        if not c[p] < 0:
+            continue
+        cost = 0.0
+        for i in range(n):
+            r = y[i] - E[i, k] * c[p]
+            for j in range(p):
+                r -= X[i, j] * c[j]
+            cost += min(r * r, cap)
+        costs[k] = cost
+    return costs, True
+
+
 def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[float, np.ndarray, int]:
     """Least squares of ``y`` on ``X`` (n, p; p may be 0) and on ``[X, E_k]`` for every column of
     ``E`` at once (the settling candidates; kept only with a negative coefficient: rising from below).
@@ -156,6 +207,9 @@ def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[fl
     Returns the smallest capped residual sum (squares capped at ``cap``, so a spike costs the same
     in every model), the coefficients of ``X`` there, and the column of ``E`` used (-1: none).
     Plain least squares on normal equations: 16 candidates cost one matrix product, not 16 robust fits.
+    The candidates' sums are compiled (:func:`_family_costs`); the numpy solve below runs only when
+    a candidate wins with coefficients to give (they are then those of these numpy calls, bit for bit:
+    the retract's line reaches every sample).
     """
     p = X.shape[1]
     if p:
@@ -167,6 +221,14 @@ def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[fl
     K = E.shape[1]
     if K == 0 or y.size <= p + 2:
         return best, coef, used
+    costs, ok = _family_costs(np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(y, dtype=float),
+                              np.ascontiguousarray(E, dtype=float), float(cap))
+    if ok:
+        k = int(np.argmin(costs))
+        if not costs[k] < best:
+            return best, coef, used
+        if p == 0:  # no coefficients to give: the winner's sum is all
+            return float(costs[k]), c0, k
     M = np.empty((K, p + 1, p + 1))
     rhs = np.empty((K, p + 1))
     M[:, :p, :p] = X.T @ X
@@ -204,10 +266,10 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
         t, s = t[keep], s[keep]
         tail = None if tail is None else tail[keep]
     tt = t - t[0]
-    if order == 0 or np.ptp(tt) == 0:
+    if order == 0 or ptp(tt) == 0:
         X = np.ones((s.size, 1))
     else:
-        X = np.column_stack([np.ones_like(tt), tt / max(np.ptp(tt), 1e-300)])
+        X = np.column_stack([np.ones_like(tt), tt / max(ptp(tt), 1e-300)])
     coef, sigma, ssr = _irls(X, s)
     extra = [(tail, False)] if tail is not None else []
     if transient and X.shape[1] > 1 and sigma > 0:  # the best settling candidate, then one robust fit
@@ -217,7 +279,7 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
             extra.append((E[:, k], True))
     best = None
     for col, settles in extra:
-        if s.size > X.shape[1] + 5 and np.ptp(col) > 0:
+        if s.size > X.shape[1] + 5 and ptp(col) > 0:
             Xt = np.column_stack([X, col / np.max(np.abs(col))])
             coef_t, sigma_t, ssr_t = _irls(Xt, s)
             if settles and not coef_t[-1] < 0:  # a lever settling after a pull-off rises from below
@@ -226,7 +288,7 @@ def fit_baseline(t: np.ndarray, s: np.ndarray, order: int = 1,
                 best = (coef_t, sigma_t, ssr_t)
     if best is not None:
         coef, sigma = best[0], best[1]
-    slope = float(coef[1]) / max(np.ptp(tt), 1e-300) if X.shape[1] > 1 else 0.0
+    slope = float(coef[1]) / max(ptp(tt), 1e-300) if X.shape[1] > 1 else 0.0
     return float(coef[0]), slope, float(sigma)
 
 
@@ -242,12 +304,12 @@ def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
     paper preset's Fig 5 run, 1.14 V/s against a true drift of 0.098 V/s), and it tilts the
     whole retract. Drift over a fraction of a second is a line to well within the noise.
     """
-    if t.size < 12 or np.ptp(t) == 0:
+    if t.size < 12 or ptp(t) == 0:
         return False
     if t.size > MAX_POINTS:
         keep = np.linspace(0, t.size - 1, MAX_POINTS).astype(np.int64)
         t, s = t[keep], s[keep]
-    x = (t - t.mean()) / np.ptp(t)
+    x = (t - t.mean()) / ptp(t)
     X = np.column_stack([np.ones_like(x), x, x * x - np.mean(x * x)])
     coef, sigma, _ = _irls(X, s)
     if not sigma > 0:
@@ -256,14 +318,14 @@ def is_settling(t: np.ndarray, s: np.ndarray, nsigma: float = 5.0) -> bool:
     sigma = max(sigma, float(np.std(r)))
     cov = np.linalg.pinv(X.T @ X) * sigma**2
     c, se = float(coef[2]), float(np.sqrt(max(cov[2, 2], 0.0)))
-    bow = abs(c) * float(np.ptp(X[:, 2]))  # signal change the curvature accounts for
+    bow = abs(c) * float(ptp(X[:, 2]))  # signal change the curvature accounts for
     if not (abs(c) > nsigma * se and bow > nsigma * sigma):
         return False
     # a relaxation decays: both halves slope the same way, the first at least twice as steeply
     # (a bow of the baseline, e.g. optical, slopes the two ways and is not this)
     half = t.size // 2
-    s1 = float(np.polyfit(t[:half], s[:half], 1)[0])
-    s2 = float(np.polyfit(t[half:], s[half:], 1)[0])
+    s1 = float(polyfit(t[:half], s[:half], 1)[0])
+    s2 = float(polyfit(t[half:], s[half:], 1)[0])
     return s1 * s2 > 0 and abs(s1) > 2 * abs(s2)
 
 
@@ -381,8 +443,8 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
         off, slope, noise_r = fit_baseline(t[ir], s[ir], order, transient=order != 1)  # order 1: retract_line
         if noise > 0 and noise_r > max_noise_ratio * noise:
             tilt = math.nan
-            if zpos is not None and ia.size > 2 and np.ptp(t[ia]) > 0:
-                v = float(np.polyfit(t[ia] - t0a, zpos[ia], 1)[0])
+            if zpos is not None and ia.size > 2 and ptp(t[ia]) > 0:
+                v = float(np.polyfit(t[ia] - t0a, zpos[ia], 1)[0])  # numpy: the tilt reaches every retract sample
                 tilt = slope_a / v if v != 0 else math.nan
             line, off, slope, tl = borrowed_line(t[ir], s[ir], None if zpos is None else zpos[ir], off_a, slope_a,
                                                  t0a, tilt, noise_r)

@@ -33,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..constants import Z0
-from ._numeric import robust_line_thin
+from ._numeric import ptp, robust_line_thin
 from ._units import unit as _u
 
 __all__ = ["DynamicDiagnosis", "diagnose_curve", "run_velocity"]
@@ -84,7 +84,7 @@ class DynamicDiagnosis:
 
 def run_velocity(t: np.ndarray, z: np.ndarray) -> float:
     """Speed of a run [m/s]: robust slope of position against time."""
-    if t.size < 3 or np.ptp(t) == 0:
+    if t.size < 3 or ptp(t) == 0:
         return math.nan
     _, b, *_ = robust_line_thin(t - t[0], z)
     return float(abs(b))

@@ -27,8 +27,10 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import njit
 
 from ._fringe_kernel import _Prep, _prepare, lm_fit
+from ._numeric import lstsq_qr, polyfit, ptp
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
 
@@ -163,7 +165,7 @@ def _periodogram(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     period : float  [m]
     fraction : float  [-]
     """
-    span = float(np.ptp(z))
+    span = float(ptp(z))
     var = float(np.var(r))
     if not span > 0 or not var > 0:
         return math.nan, 0.0
@@ -176,7 +178,7 @@ def _periodogram(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     full = counts > 0
     centres = np.arange(nb, dtype=float)
     y = np.interp(centres, centres[full], sums[full] / counts[full])
-    y = y - np.polyval(np.polyfit(centres, y, 1), centres)
+    y = y - np.polyval(polyfit(centres, y, 1), centres)
     p_min, p_max = max(4 * step, span / 400, 2.5 * width), span / 1.5
     pad = 8 * nb
     spec = np.abs(np.fft.rfft(y, pad)) ** 2
@@ -193,6 +195,93 @@ def _periodogram(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     return peak, min(band_var / var, 1.0)
 
 
+@njit(cache=True)
+def _binned(z, r, nb):
+    """:func:`_periodogram`'s series: ``r`` (less its mean) averaged in ``nb`` uniform bins of ``z``,
+    empty bins interpolated (held beyond the ends), a line removed; and the median sample step."""
+    n = z.size
+    zmin = z.min()
+    span = z.max() - zmin
+    width = span / nb
+    mean = r.mean()
+    counts = np.zeros(nb)
+    sums = np.zeros(nb)
+    for i in range(n):
+        k = min(int((z[i] - zmin) / width), nb - 1)
+        counts[k] += 1.0
+        sums[k] += r[i] - mean
+    y = np.empty(nb)
+    last = -1
+    for i in range(nb):
+        if counts[i] > 0:
+            y[i] = sums[i] / counts[i]
+            if last < 0:
+                for j in range(i):
+                    y[j] = y[i]
+            elif i - last > 1:
+                slope = (y[i] - y[last]) / (i - last)
+                for j in range(last + 1, i):
+                    y[j] = slope * (j - last) + y[last]
+            last = i
+    for j in range(last + 1, nb):
+        y[j] = y[last]
+    cm = 0.5 * (nb - 1)  # the least-squares line over the bin index, removed
+    sxx = 0.0
+    sxy = 0.0
+    ym = y.mean()
+    for i in range(nb):
+        sxx += (i - cm) * (i - cm)
+        sxy += (i - cm) * (y[i] - ym)
+    b = sxy / sxx
+    for i in range(nb):
+        y[i] -= ym + b * (i - cm)
+    zs = np.sort(z)
+    d = np.empty(n - 1)
+    for i in range(n - 1):
+        d[i] = abs(zs[i + 1] - zs[i])
+    return y, np.median(d)
+
+
+@njit(cache=True)
+def _peak_and_band(spec, coarse, pad, width, p_min, p_max, nb):
+    """:func:`_periodogram`'s peak period in the search range (NaN: none) and the band's variance."""
+    best = -1.0
+    peak = math.nan
+    for k in range(spec.size):
+        period = pad * width / max(k, 1e-300)
+        if period >= p_min and period <= p_max and spec[k] > best:
+            best = spec[k]
+            peak = period
+    if math.isnan(peak):
+        return peak, 0.0
+    k_peak = nb * width / peak
+    half = max(0.2 * k_peak, 1.0)
+    band = 0.0
+    for c in range(1, coarse.size):
+        if abs(c - k_peak) <= half:
+            band += coarse[c]
+    return peak, 2.0 * band / nb**2
+
+
+def _periodogram_fast(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
+    """:func:`_periodogram` with the binning and the search compiled (equal to rounding; used where
+    the fit's result is reported, not subtracted from the curve)."""
+    span = float(ptp(z))
+    var = float(np.var(r))
+    if not span > 0 or not var > 0:
+        return math.nan, 0.0
+    nb = int(min(BINS, max(64, z.size)))
+    y, step = _binned(np.ascontiguousarray(z, dtype=float), np.ascontiguousarray(r, dtype=float), nb)
+    step = float(step) or span / z.size
+    width = span / nb
+    p_min, p_max = max(4 * step, span / 400, 2.5 * width), span / 1.5
+    pad = 8 * nb
+    spec = np.abs(np.fft.rfft(y, pad)) ** 2
+    coarse = np.abs(np.fft.rfft(y)) ** 2
+    peak, band_var = _peak_and_band(spec, coarse, float(pad), width, p_min, p_max, nb)
+    return float(peak), min(float(band_var) / var, 1.0) if math.isfinite(peak) else 0.0
+
+
 def _initial_period(z: np.ndarray, r: np.ndarray) -> float:
     """Strongest period of the baseline residual (see :func:`_periodogram`) [m]."""
     return _periodogram(z, r)[0]
@@ -200,9 +289,9 @@ def _initial_period(z: np.ndarray, r: np.ndarray) -> float:
 
 def _not_found(z: np.ndarray, r: np.ndarray, explained: float, period: float) -> FringeRun:
     zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(np.ptp(z)) or 1.0
+    L = 0.5 * float(ptp(z)) or 1.0
     return FringeRun(False, period, 0.0, 0.0, 1.0, 0.0, 0.0, float(zm), float(L), 0.0, float(explained),
-                     float(np.ptp(z) / period) if period > 0 else 0.0, float(np.std(r)))
+                     float(ptp(z) / period) if period > 0 else 0.0, float(np.std(r)))
 
 
 def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.period, order: int | str = _Fr.order,
@@ -241,13 +330,13 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     t = None if t is None else np.asarray(t, float)
     p0 = None
     if not (period or z.size < 16 or np.var(r) == 0):
-        p0, fraction = _periodogram(z, r)
+        p0, fraction = _periodogram_fast(z, r)  # compiled: the same starting period (a grid value)
         if not math.isfinite(p0) or fraction < min_explained / 3:
             return _not_found(z, r, fraction, p0 if math.isfinite(p0) else math.nan)
     keep = None
     per = float(period) if period else p0
     if per and z.size > 16:
-        m = int(min(FIT_POINTS, max(MIN_FIT_POINTS, POINTS_PER_PERIOD * np.ptp(z) / per)))
+        m = int(min(FIT_POINTS, max(MIN_FIT_POINTS, POINTS_PER_PERIOD * ptp(z) / per)))
         if z.size > m:
             keep = np.unique(np.linspace(0, z.size - 1, m).round().astype(np.int64))
     zs, rs, ts = (z, r, t) if keep is None else (z[keep], r[keep], None if t is None else t[keep])
@@ -330,7 +419,7 @@ def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=N
     # the map only (the line, amplitude and verdict come from _finish on every sample)
     rms = math.sqrt(2.0 * best.cost / z.size)
     return FringeRun(False, float(P), 0.0, 0.0, float(c1), float(a2), float(a3), float(zm), float(L), 0.0,
-                     1.0 - rms**2 / var0, float(np.ptp(z)) / P if P > 0 else 0.0, rms, converged=best.status > 0)
+                     1.0 - rms**2 / var0, float(ptp(z)) / P if P > 0 else 0.0, rms, converged=best.status > 0)
 
 
 @dataclass
@@ -340,24 +429,39 @@ class _Solution:
     status: int  # 0: evaluation budget spent; 1: converged
 
 
-def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True) -> FringeRun:
-    """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample."""
+def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False) -> FringeRun:
+    """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample.
+
+    The linear solve is the compiled :func:`~._numeric.lstsq_qr` (equal to rounding) where the map is
+    well posed (converged, at least one period in the range); LAPACK's, the solver these numbers were
+    first computed with, with ``lapack``, where the map is ill-posed (cos and sin then nearly the
+    baseline's line: rounding moves the amplitude by percent, the JPK stress-relaxation curve) and
+    where fringes are found (they are subtracted from every sample: the same bits).
+    """
     zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(np.ptp(z)) or 1.0
+    L = 0.5 * float(ptp(z)) or 1.0
     xt = None
     if t is not None:
-        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(np.ptp(t)) or 1.0
+        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(ptp(t)) or 1.0
         xt = (t - tm) / tL
     X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
-    coef, *_ = np.linalg.lstsq(X, r, rcond=None)
+    lapack = lapack or not (converged and float(ptp(u) / P) >= 1.0)
+    coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float))
+    if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
+        coef, *_ = np.linalg.lstsq(X, r, rcond=None)
     res = X @ coef - r
     amp = float(math.hypot(coef[0], coef[1]))
     phase = float(math.atan2(-coef[1], coef[0]))
-    lin = np.polyval(np.polyfit(z, u, 1), z)
-    nonlin = float(np.max(np.abs(u - lin)) / max(np.ptp(u), 1e-300))
+    # a linear map (a2 = a3 = 0) leaves rounding noise here: np.polyfit's, kept bit for bit; a curved one
+    # a nonlinearity far above rounding, which the compiled fit gives to ~1e-13 of it
+    curved = not lapack and abs(a2) + abs(a3) > 1e-3
+    lin = np.polyval((polyfit if curved else np.polyfit)(z, u, 1), z)
+    nonlin = float(np.max(np.abs(u - lin)) / max(ptp(u), 1e-300))
     explained = 1.0 - float(np.var(res)) / float(np.var(r))
-    cycles = float(np.ptp(u) / P)
+    cycles = float(ptp(u) / P)
     found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
+    if found and ok:
+        return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True)
     if xt is None:
         base = (float(coef[2]), float(coef[3]) / L, float(zm), "position")
     else:

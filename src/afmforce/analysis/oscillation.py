@@ -25,6 +25,7 @@ from typing import Sequence
 import numpy as np
 from scipy.ndimage import median_filter
 
+from ._numeric import polyfit
 from ._units import unit as _u
 from .options import OscillationOptions as _Osc  # the defaults: declared once, in the step's record
 
@@ -113,7 +114,7 @@ def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cy
     if not dt > 0:
         return _no_peak(run, velocity)
     tt = (t - t[0]) / max(t[-1] - t[0], dt)
-    x = r - np.polyval(np.polyfit(tt, r, 3), tt)  # a curved (nonlinear) contact is not an oscillation
+    x = r - np.polyval(polyfit(tt, r, 3), tt)  # a curved (nonlinear) contact is not an oscillation
     w = np.hanning(n)  # leakage of what the cubic trend left would raise the noise floor
     spec = np.abs(np.fft.rfft(x * w)) ** 2
     freq = np.fft.rfftfreq(n, dt)

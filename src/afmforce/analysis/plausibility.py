@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from ._numeric import ptp
 from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
@@ -137,8 +138,8 @@ def _span(st: State) -> list[str]:
     f = f[np.isfinite(f)]
     if f.size < 2:
         return []
-    signal_span = float(np.ptp(st.curve.deflection_signal[runs])) * abs(st.factor) * st.spring_constant
-    span = float(np.ptp(f))
+    signal_span = float(ptp(st.curve.deflection_signal[runs])) * abs(st.factor) * st.spring_constant
+    span = float(ptp(f))
     if signal_span > 0 and span > MAX_SPAN_RATIO * signal_span:
         return [f"the corrected force spans {span * 1e9:.4g} nN where the signal itself spans {signal_span * 1e9:.4g} "
                 "nN: the baseline correction is larger than the data (a drift line extrapolated too far)"]

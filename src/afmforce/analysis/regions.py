@@ -30,7 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import AnalysisError
-from ._numeric import mad_sigma, robust_line_thin, two_line_split
+from ._numeric import mad_sigma, polyfit, ptp, robust_line_thin, two_line_split
 
 __all__ = ["RunRegions", "find_run_regions", "saturated_mask", "run_indices", "check_compliance",
            "contact_slopes"]
@@ -125,12 +125,12 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
     if n < 2 * min_points + 2:
         raise AnalysisError(f"the {kind} run has {n} samples; at least {2 * min_points + 2} are needed")
     zr, sr, sat = z[index], s[index], saturated[index]
-    if np.ptp(sr) == 0:
+    if ptp(sr) == 0:
         raise AnalysisError(f"flat curve: the deflection signal of the {kind} run is constant")
     ok = ~sat
     if ok.sum() < 2 * min_points:
         raise AnalysisError(f"the {kind} run is saturated (the photodiode is clipped almost everywhere)")
-    if np.ptp(sr[ok]) == 0:
+    if ptp(sr[ok]) == 0:
         raise AnalysisError(f"flat curve: the deflection signal of the {kind} run is constant")
     pos = np.flatnonzero(ok)
     # approach: far side first in time; retract: contact first -> reverse so far side comes first
@@ -142,7 +142,7 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
     # contrast test: the contact line must rise well above the baseline noise
     own = float(mad_sigma(np.diff(sr[far])) / np.sqrt(2.0)) if far.size > 2 else 0.0
     sigma = own if noise is None or not np.isfinite(noise) else min(own, float(noise))
-    span = np.ptp(sr[near]) if near.size else 0.0
+    span = ptp(sr[near]) if near.size else 0.0
     if not (span > min_contrast * max(sigma, 1e-300)) or near.size < min_points:
         raise AnalysisError(
             f"no contact region found on the {kind} run (the signal rises only {span:.3g} over a "
@@ -242,7 +242,7 @@ def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
     if below.size == 0:
         return split
     onset = int(free[below[-1] + 1])
-    steep = float(np.ptp(zr[split:])) if split < zr.size else 0.0
+    steep = float(ptp(zr[split:])) if split < zr.size else 0.0
     if abs(float(zr[split] - zr[onset])) > MAX_ONSET_RATIO * steep:  # a slow rise, not a curved onset
         return split
     at_split = float(sr[split] - (a + b * (zr[split] - x0)))
@@ -271,20 +271,20 @@ def _surface_force_like(z: np.ndarray, rise: np.ndarray, z_split: float, sigma: 
     x = (z - z_split) * toward          # <= 0, growing towards the split
     up = rise > SURFACE_MIN_NSIGMA * sigma
     x, y = x[up], np.log(rise[up])
-    if x.size < 6 or np.ptp(x) == 0:
+    if x.size < 6 or ptp(x) == 0:
         return False
     mid = 0.5 * (x.min() + x.max())
     far, near = x <= mid, x > mid
-    if far.sum() < 3 or near.sum() < 3 or np.ptp(x[far]) == 0 or np.ptp(x[near]) == 0:
+    if far.sum() < 3 or near.sum() < 3 or ptp(x[far]) == 0 or ptp(x[near]) == 0:
         return False
-    s_far = float(np.polyfit(x[far], y[far], 1)[0])
-    s_near = float(np.polyfit(x[near], y[near], 1)[0])
+    s_far = float(polyfit(x[far], y[far], 1)[0])
+    s_near = float(polyfit(x[near], y[near], 1)[0])
     lo, hi = SURFACE_DECAY_RANGE
     return bool(1.0 / hi <= s_far <= 1.0 / lo and s_near >= SURFACE_MIN_SLOPE_RATIO * s_far)
 
 
 def _slope(z: np.ndarray, s: np.ndarray) -> float:
-    if z.size < 3 or np.ptp(z) == 0:
+    if z.size < 3 or ptp(z) == 0:
         return math.nan
     return float(robust_line_thin(z - z.mean(), s)[1])
 
