@@ -268,8 +268,7 @@ def calibrate_liquid_curve(curve, far: float | None = None):
     """
     import dataclasses
 
-    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal,
-                   float)
+    z = np.asarray(curve.position("auto"), float)
     v = np.asarray(curve.deflection_signal, float)
     seg = np.asarray(curve.segment)
     a, r = seg == 0, seg == 1

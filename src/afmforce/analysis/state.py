@@ -148,12 +148,8 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     AnalysisError
         Non-finite samples, a missing run, or a requested channel that is absent.
     """
-    if channel not in ("auto", "measured", "nominal"):
-        raise AnalysisError(f"position channel must be auto, measured or nominal, got {channel!r}")
-    if channel == "measured" and curve.piezo_measured is None:
-        raise AnalysisError("the curve has no measured position channel; use the nominal one")
-    use_measured = curve.piezo_measured is not None and channel != "nominal"
-    z = np.array(curve.piezo_measured if use_measured else curve.piezo_nominal, dtype=float)
+    use_measured = curve.position_channel(channel) == "measured"   # RawCurve's one choice (and its refusals)
+    z = np.array(curve.position(channel), dtype=float)
     s = np.array(curve.deflection_signal, dtype=float)
     t = np.array(curve.time, dtype=float)
     for name, arr in (("position", z), ("deflection signal", s), ("time", t)):

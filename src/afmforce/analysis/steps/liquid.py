@@ -141,8 +141,7 @@ def liquid(st: State, o: LiquidOptions) -> State:
         return _skip(st, "liquid", "needs the spring constant and the probe radius (`spring_constant`, `radius`)")
     seg = np.asarray(st.curve.segment)
     ia, ir = run_indices(seg, 0), run_indices(seg, 1)
-    z = np.asarray(st.curve.piezo_measured if st.curve.piezo_measured is not None else st.curve.piezo_nominal,
-                   float)
+    z = np.asarray(st.curve.position("auto"), float)
     far = float(z[ia].min() + o.far_fraction * np.ptp(z[ia]))
     try:
         cal_curve = calibrate_liquid_curve(st.curve, far=far)
