@@ -30,7 +30,7 @@ from . import native
 from ._guard import FileTimeoutError, run_with_timeout
 from ._meta import METADATA, check_meta_override, parse_meta_args, require_metadata
 
-__all__ = ["ReaderFormat", "FORMATS", "load", "find_format", "formats_table", "METADATA", "refusal",
+__all__ = ["ReaderFormat", "FORMATS", "register_format", "unregister_format", "load", "find_format", "formats_table", "METADATA", "refusal",
            "supported_suffixes", "is_supported", "require_metadata", "formats_markdown", "check_meta_override",
            "parse_meta_args", "run_with_timeout", "FileTimeoutError"]
 
@@ -170,6 +170,52 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  via="afmformats", supplies=("spring_constant", "velocity"),
                  signature="Device: Chiaro header line, Time (s)/Load/Indentation/Cantilever/Piezo columns"),
 )}
+
+
+def register_format(fmt: ReaderFormat, *, before: str | None = None) -> ReaderFormat:
+    """Add a reader to :data:`FORMATS` (a new format needs only its own module calling this).
+
+    Parameters
+    ----------
+    fmt : ReaderFormat
+        The record; its ``identifier`` must be new.
+    before : str, optional
+        Identifier of a registered format this one is tried before, for a shared suffix
+        (default: tried last).
+
+    Returns the record (usable as a module-level statement). Everything that lists or detects
+    formats (:func:`load`, :func:`find_format`, ``afmforce formats``, docs/formats.md's table,
+    ``--format`` and the web's ``format`` field) reads :data:`FORMATS`, so the reader appears there.
+
+    Raises
+    ------
+    ParameterError
+        The identifier is taken, ``before`` is unknown, or ``fmt`` has no suffix or pattern.
+    """
+    if not isinstance(fmt, ReaderFormat):
+        raise ParameterError(f"register_format takes a ReaderFormat, got {type(fmt).__name__}")
+    if fmt.identifier in FORMATS:
+        raise ParameterError(f"format {fmt.identifier!r} is registered already; choose another identifier")
+    if not (fmt.suffixes or fmt.pattern):
+        raise ParameterError(f"format {fmt.identifier!r} claims no file name: give suffixes or a pattern")
+    if any(s != s.lower() or not s.startswith(".") for s in fmt.suffixes):
+        raise ParameterError(f"format {fmt.identifier!r}: suffixes are lower case and start with a dot, "
+                             f"got {fmt.suffixes}")
+    if before is not None and before not in FORMATS:
+        raise ParameterError(f"format {before!r} (before=) is not registered; choose one of {', '.join(FORMATS)}")
+    items = list(FORMATS.items())
+    at = len(items) if before is None else [k for k, _ in items].index(before)
+    items.insert(at, (fmt.identifier, fmt))
+    FORMATS.clear()
+    FORMATS.update(items)
+    return fmt
+
+
+def unregister_format(identifier: str) -> None:
+    """Remove a reader added by :func:`register_format` (tests; a built-in may be removed too)."""
+    if identifier not in FORMATS:
+        raise ParameterError(f"format {identifier!r} is not registered")
+    del FORMATS[identifier]
 
 
 def supported_suffixes() -> list[str]:
