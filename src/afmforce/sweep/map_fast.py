@@ -138,13 +138,15 @@ class PixelAnalysis:
 
 
 def _read(ref):
-    """The curve of ``ref``: from the worker's open afmforce map reader, else the file's curves (cached)."""
+    """The curve of ``ref``: from the worker's open map (afmforce, JPK, NanoScope), else the file's curves (cached)."""
     from . import files as F
 
     if ref.index is None:
         raise AnalysisError(f"{ref.path}: not a force map (one curve per pixel expected)")
-    if ref.format == "afmforce-map":
-        return F._map_reader(ref.location).read(ref.index)
+    from ..io.map_curves import STREAMED_FORMATS
+
+    if ref.format in STREAMED_FORMATS:  # one curve from the worker's open map: memory flat in the map's size
+        return F._map_reader(ref.location, ref.format).read(ref.index)
     return F._load_cached(ref.location, {}, ref.format)[ref.index]
 
 

@@ -17,9 +17,9 @@ class Runs:
     """One curve's approach and retract, in time order (SI; signal in V)."""
 
     time: tuple[np.ndarray, np.ndarray]
-    z: tuple[np.ndarray, np.ndarray]          # piezo position [m], increasing towards the probe
+    z: tuple[np.ndarray, np.ndarray]          # nominal piezo position [m], increasing towards the probe
+    zm: tuple[np.ndarray, np.ndarray]         # measured piezo position [m] (a sensor's; else the nominal)
     volts: tuple[np.ndarray, np.ndarray]      # deflection signal [V]
-    measured: bool                            # z from piezo_measured (a sensor), not the nominal ramp
 
 
 def runs(curve: RawCurve, where: str) -> Runs:
@@ -31,9 +31,9 @@ def runs(curve: RawCurve, where: str) -> Runs:
     app, ret = np.flatnonzero(seg == 0), np.flatnonzero(seg == 1)
     if app.size < 2 or ret.size < 2 or np.any(np.diff(app) != 1) or np.any(np.diff(ret) != 1) or app[-1] > ret[0]:
         raise ParameterError(f"{where}: a map curve needs one approach (segment 0) then one retract (segment 1)")
-    zsrc = curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal
-    z, t, v = (np.asarray(a, dtype=float) for a in (zsrc, curve.time, curve.deflection_signal))
-    return Runs((t[app], t[ret]), (z[app], z[ret]), (v[app], v[ret]), curve.piezo_measured is not None)
+    zm = curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal
+    z, zm, t, v = (np.asarray(a, dtype=float) for a in (curve.piezo_nominal, zm, curve.time, curve.deflection_signal))
+    return Runs((t[app], t[ret]), (z[app], z[ret]), (zm[app], zm[ret]), (v[app], v[ret]))
 
 
 def cell(curve: RawCurve, i: int, nx: int, ny: int, where: str) -> tuple[int, int]:

@@ -11,12 +11,14 @@ The archive (a zip, deflated) holds what the QI files of the corpus hold
     index/<i>/segments/<j>/segment-header.properties   points, duration, channels
     index/<i>/segments/<j>/channels/height.dat         big-endian int32
     index/<i>/segments/<j>/channels/vDeflection.dat    big-endian int32
+    index/<i>/segments/<j>/channels/measuredHeight.dat big-endian int32
 
 ``vDeflection`` is stored in volts through a 32-bit encoder (step 10 V / 2^31: the recorded
 signal is kept to 5e-9 V) with the conversion set volts -> distance (multiplier: the sensitivity
 [m/V]) -> force (multiplier: the spring constant [N/m]); ``height`` is minus the piezo position
 (JPK's height decreases towards the sample) through an encoder to volts and the ``nominal``
-(volts -> m) and ``calibrated`` (m -> m) conversions. Curve ``i`` is grid cell
+(volts -> m) and ``calibrated`` (m -> m) conversions; ``measuredHeight`` is the same in metres (1e-14 m
+steps; the curve's ``piezo_measured`` when it has one). Curve ``i`` is grid cell
 ``(i % nx, i // nx)`` (``back-and-forth=false``).
 """
 
@@ -40,6 +42,8 @@ __all__ = ["write_jpk_qi", "DEFLECTION_STEP", "HEIGHT_STEP"]
 #: Encoder steps of the stored channels [V per integer]: +-10 V and +-20 V over int32.
 DEFLECTION_STEP = 10.0 / 2**31
 HEIGHT_STEP = 20.0 / 2**31
+#: The measured height's encoder step [m per integer]: +-21 um over int32.
+MEASURED_STEP = 1e-14
 #: The height channel's nominal conversion [m/V] (a 20 um piezo over +-20 V would be 5e-7).
 HEIGHT_METRES_PER_VOLT = 1e-6
 
@@ -77,12 +81,18 @@ def _settings(prefix: str, n: tuple[int, int], durations: tuple[float, float], r
     return out
 
 
-def _shared(k: float, sens: float, n: tuple[int, int], durations: tuple[float, float], ramp: float) -> dict:
-    out: dict[str, Any] = {"force-segment-header-infos.count": 2, "lcd-infos.count": 2}
+def _stamp(t: float) -> str:
+    """A JPK time stamp (``2020-02-07 16:29:04.935 +0000``) of the POSIX time ``t`` [s]."""
+    return _time.strftime("%Y-%m-%d %H:%M:%S", _time.gmtime(t)) + f".{int(t % 1 * 1000):03d} +0000"
+
+
+def _shared(k: float, sens: float, n: tuple[int, int], durations: tuple[float, float], ramp: float,
+            approach: str) -> dict:
+    out: dict[str, Any] = {"force-segment-header-infos.count": 2, "lcd-infos.count": 3}
     for j, (run, kind, npts, dur) in enumerate((("extend", "z-extend-force", n[0], durations[0]),
                                                 ("retract", "z-retract-height", n[1], durations[1]))):
         p = f"force-segment-header-info.{j}."
-        out.update({p + "type": "spm-force-segment-header", p + "name.type": "standard",
+        out.update({p + "type": "spm-force-segment-header", p + "approach-id": approach, p + "name.type": "standard",
                     p + "name.name": f"{run}-spm", p + "settings.type": "combined", p + "settings.style": run,
                     p + "settings.feedback-mode.name": "contact", p + "settings.segment-settings.type": kind,
                     p + "settings.segment-settings.identifier.type": "standard",
@@ -98,21 +108,26 @@ def _shared(k: float, sens: float, n: tuple[int, int], durations: tuple[float, f
                 c + "scaling.style": "offsetmultiplier", c + "scaling.offset": 0.0, c + "scaling.multiplier": mult,
                 c + "scaling.unit.type": "metric-unit", c + "scaling.unit.unit": unit}
 
-    def encoder(p: str, step: float) -> dict[str, Any]:
+    def encoder(p: str, step: float, unit: str = "V") -> dict[str, Any]:
         return {p + "encoder.type": "signedinteger", p + "encoder.scaling.type": "linear",
                 p + "encoder.scaling.style": "offsetmultiplier", p + "encoder.scaling.offset": 0.0,
                 p + "encoder.scaling.multiplier": step, p + "encoder.scaling.unit.type": "metric-unit",
-                p + "encoder.scaling.unit.unit": "V"}
+                p + "encoder.scaling.unit.unit": unit}
 
     for j, (name, convs, default) in enumerate((("height", "nominal calibrated", "calibrated"),
-                                                ("vDeflection", "distance force", "force"))):
+                                                ("vDeflection", "distance force", "force"),
+                                                ("measuredHeight", "nominal", "nominal"))):
         p = f"lcd-info.{j}."
+        base, unit = ("absolute", "m") if name == "measuredHeight" else ("volts", "V")
         out.update({p + "type": "integer-data", p + "channel.type": "channel", p + "channel.name": name,
-                    p + "unit.type": "metric-unit", p + "unit.unit": "V", p + "conversion-set.conversions.list": convs,
-                    p + "conversion-set.conversions.default": default, p + "conversion-set.conversions.base": "volts",
-                    p + "conversion-set.conversion.volts.name": "Volts",
-                    p + "conversion-set.conversion.volts.defined": False})
-        if name == "height":
+                    p + "unit.type": "metric-unit", p + "unit.unit": unit, p + "conversion-set.conversions.list": convs,
+                    p + "conversion-set.conversions.default": default, p + "conversion-set.conversions.base": base,
+                    p + f"conversion-set.conversion.{base}.name": base.capitalize(),
+                    p + f"conversion-set.conversion.{base}.defined": False})
+        if name == "measuredHeight":
+            out.update(conversion(p, "nominal", "Nominal height", "absolute", 1.0, "m"))
+            out.update(encoder(p, MEASURED_STEP, "m"))
+        elif name == "height":
             out.update(conversion(p, "nominal", "Nominal height", "volts", HEIGHT_METRES_PER_VOLT, "m"))
             out.update(conversion(p, "calibrated", "Calibrated height", "nominal", 1.0, "m"))
             out.update(encoder(p, HEIGHT_STEP))
@@ -155,6 +170,7 @@ def write_jpk_qi(curves: Iterable[RawCurve], path: str | os.PathLike, *, shape: 
     seen: set[int] = set()
     with atomic_path(path, force) as tmp, zipfile.ZipFile(tmp, "w", zipfile.ZIP_DEFLATED, compresslevel=1) as arc:
         head = None
+        start = _time.time()
         for i, curve in enumerate(curves):
             r = runs(curve, where)
             n = (r.z[0].size, r.z[1].size)
@@ -183,8 +199,10 @@ def write_jpk_qi(curves: Iterable[RawCurve], path: str | os.PathLike, *, shape: 
                        "quantitative-imaging-map.position-pattern.grid.ilength": nx,
                        "quantitative-imaging-map.position-pattern.grid.jlength": ny,
                        "quantitative-imaging-map.feedback-mode.name": "contact"}
-                arc.writestr("header.properties", _props(gen))
-                arc.writestr("shared-data/header.properties", _props(_shared(k, sens, n, durations, ramp)))
+                arc.writestr("index/", b"")  # folder entries, as JPK writes them (afmformats looks for them)
+                arc.writestr("shared-data/", b"")
+                arc.writestr("shared-data/header.properties", _props(_shared(k, sens, n, durations, ramp, _time.strftime(
+                    "%Y.%m.%d-%H.%M.%S-00000", _time.gmtime(start)))))
             elif n != head:
                 raise ParameterError(f"{where}: curve {i} has {n[0]} + {n[1]} points, the first {head[0]} + {head[1]}"
                                      "; a QI map's curves share their numbers of points")
@@ -196,6 +214,8 @@ def write_jpk_qi(curves: Iterable[RawCurve], path: str | os.PathLike, *, shape: 
             md = curve.metadata
             px, py = float(md.get("position_x", x * dx)), float(md.get("position_y", y * dy))
             series = "quantitative-imaging-series."
+            for folder in ("", "segments/"):
+                arc.writestr(f"index/{index}/{folder}", b"")
             arc.writestr(f"index/{index}/header.properties", _props({
                 "type": "quantitative-imaging-series", series + "force-segments.count": 2,
                 series + "header.type": "xy-position-force-scan-series-header",
@@ -206,19 +226,25 @@ def write_jpk_qi(curves: Iterable[RawCurve], path: str | os.PathLike, *, shape: 
             for j in (0, 1):
                 seg = f"index/{index}/segments/{j}/"
                 npts = r.z[j].size
+                arc.writestr(seg, b"")
+                arc.writestr(seg + "channels/", b"")
                 arc.writestr(seg + "segment-header.properties", _props({
                     "force-segment-header.force-segment-header-info.*": j,
                     "force-segment-header.type": "spm-force-segment-header",
                     "force-segment-header.num-points": npts, "force-segment-header.duration": duration(r.time[j]),
+                    "force-segment-header.time-stamp": _stamp(start + float(r.time[j][0])),
                     "force-segment-header.environment.xy-scanner-position-map.xy-scanner.tip-scanner.position.x": px,
                     "force-segment-header.environment.xy-scanner-position-map.xy-scanner.tip-scanner.position.y": py,
-                    "channels.list": "height vDeflection",
-                    **{f"channel.{c}.{key}": v for c, lcd in (("height", 0), ("vDeflection", 1)) for key, v in (
+                    "channels.list": "height vDeflection measuredHeight",
+                    **{f"channel.{c}.{key}": v for c, lcd in (("height", 0), ("vDeflection", 1), ("measuredHeight", 2))
+                       for key, v in (
                         ("lcd-info.*", lcd), ("data.file.name", f"channels/{c}.dat"), ("data.file.format", "raw"),
                         ("data.num-points", npts))}}))
                 arc.writestr(seg + "channels/height.dat",
                              _encode(-r.z[j] / HEIGHT_METRES_PER_VOLT, HEIGHT_STEP, where))
                 arc.writestr(seg + "channels/vDeflection.dat", _encode(r.volts[j], DEFLECTION_STEP, where))
+                arc.writestr(seg + "channels/measuredHeight.dat", _encode(-r.zm[j], MEASURED_STEP, where))
         if head is None:
             raise ParameterError(f"{where}: no curves to write")
+        arc.writestr("header.properties", _props(gen))
     return Path(path)

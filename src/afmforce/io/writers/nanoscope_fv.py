@@ -55,7 +55,7 @@ def _header(entries: list[str], length: int) -> bytes:
 
 def write_nanoscope_fv(curves: Iterable[RawCurve], path: str | os.PathLike, *, shape: tuple[int, int], step: float,
                        spring_constant: float | None = None, sensitivity: float | None = None,
-                       deflection_lsb: float = 0.000375, radius: float | None = None,
+                       deflection_lsb: float = 0.000375, z_range: float | None = None, radius: float | None = None,
                        instrument: str = "afmforce virtual AFM", force: bool = False) -> Path:
     """Write a force map as a NanoScope v9 force volume, one curve at a time, atomically.
 
@@ -74,6 +74,9 @@ def write_nanoscope_fv(curves: Iterable[RawCurve], path: str | os.PathLike, *, s
         [N/m], [m/V]; default: the first curve's metadata.
     deflection_lsb : float
         The deflection ADC's step [V] (16 bits): the signal is stored in its counts.
+    z_range : float, optional
+        The largest |z| the Z sensor's 16-bit channel must hold [m] (its step: z_range / 2^15);
+        default: twice the first curve's.
     radius : float, optional
         Tip radius [m] (``\\Tip Radius``); default: the first curve's ``radius``.
     force : bool
@@ -93,12 +96,13 @@ def write_nanoscope_fv(curves: Iterable[RawCurve], path: str | os.PathLike, *, s
             if layout is None:
                 k, sens = calibration(curve, {"spring_constant": spring_constant, "sensitivity": sensitivity}, where)
                 tip = radius if radius is not None else curve.metadata.get("radius")
-                z_all = np.concatenate(r.z)
+                z_all = np.concatenate(r.zm)
                 ramp = float(np.ptp(r.z[0]))
                 v_app = ramp / (r.time[0][-1] - r.time[0][0]) * (n[0] - 1) / n[0]
                 v_ret = float(np.ptp(r.z[1])) / (r.time[1][-1] - r.time[1][0]) * (n[1] - 1) / n[1]
-                # the Z sensor's step: its 16-bit range covers 4x the first curve's largest |z|
-                z_lsb = float(f"{4 * np.max(np.abs(z_all)) / (ZSENSOR_SENS * 1e-9) / _HALF:.4g}")
+                # the Z sensor's step: its 16-bit range holds z_range (default twice the first curve's |z|)
+                reach = float(z_range) if z_range is not None else 2 * float(np.max(np.abs(z_all)))
+                z_lsb = float(f"{1.001 * reach / (ZSENSOR_SENS * 1e-9) / (_HALF - 1):.4g}")
                 per = (n[0] + n[1]) * 4 * n_curves
                 layout = (n, per, z_lsb)
                 entries = _entries(nx, ny, step, n, k, sens, tip, ramp, v_app, v_ret, deflection_lsb, z_lsb,
@@ -123,7 +127,7 @@ def write_nanoscope_fv(curves: Iterable[RawCurve], path: str | os.PathLike, *, s
             width = (n[0] + n[1]) * 4
             defl = np.concatenate([_counts(r.volts[0][::-1], deflection_lsb, "deflection [V]", where),
                                    _counts(r.volts[1], deflection_lsb, "deflection [V]", where)])
-            zvolts = [z / (ZSENSOR_SENS * 1e-9) for z in r.z]
+            zvolts = [z / (ZSENSOR_SENS * 1e-9) for z in r.zm]
             zs = np.concatenate([_counts(zvolts[0][::-1], z_lsb, "Z sensor [V]", where),
                                  _counts(zvolts[1], z_lsb, "Z sensor [V]", where)])
             fh.seek(base + index * width)
@@ -157,6 +161,6 @@ def _entries(nx, ny, step, n, k, sens, tip, ramp, v_app, v_ret, lsb, z_lsb, per,
         out += ["\\*Ciao force image list", f"\\Data offset: @OFFSET{j}@", f"\\Data length: {per}",
                 "\\Bytes/pixel: 4", "\\Start context: FOL", "\\Data type: AFM", f"\\Samps/line: {n[0]} {n[1]}",
                 "\\Scan Line: Main", f"\\Spring Constant: {k:.10g}", f"\\@4:Image Data: S [{name}] \"{label}\"",
-                f"\\@4:Z scale: V [Sens. {sname}] ({step_v:.10g} V/LSB) {step_v * 2**16:.10g} V",
+                f"\\@4:Z scale: V [Sens. {sname}] ({step_v!r} V/LSB) {step_v * 2**16:.10g} V",
                 f"\\@4:Ramp Size: V [Sens. Zsens] (0.006713765 V/LSB) {ramp_v:.10g} V"]
     return out
