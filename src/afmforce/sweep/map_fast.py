@@ -97,7 +97,7 @@ class PixelAnalysis:
         k = float(p.value("spring_constant", md))
         seg = np.asarray(curve.segment)
         sig = np.asarray(curve.deflection_signal, dtype=float)
-        sens = float(p.value("sensitivity", md) or math.nan) if curve.deflection_unit == "V" else math.nan
+        sens = float(p.value("sensitivity", md) or math.nan)  # reported also for a force the reader calibrated
         scale = {"V": sens * k, "m": k, "N": 1.0}.get(curve.deflection_unit, math.nan)
         z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal)
         force = sig * scale
