@@ -47,6 +47,15 @@ def load_text() -> str:
 
 
 def _peak_mb() -> float:
+    """This process's peak resident memory [MB]: VmHWM, the high-water mark since it started its
+    program (``ru_maxrss`` of a spawned Dask worker also holds its parent's peak before the exec)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 

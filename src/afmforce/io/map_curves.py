@@ -12,8 +12,9 @@ it is); the NanoScope header (each curve's samples are read from their place in 
 from __future__ import annotations
 
 import os
-import re
+import struct
 import zipfile
+import zlib
 from pathlib import Path
 from typing import Any, Mapping, Protocol
 
@@ -70,47 +71,65 @@ class _NativeMap:
         self._reader.close()
 
 
-class _Curve:
-    """The part of an open archive that one curve's decoder sees (its own names, the shared files)."""
+class _Members:
+    """What jpk_zip's functions read of an archive: ``namelist()`` and ``read(name)``, from a
+    :class:`~afmforce.io._lean_zip.LeanZip` (``index`` None: the members outside the curves; else
+    one curve's, under ``index/<index>/``)."""
 
-    def __init__(self, arc: zipfile.ZipFile, names: list[str]) -> None:
-        self._arc, self._names = arc, names
+    def __init__(self, lean, index: int | None = None) -> None:
+        self._lean, self._index = lean, index
+        self._prefix = "" if index is None else f"index/{index}/"
+        self._own = lean.named if index is None else lean.groups[index]
 
     def namelist(self) -> list[str]:
-        return self._names
+        return [self._prefix + rest for rest in self._own]
 
     def read(self, name: str) -> bytes:
-        return self._arc.read(name)
+        if self._prefix and name.startswith(self._prefix):
+            entry = self._own.get(name[len(self._prefix):])
+        else:
+            entry = self._lean.named.get(name)
+        if entry is None:
+            raise KeyError(f"There is no item named {name!r} in the archive")
+        return self._lean.read(entry, name)
 
 
 class JpkMap:
     """A JPK force map or QI data file (``index/<i>/segments/...``), decoded curve by curve by
     :mod:`afmforce.io.jpk_zip` (``force``: in N from the file's or the user's spring constant and
-    sensitivity, as the ``jpk-force`` reader gives them; else in volts, as ``jpk-zip``)."""
+    sensitivity, as the ``jpk-force`` reader gives them; else in volts, as ``jpk-zip``). The zip's
+    directory is read into arrays (:mod:`afmforce.io._lean_zip`): a 128 x 128 QI file opens in
+    about a second and 20 MB instead of 18 s and 150 MB."""
 
     def __init__(self, path: Path, meta: dict, *, force: bool) -> None:
+        from ._lean_zip import LeanZip, index_group
         from .jpk_zip import _read_props, _shared
 
         self.where, self.meta, self.force = str(path), meta, force
         try:
-            self._arc = zipfile.ZipFile(path)
-        except (zipfile.BadZipFile, OSError, ValueError) as exc:
+            self._zip = LeanZip(path, index_group)
+        except (zipfile.BadZipFile, OSError, ValueError, struct.error) as exc:
             raise FileFormatError(f"{path}: not a JPK zip archive ({exc})") from None
         try:
-            names: dict[int, list[str]] = {}
-            pat = re.compile(r"index/(\d+)/")
-            for n in self._arc.namelist():
-                m = pat.match(n)
-                if m is not None:
-                    names.setdefault(int(m.group(1)), []).append(n)
-            if not names:
-                raise FileFormatError(f"{path}: not a JPK force map (no index/<i>/ folders)")
-            self._indices = sorted(names)
-            self._names = names
-            self._shared = _shared(self._arc)
-            self._general = _read_props(self._arc, "header.properties")
-        except BaseException:
-            self._arc.close()
+            # the curves: index folders with segment headers (as jpk_zip finds them), in index order
+            self._indices = sorted(i for i, members in self._zip.groups.items()
+                                   if any(r.startswith("segments/") and r.endswith("/segment-header.properties")
+                                          for r in members))
+            if not self._indices:
+                raise FileFormatError(f"{path}: not a JPK force map (no index/<i>/segments/)")
+            top = _Members(self._zip)
+            if "header.properties" not in self._zip.named:
+                raise FileFormatError(f"{path}: header.properties missing; not a JPK force file")
+            self._shared = _shared(top)
+            self._general = _read_props(top, "header.properties")
+        except FileFormatError:
+            self._zip.close()
+            raise
+        except BaseException as exc:
+            self._zip.close()
+            if isinstance(exc, Exception):
+                raise FileFormatError(f"{path}: damaged JPK archive ({type(exc).__name__}: {str(exc)[:200]})") \
+                    from None
             raise
 
     def __len__(self) -> int:
@@ -124,14 +143,15 @@ class JpkMap:
             raise FileFormatError(f"{self.where}: no curve {index} (the file holds {len(self._indices)})")
         i = self._indices[index]
         try:
-            curve = _read_archive(_Curve(self._arc, self._names[i]), self.where, dict(self.meta), None,
+            curve = _read_archive(_Members(self._zip, i), self.where, dict(self.meta), None,
                                   prefix=f"index/{i}/", shared=self._shared, general=self._general)
         except FileFormatError:
             raise
-        except (zipfile.BadZipFile, KeyError, ValueError, OSError, EOFError, RuntimeError) as exc:
+        except (zipfile.BadZipFile, KeyError, ValueError, OSError, EOFError, RuntimeError, zlib.error,
+                NotImplementedError) as exc:
             raise FileFormatError(f"{self.where}#{index}: damaged JPK archive ({type(exc).__name__}: "
                                   f"{str(exc)[:200]})") from None
         return _jpk_force(curve) if self.force else curve
 
     def close(self) -> None:
-        self._arc.close()
+        self._zip.close()

@@ -76,9 +76,13 @@ def _count_curves(path: Path, fmt) -> int | None:
 
         return map_info(path).n_curves
     if fmt.identifier in ("jpk-force", "jpk-zip") and path.name.lower().endswith(_MAP_SUFFIXES):
-        from afmformats.formats.fmt_jpk.jpk_reader import JPKReader
+        from ..io.map_curves import open_map  # the curves the workers read (the zip's directory only)
 
-        return len(JPKReader(path))
+        reader = open_map(path, fmt.identifier)
+        try:
+            return len(reader)
+        finally:
+            reader.close()
     if fmt.identifier == "bruker-nanoscope":  # a force volume: its grid, from the header alone
         from ..io.nanoscope import count_curves
 
