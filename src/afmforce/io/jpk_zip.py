@@ -75,7 +75,18 @@ def parse_properties(text: str) -> dict[str, str]:
 
 
 def detect_jpk(path: Path) -> bool:
-    """True for a zip archive with ``header.properties`` (JPK curves, maps, QI data)."""
+    """True for a zip archive with ``header.properties`` (JPK curves, maps, QI data). The directory
+    is read into arrays (:mod:`afmforce.io._lean_zip`: a 128 x 128 QI file's 245,764 members in
+    0.6 s instead of several), else by :mod:`zipfile`."""
+    from ._lean_zip import LeanZip, index_group
+
+    try:
+        lean = LeanZip(path, index_group)
+    except Exception:
+        pass
+    else:
+        lean.close()
+        return "header.properties" in lean.named
     try:
         with zipfile.ZipFile(path) as arc:
             return "header.properties" in arc.namelist()
