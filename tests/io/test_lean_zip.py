@@ -67,3 +67,19 @@ def test_a_damaged_member_is_named(tmp_path):
             reader.read(1)
     finally:
         reader.close()
+
+
+def test_a_damaged_directory_is_refused_before_any_large_read(tmp_path):
+    """End records pointing beyond the file, or announcing more members than fit, are not read."""
+    import struct
+
+    path = CORPUS / "jpk-qi-data_2020.02.07.jpk-qi-data"
+    data = bytearray(path.read_bytes())
+    at = data.rfind(b"PK\x05\x06")
+    for field, value in ((12, 0x7FFFFFFF), (10, 0xFFFE)):  # directory size; member count
+        bad = bytearray(data)
+        struct.pack_into("<I" if field == 12 else "<H", bad, at + field, value)
+        broken = tmp_path / f"bad{field}.jpk-qi-data"
+        broken.write_bytes(bytes(bad))
+        with pytest.raises(zipfile.BadZipFile):
+            LeanZip(broken, index_group)

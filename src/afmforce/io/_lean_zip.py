@@ -62,6 +62,8 @@ class LeanZip:
             if rec[0] != 0x06064B50:
                 raise zipfile.BadZipFile("damaged ZIP64 end of central directory")
             count, cd_size, cd_offset = rec[7], rec[8], rec[9]
+        if cd_offset + cd_size > size or count * _CENTRAL.size > cd_size:
+            raise zipfile.BadZipFile("damaged central directory (beyond the file, or too short for its members)")
         directory = self._pread(cd_size, cd_offset)
         offset = np.empty(count, np.int64)
         csize = np.empty(count, np.int64)

@@ -241,7 +241,8 @@ class CurveAnalysis:
             return list(enumerate(load(path, meta_override=self.meta_override, format=self.format,
                                        timeout=self.file_timeout)))
         if ref.format in STREAMED_FORMATS:  # a force map: this curve alone, from the worker's open map
-            return [(ref.index, _map_reader(path, ref.format, check_meta_override(self.meta_override)).read(ref.index))]
+            reader = _map_reader(path, ref.format, check_meta_override(self.meta_override))
+            return [(ref.index, reader.read(ref.index))]
         curves = _load_cached(path, self.meta_override, self.format, self.file_timeout)
         if not 0 <= ref.index < len(curves):
             raise FileFormatError(f"{path}: no curve {ref.index} (the file holds {len(curves)})")
