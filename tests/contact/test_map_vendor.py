@@ -123,3 +123,19 @@ def test_cli_writes_the_maps_of_a_vendor_file(vendor, tmp_path, capsys):
     first = table.iloc[0]
     assert np.allclose(x - x[0], CFG.step * np.arange(4)) and math.isclose(x[0], first["position_x"], abs_tol=1e-15)
     assert np.allclose(y - y[0], CFG.step * np.arange(4)) and math.isclose(y[0], first["position_y"], abs_tol=1e-15)
+
+
+def test_indentation_and_force_maps_follow_the_setpoint(vendor):
+    """The fast map's further quantities as images: QI turns at the force setpoint, so the largest
+    force is the setpoint and the deepest indentation Hertz's (F / (4/3 E* sqrt(R)))^(2/3)."""
+    from afmforce.analysis.maps import map_images
+
+    _, _, table = vendor
+    (force,) = map_images(table, "max_force")
+    (depth,) = map_images(table, "indentation")
+    assert force.quantity.unit == "N" and depth.quantity.unit == "m" and depth.has_positions
+    noise = CFG.noise * CFG.spring_constant
+    assert np.abs(force.values - CFG.setpoint).max() < 5 * noise
+    e_star = soft_map_fields(CFG)["youngs_modulus"] / (1 - CFG.poisson ** 2)
+    hertz = (CFG.setpoint / (4 / 3 * e_star * math.sqrt(CFG.radius))) ** (2 / 3)
+    assert np.allclose(depth.values, hertz, rtol=0.015)
