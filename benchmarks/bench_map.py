@@ -1,13 +1,13 @@
 """Force maps at instrument speed (issue 35): a 128 x 128 map in a minute, per-curve speed, memory.
 
     python benchmarks/bench_map.py                     # all parts
-    python benchmarks/bench_map.py --part map --side 128 --workers 2
+    python benchmarks/bench_map.py --part map --side 128 --workers 2 --format jpk-qi,bruker-fv
     python benchmarks/bench_map.py --part curve        # per curve against nanite (pip install -e .[bench])
 
 **map**: a virtual QI map (``afmforce.instrument.soft_map``: a soft, adhesive sample with a
 known modulus, topography and work-of-adhesion field; Hertz approach, DMT retract, recorded by
-the virtual AFM; 300 + 300 points a curve) written once to an afmforce map file in the system's
-temporary folder, then analysed by ``analyze_map`` (``PixelAnalysis``: the indentation fit, the
+the virtual AFM; 300 + 300 points a curve) written once in each ``--format`` (JPK QI data, a
+Bruker NanoScope force volume, afmforce's map file) in the system's temporary folder, then analysed by ``analyze_map`` (``PixelAnalysis``: the indentation fit, the
 adhesion, the DMT work of adhesion) on a local Dask cluster of ``--workers`` single-threaded
 workers, the rows stored chunk by chunk. Prints the wall time (start of the cluster included;
 target < 60 s on 2 cores), the CPU time per curve of a serial run of 1,024 curves (what an idle
@@ -48,17 +48,36 @@ def load_text() -> str:
 
 
 def _peak_mb() -> float:
+    """This process's peak resident memory [MB]: VmHWM, the high-water mark since it started its
+    program (``ru_maxrss`` of a spawned Dask worker also holds its parent's peak before the exec)."""
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("VmHWM:"):
+                    return int(line.split()[1]) / 1024
+    except OSError:
+        pass
     return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 
 
 # --- map --------------------------------------------------------------------------------------
-def map_file(side: int, points: int) -> Path:
-    from afmforce.instrument.soft_map import SoftMapConfig, write_soft_map
+#: File endings of the virtual map's formats (``write_soft_map(..., format=...)``).
+SUFFIXES = {"afmforce-map": ".h5", "jpk-qi": ".jpk-qi-data", "bruker-fv": ".spm"}
 
-    path = Path(tempfile.gettempdir()) / f"afmforce-bench-softmap{side}-{points}.h5"
+
+def map_config(side: int, points: int):
+    from afmforce.instrument.soft_map import SoftMapConfig
+
+    return SoftMapConfig(nx=side, ny=side, points=points, step=50e-6 / side)
+
+
+def map_file(side: int, points: int, fmt: str = "afmforce-map") -> Path:
+    from afmforce.instrument.soft_map import write_soft_map
+
+    path = Path(tempfile.gettempdir()) / f"afmforce-bench-softmap{side}-{points}{SUFFIXES[fmt]}"
     if not path.exists():
         t = time.perf_counter()
-        write_soft_map(SoftMapConfig(nx=side, ny=side, points=points, step=50e-6 / side), path)
+        write_soft_map(map_config(side, points), path, format=fmt)
         print(f"wrote {path} in {time.perf_counter() - t:.1f} s ({path.stat().st_size / 1e6:.0f} MB; "
               f"writer peak RSS {_peak_mb():.0f} MB; {load_text()})")
     return path
@@ -71,16 +90,16 @@ def _analysis(cfg):
     return PixelAnalysis(IndentationOptions(tip_radius=cfg.radius, poisson=cfg.poisson))
 
 
-def bench_map(side: int, points: int, workers: int, cpu_curves: int) -> None:
+def bench_map(side: int, points: int, workers: int, cpu_curves: int, fmt: str = "afmforce-map") -> None:
     from afmforce.sweep.map_fast import analyze_map
-    from afmforce.instrument.soft_map import config_of, soft_map_fields
-    from afmforce.io.native.rawmap import map_info
+    from afmforce.instrument.soft_map import soft_map_fields
     from afmforce.sweep import executors
-    from afmforce.sweep.files import CurveRef, plan_curves
+    from afmforce.sweep.files import plan_curves
 
-    path = map_file(side, points)
-    cfg = config_of(map_info(path).metadata)
+    path = map_file(side, points, fmt)
+    cfg = map_config(side, points)  # the vendor files do not record it: the same configuration as written
     analysis = _analysis(cfg)
+    print(f"--- {fmt}: {path.name} ({path.stat().st_size / 1e6:.0f} MB)")
     # CPU per curve, serial (this process), after a warm-up: the cost on an idle machine
     refs = plan_curves([path])
     from afmforce.sweep import run_batch
@@ -117,7 +136,7 @@ def bench_map(side: int, points: int, workers: int, cpu_curves: int) -> None:
         table = result.table()
         main_peak = _peak_mb()
         ok = table["error"].isna()
-        print(f"map {side} x {side} ({len(table)} curves of {2 * points} points, {int(ok.sum())} analysed) on "
+        print(f"map {side} x {side}, {fmt} ({len(table)} curves of {2 * points} points, {int(ok.sum())} analysed) on "
               f"{result.executor}: {wall:.1f} s wall, start of the cluster included (target < 60 s on 2 cores; "
               f"{load_text()}); rerun from the store {resume:.1f} s ({again.chunks_skipped} chunks skipped)")
         print(f"  peak RSS: this process {main_peak:.0f} MB (before the run {rss0:.0f} MB), workers "
@@ -237,6 +256,9 @@ def main() -> None:
     ap.add_argument("--side", type=int, default=128, help="pixels per side of the map (default 128)")
     ap.add_argument("--points", type=int, default=300, help="samples per run of each curve (default 300)")
     ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--format", default="jpk-qi,bruker-fv,afmforce-map",
+                    help="formats the virtual map is written in and read from, comma-separated: "
+                         + ", ".join(SUFFIXES))
     ap.add_argument("--cpu-curves", type=int, default=1024, help="curves of the serial CPU-time run")
     ap.add_argument("--repeat", type=int, default=10)
     args = ap.parse_args()
@@ -245,7 +267,8 @@ def main() -> None:
     if args.part in ("curve", "all"):
         bench_curve(args.repeat)
     if args.part in ("map", "all"):
-        bench_map(args.side, args.points, args.workers, args.cpu_curves)
+        for fmt in args.format.split(","):
+            bench_map(args.side, args.points, args.workers, args.cpu_curves, fmt)
 
 
 if __name__ == "__main__":

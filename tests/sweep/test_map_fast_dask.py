@@ -1,5 +1,6 @@
 """The fast map analysis on a multi-worker Dask cluster (issue 35, item 1): the same rows as in
-this process, every pixel analysed by the workers reading the map file themselves."""
+this process, every pixel analysed by the workers reading the map file themselves, curve by curve:
+afmforce's map format, JPK QI data and a Bruker NanoScope force volume."""
 
 from __future__ import annotations
 
@@ -10,11 +11,15 @@ from afmforce.analysis.options import IndentationOptions
 from afmforce.instrument.soft_map import SoftMapConfig, write_soft_map
 from afmforce.sweep.executors import DaskExecutor
 
+import pytest
+
 CFG = SoftMapConfig(nx=4, ny=3, seed=7)
 
 
-def test_dask_workers_give_the_serial_rows(dask_client, tmp_path):
-    path = write_soft_map(CFG, tmp_path / "soft.h5")
+@pytest.mark.parametrize("fmt, name", [("afmforce-map", "soft.h5"), ("jpk-qi", "soft.jpk-qi-data"),
+                                       ("bruker-fv", "soft.spm")])
+def test_dask_workers_give_the_serial_rows(dask_client, tmp_path, fmt, name):
+    path = write_soft_map(CFG, tmp_path / name, format=fmt)
     analysis = PixelAnalysis(IndentationOptions(tip_radius=CFG.radius, poisson=CFG.poisson))
     serial = analyze_map([path], analysis, executor="serial").table()
     result = analyze_map([path], analysis, executor=DaskExecutor(client=dask_client), chunk_size=3,

@@ -14,7 +14,8 @@ recorded by a virtual AFM (:class:`~afmforce.instrument.Instrument`: photodiode,
 with ``map_x``, ``map_y``, ``position_x``, ``position_y`` and the tip's ``radius`` in their metadata and the pixel's truth
 (``youngs_modulus``, ``topography``, ``adhesion``, ``work_of_adhesion``) in ``truth``;
 :func:`soft_map_fields` gives the fields themselves;
-:func:`write_soft_map` writes them to an afmforce map file (:mod:`afmforce.io.native.rawmap`).
+:func:`write_soft_map` writes them to an afmforce map file (:mod:`afmforce.io.native.rawmap`), JPK QI data
+or a Bruker force volume (:mod:`afmforce.io.writers`).
 """
 
 from __future__ import annotations
@@ -36,7 +37,8 @@ from .instrument import Instrument
 from .noise import Noise
 from .photodiode import Photodiode
 
-__all__ = ["SoftMapConfig", "soft_map_fields", "soft_map_curves", "soft_curve", "write_soft_map", "config_of"]
+__all__ = ["SoftMapConfig", "soft_map_fields", "soft_map_curves", "soft_curve", "write_soft_map", "config_of",
+           "SOFT_MAP_FORMATS"]
 
 
 @dataclass(frozen=True)
@@ -167,12 +169,35 @@ def soft_map_curves(cfg: SoftMapConfig) -> Iterator[RawCurve]:
 _SHARED = ("source", "instrument", "velocity", "sample_rate", "spring_constant", "sensitivity", "radius")
 
 
-def write_soft_map(cfg: SoftMapConfig, path: str | os.PathLike, *, force: bool = False) -> Path:
-    """Write the virtual map to an afmforce map file, streamed (constant memory).
+#: Formats :func:`write_soft_map` writes: afmforce's map, JPK QI data, a Bruker NanoScope force volume.
+SOFT_MAP_FORMATS = ("afmforce-map", "jpk-qi", "bruker-fv")
 
-    The calibration is stored once for the map (with the configuration, ``soft_map``: the known
-    fields follow from it by :func:`soft_map_fields`); each curve keeps its place and noise seed.
+
+def write_soft_map(cfg: SoftMapConfig, path: str | os.PathLike, *, format: str = "afmforce-map",
+                   force: bool = False) -> Path:
+    """Write the virtual map, streamed (constant memory), in afmforce's map format or a vendor's.
+
+    ``format``: ``"afmforce-map"`` (HDF5; the calibration is stored once for the map with the
+    configuration, ``soft_map``, from which :func:`config_of` and :func:`soft_map_fields` give the
+    known fields; each curve keeps its place and noise seed), ``"jpk-qi"`` (``.jpk-qi-data``) or
+    ``"bruker-fv"`` (NanoScope v9 force volume, ``.spm``; the deflection in the virtual ADC's counts,
+    the piezo position in the Z-sensor channel): :mod:`afmforce.io.writers`. The vendor files
+    record the spring constant, the sensitivity, the grid and (NanoScope) the tip radius, not the
+    configuration: keep ``cfg`` to compare with the known fields.
     """
+    if format not in SOFT_MAP_FORMATS:
+        raise ParameterError(f"soft map format {format!r}: choose one of {', '.join(SOFT_MAP_FORMATS)}")
+    if format != "afmforce-map":
+        from ..io.writers import write_jpk_qi, write_nanoscope_fv
+
+        shape = (cfg.ny, cfg.nx)
+        if format == "jpk-qi":
+            return write_jpk_qi(soft_map_curves(cfg), path, shape=shape, step=cfg.step, instrument="virtual QI",
+                                force=force)
+        reach = 1.5 * (cfg.ramp + cfg.topography) + 2 * cfg.setpoint / cfg.spring_constant
+        return write_nanoscope_fv(soft_map_curves(cfg), path, shape=shape, step=cfg.step,
+                                  deflection_lsb=_instrument(cfg).acquisition.lsb, z_range=reach,
+                                  instrument="virtual force volume", force=force)
     from ..io.native.rawmap import write_map
 
     first = next(soft_map_curves(dataclasses.replace(cfg, nx=1, ny=1)))

@@ -75,7 +75,18 @@ def parse_properties(text: str) -> dict[str, str]:
 
 
 def detect_jpk(path: Path) -> bool:
-    """True for a zip archive with ``header.properties`` (JPK curves, maps, QI data)."""
+    """True for a zip archive with ``header.properties`` (JPK curves, maps, QI data). The directory
+    is read into arrays (:mod:`afmforce.io._lean_zip`: a 128 x 128 QI file's 245,764 members in
+    0.6 s instead of several), else by :mod:`zipfile`."""
+    from ._lean_zip import LeanZip, index_group
+
+    try:
+        lean = LeanZip(path, index_group)
+    except Exception:
+        pass
+    else:
+        lean.close()
+        return "header.properties" in lean.named
     try:
         with zipfile.ZipFile(path) as arc:
             return "header.properties" in arc.namelist()
@@ -130,16 +141,32 @@ def _segment_header(arc: zipfile.ZipFile, name: str, shared: Mapping[str, str]) 
     props = _read_props(arc, name)
     ref = props.get("force-segment-header.force-segment-header-info.*")
     if ref is not None and shared:
-        lp = f"force-segment-header-info.{ref}."
-        for k, v in shared.items():
-            if k.startswith(lp):
-                props.setdefault("force-segment-header." + k[len(lp):], v)
+        for k, v in _group(shared, f"force-segment-header-info.{ref}."):
+            props.setdefault("force-segment-header." + k, v)
     return props
 
 
-def _shared(arc: zipfile.ZipFile) -> dict[str, str]:
+class SharedHeader(dict):
+    """``shared-data/header.properties``, with its groups (``lcd-info.1.*``) found once: a map's
+    thousands of curves resolve their references to the same few groups."""
+
+    def group(self, prefix: str) -> list[tuple[str, str]]:
+        cache = self.__dict__.setdefault("_groups", {})
+        if prefix not in cache:
+            cache[prefix] = [(k[len(prefix):], v) for k, v in self.items() if k.startswith(prefix)]
+        return cache[prefix]
+
+
+def _group(shared: Mapping[str, str], prefix: str) -> list[tuple[str, str]]:
+    """The shared entries under ``prefix``, as ``(rest of the key, value)``."""
+    if isinstance(shared, SharedHeader):
+        return shared.group(prefix)
+    return [(k[len(prefix):], v) for k, v in shared.items() if k.startswith(prefix)]
+
+
+def _shared(arc: zipfile.ZipFile) -> SharedHeader:
     name = "shared-data/header.properties"
-    return _read_props(arc, name) if name in arc.namelist() else {}
+    return SharedHeader(_read_props(arc, name) if name in arc.namelist() else {})
 
 
 def _curve_prefixes(names) -> list[str]:
@@ -198,10 +225,8 @@ def _channel_props(seg: dict[str, str], shared: dict[str, str], name: str) -> di
     out = {k[len(prefix):]: v for k, v in seg.items() if k.startswith(prefix)}
     ref = out.get("lcd-info.*")
     if ref is not None:
-        lp = f"lcd-info.{ref}."
-        for k, v in shared.items():
-            if k.startswith(lp):
-                out.setdefault(k[len(lp):], v)
+        for k, v in _group(shared, f"lcd-info.{ref}."):
+            out.setdefault(k, v)
     return out
 
 

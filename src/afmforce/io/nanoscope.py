@@ -59,7 +59,7 @@ from ..errors import FileFormatError
 from .curve import RawCurve
 from ._meta import finalize_curve
 
-__all__ = ["load_nanoscope", "detect_nanoscope", "parse_header", "count_curves", "MAX_HEADER", "ADC_COUNTS"]
+__all__ = ["load_nanoscope", "NanoscopeFile", "detect_nanoscope", "parse_header", "count_curves", "MAX_HEADER", "ADC_COUNTS"]
 
 #: Headers longer than this are not NanoScope force files (v9 headers are ~40-90 kB).
 MAX_HEADER = 4 * 2**20
@@ -236,120 +236,190 @@ def _adc_counts(ints: np.ndarray, bpp: int, channel: str, where: str) -> np.ndar
     still beyond the range are refused: read with the 16-bit scale they would put the signal
     far outside what the photodiode's ADC can give (a v9 force volume read so: approach 312 V).
     """
-    values = ints.astype(float)
-    if bpp == 2 or not values.size or np.abs(values).max() <= ADC_COUNTS:
-        return values
-    for shift in (16, 8):
-        low = ints & ((1 << shift) - 1)
-        if np.all((low == 0) | (low == (1 << shift) - 1)):
-            values = values / float(1 << shift)
-            break
-    peak = np.abs(values).max()
-    if peak > ADC_COUNTS:
+    return ints.astype(float) / _adc_shift([ints], bpp, channel, where)
+
+
+def _adc_shift(chunks, bpp: int, channel: str, where: str) -> float:
+    """The divisor (1, 256 or 65536) turning a channel's samples into 16-bit ADC counts (the unit of its
+    ``V/LSB``), decided on all its samples (given in chunks) as :func:`_adc_counts` describes."""
+    if bpp == 2:
+        return 1.0
+    peak, aligned = 0, {16: True, 8: True}
+    for ints in chunks:
+        if not ints.size:
+            continue
+        peak = max(peak, int(np.abs(ints.astype(np.int64)).max()))
+        for shift in aligned:
+            low = ints & ((1 << shift) - 1)
+            aligned[shift] = aligned[shift] and bool(np.all((low == 0) | (low == (1 << shift) - 1)))
+    if peak <= ADC_COUNTS:
+        return 1.0
+    divisor = next((float(1 << shift) for shift in (16, 8) if aligned[shift]), 1.0)
+    if peak / divisor > ADC_COUNTS:
         raise FileFormatError(
-            f"{where}: channel {channel!r} holds 4-byte samples up to {peak:.0f} counts, beyond the 16-bit ADC "
-            f"range ({ADC_COUNTS}) its V/LSB scale is for, and their low bits carry data: the scale of this "
+            f"{where}: channel {channel!r} holds 4-byte samples up to {peak / divisor:.0f} counts, beyond the 16-bit "
+            f"ADC range ({ADC_COUNTS}) its V/LSB scale is for, and their low bits carry data: the scale of this "
             "NanoScope version is not known to afmforce; export the curves as NanoScope Analysis text")
-    return values
+    return divisor
+
+
+class NanoscopeFile:
+    """An open NanoScope force file whose curves are read one at a time (:meth:`curve`): a force
+    volume of any size in the memory of one curve (the header is parsed once, each curve's samples
+    are read from their place in the file). :func:`load_nanoscope` reads every curve through it."""
+
+    def __init__(self, path: Path, meta_override: Mapping[str, Any] | None = None) -> None:
+        path = Path(path)
+        where = self.where = str(path)
+        try:
+            self._fh = open(path, "rb")
+            size = path.stat().st_size
+            head = self._fh.read(MAX_HEADER + 64)
+        except OSError as exc:
+            raise FileFormatError(f"{where}: cannot read ({exc})") from None
+        try:
+            self._open(head, size, meta_override)
+        except BaseException:
+            self._fh.close()
+            raise
+
+    def _open(self, head: bytes, size: int, meta_override) -> None:
+        where = self.where
+        sections = parse_header(head, where)
+        chans = _channels(sections)
+        if not chans:
+            raise FileFormatError(f"{where}: no '\\*Ciao force image list' (no curve data) in the header")
+        samps = _find(sections, "Samps/line", "Ciao force list") or _find(sections, "Samps/line", "Ciao force image list")
+        counts = [int(float(v)) for v in re.findall(_NUMBER, samps or "")]
+        if not counts or min(counts) < 2 or max(counts) > 10**7:
+            raise FileFormatError(f"{where}: NanoScope header 'Samps/line' missing or invalid ({samps!r})")
+        n_app, n_ret = (counts[0], counts[1]) if len(counts) >= 2 else (counts[0], counts[0])
+        defl = next((c for c in chans if "defl" in _channel_name(c).lower()), chans[0])
+        zsen = next((c for c in chans if _channel_name(c).lower() in ("zsensor", "height sensor", "heightsensor")), None)
+
+        grid = self._grid = _grid(sections, where)
+        n_curves = grid[0] * grid[1] if grid is not None else 1
+        per = n_app + n_ret
+
+        def place(entries) -> tuple[int, int, int, float, float]:
+            """(offset, bytes per sample, curves, V/LSB, sensitivity) of a channel, its ADC shift checked."""
+            offset = int(_number(entries.get("Data offset"), where, "Data offset"))
+            length = int(_number(entries.get("Data length"), where, "Data length"))
+            if length <= 0 or offset < 0 or offset + length > size:
+                raise FileFormatError(f"{where}: channel data ({length} bytes at {offset}) lies outside the file "
+                                      f"({size} bytes); truncated or damaged")
+            bpp = _sample_width(length, per, n_curves, entries, where)
+            rows = length // (bpp * per)
+            vlsb, sens, _ = _channel_scale(entries, sections, where)
+            return offset, bpp, rows, vlsb, sens
+
+        d_off, d_bpp, rows, d_vlsb, _ = place(defl)
+        self._defl = (d_off, d_bpp, self._divisor(d_off, d_bpp, rows * per, _channel_name(defl)), d_vlsb)
+        self._zsen = None
+        if zsen is not None:
+            z_off, z_bpp, z_rows, z_vlsb, z_sens = place(zsen)
+            if z_rows == rows:
+                self._zsen = (z_off, z_bpp, self._divisor(z_off, z_bpp, rows * per, _channel_name(zsen)),
+                              z_vlsb, z_sens)
+        self.n_curves, self._n = rows, (n_app, n_ret)
+        meta: dict[str, Any] = {"instrument": _find(sections, "Microscope") or "Bruker NanoScope",
+                                "nanoscope_version": _find(sections, "Version") or ""}
+        k = _find([("", defl)], "Spring Constant") or _find(sections, "Spring Constant")  # the deflection's list
+        if k is not None and _number(k, where, "Spring Constant") > 0:
+            meta["spring_constant"] = _number(k, where, "Spring Constant")
+        sens = _sens(sections, "DeflSens") or _sens(sections, "Deflection")
+        if sens is not None and sens[0] > 0:
+            meta["sensitivity"] = sens[0] * 1e-9  # [nm/V]
+        tip = _find(sections, "Tip Radius", "Ciao scan list")  # [nm], as typed into NanoScope
+        if tip is not None and re.search(_NUMBER, tip) and _number(tip, where, "Tip Radius", 0) > 0:
+            meta["radius"] = _number(tip, where, "Tip Radius", 0) * 1e-9
+        corr = _find(sections, "Deflection Sensitivity Correction")
+        if corr is not None:
+            meta["nanoscope_deflection_sensitivity_correction"] = _number(corr, where, "Deflection Sensitivity Correction")
+        zsens = _sens(sections, "Zsens") or _sens(sections, "Zscan")
+        ramp = defl.get("4:Ramp Size") or defl.get("Ramp Size") or _find(sections, "4:Ramp Size Zsweep")
+        if zsens is None or ramp is None:
+            raise FileFormatError(f"{where}: NanoScope header lacks the Z sensitivity or the ramp size")
+        ramp_m = _number(ramp, where, "Ramp Size") * zsens[0] * 1e-9  # [V] x [nm/V]
+        if not (0 < ramp_m < 1e-3):
+            raise FileFormatError(f"{where}: ramp size {ramp_m!r} m is not plausible; damaged header")
+        fwd, rev = _find(sections, "Forward vel."), _find(sections, "Reverse vel.")
+        if fwd is not None and rev is not None and _number(fwd, where, "Forward vel.") > 0 \
+                and _number(rev, where, "Reverse vel.") > 0:
+            v_app = _number(fwd, where, "Forward vel.") * zsens[0] * 1e-9  # [V/s] x [nm/V]
+            v_ret = _number(rev, where, "Reverse vel.") * zsens[0] * 1e-9
+        else:
+            rate = _number(_find(sections, "Scan rate"), where, "Scan rate")
+            if not rate > 0:
+                raise FileFormatError(f"{where}: no velocity and no scan rate in the header")
+            v_app = v_ret = 2 * ramp_m * rate
+        meta.update(velocity=v_app, retract_velocity=v_ret, sample_rate=v_app * n_app / ramp_m,
+                    adc_range=ADC_COUNTS * d_vlsb)  # [V]: the deflection channel's 16-bit ADC
+        dt_app, dt_ret = ramp_m / (v_app * n_app), ramp_m / (v_ret * n_ret)
+        self._time = np.concatenate([dt_app * np.arange(n_app), dt_app * n_app + dt_ret * np.arange(n_ret)])
+        z_app = np.linspace(0.0, ramp_m, n_app, endpoint=False) + ramp_m / n_app  # towards the sample
+        z_ret = ramp_m - np.arange(n_ret) * (ramp_m / n_ret)
+        self._z = np.concatenate([z_app, z_ret])
+        self._seg = np.concatenate([np.zeros(n_app, np.int8), np.ones(n_ret, np.int8)])
+        meta.update(dict(meta_override or {}))
+        meta.update(source_file=where, reader="bruker-nanoscope", format="Bruker NanoScope binary force file",
+                    position_sign=1.0)
+        self._meta = meta
+
+    def _samples(self, offset: int, bpp: int, first: int, count: int) -> np.ndarray:
+        self._fh.seek(offset + first * bpp)
+        raw = self._fh.read(count * bpp)
+        if len(raw) != count * bpp:
+            raise FileFormatError(f"{self.where}: the file ends inside its curve data; truncated")
+        return np.frombuffer(raw, dtype=f"<i{bpp}")
+
+    def _divisor(self, offset: int, bpp: int, total: int, channel: str) -> float:
+        step = 2**22  # samples per chunk: the decision sees every sample, in bounded memory
+        chunks = (self._samples(offset, bpp, i, min(step, total - i)) for i in range(0, total, step))
+        return _adc_shift(chunks, bpp, channel, self.where)
+
+    def __len__(self) -> int:
+        return self.n_curves
+
+    def curve(self, i: int) -> RawCurve:
+        """Curve ``i`` (in file order: row by row in a force volume)."""
+        if not 0 <= i < self.n_curves:
+            raise FileFormatError(f"{self.where}: no curve {i} (the file holds {self.n_curves})")
+        n_app, n_ret = self._n
+        per = n_app + n_ret
+        off, bpp, div, vlsb = self._defl
+        volts = self._samples(off, bpp, i * per, per).astype(float) / div * vlsb
+        signal = np.concatenate([volts[:n_app][::-1], volts[n_app:]])  # both runs start at the turning point
+        zm = None
+        if self._zsen is not None:
+            off, bpp, div, vlsb, sens = self._zsen
+            zr = self._samples(off, bpp, i * per, per).astype(float) / div * vlsb * sens
+            zm = np.concatenate([zr[:n_app][::-1], zr[n_app:]])
+            if zm[n_app - 1] < zm[0]:
+                zm = -zm
+        meta = {**self._meta, "curve_index": i, **_grid_point(self._grid, i)} if self.n_curves > 1 \
+            else dict(self._meta)
+        curve = RawCurve(time=self._time.copy(), piezo_nominal=self._z.copy(), piezo_measured=zm,
+                         deflection_signal=signal, segment=self._seg.copy(), metadata=meta, deflection_unit="V")
+        return finalize_curve(curve, self.where)
+
+    def close(self) -> None:
+        self._fh.close()
+
+    def __enter__(self) -> "NanoscopeFile":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
 
 
 def load_nanoscope(path: Path, *, meta_override: Mapping[str, Any] | None = None,
                    callback: Callable | None = None) -> list[RawCurve]:
     """Read every force curve of a NanoScope binary force file (see module docstring)."""
-    path = Path(path)
-    where = str(path)
-    try:
-        data = path.read_bytes()
-    except OSError as exc:
-        raise FileFormatError(f"{where}: cannot read ({exc})") from None
-    sections = parse_header(data, where)
-    chans = _channels(sections)
-    if not chans:
-        raise FileFormatError(f"{where}: no '\\*Ciao force image list' (no curve data) in the header")
-    samps = _find(sections, "Samps/line", "Ciao force list") or _find(sections, "Samps/line", "Ciao force image list")
-    counts = [int(float(v)) for v in re.findall(_NUMBER, samps or "")]
-    if not counts or min(counts) < 2 or max(counts) > 10**7:
-        raise FileFormatError(f"{where}: NanoScope header 'Samps/line' missing or invalid ({samps!r})")
-    n_app, n_ret = (counts[0], counts[1]) if len(counts) >= 2 else (counts[0], counts[0])
-    defl = next((c for c in chans if "defl" in _channel_name(c).lower()), chans[0])
-    zsen = next((c for c in chans if _channel_name(c).lower() in ("zsensor", "height sensor", "heightsensor")), None)
-
-    grid = _grid(sections, where)
-    n_curves = grid[0] * grid[1] if grid is not None else 1
-
-    def read(entries) -> tuple[np.ndarray, float, float]:
-        offset = int(_number(entries.get("Data offset"), where, "Data offset"))
-        length = int(_number(entries.get("Data length"), where, "Data length"))
-        if length <= 0 or offset < 0 or offset + length > len(data):
-            raise FileFormatError(f"{where}: channel data ({length} bytes at {offset}) lies outside the file "
-                                  f"({len(data)} bytes); truncated or damaged")
-        bpp = _sample_width(length, n_app + n_ret, n_curves, entries, where)
-        ints = np.frombuffer(data, dtype=f"<i{bpp}", count=length // bpp, offset=offset)
-        vlsb, sens, _ = _channel_scale(entries, sections, where)
-        return _adc_counts(ints, bpp, _channel_name(entries), where).reshape(-1, n_app + n_ret), vlsb, sens
-
-    d_ints, d_vlsb, defl_sens = read(defl)
-    z_ints = None
-    if zsen is not None:
-        z_ints, z_vlsb, z_sens = read(zsen)
-        if z_ints.shape != d_ints.shape:
-            z_ints = None
-    meta: dict[str, Any] = {"instrument": _find(sections, "Microscope") or "Bruker NanoScope",
-                            "nanoscope_version": _find(sections, "Version") or ""}
-    k = _find([("", defl)], "Spring Constant") or _find(sections, "Spring Constant")  # the deflection's list
-    if k is not None and _number(k, where, "Spring Constant") > 0:
-        meta["spring_constant"] = _number(k, where, "Spring Constant")
-    sens = _sens(sections, "DeflSens") or _sens(sections, "Deflection")
-    if sens is not None and sens[0] > 0:
-        meta["sensitivity"] = sens[0] * 1e-9  # [nm/V]
-    tip = _find(sections, "Tip Radius", "Ciao scan list")  # [nm], as typed into NanoScope
-    if tip is not None and re.search(_NUMBER, tip) and _number(tip, where, "Tip Radius", 0) > 0:
-        meta["radius"] = _number(tip, where, "Tip Radius", 0) * 1e-9
-    corr = _find(sections, "Deflection Sensitivity Correction")
-    if corr is not None:
-        meta["nanoscope_deflection_sensitivity_correction"] = _number(corr, where, "Deflection Sensitivity Correction")
-    zsens = _sens(sections, "Zsens") or _sens(sections, "Zscan")
-    ramp = defl.get("4:Ramp Size") or defl.get("Ramp Size") or _find(sections, "4:Ramp Size Zsweep")
-    if zsens is None or ramp is None:
-        raise FileFormatError(f"{where}: NanoScope header lacks the Z sensitivity or the ramp size")
-    ramp_m = _number(ramp, where, "Ramp Size") * zsens[0] * 1e-9  # [V] x [nm/V]
-    if not (0 < ramp_m < 1e-3):
-        raise FileFormatError(f"{where}: ramp size {ramp_m!r} m is not plausible; damaged header")
-    fwd, rev = _find(sections, "Forward vel."), _find(sections, "Reverse vel.")
-    if fwd is not None and rev is not None and _number(fwd, where, "Forward vel.") > 0 \
-            and _number(rev, where, "Reverse vel.") > 0:
-        v_app = _number(fwd, where, "Forward vel.") * zsens[0] * 1e-9  # [V/s] x [nm/V]
-        v_ret = _number(rev, where, "Reverse vel.") * zsens[0] * 1e-9
-    else:
-        rate = _number(_find(sections, "Scan rate"), where, "Scan rate")
-        if not rate > 0:
-            raise FileFormatError(f"{where}: no velocity and no scan rate in the header")
-        v_app = v_ret = 2 * ramp_m * rate
-    meta.update(velocity=v_app, retract_velocity=v_ret, sample_rate=v_app * n_app / ramp_m,
-                adc_range=ADC_COUNTS * d_vlsb)  # [V]: the deflection channel's 16-bit ADC
-    dt_app, dt_ret = ramp_m / (v_app * n_app), ramp_m / (v_ret * n_ret)
-    time = np.concatenate([dt_app * np.arange(n_app), dt_app * n_app + dt_ret * np.arange(n_ret)])
-    z_app = np.linspace(0.0, ramp_m, n_app, endpoint=False) + ramp_m / n_app  # towards the sample
-    z_ret = ramp_m - np.arange(n_ret) * (ramp_m / n_ret)
-    seg = np.concatenate([np.zeros(n_app, np.int8), np.ones(n_ret, np.int8)])
-    meta.update(dict(meta_override or {}))
-    meta.update(source_file=where, reader="bruker-nanoscope", format="Bruker NanoScope binary force file",
-                position_sign=1.0)
-    out = []
-    for i, row in enumerate(d_ints):
-        volts = row * d_vlsb
-        signal = np.concatenate([volts[:n_app][::-1], volts[n_app:]])  # both runs start at the turning point
-        zm = None
-        if z_ints is not None:
-            zr = z_ints[i] * z_vlsb * z_sens
-            zm = np.concatenate([zr[:n_app][::-1], zr[n_app:]])
-            if zm[n_app - 1] < zm[0]:
-                zm = -zm
-        curve = RawCurve(time=time, piezo_nominal=np.concatenate([z_app, z_ret]), piezo_measured=zm,
-                         deflection_signal=signal, segment=seg,
-                         metadata={**meta, "curve_index": i, **_grid_point(grid, i)} if len(d_ints) > 1
-                         else dict(meta), deflection_unit="V")
-        out.append(finalize_curve(curve, where))
-        if callback is not None:
-            callback((i + 1) / len(d_ints))
+    with NanoscopeFile(path, meta_override) as f:
+        out = []
+        for i in range(len(f)):
+            out.append(f.curve(i))
+            if callback is not None:
+                callback((i + 1) / len(f))
     return out

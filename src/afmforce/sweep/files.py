@@ -75,10 +75,14 @@ def _count_curves(path: Path, fmt) -> int | None:
         from ..io.native.rawmap import map_info
 
         return map_info(path).n_curves
-    if fmt.identifier == "jpk-force" and path.name.lower().endswith(_MAP_SUFFIXES):
-        from afmformats.formats.fmt_jpk.jpk_reader import JPKReader
+    if fmt.identifier in ("jpk-force", "jpk-zip") and path.name.lower().endswith(_MAP_SUFFIXES):
+        from ..io.map_curves import open_map  # the curves the workers read (the zip's directory only)
 
-        return len(JPKReader(path))
+        reader = open_map(path, fmt.identifier)
+        try:
+            return len(reader)
+        finally:
+            reader.close()
     if fmt.identifier == "bruker-nanoscope":  # a force volume: its grid, from the header alone
         from ..io.nanoscope import count_curves
 
@@ -130,13 +134,14 @@ def _identity(path: Path, *extra) -> tuple:
     return (str(path.resolve()), st.st_size, st.st_mtime_ns, *extra)
 
 
-def _map_reader(path: Path):
-    from ..io.native.rawmap import MapReader
+def _map_reader(path: Path, format: str = "afmforce-map", meta: Mapping[str, Any] | None = None):
+    """The worker's open map (:func:`afmforce.io.map_curves.open_map`): its curves read one at a time."""
+    from ..io.map_curves import open_map
 
-    ident = _identity(path, "map")
+    ident = _identity(path, "map", format, json.dumps(dict(meta or {}), sort_keys=True, default=repr))
     if _OPEN.get("id") != ident:
         _close_open()
-        _OPEN.update(id=ident, value=MapReader(path))
+        _OPEN.update(id=ident, value=open_map(path, format, meta))
     return _OPEN["value"]
 
 
@@ -226,18 +231,16 @@ class CurveAnalysis:
 
     def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
         """``(index in the file, RawCurve)`` of the item's curves."""
-        from ..io import FORMATS, load
-        from ..io import check_meta_override
+        from ..io import check_meta_override, load
+        from ..io.map_curves import STREAMED_FORMATS
 
         path = ref.location
         if ref.index is None:
             return list(enumerate(load(path, meta_override=self.meta_override, format=self.format,
                                        timeout=self.file_timeout)))
-        if ref.format == "afmforce-map":
-            meta = check_meta_override(self.meta_override)
-            reader = _map_reader(path)
-            return [(ref.index, FORMATS["afmforce-map"].loader(path, meta_override=meta, indices=[ref.index],
-                                                              reader=reader)[0])]
+        if ref.format in STREAMED_FORMATS:  # a force map: this curve alone, from the worker's open map
+            reader = _map_reader(path, ref.format, check_meta_override(self.meta_override))
+            return [(ref.index, reader.read(ref.index))]
         curves = _load_cached(path, self.meta_override, self.format, self.file_timeout)
         if not 0 <= ref.index < len(curves):
             raise FileFormatError(f"{path}: no curve {ref.index} (the file holds {len(curves)})")

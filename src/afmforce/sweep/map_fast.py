@@ -97,8 +97,8 @@ class PixelAnalysis:
         k = float(p.value("spring_constant", md))
         seg = np.asarray(curve.segment)
         sig = np.asarray(curve.deflection_signal, dtype=float)
-        sens = float(p.value("sensitivity", md) or math.nan) if curve.deflection_unit == "V" else math.nan
-        scale = curve.force_factor(sens, k)
+        sens = float(p.value("sensitivity", md) or math.nan)  # reported also for a force the reader calibrated
+        scale = curve.force_factor(sens, k)                    # uses the sensitivity for volts only
         z = curve.position()
         force = sig * scale
         app, ret = seg == 0, seg == 1
@@ -138,13 +138,15 @@ class PixelAnalysis:
 
 
 def _read(ref):
-    """The curve of ``ref``: from the worker's open afmforce map reader, else the file's curves (cached)."""
+    """The curve of ``ref``: from the worker's open map (afmforce, JPK, NanoScope), else the file's curves (cached)."""
     from . import files as F
 
     if ref.index is None:
         raise AnalysisError(f"{ref.path}: not a force map (one curve per pixel expected)")
-    if ref.format == "afmforce-map":
-        return F._map_reader(ref.location).read(ref.index)
+    from ..io.map_curves import STREAMED_FORMATS
+
+    if ref.format in STREAMED_FORMATS:  # one curve from the worker's open map: memory flat in the map's size
+        return F._map_reader(ref.location, ref.format).read(ref.index)
     return F._load_cached(ref.location, {}, ref.format)[ref.index]
 
 
