@@ -69,8 +69,10 @@ def test_units_summary_columns_and_maps_come_from_the_records():
             assert MAP_QUANTITIES[name].column == name and MAP_QUANTITIES[name].unit == unit
         else:   # a map is drawn from the summary table: no column, no map (before: an empty choice)
             assert name not in MAP_QUANTITIES
-    # the named map quantities point to declared columns
-    assert all(q.column in SUMMARY_COLUMNS for q in MAP_QUANTITIES.values())
+    # the named map quantities point to declared columns: the summary table's or the fast map's
+    from afmforce.sweep.map_fast import PIXEL_COLUMNS
+
+    assert all(q.column in SUMMARY_COLUMNS or q.column in PIXEL_COLUMNS for q in MAP_QUANTITIES.values())
 
 
 def test_the_result_reads_its_fields_from_the_values_and_refuses_undeclared_ones():

@@ -132,7 +132,7 @@ def test_indentation_and_force_maps_follow_the_setpoint(vendor):
 
     _, _, table = vendor
     (force,) = map_images(table, "max_force")
-    (depth,) = map_images(table, "indentation")
+    (depth,) = map_images(table, "max_indentation")
     assert force.quantity.unit == "N" and depth.quantity.unit == "m" and depth.has_positions
     noise = CFG.noise * CFG.spring_constant
     assert np.abs(force.values - CFG.setpoint).max() < 5 * noise

@@ -70,7 +70,7 @@ def _quantities() -> dict[str, "MapQuantity"]:
         MapQuantity("topography", "contact_point", "height: minus the piezo position at contact", "m", -1.0),
         # the fast map's further columns (afmforce.sweep.map_fast.PIXEL_COLUMNS)
         MapQuantity("topography_se", "contact_point_se", "standard error of the contact point", "m"),
-        MapQuantity("indentation", "max_indentation", "deepest indentation (fit)", "m"),
+        MapQuantity("max_indentation", "max_indentation", "deepest indentation (fit)", "m"),
         MapQuantity("max_force", "max_force", "force at the deepest indentation, above the baseline", "N"),
         MapQuantity("adhesion_noise", "adhesion_noise", "baseline noise (force, rms)", "N"),
         MapQuantity("work_of_adhesion_se", "work_of_adhesion_se", "uncertainty of the work of adhesion", "J/m^2"),
