@@ -62,7 +62,7 @@ def test_pair_reads_as_one_curve(tmp_path):
 
 def test_pair_without_k_asks_for_it(tmp_path):
     _pair(tmp_path, f"NumPtsPerSec:5000\rIndexes:0,{N_APP},{2 * N_APP - 1}\r", signal="Raw")
-    with pytest.raises(MissingMetadataError, match="--spring-constant and --sensitivity"):
+    with pytest.raises(MissingMetadataError, match="give `spring_constant` and `sensitivity`"):
         load(tmp_path / "Map0001Point0000Raw.ibw")
     c = load(tmp_path / "Map0001Point0000Raw.ibw", meta_override={"spring_constant": 0.1, "sensitivity": 40e-9})[0]
     assert c.deflection_unit == "V" and c.metadata["spring_constant"] == 0.1
