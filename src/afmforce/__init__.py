@@ -64,7 +64,7 @@ class _GuardNumbaCache:
 
             def exec_module(module):
                 run(module)
-                importlib.import_module(f"{__name__}._jitcache")    # installs on import
+                importlib.import_module(f"{__name__}._jitcache").install()
 
             spec.loader.exec_module = exec_module
         return spec
@@ -72,7 +72,7 @@ class _GuardNumbaCache:
 
 def _guard_numba_cache() -> None:
     if _GuardNumbaCache.NAME in sys.modules:
-        importlib.import_module(f"{__name__}._jitcache")                # installs on import
+        importlib.import_module(f"{__name__}._jitcache").install()
     elif not any(isinstance(f, _GuardNumbaCache) for f in sys.meta_path):
         sys.meta_path.insert(0, _GuardNumbaCache())
 

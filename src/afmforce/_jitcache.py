@@ -11,8 +11,8 @@ any of them recompiles every afmforce kernel, once. The sources a kernel may rea
 of the layers at or below the analysis (docs/architecture.md; the layers above may not be
 imported by them, tested): the top-level modules and the packages of :data:`KERNEL_SOURCES`.
 
-:func:`install` puts the locators first in numba's list (on import of this module);
-``afmforce/__init__.py`` imports it as soon as numba's caching module is imported, before any
+:func:`install` puts the locators first in numba's list (this module imports no numba);
+``afmforce/__init__.py`` calls it as soon as numba's caching module is imported, before any
 kernel is decorated (an import hook: ``import afmforce`` still loads no numba). Functions
 outside the afmforce package keep numba's own locators. Where the cache lives is numba's choice, as
 before (``NUMBA_CACHE_DIR``, else ``__pycache__`` beside the source, else the user's cache).
@@ -25,17 +25,16 @@ import os
 from functools import lru_cache
 from pathlib import Path
 
-from numba.core import caching as _caching
-
 #: Packages of afmforce whose sources a kernel may reach (with the top-level modules).
 KERNEL_SOURCES = ("analysis", "calibration", "contact", "dynamics", "instrument", "io",
                   "surface_laws")
 
 PACKAGE = Path(__file__).resolve().parent
 
-#: numba's locators, in numba's order (ours wrap each)
-_BASES = (_caching.UserProvidedCacheLocator, _caching.InTreeCacheLocator,
-          _caching.UserWideCacheLocator)
+#: numba's locators that ours wrap, in numba's order (``numba.core.caching``)
+_BASES = ("UserProvidedCacheLocator", "InTreeCacheLocator", "UserWideCacheLocator")
+#: Our locators, made by :func:`install` (importing this module imports no numba)
+LOCATORS: tuple = ()
 
 
 def kernel_source_files(root: Path = PACKAGE) -> list[Path]:
@@ -94,17 +93,14 @@ def _locator(base):
     return Locator
 
 
-AfmforceUserProvidedCacheLocator, AfmforceInTreeCacheLocator, AfmforceUserWideCacheLocator = (
-    _locator(b) for b in _BASES)
-LOCATORS = (AfmforceUserProvidedCacheLocator, AfmforceInTreeCacheLocator,
-            AfmforceUserWideCacheLocator)
+def install() -> tuple:
+    """Put the locators first in numba's list (once; imports numba). Returns them."""
+    global LOCATORS
+    from numba.core import caching
 
-def install() -> bool:
-    """Put the locators first in numba's list (once). Returns whether they are in it."""
-    classes = _caching.CacheImpl._locator_classes
+    if not LOCATORS:
+        LOCATORS = tuple(_locator(getattr(caching, name)) for name in _BASES)
+    classes = caching.CacheImpl._locator_classes
     if classes[:len(LOCATORS)] != list(LOCATORS):
         classes[:0] = LOCATORS
-    return True
-
-
-install()
+    return LOCATORS
