@@ -171,6 +171,7 @@ def _text_never_fails() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (argparse usage errors raise SystemExit(2))."""
+    command_line = argv is None         # the afmforce process itself (not main() called from Python)
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     _text_never_fails()
     _outcome.start(argv)
@@ -203,7 +204,8 @@ def main(argv: list[str] | None = None) -> int:
     _outcome.RunState.generic_json = bool(getattr(args, "_generic_json", False))
     try:
         check_common(args)
-        _firstrun.prepare(command, args, lambda text: print(text, file=sys.stderr, flush=True))
+        if command_line:                # its first run may use uncompiled kernels (cli/_firstrun.py)
+            _firstrun.prepare(command, args, lambda text: print(text, file=sys.stderr, flush=True))
         if command in SIMULATING:
             _compile_notice()
         if _outcome.RunState.generic_json and _outcome.RunState.json:

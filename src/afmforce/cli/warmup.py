@@ -1,12 +1,13 @@
 """``afmforce warmup``: compile the kernels the commands use, once, ahead of their first run.
 
-numba compiles afmforce's kernels on their first call and caches them on disk; this runs
-each group's workload (:data:`afmforce.cli._firstrun.GROUPS`: the commands themselves, on the
-shipped sample files and default settings, outputs in a temporary folder) so that numba's
-cache holds what those commands call, and leaves a stamp per group. ``afmforce analyze``
-starts ``afmforce warmup --only analysis`` in the background on its first run
-(docs/architecture.md, "First run"). Safe to run again: a group whose kernels are cached
-loads them in seconds.
+afmforce's kernels are compiled on their first call and cached on disk. This runs each
+group's commands once on the shipped sample files and default settings (outputs in a
+temporary folder), so that the cache holds what those commands call; later runs load them
+in seconds. The first afmforce analyze starts it in the background for the analysis. Safe
+to run again.
+
+Each group's workload is :data:`afmforce.cli._firstrun.GROUPS`; a stamp per group says it ran
+(docs/architecture.md, "First run").
 """
 
 from __future__ import annotations
