@@ -128,8 +128,25 @@ def test_one_background_warmup_at_a_time(tmp_path, monkeypatch):
     k = _firstrun.key()
     lock = tmp_path / f"warming-analysis-{k}.lock"
     lock.write_text(f"{os.getpid()}\n")         # a live process holds it
-    assert _firstrun.start_background("analysis", k) is False
+    assert _firstrun.start_background("analysis", k) == "running"
     assert sorted(p.name for p in tmp_path.iterdir()) == [lock.name]
+
+
+def test_no_state_folder_no_uncompiled_run(tmp_path, monkeypatch):
+    """Where no warmup can start (the state folder is not writable), the first analyze compiles
+    in its process as before: running uncompiled would never end."""
+    from argparse import Namespace
+
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("AFMFORCE_STATE_DIR", str(blocker / "state"))
+    monkeypatch.delenv(_firstrun.ENV, raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    monkeypatch.delitem(sys.modules, "numba", raising=False)
+    assert _firstrun.start_background("analysis") == "failed"
+    args = Namespace(files=[], example=["jpk-cell"], scheduler=None, workers=None)
+    assert _firstrun.prepare("analyze", args, print) == "compile"
+    assert "NUMBA_DISABLE_JIT" not in os.environ
 
 
 def test_interpreted_only_for_a_few_small_files(tmp_path, monkeypatch):
@@ -158,7 +175,7 @@ def test_first_analyze_runs_uncompiled_with_the_compiled_answers(tmp_path, capsy
     code = ("import sys, json\n"
             "from afmforce.cli import _firstrun\n"
             "started = []\n"
-            "_firstrun.start_background = lambda group, k=None: started.append(group) or True\n"
+            "_firstrun.start_background = lambda group, k=None: started.append(group) or 'started'\n"
             f"sys.argv = ['afmforce', *{argv!r}]\n"
             "from afmforce.cli.main import main\n"
             "status = main()\n"

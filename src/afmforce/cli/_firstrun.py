@@ -123,9 +123,10 @@ def _alive(pid: int) -> bool:
     return True
 
 
-def start_background(group: str, k: str | None = None) -> bool:
+def start_background(group: str, k: str | None = None) -> str:
     """Start ``afmforce warmup --only GROUP`` as a detached process unless one runs already
-    (a lock file with its pid). Returns whether one was started."""
+    (a lock file with its pid). Returns "started", "running" (another one holds the lock) or
+    "failed" (no state folder, no process)."""
     k = k or key()
     folder = state_dir()
     lock = folder / f"warming-{group}-{k}.lock"
@@ -137,11 +138,13 @@ def start_background(group: str, k: str | None = None) -> bool:
             except (OSError, ValueError, IndexError):
                 pid = 0
             if pid and _alive(pid) and time.time() - lock.stat().st_mtime < LOCK_STALE_S:
-                return False
+                return "running"
             lock.unlink(missing_ok=True)
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)
+    except FileExistsError:
+        return "running"                # another command took it a moment ago
     except OSError:
-        return False
+        return "failed"
     import subprocess
 
     env = {name: value for name, value in os.environ.items() if name != "NUMBA_DISABLE_JIT"}
@@ -158,10 +161,10 @@ def start_background(group: str, k: str | None = None) -> bool:
     except OSError:
         os.close(fd)
         lock.unlink(missing_ok=True)
-        return False
+        return "failed"
     os.write(fd, f"{proc.pid}\n".encode())
     os.close(fd)
-    return True
+    return "started"
 
 
 def interpretable(command: str, args) -> bool:
@@ -197,8 +200,10 @@ def prepare(command: str, args, notice) -> str:
     if not interpretable(command, args):
         return "compile"
     started = start_background(group, k)
+    if started == "failed":             # nothing would ever compile them: compile here, as before
+        return "compile"
     os.environ["NUMBA_DISABLE_JIT"] = "1"
     notice("afmforce: first run: the analysis kernels are " + ("being compiled in the background"
-           if started else "still being compiled in the background")
+           if started == "started" else "still being compiled in the background")
            + " (~1 min of one core, once); this run uses them uncompiled (same results to rounding)")
     return "interpreted"
