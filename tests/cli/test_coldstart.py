@@ -71,6 +71,20 @@ def test_help_and_version_compile_nothing_and_start_nothing(tmp_path, argv):
     assert _files(tmp_path / "state") == []
 
 
+def test_importing_every_module_compiles_no_kernel(tmp_path):
+    """No module-level call compiles (or loads) a kernel: a command compiles only what it calls.
+    Every module of the package imported, with an empty numba cache."""
+    code = ("import importlib, pkgutil, afmforce\n"
+            "names = [m.name for m in pkgutil.walk_packages(afmforce.__path__, 'afmforce.')]\n"
+            "for name in names:\n    importlib.import_module(name)\n"
+            "print('MODULES', len(names), file=sys.stderr)\n" + _COMPILED.format(heavy=HEAVY))
+    proc = _python("import sys\n" + code, tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert int(proc.stderr.split("MODULES ")[1].split()[0]) > 150      # the walk saw the package
+    assert "COMPILED []" in proc.stderr and "'numba'" in proc.stderr   # the kernels were defined
+    assert [f for f in _files(tmp_path / "numba") if f.suffix in (".nbi", ".nbc")] == []
+
+
 _CALLEE = "from numba import njit\n\n\n@njit(cache=True)\ndef f(x):\n    return x + {c}\n"
 _CALLER = ("from numba import njit\n\nfrom ._cs_callee import f\n\n\n@njit(cache=True)\n"
            "def g(x):\n    return {k} * f(x)\n")
