@@ -229,3 +229,29 @@ def _differences(a, b, path: str = "") -> list[str]:
     if isinstance(a, float) and isinstance(b, float):
         return [] if math.isclose(a, b, rel_tol=REL_TOL, abs_tol=1e-300) else [f"{path}: {a!r} != {b!r}"]
     return [] if a == b and type(a) is type(b) else [f"{path}: {a!r} != {b!r}"]
+
+
+def test_demo_compiles_its_analysis_in_the_background_while_it_simulates(tmp_path, monkeypatch):
+    """demo cannot run uncompiled (it simulates); on two cores its analysis kernels are
+    compiled by a background warmup meanwhile, and only when that warmup has not run."""
+    from argparse import Namespace
+
+    started = []
+    monkeypatch.setenv("AFMFORCE_STATE_DIR", str(tmp_path))
+    monkeypatch.delenv(_firstrun.ENV, raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    monkeypatch.delitem(sys.modules, "numba", raising=False)
+    monkeypatch.setattr(_firstrun, "start_background", lambda group, k=None: started.append(group) or "started")
+    monkeypatch.setattr(_firstrun, "_cores", lambda: 2)
+    args = Namespace(out=str(tmp_path / "paper"))
+    assert _firstrun.prepare("demo", args, print) == "compile"
+    assert started == ["analysis"] and "NUMBA_DISABLE_JIT" not in os.environ
+    _firstrun.write_stamp("analysis")
+    assert _firstrun.prepare("demo", args, print) == "compile" and started == ["analysis"]
+    _firstrun.write_stamp("demo")
+    assert _firstrun.prepare("demo", args, print) == "warm"
+    monkeypatch.setattr(_firstrun, "_cores", lambda: 1)
+    (tmp_path / f"warm-analysis-{_firstrun.key()}").unlink()
+    (tmp_path / f"warm-demo-{_firstrun.key()}").unlink()
+    assert _firstrun.prepare("demo", args, print) == "compile" and started == ["analysis"]   # one core: no
+

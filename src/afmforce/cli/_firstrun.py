@@ -19,7 +19,9 @@ happens now:
 * the simulating commands cannot do this: the integrator run as Python takes other steps
   (its floating point differs in the last bits, and an adaptive step size amplifies that),
   so they compile as before, on two cores (``dynamics._helper``), after one line that
-  names ``afmforce warmup``.
+  names ``afmforce warmup``. ``demo``, which analyses after it simulates, starts the
+  analysis' warmup in the background at once (:data:`COMMAND_LATER`; two cores or more), so
+  that its analysis kernels are compiled on the other core while it compiles the integrator.
 
 A stamp only says that the warmup ran for these sources, this numba and this cache: it is
 a hint, never a guarantee of freshness. That is numba's index, whose stamp covers every
@@ -51,6 +53,9 @@ GROUPS: dict[str, str] = {
 }
 #: Command -> the group whose kernels it needs first.
 COMMAND_GROUP = {"analyze": "analysis", "simulate": "simulate", "demo": "demo"}
+#: Command -> groups it needs later, compiled by a background warmup on another core while the
+#: command compiles and runs what it needs first (``demo``: the integrator, then the analysis).
+COMMAND_LATER = {"demo": ("analysis",)}
 ENV = "AFMFORCE_FIRST_RUN"
 #: analyze runs its kernels as Python on its first run only for this much input [bytes] ...
 MAX_INTERPRETED_BYTES = 2_000_000
@@ -167,6 +172,12 @@ def start_background(group: str, k: str | None = None) -> str:
     return "started"
 
 
+def _cores() -> int:
+    from .._cores import available_cores
+
+    return available_cores()
+
+
 def interpretable(command: str, args) -> bool:
     """Whether this run may use the kernels as Python: ``analyze`` of a few small files (or
     shipped examples), in this process (no cluster), numba not imported yet."""
@@ -197,6 +208,10 @@ def prepare(command: str, args, notice) -> str:
     k = key()
     if is_warm(group, k):
         return "warm"
+    later = [g for g in COMMAND_LATER.get(command, ()) if not is_warm(g, k)]
+    if later and "numba" not in sys.modules and _cores() >= 2:
+        for g in later:
+            start_background(g, k)
     if not interpretable(command, args):
         return "compile"
     started = start_background(group, k)
