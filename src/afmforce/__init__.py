@@ -11,6 +11,7 @@ afmforce`` -- and ``afmforce --help`` -- does not load numpy.
 from __future__ import annotations
 
 import importlib
+import importlib.util
 import sys
 from typing import Any
 
