@@ -177,6 +177,10 @@ def test_interpreted_only_for_a_few_small_files(tmp_path, monkeypatch):
     assert not _firstrun.interpretable("analyze", Namespace(**{**args, "files": [str(big)]}))
     assert not _firstrun.interpretable("analyze", Namespace(**{**args, "files": [str(tmp_path)]}))
     assert not _firstrun.interpretable("analyze", Namespace(**{**args, "workers": 2}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "indentation_model": "jkr"}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "fast_map": True}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "option": ["indentation.model=jkr"]}))
+    assert _firstrun.interpretable("analyze", Namespace(**{**args, "option": ["vdw.max_separation=20nm"]}))
     assert not _firstrun.interpretable("analyze", Namespace(**{**args, "files": [str(small)] * (_firstrun.MAX_INTERPRETED_INPUTS + 1)}))
 
 

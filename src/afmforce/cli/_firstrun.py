@@ -61,6 +61,9 @@ ENV = "AFMFORCE_FIRST_RUN"
 MAX_INTERPRETED_BYTES = 2_000_000
 #: ... and this many inputs (a folder is never run so)
 MAX_INTERPRETED_INPUTS = 8
+#: analyze's options whose kernels are slow as Python (the indentation and adhesive contact fits:
+#: 1-2 s a curve compiled): with any of them the first run compiles
+HEAVY_FLAGS = ("indentation_model", "fast_map")
 #: A background warmup whose lock is older than this is taken for dead [s].
 LOCK_STALE_S = 900.0
 
@@ -182,10 +185,14 @@ def _cores() -> int:
 
 def interpretable(command: str, args) -> bool:
     """Whether this run may use the kernels as Python: ``analyze`` of a few small files (or
-    shipped examples), in this process (no cluster), numba not imported yet."""
+    shipped examples), in this process (no cluster), without a contact fit
+    (:data:`HEAVY_FLAGS`), numba not imported yet."""
     if command != "analyze" or "numba" in sys.modules:
         return False
     if getattr(args, "scheduler", None) or getattr(args, "workers", None):
+        return False
+    if any(getattr(args, name, None) for name in HEAVY_FLAGS) or any(
+            str(o).startswith("indentation.model") for o in getattr(args, "option", None) or ()):
         return False
     inputs = list(getattr(args, "files", []) or [])
     if len(inputs) + len(getattr(args, "example", []) or []) > MAX_INTERPRETED_INPUTS:
