@@ -65,7 +65,10 @@ class _GuardNumbaCache:
 
             def exec_module(module):
                 run(module)
-                importlib.import_module(f"{__name__}._jitcache").install()
+                try:
+                    importlib.import_module(f"{__name__}._jitcache").install()
+                except Exception:       # noqa: BLE001 - never break numba's import: its own stamps then
+                    pass
 
             spec.loader.exec_module = exec_module
         return spec

@@ -94,13 +94,17 @@ def _locator(base):
 
 
 def install() -> tuple:
-    """Put the locators first in numba's list (once; imports numba). Returns them."""
+    """Put the locators first in numba's list (once; imports numba). Returns them; ``()`` where
+    this numba's caching module has another shape (its own locators then, as before)."""
     global LOCATORS
     from numba.core import caching
 
-    if not LOCATORS:
-        LOCATORS = tuple(_locator(getattr(caching, name)) for name in _BASES)
-    classes = caching.CacheImpl._locator_classes
+    try:
+        if not LOCATORS:
+            LOCATORS = tuple(_locator(getattr(caching, name)) for name in _BASES)
+        classes = caching.CacheImpl._locator_classes
+    except AttributeError:              # pragma: no cover - another numba
+        return ()
     if classes[:len(LOCATORS)] != list(LOCATORS):
         classes[:0] = LOCATORS
     return LOCATORS
