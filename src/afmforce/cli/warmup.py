@@ -52,6 +52,7 @@ def warm(group: str) -> float:
     """Run ``group``'s workload in a child process (its output discarded unless it fails) and
     leave its stamp; returns the seconds it took."""
     start = time.perf_counter()
+    k = _firstrun.key()                 # before compiling: sources edited meanwhile leave no stamp
     env = {name: value for name, value in os.environ.items() if name != "NUMBA_DISABLE_JIT"}
     env[_firstrun.ENV] = "compile"                  # the workload compiles, here and now
     with tempfile.TemporaryDirectory(prefix="afmforce-warmup-") as tmp:
@@ -62,7 +63,7 @@ def warm(group: str) -> float:
                 tail = (proc.stderr or proc.stdout).strip().splitlines()[-1:] or ["no output"]
                 raise AfmforceError(f"the warmup of {group} failed: afmforce {argv[0]} exited with "
                                     f"{proc.returncode}: {tail[0]}")
-    _firstrun.write_stamp(group)
+    _firstrun.write_stamp(group, k)
     return time.perf_counter() - start
 
 
