@@ -259,3 +259,34 @@ def test_demo_compiles_its_analysis_in_the_background_while_it_simulates(tmp_pat
     (tmp_path / f"warm-demo-{_firstrun.key()}").unlink()
     assert _firstrun.prepare("demo", args, print) == "compile" and started == ["analysis"]   # one core: no
 
+
+
+def test_warmup_leaves_a_stamp_only_when_its_workload_succeeds(tmp_path, monkeypatch, capsys):
+    """The warmup's machinery (its workloads replaced by cheap commands: the real ones compile
+    for minutes): each group's commands run in a child process, a stamp per group, none when a
+    command fails, and the error is one line."""
+    from afmforce.cli import warmup
+
+    monkeypatch.setenv("AFMFORCE_STATE_DIR", str(tmp_path))
+    monkeypatch.setattr(warmup, "_workload", lambda group, folder: [["formats"]] if group == "analysis"
+                        else [["statics", "--k0", "-1N/m"]])
+    assert main(["warmup", "--only", "analysis"]) == 0
+    assert _firstrun.is_warm("analysis") and "analysis" in capsys.readouterr().out
+    assert main(["warmup", "--only", "simulate"]) == 1
+    err = capsys.readouterr().err
+    assert not _firstrun.is_warm("simulate")
+    assert err.startswith("error: the warmup of simulate failed: afmforce statics exited with 2")
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_warmup_workloads_are_commands_that_parse():
+    """The real workloads: commands of this CLI whose arguments parse (the sample files exist)."""
+    from afmforce.cli import warmup
+    from afmforce.cli.main import build_parser
+
+    for group in _firstrun.GROUPS:
+        for argv in warmup._workload(group, Path("/tmp/afmforce-warmup-test")):
+            args = build_parser(argv[0]).parse_args(argv)
+            assert args.command == argv[0]
+            for name in getattr(args, "example", []) or []:
+                assert Path(datasets.path(name)).is_file()
