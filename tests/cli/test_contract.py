@@ -113,6 +113,7 @@ PER_COMMAND = {
     "fit": ["--example", "speeds", "--level", "2"],
     "plan": ["--speeds", "1e9um/s"],
     "serve": ["--max-upload", "0MB"],
+    "warmup": ["--only", "everything"],
     "calibrate": ["sader", "--length", "-5um", "--width", "1um", "--frequency", "1kHz", "--quality-factor", "2"],
 }
 

@@ -2,7 +2,7 @@
 
 The lines run in order in one empty folder (a later line may read what an earlier one wrote:
 ``simulate --raw run.txt`` then ``analyze run.txt``), in this process. Commands that take
-tens of seconds (fit, plan, sweep, reproduce, demo: 10-120 s each on the 2-core
+tens of seconds (fit, plan, sweep, reproduce, demo, warmup: 10-120 s each on the 2-core
 machine) are parsed and their input files checked here; ``AFMFORCE_README_FULL=1`` runs them
 too (``AFMFORCE_README_FULL=1 pytest tests/cli/test_readme_examples.py``, a few minutes).
 The Python blocks of the README are not run here (tests/test_docs_tables.py reads its raw text
@@ -21,7 +21,7 @@ import pytest
 from afmforce.cli.main import build_parser, main
 
 README = Path(__file__).resolve().parents[2] / "README.md"
-SLOW = ("fit", "plan", "sweep", "reproduce", "demo")
+SLOW = ("fit", "plan", "sweep", "reproduce", "demo", "warmup")
 #: Commands that run until stopped (a server): parsed only, even with AFMFORCE_README_FULL=1.
 SERVERS = ("serve",)
 FULL = os.environ.get("AFMFORCE_README_FULL") == "1"

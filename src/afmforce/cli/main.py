@@ -25,7 +25,7 @@ import re
 import sys
 
 from .. import __version__
-from . import _outcome
+from . import _firstrun, _outcome
 from ._validate import HelpFormatter, check_common, refuse_empty_values
 
 #: Sub-command -> (module of this package, one-line help), in the order ``afmforce --help`` lists them.
@@ -43,6 +43,7 @@ COMMANDS: dict[str, tuple[str, str]] = {
     "plan": ("plan", "design a multi-speed measurement: speeds and sample rates that fix xi best"),
     "calibrate": ("calibrate", "calibrate the probe: thermal noise spectrum, Sader method, InvOLS"),
     "serve": ("serve", "a local web application: analyse, simulate, fit and sweep in the browser"),
+    "warmup": ("warmup", "compile the kernels the commands use, once, ahead of their first run"),
 }
 
 EXIT_USAGE = 2
@@ -162,7 +163,7 @@ def _compile_notice() -> None:
 
     def notice() -> None:
         print("afmforce: compiling the integrator, ~10 s (first run; later runs load it from "
-              "numba's cache)...", file=sys.stderr, flush=True)
+              "numba's cache; afmforce warmup compiles ahead)...", file=sys.stderr, flush=True)
 
     BEFORE_COMPILE[:] = [notice]
 
@@ -180,6 +181,7 @@ def _text_never_fails() -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the command line; returns the exit status (argparse usage errors raise SystemExit(2))."""
+    command_line = argv is None         # the afmforce process itself (not main() called from Python)
     argv = _join_negative_values(list(sys.argv[1:] if argv is None else argv))
     _text_never_fails()
     _outcome.start(argv)
@@ -213,6 +215,8 @@ def main(argv: list[str] | None = None) -> int:
     _outcome.RunState.generic_json = bool(getattr(args, "_generic_json", False))
     try:
         check_common(args)
+        if command_line:                # its first run may use uncompiled kernels (cli/_firstrun.py)
+            _firstrun.prepare(command, args, lambda text: print(text, file=sys.stderr, flush=True))
         if command in SIMULATING:
             _compile_notice()
         if _outcome.RunState.generic_json and _outcome.RunState.json:

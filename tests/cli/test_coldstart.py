@@ -1,0 +1,292 @@
+"""Issue 35 item 4: the first command after an install answers in seconds, and a stale numba
+cache never runs old code. Structural checks only (no wall-clock verdicts): what is imported,
+what is compiled, what the cache holds. The timings are in benchmarks/bench_coldstart.py."""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from afmforce import datasets
+from afmforce.cli import _firstrun
+from afmforce.cli.main import main
+
+SRC = Path(__file__).resolve().parents[2] / "src"
+HEAVY = ("numpy", "numba", "dask", "distributed", "matplotlib", "scipy", "pandas", "xarray", "h5py")
+
+
+def _python(code: str, tmp_path: Path, *, src: Path = SRC, **env) -> subprocess.CompletedProcess:
+    full = {k: v for k, v in os.environ.items() if k not in ("NUMBA_DISABLE_JIT", _firstrun.ENV)}
+    full.update(PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(tmp_path / "numba"),
+                AFMFORCE_STATE_DIR=str(tmp_path / "state"), **env)
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=full,
+                          cwd=tmp_path, timeout=600)
+
+
+def _files(folder: Path) -> list[Path]:
+    return sorted(p for p in folder.rglob("*") if p.is_file()) if folder.exists() else []
+
+
+def test_importing_the_command_line_loads_no_heavy_library(tmp_path):
+    code = ("import sys, afmforce, afmforce.cli.main, afmforce.cli._firstrun, afmforce.cli.warmup\n"
+            f"print(sorted(m for m in {HEAVY!r} if m in sys.modules))")
+    proc = _python(code, tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == "[]"
+
+
+_COMPILED = """
+import gc, sys
+compiled = []
+if "numba" in sys.modules:
+    from numba.core.dispatcher import Dispatcher
+    compiled = [o.py_func.__qualname__ for o in gc.get_objects() if isinstance(o, Dispatcher) and o.signatures]
+print("LOADED", sorted(m for m in {heavy!r} if m in sys.modules), "COMPILED", compiled, file=sys.stderr)
+"""
+
+
+@pytest.mark.parametrize("argv", [["--help"], ["--version"], ["analyze", "--help"], ["simulate", "--help"],
+                                  ["demo", "--help"], ["warmup", "--help"], ["formats"]])
+def test_help_and_version_compile_nothing_and_start_nothing(tmp_path, argv):
+    """The afmforce process itself (argv from sys.argv) with an empty numba cache: no kernel
+    compiled or loaded, no cache file written, no background warmup started; the top-level
+    help and version load no numpy at all (a command's help may import its modules to list
+    their choices: docs/architecture.md, "The command line")."""
+    code = (f"import sys; sys.argv = ['afmforce', *{argv!r}]\n"
+            "from afmforce.cli.main import main\n"
+            "try:\n    main()\nexcept SystemExit:\n    pass\n" + _COMPILED.format(heavy=HEAVY))
+    proc = _python(code, tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert "COMPILED []" in proc.stderr
+    if argv[0].startswith("--"):                  # afmforce --help, --version
+        assert "LOADED [] " in proc.stderr
+    assert [f for f in _files(tmp_path / "numba") if f.suffix in (".nbi", ".nbc")] == []
+    assert _files(tmp_path / "state") == []
+
+
+def test_importing_every_module_compiles_no_kernel(tmp_path):
+    """No module-level call compiles (or loads) a kernel: a command compiles only what it calls.
+    Every module of the package imported, with an empty numba cache."""
+    code = ("import importlib, pkgutil, afmforce\n"
+            "names = [m.name for m in pkgutil.walk_packages(afmforce.__path__, 'afmforce.')]\n"
+            "for name in names:\n    importlib.import_module(name)\n"
+            "print('MODULES', len(names), file=sys.stderr)\n" + _COMPILED.format(heavy=HEAVY))
+    proc = _python("import sys\n" + code, tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    assert int(proc.stderr.split("MODULES ")[1].split()[0]) > 150      # the walk saw the package
+    assert "COMPILED []" in proc.stderr and "'numba'" in proc.stderr   # the kernels were defined
+    assert [f for f in _files(tmp_path / "numba") if f.suffix in (".nbi", ".nbc")] == []
+
+
+_CALLEE = "from numba import njit\n\n\n@njit(cache=True)\ndef f(x):\n    return x + {c}\n"
+_CALLER = ("from numba import njit\n\nfrom ._cs_callee import f\n\n\n@njit(cache=True)\n"
+           "def g(x):\n    return {k} * f(x)\n")
+_RUN = "import afmforce.instrument._cs_caller as m; print(m.g(1.0), dict(m.g.stats.cache_hits))"
+
+
+def test_a_kernel_sees_an_edit_of_the_file_it_calls(tmp_path):
+    """numba stamps a cached function with its own file only: the caller's cache held the old
+    callee (the bug). afmforce's locators stamp every kernel with all the sources a kernel may
+    reach (afmforce._jitcache): editing the callee's file, or the caller's, recompiles."""
+    pkg = tmp_path / "src" / "afmforce"
+    shutil.copytree(SRC / "afmforce", pkg, ignore=shutil.ignore_patterns("__pycache__", "*.nbi", "*.nbc"))
+    callee, caller = pkg / "instrument" / "_cs_callee.py", pkg / "instrument" / "_cs_caller.py"
+    callee.write_text(_CALLEE.format(c="1.0"))
+    caller.write_text(_CALLER.format(k="2.0"))
+
+    def run() -> tuple[float, bool]:
+        proc = _python(_RUN, tmp_path, src=tmp_path / "src")
+        assert proc.returncode == 0, proc.stderr
+        value, hits = proc.stdout.split(" ", 1)
+        return float(value), hits.strip() != "{}"
+
+    assert run() == (4.0, False)                 # compiled and cached
+    assert run() == (4.0, True)                  # loaded from the cache
+    callee.write_text(_CALLEE.format(c="100.0"))  # another file: numba alone returned 4.0 here
+    assert run() == (202.0, False)
+    assert run() == (202.0, True)
+    caller.write_text(_CALLER.format(k="3.0"))   # its own file (numba's content hash)
+    assert run() == (303.0, False)
+    (pkg / "constants.py").write_text((pkg / "constants.py").read_text() + "\n# an edit\n")
+    assert run() == (303.0, False)               # any source a kernel may reach recompiles it
+
+
+def test_stamps_follow_the_kernel_sources(tmp_path, monkeypatch):
+    pkg = tmp_path / "afmforce"
+    shutil.copytree(SRC / "afmforce", pkg, ignore=shutil.ignore_patterns("__pycache__"))
+    monkeypatch.setattr(_firstrun, "_package", lambda: pkg)
+    monkeypatch.setenv("AFMFORCE_STATE_DIR", str(tmp_path / "state"))
+    assert not _firstrun.is_warm("analysis")
+    assert _firstrun.write_stamp("analysis") is not None
+    assert _firstrun.is_warm("analysis") and not _firstrun.is_warm("simulate")
+    before = _firstrun.key()
+    assert _firstrun.key() == before
+    numeric = pkg / "analysis" / "_numeric.py"
+    numeric.write_text(numeric.read_text() + "\n")
+    assert _firstrun.key() != before and not _firstrun.is_warm("analysis")
+    (pkg / "cli" / "main.py").write_text("# the command line holds no kernel\n")
+    k = _firstrun.key()
+    (pkg / "cli" / "demo.py").write_text("# nor does this\n")
+    assert _firstrun.key() == k
+
+
+def test_one_background_warmup_at_a_time(tmp_path, monkeypatch):
+    monkeypatch.setenv("AFMFORCE_STATE_DIR", str(tmp_path))
+    k = _firstrun.key()
+    lock = tmp_path / f"warming-analysis-{k}.lock"
+    lock.write_text(f"{os.getpid()}\n")         # a live process holds it
+    assert _firstrun.start_background("analysis", k) == "running"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [lock.name]
+
+
+def test_no_state_folder_no_uncompiled_run(tmp_path, monkeypatch):
+    """Where no warmup can start (the state folder is not writable), the first analyze compiles
+    in its process as before: running uncompiled would never end."""
+    from argparse import Namespace
+
+    blocker = tmp_path / "file"
+    blocker.write_text("not a folder")
+    monkeypatch.setenv("AFMFORCE_STATE_DIR", str(blocker / "state"))
+    monkeypatch.delenv(_firstrun.ENV, raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    monkeypatch.delitem(sys.modules, "numba", raising=False)
+    assert _firstrun.start_background("analysis") == "failed"
+    args = Namespace(files=[], example=["jpk-cell"], scheduler=None, workers=None)
+    assert _firstrun.prepare("analyze", args, print) == "compile"
+    assert "NUMBA_DISABLE_JIT" not in os.environ
+
+
+def test_interpreted_only_for_a_few_small_files(tmp_path, monkeypatch):
+    from argparse import Namespace
+
+    monkeypatch.delitem(sys.modules, "numba", raising=False)   # as in a fresh afmforce process
+    small = tmp_path / "a.txt"
+    small.write_bytes(b"0" * 1000)
+    big = tmp_path / "b.txt"
+    big.write_bytes(b"0" * (_firstrun.MAX_INTERPRETED_BYTES + 1))
+    args = dict(files=[str(small)], example=[], scheduler=None, workers=None)
+    assert _firstrun.interpretable("analyze", Namespace(**args))
+    assert not _firstrun.interpretable("simulate", Namespace(**args))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "files": [str(big)]}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "files": [str(tmp_path)]}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "workers": 2}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "indentation_model": "jkr"}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "fast_map": True}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "option": ["indentation.model=jkr"]}))
+    assert _firstrun.interpretable("analyze", Namespace(**{**args, "option": ["vdw.max_separation=20nm"]}))
+    assert not _firstrun.interpretable("analyze", Namespace(**{**args, "files": [str(small)] * (_firstrun.MAX_INTERPRETED_INPUTS + 1)}))
+
+
+def test_first_analyze_runs_uncompiled_with_the_compiled_answers(tmp_path, capsys):
+    """The first ``afmforce analyze`` with no warm cache: one line on stderr, a warmup started
+    in the background (here recorded, not run), numba's JIT off in that process, and the
+    results of every shipped sample curve equal to those of the compiled kernels."""
+    names = [n for n, d in datasets.DATASETS.items() if Path(datasets.path(n)).suffix != ".tnd"]
+    argv = ["analyze", *(a for n in names for a in ("--example", n)), "--json"]
+    code = ("import sys, json\n"
+            "from afmforce.cli import _firstrun\n"
+            "started = []\n"
+            "_firstrun.start_background = lambda group, k=None: started.append(group) or 'started'\n"
+            f"sys.argv = ['afmforce', *{argv!r}]\n"
+            "from afmforce.cli.main import main\n"
+            "status = main()\n"
+            "import numba\n"
+            "print(json.dumps({'status': status, 'started': started, 'jit_off': numba.config.DISABLE_JIT}),"
+            " file=sys.stderr)")
+    proc = _python(code, tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    report = json.loads(proc.stderr.strip().splitlines()[-1])
+    assert report == {"status": 0, "started": ["analysis"], "jit_off": 1}
+    assert "first run: the analysis kernels are being compiled in the background" in proc.stderr
+    assert [f for f in _files(tmp_path / "numba") if f.suffix in (".nbi", ".nbc")] == []  # nothing compiled
+    interpreted = json.loads(proc.stdout)
+
+    assert main(argv) == 0                        # compiled (this process)
+    compiled = json.loads(capsys.readouterr().out)
+    assert sorted(interpreted["results"]) == sorted(compiled["results"]) and len(compiled["results"]) == len(names)
+    differences = _differences(interpreted, compiled)
+    assert differences == [], differences[:5]
+
+
+#: Python and the compiled kernels round differently in the last bits (the order of a sum, a
+#: fused multiply-add): measured up to 1.2e-14 relative (a fringe fit's baseline slope).
+REL_TOL = 1e-12
+
+
+def _differences(a, b, path: str = "") -> list[str]:
+    """Where two JSON values differ: keys, lengths, strings exactly, numbers beyond REL_TOL."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        if set(a) != set(b):
+            return [f"{path}: keys {sorted(set(a) ^ set(b))}"]
+        return [d for k in a for d in _differences(a[k], b[k], f"{path}/{k}")]
+    if isinstance(a, list) and isinstance(b, list):
+        if len(a) != len(b):
+            return [f"{path}: {len(a)} != {len(b)} items"]
+        return [d for i, (u, v) in enumerate(zip(a, b)) for d in _differences(u, v, f"{path}[{i}]")]
+    if isinstance(a, float) and isinstance(b, float):
+        return [] if math.isclose(a, b, rel_tol=REL_TOL, abs_tol=1e-300) else [f"{path}: {a!r} != {b!r}"]
+    return [] if a == b and type(a) is type(b) else [f"{path}: {a!r} != {b!r}"]
+
+
+def test_demo_compiles_its_analysis_in_the_background_while_it_simulates(tmp_path, monkeypatch):
+    """demo cannot run uncompiled (it simulates); on two cores its analysis kernels are
+    compiled by a background warmup meanwhile, and only when that warmup has not run."""
+    from argparse import Namespace
+
+    started = []
+    monkeypatch.setenv("AFMFORCE_STATE_DIR", str(tmp_path))
+    monkeypatch.delenv(_firstrun.ENV, raising=False)
+    monkeypatch.delenv("NUMBA_DISABLE_JIT", raising=False)
+    monkeypatch.delitem(sys.modules, "numba", raising=False)
+    monkeypatch.setattr(_firstrun, "start_background", lambda group, k=None: started.append(group) or "started")
+    monkeypatch.setattr(_firstrun, "_cores", lambda: 2)
+    args = Namespace(out=str(tmp_path / "paper"))
+    assert _firstrun.prepare("demo", args, print) == "compile"
+    assert started == ["analysis"] and "NUMBA_DISABLE_JIT" not in os.environ
+    _firstrun.write_stamp("analysis")
+    assert _firstrun.prepare("demo", args, print) == "compile" and started == ["analysis"]
+    _firstrun.write_stamp("demo")
+    assert _firstrun.prepare("demo", args, print) == "warm"
+    monkeypatch.setattr(_firstrun, "_cores", lambda: 1)
+    (tmp_path / f"warm-analysis-{_firstrun.key()}").unlink()
+    (tmp_path / f"warm-demo-{_firstrun.key()}").unlink()
+    assert _firstrun.prepare("demo", args, print) == "compile" and started == ["analysis"]   # one core: no
+
+
+
+def test_warmup_leaves_a_stamp_only_when_its_workload_succeeds(tmp_path, monkeypatch, capsys):
+    """The warmup's machinery (its workloads replaced by cheap commands: the real ones compile
+    for minutes): each group's commands run in a child process, a stamp per group, none when a
+    command fails, and the error is one line."""
+    from afmforce.cli import warmup
+
+    monkeypatch.setenv("AFMFORCE_STATE_DIR", str(tmp_path))
+    monkeypatch.setattr(warmup, "_workload", lambda group, folder: [["formats"]] if group == "analysis"
+                        else [["statics", "--k0", "-1N/m"]])
+    assert main(["warmup", "--only", "analysis"]) == 0
+    assert _firstrun.is_warm("analysis") and "analysis" in capsys.readouterr().out
+    assert main(["warmup", "--only", "simulate"]) == 1
+    err = capsys.readouterr().err
+    assert not _firstrun.is_warm("simulate")
+    assert err.startswith("error: the warmup of simulate failed: afmforce statics exited with 2")
+    assert len(err.strip().splitlines()) == 1
+
+
+def test_warmup_workloads_are_commands_that_parse():
+    """The real workloads: commands of this CLI whose arguments parse (the sample files exist)."""
+    from afmforce.cli import warmup
+    from afmforce.cli.main import build_parser
+
+    for group in _firstrun.GROUPS:
+        for argv in warmup._workload(group, Path("/tmp/afmforce-warmup-test")):
+            args = build_parser(argv[0]).parse_args(argv)
+            assert args.command == argv[0]
+            for name in getattr(args, "example", []) or []:
+                assert Path(datasets.path(name)).is_file()
