@@ -281,10 +281,15 @@ class CurveAnalysis:
         row = summary_row(res, curve, file=display_path(ref.path), index=index,
                           name=f"{shown}#{index}" if several else shown)
         if self.keep_json:
-            row["json"] = res.to_json(indent=None, arrays=self.json_arrays)
+            row["json"] = self.result_json(res)
         if self.out is not None:
             self.write_outputs(res, curve, stem, row)
         return row
+
+    def result_json(self, res) -> str:
+        """The ``json`` column of a curve's row (with ``keep_json``): the result's JSON, with the
+        per-sample arrays when :attr:`json_arrays` (a subclass may send less: the web's plots)."""
+        return res.to_json(indent=None, arrays=self.json_arrays)
 
     def _settings(self) -> str:
         fields = {k: v for k, v in self.key_fields().items() if k != "json"}

@@ -126,6 +126,7 @@ async function analyse(upload) {
   try {
     const t0 = performance.now();
     const p = await api("api/analyze", { method: "POST", body: fd });
+    AN.fetched = performance.now();
     if (upload) { AN.files = p.files; listUploads(); }
     AN.payload = p;
     $("an-time").textContent = `${((performance.now() - t0) / 1000).toFixed(2)} s, server ${p.wall_time.toFixed(2)} s`;
@@ -138,10 +139,20 @@ async function analyse(upload) {
     drawMaps(p.maps || []);
     drawBatch();
     if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance"].forEach((i) => Plotly.purge(i));
+    await recordAnalyseLatency(t0, p);
   } catch (e) { $("an-error").textContent = e.message; }
   saveAnalyse();
   AN.busy = false; $("status").textContent = "";
   if (AN.next) { const up = AN.next === "upload"; AN.next = null; analyse(up); }
+}
+// the time from the change to the painted plots, in parts (benchmarks/bench_web.py reads them)
+async function recordAnalyseLatency(t0, p) {
+  const drawn = performance.now();
+  await new Promise((done) => requestAnimationFrame(() => setTimeout(done, 0)));   // painted
+  const now = performance.now();
+  (window.AN_LATENCY = window.AN_LATENCY || []).push(now - t0);
+  (window.AN_PARTS = window.AN_PARTS || []).push([p.wall_time * 1e3, AN.fetched - t0, drawn - AN.fetched, now - drawn]);
+  document.body.dataset.anCount = String(Number(document.body.dataset.anCount || 0) + 1);
 }
 // ---- the session: uploads kept on the server, the page restored after a reload -----------------------
 const SAVED = "afmforce.analyse";
@@ -661,5 +672,6 @@ $("an-calfile").addEventListener("change", (e) => { if (e.target.files[0]) loadC
     SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
     await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
+    window.READY_MS = performance.now();   // page load to interactive (benchmarks/bench_web.py)
   } catch (e) { $("status").textContent = "cannot reach the server: " + e.message; }
 })();
