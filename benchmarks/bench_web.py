@@ -239,21 +239,22 @@ def page_map(url: str, path: Path, n: int) -> dict:
             "parts_p50": np.median(np.array(parts), axis=0).tolist(), "table_ms": table}
 
 
-def api_calibration(url: str, path: Path, n: int, max_points: int = 2500) -> dict:
-    """``POST /api/analyze`` with the stored upload and a new spring constant, arrays as the page asks."""
+def api_calibration(url: str, path: Path, n: int, max_points: int = 1040) -> dict:
+    """``POST /api/analyze`` with the stored upload and a new spring constant, arrays as the page asks
+    them (the 1400-pixel-wide window's plots: 1040 samples; the arrays of the first curve only)."""
     import httpx
 
     with httpx.Client(base_url=url, timeout=300) as c:
         t0 = time.perf_counter()
         r = c.post("api/analyze", files={"file": (path.name, path.read_bytes())},
-                   data={"arrays": "true", "max_points": str(max_points)})
+                   data={"arrays": "true", "max_points": str(max_points), "curve": ""})
         first = (time.perf_counter() - t0) * 1e3
         fid = r.json()["files"][0]["id"]
         ms, server, size = [], [], []
         for i in range(n):
             t0 = time.perf_counter()
             r = c.post("api/analyze", data={"file_id": fid, "probe": f"spring_constant={0.1 + 0.01 * (i % 7)}N/m",
-                                            "arrays": "true", "max_points": str(max_points)})
+                                            "arrays": "true", "max_points": str(max_points), "curve": ""})
             ms.append((time.perf_counter() - t0) * 1e3)
             assert r.status_code == 200 and r.json()["results"], r.text[:300]
             server.append(r.json()["wall_time"] * 1e3)

@@ -7,6 +7,19 @@ const el = (tag, attrs = {}, ...kids) => {
   kids.forEach((k) => e.append(k));
   return e;
 };
+// Plotly.js is loaded once the page is ready (or when a plot is first drawn, if sooner): every
+// drawing entry point awaits it
+let PLOTLY = null;
+function plotlyLoaded() {
+  if (window.Plotly) return Promise.resolve();
+  PLOTLY = PLOTLY || new Promise((done, fail) => {
+    const tag = el("script", { src: "static/plotly.min.js", id: "plotly-js" });
+    tag.addEventListener("load", () => done(), { once: true });
+    tag.addEventListener("error", () => { PLOTLY = null; fail(new Error("Plotly.js did not load")); }, { once: true });
+    document.head.append(tag);
+  });
+  return PLOTLY;
+}
 const SCHEMA = { simulation: [], analysis: {}, fit: [], examples: [], instrument_presets: [] };
 // the legend outside the plot on the right (Plotly widens the margin for it): never over an axis title
 const LAYOUT = { margin: { l: 70, r: 20, t: 40, b: 50 }, hovermode: "closest",
@@ -122,11 +135,12 @@ async function analyse(upload) {
   optionTexts().forEach((o) => fd.append("option", o));
   probeTexts().forEach((o) => fd.append("probe", o));
   fd.append("arrays", "true");
-  fd.append("max_points", "2500");
+  plotRequest(fd);
   try {
     const t0 = performance.now();
     const p = await api("api/analyze", { method: "POST", body: fd });
     AN.fetched = performance.now();
+    await plotlyLoaded();
     if (upload) { AN.files = p.files; listUploads(); }
     AN.payload = p;
     $("an-time").textContent = `${((performance.now() - t0) / 1000).toFixed(2)} s, server ${p.wall_time.toFixed(2)} s`;
@@ -144,6 +158,44 @@ async function analyse(upload) {
   saveAnalyse();
   AN.busy = false; $("status").textContent = "";
   if (AN.next) { const up = AN.next === "upload"; AN.next = null; analyse(up); }
+}
+// what the plots need: samples for the screen's width (each pixel column's min and max, thinned by the
+// server), the arrays of the curve shown only (another curve's are asked for when it is shown)
+function plotRequest(fd, curve) {
+  const w = ($("an-plot-force").clientWidth || 700);
+  fd.append("max_points", String(Math.max(400, Math.min(4000, 2 * Math.round(w)))));
+  fd.append("curve", curve !== undefined ? curve : AN.restoreCurve || $("an-curve").value || "");
+}
+async function loadCurveArrays(name) {   // a curve of a batch or map drawn for the first time
+  if (AN.loading === name) return;
+  AN.loading = name;
+  const fd = new FormData();
+  AN.files.forEach((f) => fd.append("file_id", f.id));
+  AN.examples.forEach((e) => fd.append("example", e));
+  optionTexts().forEach((o) => fd.append("option", o));
+  probeTexts().forEach((o) => fd.append("probe", o));
+  fd.append("arrays", "true");
+  plotRequest(fd, name);
+  try {
+    const p = await api("api/analyze", { method: "POST", body: fd });
+    for (const n of p.arrays_for || []) {
+      if (AN.payload.results[n] && p.results[n]) AN.payload.results[n] = p.results[n];
+      if (p.raw && p.raw[n]) (AN.payload.raw = AN.payload.raw || {})[n] = p.raw[n];
+    }
+  } catch (e) { $("an-error").textContent = e.message; }
+  AN.loading = null;
+  if ($("an-curve").value === name && AN.payload.results[name] && AN.payload.results[name].separation) drawCurve();
+}
+// a plot redrawn only when what it shows changed (a calibration leaves the raw signal as it was)
+function changed(id, key) {
+  const div = $(id);
+  if (div.drawnKey === key && div.data) return false;
+  div.drawnKey = key;
+  return true;
+}
+function rawKey(name, raw, d) {
+  const n = raw ? raw.signal.length : 0;
+  return JSON.stringify([name, n, raw && raw.signal[0], raw && raw.signal[n >> 1], raw && raw.signal[n - 1], raw && raw.time[n - 1], d.drift || null, d.compliance || null]);
 }
 // the time from the change to the painted plots, in parts (benchmarks/bench_web.py reads them)
 async function recordAnalyseLatency(t0, p) {
@@ -212,6 +264,7 @@ async function restoreAnalyse() {
 function drawCurve() {
   const name = $("an-curve").value, res = AN.payload.results[name], raw = (AN.payload.raw || {})[name];
   if (!res) return;
+  if (!res.separation) { loadCurveArrays(name); return; }
   const seg = res.segment || [], parts = [[0, "approach", "#2f6db5"], [1, "retract", "#d0632b"], [2, "dwell", "#888"]];
   const pick = (arr, k) => arr.map((v, i) => (seg[i] === k ? v : null));
   const f = [];
@@ -241,7 +294,8 @@ function drawCurve() {
     marks.push({ x: xs, y: ys, name: `vdW fit A R = ${fmt(v.hamaker_radius, "")} J m`, mode: "lines", line: { dash: "dash", color: "#6a3d9a" }, hovertemplate: "fit: F = %{y:.4f} nN at %{x:.2f} nm<extra></extra>" });
   }
   Plotly.react("an-plot-force", f.concat(marks), { ...LAYOUT, title: { text: `Force vs separation — ${name}` }, xaxis: { title: { text: "separation h [nm]" } }, yaxis: { title: { text: "force F [nN]" } } }, CONFIG);
-  if (raw) {
+  const rawChanged = changed("an-plot-raw", rawKey(name, raw, d));
+  if (raw && rawChanged) {
     const u = raw.unit || "";
     const [fs, us] = U[u] || [1, u];
     const rt = [];
@@ -251,7 +305,7 @@ function drawCurve() {
     }
     Plotly.react("an-plot-raw", rt, { ...LAYOUT, title: { text: "Raw signal vs piezo position" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
   }
-  drawDrift(raw, d, parts);
+  if (rawChanged) drawDrift(raw, d, parts);
   drawIndentation(res);
   const rows = [["contact", res.contact_kind_reason && String(res.contact_kind_reason).startsWith(res.contact_kind) ? res.contact_kind_reason : `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
     ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
@@ -484,6 +538,7 @@ async function simulate() {
   const t0 = performance.now();
   try {
     const r = await api("api/simulate?max_points=600&columns=piezo_position,deflection,apparent_deflection,separation,normal_force", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(simConfig()) });
+    await plotlyLoaded();
     const t1 = performance.now();
     SIM.last = r; $("sim-error").textContent = "";
     drawSim();
@@ -561,7 +616,8 @@ function follow(id, prefix, onEnd) {
     if (p.fraction !== undefined && p.fraction !== null) $(prefix + "-progress").value = p.fraction;
     $(prefix + "-state").textContent = `${d.state}${p.what ? ": " + p.what : ""}${p.total ? ` (${p.done}/${p.total} ${p.unit})` : ""}`;
   });
-  es.addEventListener("end", (e) => {
+  es.addEventListener("end", async (e) => {
+    await plotlyLoaded();
     es.close(); const job = JSON.parse(e.data);
     $(prefix + "-cancel").disabled = true; $(prefix + "-progress").value = job.state === "done" ? 1 : $(prefix + "-progress").value;
     $(prefix + "-state").textContent = job.state + (job.resumed ? ` (resumed ${job.resumed}x)` : "");
@@ -636,7 +692,7 @@ async function listJobs() {
   const jobs = await api("api/jobs");
   $("sw-jobs").replaceChildren(table(jobs.map((j) => [j.kind, j.state + (j.resumed ? ` (resumed)` : ""), new Date(j.created * 1000).toLocaleTimeString()]), ["job", "state", "started"]));
   const rows = $("sw-jobs").querySelectorAll("tr");
-  jobs.forEach((j, i) => { rows[i + 1].style.cursor = "pointer"; rows[i + 1].onclick = async () => { const full = await api(`api/jobs/${j.id}`); if (full.result) (j.kind === "fit" ? drawFit : drawSweep)(full.result); else if (full.state === "running") follow(j.id, j.kind === "fit" ? "fit" : "sw", j.kind === "fit" ? drawFit : drawSweep); }; });
+  jobs.forEach((j, i) => { rows[i + 1].style.cursor = "pointer"; rows[i + 1].onclick = async () => { const full = await api(`api/jobs/${j.id}`); await plotlyLoaded(); if (full.result) (j.kind === "fit" ? drawFit : drawSweep)(full.result); else if (full.state === "running") follow(j.id, j.kind === "fit" ? "fit" : "sw", j.kind === "fit" ? drawFit : drawSweep); }; });
 }
 function drawSweep(r) {
   SW.result = r;
@@ -673,5 +729,6 @@ $("an-calfile").addEventListener("change", (e) => { if (e.target.files[0]) loadC
     await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
     window.READY_MS = performance.now();   // page load to interactive (benchmarks/bench_web.py)
+    setTimeout(() => plotlyLoaded().catch((e) => { $("status").textContent = e.message; }), 0);
   } catch (e) { $("status").textContent = "cannot reach the server: " + e.message; }
 })();
