@@ -317,13 +317,40 @@ function drawCurve() {
   res.warnings.forEach((w) => rows.push(["warning", w]));
   showUsed(res);
   $("an-summary").replaceChildren(table(rows));
-  const box = $("an-details"); box.replaceChildren(el("h2", { text: "Every step's evidence (SI units)" }));
+  drawEvidence(res, d);
+}
+function drawEvidence(res, d) {   // each step's result record, every number in an engineering unit (SI on hover)
+  const box = $("an-details"); box.replaceChildren(el("h2", { text: "Every step's evidence" }));
   for (const [step, vals] of Object.entries(d)) {
     const units = (res.details_units || {})[step] || {};
-    const r = Object.entries(vals || {}).filter(([, x]) => typeof x !== "object" || x === null).map(([k, x]) => [k, x === null ? "–" : String(x), units[k] || ""]);
-    const det = el("details", {}, el("summary", { text: step + (res.not_applicable && res.not_applicable[step] ? " (not applicable)" : "") }), table(r, ["field", "value", "unit"]));
+    const r = Object.entries(vals || {}).filter(([, x]) => typeof x !== "object" || x === null).map(([k, x]) => [k, ...engineering(x, units[k] || "")]);
+    const t = table(r.map((row) => row.slice(0, 3)), ["field", "value", "unit"]);
+    t.querySelectorAll("tr").forEach((tr, i) => { if (i && r[i - 1][3]) tr.title = r[i - 1][3]; });
+    const det = el("details", {}, el("summary", { text: step + (res.not_applicable && res.not_applicable[step] ? " (not applicable)" : "") }), t);
     box.append(det);
   }
+}
+// a value in SI and its unit -> [value, unit, SI text] in the unit a lab reads (29680000 V/m is
+// 0.02968 V/nm, 3.1e-8 m/V is 31 nm/V, 4.2e-20 J is 42 zJ); the SI value is kept for the hover
+const ENGINEERING = {
+  "m": [[1e-3, "mm", 1e3], [1e-6, "µm", 1e6], [1e-9, "nm", 1e9], [0, "pm", 1e12]],
+  "N": [[1e-3, "mN", 1e3], [1e-6, "µN", 1e6], [1e-9, "nN", 1e9], [0, "pN", 1e12]],
+  "s": [[1, "s", 1], [1e-3, "ms", 1e3], [0, "µs", 1e6]],
+  "Hz": [[1e6, "MHz", 1e-6], [1e3, "kHz", 1e-3], [0, "Hz", 1]],
+  "Pa": [[1e9, "GPa", 1e-9], [1e6, "MPa", 1e-6], [1e3, "kPa", 1e-3], [0, "Pa", 1]],
+  "J": [[1e-18, "aJ", 1e18], [0, "zJ", 1e21]],
+  "m/V": [[0, "nm/V", 1e9]], "V/m": [[0, "V/nm", 1e-9]], "N/V": [[0, "nN/V", 1e9]],
+  "m/s": [[1e-3, "mm/s", 1e3], [1e-6, "µm/s", 1e6], [0, "nm/s", 1e9]],
+  "J/m^2": [[0, "mJ/m²", 1e3]], "N/m^2": [[0, "Pa", 1]],
+};
+function engineering(x, unit) {
+  if (x === null || x === undefined) return ["–", unit, ""];
+  if (typeof x !== "number") return [String(x), unit, ""];
+  if (!isFinite(x)) return [String(x), unit, ""];
+  const ways = ENGINEERING[unit];
+  if (ways && x !== 0) for (const [lim, u, f] of ways) if (Math.abs(x) >= lim) return [String(Number((x * f).toPrecision(4))), u, `${x} ${unit}`];
+  const shown = Math.abs(x) !== 0 && (Math.abs(x) < 1e-3 || Math.abs(x) >= 1e5) ? x.toExponential(3) : String(Number(x.toPrecision(5)));
+  return [shown, unit, shown === String(x) ? "" : `${x} ${unit}`];
 }
 function drawDrift(raw, d, parts) {   // the drift step: raw signal against time, its baselines; then the compliance lines
   const dr = d.drift, co = d.compliance;
