@@ -14,11 +14,50 @@ function plotlyLoaded() {
   if (window.Plotly) return Promise.resolve();
   PLOTLY = PLOTLY || new Promise((done, fail) => {
     const tag = el("script", { src: "static/plotly.min.js", id: "plotly-js" });
-    tag.addEventListener("load", () => done(), { once: true });
+    tag.addEventListener("load", () => { guardLayouts(); done(); }, { once: true });
     tag.addEventListener("error", () => { PLOTLY = null; fail(new Error("Plotly.js did not load")); }, { once: true });
     document.head.append(tag);
   });
   return PLOTLY;
+}
+// every plot's layout, checked in one place before Plotly draws it (issue 33.5; a browser test reads the
+// boxes): a title wrapped to the plot's width (the top margin grows with its lines), axes whose
+// titles make room for their tick labels (automargin), colour bars inside the drawing
+function guardLayout(gd, data, layout) {
+  const div = typeof gd === "string" ? document.getElementById(gd) : gd;
+  const out = { ...layout, margin: { ...(layout.margin || {}) } };
+  const t = out.title && (typeof out.title === "string" ? { text: out.title } : out.title);
+  if (t && t.text) {
+    const per = Math.max(24, Math.floor(((div && div.clientWidth) || 600) / 8.5) - 4);
+    const lines = wrapText(String(t.text), per);
+    out.title = { ...t, text: lines.join("<br>"), font: { size: 14, ...(t.font || {}) } };
+    out.margin.t = Math.max(out.margin.t || 0, 22 + 18 * lines.length);
+  }
+  for (const k of Object.keys(out)) if (/^[xy]axis\d*$/.test(k)) out[k] = { automargin: true, ...out[k] };
+  // a colour bar's title runs along it: wrapped to the bar's length (a long quantity name overran the plot)
+  const tall = Math.max(120, (((div && div.clientHeight) || 360) - (out.margin.t || 0) - (out.margin.b || 50)) * 0.85);
+  const bars = (data || []).map((tr) => {
+    if (!tr || !tr.colorbar) return tr;
+    const cb = { len: 0.9, y: 0.5, yanchor: "middle", ...tr.colorbar };
+    if (cb.title && cb.title.text) cb.title = { ...cb.title, text: wrapText(String(cb.title.text), Math.max(12, Math.floor(tall / 7.5))).join("<br>") };
+    return { ...tr, colorbar: cb };
+  });
+  return [bars, out];
+}
+function wrapText(text, per) {   // lines of at most ``per`` characters, broken at spaces
+  const lines = [];
+  let line = "";
+  for (const w of text.split(" ")) {
+    if (line && (line + " " + w).length > per) { lines.push(line); line = w; } else line = line ? line + " " + w : w;
+  }
+  if (line) lines.push(line);
+  return lines;
+}
+function guardLayouts() {   // Plotly.react and Plotly.newPlot pass through guardLayout
+  for (const name of ["react", "newPlot"]) {
+    const draw = Plotly[name];
+    Plotly[name] = (gd, data, layout, config) => { const [d, l] = guardLayout(gd, data, layout || {}); return draw(gd, d, l, config); };
+  }
 }
 const SCHEMA = { simulation: [], analysis: {}, fit: [], examples: [], instrument_presets: [] };
 // the legend outside the plot on the right (Plotly widens the margin for it): never over an axis title
