@@ -214,6 +214,9 @@ class CurveAnalysis:
     plot: bool = True
     protect: tuple[str, ...] = ()
     file_timeout: float | None = None
+    #: kept state of the sample steps (``analyze(..., memo=)``): a re-run after a calibration change
+    #: starts after them; None: none (it does not travel to workers)
+    memo: Any = field(default=None, compare=False, repr=False)
 
     def key_fields(self) -> dict[str, Any]:
         """What determines the results (and so the store they resume from)."""
@@ -276,7 +279,7 @@ class CurveAnalysis:
                     f"{self._paths(stem)['json']} holds another analysis (other steps, options or "
                     "metadata); choose another --out, or pass --force to replace it")
         res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
-                      channel=self.channel)
+                      channel=self.channel, memo=self.memo)
         shown = display_path(base)      # a file name that is not UTF-8: \xNN in the tables
         row = summary_row(res, curve, file=display_path(ref.path), index=index,
                           name=f"{shown}#{index}" if several else shown)

@@ -41,17 +41,41 @@ _NATIVE = ("afmforce-raw", "afmforce-hdf5", "afmforce-map")
 _CALIBRATION = ("spring_constant", "sensitivity")
 
 
+class _Memo:
+    """The sample steps' states of the curves analysed lately (``analyze(..., memo=)``), at most
+    :data:`_CURVES_KEPT`: a calibration change re-runs the steps after them only."""
+
+    def __init__(self) -> None:
+        self._d: OrderedDict = OrderedDict()
+
+    def get(self, key, default=None):
+        return _recalled(self._d, key) or default
+
+    def __setitem__(self, key, value) -> None:     # a state holds about a dozen arrays of the curve's length
+        _remember(self._d, key, value, _CURVES_KEPT, lambda v: 12 * getattr(v[0][0], "nbytes", 0))
+
+
+_MEMO = _Memo()
+
+
 def _nbytes(pairs) -> int:
     return sum(getattr(c.time, "nbytes", 0) * 5 for _, c in pairs)
+
+
+_SIZES: dict = {}      # id(cache) -> {key: bytes} of the caches bounded in bytes
 
 
 def _remember(cache: OrderedDict, key, value, kept: int, size=None) -> None:
     with _LOCK:
         cache[key] = value
         cache.move_to_end(key)
-        while len(cache) > kept or (size is not None and sum(size(v) for v in cache.values()) > _CURVES_BYTES
-                                    and len(cache) > 1):
-            cache.popitem(last=False)
+        sizes = _SIZES.setdefault(id(cache), {})
+        if size is not None:
+            sizes[key] = size(value)
+        total = sum(sizes.values()) if size is not None else 0
+        while len(cache) > kept or (size is not None and total > _CURVES_BYTES and len(cache) > 1):
+            old, _ = cache.popitem(last=False)
+            total -= sizes.pop(old, 0)
 
 
 def _recalled(cache: OrderedDict, key):
@@ -213,7 +237,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
         max_points = max(10, min(max_points, ANALYSIS_POINTS // max(1, len(refs))))
     analysis = CachedAnalysis(options=records, probe=probe_record, meta_override=override, format=format,
                              keep_json=True, json_arrays=arrays, file_timeout=timeout,
-                             points=max_points if arrays else None)
+                             points=max_points if arrays else None, memo=_MEMO)
 
     def on_curve(_progress) -> None:
         if deadline is not None and time.monotonic() > deadline:
