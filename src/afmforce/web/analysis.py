@@ -56,6 +56,9 @@ class _Memo:
 
 
 _MEMO = _Memo()
+#: The modulus fit's per-sample lists (``details.indentation``), sent with the arrays only.
+_FIT_SAMPLES = ("indentation", "fit_force", "residuals")
+_FIT = "__fit_samples__"
 
 
 def _nbytes(pairs) -> int:
@@ -147,12 +150,18 @@ class CachedAnalysis(CurveAnalysis):
         return dict(row)
 
     def result_json(self, res) -> str:
-        if self.json_arrays:        # kept aside (under None until the row has its name); made when sent
-            from .plotdata import result_arrays
+        if not self.json_arrays:
+            return res.to_json(indent=None, arrays=False)
+        from .plotdata import result_arrays
 
-            points = self.points
-            self.arrays[None] = lambda: result_arrays(res, points)
-        return res.to_json(indent=None, arrays=False)
+        # kept aside (under None until the row has its name), made when sent: the arrays, and the
+        # modulus fit's samples (most of a map curve's JSON, drawn for the curve shown only)
+        out = res.to_dict(arrays=False)
+        fit = (out.get("details") or {}).get("indentation")
+        samples = {k: fit.pop(k) for k in _FIT_SAMPLES if isinstance(fit, dict) and isinstance(fit.get(k), list)}
+        points = self.points
+        self.arrays[None] = lambda: {**result_arrays(res, points), _FIT: samples}
+        return json.dumps(out, allow_nan=False)
 
 def _probe_fields() -> dict[str, Any]:
     """The probe record's fields and their specs (:class:`~afmforce.analysis.options.ProbeCalibration`)."""
@@ -258,13 +267,13 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     if arrays:
         for name in wanted:
             if name in made:
-                payload["results"][name].update(made[name]())
+                extra = made[name]()
+                samples = extra.pop(_FIT, {})
+                payload["results"][name].update(extra)
+                if samples:
+                    payload["results"][name]["details"]["indentation"].update(samples)
         for name, res in payload["results"].items():     # the per-sample arrays are thinned already
             fit = (res.get("details") or {}).get("indentation")
-            if isinstance(fit, dict) and name not in wanted:     # a curve not drawn: no samples
-                for key in ("indentation", "fit_force", "residuals"):
-                    fit.pop(key, None)
-                continue
             if isinstance(fit, dict) and isinstance(fit.get("indentation"), list):   # the modulus fit's samples
                 keep = decimate(len(fit["indentation"]), max_points)
                 for key in ("indentation", "fit_force", "residuals"):
