@@ -27,11 +27,12 @@ from ..sweep.files import CurveAnalysis
 __all__ = ["parse_inputs", "run_analysis", "CachedAnalysis"]
 
 #: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)],
-#: at most :data:`_CURVES_KEPT` entries and :data:`_CURVES_BYTES` bytes of samples.
+#: at most :data:`_CURVES_KEPT` entries and :data:`_CACHE_BYTES` bytes (each cache here).
 _CURVES: OrderedDict = OrderedDict()
 _CURVES_KEPT = 4096
-_CURVES_BYTES = 256e6
-#: Rows of curves analysed lately: (curve key, options, probe, arrays) -> summary row with its JSON.
+_CACHE_BYTES = 128e6
+#: Rows of curves analysed lately: (curve key, options, probe, arrays) -> (summary row with its
+#: JSON, (make the arrays, bytes held) or None).
 _ROWS: OrderedDict = OrderedDict()
 _ROWS_KEPT = 2048
 _LOCK = threading.Lock()
@@ -76,7 +77,7 @@ def _remember(cache: OrderedDict, key, value, kept: int, size=None) -> None:
         if size is not None:
             sizes[key] = size(value)
         total = sum(sizes.values()) if size is not None else 0
-        while len(cache) > kept or (size is not None and total > _CURVES_BYTES and len(cache) > 1):
+        while len(cache) > kept or (size is not None and total > _CACHE_BYTES and len(cache) > 1):
             old, _ = cache.popitem(last=False)
             total -= sizes.pop(old, 0)
 
@@ -143,7 +144,8 @@ class CachedAnalysis(CurveAnalysis):
             self.arrays.pop(None, None)
             row = super().analyze_curve(ref, index, curve, several)
             hit = (row, self.arrays.pop(None, None))
-            _remember(_ROWS, key, hit, _ROWS_KEPT)
+            _remember(_ROWS, key, hit, _ROWS_KEPT,
+                      lambda h: len(h[0].get("json") or "") + (h[1][1] if h[1] is not None else 0))
         row, arrays = hit
         if arrays is not None:
             self.arrays[row["name"]] = arrays
@@ -160,8 +162,10 @@ class CachedAnalysis(CurveAnalysis):
         fit = (out.get("details") or {}).get("indentation")
         samples = {k: fit.pop(k) for k in _FIT_SAMPLES if isinstance(fit, dict) and isinstance(fit.get(k), list)}
         points = self.points
-        self.arrays[None] = lambda: {**result_arrays(res, points), _FIT: samples}
+        held = sum(getattr(getattr(res, name), "nbytes", 0) for name in res.ARRAYS)
+        self.arrays[None] = (lambda: {**result_arrays(res, points), _FIT: samples}, held)
         return json.dumps(out, allow_nan=False)
+
 
 def _probe_fields() -> dict[str, Any]:
     """The probe record's fields and their specs (:class:`~afmforce.analysis.options.ProbeCalibration`)."""
@@ -267,7 +271,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     if arrays:
         for name in wanted:
             if name in made:
-                extra = made[name]()
+                extra = made[name][0]()
                 samples = extra.pop(_FIT, {})
                 payload["results"][name].update(extra)
                 if samples:
