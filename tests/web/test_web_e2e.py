@@ -513,3 +513,25 @@ def test_every_view_every_axis_titled_and_no_text_box_overlaps(page):
     summary = page.evaluate("[...document.querySelectorAll('#an-summary td')].map(t => t.textContent)")
     repeats = [t for t in summary if ": " in t and t.split(": ", 1)[0] == t.split(": ", 1)[1]]
     assert not repeats, repeats                    # no "not assessed: not assessed"
+
+
+def test_another_curve_of_a_map_gets_its_arrays_when_shown(page):
+    """Issue 33.7: a map's re-run sends the arrays of the curve drawn only; another curve chosen
+    gets its own (asked for then) and is drawn, the same numbers as the whole map's analysis."""
+    page.click("button[data-view=analyse]")
+    names = page.eval_on_selector_all("#an-curve option", "os => os.map(o => o.value)")
+    sent = page.evaluate("AN.payload.arrays_for")
+    assert len(names) == 4 and len(sent) == 1
+    other = next(n for n in names if n not in sent)
+    assert page.evaluate(f"AN.payload.results[{json.dumps(other)}].separation === undefined")
+    page.select_option("#an-curve", other)
+    page.wait_for_function(f"document.querySelector('#an-plot-force .g-gtitle') && "
+                           f"document.querySelector('#an-plot-force .g-gtitle').textContent.includes({json.dumps(other)})",
+                           timeout=30_000)
+    drawn = page.evaluate(f"AN.payload.results[{json.dumps(other)}]")
+    fid = page.evaluate("AN.files[0].id")
+    api = page.evaluate(f"""() => {{ const fd = new FormData(); fd.append('file_id', '{fid}'); fd.append('arrays', 'true');
+        fd.append('max_points', String(AN.payload.max_points));
+        return fetch('api/analyze', {{method: 'POST', body: fd}}).then(r => r.json()); }}""")["results"][other]
+    assert len(drawn["separation"]) > 10 and drawn["force"] == api["force"]
+    assert drawn["adhesion_force"] == api["adhesion_force"]
