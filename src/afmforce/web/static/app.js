@@ -44,11 +44,21 @@ function guardLayout(gd, data, layout) {
   });
   return [bars, out];
 }
-function wrapText(text, per) {   // lines of at most ``per`` characters, broken at spaces
+function wrapText(text, per) {   // lines of at most ``per`` characters, broken after a comma, colon or
+  // dash or before a bracket (a number keeps its unit); a part still too long is broken at spaces
+  const parts = [];
+  for (const part of text.split(/(?<=[,:;—])\s+|\s+(?=[(\[—])/)) {
+    if (part.length <= per) { parts.push(part); continue; }
+    let line = "";
+    for (const w of part.split(" ")) {
+      if (line && (line + " " + w).length > per) { parts.push(line); line = w; } else line = line ? line + " " + w : w;
+    }
+    if (line) parts.push(line);
+  }
   const lines = [];
   let line = "";
-  for (const w of text.split(" ")) {
-    if (line && (line + " " + w).length > per) { lines.push(line); line = w; } else line = line ? line + " " + w : w;
+  for (const p of parts) {
+    if (line && (line + " " + p).length > per) { lines.push(line); line = p; } else line = line ? line + " " + p : p;
   }
   if (line) lines.push(line);
   return lines;
