@@ -262,6 +262,8 @@ def test_the_page_needs_no_network(client):
         text = (STATIC / name).read_text(encoding="utf-8")
         assert not re.search(r"https?://|//cdn|@import", text), name
     srcs = re.findall(r'(?:src|href)="([^"]+)"', page.text)
+    # Plotly.js is added by the page's script once the page is ready (app.js: plotlyLoaded)
+    srcs += re.findall(r'src: "([^"]+)"', (STATIC / "app.js").read_text(encoding="utf-8"))
     assert "static/plotly.min.js" in srcs
     for src in srcs:
         assert client.get("/" + src).status_code == 200, src

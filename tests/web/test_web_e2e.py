@@ -168,7 +168,8 @@ def test_the_modulus_fit_on_force_vs_indentation(page):
     box.dispatch_event("change")
     page.wait_for_function("document.getElementById('an-plot-indentation').data", timeout=60_000)
     api = page.evaluate("""() => { const fd = new FormData(); fd.append('example', 'jpk-cell');
-        fd.append('option', 'indentation.tip_radius=5um'); fd.append('arrays', 'true'); fd.append('max_points', '2500');
+        fd.append('option', 'indentation.tip_radius=5um'); fd.append('arrays', 'true');
+        fd.append('max_points', String(AN.payload.max_points));     // the screen's width, as the page asked
         return fetch('api/analyze', {method: 'POST', body: fd}).then(r => r.json()); }""")
     fit = next(iter(api["results"].values()))["details"]["indentation"]
     drawn = page.evaluate("document.getElementById('an-plot-indentation').data[1]")
@@ -415,3 +416,122 @@ def test_each_profiled_parameter_has_its_own_axis(page):
     assert "hamaker [J]" in titles and "xi [kg/s]" in titles, titles
     axes = page.evaluate("Object.keys(document.getElementById('fit-profiles')._fullLayout).filter(k => /^xaxis\\d*$/.test(k))")
     assert len(axes) == 2, axes
+
+
+# every text box of a drawn plot, read from the DOM the browser laid out: the axes (each with its
+# rendered title), the plot's title, the legend, the colour bar, the tick labels; boxes [l, t, r, b]
+_BOXES = """(view) => [...document.querySelectorAll('#view-' + view + ' .plot')].filter(gd => gd.data && gd.data.length
+    && gd._fullLayout && gd.offsetParent !== null).map(gd => {
+    const r = (e) => { const b = e.getBoundingClientRect(); return [b.left, b.top, b.right, b.bottom]; };
+    const seen = (e) => { const b = e.getBoundingClientRect(); return b.width > 0 && b.height > 0; };
+    const L = gd._fullLayout;
+    const axes = Object.keys(L).filter(k => /^[xy]axis\\d*$/.test(k) && L[k].visible !== false).map(k => {
+        const t = gd.querySelector('.g-' + L[k]._id + 'title text');
+        return {axis: gd.id + ':' + L[k]._id, text: t ? t.textContent.trim() : '', box: t && seen(t) ? r(t) : null};
+    });
+    const title = gd.querySelector('.g-gtitle text');
+    return {id: gd.id, svg: r(gd.querySelector('.main-svg')), div: r(gd), axes,
+            title: title && seen(title) ? {text: title.textContent, box: r(title)} : null,
+            legend: [...gd.querySelectorAll('.legend')].filter(seen).map(r),
+            colorbar: [...gd.querySelectorAll('.colorbar')].filter(seen).map(r),
+            ticks: [...gd.querySelectorAll('.xtick text, .ytick text')].filter(seen).map(t => ({text: t.textContent, box: r(t)}))};
+})"""
+
+
+def _overlap(a, b, tol=1.0) -> bool:
+    return a[0] + tol < b[2] and b[0] + tol < a[2] and a[1] + tol < b[3] and b[1] + tol < a[3]
+
+
+def _inside(inner, outer, tol=1.0) -> bool:
+    return (outer[0] - tol <= inner[0] and inner[2] <= outer[2] + tol and outer[1] - tol <= inner[1]
+            and inner[3] <= outer[3] + tol)
+
+
+def _layout_faults(plot) -> list[str]:
+    """Empty or missing axis titles, boxes outside the drawing, and overlaps of titles, legend, colour
+    bar and tick labels, in words."""
+    faults = []
+    named = []                                 # (what, box) of every box that must stand alone
+    for ax in plot["axes"]:
+        if not ax["text"] or ax["box"] is None:
+            faults.append(f"{ax['axis']}: no axis title rendered")
+        elif "[" not in ax["text"] and "index" not in ax["text"]:
+            faults.append(f"{ax['axis']}: title {ax['text']!r} has no unit")
+        else:
+            named.append((f"{ax['axis']} title {ax['text']!r}", ax["box"]))
+    if plot["title"] is not None:
+        named.append((f"title {plot['title']['text']!r}", plot["title"]["box"]))
+    named += [("legend", b) for b in plot["legend"]] + [("colour bar", b) for b in plot["colorbar"]]
+    for what, box in named:
+        if not _inside(box, plot["svg"]) or not _inside(box, plot["div"]):
+            faults.append(f"{what} clipped: {box} outside {plot['svg']}")
+    for i, (a, box_a) in enumerate(named):
+        for b, box_b in named[i + 1:]:
+            if _overlap(box_a, box_b):
+                faults.append(f"{a} overlaps {b}")
+        if "title" in a:
+            for tick in plot["ticks"]:
+                if _overlap(box_a, tick["box"]):
+                    faults.append(f"{a} overlaps the tick label {tick['text']!r}")
+    return [f"{plot['id']}: {f}" for f in faults]
+
+
+def test_every_view_every_axis_titled_and_no_text_box_overlaps(page):
+    """Issue 33.5: on each view (analyse with a force map, simulate, fit, sweep), every rendered
+    axis of every drawn plot has a title with its unit, and no title, legend, colour bar or tick
+    label overlaps another or is clipped (bounding boxes laid out by Chromium). The analyse view
+    is drawn again with the 2x2 map (its heat map, table histogram, force, raw, drift and
+    compliance plots); the fit view with the small fit's data and the two-parameter profiles."""
+    page.click("button[data-view=analyse]")
+    data = Path(__file__).resolve().parents[1] / "data" / "afmforce-map_jpk-map2x2.h5"
+    page.set_input_files("#an-files", str(data))
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-plot-map').data && document.getElementById('an-batch-hist').data"
+                           " && document.getElementById('an-plot-force').data", timeout=60_000)
+    page.wait_for_timeout(300)
+    # the fit view: the small fit's result (data and model per curve, from the server), with the
+    # profiles of two parameters as the library writes them (FitResult.to_dict)
+    page.evaluate("""async () => {
+        const jobs = await (await fetch('api/jobs')).json();
+        const job = jobs.find(j => j.kind === 'fit' && j.state === 'done');
+        const r = (await (await fetch('api/jobs/' + job.id)).json()).result;
+        r.profiles = {hamaker: {value: [4.8e-19, 5e-19, 5.2e-19], delta_chi2: [4, 0, 4]},
+                      xi: {value: [0.0048, 0.005, 0.0052], delta_chi2: [4, 0, 4]}};
+        drawFit(r); }""")
+    plots, faults = {}, []
+    for view in ("analyse", "simulate", "fit", "sweep"):
+        page.click(f"button[data-view={view}]")
+        page.wait_for_timeout(400)                 # the resize after a tab switch
+        for plot in page.evaluate(_BOXES, view):
+            plots[plot["id"]] = plot
+            faults += _layout_faults(plot)
+    must = {"an-plot-force", "an-plot-raw", "an-plot-map", "an-batch-hist", "sim-plot-defl", "sim-plot-force",
+            "fit-plot", "fit-profiles", "sw-plot"}
+    assert not faults, "\n".join(faults)
+    assert must <= set(plots), sorted(plots)
+    assert sum(len(p["axes"]) for p in plots.values()) >= 2 * len(must)
+    summary = page.evaluate("[...document.querySelectorAll('#an-summary td')].map(t => t.textContent)")
+    repeats = [t for t in summary if ": " in t and t.split(": ", 1)[0] == t.split(": ", 1)[1]]
+    assert not repeats, repeats                    # no "not assessed: not assessed"
+
+
+def test_another_curve_of_a_map_gets_its_arrays_when_shown(page):
+    """Issue 33.7: a map's re-run sends the arrays of the curve drawn only; another curve chosen
+    gets its own (asked for then) and is drawn, the same numbers as the whole map's analysis."""
+    page.click("button[data-view=analyse]")
+    names = page.eval_on_selector_all("#an-curve option", "os => os.map(o => o.value)")
+    sent = page.evaluate("AN.payload.arrays_for")
+    assert len(names) == 4 and len(sent) == 1
+    other = next(n for n in names if n not in sent)
+    assert page.evaluate(f"AN.payload.results[{json.dumps(other)}].separation === undefined")
+    page.select_option("#an-curve", other)
+    page.wait_for_function(f"document.querySelector('#an-plot-force .g-gtitle') && "
+                           f"document.querySelector('#an-plot-force .g-gtitle').textContent.includes({json.dumps(other)})",
+                           timeout=30_000)
+    drawn = page.evaluate(f"AN.payload.results[{json.dumps(other)}]")
+    fid = page.evaluate("AN.files[0].id")
+    api = page.evaluate(f"""() => {{ const fd = new FormData(); fd.append('file_id', '{fid}'); fd.append('arrays', 'true');
+        fd.append('max_points', String(AN.payload.max_points));
+        return fetch('api/analyze', {{method: 'POST', body: fd}}).then(r => r.json()); }}""")["results"][other]
+    assert len(drawn["separation"]) > 10 and drawn["force"] == api["force"]
+    assert drawn["adhesion_force"] == api["adhesion_force"]

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Mapping, Sequence
+from typing import Any, Mapping, MutableMapping, Sequence
 
 import numpy as np
 
@@ -48,6 +48,11 @@ STEPS: registry.LiveDict = registry.LiveDict(registry.steps)
 
 #: Steps run when none are named: all of them.
 DEFAULT_STEPS: registry.LiveTuple = registry.LiveTuple(registry.order)
+
+#: The first steps, which read the recorded samples (time, position, signal, segments, the signal's
+#: unit) and their own options only, never the metadata's calibration nor the probe record: after a
+#: new spring constant or sensitivity their state is the same, and ``analyze(..., memo=)`` reuses it.
+SAMPLE_STEPS: tuple[str, ...] = ("smooth", "contact", "drift", "fringes", "compliance")
 
 
 def resolve_steps(steps: Sequence[str] | None) -> list[str]:
@@ -124,7 +129,8 @@ def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
 
 
 def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = None, *,
-            probe: O.ProbeCalibration | None = None, channel: str = "auto") -> AnalysisResult:
+            probe: O.ProbeCalibration | None = None, channel: str = "auto",
+            memo: MutableMapping | None = None) -> AnalysisResult:
     """Analyse one force curve.
 
     Parameters
@@ -142,6 +148,11 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
         given by the user; a field left ``None`` takes the file's value.
     channel : str
         Position channel: ``"auto"``, ``"measured"`` or ``"nominal"``.
+    memo : mutable mapping, optional
+        Where the state after the :data:`SAMPLE_STEPS` is kept, keyed by the curve's arrays
+        (identity), the channel and those steps' options; a later call with the same curve
+        arrays (another spring constant, sensitivity or probe, other options of later steps)
+        starts after them. The result is the same as without it.
 
     Returns
     -------
@@ -164,12 +175,32 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
     misread = beyond_detector(curve)
     if misread:  # no photodiode gives this signal: every number from it would be impossible
         return _refused(st, tuple(order), misread)
-    for name in order:
+    head = 0
+    while head < len(order) and head < len(SAMPLE_STEPS) and order[head] == SAMPLE_STEPS[head]:
+        head += 1
+    key, start = None, 0
+    if memo is not None and head:
+        key, arrays = _memo_key(curve, st.channel, order[:head], opts)
+        hit = memo.get(key)
+        if hit is not None and all(a is b for a, b in zip(hit[0], arrays)):
+            st, start = dataclasses.replace(hit[1], curve=curve, probe=st.probe), head
+    for i, name in enumerate(order[start:], start):
         try:
             st = known[name].run(st, opts[name])
         except NoContact as exc:  # a curve that never touches: contact kind "none", not a failure
             return _no_contact(st, tuple(order), str(exc))
+        if key is not None and i == head - 1:
+            memo[key] = (arrays, st)
     return _result(st, tuple(order), known)
+
+
+def _memo_key(curve: RawCurve, channel: str, names, opts) -> tuple[tuple, tuple]:
+    """The key of the state after the sample steps ``names`` (and the arrays it is valid for)."""
+    arrays = (curve.time, curve.piezo_nominal, curve.piezo_measured, curve.deflection_signal, curve.segment)
+    md = curve.metadata
+    return ((tuple(id(a) for a in arrays), channel, curve.deflection_unit, md.get("single_run"),
+             md.get("processed"), bool(md.get("time_is_sample_index", False)),
+             tuple(repr(opts[n]) for n in names)), arrays)
 
 
 def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.0) -> AnalysisResult:

@@ -218,6 +218,9 @@ class CurveAnalysis:
     plot: bool = True
     protect: tuple[str, ...] = ()
     file_timeout: float | None = None
+    #: kept state of the sample steps (``analyze(..., memo=)``): a re-run after a calibration change
+    #: starts after them; None: none (it does not travel to workers)
+    memo: Any = field(default=None, compare=False, repr=False)
 
     def key_fields(self) -> dict[str, Any]:
         """What determines the results (and so the store they resume from)."""
@@ -278,15 +281,20 @@ class CurveAnalysis:
                     f"{self._paths(stem)['json']} holds another analysis (other steps, options or "
                     "metadata); choose another `out`, or pass `force` to replace it")
         res = analyze(curve, steps=self.steps, options=self.options or None, probe=self.probe,
-                      channel=self.channel)
+                      channel=self.channel, memo=self.memo)
         shown = display_path(base)      # a file name that is not UTF-8: \xNN in the tables
         row = summary_row(res, curve, file=display_path(ref.path), index=index,
                           name=f"{shown}#{index}" if several else shown)
         if self.keep_json:
-            row["json"] = res.to_json(indent=None, arrays=self.json_arrays)
+            row["json"] = self.result_json(res)
         if self.out is not None:
             self.write_outputs(res, curve, stem, row)
         return row
+
+    def result_json(self, res) -> str:
+        """The ``json`` column of a curve's row (with ``keep_json``): the result's JSON, with the
+        per-sample arrays when :attr:`json_arrays` (a subclass may send less: the web's plots)."""
+        return res.to_json(indent=None, arrays=self.json_arrays)
 
     def _settings(self) -> str:
         fields = {k: v for k, v in self.key_fields().items() if k != "json"}

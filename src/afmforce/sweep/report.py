@@ -46,13 +46,14 @@ def oscillation_origin_of(ok) -> tuple[str, str] | None:
     return oscillation_origin(freqs, vels)
 
 
-def analysis_json(result: BatchResult) -> dict[str, Any]:
+def analysis_json(result: BatchResult, table=None) -> dict[str, Any]:
     """``{"results": {name: result JSON}, "failed": [{file, curve?, error}], "oscillation_origin"?}``.
 
     ``result`` is an :func:`~afmforce.sweep.files.analyze_files` batch run with
-    ``keep_json=True``; values are SI (units under each result's ``units``).
+    ``keep_json=True``; values are SI (units under each result's ``units``). ``table``: its
+    ``summary_table(result, with_json=True)`` when the caller has it already.
     """
-    table = summary_table(result, with_json=True)
+    table = summary_table(result, with_json=True) if table is None else table
     ok = table[table["error"].isna()]
     payload: dict[str, Any] = {"results": {row["name"]: json.loads(row["json"]) for _, row in ok.iterrows()},
                                "failed": []}

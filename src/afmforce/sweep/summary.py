@@ -149,10 +149,12 @@ def summary_table(result: BatchResult, *, with_json: bool = False):
     import pandas as pd
 
     extra = ("json",) if with_json else ()  # present even when the first chunk failed (no rows)
-    frames = [_normalise(f, extra) for f in result.iter_tables()]
+    frames = [f for f in result.iter_tables() if len(f)]
     if not frames:
         return _normalise(pd.DataFrame(), extra)
-    return pd.concat(frames, ignore_index=True)
+    # the chunks joined first, then typed once (typing each chunk cost ~50 ms: 13 s for a 16 x 16
+    # map analysed a curve a chunk, as afmforce serve does)
+    return _normalise(pd.concat(frames, ignore_index=True), extra)
 
 
 def _csv_header() -> list[str]:

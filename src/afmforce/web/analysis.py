@@ -20,38 +20,153 @@ from .._fields import spec_of
 from ..errors import ParameterError
 from .limits import ANALYSIS_POINTS
 from .replies import PastBudget
+from .plotdata import raw_arrays
 from .tasks import decimate
 from .validate import FieldError, metadata, number
 from ..sweep.files import CurveAnalysis
 
 __all__ = ["parse_inputs", "parse_steps", "run_analysis", "CachedAnalysis"]
 
-#: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)].
+#: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)],
+#: at most :data:`_CURVES_KEPT` entries and :data:`_CACHE_BYTES` bytes (each cache here).
 _CURVES: OrderedDict = OrderedDict()
-_CURVES_KEPT = 16
+_CURVES_KEPT = 4096
+_CACHE_BYTES = 128e6
+#: Rows of curves analysed lately: (curve key, options, probe, arrays) -> (summary row with its
+#: JSON, (make the arrays, bytes held) or None).
+_ROWS: OrderedDict = OrderedDict()
+_ROWS_KEPT = 2048
 _LOCK = threading.Lock()
+#: Readers whose metadata override is only merged into the metadata (:mod:`afmforce.io.native`): a
+#: new spring constant or sensitivity for their curves is a new metadata record, not a new reading.
+_NATIVE = ("afmforce-raw", "afmforce-hdf5", "afmforce-map")
+_CALIBRATION = ("spring_constant", "sensitivity")
+
+
+class _Memo:
+    """The sample steps' states of the curves analysed lately (``analyze(..., memo=)``), at most
+    :data:`_CURVES_KEPT`: a calibration change re-runs the steps after them only."""
+
+    def __init__(self) -> None:
+        self._d: OrderedDict = OrderedDict()
+
+    def get(self, key, default=None):
+        return _recalled(self._d, key) or default
+
+    def __setitem__(self, key, value) -> None:     # a state holds about a dozen arrays of the curve's length
+        _remember(self._d, key, value, _CURVES_KEPT, lambda v: 12 * getattr(v[0][0], "nbytes", 0))
+
+
+_MEMO = _Memo()
+#: The modulus fit's per-sample lists (``details.indentation``), sent with the arrays only.
+_FIT_SAMPLES = ("indentation", "fit_force", "residuals")
+_FIT = "__fit_samples__"
+
+
+def _nbytes(pairs) -> int:
+    return sum(getattr(c.time, "nbytes", 0) * 5 for _, c in pairs)
+
+
+_SIZES: dict = {}      # id(cache) -> {key: bytes} of the caches bounded in bytes
+
+
+def _remember(cache: OrderedDict, key, value, kept: int, size=None) -> None:
+    with _LOCK:
+        cache[key] = value
+        cache.move_to_end(key)
+        sizes = _SIZES.setdefault(id(cache), {})
+        if size is not None:
+            sizes[key] = size(value)
+        total = sum(sizes.values()) if size is not None else 0
+        while len(cache) > kept or (size is not None and total > _CACHE_BYTES and len(cache) > 1):
+            old, _ = cache.popitem(last=False)
+            total -= sizes.pop(old, 0)
+
+
+def _recalled(cache: OrderedDict, key):
+    with _LOCK:
+        if key in cache:
+            cache.move_to_end(key)
+            return cache[key]
+    return None
 
 
 @dataclass(frozen=True)
 class CachedAnalysis(CurveAnalysis):
-    """:class:`~afmforce.sweep.files.CurveAnalysis` that keeps the last curves it read in memory:
-    a re-run after an option change does not parse the file again (a 10,000-row text file: 0.3 s)."""
+    """:class:`~afmforce.sweep.files.CurveAnalysis` for the page: what it read and computed lately
+    stays in memory, and it sends the plots only what they draw.
 
-    def load(self, ref):
+    * A re-run does not parse the file again (a 10,000-row text file: 0.1-0.3 s), also after a
+      calibration change: the curves of afmforce's own formats are read once without the given
+      spring constant and sensitivity, which are then put into their metadata (as their reader
+      does); other formats are read again with the new values (their readers may rescale with them).
+    * A curve analysed before with the same options, probe and metadata is not analysed again.
+    * With :attr:`json_arrays`, the per-sample arrays are thinned to ``points`` samples per curve
+      on the screen's terms (:func:`~.plotdata.result_arrays`) before they are written as JSON.
+    """
+
+    points: int | None = None
+    #: the thinned arrays of the curves analysed by this instance, by row name (joined to the
+    #: payload after :func:`~afmforce.sweep.report.analysis_json`: never through a JSON text)
+    arrays: dict = dataclasses.field(default_factory=dict, compare=False, hash=False, repr=False)
+
+    def _file_key(self, ref, override) -> tuple:
         path = Path(ref.location)
         st = path.stat()
-        key = (str(path), st.st_size, st.st_mtime_ns, ref.index,
-               json.dumps(dict(self.meta_override), sort_keys=True, default=repr), self.format)
-        with _LOCK:
-            if key in _CURVES:
-                _CURVES.move_to_end(key)
-                return _CURVES[key]
-        pairs = super().load(ref)
-        with _LOCK:
-            _CURVES[key] = pairs
-            while len(_CURVES) > _CURVES_KEPT:
-                _CURVES.popitem(last=False)
+        return (str(path), st.st_size, st.st_mtime_ns, ref.index,
+                json.dumps(dict(override), sort_keys=True, default=repr), self.format)
+
+    def _read(self, ref, override) -> list:
+        key = self._file_key(ref, override)
+        pairs = _recalled(_CURVES, key)
+        if pairs is None:
+            pairs = dataclasses.replace(self, meta_override=override).load_uncached(ref)
+            _remember(_CURVES, key, pairs, _CURVES_KEPT, _nbytes)
         return pairs
+
+    def load_uncached(self, ref):
+        return super().load(ref)
+
+    def load(self, ref):
+        override = dict(self.meta_override)
+        given = {k: override.pop(k) for k in _CALIBRATION if k in override}
+        if given:      # read without the calibration; afmforce's formats take it as metadata only
+            pairs = self._read(ref, override)
+            if all(c.metadata.get("reader") in _NATIVE for _, c in pairs):
+                return [(i, dataclasses.replace(c, metadata={**c.metadata, **given})) for i, c in pairs]
+            override.update(given)
+        return self._read(ref, override)
+
+    def analyze_curve(self, ref, index, curve, several):
+        key = (self._file_key(ref, self.meta_override), index, several, self.channel,
+               json.dumps(self.key_fields(), sort_keys=True, default=repr), self.points)
+        hit = _recalled(_ROWS, key)
+        if hit is None:
+            self.arrays.pop(None, None)
+            row = super().analyze_curve(ref, index, curve, several)
+            hit = (row, self.arrays.pop(None, None))
+            _remember(_ROWS, key, hit, _ROWS_KEPT,
+                      lambda h: len(h[0].get("json") or "") + (h[1][1] if h[1] is not None else 0))
+        row, arrays = hit
+        if arrays is not None:
+            self.arrays[row["name"]] = arrays
+        return dict(row)
+
+    def result_json(self, res) -> str:
+        if not self.json_arrays:
+            return res.to_json(indent=None, arrays=False)
+        from .plotdata import result_arrays
+
+        # kept aside (under None until the row has its name), made when sent: the arrays, and the
+        # modulus fit's samples (most of a map curve's JSON, drawn for the curve shown only)
+        out = res.to_dict(arrays=False)
+        fit = (out.get("details") or {}).get("indentation")
+        samples = {k: fit.pop(k) for k in _FIT_SAMPLES if isinstance(fit, dict) and isinstance(fit.get(k), list)}
+        points = self.points
+        held = sum(getattr(getattr(res, name), "nbytes", 0) for name in res.ARRAYS)
+        self.arrays[None] = (lambda: {**result_arrays(res, points), _FIT: samples}, held)
+        return json.dumps(out, allow_nan=False)
+
 
 def _probe_fields() -> dict[str, Any]:
     """The probe record's fields and their specs (:class:`~afmforce.analysis.options.ProbeCalibration`)."""
@@ -117,7 +232,8 @@ def parse_steps(steps: Sequence[str] | None) -> tuple[str, ...] | None:
 def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *,
                  steps: Sequence[str] | None = None, format: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
-                 guard: bool = True, deadline: float | None = None) -> dict[str, Any]:
+                 guard: bool = True, deadline: float | None = None,
+                 curves: Sequence[str] = ()) -> dict[str, Any]:
     """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``; ``steps``: the
     analysis steps to run (their requirements added; None: all).
 
@@ -130,6 +246,9 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     the analysis stops after the curve it is on (:class:`~.replies.PastBudget`): a request that
     timed out does not keep computing. With ``arrays``, the curves together carry at most
     :data:`~.limits.ANALYSIS_POINTS` samples (``max_points`` is lowered for many curves).
+    ``curves``: with ``arrays``, only these results (names as returned) get their arrays and raw
+    signal, the first result when none of them is one (a page draws one curve of a map; the
+    others are asked for when shown); empty: every result. ``arrays_for`` lists those sent.
     """
     from ..sweep.files import analyze_files, plan_curves
     from ..sweep.report import analysis_json
@@ -148,25 +267,37 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     rename.update(_channel_prefixes(files))
     timeout = budget if guard else None
     refs = plan_curves([p for p, _ in files], format, timeout=timeout)
-    if arrays:     # the response's size cap
+    if arrays and not curves:     # the response's size cap
         max_points = max(10, min(max_points, ANALYSIS_POINTS // max(1, len(refs))))
     analysis = CachedAnalysis(steps=chosen, options=records, probe=probe_record, meta_override=override,
-                             format=format,
-                             keep_json=True, json_arrays=arrays, file_timeout=timeout)
+                             format=format, keep_json=True, json_arrays=arrays, file_timeout=timeout,
+                             points=max_points if arrays else None, memo=_MEMO)
 
     def on_curve(_progress) -> None:
         if deadline is not None and time.monotonic() > deadline:
             raise PastBudget(f"cancelled: the analysis ran past its budget of {budget:g} s")
 
-    result = analyze_files(refs, analysis, chunk_size=1, executor="serial", progress=on_curve)
-    payload = analysis_json(result)
+    # chunks of up to 32 curves: each chunk is a table (a curve a chunk cost 1-2 s of pandas for a
+    # 16 x 16 map); the budget is checked between chunks (a chunk: well under a second)
+    chunk = min(32, max(1, len(refs) // 8))
+    result = analyze_files(refs, analysis, chunk_size=chunk, executor="serial", progress=on_curve)
+    table = summary_table(result, with_json=True)
+    payload = analysis_json(result, table)
+    made = {name: analysis.arrays[name] for name in payload["results"] if name in analysis.arrays}
     payload = _renamed(payload, rename)
+    made = {_renamed_name(name, rename): v for name, v in made.items()}
+    wanted = list(payload["results"])
+    if arrays and curves:
+        wanted = [n for n in wanted if n in set(curves)] or wanted[:1]
     if arrays:
-        for res in payload["results"].values():
-            idx = decimate(len(res.get("time") or ()), max_points)
-            for key in ("time", "position", "separation", "deflection", "force", "segment"):
-                if res.get(key) is not None:
-                    res[key] = [res[key][i] for i in idx]
+        for name in wanted:
+            if name in made:
+                extra = made[name][0]()
+                samples = extra.pop(_FIT, {})
+                payload["results"][name].update(extra)
+                if samples:
+                    payload["results"][name]["details"]["indentation"].update(samples)
+        for name, res in payload["results"].items():     # the per-sample arrays are thinned already
             fit = (res.get("details") or {}).get("indentation")
             if isinstance(fit, dict) and isinstance(fit.get("indentation"), list):   # the modulus fit's samples
                 keep = decimate(len(fit["indentation"]), max_points)
@@ -176,9 +307,10 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
         from dataclasses import replace
 
         direct = replace(analysis, file_timeout=None)   # read once already, in this call
-        payload["raw"] = _raw_signals(refs, direct, rename, max_points)
+        payload["raw"] = _raw_signals(refs, direct, rename, max_points, set(wanted))
+        payload["arrays_for"] = wanted
         maps = any(r.index is not None for r in refs)
-        payload["maps"] = _maps(summary_table(result), rename) if maps else []
+        payload["maps"] = _maps(table, rename) if maps else []
     payload["wall_time"] = time.perf_counter() - t0
     payload["max_points"] = max_points if arrays else None
     return payload
@@ -213,26 +345,39 @@ def _renamed(payload: dict[str, Any], rename: dict[str, str]) -> dict[str, Any]:
     return payload
 
 
-def _raw_signals(refs, analysis, rename, max_points) -> dict[str, Any]:
+def _renamed_name(name: str, rename: dict[str, str]) -> str:
+    for stored, shown in rename.items():   # full paths first (dict order), as _renamed
+        name = name.replace(stored, shown)
+    return name
+
+
+def _raw_signals(refs, analysis, rename, max_points, wanted) -> dict[str, Any]:
     out = {}
     for ref in refs:
+        base = rename.get(Path(ref.path).name, Path(ref.path).name)
+        if ref.index is not None and f"{base}#{ref.index}" not in wanted:
+            continue        # a map's curve not drawn: not even looked up
         try:
             pairs = analysis.load(ref)
         except Exception:  # the failure is in payload["failed"] already
             continue
         several = ref.index is not None or len(pairs) > 1
-        base = rename.get(Path(ref.path).name, Path(ref.path).name)
         for index, curve in pairs:
             name = f"{base}#{index}" if several else base
-            piezo = curve.position()
-            idx = decimate(len(curve.time), max_points)
-            out[name] = {"time": curve.time[idx].tolist(), "piezo": np.asarray(piezo)[idx].tolist(),
-                         "signal": curve.deflection_signal[idx].tolist(), "segment": curve.segment[idx].tolist(),
-                         "unit": curve.deflection_unit,
-                         # False: the file has no time base, "time" is the sample index (the page says so)
-                         "time_base": not curve.metadata.get("time_is_sample_index", False),
-                         "position": [curve.metadata.get("position_x"), curve.metadata.get("position_y")]}
+            if name not in wanted:
+                continue
+            # the same signal read before (a calibration changes the metadata, not the samples)
+            key = (id(curve.deflection_signal), max_points)
+            raw = _recalled(_RAW, key)
+            if raw is None or raw[0] is not curve.deflection_signal:
+                raw = (curve.deflection_signal, raw_arrays(curve, max_points))
+                _remember(_RAW, key, raw, _CURVES_KEPT)
+            out[name] = raw[1]
     return out
+
+
+#: The thinned raw signals of the cached curves: (id of the signal, points) -> (signal, arrays).
+_RAW: OrderedDict = OrderedDict()
 
 
 def _maps(table, rename) -> list[dict[str, Any]]:

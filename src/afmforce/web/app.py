@@ -44,7 +44,12 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         from ..dynamics import simulate
         from ..units import parse_quantity
 
+        from .routes_main import plotly_js
+        from .schema import schema
+
         try:
+            schema()                              # the page's controls: the first page load does not build them
+            plotly_js()                           # read once (4.6 MB)
             parse_quantity("1 nm", "length")     # pint's registry: 2-5 s on its first use
             simulate(velocity=1e-5)
         finally:

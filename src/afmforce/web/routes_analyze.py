@@ -37,7 +37,11 @@ async def analyze(request: Request,
                                                                     "'probe' gives none")] = None,
                   format: Annotated[str | None, Form(description="reader instead of detection")] = None,
                   arrays: Annotated[bool, Form(description="add per-sample arrays, raw signals, maps")] = False,
-                  max_points: Annotated[int, Form(ge=100, le=RESPONSE_POINTS)] = 4000) -> JSONResponse:
+                  max_points: Annotated[int, Form(ge=100, le=RESPONSE_POINTS)] = 4000,
+                  curve: Annotated[list[str], Form(description="with arrays: the curves whose arrays and raw "
+                                                               "signal to send (names as returned; the first "
+                                                               "when none matches); default: every curve")] = []
+                  ) -> JSONResponse:
     """The JSON of ``afmforce analyze FILE --json`` (``results``, ``failed``, ``oscillation_origin``)
     plus ``files`` (the ids to re-run with ``file_id`` after an option change) and ``wall_time`` [s];
     with ``arrays`` also ``raw`` and ``maps``. A file that cannot be read is listed under ``failed``.
@@ -47,7 +51,7 @@ async def analyze(request: Request,
     settings, sessions = request.app.state.settings, request.app.state.sessions
     session = request.state.session
     for name, items in (("file", file), ("file_id", file_id), ("example", example), ("option", option),
-                        ("step", step), ("meta", meta), ("probe", probe)):
+                        ("step", step), ("meta", meta), ("probe", probe), ("curve", curve)):
         if len(items) > MAX_ITEMS:
             raise FieldError(name, f"{name}: at most {MAX_ITEMS} per request, got {len(items)}")
     deadline = time.monotonic() + settings.request_budget
@@ -75,7 +79,7 @@ async def analyze(request: Request,
     work = run_in_threadpool(run_analysis, paths, option, meta, probe, steps=step or None, format=format,
                              arrays=arrays,
                              max_points=max_points, budget=settings.request_budget, guard=guard,
-                             deadline=deadline)
+                             deadline=deadline, curves=curve)
     try:      # the thread stops by itself after the curve it is on (run_analysis's deadline)
         payload = await asyncio.wait_for(work, timeout=settings.request_budget)
     except asyncio.TimeoutError:

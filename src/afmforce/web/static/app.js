@@ -7,6 +7,68 @@ const el = (tag, attrs = {}, ...kids) => {
   kids.forEach((k) => e.append(k));
   return e;
 };
+// Plotly.js is loaded once the page is ready (or when a plot is first drawn, if sooner): every
+// drawing entry point awaits it
+let PLOTLY = null;
+function plotlyLoaded() {
+  if (window.Plotly) return Promise.resolve();
+  PLOTLY = PLOTLY || new Promise((done, fail) => {
+    const tag = el("script", { src: "static/plotly.min.js", id: "plotly-js" });
+    tag.addEventListener("load", () => { guardLayouts(); done(); }, { once: true });
+    tag.addEventListener("error", () => { PLOTLY = null; fail(new Error("Plotly.js did not load")); }, { once: true });
+    document.head.append(tag);
+  });
+  return PLOTLY;
+}
+// every plot's layout, checked in one place before Plotly draws it (issue 33.5; a browser test reads the
+// boxes): a title wrapped to the plot's width (the top margin grows with its lines), axes whose
+// titles make room for their tick labels (automargin), colour bars inside the drawing
+function guardLayout(gd, data, layout) {
+  const div = typeof gd === "string" ? document.getElementById(gd) : gd;
+  const out = { ...layout, margin: { ...(layout.margin || {}) } };
+  const t = out.title && (typeof out.title === "string" ? { text: out.title } : out.title);
+  if (t && t.text) {
+    const per = Math.max(24, Math.floor(((div && div.clientWidth) || 600) / 8.5) - 4);
+    const lines = wrapText(String(t.text), per);
+    out.title = { ...t, text: lines.join("<br>"), font: { size: 14, ...(t.font || {}) } };
+    out.margin.t = Math.max(out.margin.t || 0, 22 + 18 * lines.length);
+  }
+  for (const k of Object.keys(out)) if (/^[xy]axis\d*$/.test(k)) out[k] = { automargin: true, ...out[k] };
+  // a colour bar's title runs along it: wrapped to the bar's length (a long quantity name overran the plot)
+  const tall = Math.max(120, (((div && div.clientHeight) || 360) - (out.margin.t || 0) - (out.margin.b || 50)) * 0.85);
+  const bars = (data || []).map((tr) => {
+    if (!tr || !tr.colorbar) return tr;
+    const cb = { len: 0.9, y: 0.5, yanchor: "middle", ...tr.colorbar };
+    if (cb.title && cb.title.text) cb.title = { ...cb.title, text: wrapText(String(cb.title.text), Math.max(12, Math.floor(tall / 7.5))).join("<br>") };
+    return { ...tr, colorbar: cb };
+  });
+  return [bars, out];
+}
+function wrapText(text, per) {   // lines of at most ``per`` characters, broken after a comma, colon or
+  // dash or before a bracket (a number keeps its unit); a part still too long is broken at spaces
+  const parts = [];
+  for (const part of text.split(/(?<=[,:;—])\s+|\s+(?=[(\[—])/)) {
+    if (part.length <= per) { parts.push(part); continue; }
+    let line = "";
+    for (const w of part.split(" ")) {
+      if (line && (line + " " + w).length > per) { parts.push(line); line = w; } else line = line ? line + " " + w : w;
+    }
+    if (line) parts.push(line);
+  }
+  const lines = [];
+  let line = "";
+  for (const p of parts) {
+    if (line && (line + " " + p).length > per) { lines.push(line); line = p; } else line = line ? line + " " + p : p;
+  }
+  if (line) lines.push(line);
+  return lines;
+}
+function guardLayouts() {   // Plotly.react and Plotly.newPlot pass through guardLayout
+  for (const name of ["react", "newPlot"]) {
+    const draw = Plotly[name];
+    Plotly[name] = (gd, data, layout, config) => { const [d, l] = guardLayout(gd, data, layout || {}); return draw(gd, d, l, config); };
+  }
+}
 const SCHEMA = { simulation: [], analysis: {}, fit: [], examples: [], instrument_presets: [] };
 // the legend outside the plot on the right (Plotly widens the margin for it): never over an axis title
 const LAYOUT = { margin: { l: 70, r: 20, t: 40, b: 50 }, hovermode: "closest",
@@ -122,10 +184,12 @@ async function analyse(upload) {
   optionTexts().forEach((o) => fd.append("option", o));
   probeTexts().forEach((o) => fd.append("probe", o));
   fd.append("arrays", "true");
-  fd.append("max_points", "2500");
+  plotRequest(fd);
   try {
     const t0 = performance.now();
     const p = await api("api/analyze", { method: "POST", body: fd });
+    AN.fetched = performance.now();
+    await plotlyLoaded();
     if (upload) { AN.files = p.files; listUploads(); }
     AN.payload = p;
     $("an-time").textContent = `${((performance.now() - t0) / 1000).toFixed(2)} s, server ${p.wall_time.toFixed(2)} s`;
@@ -138,10 +202,58 @@ async function analyse(upload) {
     drawMaps(p.maps || []);
     drawBatch();
     if (names.length) drawCurve(); else ["an-plot-force", "an-plot-raw", "an-plot-time", "an-plot-compliance"].forEach((i) => Plotly.purge(i));
+    await recordAnalyseLatency(t0, p);
   } catch (e) { $("an-error").textContent = e.message; }
   saveAnalyse();
   AN.busy = false; $("status").textContent = "";
   if (AN.next) { const up = AN.next === "upload"; AN.next = null; analyse(up); }
+}
+// what the plots need: samples for the screen's width (each pixel column's min and max, thinned by the
+// server), the arrays of the curve shown only (another curve's are asked for when it is shown)
+function plotRequest(fd, curve) {
+  const w = ($("an-plot-force").clientWidth || 700);
+  fd.append("max_points", String(Math.max(400, Math.min(4000, 2 * Math.round(w)))));
+  fd.append("curve", curve !== undefined ? curve : AN.restoreCurve || $("an-curve").value || "");
+}
+async function loadCurveArrays(name) {   // a curve of a batch or map drawn for the first time
+  if (AN.loading === name) return;
+  AN.loading = name;
+  const fd = new FormData();
+  AN.files.forEach((f) => fd.append("file_id", f.id));
+  AN.examples.forEach((e) => fd.append("example", e));
+  optionTexts().forEach((o) => fd.append("option", o));
+  probeTexts().forEach((o) => fd.append("probe", o));
+  fd.append("arrays", "true");
+  plotRequest(fd, name);
+  try {
+    const p = await api("api/analyze", { method: "POST", body: fd });
+    for (const n of p.arrays_for || []) {
+      if (AN.payload.results[n] && p.results[n]) AN.payload.results[n] = p.results[n];
+      if (p.raw && p.raw[n]) (AN.payload.raw = AN.payload.raw || {})[n] = p.raw[n];
+    }
+  } catch (e) { $("an-error").textContent = e.message; }
+  AN.loading = null;
+  if ($("an-curve").value === name && AN.payload.results[name] && AN.payload.results[name].separation) drawCurve();
+}
+// a plot redrawn only when what it shows changed (a calibration leaves the raw signal as it was)
+function changed(id, key) {
+  const div = $(id);
+  if (div.drawnKey === key && div.data) return false;
+  div.drawnKey = key;
+  return true;
+}
+function rawKey(name, raw, d) {
+  const n = raw ? raw.signal.length : 0;
+  return JSON.stringify([name, n, raw && raw.signal[0], raw && raw.signal[n >> 1], raw && raw.signal[n - 1], raw && raw.time[n - 1], d.drift || null, d.compliance || null]);
+}
+// the time from the change to the painted plots, in parts (benchmarks/bench_web.py reads them)
+async function recordAnalyseLatency(t0, p) {
+  const drawn = performance.now();
+  await new Promise((done) => requestAnimationFrame(() => setTimeout(done, 0)));   // painted
+  const now = performance.now();
+  (window.AN_LATENCY = window.AN_LATENCY || []).push(now - t0);
+  (window.AN_PARTS = window.AN_PARTS || []).push([p.wall_time * 1e3, AN.fetched - t0, drawn - AN.fetched, now - drawn]);
+  document.body.dataset.anCount = String(Number(document.body.dataset.anCount || 0) + 1);
 }
 // ---- the session: uploads kept on the server, the page restored after a reload -----------------------
 const SAVED = "afmforce.analyse";
@@ -201,6 +313,7 @@ async function restoreAnalyse() {
 function drawCurve() {
   const name = $("an-curve").value, res = AN.payload.results[name], raw = (AN.payload.raw || {})[name];
   if (!res) return;
+  if (!res.separation) { loadCurveArrays(name); return; }
   const seg = res.segment || [], parts = [[0, "approach", "#2f6db5"], [1, "retract", "#d0632b"], [2, "dwell", "#888"]];
   const pick = (arr, k) => arr.map((v, i) => (seg[i] === k ? v : null));
   const f = [];
@@ -231,7 +344,8 @@ function drawCurve() {
   }
   Plotly.react("an-plot-force", f.concat(marks), { ...LAYOUT, title: { text: `Force vs separation — ${name}` }, xaxis: { title: { text: "separation h [nm]" } }, yaxis: { title: { text: "force F [nN]" } }, ...vdwRangeLayout(res) }, { ...CONFIG, edits: { shapePosition: true } });
   optionHandleBind($("an-plot-force"), "vdw", "max_separation");   // drag.js: the vdW fit's window, dragged
-  if (raw) {
+  const rawChanged = changed("an-plot-raw", rawKey(name, raw, d));
+  if (raw && rawChanged) {
     const u = raw.unit || "";
     const [fs, us] = U[u] || [1, u];
     const rt = [];
@@ -241,7 +355,7 @@ function drawCurve() {
     }
     Plotly.react("an-plot-raw", rt, { ...LAYOUT, title: { text: "Raw signal vs piezo position" }, xaxis: { title: { text: "piezo position z [nm]" } }, yaxis: { title: { text: `deflection signal [${us}]` } } }, CONFIG);
   }
-  drawDrift(raw, d, parts);
+  if (rawChanged) drawDrift(raw, d, parts);
   drawIndentation(res);
   const rows = [["contact", res.contact_kind_reason && String(res.contact_kind_reason).startsWith(res.contact_kind) ? res.contact_kind_reason : `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
     ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
@@ -253,13 +367,40 @@ function drawCurve() {
   res.warnings.forEach((w) => rows.push(["warning", w]));
   showUsed(res);
   $("an-summary").replaceChildren(table(rows));
-  const box = $("an-details"); box.replaceChildren(el("h2", { text: "Every step's evidence (SI units)" }));
+  drawEvidence(res, d);
+}
+function drawEvidence(res, d) {   // each step's result record, every number in an engineering unit (SI on hover)
+  const box = $("an-details"); box.replaceChildren(el("h2", { text: "Every step's evidence" }));
   for (const [step, vals] of Object.entries(d)) {
     const units = (res.details_units || {})[step] || {};
-    const r = Object.entries(vals || {}).filter(([, x]) => typeof x !== "object" || x === null).map(([k, x]) => [k, x === null ? "–" : String(x), units[k] || ""]);
-    const det = el("details", {}, el("summary", { text: step + (res.not_applicable && res.not_applicable[step] ? " (not applicable)" : "") }), table(r, ["field", "value", "unit"]));
+    const r = Object.entries(vals || {}).filter(([, x]) => typeof x !== "object" || x === null).map(([k, x]) => [k, ...engineering(x, units[k] || "")]);
+    const t = table(r.map((row) => row.slice(0, 3)), ["field", "value", "unit"]);
+    t.querySelectorAll("tr").forEach((tr, i) => { if (i && r[i - 1][3]) tr.title = r[i - 1][3]; });
+    const det = el("details", {}, el("summary", { text: step + (res.not_applicable && res.not_applicable[step] ? " (not applicable)" : "") }), t);
     box.append(det);
   }
+}
+// a value in SI and its unit -> [value, unit, SI text] in the unit a lab reads (29680000 V/m is
+// 0.02968 V/nm, 3.1e-8 m/V is 31 nm/V, 4.2e-20 J is 42 zJ); the SI value is kept for the hover
+const ENGINEERING = {
+  "m": [[1e-3, "mm", 1e3], [1e-6, "µm", 1e6], [1e-9, "nm", 1e9], [0, "pm", 1e12]],
+  "N": [[1e-3, "mN", 1e3], [1e-6, "µN", 1e6], [1e-9, "nN", 1e9], [0, "pN", 1e12]],
+  "s": [[1, "s", 1], [1e-3, "ms", 1e3], [0, "µs", 1e6]],
+  "Hz": [[1e6, "MHz", 1e-6], [1e3, "kHz", 1e-3], [0, "Hz", 1]],
+  "Pa": [[1e9, "GPa", 1e-9], [1e6, "MPa", 1e-6], [1e3, "kPa", 1e-3], [0, "Pa", 1]],
+  "J": [[1e-18, "aJ", 1e18], [0, "zJ", 1e21]],
+  "m/V": [[0, "nm/V", 1e9]], "V/m": [[0, "V/nm", 1e-9]], "N/V": [[0, "nN/V", 1e9]],
+  "m/s": [[1e-3, "mm/s", 1e3], [1e-6, "µm/s", 1e6], [0, "nm/s", 1e9]],
+  "J/m^2": [[0, "mJ/m²", 1e3]], "N/m^2": [[0, "Pa", 1]],
+};
+function engineering(x, unit) {
+  if (x === null || x === undefined) return ["–", unit, ""];
+  if (typeof x !== "number") return [String(x), unit, ""];
+  if (!isFinite(x)) return [String(x), unit, ""];
+  const ways = ENGINEERING[unit];
+  if (ways && x !== 0) for (const [lim, u, f] of ways) if (Math.abs(x) >= lim) return [String(Number((x * f).toPrecision(4))), u, `${x} ${unit}`];
+  const shown = Math.abs(x) !== 0 && (Math.abs(x) < 1e-3 || Math.abs(x) >= 1e5) ? x.toExponential(3) : String(Number(x.toPrecision(5)));
+  return [shown, unit, shown === String(x) ? "" : `${x} ${unit}`];
 }
 function drawDrift(raw, d, parts) {   // the drift step: raw signal against time, its baselines; then the compliance lines
   const dr = d.drift, co = d.compliance;
@@ -482,6 +623,7 @@ async function simulate() {
   const t0 = performance.now();
   try {
     const r = await api("api/simulate?max_points=600&columns=piezo_position,deflection,apparent_deflection,separation,normal_force", { method: "POST", headers: { "content-type": "application/json" }, body: JSON.stringify(simConfig()) });
+    await plotlyLoaded();
     const t1 = performance.now();
     SIM.last = r; $("sim-error").textContent = "";
     drawSim();
@@ -559,7 +701,8 @@ function follow(id, prefix, onEnd) {
     if (p.fraction !== undefined && p.fraction !== null) $(prefix + "-progress").value = p.fraction;
     $(prefix + "-state").textContent = `${d.state}${p.what ? ": " + p.what : ""}${p.total ? ` (${p.done}/${p.total} ${p.unit})` : ""}`;
   });
-  es.addEventListener("end", (e) => {
+  es.addEventListener("end", async (e) => {
+    await plotlyLoaded();
     es.close(); const job = JSON.parse(e.data);
     $(prefix + "-cancel").disabled = true; $(prefix + "-progress").value = job.state === "done" ? 1 : $(prefix + "-progress").value;
     $(prefix + "-state").textContent = job.state + (job.resumed ? ` (resumed ${job.resumed}x)` : "");
@@ -634,7 +777,7 @@ async function listJobs() {
   const jobs = await api("api/jobs");
   $("sw-jobs").replaceChildren(table(jobs.map((j) => [j.kind, j.state + (j.resumed ? ` (resumed)` : ""), new Date(j.created * 1000).toLocaleTimeString()]), ["job", "state", "started"]));
   const rows = $("sw-jobs").querySelectorAll("tr");
-  jobs.forEach((j, i) => { rows[i + 1].style.cursor = "pointer"; rows[i + 1].onclick = async () => { const full = await api(`api/jobs/${j.id}`); if (full.result) (j.kind === "fit" ? drawFit : drawSweep)(full.result); else if (full.state === "running") follow(j.id, j.kind === "fit" ? "fit" : "sw", j.kind === "fit" ? drawFit : drawSweep); }; });
+  jobs.forEach((j, i) => { rows[i + 1].style.cursor = "pointer"; rows[i + 1].onclick = async () => { const full = await api(`api/jobs/${j.id}`); await plotlyLoaded(); if (full.result) (j.kind === "fit" ? drawFit : drawSweep)(full.result); else if (full.state === "running") follow(j.id, j.kind === "fit" ? "fit" : "sw", j.kind === "fit" ? drawFit : drawSweep); }; });
 }
 function drawSweep(r) {
   SW.result = r;
@@ -670,5 +813,7 @@ $("an-calfile").addEventListener("change", (e) => { if (e.target.files[0]) loadC
     SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
     await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
+    window.READY_MS = performance.now();   // page load to interactive (benchmarks/bench_web.py)
+    setTimeout(() => plotlyLoaded().catch((e) => { $("status").textContent = e.message; }), 0);
   } catch (e) { $("status").textContent = "cannot reach the server: " + e.message; }
 })();
