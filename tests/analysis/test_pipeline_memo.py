@@ -8,6 +8,7 @@ and the sample steps really are skipped (counted), unless the curve's samples or
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import json
 from pathlib import Path
 
@@ -24,16 +25,25 @@ def _same(a, b) -> None:
     assert json.dumps(a.to_dict(arrays=True), sort_keys=True) == json.dumps(b.to_dict(arrays=True), sort_keys=True)
 
 
+_VERSIONS = itertools.count()
+
+
 @pytest.fixture
 def counted(monkeypatch):
+    from afmforce.analysis import registry
+
     calls = {"smooth": 0}
-    step = pipeline.STEPS["smooth"]
+    step = registry.step("smooth")
 
     def smooth(st, o):
         calls["smooth"] += 1
         return step.func(st, o)
 
-    monkeypatch.setitem(pipeline.STEPS, "smooth", dataclasses.replace(step, func=smooth))
+    # the record replaced in place (same place in the order); a version never used before rebuilds
+    # every derived table (all undone after the test)
+    monkeypatch.setitem(registry._STEPS, "smooth", dataclasses.replace(step, func=smooth))
+    monkeypatch.setitem(registry._STATE, "version", 10**9 + next(_VERSIONS))
+    assert pipeline.STEPS["smooth"].func is smooth
     return calls
 
 

@@ -138,6 +138,9 @@ def test_a_click_on_a_map_pixel_opens_its_curve(page):  # noqa: F811
     for px in sorted(pixels, key=lambda p: p["name"], reverse=True):    # the last curve first: not the one shown
         page.mouse.click(px["x"], px["y"])
         page.wait_for_function("(n) => document.getElementById('an-curve').value === n", arg=px["name"], timeout=10_000)
+        # the curve's arrays are fetched when it is first shown (a map sends the drawn curve's only)
+        page.wait_for_function("(n) => { const t = document.querySelector('#an-plot-force .g-gtitle text'); "
+                               "return t && t.textContent.endsWith(n); }", arg=px["name"], timeout=30_000)
         title = page.evaluate("document.querySelector('#an-plot-force .g-gtitle text').textContent")
         assert title.endswith(px["name"]), title
         drawn = page.evaluate("(() => { const d = document.getElementById('an-plot-force').data.find(t => t.name === 'approach'); return d.y.filter(v => v !== null); })()")
@@ -158,7 +161,8 @@ def test_a_file_without_a_time_base_is_drawn_against_the_sample_index(page):  # 
     xt = lambda: page.evaluate("document.querySelector('#an-plot-time .g-xtitle text').textContent")  # noqa: E731
     assert xt().startswith("sample index n [-]"), xt()
     x = page.evaluate("document.getElementById('an-plot-time').data[0].x.filter(v => v !== null)")
-    assert x[:3] == [0, 1, 2]
+    # sample indices (thinned to the screen: each pixel column's extremes), from the first sample on
+    assert x[0] == 0 and all(float(v).is_integer() for v in x) and all(b > a for a, b in zip(x, x[1:]))
     page.select_option("#an-example", "asylum-air")
     page.set_input_files("#an-files", [])
     page.click("#an-run")

@@ -28,6 +28,7 @@ from __future__ import annotations
 import importlib
 import math
 import pkgutil
+import threading
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any, Callable, Iterator
@@ -138,9 +139,22 @@ _STATE = {"version": 0, "loading": False, "loaded": False}
 _CACHE: dict[str, tuple[int, Any]] = {}
 
 
+#: Held while the step modules are imported: reentrant (a step module may read the registry while
+#: it is imported, in the same thread), and another thread (the web server's warm-up and a request)
+#: waits for the whole registry instead of reading a half-loaded one.
+_LOCK = threading.RLock()
+
+
 def _load() -> None:
-    if _STATE["loaded"] or _STATE["loading"]:
+    if _STATE["loaded"]:
         return
+    with _LOCK:
+        if _STATE["loaded"] or _STATE["loading"]:
+            return
+        _load_locked()
+
+
+def _load_locked() -> None:
     _STATE["loading"] = True
     try:
         package = importlib.import_module(f"{__package__}.steps")
