@@ -301,6 +301,8 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
                             f"{max_indentation * 1e9:.4g} nm of the contact point (at least 8 are "
                             "needed): fit a larger range")
     ref = fit.contact
+    if keep.all():  # the range holds the whole run: its fit
+        return replace(fit, range_reference=float(ref))
     fit = _fit_samples(u[keep], F[keep], idx[keep], *args, ref)
     shift = ref - fit.contact
     extra = ()
