@@ -144,3 +144,58 @@ def test_cell_curve_range_fits_the_samples_within_the_range():
     assert abs(got["contact_depth"] - c) < 0.01 * got["contact_point_se"]
     assert 1e3 < got["youngs_modulus"] < 1e5
     assert abs(got["contact_depth"] - whole["contact_depth"]) < 60e-9
+
+
+def _linear_E_b(u, F, c, R=R_TIP, nu=NU):
+    """(E, b) of the Hertz paraboloid at the contact point c by numpy's least squares, in scaled columns."""
+    phi = 4 / 3 / (1 - nu * nu) * math.sqrt(R) * np.clip(u - c, 0, None) ** 1.5
+    s = phi.max()
+    (e, b), *_ = np.linalg.lstsq(np.column_stack((phi / s, np.ones_like(phi))), F, rcond=None)
+    return e / s, b
+
+
+@pytest.mark.parametrize("window", [math.inf, 100e-9])
+def test_fixed_contact_point_fits_E_and_the_baseline_only(window):
+    """contact_point given (the truth): E and b are numpy's linear least squares over the samples within
+    the range of it, the contact point is reported with standard error 0 and a note; the 95 % interval
+    of E covers the truth on >= 17 of 20 seeds."""
+    cover = 0
+    for seed in range(20):
+        u, F, c, b = _curve(seed)
+        fit = fit_indentation(u, F, "hertz_paraboloid", {"radius": R_TIP}, nu=NU, contact_point=c,
+                              max_indentation=window)
+        keep = u <= c + window
+        np.testing.assert_array_equal(fit.fitted, np.flatnonzero(keep))
+        E, bi = _linear_E_b(u[keep], F[keep], c)
+        assert fit.youngs_modulus == pytest.approx(E, rel=1e-9)
+        assert fit.baseline == pytest.approx(bi, abs=1e-6 * NOISE)   # normal equations vs QR
+        assert fit.contact == c and fit.contact_se == 0.0
+        assert "fixed" in fit.warnings[0]
+        cover += fit.youngs_modulus_low <= E_TRUE <= fit.youngs_modulus_high
+    assert cover >= 17, cover
+
+
+def test_fixed_contact_point_refusals():
+    from afmforce.errors import AnalysisError, ParameterError
+    import adhesive_curves as ac
+
+    u, F, c, b = _curve(2)
+    with pytest.raises(AnalysisError, match="contact point fixed"):
+        fit_indentation(u, F, "hertz_paraboloid", {"radius": R_TIP}, nu=NU, contact_point=2e-6)   # past the run
+    u, F, tr = ac.curve("jkr", 0, n=100)
+    with pytest.raises(ParameterError, match="contact_point"):
+        fit_indentation(u, F, "jkr", {"radius": ac.R_TIP}, nu=ac.NU, contact_point=tr["c"])
+
+
+def test_cell_curve_with_the_contact_point_given():
+    """The shipped cell through the CLI option indentation.contact_point: fixed at the whole run's fitted
+    contact point, E is the whole run's (its optimum over c), with standard error 0 on the contact."""
+    from afmforce.datasets import path
+
+    whole = _cli(path("jpk-cell"), "indentation.tip_radius=5um")
+    c = whole["contact_depth"]
+    got = _cli(path("jpk-cell"), "indentation.tip_radius=5um", f"indentation.contact_point={c!r}")
+    assert got["contact_depth"] == c and got["contact_point_se"] == 0.0
+    assert abs(got["youngs_modulus"] - whole["youngs_modulus"]) < 0.01 * whole["youngs_modulus_se"]
+    assert got["youngs_modulus_se"] < whole["youngs_modulus_se"]      # c no longer uncertain
+    assert got["n_points"] == whole["n_points"]

@@ -58,7 +58,7 @@ class IndentationFit:
     fitted : ndarray of int  indices (into the arrays given) of the fitted points
     warnings : tuple of str  the validity check (:func:`validity`) and fit troubles
     range_reference : float  the contact point the fit range (``max_indentation``) is measured from: the
-        whole run's [m] (NaN: no range, the whole run fitted)
+        whole run's, or the one given (``contact_point``) [m] (NaN: no range, the whole run fitted)
     """
 
     model: str
@@ -224,7 +224,8 @@ def validity(key: str, geometry: dict, max_indentation: float, thickness: float 
 def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dict | None = None, *,
                     nu: float = 0.5, weight_width: float = 0.0, max_indentation: float = math.inf,
                     contact_guess: float | None = None, thickness: float | None = None,
-                    transition: float = 1.0, branch: str = "approach") -> IndentationFit:
+                    transition: float = 1.0, branch: str = "approach",
+                    contact_point: float | None = None) -> IndentationFit:
     """Fit the law ``model`` to one run: E, contact point and baseline jointly (and w for adhesive laws).
 
     Parameters
@@ -259,6 +260,11 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
         Adhesive laws: ``"approach"`` (no force before contact) or ``"retract"`` (the neck before
         the pull-off: negative indentations; the data read backwards, into the sample).
 
+    contact_point : float, optional
+        The contact point, fixed, as a tip depth [m] (None: fitted). Then only E and the baseline are
+        fitted (linear least squares), the contact point's standard error is 0 and a note in
+        ``warnings`` says it was given; a fit range is measured from it. Linear laws only.
+
     Returns
     -------
     IndentationFit
@@ -287,6 +293,8 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     if u.size < 8:
         raise AnalysisError(f"only {u.size} points to fit the indentation model (at least 8 are needed)")
     args = (model, geom, nu, weight_width, thickness, transition, branch)
+    if contact_point is not None:
+        return _fit_fixed(u, F, idx, args, m, float(contact_point), max_indentation)
     fit = _fit_samples(u, F, idx, *args, contact_guess)
     if not math.isfinite(max_indentation):
         return fit
@@ -314,13 +322,47 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     return replace(fit, range_reference=float(ref), warnings=fit.warnings + extra)
 
 
+def _fit_fixed(u, F, idx, args, m, c: float, max_indentation: float) -> IndentationFit:
+    """The fit with the contact point ``c`` [m] given: E and b on the samples within the range of c."""
+    if not m.linear:
+        raise ParameterError(f"a fixed contact point is supported for the laws without adhesion, not {m.name} "
+                             "(give no contact_point: it is fitted with E and w)")
+    if not math.isfinite(c):
+        raise ParameterError(f"contact_point must be a finite tip depth (got {c!r} m)")
+    keep = u <= c + max_indentation
+    if int(keep.sum()) < 8:
+        raise AnalysisError(f"only {int(keep.sum())} points within max_indentation = {max_indentation * 1e9:.4g} nm "
+                            "of the contact point (at least 8 are needed): fit a larger range")
+    fit = _fit_samples(u[keep], F[keep], idx[keep], *args, None, fixed=c)
+    note = (f"the contact point is fixed (given) at a tip depth of {c * 1e9:.6g} nm: not fitted, its standard "
+            "error is 0",)
+    return replace(fit, range_reference=c if math.isfinite(max_indentation) else math.nan,
+                   warnings=note + fit.warnings)
+
+
 def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition, branch,
-                 contact_guess) -> IndentationFit:
+                 contact_guess, fixed: float | None = None) -> IndentationFit:
     """The fit on the finite samples (u, F) (all of them: the fit range is applied before); ``idx``:
-    their indices into the arrays the caller gave."""
+    their indices into the arrays the caller gave; ``fixed``: the contact point, held (linear laws)."""
     m = indentation_model(model)
     w = w_se = w_low = w_high = math.nan
-    if m.linear:
+    if fixed is not None:  # E and b alone: linear least squares at the given contact point
+        c = float(fixed)
+        d = u - c
+        phi = shape_and_slope(model, d, geom, nu)[0]
+        q = _weights(d, weight_width, math.inf)
+        J = q[:, None] * np.column_stack((phi, np.ones_like(phi)))
+        try:
+            E, b = _normal_solve(J, q * F)
+        except np.linalg.LinAlgError:
+            E = math.nan
+        if not (E > 0):
+            raise AnalysisError(f"with the contact point fixed at a tip depth of {c * 1e9:.6g} nm, no positive "
+                                "modulus fits: the curve does not rise into contact past it (give another "
+                                "contact_point, or none to fit it)")
+        r = q * (F - E * phi - b)
+        names = 2
+    elif m.linear:
         E, c, b = _linear_fit(u, F, model, geom, nu, weight_width, contact_guess)
         d = u - c
         phi, dphi = shape_and_slope(model, d, geom, nu)
@@ -339,13 +381,13 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
     used = q > 0
     n = int(used.sum())
     dof = n - names
-    if m.linear:
+    if m.linear or fixed is not None:
         s2 = float(r @ r) / dof if dof > 0 else math.nan
         try:
             se = np.sqrt(np.clip(np.diag(_covariance(J, s2)), 0, None))
         except np.linalg.LinAlgError:
             se = np.full(names, math.nan)
-        E_se, c_se = float(se[0]), float(se[1])
+        E_se, c_se = float(se[0]), (float(se[1]) if fixed is None else 0.0)
     else:
         E_se, w_se, c_se = float(se_a[0]), float(se_a[1]), float(se_a[2])
     t = _t95(dof)
