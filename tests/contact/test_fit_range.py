@@ -199,3 +199,14 @@ def test_cell_curve_with_the_contact_point_given():
     assert abs(got["youngs_modulus"] - whole["youngs_modulus"]) < 0.01 * whole["youngs_modulus_se"]
     assert got["youngs_modulus_se"] < whole["youngs_modulus_se"]      # c no longer uncertain
     assert got["n_points"] == whole["n_points"]
+
+
+def test_fit_adhesive_refuses_a_moving_window():
+    """fit_adhesive fits every sample it is given: a finite max_ind (the old per-candidate window) is refused."""
+    from afmforce.contact.adhesive_fit import fit_adhesive
+    from afmforce.errors import ParameterError
+    import adhesive_curves as ac
+
+    u, F, tr = ac.curve("dmt", 0, n=100)
+    with pytest.raises(ParameterError, match="max_ind"):
+        fit_adhesive(u, F, "dmt", ac.R_TIP, ac.NU, max_ind=0.5e-6)
