@@ -42,13 +42,14 @@ def _page_fit(page) -> dict:
     return page.evaluate("AN.payload.results[document.getElementById('an-curve').value].details.indentation")
 
 
-def _handle_drag(page, to_nm: float) -> None:
-    """A real mouse drag of the fit-limit handle (the plot's one shape) to ``to_nm`` on the x axis."""
+def _handle_drag(page, to_nm: float, shape: int = 0) -> None:
+    """A real mouse drag of a handle (the plot's shape ``shape``: 0 the fit limit, 1 the contact point) to
+    ``to_nm`` on the x axis."""
     page.locator("#an-plot-indentation").scroll_into_view_if_needed()
-    at = page.evaluate("""() => { const gd = document.getElementById('an-plot-indentation'), L = gd._fullLayout;
+    at = page.evaluate("""(k) => { const gd = document.getElementById('an-plot-indentation'), L = gd._fullLayout;
         const r = gd.getBoundingClientRect();
-        return {x0: L.shapes[0].x0, left: r.left + L.xaxis._offset, top: r.top + L.yaxis._offset, h: L.yaxis._length,
-                lo: L.xaxis.range[0], hi: L.xaxis.range[1], w: L.xaxis._length}; }""")
+        return {x0: L.shapes[k].x0, left: r.left + L.xaxis._offset, top: r.top + L.yaxis._offset, h: L.yaxis._length,
+                lo: L.xaxis.range[0], hi: L.xaxis.range[1], w: L.xaxis._length}; }""", shape)
     px = lambda nm: at["left"] + (nm - at["lo"]) / (at["hi"] - at["lo"]) * at["w"]   # noqa: E731 (a linear axis)
     y = at["top"] + at["h"] * 0.5
     page.mouse.move(px(at["x0"]), y)
@@ -68,7 +69,8 @@ def test_drag_the_fit_range_and_the_modulus_is_refitted(page):  # noqa: F811
     """The cell of the shipped JPK curve, a 5 µm bead: the fit limit dragged to half its depth types
     indentation.max_indentation in its field and re-runs; the E that comes back is the library's
     with the same option (``afmforce analyze --option``), the closed-form least-squares E of the
-    samples it fitted, every one within the dragged limit, and not the whole run's E. Dragged past
+    samples it fitted, those within the dragged limit of the whole run's contact point, and not the
+    whole run's E. Dragged past
     the whole run's end, the option is cleared and the whole run's E comes back."""
     from afmforce.datasets import path
 
@@ -97,8 +99,11 @@ def test_drag_the_fit_range_and_the_modulus_is_refitted(page):  # noqa: F811
     fit = cli["details"]["indentation"]
     assert got["youngs_modulus"] == pytest.approx(fit["youngs_modulus"], rel=1e-12)
     assert fit["youngs_modulus"] == pytest.approx(_closed_form_modulus(fit), rel=1e-6)
-    assert max(fit["indentation"]) <= limit * 1e-9 * (1 + 1e-12)
-    assert fit["max_indentation"] <= limit * 1e-9 * (1 + 1e-12)
+    # the range: the samples within the limit of the whole run's contact point (a fixed set), every one
+    u_whole = cli_whole["contact_depth"] + np.asarray(cli_whole["indentation"])
+    u_fit = fit["contact_depth"] + np.asarray(fit["indentation"])
+    assert fit["n_points"] == int(np.sum(u_whole <= cli_whole["contact_depth"] + limit * 1e-9)) < u_whole.size
+    assert u_fit.max() <= cli_whole["contact_depth"] + limit * 1e-9 * (1 + 1e-12)
     assert abs(got["youngs_modulus"] / whole["youngs_modulus"] - 1) > 1e-3
     title = page.evaluate("document.querySelector('#an-plot-indentation .g-gtitle text').textContent")
     e = got["youngs_modulus"]
@@ -111,6 +116,51 @@ def test_drag_the_fit_range_and_the_modulus_is_refitted(page):  # noqa: F811
     _handle_drag(page, layout["hi"] - 0.01 * span)
     _settled(page, 2)
     assert page.locator("[data-option='indentation.max_indentation'] input.val").input_value() == ""
+    assert _page_fit(page)["youngs_modulus"] == pytest.approx(whole["youngs_modulus"], rel=1e-12)
+    box.fill("")
+    box.dispatch_event("change")
+    page.wait_for_function("document.getElementById('an-plot-indentation').classList.contains('hidden')", timeout=60_000)
+    page.select_option("#an-example", "")
+    assert not page.errors
+
+
+def test_drag_the_contact_point_and_it_is_fixed_there(page):  # noqa: F811
+    """The shipped JPK cell, a 5 µm bead: the contact-point line (δ = 0) dragged 25 nm to the left types
+    indentation.contact_point (the tip depth there) in its field and re-runs; the fit that comes back
+    is the library's with the same option, its contact point is the typed one (standard error 0), and
+    E is the closed-form least squares of the samples at that contact point; cleared, the fitted
+    contact point and the whole run's E come back."""
+    from afmforce.datasets import path
+
+    page.select_option("#an-example", "jpk-cell")
+    page.click("#an-run")
+    page.wait_for_function("document.getElementById('an-curve').value.includes('jpk-cell')", timeout=60_000)
+    box = page.locator("[data-option='indentation.tip_radius'] input.val")
+    box.fill("5000")
+    box.dispatch_event("change")
+    page.wait_for_function("document.getElementById('an-plot-indentation').data", timeout=60_000)
+    drops = page.evaluate("window.FIT_RANGE_DROPS || 0")
+    _settled(page, drops)
+    whole = _page_fit(page)
+    assert whole["contact_point_se"] > 0
+    _handle_drag(page, -25.0, shape=1)
+    _settled(page, drops + 1)
+    field = page.locator("[data-option='indentation.contact_point'] input.val")
+    typed = field.input_value()
+    got = _page_fit(page)
+    cli = _cli(path("jpk-cell"), "indentation.tip_radius=5um", f"indentation.contact_point={typed}nm")
+    fit = cli["details"]["indentation"]
+    span = page.evaluate("(() => { const r = document.getElementById('an-plot-indentation')._fullLayout.xaxis.range; return r[1] - r[0]; })()")
+    assert float(typed) * 1e-9 - whole["contact_depth"] == pytest.approx(-25e-9, abs=0.03 * span * 1e-9)
+    assert got["contact_depth"] == pytest.approx(float(typed) * 1e-9, rel=1e-12) == fit["contact_depth"]
+    assert got["contact_point_se"] == 0.0 and fit["contact_point_se"] == 0.0
+    assert got["youngs_modulus"] == pytest.approx(fit["youngs_modulus"], rel=1e-12)
+    assert fit["youngs_modulus"] == pytest.approx(_closed_form_modulus(fit), rel=1e-9)
+    assert abs(got["youngs_modulus"] / whole["youngs_modulus"] - 1) > 1e-3
+    field.evaluate("(e) => { e.value = ''; e.dispatchEvent(new Event('change')); }")   # its section may be folded
+    page.wait_for_function("document.getElementById('status').textContent === '' && !AN.busy && !AN.next", timeout=120_000)
+    page.wait_for_function(f"AN.payload.results[document.getElementById('an-curve').value].details.indentation.contact_point_se > 0",
+                           timeout=120_000)
     assert _page_fit(page)["youngs_modulus"] == pytest.approx(whole["youngs_modulus"], rel=1e-12)
     box.fill("")
     box.dispatch_event("change")

@@ -105,7 +105,7 @@ def indentation(st: State, o: IndentationOptions) -> State:
         fit = fit_indentation(u, f, o.model, {k: v for k, v in geom.items() if v is not None}, nu=o.poisson,
                               weight_width=o.weight_width, contact_guess=guess, thickness=o.thickness,
                               max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
-                              transition=o.transition, branch=o.run)
+                              transition=o.transition, branch=o.run, contact_point=o.contact_point)
     except (AnalysisError, ParameterError) as exc:
         return _skip(st, "indentation", f"no modulus: {exc}")
     res = _result(fit, u, o, geom, radius, st.spring_constant)
@@ -175,5 +175,5 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
     fit = fit_indentation(u, d * float(k), o.model, {g: v for g, v in geom.items() if v is not None},
                           nu=o.poisson, weight_width=o.weight_width, thickness=o.thickness,
                           max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
-                          transition=o.transition, branch=o.run)
+                          transition=o.transition, branch=o.run, contact_point=o.contact_point)
     return _result(fit, u, o, geom, radius, float(k))

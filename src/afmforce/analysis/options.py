@@ -405,8 +405,11 @@ class IndentationOptions(StepOptions):
                                    "the validity check of the others (None: a half space)", lo=0.0, hi=1e-2,
                                    lo_open=True)
     bonded: bool = _opt(True, "flag", "", "thin-layer model: the layer is bonded to the substrate")
-    max_indentation: float | None = _opt(None, "length", "m", "fit only up to this indentation (None: the "
-                                         "whole run)", lo=0.0, hi=1e-3, lo_open=True)
+    max_indentation: float | None = _opt(None, "length", "m", "fit only the samples up to this indentation "
+                                         "past the whole run's contact point (None: the whole run)", lo=0.0, hi=1e-3, lo_open=True)
+    contact_point: float | None = _opt(None, "length", "m", "the contact point, fixed, as the tip depth u = z "
+                                       "- deflection (None: fitted with E; laws without adhesion)",
+                                       lo=-1e-3, hi=1e-3)
     weight_width: float = _opt(0.0, "length", "m", "residuals within this distance of the contact point "
                                "weighted down linearly (nanite's weight_cp; 0: none)", lo=0.0, hi=1e-3)
     run: str = _opt("approach", "choice", "", "run fitted", choices=("approach", "retract"))

@@ -107,10 +107,17 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
                  width: float = 0.0, max_ind: float = math.inf) -> AdhesiveFit:
     """Fit the adhesive law ``key`` (``jkr``, ``dmt``, ``maugis``) to one run (the module docstring).
 
-    ``width``, ``max_ind``: the residuals weighted down linearly within ``width`` [m] of the contact
-    point and dropped beyond the indentation ``max_ind`` [m] (:func:`afmforce.contact.fit.fit_indentation`).
-    Raises AnalysisError when no contact point gives E > 0.
+    ``width``: the residuals weighted down linearly within ``width`` [m] of the contact point. ``max_ind``
+    must be inf: every sample given is fitted. A fit range is a fixed set of samples chosen before
+    (:func:`afmforce.contact.fit.fit_indentation`'s ``max_indentation``); one measured from each tried
+    contact point would let contact points early in the baseline win by fitting fewer samples.
+    Raises AnalysisError when no contact point gives E > 0, ParameterError for a finite ``max_ind``.
     """
+    if math.isfinite(max_ind):
+        from ..errors import ParameterError
+
+        raise ParameterError("fit_adhesive fits every sample given (max_ind must be inf): choose the samples of a "
+                             "fit range before, as fit_indentation does with max_indentation")
     from ._kernels import scan_dmt
     from ._weights import t95 as _t95, weights as _weights
 

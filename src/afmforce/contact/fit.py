@@ -10,7 +10,9 @@ fitted jointly, and residuals weighted down linearly within ``weight_width`` of 
 (nanite's ``weight_cp``; 0: unweighted). For a given c the model is linear in (E, b): the fit
 solves it in closed form for a few dozen contact points at once (one array operation), refines
 the best one twice, and ends with Gauss-Newton steps on (E, c, b), whose Jacobian gives the
-standard errors. Adhesive laws (JKR, DMT, Maugis) add the work of adhesion w [J/m^2]: all four
+standard errors. A fit range (``max_indentation``) is a fixed set of samples, ``u <= c_ref +
+max_indentation`` for every contact point tried, with c_ref the whole run's contact point
+(:func:`fit_indentation`). Adhesive laws (JKR, DMT, Maugis) add the work of adhesion w [J/m^2]: all four
 parameters, the contact point included, are fitted together and get their covariance
 (:mod:`afmforce.contact.adhesive_fit`).
 
@@ -21,7 +23,7 @@ parameters, the contact point included, are fitted together and get their covari
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -55,6 +57,8 @@ class IndentationFit:
     residuals : ndarray  data minus model on the fitted points [N]
     fitted : ndarray of int  indices (into the arrays given) of the fitted points
     warnings : tuple of str  the validity check (:func:`validity`) and fit troubles
+    range_reference : float  the contact point the fit range (``max_indentation``) is measured from: the
+        whole run's, or the one given (``contact_point``) [m] (NaN: no range, the whole run fitted)
     """
 
     model: str
@@ -77,6 +81,7 @@ class IndentationFit:
     warnings: tuple[str, ...] = ()
     work_of_adhesion_low: float = math.nan
     work_of_adhesion_high: float = math.nan
+    range_reference: float = math.nan
 
 
 def model_force(key: str, delta, E: float, geometry: dict, nu: float, w: float = 0.0, lam: float = 1.0,
@@ -96,17 +101,18 @@ _POWER = {"hertz_paraboloid": (lambda g, c: 4.0 / 3.0 * c * math.sqrt(g["radius"
           "bilodeau_pyramid4": (lambda g, c: BILODEAU_FOUR_SIDED * math.tan(g["half_angle"]) * c, 2.0)}
 
 
-def _scan(u, F, cands, key, geom, nu, width, max_ind):
-    """Closed-form (E, b) and the weighted sum of squares for each candidate contact point."""
+def _scan(u, F, cands, key, geom, nu, width):
+    """Closed-form (E, b) and the weighted sum of squares for each candidate contact point (all samples
+    given are fitted: a fit range is applied before, as a fixed set of samples)."""
     if key in _POWER:
         from ._kernels import scan_power_law
 
         kf, p = _POWER[key]
         return scan_power_law(u, F, np.ascontiguousarray(cands, dtype=float), kf(geom, 1.0 / (1.0 - nu * nu)), p,
-                              float(width), float(max_ind))
+                              float(width), math.inf)
     d = u[None, :] - cands[:, None]
     phi = shape_and_slope(key, d, geom, nu)[0]
-    q = _weights(d, width, max_ind) ** 2
+    q = _weights(d, width, math.inf) ** 2
     s0, s1, s2 = q.sum(1), (q * phi).sum(1), (q * phi * phi).sum(1)
     qf = q * F
     sy, sxy, syy = qf.sum(1), (qf * phi).sum(1), (qf * F).sum(1)
@@ -119,7 +125,7 @@ def _scan(u, F, cands, key, geom, nu, width, max_ind):
     return E, b, ssr
 
 
-def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
+def _linear_fit(u, F, key, geom, nu, width, guess):
     lo, hi = float(np.min(u)), float(np.max(u))
     span = hi - lo
     if not span > 0:
@@ -133,7 +139,7 @@ def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
     for rnd in range(4):
         cands = np.unique(cands)
         us, Fs = (u[::stride], F[::stride]) if rnd < 3 else (u, F)
-        E, b, ssr = _scan(us, Fs, cands, key, geom, nu, width, max_ind)
+        E, b, ssr = _scan(us, Fs, cands, key, geom, nu, width)
         i = int(np.argmin(ssr))
         if not math.isfinite(ssr[i]):
             raise AnalysisError("no contact point gives a positive modulus: the curve does not rise into contact")
@@ -147,7 +153,7 @@ def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
     for _ in range(2):  # the scan has the contact point to ~1e-4 of a grid step: a polish
         d = u - p[1]
         phi, dphi = shape_and_slope(key, d, geom, nu)
-        q = _weights(d, width, max_ind)
+        q = _weights(d, width, math.inf)
         r = q * (F - p[0] * phi - p[2])
         J = q[:, None] * np.column_stack((phi, -p[0] * dphi, np.ones_like(phi)))
         try:
@@ -158,7 +164,7 @@ def _linear_fit(u, F, key, geom, nu, width, max_ind, guess):
         if trial[0] <= 0:
             break
         dt = u - trial[1]
-        rt = _weights(dt, width, max_ind) * (F - trial[0] * shape_and_slope(key, dt, geom, nu)[0] - trial[2])
+        rt = _weights(dt, width, math.inf) * (F - trial[0] * shape_and_slope(key, dt, geom, nu)[0] - trial[2])
         s = float(rt @ rt)
         if s > best:
             break
@@ -218,7 +224,8 @@ def validity(key: str, geometry: dict, max_indentation: float, thickness: float 
 def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dict | None = None, *,
                     nu: float = 0.5, weight_width: float = 0.0, max_indentation: float = math.inf,
                     contact_guess: float | None = None, thickness: float | None = None,
-                    transition: float = 1.0, branch: str = "approach") -> IndentationFit:
+                    transition: float = 1.0, branch: str = "approach",
+                    contact_point: float | None = None) -> IndentationFit:
     """Fit the law ``model`` to one run: E, contact point and baseline jointly (and w for adhesive laws).
 
     Parameters
@@ -236,7 +243,13 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     weight_width : float
         Residuals within this distance of the contact point are weighted down linearly [m] (0: none).
     max_indentation : float
-        Fit only up to this indentation beyond the contact point [m] (inf: the whole run).
+        Fit only up to this indentation beyond the contact point [m] (inf: the whole run). The range
+        is a fixed set of samples, ``u <= c_ref + max_indentation``, the same for every contact point
+        tried, with ``c_ref`` the whole run's contact point (the first pass of nanite's
+        ``range_type="relative cp"``; :attr:`IndentationFit.range_reference`); E, the contact point
+        and the baseline are then fitted on those samples. A range that moved with each tried contact
+        point would let contact points early in the baseline win by fitting fewer samples; further
+        passes (c_ref from the range's own fit) do not settle on curves whose onset is not the law's.
     contact_guess : float, optional
         A contact point (tip depth [m]) the search also looks around.
     thickness : float, optional
@@ -246,6 +259,11 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     branch : str
         Adhesive laws: ``"approach"`` (no force before contact) or ``"retract"`` (the neck before
         the pull-off: negative indentations; the data read backwards, into the sample).
+
+    contact_point : float, optional
+        The contact point, fixed, as a tip depth [m] (None: fitted). Then only E and the baseline are
+        fitted (linear least squares), the contact point's standard error is 0 and a note in
+        ``warnings`` says it was given; a fit range is measured from it. Linear laws only.
 
     Returns
     -------
@@ -265,6 +283,8 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
         if v is None or not (float(v) > 0):
             key = {"radius": "tip_radius", "thickness": "indentation.thickness"}.get(g, g)     # the quantity the user gives (`key`: each face's flag)
             raise ParameterError(f"indentation model {model!r} needs the {g.replace('_', ' ')} (`{key}`)")
+    if not (max_indentation > 0):
+        raise ParameterError(f"max_indentation must be positive (got {max_indentation!r} m)")
     u = np.asarray(depth, dtype=float)
     F = np.asarray(force, dtype=float)
     ok = np.isfinite(u) & np.isfinite(F)
@@ -272,17 +292,86 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     u, F = u[ok], F[ok]
     if u.size < 8:
         raise AnalysisError(f"only {u.size} points to fit the indentation model (at least 8 are needed)")
+    args = (model, geom, nu, weight_width, thickness, transition, branch)
+    if contact_point is not None:
+        return _fit_fixed(u, F, idx, args, m, float(contact_point), max_indentation)
+    fit = _fit_samples(u, F, idx, *args, contact_guess)
+    if not math.isfinite(max_indentation):
+        return fit
+    # the fit range: a fixed set of samples, u <= c_ref + max_indentation, the same for every contact
+    # point tried, c_ref the whole run's contact point (nanite's first pass of its "relative cp" range).
+    # Not iterated: on real curves whose onset is not the law's, each pass moves the contact point
+    # earlier and the range with it (the shipped cell, 30 nm: 7 kPa, 0.9 kPa, then 1 Pa at 1.7 um of
+    # "indentation" in the baseline), so the passes never settle
+    keep = u <= fit.contact + max_indentation
+    if int(keep.sum()) < 8:
+        raise AnalysisError(f"only {int(keep.sum())} points within max_indentation = "
+                            f"{max_indentation * 1e9:.4g} nm of the contact point (at least 8 are "
+                            "needed): fit a larger range")
+    ref = fit.contact
+    if keep.all():  # the range holds the whole run: its fit
+        return replace(fit, range_reference=float(ref))
+    fit = _fit_samples(u[keep], F[keep], idx[keep], *args, ref)
+    shift = ref - fit.contact
+    extra = ()
+    if abs(shift) > 0.5 * max_indentation:
+        extra = (f"the contact point of the fit range lies {abs(shift) * 1e9:.3g} nm "
+                 f"{'before' if shift > 0 else 'beyond'} the whole run's (the range's reference), more than "
+                 f"half the range: the curve near contact is not of the {m.name} law's shape, and the "
+                 "modulus depends on the range",)
+    return replace(fit, range_reference=float(ref), warnings=fit.warnings + extra)
+
+
+def _fit_fixed(u, F, idx, args, m, c: float, max_indentation: float) -> IndentationFit:
+    """The fit with the contact point ``c`` [m] given: E and b on the samples within the range of c."""
+    if not m.linear:
+        raise ParameterError(f"a fixed contact point is supported for the laws without adhesion, not {m.name} "
+                             "(give no contact_point: it is fitted with E and w)")
+    if not math.isfinite(c):
+        raise ParameterError(f"contact_point must be a finite tip depth (got {c!r} m)")
+    keep = u <= c + max_indentation
+    if int(keep.sum()) < 8:
+        raise AnalysisError(f"only {int(keep.sum())} points within max_indentation = {max_indentation * 1e9:.4g} nm "
+                            "of the contact point (at least 8 are needed): fit a larger range")
+    fit = _fit_samples(u[keep], F[keep], idx[keep], *args, None, fixed=c)
+    note = (f"the contact point is fixed (given) at a tip depth of {c * 1e9:.6g} nm: not fitted, its standard "
+            "error is 0",)
+    return replace(fit, range_reference=c if math.isfinite(max_indentation) else math.nan,
+                   warnings=note + fit.warnings)
+
+
+def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition, branch,
+                 contact_guess, fixed: float | None = None) -> IndentationFit:
+    """The fit on the finite samples (u, F) (all of them: the fit range is applied before); ``idx``:
+    their indices into the arrays the caller gave; ``fixed``: the contact point, held (linear laws)."""
+    m = indentation_model(model)
     w = w_se = w_low = w_high = math.nan
-    if m.linear:
-        E, c, b = _linear_fit(u, F, model, geom, nu, weight_width, max_indentation, contact_guess)
+    if fixed is not None:  # E and b alone: linear least squares at the given contact point
+        c = float(fixed)
+        d = u - c
+        phi = shape_and_slope(model, d, geom, nu)[0]
+        q = _weights(d, weight_width, math.inf)
+        J = q[:, None] * np.column_stack((phi, np.ones_like(phi)))
+        try:
+            E, b = _normal_solve(J, q * F)
+        except np.linalg.LinAlgError:
+            E = math.nan
+        if not (E > 0):
+            raise AnalysisError(f"with the contact point fixed at a tip depth of {c * 1e9:.6g} nm, no positive "
+                                "modulus fits: the curve does not rise into contact past it (give another "
+                                "contact_point, or none to fit it)")
+        r = q * (F - E * phi - b)
+        names = 2
+    elif m.linear:
+        E, c, b = _linear_fit(u, F, model, geom, nu, weight_width, contact_guess)
         d = u - c
         phi, dphi = shape_and_slope(model, d, geom, nu)
-        q = _weights(d, weight_width, max_indentation)
+        q = _weights(d, weight_width, math.inf)
         r = q * (F - E * phi - b)
         J = q[:, None] * np.column_stack((phi, -E * dphi, np.ones_like(phi)))
         names = 3
     else:
-        a = fit_adhesive(u, F, model, geom["radius"], nu, transition, branch, weight_width, max_indentation)
+        a = fit_adhesive(u, F, model, geom["radius"], nu, transition, branch, weight_width, math.inf)
         E, w, c, b = a.E, a.w, a.c, a.b
         d = u - c
         q = a.weights
@@ -292,13 +381,13 @@ def fit_indentation(depth, force, model: str = "hertz_paraboloid", geometry: dic
     used = q > 0
     n = int(used.sum())
     dof = n - names
-    if m.linear:
+    if m.linear or fixed is not None:
         s2 = float(r @ r) / dof if dof > 0 else math.nan
         try:
             se = np.sqrt(np.clip(np.diag(_covariance(J, s2)), 0, None))
         except np.linalg.LinAlgError:
             se = np.full(names, math.nan)
-        E_se, c_se = float(se[0]), float(se[1])
+        E_se, c_se = float(se[0]), (float(se[1]) if fixed is None else 0.0)
     else:
         E_se, w_se, c_se = float(se_a[0]), float(se_a[1]), float(se_a[2])
     t = _t95(dof)

@@ -478,8 +478,9 @@ function drawIndentation(res) {   // force above the baseline vs indentation: th
     contactPointTrace(fit, data)],
   { ...LAYOUT, title: { text: `Indentation: ${label}` + (fit.warnings && fit.warnings.length ? ` (${fit.warnings.length} warning${fit.warnings.length > 1 ? "s" : ""})` : "") },
     xaxis: { title: { text: "indentation δ [nm]" }, range: range.xrange, autorange: false }, yaxis: { title: { text: "force above the baseline [nN]" } },
-    shapes: range.shapes, annotations: range.annotations }, { ...CONFIG, edits: { shapePosition: true } });
+    shapes: [...range.shapes, contactPointShape(fit)], annotations: range.annotations }, { ...CONFIG, edits: { shapePosition: true } });
   fitRangeBind(div);
+  contactPointBind(div);   // drag.js: the contact point, dragged (indentation.contact_point)
 }
 function timeAxis(raw) {   // a file without a time base (no sample rate): its "time" is the sample index
   return raw.time_base === false ? { title: "sample index n [-] (the file has no time base)", hover: "sample %{x:.0f}" }

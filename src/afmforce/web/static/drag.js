@@ -29,12 +29,14 @@ function fitRangeLayout(name, fit, x) {
   };
 }
 
-// the fitted contact point (δ = 0) as a trace: fitted with E and the baseline (no option fixes it)
+// the contact point (δ = 0) as a trace (its hover): fitted with E and the baseline, or given
+// (indentation.contact_point, dragged: contactPointBind)
 function contactPointTrace(fit, ys) {
   const lo = Math.min(...ys), hi = Math.max(...ys);
   const se = fit.contact_point_se !== null && isFinite(fit.contact_point_se) ? ` ± ${Number((fit.contact_point_se * 1e9).toPrecision(3))} nm` : "";
-  return { x: [0, 0], y: [lo, hi], mode: "lines", name: "contact point (fitted)", line: { color: "#555", dash: "dash", width: 1 },
-    hovertemplate: `contact point, fitted: z = ${Number((fit.contact_point * 1e9).toPrecision(6))} nm${se}<extra></extra>` };
+  const how = fit.contact_point_se === 0 ? "given" : "fitted";
+  return { x: [0, 0], y: [lo, hi], mode: "lines", name: `contact point (${how}) ⇠ drag ⇢`, line: { color: "#555", dash: "dash", width: 1 },
+    hovertemplate: `contact point, ${how}: z = ${Number((fit.contact_point * 1e9).toPrecision(6))} nm${se}<extra></extra>` };
 }
 
 // a dropped handle -> the option's value (SI -> its control's unit) and a re-run; dragged to the
@@ -43,22 +45,41 @@ function fitRangeBind(div) {
   optionHandleBind(div, "indentation", "max_indentation", () => FIT_RANGE.room[$("an-curve").value]);
 }
 
-// the handle of one option on a plot (its only shape): dropped, its x [nm] is typed in the option's
-// field and the analysis re-runs (past clearAt(): the field emptied, the option's default again)
-function optionHandleBind(div, step, name, clearAt = () => undefined) {
-  if (div.dataset.handle) return;
-  div.dataset.handle = `${step}.${name}`;
-  div.on("plotly_relayout", (ev) => {
-    const x0 = ev["shapes[0].x0"], x1 = ev["shapes[0].x1"];
+// the handle of one option on a plot (its shape number ``index``): dropped, its x [nm] is typed in the
+// option's field and the analysis re-runs (past clearAt(): the field emptied, the option's default
+// again); value(nm): the option's value [SI] at x (default: a positive length, x itself)
+function optionHandleBind(div, step, name, clearAt = () => undefined, index = 0,
+  value = (nm) => Math.max(nm, 1e-3) * 1e-9, digits = 4) {
+  // one listener per handle, bound again on each draw (a purged plot -- hidden -- has lost its listeners)
+  const key = `_afmHandle${index}`;
+  if (div[key] && div.removeListener) div.removeListener("plotly_relayout", div[key]);
+  div.dataset[`handle${index}`] = `${step}.${name}`;
+  div[key] = (ev) => {
+    const x0 = ev[`shapes[${index}].x0`], x1 = ev[`shapes[${index}].x1`];
     if (x0 === undefined && x1 === undefined) return;
     const c = (typeof AN === "undefined" ? [] : AN.controls).find((x) => x.step === step && x.f.name === name); if (!c) return;
     const nm = (Number(x0 ?? x1) + Number(x1 ?? x0)) / 2, end = clearAt();
     const input = c.box.querySelector("input.val");
     if (end !== undefined && nm >= end) input.value = "";
-    else input.value = String(Number((Math.max(nm, 1e-3) * 1e-9 / c.f.factor).toPrecision(4)));
+    else input.value = String(Number((value(nm) / c.f.factor).toPrecision(digits)));
     window.FIT_RANGE_DROPS = (window.FIT_RANGE_DROPS || 0) + 1;
     input.dispatchEvent(new Event("change"));
-  });
+  };
+  div.on("plotly_relayout", div[key]);
+}
+
+// the contact point (δ = 0, the plot's shape 1) dragged: the option indentation.contact_point, the
+// tip depth u = z - deflection, fixed there (the fit's contact depth plus the drop's δ); cleared in
+// its field, the contact point is fitted again
+function contactPointShape(fit) {
+  const given = fit.contact_point_se === 0;
+  return { type: "line", xref: "x", yref: "paper", x0: 0, x1: 0, y0: 0, y1: 1, name: "contact point",
+    line: { color: given ? "#1f6feb" : "#555", width: 3, dash: "dash" } };
+}
+function contactPointBind(div) {
+  const depth = () => { const r = ((AN.payload || {}).results || {})[$("an-curve").value];
+    return (((r || {}).details || {}).indentation || {}).contact_depth; };
+  optionHandleBind(div, "indentation", "contact_point", () => undefined, 1, (nm) => depth() + nm * 1e-9, 8);   // 8 digits: as the page sends options (1 pm at 10 um)
 }
 
 // the van der Waals fit's window on force vs separation: a handle for vdw.max_separation (hard
