@@ -14,7 +14,7 @@ from typing import Iterator
 
 from .errors import OutputExistsError, ParameterError
 
-__all__ = ["atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable", "display_path",
+__all__ = ["pid_alive", "atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable", "display_path",
            "LISTENERS"]
 
 #: Callables ``f(path)`` told of every file written (in this process): the command line lists them.
@@ -91,3 +91,17 @@ def atomic_write_text(path: str | os.PathLike, text: str, force: bool = True) ->
     """Write UTF-8 ``text`` to ``path`` atomically (a file name in it that is not UTF-8 keeps its
     own bytes, as the file system has them)."""
     return atomic_write_bytes(path, text.encode("utf-8", "surrogateescape"), force)
+
+
+def pid_alive(pid: int) -> bool:
+    """Whether process ``pid`` of this machine still runs (a lock's or a store's writer). On Windows,
+    where ``os.kill(pid, 0)`` would end the process, always True: the caller's lock age decides."""
+    if os.name == "nt":
+        return True
+    try:
+        os.kill(pid, 0)
+    except ProcessLookupError:
+        return False
+    except PermissionError:
+        return True
+    return True

@@ -40,6 +40,7 @@ import sys
 import time
 from pathlib import Path
 
+from .._files import pid_alive
 from .._jitcache import kernel_source_files
 
 __all__ = ["GROUPS", "COMMAND_GROUP", "ENV", "key", "stamp_path", "is_warm", "write_stamp",
@@ -121,18 +122,6 @@ def write_stamp(group: str, k: str | None = None) -> Path | None:
     return path
 
 
-def _alive(pid: int) -> bool:
-    if os.name == "nt":                 # os.kill(pid, 0) would end it there: the lock's age decides
-        return True
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
-
-
 def start_background(group: str, k: str | None = None) -> str:
     """Start ``afmforce warmup --only GROUP`` as a detached process unless one runs already
     (a lock file with its pid). Returns "started", "running" (another one holds the lock) or
@@ -147,7 +136,7 @@ def start_background(group: str, k: str | None = None) -> str:
                 pid = int(lock.read_text().split()[0])
             except (OSError, ValueError, IndexError):
                 pid = 0
-            if pid and _alive(pid) and time.time() - lock.stat().st_mtime < LOCK_STALE_S:
+            if pid and pid_alive(pid) and time.time() - lock.stat().st_mtime < LOCK_STALE_S:
                 return "running"
             lock.unlink(missing_ok=True)
         fd = os.open(lock, os.O_CREAT | os.O_EXCL | os.O_WRONLY, 0o644)

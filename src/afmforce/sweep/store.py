@@ -21,7 +21,7 @@ import socket
 from pathlib import Path
 from typing import Any, Iterator
 
-from .._files import atomic_path, atomic_write_text
+from .._files import atomic_path, atomic_write_text, pid_alive
 from ..errors import AfmforceError, ParameterError
 
 __all__ = ["SweepStore", "StoreBusyError"]
@@ -31,16 +31,6 @@ _CHUNK = "chunk-{:06d}"
 
 class StoreBusyError(AfmforceError):
     """Another live process is writing the same store."""
-
-
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    return True
 
 
 class SweepStore:
@@ -123,7 +113,7 @@ class SweepStore:
             except (OSError, ValueError):
                 info = {}
             pid = int(info.get("pid", -1))
-            if info.get("host") == host and pid > 0 and pid != os.getpid() and _pid_alive(pid):
+            if info.get("host") == host and pid > 0 and pid != os.getpid() and pid_alive(pid):
                 raise StoreBusyError(f"{self.root} is being written by process {pid}; wait for it or use "
                                      "another `store`")
         atomic_write_text(path, json.dumps({"pid": os.getpid(), "host": host}))
