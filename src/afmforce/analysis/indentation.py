@@ -156,7 +156,7 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
         raise AnalysisError(f"the curve has {idx.size} {o.run} samples: nothing to fit")
     if o.run == "retract":
         idx = idx[::-1]
-    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal)[idx]
+    z = curve.position()[idx]
     sig = np.asarray(curve.deflection_signal, dtype=float)[idx]
     k = p.value("spring_constant", md)
     if not k:

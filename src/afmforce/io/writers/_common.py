@@ -31,7 +31,7 @@ def runs(curve: RawCurve, where: str) -> Runs:
     app, ret = np.flatnonzero(seg == 0), np.flatnonzero(seg == 1)
     if app.size < 2 or ret.size < 2 or np.any(np.diff(app) != 1) or np.any(np.diff(ret) != 1) or app[-1] > ret[0]:
         raise ParameterError(f"{where}: a map curve needs one approach (segment 0) then one retract (segment 1)")
-    zm = curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal
+    zm = curve.position()
     z, zm, t, v = (np.asarray(a, dtype=float) for a in (curve.piezo_nominal, zm, curve.time, curve.deflection_signal))
     return Runs((t[app], t[ret]), (z[app], z[ret]), (zm[app], zm[ret]), (v[app], v[ret]))
 
