@@ -142,12 +142,10 @@ FLAGS = _flags()
 
 @pytest.fixture(scope="module")
 def web(tmp_path_factory):
-    """A test client of the web application, or None without the web extra."""
-    try:
-        from fastapi.testclient import TestClient
-    except ImportError:
-        yield None
-        return
+    """A test client of the web application (fastapi is a dependency, httpx a test extra: never
+    skipped, so the web face is always compared)."""
+    from fastapi.testclient import TestClient
+
     from afmforce.web import Settings, create_app
 
     app = create_app(Settings(data=tmp_path_factory.mktemp("web"), spare_job=False))
@@ -217,7 +215,7 @@ def test_python_and_cli_refuse_the_same_value_with_the_same_message(capsys, tmp_
     assert routes, f"no command-line route sets {name}"
     for argv in routes:
         messages.append((" ".join(argv), _cli(capsys, argv)))
-    for url, request in (_web_requests(name, text) if web is not None else []):
+    for url, request in _web_requests(name, text):
         r = web.post(url, **request)
         assert r.status_code == 422, (url, request, r.status_code, r.text[:300])
         messages.append((f"{url} {request}", r.json()["error"]["message"]))
@@ -292,8 +290,6 @@ def test_the_openapi_document_publishes_the_declared_ranges(web):
     from afmforce.analysis.result import AnalysisResult
     from afmforce.dynamics.config import FLAT
 
-    if web is None:
-        pytest.skip("web extra not installed")
     doc = web.get("/openapi.json").json()
     schemas = doc["components"]["schemas"]
 
