@@ -92,9 +92,7 @@ def test_a_huge_sweep_grid_is_refused_before_anything_is_made(workers, client):
     make the grid either (its memory stays within a few MB)."""
     before = workers()
     rss = psutil.Process().memory_info().rss
-    t0 = time.perf_counter()
     err = _error(client.post("/api/sweep", json={"grid": ["xi=0.001:0.1:100000000:log"]}))
-    assert time.perf_counter() - t0 < 30       # generous: a refusal, not a grid of 1e8 values (not a speed test)
     assert err["field"] == "grid[0]" and "100,000,000" in err["message"]
     assert psutil.Process().memory_info().rss - rss < 100e6        # 1e8 floats would be 800 MB
     err = _error(client.post("/api/sweep", json={"grid": ["xi=0.001:0.1:200:log", "hamaker=1e-20:1e-19:200"]}))
