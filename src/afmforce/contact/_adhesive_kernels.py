@@ -15,6 +15,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .._linalg_small import solve_small_in_place
+
 __all__ = ["DMT", "JKR", "MAUGIS", "jkr_point", "maugis_point", "maugis_params", "maugis_branch_point",
            "branch_point", "branch_values", "adhesive_normal", "adhesive_lm", "gap_fit", "adhesive_walk",
            "adhesive_model"]
@@ -206,34 +208,6 @@ def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, A, g)
 
 
 @njit(cache=True)
-def _solve_small(M, y):  # pragma: no cover - compiled
-    """M z = y by Gaussian elimination with partial pivoting (M, y overwritten); False if singular."""
-    n = y.size
-    for col in range(n):
-        piv = col
-        for i in range(col + 1, n):
-            if abs(M[i, col]) > abs(M[piv, col]):
-                piv = i
-        if not abs(M[piv, col]) > 1e-300:
-            return False
-        if piv != col:
-            for k in range(n):
-                M[col, k], M[piv, k] = M[piv, k], M[col, k]
-            y[col], y[piv] = y[piv], y[col]
-        for i in range(col + 1, n):
-            f = M[i, col] / M[col, col]
-            for k in range(col, n):
-                M[i, k] -= f * M[col, k]
-            y[i] -= f * y[col]
-    for i in range(n - 1, -1, -1):
-        acc = y[i]
-        for k in range(i + 1, n):
-            acc -= M[i, k] * y[k]
-        y[i] = acc / M[i, i]
-    return True
-
-
-@njit(cache=True)
 def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width,
                 max_iter):  # pragma: no cover - compiled
     """Bounded Levenberg-Marquardt on (E, w, cj, b) of :func:`adhesive_normal` (Marquardt's diagonal
@@ -274,7 +248,7 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width,
                 else:
                     M[j, j] = 1.0
                     y[j] = 0.0
-            if not _solve_small(M, y):
+            if not solve_small_in_place(M, y):
                 mu *= 10.0
                 continue
             for j in range(4):
