@@ -16,6 +16,7 @@ import numpy as np
 from numba import njit
 
 from .._linalg_small import solve_small_in_place
+from ._kernels import ramp_weight
 
 __all__ = ["DMT", "JKR", "MAUGIS", "jkr_point", "maugis_point", "maugis_params", "maugis_branch_point",
            "branch_point", "branch_values", "adhesive_normal", "adhesive_lm", "gap_fit", "adhesive_walk",
@@ -165,10 +166,7 @@ def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, A, g)
     g0 = g1 = g2 = g3 = 0.0
     S = 0.0
     for i in range(u.size):
-        d = u[i] - c
-        q = 1.0
-        if width > 0:
-            q = min(abs(d) / width, 1.0)
+        q = ramp_weight(u[i] - c, width)
         if q == 0.0:
             continue
         model = b

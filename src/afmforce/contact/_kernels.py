@@ -10,7 +10,16 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["scan_power_law", "scan_dmt"]
+__all__ = ["ramp_weight", "scan_power_law", "scan_dmt"]
+
+
+@njit(cache=True)
+def ramp_weight(d, width):  # pragma: no cover - compiled
+    """The weight of a sample at indentation ``d`` [m]: ramped up linearly over ``width`` [m] from the
+    contact point, 1 beyond (``width`` <= 0: 1) -- :func:`afmforce.contact._weights.weights`, one sample."""
+    if width > 0:
+        return min(abs(d) / width, 1.0)
+    return 1.0
 
 
 @njit(cache=True)
@@ -27,9 +36,7 @@ def scan_power_law(u, F, cands, k, p, width):  # pragma: no cover - compiled
         s0 = s1 = s2 = sy = sxy = syy = 0.0
         for i in range(u.size):
             d = u[i] - c
-            q = 1.0
-            if width > 0:
-                q = min(abs(d) / width, 1.0)
+            q = ramp_weight(d, width)
             q = q * q
             if d <= 0:
                 phi = 0.0
@@ -104,9 +111,7 @@ def scan_dmt(u, F, cands, k, g, width):  # pragma: no cover - compiled
         else:
             for i in range(n):
                 d = us[i] - c
-                q = 1.0
-                if width > 0:
-                    q = min(abs(d) / width, 1.0)
+                q = ramp_weight(d, width)
                 q = q * q
                 if d > 0:
                     phi = k * d * math.sqrt(d)
