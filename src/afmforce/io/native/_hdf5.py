@@ -10,8 +10,8 @@ from typing import Any
 import numpy as np
 
 from ..._files import atomic_path
-from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _json
-from ...errors import FileFormatError, MissingDependencyError, ParameterError
+from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _check_truth_array, _json
+from ...errors import FileFormatError, MissingDependencyError
 from ..curve import RawCurve
 
 
@@ -47,9 +47,7 @@ def write_curve_group(group, curve: RawCurve) -> None:
     arrays: dict[str, np.ndarray] = {}
     for key, value in (curve.truth or {}).items():
         if isinstance(value, np.ndarray):
-            if value.ndim != 1 or value.size != n:
-                raise ParameterError(f"truth array {key!r} has shape {value.shape}; only 1-D arrays of the "
-                                     f"curve's length ({n}) can be stored")
+            _check_truth_array(key, value, n)
             arrays[key] = value
         else:
             scalars[key] = value
