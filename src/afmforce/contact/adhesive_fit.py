@@ -116,8 +116,13 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     from ._kernels import scan_dmt
     from ._weights import t95 as _t95, weights as _weights
 
-    def weights(d):
-        return _weights(d, width)
+    def lowest(S):
+        """The index of the lowest sum of squares of a DMT scan (AnalysisError where none is finite)."""
+        i = int(np.argmin(S))
+        if not math.isfinite(S[i]):
+            raise AnalysisError(f"{key}: no contact point gives a positive modulus (the curve does not rise into "
+                                "contact)")
+        return i
 
     u = np.asarray(u, float)
     F = np.asarray(F, float)
@@ -133,18 +138,12 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     args = (kh, 2 * math.pi * R, float(width))
     cand = np.ascontiguousarray(mids[::stride])
     S0 = scan_dmt(u, F, cand, *args)[3]
-    i = int(np.argmin(S0))
-    if not math.isfinite(S0[i]):
-        raise AnalysisError(f"{key}: no contact point gives a positive modulus (the curve does not rise into "
-                            "contact)")
+    i = lowest(S0)
     if stride > 1:
         k = i * stride
         cand = np.ascontiguousarray(mids[max(k - 2 * stride, 0):k + 2 * stride + 1])
     E0, W0, B0, S0 = scan_dmt(u, F, cand, *args)
-    i = int(np.argmin(S0))
-    if not math.isfinite(S0[i]):
-        raise AnalysisError(f"{key}: no contact point gives a positive modulus (the curve does not rise into "
-                            "contact)")
+    i = lowest(S0)
     prob = _Problem(u, F, key, R, nu, lam, branch, width)
     w0 = float(W0[i]) * 2.0 / abs(_jump(key, float(lam))) if W0[i] > 0 else 0.0  # DMT's jump is -2 pi w R
     w_small = 1e-5 * max(float(np.abs(F).max()), 1e-30) / (math.pi * R)  # an adhesion far below the forces
@@ -179,7 +178,7 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
                 best = got
         best = gaps.sweep(best)
     x, S, JtJ = best[1:]
-    q = weights(u - prob.contact(x))
+    q = _weights(u - prob.contact(x), width)
     n = int((q > 0).sum())
     dof = n - 4
     s2 = S / max(dof, 1)
@@ -208,7 +207,7 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
         if hertz[2] < S:
             best = hertz
             x, S = best[1], best[2]
-            q = weights(u - prob.contact(x))
+            q = _weights(u - prob.contact(x), width)
         w_low = 0.0
         w_high = gaps.profile(1, 1.0, best, S, s2, t * t, se[1])
     model = prob._k.adhesive_model(u, prob.law, x, prob.R, prob.kc, prob.d_end, prob.lam, *prob.tables)
