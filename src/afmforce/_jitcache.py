@@ -1,15 +1,16 @@
 """numba's cache of afmforce's kernels never runs old code (issue 35, item 4).
 
-numba keys a ``cache=True`` function's cache on the content of *its own* source file. A
-kernel that calls a compiled function of another file (``analysis._fringe_kernel.lm_fit``
-calls ``analysis._numeric.solve_small``; the integrator inlines the vector field and the
-surface force laws) or reads a module-level constant of another module holds that code in
-its cache too: edit only the other file and numba loads the old code (tested:
-``tests/cli/test_coldstart.py``). The locators here give every afmforce kernel the source
-stamp ``(digest of its own file, digest of every source a kernel may reach)``: any edit of
-any of them recompiles every afmforce kernel, once. The sources a kernel may reach are those
-of the layers at or below the analysis (docs/architecture.md; the layers above may not be
-imported by them, tested): the top-level modules and the packages of :data:`KERNEL_SOURCES`.
+numba keys a ``cache=True`` function's cache on the content of *its own* source file. A kernel
+that calls a compiled function of another file (``analysis._fringe_kernel.lm_fit`` and
+``contact._adhesive_kernels.adhesive_lm`` call ``_linalg_small``'s solver; the integrator
+inlines the vector field and the surface force laws) or reads a module-level constant of
+another module holds that code in its cache too: edit only the other file and numba loads the
+old code (tested: ``tests/cli/test_coldstart.py``). The locators here give every afmforce
+kernel the source stamp ``(digest of its own file, digest of every source a kernel may
+reach)``: any edit of any of them recompiles every afmforce kernel, once. The sources a kernel
+may reach are those of the layers at or below the analysis (docs/architecture.md; the layers
+above may not be imported by them, tested): the top-level modules and the packages of
+:data:`KERNEL_SOURCES`.
 
 :func:`install` puts the locators first in numba's list (this module imports no numba);
 ``afmforce/__init__.py`` calls it as soon as numba's caching module is imported, before any

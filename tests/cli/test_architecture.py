@@ -18,8 +18,8 @@ SRC = Path(__file__).resolve().parents[2] / "src" / "afmforce"
 DOCS = Path(__file__).resolve().parents[2] / "docs" / "architecture.md"
 
 LAWS = ("constants", "units", "errors", "progress", "_validate", "_fields", "limits", "_files", "_json",
-        "_cores", "_jitcache", "forces", "friction", "cantilever", "statics", "diagnostics", "contact", "calibration",
-        "surface_laws")
+        "_cores", "_jitcache", "_linalg_small", "forces", "friction", "cantilever", "statics", "diagnostics",
+        "contact", "calibration", "surface_laws")
 IO = ("io",)
 ABOVE_DYNAMICS = ("instrument", "io", "analysis", "plotting", "sweep", "paper", "cli")
 

@@ -48,12 +48,12 @@ def test_jkr_retract_branch_agrees_with_independent_solver():
 def test_analytic_jacobian_is_the_gradient(key):
     """The kernel's J^T r equals -1/2 the numerical gradient of the sum of squares (within one gap)."""
     u, F, tr = ac.curve(key, 0, n=200)
-    prob = _Problem(u, F, key, ac.R_TIP, ac.NU, ac.LAM, "approach", 0.0, math.inf)
+    prob = _Problem(u, F, key, ac.R_TIP, ac.NU, ac.LAM, "approach", 0.0)
     x = np.array([tr["E"] * 1.05, tr["w"] * 0.9, tr["c"], tr["b"] + 1e-11])
     from afmforce.contact import _adhesive_kernels as K
 
     Amat, g = np.zeros((4, 4)), np.zeros(4)
-    K.adhesive_normal(u, F, prob.law, x, prob.R, prob.kc, prob.d_end, prob.lam, *prob.tables, 0.0, math.inf, Amat, g)
+    K.adhesive_normal(u, F, prob.law, x, prob.R, prob.kc, prob.d_end, prob.lam, *prob.tables, 0.0, Amat, g)
     gap = np.diff(np.unique(u)).min()
     steps = np.array([1e-6 * x[0], 1e-6 * x[1], 1e-4 * gap, 1e-13])
     for j in range(4):

@@ -201,12 +201,15 @@ def test_cell_curve_with_the_contact_point_given():
     assert got["n_points"] == whole["n_points"]
 
 
-def test_fit_adhesive_refuses_a_moving_window():
-    """fit_adhesive fits every sample it is given: a finite max_ind (the old per-candidate window) is refused."""
+def test_fit_adhesive_fits_every_sample_given():
+    """fit_adhesive has no window that moves with the contact point tried (the old per-candidate
+    ``max_ind``, which let contact points early in the baseline win by fitting fewer samples): every
+    sample given is fitted, with weight 1 (no ``width``). A fit range is chosen before, by
+    fit_indentation's ``max_indentation``."""
     from afmforce.contact.adhesive_fit import fit_adhesive
-    from afmforce.errors import ParameterError
     import adhesive_curves as ac
 
     u, F, tr = ac.curve("dmt", 0, n=100)
-    with pytest.raises(ParameterError, match="max_ind"):
-        fit_adhesive(u, F, "dmt", ac.R_TIP, ac.NU, max_ind=0.5e-6)
+    fit = fit_adhesive(u, F, "dmt", ac.R_TIP, ac.NU)
+    assert fit.n == u.size and np.array_equal(fit.weights, np.ones(u.size))
+    assert abs(fit.c - tr["c"]) < 0.05 * (u.max() - u.min())  # the contact found, not a baseline point

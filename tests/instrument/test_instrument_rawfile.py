@@ -67,6 +67,22 @@ def test_refuses_to_overwrite_without_force(tmp_path, paper_curve):
     write_raw(paper_curve, path, force=True)
 
 
+
+@pytest.mark.parametrize("suffix", [".txt", ".h5"])
+@pytest.mark.parametrize("bad", [np.zeros(49), np.zeros((50, 2))])
+def test_a_truth_array_that_is_not_a_column_is_refused(tmp_path, suffix, bad):
+    """Both halves of the format store a truth array as a column: one value per sample; another shape
+    is refused by name, and nothing is written."""
+    from afmforce.errors import ParameterError
+
+    curve = RawCurve(time=np.arange(50) * 1e-3, piezo_nominal=np.linspace(0, 1e-6, 50),
+                     deflection_signal=np.zeros(50), segment=np.r_[np.zeros(25), np.ones(25)].astype(np.int8),
+                     truth={"separation": bad})
+    path = tmp_path / f"t{suffix}"
+    with pytest.raises(ParameterError, match=r"truth array 'separation' has shape .*curve's length \(50\)"):
+        write_raw(curve, path)
+    assert not path.exists()
+
 USER_FILE = """# format: afmforce-raw
 # version: 1
 # exported by hand: from a spreadsheet

@@ -11,6 +11,8 @@ import math
 import numpy as np
 from numba import njit
 
+from .._linalg_small import solve_small  # re-exported: drift and the fringe fit import it from here
+
 __all__ = ["running_mean", "two_line_split", "line_fit", "robust_line", "robust_line_thin", "largest_step",
            "mad_sigma", "lstsq_qr", "polyfit", "ptp"]
 
@@ -233,38 +235,6 @@ def robust_line_thin(x: np.ndarray, y: np.ndarray, max_points: int = 4001):
         keep = np.linspace(0, n - 1, max_points).astype(np.int64)
         x, y = np.ascontiguousarray(x[keep]), np.ascontiguousarray(y[keep])
     return robust_line(x, y)
-
-
-@njit(cache=True)
-def solve_small(A, b):
-    """``A x = b`` by Gaussian elimination with partial pivoting (a few unknowns; ``A`` and ``b``
-    are not changed); NaN when a pivot is zero (singular). Shared by the compiled fits."""
-    m = b.size
-    M = A.copy()
-    v = b.copy()
-    for c in range(m):
-        p = c
-        for r in range(c + 1, m):
-            if abs(M[r, c]) > abs(M[p, c]):
-                p = r
-        if M[p, c] == 0.0:
-            return np.full(m, np.nan)
-        if p != c:
-            for k in range(m):
-                M[c, k], M[p, k] = M[p, k], M[c, k]
-            v[c], v[p] = v[p], v[c]
-        for r in range(c + 1, m):
-            f = M[r, c] / M[c, c]
-            for k in range(c, m):
-                M[r, k] -= f * M[c, k]
-            v[r] -= f * v[c]
-    out = np.empty(m)
-    for c in range(m - 1, -1, -1):
-        s = v[c]
-        for k in range(c + 1, m):
-            s -= M[c, k] * out[k]
-        out[c] = s / M[c, c]
-    return out
 
 
 @njit(cache=True)

@@ -15,6 +15,9 @@ import math
 import numpy as np
 from numba import njit
 
+from .._linalg_small import solve_small_in_place
+from ._kernels import ramp_weight
+
 __all__ = ["DMT", "JKR", "MAUGIS", "jkr_point", "maugis_point", "maugis_params", "maugis_branch_point",
            "branch_point", "branch_values", "adhesive_normal", "adhesive_lm", "gap_fit", "adhesive_walk",
            "adhesive_model"]
@@ -144,7 +147,7 @@ def branch_values(law, D, lam, lt_tab, y_tab):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, A, g):  # pragma: no cover
+def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, A, g):  # pragma: no cover
     """The sum of squares [N^2] of an adhesive law at x = (E, w, cj, b); fills ``A`` (4 x 4) with J^T J
     and ``g`` (4) with J^T r of the weighted model Jacobian J = d model / d (E, w, cj, b) and the weighted
     residuals r = q (F - model); ``A.size == 0``: the sum of squares alone.
@@ -163,12 +166,7 @@ def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, max_i
     g0 = g1 = g2 = g3 = 0.0
     S = 0.0
     for i in range(u.size):
-        d = u[i] - c
-        q = 1.0
-        if width > 0:
-            q = min(abs(d) / width, 1.0)
-        if d > max_ind:
-            q = 0.0
+        q = ramp_weight(u[i] - c, width)
         if q == 0.0:
             continue
         model = b
@@ -208,35 +206,7 @@ def adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, max_i
 
 
 @njit(cache=True)
-def _solve_small(M, y):  # pragma: no cover - compiled
-    """M z = y by Gaussian elimination with partial pivoting (M, y overwritten); False if singular."""
-    n = y.size
-    for col in range(n):
-        piv = col
-        for i in range(col + 1, n):
-            if abs(M[i, col]) > abs(M[piv, col]):
-                piv = i
-        if not abs(M[piv, col]) > 1e-300:
-            return False
-        if piv != col:
-            for k in range(n):
-                M[col, k], M[piv, k] = M[piv, k], M[col, k]
-            y[col], y[piv] = y[piv], y[col]
-        for i in range(col + 1, n):
-            f = M[i, col] / M[col, col]
-            for k in range(col, n):
-                M[i, k] -= f * M[col, k]
-            y[i] -= f * y[col]
-    for i in range(n - 1, -1, -1):
-        acc = y[i]
-        for k in range(i + 1, n):
-            acc -= M[i, k] * y[k]
-        y[i] = acc / M[i, i]
-    return True
-
-
-@njit(cache=True)
-def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
+def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width,
                 max_iter):  # pragma: no cover - compiled
     """Bounded Levenberg-Marquardt on (E, w, cj, b) of :func:`adhesive_normal` (Marquardt's diagonal
     scaling; a variable on a bound that the gradient pushes outwards is held there, one with lo = hi
@@ -246,7 +216,7 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, 
     A = np.zeros((4, 4))
     g = np.zeros(4)
     empty = np.zeros((0, 0))
-    S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, A, g)
+    S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, A, g)
     mu = 1e-4
     M = np.zeros((4, 4))
     y = np.zeros(4)
@@ -276,12 +246,12 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, 
                 else:
                     M[j, j] = 1.0
                     y[j] = 0.0
-            if not _solve_small(M, y):
+            if not solve_small_in_place(M, y):
                 mu *= 10.0
                 continue
             for j in range(4):
                 xn[j] = min(max(x[j] + y[j] / nrm[j], lo[j]), hi[j])
-            Sn = adhesive_normal(u, F, law, xn, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, empty, g[:0])
+            Sn = adhesive_normal(u, F, law, xn, R, kc, d_end, lam, lt_tab, y_tab, width, empty, g[:0])
             if Sn < S:
                 improved = True
                 break
@@ -293,13 +263,13 @@ def adhesive_lm(u, F, law, x0, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, 
         S = Sn
         if gain <= 1e-11 * S:  # the sum of squares to 1e-11: the parameters to ~1e-5 of their errors (J^T J
             break             # kept from the step before: as good for the covariance)
-        S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, A, g)
+        S = adhesive_normal(u, F, law, x, R, kc, d_end, lam, lt_tab, y_tab, width, A, g)
         mu = max(mu / 5.0, 1e-9)
     return x, S, A, it
 
 
 @njit(cache=True)
-def gap_fit(u, F, law, us, k, start, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
+def gap_fit(u, F, law, us, k, start, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width,
              max_iter):  # pragma: no cover - compiled
     """:func:`adhesive_lm` with the jump cj confined to gap k, E and w held where ``fixed`` says."""
     lo = np.empty(4)
@@ -313,12 +283,12 @@ def gap_fit(u, F, law, us, k, start, w_floor, fixed, R, kc, d_end, lam, lt_tab, 
             lo[j] = hi[j] = s[j] = fixed[j]
     lo[2], hi[2] = us[k] + 1e-9 * gap, us[k + 1] - 1e-9 * gap
     lo[3], hi[3] = -np.inf, np.inf
-    x, S, A, _ = adhesive_lm(u, F, law, s, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind, max_iter)
+    x, S, A, _ = adhesive_lm(u, F, law, s, lo, hi, R, kc, d_end, lam, lt_tab, y_tab, width, max_iter)
     return x, S, A
 
 
 @njit(cache=True)
-def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width, max_ind,
+def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width,
                   max_iter):  # pragma: no cover - compiled
     """:func:`adhesive_lm` with the jump cj confined to the gap ``[us[k], us[k+1]]`` between two
     consecutive sample depths (where the set of points in contact is fixed): first the gap k0, then the
@@ -331,7 +301,7 @@ def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_t
     m = us.size - 1
     best_k = k0
     best_x, best_S, best_A = gap_fit(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab,
-                                      width, max_ind, max_iter)
+                                      width, max_iter)
     tried = np.zeros(m, dtype=np.bool_)
     tried[k0] = True
     for direction in (-1, 1):
@@ -354,7 +324,7 @@ def adhesive_walk(u, F, law, us, k0, x0, w_floor, fixed, R, kc, d_end, lam, lt_t
                 continue
             tried[k] = True
             x, S, A = gap_fit(u, F, law, us, k, best_x, w_floor, fixed, R, kc, d_end, lam, lt_tab, y_tab, width,
-                               max_ind, max_iter)
+                               max_iter)
             if S < best_S:
                 best_k, best_S = k, S
                 best_x[:] = x

@@ -10,11 +10,20 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["scan_power_law", "scan_dmt"]
+__all__ = ["ramp_weight", "scan_power_law", "scan_dmt"]
 
 
 @njit(cache=True)
-def scan_power_law(u, F, cands, k, p, width, max_ind):  # pragma: no cover - compiled
+def ramp_weight(d, width):  # pragma: no cover - compiled
+    """The weight of a sample at indentation ``d`` [m]: ramped up linearly over ``width`` [m] from the
+    contact point, 1 beyond (``width`` <= 0: 1) -- :func:`afmforce.contact._weights.weights`, one sample."""
+    if width > 0:
+        return min(abs(d) / width, 1.0)
+    return 1.0
+
+
+@njit(cache=True)
+def scan_power_law(u, F, cands, k, p, width):  # pragma: no cover - compiled
     """For each contact point ``cands[j]`` [m]: (E [Pa], b [N], weighted sum of squares [N^2]) of the
     weighted least-squares fit of ``F = E k max(u - c, 0)^p + b`` (weights as in fit._weights;
     sum of squares inf where E <= 0 or the system is singular)."""
@@ -27,11 +36,7 @@ def scan_power_law(u, F, cands, k, p, width, max_ind):  # pragma: no cover - com
         s0 = s1 = s2 = sy = sxy = syy = 0.0
         for i in range(u.size):
             d = u[i] - c
-            if d > max_ind:
-                continue
-            q = 1.0
-            if width > 0:
-                q = min(abs(d) / width, 1.0)
+            q = ramp_weight(d, width)
             q = q * q
             if d <= 0:
                 phi = 0.0
@@ -64,7 +69,7 @@ def scan_power_law(u, F, cands, k, p, width, max_ind):  # pragma: no cover - com
 
 
 @njit(cache=True)
-def scan_dmt(u, F, cands, k, g, width, max_ind):  # pragma: no cover - compiled
+def scan_dmt(u, F, cands, k, g, width):  # pragma: no cover - compiled
     """DMT at each contact point ``cands[j]`` [m]: the weighted least-squares (E [Pa], w [J/m^2], b [N])
     of ``F = E k max(u - c, 0)^1.5 - w g [u > c] + b`` (k = 4/3 sqrt(R)/(1 - nu^2), g = 2 pi R) and its
     sum of squares [N^2]; w >= 0 (on the bound: the Hertz fit, w = 0); inf where E <= 0 or singular."""
@@ -77,7 +82,7 @@ def scan_dmt(u, F, cands, k, g, width, max_ind):  # pragma: no cover - compiled
     for i in range(F.size):
         f0 += F[i]
     f0 /= F.size  # the force centred: the sums of squares without cancellation
-    plain = width <= 0 and not max_ind < np.inf  # unit weights: only the points in contact need a loop
+    plain = width <= 0  # unit weights: only the points in contact need a loop
     order = np.argsort(u)
     us = u[order]
     fs = F[order] - f0
@@ -106,11 +111,7 @@ def scan_dmt(u, F, cands, k, g, width, max_ind):  # pragma: no cover - compiled
         else:
             for i in range(n):
                 d = us[i] - c
-                if d > max_ind:
-                    continue
-                q = 1.0
-                if width > 0:
-                    q = min(abs(d) / width, 1.0)
+                q = ramp_weight(d, width)
                 q = q * q
                 if d > 0:
                     phi = k * d * math.sqrt(d)

@@ -21,12 +21,9 @@ def t95(dof: int) -> float:
     return float(stdtrit(dof, 0.975))
 
 
-def weights(d: np.ndarray, width: float, max_indentation: float) -> np.ndarray:
+def weights(d: np.ndarray, width: float) -> np.ndarray:
     """Weight of each sample at indentation ``d`` [m]: ramped up over ``width`` [m] from the
-    contact point (none: all 1), 0 beyond ``max_indentation`` [m]. The fits pass inf: their fit range
-    is a fixed set of samples chosen before (:func:`afmforce.contact.fit.fit_indentation`), never a
-    window that moves with the contact point tried."""
-    q = np.ones_like(d) if width <= 0 else np.minimum(np.abs(d) / width, 1.0)
-    if math.isfinite(max_indentation):
-        q = np.where(d > max_indentation, 0.0, q)
-    return q
+    contact point (none: all 1). Every sample given is weighted: the fits' range is a fixed set of
+    samples chosen before (:func:`afmforce.contact.fit.fit_indentation`), never a window that moves
+    with the contact point tried."""
+    return np.ones_like(d) if width <= 0 else np.minimum(np.abs(d) / width, 1.0)

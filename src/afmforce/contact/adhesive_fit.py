@@ -77,7 +77,7 @@ class _Problem:
     """The law on one run, in the parameters x = (E, w, cj, b); cj is where the contact begins (the
     jump): c on the approach, c + D_end d_s on the retract (D_end < 0, the branch's end)."""
 
-    def __init__(self, u, F, key, R, nu, lam, branch, width, max_ind):
+    def __init__(self, u, F, key, R, nu, lam, branch, width):
         from . import _adhesive_kernels as _kernels
 
         self.u, self.F, self.R, self.lam = u, F, R, float(lam)
@@ -85,7 +85,7 @@ class _Problem:
         self.tables = _tables(key, lam)
         self.kc = 4.0 / 3.0 / (1.0 - nu * nu)  # K / E
         self.d_end = 0.0 if (branch == "approach" or key == "dmt") else branch_end(key, lam)[0]
-        self.width, self.max_ind = float(width), float(max_ind)
+        self.width = float(width)
         self._k = _kernels
 
     def scales(self, E, w):
@@ -99,30 +99,30 @@ class _Problem:
     def ssr(self, x) -> float:
         """The weighted sum of squares at x [N^2]."""
         return self._k.adhesive_normal(self.u, self.F, self.law, np.asarray(x, float), self.R, self.kc,
-                                       self.d_end, self.lam, *self.tables, self.width, self.max_ind,
-                                       np.zeros((0, 0)), np.zeros(0))
+                                       self.d_end, self.lam, *self.tables, self.width, np.zeros((0, 0)),
+                                       np.zeros(0))
 
 
 def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.0, branch: str = "approach",
-                 width: float = 0.0, max_ind: float = math.inf) -> AdhesiveFit:
+                 width: float = 0.0) -> AdhesiveFit:
     """Fit the adhesive law ``key`` (``jkr``, ``dmt``, ``maugis``) to one run (the module docstring).
 
-    ``width``: the residuals weighted down linearly within ``width`` [m] of the contact point. ``max_ind``
-    must be inf: every sample given is fitted. A fit range is a fixed set of samples chosen before
+    ``width``: the residuals weighted down linearly within ``width`` [m] of the contact point. Every
+    sample given is fitted: a fit range is a fixed set of samples chosen before
     (:func:`afmforce.contact.fit.fit_indentation`'s ``max_indentation``); one measured from each tried
     contact point would let contact points early in the baseline win by fitting fewer samples.
-    Raises AnalysisError when no contact point gives E > 0, ParameterError for a finite ``max_ind``.
+    Raises AnalysisError when no contact point gives E > 0.
     """
-    if math.isfinite(max_ind):
-        from ..errors import ParameterError
-
-        raise ParameterError("fit_adhesive fits every sample given (max_ind must be inf): choose the samples of a "
-                             "fit range before, as fit_indentation does with max_indentation")
     from ._kernels import scan_dmt
     from ._weights import t95 as _t95, weights as _weights
 
-    def weights(d):
-        return _weights(d, width, max_ind)
+    def lowest(S):
+        """The index of the lowest sum of squares of a DMT scan (AnalysisError where none is finite)."""
+        i = int(np.argmin(S))
+        if not math.isfinite(S[i]):
+            raise AnalysisError(f"{key}: no contact point gives a positive modulus (the curve does not rise into "
+                                "contact)")
+        return i
 
     u = np.asarray(u, float)
     F = np.asarray(F, float)
@@ -135,22 +135,16 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
     # DMT at a point in every gap: every stride-th gap, then every gap near the best (on all samples:
     # thinned ones misplace the best on real curves whose jump is within the noise)
     stride = max(1, round(math.sqrt(mids.size / 4)))  # the fewest candidates: m/stride + 4 stride
-    args = (kh, 2 * math.pi * R, float(width), float(max_ind))
+    args = (kh, 2 * math.pi * R, float(width))
     cand = np.ascontiguousarray(mids[::stride])
     S0 = scan_dmt(u, F, cand, *args)[3]
-    i = int(np.argmin(S0))
-    if not math.isfinite(S0[i]):
-        raise AnalysisError(f"{key}: no contact point gives a positive modulus (the curve does not rise into "
-                            "contact)")
+    i = lowest(S0)
     if stride > 1:
         k = i * stride
         cand = np.ascontiguousarray(mids[max(k - 2 * stride, 0):k + 2 * stride + 1])
     E0, W0, B0, S0 = scan_dmt(u, F, cand, *args)
-    i = int(np.argmin(S0))
-    if not math.isfinite(S0[i]):
-        raise AnalysisError(f"{key}: no contact point gives a positive modulus (the curve does not rise into "
-                            "contact)")
-    prob = _Problem(u, F, key, R, nu, lam, branch, width, max_ind)
+    i = lowest(S0)
+    prob = _Problem(u, F, key, R, nu, lam, branch, width)
     w0 = float(W0[i]) * 2.0 / abs(_jump(key, float(lam))) if W0[i] > 0 else 0.0  # DMT's jump is -2 pi w R
     w_small = 1e-5 * max(float(np.abs(F).max()), 1e-30) / (math.pi * R)  # an adhesion far below the forces
     x0 = np.array([float(E0[i]), max(w0, w_small), float(cand[i]), float(B0[i])])
@@ -184,7 +178,7 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
                 best = got
         best = gaps.sweep(best)
     x, S, JtJ = best[1:]
-    q = weights(u - prob.contact(x))
+    q = _weights(u - prob.contact(x), width)
     n = int((q > 0).sum())
     dof = n - 4
     s2 = S / max(dof, 1)
@@ -213,7 +207,7 @@ def fit_adhesive(u, F, key: str, radius: float, nu: float = 0.5, lam: float = 1.
         if hertz[2] < S:
             best = hertz
             x, S = best[1], best[2]
-            q = weights(u - prob.contact(x))
+            q = _weights(u - prob.contact(x), width)
         w_low = 0.0
         w_high = gaps.profile(1, 1.0, best, S, s2, t * t, se[1])
     model = prob._k.adhesive_model(u, prob.law, x, prob.R, prob.kc, prob.d_end, prob.lam, *prob.tables)
@@ -245,7 +239,7 @@ class _Gaps:
         lo = np.array([1e-12 * x0[0], self.w_floor, self.us[0], -np.inf])
         hi = np.array([np.inf, np.inf, self.us[-1], np.inf])
         x, S, _, _ = p._k.adhesive_lm(p.u, p.F, p.law, np.asarray(x0, float), lo, hi, p.R, p.kc, p.d_end, p.lam,
-                                      *p.tables, p.width, p.max_ind, 100)
+                                      *p.tables, p.width, 100)
         return x if S < p.ssr(x0) else np.asarray(x0, float)
 
     def walk(self, k0: int, x0: np.ndarray, E: float = math.nan, w: float = math.nan):
@@ -253,8 +247,7 @@ class _Gaps:
         of squares falls (_adhesive_kernels.adhesive_walk); E, w held where given: (gap, x, ssr, J^T J) of the best."""
         p = self.prob
         k, x, S, A = p._k.adhesive_walk(p.u, p.F, p.law, self.us, int(k0), np.asarray(x0, float), self.w_floor,
-                                        np.array([E, w]), p.R, p.kc, p.d_end, p.lam, *p.tables, p.width,
-                                        p.max_ind, 200)
+                                        np.array([E, w]), p.R, p.kc, p.d_end, p.lam, *p.tables, p.width, 200)
         return int(k), x, float(S), A
 
     def sweep(self, best, rounds: int = 3):
@@ -270,7 +263,7 @@ class _Gaps:
                 for k in (k0 - off, k0 + off):
                     if 0 <= k < self.us.size - 1:
                         x, S, _ = p._k.gap_fit(p.u, p.F, p.law, self.us, k, best[1], self.w_floor, fixed, p.R, p.kc,
-                                               p.d_end, p.lam, *p.tables, p.width, p.max_ind, 8)
+                                               p.d_end, p.lam, *p.tables, p.width, 8)
                         if S < best[2] and (better is None or S < better[1]):
                             better = (k, S, x)
                 if better is not None:

@@ -109,10 +109,10 @@ def _scan(u, F, cands, key, geom, nu, width):
 
         kf, p = _POWER[key]
         return scan_power_law(u, F, np.ascontiguousarray(cands, dtype=float), kf(geom, 1.0 / (1.0 - nu * nu)), p,
-                              float(width), math.inf)
+                              float(width))
     d = u[None, :] - cands[:, None]
     phi = shape_and_slope(key, d, geom, nu)[0]
-    q = _weights(d, width, math.inf) ** 2
+    q = _weights(d, width) ** 2
     s0, s1, s2 = q.sum(1), (q * phi).sum(1), (q * phi * phi).sum(1)
     qf = q * F
     sy, sxy, syy = qf.sum(1), (qf * phi).sum(1), (qf * F).sum(1)
@@ -153,7 +153,7 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
     for _ in range(2):  # the scan has the contact point to ~1e-4 of a grid step: a polish
         d = u - p[1]
         phi, dphi = shape_and_slope(key, d, geom, nu)
-        q = _weights(d, width, math.inf)
+        q = _weights(d, width)
         r = q * (F - p[0] * phi - p[2])
         J = q[:, None] * np.column_stack((phi, -p[0] * dphi, np.ones_like(phi)))
         try:
@@ -164,7 +164,7 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
         if trial[0] <= 0:
             break
         dt = u - trial[1]
-        rt = _weights(dt, width, math.inf) * (F - trial[0] * shape_and_slope(key, dt, geom, nu)[0] - trial[2])
+        rt = _weights(dt, width) * (F - trial[0] * shape_and_slope(key, dt, geom, nu)[0] - trial[2])
         s = float(rt @ rt)
         if s > best:
             break
@@ -350,7 +350,7 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
         c = float(fixed)
         d = u - c
         phi = shape_and_slope(model, d, geom, nu)[0]
-        q = _weights(d, weight_width, math.inf)
+        q = _weights(d, weight_width)
         J = q[:, None] * np.column_stack((phi, np.ones_like(phi)))
         try:
             E, b = _normal_solve(J, q * F)
@@ -366,12 +366,12 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
         E, c, b = _linear_fit(u, F, model, geom, nu, weight_width, contact_guess)
         d = u - c
         phi, dphi = shape_and_slope(model, d, geom, nu)
-        q = _weights(d, weight_width, math.inf)
+        q = _weights(d, weight_width)
         r = q * (F - E * phi - b)
         J = q[:, None] * np.column_stack((phi, -E * dphi, np.ones_like(phi)))
         names = 3
     else:
-        a = fit_adhesive(u, F, model, geom["radius"], nu, transition, branch, weight_width, math.inf)
+        a = fit_adhesive(u, F, model, geom["radius"], nu, transition, branch, weight_width)
         E, w, c, b = a.E, a.w, a.c, a.b
         d = u - c
         q = a.weights

@@ -285,8 +285,10 @@ def load_export(path: Path, *, meta_override: Mapping[str, Any], callback: Calla
     z runs out and back is split at its turning point (as :mod:`afmforce.io.igor`
     does for the original wave) and says so in ``metadata["segments_note"]``.
     """
+    from .native import HDF5_SIGNATURE
+
     with open(path, "rb") as fh:
-        reader = "afmformats-hdf5" if fh.read(8) == b"\x89HDF\r\n\x1a\n" else "afmformats-tab"
+        reader = "afmformats-hdf5" if fh.read(8) == HDF5_SIGNATURE else "afmformats-tab"
     data = _load_data(path, {}, callback)  # afmformats' export readers refuse a k or sensitivity override
     if not data:
         raise FileFormatError(f"{path}: the file holds no force-distance curve")
@@ -343,19 +345,9 @@ def _split_at_turn(curve: RawCurve, path: Path) -> RawCurve:
 
 def detect_afmformats_hdf5(path: Path) -> bool:
     """HDF5 signature and the root attribute ``software = "afmformats"`` (size-checked)."""
-    try:
-        with open(path, "rb") as fh:
-            if fh.read(8) != b"\x89HDF\r\n\x1a\n":
-                return False
-        import h5py
+    from .native import root_attribute
 
-        from .native import safe_attr
-
-        with h5py.File(path, "r") as f:
-            value = safe_attr(f, "software", limit=256)
-        return (value.decode() if isinstance(value, bytes) else str(value)) == "afmformats"
-    except Exception:  # any failure means: not an afmformats export
-        return False
+    return root_attribute(path, "software") == "afmformats"
 
 
 def detect_ntmdt(path: Path) -> bool:

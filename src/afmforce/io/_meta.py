@@ -19,7 +19,8 @@ from ..errors import FileFormatError, MissingMetadataError, ParameterError
 from .curve import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
 
 __all__ = ["MetaField", "METADATA", "check_meta_override", "finalize_curve", "segment_code",
-           "missing_metadata", "require_metadata", "orient", "afmformats_override", "parse_meta_args"]
+           "missing_metadata", "require_metadata", "orient", "afmformats_override", "parse_meta_args",
+           "positive_entry"]
 
 
 def _positive(value: Any) -> float:
@@ -27,6 +28,16 @@ def _positive(value: Any) -> float:
     if not math.isfinite(v) or v <= 0:
         raise ValueError("must be a positive finite number")
     return v
+
+
+def positive_entry(entries: Mapping[str, str], key: str) -> float | None:
+    """The positive finite number a reader finds under ``key`` of a file's header or note, or None
+    where the key is missing or its value is not such a number (optional metadata)."""
+    try:
+        v = float(entries[key])
+    except (KeyError, ValueError):
+        return None
+    return v if np.isfinite(v) and v > 0 else None
 
 
 def _finite(value: Any) -> float:

@@ -306,6 +306,28 @@ def _deflection_unit(table: dict, where: str, runs: tuple[str, ...]) -> tuple[st
                           f"(Defl_V_, Defl_nm_ or Defl_pN_ followed by {'/'.join(runs)})")
 
 
+def _in_time_order(runs: dict[str, dict]) -> tuple[list[dict], np.ndarray]:
+    """The runs' columns (``runs``: run name -> columns), each in time order (a run exported backwards
+    reversed), and the segment code of every sample (extend 0, retract 1)."""
+    for run, cols in runs.items():
+        if _reversed(run, cols, runs):
+            runs[run] = {k: (None if v is None else v[::-1].copy()) for k, v in cols.items()}
+    seg = np.concatenate([np.full(len(c["defl"]), 0 if r == "Ex" else 1, np.int8) for r, c in runs.items()])
+    return list(runs.values()), seg
+
+
+def _calibration(header: dict[str, str]) -> dict[str, float]:
+    """The spring constant [N/m] and the deflection sensitivity [m/V] the header states (positive ones)."""
+    meta = {}
+    k = _header_value(header, "Spring Constant")
+    if k and k > 0:
+        meta["spring_constant"] = k
+    sens = _header_value(header, "Sens. DeflSens")
+    if sens and sens > 0:
+        meta["sensitivity"] = sens * 1e-9  # nm/V
+    return meta
+
+
 def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
     """One force-curve block."""
     header, names, data = _parse(text, where)
@@ -338,18 +360,8 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
         if any(v is not None and len(v) != n for v in cols.values()):
             raise FileFormatError(f"{where}: columns of run {run} have different lengths")
         runs[run] = cols
-    for run, cols in runs.items():
-        if _reversed(run, cols, runs):
-            runs[run] = {k: (None if v is None else v[::-1].copy()) for k, v in cols.items()}
-    parts = list(runs.values())
-    seg = np.concatenate([np.full(len(c["defl"]), 0 if r == "Ex" else 1, np.int8) for r, c in runs.items()])
-    meta: dict[str, Any] = {}
-    k = _header_value(header, "Spring Constant")
-    if k and k > 0:
-        meta["spring_constant"] = k
-    sens = _header_value(header, "Sens. DeflSens")
-    if sens and sens > 0:
-        meta["sensitivity"] = sens * 1e-9  # nm/V
+    parts, seg = _in_time_order(runs)
+    meta: dict[str, Any] = _calibration(header)
     n = len(seg)
     if all(c["t"] is not None for c in parts):
         time = np.concatenate([c["t"] for c in parts])
@@ -409,18 +421,10 @@ def _force_separation(table: dict, header: dict[str, str], where: str, source: s
         runs[run] = cols
     if "Ex" not in runs:
         raise FileFormatError(f"{where}: only retract (_Rt) force columns; export the extend (_Ex) run too")
-    for run, cols in runs.items():
-        if _reversed(run, cols, runs):
-            runs[run] = {k: (None if v is None else v[::-1].copy()) for k, v in cols.items()}
-    parts = list(runs.values())
-    seg = np.concatenate([np.full(len(c["defl"]), 0 if r == "Ex" else 1, np.int8) for r, c in runs.items()])
+    parts, seg = _in_time_order(runs)
     meta: dict[str, Any] = {"processed": "force vs separation (NanoScope Analysis): force in N, position = "
                                          "-separation; no spring constant or sensitivity needed",
-                            "position_is_separation": True}
-    for key, name in (("Spring Constant", "spring_constant"), ("Sens. DeflSens", "sensitivity")):
-        value = _header_value(header, key)
-        if value and value > 0:
-            meta[name] = value * (1e-9 if name == "sensitivity" else 1.0)
+                            "position_is_separation": True, **_calibration(header)}
     n = len(seg)
     if all(c["t"] is not None for c in parts):
         time = np.concatenate([c["t"] for c in parts])

@@ -23,7 +23,7 @@ from ..errors import FileFormatError
 from .curve import RawCurve
 from ._afmformats import _curve_from_afmdata, _load_data, rescale_force
 from .ibw_wave import afmformats_igor, read_wave5
-from ._meta import finalize_curve, missing_metadata, orient
+from ._meta import finalize_curve, missing_metadata, orient, positive_entry
 
 __all__ = ["load_ibw", "check_ibw_header", "CHANNELS"]
 
@@ -181,14 +181,6 @@ def _wave(path: Path) -> tuple[np.ndarray, dict[str, str], float]:
     return np.asarray(w["wData"], dtype=float).ravel(), entries, step
 
 
-def _note_float(entries: Mapping[str, str], key: str) -> float | None:
-    try:
-        v = float(entries[key])
-    except (KeyError, ValueError):
-        return None
-    return v if np.isfinite(v) and v > 0 else None
-
-
 def _split_name(path: Path) -> tuple[str, str] | None:
     stem = path.name[: -len(path.suffix)] if path.suffix else path.name
     for ch in (*CHANNELS, *POSITIONS):
@@ -227,7 +219,7 @@ def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCur
     for key, ours in (("SpringConstant", "spring_constant"), ("InvOLS", "sensitivity"),
                       ("NumPtsPerSec", "sample_rate"), ("ThermalFrequency", "resonance_frequency"),
                       ("ThermalQ", "quality_factor")):
-        value = _note_float(note, key)
+        value = positive_entry(note, key)
         if value is not None:
             meta[ours] = value
     if "sample_rate" not in meta and step > 0:

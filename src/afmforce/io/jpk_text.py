@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import FileFormatError
 from .curve import RawCurve
-from ._meta import finalize_curve, orient, segment_code
+from ._meta import finalize_curve, orient, positive_entry, segment_code
 
 __all__ = ["detect_jpk_text", "load_jpk_text"]
 
@@ -104,14 +104,6 @@ def _curves(blocks: list[dict[str, Any]]) -> list[list[dict[str, Any]]]:
     return out
 
 
-def _float(header: Mapping[str, str], key: str) -> float | None:
-    try:
-        v = float(header[key])
-    except (KeyError, ValueError):
-        return None
-    return v if np.isfinite(v) and v > 0 else None
-
-
 def _curve(blocks: list[dict[str, Any]], where: str, meta_override: Mapping[str, Any]) -> RawCurve:
     cols_t, cols_zn, cols_zm, cols_s, cols_seg, types = [], [], [], [], [], []
     unit = None
@@ -138,7 +130,7 @@ def _curve(blocks: list[dict[str, Any]], where: str, meta_override: Mapping[str,
             raise FileFormatError(f"{where}: segment {h.get('segment')} has no height column "
                                   f"(columns: {' '.join(names)}); export height or measured height")
         slots = dict(zip(names, h.get("calibrationSlots", "").split()))
-        if height is not None and slots.get("height") == "nominal" and _float(h, "heightMultiplier"):
+        if height is not None and slots.get("height") == "nominal" and positive_entry(h, "heightMultiplier"):
             # the archive's default height is the calibrated slot: nominal x heightMultiplier + heightOffset
             height = height * float(h["heightMultiplier"]) + float(h.get("heightOffset", "0") or 0)
         if height is None:
@@ -164,7 +156,7 @@ def _curve(blocks: list[dict[str, Any]], where: str, meta_override: Mapping[str,
         cols_seg.append(np.full(n, segment_code(word), dtype=np.int8))
         types.append(style)
         for key, ours in (("springConstant", "spring_constant"), ("sensitivity", "sensitivity")):
-            v = _float(h, key)
+            v = positive_entry(h, key)
             if v is not None:
                 meta.setdefault(ours, v)
         if h.get("data-description.instrument"):

@@ -69,6 +69,14 @@ def _say(ax, text: str):
     return ax
 
 
+def _fit_ylim(ax, y: np.ndarray) -> None:
+    """The y range of the samples shown, padded by 8 % (none shown: matplotlib's)."""
+    if y.size:
+        ylo, yhi = float(np.min(y)), float(np.max(y))
+        pad = 0.08 * max(yhi - ylo, 1e-6)
+        ax.set_ylim(ylo - pad, yhi + pad)
+
+
 def _window(result: AnalysisResult, max_separation: float | None) -> tuple[float, float]:
     """Separation range [m] that shows the contact region and the adhesion dip."""
     h = result.separation[np.isfinite(result.separation)]
@@ -134,11 +142,7 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
     ax.axhline(0, color="0.6", lw=0.5)
     ax.axvline(0, color="0.6", lw=0.5)
     ax.set_xlim(lo * 1e9, hi * 1e9)
-    y = f[inside] * 1e9
-    if y.size:
-        ylo, yhi = float(np.min(y)), float(np.max(y))
-        pad = 0.08 * max(yhi - ylo, 1e-6)
-        ax.set_ylim(ylo - pad, yhi + pad)
+    _fit_ylim(ax, f[inside] * 1e9)
     ax.set_ylabel(ylabel)
     ax.legend(fontsize="small")
     return ax
@@ -187,11 +191,7 @@ def plot_contact_region(result: AnalysisResult, ax=None, width: float = 0.25):
     ax.axvline(0, color="k", lw=0.8, label=f"contact point (z = {cp.position * 1e6:.4g} µm)")
     ax.axhline(0, color="0.6", lw=0.5)
     ax.set_xlim(-half * 1e9, top * 1e9)
-    y = f[inside] * 1e9
-    if y.size:
-        ylo, yhi = float(np.min(y)), float(np.max(y))
-        pad = 0.08 * max(yhi - ylo, 1e-6)
-        ax.set_ylim(ylo - pad, yhi + pad)
+    _fit_ylim(ax, f[inside] * 1e9)
     ax.legend(fontsize="small")
     return ax
 

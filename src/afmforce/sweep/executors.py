@@ -234,19 +234,18 @@ class DaskExecutor:
                 # after an interruption a worker may still be busy in its task (workers ignore
                 # SIGINT): a close that times out must not replace the one-line report, and the
                 # cluster is closed (its worker processes ended) all the same
-                if self._own_client and self._client is not None:
+                def shut(part) -> None:
                     try:
-                        self._client.close(**({"timeout": 10} if quiet else {}))
+                        part.close(**({"timeout": 10} if quiet else {}))
                     except (TimeoutError, OSError):
                         if not quiet:
                             raise
+
+                if self._own_client and self._client is not None:
+                    shut(self._client)
                     self._client = None
                 if self._cluster is not None:
-                    try:
-                        self._cluster.close(**({"timeout": 10} if quiet else {}))
-                    except (TimeoutError, OSError):
-                        if not quiet:
-                            raise
+                    shut(self._cluster)
                     self._cluster = None
         finally:
             for lg, level in zip(loggers, levels):

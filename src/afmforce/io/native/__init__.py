@@ -12,9 +12,10 @@ from pathlib import Path
 from typing import Any, Mapping
 
 from ..curve import RawCurve
-from ._hdf5 import safe_attr
+from ._hdf5 import HDF5_SIGNATURE, root_attribute, safe_attr
 
-__all__ = ["detect_raw_text", "detect_raw_hdf5", "detect_raw_map", "load_rawfile", "load_rawmap", "safe_attr"]
+__all__ = ["detect_raw_text", "detect_raw_hdf5", "detect_raw_map", "load_rawfile", "load_rawmap", "safe_attr",
+           "root_attribute", "HDF5_SIGNATURE"]
 
 
 def rawfile_available() -> bool:
@@ -35,19 +36,7 @@ def detect_raw_text(path: Path) -> bool:
 
 def detect_raw_hdf5(path: Path) -> bool:
     """HDF5 signature and the root attribute ``format = "afmforce-raw"``."""
-    if not rawfile_available():
-        return False
-    try:
-        with open(path, "rb") as fh:
-            if fh.read(8) != b"\x89HDF\r\n\x1a\n":
-                return False
-        import h5py
-
-        with h5py.File(path, "r") as f:
-            fmt = safe_attr(f, "format", limit=256)  # sizes checked before reading: a damaged file must not hang
-        return (fmt.decode() if isinstance(fmt, bytes) else str(fmt)) == "afmforce-raw"
-    except Exception:  # any h5py failure means: not ours
-        return False
+    return rawfile_available() and root_attribute(path, "format") == "afmforce-raw"
 
 
 def load_rawfile(path: Path, *, meta_override: Mapping[str, Any], callback=None) -> list[RawCurve]:

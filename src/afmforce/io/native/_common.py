@@ -24,6 +24,13 @@ TRUTH_UNITS: dict[str, str] = {
 }
 
 
+def _check_truth_array(key: str, value: np.ndarray, n: int) -> None:
+    """A truth array is stored as a column: 1-D, of the curve's length ``n`` (else ParameterError)."""
+    if value.ndim != 1 or value.size != n:
+        raise ParameterError(f"truth array {key!r} has shape {value.shape}; only 1-D arrays of the "
+                             f"curve's length ({n}) can be stored")
+
+
 def _plain(value):
     if isinstance(value, dict):
         return {str(k): _plain(v) for k, v in value.items()}

@@ -3,14 +3,15 @@
 from __future__ import annotations
 
 import json
+import os
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ..._files import atomic_path
-from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _json
-from ...errors import FileFormatError, MissingDependencyError, ParameterError
+from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _check_truth_array, _json
+from ...errors import FileFormatError, MissingDependencyError
 from ..curve import RawCurve
 
 
@@ -46,9 +47,7 @@ def write_curve_group(group, curve: RawCurve) -> None:
     arrays: dict[str, np.ndarray] = {}
     for key, value in (curve.truth or {}).items():
         if isinstance(value, np.ndarray):
-            if value.ndim != 1 or value.size != n:
-                raise ParameterError(f"truth array {key!r} has shape {value.shape}; only 1-D arrays of the "
-                                     f"curve's length ({n}) can be stored")
+            _check_truth_array(key, value, n)
             arrays[key] = value
         else:
             scalars[key] = value
@@ -181,4 +180,22 @@ def _attr_str(value) -> str | None:
     if isinstance(value, bytes):
         return value.decode("utf-8")
     return None if value is None else str(value)
+
+
+#: The first bytes of every HDF5 file.
+HDF5_SIGNATURE = b"\x89HDF\r\n\x1a\n"
+
+
+def root_attribute(path: str | os.PathLike, name: str) -> str | None:
+    """The text of the root attribute ``name`` of the HDF5 file ``path`` (its size checked before
+    it is read: a damaged file must not hang), for telling formats apart; None where the file is not
+    HDF5, cannot be read, or has no such attribute."""
+    try:
+        with open(path, "rb") as fh:
+            if fh.read(8) != HDF5_SIGNATURE:
+                return None
+        with _h5py().File(path, "r") as f:
+            return _attr_str(safe_attr(f, name, limit=256))
+    except Exception:  # any failure means: not a file of the format asked about
+        return None
 

@@ -60,7 +60,7 @@ import numpy as np
 
 from ..._files import atomic_path
 from ...errors import FileFormatError, ParameterError
-from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _json
+from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _check_truth_array, _json
 from ._hdf5 import _read_hdf5, _write_hdf5, read_curve_group, write_curve_group
 from ..curve import DEFLECTION_UNITS, RawCurve
 
@@ -145,9 +145,7 @@ def format_text(curve: RawCurve) -> str:
     for key, value in (curve.truth or {}).items():
         name = f"truth.{key}"
         if isinstance(value, np.ndarray):
-            if value.ndim != 1 or value.size != n:
-                raise ParameterError(f"truth array {key!r} has shape {value.shape}; only 1-D arrays of the "
-                                     f"curve's length ({n}) can be stored")
+            _check_truth_array(key, value, n)
             cols.append((name, TRUTH_UNITS.get(key, ""), np.asarray(value, float), _FLOAT))
         else:
             lines.append(_header_line(name, value, TRUTH_UNITS.get(key, "")))

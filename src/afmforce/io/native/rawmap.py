@@ -35,7 +35,7 @@ from ..._files import atomic_path
 from ...errors import FileFormatError, ParameterError
 from ..curve import RawCurve
 from ._common import _json
-from ._hdf5 import _attr_str, _h5py, read_curve_group, safe_attr, write_curve_group
+from ._hdf5 import _attr_str, _h5py, read_curve_group, root_attribute, safe_attr, write_curve_group
 
 __all__ = ["MAP_FORMAT", "MAP_VERSION", "MapInfo", "MapReader", "write_map", "read_map", "iter_map", "map_info",
            "is_map"]
@@ -267,11 +267,4 @@ def read_map(path: str | os.PathLike, indices: Iterable[int] | None = None) -> l
 
 def is_map(path: str | os.PathLike) -> bool:
     """True if ``path`` is an HDF5 file whose ``format`` attribute says afmforce-map."""
-    try:
-        with open(path, "rb") as fh:
-            if fh.read(8) != b"\x89HDF\r\n\x1a\n":
-                return False
-        with _h5py().File(path, "r") as f:
-            return _attr_str(safe_attr(f, "format", limit=256)) == MAP_FORMAT
-    except Exception:  # any failure means: not a map we can read
-        return False
+    return root_attribute(path, "format") == MAP_FORMAT
