@@ -131,7 +131,7 @@ def test_two_sessions_never_see_each_others_data(make_client):
     assert b.get(f"/api/jobs/{job}").status_code == 404
     assert b.get("/api/jobs").json() == []
     assert a.post(f"/api/jobs/{job}/cancel").status_code == 200     # cancel: the process is terminated
-    deadline = time.monotonic() + 20
+    deadline = time.monotonic() + 300
     while a.get(f"/api/jobs/{job}").json()["state"] == "running" and time.monotonic() < deadline:
         time.sleep(0.1)
     assert a.get(f"/api/jobs/{job}").json()["state"] == "cancelled"
@@ -188,7 +188,7 @@ def test_sweep_job_runs_and_resumes_after_a_restart(make_client, tmp_path):
     c = make_client(data=data)
     job = c.post("/api/sweep", json={"grid": ["xi=0.01,0.1"], "sets": ["velocity=1um/s"],
                                      "executor": "serial"}).json()["id"]
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 300
     while (state := c.get(f"/api/jobs/{job}").json())["state"] == "running" and time.monotonic() < deadline:
         time.sleep(0.2)
     assert state["state"] == "done", state
@@ -208,7 +208,7 @@ def test_sweep_job_runs_and_resumes_after_a_restart(make_client, tmp_path):
 
     c2 = make_client(app=create_app(Settings(data=data, spare_job=False)))
     c2.cookies.update(c.cookies)                     # the same browser
-    deadline = time.monotonic() + 60
+    deadline = time.monotonic() + 300
     while (state := c2.get(f"/api/jobs/{job}").json())["state"] == "running" and time.monotonic() < deadline:
         time.sleep(0.2)
     assert state["state"] == "done" and state["resumed"] == 1

@@ -179,7 +179,7 @@ def test_shutdown_stops_every_worker(workers, tmp_path):
     assert len(jobs.processes()) == 2 and workers() >= before + 2
     jobs.shutdown()
     assert jobs.processes() == []
-    deadline = time.monotonic() + 10
+    deadline = time.monotonic() + 300
     while workers() > before and time.monotonic() < deadline:
         time.sleep(0.1)
     assert workers() == before
@@ -287,7 +287,7 @@ def test_sessions_expire_after_their_ttl(make_client, tmp_path):
     fid = c.post("/api/analyze", files={"file": (src.name, src.read_bytes())}).json()["files"][0]["id"]
     job = c.post("/api/fit", json={"velocities": [1e-6, 2e-6]}).json()["id"]
     c.post(f"/api/jobs/{job}/cancel")
-    deadline = time.monotonic() + 30
+    deadline = time.monotonic() + 300
     while c.get(f"/api/jobs/{job}").json()["state"] == "running" and time.monotonic() < deadline:
         time.sleep(0.1)
     sessions = c.app.state.sessions
