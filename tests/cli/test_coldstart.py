@@ -415,7 +415,7 @@ def test_first_simulate_runs_uncompiled_with_the_compiled_answers(tmp_path):
 
 @pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="no interval timer: simulate compiles")
 def test_an_uncompiled_simulate_past_its_budget_runs_again_compiled(tmp_path):
-    """Past its budget (here 1 ms: the timer fires before or while it integrates) the first
+    """Past its budget (here 1 ms of CPU time: the timer fires before or while it integrates) the first
     simulate stops before writing anything and the process becomes the same command run
     compiled (this process's numba cache): one more line, the same file."""
     proc = _python(_FIRST_SIMULATE.format(budget=0.001), tmp_path, own_cache=False)
