@@ -24,8 +24,8 @@ happens now:
   only to rounding. As Python the integrator is ~10x slower (the default run: ~1 s of
   integration, ~2.4 s in all): a run that is still integrating after
   :data:`INTERPRETED_BUDGET_S` of CPU time (a ``SIGVTALRM`` timer; no timer, no Python run)
-  stops before it wrote anything and runs again compiled (``os.execv`` of the same command line, one more
-  line on stderr): at most that long lost, never an endless Python run;
+  stops before it wrote anything and runs again compiled (``os.execv`` of the same command
+  line, one more line on stderr): at most that long lost, never an endless Python run;
 * ``demo`` compiles as before, on two cores (``dynamics._helper``), after one line that names
   ``afmforce warmup``: as Python it would take ~2 min (against ~8 s compiled, ~45 s of
   compiling). It starts the analysis' warmup in the background at once
