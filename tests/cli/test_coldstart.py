@@ -363,7 +363,8 @@ def test_the_integrator_as_python_takes_the_compiled_steps_bitwise(tmp_path):
     interpreted = pickle.loads((tmp_path / "python.pkl").read_bytes())
 
     namespace: dict = {}
-    exec(_SIMULATE_RUNS.replace("sys.argv[1]", repr(str(tmp_path / "compiled.pkl"))), namespace)  # compiled here
+    compiled_runs = _SIMULATE_RUNS.replace("sys.argv[1]", repr(str(tmp_path / "compiled.pkl")))
+    exec(compiled_runs, namespace)                                      # compiled, in this process
     compiled = pickle.loads((tmp_path / "compiled.pkl").read_bytes())
     assert [label for label, _ in interpreted] == [label for label, _ in compiled]
     for (label, a), (_, b) in zip(interpreted, compiled):

@@ -256,9 +256,10 @@ def guard(args, notice, budget: float | None = None) -> None:
     """Bound the integrator's run as Python (NUMBA_DISABLE_JIT already set): after ``budget``
     seconds of this process' CPU time (:data:`INTERPRETED_BUDGET_S`) a timer stops the command
     while it integrates (or at its next drive segment: before it writes anything) and this
-    process becomes the same command line run compiled (``os.execv``; the warmup started in the background meanwhile
-    may have compiled it already). ``args.func`` is wrapped; the integrator's entry point
-    (``dynamics.radau.integrate_segment``, a Python function here) too."""
+    process becomes the same command line run compiled (``os.execv``; the warmup started in
+    the background meanwhile may have compiled it already). ``args.func`` is wrapped; the
+    integrator's entry point (``dynamics.radau.integrate_segment``, a Python function here)
+    too."""
     import signal
 
     from ..dynamics import radau
