@@ -27,8 +27,8 @@ happens now:
   stops before it wrote anything and runs again compiled (``os.execv`` of the same command
   line, one more line on stderr): at most that long lost, never an endless Python run;
 * ``demo`` compiles as before, on two cores (``dynamics._helper``), after one line that names
-  ``afmforce warmup``: as Python it would take ~2 min (against ~8 s compiled, ~45 s of
-  compiling). It starts the analysis' warmup in the background at once
+  ``afmforce warmup``: as Python it took 90 s of CPU, more than compiling (45-70 s; ~9 s
+  warm). It starts the analysis' warmup in the background at once
   (:data:`COMMAND_LATER`; two cores or more), so that its analysis kernels are compiled on the
   other core while it compiles the integrator.
 
