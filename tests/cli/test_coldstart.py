@@ -7,11 +7,14 @@ from __future__ import annotations
 import json
 import math
 import os
+import pickle
 import shutil
+import signal
 import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from afmforce import datasets
@@ -22,10 +25,16 @@ SRC = Path(__file__).resolve().parents[2] / "src"
 HEAVY = ("numpy", "numba", "dask", "distributed", "matplotlib", "scipy", "pandas", "xarray", "h5py")
 
 
-def _python(code: str, tmp_path: Path, *, src: Path = SRC, **env) -> subprocess.CompletedProcess:
+def _python(code: str, tmp_path: Path, *, src: Path = SRC, own_cache: bool = True,
+            **env) -> subprocess.CompletedProcess:
+    """Run ``code`` in a fresh interpreter: an empty numba cache of its own (``own_cache``; else
+    this process's cache) and an empty state folder."""
     full = {k: v for k, v in os.environ.items() if k not in ("NUMBA_DISABLE_JIT", _firstrun.ENV)}
-    full.update(PYTHONPATH=str(src), NUMBA_CACHE_DIR=str(tmp_path / "numba"),
-                AFMFORCE_STATE_DIR=str(tmp_path / "state"), **env)
+    full.update(PYTHONPATH=str(src), AFMFORCE_STATE_DIR=str(tmp_path / "state"), **env)
+    if own_cache:
+        full["NUMBA_CACHE_DIR"] = str(tmp_path / "numba")
+    elif full.get("NUMBA_CACHE_DIR"):
+        full["NUMBA_CACHE_DIR"] = os.path.abspath(full["NUMBA_CACHE_DIR"])
     return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, env=full,
                           cwd=tmp_path, timeout=600)
 
@@ -173,7 +182,8 @@ def test_interpreted_only_for_a_few_small_files(tmp_path, monkeypatch):
     big.write_bytes(b"0" * (_firstrun.MAX_INTERPRETED_BYTES + 1))
     args = dict(files=[str(small)], example=[], scheduler=None, workers=None)
     assert _firstrun.interpretable("analyze", Namespace(**args))
-    assert not _firstrun.interpretable("simulate", Namespace(**args))
+    assert _firstrun.interpretable("simulate", Namespace(**args)) == hasattr(signal, "setitimer")
+    assert not _firstrun.interpretable("demo", Namespace(**args))
     assert not _firstrun.interpretable("analyze", Namespace(**{**args, "files": [str(big)]}))
     assert not _firstrun.interpretable("analyze", Namespace(**{**args, "files": [str(tmp_path)]}))
     assert not _firstrun.interpretable("analyze", Namespace(**{**args, "workers": 2}))
@@ -290,3 +300,131 @@ def test_warmup_workloads_are_commands_that_parse():
             assert args.command == argv[0]
             for name in getattr(args, "example", []) or []:
                 assert Path(datasets.path(name)).is_file()
+
+
+#: Runs of the kinds the default simulate and the demo make (the paper's figures: spring and
+#: beam, viscous friction; the virtual experiment; the liquid one: slip and lever drag, the
+#: model with the extras), plus load-dependent friction: (label, simulate's keywords).
+_RUNS = """
+from afmforce.paper.demo import DEMO_RUNS, _COMMON
+from afmforce.paper.demo_liquid import LIQUID_DEMO
+from afmforce.paper.runs import FIG1_RUN, FIG5_RUN, FIG9_RUN
+RUNS = [("fig1 spring 5 um/s", dict(velocity=5e-6, **FIG1_RUN)),
+        ("fig5 beam xi 0.1, 1 um/s", dict(xi=0.1, velocity=1e-6, **FIG5_RUN)),
+        ("fig9 spring 2 um/s", dict(velocity=2e-6, sample_rate=4e3, **FIG9_RUN)),
+        ("demo virtual run with friction", {**_COMMON, **DEMO_RUNS[1][1]}),
+        ("demo liquid 40 um/s", dict(velocity=40e-6, sample_rate=40e3, **LIQUID_DEMO)),
+        ("load-dependent friction", dict(friction="load", zeta=3e14, end=-190e-9))]
+"""
+_SIMULATE_RUNS = _RUNS + """
+import dataclasses, pickle, sys
+from afmforce.dynamics import simulate
+out = []
+for label, kw in RUNS:
+    tr = simulate(**kw)
+    record = {f.name: getattr(tr, f.name) for f in dataclasses.fields(tr)
+              if f.name not in ("config", "events", "solver")}
+    record["events"] = dataclasses.asdict(tr.events)
+    record["solver"] = {k: v for k, v in dataclasses.asdict(tr.solver).items() if k != "wall_time"}
+    out.append((label, record))
+with open(sys.argv[1], "wb") as f:
+    pickle.dump(out, f)
+"""
+
+
+def _bitwise(a, b, path: str = "") -> list[str]:
+    """Where two records differ at all (arrays and floats bit for bit, NaN equal to NaN)."""
+    if isinstance(a, dict):
+        if set(a) != set(b):
+            return [f"{path}: keys {sorted(set(a) ^ set(b))}"]
+        return [d for k in a for d in _bitwise(a[k], b[k], f"{path}/{k}")]
+    if isinstance(a, np.ndarray):
+        same = a.dtype == b.dtype and a.shape == b.shape and a.tobytes() == b.tobytes()
+        return [] if same else [f"{path}: arrays differ"]
+    if isinstance(a, float):
+        return [] if np.float64(a).tobytes() == np.float64(b).tobytes() else [f"{path}: {a!r} != {b!r}"]
+    return [] if a == b else [f"{path}: {a!r} != {b!r}"]
+
+
+def test_the_integrator_as_python_takes_the_compiled_steps_bitwise(tmp_path):
+    """The integrator run as Python (NUMBA_DISABLE_JIT, a fresh process) gives the compiled
+    integrator's trajectories bit for bit: every sampled array, every event, every solver
+    count (the step sizes follow from every bit of the state, so one rounding apart anywhere
+    would show), on the kinds of runs the default simulate and the demo make. numba compiles
+    ``x ** 3`` as ``x * x * x`` where Python calls pow: written out in the kernels."""
+    script = tmp_path / "runs.py"
+    script.write_text(_SIMULATE_RUNS)
+    full = {k: v for k, v in os.environ.items() if k != _firstrun.ENV}
+    full.update(PYTHONPATH=str(SRC), NUMBA_DISABLE_JIT="1", NUMBA_CACHE_DIR=str(tmp_path / "numba"))
+    proc = subprocess.run([sys.executable, str(script), str(tmp_path / "python.pkl")], capture_output=True,
+                          text=True, env=full, cwd=tmp_path, timeout=900)
+    assert proc.returncode == 0, proc.stderr
+    assert [f for f in _files(tmp_path / "numba") if f.suffix in (".nbi", ".nbc")] == []   # nothing compiled
+    interpreted = pickle.loads((tmp_path / "python.pkl").read_bytes())
+
+    namespace: dict = {}
+    compiled_runs = _SIMULATE_RUNS.replace("sys.argv[1]", repr(str(tmp_path / "compiled.pkl")))
+    exec(compiled_runs, namespace)                                      # compiled, in this process
+    compiled = pickle.loads((tmp_path / "compiled.pkl").read_bytes())
+    assert [label for label, _ in interpreted] == [label for label, _ in compiled]
+    for (label, a), (_, b) in zip(interpreted, compiled):
+        assert len(a["time"]) > 100 and a["solver"]["steps"] > 100, label     # a real run
+        differences = _bitwise(a, b)
+        assert differences == [], (label, differences[:5])
+
+
+def _without_wall_time(csv: Path) -> list[str]:
+    """The trajectory file's lines, its solver header without the wall time."""
+    lines = csv.read_text().splitlines()
+    for i, line in enumerate(lines):
+        if line.startswith("# solver: "):
+            solver = json.loads(line[len("# solver: "):])
+            assert solver.pop("wall_time") > 0.0
+            lines[i] = "# solver: " + json.dumps(solver)
+    return lines
+
+
+_FIRST_SIMULATE = """
+import sys, json
+from afmforce.cli import _firstrun
+started = []
+_firstrun.start_background = lambda group, k=None: started.append(group) or 'started'
+_firstrun.INTERPRETED_BUDGET_S = {budget}
+sys.argv = ['afmforce', 'simulate', '--out', 'first.csv', '--no-progress']
+from afmforce.cli.main import main
+status = main()
+import numba
+print(json.dumps({{'status': status, 'started': started, 'jit_off': numba.config.DISABLE_JIT}}), file=sys.stderr)
+"""
+
+
+@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="no interval timer: simulate compiles")
+def test_first_simulate_runs_uncompiled_with_the_compiled_answers(tmp_path):
+    """The first ``afmforce simulate`` with no warm cache: one line on stderr, the warmup of the
+    integrator started in the background (here recorded), nothing compiled, and the trajectory
+    file equal to the compiled run's, byte for byte but the wall time."""
+    proc = _python(_FIRST_SIMULATE.format(budget=600.0), tmp_path)
+    assert proc.returncode == 0, proc.stderr
+    report = json.loads(proc.stderr.strip().splitlines()[-1])
+    assert report == {"status": 0, "started": ["simulate"], "jit_off": 1}
+    notes = [line for line in proc.stderr.splitlines() if line.startswith("afmforce:")]
+    assert len(notes) == 1 and "the integrator is being compiled in the background" in notes[0]
+    assert [f for f in _files(tmp_path / "numba") if f.suffix in (".nbi", ".nbc")] == []
+    assert main(["simulate", "--out", str(tmp_path / "compiled.csv"), "--no-progress"]) == 0
+    assert _without_wall_time(tmp_path / "first.csv") == _without_wall_time(tmp_path / "compiled.csv")
+
+
+@pytest.mark.skipif(not hasattr(signal, "setitimer"), reason="no interval timer: simulate compiles")
+def test_an_uncompiled_simulate_past_its_budget_runs_again_compiled(tmp_path):
+    """Past its budget (here 1 ms of CPU time: the timer fires before or while it integrates) the first
+    simulate stops before writing anything and the process becomes the same command run
+    compiled (this process's numba cache): one more line, the same file."""
+    proc = _python(_FIRST_SIMULATE.format(budget=0.001), tmp_path, own_cache=False)
+    assert proc.returncode == 0, proc.stderr
+    notes = [line for line in proc.stderr.splitlines() if line.startswith("afmforce:")]
+    assert "being compiled in the background" in notes[0]
+    assert "long for the uncompiled integrator; compiling it now" in notes[1]
+    assert not proc.stderr.strip().splitlines()[-1].startswith("{")     # execv: the script did not go on
+    assert "wrote first.csv" in proc.stdout
+    assert main(["simulate", "--out", str(tmp_path / "compiled.csv"), "--no-progress"]) == 0
+    assert _without_wall_time(tmp_path / "first.csv") == _without_wall_time(tmp_path / "compiled.csv")

@@ -16,12 +16,21 @@ happens now:
   kernels to rounding (Python and LLVM round differently in the last bits: 1.2e-14 relative
   at most on the shipped sample files, which ``tests/cli/test_coldstart.py`` compares at
   1e-12); the next run loads the compiled kernels from the cache;
-* the simulating commands cannot do this: the integrator run as Python takes other steps
-  (its floating point differs in the last bits, and an adaptive step size amplifies that),
-  so they compile as before, on two cores (``dynamics._helper``), after one line that
-  names ``afmforce warmup``. ``demo``, which analyses after it simulates, starts the
-  analysis' warmup in the background at once (:data:`COMMAND_LATER`; two cores or more), so
-  that its analysis kernels are compiled on the other core while it compiles the integrator.
+* the first ``afmforce simulate`` with no stamp for the integrator runs it as Python too
+  while ``afmforce warmup --only simulate`` compiles it in the background: the integrator as
+  Python takes the compiled one's steps bitwise (its integer powers are written as numba
+  compiles them, ``dynamics.models.surface_force``, ``dynamics._radau_newton._ipow``; tested
+  on the default run and the demo's kinds of runs), so its answers are the compiled ones, not
+  only to rounding. As Python the integrator is ~10x slower (the default run: ~1 s of
+  integration, ~2.4 s in all): a run that is still integrating after
+  :data:`INTERPRETED_BUDGET_S` of CPU time (a ``SIGVTALRM`` timer; no timer, no Python run)
+  stops before it wrote anything and runs again compiled (``os.execv`` of the same command
+  line, one more line on stderr): at most that long lost, never an endless Python run;
+* ``demo`` compiles as before, on two cores (``dynamics._helper``), after one line that names
+  ``afmforce warmup``: as Python it took 90 s of CPU, more than compiling (45-70 s; ~9 s
+  warm). It starts the analysis' warmup in the background at once
+  (:data:`COMMAND_LATER`; two cores or more), so that its analysis kernels are compiled on the
+  other core while it compiles the integrator.
 
 A stamp only says that the warmup ran for these sources, this numba and this cache: it is
 a hint, never a guarantee of freshness. That is numba's index, whose stamp covers every
@@ -44,7 +53,7 @@ from .._files import pid_alive
 from .._jitcache import kernel_source_files
 
 __all__ = ["GROUPS", "COMMAND_GROUP", "ENV", "key", "stamp_path", "is_warm", "write_stamp",
-           "interpretable", "start_background", "prepare"]
+           "interpretable", "start_background", "prepare", "guard"]
 
 #: Group -> what ``afmforce warmup`` runs to compile its kernels (commands of this CLI).
 GROUPS: dict[str, str] = {
@@ -65,6 +74,12 @@ MAX_INTERPRETED_INPUTS = 8
 #: analyze's options whose kernels are slow as Python (the indentation and adhesive contact fits:
 #: 1-2 s a curve compiled): with any of them the first run compiles
 HEAVY_FLAGS = ("indentation_model", "fast_map")
+#: simulate's first run gives the command this much CPU time with the integrator as Python [s]
+#: (the default run: ~1.5 s, ~0.8 s of it integrating), then runs it again compiled; CPU time,
+#: not wall time: on a loaded machine both the Python run and the compiler take longer
+INTERPRETED_BUDGET_S = 4.0
+#: What the first run's line on stderr calls each group's kernels
+KERNELS = {"analysis": "the analysis kernels are", "simulate": "the integrator is"}
 #: A background warmup whose lock is older than this is taken for dead [s].
 LOCK_STALE_S = 900.0
 
@@ -173,10 +188,16 @@ def _cores() -> int:
 
 
 def interpretable(command: str, args) -> bool:
-    """Whether this run may use the kernels as Python: ``analyze`` of a few small files (or
-    shipped examples), in this process (no cluster), without a contact fit
-    (:data:`HEAVY_FLAGS`), numba not imported yet."""
-    if command != "analyze" or "numba" in sys.modules:
+    """Whether this run may use the kernels as Python (numba not imported yet): ``simulate``
+    where a timer can stop it (:func:`guard`), ``analyze`` of a few small files (or shipped
+    examples), in this process (no cluster), without a contact fit (:data:`HEAVY_FLAGS`)."""
+    if "numba" in sys.modules:
+        return False
+    if command == "simulate":
+        import signal
+
+        return hasattr(signal, "setitimer") and hasattr(signal, "SIGVTALRM")
+    if command != "analyze":
         return False
     if getattr(args, "scheduler", None) or getattr(args, "workers", None):
         return False
@@ -216,7 +237,78 @@ def prepare(command: str, args, notice) -> str:
     if started == "failed":             # nothing would ever compile them: compile here, as before
         return "compile"
     os.environ["NUMBA_DISABLE_JIT"] = "1"
-    notice("afmforce: first run: the analysis kernels are " + ("being compiled in the background"
+    simulating = command == "simulate"
+    notice(f"afmforce: first run: {KERNELS[group]} " + ("being compiled in the background"
            if started == "started" else "still being compiled in the background")
-           + " (~1 min of one core, once); this run uses them uncompiled (same results to rounding)")
+           + (" (~20 s of one core, once); this run uses it uncompiled (the same results)" if simulating
+              else " (~1 min of one core, once); this run uses them uncompiled (same results to rounding)"))
+    if simulating:
+        guard(args, notice)
     return "interpreted"
+
+
+class _TooLong(BaseException):
+    """The integrator as Python ran past its budget (a BaseException: no ``except Exception``
+    of the command swallows it)."""
+
+
+def guard(args, notice, budget: float | None = None) -> None:
+    """Bound the integrator's run as Python (NUMBA_DISABLE_JIT already set): after ``budget``
+    seconds of this process' CPU time (:data:`INTERPRETED_BUDGET_S`) a timer stops the command
+    while it integrates (or at its next drive segment: before it writes anything) and this
+    process becomes the same command line run compiled (``os.execv``; the warmup started in
+    the background meanwhile may have compiled it already). ``args.func`` is wrapped; the
+    integrator's entry point (``dynamics.radau.integrate_segment``, a Python function here)
+    too."""
+    import signal
+
+    from ..dynamics import radau
+
+    state = {"inside": 0, "over": False}
+    entry = radau.integrate_segment
+
+    def integrate_segment(*a):
+        if state["over"]:
+            raise _TooLong
+        state["inside"] += 1
+        try:
+            return entry(*a)
+        finally:
+            state["inside"] -= 1
+
+    def alarm(signum, frame):
+        state["over"] = True
+        if state["inside"]:
+            raise _TooLong
+
+    func = args.func
+
+    def run(a):
+        previous = signal.signal(signal.SIGVTALRM, alarm)
+        signal.setitimer(signal.ITIMER_VIRTUAL, INTERPRETED_BUDGET_S if budget is None else budget)
+        try:
+            return func(a)
+        except _TooLong:
+            pass
+        finally:
+            signal.setitimer(signal.ITIMER_VIRTUAL, 0.0)
+            signal.signal(signal.SIGVTALRM, previous)
+            radau.integrate_segment = entry
+        notice("afmforce: first run: this run is long for the uncompiled integrator; "
+               "compiling it now instead (~20 s, once)")
+        _run_compiled()
+
+    radau.integrate_segment = integrate_segment
+    args.func = run
+
+
+def _run_compiled() -> None:
+    """Replace this process by its command line run compiled (never returns)."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):
+            pass
+    env = {name: value for name, value in os.environ.items() if name != "NUMBA_DISABLE_JIT"}
+    env[ENV] = "compile"
+    os.execve(sys.executable, [sys.executable, "-m", "afmforce.cli.main", *sys.argv[1:]], env)

@@ -3,8 +3,8 @@
 afmforce's kernels are compiled on their first call and cached on disk. This runs each
 group's commands once on the shipped sample files and default settings (outputs in a
 temporary folder), so that the cache holds what those commands call; later runs load them
-in seconds. The first afmforce analyze starts it in the background for the analysis. Safe
-to run again.
+in seconds. The first afmforce analyze (simulate) starts it in the background for the
+analysis (the integrator). Safe to run again.
 
 Each group's workload is :data:`afmforce.cli._firstrun.GROUPS`; a stamp per group says it ran
 (docs/architecture.md, "First run").

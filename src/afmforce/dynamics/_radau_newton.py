@@ -69,6 +69,20 @@ def factorize(J, h, Sr, Sc, lu, stats):
 
 
 @piece(inline=True)
+def _ipow(x, m):
+    """``x ** m`` for an integer ``m >= 0`` by repeated squaring, as numba compiles ``**`` with
+    an integer exponent (Python's ``pow`` rounds otherwise: the kernels run as Python give the
+    compiled results bitwise, cli/_firstrun.py)."""
+    r = 1.0
+    while m != 0:
+        if m & 1:
+            r *= x
+        m >>= 1
+        x *= x
+    return r
+
+
+@piece(inline=True)
 def newton(model, p, drive, t, h, y, J, Sr, Sc, lu, scale, newton_tol, nmax, Z0, Z, W, F, dW,
            rr, cc, ytmp, yst, stats):
     """Simplified Newton iterations from ``Z0`` with the factors of :func:`factorize`.
@@ -135,7 +149,7 @@ def newton(model, p, drive, t, h, y, J, Sr, Sc, lu, scale, newton_tol, nmax, Z0,
         if dw_old >= 0.0:
             rate = dwn / dw_old
         if rate >= 0.0 and (rate >= 1.0 or
-                            rate ** (nmax - k) / (1.0 - rate) * dwn > newton_tol):
+                            _ipow(rate, nmax - k) / (1.0 - rate) * dwn > newton_tol):
             break
         for st in range(3):
             for i in range(n):

@@ -141,7 +141,8 @@ def state_size(model: int) -> int:
 def surface_force(h, ar, z0):
     """Fs(h) and Fs'(h) of eq 2 [N, N/m]."""
     ih2 = 1.0 / (h * h)
-    r6 = (z0 * z0 * ih2) ** 3
+    r2 = z0 * z0 * ih2
+    r6 = r2 * r2 * r2             # as numba compiles ``r2 ** 3`` (Python's pow rounds otherwise)
     fs = -(ar / 12.0) * ih2 * (1.0 - 0.25 * r6)
     dfs = (ar / 6.0) * ih2 / h * (1.0 - r6)
     return fs, dfs
