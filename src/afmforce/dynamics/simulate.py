@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+from bisect import bisect_left, bisect_right
 import warnings
 from typing import Callable
 
@@ -194,9 +195,10 @@ class _Run:
             a[:n_samp].copy() if short else a[:n_samp] for a in self.out)
         offset = slope = math.nan
         if finite and math.isfinite(self.ev[R.E_CONTACT_T]):
-            offset, slope = fit_compliance(zd, apparent, obs[:, O_H], code,
-                                           self.cfg.contact_separation,
-                                           self.ev[R.E_CONTACT_Z], self.z_turn,
+            z_c = float(self.ev[R.E_CONTACT_Z])
+            a, b = _rows_between(zd, labels, plan, z_c, self.z_turn)
+            offset, slope = fit_compliance(zd[a:b], apparent[a:b], obs[a:b, O_H], code[a:b],
+                                           self.cfg.contact_separation, z_c, self.z_turn,
                                            s.beta if s.beam else math.nan)
         return tt, zd, code, obs, apparent, apparent_sep, finite, offset, slope
 
@@ -293,6 +295,32 @@ class _Run:
             lateral_position=obs[:, O_Y2], normal_force=obs[:, O_FZ], friction_force=obs[:, O_FY],
             segment=seg_code, calibration_factor=s.beta, spring_constant=s.k, config=cfg,
             events=events, solver=solver))
+
+
+def _neg(x):
+    return -x
+
+
+def _rows_between(zd, labels, plan, lo, hi) -> tuple[int, int]:
+    """The rows ``[a, b)`` that hold every sample with ``lo <= z <= hi`` of the approach and
+    retract segments (``labels``: their rows; ``z`` is monotone along a segment, so
+    bisection finds them): the compliance fits read samples in ``[contact, turn]`` only, and
+    reading these rows instead of all (Fig 5: ~4,600 of 31,001) gives the same sums in the
+    same order, bitwise (issue 35.5)."""
+    a, b = len(zd), 0
+    for (first, last, kind), seg in zip(labels, plan):
+        if kind == R.DWELL or last <= first:
+            continue
+        if seg.velocity > 0.0:
+            i, j = bisect_left(zd, lo, first, last), bisect_right(zd, hi, first, last)
+        elif seg.velocity < 0.0:
+            i = bisect_left(zd, -hi, first, last, key=_neg)
+            j = bisect_right(zd, -lo, first, last, key=_neg)
+        else:
+            i, j = first, last
+        if j > i:
+            a, b = min(a, i), max(b, j)
+    return (a, b) if b > a else (0, 0)
 
 
 def _events(cfg, ev, t_turn, z_turn, beta, model, offset, slope, h_s, z_s) -> Events:
