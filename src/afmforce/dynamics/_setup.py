@@ -56,7 +56,7 @@ class _Setup:
 _FIELDS = ("model", "kmodel", "n", "p", "y0", "atol", "rtolv", "t_total_max", "dt", "nbuf",
            "averaged", "ev0", "h_s", "z_s", "hmax_dz", "damp_cycles", "term", "f_max",
            "budget", "tolerances", "control", "beta", "k", "beam", "plan", "records",
-           "seg_table", "rate",
+           "seg_table", "seg_kinds", "seg_columns", "rate",
            # friction-dependent (the rest depends on probe, surface, drive, solver only)
            "vfac_scale", "stiff_load", "vfac")
 
@@ -149,6 +149,8 @@ def _base(cfg: SimulationConfig) -> _Setup:
     s.records = [_record(seg) for seg in plan]
     s.records[0] = _record(plan[0], *s.term)
     s.seg_table = _seg_table(plan)
+    s.seg_kinds = _seg_kinds(plan)
+    s.seg_columns = _seg_columns(s.seg_table)
     return s
 
 
@@ -160,6 +162,16 @@ def _record(seg, term_kind=R.TERM_NONE, term_level=0.0) -> tuple:
 def _seg_table(plan) -> np.ndarray:
     """(t_start, z_start, velocity, t_end) of every segment (for the sampled columns)."""
     return np.array([(g.t_start, g.z_start, g.velocity, g.t_end) for g in plan], dtype=float)
+
+
+def _seg_kinds(plan) -> np.ndarray:
+    """The kind of every segment (int8, for the sampled columns)."""
+    return np.array([g.kind for g in plan], dtype=np.int8)
+
+
+def _seg_columns(seg_table) -> tuple:
+    """(t_start, z_start, velocity) columns of :func:`_seg_table` (for the sampled columns)."""
+    return seg_table[:, 0], seg_table[:, 1], seg_table[:, 2]
 
 
 def _control(s: _Setup, chunk: int) -> tuple:

@@ -21,7 +21,7 @@ from .events import Events, fit_compliance
 from .guard import lever_damping_check, risky, run_check
 from .models import MODEL_BEAM, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_THETA, O_Y2
 from .trajectory import SolverStats, Trajectory
-from ._setup import _control, _record, _seg_table, _setup
+from ._setup import _control, _record, _seg_columns, _seg_kinds, _seg_table, _setup
 # re-exported (tests, docs and earlier imports name them here)
 from ._setup import (DAMP_KAPPA_RATIO, HMAX_FRACTION, HMAX_TRAVEL,  # noqa: F401
                      POSITION_RTOL_FACTOR, VELOCITY_ATOL_FREQUENCY, VELOCITY_TOLERANCE_FACTOR)
@@ -184,10 +184,12 @@ class _Run:
             n_samp = int(self.s_next[0])
             labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
         lab = np.array(labels, dtype=np.int64)
-        finite = sample_columns(
-            s.kmodel, s.p, ybuf, n_samp, s.averaged, s.dt, lab[:, 0], lab[:, 1],
-            lab[:, 2].astype(np.int8), seg_table[:, 0], seg_table[:, 1], seg_table[:, 2],
-            s.beam, s.beta, *self.out)
+        if seg_table is s.seg_table:        # the plan of the setup (not turned at a load)
+            kinds, columns = s.seg_kinds, s.seg_columns
+        else:
+            kinds, columns = _seg_kinds(plan), _seg_columns(seg_table)
+        finite = sample_columns(s.kmodel, s.p, ybuf, n_samp, s.averaged, s.dt, lab[:, 0],
+                                lab[:, 1], kinds, *columns, s.beam, s.beta, *self.out)
         # the first n_samp rows; a copy where they are well short of the buffer (a run
         # that turned early at a load), so that the trajectory does not hold the rest
         short = 4 * n_samp < 3 * s.nbuf
