@@ -49,6 +49,7 @@ APPROACH, RETRACT, DWELL = 0, 1, 2
 TERM_NONE, TERM_FORCE, TERM_DEFLECTION = 0, 1, 2
 
 NSUB = 4            # scan points per step (then bisection / golden section)
+EXTREMUM_TOL = 1e-9     # an extremum is located to this fraction of the step
 _GOLD = 0.3819660112501051
 
 
@@ -136,7 +137,7 @@ def _extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_lo, s_hi, idx, sign, ytm
     fc = sign * _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, c, ytmp, idx, o)
     fd = sign * _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, d, ytmp, idx, o)
     for _ in range(60):
-        if b - a < 1e-9:
+        if b - a < EXTREMUM_TOL:
             break
         if fc < fd:
             b = d
@@ -195,6 +196,17 @@ def _scan_extremum(model, p, t_a, z_a, v, t0, h, y_old, Q, s_a, s_b, idx, sign, 
             vals_s = s
     if kbest < 0:
         return math.nan, math.nan
+    if kbest == 0 or kbest == NSUB:
+        # the best scan point is an end of [s_a, s_b] and the observable is no better just
+        # inside it: the extremum is that end (the golden section would converge to within
+        # EXTREMUM_TOL of it and then keep the end; a running extremum that moves on every
+        # step, as the approach's attraction or the adhesion does, costs 1 evaluation
+        # instead of ~45: issue 35.5)
+        s_in = vals_s + EXTREMUM_TOL if kbest == 0 else vals_s - EXTREMUM_TOL
+        if sign * _eval_value(model, p, t_a, z_a, v, t0, h, y_old, Q, s_in, ytmp, idx,
+                              o) >= vbest:
+            _eval_obs(model, p, t_a, z_a, v, t0, h, y_old, Q, vals_s, ytmp, o)
+            return vals_s, o[idx]
     ds = (s_b - s_a) / NSUB
     lo = fmax(s_a, vals_s - ds)
     hi = fmin(s_b, vals_s + ds)

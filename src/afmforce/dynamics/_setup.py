@@ -47,18 +47,20 @@ DAMP_KAPPA_RATIO = 100.0
 class _Setup:
     """What a run derives from its configuration alone (:func:`_setup`, once per
     configuration): the packed model, start state, tolerances, drive plan, the event
-    record's inputs and the compiled call's records. Read-only: runs copy what they change."""
-
-    __slots__ = ("model", "kmodel", "n", "p", "y0", "atol", "rtolv", "t_total_max", "dt", "nbuf",
-                 "averaged", "ev0", "h_s", "z_s", "hmax_dz", "damp_cycles", "term", "f_max",
-                 "budget", "tolerances", "control", "beta", "k", "beam", "plan", "records",
-                 "seg_table", "rate",
-                 # friction-dependent (the rest depends on probe, surface, drive, solver only)
-                 "vfac_scale", "stiff_load", "vfac")
+    record's inputs and the compiled call's records. Read-only: runs copy what they change.
+    Its attributes are :data:`_FIELDS` (a plain ``__dict__``, not slots: a configuration
+    that differs in friction only copies the base's in one call, issue 35.5)."""
 
 
-#: The fields of :class:`_Setup` shared by configurations that differ in friction only.
-_BASE_FIELDS = _Setup.__slots__[:-3]
+#: The attributes of :class:`_Setup`.
+_FIELDS = ("model", "kmodel", "n", "p", "y0", "atol", "rtolv", "t_total_max", "dt", "nbuf",
+           "averaged", "ev0", "h_s", "z_s", "hmax_dz", "damp_cycles", "term", "f_max",
+           "budget", "tolerances", "control", "beta", "k", "beam", "plan", "records",
+           "seg_table", "seg_kinds", "seg_columns", "rate",
+           # friction-dependent (the rest depends on probe, surface, drive, solver only)
+           "vfac_scale", "stiff_load", "vfac")
+
+
 #: The base _Setup by (probe, surface, drive, solver), and by their ids (-> (parts, base)):
 #: a fit or sweep changes one part (e.g. friction) and keeps the others as the same objects
 #: or equal ones.
@@ -85,8 +87,7 @@ def _setup(cfg: SimulationConfig) -> _Setup:
             _BASES[parts] = base
         _BASES[key] = (parts, base)
     s = _Setup()
-    for name in _BASE_FIELDS:
-        setattr(s, name, getattr(base, name))
+    s.__dict__.update(base.__dict__)        # every base field (_base sets no other)
     xi, zeta = cfg.friction.coefficients
     if s.beam:              # the same values as parameter_vector(cfg) fills in
         s.p = p = base.p.copy()
@@ -148,6 +149,8 @@ def _base(cfg: SimulationConfig) -> _Setup:
     s.records = [_record(seg) for seg in plan]
     s.records[0] = _record(plan[0], *s.term)
     s.seg_table = _seg_table(plan)
+    s.seg_kinds = _seg_kinds(plan)
+    s.seg_columns = _seg_columns(s.seg_table)
     return s
 
 
@@ -159,6 +162,16 @@ def _record(seg, term_kind=R.TERM_NONE, term_level=0.0) -> tuple:
 def _seg_table(plan) -> np.ndarray:
     """(t_start, z_start, velocity, t_end) of every segment (for the sampled columns)."""
     return np.array([(g.t_start, g.z_start, g.velocity, g.t_end) for g in plan], dtype=float)
+
+
+def _seg_kinds(plan) -> np.ndarray:
+    """The kind of every segment (int8, for the sampled columns)."""
+    return np.array([g.kind for g in plan], dtype=np.int8)
+
+
+def _seg_columns(seg_table) -> tuple:
+    """(t_start, z_start, velocity) columns of :func:`_seg_table` (for the sampled columns)."""
+    return seg_table[:, 0], seg_table[:, 1], seg_table[:, 2]
 
 
 def _control(s: _Setup, chunk: int) -> tuple:
