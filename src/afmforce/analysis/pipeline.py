@@ -32,7 +32,7 @@ from .plausibility import (beyond_detector, impossible_reasons, impossible_steps
                            slope_not_the_levers)
 from .registry import AnalysisStep, ResultField, register_step
 from .result import AnalysisResult
-from .state import NoContact, State, prepare
+from .state import NoContact, State, _default_probe, prepare
 from .steps.contact import retract_dip
 from ..errors import ParameterError
 from ..io.curve import RawCurve
@@ -111,7 +111,8 @@ def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
     else:
         given = list(options)
     known = registry.steps()
-    out = {name: _default_options(step.options) for name, step in known.items()}
+    out = dict(registry._cached("default_options", lambda: {name: _default_options(step.options)
+                                                             for name, step in registry.steps().items()}))
     seen = set()
     for rec in given:
         if not isinstance(rec, O.StepOptions):
@@ -125,7 +126,7 @@ def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
     out["kind"].check_method(CONTACT_POINT_METHODS)
     if probe is not None and not isinstance(probe, O.ProbeCalibration):
         raise ParameterError(f"probe must be a ProbeCalibration, got {probe!r}")
-    return out, probe or O.ProbeCalibration()
+    return out, probe if probe is not None else _default_probe()
 
 
 def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = None, *,
