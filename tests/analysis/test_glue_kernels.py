@@ -18,7 +18,8 @@ import pytest
 from scipy.ndimage import median_filter
 
 from afmforce.analysis import unbinding
-from afmforce.analysis._adhesion_kernel import adhesion_core, running_median_nearest
+from afmforce.analysis._adhesion_kernel import adhesion_core, robust_line_ab, running_median_nearest
+from afmforce.analysis._numeric import robust_line
 from afmforce.analysis._glue_kernel import first_below, median_abs_step, span_stats
 from afmforce.analysis.regions import RunRegions
 
@@ -35,6 +36,21 @@ def test_running_median_is_scipys_median_filter(w):
         ref = median_filter(u, size=w, mode="nearest")
         for start in sorted({0, 1, n // 2, n - 1, n}):
             assert np.array_equal(running_median_nearest(u, w, start), ref[start:])
+
+
+def test_robust_line_ab_is_robust_lines_a_and_b():
+    rng = np.random.default_rng(3)
+    for n in (3, 4, 5, 10, 11, 64, 999, 1000, 2001):
+        for trial in range(4):
+            x = np.sort(rng.uniform(-1, 1, n)) * 10.0 ** rng.uniform(-9, 0)
+            y = 0.7 * x + rng.normal(size=n) * 10.0 ** rng.uniform(-12, -8)
+            y[rng.integers(0, n, n // 10)] += 1e-7  # spikes: zero weights
+            if trial == 3:
+                y = np.round(y * 1e10) / 1e10  # ties (a coarse ADC): equal order statistics
+            a, b, ok = robust_line_ab(x, y)
+            ra, rb, *_ = robust_line(x, y)
+            assert ok and (a, b) == (ra, rb)
+    assert not robust_line_ab(np.array([0.0, 1.0, np.nan]), np.zeros(3))[2]
 
 
 def _retract(seed, steps=True, saturate=False, offset=7):

@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import median_filter
 
-from ._adhesion_kernel import adhesion_core
+from ._adhesion_kernel import adhesion_core, robust_line_ab
 from ._glue_kernel import COMPILED
 from ._numeric import mad_sigma, robust_line_thin
 from .regions import RunRegions
@@ -116,7 +116,12 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
         free = far & ~run.saturated
     xf = x[free]
     xm = float(xf.mean())
-    a, b, *_ = robust_line_thin(xf - xm, y[free])
+    xc, yf = xf - xm, y[free]
+    ok = False
+    if COMPILED and fast and xc.size <= 4001:  # robust_line's a and b, selected in place (robust_line_thin: <= 4001)
+        a, b, ok = robust_line_ab(xc, yf)
+    if not ok:
+        a, b, *_ = robust_line_thin(xc, yf)
     if not math.isfinite(b):
         a, b = float(np.median(y[free])), 0.0
     w = smooth or max(3, (idx.size // 400) | 1)
