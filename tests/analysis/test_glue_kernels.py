@@ -18,9 +18,9 @@ import pytest
 from scipy.ndimage import median_filter
 
 from afmforce.analysis import unbinding
-from afmforce.analysis._adhesion_kernel import adhesion_core, robust_line_ab, running_median_nearest
+from afmforce.analysis._adhesion_kernel import adhesion_core, running_median_nearest
 from afmforce.analysis._numeric import robust_line
-from afmforce.analysis._glue_kernel import first_below, median_abs_step, span_stats
+from afmforce.analysis._glue_kernel import first_below, median_abs_step, robust_line_ab, span_stats
 from afmforce.analysis.regions import RunRegions
 
 NM = 1e-9
@@ -205,3 +205,18 @@ def test_median_step_and_first_below_equal_numpy():
             limit = float(np.quantile(z, 0.3))
             stop = np.flatnonzero((np.arange(idx.size) > k) & (z[idx] < limit))
             assert first_below(z, idx, k, limit) == (int(stop[0]) if stop.size else idx.size)
+
+
+def test_state_velocity_is_run_velocity():
+    from afmforce.analysis.dynamic import run_velocity
+    from afmforce.analysis.state import _velocity
+
+    rng = np.random.default_rng(11)
+    for n in (2, 3, 4, 500, 4001, 4002, 9000):
+        t = np.sort(rng.uniform(0, 1, n))
+        z = 2e-6 * t + 1e-9 * rng.standard_normal(n)
+        z[rng.integers(0, n, n // 20 + 1)] += 5e-8  # glitches the robust line ignores
+        v, ref = _velocity(t, z), run_velocity(t, z)
+        assert v == ref or (np.isnan(v) and np.isnan(ref))
+        assert n < 3 or v == pytest.approx(2e-6, rel=1e-2)
+    assert np.isnan(_velocity(np.zeros(5), np.arange(5.0)))  # no time base

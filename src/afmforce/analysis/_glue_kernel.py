@@ -2,7 +2,9 @@
 
 :func:`span_stats` gives what :func:`~afmforce.analysis.plausibility._span` reads off a curve's two
 runs (the finite forces' extremes and count, the signal's extremes) in one pass instead of a dozen
-numpy calls; :func:`median_abs_step` and :func:`first_below` serve the diagnosis step. Extremes and
+numpy calls; :func:`median_abs_step` and :func:`first_below` serve the diagnosis step;
+:func:`robust_line_ab` is :func:`~afmforce.analysis._numeric.robust_line`'s line (the adhesion's
+baseline, a run's speed) with its passes fused. Extremes and
 medians are exact whatever the order of the pass, so the numbers are those of numpy.
 
 :data:`COMPILED` is False when numba's JIT is off (``NUMBA_DISABLE_JIT``: the first run after an
@@ -15,7 +17,9 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-__all__ = ["span_stats", "median_abs_step", "first_below", "COMPILED"]
+from ._numeric import line_fit
+
+__all__ = ["span_stats", "median_abs_step", "first_below", "robust_line_ab", "COMPILED"]
 
 
 @njit(cache=True, nogil=True)
@@ -65,6 +69,101 @@ def first_below(h: np.ndarray, idx: np.ndarray, k: int, limit: float) -> int:
         if h[idx[i]] < limit:
             return i
     return idx.size
+
+
+@njit(cache=True, nogil=True)
+def _select(a: np.ndarray, k: int) -> float:
+    """The ``k``-th smallest of ``a`` (rearranged in place: everything before ``k`` is not larger),
+    by Hoare's selection with a median-of-three pivot."""
+    lo = 0
+    hi = a.size - 1
+    while hi > lo:
+        mid = (lo + hi) >> 1
+        if a[mid] < a[lo]:
+            a[mid], a[lo] = a[lo], a[mid]
+        if a[hi] < a[lo]:
+            a[hi], a[lo] = a[lo], a[hi]
+        if a[hi] < a[mid]:
+            a[hi], a[mid] = a[mid], a[hi]
+        pivot = a[mid]
+        i = lo
+        j = hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break
+    return a[k]
+
+
+@njit(cache=True, nogil=True)
+def _middle(a: np.ndarray, half: int, even: bool):
+    """The two middle order statistics of ``a`` (``half = a.size // 2``; the same one for an odd size)."""
+    hi = _select(a, half)
+    if not even:
+        return hi, hi
+    lo = a[0]
+    for i in range(1, half):
+        lo = max(lo, a[i])
+    return lo, hi
+
+
+@njit(cache=True, nogil=True)
+def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
+    """``a, b`` of :func:`~afmforce.analysis._numeric.robust_line` (``y = a + b x``, Tukey bisquare IRLS),
+    the same numbers: the same operations on every sample in the same order, the medians (order
+    statistics) selected in place, the passes fused, without the standard errors. Returns
+    ``(a, b, ok)``; ``ok`` False for fewer than three samples or a sample that is not finite (nothing
+    computed: the caller uses ``robust_line``)."""
+    n = x.size
+    if n < 3:
+        return np.nan, np.nan, False
+    for i in range(n):
+        if not (np.isfinite(x[i]) and np.isfinite(y[i])):
+            return np.nan, np.nan, False
+    w = np.ones(n)
+    a, b = line_fit(x, y, w)
+    r = np.empty(n)
+    buf = np.empty(n)
+    half = n // 2
+    even = n % 2 == 0
+    for _ in range(n_iter):
+        for i in range(n):
+            r[i] = y[i] - (a + b * x[i])
+            buf[i] = r[i]
+        lo, hi = _middle(buf, half, even)
+        med = (lo + hi) / 2 if even else lo
+        a += med
+        m2 = ((lo - med) + (hi - med)) / 2 if even else lo - med
+        for i in range(n):
+            r[i] -= med
+            buf[i] = np.abs(r[i] - m2)
+        lo, hi = _middle(buf, half, even)
+        sigma = 1.4826 * ((lo + hi) / 2 if even else hi)  # np.median as numba computes it
+        if not sigma > 0:
+            break
+        total = 0.0
+        for i in range(n):
+            u = r[i] / (tuning * sigma)
+            w[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
+            total += w[i]
+        if total <= 2.0:
+            break
+        a2, b2 = line_fit(x, y, w)
+        if not (np.isfinite(a2) and np.isfinite(b2)):
+            break
+        a, b = a2, b2
+    return a, b, True
 
 
 #: The kernels run compiled (False under ``NUMBA_DISABLE_JIT``, where they are plain Python).

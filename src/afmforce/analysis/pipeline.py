@@ -246,7 +246,9 @@ def _refused(st: State, order: tuple[str, ...], why: str) -> AnalysisResult:
 
 
 def _result(st: State, order: tuple[str, ...], known: Mapping[str, AnalysisStep]) -> AnalysisResult:
-    st = st.update(warn=plausibility_warnings(st))
+    implausible = plausibility_warnings(st)
+    if implausible:
+        st = st.update(warn=implausible)
     bad = impossible_steps(st)
     if bad:  # numbers no physics allows are not results: the steps say why, their details are dropped
         st = st.update(skipped={**st.skipped, **bad},
@@ -272,7 +274,7 @@ def _result(st: State, order: tuple[str, ...], known: Mapping[str, AnalysisStep]
         position_channel=st.channel, warnings=st.warnings, time=st.time,
         position=st.position if st.position is not None else st.z, separation=full(st.separation),
         deflection=full(st.deflection), force=full(st.force), segment=st.curve.segment.astype("int8"),
-        details=dict(d), not_applicable=dict(st.skipped), values=kw)
+        details=d, not_applicable=st.skipped, values=kw)  # (copied by AnalysisResult)
 
 
 def steps_table() -> list[dict[str, str]]:

@@ -184,7 +184,12 @@ def beyond_detector(curve) -> str | None:
     except (TypeError, ValueError):
         limit = DETECTOR_RANGE
     signal = np.asarray(curve.deflection_signal, float)
-    peak = float(np.nanmax(np.abs(signal))) if signal.size else 0.0
+    if not signal.size:
+        peak = 0.0
+    else:
+        peak = max(float(signal.max()), -float(signal.min()))  # max |signal|, in two reductions
+        if not math.isfinite(peak):  # NaN (or infinite) samples: the NaN-aware maximum
+            peak = float(np.nanmax(np.abs(signal)))
     if not peak > 1.01 * limit:
         return None
     reader = curve.metadata.get("reader", "the reader")

@@ -24,8 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import median_filter
 
-from ._adhesion_kernel import adhesion_core, robust_line_ab
-from ._glue_kernel import COMPILED
+from ._adhesion_kernel import adhesion_core
+from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import mad_sigma, robust_line_thin
 from .regions import RunRegions
 from ._units import unit as _u
