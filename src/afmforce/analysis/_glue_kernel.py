@@ -119,12 +119,43 @@ def _middle(a: np.ndarray, half: int, even: bool):
 
 
 @njit(cache=True, nogil=True)
+def _middle_bracket(a: np.ndarray, half: int, even: bool, lo_v: float, hi_v: float, buf: np.ndarray):
+    """:func:`_middle` of ``a`` (left unchanged) when its middle order statistics lie in ``[lo_v, hi_v]``:
+    one branch-free pass counts the samples below and gathers those within into ``buf``, and the
+    selection runs on these few. Returns ``(lo, hi, ok)``; ``ok`` False when the bracket misses."""
+    n = a.size
+    below = 0
+    m = 0
+    for i in range(n):
+        v = a[i]
+        below += v < lo_v
+        buf[m] = v
+        m += (v >= lo_v) & (v <= hi_v)
+    first = half - 1 if even else half
+    if not (below <= first and half < below + m):
+        return 0.0, 0.0, False
+    part = buf[:m]
+    hi = _select(part, half - below)
+    if not even:
+        return hi, hi, True
+    lo = hi if half - below == 0 else part[0]  # (half - below >= 1: ``first`` is in the bracket too)
+    for i in range(1, half - below):
+        lo = max(lo, part[i])
+    return lo, hi, True
+
+
+#: Half-width of the brackets of :func:`robust_line_ab`'s medians, in the previous iteration's MAD [-]
+BRACKET = 0.25
+
+
+@njit(cache=True, nogil=True)
 def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
     """``a, b`` of :func:`~afmforce.analysis._numeric.robust_line` (``y = a + b x``, Tukey bisquare IRLS),
     the same numbers: the same operations on every sample in the same order, the medians (order
-    statistics) selected in place, the passes fused, without the standard errors. Returns
-    ``(a, b, ok)``; ``ok`` False for fewer than three samples or a sample that is not finite (nothing
-    computed: the caller uses ``robust_line``)."""
+    statistics) selected exactly among the samples near the previous iteration's (a bracket of
+    :data:`BRACKET` MADs; all of them when it misses), the passes fused, without the standard
+    errors. Returns ``(a, b, ok)``; ``ok`` False for fewer than three samples or a sample that is not
+    finite (nothing computed: the caller uses ``robust_line``)."""
     n = x.size
     if n < 3:
         return np.nan, np.nan, False
@@ -134,22 +165,34 @@ def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float 
     w = np.ones(n)
     a, b = line_fit(x, y, w)
     r = np.empty(n)
+    t = np.empty(n)
     buf = np.empty(n)
     half = n // 2
     even = n % 2 == 0
+    mad = -1.0  # the previous iteration's median absolute deviation (none yet)
     for _ in range(n_iter):
         for i in range(n):
             r[i] = y[i] - (a + b * x[i])
-            buf[i] = r[i]
-        lo, hi = _middle(buf, half, even)
+        ok = False
+        if mad > 0:
+            lo, hi, ok = _middle_bracket(r, half, even, -BRACKET * mad, BRACKET * mad, buf)
+        if not ok:
+            buf[:] = r
+            lo, hi = _middle(buf, half, even)
         med = (lo + hi) / 2 if even else lo
         a += med
         m2 = ((lo - med) + (hi - med)) / 2 if even else lo - med
         for i in range(n):
             r[i] -= med
-            buf[i] = np.abs(r[i] - m2)
-        lo, hi = _middle(buf, half, even)
-        sigma = 1.4826 * ((lo + hi) / 2 if even else hi)  # np.median as numba computes it
+            t[i] = np.abs(r[i] - m2)
+        ok = False
+        if mad > 0:
+            lo, hi, ok = _middle_bracket(t, half, even, (1.0 - BRACKET) * mad, (1.0 + BRACKET) * mad, buf)
+        if not ok:
+            buf[:] = t
+            lo, hi = _middle(buf, half, even)
+        mad = (lo + hi) / 2 if even else hi  # np.median as numba computes it
+        sigma = 1.4826 * mad
         if not sigma > 0:
             break
         total = 0.0
