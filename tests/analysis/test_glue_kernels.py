@@ -49,10 +49,11 @@ def test_robust_line_ab_is_robust_lines_a_and_b():
                 y = np.round(y * 1e10) / 1e10  # ties (a coarse ADC): equal order statistics
             if trial == 2:  # 40 % outliers on one side: the medians move far between iterations
                 y[rng.uniform(size=n) < 0.4] += 10.0 ** rng.uniform(-10, -6)
-            a, b, ok = robust_line_ab(x, y)
-            ra, rb, *_ = robust_line(x, y)
+            a, b, mad, ok = robust_line_ab(x, y)
+            ra, rb, _, _, sigma, _ = robust_line(x, y)
             assert ok and (a, b) == (ra, rb)
-    assert not robust_line_ab(np.array([0.0, 1.0, np.nan]), np.zeros(3))[2]
+            assert not sigma > 0 or 1.4826 * mad == sigma  # the last MAD (robust_line's robust scale)
+    assert not robust_line_ab(np.array([0.0, 1.0, np.nan]), np.zeros(3))[3]
 
 
 def _retract(seed, steps=True, saturate=False, offset=7):
@@ -84,21 +85,22 @@ def _retract(seed, steps=True, saturate=False, offset=7):
 def _fit(x, d, run):
     free = run.zero_force & ~run.saturated
     xm = float(x[free].mean())
-    a, b, *_ = unbinding.robust_line_thin(x[free] - xm, d[free])
-    return free, float(a), float(b), xm
+    a, b, *_, sigma, _ = unbinding.robust_line_thin(x[free] - xm, d[free])
+    return free, float(a), float(b), xm, sigma / 1.4826
 
 
 @pytest.mark.parametrize("seed", range(12))
 def test_adhesion_core_equals_the_numpy_tail(seed):
     x, d, run = _retract(seed, steps=seed % 4 != 3, saturate=seed % 3 == 2)
-    free, a, b, xm = _fit(x, d, run)
+    free, a, b, xm, mad = _fit(x, d, run)
     idx = run.index
     verdicts = []
     for nsigma, w, pull_off in ((5.0, 3, -1), (3.0, 5, 80), (8.0, 7, 25), (5.0, 3, 0), (1e3, 3, -1)):
-        ok, sigma, j, depth, found, last, at, rise = adhesion_core(x, d, free, run.saturated, a, b, xm, nsigma, w,
-                                                                   pull_off)
         ref = unbinding._tail_numpy(x, d, free, run.saturated, idx, a, b, xm, nsigma, w, 0.1, pull_off)
-        assert ok
+        for hint in (-1.0, mad, 50 * mad, 0.02 * mad):  # none, the line's MAD, brackets that miss
+            got = adhesion_core(x, d, free, run.saturated, a, b, xm, nsigma, w, pull_off, hint)
+            assert got[0] and got[1:5] == ref[:4]
+        ok, sigma, j, depth, found, last, at, rise = got
         assert (sigma, j, depth, found) == ref[:4]
         if found:
             assert float(-x[min(last + 1, x.size - 1)]) == ref[4]
@@ -111,7 +113,7 @@ def test_adhesion_core_equals_the_numpy_tail(seed):
 
 def test_adhesion_core_hands_non_finite_residuals_back():
     x, d, run = _retract(0, offset=0)
-    free, a, b, xm = _fit(x, d, run)
+    free, a, b, xm, _ = _fit(x, d, run)
     d = d.copy()
     d[300] = np.nan
     assert not adhesion_core(x, d, free, run.saturated, a, b, xm, 5.0, 3, -1)[0]

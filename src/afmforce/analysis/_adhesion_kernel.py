@@ -16,6 +16,7 @@ import math
 import numpy as np
 from numba import njit
 
+from ._glue_kernel import BRACKET, middle_bracket
 from ._numeric import mad_sigma
 
 __all__ = ["adhesion_core", "running_median_nearest"]
@@ -44,7 +45,7 @@ def running_median_nearest(u: np.ndarray, w: int, start: int) -> np.ndarray:
 
 @njit(cache=True, nogil=True)
 def adhesion_core(x: np.ndarray, y: np.ndarray, free: np.ndarray, saturated: np.ndarray, a: float, b: float,
-                  xm: float, nsigma: float, w: int, pull_off: int):
+                  xm: float, nsigma: float, w: int, pull_off: int, hint: float = -1.0):
     """The retract's dip below the line ``a + b (x - xm)`` and its unbinding steps.
 
     Parameters
@@ -61,6 +62,9 @@ def adhesion_core(x: np.ndarray, y: np.ndarray, free: np.ndarray, saturated: np.
         Running-median window (odd) [samples].
     pull_off : int
         Run sample of a hard contact's pull-off jump (-1: none).
+    hint : float
+        The baseline residuals' median absolute deviation, about [m] (<= 0: none): where the noise's
+        medians are looked for first (:func:`~._glue_kernel.middle_bracket`; the same numbers).
 
     Returns
     -------
@@ -86,8 +90,21 @@ def adhesion_core(x: np.ndarray, y: np.ndarray, free: np.ndarray, saturated: np.
         if free[i]:
             uf[q] = u[i]
             q += 1
-    med = np.median(uf)
-    sigma = 1.4826 * np.median(np.abs(uf - med))
+    med = np.nan
+    sigma = np.nan
+    if hint > 0:  # the baseline fit's last MAD: the medians selected among the samples near it (exact)
+        buf = np.empty(nf)
+        half = nf // 2
+        even = nf % 2 == 0
+        lo, hi, ok = middle_bracket(uf, half, even, -BRACKET * hint, BRACKET * hint, buf)
+        if ok:
+            med = (lo + hi) / 2 if even else hi  # np.median
+            dev = np.abs(uf - med)
+            lo, hi, ok = middle_bracket(dev, half, even, (1.0 - BRACKET) * hint, (1.0 + BRACKET) * hint, buf)
+            sigma = 1.4826 * ((lo + hi) / 2 if even else hi) if ok else 1.4826 * np.median(dev)
+    if not med == med:  # (NaN: no hint, or the bracket missed)
+        med = np.median(uf)
+        sigma = 1.4826 * np.median(np.abs(uf - med))
     if not sigma > 0:
         sigma = mad_sigma(np.diff(uf)) / math.sqrt(2.0)
     j = 0

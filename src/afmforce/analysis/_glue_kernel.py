@@ -19,7 +19,7 @@ from numba import njit
 
 from ._numeric import line_fit
 
-__all__ = ["span_stats", "median_abs_step", "first_below", "robust_line_ab", "COMPILED"]
+__all__ = ["span_stats", "median_abs_step", "first_below", "robust_line_ab", "middle_bracket", "COMPILED", "BRACKET"]
 
 
 @njit(cache=True, nogil=True)
@@ -119,7 +119,7 @@ def _middle(a: np.ndarray, half: int, even: bool):
 
 
 @njit(cache=True, nogil=True)
-def _middle_bracket(a: np.ndarray, half: int, even: bool, lo_v: float, hi_v: float, buf: np.ndarray):
+def middle_bracket(a: np.ndarray, half: int, even: bool, lo_v: float, hi_v: float, buf: np.ndarray):
     """:func:`_middle` of ``a`` (left unchanged) when its middle order statistics lie in ``[lo_v, hi_v]``:
     one branch-free pass counts the samples below and gathers those within into ``buf``, and the
     selection runs on these few. Returns ``(lo, hi, ok)``; ``ok`` False when the bracket misses."""
@@ -154,14 +154,15 @@ def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float 
     the same numbers: the same operations on every sample in the same order, the medians (order
     statistics) selected exactly among the samples near the previous iteration's (a bracket of
     :data:`BRACKET` MADs; all of them when it misses), the passes fused, without the standard
-    errors. Returns ``(a, b, ok)``; ``ok`` False for fewer than three samples or a sample that is not
+    errors. Returns ``(a, b, mad, ok)``: ``mad`` the residuals' last median absolute deviation (a hint
+    for the caller's own medians); ``ok`` False for fewer than three samples or a sample that is not
     finite (nothing computed: the caller uses ``robust_line``)."""
     n = x.size
     if n < 3:
-        return np.nan, np.nan, False
+        return np.nan, np.nan, np.nan, False
     for i in range(n):
         if not (np.isfinite(x[i]) and np.isfinite(y[i])):
-            return np.nan, np.nan, False
+            return np.nan, np.nan, np.nan, False
     w = np.ones(n)
     a, b = line_fit(x, y, w)
     r = np.empty(n)
@@ -175,7 +176,7 @@ def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float 
             r[i] = y[i] - (a + b * x[i])
         ok = False
         if mad > 0:
-            lo, hi, ok = _middle_bracket(r, half, even, -BRACKET * mad, BRACKET * mad, buf)
+            lo, hi, ok = middle_bracket(r, half, even, -BRACKET * mad, BRACKET * mad, buf)
         if not ok:
             buf[:] = r
             lo, hi = _middle(buf, half, even)
@@ -187,7 +188,7 @@ def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float 
             t[i] = np.abs(r[i] - m2)
         ok = False
         if mad > 0:
-            lo, hi, ok = _middle_bracket(t, half, even, (1.0 - BRACKET) * mad, (1.0 + BRACKET) * mad, buf)
+            lo, hi, ok = middle_bracket(t, half, even, (1.0 - BRACKET) * mad, (1.0 + BRACKET) * mad, buf)
         if not ok:
             buf[:] = t
             lo, hi = _middle(buf, half, even)
@@ -195,18 +196,41 @@ def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float 
         sigma = 1.4826 * mad
         if not sigma > 0:
             break
-        total = 0.0
+        sw = 0.0  # w.sum() and line_fit's first pass, fused with the weights (the same sums in the same order)
+        sx = 0.0
+        sy = 0.0
         for i in range(n):
             u = r[i] / (tuning * sigma)
             w[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
-            total += w[i]
-        if total <= 2.0:
+            sw += w[i]
+            sx += w[i] * x[i]
+            sy += w[i] * y[i]
+        if sw <= 2.0:
             break
-        a2, b2 = line_fit(x, y, w)
+        a2, b2 = _line_fit_rest(x, y, w, sw, sx, sy)
         if not (np.isfinite(a2) and np.isfinite(b2)):
             break
         a, b = a2, b2
-    return a, b, True
+    return a, b, mad, True
+
+
+@njit(cache=True, nogil=True)
+def _line_fit_rest(x, y, w, sw, sx, sy):
+    """:func:`~afmforce.analysis._numeric.line_fit` after its first pass (``sw, sx, sy``), line by line."""
+    if sw <= 0:
+        return np.nan, np.nan
+    mx = sx / sw
+    my = sy / sw
+    sxx = 0.0
+    sxy = 0.0
+    for i in range(x.size):
+        dx = x[i] - mx
+        sxx += w[i] * dx * dx
+        sxy += w[i] * dx * (y[i] - my)
+    if sxx <= 0:
+        return my, np.nan
+    b = sxy / sxx
+    return my - b * mx, b
 
 
 #: The kernels run compiled (False under ``NUMBA_DISABLE_JIT``, where they are plain Python).

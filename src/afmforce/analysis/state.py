@@ -143,7 +143,7 @@ class State:
 def _velocity(t: np.ndarray, z: np.ndarray) -> float:
     """:func:`~.dynamic.run_velocity` (the same number): its robust line by the fused kernel when compiled."""
     if COMPILED and 3 <= t.size <= 4001 and t.dtype == np.float64 and z.dtype == np.float64 and ptp(t) != 0:
-        _, b, ok = robust_line_ab(t - t[0], z)
+        _, b, _, ok = robust_line_ab(t - t[0], z)
         if ok:
             return float(abs(b))
     return run_velocity(t, z)

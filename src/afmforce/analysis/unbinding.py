@@ -117,18 +117,19 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
     xf = x[free]
     xm = float(xf.mean())
     xc, yf = xf - xm, y[free]
-    ok = False
+    ok, mad = False, -1.0
     if COMPILED and fast and xc.size <= 4001:  # robust_line's a and b, selected in place (robust_line_thin: <= 4001)
-        a, b, ok = robust_line_ab(xc, yf)
+        a, b, mad, ok = robust_line_ab(xc, yf)
     if not ok:
         a, b, *_ = robust_line_thin(xc, yf)
+    hint = float(mad) if ok and math.isfinite(b) else -1.0  # the line's residual MAD (none for the median's flat line)
     if not math.isfinite(b):
         a, b = float(np.median(y[free])), 0.0
     w = smooth or max(3, (idx.size // 400) | 1)
     tail = None
     if COMPILED and fast and w % 2 == 1 and x.dtype == np.float64 and y.dtype == np.float64:
         ok, sigma, j, depth, found, last, at, rise = adhesion_core(
-            x, y, free, run.saturated, float(a), float(b), xm, float(nsigma), int(w), pull_off)
+            x, y, free, run.saturated, float(a), float(b), xm, float(nsigma), int(w), pull_off, hint)
         if ok:
             rupture = float(-x[min(last + 1, x.size - 1)]) if found else math.nan
             kk = k if math.isfinite(k) else 1.0
