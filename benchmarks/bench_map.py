@@ -178,6 +178,51 @@ def bench_outputs(table, folder: Path, side: int) -> None:
 
 
 # --- per curve ----------------------------------------------------------------------------------
+def step_times(analyze, curve, repeat: int) -> tuple[dict[str, float], float]:
+    """CPU time of each step of ``analyze(curve)`` [s] (best of ``repeat``), and of the pipeline's own work
+    outside the steps (options, state, plausibility, the result; best of ``repeat``), the cost of the
+    timing wrapper itself (two clock reads and a call per step, measured on a no-op step) taken off."""
+    from afmforce.analysis import registry
+    from afmforce.analysis.options import SmoothOptions
+
+    clock = time.process_time
+    orig = registry.AnalysisStep.run
+    acc: dict[str, float] = {}
+
+    def timed(self, state, options):
+        t = clock()
+        try:
+            return orig(self, state, options)
+        finally:
+            acc[self.identifier] = acc.get(self.identifier, 0.0) + clock() - t
+
+    noop = registry.AnalysisStep("smooth", "no-op", lambda s, o: s, SmoothOptions)
+    n = 20000
+    t = clock()
+    for _ in range(n):
+        timed(noop, None, None)
+    wrapped = clock() - t
+    t = clock()
+    for _ in range(n):
+        orig(noop, None, None)
+    overhead = max(wrapped - (clock() - t), 0.0) / n  # per step, outside what the step's clock reads
+    best: dict[str, float] = {}
+    outside = math.inf
+    registry.AnalysisStep.run = timed
+    try:
+        for _ in range(repeat):
+            acc.clear()
+            t = clock()
+            analyze(curve)
+            total = clock() - t
+            for k, v in acc.items():
+                best[k] = min(best.get(k, math.inf), v)
+            outside = min(outside, total - sum(acc.values()) - overhead * len(acc))
+    finally:
+        registry.AnalysisStep.run = orig
+    return best, outside
+
+
 def bench_curve(repeat: int) -> None:
     sys.path.insert(0, str(ROOT / "tests" / "analysis"))
     import json
@@ -244,6 +289,10 @@ def bench_curve(repeat: int) -> None:
               f"({ratios_pipe[-1]:4.1f}x), map pixel {best['fast'] * 1e3:6.2f} ms ({ratios_fast[-1]:5.1f}x), "
               f"nanite {best['nanite'] * 1e3:7.2f} ms; E {values['pipeline']:.4g} / {values['fast']:.4g} / "
               f"{values['nanite']:.4g} Pa ({load_text()})")
+        per_step, outside = step_times(analyze, curve, repeat)  # where the whole analyze's time goes
+        print("      steps [ms]: " + ", ".join(f"{k} {v * 1e3:.2f}" for k, v in
+                                            sorted(per_step.items(), key=lambda kv: -kv[1]) if v >= 5e-6)
+              + f"; outside the steps {outside * 1e3:.2f} (best of {repeat} each)")
     print(f"  geometric mean: whole default analyze {math.exp(np.mean(np.log(ratios_whole))):.2f}x nanite "
           f"(min {min(ratios_whole):.2f}x; issue 35 item 2: >= 5x on every file), analyze to E "
           f"{math.exp(np.mean(np.log(ratios_pipe))):.1f}x, map pixel "

@@ -32,7 +32,7 @@ from .plausibility import (beyond_detector, impossible_reasons, impossible_steps
                            slope_not_the_levers)
 from .registry import AnalysisStep, ResultField, register_step
 from .result import AnalysisResult
-from .state import NoContact, State, prepare
+from .state import NoContact, State, _default_probe, prepare
 from .steps.contact import retract_dip
 from ..errors import ParameterError
 from ..io.curve import RawCurve
@@ -111,7 +111,8 @@ def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
     else:
         given = list(options)
     known = registry.steps()
-    out = {name: _default_options(step.options) for name, step in known.items()}
+    out = dict(registry._cached("default_options", lambda: {name: _default_options(step.options)
+                                                             for name, step in registry.steps().items()}))
     seen = set()
     for rec in given:
         if not isinstance(rec, O.StepOptions):
@@ -125,7 +126,7 @@ def resolve_options(options: Any = None, probe: O.ProbeCalibration | None = None
     out["kind"].check_method(CONTACT_POINT_METHODS)
     if probe is not None and not isinstance(probe, O.ProbeCalibration):
         raise ParameterError(f"probe must be a ProbeCalibration, got {probe!r}")
-    return out, probe or O.ProbeCalibration()
+    return out, probe if probe is not None else _default_probe()
 
 
 def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = None, *,
@@ -245,7 +246,9 @@ def _refused(st: State, order: tuple[str, ...], why: str) -> AnalysisResult:
 
 
 def _result(st: State, order: tuple[str, ...], known: Mapping[str, AnalysisStep]) -> AnalysisResult:
-    st = st.update(warn=plausibility_warnings(st))
+    implausible = plausibility_warnings(st)
+    if implausible:
+        st = st.update(warn=implausible)
     bad = impossible_steps(st)
     if bad:  # numbers no physics allows are not results: the steps say why, their details are dropped
         st = st.update(skipped={**st.skipped, **bad},
@@ -271,7 +274,7 @@ def _result(st: State, order: tuple[str, ...], known: Mapping[str, AnalysisStep]
         position_channel=st.channel, warnings=st.warnings, time=st.time,
         position=st.position if st.position is not None else st.z, separation=full(st.separation),
         deflection=full(st.deflection), force=full(st.force), segment=st.curve.segment.astype("int8"),
-        details=dict(d), not_applicable=dict(st.skipped), values=kw)
+        details=d, not_applicable=st.skipped, values=kw)  # (copied by AnalysisResult)
 
 
 def steps_table() -> list[dict[str, str]]:

@@ -16,6 +16,9 @@ import numpy as np
 
 from ..errors import AnalysisError
 from ..io.curve import RawCurve
+from ._glue_kernel import COMPILED, robust_line_ab
+from ._numeric import ptp
+from .dynamic import run_velocity
 from .options import ProbeCalibration
 from .regions import RunRegions, run_indices
 from ._units import unit as _u
@@ -92,12 +95,10 @@ class State:
     def velocity(self, index: np.ndarray) -> float:
         """Speed of the run ``index`` [m/s] (:func:`~.dynamic.run_velocity` of the current time and
         position), computed once per curve for the same arrays."""
-        from .dynamic import run_velocity
-
         hit = self.cache.get(("velocity", id(index)))
         if hit is not None and hit[0] is index and hit[1] is self.time and hit[2] is self.z:
             return hit[3]
-        v = run_velocity(self.time[index], self.z[index])
+        v = _velocity(self.time[index], self.z[index])
         self.cache[("velocity", id(index))] = (index, self.time, self.z, v)
         return v
 
@@ -110,10 +111,10 @@ class State:
         """A new state with ``changes``, ``detail`` stored under ``step`` and ``warn`` (one or several) appended."""
         if step is not None:
             changes["details"] = {**self.details, step: detail}
-        new = (warn,) if isinstance(warn, str) else tuple(warn or ())
-        new = tuple(w for w in new if w)
-        if new:
-            changes["warnings"] = self.warnings + new
+        if warn:
+            new = (warn,) if isinstance(warn, str) else tuple(w for w in warn if w)
+            if new:
+                changes["warnings"] = self.warnings + new
         if not changes.keys() <= _FIELDS:
             raise TypeError(f"State has no field(s) {', '.join(sorted(changes.keys() - _FIELDS))}")
         # the instance dict copied: dataclasses.replace re-runs the frozen __init__ over all 21 fields
@@ -122,11 +123,30 @@ class State:
         object.__setattr__(out, "__dict__", {**self.__dict__, **changes})
         return out
 
+    def run_index(self, which: int) -> np.ndarray:
+        """Indices of the curve's segment ``which`` (0 approach, 1 retract), in time order
+        (:func:`~.regions.run_indices`, found once per curve: read it, do not change it)."""
+        hit = self.cache.get(("run", which))
+        if hit is not None and hit[0] is self.curve.segment:
+            return hit[1]
+        idx = run_indices(self.curve.segment, which)
+        self.cache[("run", which)] = (self.curve.segment, idx)
+        return idx
+
     def require(self, *names: str, step: str) -> None:
         """Raise AnalysisError if a needed intermediate result is missing."""
         for name in names:
             if getattr(self, name) is None:
                 raise AnalysisError(f"step {step!r} needs {name}, computed by an earlier step")
+
+
+def _velocity(t: np.ndarray, z: np.ndarray) -> float:
+    """:func:`~.dynamic.run_velocity` (the same number): its robust line by the fused kernel when compiled."""
+    if COMPILED and 3 <= t.size <= 4001 and t.dtype == np.float64 and z.dtype == np.float64 and ptp(t) != 0:
+        _, b, _, ok = robust_line_ab(t - t[0], z)
+        if ok:
+            return float(abs(b))
+    return run_velocity(t, z)
 
 
 #: The state's field names (what :meth:`State.update` may change).
@@ -149,17 +169,21 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
         Non-finite samples, a missing run, or a requested channel that is absent.
     """
     use_measured = curve.position_channel(channel) == "measured"   # RawCurve's one choice (and its refusals)
-    z = np.array(curve.position(channel), dtype=float)
+    z = np.array(curve.piezo_measured if use_measured else curve.piezo_nominal, dtype=float)
     s = np.array(curve.deflection_signal, dtype=float)
     t = np.array(curve.time, dtype=float)
-    for name, arr in (("position", z), ("deflection signal", s), ("time", t)):
-        bad = ~np.isfinite(arr)
-        if bad.any():
-            raise AnalysisError(f"the {name} has {int(bad.sum())} NaN or infinite samples "
-                                f"(first at {int(np.argmax(bad))}); clean the data first")
+    # a sum is finite only if every sample is (a finite sum that overflows is checked sample by sample)
+    if not math.isfinite(float(np.add.reduce(z)) + float(np.add.reduce(s)) + float(np.add.reduce(t))):
+        for name, arr in (("position", z), ("deflection signal", s), ("time", t)):
+            bad = ~np.isfinite(arr)
+            if bad.any():
+                raise AnalysisError(f"the {name} has {int(bad.sum())} NaN or infinite samples "
+                                    f"(first at {int(np.argmax(bad))}); clean the data first")
     seg = np.asarray(curve.segment)
+    runs = {}
     for which, word in ((0, "approach"), (1, "retract")):
-        if run_indices(seg, which).size == 0:
+        runs[("run", which)] = (curve.segment, run_indices(seg, which))
+        if runs[("run", which)][1].size == 0:
             single = curve.metadata.get("single_run")
             if single:  # an export of one run: nothing to split
                 raise AnalysisError(f"the file holds the {single} run only (no {word}); the analysis needs both "
@@ -170,5 +194,16 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     return State(curve=curve, time=t, z=z, signal=s, unit=curve.deflection_unit,
                  channel="measured" if use_measured else "nominal",
                  time_known=not bool(curve.metadata.get("time_is_sample_index", False)),
-                 probe=probe if probe is not None else ProbeCalibration(),
-                 warnings=(f"read as a processed export: {processed}",) if processed else ())
+                 probe=probe if probe is not None else _default_probe(),
+                 warnings=(f"read as a processed export: {processed}",) if processed else (), cache=runs)
+
+
+_PROBE: list[ProbeCalibration] = []
+
+
+def _default_probe() -> ProbeCalibration:
+    """The empty probe record (everything from the file): frozen, so one serves every curve (its
+    construction validates eight fields: a few per cent of a small curve's analysis)."""
+    if not _PROBE:
+        _PROBE.append(ProbeCalibration())
+    return _PROBE[0]

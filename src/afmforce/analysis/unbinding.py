@@ -24,6 +24,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.ndimage import median_filter
 
+from ._adhesion_kernel import adhesion_core
+from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import mad_sigma, robust_line_thin
 from .regions import RunRegions
 from ._units import unit as _u
@@ -107,24 +109,62 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
     k = spring_constant if math.isfinite(spring_constant) else math.nan
     x, y = position[idx], d[idx]
     free = run.zero_force & ~run.saturated
-    if free.sum() < 10:  # no free part found: the farthest 30 % of the run
+    fast = True
+    if np.count_nonzero(free) < 10:  # no free part found: the farthest 30 % of the run
+        fast = False  # (few baseline samples: the numpy path, which also treats an empty one)
         far = x <= np.quantile(x, 0.3)
         free = far & ~run.saturated
     xf = x[free]
     xm = float(xf.mean())
-    a, b, *_ = robust_line_thin(xf - xm, y[free])
+    xc, yf = xf - xm, y[free]
+    ok, mad = False, -1.0
+    if COMPILED and fast and xc.size <= 4001:  # robust_line's a and b, selected in place (robust_line_thin: <= 4001)
+        a, b, mad, ok = robust_line_ab(xc, yf)
+    if not ok:
+        a, b, *_ = robust_line_thin(xc, yf)
+    hint = float(mad) if ok and math.isfinite(b) else -1.0  # the line's residual MAD (none for the median's flat line)
     if not math.isfinite(b):
         a, b = float(np.median(y[free])), 0.0
+    w = smooth or max(3, (idx.size // 400) | 1)
+    tail = None
+    if COMPILED and fast and w % 2 == 1 and x.dtype == np.float64 and y.dtype == np.float64:
+        ok, sigma, j, depth, found, last, at, rise = adhesion_core(
+            x, y, free, run.saturated, float(a), float(b), xm, float(nsigma), int(w), pull_off, hint)
+        if ok:
+            rupture = float(-x[min(last + 1, x.size - 1)]) if found else math.nan
+            kk = k if math.isfinite(k) else 1.0
+            steps = [UnbindingStep(int(idx[min(s, idx.size - 1)]), float(-x[min(s, x.size - 1)]), float(r * kk))
+                     for s, r in zip(at.tolist(), rise.tolist())]
+            tail = float(sigma), int(j), float(depth), bool(found), rupture, steps
+    if tail is None:
+        tail = _tail_numpy(x, y, free, run.saturated, idx, a, b, xm, nsigma, w, k, pull_off)
+    sigma, j, depth, found, rupture, steps = tail
+    force = depth * k
+    unit, scale, val = ("nN", 1e9, force) if math.isfinite(k) else ("nm", 1e9, depth)
+    noise_v = sigma * (k if math.isfinite(k) else 1.0)
+    if found:
+        verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
+                   f"{noise_v * scale:.2g} {unit}) at {-x[j] * 1e9:.4g} nm from contact; last rupture at "
+                   f"{rupture * 1e9:.4g} nm; {len(steps)} unbinding step(s)")
+    else:
+        verdict = (f"no adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): the "
+                   f"deepest dip is {-depth / sigma if sigma > 0 else 0:.2g} x the noise")
+    return Adhesion(bool(found), float(force) if found else math.nan, float(depth) if found else math.nan, int(idx[j]), float(-x[j]), float(noise_v), float(nsigma),
+                    float(rupture), tuple(steps), verdict)
+
+
+def _tail_numpy(x, y, free, saturated, idx, a, b, xm, nsigma, w, k, pull_off):
+    """What :func:`~._adhesion_kernel.adhesion_core` computes, in numpy (the reference; used when the
+    kernels are not compiled, or a residual is not finite): ``(sigma, j, depth, found, rupture, steps)``."""
     u = y - (a + b * (x - xm))
     sigma = float(1.4826 * np.median(np.abs(u[free] - np.median(u[free]))))
     if not sigma > 0:
         sigma = float(mad_sigma(np.diff(u[free])) / math.sqrt(2.0))
-    ok = ~run.saturated | (u < 0)  # a clipped bottom is still a dip (a lower bound)
+    ok = ~saturated | (u < 0)  # a clipped bottom is still a dip (a lower bound)
     j = int(np.argmin(np.where(ok, u, np.inf)))
     depth = min(float(u[j]), 0.0)
     thr = nsigma * sigma
     found = -depth > thr
-    w = smooth or max(3, (idx.size // 400) | 1)
     us = median_filter(u, size=w, mode="nearest")
     steps: list[UnbindingStep] = []
     rupture = math.nan
@@ -150,15 +190,4 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
                 steps.append(UnbindingStep(int(idx[min(s_idx, idx.size - 1)]),
                                            float(-x[min(s_idx, x.size - 1)]),
                                            float(rise[g] * (k if math.isfinite(k) else 1.0))))
-    force = depth * k
-    unit, scale, val = ("nN", 1e9, force) if math.isfinite(k) else ("nm", 1e9, depth)
-    noise_v = sigma * (k if math.isfinite(k) else 1.0)
-    if found:
-        verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
-                   f"{noise_v * scale:.2g} {unit}) at {-x[j] * 1e9:.4g} nm from contact; last rupture at "
-                   f"{rupture * 1e9:.4g} nm; {len(steps)} unbinding step(s)")
-    else:
-        verdict = (f"no adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): the "
-                   f"deepest dip is {-depth / sigma if sigma > 0 else 0:.2g} x the noise")
-    return Adhesion(bool(found), float(force) if found else math.nan, float(depth) if found else math.nan, int(idx[j]), float(-x[j]), float(noise_v), float(nsigma),
-                    float(rupture), tuple(steps), verdict)
+    return sigma, j, depth, found, rupture, steps

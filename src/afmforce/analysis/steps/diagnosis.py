@@ -11,6 +11,8 @@ import math
 import numpy as np
 
 from ...errors import AnalysisError
+from .._glue_kernel import COMPILED, first_below, median_abs_step
+from .._numeric import polyfit, ptp
 from .._step_helpers import _kind
 from ..dynamic import diagnose_curve
 from ..jumps import pull_off_estimate
@@ -26,25 +28,41 @@ def _force_gradient(st: State, window: int = 5) -> tuple[float, str]:
     if st.force is None or not math.isfinite(st.spring_constant):
         return math.nan, "no force (spring constant unknown)"
     idx = st.approach.index
-    h, f = st.separation[idx], st.force[idx]
     if _kind(st) == "soft":
         cp = st.details["contact_point"]
         k = int(np.searchsorted(idx, cp.index))
-        stop = np.flatnonzero((np.arange(idx.size) > k) & (h < -0.1 * max(cp.indentation, 0.0)))
-        end = int(stop[0]) if stop.size else idx.size
-        sel = slice(k, max(end, k + 3))
+        limit = -0.1 * max(cp.indentation, 0.0)
+        if COMPILED and _f64(st.separation) and idx.dtype == np.int64:
+            end = first_below(st.separation, idx, k, limit)
+        else:
+            stop = np.flatnonzero((np.arange(idx.size) > k) & (st.separation[idx] < limit))
+            end = int(stop[0]) if stop.size else idx.size
+        sel = idx[k:max(end, k + 3)]
         what = "contact stiffness over the first 10 % of the indentation"
     else:
         ji = st.details["jumps"].jump_in
         if not ji.found:
             return math.nan, "no jump into contact: the attraction's gradient is below the noise"
         k = int(np.searchsorted(idx, ji.index))
-        sel = slice(max(k - window + 1, 0), k + 1)
+        sel = idx[max(k - window + 1, 0):k + 1]
         what = f"attraction over the last {window} samples before the jump"
-    hs, fs = h[sel], f[sel]
-    if hs.size < 3 or np.ptp(hs) == 0:
+    hs, fs = st.separation[sel], st.force[sel]
+    if hs.size < 3 or ptp(hs) == 0:
         return math.nan, "too few samples to measure the force gradient"
-    return float(abs(np.polyfit(hs - hs.mean(), fs, 1)[0])), what
+    return float(abs(polyfit(hs - hs.mean(), fs, 1)[0])), what
+
+
+def _f64(a) -> bool:
+    return isinstance(a, np.ndarray) and a.dtype == np.float64
+
+
+def _median_step(z: np.ndarray, idx: np.ndarray) -> float:
+    """Median position step of the run ``idx`` [m] (0 for a single sample)."""
+    if idx.size < 2:
+        return 0.0
+    if COMPILED and _f64(z) and idx.dtype == np.int64:
+        return float(median_abs_step(z, idx))
+    return float(np.median(np.abs(np.diff(z[idx]))))
 
 
 def diagnosis(st: State, o: DiagnosisOptions) -> State:
@@ -62,7 +80,7 @@ def diagnosis(st: State, o: DiagnosisOptions) -> State:
     fit = st.details.get("vdw")
     fit = fit if fit is not None and hasattr(fit, "static_jump_in_separation") else None
     h_static = fit.static_jump_in_separation if fit is not None else math.nan
-    step = float(np.median(np.abs(np.diff(st.z[idx])))) if idx.size > 1 else 0.0
+    step = _median_step(st.z, idx)
     fr = st.details.get("friction")
     z0 = st.details["zero"].contact_separation if "zero" in st.details else math.nan
     grad, grad_how = _force_gradient(st)
