@@ -446,7 +446,7 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
         xt = (t - tm) / tL
     X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
     lapack = lapack or not (converged and float(ptp(u) / P) >= 1.0)
-    coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float))
+    coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float), 1e-5)
     if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
         coef, *_ = np.linalg.lstsq(X, r, rcond=None)
     res = X @ coef - r
