@@ -276,10 +276,57 @@ def _periodogram_fast(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     width = span / nb
     p_min, p_max = max(4 * step, span / 400, 2.5 * width), span / 1.5
     pad = 8 * nb
-    spec = np.abs(np.fft.rfft(y, pad)) ** 2
-    coarse = np.abs(np.fft.rfft(y)) ** 2
+    spec = _padded_power(y)
+    coarse = np.ascontiguousarray(spec[::8])  # the unpadded transform's bins: every 8th of the padded one
     peak, band_var = _peak_and_band(spec, coarse, float(pad), width, p_min, p_max, nb)
     return float(peak), min(float(band_var) / var, 1.0) if math.isfinite(peak) else 0.0
+
+
+#: :func:`_padded_power` takes the chirp-z route when the number of bins has a prime factor above this
+#: (pocketfft's own route for such a length, 8x padded, costs 0.4-1.8 ms; the chirp-z 0.1-0.2 ms).
+CHIRP_PRIME = 100
+_CHIRPS: dict[int, tuple] = {}
+
+
+def _largest_prime_factor(n: int) -> int:
+    f, big = 2, 1
+    while f * f <= n:
+        while n % f == 0:
+            big, n = f, n // f
+        f += 1
+    return max(big, n)
+
+
+def _chirp(nb: int) -> tuple:
+    """The chirps and the transformed filter of :func:`_padded_power` for ``nb`` samples (cached)."""
+    hit = _CHIRPS.get(nb)
+    if hit is not None:
+        return hit
+    from scipy.fft import next_fast_len as _next_fast_len  # here: the import costs the cold start nothing
+    N, K = 8 * nb, 4 * nb + 1
+    size = _next_fast_len(nb + K - 1)
+    j = np.arange(max(nb, K), dtype=np.int64)
+    c = np.exp(-1j * (np.pi * ((j * j) % (2 * N)) / N))  # exp(-i pi j^2 / N), the phase reduced exactly
+    b = np.zeros(size, complex)
+    b[:K] = np.conj(c[:K])
+    b[size - nb + 1:] = np.conj(c[1:nb])[::-1]
+    out = (c[:nb].copy(), np.fft.fft(b), c[:K].copy(), size)
+    if len(_CHIRPS) > 64:
+        _CHIRPS.clear()
+    _CHIRPS[nb] = out
+    return out
+
+
+def _padded_power(y: np.ndarray) -> np.ndarray:
+    """``|rfft(y, 8 y.size)|^2``: pocketfft where the length factors well, else Bluestein's chirp-z
+    (``nk = (n^2 + k^2 - (k - n)^2) / 2``: one convolution by FFTs of a fast length); the two agree to
+    ~1e-15 of the largest bin (tested against a direct DFT)."""
+    nb = y.size
+    if _largest_prime_factor(nb) <= CHIRP_PRIME:
+        return np.abs(np.fft.rfft(y, 8 * nb)) ** 2
+    cn, B, ck, size = _chirp(nb)
+    X = np.fft.ifft(np.fft.fft(y * cn, size) * B)[:ck.size] * ck
+    return X.real ** 2 + X.imag ** 2
 
 
 def _initial_period(z: np.ndarray, r: np.ndarray) -> float:
