@@ -37,8 +37,9 @@ class _Prep:
     r_perp: np.ndarray
 
 
-def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
-    """Normalised position and its powers, and the residual with the line projected out."""
+def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None, var0: float | None = None) -> _Prep:
+    """Normalised position and its powers, and the residual with the line projected out (``var0``:
+    ``np.var(r)`` when the caller has it)."""
     zm = 0.5 * (z.max() + z.min())
     L = 0.5 * float(ptp(z)) or 1.0
     xt = None
@@ -46,7 +47,7 @@ def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
         t = np.asarray(t, float)
         tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(ptp(t)) or 1.0
         xt = (t - tm) / tL
-    var0 = float(np.var(r))
+    var0 = float(np.var(r)) if var0 is None else var0
     x = np.ascontiguousarray((z - zm) / L)
     x2, x3 = x * x, x * x * x
     # variable projection: the line (1, x or t) is projected out once (thin QR), the cos/sin

@@ -263,11 +263,11 @@ def _peak_and_band(spec, coarse, pad, width, p_min, p_max, nb):
     return peak, 2.0 * band / nb**2
 
 
-def _periodogram_fast(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
+def _periodogram_fast(z: np.ndarray, r: np.ndarray, var: float | None = None) -> tuple[float, float]:
     """:func:`_periodogram` with the binning and the search compiled (equal to rounding; used where
-    the fit's result is reported, not subtracted from the curve)."""
+    the fit's result is reported, not subtracted from the curve); ``var``: ``np.var(r)`` if known."""
     span = float(ptp(z))
-    var = float(np.var(r))
+    var = float(np.var(r)) if var is None else var
     if not span > 0 or not var > 0:
         return math.nan, 0.0
     nb = int(min(BINS, max(64, z.size)))
@@ -376,8 +376,9 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     r = np.asarray(r, float)
     t = None if t is None else np.asarray(t, float)
     p0 = None
-    if not (period or z.size < 16 or np.var(r) == 0):
-        p0, fraction = _periodogram_fast(z, r)  # compiled: the same starting period (a grid value)
+    var_r = float(np.var(r)) if z.size >= 16 else None  # computed once: the search, the fit, the verdict
+    if not (period or z.size < 16 or var_r == 0):
+        p0, fraction = _periodogram_fast(z, r, var_r)  # compiled: the same starting period (a grid value)
         if not math.isfinite(p0) or fraction < min_explained / 3:
             return _not_found(z, r, fraction, p0 if math.isfinite(p0) else math.nan)
     keep = None
@@ -389,7 +390,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     zs, rs, ts = (z, r, t) if keep is None else (z[keep], r[keep], None if t is None else t[keep])
     orders = (1, 2, 3) if order == "auto" else (int(order),)
     fits = []
-    prep = _prepare(zs, rs, ts) if zs.size >= 16 else None  # shared by the orders
+    prep = _prepare(zs, rs, ts, var_r if keep is None else None) if zs.size >= 16 else None  # shared by the orders
     for o in orders:
         ref = 0.5 * zs.size * fits[-1].residual ** 2 if fits and math.isfinite(fits[-1].residual) else None
         warm = fits[-1] if fits and fits[-1].converged and math.isfinite(fits[-1].period) else None
@@ -404,7 +405,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     if not math.isfinite(best.period):
         return best
     return _finish(z, r, t, best.period, best.scale, best.a2, best.a3, min_explained, min_cycles,
-                   converged=best.converged)
+                   converged=best.converged, var_r=var_r)
 
 
 def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=None,
@@ -476,7 +477,8 @@ class _Solution:
     status: int  # 0: evaluation budget spent; 1: converged
 
 
-def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False) -> FringeRun:
+def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False,
+            var_r=None) -> FringeRun:
     """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample.
 
     The linear solve is the compiled :func:`~._numeric.lstsq_qr` (equal to rounding) where the map is
@@ -504,11 +506,11 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     curved = not lapack and abs(a2) + abs(a3) > 1e-3
     lin = np.polyval((polyfit if curved else np.polyfit)(z, u, 1), z)
     nonlin = float(np.max(np.abs(u - lin)) / max(ptp(u), 1e-300))
-    explained = 1.0 - float(np.var(res)) / float(np.var(r))
+    explained = 1.0 - float(np.var(res)) / (float(np.var(r)) if var_r is None else var_r)
     cycles = float(ptp(u) / P)
     found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
     if found and ok:
-        return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True)
+        return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True, var_r=var_r)
     if xt is None:
         base = (float(coef[2]), float(coef[3]) / L, float(zm), "position")
     else:
