@@ -487,14 +487,17 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     baseline's line: rounding moves the amplitude by percent, the JPK stress-relaxation curve) and
     where fringes are found (they are subtracted from every sample: the same bits).
     """
-    zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(ptp(z)) or 1.0
+    z_hi, z_lo = z.max(), z.min()
+    zm = 0.5 * (z_hi + z_lo)
+    L = 0.5 * float(z_hi - z_lo) or 1.0
     xt = None
     if t is not None:
-        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(ptp(t)) or 1.0
+        t_hi, t_lo = t.max(), t.min()
+        tm, tL = 0.5 * (t_hi + t_lo), 0.5 * float(t_hi - t_lo) or 1.0
         xt = (t - tm) / tL
     X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
-    lapack = lapack or not (converged and float(ptp(u) / P) >= 1.0)
+    u_range = ptp(u)
+    lapack = lapack or not (converged and float(u_range / P) >= 1.0)
     coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float), 1e-5)
     if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
         coef, *_ = np.linalg.lstsq(X, r, rcond=None)
@@ -505,9 +508,9 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     # a nonlinearity far above rounding, which the compiled fit gives to ~1e-13 of it
     curved = not lapack and abs(a2) + abs(a3) > 1e-3
     lin = np.polyval((polyfit if curved else np.polyfit)(z, u, 1), z)
-    nonlin = float(np.max(np.abs(u - lin)) / max(ptp(u), 1e-300))
+    nonlin = float(np.max(np.abs(u - lin)) / max(u_range, 1e-300))
     explained = 1.0 - float(np.var(res)) / (float(np.var(r)) if var_r is None else var_r)
-    cycles = float(ptp(u) / P)
+    cycles = float(u_range / P)
     found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
     if found and ok:
         return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True, var_r=var_r)
