@@ -93,3 +93,16 @@ def test_fit_reaches_scipy_least_squares_minimum():
     assert q[1] == pytest.approx(ref.x[1], rel=1e-6)
     assert cost == pytest.approx(0.5 * np.sum(ref.fun ** 2), rel=1e-8)
     assert P0 * math.exp(q[0]) == pytest.approx(152e-9, rel=1e-3) and q[1] == pytest.approx(0.04, rel=0.05)
+
+
+def test_thinning_equals_numpy():
+    """The evenly thinned samples of the nonlinear fit: numpy's linspace, rounded, deduplicated."""
+    from afmforce.analysis._fringe_kernel import _thin_indices
+
+    rng = np.random.default_rng(9)
+    cases = [(n, m) for n in (17, 201, 401, 1344, 4001, 11935) for m in (2, 3, 200, 201, n - 1)]
+    cases += [(int(n), int(rng.integers(2, n))) for n in rng.integers(17, 100_000, 300)]
+    for n, m in cases:
+        if 2 <= m < n:
+            expected = np.unique(np.linspace(0, n - 1, m).round().astype(np.int64))
+            assert np.array_equal(_thin_indices(n, m), expected), (n, m)

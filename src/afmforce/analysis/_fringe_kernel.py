@@ -59,6 +59,27 @@ def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None, var0: float | N
 
 
 @njit(cache=True)
+def _thin_indices(n, m):
+    """``np.unique(np.linspace(0, n - 1, m).round().astype(np.int64))`` for ``2 <= m < n``: numpy's
+    grid (``i * ((n - 1) / (m - 1))``, the last point ``n - 1`` exactly), rounded half to even,
+    repeated indices dropped (the grid increases)."""
+    step = (n - 1.0) / (m - 1)
+    out = np.empty(m, dtype=np.int64)
+    k = 0
+    for i in range(m):
+        v = i * step + 0.0 if i < m - 1 else n - 1.0
+        f = math.floor(v)
+        d = v - f
+        j = int(f)
+        if d > 0.5 or (d == 0.5 and j % 2 == 1):
+            j += 1
+        if k == 0 or j != out[k - 1]:
+            out[k] = j
+            k += 1
+    return out[:k].copy()
+
+
+@njit(cache=True)
 def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
     """The model at ``q``: fills the workspace ``W`` (rows: residual, theta, map polynomial, cos, sin,
     projected cos, projected sin) and returns ``(half the SSR, p, q amplitudes, the inverse 2x2

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._fringe_kernel import _Prep, _prepare, lm_fit
+from ._fringe_kernel import _Prep, _prepare, _thin_indices, lm_fit
 from ._numeric import lstsq_qr, polyfit, ptp
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
@@ -386,7 +386,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     if per and z.size > 16:
         m = int(min(FIT_POINTS, max(MIN_FIT_POINTS, POINTS_PER_PERIOD * ptp(z) / per)))
         if z.size > m:
-            keep = np.unique(np.linspace(0, z.size - 1, m).round().astype(np.int64))
+            keep = _thin_indices(z.size, m)  # np.unique(np.linspace(0, n - 1, m).round().astype(np.int64))
     zs, rs, ts = (z, r, t) if keep is None else (z[keep], r[keep], None if t is None else t[keep])
     orders = (1, 2, 3) if order == "auto" else (int(order),)
     fits = []
@@ -478,7 +478,7 @@ class _Solution:
 
 
 def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False,
-            var_r=None) -> FringeRun:
+            var_r=None, _design_of=None) -> FringeRun:
     """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample.
 
     The linear solve is the compiled :func:`~._numeric.lstsq_qr` (equal to rounding) where the map is
@@ -487,16 +487,19 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     baseline's line: rounding moves the amplitude by percent, the JPK stress-relaxation curve) and
     where fringes are found (they are subtracted from every sample: the same bits).
     """
-    z_hi, z_lo = z.max(), z.min()
-    zm = 0.5 * (z_hi + z_lo)
-    L = 0.5 * float(z_hi - z_lo) or 1.0
-    xt = None
-    if t is not None:
-        t_hi, t_lo = t.max(), t.min()
-        tm, tL = 0.5 * (t_hi + t_lo), 0.5 * float(t_hi - t_lo) or 1.0
-        xt = (t - tm) / tL
-    X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
-    u_range = ptp(u)
+    if _design_of is None:
+        z_hi, z_lo = z.max(), z.min()
+        zm = 0.5 * (z_hi + z_lo)
+        L = 0.5 * float(z_hi - z_lo) or 1.0
+        xt = tm = tL = None
+        if t is not None:
+            t_hi, t_lo = t.max(), t.min()
+            tm, tL = 0.5 * (t_hi + t_lo), 0.5 * float(t_hi - t_lo) or 1.0
+            xt = (t - tm) / tL
+        X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
+        u_range = ptp(u)
+    else:  # the LAPACK pass of the same map: the same design matrix
+        zm, L, xt, tm, tL, X, x, u, u_range = _design_of
     lapack = lapack or not (converged and float(u_range / P) >= 1.0)
     coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float), 1e-5)
     if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
@@ -513,7 +516,8 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     cycles = float(u_range / P)
     found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
     if found and ok:
-        return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True, var_r=var_r)
+        return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True, var_r=var_r,
+                       _design_of=(zm, L, xt, tm, tL, X, x, u, u_range))
     if xt is None:
         base = (float(coef[2]), float(coef[3]) / L, float(zm), "position")
     else:
@@ -527,8 +531,19 @@ def monotonic_map(c1: float, a2: float, a3: float, reach: float = 1.5) -> bool:
     :func:`position_map` uses the polynomial)? A piezo moves one way while its drive does: a map
     that turns back (``du/dx <= 0`` somewhere) is no position, whatever it explains of a baseline
     (a fit of a slow wobble over barely one period), and is not taken for fringes."""
-    x = np.linspace(-reach, reach, 301)
-    return bool(c1 > 0 and np.all(1.0 + 2.0 * a2 * x + 3.0 * a3 * x**2 > 0))
+    if not c1 > 0:
+        return False
+    grid = _MAP_GRIDS.get(reach)
+    if grid is None:
+        x = np.linspace(-reach, reach, 301)
+        x2 = x**2
+        x.flags.writeable = x2.flags.writeable = False
+        grid = _MAP_GRIDS[reach] = (x, x2)
+    x, x2 = grid
+    return bool(np.all(1.0 + 2.0 * a2 * x + 3.0 * a3 * x2 > 0))
+
+
+_MAP_GRIDS: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def loop_width(fa: FringeRun, fr: FringeRun, z: np.ndarray) -> float:
