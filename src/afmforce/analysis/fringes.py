@@ -509,7 +509,7 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     phase = float(math.atan2(-coef[1], coef[0]))
     # a linear map (a2 = a3 = 0) leaves rounding noise here: np.polyfit's, kept bit for bit; a curved one
     # a nonlinearity far above rounding, which the compiled fit gives to ~1e-13 of it
-    curved = not lapack and abs(a2) + abs(a3) > 1e-3
+    curved = abs(a2) + abs(a3) > 1e-3  # (u does not depend on the linear solve: LAPACK or not alike)
     lin = np.polyval((polyfit if curved else np.polyfit)(z, u, 1), z)
     nonlin = float(np.max(np.abs(u - lin)) / max(u_range, 1e-300))
     explained = 1.0 - float(np.var(res)) / (float(np.var(r)) if var_r is None else var_r)
