@@ -37,8 +37,9 @@ class _Prep:
     r_perp: np.ndarray
 
 
-def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
-    """Normalised position and its powers, and the residual with the line projected out."""
+def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None, var0: float | None = None) -> _Prep:
+    """Normalised position and its powers, and the residual with the line projected out (``var0``:
+    ``np.var(r)`` when the caller has it)."""
     zm = 0.5 * (z.max() + z.min())
     L = 0.5 * float(ptp(z)) or 1.0
     xt = None
@@ -46,7 +47,7 @@ def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
         t = np.asarray(t, float)
         tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(ptp(t)) or 1.0
         xt = (t - tm) / tL
-    var0 = float(np.var(r))
+    var0 = float(np.var(r)) if var0 is None else var0
     x = np.ascontiguousarray((z - zm) / L)
     x2, x3 = x * x, x * x * x
     # variable projection: the line (1, x or t) is projected out once (thin QR), the cos/sin
@@ -58,8 +59,31 @@ def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None) -> _Prep:
 
 
 @njit(cache=True)
-def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_jac):
-    """Residual (into ``res``), Jacobian (into ``J`` when ``want_jac``); returns half the SSR."""
+def _thin_indices(n, m):
+    """``np.unique(np.linspace(0, n - 1, m).round().astype(np.int64))`` for ``2 <= m < n``: numpy's
+    grid (``i * ((n - 1) / (m - 1))``, the last point ``n - 1`` exactly), rounded half to even,
+    repeated indices dropped (the grid increases)."""
+    step = (n - 1.0) / (m - 1)
+    out = np.empty(m, dtype=np.int64)
+    k = 0
+    for i in range(m):
+        v = i * step + 0.0 if i < m - 1 else n - 1.0
+        f = math.floor(v)
+        d = v - f
+        j = int(f)
+        if d > 0.5 or (d == 0.5 and j % 2 == 1):
+            j += 1
+        if k == 0 or j != out[k - 1]:
+            out[k] = j
+            k += 1
+    return out[:k].copy()
+
+
+@njit(cache=True)
+def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
+    """The model at ``q``: fills the workspace ``W`` (rows: residual, theta, map polynomial, cos, sin,
+    projected cos, projected sin) and returns ``(half the SSR, p, q amplitudes, the inverse 2x2
+    normal matrix i00, i01, i11, 2 pi / P, c1)``; half the SSR is +inf where no fit exists."""
     n = x.size
     if known:
         c1 = q[0]
@@ -70,14 +94,15 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
     a2 = q[1] if n_map >= 1 else 0.0
     a3 = q[2] if n_map >= 2 else 0.0
     if not (P > 0.0 and P < math.inf):  # exp(q) under- or overflowed: a trial step far off, rejected
-        return math.inf
+        return math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, c1
     w = 2.0 * math.pi / P
-    cs = np.empty(n)
-    sn = np.empty(n)
-    th = np.empty(n)
-    cr = np.empty(n)  # cos and sin before the projection (the Jacobian needs them: not computed twice)
-    sr = np.empty(n)
-    poly = np.empty(n)
+    res = W[0]
+    th = W[1]
+    poly = W[2]
+    cr = W[3]  # cos and sin before the projection (the Jacobian needs them: not computed twice)
+    sr = W[4]
+    cs = W[5]
+    sn = W[6]
     g00 = g01 = g10 = g11 = 0.0  # Q0^T C
     for i in range(n):
         p = x[i] + a2 * x2[i] + a3 * x3[i]
@@ -106,7 +131,7 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
     A11 += reg
     det = A00 * A11 - A01 * A01
     if not det > 0.0:  # cos and sin collinear to rounding (underflow): no amplitude to solve for
-        return math.inf
+        return math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, w, c1
     i00, i01, i11 = A11 / det, -A01 / det, A00 / det
     c0 = i00 * b0 + i01 * b1
     c1c = i01 * b0 + i11 * b1
@@ -114,59 +139,84 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
     for i in range(n):
         res[i] = cs[i] * c0 + sn[i] * c1c - rp[i]
         cost += res[i] * res[i]
-    if want_jac:
-        m = J.shape[1]
-        k = w * c1 * L
-        gd = np.empty(n)  # g = d(X coef)/dtheta from the unprojected cos/sin
+    return 0.5 * cost, c0, c1c, i00, i01, i11, w, c1
+
+
+@njit(cache=True)
+def _vp_jac(known, L, x2, x3, Q0, W, c0, c1c, i00, i01, i11, w, c1, J):
+    """Kaufman's variable-projection Jacobian (into ``J``) at the point :func:`_vp_core` left in ``W``."""
+    n = x2.size
+    th = W[1]
+    poly = W[2]
+    cr = W[3]
+    sr = W[4]
+    cs = W[5]
+    sn = W[6]
+    m = J.shape[1]
+    k = w * c1 * L
+    gd = np.empty(n)  # g = d(X coef)/dtheta from the unprojected cos/sin
+    for i in range(n):
+        gd[i] = c1c * cr[i] - c0 * sr[i]
+    for j in range(m):
+        # column j of V = g * dtheta/dq_j
+        h0 = h1 = 0.0
         for i in range(n):
-            gd[i] = c1c * cr[i] - c0 * sr[i]
-        for j in range(m):
-            # column j of V = g * dtheta/dq_j
-            h0 = h1 = 0.0
-            for i in range(n):
-                if j == 0:
-                    d = w * L * poly[i] if known else -th[i]
-                elif j == 1:
-                    d = k * x2[i]
-                else:
-                    d = k * x3[i]
-                J[i, j] = gd[i] * d
-                h0 += Q0[i, 0] * J[i, j]
-                h1 += Q0[i, 1] * J[i, j]
-            e0 = e1 = 0.0
-            for i in range(n):
-                J[i, j] -= Q0[i, 0] * h0 + Q0[i, 1] * h1
-                e0 += cs[i] * J[i, j]
-                e1 += sn[i] * J[i, j]
-            f0 = i00 * e0 + i01 * e1
-            f1 = i01 * e0 + i11 * e1
-            for i in range(n):
-                J[i, j] -= cs[i] * f0 + sn[i] * f1
-    return 0.5 * cost
+            if j == 0:
+                d = w * L * poly[i] if known else -th[i]
+            elif j == 1:
+                d = k * x2[i]
+            else:
+                d = k * x3[i]
+            J[i, j] = gd[i] * d
+            h0 += Q0[i, 0] * J[i, j]
+            h1 += Q0[i, 1] * J[i, j]
+        e0 = e1 = 0.0
+        for i in range(n):
+            J[i, j] -= Q0[i, 0] * h0 + Q0[i, 1] * h1
+            e0 += cs[i] * J[i, j]
+            e1 += sn[i] * J[i, j]
+        f0 = i00 * e0 + i01 * e1
+        f1 = i01 * e0 + i11 * e1
+        for i in range(n):
+            J[i, j] -= cs[i] * f0 + sn[i] * f1
 
 
+@njit(cache=True)
+def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_jac):
+    """Residual (into ``res``), Jacobian (into ``J`` when ``want_jac``); returns half the SSR."""
+    W = np.empty((7, x.size))
+    cost, c0, c1c, i00, i01, i11, w, c1 = _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W)
+    if not cost < math.inf:
+        return cost
+    res[:] = W[0]
+    if want_jac:
+        _vp_jac(known, L, x2, x3, Q0, W, c0, c1c, i00, i01, i11, w, c1, J)
+    return cost
 
 
 @njit(cache=True)
 def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol):
     """Levenberg-Marquardt on :func:`vp_eval`; returns ``(q, cost, status)`` (status 0: budget
     spent, 1: converged: an accepted step changed the cost by < ftol of it, or q by
-    < xtol (xtol + |q|), or no descent is left)."""
+    < xtol (xtol + |q|), or no descent is left).
+
+    Two workspaces: a trial point's evaluation becomes the current one when the step is accepted
+    (its Jacobian is then computed from it; the model is not evaluated twice at one point)."""
     n = x.size
     m = q0.size
     q = q0.copy()
-    res = np.empty(n)
+    WS = np.empty((2, 7, n))
+    cur = 0
     J = np.empty((n, m))
-    empty = np.empty((0, m))
-    cost = vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, True)
+    cost, c0, c1c, i00, i01, i11, w, c1 = _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, WS[cur])
     if not cost < math.inf:  # no fit at the start (see vp_eval)
         return q, cost, 1
+    _vp_jac(known, L, x2, x3, Q0, WS[cur], c0, c1c, i00, i01, i11, w, c1, J)
     nfev = 1
     lam = 1e-3
-    resn = np.empty(n)
     while nfev < max_nfev:
         A = J.T @ J
-        g = J.T @ res
+        g = J.T @ WS[cur, 0]
         d = np.empty(m)
         for j in range(m):
             d[j] = A[j, j] if A[j, j] > 0 else 1.0
@@ -182,7 +232,8 @@ def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, fto
                     return q, cost, 1
                 continue
             qn = q + dq
-            cn = vp_eval(qn, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, resn, empty, False)
+            cn, c0, c1c, i00, i01, i11, w, c1 = _vp_core(qn, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp,
+                                                         WS[1 - cur])
             nfev += 1
             if cn <= cost:
                 small_f = cost - cn <= ftol * cost
@@ -191,7 +242,9 @@ def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, fto
                     if abs(dq[j]) > xtol * (xtol + abs(q[j])):
                         small_x = False
                 q = qn
-                cost = vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, True)
+                cur = 1 - cur
+                cost = cn
+                _vp_jac(known, L, x2, x3, Q0, WS[cur], c0, c1c, i00, i01, i11, w, c1, J)
                 lam = max(lam / 3.0, 1e-12)
                 if small_f or small_x:
                     return q, cost, 1

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._fringe_kernel import _Prep, _prepare, lm_fit
+from ._fringe_kernel import _Prep, _prepare, _thin_indices, lm_fit
 from ._numeric import lstsq_qr, polyfit, ptp
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
@@ -263,11 +263,11 @@ def _peak_and_band(spec, coarse, pad, width, p_min, p_max, nb):
     return peak, 2.0 * band / nb**2
 
 
-def _periodogram_fast(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
+def _periodogram_fast(z: np.ndarray, r: np.ndarray, var: float | None = None) -> tuple[float, float]:
     """:func:`_periodogram` with the binning and the search compiled (equal to rounding; used where
-    the fit's result is reported, not subtracted from the curve)."""
+    the fit's result is reported, not subtracted from the curve); ``var``: ``np.var(r)`` if known."""
     span = float(ptp(z))
-    var = float(np.var(r))
+    var = float(np.var(r)) if var is None else var
     if not span > 0 or not var > 0:
         return math.nan, 0.0
     nb = int(min(BINS, max(64, z.size)))
@@ -276,10 +276,57 @@ def _periodogram_fast(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
     width = span / nb
     p_min, p_max = max(4 * step, span / 400, 2.5 * width), span / 1.5
     pad = 8 * nb
-    spec = np.abs(np.fft.rfft(y, pad)) ** 2
-    coarse = np.abs(np.fft.rfft(y)) ** 2
+    spec = _padded_power(y)
+    coarse = np.ascontiguousarray(spec[::8])  # the unpadded transform's bins: every 8th of the padded one
     peak, band_var = _peak_and_band(spec, coarse, float(pad), width, p_min, p_max, nb)
     return float(peak), min(float(band_var) / var, 1.0) if math.isfinite(peak) else 0.0
+
+
+#: :func:`_padded_power` takes the chirp-z route when the number of bins has a prime factor above this
+#: (pocketfft's own route for such a length, 8x padded, costs 0.4-1.8 ms; the chirp-z 0.1-0.2 ms).
+CHIRP_PRIME = 100
+_CHIRPS: dict[int, tuple] = {}
+
+
+def _largest_prime_factor(n: int) -> int:
+    f, big = 2, 1
+    while f * f <= n:
+        while n % f == 0:
+            big, n = f, n // f
+        f += 1
+    return max(big, n)
+
+
+def _chirp(nb: int) -> tuple:
+    """The chirps and the transformed filter of :func:`_padded_power` for ``nb`` samples (cached)."""
+    hit = _CHIRPS.get(nb)
+    if hit is not None:
+        return hit
+    from scipy.fft import next_fast_len as _next_fast_len  # here: the import costs the cold start nothing
+    N, K = 8 * nb, 4 * nb + 1
+    size = _next_fast_len(nb + K - 1)
+    j = np.arange(max(nb, K), dtype=np.int64)
+    c = np.exp(-1j * (np.pi * ((j * j) % (2 * N)) / N))  # exp(-i pi j^2 / N), the phase reduced exactly
+    b = np.zeros(size, complex)
+    b[:K] = np.conj(c[:K])
+    b[size - nb + 1:] = np.conj(c[1:nb])[::-1]
+    out = (c[:nb].copy(), np.fft.fft(b), c[:K].copy(), size)
+    if len(_CHIRPS) > 64:
+        _CHIRPS.clear()
+    _CHIRPS[nb] = out
+    return out
+
+
+def _padded_power(y: np.ndarray) -> np.ndarray:
+    """``|rfft(y, 8 y.size)|^2``: pocketfft where the length factors well, else Bluestein's chirp-z
+    (``nk = (n^2 + k^2 - (k - n)^2) / 2``: one convolution by FFTs of a fast length); the two agree to
+    ~1e-15 of the largest bin (tested against a direct DFT)."""
+    nb = y.size
+    if _largest_prime_factor(nb) <= CHIRP_PRIME:
+        return np.abs(np.fft.rfft(y, 8 * nb)) ** 2
+    cn, B, ck, size = _chirp(nb)
+    X = np.fft.ifft(np.fft.fft(y * cn, size) * B)[:ck.size] * ck
+    return X.real ** 2 + X.imag ** 2
 
 
 def _initial_period(z: np.ndarray, r: np.ndarray) -> float:
@@ -329,8 +376,9 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     r = np.asarray(r, float)
     t = None if t is None else np.asarray(t, float)
     p0 = None
-    if not (period or z.size < 16 or np.var(r) == 0):
-        p0, fraction = _periodogram_fast(z, r)  # compiled: the same starting period (a grid value)
+    var_r = float(np.var(r)) if z.size >= 16 else None  # computed once: the search, the fit, the verdict
+    if not (period or z.size < 16 or var_r == 0):
+        p0, fraction = _periodogram_fast(z, r, var_r)  # compiled: the same starting period (a grid value)
         if not math.isfinite(p0) or fraction < min_explained / 3:
             return _not_found(z, r, fraction, p0 if math.isfinite(p0) else math.nan)
     keep = None
@@ -338,11 +386,11 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     if per and z.size > 16:
         m = int(min(FIT_POINTS, max(MIN_FIT_POINTS, POINTS_PER_PERIOD * ptp(z) / per)))
         if z.size > m:
-            keep = np.unique(np.linspace(0, z.size - 1, m).round().astype(np.int64))
+            keep = _thin_indices(z.size, m)  # np.unique(np.linspace(0, n - 1, m).round().astype(np.int64))
     zs, rs, ts = (z, r, t) if keep is None else (z[keep], r[keep], None if t is None else t[keep])
     orders = (1, 2, 3) if order == "auto" else (int(order),)
     fits = []
-    prep = _prepare(zs, rs, ts) if zs.size >= 16 else None  # shared by the orders
+    prep = _prepare(zs, rs, ts, var_r if keep is None else None) if zs.size >= 16 else None  # shared by the orders
     for o in orders:
         ref = 0.5 * zs.size * fits[-1].residual ** 2 if fits and math.isfinite(fits[-1].residual) else None
         warm = fits[-1] if fits and fits[-1].converged and math.isfinite(fits[-1].period) else None
@@ -357,7 +405,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     if not math.isfinite(best.period):
         return best
     return _finish(z, r, t, best.period, best.scale, best.a2, best.a3, min_explained, min_cycles,
-                   converged=best.converged)
+                   converged=best.converged, var_r=var_r)
 
 
 def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=None,
@@ -429,7 +477,8 @@ class _Solution:
     status: int  # 0: evaluation budget spent; 1: converged
 
 
-def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False) -> FringeRun:
+def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False,
+            var_r=None, _design_of=None) -> FringeRun:
     """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample.
 
     The linear solve is the compiled :func:`~._numeric.lstsq_qr` (equal to rounding) where the map is
@@ -438,15 +487,21 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     baseline's line: rounding moves the amplitude by percent, the JPK stress-relaxation curve) and
     where fringes are found (they are subtracted from every sample: the same bits).
     """
-    zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(ptp(z)) or 1.0
-    xt = None
-    if t is not None:
-        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(ptp(t)) or 1.0
-        xt = (t - tm) / tL
-    X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
-    lapack = lapack or not (converged and float(ptp(u) / P) >= 1.0)
-    coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float))
+    if _design_of is None:
+        z_hi, z_lo = z.max(), z.min()
+        zm = 0.5 * (z_hi + z_lo)
+        L = 0.5 * float(z_hi - z_lo) or 1.0
+        xt = tm = tL = None
+        if t is not None:
+            t_hi, t_lo = t.max(), t.min()
+            tm, tL = 0.5 * (t_hi + t_lo), 0.5 * float(t_hi - t_lo) or 1.0
+            xt = (t - tm) / tL
+        X, x, u = _design(z, zm, L, P, c1, a2, a3, xt)
+        u_range = ptp(u)
+    else:  # the LAPACK pass of the same map: the same design matrix
+        zm, L, xt, tm, tL, X, x, u, u_range = _design_of
+    lapack = lapack or not (converged and float(u_range / P) >= 1.0)
+    coef, ok = (None, False) if lapack else lstsq_qr(X, np.ascontiguousarray(r, dtype=float), 1e-5)
     if not ok:  # ill-conditioned (a period far beyond the range): LAPACK's truncated solution
         coef, *_ = np.linalg.lstsq(X, r, rcond=None)
     res = X @ coef - r
@@ -454,14 +509,15 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     phase = float(math.atan2(-coef[1], coef[0]))
     # a linear map (a2 = a3 = 0) leaves rounding noise here: np.polyfit's, kept bit for bit; a curved one
     # a nonlinearity far above rounding, which the compiled fit gives to ~1e-13 of it
-    curved = not lapack and abs(a2) + abs(a3) > 1e-3
+    curved = abs(a2) + abs(a3) > 1e-3  # (u does not depend on the linear solve: LAPACK or not alike)
     lin = np.polyval((polyfit if curved else np.polyfit)(z, u, 1), z)
-    nonlin = float(np.max(np.abs(u - lin)) / max(ptp(u), 1e-300))
-    explained = 1.0 - float(np.var(res)) / float(np.var(r))
-    cycles = float(ptp(u) / P)
+    nonlin = float(np.max(np.abs(u - lin)) / max(u_range, 1e-300))
+    explained = 1.0 - float(np.var(res)) / (float(np.var(r)) if var_r is None else var_r)
+    cycles = float(u_range / P)
     found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
     if found and ok:
-        return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True)
+        return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True, var_r=var_r,
+                       _design_of=(zm, L, xt, tm, tL, X, x, u, u_range))
     if xt is None:
         base = (float(coef[2]), float(coef[3]) / L, float(zm), "position")
     else:
@@ -475,8 +531,19 @@ def monotonic_map(c1: float, a2: float, a3: float, reach: float = 1.5) -> bool:
     :func:`position_map` uses the polynomial)? A piezo moves one way while its drive does: a map
     that turns back (``du/dx <= 0`` somewhere) is no position, whatever it explains of a baseline
     (a fit of a slow wobble over barely one period), and is not taken for fringes."""
-    x = np.linspace(-reach, reach, 301)
-    return bool(c1 > 0 and np.all(1.0 + 2.0 * a2 * x + 3.0 * a3 * x**2 > 0))
+    if not c1 > 0:
+        return False
+    grid = _MAP_GRIDS.get(reach)
+    if grid is None:
+        x = np.linspace(-reach, reach, 301)
+        x2 = x**2
+        x.flags.writeable = x2.flags.writeable = False
+        grid = _MAP_GRIDS[reach] = (x, x2)
+    x, x2 = grid
+    return bool(np.all(1.0 + 2.0 * a2 * x + 3.0 * a3 * x2 > 0))
+
+
+_MAP_GRIDS: dict[float, tuple[np.ndarray, np.ndarray]] = {}
 
 
 def loop_width(fa: FringeRun, fr: FringeRun, z: np.ndarray) -> float:

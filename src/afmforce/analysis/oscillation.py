@@ -25,6 +25,7 @@ from typing import Sequence
 import numpy as np
 from scipy.ndimage import median_filter
 
+from . import _oscillation_kernel as _K
 from ._numeric import polyfit
 from ._units import unit as _u
 from .options import OscillationOptions as _Osc  # the defaults: declared once, in the step's record
@@ -110,6 +111,69 @@ def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cy
     n = r.size
     if n < min_points or not np.all(np.isfinite(t)):
         return _no_peak(run, velocity)
+    if _compiled() and np.isfinite(r).all():
+        t = np.ascontiguousarray(t, dtype=float)
+        w, w_sum = _hann(n)
+        dt, xw, ok = _K.detrend(t, np.ascontiguousarray(r, dtype=float), w)
+        if not dt > 0:
+            return _no_peak(run, velocity)
+        if ok:
+            spec = np.abs(np.fft.rfft(xw)) ** 2
+            k0, count, k, sig = _K.band_peak(spec, n, float(dt), float(min_cycles), float(max_nyquist_fraction))
+            nyq = 0.5 / dt
+            if count < 16:
+                return _no_peak(run, velocity, nyquist=nyq)
+            p = spec[k0:k0 + count]
+            df = float((k0 + 1) * (1.0 / (n * dt)) - k0 * (1.0 / (n * dt)))  # f[1] - f[0] of rfftfreq's grid
+            return _line(run, velocity, p, float(sig), int(k), (k0 + k) * (1.0 / (n * dt)), df, count,
+                         false_alarm, nyq, w_sum)
+    return _find_peak_numpy(t, r, velocity, run, min_cycles=min_cycles, false_alarm=false_alarm,
+                            max_nyquist_fraction=max_nyquist_fraction)
+
+
+def _compiled() -> bool:
+    """The kernels are compiled (not the first, uncompiled run: ``NUMBA_DISABLE_JIT``), where the
+    numpy version, the same numbers, is the faster."""
+    from numba.core import config
+
+    return not config.DISABLE_JIT
+
+
+_HANN: dict[int, tuple[np.ndarray, float]] = {}
+
+
+def _hann(n: int) -> tuple[np.ndarray, float]:
+    """``np.hanning(n)`` and its sum (cached per length: a map's runs share a few)."""
+    hit = _HANN.get(n)
+    if hit is None:
+        if len(_HANN) > 256:
+            _HANN.clear()
+        w = np.hanning(n)
+        hit = _HANN[n] = (w, float(w.sum()))
+    return hit
+
+
+def _line(run, velocity, p, sig, k, fk, df, count, false_alarm, nyq, w_sum) -> OscillationPeak:
+    """The peak at band index ``k`` (normalised power ``sig``, frequency ``fk``) judged and refined."""
+    threshold = math.log2(count / false_alarm)
+    fap = false_alarm_probability(sig * math.log(2.0), int(count))
+    if not fap < false_alarm:
+        return _no_peak(run, velocity, sig, threshold, fap, nyq, float(fk))
+    if 0 < k < p.size - 1:  # parabolic refinement on log power
+        y0, y1, y2 = np.log(p[k - 1:k + 2])
+        den = y0 - 2 * y1 + y2
+        if den < 0:
+            fk = fk + 0.5 * (y0 - y2) / den * df
+    amp = 2.0 * math.sqrt(p[k]) / w_sum
+    v = abs(velocity)
+    sf = fk / v if v > 0 else math.nan
+    return OscillationPeak(run, True, float(fk), float(sf), float(1.0 / sf) if sf > 0 else math.nan,
+                           float(amp), sig, float(threshold), float(velocity), fap, nyq)
+
+
+def _find_peak_numpy(t, r, velocity, run, *, min_cycles, false_alarm, max_nyquist_fraction) -> OscillationPeak:
+    """:func:`find_peak` in numpy and scipy calls (the uncompiled run, and samples that are not finite)."""
+    n = r.size
     dt = float(np.median(np.diff(t)))
     if not dt > 0:
         return _no_peak(run, velocity)
@@ -127,23 +191,9 @@ def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cy
     width = max(9, 2 * (p.size // 20) + 1)
     local = median_filter(p, size=width, mode="nearest")  # coloured noise: compare with the neighbourhood
     ratio = p / np.where(local > 0, local, np.inf)
-    threshold = math.log2(band.sum() / false_alarm)
     k = int(np.argmax(ratio))
-    sig = float(ratio[k])
-    fap = false_alarm_probability(sig * math.log(2.0), int(band.sum()))
-    if not fap < false_alarm:
-        return _no_peak(run, velocity, sig, threshold, fap, nyq, float(f[k]))
-    fk = f[k]
-    if 0 < k < p.size - 1:  # parabolic refinement on log power
-        y0, y1, y2 = np.log(p[k - 1:k + 2])
-        den = y0 - 2 * y1 + y2
-        if den < 0:
-            fk = fk + 0.5 * (y0 - y2) / den * (f[1] - f[0])
-    amp = 2.0 * math.sqrt(p[k]) / w.sum()
-    v = abs(velocity)
-    sf = fk / v if v > 0 else math.nan
-    return OscillationPeak(run, True, float(fk), float(sf), float(1.0 / sf) if sf > 0 else math.nan,
-                           float(amp), sig, float(threshold), float(velocity), fap, nyq)
+    return _line(run, velocity, p, float(ratio[k]), k, f[k], f[1] - f[0], int(band.sum()), false_alarm, nyq,
+                 w.sum())
 
 
 def oscillation_origin(frequencies: Sequence[float], velocities: Sequence[float], *,

@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from .._numeric import ptp
 from .._step_helpers import _zero_deflection_position
 from ..fringes import FringeResult, fit_fringes, fringe_baseline, fringe_signal, loop_width, position_map
 from ..options import FringesOptions
@@ -38,7 +39,7 @@ def fringes(st: State, o: FringesOptions) -> State:
         idx = run.index[run.zero_force & ~run.saturated]  # the baseline: not the attraction, nor a settling tail
         zf = st.z[idx]
         z_split = st.z[run.index[min(run.split, run.index.size - 1)]]
-        far = np.abs(zf - z_split) > margin * (np.ptp(zf) if zf.size else 0.0)  # not the attraction near contact
+        far = np.abs(zf - z_split) > margin * (ptp(zf) if zf.size else 0.0)  # not the attraction near contact
         if run.kind == "retract" and not runs["approach"].found and apply != "always":
             # fringes are a property of the optics, present on both runs: without them on the
             # approach nothing is changed whatever the retract shows, so it is not searched
@@ -67,7 +68,7 @@ def fringes(st: State, o: FringesOptions) -> State:
         if remap:
             z[idx] = position_map(st.z[idx], fit)
     applied = remap
-    width = loop_width(fa, fr, st.z[np.concatenate([st.approach.index, st.retract.index])])
+    width = loop_width(fa, fr, st.z[np.concatenate([st.approach.index, st.retract.index])]) if fa.found and fr.found else math.nan  # (loop_width's own NaN)
     if both:
         verdict = (f"fringes of period {0.5 * (fa.period + fr.period) * 1e9:.4g} nm; position nonlinearity "
                    f"{max(fa.nonlinearity, fr.nonlinearity) * 100:.3g} %; loop width {width * 1e9:.3g} nm "

@@ -33,7 +33,7 @@ def oscillation(st: State, o: OscillationOptions) -> State:
             peaks[run.kind] = dataclasses.replace(find_peak(np.array([]), np.array([]), v, run.kind), nyquist=nyq)
             continue
         x = st.z[idx] - st.z[idx].mean()
-        a, b, *_ = robust_line(x, st.deflection[idx])
+        a, b, *_ = robust_line(x, st.deflection[idx], 6, 4.685)
         resid = st.deflection[idx] - (a + b * x)
         peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=o.min_cycles,
                                     false_alarm=o.false_alarm)

@@ -1,0 +1,118 @@
+"""Compiled parts of the oscillation search (:func:`afmforce.analysis.oscillation.find_peak`, issue 35).
+
+:func:`detrend` (median sample step, cubic trend removed, Hann window applied) and
+:func:`band_peak` (search band, running median of the power, strongest normalised line) are the
+numpy calls of ``find_peak`` written as loops over one run: the same operations in the same order
+(``np.polyfit`` as :func:`~._numeric.polyfit`'s compiled QR, ``np.polyval``'s Horner scheme,
+``np.fft.rfftfreq``'s grid, ``scipy.ndimage.median_filter``'s ``mode="nearest"`` window), so the
+same numbers. The transform stays ``np.fft.rfft`` between the two.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit
+
+from ._numeric import _polyfit_qr
+
+__all__ = ["detrend", "band_peak"]
+
+
+@njit(cache=True)
+def detrend(t, r, w):
+    """``(dt, x w, ok)``: the median sample step [s], the residual less its cubic trend in normalised
+    time, times the window ``w``; ``ok`` False when the cubic fit is ill-conditioned (the caller
+    then uses numpy's), or ``dt`` is not positive."""
+    n = r.size
+    d = np.empty(n - 1)
+    for i in range(n - 1):
+        d[i] = t[i + 1] - t[i]
+    dt = np.median(d)
+    xw = np.empty(n)
+    if not dt > 0:
+        return dt, xw, False
+    span = max(t[n - 1] - t[0], dt)
+    tt = np.empty(n)
+    for i in range(n):
+        tt[i] = (t[i] - t[0]) / span
+    c, ok = _polyfit_qr(tt, r, 3)
+    if not ok:
+        return dt, xw, False
+    for j in range(4):
+        if not np.isfinite(c[j]):
+            return dt, xw, False
+    for i in range(n):
+        y = 0.0 * tt[i] + c[0]  # np.polyval: Horner from zeros
+        y = y * tt[i] + c[1]
+        y = y * tt[i] + c[2]
+        y = y * tt[i] + c[3]
+        xw[i] = (r[i] - y) * w[i]
+    return dt, xw, True
+
+
+@njit(cache=True)
+def _running_median_nearest(p, width):
+    """``scipy.ndimage.median_filter(p, size=width, mode="nearest")`` for odd ``width``: a sorted
+    window slid along the edge-extended series (the median is one of the samples: the same number)."""
+    m = p.size
+    h = width // 2
+    buf = np.empty(width)
+    for j in range(width):
+        buf[j] = p[min(max(j - h, 0), m - 1)]
+    buf.sort()
+    out = np.empty(m)
+    out[0] = buf[h]
+    for i in range(1, m):
+        old = p[min(max(i - 1 - h, 0), m - 1)]
+        new = p[min(max(i + h, 0), m - 1)]
+        if old != new:
+            lo, hi = 0, width  # remove one copy of old (present: it entered the window before)
+            while lo < hi:
+                mid = (lo + hi) // 2
+                if buf[mid] < old:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            k = lo
+            if new >= old:  # shift the elements between down, insert new in order
+                while k + 1 < width and buf[k + 1] < new:
+                    buf[k] = buf[k + 1]
+                    k += 1
+            else:
+                while k > 0 and buf[k - 1] > new:
+                    buf[k] = buf[k - 1]
+                    k -= 1
+            buf[k] = new
+        out[i] = buf[h]
+    return out
+
+
+@njit(cache=True)
+def band_peak(spec, n, dt, min_cycles, max_nyquist_fraction):
+    """The search band of the power ``spec`` (``np.fft.rfft`` of ``n`` samples ``dt`` apart) and its
+    strongest line against the running median: ``(first bin, bins, index in the band, ratio)``
+    (bins < 16: no search)."""
+    val = 1.0 / (n * dt)
+    lower = min_cycles / (n * dt)
+    upper = max_nyquist_fraction * (0.5 / dt)
+    k0 = -1
+    count = 0
+    for k in range(spec.size):
+        f = k * val
+        if f >= lower and f <= upper:
+            if k0 < 0:
+                k0 = k
+            count += 1
+    if count < 16:
+        return k0, count, -1, 0.0
+    p = spec[k0:k0 + count]
+    width = max(9, 2 * (count // 20) + 1)
+    local = _running_median_nearest(p, width)
+    best = -1.0
+    kb = 0
+    for i in range(count):
+        ratio = p[i] / local[i] if local[i] > 0 else p[i] / np.inf
+        if ratio > best:
+            best = ratio
+            kb = i
+    return k0, count, kb, best
