@@ -20,38 +20,74 @@ __all__ = ["pairwise_sum", "block_mean", "linspace", "fit_grid", "soft_contact_k
 
 
 @njit(cache=True)
-def pairwise_sum(a, lo, n):
-    """``np.sum(a[lo:lo + n])`` of a float64 array, bit for bit: numpy's pairwise summation (blocks of
-    128 summed by 8 running partial sums, longer runs halved at a multiple of 8)."""
+def _leaf_sum(a, lo, n):
+    """numpy's pairwise summation of at most 128 values: 8 running partial sums (sequential below 8)."""
     if n < 8:
         res = 0.0
         for i in range(lo, lo + n):
             res += a[i]
         return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    end = n - n % 8
+    while i < end:
+        j = lo + i
+        r0 += a[j]
+        r1 += a[j + 1]
+        r2 += a[j + 2]
+        r3 += a[j + 3]
+        r4 += a[j + 4]
+        r5 += a[j + 5]
+        r6 += a[j + 6]
+        r7 += a[j + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
+
+
+@njit(cache=True)
+def pairwise_sum(a, lo, n):
+    """``np.sum(a[lo:lo + n])`` of a float64 array, bit for bit: numpy's pairwise summation (blocks of
+    at most 128 summed by 8 running partial sums, longer runs halved at a multiple of 8, the halves
+    added left + right). Without recursion (numba's cache cannot load a recursive kernel called from
+    another module): the halving tree walked with an explicit stack."""
     if n <= 128:
-        r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-        r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-        i = 8
-        end = n - n % 8
-        while i < end:
-            j = lo + i
-            r0 += a[j]
-            r1 += a[j + 1]
-            r2 += a[j + 2]
-            r3 += a[j + 3]
-            r4 += a[j + 4]
-            r5 += a[j + 5]
-            r6 += a[j + 6]
-            r7 += a[j + 7]
-            i += 8
-        res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-        while i < n:
-            res += a[lo + i]
-            i += 1
-        return res
-    n2 = n // 2
-    n2 -= n2 % 8
-    return pairwise_sum(a, lo, n2) + pairwise_sum(a, lo + n2, n - n2)
+        return _leaf_sum(a, lo, n)
+    s_lo = np.empty(64, np.int64)
+    s_n = np.empty(64, np.int64)
+    s_state = np.empty(64, np.int64)
+    vals = np.empty(64)
+    sp = 0
+    nv = 0
+    s_lo[0], s_n[0], s_state[0] = lo, n, 0
+    sp = 1
+    while sp > 0:
+        t = sp - 1
+        l, m = s_lo[t], s_n[t]
+        if m <= 128:
+            vals[nv] = _leaf_sum(a, l, m)
+            nv += 1
+            sp -= 1
+            continue
+        n2 = m // 2
+        n2 -= n2 % 8
+        if s_state[t] == 0:
+            s_state[t] = 1
+            s_lo[sp], s_n[sp], s_state[sp] = l, n2, 0
+            sp += 1
+        elif s_state[t] == 1:
+            s_state[t] = 2
+            s_lo[sp], s_n[sp], s_state[sp] = l + n2, m - n2, 0
+            sp += 1
+        else:
+            vals[nv - 2] = vals[nv - 2] + vals[nv - 1]
+            nv -= 1
+            sp -= 1
+    return vals[0]
 
 
 @njit(cache=True)
