@@ -91,7 +91,7 @@ def saturated_mask(signal: np.ndarray, min_run: int = 3) -> np.ndarray:
     A sample is saturated when it equals the global maximum (or minimum) and at
     least ``min_run`` samples share that exact value.
     """
-    if signal.dtype == np.float64 and signal.ndim == 1:
+    if signal.dtype == np.float64 and signal.ndim == 1 and signal.size:  # one compiled pass
         return saturated_kernel(np.ascontiguousarray(signal), int(min_run))
     out = np.zeros(signal.size, dtype=bool)
     for extreme in (signal.max(), signal.min()):
