@@ -22,7 +22,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import AnalysisError, ParameterError
-from ._numeric import robust_line
+from ._smooth_kernel import compliance_line
 from .regions import RunRegions
 from ._units import unit as _u
 from .options import CalibrationOptions as _C, FrictionOptions as _F  # defaults declared once
@@ -91,18 +91,19 @@ class ComplianceResult:
 def _fit_line(z: np.ndarray, s: np.ndarray, run: RunRegions) -> ComplianceLine:
     if not run.has_compliance:
         return ComplianceLine.missing()
-    idx = run.index[run.compliance & ~run.saturated]
-    if idx.size < 3:
-        raise AnalysisError(f"the {run.kind} constant-compliance region has {idx.size} samples; need 3")
-    x, y = z[idx], s[idx]
-    xm = x.mean()
-    a, b, se_a, se_b, sigma, n_used = robust_line(x - xm, y)
+    # one compiled call: the robust line of the region's unsaturated samples against their centred position
+    (n, intercept, b, se_a, se_b, sigma, n_used, z_min, z_max, s_min, s_max, xm) = compliance_line(
+        np.ascontiguousarray(z, dtype=np.float64), np.ascontiguousarray(s, dtype=np.float64),
+        np.ascontiguousarray(run.index, dtype=np.int64), np.ascontiguousarray(run.compliance, dtype=np.bool_),
+        np.ascontiguousarray(run.saturated, dtype=np.bool_))
+    if n < 3:
+        raise AnalysisError(f"the {run.kind} constant-compliance region has {int(n)} samples; need 3")
     if not np.isfinite(b) or b == 0:
         raise AnalysisError(f"the {run.kind} constant-compliance line is degenerate (zero or undefined slope)")
-    return ComplianceLine(intercept=float(a - b * xm), slope=float(b),
+    return ComplianceLine(intercept=float(intercept), slope=float(b),
                           intercept_se=float(math.hypot(se_a, se_b * xm)), slope_se=float(se_b),
-                          sigma=float(sigma), n_points=int(n_used), z_min=float(x.min()),
-                          z_max=float(x.max()), s_min=float(y.min()), s_max=float(y.max()))
+                          sigma=float(sigma), n_points=int(n_used), z_min=float(z_min),
+                          z_max=float(z_max), s_min=float(s_min), s_max=float(s_max))
 
 
 def fit_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract: RunRegions,

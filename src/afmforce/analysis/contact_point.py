@@ -48,9 +48,9 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 
 from ..errors import ParameterError
+from ._contact_kernel import curvature_kernel, fit_grid, soft_contact_kernel
 from ._numeric import polyfit, ptp
 from ._units import unit as _u
 from .options import KindOptions as _K  # the defaults: declared once, in the step's record
@@ -89,65 +89,8 @@ class SoftContactPoint:
     position_high: float = _u("m", math.nan)
 
 
-def _block(x: np.ndarray, n: int) -> np.ndarray:
-    m = x.size // n
-    if m <= 1:
-        return x
-    k = x.size // m
-    return x[:k * m].reshape(k, m).mean(1)
-
-
-@njit(cache=True)
-def _fit_grid(x: np.ndarray, y: np.ndarray, cands: np.ndarray, exponent: float) -> tuple[np.ndarray, np.ndarray]:
-    """Least squares of ``y = a + b x + c (x - x_c)_+^p`` for each candidate ``x_c``: coefficients, residual sums
-    (infinite where c <= 0). Normal equations per candidate (compiled loops)."""
-    n = x.size
-    sx = sxx = sy = sxy = syy = 0.0
-    for i in range(n):
-        sx += x[i]
-        sxx += x[i] * x[i]
-        sy += y[i]
-        sxy += x[i] * y[i]
-        syy += y[i] * y[i]
-    coef = np.empty((cands.size, 3))
-    rss = np.empty(cands.size)
-    m = np.empty((3, 3))
-    v = np.empty(3)
-    # u ** 1.75 and u ** 1.5 by square roots (a few times faster than pow; equal to ~1 ulp)
-    kind = 1 if exponent == 1.75 else 2 if exponent == 1.5 else 0
-    # the samples before the first one beyond a candidate add nothing: start there (the same terms in
-    # the same order), found on the running maximum of x (an approach rises, a measured one with noise)
-    top = np.empty(n)
-    run = -np.inf
-    for i in range(n):
-        run = max(run, x[i])
-        top[i] = run
-    for k in range(cands.size):
-        sg = sgg = sxg = syg = 0.0
-        start = np.searchsorted(top, cands[k], side="right")
-        for i in range(start, n):
-            u = x[i] - cands[k]
-            if u > 0.0:
-                if kind == 1:
-                    r = math.sqrt(u)
-                    g = u * r * math.sqrt(r)
-                elif kind == 2:
-                    g = u * math.sqrt(u)
-                else:
-                    g = u ** exponent
-                sg += g
-                sgg += g * g
-                sxg += g * x[i]
-                syg += g * y[i]
-        m[0, 0], m[0, 1], m[0, 2] = n + 1e-12, sx, sg
-        m[1, 0], m[1, 1], m[1, 2] = sx, sxx + 1e-12, sxg
-        m[2, 0], m[2, 1], m[2, 2] = sg, sxg, sgg + 1e-12
-        v[0], v[1], v[2] = sy, sxy, syg
-        c = np.linalg.solve(m, v)
-        coef[k, 0], coef[k, 1], coef[k, 2] = c[0], c[1], c[2]
-        r = syy - (c[0] * v[0] + c[1] * v[1] + c[2] * v[2])
-        rss[k] = r if c[2] > 0 else np.inf
-    return coef, rss
+#: The grid fit, compiled (:func:`._contact_kernel.fit_grid`; the name tests and older callers use).
+_fit_grid = fit_grid
 
 
 def soft_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, *, exponent: float = 1.75,
@@ -177,45 +120,14 @@ def soft_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, *, expon
     if not (0 < force_fraction <= 1 and 0 < window <= 1 and grid >= 3 and exponent > 1):
         raise ParameterError("contact point: force_fraction and window in (0, 1], grid >= 3, exponent > 1")
     nan = math.nan
-    zi, di = z[index], d[index]
-    # the largest deflection and the fit's end on the block average: a noise spike decides neither
-    m = max(zi.size // max_points, 1)
-    jb = int(np.argmax(_block(di, max_points)))
-    imax = min((jb + 1) * m - 1, zi.size - 1) if m > 1 else int(np.argmax(di))
-    if imax < 8:
+    zi = np.ascontiguousarray(z[index], dtype=np.float64)
+    di = np.ascontiguousarray(d[index], dtype=np.float64)
+    k, zc, d_c, z_init, indentation, low, high = soft_contact_kernel(
+        zi, di, float(exponent), float(force_fraction), float(window), int(grid), int(max_points))
+    if k < 0:
         return SoftContactPoint(method, -1, nan, nan, nan, nan, exponent)
-    zb, db = _block(zi[: imax + 1], max_points), _block(di[: imax + 1], max_points)
-    above = np.flatnonzero(db - db.min() > force_fraction * ptp(db))
-    cut = int(above[0]) + 1 if above.size and above[0] > 8 else db.size
-    zb, db = zb[:cut], db[:cut]
-    span = zb[-1] - zb[0] if zb.size > 1 else 0.0
-    if not span > 0 or zb.size < 8:
-        return SoftContactPoint(method, -1, nan, nan, nan, nan, exponent)
-    x = (zb - zb[0]) / span
-    y = (db - db.min()) / max(ptp(db), 1e-300)
-    straight = np.linspace(0.0, 1.0, x.size)
-    x_init = float(x[int(np.argmin(y - straight))])
-    cands = np.linspace(max(x_init - window, 0.0), min(x_init + window, 1.0), grid)
-    coef, rss = _fit_grid(x, y, cands, exponent)
-    j = int(np.argmin(rss))
-    coarse, coarse_rss = cands, rss
-    step = cands[1] - cands[0]  # refine: a finer grid over the neighbouring cells
-    cands = np.linspace(max(cands[j] - step, 0.0), min(cands[j] + step, 1.0), 41)
-    coef, rss = _fit_grid(x, y, cands, exponent)
-    j = int(np.argmin(rss))
-    zc = float(zb[0] + cands[j] * span)
-    s2 = rss[j] / max(x.size - 4, 1)  # 4 parameters: a, b, c, z_c
-    near = coarse[coarse_rss <= rss[j] + 4.0 * s2]
-    low = float(zb[0] + min(near.min(), cands[j]) * span) if near.size else zc
-    high = float(zb[0] + max(near.max(), cands[j]) * span) if near.size else zc
-    zr = zi[: imax + 1]
-    k = int(np.searchsorted(zr, zc)) if np.all(np.diff(zr) >= 0) else int(np.argmin(np.abs(zr - zc)))
-    k = min(max(k - 1, 0), zr.size - 1)
-    a, b = coef[j, 0], coef[j, 1]
-    d_c = float(db.min() + (a + b * cands[j]) * ptp(db))
-    indentation = float((zi[imax] - zc) - (di[imax] - d_c))
-    return SoftContactPoint(method, int(index[k]), zc, d_c, float(zb[0] + x_init * span), indentation,
-                            float(exponent), min(low, high), max(low, high))
+    return SoftContactPoint(method, int(index[int(k)]), float(zc), float(d_c), float(z_init), float(indentation),
+                            float(exponent), float(low), float(high))
 
 
 def hertz_contact_point(z: np.ndarray, d: np.ndarray, index: np.ndarray, **options) -> SoftContactPoint:
@@ -265,9 +177,13 @@ def curvature_ratio(z: np.ndarray, d: np.ndarray, contact: np.ndarray, min_point
     """
     if contact.size < min_points:
         return math.nan
-    order = contact[np.argsort(z[contact], kind="stable")]
-    n3 = order.size // 3
-    early, late = _slope(z[order[:n3]], d[order[:n3]]), _slope(z[order[-n3:]], d[order[-n3:]])
+    z = np.ascontiguousarray(z, dtype=np.float64)
+    d = np.ascontiguousarray(d, dtype=np.float64)
+    early, late = curvature_kernel(z, d, np.ascontiguousarray(contact, dtype=np.int64))
+    if early == -math.inf or late == -math.inf:  # the compiled polyfit refused one: numpy's (its fallback)
+        order = contact[np.argsort(z[contact], kind="stable")]
+        n3 = order.size // 3
+        early, late = _slope(z[order[:n3]], d[order[:n3]]), _slope(z[order[-n3:]], d[order[-n3:]])
     if not (math.isfinite(early) and math.isfinite(late)) or late <= 0:
         return math.nan
     return late / early if early > 0 else math.inf

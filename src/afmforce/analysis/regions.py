@@ -31,6 +31,7 @@ import numpy as np
 
 from ..errors import AnalysisError
 from ._numeric import mad_sigma, polyfit, ptp, robust_line_thin, two_line_split
+from ._regions_kernel import OK, region_slope, run_index, run_regions_kernel, saturated_kernel
 
 __all__ = ["RunRegions", "find_run_regions", "saturated_mask", "run_indices", "check_compliance",
            "contact_slopes"]
@@ -78,7 +79,10 @@ class RunRegions:
 
 def run_indices(segment: np.ndarray, which: int) -> np.ndarray:
     """Indices of segment ``which`` (0 approach, 1 retract), in time order."""
-    return np.flatnonzero(np.asarray(segment) == which)
+    segment = np.asarray(segment)
+    if segment.dtype == np.int8 and segment.ndim == 1:  # the readers' segments: one compiled pass
+        return run_index(segment, int(which))
+    return np.flatnonzero(segment == which)
 
 
 def saturated_mask(signal: np.ndarray, min_run: int = 3) -> np.ndarray:
@@ -87,6 +91,8 @@ def saturated_mask(signal: np.ndarray, min_run: int = 3) -> np.ndarray:
     A sample is saturated when it equals the global maximum (or minimum) and at
     least ``min_run`` samples share that exact value.
     """
+    if signal.dtype == np.float64 and signal.ndim == 1 and signal.size:  # one compiled pass
+        return saturated_kernel(np.ascontiguousarray(signal), int(min_run))
     out = np.zeros(signal.size, dtype=bool)
     for extreme in (signal.max(), signal.min()):
         hit = signal == extreme
@@ -121,6 +127,25 @@ def find_run_regions(z: np.ndarray, s: np.ndarray, index: np.ndarray, kind: str,
     AnalysisError
         Too few samples, a flat signal, or no constant-compliance region.
     """
+    if (z.dtype == np.float64 and s.dtype == np.float64 and z.ndim == 1 and s.ndim == 1
+            and kind in ("approach", "retract") and _surface_force_like is _SURFACE_TEST):
+        # one compiled call where the regions are found (the numpy path where a test replaced the shape test)
+        status, split, contact, zero_force, compliance, sat, own = run_regions_kernel(
+            np.ascontiguousarray(z), np.ascontiguousarray(s), np.ascontiguousarray(index, dtype=np.int64),
+            np.ascontiguousarray(saturated, dtype=np.bool_), kind == "approach", int(min_points),
+            float(baseline_fraction), float(compliance_fraction), float(min_contrast),
+            math.nan if noise is None else float(noise), _onset_constants())
+        if status == OK:
+            return RunRegions(kind=kind, index=index, split=int(split), contact=contact, zero_force=zero_force,
+                              compliance=compliance, saturated=sat, noise=float(own))
+    return _find_run_regions(z, s, index, kind, saturated=saturated, min_points=min_points,
+                             baseline_fraction=baseline_fraction, compliance_fraction=compliance_fraction,
+                             min_contrast=min_contrast, noise=noise)
+
+
+def _find_run_regions(z, s, index, kind, *, saturated, min_points, baseline_fraction, compliance_fraction,
+                      min_contrast, noise) -> RunRegions:
+    """:func:`find_run_regions` by numpy (its errors, and what the compiled kernel leaves to it)."""
     n = index.size
     if n < 2 * min_points + 2:
         raise AnalysisError(f"the {kind} run has {n} samples; at least {2 * min_points + 2} are needed")
@@ -200,6 +225,13 @@ SURFACE_DECAY_RANGE = (0.2e-9, 200e-9)
 #: a contact, a power of the indentation: it falls). Measured: the virtual liquid runs 0.66-1.22, the
 #: sapphire lever's contact 0.46, an ideal Hertz onset from 5 to 100 sigma 0.42.
 SURFACE_MIN_SLOPE_RATIO = 0.6
+
+
+def _onset_constants() -> tuple:
+    """The constants above, in the order the compiled kernel takes them (read at each call)."""
+    lo, hi = SURFACE_DECAY_RANGE
+    return (float(ONSET_NSIGMA), float(MAX_ONSET_RATIO), float(ONSET_JUMP_NSIGMA), float(SURFACE_MIN_NSIGMA),
+            float(lo), float(hi), float(SURFACE_MIN_SLOPE_RATIO))
 
 
 def _repulsive_onset(zr, sr, far, zero_force, split: int, sigma: float) -> int:
@@ -283,6 +315,10 @@ def _surface_force_like(z: np.ndarray, rise: np.ndarray, z_split: float, sigma: 
     return bool(1.0 / hi <= s_far <= 1.0 / lo and s_near >= SURFACE_MIN_SLOPE_RATIO * s_far)
 
 
+#: The shape test the compiled kernel implements (the numpy path runs a replaced one).
+_SURFACE_TEST = _surface_force_like
+
+
 def _slope(z: np.ndarray, s: np.ndarray) -> float:
     if z.size < 3 or ptp(z) == 0:
         return math.nan
@@ -296,6 +332,11 @@ def contact_slopes(z: np.ndarray, s: np.ndarray, run: RunRegions) -> tuple[float
 
 def _region_slope(z: np.ndarray, s: np.ndarray, run: RunRegions, region: np.ndarray) -> float:
     """Robust slope of the unsaturated samples of one region of a run (a mask over its index)."""
+    if z.dtype == np.float64 and s.dtype == np.float64 and z.ndim == 1 and s.ndim == 1:  # one compiled call
+        return float(region_slope(np.ascontiguousarray(z), np.ascontiguousarray(s),
+                                  np.ascontiguousarray(run.index, dtype=np.int64),
+                                  np.ascontiguousarray(region, dtype=np.bool_),
+                                  np.ascontiguousarray(run.saturated, dtype=np.bool_)))
     idx = run.index[region & ~run.saturated]
     return _slope(z[idx], s[idx])
 
