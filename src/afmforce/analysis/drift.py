@@ -29,6 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import config as _numba_config
 from numba import njit
 
 from ._numeric import irls_bisquare, mad_sigma, polyfit, ptp, solve_small
@@ -411,10 +412,13 @@ def borrowed_line(t: np.ndarray, s: np.ndarray, z: np.ndarray | None, off_a: flo
     return best
 
 
-def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
-                 retract: RunRegions, unit: str, order: int = _D.order, min_points: int = 5,
-                 max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
-    """Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
+def _remove_drift_numpy(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
+                        retract: RunRegions, unit: str, order: int = _D.order, min_points: int = 5,
+                        max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
+    """:func:`remove_drift` in numpy calls and the compiled fits of :mod:`._numeric` (the code the
+    kernels of :mod:`._drift_kernel` reproduce; what runs when they are not compiled).
+
+    Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
 
     The runs are found by their segment type, wherever they lie in the record. Samples of other
     segments (a dwell, a pause before the approach) get the baseline interpolated in time between
@@ -481,3 +485,93 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
                       noise=noise, retract_from_approach=bool(from_app), unit=unit,
                       retract_settling=bool(settling), retract_line=line, tilt_retract=float(tilt_r))
     return out, res
+
+
+def family_coef(X: np.ndarray, y: np.ndarray, t: np.ndarray, k: int) -> np.ndarray:
+    """The coefficients of ``X`` that :func:`_family` gives when its settling column ``k`` of
+    ``_transient(t)`` wins (-1: none wins), bit for bit, in fewer numpy calls: the winner's system
+    alone, from a matrix that holds only its column (BLAS and einsum give each column's sums from
+    that column alone: ``tests/analysis/test_drift.py`` checks it)."""
+    if k < 0:
+        return _wls(X, y, np.ones(y.size))
+    p = X.shape[1]
+    span = float(t[-1] - t[0])
+    taus = np.geomspace(span / (t.size - 1), span / 5.0, 16)
+    E = np.zeros((t.size, taus.size))
+    E[:, k] = np.exp(-((t - t[0]) / taus[k]))
+    M = np.empty((1, p + 1, p + 1))
+    rhs = np.empty((1, p + 1))
+    M[0, :p, :p] = X.T @ X
+    xe = (X.T @ E)[:, k]
+    M[0, :p, p] = xe
+    M[0, p, :p] = xe
+    M[0, p, p] = np.einsum("ij,ij->j", E, E)[k]
+    rhs[0, :p] = X.T @ y
+    rhs[0, p] = (E.T @ y)[k]
+    return np.linalg.solve(M, rhs[..., None])[0, :p, 0]
+
+
+def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
+                 retract: RunRegions, unit: str, order: int = _D.order, min_points: int = 5,
+                 max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
+    """Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
+
+    The runs are found by their segment type, wherever they lie in the record. Samples of other
+    segments (a dwell, a pause before the approach) get the baseline interpolated in time between
+    the runs' (held at the nearest run's value outside them). The retract run uses its own line;
+    when its free part is too short, or more than ``max_noise_ratio`` times noisier than the
+    approach's (a cantilever ringing freely after the pull-off, unbinding events: its line would be
+    biased), it uses the simplest of the approach line and its own offset (:func:`borrowed_line`).
+    A dwell between the runs rules out the "continuous" retract line (the approach line's end is
+    then an extrapolation over the dwell).
+
+    Compiled (:mod:`._drift_kernel`: the fits and choices in one call, the numbers of the numpy
+    code bit for bit); :func:`_remove_drift_numpy` when numba does not compile (the first run
+    after an install) or in the rare cases the kernel leaves to it.
+    """
+    args = (t, s, segment, approach, retract, unit, order, min_points, max_noise_ratio, z, h_tail)
+    if _K is None:
+        return _remove_drift_numpy(*args)
+    tf = np.ascontiguousarray(t, dtype=float)
+    sf = np.ascontiguousarray(s, dtype=float)
+    zf = _EMPTY if z is None else np.ascontiguousarray(z, dtype=float)
+    a_idx, r_idx = approach.index, retract.index
+    (status, off_a, slope_a, noise, t0a, line, settling, off_r, slope_r, t0r, tilt_r, z0r, p,
+     k) = _K.decide(tf, sf, a_idx, approach.zero_force, int(approach.split), r_idx, retract.zero_force, zf,
+                    z is not None, int(order), int(min_points), float(max_noise_ratio), float(h_tail))
+    if status != 0:
+        return _remove_drift_numpy(*args)
+    if line in (1, 2):  # the retract line's coefficients: numpy's sums and solve, bit for bit
+        ir = retract.index[retract.zero_force]
+        tr, sr = t[ir], s[ir]
+        m = tr.size // SELECT_POINTS
+        if m > 1:
+            nb = tr.size // m
+            tr, sr = tr[: nb * m].reshape(nb, m).mean(1), sr[: nb * m].reshape(nb, m).mean(1)
+        t_turn = t[retract.index[0]]
+        at_turn = off_a + slope_a * (t_turn - t0a)
+        scale = max(float(tr[-1] - t_turn), 1e-300)
+        y1 = sr - at_turn
+        if line == 1:
+            c = family_coef(((tr - t_turn) / scale)[:, None], y1, tr, k)
+            off_r, slope_r = at_turn, float(c[0]) / scale
+        else:
+            c = family_coef(np.column_stack([np.ones_like(tr), (tr - t_turn) / scale]), y1, tr, k)
+            off_r, slope_r = at_turn + float(c[0]), float(c[1]) / scale
+        t0r = t_turn
+    out, base, ok = _K.apply(tf, sf, zf, a_idx, r_idx, off_a, slope_a, t0a, off_r, slope_r, t0r, tilt_r, z0r)
+    if not ok:  # samples outside the runs, the runs' not in time order: numpy's stable sort
+        return _remove_drift_numpy(*args)
+    ret0 = retract.index[0]
+    res = DriftResult(offset_approach=off_a + slope_a * (t[approach.index[0]] - t0a), slope_approach=slope_a,
+                      offset_retract=float(base[ret0]), slope_retract=slope_r,
+                      noise=noise, retract_from_approach=line == 0, unit=unit,
+                      retract_settling=bool(settling), retract_line=_K.LINES[line], tilt_retract=float(tilt_r))
+    return out, res
+
+
+_EMPTY = np.empty(0)
+if _numba_config.DISABLE_JIT:  # the first run after an install: the numpy code (no loops run as Python)
+    _K = None
+else:
+    from . import _drift_kernel as _K
