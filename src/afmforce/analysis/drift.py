@@ -541,7 +541,7 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
                     z is not None, int(order), int(min_points), float(max_noise_ratio), float(h_tail))
     if status != 0:
         return _remove_drift_numpy(*args)
-    if line in (1, 2):  # the retract line's coefficients: numpy's sums and solve, bit for bit
+    if p:  # the retract line's coefficients (retract_line's family p): numpy's sums and solve, bit for bit
         ir = retract.index[retract.zero_force]
         tr, sr = t[ir], s[ir]
         m = tr.size // SELECT_POINTS
@@ -552,7 +552,7 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
         at_turn = off_a + slope_a * (t_turn - t0a)
         scale = max(float(tr[-1] - t_turn), 1e-300)
         y1 = sr - at_turn
-        if line == 1:
+        if p == 1:
             c = family_coef(((tr - t_turn) / scale)[:, None], y1, tr, k)
             off_r, slope_r = at_turn, float(c[0]) / scale
         else:
