@@ -68,6 +68,17 @@ def test_robust_fit_is_a_bisquare_irls(n, p):
     assert ok2 and np.array_equal(coef, c2) and sigma == s2 and ssr == q2
 
 
+@pytest.mark.parametrize("n,p", [(40, 1), (301, 2), (1344, 3), (4001, 2)])
+def test_uncompiled_robust_fit_is_the_compiled_one(n, p):
+    """What runs uncompiled (the first run after an install: drift._irls_seq, numpy calls with
+    ordered sums) gives irls_bisquare's numbers bit for bit."""
+    rng = np.random.default_rng(7 * n + p)
+    X, y = _design(rng, n, p)
+    c1, s1, q1, ok1 = D._irls_seq(X, y, 6, 4.685)
+    c2, s2, q2, ok2 = irls_bisquare(X, y, 6, 4.685)
+    assert ok1 and ok2 and np.array_equal(c1, c2) and s1 == s2 and q1 == q2
+
+
 def test_median_is_numpys():
     """The bracketed median is np.median exactly: even and odd sizes, ties, brackets that hold the
     middle and brackets that miss it (then a full selection)."""

@@ -47,6 +47,10 @@ MAX_POINTS = 4001
 #: The retract line's model choice works on block means of at most about this many points.
 SELECT_POINTS = 1000
 
+#: numba does not compile (``NUMBA_DISABLE_JIT``: the first run after an install): the numpy code,
+#: without loops run as Python.
+_COLD = bool(_numba_config.DISABLE_JIT)
+
 
 @dataclass(frozen=True)
 class DriftResult:
@@ -113,10 +117,61 @@ def _irls(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
     """
     X = np.ascontiguousarray(X, dtype=float)
     y = np.ascontiguousarray(y, dtype=float)
-    coef, sigma, ssr, ok = irls_bisquare(X, y, n_iter, tuning)
+    coef, sigma, ssr, ok = (_irls_seq if _COLD else irls_bisquare)(X, y, n_iter, tuning)
     if ok:
         return coef, float(sigma), float(ssr)
     return _irls_numpy(X, y, n_iter, tuning)
+
+
+def _sum(v: np.ndarray) -> float:
+    """The sum of ``v`` from the first element on, in order (a compiled loop's sum)."""
+    return float(np.add.accumulate(v)[-1]) if v.size else 0.0
+
+
+def _irls_seq(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
+    """:func:`~._numeric.irls_bisquare` in numpy calls, its numbers bit for bit (its sums in order by
+    ``np.add.accumulate``, the same products): what :func:`_irls` runs when numba does not compile
+    (the first run after an install), where the kernel's loops would run as Python."""
+    n, p = X.shape
+
+    def wls(w):
+        keep = w != 0.0
+        Xk, yk = X[keep], y[keep]
+        xw = Xk * w[keep][:, None]
+        A = np.array([[_sum(xw[:, j] * Xk[:, k]) for k in range(p)] for j in range(p)])
+        b = np.array([_sum(xw[:, j] * yk) for j in range(p)])
+        out = solve_small(A, b)
+        return out, not math.isnan(out[0])
+
+    def resid(coef):
+        fit = 0.0 + X[:, 0] * coef[0]
+        for j in range(1, p):
+            fit = fit + X[:, j] * coef[j]
+        return y - fit
+
+    w = np.ones(n)
+    coef, ok = wls(w)
+    if not ok:
+        return coef, 0.0, 0.0, False
+    sigma = 0.0
+    for _ in range(n_iter):
+        r = resid(coef)
+        sigma = mad_sigma(r)
+        if not sigma > 0:
+            break
+        u = r / (tuning * sigma)
+        w = np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+        new, ok = wls(w)
+        if not ok:
+            return coef, sigma, 0.0, False
+        moved = 0.0
+        for j in range(p):
+            moved += abs(new[j] - coef[j])
+        coef = new
+        if moved < 1e-4 * sigma:
+            break
+    e = resid(coef)
+    return coef, sigma, _sum(w * e * e), True
 
 
 def _irls_numpy(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
@@ -222,8 +277,9 @@ def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[fl
     K = E.shape[1]
     if K == 0 or y.size <= p + 2:
         return best, coef, used
-    costs, ok = _family_costs(np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(y, dtype=float),
-                              np.ascontiguousarray(E, dtype=float), float(cap))
+    costs, ok = (None, False) if _COLD else _family_costs(  # uncompiled: the numpy sums below decide
+        np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(y, dtype=float),
+        np.ascontiguousarray(E, dtype=float), float(cap))
     if ok:
         k = int(np.argmin(costs))
         if not costs[k] < best:
@@ -571,7 +627,7 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
 
 
 _EMPTY = np.empty(0)
-if _numba_config.DISABLE_JIT:  # the first run after an install: the numpy code (no loops run as Python)
+if _COLD:  # the first run after an install: the numpy code (no loops run as Python)
     _K = None
 else:
     from . import _drift_kernel as _K
