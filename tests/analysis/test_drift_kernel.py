@@ -98,6 +98,16 @@ def _settling_run(seed, slope=0.02, jump=0.0, amplitude=-6e-3, n=165):
     return t, s
 
 
+def test_tau_is_geomspaces():
+    """drift._tau gives np.geomspace's element bit for bit (the settling times of the winner)."""
+    rng = np.random.default_rng(11)
+    for _ in range(300):
+        a = 10 ** rng.uniform(-9, 2)
+        b = a * 10 ** rng.uniform(0.01, 5)
+        g = np.geomspace(a, b, 16)
+        assert [D._tau(a, b, 16, k) for k in range(16)] == list(g)
+
+
 @pytest.mark.parametrize("p", [1, 2])
 def test_family_coef_is_the_familys(p):
     """family_coef (the winning settling column's system alone) gives _family's coefficients bit

@@ -543,6 +543,17 @@ def _remove_drift_numpy(t: np.ndarray, s: np.ndarray, segment: np.ndarray, appro
     return out, res
 
 
+def _tau(start: float, stop: float, num: int, k: int) -> float:
+    """``np.geomspace(start, stop, num)[k]`` for ``0 < start, stop`` (the same number: its own calls,
+    without its checks and rotations)."""
+    if k == 0:
+        return start
+    if k == num - 1:
+        return stop
+    y = np.linspace(np.log10(np.asarray(start, dtype=float)), np.log10(np.asarray(stop, dtype=float)), num)
+    return np.power(10.0, y)[k]
+
+
 def family_coef(X: np.ndarray, y: np.ndarray, t: np.ndarray, k: int) -> np.ndarray:
     """The coefficients of ``X`` that :func:`_family` gives when its settling column ``k`` of
     ``_transient(t)`` wins (-1: none wins), bit for bit, in fewer numpy calls: the winner's system
@@ -552,9 +563,8 @@ def family_coef(X: np.ndarray, y: np.ndarray, t: np.ndarray, k: int) -> np.ndarr
         return _wls(X, y, np.ones(y.size))
     p = X.shape[1]
     span = float(t[-1] - t[0])
-    taus = np.geomspace(span / (t.size - 1), span / 5.0, 16)
-    E = np.zeros((t.size, taus.size))
-    E[:, k] = np.exp(-((t - t[0]) / taus[k]))
+    E = np.zeros((t.size, 16))
+    E[:, k] = np.exp(-((t - t[0]) / _tau(span / (t.size - 1), span / 5.0, 16, k)))
     M = np.empty((1, p + 1, p + 1))
     rhs = np.empty((1, p + 1))
     M[0, :p, :p] = X.T @ X
