@@ -620,11 +620,14 @@ def retract_choice(t, s, off_a, slope_a, t0a, t_turn, noise, gap, threshold=25.0
             for k in range(_NT):
                 e = E[i, k]
                 r = a0 - e * ce0[k]
-                s0[k] += min(r * r, cap)
+                r *= r
+                s0[k] += r if r < cap else cap
                 r = a1 - e * ce1[k] - ui * cu1[k]
-                s1[k] += min(r * r, cap)
+                r *= r
+                s1[k] += r if r < cap else cap
                 r = a1 - e * ce2[k] - c12[k] - ui * cu2[k]
-                s2[k] += min(r * r, cap)
+                r *= r
+                s2[k] += r if r < cap else cap
         ssr0, _ = _pick(ce0, w0, s0, best0)
         ssr1, k1 = _pick(ce1, w1, s1, best1)
         ssr2, k2 = _pick(ce2, w2, s2, best2)
@@ -786,6 +789,7 @@ def apply(t, s, z, a_index, r_index, off_a, slope_a, t0a, off_r, slope_r, t0r, t
                 return s - base, base, False
         xp = t[known]
         fp = base[known]
+        j = 0
         for i in range(n):
             if not math.isnan(base[i]):
                 continue
@@ -796,15 +800,16 @@ def apply(t, s, z, a_index, r_index, off_a, slope_a, t0a, off_r, slope_r, t0r, t
             elif x > xp[m - 1]:
                 v = fp[m - 1]
             else:
-                lo = 0
-                hi = m
-                while lo < hi:  # bisect_right
-                    mid = (lo + hi) >> 1
-                    if x < xp[mid]:
-                        hi = mid
-                    else:
-                        lo = mid + 1
-                j = lo - 1
+                if not (xp[j] <= x and (j + 1 == m or x < xp[j + 1])):  # the previous sample's j, else bisect
+                    lo = 0
+                    hi = m
+                    while lo < hi:  # bisect_right
+                        mid = (lo + hi) >> 1
+                        if x < xp[mid]:
+                            hi = mid
+                        else:
+                            lo = mid + 1
+                    j = lo - 1
                 if j == m - 1:
                     v = fp[j]
                 elif xp[j] == x:
