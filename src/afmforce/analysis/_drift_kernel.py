@@ -696,9 +696,18 @@ def decide(t, s, a_index, a_zf, a_split, r_index, r_zf, z, has_z, order, min_poi
     settling column ``k``."""
     nan = math.nan
     finite = np.isfinite(t).all() and np.isfinite(s).all() and (not has_z or np.isfinite(z).all())
+    n = s.size
+    for idx in (a_index, r_index):
+        for i in idx:
+            finite = finite and 0 <= i < n  # and in the record (no bounds checks here)
+    finite = finite and t.size == n and (not has_z or z.size == n)
+    finite = finite and a_zf.size == a_index.size and r_zf.size == r_index.size
+    if not finite:
+        return 1, nan, nan, nan, nan, 0, False, nan, nan, nan, 0.0, 0.0, 0, -1
     ia = a_index[a_zf]
     ir = r_index[r_zf]
-    if not finite or ia.size < 1 or a_index.size < 1 or r_index.size < 1 or not (order == 0 or order == 1):
+    if (not finite or ia.size < 1 or a_index.size < 1 or r_index.size < 1 or not (order == 0 or order == 1)
+            or min_points < 1 or (has_z and not 0 <= a_split < a_index.size)):  # the numpy code says what is wrong
         return 1, nan, nan, nan, nan, 0, False, nan, nan, nan, 0.0, 0.0, 0, -1
     ta = t[ia]
     sa = s[ia]
