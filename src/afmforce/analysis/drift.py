@@ -29,6 +29,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numba import config as _numba_config
 from numba import njit
 
 from ._numeric import irls_bisquare, mad_sigma, polyfit, ptp, solve_small
@@ -45,6 +46,10 @@ MAX_POINTS = 4001
 
 #: The retract line's model choice works on block means of at most about this many points.
 SELECT_POINTS = 1000
+
+#: numba does not compile (``NUMBA_DISABLE_JIT``: the first run after an install): the numpy code,
+#: without loops run as Python.
+_COLD = bool(_numba_config.DISABLE_JIT)
 
 
 @dataclass(frozen=True)
@@ -112,10 +117,61 @@ def _irls(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
     """
     X = np.ascontiguousarray(X, dtype=float)
     y = np.ascontiguousarray(y, dtype=float)
-    coef, sigma, ssr, ok = irls_bisquare(X, y, n_iter, tuning)
+    coef, sigma, ssr, ok = (_irls_seq if _COLD else irls_bisquare)(X, y, n_iter, tuning)
     if ok:
         return coef, float(sigma), float(ssr)
     return _irls_numpy(X, y, n_iter, tuning)
+
+
+def _sum(v: np.ndarray) -> float:
+    """The sum of ``v`` from the first element on, in order (a compiled loop's sum)."""
+    return float(np.add.accumulate(v)[-1]) if v.size else 0.0
+
+
+def _irls_seq(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
+    """:func:`~._numeric.irls_bisquare` in numpy calls, its numbers bit for bit (its sums in order by
+    ``np.add.accumulate``, the same products): what :func:`_irls` runs when numba does not compile
+    (the first run after an install), where the kernel's loops would run as Python."""
+    n, p = X.shape
+
+    def wls(w):
+        keep = w != 0.0
+        Xk, yk = X[keep], y[keep]
+        xw = Xk * w[keep][:, None]
+        A = np.array([[_sum(xw[:, j] * Xk[:, k]) for k in range(p)] for j in range(p)])
+        b = np.array([_sum(xw[:, j] * yk) for j in range(p)])
+        out = solve_small(A, b)
+        return out, not math.isnan(out[0])
+
+    def resid(coef):
+        fit = 0.0 + X[:, 0] * coef[0]
+        for j in range(1, p):
+            fit = fit + X[:, j] * coef[j]
+        return y - fit
+
+    w = np.ones(n)
+    coef, ok = wls(w)
+    if not ok:
+        return coef, 0.0, 0.0, False
+    sigma = 0.0
+    for _ in range(n_iter):
+        r = resid(coef)
+        sigma = mad_sigma(r)
+        if not sigma > 0:
+            break
+        u = r / (tuning * sigma)
+        w = np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+        new, ok = wls(w)
+        if not ok:
+            return coef, sigma, 0.0, False
+        moved = 0.0
+        for j in range(p):
+            moved += abs(new[j] - coef[j])
+        coef = new
+        if moved < 1e-4 * sigma:
+            break
+    e = resid(coef)
+    return coef, sigma, _sum(w * e * e), True
 
 
 def _irls_numpy(X: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
@@ -221,8 +277,9 @@ def _family(X: np.ndarray, y: np.ndarray, E: np.ndarray, cap: float) -> tuple[fl
     K = E.shape[1]
     if K == 0 or y.size <= p + 2:
         return best, coef, used
-    costs, ok = _family_costs(np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(y, dtype=float),
-                              np.ascontiguousarray(E, dtype=float), float(cap))
+    costs, ok = (None, False) if _COLD else _family_costs(  # uncompiled: the numpy sums below decide
+        np.ascontiguousarray(X, dtype=float), np.ascontiguousarray(y, dtype=float),
+        np.ascontiguousarray(E, dtype=float), float(cap))
     if ok:
         k = int(np.argmin(costs))
         if not costs[k] < best:
@@ -411,10 +468,13 @@ def borrowed_line(t: np.ndarray, s: np.ndarray, z: np.ndarray | None, off_a: flo
     return best
 
 
-def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
-                 retract: RunRegions, unit: str, order: int = _D.order, min_points: int = 5,
-                 max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
-    """Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
+def _remove_drift_numpy(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
+                        retract: RunRegions, unit: str, order: int = _D.order, min_points: int = 5,
+                        max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
+    """:func:`remove_drift` in numpy calls and the compiled fits of :mod:`._numeric` (the code the
+    kernels of :mod:`._drift_kernel` reproduce; what runs when they are not compiled).
+
+    Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
 
     The runs are found by their segment type, wherever they lie in the record. Samples of other
     segments (a dwell, a pause before the approach) get the baseline interpolated in time between
@@ -481,3 +541,103 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
                       noise=noise, retract_from_approach=bool(from_app), unit=unit,
                       retract_settling=bool(settling), retract_line=line, tilt_retract=float(tilt_r))
     return out, res
+
+
+def _tau(start: float, stop: float, num: int, k: int) -> float:
+    """``np.geomspace(start, stop, num)[k]`` for ``0 < start, stop`` (the same number: its own calls,
+    without its checks and rotations)."""
+    if k == 0:
+        return start
+    if k == num - 1:
+        return stop
+    y = np.linspace(np.log10(np.asarray(start, dtype=float)), np.log10(np.asarray(stop, dtype=float)), num)
+    return np.power(10.0, y)[k]
+
+
+def family_coef(X: np.ndarray, y: np.ndarray, t: np.ndarray, k: int) -> np.ndarray:
+    """The coefficients of ``X`` that :func:`_family` gives when its settling column ``k`` of
+    ``_transient(t)`` wins (-1: none wins), bit for bit, in fewer numpy calls: the winner's system
+    alone, from a matrix that holds only its column (BLAS and einsum give each column's sums from
+    that column alone: ``tests/analysis/test_drift.py`` checks it)."""
+    if k < 0:
+        return _wls(X, y, np.ones(y.size))
+    p = X.shape[1]
+    span = float(t[-1] - t[0])
+    E = np.zeros((t.size, 16))
+    E[:, k] = np.exp(-((t - t[0]) / _tau(span / (t.size - 1), span / 5.0, 16, k)))
+    M = np.empty((1, p + 1, p + 1))
+    rhs = np.empty((1, p + 1))
+    M[0, :p, :p] = X.T @ X
+    xe = (X.T @ E)[:, k]
+    M[0, :p, p] = xe
+    M[0, p, :p] = xe
+    M[0, p, p] = np.einsum("ij,ij->j", E, E)[k]
+    rhs[0, :p] = X.T @ y
+    rhs[0, p] = (E.T @ y)[k]
+    return np.linalg.solve(M, rhs[..., None])[0, :p, 0]
+
+
+def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: RunRegions,
+                 retract: RunRegions, unit: str, order: int = _D.order, min_points: int = 5,
+                 max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
+    """Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
+
+    The runs are found by their segment type, wherever they lie in the record. Samples of other
+    segments (a dwell, a pause before the approach) get the baseline interpolated in time between
+    the runs' (held at the nearest run's value outside them). The retract run uses its own line;
+    when its free part is too short, or more than ``max_noise_ratio`` times noisier than the
+    approach's (a cantilever ringing freely after the pull-off, unbinding events: its line would be
+    biased), it uses the simplest of the approach line and its own offset (:func:`borrowed_line`).
+    A dwell between the runs rules out the "continuous" retract line (the approach line's end is
+    then an extrapolation over the dwell).
+
+    Compiled (:mod:`._drift_kernel`: the fits and choices in one call, the numbers of the numpy
+    code bit for bit); :func:`_remove_drift_numpy` when numba does not compile (the first run
+    after an install) or in the rare cases the kernel leaves to it.
+    """
+    args = (t, s, segment, approach, retract, unit, order, min_points, max_noise_ratio, z, h_tail)
+    if _K is None:
+        return _remove_drift_numpy(*args)
+    tf = np.ascontiguousarray(t, dtype=float)
+    sf = np.ascontiguousarray(s, dtype=float)
+    zf = _EMPTY if z is None else np.ascontiguousarray(z, dtype=float)
+    a_idx, r_idx = approach.index, retract.index
+    (status, off_a, slope_a, noise, t0a, line, settling, off_r, slope_r, t0r, tilt_r, z0r, p,
+     k) = _K.decide(tf, sf, a_idx, approach.zero_force, int(approach.split), r_idx, retract.zero_force, zf,
+                    z is not None, int(order), int(min_points), float(max_noise_ratio), float(h_tail))
+    if status != 0:
+        return _remove_drift_numpy(*args)
+    if p:  # the retract line's coefficients (retract_line's family p): numpy's sums and solve, bit for bit
+        ir = retract.index[retract.zero_force]
+        tr, sr = t[ir], s[ir]
+        m = tr.size // SELECT_POINTS
+        if m > 1:
+            nb = tr.size // m
+            tr, sr = tr[: nb * m].reshape(nb, m).mean(1), sr[: nb * m].reshape(nb, m).mean(1)
+        t_turn = t[retract.index[0]]
+        at_turn = off_a + slope_a * (t_turn - t0a)
+        scale = max(float(tr[-1] - t_turn), 1e-300)
+        y1 = sr - at_turn
+        if p == 1:
+            c = family_coef(((tr - t_turn) / scale)[:, None], y1, tr, k)
+            off_r, slope_r = at_turn, float(c[0]) / scale
+        else:
+            c = family_coef(np.column_stack([np.ones_like(tr), (tr - t_turn) / scale]), y1, tr, k)
+            off_r, slope_r = at_turn + float(c[0]), float(c[1]) / scale
+        t0r = t_turn
+    out, base, ok = _K.apply(tf, sf, zf, a_idx, r_idx, off_a, slope_a, t0a, off_r, slope_r, t0r, tilt_r, z0r)
+    if not ok:  # samples outside the runs, the runs' not in time order: numpy's stable sort
+        return _remove_drift_numpy(*args)
+    ret0 = retract.index[0]
+    res = DriftResult(offset_approach=off_a + slope_a * (t[approach.index[0]] - t0a), slope_approach=slope_a,
+                      offset_retract=float(base[ret0]), slope_retract=slope_r,
+                      noise=noise, retract_from_approach=line == 0, unit=unit,
+                      retract_settling=bool(settling), retract_line=_K.LINES[line], tilt_retract=float(tilt_r))
+    return out, res
+
+
+_EMPTY = np.empty(0)
+if _COLD:  # the first run after an install: the numpy code (no loops run as Python)
+    _K = None
+else:
+    from . import _drift_kernel as _K
