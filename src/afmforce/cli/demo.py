@@ -8,6 +8,11 @@
    with tip friction);
 3. a liquid experiment (issue 25): a colloid probe in water with slip, four speeds, the slip
    length and the spring constant fitted in situ against the truth.
+
+Each part is printed when it is done (the paper's closed-form and static rows first: they need
+no integrator, so a first run that compiles shows them in about a second too); the figures are
+drawn in a forked child meanwhile (:class:`_Aside`; in this process where there is no fork or
+one CPU). Issue 35 item 4; measured in ``benchmarks/README.md``, "Cold start".
 """
 
 from __future__ import annotations
