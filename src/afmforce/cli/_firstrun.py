@@ -26,11 +26,20 @@ happens now:
   :data:`INTERPRETED_BUDGET_S` of CPU time (a ``SIGVTALRM`` timer; no timer, no Python run)
   stops before it wrote anything and runs again compiled (``os.execv`` of the same command
   line, one more line on stderr): at most that long lost, never an endless Python run;
-* ``demo`` compiles as before, on two cores (``dynamics._helper``), after one line that names
-  ``afmforce warmup``: as Python it took 90 s of CPU, more than compiling (45-70 s; ~9 s
-  warm). It starts the analysis' warmup in the background at once
-  (:data:`COMMAND_LATER`; two cores or more), so that its analysis kernels are compiled on the
-  other core while it compiles the integrator.
+* ``demo`` compiles, on two cores (``dynamics._helper``), after one line that names
+  ``afmforce warmup``, and prints each part as soon as it is done (``cli/demo.py``): first
+  the paper's closed-form, inertia and static checks (31 of the 61 rows of its table: ~0.4 s,
+  no integrator, nothing to compile), so that a first run answers in about a second too; then
+  the simulated checks, the virtual experiment and the liquid fit, which wait for the compiled
+  kernels. Decision: none of them runs as Python. The simulated checks alone take 25 s of CPU
+  as Python against ~1 s compiled (measured: ``evaluate_checks`` of the "dynamics" group with
+  ``NUMBA_DISABLE_JIT``), more than compiling the integrator (~10-20 s of one core); the liquid
+  fit's 112,612 Newton solves as Python would take over a minute; and numba's switch is one
+  per process, so a Python part could not share the process with the compiled ones. The demo
+  starts the analysis' warmup in the background at once (:data:`COMMAND_LATER`; two cores or
+  more), so that its analysis kernels are compiled on the other core while it compiles the
+  integrator; its figures (about half its CPU time warm) are drawn in a forked child while
+  the experiments run.
 
 A stamp only says that the warmup ran for these sources, this numba and this cache: it is
 a hint, never a guarantee of freshness. That is numba's index, whose stamp covers every

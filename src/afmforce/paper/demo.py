@@ -16,7 +16,7 @@ from pathlib import Path
 
 from .. import constants as C
 
-__all__ = ["VirtualExperiment", "virtual_experiment", "DEMO_RUNS"]
+__all__ = ["VirtualExperiment", "virtual_experiment", "virtual_runs", "draw_virtual", "DEMO_RUNS"]
 
 #: (label, simulation overrides) of the demo's two runs.
 DEMO_RUNS = (
@@ -55,7 +55,7 @@ class VirtualExperiment:
 
 
 def virtual_experiment(out_dir: str | Path | None = None, seed: int = 1) -> list[VirtualExperiment]:
-    """Simulate, record, write, read back and analyse the demo's runs.
+    """Simulate, record, write, read back and analyse the demo's runs (with figures).
 
     Parameters
     ----------
@@ -64,6 +64,14 @@ def virtual_experiment(out_dir: str | Path | None = None, seed: int = 1) -> list
     seed : int
         Seed of the instrument's noise and drift.
     """
+    runs = virtual_runs(out_dir, seed)
+    draw_virtual(runs)
+    return [r for r, _, _ in runs]
+
+
+def virtual_runs(out_dir: str | Path | None = None, seed: int = 1) -> list[tuple]:
+    """:func:`virtual_experiment` without drawing: ``(result, analysis, raw curve)`` per run,
+    ``result.figure`` the path :func:`draw_virtual` writes (None without ``out_dir``)."""
     from ..dynamics import simulate
     from ..instrument import get_preset
     from ..analysis.options import ProbeCalibration
@@ -81,16 +89,22 @@ def virtual_experiment(out_dir: str | Path | None = None, seed: int = 1) -> list
             raw_file = out / f"virtual_run_{i + 1}.txt"
             write_raw(raw, raw_file, force=True)
             raw = read_raw(raw_file)  # analyse what a user would: the file
+            fig_file = out / f"virtual_run_{i + 1}_analysis.png"
         res = analyze(raw, probe=ProbeCalibration(radius=C.FIG5["radius"], spring_constant=tr.spring_constant))
-        if out is not None:
-            fig_file = _figure(res, raw, out / f"virtual_run_{i + 1}_analysis.png")
         a_true = tr.config.hamaker
-        results.append(VirtualExperiment(
+        results.append((VirtualExperiment(
             label=label, hamaker_true=a_true, hamaker_fit=res.hamaker, hamaker_se=res.hamaker_se,
             relative_error=res.hamaker / a_true - 1.0 if math.isfinite(res.hamaker) else math.nan,
             jump_in_separation=res.jump_in_separation, friction=res.friction, verdict=res.verdict,
-            warnings=tuple(res.warnings), raw_file=raw_file, figure=fig_file))
+            warnings=tuple(res.warnings), raw_file=raw_file, figure=fig_file), res, raw))
     return results
+
+
+def draw_virtual(runs: list[tuple]) -> None:
+    """Write the analysis figure of each of :func:`virtual_runs`' runs that has a path."""
+    for result, analysis, raw in runs:
+        if result.figure is not None:
+            _figure(analysis, raw, result.figure)
 
 
 def _figure(result, raw, path: Path) -> Path:

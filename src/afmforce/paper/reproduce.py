@@ -18,7 +18,8 @@ from ..errors import ParameterError
 from ..progress import Progress
 from .numbers import KINDS, MAX_TOLERANCE, CheckResult, evaluate_checks
 
-__all__ = ["FIGURES", "ReproduceResult", "planned_files", "reproduce", "report_markdown"]
+__all__ = ["FIGURES", "ReproduceResult", "planned_files", "reproduce", "report_markdown", "write_figures",
+           "write_reports"]
 
 
 def _fig(name):
@@ -176,6 +177,50 @@ def planned_files(only: list[str] | None = None, svg: bool = False) -> list[str]
         "report.md", "report.json"]
 
 
+def write_figures(out: Path, keys: list[str], *, fast: bool = False, svg: bool = False,
+                  progress: Callable[[Progress], None] | None = None,
+                  steps: int | None = None) -> tuple[dict[str, list[Path]], dict[str, str]]:
+    """Write the figures ``keys`` of :data:`FIGURES` into ``out`` (which exists).
+
+    Returns ``(written, failed)``: identifier -> written paths, identifier -> why a figure
+    could not be made (a component unavailable)."""
+    written: dict[str, list[Path]] = {}
+    failed: dict[str, str] = {}
+    for i, key in enumerate(keys):
+        if progress:
+            progress(Progress(done=i, total=steps or len(keys), unit="figure", what=key))
+        stem, _ = FIGURES[key]
+        try:
+            fig = _fig(key)(fast)
+        except ImportError as exc:  # a component (e.g. the virtual instrument) is unavailable
+            failed[key] = str(exc)
+            continue
+        paths = []
+        for ext in ("png", "svg") if svg else ("png",):
+            target = out / f"{stem}.{ext}"
+            with atomic_path(target) as tmp:
+                fig.savefig(tmp, dpi=90 if fast else 150, format=ext)
+            paths.append(target)
+        written[key] = paths
+    return written, failed
+
+
+def write_reports(out: Path, checks: list[CheckResult], written: dict[str, list[Path]],
+                  failed: dict[str, str]) -> None:
+    """Write ``report.md`` and ``report.json`` of evaluated ``checks`` and written figures."""
+    atomic_write_text(out / "report.md", report_markdown(checks, written, out))
+    payload = {
+        "paper": "Attard, Carambassis & Rutland, Langmuir 15, 553 (1999)",
+        "passed": all(c.passed for c in checks if c.gated) and not failed,
+        "gates": {"max_tolerance": MAX_TOLERANCE, "kinds": KINDS},
+        "checks": [c.to_dict() for c in checks],
+        "figures": {k: [p.name for p in v] for k, v in written.items()},
+        "failed_figures": failed,
+    }
+    atomic_write_text(out / "report.json", json.dumps(payload, indent=2, allow_nan=False,
+                                                      default=lambda o: None))
+
+
 def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None = None, fast: bool = False,
               svg: bool = False, progress: Callable[[Progress], None] | None = None) -> ReproduceResult:
     """Reproduce the paper's figures and numbers into ``out_dir``.
@@ -202,39 +247,12 @@ def reproduce(out_dir: str | Path = "afmforce-paper", *, only: list[str] | None 
         raise ParameterError(f"unknown figure(s) {', '.join(bad)}; choose from {', '.join(FIGURES)}")
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    written: dict[str, list[Path]] = {}
-    failed: dict[str, str] = {}
     steps = len(keys) + 1
-    for i, key in enumerate(keys):
-        if progress:
-            progress(Progress(done=i, total=steps, unit="figure", what=key))
-        stem, _ = FIGURES[key]
-        try:
-            fig = _fig(key)(fast)
-        except ImportError as exc:  # a component (e.g. the virtual instrument) is unavailable
-            failed[key] = str(exc)
-            continue
-        paths = []
-        for ext in ("png", "svg") if svg else ("png",):
-            target = out / f"{stem}.{ext}"
-            with atomic_path(target) as tmp:
-                fig.savefig(tmp, dpi=90 if fast else 150, format=ext)
-            paths.append(target)
-        written[key] = paths
+    written, failed = write_figures(out, keys, fast=fast, svg=svg, progress=progress, steps=steps)
     if progress:
         progress(Progress(done=len(keys), total=steps, unit="figure", what="numbers"))
     checks = evaluate_checks()
-    atomic_write_text(out / "report.md", report_markdown(checks, written, out))
-    payload = {
-        "paper": "Attard, Carambassis & Rutland, Langmuir 15, 553 (1999)",
-        "passed": all(c.passed for c in checks if c.gated) and not failed,
-        "gates": {"max_tolerance": MAX_TOLERANCE, "kinds": KINDS},
-        "checks": [c.to_dict() for c in checks],
-        "figures": {k: [p.name for p in v] for k, v in written.items()},
-        "failed_figures": failed,
-    }
-    atomic_write_text(out / "report.json", json.dumps(payload, indent=2, allow_nan=False,
-                                                      default=lambda o: None))
+    write_reports(out, checks, written, failed)
     if progress:
         progress(Progress(done=steps, total=steps, unit="figure", what="done"))
     return ReproduceResult(out, written, checks, failed, time.perf_counter() - t0)
