@@ -251,10 +251,13 @@ def _robust_line(x, y, n_iter, tuning, errors):
     weighted line's first sums (the same sums in the same order as :func:`line_fit`)."""
     n = x.size
     finite = n >= 3
-    for i in range(n):
-        if not (np.isfinite(x[i]) and np.isfinite(y[i])):
-            finite = False
-            break
+    if _COMPILED:
+        for i in range(n):
+            if not (np.isfinite(x[i]) and np.isfinite(y[i])):
+                finite = False
+                break
+    else:
+        finite = finite and bool(np.isfinite(x).all() and np.isfinite(y).all())
     fast = finite and _COMPILED  # as Python, np.partition selects faster than a loop
     w = np.ones(n)
     w_new = np.empty(n)
@@ -267,8 +270,11 @@ def _robust_line(x, y, n_iter, tuning, errors):
     mad = np.nan
     sigma = np.nan
     for _ in range(n_iter):
-        for i in range(n):
-            r[i] = y[i] - (a + b * x[i])
+        if _COMPILED:
+            for i in range(n):
+                r[i] = y[i] - (a + b * x[i])
+        else:  # as Python: numpy's loops (the same operations on each sample)
+            r[:] = y - (a + b * x)
         # np.median(r): outliers pull least squares off: recentre first
         lo, hi = _median_pair(r, half, even, -BRACKET * mad, BRACKET * mad, buf, fast)
         med = (lo + hi) / 2 if even else lo
@@ -276,9 +282,13 @@ def _robust_line(x, y, n_iter, tuning, errors):
         # mad_sigma(r) without its first selection: subtracting one number keeps the order (rounding is
         # monotonic), so the shifted middle pair is the old one shifted, and np.median(r) is this exactly
         m2 = ((lo - med) + (hi - med)) / 2 if even else lo - med
-        for i in range(n):
-            r[i] -= med
-            t[i] = np.abs(r[i] - m2)
+        if _COMPILED:
+            for i in range(n):
+                r[i] -= med
+                t[i] = np.abs(r[i] - m2)
+        else:
+            r -= med
+            t[:] = np.abs(r - m2)
         if n == 0:
             mad = np.nan
         elif fast:
@@ -292,12 +302,19 @@ def _robust_line(x, y, n_iter, tuning, errors):
         sw = 0.0  # w_new.sum() and line_fit's first pass, fused with the weights
         sx = 0.0
         sy = 0.0
-        for i in range(n):
-            u = r[i] / (tuning * sigma)
-            w_new[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
-            sw += w_new[i]
-            sx += w_new[i] * x[i]
-            sy += w_new[i] * y[i]
+        if _COMPILED:
+            for i in range(n):
+                u = r[i] / (tuning * sigma)
+                w_new[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
+                sw += w_new[i]
+                sx += w_new[i] * x[i]
+                sy += w_new[i] * y[i]
+        elif n:  # the same numbers, the sums in the same order (cumsum)
+            u = r / (tuning * sigma)
+            w_new[:] = np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+            sw = np.cumsum(w_new)[-1]
+            sx = np.cumsum(w_new * x)[-1]
+            sy = np.cumsum(w_new * y)[-1]
         if sw <= 2.0:
             break
         w, w_new = w_new, w
