@@ -132,3 +132,97 @@ def test_contact_grid_equals_direct_least_squares():
         if sol[2] > 0:
             assert rss[k] == pytest.approx(np.sum((A @ sol - y) ** 2), rel=1e-6, abs=1e-12)
     assert abs(cands[int(np.argmin(rss))] - 0.6) < 0.05
+
+
+def _robust_line_numpy(x, y, n_iter=6, tuning=4.685):
+    """Tukey bisquare IRLS line as the textbook writes it, in numpy: ``np.median`` for the medians
+    (``mad_sigma`` of the recentred residuals), the weighted line and the standard errors by sums
+    taken in sample order (``np.cumsum``: the compiled loops' order, so the numbers are bitwise theirs)."""
+    def total(v):
+        return np.cumsum(v)[-1] if v.size else 0.0
+
+    def line(w):
+        sw = total(w)
+        if sw <= 0:
+            return np.nan, np.nan
+        mx, my = total(w * x) / sw, total(w * y) / sw
+        dx = x - mx
+        sxx, sxy = total(w * dx * dx), total(w * dx * (y - my))
+        if sxx <= 0:
+            return my, np.nan
+        return my - sxy / sxx * mx, sxy / sxx
+
+    n = x.size
+    w = np.ones(n)
+    a, b = line(w)
+    sigma = np.nan
+    with np.errstate(all="ignore"):
+        for _ in range(n_iter):
+            r = y - (a + b * x)
+            med = np.median(r) if n else np.nan
+            a += med
+            r = r - med
+            sigma = 1.4826 * np.median(np.abs(r - np.median(r))) if n else np.nan
+            if not sigma > 0:
+                break
+            u = r / (tuning * sigma)
+            w_new = np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+            if total(w_new) <= 2.0:
+                break
+            w = w_new
+            a2, b2 = line(w)
+            if not (np.isfinite(a2) and np.isfinite(b2)):
+                break
+            a, b = a2, b2
+        sw = total(w)
+        n_used = int(np.count_nonzero(w > 0))
+        mx = total(w * x) / sw if sw > 0 else np.nan
+        sxx = total(w * (x - mx) ** 2)
+        ssr = total(w * (y - a - b * x) ** 2)
+        s2 = ssr / max(sw, 1e-300) * n_used / max(n_used - 2, 1)
+        se_b = np.sqrt(s2 / sxx) if sxx > 0 else np.nan
+        se_a = np.sqrt(s2 * (1.0 / max(n_used, 1) + mx * mx / sxx)) if sxx > 0 else np.nan
+    if not sigma > 0:
+        sigma = np.sqrt(s2)
+    return a, b, se_a, se_b, sigma, n_used
+
+
+def _robust_cases(seed):
+    """Lines with noise over 4 decades, spikes (zero weights), a coarse ADC (ties), 40 % one-sided
+    outliers (medians that move far between iterations), two levels (a zero MAD), a NaN, an inf in x,
+    a constant x, and the sizes 0-2."""
+    rng = np.random.default_rng(seed)
+    for n in (0, 1, 2, 3, 4, 5, 10, 11, 64, 999, 1000, 1400, 2001):
+        for trial in range(7):
+            x = np.sort(rng.uniform(-1, 1, n)) * 10.0 ** rng.uniform(-9, 0)
+            y = 0.7 * x + rng.normal(size=n) * 10.0 ** rng.uniform(-12, -8)
+            y[rng.integers(0, max(n, 1), n // 10)] += 1e-7
+            if trial == 1:
+                y = np.round(y * 1e10) / 1e10
+            if trial == 2:
+                y[rng.uniform(size=n) < 0.4] += 10.0 ** rng.uniform(-10, -6)
+            if trial == 3:
+                y = np.where(np.arange(n) < n // 2, 1.0, 2.0)
+            if trial == 4 and n:
+                y[rng.integers(0, n)] = np.nan
+            if trial == 5 and n:
+                x[rng.integers(0, n)] = np.inf
+            if trial == 6:
+                x = np.full(n, 0.5)
+            yield x, y
+
+
+@pytest.mark.parametrize("seed", [0, 1])
+def test_robust_line_equals_the_numpy_irls(seed):
+    from afmforce.analysis._numeric import robust_line, robust_line_thin
+
+    for x, y in _robust_cases(seed):
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            got, ref = robust_line(x, y), _robust_line_numpy(x, y)
+        assert np.array_equal(np.array(got, float), np.array(ref, float), equal_nan=True), (x.size, got, ref)
+        assert isinstance(got[5], int)
+    x = np.linspace(0.0, 1e-6, 9001)
+    y = 0.3 * x + 1e-10 * np.random.default_rng(seed).normal(size=x.size)
+    keep = np.linspace(0, x.size - 1, 4001).astype(np.int64)  # robust_line_thin: 4001 samples of a long run
+    assert robust_line_thin(x, y) == _robust_line_numpy(x[keep], y[keep])

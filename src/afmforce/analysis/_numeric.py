@@ -146,49 +146,184 @@ def _middle_pair(r):
     return lo, hi
 
 
-@njit(cache=True)
-def robust_line(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
-    """Line fit with Tukey bisquare weights (IRLS), robust to spikes and transients.
+@njit(cache=True, nogil=True)
+def _select(a: np.ndarray, k: int) -> float:
+    """The ``k``-th smallest of ``a`` (rearranged in place: everything before ``k`` is not larger),
+    by Hoare's selection with a median-of-three pivot."""
+    lo = 0
+    hi = a.size - 1
+    while hi > lo:
+        mid = (lo + hi) >> 1
+        if a[mid] < a[lo]:
+            a[mid], a[lo] = a[lo], a[mid]
+        if a[hi] < a[lo]:
+            a[hi], a[lo] = a[lo], a[hi]
+        if a[hi] < a[mid]:
+            a[hi], a[mid] = a[mid], a[hi]
+        pivot = a[mid]
+        i = lo
+        j = hi
+        while i <= j:
+            while a[i] < pivot:
+                i += 1
+            while a[j] > pivot:
+                j -= 1
+            if i <= j:
+                a[i], a[j] = a[j], a[i]
+                i += 1
+                j -= 1
+        if k <= j:
+            hi = j
+        elif k >= i:
+            lo = i
+        else:
+            break
+    return a[k]
 
-    Returns
-    -------
-    a, b : float
-        Intercept and slope of ``y = a + b x``.
-    se_a, se_b : float
-        Standard errors (from the weighted residual variance).
-    sigma : float
-        Robust scale of the residuals.
-    n_used : int
-        Number of samples with non-zero weight.
-    """
+
+@njit(cache=True, nogil=True)
+def _middle(a: np.ndarray, half: int, even: bool):
+    """The two middle order statistics of ``a`` (``half = a.size // 2``; the same one for an odd size)."""
+    hi = _select(a, half)
+    if not even:
+        return hi, hi
+    lo = a[0]
+    for i in range(1, half):
+        lo = max(lo, a[i])
+    return lo, hi
+
+
+@njit(cache=True, nogil=True)
+def middle_bracket(a: np.ndarray, half: int, even: bool, lo_v: float, hi_v: float, buf: np.ndarray):
+    """:func:`_middle` of ``a`` (left unchanged) when its middle order statistics lie in ``[lo_v, hi_v]``:
+    one branch-free pass counts the samples below and gathers those within into ``buf``, and the
+    selection runs on these few. Returns ``(lo, hi, ok)``; ``ok`` False when the bracket misses."""
+    n = a.size
+    below = 0
+    m = 0
+    for i in range(n):
+        v = a[i]
+        below += v < lo_v
+        buf[m] = v
+        m += (v >= lo_v) & (v <= hi_v)
+    first = half - 1 if even else half
+    if not (below <= first and half < below + m):
+        return 0.0, 0.0, False
+    part = buf[:m]
+    hi = _select(part, half - below)
+    if not even:
+        return hi, hi, True
+    lo = hi if half - below == 0 else part[0]  # (half - below >= 1: ``first`` is in the bracket too)
+    for i in range(1, half - below):
+        lo = max(lo, part[i])
+    return lo, hi, True
+
+
+#: Half-width of the brackets of :func:`robust_line`'s medians, in the previous iteration's MAD [-]
+BRACKET = 0.25
+
+
+@njit(cache=True, nogil=True)
+def _median_pair(a, half, even, lo_v, hi_v, buf, fast):
+    """The two middle order statistics of ``a`` (left unchanged): selected in place among the samples
+    in ``[lo_v, hi_v]`` when ``fast`` (finite samples, a bracket given: ``lo_v < hi_v``), among all of
+    them when that misses; otherwise by ``np.partition`` (NaN ordered as numpy orders it; and numpy's
+    own speed when the kernels run as Python)."""
+    if not fast:
+        return _middle_pair(a)
+    if lo_v < hi_v:
+        lo, hi, ok = middle_bracket(a, half, even, lo_v, hi_v, buf)
+        if ok:
+            return lo, hi
+    buf[:] = a
+    return _middle(buf, half, even)
+
+
+@njit(cache=True, nogil=True)
+def _robust_line(x, y, n_iter, tuning, errors):
+    """:func:`robust_line`: ``(a, b, se_a, se_b, sigma, n_used, mad, finite)`` (the standard errors
+    NaN, ``n_used`` 0 unless ``errors``); ``mad`` the residuals' last median absolute deviation,
+    ``finite`` whether there are three samples or more, all finite.
+
+    One pass a step on every sample: the residuals, their median (selected in place among the
+    samples within :data:`BRACKET` MADs of the previous iteration's, all of them when that misses:
+    the exact order statistics), the absolute deviations, their median, the weights fused with the
+    weighted line's first sums (the same sums in the same order as :func:`line_fit`)."""
     n = x.size
+    finite = n >= 3
+    if _COMPILED:
+        for i in range(n):
+            if not (np.isfinite(x[i]) and np.isfinite(y[i])):
+                finite = False
+                break
+    else:
+        finite = finite and bool(np.isfinite(x).all() and np.isfinite(y).all())
+    fast = finite and _COMPILED  # as Python, np.partition selects faster than a loop
     w = np.ones(n)
+    w_new = np.empty(n)
     a, b = line_fit(x, y, w)
+    r = np.empty(n)
+    t = np.empty(n)
+    buf = np.empty(n)
+    half = n // 2
+    even = n % 2 == 0
+    mad = np.nan
     sigma = np.nan
     for _ in range(n_iter):
-        r = y - (a + b * x)
-        lo, hi = _middle_pair(r)
-        even = n % 2 == 0
-        med = (lo + hi) / 2 if even else lo  # np.median(r): outliers pull least squares off: recentre first
+        if _COMPILED:
+            for i in range(n):
+                r[i] = y[i] - (a + b * x[i])
+        else:  # as Python: numpy's loops (the same operations on each sample)
+            r[:] = y - (a + b * x)
+        # np.median(r): outliers pull least squares off: recentre first
+        lo, hi = _median_pair(r, half, even, -BRACKET * mad, BRACKET * mad, buf, fast)
+        med = (lo + hi) / 2 if even else lo
         a += med
-        r -= med
         # mad_sigma(r) without its first selection: subtracting one number keeps the order (rounding is
         # monotonic), so the shifted middle pair is the old one shifted, and np.median(r) is this exactly
         m2 = ((lo - med) + (hi - med)) / 2 if even else lo - med
-        sigma = 1.4826 * np.median(np.abs(r - m2)) if n > 0 else np.nan
+        if _COMPILED:
+            for i in range(n):
+                r[i] -= med
+                t[i] = np.abs(r[i] - m2)
+        else:
+            r -= med
+            t[:] = np.abs(r - m2)
+        if n == 0:
+            mad = np.nan
+        elif fast:
+            lo, hi = _median_pair(t, half, even, (1.0 - BRACKET) * mad, (1.0 + BRACKET) * mad, buf, fast)
+            mad = (lo + hi) / 2 if even else hi  # np.median as numba computes it
+        else:
+            mad = np.median(t)
+        sigma = 1.4826 * mad
         if not sigma > 0:
             break
-        w_new = np.empty(n)
-        for i in range(n):
-            u = r[i] / (tuning * sigma)
-            w_new[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
-        if w_new.sum() <= 2.0:
+        sw = 0.0  # w_new.sum() and line_fit's first pass, fused with the weights
+        sx = 0.0
+        sy = 0.0
+        if _COMPILED:
+            for i in range(n):
+                u = r[i] / (tuning * sigma)
+                w_new[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
+                sw += w_new[i]
+                sx += w_new[i] * x[i]
+                sy += w_new[i] * y[i]
+        elif n:  # the same numbers, the sums in the same order (cumsum)
+            u = r / (tuning * sigma)
+            w_new[:] = np.where(np.abs(u) < 1.0, (1.0 - u * u) ** 2, 0.0)
+            sw = np.cumsum(w_new)[-1]
+            sx = np.cumsum(w_new * x)[-1]
+            sy = np.cumsum(w_new * y)[-1]
+        if sw <= 2.0:
             break
-        w = w_new
-        a2, b2 = line_fit(x, y, w)
+        w, w_new = w_new, w
+        a2, b2 = _line_fit_rest(x, y, w, sw, sx, sy)
         if not (np.isfinite(a2) and np.isfinite(b2)):
             break
         a, b = a2, b2
+    if not errors:
+        return a, b, np.nan, np.nan, sigma, 0, mad, finite
     # standard errors of the weighted fit
     sw = 0.0
     sx = 0.0
@@ -210,6 +345,44 @@ def robust_line(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4
     se_a = np.sqrt(s2 * (1.0 / max(n_used, 1) + mx * mx / sxx)) if sxx > 0 else np.nan
     if not sigma > 0:
         sigma = np.sqrt(s2)
+    return a, b, se_a, se_b, sigma, n_used, mad, finite
+
+
+@njit(cache=True, nogil=True)
+def _line_fit_rest(x, y, w, sw, sx, sy):
+    """:func:`line_fit` after its first pass (``sw, sx, sy``), line by line."""
+    if sw <= 0:
+        return np.nan, np.nan
+    mx = sx / sw
+    my = sy / sw
+    sxx = 0.0
+    sxy = 0.0
+    for i in range(x.size):
+        dx = x[i] - mx
+        sxx += w[i] * dx * dx
+        sxy += w[i] * dx * (y[i] - my)
+    if sxx <= 0:
+        return my, np.nan
+    b = sxy / sxx
+    return my - b * mx, b
+
+
+@njit(cache=True, nogil=True)
+def robust_line(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4.685):
+    """Line fit with Tukey bisquare weights (IRLS), robust to spikes and transients.
+
+    Returns
+    -------
+    a, b : float
+        Intercept and slope of ``y = a + b x``.
+    se_a, se_b : float
+        Standard errors (from the weighted residual variance).
+    sigma : float
+        Robust scale of the residuals.
+    n_used : int
+        Number of samples with non-zero weight.
+    """
+    a, b, se_a, se_b, sigma, n_used, _, _ = _robust_line(x, y, n_iter, tuning, True)
     return a, b, se_a, se_b, sigma, n_used
 
 
@@ -224,6 +397,10 @@ def largest_step(d: np.ndarray, lo: int, hi: int, sign: float) -> int:
             best = s
             ib = i
     return ib
+
+
+#: The kernels run compiled (False under ``NUMBA_DISABLE_JIT``, where they are plain Python).
+_COMPILED = hasattr(line_fit, "py_func")
 
 
 def robust_line_thin(x: np.ndarray, y: np.ndarray, max_points: int = 4001):
