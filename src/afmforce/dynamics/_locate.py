@@ -20,7 +20,8 @@ import numpy as np
 from numba import njit
 
 from ._jit import fmax, fmin, piece
-from .models import (HQA, HQB, MODEL_SPRING, N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z,
+from .models import (HQA, HQB, MODEL_SPRING, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_HDOT, O_THETA,
+                     O_Y2, O_Z,
                      TH_A, TH_B, drainage, observe, static_force)
 
 # --- events array layout (float, NaN = not found) ---------------------------
@@ -349,12 +350,20 @@ def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, i_h, ytmp, o):
             return
 
 
+#: Rows of the sampled observables (``sample_columns``' ``cols``): the six a trajectory
+#: exposes (separation, deflection, angle, normal force, lateral position, friction force).
+#: dh/dt, dy2/dt and the drive are not kept (the drive is its own column; issue 35.5).
+S_H, S_DEFL, S_THETA, S_FZ, S_Y2, S_FY = range(6)
+N_SAMPLED = 6
+
+
 @njit(cache=True, error_model="numpy", nogil=True)
 def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kind, seg_t0,
-                   seg_z0, seg_v, beam, beta, tt, zd, code, obs, app, app_sep):
+                   seg_z0, seg_v, beam, beta, tt, zd, code, cols, app, app_sep):
     """Time, drive, segment code, observables and apparent deflection of the first ``n``
-    samples in one pass, written into the first ``n`` rows of ``tt, zd, code, obs, app,
-    app_sep``.
+    samples in one pass, written into the first ``n`` entries of ``tt, zd, code, app,
+    app_sep`` and of every row of ``cols`` (``(N_SAMPLED, n_buffer)``: the exposed
+    observables, rows ``S_*``, each contiguous).
 
     Row ``k`` of ``ybuf`` holds the state at ``t = k dt`` (``averaged``: its window
     sums, with the covered time in the last column; the state is their ratio).
@@ -368,10 +377,12 @@ def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kin
     """
     ns = ybuf.shape[1] - 1 if averaged else ybuf.shape[1]
     yk = np.empty(ns)
+    o = np.empty(N_OBS)
     finite = True
     # one pass over the rows (issue 35: three passes read and wrote ~4 MB on Fig 5, more than
-    # the cache holds); the segments' sample ranges are in order and do not overlap, as
-    # simulate builds them; a row in none of them gets code 0 and no observables
+    # the cache holds; the observables nobody reads are not written, issue 35.5); the
+    # segments' sample ranges are in order and do not overlap, as simulate builds them; a
+    # row in none of them gets code 0 and no observables
     nseg = seg_first.shape[0]
     j = 0
     for k in range(n):
@@ -388,10 +399,17 @@ def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kin
             code[k] = seg_kind[j]
             z = seg_z0[j] + seg_v[j] * (t - seg_t0[j])
             zd[k] = z
-            observe(model, p, z, seg_v[j], yk, obs[k])
+            observe(model, p, z, seg_v[j], yk, o)
+            cols[S_H, k] = o[O_H]
+            cols[S_DEFL, k] = o[O_DEFL]
+            cols[S_THETA, k] = o[O_THETA]
+            cols[S_FZ, k] = o[O_FZ]
+            cols[S_Y2, k] = o[O_Y2]
+            cols[S_FY, k] = o[O_FY]
+            a = beta * o[O_THETA] if beam else o[O_DEFL]
         else:
             code[k] = 0
-        a = beta * obs[k, O_THETA] if beam else obs[k, O_DEFL]
+            a = beta * cols[S_THETA, k] if beam else cols[S_DEFL, k]
         app[k] = a
         app_sep[k] = a - zd[k]
     return finite
