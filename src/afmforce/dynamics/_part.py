@@ -186,10 +186,11 @@ class Part:
         _SOURCE.src = (self, changes)
         try:
             # what the dataclass __init__ does with every field given, without its keyword
-            # call (a few us of a fit step, issue 35.5), then the same __post_init__
+            # call (a few us of a fit step, issue 35.5), then the same __post_init__, which
+            # derives again whatever it keeps beside the fields (BeamProbe's _cant)
             new = object.__new__(cls)
             d = new.__dict__
-            d.update(self.to_dict())
+            d.update(self.__dict__)     # the fields (and what __post_init__ derives again)
             d.update(changes)
             new.__post_init__()
             return new
