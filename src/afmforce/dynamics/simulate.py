@@ -172,9 +172,9 @@ class _Run:
 
     def _sample(self, ybuf, plan, rows, seg_table) -> tuple:
         """The sampled columns and compliance lines (two compiled calls that release the
-        GIL, writing into the buffers of ``__init__``): ``(time, z, segment code,
-        the exposed observables (rows ``S_*`` of one array), apparent deflection, apparent separation, all finite, hysteresis
-        offset, compliance slope)``."""
+        GIL, writing into the buffers of ``__init__``): ``(time, z, segment code, the
+        exposed observables (rows ``S_*`` of one array), apparent deflection, apparent
+        separation, all finite, hysteresis offset, compliance slope)``."""
         s = self.setup
         if s.averaged:
             # every grid time up to the end; windows at the ends are clipped to the run
@@ -187,8 +187,10 @@ class _Run:
                       for i, seg in enumerate(plan)]
         else:
             n_samp = int(self.s_next[0])
-            labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
-        lab = np.array(labels, dtype=np.int64)
+            labels = None                       # built from rows where a fit needs them
+            lab = np.array(rows, dtype=np.int64)[:, 1:]
+        if labels is not None:
+            lab = np.array(labels, dtype=np.int64)
         if seg_table is s.seg_table:        # the plan of the setup (not turned at a load)
             kinds, columns = s.seg_kinds, s.seg_columns
         else:
@@ -197,11 +199,15 @@ class _Run:
                                 lab[:, 1], kinds, *columns, s.beam, s.beta, *self.out)
         # the first n_samp rows; a copy where they are well short of the buffer (a run
         # that turned early at a load), so that the trajectory does not hold the rest
-        short = 4 * n_samp < 3 * s.nbuf
-        tt, zd, code, cols, apparent, apparent_sep = (
-            (a[..., :n_samp].copy() if short else a[..., :n_samp]) for a in self.out)
+        tt, zd, code, cols, apparent, apparent_sep = self.out
+        if 4 * n_samp < 3 * s.nbuf:
+            tt, zd, code, cols, apparent, apparent_sep = [a[..., :n_samp].copy() for a in self.out]
+        elif n_samp < s.nbuf:
+            tt, zd, code, cols, apparent, apparent_sep = [a[..., :n_samp] for a in self.out]
         offset = slope = math.nan
         if finite and math.isfinite(self.ev[R.E_CONTACT_T]):
+            if labels is None:
+                labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
             z_c = float(self.ev[R.E_CONTACT_Z])
             a, b = _rows_between(zd, labels, plan, z_c, self.z_turn)
             offset, slope = fit_compliance(zd[a:b], apparent[a:b], cols[S_H, a:b], code[a:b],
@@ -253,7 +259,7 @@ class _Run:
             raise SolverError("the sampled trajectory contains non-finite values; "
                               "try a tighter rtol/atol")
         beta = s.beta
-        why = risky(cfg) if check == "off" else ""      # cached per probe: a few us
+        why = _risky(cfg) if check == "off" else ""
         deflection = cols[S_DEFL]
         angle = cols[S_THETA] if s.beam else np.full(tt.shape[0], np.nan)
         events = _events(cfg, ev, self.t_turn, self.z_turn, beta, s.model, offset, slope,
@@ -290,18 +296,37 @@ class _Run:
             check_note += lever_damping_check(check, cfg, events, _resolve)   # issue 23
         wall = time.perf_counter() - (self.wall0 if wall0 is None else wall0)
         st = stats.tolist()
-        solver = _frozen(SolverStats, dict(
-            status="success", method=METHOD, steps=st[R.S_STEPS], accepted=st[R.S_ACCEPTED],
-            rejected=st[R.S_REJECTED], rhs_evaluations=st[R.S_NFEV],
-            jacobian_evaluations=st[R.S_NJEV], lu_decompositions=st[R.S_NLU],
-            damping_steps=st[R.S_DAMPED], newton_failures=st[R.S_NEWTON_FAIL],
-            wall_time=wall, event_errors=event_errors, check=check_note))
-        return _frozen(Trajectory, dict(
-            time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
-            separation=cols[S_H], apparent_separation=apparent_sep, angle=angle,
-            lateral_position=cols[S_Y2], normal_force=cols[S_FZ], friction_force=cols[S_FY],
-            segment=seg_code, calibration_factor=s.beta, spring_constant=s.k, config=cfg,
-            events=events, solver=solver))
+        solver = _frozen(SolverStats, {
+            "status": "success", "method": METHOD, "steps": st[R.S_STEPS], "accepted": st[R.S_ACCEPTED],
+            "rejected": st[R.S_REJECTED], "rhs_evaluations": st[R.S_NFEV],
+            "jacobian_evaluations": st[R.S_NJEV], "lu_decompositions": st[R.S_NLU],
+            "damping_steps": st[R.S_DAMPED], "newton_failures": st[R.S_NEWTON_FAIL],
+            "wall_time": wall, "event_errors": event_errors, "check": check_note})
+        return _frozen(Trajectory, {
+            "time": tt, "piezo_position": zd, "deflection": deflection, "apparent_deflection": apparent,
+            "separation": cols[S_H], "apparent_separation": apparent_sep, "angle": angle,
+            "lateral_position": cols[S_Y2], "normal_force": cols[S_FZ], "friction_force": cols[S_FY],
+            "segment": seg_code, "calibration_factor": s.beta, "spring_constant": s.k, "config": cfg,
+            "events": events, "solver": solver})
+
+
+#: risky() by the identity of (probe, surface, friction), what it reads (-> those and it).
+_WHY: dict = {}
+
+
+def _risky(cfg) -> str:
+    """:func:`.guard.risky` of ``cfg``, once per (probe, surface, friction) objects (2 us of a
+    short call, issue 35.5; configurations built from flat names share the default parts)."""
+    probe, surface, friction = cfg.probe, cfg.surface, cfg.friction
+    key = (id(probe), id(surface), id(friction))
+    hit = _WHY.get(key)
+    if hit is not None and hit[0] is probe and hit[1] is surface and hit[2] is friction:
+        return hit[3]
+    why = risky(cfg)
+    if len(_WHY) >= 256:
+        _WHY.clear()
+    _WHY[key] = (probe, surface, friction, why)
+    return why
 
 
 def _neg(x):
@@ -370,18 +395,18 @@ def _events(cfg, ev, t_turn, z_turn, beta, model, offset, slope, h_s, z_s) -> Ev
     else:
         min_app, min_app_z = min_defl, min_defl_z
         spike = spike_t = spike_z = nan
-    return _frozen(Events, dict(
-        jumped=jumped, jump_in_note=note,
-        jump_in_time=jump_t, jump_in_position=jump_z, jump_in_separation=jump_h,
-        static_jump_in_position=_nan1(z_s), static_jump_in_separation=_nan1(h_s),
-        contact_time=contact_t, contact_position=e[R.E_CONTACT_Z],
-        pull_off_time=e[R.E_PULL_T], pull_off_position=e[R.E_PULL_Z],
-        pull_off_force=e[R.E_MIN_FZ] if contact else nan,
-        min_deflection=min_defl, min_deflection_position=min_defl_z,
-        min_apparent_deflection=min_app, min_apparent_deflection_position=min_app_z,
-        spike_height=spike, spike_time=spike_t, spike_position=spike_z,
-        hysteresis_offset=_nan1(offset), compliance_slope=_nan1(slope),
-        turn_time=_nan1(t_turn), turn_position=_nan1(z_turn)))
+    return _frozen(Events, {
+        "jumped": jumped, "jump_in_note": note,
+        "jump_in_time": jump_t, "jump_in_position": jump_z, "jump_in_separation": jump_h,
+        "static_jump_in_position": _nan1(z_s), "static_jump_in_separation": _nan1(h_s),
+        "contact_time": contact_t, "contact_position": e[R.E_CONTACT_Z],
+        "pull_off_time": e[R.E_PULL_T], "pull_off_position": e[R.E_PULL_Z],
+        "pull_off_force": e[R.E_MIN_FZ] if contact else nan,
+        "min_deflection": min_defl, "min_deflection_position": min_defl_z,
+        "min_apparent_deflection": min_app, "min_apparent_deflection_position": min_app_z,
+        "spike_height": spike, "spike_time": spike_t, "spike_position": spike_z,
+        "hysteresis_offset": _nan1(offset), "compliance_slope": _nan1(slope),
+        "turn_time": _nan1(t_turn), "turn_position": _nan1(z_turn)})
 
 
 def _frozen(cls, fields: dict):
