@@ -81,7 +81,7 @@ def tasks() -> list[tuple[str, Dispatcher, tuple]]:
         (_L, "_events", (m, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1)),
         (_L, "sample_columns", (m, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
                                 a1, a1, c1, a2, a1, a1)),
-        (_E, "fit_compliance", (a1, a1, a1, c1, f8, f8, f8, f8)),
+        (_E, "fit_compliance", (a1, a1, a1a, c1, f8, f8, f8, f8)),
     ]
     return [(name, getattr(module, name), sig) for module, name, sig in table]
 

@@ -20,8 +20,7 @@ import numpy as np
 from numba import njit
 
 from ._jit import fmax, fmin, piece
-from .models import (HQA, HQB, MODEL_SPRING, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_HDOT, O_THETA,
-                     O_Y2, O_Z,
+from .models import (HQA, HQB, MODEL_SPRING, N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z,
                      TH_A, TH_B, drainage, observe, static_force)
 
 # --- events array layout (float, NaN = not found) ---------------------------
@@ -350,28 +349,29 @@ def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, i_h, ytmp, o):
             return
 
 
-S_H, S_DEFL, S_THETA, S_FZ, S_Y2, S_FY = range(N_SAMPLED := 6)   # cols: what a trajectory shows
-
-
 @njit(cache=True, error_model="numpy", nogil=True)
 def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kind, seg_t0,
-                   seg_z0, seg_v, beam, beta, tt, zd, code, cols, app, app_sep):
-    """Time, drive, segment code, observables, apparent deflection of the first ``n`` samples
-    in one pass, into ``tt, zd, code, app, app_sep`` and the rows ``S_*`` of ``cols``.
+                   seg_z0, seg_v, beam, beta, tt, zd, code, obs, app, app_sep):
+    """Time, drive, segment code, observables and apparent deflection of the first ``n``
+    samples in one pass, written into the first ``n`` rows of ``tt, zd, code, obs, app,
+    app_sep``.
 
-    Row ``k`` of ``ybuf``: the state at ``t = k dt`` (``averaged``: window sums, the covered
-    time last). Samples ``seg_first[j]`` to ``seg_last[j] - 1`` belong to drive segment ``j``
-    (``z = seg_z0 + seg_v (t - seg_t0)``). ``app``: ``beta * theta`` for the beam
-    (``beam``), the deflection for the spring; ``app_sep = app - z``. The outputs come from
-    the caller (:class:`~afmforce.dynamics.simulate._Run`). Releases the GIL (``nogil``,
-    for :func:`~afmforce.dynamics.simulate_many`). Returns whether every state is finite.
+    Row ``k`` of ``ybuf`` holds the state at ``t = k dt`` (``averaged``: its window
+    sums, with the covered time in the last column; the state is their ratio).
+    Samples ``seg_first[j]`` to ``seg_last[j] - 1`` belong to drive segment ``j``
+    (``z = seg_z0 + seg_v (t - seg_t0)``). The apparent deflection ``app`` is
+    ``beta * theta`` for the beam (``beam``), the deflection for the spring;
+    ``app_sep = app - z``. The output arrays come from the caller (allocated in the
+    thread that prepares the run: see :class:`~afmforce.dynamics.simulate._Run`).
+    Releases the GIL (``nogil``): in :func:`afmforce.dynamics.simulate_many` it
+    overlaps the other threads' integrations. Returns whether every state is finite.
     """
     ns = ybuf.shape[1] - 1 if averaged else ybuf.shape[1]
     yk = np.empty(ns)
-    o = np.empty(N_OBS)
     finite = True
-    # one pass over the rows (issue 35); the segments' sample ranges are in order and do not
-    # overlap, as simulate builds them; a row in none of them gets code 0 and no observables
+    # one pass over the rows (issue 35: three passes read and wrote ~4 MB on Fig 5, more than
+    # the cache holds); the segments' sample ranges are in order and do not overlap, as
+    # simulate builds them; a row in none of them gets code 0 and no observables
     nseg = seg_first.shape[0]
     j = 0
     for k in range(n):
@@ -388,13 +388,10 @@ def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kin
             code[k] = seg_kind[j]
             z = seg_z0[j] + seg_v[j] * (t - seg_t0[j])
             zd[k] = z
-            observe(model, p, z, seg_v[j], yk, o)
-            cols[S_H, k], cols[S_DEFL, k], cols[S_THETA, k] = o[O_H], o[O_DEFL], o[O_THETA]
-            cols[S_FZ, k], cols[S_Y2, k], cols[S_FY, k] = o[O_FZ], o[O_Y2], o[O_FY]
-            a = beta * o[O_THETA] if beam else o[O_DEFL]
+            observe(model, p, z, seg_v[j], yk, obs[k])
         else:
             code[k] = 0
-            a = beta * cols[S_THETA, k] if beam else cols[S_DEFL, k]
+        a = beta * obs[k, O_THETA] if beam else obs[k, O_DEFL]
         app[k] = a
         app_sep[k] = a - zd[k]
     return finite

@@ -16,10 +16,10 @@ from . import _helper
 from . import radau as R
 from .config import SimulationConfig
 from .drive import segments
-from ._locate import N_SAMPLED, S_DEFL, S_FY, S_FZ, S_H, S_THETA, S_Y2, sample_columns
+from ._locate import sample_columns
 from .events import Events, fit_compliance
 from .guard import lever_damping_check, risky, run_check
-from .models import MODEL_BEAM
+from .models import MODEL_BEAM, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_THETA, O_Y2
 from .trajectory import SolverStats, Trajectory
 from ._setup import _control, _record, _seg_columns, _seg_kinds, _seg_table, _setup
 # re-exported (tests, docs and earlier imports name them here)
@@ -140,9 +140,9 @@ class _Run:
         # to s_next is written (._sampling.sample_step), so np.empty
         nb = s.nbuf
         self.ybuf = np.zeros((nb, n + 1)) if s.averaged else np.empty((nb, n))
-        # time, z, apparent deflection and separation, the observables: rows of one block
-        f = np.empty((4 + N_SAMPLED, nb))
-        self.out = (f[0], f[1], np.empty(nb, dtype=np.int8), f[4:], f[2], f[3])
+        # time, z, apparent deflection and separation: rows of one block
+        f = np.empty((4, nb))
+        self.out = (f[0], f[1], np.empty(nb, dtype=np.int8), np.empty((nb, N_OBS)), f[2], f[3])
 
     def integrate(self, progress=None) -> "_Run":
         """Run the integrator over every drive segment, then sample the result (raises
@@ -172,8 +172,8 @@ class _Run:
 
     def _sample(self, ybuf, plan, rows, seg_table) -> tuple:
         """The sampled columns and compliance lines (two compiled calls that release the
-        GIL, writing into the buffers of ``__init__``): ``(time, z, segment code, the
-        exposed observables (rows ``S_*`` of one array), apparent deflection, apparent
+        GIL, writing into the buffers of ``__init__``): ``(time, z, segment code,
+        observables, apparent deflection, apparent
         separation, all finite, hysteresis offset, compliance slope)``."""
         s = self.setup
         if s.averaged:
@@ -199,21 +199,21 @@ class _Run:
                                 lab[:, 1], kinds, *columns, s.beam, s.beta, *self.out)
         # the first n_samp rows; a copy where they are well short of the buffer (a run
         # that turned early at a load), so that the trajectory does not hold the rest
-        tt, zd, code, cols, apparent, apparent_sep = self.out
+        tt, zd, code, obs, apparent, apparent_sep = self.out
         if 4 * n_samp < 3 * s.nbuf:
-            tt, zd, code, cols, apparent, apparent_sep = [a[..., :n_samp].copy() for a in self.out]
+            tt, zd, code, obs, apparent, apparent_sep = [a[:n_samp].copy() for a in self.out]
         elif n_samp < s.nbuf:
-            tt, zd, code, cols, apparent, apparent_sep = [a[..., :n_samp] for a in self.out]
+            tt, zd, code, obs, apparent, apparent_sep = [a[:n_samp] for a in self.out]
         offset = slope = math.nan
         if finite and math.isfinite(self.ev[R.E_CONTACT_T]):
             if labels is None:
                 labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
             z_c = float(self.ev[R.E_CONTACT_Z])
             a, b = _rows_between(zd, labels, plan, z_c, self.z_turn)
-            offset, slope = fit_compliance(zd[a:b], apparent[a:b], cols[S_H, a:b], code[a:b],
+            offset, slope = fit_compliance(zd[a:b], apparent[a:b], obs[a:b, O_H], code[a:b],
                                            self.cfg.contact_separation, z_c, self.z_turn,
                                            s.beta if s.beam else math.nan)
-        return tt, zd, code, cols, apparent, apparent_sep, finite, offset, slope
+        return tt, zd, code, obs, apparent, apparent_sep, finite, offset, slope
 
     def _segment(self, record, t_total, progress, fixed, seg):
         """Integrate one drive segment (``record``: its :func:`.radau.drive_record`); returns
@@ -254,14 +254,14 @@ class _Run:
     def finish(self, check: str = "off", wall0: float | None = None) -> Trajectory:
         """The trajectory, events, warnings and convergence check of an integrated run."""
         cfg, s, ev, stats = self.cfg, self.setup, self.ev, self.stats
-        tt, zd, seg_code, cols, apparent, apparent_sep, finite, offset, slope = self.columns
+        tt, zd, seg_code, obs, apparent, apparent_sep, finite, offset, slope = self.columns
         if not finite:
             raise SolverError("the sampled trajectory contains non-finite values; "
                               "try a tighter rtol/atol")
         beta = s.beta
         why = _risky(cfg) if check == "off" else ""
-        deflection = cols[S_DEFL]
-        angle = cols[S_THETA] if s.beam else np.full(tt.shape[0], np.nan)
+        deflection = obs[:, O_DEFL]
+        angle = obs[:, O_THETA] if s.beam else np.full(tt.shape[0], np.nan)
         events = _events(cfg, ev, self.t_turn, self.z_turn, beta, s.model, offset, slope,
                          s.h_s, s.z_s)
         if not math.isfinite(events.contact_time):
@@ -304,8 +304,8 @@ class _Run:
             "wall_time": wall, "event_errors": event_errors, "check": check_note})
         return _frozen(Trajectory, {
             "time": tt, "piezo_position": zd, "deflection": deflection, "apparent_deflection": apparent,
-            "separation": cols[S_H], "apparent_separation": apparent_sep, "angle": angle,
-            "lateral_position": cols[S_Y2], "normal_force": cols[S_FZ], "friction_force": cols[S_FY],
+            "separation": obs[:, O_H], "apparent_separation": apparent_sep, "angle": angle,
+            "lateral_position": obs[:, O_Y2], "normal_force": obs[:, O_FZ], "friction_force": obs[:, O_FY],
             "segment": seg_code, "calibration_factor": s.beta, "spring_constant": s.k, "config": cfg,
             "events": events, "solver": solver})
 
