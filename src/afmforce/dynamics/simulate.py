@@ -124,11 +124,15 @@ class _Run:
         self.y = s.y0.copy()
         self.ev = s.ev0.copy()
         self.ev[R.E_SPIKE_CYCLES] = SPIKE_QUIET_CYCLES   # not cached: tests may patch it
-        self.s_next = np.zeros(1, dtype=np.int64)
-        self.work = np.zeros(R.W_SIZE)
-        self.stats = np.zeros(R.S_SIZE, dtype=np.int64)
-        self.state = (self.y, self.ev, self.work, np.zeros((n, 3)), np.zeros(n),
-                      np.zeros((n, n)), self.stats)
+        # the zeroed work arrays as views of two blocks (fewer allocations: a short call's
+        # Python, issue 35.5; each view is C-contiguous, as the compiled calls are typed)
+        counters = np.zeros(R.S_SIZE + 1, dtype=np.int64)
+        self.s_next, self.stats = counters[:1], counters[1:]
+        w = R.W_SIZE
+        scratch = np.zeros(w + 4 * n + n * n)
+        self.work = scratch[:w]
+        self.state = (self.y, self.ev, self.work, scratch[w:w + 3 * n].reshape(n, 3),
+                      scratch[w + 3 * n:w + 4 * n], scratch[w + 4 * n:].reshape(n, n), self.stats)
         # the sample buffer and the sampled columns, allocated here: simulate_many prepares
         # runs in its own thread and integrates them on others, and large arrays allocated
         # there came back from glibc as fresh pages (a page fault per 4 kB: 0.1 ms and 40 %
@@ -136,8 +140,9 @@ class _Run:
         # to s_next is written (._sampling.sample_step), so np.empty
         nb = s.nbuf
         self.ybuf = np.zeros((nb, n + 1)) if s.averaged else np.empty((nb, n))
-        self.out = (np.empty(nb), np.empty(nb), np.empty(nb, dtype=np.int8),
-                    np.empty((nb, N_OBS)), np.empty(nb), np.empty(nb))
+        # time, z, apparent deflection and separation: rows of one block
+        f = np.empty((4, nb))
+        self.out = (f[0], f[1], np.empty(nb, dtype=np.int8), np.empty((nb, N_OBS)), f[2], f[3])
 
     def integrate(self, progress=None) -> "_Run":
         """Run the integrator over every drive segment, then sample the result (raises
@@ -168,8 +173,8 @@ class _Run:
     def _sample(self, ybuf, plan, rows, seg_table) -> tuple:
         """The sampled columns and compliance lines (two compiled calls that release the
         GIL, writing into the buffers of ``__init__``): ``(time, z, segment code,
-        observables, apparent deflection, apparent separation, all finite, hysteresis
-        offset, compliance slope)``."""
+        observables, apparent deflection, apparent
+        separation, all finite, hysteresis offset, compliance slope)``."""
         s = self.setup
         if s.averaged:
             # every grid time up to the end; windows at the ends are clipped to the run
@@ -182,8 +187,10 @@ class _Run:
                       for i, seg in enumerate(plan)]
         else:
             n_samp = int(self.s_next[0])
-            labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
-        lab = np.array(labels, dtype=np.int64)
+            labels = None                       # built from rows where a fit needs them
+            lab = np.array(rows, dtype=np.int64)[:, 1:]
+        if labels is not None:
+            lab = np.array(labels, dtype=np.int64)
         if seg_table is s.seg_table:        # the plan of the setup (not turned at a load)
             kinds, columns = s.seg_kinds, s.seg_columns
         else:
@@ -192,11 +199,15 @@ class _Run:
                                 lab[:, 1], kinds, *columns, s.beam, s.beta, *self.out)
         # the first n_samp rows; a copy where they are well short of the buffer (a run
         # that turned early at a load), so that the trajectory does not hold the rest
-        short = 4 * n_samp < 3 * s.nbuf
-        tt, zd, code, obs, apparent, apparent_sep = (
-            a[:n_samp].copy() if short else a[:n_samp] for a in self.out)
+        tt, zd, code, obs, apparent, apparent_sep = self.out
+        if 4 * n_samp < 3 * s.nbuf:
+            tt, zd, code, obs, apparent, apparent_sep = [a[:n_samp].copy() for a in self.out]
+        elif n_samp < s.nbuf:
+            tt, zd, code, obs, apparent, apparent_sep = [a[:n_samp] for a in self.out]
         offset = slope = math.nan
         if finite and math.isfinite(self.ev[R.E_CONTACT_T]):
+            if labels is None:
+                labels = [(a, b, seg.kind) for (_, a, b), seg in zip(rows, plan)]
             z_c = float(self.ev[R.E_CONTACT_Z])
             a, b = _rows_between(zd, labels, plan, z_c, self.z_turn)
             offset, slope = fit_compliance(zd[a:b], apparent[a:b], obs[a:b, O_H], code[a:b],
@@ -248,7 +259,7 @@ class _Run:
             raise SolverError("the sampled trajectory contains non-finite values; "
                               "try a tighter rtol/atol")
         beta = s.beta
-        why = risky(cfg) if check == "off" else ""      # cached per probe: a few us
+        why = _risky(cfg) if check == "off" else ""
         deflection = obs[:, O_DEFL]
         angle = obs[:, O_THETA] if s.beam else np.full(tt.shape[0], np.nan)
         events = _events(cfg, ev, self.t_turn, self.z_turn, beta, s.model, offset, slope,
@@ -285,18 +296,37 @@ class _Run:
             check_note += lever_damping_check(check, cfg, events, _resolve)   # issue 23
         wall = time.perf_counter() - (self.wall0 if wall0 is None else wall0)
         st = stats.tolist()
-        solver = _frozen(SolverStats, dict(
-            status="success", method=METHOD, steps=st[R.S_STEPS], accepted=st[R.S_ACCEPTED],
-            rejected=st[R.S_REJECTED], rhs_evaluations=st[R.S_NFEV],
-            jacobian_evaluations=st[R.S_NJEV], lu_decompositions=st[R.S_NLU],
-            damping_steps=st[R.S_DAMPED], newton_failures=st[R.S_NEWTON_FAIL],
-            wall_time=wall, event_errors=event_errors, check=check_note))
-        return _frozen(Trajectory, dict(
-            time=tt, piezo_position=zd, deflection=deflection, apparent_deflection=apparent,
-            separation=obs[:, O_H], apparent_separation=apparent_sep, angle=angle,
-            lateral_position=obs[:, O_Y2], normal_force=obs[:, O_FZ], friction_force=obs[:, O_FY],
-            segment=seg_code, calibration_factor=s.beta, spring_constant=s.k, config=cfg,
-            events=events, solver=solver))
+        solver = _frozen(SolverStats, {
+            "status": "success", "method": METHOD, "steps": st[R.S_STEPS], "accepted": st[R.S_ACCEPTED],
+            "rejected": st[R.S_REJECTED], "rhs_evaluations": st[R.S_NFEV],
+            "jacobian_evaluations": st[R.S_NJEV], "lu_decompositions": st[R.S_NLU],
+            "damping_steps": st[R.S_DAMPED], "newton_failures": st[R.S_NEWTON_FAIL],
+            "wall_time": wall, "event_errors": event_errors, "check": check_note})
+        return _frozen(Trajectory, {
+            "time": tt, "piezo_position": zd, "deflection": deflection, "apparent_deflection": apparent,
+            "separation": obs[:, O_H], "apparent_separation": apparent_sep, "angle": angle,
+            "lateral_position": obs[:, O_Y2], "normal_force": obs[:, O_FZ], "friction_force": obs[:, O_FY],
+            "segment": seg_code, "calibration_factor": s.beta, "spring_constant": s.k, "config": cfg,
+            "events": events, "solver": solver})
+
+
+#: risky() by the identity of (probe, surface, friction), what it reads (-> those and it).
+_WHY: dict = {}
+
+
+def _risky(cfg) -> str:
+    """:func:`.guard.risky` of ``cfg``, once per (probe, surface, friction) objects (2 us of a
+    short call, issue 35.5; configurations built from flat names share the default parts)."""
+    probe, surface, friction = cfg.probe, cfg.surface, cfg.friction
+    key = (id(probe), id(surface), id(friction))
+    hit = _WHY.get(key)
+    if hit is not None and hit[0] is probe and hit[1] is surface and hit[2] is friction:
+        return hit[3]
+    why = risky(cfg)
+    if len(_WHY) >= 256:
+        _WHY.clear()
+    _WHY[key] = (probe, surface, friction, why)
+    return why
 
 
 def _neg(x):
@@ -365,18 +395,18 @@ def _events(cfg, ev, t_turn, z_turn, beta, model, offset, slope, h_s, z_s) -> Ev
     else:
         min_app, min_app_z = min_defl, min_defl_z
         spike = spike_t = spike_z = nan
-    return _frozen(Events, dict(
-        jumped=jumped, jump_in_note=note,
-        jump_in_time=jump_t, jump_in_position=jump_z, jump_in_separation=jump_h,
-        static_jump_in_position=_nan1(z_s), static_jump_in_separation=_nan1(h_s),
-        contact_time=contact_t, contact_position=e[R.E_CONTACT_Z],
-        pull_off_time=e[R.E_PULL_T], pull_off_position=e[R.E_PULL_Z],
-        pull_off_force=e[R.E_MIN_FZ] if contact else nan,
-        min_deflection=min_defl, min_deflection_position=min_defl_z,
-        min_apparent_deflection=min_app, min_apparent_deflection_position=min_app_z,
-        spike_height=spike, spike_time=spike_t, spike_position=spike_z,
-        hysteresis_offset=_nan1(offset), compliance_slope=_nan1(slope),
-        turn_time=_nan1(t_turn), turn_position=_nan1(z_turn)))
+    return _frozen(Events, {
+        "jumped": jumped, "jump_in_note": note,
+        "jump_in_time": jump_t, "jump_in_position": jump_z, "jump_in_separation": jump_h,
+        "static_jump_in_position": _nan1(z_s), "static_jump_in_separation": _nan1(h_s),
+        "contact_time": contact_t, "contact_position": e[R.E_CONTACT_Z],
+        "pull_off_time": e[R.E_PULL_T], "pull_off_position": e[R.E_PULL_Z],
+        "pull_off_force": e[R.E_MIN_FZ] if contact else nan,
+        "min_deflection": min_defl, "min_deflection_position": min_defl_z,
+        "min_apparent_deflection": min_app, "min_apparent_deflection_position": min_app_z,
+        "spike_height": spike, "spike_time": spike_t, "spike_position": spike_z,
+        "hysteresis_offset": _nan1(offset), "compliance_slope": _nan1(slope),
+        "turn_time": _nan1(t_turn), "turn_position": _nan1(z_turn)})
 
 
 def _frozen(cls, fields: dict):
