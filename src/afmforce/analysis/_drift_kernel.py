@@ -21,7 +21,7 @@ import math
 import numpy as np
 from numba import njit
 
-from ._numeric import _polyfit_qr, solve_small
+from ._numeric import _middle, _polyfit_qr, middle_bracket, solve_small
 
 __all__ = ["decide", "apply", "irls", "median", "LINES"]
 
@@ -35,84 +35,22 @@ _N_ITER = 6
 
 
 @njit(cache=True)
-def _select(a, k):
-    """The ``k``-th smallest of ``a`` (0-based), ``a`` reordered in place (quickselect)."""
-    lo = 0
-    hi = a.size - 1
-    while hi > lo:
-        mid = (lo + hi) >> 1
-        # median of three as the pivot
-        x, y, z = a[lo], a[mid], a[hi]
-        if x < y:
-            piv = y if y < z else (z if x < z else x)
-        else:
-            piv = x if x < z else (z if y < z else y)
-        i = lo
-        j = hi
-        while i <= j:
-            while a[i] < piv:
-                i += 1
-            while a[j] > piv:
-                j -= 1
-            if i <= j:
-                a[i], a[j] = a[j], a[i]
-                i += 1
-                j -= 1
-        if k <= j:
-            hi = j
-        elif k >= i:
-            lo = i
-        else:
-            return a[k]
-    return a[k]
-
-
-@njit(cache=True)
-def _bracket(x, lo, hi, buf):
-    """Samples of ``x`` under ``lo`` (counted) and in ``[lo, hi]`` (copied to ``buf``): ``(below, m)``."""
-    below = 0
-    m = 0
-    for i in range(x.size):
-        v = x[i]
-        buf[m] = v
-        m += (v >= lo) & (v <= hi)
-        below += v < lo
-    return below, m
-
-
-@njit(cache=True)
-def _middle(x, n, below, m, buf):
-    """``np.median`` of the ``n`` samples of ``x`` from the ``m`` of them in ``buf`` (copied by
-    :func:`_bracket`, ``below`` under them), NaN when these do not hold the middle."""
-    h = n // 2
-    k_lo = h - 1 if n % 2 == 0 else h
-    if not (below <= k_lo and h < below + m):
-        return math.nan
-    sub = buf[:m]
-    b = _select(sub, h - below)
-    if k_lo == h:
-        return b
-    a = sub[0]
-    for i in range(1, h - below):
-        a = max(a, sub[i])
-    return (a + b) / 2
-
-
-@njit(cache=True)
 def median(x, guess, width, buf):
     """``np.median(x)`` of a finite array (the same number: the middle order statistics, their
     mean for an even size), from the samples in ``[guess - width, guess + width]`` when these
-    hold the middle (one counting pass), a quickselect of a copy otherwise. ``buf``: scratch of
-    ``x.size`` samples."""
+    hold the middle (one counting pass, :func:`~._numeric.middle_bracket`), a quickselect of a
+    copy otherwise. ``buf``: scratch of ``x.size`` samples."""
     n = x.size
+    half = n // 2
+    even = n % 2 == 0
     if width > 0 and n > 64:
-        below, m = _bracket(x, guess - width, guess + width, buf)
-        v = _middle(x, n, below, m, buf)
-        if not math.isnan(v):
-            return v
+        lo, hi, ok = middle_bracket(x, half, even, guess - width, guess + width, buf)
+        if ok:
+            return (lo + hi) / 2 if even else hi
     for i in range(n):
         buf[i] = x[i]
-    return _middle(x, n, 0, n, buf)
+    lo, hi = _middle(buf[:n], half, even)
+    return (lo + hi) / 2 if even else hi
 
 
 @njit(cache=True)

@@ -103,20 +103,7 @@ def line_fit(x: np.ndarray, y: np.ndarray, w: np.ndarray):
         sw += w[i]
         sx += w[i] * x[i]
         sy += w[i] * y[i]
-    if sw <= 0:
-        return np.nan, np.nan
-    mx = sx / sw
-    my = sy / sw
-    sxx = 0.0
-    sxy = 0.0
-    for i in range(x.size):
-        dx = x[i] - mx
-        sxx += w[i] * dx * dx
-        sxy += w[i] * dx * (y[i] - my)
-    if sxx <= 0:
-        return my, np.nan
-    b = sxy / sxx
-    return my - b * mx, b
+    return _line_fit_rest(x, y, w, sw, sx, sy)
 
 
 @njit(cache=True)

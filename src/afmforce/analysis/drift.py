@@ -472,18 +472,8 @@ def _remove_drift_numpy(t: np.ndarray, s: np.ndarray, segment: np.ndarray, appro
                         retract: RunRegions, unit: str, order: int = _D.order, min_points: int = 5,
                         max_noise_ratio: float = 5.0, z: np.ndarray | None = None, h_tail: float = 5e-9):
     """:func:`remove_drift` in numpy calls and the compiled fits of :mod:`._numeric` (the code the
-    kernels of :mod:`._drift_kernel` reproduce; what runs when they are not compiled).
-
-    Subtract each run's baseline line; returns ``(corrected signal, DriftResult)``.
-
-    The runs are found by their segment type, wherever they lie in the record. Samples of other
-    segments (a dwell, a pause before the approach) get the baseline interpolated in time between
-    the runs' (held at the nearest run's value outside them). The retract run uses its own line;
-    when its free part is too short, or more than ``max_noise_ratio`` times noisier than the
-    approach's (a cantilever ringing freely after the pull-off, unbinding events: its line would be
-    biased), it uses the simplest of the approach line and its own offset (:func:`borrowed_line`).
-    A dwell between the runs rules out the "continuous" retract line (the approach line's end is
-    then an extrapolation over the dwell).
+    kernels of :mod:`._drift_kernel` reproduce; what runs when they are not compiled): the same
+    arguments, the same ``(corrected signal, DriftResult)``, the method described there.
     """
     out = np.array(s, dtype=float, copy=True)
     ia = approach.index[approach.zero_force]
