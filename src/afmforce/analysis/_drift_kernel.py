@@ -22,6 +22,7 @@ import numpy as np
 from numba import njit
 
 from ._numeric import _middle, _polyfit_qr, middle_bracket, solve_small
+from ._numeric import _wls_small as _wls
 
 __all__ = ["decide", "apply", "irls", "median", "LINES"]
 
@@ -51,95 +52,6 @@ def median(x, guess, width, buf):
         buf[i] = x[i]
     lo, hi = _middle(buf[:n], half, even)
     return (lo + hi) / 2 if even else hi
-
-
-@njit(cache=True)
-def _wls(X, y, w):
-    """:func:`~._numeric._wls_small`: the same sums in the same order (each in a register)."""
-    n, p = X.shape
-    A = np.zeros((p, p))
-    b = np.zeros(p)
-    if p == 1:
-        b0 = a00 = 0.0
-        for i in range(n):
-            wi = w[i]
-            if wi != 0.0:
-                x0 = X[i, 0]
-                xw0 = x0 * wi
-                b0 += xw0 * y[i]
-                a00 += xw0 * x0
-        A[0, 0] = a00
-        b[0] = b0
-    elif p == 2:
-        b0 = b1 = a00 = a01 = a10 = a11 = 0.0
-        for i in range(n):
-            wi = w[i]
-            if wi != 0.0:
-                x0 = X[i, 0]
-                x1 = X[i, 1]
-                yi = y[i]
-                xw0 = x0 * wi
-                xw1 = x1 * wi
-                b0 += xw0 * yi
-                a00 += xw0 * x0
-                a01 += xw0 * x1
-                b1 += xw1 * yi
-                a10 += xw1 * x0
-                a11 += xw1 * x1
-        A[0, 0] = a00
-        A[0, 1] = a01
-        A[1, 0] = a10
-        A[1, 1] = a11
-        b[0] = b0
-        b[1] = b1
-    elif p == 3:
-        b0 = b1 = b2 = a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
-        for i in range(n):
-            wi = w[i]
-            if wi != 0.0:
-                x0 = X[i, 0]
-                x1 = X[i, 1]
-                x2 = X[i, 2]
-                yi = y[i]
-                xw0 = x0 * wi
-                xw1 = x1 * wi
-                xw2 = x2 * wi
-                b0 += xw0 * yi
-                a00 += xw0 * x0
-                a01 += xw0 * x1
-                a02 += xw0 * x2
-                b1 += xw1 * yi
-                a10 += xw1 * x0
-                a11 += xw1 * x1
-                a12 += xw1 * x2
-                b2 += xw2 * yi
-                a20 += xw2 * x0
-                a21 += xw2 * x1
-                a22 += xw2 * x2
-        A[0, 0] = a00
-        A[0, 1] = a01
-        A[0, 2] = a02
-        A[1, 0] = a10
-        A[1, 1] = a11
-        A[1, 2] = a12
-        A[2, 0] = a20
-        A[2, 1] = a21
-        A[2, 2] = a22
-        b[0] = b0
-        b[1] = b1
-        b[2] = b2
-    else:
-        for i in range(n):
-            wi = w[i]
-            if wi == 0.0:
-                continue
-            for j in range(p):
-                xw = X[i, j] * wi
-                b[j] += xw * y[i]
-                for k in range(p):
-                    A[j, k] += xw * X[i, k]
-    out = solve_small(A, b)
-    return out, not math.isnan(out[0])
 
 
 @njit(cache=True)

@@ -404,19 +404,91 @@ def robust_line_thin(x: np.ndarray, y: np.ndarray, max_points: int = 4001):
 @njit(cache=True)
 def _wls_small(X, y, w):
     """Weighted least squares by the normal equations (p <= 3 columns, Gaussian elimination with
-    partial pivoting); ``ok`` False when a pivot is zero (singular: the caller uses lstsq)."""
+    partial pivoting); ``ok`` False when a pivot is zero (singular: the caller uses lstsq). The
+    sums of p = 1..3 columns are unrolled (each in a register; the same sums in the same order as
+    the general loop)."""
     n, p = X.shape
     A = np.zeros((p, p))
     b = np.zeros(p)
-    for i in range(n):
-        wi = w[i]
-        if wi == 0.0:
-            continue
-        for j in range(p):
-            xw = X[i, j] * wi
-            b[j] += xw * y[i]
-            for k in range(p):
-                A[j, k] += xw * X[i, k]
+    if p == 1:
+        b0 = a00 = 0.0
+        for i in range(n):
+            wi = w[i]
+            if wi != 0.0:
+                x0 = X[i, 0]
+                xw0 = x0 * wi
+                b0 += xw0 * y[i]
+                a00 += xw0 * x0
+        A[0, 0] = a00
+        b[0] = b0
+    elif p == 2:
+        b0 = b1 = a00 = a01 = a10 = a11 = 0.0
+        for i in range(n):
+            wi = w[i]
+            if wi != 0.0:
+                x0 = X[i, 0]
+                x1 = X[i, 1]
+                yi = y[i]
+                xw0 = x0 * wi
+                xw1 = x1 * wi
+                b0 += xw0 * yi
+                a00 += xw0 * x0
+                a01 += xw0 * x1
+                b1 += xw1 * yi
+                a10 += xw1 * x0
+                a11 += xw1 * x1
+        A[0, 0] = a00
+        A[0, 1] = a01
+        A[1, 0] = a10
+        A[1, 1] = a11
+        b[0] = b0
+        b[1] = b1
+    elif p == 3:
+        b0 = b1 = b2 = a00 = a01 = a02 = a10 = a11 = a12 = a20 = a21 = a22 = 0.0
+        for i in range(n):
+            wi = w[i]
+            if wi != 0.0:
+                x0 = X[i, 0]
+                x1 = X[i, 1]
+                x2 = X[i, 2]
+                yi = y[i]
+                xw0 = x0 * wi
+                xw1 = x1 * wi
+                xw2 = x2 * wi
+                b0 += xw0 * yi
+                a00 += xw0 * x0
+                a01 += xw0 * x1
+                a02 += xw0 * x2
+                b1 += xw1 * yi
+                a10 += xw1 * x0
+                a11 += xw1 * x1
+                a12 += xw1 * x2
+                b2 += xw2 * yi
+                a20 += xw2 * x0
+                a21 += xw2 * x1
+                a22 += xw2 * x2
+        A[0, 0] = a00
+        A[0, 1] = a01
+        A[0, 2] = a02
+        A[1, 0] = a10
+        A[1, 1] = a11
+        A[1, 2] = a12
+        A[2, 0] = a20
+        A[2, 1] = a21
+        A[2, 2] = a22
+        b[0] = b0
+        b[1] = b1
+        b[2] = b2
+    else:
+        for i in range(n):
+            wi = w[i]
+            if wi == 0.0:
+                continue
+            for j in range(p):
+                xw = X[i, j] * wi
+                b[j] += xw * y[i]
+                for k in range(p):
+                    A[j, k] += xw * X[i, k]
     out = solve_small(A, b)
     return out, not math.isnan(out[0])
 
