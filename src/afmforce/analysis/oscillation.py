@@ -23,7 +23,6 @@ from dataclasses import dataclass
 from typing import Sequence
 
 import numpy as np
-from scipy.ndimage import median_filter
 
 from . import _oscillation_kernel as _K
 from ._numeric import polyfit
@@ -189,6 +188,7 @@ def _find_peak_numpy(t, r, velocity, run, *, min_cycles, false_alarm, max_nyquis
     p = spec[band]
     f = freq[band]
     width = max(9, 2 * (p.size // 20) + 1)
+    from scipy.ndimage import median_filter  # here: its import costs 0.25 s of every command
     local = median_filter(p, size=width, mode="nearest")  # coloured noise: compare with the neighbourhood
     ratio = p / np.where(local > 0, local, np.inf)
     k = int(np.argmax(ratio))

@@ -15,7 +15,6 @@ from dataclasses import dataclass, field
 from typing import Mapping, Sequence
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from .. import forces
 from .._fields import QUANTITIES
@@ -94,6 +93,7 @@ def fit_surface_law(separation, force, law: str, *, radius: float, free: Sequenc
 
     x0 = np.clip(np.array([start[n] for n in free] + [0.0] * offset) / scale, lo, hi)
     unit = sigma or float(np.std(f)) or 1.0       # residuals in units of the noise: tolerances apply
+    from scipy.optimize import least_squares  # here: its import costs 0.25 s of every command
     res = least_squares(lambda x: (model(x) - f) / unit, x0, bounds=(lo, hi),
                         xtol=1e-15, ftol=1e-15, gtol=1e-15, max_nfev=2000)
     dof = max(h.size - len(x0), 1)

@@ -17,7 +17,6 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.optimize import least_squares
 
 from .. import forces
 from ..errors import ParameterError
@@ -135,6 +134,7 @@ def fit_vdw(separation: np.ndarray, force: np.ndarray, *, spring_constant: float
             m = m + q[2] * (h - h_ref) / h_span
         return m
 
+    from scipy.optimize import least_squares  # here: its import costs 0.25 s of every command
     sol = least_squares(lambda q: model(q) - f / f_scale, p0, method="lm")
     q = sol.x
     r = (model(q) - f / f_scale) * f_scale
