@@ -76,34 +76,22 @@ def _spring_group(parser):
 
 
 def _surface_group(parser):
-    g = parser.add_argument_group("surfaces (eq 2, drainage)")
+    g = parser.add_argument_group("surfaces (radius, drainage; eq 2's flags: law van_der_waals below)")
     _q(g, "--radius", "length", "m", "effective radius R")
-    _q(g, "--hamaker", "energy", "J", "Hamaker constant A")
-    _q(g, "--z0", "length", "m", "soft-wall length")
     _q(g, "--viscosity", "viscosity", "Pa*s", "fluid viscosity (drainage)")
 
 
 def _liquid_group(parser):
-    g = parser.add_argument_group("liquid (issue 25; docs/liquid.md)")
+    g = parser.add_argument_group("liquid (issue 25; docs/liquid.md; the double layer's flags: law "
+                                  "double_layer below)")
     from ..constants import MEDIA
+    from ..forces import GEOMETRIES
     g.add_argument("--medium", default=None, choices=sorted(MEDIA),
                    help="set --viscosity and --permittivity of this medium at 25 C "
                         "(flags given explicitly win)")
-    g.add_argument("--geometry", default=None, choices=("sphere-sphere", "sphere-flat"),
-                   help="sphere-sphere: the paper (R_eff = R/2); sphere-flat: a colloid probe "
-                        "(R_eff = R) (default sphere-sphere)")
-    g.add_argument("--double-layer", dest="double_layer", default=None,
-                   choices=("none", "weak_overlap", "constant_potential", "constant_charge"),
-                   help="double-layer law (default none)")
-    _q(g, "--surface-potential", "voltage", "V", "surface potential psi1", dest="surface_potential")
-    _q(g, "--surface-potential-2", "voltage", "V", "substrate potential psi2 (default psi1)",
-       dest="surface_potential_2")
-    _q(g, "--debye-length", "length", "m", "Debye length", dest="debye_length")
-    _q(g, "--salt-concentration", "concentration", "mol/m^3",
-       "symmetric salt concentration (instead of --debye-length; 1mM = 1 mol/m^3)",
-       dest="salt_concentration")
-    _q(g, "--valence", "dimensionless", "", "valence z of the salt")
-    _q(g, "--permittivity", "dimensionless", "", "relative permittivity")
+    lazy_help(g.add_argument("--geometry", default=None, choices=tuple(GEOMETRIES),
+                             help="sphere-sphere: the paper (R_eff = R/2); sphere-flat: a colloid probe "
+                                  "(R_eff = R) (default "), lambda: f"{_defaults()['geometry']})")
     _q(g, "--slip-length", "length", "m", "slip length b", dest="slip_length")
     _q(g, "--lever-drag", "damping", "N s/m", "drag coefficient of the lever body", dest="lever_drag")
     _q(g, "--lever-height", "length", "m", "lever height at contact (0: constant drag)",
@@ -111,14 +99,20 @@ def _liquid_group(parser):
 
 
 def _laws_groups(parser):
-    """One group per surface force law of :mod:`afmforce.surface_laws`, its flags from the record
-    (a parameter shared by two laws, e.g. temperature, appears with the first)."""
+    """One group per surface force law of :mod:`afmforce.surface_laws` (the model's eq 2 and double
+    layer included), its flags from the record: the choice of its form (``switch``) and its
+    parameters (a parameter shared by two laws, e.g. temperature, appears with the first)."""
     from ..surface_laws import LAWS
 
     seen: set[str] = set()
     for name, law in LAWS.items():
         g = parser.add_argument_group(f"surface force law {name}: {law.title}",
                                       f"{law.reference}. Valid: {law.validity}.")
+        if law.switch is not None:
+            sw = law.switch
+            g.add_argument("--" + sw.name.replace("_", "-"), dest=sw.name, default=None, choices=tuple(sw.choices),
+                           help=f"{sw.help}: " + "; ".join(f"{k}: {v}" for k, v in sw.choices.items())
+                                + f" (default {sw.default})")   # the configuration's default: the record's
         for p in law.parameters:
             if p.name not in seen:
                 seen.add(p.name)
@@ -128,7 +122,8 @@ def _laws_groups(parser):
 def _friction_group(parser):
     g = parser.add_argument_group("tip friction (beam model; eq 28)")
     lazy_help(g.add_argument("--friction", default=None, metavar="LAW", help="friction law: "),
-              lambda: "; ".join(f"{k}: {v.formula}" for k, v in _dyn().FRICTION_LAWS.items()) + " (default viscous)")
+              lambda: "; ".join(f"{k}: {v.formula}" for k, v in _dyn().FRICTION_LAWS.items())
+              + f" (default {_defaults()['friction']})")
     _q(g, "--xi", "damping", "kg/s", "friction coefficient xi")
     _q(g, "--zeta", "friction_per_force2", "kg/(s N^2)", "load-dependent coefficient zeta")
 
@@ -163,7 +158,8 @@ def _solver_group(parser):
     _q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
     _q(g, "--atol", "length", "m", "absolute tolerance on positions")
     lazy_help(g.add_argument("--ringing", default=None, metavar="HOW", help="in-contact ringing: "),
-              lambda: "; ".join(f"{k}: {v.name}" for k, v in _dyn().RINGING.items()) + " (default damp)")
+              lambda: "; ".join(f"{k}: {v.name}" for k, v in _dyn().RINGING.items())
+              + f" (default {_defaults()['ringing']})")
     add_sampling_flag(g)
     _q(g, "--max-steps", "integer", "", "step budget (default: sized from the run, max(2e6, 60 f_max T))",
        dest="max_steps")
