@@ -65,3 +65,14 @@ def test_simulate_text_flags_offer_the_configurations_words():
     for name in ("friction", "ringing"):            # listed in the help from the registries themselves
         assert all(f"{c}:" in _help(flags[name]) for c in FLAT[name].choices), name
         assert f"(default {FLAT[name].default})" in _help(flags[name]), name
+
+
+def test_analyze_calibration_flag_is_the_steps_option():
+    """``--calibration`` is the short form of ``--option calibration.source``: the same words (the parser
+    is built without the options' module, which loads numba), the record's default in its help."""
+    from afmforce.analysis.options import CalibrationOptions
+
+    field = {f.name: f for f in dataclasses.fields(CalibrationOptions)}["source"]
+    flag = _actions("analyze")["calibration"]
+    assert tuple(flag.choices) == tuple(field.metadata["choices"])
+    assert f"default {field.default})" in _help(flag)

@@ -29,8 +29,8 @@ def add_model_flags(parser: argparse.ArgumentParser) -> None:
                 S._laws_groups, S._friction_group):
         add(parser)
     g = parser.add_argument_group("solver")
-    S._q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
-    S._q(g, "--atol", "length", "m", "absolute tolerance on positions")
+    S._q(g, "--rtol", "relative tolerance (velocities, Newton)")
+    S._q(g, "--atol", "absolute tolerance on positions")
     S.add_sampling_flag(g, "average")
 
 
