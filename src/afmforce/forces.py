@@ -226,7 +226,10 @@ DOUBLE_LAYERS = {
     "constant_charge": "Hogg-Healy-Fuerstenau form at constant charge (linearised PB)",
 }
 
-__all__ += ["EPS0", "GEOMETRIES", "DOUBLE_LAYERS", "effective_radius", "paper_radius",
+#: The double-layer laws that exert a force (every one but ``none``): what a fit can choose.
+DOUBLE_LAYER_LAWS = tuple(law for law in DOUBLE_LAYERS if law != "none")
+
+__all__ += ["EPS0", "GEOMETRIES", "DOUBLE_LAYERS", "DOUBLE_LAYER_LAWS", "effective_radius", "paper_radius",
             "debye_length", "double_layer_energy", "double_layer_force",
             "double_layer_force_gradient", "slip_factor", "slip_factor_over_h",
             "slip_drainage_force", "lever_drag_force"]

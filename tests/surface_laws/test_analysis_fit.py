@@ -18,6 +18,8 @@ def _window(name, v):
     exponential form's validity)."""
     if name == "steric":
         return np.linspace(0.2, 0.9, 200) * v["brush_length"]
+    if name == "van_der_waals":          # eq 2: the soft wall acts within a few z0
+        return np.linspace(0.7, 6.0, 200) * v["z0"]
     return np.linspace(1 / 80, 1 / 8, 200) * L.law(name).reach(v)
 
 

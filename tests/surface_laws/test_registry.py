@@ -25,14 +25,16 @@ from afmforce.dynamics.config import FLAT
 from afmforce.dynamics.static import surface_static_force
 
 SRC = Path(L.__file__).parent
-NAMES = list(L.LAWS)
+NAMES = list(L.COMPILED)                # the laws with kernels and slots of their own
+MODEL_LAWS = [n for n, law in L.LAWS.items() if not law.compiled]   # eq 2, the double layer
 
 
 def test_every_module_of_the_package_is_one_registered_law_and_slots_do_not_overlap():
     modules = sorted(p.stem for p in SRC.glob("*.py") if not p.stem.startswith("_"))
-    assert modules == sorted(L.LAWS) and {"hydration", "steric", "capillary"} <= set(L.LAWS)
+    assert modules == sorted(L.LAWS) and {"hydration", "steric", "capillary"} <= set(L.COMPILED)
+    assert MODEL_LAWS == ["double_layer", "van_der_waals"] and list(L.LAWS) == MODEL_LAWS + NAMES
     used = [0]                          # the block's "any law on"
-    for name, law in L.LAWS.items():
+    for name, law in L.COMPILED.items():
         o = L.SLOTS[name]
         used += list(range(o, o + 1 + law.n_slots))
     assert sorted(used) == list(range(L.N_SLOTS)) and M.P_SIZE == M.P_LAWS + L.N_SLOTS
@@ -176,7 +178,7 @@ p = parameter_vector(cfg)
 h = np.array([0.8e-9, 1.5e-9, 3e-9])
 Y = np.column_stack([h, np.zeros(3)])
 fz = M.observe_array(M.MODEL_SPRING, p, np.zeros(3), np.zeros(3), Y)[:, M.O_FZ]
-print(json.dumps({"laws": list(L.LAWS), "active": list(cfg.surface.laws), "fz": fz.tolist(),
+print(json.dumps({"laws": list(L.COMPILED), "active": list(cfg.surface.laws), "fz": fz.tolist(),
                   "static": surface_static_force(cfg.surface, h)[0].tolist(),
                   "fit": "hydration_pressure" in PARAMETERS, "slots": L.SLOTS}))
 '''
@@ -210,3 +212,76 @@ def test_a_new_law_needs_its_own_module_only(tmp_path):
     want = base + a * (lam / (h + lam)) ** 2                          # + the new law
     np.testing.assert_allclose(got["fz"], want, rtol=1e-12)
     np.testing.assert_allclose(got["static"], want, rtol=1e-12)
+
+
+# --- the laws the model computes itself: eq 2 and the double layer (declared by records too) ---
+def test_model_laws_declare_the_configurations_fields():
+    """The configuration's eq-2 and double-layer fields take default and domain from the records;
+    the double layer's choice is the record's switch (Python, the command line, the web form)."""
+    import dataclasses
+
+    from afmforce.cli.main import build_parser
+    from afmforce.dynamics.parts import Surface
+    from afmforce.web.schema import simulation_fields
+
+    fields = {f.name: f for f in dataclasses.fields(Surface)}
+    web = {d["name"]: d for d in simulation_fields()}
+    parser = build_parser("simulate")._subparsers._group_actions[0].choices["simulate"]
+    flags = {a.dest: a for a in parser._actions}
+    for name in MODEL_LAWS:
+        law = L.law(name)
+        for p in law.parameters:
+            f = fields[p.name]
+            assert f.default == p.default and f.metadata["domain"] == p.domain, p.name
+            assert f.metadata["unit"] == QUANTITIES[p.name].unit and FLAT[p.name].part == "surface"
+            assert flags[p.name].option_strings == ["--" + p.name.replace("_", "-")]
+            assert web[p.name]["range"] == QUANTITIES[p.name].range_text()
+            assert p.name not in L.PARAMETERS               # not a generated (compiled-law) field
+        assert law.reference and law.validity and law.title and law.n_slots == 0 and law.pack is None
+    sw = L.law("double_layer").switch
+    assert tuple(fields[sw.name].metadata["choices"]) == tuple(sw.choices) == tuple(F.DOUBLE_LAYERS)
+    assert fields[sw.name].default == sw.default == sw.off == "none"
+    assert tuple(flags[sw.name].choices) == tuple(sw.choices)
+    assert not SimulationConfig().surface.liquid                  # off at the defaults
+
+
+def test_model_laws_fit_parameters_come_from_the_records():
+    from afmforce.fit.params import LAW_PARAMETERS, PARAMETERS
+
+    for name in MODEL_LAWS:
+        for p in L.law(name).parameters:
+            if p.fit is None:
+                assert p.name not in PARAMETERS
+                continue
+            fp, spec = PARAMETERS[p.name], QUANTITIES[p.name]
+            assert (fp.scale, fp.rel_step, fp.abs_step) == p.fit and fp.unit == spec.unit
+            lo, hi = p.fit_window or (spec.lo, spec.hi)
+            assert (fp.lower, fp.upper) == (lo, hi) and name in fp.meaning
+            assert p.name not in LAW_PARAMETERS
+    assert set(PARAMETERS) >= {"hamaker", "z0", "surface_potential", "debye_length"}
+
+
+@pytest.mark.parametrize("name", ["van_der_waals", "double_layer"])
+def test_model_laws_force_is_the_models(name):
+    """The record's closed form is what the model computes: the static solve (numpy) and the
+    compiled vector field, on a colloid probe (R_eff = R) with the law's example values."""
+    law = L.law(name)
+    values = {**{p.name: p.default for p in law.parameters}, **law.example}
+    vdw_off = {} if name == "van_der_waals" else {"hamaker": 1e-22}
+    cfg = SimulationConfig(model="spring", spring_constant=0.5, mass=1e-11, radius=1e-6, geometry="sphere-flat",
+                           viscosity=0.0, **{**law.example, **vdw_off})
+    s, p = cfg.surface, parameter_vector(cfg)
+    assert s.radius_eff == pytest.approx(1e-6, rel=1e-15)
+    for h in (0.8e-9, 3e-9, 12e-9):
+        fl, dfl = law.force(h, s.radius_eff, values)
+        other = 0.0 if name == "van_der_waals" else float(F.vdw_force(h, 2e-6, 1e-22, s.z0))
+        fs, dfs = surface_static_force(s, h)
+        assert float(fs) == pytest.approx(float(fl) + other, rel=1e-12)
+        y, out = np.array([h, -1e-6]), np.empty(2)
+        assert M.rhs(M.MODEL_SPRING, p, 0.0, 0.0, y, out)
+        assert out[1] == pytest.approx((-0.5 * h + float(fl) + other) / 1e-11, rel=1e-9, abs=1e-3)
+        d = 1e-6 * h                         # the record's derivative is its force's
+        num = (float(law.force(h + d, s.radius_eff, values)[0])
+               - float(law.force(h - d, s.radius_eff, values)[0])) / (2 * d)
+        assert float(dfl) == pytest.approx(num, rel=1e-6)
+

@@ -22,6 +22,7 @@ from typing import Any, Mapping
 import numpy as np
 
 from ..errors import AnalysisError, ParameterError
+from ..io.deflection import signal_factor
 from ._smooth_kernel import compliance_line
 from .regions import RunRegions
 from ._units import unit as _u
@@ -179,12 +180,7 @@ class CalibrationResult:
 
 
 def _metadata_factor(unit: str, metadata: Mapping[str, Any]) -> float:
-    if unit == "V":
-        return float(metadata.get("sensitivity", math.nan) or math.nan)
-    if unit == "m":
-        return 1.0
-    k = metadata.get("spring_constant")
-    return 1.0 / float(k) if k else math.nan
+    return signal_factor(unit, metadata.get("sensitivity"), metadata.get("spring_constant"))
 
 
 def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, source: str = _C.source,

@@ -18,6 +18,7 @@ import numpy as np
 from ..contact.fit import fit_indentation, model_force
 from ..contact.registry import indentation_model
 from ..errors import AnalysisError, ParameterError
+from ..io.deflection import signal_factor
 from ._step_helpers import _kind, _skip
 from ._units import unit as _u
 from .options import IndentationOptions, ProbeCalibration
@@ -162,13 +163,10 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
     if not k:
         raise AnalysisError("no spring constant (give `spring_constant`): no force to fit")
     unit = curve.deflection_unit
-    if unit == "V":
-        sens = p.value("sensitivity", md)
-        if not sens:
-            raise AnalysisError("the deflection is in volts and no sensitivity is known (give `sensitivity`)")
-        d = sig * float(sens)
-    else:
-        d = sig if unit == "m" else sig / float(k)
+    sens = p.value("sensitivity", md) if unit == "V" else None
+    if unit == "V" and not sens:
+        raise AnalysisError("the deflection is in volts and no sensitivity is known (give `sensitivity`)")
+    d = sig * signal_factor(unit, sens, k)  # the deflection [m]
     radius = o.tip_radius if o.tip_radius is not None else p.value("radius", md)
     geom = {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
     u = z - d

@@ -32,6 +32,7 @@ from typing import Any, ClassVar, Mapping
 from .._fields import QUANTITIES, check_beam, meta, qfield, spec_of
 from ..constants import HAMAKER, MEDIA, Z0
 from ..errors import ParameterError
+from ..forces import DOUBLE_LAYER_LAWS, GEOMETRIES
 
 __all__ = ["ProbeCalibration", "StepOptions", "SmoothOptions", "ContactOptions", "DriftOptions",
            "FringesOptions", "ComplianceOptions", "CalibrationOptions", "KindOptions", "ShiftOptions",
@@ -436,9 +437,9 @@ class LiquidOptions(StepOptions):
     permittivity: float | None = _q("permittivity", None, "relative permittivity (None: the medium's)")
     viscosity: float | None = _q("viscosity", None, "viscosity (None: the medium's)")
     geometry: str = _opt("sphere-flat", "choice", "", "probe geometry (a colloid probe on a flat)",
-                         choices=("sphere-flat", "sphere-sphere"))
+                         choices=tuple(sorted(GEOMETRIES)))
     double_layer: str = _opt("constant_potential", "choice", "", "double-layer law fitted",
-                             choices=("weak_overlap", "constant_potential", "constant_charge"))
+                             choices=DOUBLE_LAYER_LAWS)
     potential_sign: str = _opt("negative", "choice", "", "sign of the (symmetric) surface potential: the "
                                "force gives only its magnitude", choices=("negative", "positive"))
     far_fraction: float = _frac(0.3, "part of the approach travel (farthest out) taken as the far baseline")

@@ -36,6 +36,7 @@ from .state import NoContact, State, _default_probe, prepare
 from .steps.contact import retract_dip
 from ..errors import ParameterError
 from ..io.curve import RawCurve
+from ..io.deflection import signal_factor
 
 __all__ = ["Step", "AnalysisStep", "ResultField", "register_step", "STEPS", "DEFAULT_STEPS", "analyze",
            "resolve_steps", "resolve_options", "steps_table", "AnalysisResult"]
@@ -214,7 +215,7 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
     depth, sigma = retract_dip(st.signal, st.curve.run_indices(1) if hasattr(st.curve, "run_indices")
                                  else np.flatnonzero(st.curve.segment == 1))
     if math.isfinite(depth) and sigma > 0 and depth > nsigma * sigma:
-        to_force = {"N": 1.0, "m": k, "V": k * sens}.get(st.unit, math.nan)
+        to_force = signal_factor(st.unit, sens, k, to="force")
         force, noise = -depth * to_force, sigma * to_force
         what = (f"{-force * 1e9:.4g} nN ({depth / sigma:.3g} x the noise)" if math.isfinite(force)
                 else f"{depth:.4g} {st.unit} ({depth / sigma:.3g} x the noise; in force with `spring_constant`"

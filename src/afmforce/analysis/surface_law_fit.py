@@ -39,6 +39,11 @@ class LawFit:
     note: str = field(default="")
 
 
+def _value(v):
+    """A parameter's start value: a float, or None for one given by another (psi2, 1/kappa)."""
+    return None if v is None else float(v)
+
+
 def fit_surface_law(separation, force, law: str, *, radius: float, free: Sequence[str],
                     fixed: Mapping[str, float] | None = None, geometry: str = "sphere-flat",
                     hamaker: float = 0.0, z0: float = 0.35e-9, sigma: float | None = None,
@@ -50,7 +55,9 @@ def fit_surface_law(separation, force, law: str, *, radius: float, free: Sequenc
     separation, force : array_like
         h [m] and the static force F [N] (negative: attractive).
     law : str
-        A key of :data:`afmforce.surface_laws.LAWS`.
+        A key of :data:`afmforce.surface_laws.LAWS` (eq 2 ``van_der_waals`` and ``double_layer``
+        included; the double layer's form from ``fixed["double_layer"]``, default its record's
+        example, constant potential).
     radius : float
         Probe radius R [m]; R_eff follows ``geometry``.
     free : sequence of str
@@ -74,7 +81,9 @@ def fit_surface_law(separation, force, law: str, *, radius: float, free: Sequenc
     h, f = h[ok], f[ok]
     if h.size < len(free) + 2:
         raise ParameterError(f"fit_surface_law: {h.size} samples for {len(free) + 1} parameters")
-    start = {p.name: float((fixed or {}).get(p.name, p.default)) for p in rec.parameters}
+    start = {p.name: _value((fixed or {}).get(p.name, p.default)) for p in rec.parameters}
+    if rec.switch is not None:          # the law's form (the double layer's boundary condition)
+        start[rec.switch.name] = (fixed or {}).get(rec.switch.name, rec.example[rec.switch.name])
     r_eff = float(forces.effective_radius(radius, geometry))
     base = (np.asarray(forces.vdw_force(h, 2.0 * r_eff, hamaker, z0)) if hamaker > 0
             else np.zeros_like(h))

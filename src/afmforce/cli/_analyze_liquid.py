@@ -5,7 +5,9 @@ from __future__ import annotations
 import math
 
 from ..constants import MEDIA
-from ._validate import add_field
+from ..forces import DOUBLE_LAYER_LAWS, GEOMETRIES
+from ._analyze_options import default as _default
+from ._validate import add_field, lazy_help
 
 __all__ = ["liquid_flags", "print_liquid"]
 
@@ -15,16 +17,20 @@ def fmt(v: float) -> str:
 
 
 def liquid_flags(p) -> None:
-    """Short forms of the liquid step's options (docs/liquid.md)."""
+    """Short forms of the liquid step's options (docs/liquid.md): their choices from the registries
+    the step's options record takes them from (``analysis.options.LiquidOptions``), their defaults
+    from the record (shown when the help is printed: the record's module loads numba)."""
     g = p.add_argument_group("liquid: colloid probe, drag, drainage, DLVO fit (docs/liquid.md; with --radius)")
-    g.add_argument("--medium", default=None, choices=("none", *MEDIA),
-                   help="medium of the measurement: a liquid runs the liquid step (--option liquid.medium)")
+    lazy_help(g.add_argument("--medium", default=None, choices=("none", *MEDIA),
+                             help="medium of the measurement: a liquid runs the liquid step (--option liquid.medium; "
+                                  "default "), lambda: f"{_default('liquid', 'medium')})")
     add_field(g, "permittivity", help="relative permittivity (default: the medium's)")
-    g.add_argument("--geometry", default=None, choices=("sphere-flat", "sphere-sphere"),
-                   help="probe geometry of the liquid step (default sphere-flat)")
-    g.add_argument("--double-layer", dest="double_layer", default=None,
-                   choices=("weak_overlap", "constant_potential", "constant_charge"),
-                   help="double-layer law of the DLVO fit (default constant_potential)")
+    lazy_help(g.add_argument("--geometry", default=None, choices=tuple(sorted(GEOMETRIES)),
+                             help="probe geometry of the liquid step (default "),
+              lambda: f"{_default('liquid', 'geometry')})")
+    lazy_help(g.add_argument("--double-layer", dest="double_layer", default=None, choices=DOUBLE_LAYER_LAWS,
+                             help="double-layer law of the DLVO fit (default "),
+              lambda: f"{_default('liquid', 'double_layer')})")
 
 
 def print_liquid(ok) -> None:

@@ -58,7 +58,8 @@ def register(sub) -> None:
                              help="analysis steps to run (their requirements are added): "), _steps)
     p.add_argument("--format", default=None, metavar="ID", help="reader to use instead of detection "
                    "(see docs/analysis.md), e.g. jpk-zip for raw volts")
-    p.add_argument("--channel", choices=("auto", "measured", "nominal"), default="auto",
+    from ..io.curve import POSITION_CHANNELS
+    p.add_argument("--channel", choices=POSITION_CHANNELS, default=POSITION_CHANNELS[0],
                    help="position channel (default: measured if recorded)")
     p.add_argument("--no-plot", action="store_true", help="with --out: skip the per-curve figures")
     lazy_help(p.add_argument("--map-quantity", action="append", default=[], metavar="Q",

@@ -21,15 +21,16 @@ __all__ = ["register", "run", "model_config", "add_model_flags"]
 
 
 def add_model_flags(parser: argparse.ArgumentParser) -> None:
-    """The model flags of ``afmforce simulate`` (model, beam, spring, surfaces, friction)."""
+    """The model flags of ``afmforce simulate`` (model, beam, spring, surfaces, the surface force
+    laws (eq 2, the double layer and the others, from their records), friction)."""
     from . import simulate as S
 
     for add in (S._model_group, S._beam_group, S._spring_group, S._surface_group, S._liquid_group,
-                S._friction_group):
+                S._laws_groups, S._friction_group):
         add(parser)
     g = parser.add_argument_group("solver")
-    S._q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
-    S._q(g, "--atol", "length", "m", "absolute tolerance on positions")
+    S._q(g, "--rtol", "relative tolerance (velocities, Newton)")
+    S._q(g, "--atol", "absolute tolerance on positions")
     S.add_sampling_flag(g, "average")
 
 

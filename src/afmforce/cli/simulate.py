@@ -38,8 +38,9 @@ def _defaults():
     return flat_defaults()
 
 
-def _q(group, flag, dim, unit, help_, dest=None, default_text=None):
-    """A quantity flag (spec: :data:`afmforce._fields.QUANTITIES`); the config's default shown in help."""
+def _q(group, flag, help_, dest=None):
+    """A quantity flag (spec: :data:`afmforce._fields.QUANTITIES`: its unit, range and dimension are
+    declared there only); the config's default shown in help."""
     name = dest or flag.lstrip("-").replace("-", "_")
     add_field(group, name, flag=flag, help=help_, default_from=lambda: _defaults().get(name))
 
@@ -49,76 +50,70 @@ def _model_group(parser):
     g.add_argument("--model", choices=("beam", "spring"), default=None,
                    help="beam: inclined cantilever with friction (eqs 22-28); "
                         "spring: mass on a spring (eq 1) (default beam)")
-    _q(g, "--quality-factor", "dimensionless", "", "quality factor Q of the lever in its medium "
+    _q(g, "--quality-factor", "quality factor Q of the lever in its medium "
        "(beam: both free modes, Rayleigh damping; spring: m omega0/Q; none: undamped, the paper)",
        dest="quality_factor")
-    _q(g, "--quality-factor-2", "dimensionless", "", "Q of the beam's second free mode "
+    _q(g, "--quality-factor-2", "Q of the beam's second free mode "
        "(default: --quality-factor)", dest="quality_factor_2")
     from .calibrate import add_probe_calibration_flag; add_probe_calibration_flag(g, "the quality factor; the spring model also k and the mass giving f0")  # noqa: E501,E702 (issue 34)
 
 
 def _beam_group(parser):
     g = parser.add_argument_group("inclined cantilever (beam model; Fig 2)")
-    _q(g, "--L0", "length", "m", "beam length")
-    _q(g, "--L1", "length", "m", "base length")
-    _q(g, "--L2", "length", "m", "probe length")
-    _q(g, "--theta0", "angle", "rad", "inclination", default_text="-15deg")
-    _q(g, "--k0", "stiffness", "N/m", "intrinsic spring constant (or give --B)")
-    _q(g, "--B", "rigidity", "N*m^2", "flexural rigidity", default_text="3.5e-13 N m^2")
-    _q(g, "--m-joint", "mass", "kg", "point mass at the beam-base joint", dest="m_joint")
-    _q(g, "--m-base", "mass", "kg", "mass spread along the base", dest="m_base")
+    _q(g, "--L0", "beam length")
+    _q(g, "--L1", "base length")
+    _q(g, "--L2", "probe length")
+    _q(g, "--theta0", "inclination")
+    _q(g, "--k0", "intrinsic spring constant (or give --B)")
+    _q(g, "--B", "flexural rigidity")
+    _q(g, "--m-joint", "point mass at the beam-base joint", dest="m_joint")
+    _q(g, "--m-base", "mass spread along the base", dest="m_base")
 
 
 def _spring_group(parser):
     g = parser.add_argument_group("simple spring (spring model; eq 1)")
-    _q(g, "--spring-constant", "stiffness", "N/m", "spring constant k", dest="spring_constant")
-    _q(g, "--mass", "mass", "kg", "effective mass m", default_text="10 ug")
+    _q(g, "--spring-constant", "spring constant k", dest="spring_constant")
+    _q(g, "--mass", "effective mass m")
 
 
 def _surface_group(parser):
-    g = parser.add_argument_group("surfaces (eq 2, drainage)")
-    _q(g, "--radius", "length", "m", "effective radius R")
-    _q(g, "--hamaker", "energy", "J", "Hamaker constant A")
-    _q(g, "--z0", "length", "m", "soft-wall length")
-    _q(g, "--viscosity", "viscosity", "Pa*s", "fluid viscosity (drainage)")
+    g = parser.add_argument_group("surfaces (radius, drainage; eq 2's flags: law van_der_waals below)")
+    _q(g, "--radius", "effective radius R")
+    _q(g, "--viscosity", "fluid viscosity (drainage)")
 
 
 def _liquid_group(parser):
-    g = parser.add_argument_group("liquid (issue 25; docs/liquid.md)")
+    g = parser.add_argument_group("liquid (issue 25; docs/liquid.md; the double layer's flags: law "
+                                  "double_layer below)")
     from ..constants import MEDIA
+    from ..forces import GEOMETRIES
     g.add_argument("--medium", default=None, choices=sorted(MEDIA),
                    help="set --viscosity and --permittivity of this medium at 25 C "
                         "(flags given explicitly win)")
-    g.add_argument("--geometry", default=None, choices=("sphere-sphere", "sphere-flat"),
-                   help="sphere-sphere: the paper (R_eff = R/2); sphere-flat: a colloid probe "
-                        "(R_eff = R) (default sphere-sphere)")
-    g.add_argument("--double-layer", dest="double_layer", default=None,
-                   choices=("none", "weak_overlap", "constant_potential", "constant_charge"),
-                   help="double-layer law (default none)")
-    _q(g, "--surface-potential", "voltage", "V", "surface potential psi1", dest="surface_potential")
-    _q(g, "--surface-potential-2", "voltage", "V", "substrate potential psi2 (default psi1)",
-       dest="surface_potential_2")
-    _q(g, "--debye-length", "length", "m", "Debye length", dest="debye_length")
-    _q(g, "--salt-concentration", "concentration", "mol/m^3",
-       "symmetric salt concentration (instead of --debye-length; 1mM = 1 mol/m^3)",
-       dest="salt_concentration")
-    _q(g, "--valence", "dimensionless", "", "valence z of the salt")
-    _q(g, "--permittivity", "dimensionless", "", "relative permittivity")
-    _q(g, "--slip-length", "length", "m", "slip length b", dest="slip_length")
-    _q(g, "--lever-drag", "damping", "N s/m", "drag coefficient of the lever body", dest="lever_drag")
-    _q(g, "--lever-height", "length", "m", "lever height at contact (0: constant drag)",
+    lazy_help(g.add_argument("--geometry", default=None, choices=tuple(GEOMETRIES),
+                             help="sphere-sphere: the paper (R_eff = R/2); sphere-flat: a colloid probe "
+                                  "(R_eff = R) (default "), lambda: f"{_defaults()['geometry']})")
+    _q(g, "--slip-length", "slip length b", dest="slip_length")
+    _q(g, "--lever-drag", "drag coefficient of the lever body", dest="lever_drag")
+    _q(g, "--lever-height", "lever height at contact (0: constant drag)",
        dest="lever_height")
 
 
 def _laws_groups(parser):
-    """One group per surface force law of :mod:`afmforce.surface_laws`, its flags from the record
-    (a parameter shared by two laws, e.g. temperature, appears with the first)."""
+    """One group per surface force law of :mod:`afmforce.surface_laws` (the model's eq 2 and double
+    layer included), its flags from the record: the choice of its form (``switch``) and its
+    parameters (a parameter shared by two laws, e.g. temperature, appears with the first)."""
     from ..surface_laws import LAWS
 
     seen: set[str] = set()
     for name, law in LAWS.items():
         g = parser.add_argument_group(f"surface force law {name}: {law.title}",
                                       f"{law.reference}. Valid: {law.validity}.")
+        if law.switch is not None:
+            sw = law.switch
+            g.add_argument("--" + sw.name.replace("_", "-"), dest=sw.name, default=None, choices=tuple(sw.choices),
+                           help=f"{sw.help}: " + "; ".join(f"{k}: {v}" for k, v in sw.choices.items())
+                                + f" (default {sw.default})")   # the configuration's default: the record's
         for p in law.parameters:
             if p.name not in seen:
                 seen.add(p.name)
@@ -128,24 +123,25 @@ def _laws_groups(parser):
 def _friction_group(parser):
     g = parser.add_argument_group("tip friction (beam model; eq 28)")
     lazy_help(g.add_argument("--friction", default=None, metavar="LAW", help="friction law: "),
-              lambda: "; ".join(f"{k}: {v.formula}" for k, v in _dyn().FRICTION_LAWS.items()) + " (default viscous)")
-    _q(g, "--xi", "damping", "kg/s", "friction coefficient xi")
-    _q(g, "--zeta", "friction_per_force2", "kg/(s N^2)", "load-dependent coefficient zeta")
+              lambda: "; ".join(f"{k}: {v.formula}" for k, v in _dyn().FRICTION_LAWS.items())
+              + f" (default {_defaults()['friction']})")
+    _q(g, "--xi", "friction coefficient xi")
+    _q(g, "--zeta", "load-dependent coefficient zeta")
 
 
 def _drive_group(parser):
     g = parser.add_argument_group("drive (substrate position z, up = towards the probe)")
-    _q(g, "--velocity", "velocity", "m/s", "approach speed")
-    _q(g, "--retract-velocity", "velocity", "m/s", "retract speed (default: --velocity)",
+    _q(g, "--velocity", "approach speed")
+    _q(g, "--retract-velocity", "retract speed (default: --velocity)",
        dest="retract_velocity")
-    _q(g, "--start", "length", "m", "start position (out of contact)")
-    _q(g, "--turn", "length", "m", "turn position (limit when turning at a load)")
-    _q(g, "--turn-force", "force", "N", "turn when the normal force reaches this",
+    _q(g, "--start", "start position (out of contact)")
+    _q(g, "--turn", "turn position (limit when turning at a load)")
+    _q(g, "--turn-force", "turn when the normal force reaches this",
        dest="turn_force")
-    _q(g, "--turn-deflection", "length", "m", "turn when the deflection reaches this",
+    _q(g, "--turn-deflection", "turn when the deflection reaches this",
        dest="turn_deflection")
-    _q(g, "--dwell", "time", "s", "pause at the turn")
-    _q(g, "--end", "length", "m", "end position of the retract")
+    _q(g, "--dwell", "pause at the turn")
+    _q(g, "--end", "end position of the retract")
 
 
 def add_sampling_flag(group, default: str | None = None) -> None:
@@ -159,13 +155,14 @@ def add_sampling_flag(group, default: str | None = None) -> None:
 
 def _solver_group(parser):
     g = parser.add_argument_group("sampling and solver")
-    _q(g, "--sample-rate", "frequency", "Hz", "instrument sample rate", dest="sample_rate")
-    _q(g, "--rtol", "dimensionless", "", "relative tolerance (velocities, Newton)")
-    _q(g, "--atol", "length", "m", "absolute tolerance on positions")
+    _q(g, "--sample-rate", "instrument sample rate", dest="sample_rate")
+    _q(g, "--rtol", "relative tolerance (velocities, Newton)")
+    _q(g, "--atol", "absolute tolerance on positions")
     lazy_help(g.add_argument("--ringing", default=None, metavar="HOW", help="in-contact ringing: "),
-              lambda: "; ".join(f"{k}: {v.name}" for k, v in _dyn().RINGING.items()) + " (default damp)")
+              lambda: "; ".join(f"{k}: {v.name}" for k, v in _dyn().RINGING.items())
+              + f" (default {_defaults()['ringing']})")
     add_sampling_flag(g)
-    _q(g, "--max-steps", "integer", "", "step budget (default: sized from the run, max(2e6, 60 f_max T))",
+    _q(g, "--max-steps", "step budget (default: sized from the run, max(2e6, 60 f_max T))",
        dest="max_steps")
     g.add_argument("--check", choices=("off", "auto", "always", "raise"), default="auto",
                    help="convergence guard: re-solve 10x tighter in risky regimes (auto, "

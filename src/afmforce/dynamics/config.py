@@ -100,6 +100,14 @@ class FlatName:
         return None if self.field is None else self.field.metadata.get("spec")
 
     @property
+    def choices(self) -> tuple[str, ...]:
+        """The words a text field accepts, as its part declares them (``model``: the probes'
+        kinds); () for a number. Every face (the web's form, the OpenAPI schema) reads this."""
+        if self.field is None:
+            return tuple(MODELS)
+        return tuple(self.field.metadata.get("choices", ()))
+
+    @property
     def default(self) -> Any:
         """The default value [SI] (B: the rigidity used when neither k0 nor B is given)."""
         if self.field is None:

@@ -165,13 +165,13 @@ def _add_law(total, kernel, o):
 
 
 def _laws_chain():
-    """One compiled function adding every law of :data:`afmforce.surface_laws.LAWS` to (F, F'):
+    """One compiled function adding every law of :data:`afmforce.surface_laws.COMPILED` to (F, F'):
     a chain of pieces, one per law, each with its kernel and its slot (no code generation; the
     pieces are inlined into the cached entry point, whose cache the sources' digest guards)."""
     total = piece(inline=True, python=True)(_no_law)
-    names = list(surface_laws.LAWS)
+    names = list(surface_laws.COMPILED)
     for name in names:
-        kernel = piece(inline=True, python=True)(surface_laws.LAWS[name].kernel)
+        kernel = piece(inline=True, python=True)(surface_laws.COMPILED[name].kernel)
         # the last link is not forced inline: static_force stays small (LLVM inlines it into
         # rhs and jac as before) and calls the chain only when a law is on
         total = piece(inline=name != names[-1], python=True)(

@@ -30,8 +30,11 @@ from .._fields import check_beam
 from ..cantilever import InclinedCantilever
 from ..constants import FIG1, FIG5
 from ..errors import ParameterError
-from ..forces import DOUBLE_LAYERS, GEOMETRIES, debye_length
+from ..forces import GEOMETRIES
+from ..surface_laws import LAWS as _LAWS
+from ..surface_laws import MODEL_PARAMETERS
 from ..surface_laws import PARAMETERS as LAW_PARAMETERS
+from ..surface_laws.double_layer import screening_length
 from ..surface_laws import active_laws
 from ..surface_laws import reach as law_reach
 from ._part import DOMAINS, Part, choice, quantity, validate
@@ -198,6 +201,17 @@ PROBES: dict[str, type] = {"beam": BeamProbe, "spring": SpringProbe}
 
 
 # --- surfaces, friction, drive, numerics ---------------------------------------
+def _law_quantity(name: str):
+    """A field of a parameter of the model's own surface laws (eq 2, the double layer): default and
+    domain from its law's record (:data:`afmforce.surface_laws.MODEL_PARAMETERS`)."""
+    p = MODEL_PARAMETERS[name]
+    return quantity(name, p.default, p.domain)
+
+
+#: The double layer's choice of boundary condition, declared by its law's record.
+_DL = _LAWS["double_layer"].switch
+
+
 @dataclass(frozen=True)
 class _SurfaceBase(Part):
     """The surfaces: van der Waals force with a soft wall (eq 2) and drainage; in a liquid also
@@ -238,32 +252,29 @@ class _SurfaceBase(Part):
     """
 
     radius: float = quantity("radius", FIG5["radius"], "positive")
-    hamaker: float = quantity("hamaker", FIG5["hamaker"], "positive")
-    z0: float = quantity("z0", FIG5["z0"], "positive")
+    hamaker: float = _law_quantity("hamaker")
+    z0: float = _law_quantity("z0")
     viscosity: float = quantity("viscosity", FIG5["viscosity"], "non_negative")
     geometry: str = choice("sphere-sphere", GEOMETRIES, "geometry of the surfaces")
-    double_layer: str = choice("none", DOUBLE_LAYERS, "double-layer law")
-    surface_potential: float = quantity("surface_potential", 0.0, "finite")
-    surface_potential_2: float | None = quantity("surface_potential_2", None, "optional_finite")
-    debye_length: float | None = quantity("debye_length", None, "optional_positive")
-    salt_concentration: float | None = quantity("salt_concentration", None, "optional_positive")
-    valence: float = quantity("valence", 1.0, "positive")
-    permittivity: float = quantity("permittivity", 78.5, "positive")
+    double_layer: str = choice(_DL.default, _DL.choices, _DL.help)
+    surface_potential: float = _law_quantity("surface_potential")
+    surface_potential_2: float | None = _law_quantity("surface_potential_2")
+    debye_length: float | None = _law_quantity("debye_length")
+    salt_concentration: float | None = _law_quantity("salt_concentration")
+    valence: float = _law_quantity("valence")
+    permittivity: float = _law_quantity("permittivity")
     slip_length: float = quantity("slip_length", 0.0, "non_negative")
     lever_drag: float = quantity("lever_drag", 0.0, "non_negative")
     lever_height: float = quantity("lever_height", 0.0, "non_negative")
 
     def __post_init__(self) -> None:
         validate(self)
-        if self.salt_concentration is not None:
-            lam = float(debye_length(self.valence**2 * self.salt_concentration * 1e-3,
-                                     self.permittivity))
-            if self.debye_length is not None and not math.isclose(self.debye_length, lam, rel_tol=1e-9):
-                raise ParameterError("give at most one of debye_length [m] or salt_concentration "
-                                     "[mol/m^3]")
-            object.__setattr__(self, "debye_length", lam)
-        elif self.debye_length is None:
-            object.__setattr__(self, "debye_length", 10e-9)
+        lam = screening_length(self.debye_length, self.salt_concentration, self.valence, self.permittivity)
+        if self.salt_concentration is not None and self.debye_length is not None \
+                and not math.isclose(self.debye_length, lam, rel_tol=1e-9):
+            raise ParameterError("give at most one of debye_length [m] or salt_concentration "
+                                 "[mol/m^3]")
+        object.__setattr__(self, "debye_length", lam)
 
     def replace(self, **changes) -> Surface:
         """A copy with some fields changed; a new salt concentration replaces the Debye length

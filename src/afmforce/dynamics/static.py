@@ -23,6 +23,7 @@ from .._validate import positive
 from ..constants import HAMAKER, Z0
 from ..errors import ParameterError
 from ..forces import static_jump_in_separation, vdw_force, vdw_force_gradient
+from ..surface_laws import LAWS
 from ..surface_laws import reach as law_reach
 from ..surface_laws import total_force
 
@@ -210,7 +211,10 @@ def surface_jump_in(spring_constant: float, surface) -> tuple[float, float, floa
 @lru_cache(maxsize=1024)
 def _surface_jump_in(k: float, s) -> tuple[float, float, float]:
     from scipy.optimize import brentq
-    hi = max(60.0 * s.debye_length, 200e-9, 2.0 * law_reach(s.law_values))
+    # out to where the model's own laws (eq 2, the double layer) and twice the others' reach
+    model = (law.reach({p.name: getattr(s, p.name) for p in law.parameters})
+             for law in LAWS.values() if not law.compiled)
+    hi = max(*model, 2.0 * law_reach(s.law_values))
     h = np.geomspace(0.5 * s.z0, hi, 6000)[::-1]
     _, df = surface_static_force(s, h)
     above = np.nonzero(df >= k)[0]

@@ -81,19 +81,32 @@ class FitParameter:
         return max(self.rel_step * abs(value), self.abs_step)
 
 
+def _model_law(name: str) -> FitParameter:
+    """The fit parameter of a parameter of the model's own surface laws (eq 2, the double layer):
+    scale, steps and search window from the law's record (:mod:`afmforce.surface_laws`), bounds
+    from the quantity's range."""
+    from ..surface_laws import LAWS
+
+    law, p = next((law, p) for law in LAWS.values() if not law.compiled for p in law.parameters
+                  if p.name == name)
+    scale, rel, step = p.fit
+    lower, upper = p.fit_window if p.fit_window is not None else (None, None)
+    return FitParameter(name, None, lower, upper, scale, rel, step, ("beam", "spring"),
+                        f"{QUANTITIES[name].help} ({law.name} law{'; ' + p.note if p.note else ''})")
+
+
 #: Parameters that ``fit_dynamic(free=...)`` and ``afmforce fit --free`` accept.
 PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
-    # unit, lower, upper None: the declaration's (afmforce._fields.QUANTITIES); numbers: a narrower search window
-    FitParameter("hamaker", None, None, None, 1e-19, 0.01, 1e-23, ("beam", "spring"),
-                 "Hamaker constant A (the data fix A*R; R is given)"),
+    # unit, lower, upper None: the declaration's (afmforce._fields.QUANTITIES); numbers: a narrower search window;
+    # the parameters of the model's surface laws (eq 2, the double layer) from their records (_model_law)
+    _model_law("hamaker"),
     FitParameter("radius", None, 1e-9, 1e-4, 1e-7, 0.01, 1e-11, ("beam", "spring"),
                  "effective radius R (the data fix A*R; A is given)"),
     FitParameter("xi", None, None, 10.0, 1e-2, 0.02, 2e-4, ("beam",),
                  "viscous tip friction coefficient (eq 28)", True),
     FitParameter("zeta", None, None, None, 1e14, 0.02, 1e12, ("beam",),
                  "load-proportional friction coefficient (friction='load')", True),
-    FitParameter("z0", None, 0.1e-9, 2e-9, 1e-9, 0.005, 1e-13, ("beam", "spring"),
-                 "soft-wall length of eq 2"),
+    _model_law("z0"),
     FitParameter("viscosity", None, None, 1.0, 1e-4, 0.02, 1e-6, ("beam", "spring"),
                  "fluid viscosity (drainage)", True),
     FitParameter("mass", None, 1e-15, None, 1e-9, 0.02, 1e-16, ("spring",),
@@ -109,10 +122,8 @@ PARAMETERS: dict[str, FitParameter] = {p.name: p for p in (
                  "intrinsic spring constant of the beam, in situ (from the drainage force)"),
     FitParameter("lever_drag", None, None, None, 1e-5, 0.02, 1e-8, ("beam", "spring"),
                  "drag coefficient of the lever body (approach and retract together fix it)"),
-    FitParameter("surface_potential", None, None, None, 0.01, 0.01, 1e-5, ("beam", "spring"),
-                 "surface potential psi1 (double layer)"),
-    FitParameter("debye_length", None, None, None, 1e-8, 0.01, 1e-12, ("beam", "spring"),
-                 "Debye length of the double layer"),
+    _model_law("surface_potential"),
+    _model_law("debye_length"),
 )}
 
 
@@ -125,7 +136,7 @@ def _law_parameters() -> dict[str, FitParameter]:
     out = {}
     for law in LAWS.values():
         for p in law.parameters:
-            if p.fit is None or p.name in out:
+            if p.fit is None or p.name in out or not law.compiled:
                 continue
             spec = QUANTITIES[p.name]
             scale, rel, step = p.fit

@@ -21,13 +21,13 @@ Conventions (spec section 1)
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass, field
 from typing import Any, Mapping
 
 import numpy as np
 
 from ..errors import AnalysisError, FileFormatError
+from .deflection import signal_factor
 
 __all__ = ["RawCurve", "SEGMENT_APPROACH", "SEGMENT_RETRACT", "SEGMENT_DWELL", "DEFLECTION_UNITS",
            "POSITION_CHANNELS"]
@@ -38,11 +38,6 @@ SEGMENT_DWELL = 2
 DEFLECTION_UNITS = ("V", "m", "N")
 #: The position channels one may ask for: ``auto`` is the measured one when recorded, else the nominal.
 POSITION_CHANNELS = ("auto", "measured", "nominal")
-
-
-def _known(value: Any) -> float:
-    """A calibration value as a float; NaN when it is unknown (None, 0 or missing)."""
-    return float(value) if value else math.nan
 
 
 @dataclass(frozen=True)
@@ -145,20 +140,15 @@ class RawCurve:
         NaN when the one the unit needs is unknown (None, 0 or missing).
         """
         md = self.metadata or {}
-        if self.deflection_unit == "V":
-            return _known(sensitivity if sensitivity is not None else md.get("sensitivity"))
-        if self.deflection_unit == "m":
-            return 1.0
-        k = spring_constant if spring_constant is not None else md.get("spring_constant")
-        return 1.0 / float(k) if k else math.nan
+        return signal_factor(self.deflection_unit,
+                             sensitivity if sensitivity is not None else md.get("sensitivity"),
+                             spring_constant if spring_constant is not None else md.get("spring_constant"))
 
     def force_factor(self, sensitivity: float | None = None, spring_constant: float | None = None) -> float:
         """Force per unit of ``deflection_signal`` [N/V, N/m or 1]: sensitivity x k for volts, k for
         metres, 1 for newtons (defaults and NaN as :meth:`deflection_factor`)."""
         md = self.metadata or {}
-        if self.deflection_unit == "N":
-            return 1.0
-        k = _known(spring_constant if spring_constant is not None else md.get("spring_constant"))
-        if self.deflection_unit == "m":
-            return k
-        return _known(sensitivity if sensitivity is not None else md.get("sensitivity")) * k
+        return signal_factor(self.deflection_unit,
+                             sensitivity if sensitivity is not None else md.get("sensitivity"),
+                             spring_constant if spring_constant is not None else md.get("spring_constant"),
+                             to="force")

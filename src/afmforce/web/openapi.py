@@ -50,17 +50,12 @@ def number_schema(spec, default: Any = None, help: str = "") -> dict[str, Any]:
 
 def config_schema() -> dict[str, Any]:
     """``SimulationConfig`` as flat names (:data:`afmforce.dynamics.config.FLAT`)."""
-    from ..dynamics import FRICTION_LAWS, MODELS, RINGING, SAMPLING
     from ..dynamics.config import FLAT
 
-    registries = {"model": MODELS, "friction": FRICTION_LAWS, "ringing": RINGING, "sampling": SAMPLING}
     props: dict[str, Any] = {}
     for name, where in FLAT.items():
         if where.spec is None:
-            choices = registries.get(name)
-            if choices is None and where.field is not None:
-                choices = where.field.metadata.get("choices", {})
-            props[name] = {"type": "string", "enum": sorted(choices or ()), "description": name}
+            props[name] = {"type": "string", "enum": sorted(where.choices), "description": name}
             if isinstance(where.default, str):
                 props[name]["default"] = where.default
         else:

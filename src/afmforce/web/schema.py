@@ -49,13 +49,11 @@ def field_json(name: str, spec: FieldSpec | None, default: Any, *, choices=(), h
 @lru_cache(maxsize=1)
 def simulation_fields() -> list[dict[str, Any]]:
     """Every flat name of a :class:`~afmforce.dynamics.SimulationConfig`, in header order."""
-    from ..dynamics import FRICTION_LAWS, MODELS, RINGING, SAMPLING
     from ..dynamics.config import FLAT
 
-    registries = {"model": MODELS, "friction": FRICTION_LAWS, "ringing": RINGING, "sampling": SAMPLING}
     out = []
     for name, where in FLAT.items():
-        d = field_json(name, where.spec, where.default, choices=tuple(registries.get(name, ())),
+        d = field_json(name, where.spec, where.default, choices=where.choices,
                        help=name if where.spec is None else "")
         d.update(part=where.part, models=list(where.models))
         out.append(d)
