@@ -7,7 +7,7 @@ import numpy as np
 from numba import njit
 
 from ._contact_kernel import pairwise_sum
-from ._numeric import robust_line
+from ._numeric import robust_line, running_mean
 
 __all__ = ["staircase_window", "smooth_runs", "compliance_line"]
 
@@ -43,52 +43,23 @@ def staircase_window(z, minimum):
 @njit(cache=True)
 def smooth_runs(z, segment, window):
     """Running mean (:func:`~._numeric.running_mean`) of ``z`` over each run (segment 0, 1, 2) separately,
-    the runs' samples in time order: the smoothed copy and its largest change.
-
-    The same sums and divisions as ``running_mean`` (cumulative sums from the run's first sample;
-    each mean ``(c[i + h + 1] - c[i - h]) / (2 h + 1)``), the runs' samples gathered in one pass and
-    the full windows, away from the ends, in a loop of their own."""
-    n = z.size
+    the runs' samples in time order: the smoothed copy and its largest change."""
     out = z.copy()
-    count = np.zeros(3, np.int64)
-    for i in range(n):
-        g = segment[i]
-        if g == 0 or g == 1 or g == 2:
-            count[g] += 1
-    first = np.zeros(4, np.int64)
-    for g in range(3):
-        first[g + 1] = first[g] + count[g]
-    idx = np.empty(first[3], np.int64)
-    pos = first[:3].copy()
-    for i in range(n):
-        g = segment[i]
-        if g == 0 or g == 1 or g == 2:
-            idx[pos[g]] = i
-            pos[g] += 1
-    half = window // 2
-    full = float(2 * half + 1)
-    c = np.empty(n + 1)
-    sm = np.empty(n)
-    for g in range(3):
-        m = count[g]
+    idx = np.empty(z.size, np.int64)
+    for which in range(3):
+        m = 0
+        for i in range(z.size):
+            if segment[i] == which:
+                idx[m] = i
+                m += 1
         if m == 0:
             continue
-        run = idx[first[g]:first[g + 1]]
-        c[0] = 0.0
+        zr = np.empty(m)
         for i in range(m):
-            c[i + 1] = c[i] + z[run[i]]
-        lo = min(half, m)
-        hi = max(m - half, lo)
-        for i in range(lo):
-            h = min(half, i, m - 1 - i)
-            sm[i] = (c[i + h + 1] - c[i - h]) / (2 * h + 1)
-        for i in range(lo, hi):  # h = half
-            sm[i] = (c[i + half + 1] - c[i - half]) / full
-        for i in range(hi, m):
-            h = min(half, i, m - 1 - i)
-            sm[i] = (c[i + h + 1] - c[i - h]) / (2 * h + 1)
+            zr[i] = z[idx[i]]
+        sm = running_mean(zr, window)
         for i in range(m):
-            out[run[i]] = sm[i]
+            out[idx[i]] = sm[i]
     change = 0.0  # np.max(np.abs(out - z)) (NaN first)
     for i in range(z.size):
         d = abs(out[i] - z[i])
