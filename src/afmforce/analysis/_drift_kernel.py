@@ -450,7 +450,14 @@ def decide(t, s, a_index, a_zf, a_split, r_index, r_zf, z, has_z, order, min_poi
     ``off_r`` and ``slope_r`` are left to :func:`~.drift.family_coef` on the family ``p`` with the
     settling column ``k``."""
     nan = math.nan
-    finite = np.isfinite(t).all() and np.isfinite(s).all() and (not has_z or np.isfinite(z).all())
+    finite = True  # np.isfinite(t).all() and np.isfinite(s).all() and (not has_z or np.isfinite(z).all())
+    for a in (t, s, z if has_z else t):
+        for v in a:
+            if not math.isfinite(v):
+                finite = False
+                break
+        if not finite:
+            break
     n = s.size
     for idx in (a_index, r_index):
         for i in idx:
