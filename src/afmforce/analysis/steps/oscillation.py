@@ -39,9 +39,11 @@ def oscillation(st: State, o: OscillationOptions) -> State:
                 nyq = 0.5 / dt if dt > 0 else math.nan   # repeated time stamps: no Nyquist frequency
             peaks[run.kind] = _no_peak(run.kind, v, nyquist=nyq)  # find_peak's answer for no samples
             continue
-        x = st.z[idx] - st.z[idx].mean()
-        a, b, *_ = robust_line(x, st.deflection[idx], 6, 4.685)
-        resid = st.deflection[idx] - (a + b * x)
+        zi = st.z[idx]
+        di = st.deflection[idx]
+        x = zi - zi.mean()
+        a, b, *_ = robust_line(x, di, 6, 4.685)
+        resid = di - (a + b * x)
         peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=o.min_cycles,
                                     false_alarm=o.false_alarm)
     origin, verdict, _ = both_runs(peaks["approach"], peaks["retract"])
