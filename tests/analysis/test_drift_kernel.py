@@ -16,7 +16,7 @@ import pytest
 
 from afmforce.analysis import _drift_kernel as K
 from afmforce.analysis import drift as D
-from afmforce.analysis._numeric import irls_bisquare
+from afmforce.analysis._numeric import irls_bisquare, median_near
 from afmforce.analysis.regions import RunRegions
 
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -55,17 +55,16 @@ def _design(rng, n, p):
 
 @pytest.mark.parametrize("n,p", [(40, 1), (301, 2), (1344, 2), (1344, 3), (4001, 3), (2000, 1)])
 def test_robust_fit_is_a_bisquare_irls(n, p):
-    """The kernel's IRLS equals a plain numpy bisquare IRLS (other solvers: to rounding), and
-    _numeric.irls_bisquare, whose numbers the drift lines carry, bit for bit."""
+    """_numeric.irls_bisquare (the drift kernels' robust fit, bracketed medians) equals a plain
+    numpy bisquare IRLS (other solvers: to rounding)."""
     rng = np.random.default_rng(n + p)
     X, y = _design(rng, n, p)
-    coef, sigma, ssr, ok = K.irls(X, y, 6, 4.685)
+    coef, sigma, ssr, ok = irls_bisquare(X, y, 6, 4.685)
     assert ok
     c_ref, s_ref = _plain_bisquare(X, y)
     np.testing.assert_allclose(coef, c_ref, rtol=1e-9, atol=1e-12)
     assert sigma == pytest.approx(s_ref, rel=1e-9)
-    c2, s2, q2, ok2 = irls_bisquare(X, y, 6, 4.685)
-    assert ok2 and np.array_equal(coef, c2) and sigma == s2 and ssr == q2
+    assert ssr > 0
 
 
 @pytest.mark.parametrize("n,p", [(40, 1), (301, 2), (1344, 3), (4001, 2)])
@@ -80,7 +79,7 @@ def test_uncompiled_robust_fit_is_the_compiled_one(n, p):
 
 
 def test_median_is_numpys():
-    """The bracketed median is np.median exactly: even and odd sizes, ties, brackets that hold the
+    """The bracketed median (_numeric.median_near) is np.median exactly: even and odd sizes, ties, brackets that hold the
     middle and brackets that miss it (then a full selection)."""
     rng = np.random.default_rng(5)
     for n in (1, 2, 3, 64, 65, 66, 300, 1343, 1344):
@@ -88,7 +87,7 @@ def test_median_is_numpys():
             buf = np.empty(n)
             m = float(np.median(x))
             for guess, width in ((0.0, 0.0), (m, 0.05), (m + 0.3, 0.1), (m, 1e-300), (-5.0, 1.0), (m, 10.0)):
-                assert K.median(x, guess, width, buf) == m, (n, guess, width)
+                assert median_near(x, guess, width, buf) == m, (n, guess, width)
 
 
 def _settling_run(seed, slope=0.02, jump=0.0, amplitude=-6e-3, n=165):

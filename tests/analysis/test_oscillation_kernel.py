@@ -50,3 +50,19 @@ def test_running_median_equals_scipy(m, width):
     p = rng.exponential(size=m)
     p[::7] = p[3]  # ties
     assert np.array_equal(_running_median_nearest(p, width), median_filter(p, size=width, mode="nearest"))
+
+
+def test_median_step_is_numpys():
+    """The sample step of a run too short for a search (its Nyquist frequency) is
+    np.median(np.diff(t[index])) exactly: even and odd counts, repeated stamps, uneven steps,
+    a NaN stamp (NaN, as numpy's)."""
+    from afmforce.analysis._oscillation_kernel import median_step
+
+    rng = np.random.default_rng(4)
+    for n in (2, 3, 4, 7, 8, 301, 1000):
+        t = np.cumsum(rng.choice([0.0, 1e-4, 2e-4, 2.5e-4], size=n)) + 0.3
+        for index in (np.arange(n), np.sort(rng.choice(n, max(2, n // 2), replace=False))):
+            assert median_step(t, index) == np.median(np.diff(t[index]))
+    t = np.arange(10) / 1e3
+    t[4] = np.nan
+    assert math.isnan(median_step(t, np.arange(10)))

@@ -4,9 +4,9 @@
 robust baselines (with the approach's tail regressor), the noisy retract's borrowed line, the
 settling test and the retract line's model with its best settling candidate. It gives the
 numbers that reach every sample bit for bit as the numpy code of :mod:`.drift` does (the same
-operations in the same order: :func:`irls` is :func:`~._numeric.irls_bisquare` with a faster
-exact median). What only decides between models (capped residual sums, the settling test, the
-settling candidates' exponentials) is computed here to rounding; the retract line's own
+operations in the same order; the robust fits by :func:`~._numeric.irls_bisquare`). What only
+decides between models (capped residual sums, the settling test, the settling candidates'
+exponentials) is computed here to rounding; the retract line's own
 coefficients, which numpy's BLAS and LAPACK compute in an order of their own, are left to
 :func:`~.drift.family_coef` (a handful of numpy calls). :func:`apply` subtracts the lines.
 
@@ -21,10 +21,10 @@ import math
 import numpy as np
 from numba import njit
 
-from ._numeric import _middle, _polyfit_qr, middle_bracket, solve_small
-from ._numeric import _wls_small as _wls
+from ._numeric import _polyfit_qr, solve_small
+from ._numeric import irls_bisquare
 
-__all__ = ["decide", "apply", "irls", "median", "LINES"]
+__all__ = ["decide", "apply", "LINES"]
 
 #: Line codes of :func:`decide`, as :class:`~.drift.DriftResult.retract_line` names them.
 LINES = ("approach", "continuous", "separate", "offset", "approach slope", "position tilt")
@@ -33,101 +33,6 @@ _MAX_POINTS = 4001      # drift.MAX_POINTS
 _SELECT_POINTS = 1000   # drift.SELECT_POINTS
 _TUNING = 4.685
 _N_ITER = 6
-
-
-@njit(cache=True)
-def median(x, guess, width, buf):
-    """``np.median(x)`` of a finite array (the same number: the middle order statistics, their
-    mean for an even size), from the samples in ``[guess - width, guess + width]`` when these
-    hold the middle (one counting pass, :func:`~._numeric.middle_bracket`), a quickselect of a
-    copy otherwise. ``buf``: scratch of ``x.size`` samples."""
-    n = x.size
-    half = n // 2
-    even = n % 2 == 0
-    if width > 0 and n > 64:
-        lo, hi, ok = middle_bracket(x, half, even, guess - width, guess + width, buf)
-        if ok:
-            return (lo + hi) / 2 if even else hi
-    for i in range(n):
-        buf[i] = x[i]
-    lo, hi = _middle(buf[:n], half, even)
-    return (lo + hi) / 2 if even else hi
-
-
-@njit(cache=True)
-def _resid(X, y, coef, r):
-    """``r = y - X coef`` as :func:`~._numeric.irls_bisquare` sums it (from 0.0, column by column)."""
-    n, p = X.shape
-    if p == 1:
-        c0 = coef[0]
-        for i in range(n):
-            r[i] = y[i] - (0.0 + X[i, 0] * c0)
-    elif p == 2:
-        c0 = coef[0]
-        c1 = coef[1]
-        for i in range(n):
-            r[i] = y[i] - ((0.0 + X[i, 0] * c0) + X[i, 1] * c1)
-    elif p == 3:
-        c0 = coef[0]
-        c1 = coef[1]
-        c2 = coef[2]
-        for i in range(n):
-            r[i] = y[i] - (((0.0 + X[i, 0] * c0) + X[i, 1] * c1) + X[i, 2] * c2)
-    else:
-        for i in range(n):
-            s = 0.0
-            for j in range(p):
-                s += X[i, j] * coef[j]
-            r[i] = y[i] - s
-
-
-@njit(cache=True)
-def irls(X, y, n_iter, tuning):
-    """:func:`~._numeric.irls_bisquare` (the same iterations, sums and order; its medians by
-    :func:`median`, bracketed by the previous iteration's): ``(coef, sigma, ssr, ok)``."""
-    n, p = X.shape
-    w = np.ones(n)
-    coef, ok = _wls(X, y, w)
-    if not ok:
-        return coef, 0.0, 0.0, False
-    sigma = 0.0
-    r = np.empty(n)
-    d = np.empty(n)
-    buf = np.empty(n)
-    med = 0.0
-    mad = 0.0
-    for it in range(n_iter):
-        _resid(X, y, coef, r)
-        if n == 0:
-            sigma = math.nan
-            break
-        # mad_sigma(r): 1.4826 * median(|r - median(r)|)
-        med = median(r, med, 0.05 * mad if it else 0.0, buf)
-        for i in range(n):
-            d[i] = abs(r[i] - med)
-        mad = median(d, mad, 0.05 * mad if it else 0.0, buf)
-        sigma = 1.4826 * mad
-        if not sigma > 0:
-            break
-        c = tuning * sigma
-        for i in range(n):
-            u = r[i] / c
-            w[i] = (1.0 - u * u) ** 2 if abs(u) < 1.0 else 0.0
-        new, ok = _wls(X, y, w)
-        if not ok:
-            return coef, sigma, 0.0, False
-        moved = 0.0
-        for j in range(p):
-            moved += abs(new[j] - coef[j])
-        coef = new
-        if moved < 1e-4 * sigma:
-            break
-    _resid(X, y, coef, r)
-    ssr = 0.0
-    for i in range(n):
-        e = r[i]
-        ssr += w[i] * e * e
-    return coef, sigma, ssr, True
 
 
 @njit(cache=True)
@@ -173,7 +78,7 @@ def fit_baseline(t, s, order, tail, has_tail):
             X[i, 0] = 1.0
             X[i, 1] = tt[i] / sc
     p = X.shape[1]
-    coef, sigma, ssr, ok = irls(X, s, _N_ITER, _TUNING)
+    coef, sigma, ssr, ok = irls_bisquare(X, s, _N_ITER, _TUNING)
     if not ok:
         return 0.0, 0.0, 0.0, False
     if has_tail and n > p + 5 and _ptp(tail) > 0:
@@ -185,7 +90,7 @@ def fit_baseline(t, s, order, tail, has_tail):
             for j in range(p):
                 Xt[i, j] = X[i, j]
             Xt[i, p] = tail[i] / mx
-        coef_t, sigma_t, ssr_t, ok = irls(Xt, s, _N_ITER, _TUNING)
+        coef_t, sigma_t, ssr_t, ok = irls_bisquare(Xt, s, _N_ITER, _TUNING)
         if not ok:
             return 0.0, 0.0, 0.0, False
         if sigma > 0 and ssr - ssr_t > 25.0 * sigma ** 2:
@@ -218,7 +123,7 @@ def is_settling(t, s, nsigma=5.0):
     x2 /= n
     for i in range(n):
         X[i, 2] -= x2
-    coef, sigma, _, ok = irls(X, s, _N_ITER, _TUNING)
+    coef, sigma, _, ok = irls_bisquare(X, s, _N_ITER, _TUNING)
     if not ok:
         return False, False
     if not sigma > 0:
@@ -522,7 +427,7 @@ def borrowed(t, s, z, has_z, off_a, slope_a, t0a, tilt, noise, threshold=25.0):
             slope = slope_a
         elif cand == 2:
             tl = tilt
-        coef, _, _, ok = irls(X, y, _N_ITER, _TUNING)
+        coef, _, _, ok = irls_bisquare(X, y, _N_ITER, _TUNING)
         if not ok:
             return 0, 0.0, 0.0, 0.0, False
         ssr = 0.0
@@ -545,7 +450,14 @@ def decide(t, s, a_index, a_zf, a_split, r_index, r_zf, z, has_z, order, min_poi
     ``off_r`` and ``slope_r`` are left to :func:`~.drift.family_coef` on the family ``p`` with the
     settling column ``k``."""
     nan = math.nan
-    finite = np.isfinite(t).all() and np.isfinite(s).all() and (not has_z or np.isfinite(z).all())
+    finite = True  # np.isfinite(t).all() and np.isfinite(s).all() and (not has_z or np.isfinite(z).all())
+    for a in (t, s, z if has_z else t):
+        for v in a:
+            if not math.isfinite(v):
+                finite = False
+                break
+        if not finite:
+            break
     n = s.size
     for idx in (a_index, r_index):
         for i in idx:

@@ -494,10 +494,61 @@ def _wls_small(X, y, w):
 
 
 @njit(cache=True)
+def median_near(x, guess, width, buf):
+    """``np.median(x)`` of a finite array (the same number: the middle order statistics, their
+    mean for an even size), from the samples in ``[guess - width, guess + width]`` when these
+    hold the middle (one counting pass, :func:`middle_bracket`), a selection of a copy
+    otherwise. ``buf``: scratch of ``x.size`` samples."""
+    n = x.size
+    half = n // 2
+    even = n % 2 == 0
+    if width > 0 and n > 64:
+        lo, hi, ok = middle_bracket(x, half, even, guess - width, guess + width, buf)
+        if ok:
+            return (lo + hi) / 2 if even else hi
+    for i in range(n):
+        buf[i] = x[i]
+    lo, hi = _middle(buf[:n], half, even)
+    return (lo + hi) / 2 if even else hi
+
+
+@njit(cache=True)
+def _resid(X, y, coef, r):
+    """``r = y - X coef``, each row's sum from 0.0 column by column (p = 1..3 unrolled)."""
+    n, p = X.shape
+    if p == 1:
+        c0 = coef[0]
+        for i in range(n):
+            r[i] = y[i] - (0.0 + X[i, 0] * c0)
+    elif p == 2:
+        c0 = coef[0]
+        c1 = coef[1]
+        for i in range(n):
+            r[i] = y[i] - ((0.0 + X[i, 0] * c0) + X[i, 1] * c1)
+    elif p == 3:
+        c0 = coef[0]
+        c1 = coef[1]
+        c2 = coef[2]
+        for i in range(n):
+            r[i] = y[i] - (((0.0 + X[i, 0] * c0) + X[i, 1] * c1) + X[i, 2] * c2)
+    else:
+        for i in range(n):
+            s = 0.0
+            for j in range(p):
+                s += X[i, j] * coef[j]
+            r[i] = y[i] - s
+
+
+@njit(cache=True)
 def irls_bisquare(X, y, n_iter, tuning):
     """Bisquare-weighted least squares of ``y`` on the columns of ``X`` (see
     :func:`afmforce.analysis.drift._irls`): ``(coef, sigma, weighted SSR, ok)``; ``ok`` False when a
-    normal-equation system was singular (the caller then uses its numpy version)."""
+    normal-equation system was singular (the caller then uses its numpy version).
+
+    Each iteration: the residuals, their scale ``1.4826 * median(|r - median(r)|)`` (the medians
+    exactly ``np.median``'s, selected among the samples near the previous iteration's:
+    :func:`median_near`), the bisquare weights, the weighted normal equations
+    (:func:`_wls_small`); it stops once the coefficients move by less than 1e-4 of the scale."""
     n, p = X.shape
     w = np.ones(n)
     coef, ok = _wls_small(X, y, w)
@@ -505,13 +556,20 @@ def irls_bisquare(X, y, n_iter, tuning):
         return coef, 0.0, 0.0, False
     sigma = 0.0
     r = np.empty(n)
-    for _ in range(n_iter):
+    d = np.empty(n)
+    buf = np.empty(n)
+    med = 0.0
+    mad = 0.0
+    for it in range(n_iter):
+        _resid(X, y, coef, r)
+        if n == 0:
+            sigma = math.nan
+            break
+        med = median_near(r, med, 0.05 * mad if it else 0.0, buf)
         for i in range(n):
-            s = 0.0
-            for j in range(p):
-                s += X[i, j] * coef[j]
-            r[i] = y[i] - s
-        sigma = mad_sigma(r)
+            d[i] = abs(r[i] - med)
+        mad = median_near(d, mad, 0.05 * mad if it else 0.0, buf)
+        sigma = 1.4826 * mad
         if not sigma > 0:
             break
         c = tuning * sigma
@@ -527,12 +585,10 @@ def irls_bisquare(X, y, n_iter, tuning):
         coef = new
         if moved < 1e-4 * sigma:
             break
+    _resid(X, y, coef, r)
     ssr = 0.0
     for i in range(n):
-        s = 0.0
-        for j in range(p):
-            s += X[i, j] * coef[j]
-        e = y[i] - s
+        e = r[i]
         ssr += w[i] * e * e
     return coef, sigma, ssr, True
 

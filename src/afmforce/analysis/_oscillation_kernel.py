@@ -15,7 +15,7 @@ from numba import njit
 
 from ._numeric import _polyfit_qr
 
-__all__ = ["detrend", "band_peak"]
+__all__ = ["detrend", "band_peak", "median_step"]
 
 
 @njit(cache=True)
@@ -48,6 +48,20 @@ def detrend(t, r, w):
         y = y * tt[i] + c[3]
         xw[i] = (r[i] - y) * w[i]
     return dt, xw, True
+
+
+@njit(cache=True)
+def median_step(t, index):
+    """``np.median(np.diff(t[index]))`` (the same number; NaN when a step is NaN, as numpy's) of at
+    least two samples: a run's sample step when it is too short for a search."""
+    m = index.size - 1
+    d = np.empty(m)
+    for i in range(m):
+        v = t[index[i + 1]] - t[index[i]]
+        if v != v:
+            return np.nan
+        d[i] = v
+    return np.median(d)
 
 
 @njit(cache=True)

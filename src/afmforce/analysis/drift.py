@@ -534,34 +534,40 @@ def _remove_drift_numpy(t: np.ndarray, s: np.ndarray, segment: np.ndarray, appro
 
 
 def _tau(start: float, stop: float, num: int, k: int) -> float:
-    """``np.geomspace(start, stop, num)[k]`` for ``0 < start, stop`` (the same number: its own calls,
-    without its checks and rotations)."""
+    """``np.geomspace(start, stop, num)[k]`` for ``0 < start, stop`` (the same number: its
+    ``np.linspace`` element ``k * step + log10(start)`` and ``np.power``, on scalars)."""
     if k == 0:
         return start
     if k == num - 1:
         return stop
-    y = np.linspace(np.log10(np.asarray(start, dtype=float)), np.log10(np.asarray(stop, dtype=float)), num)
-    return np.power(10.0, y)[k]
+    lo = np.log10(np.float64(start))
+    step = float(np.log10(np.float64(stop)) - lo) / (num - 1)
+    if step == 0:  # linspace's denormal branch (never for a settling grid)
+        y = np.linspace(lo, np.log10(np.float64(stop)), num)
+        return float(np.power(10.0, y)[k])
+    return float(np.power(10.0, float(k) * step + float(lo)))
 
 
 def family_coef(X: np.ndarray, y: np.ndarray, t: np.ndarray, k: int) -> np.ndarray:
     """The coefficients of ``X`` that :func:`_family` gives when its settling column ``k`` of
     ``_transient(t)`` wins (-1: none wins), bit for bit, in fewer numpy calls: the winner's system
-    alone, from a matrix that holds only its column (BLAS and einsum give each column's sums from
-    that column alone: ``tests/analysis/test_drift.py`` checks it)."""
+    alone, from a matrix that holds only its column (BLAS gives each column's sums from that column
+    alone; einsum's column sums are the sums in order, ``np.add.accumulate``'s:
+    ``tests/analysis/test_drift_kernel.py`` checks it against :func:`_family`)."""
     if k < 0:
         return _wls(X, y, np.ones(y.size))
     p = X.shape[1]
     span = float(t[-1] - t[0])
+    e = np.exp(-((t - t[0]) / _tau(span / (t.size - 1), span / 5.0, 16, k)))
     E = np.zeros((t.size, 16))
-    E[:, k] = np.exp(-((t - t[0]) / _tau(span / (t.size - 1), span / 5.0, 16, k)))
+    E[:, k] = e
     M = np.empty((1, p + 1, p + 1))
     rhs = np.empty((1, p + 1))
     M[0, :p, :p] = X.T @ X
     xe = (X.T @ E)[:, k]
     M[0, :p, p] = xe
     M[0, p, :p] = xe
-    M[0, p, p] = np.einsum("ij,ij->j", E, E)[k]
+    M[0, p, p] = _sum(e * e)
     rhs[0, :p] = X.T @ y
     rhs[0, p] = (E.T @ y)[k]
     return np.linalg.solve(M, rhs[..., None])[0, :p, 0]
@@ -608,11 +614,14 @@ def remove_drift(t: np.ndarray, s: np.ndarray, segment: np.ndarray, approach: Ru
         at_turn = off_a + slope_a * (t_turn - t0a)
         scale = max(float(tr[-1] - t_turn), 1e-300)
         y1 = sr - at_turn
+        X = np.empty((tr.size, p))  # np.column_stack([np.ones_like(tr), u]) for p = 2, u[:, None] for 1
+        X[:, p - 1] = (tr - t_turn) / scale
+        if p == 2:
+            X[:, 0] = 1.0
+        c = family_coef(X, y1, tr, k)
         if p == 1:
-            c = family_coef(((tr - t_turn) / scale)[:, None], y1, tr, k)
             off_r, slope_r = at_turn, float(c[0]) / scale
         else:
-            c = family_coef(np.column_stack([np.ones_like(tr), (tr - t_turn) / scale]), y1, tr, k)
             off_r, slope_r = at_turn + float(c[0]), float(c[1]) / scale
         t0r = t_turn
     out, base, ok = _K.apply(tf, sf, zf, a_idx, r_idx, off_a, slope_a, t0a, off_r, slope_r, t0r, tilt_r, z0r)

@@ -5,18 +5,25 @@ Declared once by its record :data:`OSCILLATION` (:mod:`afmforce.analysis.registr
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 
 from .._numeric import robust_line
+from .._oscillation_kernel import median_step
 from ..options import OscillationOptions
-from ..oscillation import OscillationResult, both_runs, find_peak
+from ..oscillation import OscillationResult, _compiled as compiled, _no_peak, both_runs, find_peak
 from ..registry import AnalysisStep, ResultField
 from ..state import State
 
 __all__ = ["oscillation", "OSCILLATION"]
+
+
+def _median_step(t: np.ndarray, index: np.ndarray) -> float:
+    """``np.median(np.diff(t[index]))``: one compiled call (numpy's when the kernels run as Python)."""
+    if t.dtype == np.float64 and t.flags.c_contiguous and index.dtype == np.int64 and compiled():
+        return float(median_step(t, index))
+    return float(np.median(np.diff(t[index])))
 
 
 def oscillation(st: State, o: OscillationOptions) -> State:
@@ -28,13 +35,15 @@ def oscillation(st: State, o: OscillationOptions) -> State:
         if not st.time_known or idx.size < 8:
             nyq = math.nan
             if st.time_known and run.index.size > 1:
-                dt = float(np.median(np.diff(st.time[run.index])))
+                dt = _median_step(st.time, run.index)
                 nyq = 0.5 / dt if dt > 0 else math.nan   # repeated time stamps: no Nyquist frequency
-            peaks[run.kind] = dataclasses.replace(find_peak(np.array([]), np.array([]), v, run.kind), nyquist=nyq)
+            peaks[run.kind] = _no_peak(run.kind, v, nyquist=nyq)  # find_peak's answer for no samples
             continue
-        x = st.z[idx] - st.z[idx].mean()
-        a, b, *_ = robust_line(x, st.deflection[idx], 6, 4.685)
-        resid = st.deflection[idx] - (a + b * x)
+        zi = st.z[idx]
+        di = st.deflection[idx]
+        x = zi - zi.mean()
+        a, b, *_ = robust_line(x, di, 6, 4.685)
+        resid = di - (a + b * x)
         peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=o.min_cycles,
                                     false_alarm=o.false_alarm)
     origin, verdict, _ = both_runs(peaks["approach"], peaks["retract"])
