@@ -204,9 +204,9 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
                  probe=probe, warnings=tuple(notes), cache=runs)
 
 
-#: The longest travel of an AFM scanner's z axis [m] (long-range heads move 100 um): a position
-#: spanning more is read with a wrong scale (a column in nm taken for metres).
-MAX_POSITION_SPAN = 1e-3
+#: No AFM scanner's z axis travels this far [m] (long-range heads move 100 um): a position spanning
+#: more is read with a wrong scale (a column in um or nm taken for metres).
+MAX_POSITION_SPAN = 1e-2
 
 
 def _check_calibration(metadata: Mapping[str, Any], probe: ProbeCalibration, unit: str) -> None:
@@ -257,7 +257,7 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
                                 "it; check the file's position channel (`channel`)")
     if max(spans) > MAX_POSITION_SPAN:
         raise AnalysisError(f"the {name} position spans {max(spans):.3g} m, beyond any AFM scanner's travel "
-                            f"({MAX_POSITION_SPAN * 1e3:g} mm): the file is read with a wrong position scale "
+                            f"({MAX_POSITION_SPAN * 1e3:g} mm; long-range heads move 0.1 mm): the file is read with a wrong position scale "
                             "(a column in nm taken for metres?) or is damaged")
     trend = []
     for i in idx:
