@@ -57,3 +57,27 @@ def test_no_contact_is_an_analysis_error():
     far = type(c)(**{**c.__dict__, "deflection_signal": np.where(away, c.deflection_signal[0], c.deflection_signal[0])})
     with pytest.raises(AnalysisError):
         measure_invols(far)
+
+
+def test_soft_contact_whose_runs_agree_is_still_no_calibration():
+    """An Asylum curve on a soft sample (the deflection follows 0.435 of the position in contact) whose
+    approach and retract lines agree: before, a "determined" InvOLS of 468 nm/V, 2.3 x the file's 203.6."""
+    c = load(DATA / "corpus" / "asylum-ibw_U3_3_p10004.ibw")[0]
+    r = measure_invols(c)
+    assert r.file_sensitivity == pytest.approx(203.64e-9, rel=1e-4)  # the wave note's InvOLS
+    assert abs(r.sensitivity_approach / r.sensitivity_retract - 1) < 0.10  # the runs agree ...
+    assert not r.determined and "the contact is soft" in r.verdict  # ... but the slope is not the lever's
+
+
+def test_cli_prints_no_interval_for_an_undetermined_invols(capsys):
+    from afmforce.cli.main import main
+
+    assert main(["calibrate", "invols", "--example"]) == 0
+    out = capsys.readouterr().out
+    row = next(ln for ln in out.splitlines() if ln.strip().startswith("InvOLS"))
+    assert "undetermined" in row and "+-" not in row and "934.45 nm/V" in row  # the 6-sample line, no interval
+    assert main(["calibrate", "invols", "--example", "--json"]) == 0
+    import json
+
+    d = json.loads(capsys.readouterr().out)
+    assert d["determined"] is False and d["sensitivity_se"] is None

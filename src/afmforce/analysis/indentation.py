@@ -22,6 +22,7 @@ from ..io.deflection import signal_factor
 from ._step_helpers import _kind, _skip
 from ._units import unit as _u
 from .options import IndentationOptions, ProbeCalibration
+from .plausibility import impossible_modulus
 from .state import State
 
 __all__ = ["IndentationResult", "indentation", "fast_modulus"]
@@ -109,6 +110,9 @@ def indentation(st: State, o: IndentationOptions) -> State:
                               transition=o.transition, branch=o.run, contact_point=o.contact_point)
     except (AnalysisError, ParameterError) as exc:
         return _skip(st, "indentation", f"no modulus: {exc}")
+    impossible = impossible_modulus(fit.youngs_modulus)
+    if impossible:
+        return _skip(st, "indentation", impossible)
     res = _result(fit, u, o, geom, radius, st.spring_constant)
     return st.update("indentation", res, warn=[f"indentation ({o.model}): {w}" for w in fit.warnings])
 

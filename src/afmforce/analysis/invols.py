@@ -38,7 +38,7 @@ class InvolsResult:
     n_points : int  samples in the chosen run's line [-]
     run : str  ``approach`` or ``retract``
     file_sensitivity : float  the file's own InvOLS [m/V] (NaN: none stored)
-    determined : bool  enough samples and both runs agree within :data:`MAX_RUN_MISMATCH`
+    determined : bool  a hard contact, enough samples, and both runs agree within :data:`MAX_RUN_MISMATCH`
     verdict : str  why (not) determined
     """
 
@@ -83,6 +83,11 @@ def measure_invols(curve, *, run: str = "approach", channel: str = "auto") -> In
     value = inv[run]
     se = abs(value) * line.slope_se / abs(line.slope)
     notes = []
+    # the contact's kind with the file's own calibration (the slope's makes every line follow the position)
+    kind = analyze(curve, steps=["kind"], channel=channel)
+    if kind.contact_kind == "soft":  # the slope is the lever and the sample in series: not the lever's
+        notes.append(f"the contact is soft ({kind.contact_kind_reason}): the slope is the sample's and the "
+                     "lever's in series, not the lever's; calibrate on a hard, clean surface")
     if line.n_points < MIN_POINTS:
         notes.append(f"only {line.n_points} samples in the {run} compliance line (need {MIN_POINTS}): "
                      "record the calibration curve slower or further into contact")

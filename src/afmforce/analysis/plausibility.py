@@ -26,7 +26,7 @@ from ._numeric import ptp
 from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
-           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
+           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
            "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers"]
 
 #: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
@@ -43,6 +43,9 @@ FORCE_STEPS = ("jumps", "adhesion", "surface_energy", "vdw", "indentation")
 
 #: Hamaker constants of condensed media across vacuum, air or water [J].
 HAMAKER_RANGE = (1e-21, 1e-18)
+#: Young's moduli of the softest (mucus, biofilms, brain: ~10 Pa) to the stiffest (diamond: 1.2 TPa) materials an
+#: AFM indents, with margin [Pa]: a modulus outside comes from a wrong scale, not from the sample.
+MODULUS_RANGE = (1.0, 1.2e12)
 #: Spring constants of AFM cantilevers [N/m].
 SPRING_CONSTANT_RANGE = (1e-3, 100.0)
 #: Fewest contact samples a fitted sensitivity is trusted from [-].
@@ -269,6 +272,16 @@ def slope_not_the_levers(st: State) -> str | None:
         return None
     return (f"spring constant {conv.spring_constant:.3g} N/m from the compliance slope not reported: {why}; "
             "give the lever's spring constant (the forces are the file's)")
+
+
+def impossible_modulus(modulus: float) -> str | None:
+    """Why a fitted Young's modulus [Pa] cannot be a material's (None: it can be, or it is undetermined)."""
+    lo, hi = MODULUS_RANGE
+    if not math.isfinite(modulus) or lo <= modulus <= hi:
+        return None
+    return (f"{IMPOSSIBLE}: the fitted Young's modulus {modulus:.3g} Pa is outside the range of materials "
+            f"({lo:g} Pa..{hi / 1e12:g} TPa): the position or the deflection is read with a wrong scale, or the "
+            "calibration is wrong; suspect input: spring_constant, sensitivity or the file's position scale")
 
 
 def impossible_reasons(skipped) -> list[str]:

@@ -14,6 +14,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
+from .._fields import QUANTITIES
 from ..errors import AnalysisError
 from ..io.curve import RawCurve
 from ._glue_kernel import COMPILED, robust_line_ab
@@ -190,12 +191,83 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
                                     "runs: export the whole curve (approach and retract)")
             raise AnalysisError(f"the curve has no {word} segment (one segment only); the analysis needs "
                                 "both runs: split the curve at its turning point")
+    probe = probe if probe is not None else _default_probe()
+    _check_calibration(curve.metadata, probe, curve.deflection_unit)
+    notes: list[str] = []
+    z, use_measured = _moving_position(curve, z, use_measured, channel, runs, notes)
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
+    if processed:
+        notes.insert(0, f"read as a processed export: {processed}")
     return State(curve=curve, time=t, z=z, signal=s, unit=curve.deflection_unit,
                  channel="measured" if use_measured else "nominal",
                  time_known=not bool(curve.metadata.get("time_is_sample_index", False)),
-                 probe=probe if probe is not None else _default_probe(),
-                 warnings=(f"read as a processed export: {processed}",) if processed else (), cache=runs)
+                 probe=probe, warnings=tuple(notes), cache=runs)
+
+
+#: No AFM scanner's z axis travels this far [m] (long-range heads move 100 um): a position spanning
+#: more is read with a wrong scale (a column in um or nm taken for metres).
+MAX_POSITION_SPAN = 1e-2
+
+
+def _check_calibration(metadata: Mapping[str, Any], probe: ProbeCalibration, unit: str) -> None:
+    """Refuse a spring constant or sensitivity (the user's, else the file's) that no lever has:
+    outside its declared range (``_fields.QUANTITIES``: infinite, zero, negative, absurd; ``None``
+    or NaN: unknown, left to the steps that need it). A force signal's own spring constant is
+    checked even when the user gives one: it is what turns the file's forces back into deflections."""
+    for key in ("spring_constant", "sensitivity"):
+        values = [probe.value(key, metadata)]
+        if key == "spring_constant" and unit == "N" and probe.spring_constant is not None:
+            values.append(metadata.get(key))
+        for value in values:
+            if value is None or isinstance(value, (str, bytes, bool)):
+                continue
+            try:
+                v = float(value)
+            except (TypeError, ValueError):
+                continue
+            spec = QUANTITIES[key]
+            if math.isnan(v) or spec.contains(v):
+                continue
+            raise AnalysisError(f"the curve's {spec.help} is {spec.show(v)}, outside {spec.range_text()} (no "
+                                f"cantilever has it: a damaged, unset or mis-scaled header value); give `{key}`")
+
+
+def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel: str, runs: dict,
+                     notes: list[str]) -> tuple[np.ndarray, bool]:
+    """The position ``z`` checked to move in both runs, towards the sample on the approach.
+
+    A measured channel that stands still (a position sensor switched off or not connected) gives way
+    to the nominal one when the channel was not chosen; a position that does not move, or spans more
+    than :data:`MAX_POSITION_SPAN`, is refused; a position that falls on the approach and rises on the
+    retract (stored as the distance from the sample) is turned round, with a note.
+    """
+    idx = [runs[("run", which)][1] for which in (0, 1)]
+    words = ("approach", "retract")
+    spans = [float(ptp(z[i])) if i.size else 0.0 for i in idx]
+    if min(spans) <= 0.0 and use_measured and channel == "auto":
+        nominal = np.array(curve.piezo_nominal, dtype=float)
+        if np.isfinite(nominal).all() and all(i.size and float(ptp(nominal[i])) > 0.0 for i in idx):
+            notes.append(f"the measured position does not move during the {words[spans.index(min(spans))]} "
+                         "(a position sensor off?): the nominal (piezo) position is used")
+            return _moving_position(curve, nominal, False, "nominal", runs, notes)
+    name = "measured (sensor)" if use_measured else "nominal (piezo)"
+    for word, span in zip(words, spans):
+        if span <= 0.0:
+            raise AnalysisError(f"the {name} position does not move during the {word}: no force curve comes from "
+                                "it; check the file's position channel (`channel`)")
+    if max(spans) > MAX_POSITION_SPAN:
+        raise AnalysisError(f"the {name} position spans {max(spans):.3g} m, beyond any AFM scanner's travel "
+                            f"({MAX_POSITION_SPAN * 1e3:g} mm; long-range heads move 0.1 mm): the file is read with a wrong position scale "
+                            "(a column in nm taken for metres?) or is damaged")
+    trend = []
+    for i in idx:
+        n = max(1, i.size // 10)
+        trend.append(float(np.median(z[i[-n:]]) - np.median(z[i[:n]])))
+    if trend[0] < 0.0 < trend[1]:
+        notes.append("the position falls during the approach and rises during the retract (stored as the "
+                     "distance from the sample): turned round to grow towards the sample")
+        return -z, use_measured
+    return z, use_measured
 
 
 _PROBE: list[ProbeCalibration] = []

@@ -311,7 +311,10 @@ def run_invols(args: argparse.Namespace) -> int:
     values["file"] = str(path)
     if len(results) > 1:
         values["curves"] = [dataclasses.asdict(x) for x in results]
-    rows = [("InvOLS", _pm(r.sensitivity, r.sensitivity_se, 1e9), "nm/V"),
+    if not r.determined:  # a number the curve did not determine: no interval, and none handed on
+        values["sensitivity_se"] = None
+    rows = [("InvOLS", _pm(r.sensitivity, r.sensitivity_se, 1e9), "nm/V") if r.determined else
+            ("InvOLS", f"undetermined (the {r.run} line alone: {r.sensitivity * 1e9:.5g} nm/V)", ""),
             ("approach / retract", f"{r.sensitivity_approach * 1e9:.5g} / {r.sensitivity_retract * 1e9:.5g}", "nm/V"),
             ("samples in the line", r.n_points, "")]
     if math.isfinite(r.file_sensitivity):
