@@ -154,6 +154,11 @@ def test_cli_fast_map(mapped, tmp_path, capsys):
     assert main(argv) == 0, capsys.readouterr().err
     text = capsys.readouterr().out
     assert "64 of 64 curves analysed" in text and "modulus" in text and "kPa" in text
+    # each quantity's line as its map image shows it (the registry's sign: adhesion is the dip's depth, >= 0)
+    line = next(s for s in text.splitlines() if s.strip().startswith("adhesion ("))
+    median = float(line.split("median ")[1].split()[0])
+    ok = table[table["error"].isna()]
+    assert median == pytest.approx(-float(np.median(ok["adhesion_force"].dropna())) * 1e9, rel=0.05) and median >= 0
     (folder,) = tmp_path.glob("batch-*")
     names = {p.name for p in folder.iterdir()}
     for q in ("modulus", "topography", "adhesion", "work_of_adhesion"):

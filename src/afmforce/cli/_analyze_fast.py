@@ -18,6 +18,26 @@ from ..errors import ParameterError
 FAST_MAP_QUANTITIES = ("modulus", "topography", "adhesion", "work_of_adhesion")
 
 
+def summary_lines(table, quantities) -> list[str]:
+    """One printed line per mapped quantity: its registered label, sign and display unit
+    (:data:`afmforce.analysis.maps.MAP_QUANTITIES`, the same as the map images': adhesion is the
+    depth of the retract dip, positive), the median and the range over the analysed pixels."""
+    from ..analysis.maps import MAP_DISPLAY_UNITS, map_quantity
+
+    lines = []
+    for name in quantities:
+        q = map_quantity(name)
+        if q.column not in table:
+            continue
+        factor, unit = MAP_DISPLAY_UNITS.get(q.unit, (1.0, q.unit))
+        v = table[q.column].to_numpy(float) * (q.sign * factor)
+        v = v[[math.isfinite(x) for x in v]]
+        if v.size:
+            lines.append(f"  {name} ({q.label}): median {float(sorted(v)[v.size // 2]):.4g} {unit}, "
+                         f"from {v.min():.4g} to {v.max():.4g} {unit}")
+    return lines
+
+
 def run_fast_map(args: argparse.Namespace, refs: list, write_maps) -> int:
     """``write_maps(table, folder, quantities)``: analyze's map writer (images, HDF5, histograms)."""
     from .._files import atomic_path, atomic_write_text
@@ -38,17 +58,8 @@ def run_fast_map(args: argparse.Namespace, refs: list, write_maps) -> int:
     print(f"afmforce analyze --fast-map: {len(ok)} of {len(table)} curves analysed "
           f"({result.chunks_run} chunks run on {result.executor} in {result.wall_time:.1f} s, "
           f"{result.chunks_skipped} already stored)")
-    for label, col, factor, unit in (("modulus", "youngs_modulus", 1e-3, "kPa"),
-                                     ("topography", "contact_point", -1e9, "nm"),
-                                     ("adhesion", "adhesion_force", -1e9, "nN"),
-                                     ("work of adhesion", "work_of_adhesion", 1e3, "mJ/m^2")):
-        if col not in ok:
-            continue
-        v = ok[col].to_numpy(float) * factor
-        v = v[[math.isfinite(x) for x in v]]
-        if v.size:
-            print(f"  {label:17s} median {float(sorted(v)[v.size // 2]):.4g} {unit}, from {v.min():.4g} to "
-                  f"{v.max():.4g}")
+    for line in summary_lines(ok, FAST_MAP_QUANTITIES):
+        print(line)
     if result.store is not None:
         folder = result.store.root
         with atomic_path(folder / "summary.parquet") as tmp:

@@ -401,7 +401,7 @@ _COLUMNS = (  # column, header, scale
     ("spring_constant", "k [N/m]", 1.0),
     ("sensitivity_used", "sens. used [nm/V]", 1e9),  # the forces' (file/user or fit: the cell says which)
     ("sensitivity_fit", "sens. fit [nm/V]", 1e9),
-    ("adhesion_force", "adhesion [nN]", 1e9),
+    ("adhesion_force", "adhesion F [nN]", 1e9),  # a force: negative (a pull); maps show its depth, positive
     ("rupture_distance", "rupture [nm]", 1e9),
     ("indentation", "indent. [nm]", 1e9),
     ("youngs_modulus", "E [kPa]", 1e-3),
