@@ -208,13 +208,15 @@ def velocity_force_fit(h, f_v, velocity: float, h_min: float, h_max: float) -> t
 
 @dataclass(frozen=True)
 class DLVOFit:
-    """Least-squares DLVO fit: values, standard errors [SI], reduced chi-square."""
+    """Least-squares DLVO fit: values, standard errors [SI], reduced chi-square, and the residuals'
+    correlation time [samples] the standard errors are widened by (its square root; 1: white)."""
 
     surface_potential: float
     debye_length: float
     hamaker: float
     stderr: dict
     redchi: float
+    correlation_time: float = 1.0
 
 
 def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-flat",
@@ -248,12 +250,34 @@ def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-f
                         bounds=([-100, 1e-3, 1e-3], [100, 1e3, 1e4]), x_scale="jac")
     dof = max(hh.size - 3, 1)
     redchi = float(res.fun @ res.fun / dof)
-    cov = np.linalg.pinv(res.jac.T @ res.jac) * max(redchi, 1.0)
+    tau = _correlation_time(res.fun)
+    cov = np.linalg.pinv(res.jac.T @ res.jac) * max(redchi, 1.0) * tau
     se = np.sqrt(np.clip(np.diag(cov), 0, None)) * scale
     psi, lam, a = res.x * scale
     return DLVOFit(float(psi), float(lam), float(a),
                    {"surface_potential": float(se[0]), "debye_length": float(se[1]),
-                    "hamaker": float(se[2])}, redchi)
+                    "hamaker": float(se[2])}, redchi, tau)
+
+
+def _correlation_time(r) -> float:
+    """Integrated autocorrelation time ``1 + 2 sum rho_k`` of residuals in sample order [samples].
+
+    The sum runs while the autocorrelation stays positive (the initial positive sequence). White
+    noise gives about 1; drift and 1/f noise, which a smooth force law follows over many samples,
+    more: each independent piece of information is then spread over that many samples, and the
+    covariance of a least-squares fit grows by that factor (its standard errors by the square root).
+    """
+    r = np.asarray(r, float)
+    r = r - r.mean()
+    n = r.size
+    if n < 8 or not np.any(r):
+        return 1.0
+    spec = np.fft.rfft(r, 2 * n)
+    acf = np.fft.irfft(spec * np.conj(spec))[:n]
+    rho = acf / acf[0]
+    stop = np.flatnonzero(rho[1:] <= 0)
+    m = int(stop[0]) if stop.size else n - 1
+    return float(min(max(1.0 + 2.0 * float(np.sum(rho[1:m + 1])), 1.0), n))
 
 
 def calibrate_liquid_curve(curve, far: float | None = None):
