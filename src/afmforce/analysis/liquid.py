@@ -133,12 +133,18 @@ class DragBaselines:
         ``d_app - d_ret`` at the middle of the far region [m] (drag: positive).
     lever_drag : float
         ``k gap / (v_app + v_ret)`` [N s/m] (NaN without k).
+    gap_se, lever_drag_se : float
+        Their standard errors [m], [N s/m]: the two lines' covariances at that point, widened by the
+        residuals' correlation time (1/f noise), and the drift between the runs (the lines' slope
+        difference times the distance to the turning point, added in quadrature).
     """
 
     approach: tuple
     retract: tuple
     gap: float
     lever_drag: float
+    gap_se: float = math.nan
+    lever_drag_se: float = math.nan
 
 
 def drag_baselines(piezo_app, defl_app, piezo_ret, defl_ret, far: float, *,
@@ -160,8 +166,22 @@ def drag_baselines(piezo_app, defl_app, piezo_ret, defl_ret, far: float, *,
     pr = np.polyfit(zr[mr], dr[mr], 1)
     zm = 0.5 * (max(za[ma].min(), zr[mr].min()) + far)
     gap = float(np.polyval(pa, zm) - np.polyval(pr, zm))
+    var = 0.0
+    for z, d, p in ((za[ma], da[ma], pa), (zr[mr], dr[mr], pr)):
+        r = d - np.polyval(p, z)
+        s2 = float(r @ r) / max(r.size - 2, 1) * _correlation_time(r)
+        X = np.column_stack([z - zm, np.ones_like(z)])
+        var += s2 * float(np.linalg.pinv(X.T @ X)[1, 1])      # the line's variance at zm
+    # drift between the runs: a drift rate r tilts the approach's line by +r/v_app and the retract's by
+    # -r/v_ret, and offsets them at zm by r times the time between passing zm on the way in and out, i.e.
+    # by (slope_app - slope_ret) (z_turn - zm) whatever the speeds: not separable from the drag offset on
+    # one curve (drift is not linear in time), so its size counts as an error of the gap
+    z_turn = max(float(za.max()), float(zr.max()))
+    var += (float(pa[0] - pr[0]) * (z_turn - zm)) ** 2
+    gap_se = math.sqrt(var)
     drag = spring_constant * gap / (v_app + v_ret)
-    return DragBaselines((float(pa[1]), float(pa[0])), (float(pr[1]), float(pr[0])), gap, float(drag))
+    return DragBaselines((float(pa[1]), float(pa[0])), (float(pr[1]), float(pr[0])), gap, float(drag),
+                         gap_se, float(spring_constant * gap_se / (v_app + v_ret)))
 
 
 def split_drainage(h_app, f_app, h_ret, f_ret, h=None):
