@@ -134,3 +134,22 @@ def test_a_resonance_three_bins_wide_is_found():
     psd = linear_thermal_psd(f, k, m, c, [1.0], 295.0) + 1e-30
     r = fit_thermal(f, psd, correction=1.0)
     assert r.resonance_frequency == pytest.approx(15e3, rel=1e-6) and r.spring_constant == pytest.approx(k, rel=1e-4)
+
+
+@pytest.mark.parametrize("case", ["above_nyquist", "buried"])
+def test_no_resonance_above_the_noise_is_refused_not_fitted(case):
+    """A spectrum whose peak lies above its highest frequency, or 20 dB under the detector floor:
+    before, a noise blip was fitted as the resonance (f0 680 Hz, Q 11 +- 10, k 5e4 or 0.44 N/m against
+    a true 70 kHz, 0.1 N/m lever); now the fit says no resonance stands above the noise."""
+    rng = np.random.default_rng(0)
+    f = np.arange(20.0, 200e3, 20.0)
+    k, f0, q = 0.1, (300e3 if case == "above_nyquist" else 70e3), 100.0
+    area = BUTT_JASCHKE * BOLTZMANN * DEFAULT_TEMPERATURE / k           # equipartition, eq (2)
+    white = 1e-28 if case == "above_nyquist" else 1e-22
+    p = sho_psd(f, f0, q, 2 * area / (math.pi * f0 * q), white) * rng.gamma(4, 0.25, f.size)
+    with pytest.raises(AnalysisError, match="no resonance stands above the noise"):
+        fit_thermal(f, p)
+    # the same lever with its peak in view and the floor 1000x lower is fitted (k within 3 se)
+    p = sho_psd(f, 70e3, q, 2 * area / (math.pi * 70e3 * q), 1e-25) * rng.gamma(4, 0.25, f.size)
+    fit = fit_thermal(f, p)
+    assert abs(fit.spring_constant - k) < 3 * fit.spring_constant_se < 0.2 * k

@@ -100,6 +100,8 @@ def test_cli_analyze_liquid_json(tmp_path, capsys):
     line = [ln for ln in capsys.readouterr().out.splitlines() if ln.startswith("liquid_3.txt: liquid:")][0]
     psi = float(line.split("DLVO psi ")[1].split()[0])
     assert psi == pytest.approx(r["surface_potential"] * 1e3, rel=1e-3) and "Debye length" in line
+    # 1 um/s: the drag offset (0.15 nm) is within the drift between the runs: undetermined, said so
+    assert "lever drag undetermined" in line and r["lever_drag"] is None
 
 
 def test_figure_panel_of_a_liquid_curve(tmp_path):

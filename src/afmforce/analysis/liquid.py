@@ -133,12 +133,18 @@ class DragBaselines:
         ``d_app - d_ret`` at the middle of the far region [m] (drag: positive).
     lever_drag : float
         ``k gap / (v_app + v_ret)`` [N s/m] (NaN without k).
+    gap_se, lever_drag_se : float
+        Their standard errors [m], [N s/m]: the two lines' covariances at that point, widened by the
+        residuals' correlation time (1/f noise), and the drift between the runs (the lines' slope
+        difference times the distance to the turning point, added in quadrature).
     """
 
     approach: tuple
     retract: tuple
     gap: float
     lever_drag: float
+    gap_se: float = math.nan
+    lever_drag_se: float = math.nan
 
 
 def drag_baselines(piezo_app, defl_app, piezo_ret, defl_ret, far: float, *,
@@ -160,8 +166,22 @@ def drag_baselines(piezo_app, defl_app, piezo_ret, defl_ret, far: float, *,
     pr = np.polyfit(zr[mr], dr[mr], 1)
     zm = 0.5 * (max(za[ma].min(), zr[mr].min()) + far)
     gap = float(np.polyval(pa, zm) - np.polyval(pr, zm))
+    var = 0.0
+    for z, d, p in ((za[ma], da[ma], pa), (zr[mr], dr[mr], pr)):
+        r = d - np.polyval(p, z)
+        s2 = float(r @ r) / max(r.size - 2, 1) * _correlation_time(r)
+        X = np.column_stack([z - zm, np.ones_like(z)])
+        var += s2 * float(np.linalg.pinv(X.T @ X)[1, 1])      # the line's variance at zm
+    # drift between the runs: a drift rate r tilts the approach's line by +r/v_app and the retract's by
+    # -r/v_ret, and offsets them at zm by r times the time between passing zm on the way in and out, i.e.
+    # by (slope_app - slope_ret) (z_turn - zm) whatever the speeds: not separable from the drag offset on
+    # one curve (drift is not linear in time), so its size counts as an error of the gap
+    z_turn = max(float(za.max()), float(zr.max()))
+    var += (float(pa[0] - pr[0]) * (z_turn - zm)) ** 2
+    gap_se = math.sqrt(var)
     drag = spring_constant * gap / (v_app + v_ret)
-    return DragBaselines((float(pa[1]), float(pa[0])), (float(pr[1]), float(pr[0])), gap, float(drag))
+    return DragBaselines((float(pa[1]), float(pa[0])), (float(pr[1]), float(pr[0])), gap, float(drag),
+                         gap_se, float(spring_constant * gap_se / (v_app + v_ret)))
 
 
 def split_drainage(h_app, f_app, h_ret, f_ret, h=None):
@@ -208,13 +228,15 @@ def velocity_force_fit(h, f_v, velocity: float, h_min: float, h_max: float) -> t
 
 @dataclass(frozen=True)
 class DLVOFit:
-    """Least-squares DLVO fit: values, standard errors [SI], reduced chi-square."""
+    """Least-squares DLVO fit: values, standard errors [SI], reduced chi-square, and the residuals'
+    correlation time [samples] the standard errors are widened by (its square root; 1: white)."""
 
     surface_potential: float
     debye_length: float
     hamaker: float
     stderr: dict
     redchi: float
+    correlation_time: float = 1.0
 
 
 def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-flat",
@@ -248,12 +270,34 @@ def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-f
                         bounds=([-100, 1e-3, 1e-3], [100, 1e3, 1e4]), x_scale="jac")
     dof = max(hh.size - 3, 1)
     redchi = float(res.fun @ res.fun / dof)
-    cov = np.linalg.pinv(res.jac.T @ res.jac) * max(redchi, 1.0)
+    tau = _correlation_time(res.fun)
+    cov = np.linalg.pinv(res.jac.T @ res.jac) * max(redchi, 1.0) * tau
     se = np.sqrt(np.clip(np.diag(cov), 0, None)) * scale
     psi, lam, a = res.x * scale
     return DLVOFit(float(psi), float(lam), float(a),
                    {"surface_potential": float(se[0]), "debye_length": float(se[1]),
-                    "hamaker": float(se[2])}, redchi)
+                    "hamaker": float(se[2])}, redchi, tau)
+
+
+def _correlation_time(r) -> float:
+    """Integrated autocorrelation time ``1 + 2 sum rho_k`` of residuals in sample order [samples].
+
+    The sum runs while the autocorrelation stays positive (the initial positive sequence). White
+    noise gives about 1; drift and 1/f noise, which a smooth force law follows over many samples,
+    more: each independent piece of information is then spread over that many samples, and the
+    covariance of a least-squares fit grows by that factor (its standard errors by the square root).
+    """
+    r = np.asarray(r, float)
+    r = r - r.mean()
+    n = r.size
+    if n < 8 or not np.any(r):
+        return 1.0
+    spec = np.fft.rfft(r, 2 * n)
+    acf = np.fft.irfft(spec * np.conj(spec))[:n]
+    rho = acf / acf[0]
+    stop = np.flatnonzero(rho[1:] <= 0)
+    m = int(stop[0]) if stop.size else n - 1
+    return float(min(max(1.0 + 2.0 * float(np.sum(rho[1:m + 1])), 1.0), n))
 
 
 def calibrate_liquid_curve(curve, far: float | None = None):

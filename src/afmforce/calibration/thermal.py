@@ -48,6 +48,11 @@ DEFAULT_TEMPERATURE = 295.0
 #: A bin this many times above the fitted model is an electrical line, not thermal noise (the
 #: chance of a chi-square(2) bin reaching it is e^-20): masked and the fit redone.
 SPIKE = 20.0
+#: The resonance must lower the spectrum's deviance (times the averages: a likelihood ratio) against a
+#: flat floor in the window by at least ``2 ln(bins in the spectrum) + RESONANCE_MARGIN``: the best
+#: noise blip of a peak-free spectrum, found by the search over all its bins, reaches 4-10 (10 000 bins),
+#: a lever's resonance hundreds to thousands. Below: no resonance above the noise (AnalysisError).
+RESONANCE_MARGIN = 20.0
 #: Butt & Jaschke's factor for the first mode of an end-loaded rectangular lever read by an
 #: optical lever calibrated on a static compliance line: k = 0.817 kB T / <z*^2>.
 BUTT_JASCHKE = 0.817
@@ -341,6 +346,7 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
             window = _window(f0, q, f)
     fs, ps = f[sel], p[sel]
     cov, averages, dev = _covariance(fs, ps, th, m)
+    _require_resonance(fs, ps, m, averages, f.size, pink, float(f[-1]))
     ln_area, var_lnk = _lnk(th, cov)
     # the window's influence (a lever whose resonance is not exactly a harmonic oscillator, e.g.
     # in a liquid): refits in windows half and 1.5 times as wide; their differences beyond what
@@ -375,6 +381,45 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
         tilt=float(tilt), f_min=float(fs[0]), f_max=float(fs[-1]), n_bins=int(fs.size), masked=masked,
         spring_constant_se_window=window_se,
         averages=float(averages), reduced_deviance=dev * averages)
+
+
+def _require_resonance(fs, ps, m, averages: float, n_all: int, pink: bool, f_top: float) -> None:
+    """Raise AnalysisError unless the fitted resonance stands above the noise floor.
+
+    The likelihood ratio of the fit against the floor alone (white, or white + 1/f) in the window,
+    ``N [D(floor) - D(fit)]`` with D the summed gamma deviance and N the averages, must exceed
+    ``2 ln(n_all) + RESONANCE_MARGIN`` (the search looked at every bin of the spectrum). A peak
+    buried in the detector noise or above the spectrum's highest frequency (Nyquist) gives a blip
+    of noise a "resonance" with any k: no spring constant, and the reason instead.
+    """
+    def deviance(model):
+        r = ps / model
+        return float(np.sum(2.0 * (r - 1.0 - np.log(r))))
+
+    floor = np.full(ps.shape, float(np.mean(ps)))   # the maximum-likelihood constant
+    if pink:
+        from scipy.optimize import least_squares
+
+        def resid(th):
+            r = ps / (math.exp(th[0]) + math.exp(th[1]) / fs)
+            return np.sign(r - 1.0) * np.sqrt(np.maximum(2.0 * (r - 1.0 - np.log(r)), 0.0))
+
+        x0 = np.log([max(float(np.median(ps)) * 0.5, 1e-300), max(float(np.median(ps * fs)) * 0.5, 1e-300)])
+        th = least_squares(resid, x0, method="trf").x
+        alt = math.exp(th[0]) + math.exp(th[1]) / fs
+        if deviance(alt) < deviance(floor):
+            floor = alt
+    n = averages if math.isfinite(averages) else 1.0
+    lr = n * (deviance(floor) - deviance(m))
+    need = 2.0 * math.log(max(n_all, 2)) + RESONANCE_MARGIN
+    if not lr >= need:
+        raise AnalysisError(
+            f"no resonance stands above the noise in the thermal spectrum (the best candidate, "
+            f"{fs[int(np.argmax(m))]:.4g} Hz, improves the likelihood over a flat floor by {lr:.3g}, "
+            f"{need:.3g} needed): the lever's peak is buried in the detector noise or lies above the "
+            f"spectrum's highest frequency ({f_top:.4g} Hz); the spring constant is not "
+            "determined -- record a spectrum that shows the resonance (a higher sampling rate, more "
+            "averages), or give the frequency window (f_range) around it")
 
 
 def _model_at(f, th):

@@ -36,10 +36,11 @@ def liquid_flags(p) -> None:
 def print_liquid(ok) -> None:
     """One line per curve the liquid step analysed: drag, and the DLVO fit with standard errors."""
     for _, r in ok.iterrows():
-        if not math.isfinite(float(r["lever_drag"])):
+        if not math.isfinite(float(r["drag_offset"])):
             continue
-        line = (f"{r['name']}: liquid: drag offset {fmt(r['drag_offset'] * 1e9)} nm, lever drag "
-                f"{fmt(r['lever_drag'])} N s/m")
+        drag = (f"{fmt(r['lever_drag'])} N s/m" if math.isfinite(float(r["lever_drag"]))
+                else "undetermined (see the warning)")
+        line = f"{r['name']}: liquid: drag offset {fmt(r['drag_offset'] * 1e9)} nm, lever drag {drag}"
         if math.isfinite(float(r["surface_potential"])):
             line += (f"; DLVO psi {fmt(r['surface_potential'] * 1e3)} +- {fmt(r['surface_potential_se'] * 1e3)} mV, "
                      f"Debye length {fmt(r['debye_length'] * 1e9)} +- {fmt(r['debye_length_se'] * 1e9)} nm, "

@@ -34,7 +34,9 @@ def plot_indentation(result: AnalysisResult, ax=None):
     order = np.argsort(d)
     ax.plot(d, data, ".", ms=2.5, color="0.45", label=f"{fit.run} (data)")
     label = (f"{fit.model}: E = {fit.youngs_modulus / 1e3:.4g} kPa "
-             f"[{fit.youngs_modulus_low / 1e3:.3g}, {fit.youngs_modulus_high / 1e3:.3g}]")
+             f"[{fit.youngs_modulus_low / 1e3:.3g}, {fit.youngs_modulus_high / 1e3:.3g}]"
+             if math.isfinite(fit.youngs_modulus_high) else
+             f"{fit.model}: E undetermined ({fit.youngs_modulus / 1e3:.3g} kPa, interval [0, open])")
     if math.isfinite(fit.work_of_adhesion):
         label += f", w = {fit.work_of_adhesion * 1e3:.3g} mJ/m²"
     ax.plot(d[order], model[order], "-", color="C3", lw=1.5, label=label)

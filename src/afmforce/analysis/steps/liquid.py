@@ -60,7 +60,9 @@ class LiquidResult:
     contact_position : float  piezo position of zero separation on the compliance line [m]
     drag_offset : float  approach minus retract far-field deflection [m]
     drag_separation : float  separation where the offset is measured [m]
-    lever_drag : float  ``k offset / (v_app + v_ret)`` less the drainage there ``6 pi eta R_eff^2 / h`` [N s/m]
+    lever_drag : float  ``k offset / (v_app + v_ret)`` less the drainage there ``6 pi eta R_eff^2 / h`` [N s/m];
+        NaN (undetermined, a warning says why) where its 95 % interval reaches 0 or below
+    lever_drag_se : float  its standard error, from the far lines' scatter [N s/m]
     lever_drag_total : float  ``k offset / (v_app + v_ret)`` (lever drag plus that drainage) [N s/m]
     lever_drag_fit, drainage_coefficient : float  ``F_v = v (c + beta / h)`` fitted: c [N s/m], beta [N s]
     drainage_coefficient_expected : float  ``6 pi eta R_eff^2`` (Reynolds) [N s]
@@ -96,6 +98,7 @@ class LiquidResult:
     drag_separation: float = _u("m")
     lever_drag: float = _u("N s/m")
     lever_drag_total: float = _u("N s/m")
+    lever_drag_se: float = _u("N s/m", math.nan)
     lever_drag_fit: float = _u("N s/m", math.nan)
     drainage_coefficient: float = _u("N s", math.nan)
     drainage_coefficient_expected: float = _u("N s", math.nan)
@@ -177,23 +180,32 @@ def liquid(st: State, o: LiquidOptions) -> State:
                                          float(hs.max()))
     except AnalysisError:
         c_fit = beta = math.nan
+    drag = drag_estimate = db.lever_drag - beta0 / h_drag
+    warn = []
+    if not drag - 1.96 * db.lever_drag_se > 0:
+        # a drag the offset does not resolve (too slow, too noisy) is no result; a negative one is impossible
+        warn.append(f"liquid: lever drag undetermined: {drag:.3g} +- {db.lever_drag_se:.2g} N s/m (the drag "
+                    f"offset {db.gap * 1e9:.3g} +- {db.gap_se * 1e9:.2g} nm, the Reynolds drainage at "
+                    f"{h_drag * 1e9:.3g} nm taken off) reaches 0 at 95 %: measure faster or further out")
+        drag = math.nan
     common = dict(medium=o.medium, geometry=o.geometry, double_layer=o.double_layer, viscosity=eta,
                   permittivity=eps, radius=radius, spring_constant=k, velocity_approach=va, velocity_retract=vr,
                   sensitivity=cal.a, nonlinearity=cal.c,
                   nonlinearity_length=-cal.a ** 2 / cal.c if cal.c != 0 else math.inf, signal_zero=cal.v0,
                   compliance_rms=cal.rms, compliance_points=cal.n, contact_position=-cal.z_contact,
-                  drag_offset=db.gap, drag_separation=h_drag, lever_drag=db.lever_drag - beta0 / h_drag,
-                  lever_drag_total=db.lever_drag, lever_drag_fit=c_fit, drainage_coefficient=beta,
+                  drag_offset=db.gap, drag_separation=h_drag, lever_drag=drag,
+                  lever_drag_total=db.lever_drag, lever_drag_se=db.lever_drag_se, lever_drag_fit=c_fit,
+                  drainage_coefficient=beta,
                   drainage_coefficient_expected=beta0, force_noise=noise,
                   static_separation=hs, static_force=fs, velocity_force=fv)
     st = st.update(separation=h, force=force, deflection=d - base)
     # the approach's static force: the velocity force (lever drag and Reynolds drainage) taken off; the
     # retract jumps out from contact, so near the surface only the approach has the double layer
-    ha, fa = h[ia], force[ia] - va * (common["lever_drag"] + beta0 / np.maximum(h[ia], 1e-10))
+    ha, fa = h[ia], force[ia] - va * (drag_estimate + beta0 / np.maximum(h[ia], 1e-10))
     jump = int(np.argmin(np.diff(ha)))  # the jump into contact (or the steepest step towards it)
     why = _no_double_layer(ha[:jump], fa[:jump], noise * math.sqrt(2.0), o, h_far)
     if isinstance(why, str):
-        return _skip(st, "liquid", why, LiquidResult(**common))
+        return _skip(st.update(warn=warn) if warn else st, "liquid", why, LiquidResult(**common))
     lam0, f0, hi = why  # weak overlap at h = 0: F0 = 4 pi R_eff eps eps0 kappa psi^2
     psi0 = float(np.clip(math.sqrt(f0 * lam0 / (4 * math.pi * r_eff * eps * _EPS0)), 0.005, 0.2))
     sel = (np.arange(ha.size) < jump) & (ha >= o.min_separation) & (ha <= hi)
@@ -212,7 +224,7 @@ def liquid(st: State, o: LiquidOptions) -> State:
                        hamaker_se=fit.stderr["hamaker"], dlvo_redchi=fit.redchi,
                        dlvo_min_separation=o.min_separation, dlvo_max_separation=hi, dlvo_points=int(sel.sum()),
                        dlvo_separation=hf, dlvo_force=fa[sel], fit_force=model)
-    return st.update("liquid", res)
+    return st.update("liquid", res, warn=warn)
 
 
 def _no_double_layer(hs, fs, noise, o: LiquidOptions, h_far: float):

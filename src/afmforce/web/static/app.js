@@ -362,7 +362,7 @@ function drawCurve() {
     ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", res.friction_verdict && String(res.friction_verdict).startsWith(res.friction) ? res.friction_verdict : `${res.friction}: ${res.friction_verdict}`],
     ["diagnosis", res.verdict || "–"]];
   if (res.youngs_modulus !== null && res.youngs_modulus !== undefined)
-    rows.push(["Young's modulus E", `${fmtPa(res.youngs_modulus)}` + (res.youngs_modulus_low !== null && res.youngs_modulus_high !== null ? ` (interval ${fmtPa(res.youngs_modulus_low)} – ${fmtPa(res.youngs_modulus_high)})` : "") + (res.indentation_model ? `, ${res.indentation_model}` : "")]);
+    rows.push(["Young's modulus E", `${fmtPa(res.youngs_modulus)}` + (res.youngs_modulus_low === 0 && (res.youngs_modulus_high === null || res.youngs_modulus_high === undefined) ? " (undetermined: the 95 % interval reaches 0, no upper bound)" : res.youngs_modulus_low !== null && res.youngs_modulus_high !== null ? ` (interval ${fmtPa(res.youngs_modulus_low)} – ${fmtPa(res.youngs_modulus_high)})` : "") + (res.indentation_model ? `, ${res.indentation_model}` : "")]);
   for (const [step, why] of Object.entries(res.not_applicable || {})) rows.push([`${step} (not run)`, why]);
   res.warnings.forEach((w) => rows.push(["warning", w]));
   showUsed(res);
@@ -469,7 +469,7 @@ function drawIndentation(res) {   // force above the baseline vs indentation: th
   div.classList.remove("hidden");
   const x = fit.indentation.map((v) => v * 1e9), data = fit.fit_force.map((F, i) => (F + fit.residuals[i] - fit.baseline) * 1e9);
   const order = x.map((_, i) => i).sort((a, b) => x[a] - x[b]);
-  let label = `E = ${fmtPa(fit.youngs_modulus)} [${fmtPa(fit.youngs_modulus_low)}, ${fmtPa(fit.youngs_modulus_high)}]`;
+  let label = fit.youngs_modulus_low === 0 && (fit.youngs_modulus_high === null || fit.youngs_modulus_high === undefined) ? `E undetermined (${fmtPa(fit.youngs_modulus)}, interval [0, open])` : `E = ${fmtPa(fit.youngs_modulus)} [${fmtPa(fit.youngs_modulus_low)}, ${fmtPa(fit.youngs_modulus_high)}]`;
   if (fit.work_of_adhesion !== null && fit.work_of_adhesion !== undefined) label += `, w = ${Number((fit.work_of_adhesion * 1e3).toPrecision(3))} mJ/m²`;
   const range = fitRangeLayout($("an-curve").value, fit, x);   // drag.js: the fit limit, dragged
   Plotly.react(div, [
