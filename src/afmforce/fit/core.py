@@ -76,12 +76,17 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
     for name in ("hamaker", "radius"):
         if name not in free or not (target < 0):
             continue
-        lo, hi = math.log(PARAMETERS[name].lower), math.log(PARAMETERS[name].upper)
+        p = PARAMETERS[name]
+
+        def inside(log_value: float) -> float:   # exp(log(1e-22)) is 9.99...e-23: keep the bounds
+            return min(max(math.exp(log_value), p.lower), p.upper)
+
+        lo, hi = math.log(p.lower), math.log(p.upper)
         for _ in range(60):   # |static jump deflection| grows with A*R
             mid = 0.5 * (lo + hi)
-            dj = surface_jump_in(k, base.surface.replace(**{name: math.exp(mid)}))[2]
+            dj = surface_jump_in(k, base.surface.replace(**{name: inside(mid)}))[2]
             lo, hi = (mid, hi) if dj > target else (lo, mid)
-        g[name] = math.exp(0.5 * (lo + hi))
+        g[name] = inside(0.5 * (lo + hi))
     for name in ("xi", "zeta", "slip_length", *LAW_PARAMETERS):
         if name in free:
             g[name] = max(g[name], PARAMETERS[name].abs_step)
