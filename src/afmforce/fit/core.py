@@ -232,13 +232,14 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Bad parameters, a speed-dependent parameter with all curves at one
         speed, uncalibrated or inconsistent curves, a curve without contact.
     """
+    t0 = time.perf_counter()
+    check_value("jump_window", jump_window)        # the declared ranges (afmforce._fields.QUANTITIES)
+    check_value("fringe_period", fringe_period)
     from .adequacy import adequacy, undetermined_verdict
     from .damping_check import damping_check, undamped_verdict
     from .noise import PINK_SIGNIFICANCE, estimate_pink, set_noise_model
     from .uncertainty import compare_models, fit_nested, profile_interval
 
-    t0 = time.perf_counter()
-    check_value("jump_window", jump_window)        # the declared range (afmforce._fields.QUANTITIES)
     if calibration not in ("auto", "file"):
         raise ParameterError(f"calibration must be 'auto' or 'file', got {calibration!r}")
     if noise not in ("auto", "white"):
