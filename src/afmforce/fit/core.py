@@ -20,7 +20,7 @@ from .problem import Problem, local_fit
 from .search import _refit_all, _search
 from .result import CurveFit, Estimate, FitResult, contain_value, wald_interval
 
-__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT"]
+__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT", "check_speeds"]
 
 #: Above this viscosity [Pa s] the medium is a liquid (air 1.8e-5, hexane 3e-4, water 8.9e-4):
 #: drainage and double-layer forces then bend the approach like an indentation does, so a curve
@@ -52,6 +52,26 @@ def retract_follows(curve) -> bool:
 
 class IdentifiabilityError(ParameterError):
     """The data cannot determine a free parameter (e.g. friction from one speed)."""
+
+
+def check_speeds(free: Sequence[str], velocities: Sequence[float]) -> None:
+    """Refuse a speed-dependent free parameter (:data:`SPEED_DEPENDENT`) with curves at one
+    driving speed (less than 1.2x apart): friction lowers the apparent attraction like a smaller
+    A*R does, and one speed cannot tell them apart. Cheap: the web checks it before a job starts.
+
+    Raises
+    ------
+    IdentifiabilityError
+    """
+    speeds = sorted({round(float(v), 15) for v in velocities})
+    dep = [n for n in free if n in SPEED_DEPENDENT]
+    if dep and speeds and (len(speeds) < 2 or speeds[-1] / speeds[0] < 1.2):
+        raise IdentifiabilityError(
+            f"{', '.join(dep)} cannot be determined from curves at one driving speed "
+            f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
+            "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
+            "(ideally a factor >= 4 apart) or fix " + ", ".join(dep)
+            + " (e.g. `free` hamaker and `xi` 0: A*R alone, without friction)")
 
 
 def base_config(model="beam", **fields):
@@ -266,15 +286,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     base = lever_from_files(base, fc, lever)
     if lever == "model" and {"spring_constant", "k0"} & set(free):
         base = lever_from_files(base, fc, "file")   # a free k starts from the files' (issue 25)
-    speeds = sorted({round(c.velocity, 15) for c in fc})
-    dep = [n for n in free if n in SPEED_DEPENDENT]
-    if dep and (len(speeds) < 2 or speeds[-1] / speeds[0] < 1.2):
-        raise IdentifiabilityError(
-            f"{', '.join(dep)} cannot be determined from curves at one driving speed "
-            f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
-            "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
-            "(ideally a factor >= 4 apart) or fix " + ", ".join(dep)
-            + " (e.g. `free` hamaker and `xi` 0: A*R alone, without friction)")
+    check_speeds(free, [c.velocity for c in fc])
     undetermined = [] if any(c.retract_start is not None for c in fc) else need
     ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)

@@ -60,6 +60,12 @@ def fit(request: Request, body: FitRequest) -> dict:
         raise validate.FieldError("velocities", "give >= 2 uploaded curves (file_ids) or >= 2 velocities "
                                                 "for virtual curves")
     if not files:
+        from ..fit.core import check_speeds
+
+        try:     # xi from virtual curves at one speed: refused now, not by the job after its curves
+            check_speeds(body.free, velocities)
+        except AfmforceError as exc:
+            raise validate.FieldError("velocities", str(exc)) from None
         for i, v in enumerate(velocities):      # every virtual curve within the sample cap
             try:
                 validate.build_config({**truth, "velocity": v})
