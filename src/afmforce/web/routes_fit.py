@@ -10,8 +10,11 @@ from pydantic import BaseModel, ConfigDict, Field
 from ..errors import AfmforceError
 from . import validate
 from .limits import MAX_CURVES, MAX_ITEMS
+from .schema import fit_defaults
 
 router = APIRouter(tags=["fit"])
+#: ``afmforce fit``'s defaults (:func:`afmforce.web.schema.fit_defaults`, from fit_dynamic's signature).
+_DEFAULTS = fit_defaults()
 
 
 class FitRequest(BaseModel):
@@ -28,11 +31,13 @@ class FitRequest(BaseModel):
                                   description="virtual curves: driving speeds [m/s] (or texts with units)")
     truth: dict[str, Any] = Field(default={}, description="model configuration, flat names, SI (fixed values)")
     seed: int = Field(default=0, ge=0, le=2**32 - 1, strict=True)
-    free: list[str] = Field(default=["hamaker", "xi"], max_length=16, description="global parameters to fit")
+    free: list[str] = Field(default=_DEFAULTS["free"], max_length=16, description="global parameters to fit")
     meta: list[str] = Field(default=[], max_length=MAX_ITEMS, description="KEY=VALUE metadata for uploaded curves")
-    starts: int = Field(default=1, ge=1, le=6, strict=True)
-    profile: bool = Field(default=True, strict=True, description="profile-likelihood intervals")
-    compare: bool = Field(default=True, strict=True, description="model comparison (friction verdict)")
+    starts: int = Field(default=_DEFAULTS["starts"], ge=1, le=6, strict=True,
+                        description="local fits from the best points of the search")
+    profile: bool = Field(default=_DEFAULTS["profile"], strict=True, description="profile-likelihood intervals")
+    compare: bool = Field(default=_DEFAULTS["compare"], strict=True,
+                          description="model comparison (friction verdict)")
 
 
 @router.post("/api/fit", status_code=202)

@@ -61,3 +61,26 @@ def test_virtual_curves_at_one_speed_are_refused_before_a_job_starts(recorded):
     assert err["field"] == "velocities" and "cannot be determined from curves at one driving speed" in err["message"]
     assert not started
     assert client.post("/api/fit", json={"velocities": [1e-6, 1e-6], "free": ["hamaker"]}).status_code == 202
+
+
+def test_a_fit_from_the_page_runs_with_afmforce_fit_s_defaults():
+    """Before: a fit request without options ran 1 start (``afmforce fit``: 2) and the page's box
+    for profile intervals was unchecked (Wald intervals; the CLI: profiles), its free parameters
+    written in the script. Now the request model and the page's controls take fit_dynamic's
+    defaults, as the CLI does."""
+    import inspect
+
+    from afmforce.cli.main import build_parser
+    from afmforce.fit import fit_dynamic
+    from afmforce.web.routes_fit import FitRequest
+    from afmforce.web.schema import fit_defaults
+
+    sig = inspect.signature(fit_dynamic).parameters
+    cli = build_parser(None)._subparsers._group_actions[0].choices["fit"].parse_args(["a.txt"])
+    request = FitRequest()
+    assert request.starts == sig["starts"].default == cli.starts
+    assert request.free == list(sig["free"].default) == cli.free.split(",")
+    assert request.profile is (sig["profile"].default is None) is (not cli.no_profile) is True
+    assert request.compare is sig["compare"].default is (not cli.no_compare) is True
+    page = fit_defaults()       # GET /api/schema's "fit_defaults": what the page's boxes are set to
+    assert page == {"free": request.free, "starts": request.starts, "profile": True, "compare": True}
