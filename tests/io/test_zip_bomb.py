@@ -51,3 +51,24 @@ def test_the_lean_directory_reader_never_unpacks_past_the_cap(bomb):
     finally:
         lean.close()
 
+
+
+def test_an_hdf5_dataset_declaring_more_values_than_a_curve_holds_is_refused(tmp_path):
+    """afmforce's HDF5 format: a chunked, compressed (or never written) dataset declared with 10 M + 1
+    values is a file of a few kB; before, the reader allocated and filled it (80 MB here, 8 GB for
+    1e9 values) before anything looked at its size."""
+    import shutil
+
+    h5py = pytest.importorskip("h5py")
+    from afmforce.io import load
+    from afmforce.limits import MAX_SAMPLES
+
+    path = tmp_path / "bomb.h5"
+    shutil.copy(Path(__file__).parents[1] / "data" / "afmforce-hdf5_virtual-afm.h5", path)
+    with h5py.File(path, "r+") as f:
+        group = f if "time" in f else next(g for g in f.values() if "time" in g)
+        del group["time"]
+        group.create_dataset("time", shape=(MAX_SAMPLES + 1,), chunks=(1 << 16,), compression="gzip")
+    assert path.stat().st_size < 2_000_000
+    with pytest.raises(FileFormatError, match=r"dataset /time declares 10,000,001 values, more than a force curve"):
+        load(path)
