@@ -84,3 +84,14 @@ def test_a_fit_from_the_page_runs_with_afmforce_fit_s_defaults():
     assert request.compare is sig["compare"].default is (not cli.no_compare) is True
     page = fit_defaults()       # GET /api/schema's "fit_defaults": what the page's boxes are set to
     assert page == {"free": request.free, "starts": request.starts, "profile": True, "compare": True}
+
+
+@pytest.mark.parametrize("name", ["velocity", "sample_rate"])
+def test_a_truth_that_sets_each_curve_s_drive_is_refused(recorded, name):
+    """Before: {"truth": {"velocity": 1e-6}} was accepted (202) and its job failed with Python's
+    "got multiple values for keyword argument 'velocity'"."""
+    client, started = recorded
+    r = client.post("/api/fit", json={"velocities": [1e-6, 4e-6], "truth": {name: 1e-6 if name == "velocity" else 1e4}})
+    assert r.status_code == 422, r.text
+    assert r.json()["error"]["field"] == f"truth.{name}" and "set by velocities" in r.json()["error"]["message"]
+    assert not started

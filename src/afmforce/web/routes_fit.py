@@ -52,6 +52,10 @@ def fit(request: Request, body: FitRequest) -> dict:
                                           f"{', '.join(PARAMETERS)}")
     velocities = validate.velocities(body.velocities)
     truth = validate.flat_config(body.truth, "truth.")
+    for name in ("velocity", "sample_rate"):     # each virtual curve's own (fit.virtual_curves)
+        if name in truth:
+            raise validate.FieldError(f"truth.{name}", f"truth.{name}: each virtual curve's {name} is set by "
+                                      "velocities (sample rate: 2 samples per nm of travel); drop it from truth")
     validate.build_config(truth, "truth.")     # names, ranges and their combination
     files = []
     for i, fid in enumerate(body.file_ids):
