@@ -273,6 +273,12 @@ QUANTITIES: dict[str, FieldSpec] = {
     "jump_factor": _q("dimensionless", "", "jump-in criterion dh/dt < -factor dz/dt", hi=1e3, **_POS),
     "spike_window": _q("time", "s", "jump-in transient window (0: no spike)", 0.0, 10.0),
     "jump_window": _q("time", "s", "time after the jump-in left out of the dynamic fit", 0.0, 1.0, display="ms"),
+    "fringe_period": _q("length", "m", "period of the interference fringes in the separation (half the laser "
+                        "wavelength)", 100e-9, 10e-6, display="nm"),
+    # measurement design (afmforce plan)
+    "deflection_noise": _q("length", "m", "deflection noise rms of a curve", hi=100e-9, display="nm", **_POS),
+    "force_error": _q("force", "N", "allowed error of the static pull-in force", hi=1e-6, **_POS),
+    "slip_target": _q("length", "m", "95 % half-width wanted of the slip length", hi=1e-6, display="nm", **_POS),
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
     # probe calibration (issue 34; docs/calibration.md): thermal noise, Sader, InvOLS
     "temperature": _q("temperature", "K", "temperature of the lever and its medium", 1.0, 1000.0),

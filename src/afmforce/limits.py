@@ -15,12 +15,16 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "SERVER_MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "SERVER_MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
 #: (Fig 9 at 1 nm/s, 4.3e6 samples) fits; a real force curve has at most ~1e6.
 MAX_SAMPLES = 10_000_000
+#: The most bytes one member of a zip archive (a channel of a JPK file) may unpack to: the
+#: samples of the longest cycle, 8 bytes each. A 1.5 MB JPK file whose deflection member unpacked
+#: to 800 MB of zeros (a zip bomb) took 6 GB and minutes before its channels were found to differ.
+MAX_MEMBER_BYTES = MAX_SAMPLES * 8
 #: The most samples of one cycle a request to ``afmforce serve`` may simulate: a server shares its
 #: memory among its clients (about 90 MB of trajectory per request; issue 33). Declared here, beside
 #: :data:`MAX_SAMPLES`, so that every face reads its caps from one module.
@@ -104,6 +108,7 @@ def check_design(n_speeds: int, n_curves: int, samples: float) -> None:
 def caps_markdown() -> str:
     """The docs table of the caps (docs/ranges.md holds it verbatim)."""
     rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
+            ("bytes one member of a JPK archive unpacks to", MAX_MEMBER_BYTES, "the JPK readers"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
             ("runs of one sweep run without asking for a yes", CONFIRM_RUNS, "sweep"),
             ("runs of one sweep", MAX_RUNS, "sweep"),

@@ -74,10 +74,19 @@ def _records(name: str, value: float) -> list:
     if name in statics:
         friction, kw = statics[name]
         out.append(lambda: static_analysis(cant, friction, **kw))
-    if name == "jump_window":
+    if name in ("jump_window", "fringe_period"):
         from afmforce.fit import fit_dynamic
 
-        out.append(lambda: fit_dynamic([], "beam", jump_window=value))
+        out.append(lambda: fit_dynamic([], "beam", **{name: value}))
+    if name in ("deflection_noise", "force_error"):
+        from afmforce.fit.plan import plan_experiment
+
+        out.append(lambda: plan_experiment("beam", **{"noise" if name == "deflection_noise" else name: value}))
+    if name in ("deflection_noise", "slip_target"):
+        from afmforce.fit.plan_slip import plan_slip
+
+        out.append(lambda: plan_slip("spring", **{"noise" if name == "deflection_noise" else "target": value,
+                                                  **({"target": 1e-9} if name == "deflection_noise" else {})}))
     calibration = _calibration_records(name, value)
     if calibration is not None:
         out.append(calibration)

@@ -15,7 +15,7 @@ from .._files import atomic_write_text
 from ..errors import AfmforceError, ParameterError
 from ._outcome import RunState, render
 from ._validate import add_field, check_folder_outputs, check_outputs
-from .common import busy, eprint, print_json, quantity
+from .common import busy, eprint, print_json
 
 __all__ = ["register", "run", "model_config", "add_model_flags"]
 
@@ -119,9 +119,8 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--calibration", choices=("auto", "file"), default="auto",
                    help="auto (default): as analyze calibrates (a hard contact's compliance line far "
                         "off the file's sensitivity replaces it); file: the files' sensitivities always")
-    g.add_argument("--fringe-period", type=quantity("length", "--fringe-period", positive=True), default=335e-9,
-                   metavar="LENGTH", help="fringe period in the separation: half the laser "
-                   "wavelength (default 335nm, a 670 nm laser)")
+    add_field(g, "fringe_period", default=335e-9,
+              help="fringe period in the separation: half the laser wavelength (335 nm: a 670 nm laser)")
     add_field(g, "jump_window", default=None,
               help="left out after the jump-in (default: until the deflection has landed on the "
                    "contact line, at most 2 ms)")

@@ -10,7 +10,7 @@ import argparse
 from .._files import atomic_write_text
 from ..limits import MAX_DESIGN_CURVES
 from ._validate import add_field, check_outputs
-from .common import add_quantity, busy, print_json, quantity
+from .common import busy, print_json, quantity
 
 __all__ = ["register", "run"]
 
@@ -34,15 +34,13 @@ def register(subparsers) -> argparse.ArgumentParser:
                                             "(default: --points-per-nm x speed)")
     g.add_argument("--points-per-nm", type=quantity("dimensionless", "--points-per-nm", positive=True), default=2.0,
                    help="samples per nm of drive travel when no rates are given (default 2)")
-    add_quantity(g, "--noise", "length", 0.05e-9, "deflection noise rms", unit="m", positive=True)
+    add_field(g, "deflection_noise", flag="--noise", default=0.05e-9)
     g.add_argument("--curves", type=int, default=4, help=f"curves in a design (default 4; at most {MAX_DESIGN_CURVES})")
-    add_quantity(g, "--force-error", "force", None,
-                 "allowed error of the static pull-in force (default 10 %% of it)", unit="N", positive=True)
+    add_field(g, "force_error", help="allowed error of the static pull-in force (default 10 %% of it)")
     add_field(g, "start", help="start of each approach (default -40 nm)")
     add_field(g, "turn", help="turn of each approach (default +20 nm)")
-    add_quantity(g, "--slip-target", "length", None,
-                 "plan the slip length instead: the 95 %% half-width wanted (issue 25; with "
-                 "--slip-length, --medium, --geometry ...; docs/liquid.md)", unit="m")
+    add_field(g, "slip_target", help="plan the slip length instead: the 95 %% half-width wanted (issue 25; "
+                                     "with --slip-length, --medium, --geometry ...; docs/liquid.md)")
     add_model_flags(p)
     o = p.add_argument_group("output")
     o.add_argument("--json", action="store_true", help="print the plan as JSON (SI units)")
@@ -72,10 +70,10 @@ def run(args: argparse.Namespace) -> int:
         if args.slip_target is not None:
             from ..fit.plan_slip import plan_slip
             kw = {} if "--speeds" not in _given(args) else {"speeds": args.speeds}
-            plan = plan_slip(cfg, target=args.slip_target, noise=args.noise, n_curves=args.curves,
+            plan = plan_slip(cfg, target=args.slip_target, noise=args.deflection_noise, n_curves=args.curves,
                              points_per_nm=args.points_per_nm, **kw)
         else:
-            plan = plan_experiment(cfg, noise=args.noise, speeds=args.speeds,
+            plan = plan_experiment(cfg, noise=args.deflection_noise, speeds=args.speeds,
                                    sample_rates=args.sample_rates, points_per_nm=args.points_per_nm,
                                    n_curves=args.curves, force_error=args.force_error)
     if args.report:

@@ -20,7 +20,7 @@ from .problem import Problem, local_fit
 from .search import _refit_all, _search
 from .result import CurveFit, Estimate, FitResult, contain_value, wald_interval
 
-__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT"]
+__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT", "check_speeds"]
 
 #: Above this viscosity [Pa s] the medium is a liquid (air 1.8e-5, hexane 3e-4, water 8.9e-4):
 #: drainage and double-layer forces then bend the approach like an indentation does, so a curve
@@ -54,6 +54,26 @@ class IdentifiabilityError(ParameterError):
     """The data cannot determine a free parameter (e.g. friction from one speed)."""
 
 
+def check_speeds(free: Sequence[str], velocities: Sequence[float]) -> None:
+    """Refuse a speed-dependent free parameter (:data:`SPEED_DEPENDENT`) with curves at one
+    driving speed (less than 1.2x apart): friction lowers the apparent attraction like a smaller
+    A*R does, and one speed cannot tell them apart. Cheap: the web checks it before a job starts.
+
+    Raises
+    ------
+    IdentifiabilityError
+    """
+    speeds = sorted({round(float(v), 15) for v in velocities})
+    dep = [n for n in free if n in SPEED_DEPENDENT]
+    if dep and speeds and (len(speeds) < 2 or speeds[-1] / speeds[0] < 1.2):
+        raise IdentifiabilityError(
+            f"{', '.join(dep)} cannot be determined from curves at one driving speed "
+            f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
+            "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
+            "(ideally a factor >= 4 apart) or fix " + ", ".join(dep)
+            + " (e.g. `free` hamaker and `xi` 0: A*R alone, without friction)")
+
+
 def base_config(model="beam", **fields):
     """A :class:`~afmforce.dynamics.SimulationConfig` from a model name, a config or a dict."""
     from ..dynamics import SimulationConfig
@@ -76,12 +96,17 @@ def _guess_globals(curves: list[FitCurve], base, free: tuple[str, ...]) -> dict:
     for name in ("hamaker", "radius"):
         if name not in free or not (target < 0):
             continue
-        lo, hi = math.log(PARAMETERS[name].lower), math.log(PARAMETERS[name].upper)
+        p = PARAMETERS[name]
+
+        def inside(log_value: float) -> float:   # exp(log(1e-22)) is 9.99...e-23: keep the bounds
+            return min(max(math.exp(log_value), p.lower), p.upper)
+
+        lo, hi = math.log(p.lower), math.log(p.upper)
         for _ in range(60):   # |static jump deflection| grows with A*R
             mid = 0.5 * (lo + hi)
-            dj = surface_jump_in(k, base.surface.replace(**{name: math.exp(mid)}))[2]
+            dj = surface_jump_in(k, base.surface.replace(**{name: inside(mid)}))[2]
             lo, hi = (mid, hi) if dj > target else (lo, mid)
-        g[name] = math.exp(0.5 * (lo + hi))
+        g[name] = inside(0.5 * (lo + hi))
     for name in ("xi", "zeta", "slip_length", *LAW_PARAMETERS):
         if name in free:
             g[name] = max(g[name], PARAMETERS[name].abs_step)
@@ -227,13 +252,14 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Bad parameters, a speed-dependent parameter with all curves at one
         speed, uncalibrated or inconsistent curves, a curve without contact.
     """
+    t0 = time.perf_counter()
+    check_value("jump_window", jump_window)        # the declared ranges (afmforce._fields.QUANTITIES)
+    check_value("fringe_period", fringe_period)
     from .adequacy import adequacy, undetermined_verdict
     from .damping_check import damping_check, undamped_verdict
     from .noise import PINK_SIGNIFICANCE, estimate_pink, set_noise_model
     from .uncertainty import compare_models, fit_nested, profile_interval
 
-    t0 = time.perf_counter()
-    check_value("jump_window", jump_window)        # the declared range (afmforce._fields.QUANTITIES)
     if calibration not in ("auto", "file"):
         raise ParameterError(f"calibration must be 'auto' or 'file', got {calibration!r}")
     if noise not in ("auto", "white"):
@@ -260,15 +286,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     base = lever_from_files(base, fc, lever)
     if lever == "model" and {"spring_constant", "k0"} & set(free):
         base = lever_from_files(base, fc, "file")   # a free k starts from the files' (issue 25)
-    speeds = sorted({round(c.velocity, 15) for c in fc})
-    dep = [n for n in free if n in SPEED_DEPENDENT]
-    if dep and (len(speeds) < 2 or speeds[-1] / speeds[0] < 1.2):
-        raise IdentifiabilityError(
-            f"{', '.join(dep)} cannot be determined from curves at one driving speed "
-            f"({speeds[0] * 1e6:.3g} um/s): friction (and inertia, drainage) lowers the "
-            "apparent attraction like a smaller A*R would; give curves at >= 2 speeds "
-            "(ideally a factor >= 4 apart) or fix " + ", ".join(dep)
-            + " (e.g. `free` hamaker and `xi` 0: A*R alone, without friction)")
+    check_speeds(free, [c.velocity for c in fc])
     undetermined = [] if any(c.retract_start is not None for c in fc) else need
     ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)

@@ -169,14 +169,19 @@ def plan_experiment(model="beam", *, xi: float | None = None, noise: float = 0.0
     **fields
         Other SimulationConfig fields (drive range: start, turn).
     """
+    from .._fields import check
+
+    check("deflection_noise", noise)            # the declared ranges, before any work
+    check("force_error", force_error)
     base = base_config(model, **fields)
     if xi is not None:
         base = base.replace(xi=xi)
     if base.model != "beam":
         raise ParameterError("plan designs the friction measurement: use the beam model "
                              "(the spring model has no friction)")
-    if noise <= 0 or n_curves < 2 or len(speeds) < 2:
-        raise ParameterError("plan needs noise > 0 [m], n_curves >= 2 and >= 2 candidate speeds")
+    if noise <= 0 or n_curves < 2 or len(set(speeds)) < 2:
+        raise ParameterError("plan needs noise > 0 [m], n_curves >= 2 and >= 2 different candidate speeds "
+                             "(xi cannot be determined from curves at one driving speed)")
     speeds = sorted(float(v) for v in speeds)
     rates = list(sample_rates) if sample_rates is not None else [
         points_per_nm * v * 1e9 for v in speeds]
@@ -191,7 +196,7 @@ def plan_experiment(model="beam", *, xi: float | None = None, noise: float = 0.0
                       "sigma_xi_alone": float(_sigma(F)[1])})
     best = None
     for combo in itertools.combinations_with_replacement(range(len(speeds)), n_curves):
-        if len(set(combo)) < 2:
+        if len({speeds[i] for i in combo}) < 2:      # one speed leaves xi undetermined
             continue
         s = _sigma(sum(infos[i] for i in combo))
         if best is None or s[1] < best[0][1]:

@@ -67,12 +67,16 @@ def plan_slip(model="spring", *, target: float, noise: float = 0.05e-9,
     ``model``: a configuration (or model name and ``fields``) with the slip length, radius,
     viscosity, lever drag ... assumed; its drive range (start, turn) is each approach's.
     """
+    from .._fields import check
+
+    check("slip_target", target)                 # the declared ranges, before any work
+    check("deflection_noise", noise)
     base = base_config(model, **fields)
     if not base.surface.slip_length > 0 or not base.viscosity > 0:
         raise ParameterError("planning the slip length (`slip_target`) needs the slip length to expect (> 0) and a "
                              "viscosity (`slip_length`, and `viscosity` or `medium`)")
-    if target <= 0 or noise <= 0 or n_curves < 2 or len(speeds) < 2:
-        raise ParameterError("plan needs target > 0 [m], noise > 0 [m], n_curves >= 2 and >= 2 speeds")
+    if target <= 0 or noise <= 0 or n_curves < 2 or len(set(speeds)) < 2:
+        raise ParameterError("plan needs target > 0 [m], noise > 0 [m], n_curves >= 2 and >= 2 different speeds")
     speeds = sorted(float(v) for v in speeds)
     check_plan_size(base, speeds, [points_per_nm * v * 1e9 for v in speeds], n_curves)
     k_name = "spring_constant" if base.model == "spring" else "k0"

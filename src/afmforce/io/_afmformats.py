@@ -180,13 +180,14 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
     sensitivity, and none given by the user) is read in raw volts by
     :mod:`afmforce.io.jpk_zip`; so are files with pause segments afmformats cannot read.
     """
-    from .jpk_zip import load_jpk_zip, segment_styles
+    from .jpk_zip import check_member_sizes, load_jpk_zip, segment_styles
 
     try:
         arc = zipfile.ZipFile(path)
     except (zipfile.BadZipFile, OSError, ValueError) as exc:
         raise FileFormatError(f"{path}: not a JPK zip archive ({exc})") from None
     with arc:
+        check_member_sizes(arc, str(path))      # before either reader unpacks a member
         single = any(n.startswith("segments/") for n in arc.namelist())
         if single:  # one curve: decode it directly
             try:

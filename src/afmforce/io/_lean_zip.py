@@ -117,10 +117,17 @@ class LeanZip:
         sig, *_, nlen, elen = _LOCAL.unpack(head)
         if sig != 0x04034B50:
             raise zipfile.BadZipFile(f"Bad magic number for file header of {name}")
+        from ..limits import MAX_MEMBER_BYTES
+
+        size = int(self._usize[entry])
+        if size > MAX_MEMBER_BYTES:
+            raise zipfile.BadZipFile(f"{name} would unpack to {size:,} bytes, more than a force curve's channel "
+                                     f"holds ({MAX_MEMBER_BYTES:,}): a damaged archive or a zip bomb")
         data = self._pread(cs, off + _LOCAL.size + nlen + elen) if cs else b""
         meth = int(self._method[entry])
-        if meth == zipfile.ZIP_DEFLATED:
-            data = zlib.decompress(data, -15)
+        if meth == zipfile.ZIP_DEFLATED:      # never more than the declared size (+1: a lie is seen)
+            inflate = zlib.decompressobj(-15)
+            data = inflate.decompress(data, size + 1)
         elif meth != zipfile.ZIP_STORED:
             raise NotImplementedError(f"{name}: compression method {meth} not supported")
         if len(data) != int(self._usize[entry]) or zlib.crc32(data) != int(self._crc[entry]):

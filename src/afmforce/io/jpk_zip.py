@@ -74,6 +74,24 @@ def parse_properties(text: str) -> dict[str, str]:
     return props
 
 
+def check_member_sizes(arc: zipfile.ZipFile, where: str) -> None:
+    """Refuse an archive with a member that unpacks to more than :data:`afmforce.limits.MAX_MEMBER_BYTES`
+    (its declared size, which :mod:`zipfile` never reads past), before any member is read.
+
+    Raises
+    ------
+    FileFormatError
+    """
+    from ..limits import MAX_MEMBER_BYTES, MAX_SAMPLES
+
+    big = max(arc.infolist(), key=lambda i: i.file_size, default=None)
+    if big is not None and big.file_size > MAX_MEMBER_BYTES:
+        raise FileFormatError(
+            f"{where}: {big.filename} would unpack to {big.file_size:,} bytes ({big.compress_size:,} stored), "
+            f"more than a force curve's channel holds ({MAX_MEMBER_BYTES:,} bytes: {MAX_SAMPLES:,} samples); a "
+            "damaged archive or a zip bomb: not read")
+
+
 def detect_jpk(path: Path) -> bool:
     """True for a zip archive with ``header.properties`` (JPK curves, maps, QI data). The directory
     is read into arrays (:mod:`afmforce.io._lean_zip`: a 128 x 128 QI file's 245,764 members in
@@ -316,6 +334,7 @@ def load_jpk_zip(path: Path, *, meta_override: Mapping[str, Any] | None = None,
     except (zipfile.BadZipFile, OSError, ValueError) as exc:
         raise FileFormatError(f"{where}: not a JPK zip archive ({exc})") from None
     with arc:
+        check_member_sizes(arc, where)
         try:
             names = arc.namelist()
             if "header.properties" not in names:

@@ -28,7 +28,8 @@ from pathlib import Path
 from typing import Any
 
 from .._files import atomic_write_text
-from .replies import JobStartError
+from .limits import MAX_JOBS, MAX_SESSION_JOBS
+from .replies import JobStartError, TooManyJobs
 from .sessions import session_key
 from .tasks import standby
 
@@ -166,11 +167,22 @@ class JobManager:
 
     # -- API ---------------------------------------------------------------------------
     def submit(self, kind: str, session: str, params: dict[str, Any]) -> Job:
-        """Start a job for ``session``; returns it (state ``running``)."""
+        """Start a job for ``session``; returns it (state ``running``).
+
+        Raises :class:`~.replies.TooManyJobs` when the server runs :data:`~.limits.MAX_JOBS` jobs or
+        the session :data:`~.limits.MAX_SESSION_JOBS` (each job is a process: without a cap, a client
+        posting fits in a loop would start a process each, until the machine's memory ran out)."""
         job = Job(secrets.token_hex(8), kind, owner_of(session), dict(params))
         if kind == "sweep":
             job.params["store"] = str(self.root / "sweeps")
         with self._lock:
+            live = [j for j in self._jobs.values() if j.state not in FINISHED]
+            mine = sum(1 for j in live if j.owner == job.owner)
+            if mine >= MAX_SESSION_JOBS or len(live) >= MAX_JOBS:
+                raise TooManyJobs(
+                    f"{mine} of this session's jobs and {len(live)} in all are running; a session may run "
+                    f"{MAX_SESSION_JOBS} and the server {MAX_JOBS} fits and sweeps at once: wait for one to "
+                    "end or cancel one (POST /api/jobs/ID/cancel)")
             self._jobs[job.id] = job
         self._start(job)
         return job

@@ -9,7 +9,7 @@ before anything is computed.
 from __future__ import annotations
 
 __all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
-           "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL"]
+           "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL", "MAX_JOBS", "MAX_SESSION_JOBS"]
 
 #: Samples one simulated cycle may have: the library's cap for a server (``afmforce.limits``).
 from ..limits import SERVER_MAX_SAMPLES as MAX_SAMPLES  # noqa: E402
@@ -25,6 +25,11 @@ MAX_RUNS = 20_000
 MAX_ITEMS = 64
 #: Virtual curves of one fit.
 MAX_CURVES = 8
+#: Fits and sweeps running at once on the server (each is a process holding one core and up to
+#: about a GB); one more is refused (429) until one ends or is cancelled.
+MAX_JOBS = 4
+#: Fits and sweeps one session may have running at once.
+MAX_SESSION_JOBS = 2
 #: Bytes of an uploaded probe calibration file (``afmforce calibrate --out`` writes about 1 kB).
 CALIBRATION_BYTES = 65_536
 #: Default lifetime of an unused session (its uploads and jobs) [s].

@@ -17,10 +17,11 @@ from typing import Any
 
 from ..errors import AfmforceError, render_keys
 
-__all__ = ["error_body", "error_bytes", "install", "JobStartError", "PastBudget"]
+__all__ = ["error_body", "error_bytes", "install", "JobStartError", "PastBudget", "TooManyJobs"]
 
 _STATUS_TYPES = {400: "invalid_request", 401: "unauthorized", 403: "forbidden", 404: "not_found",
-                 405: "method_not_allowed", 413: "too_large", 422: "invalid_value", 504: "past_budget"}
+                 405: "method_not_allowed", 413: "too_large", 422: "invalid_value", 429: "too_many_jobs",
+                 504: "past_budget"}
 _LOG = logging.getLogger("afmforce.web")
 
 
@@ -56,6 +57,10 @@ def _shown(value: Any) -> str:
 
 class PastBudget(AfmforceError):
     """A request ran past its time budget and was cancelled, its computation included (504)."""
+
+
+class TooManyJobs(AfmforceError):
+    """A fit or sweep asked for while the server (or the session) runs as many as it may (429)."""
 
 
 class JobStartError(Exception):
@@ -97,6 +102,10 @@ def install(app) -> None:
     @app.exception_handler(PastBudget)
     async def _budget(request, exc: PastBudget):
         return JSONResponse(error_body("past_budget", str(exc)), status_code=504)
+
+    @app.exception_handler(TooManyJobs)
+    async def _busy(request, exc: TooManyJobs):
+        return JSONResponse(error_body("too_many_jobs", str(exc)), status_code=429, headers={"retry-after": "10"})
 
     @app.exception_handler(JobStartError)
     async def _job(request, exc: JobStartError):

@@ -10,8 +10,11 @@ from pydantic import BaseModel, ConfigDict, Field
 from ..errors import AfmforceError
 from . import validate
 from .limits import MAX_CURVES, MAX_ITEMS
+from .schema import fit_defaults
 
 router = APIRouter(tags=["fit"])
+#: ``afmforce fit``'s defaults (:func:`afmforce.web.schema.fit_defaults`, from fit_dynamic's signature).
+_DEFAULTS = fit_defaults()
 
 
 class FitRequest(BaseModel):
@@ -28,11 +31,13 @@ class FitRequest(BaseModel):
                                   description="virtual curves: driving speeds [m/s] (or texts with units)")
     truth: dict[str, Any] = Field(default={}, description="model configuration, flat names, SI (fixed values)")
     seed: int = Field(default=0, ge=0, le=2**32 - 1, strict=True)
-    free: list[str] = Field(default=["hamaker", "xi"], max_length=16, description="global parameters to fit")
+    free: list[str] = Field(default=_DEFAULTS["free"], max_length=16, description="global parameters to fit")
     meta: list[str] = Field(default=[], max_length=MAX_ITEMS, description="KEY=VALUE metadata for uploaded curves")
-    starts: int = Field(default=1, ge=1, le=6, strict=True)
-    profile: bool = Field(default=True, strict=True, description="profile-likelihood intervals")
-    compare: bool = Field(default=True, strict=True, description="model comparison (friction verdict)")
+    starts: int = Field(default=_DEFAULTS["starts"], ge=1, le=6, strict=True,
+                        description="local fits from the best points of the search")
+    profile: bool = Field(default=_DEFAULTS["profile"], strict=True, description="profile-likelihood intervals")
+    compare: bool = Field(default=_DEFAULTS["compare"], strict=True,
+                          description="model comparison (friction verdict)")
 
 
 @router.post("/api/fit", status_code=202)
@@ -47,6 +52,10 @@ def fit(request: Request, body: FitRequest) -> dict:
                                           f"{', '.join(PARAMETERS)}")
     velocities = validate.velocities(body.velocities)
     truth = validate.flat_config(body.truth, "truth.")
+    for name in ("velocity", "sample_rate"):     # each virtual curve's own (fit.virtual_curves)
+        if name in truth:
+            raise validate.FieldError(f"truth.{name}", f"truth.{name}: each virtual curve's {name} is set by "
+                                      "velocities (sample rate: 2 samples per nm of travel); drop it from truth")
     validate.build_config(truth, "truth.")     # names, ranges and their combination
     files = []
     for i, fid in enumerate(body.file_ids):
@@ -60,6 +69,12 @@ def fit(request: Request, body: FitRequest) -> dict:
         raise validate.FieldError("velocities", "give >= 2 uploaded curves (file_ids) or >= 2 velocities "
                                                 "for virtual curves")
     if not files:
+        from ..fit.core import check_speeds
+
+        try:     # xi from virtual curves at one speed: refused now, not by the job after its curves
+            check_speeds(body.free, velocities)
+        except AfmforceError as exc:
+            raise validate.FieldError("velocities", str(exc)) from None
         for i, v in enumerate(velocities):      # every virtual curve within the sample cap
             try:
                 validate.build_config({**truth, "velocity": v})

@@ -16,7 +16,7 @@ from typing import Any
 from .._fields import DISPLAY_UNITS, FieldSpec
 
 __all__ = ["simulation_fields", "analysis_steps", "analysis_options", "calibration_fields", "fit_parameters",
-           "examples", "schema"]
+           "fit_defaults", "examples", "schema"]
 
 #: SI unit -> the unit a control shows when its spec names none.
 _SHOWN = {"m": "nm", "N": "nN", "kg": "ng", "m/s": "um/s", "Hz": "kHz", "s": "s", "m/V": "nm/V", "rad": "deg"}
@@ -148,6 +148,19 @@ def fit_parameters() -> list[dict[str, Any]]:
             for n, p in PARAMETERS.items()]
 
 
+def fit_defaults() -> dict[str, Any]:
+    """The fit's defaults, read off :func:`afmforce.fit.fit_dynamic`'s signature (as ``afmforce fit``
+    runs it): ``free`` parameters, ``starts``, ``profile`` (intervals by profile likelihood) and
+    ``compare`` (the friction verdict). The form's controls and the request's defaults take them."""
+    import inspect
+
+    from ..fit import fit_dynamic
+
+    p = inspect.signature(fit_dynamic).parameters
+    return {"free": list(p["free"].default), "starts": int(p["starts"].default),
+            "profile": p["profile"].default != (), "compare": bool(p["compare"].default)}
+
+
 def examples() -> list[dict[str, str]]:
     """The sample files shipped with afmforce (``afmforce analyze --example``)."""
     from ..datasets import DATASETS
@@ -161,4 +174,5 @@ def schema() -> dict[str, Any]:
 
     return {"simulation": simulation_fields(), "analysis": analysis_options(), "steps": analysis_steps(),
             "calibration": calibration_fields(),
-            "fit": fit_parameters(), "examples": examples(), "instrument_presets": list(PRESETS)}
+            "fit": fit_parameters(), "fit_defaults": fit_defaults(), "examples": examples(),
+            "instrument_presets": list(PRESETS)}

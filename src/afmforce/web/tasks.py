@@ -55,7 +55,8 @@ def fit_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
     model = SimulationConfig(**{k: v for k, v in truth.items() if k not in free})
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        res = fit_dynamic(curves, model, free=free, names=names, starts=int(params.get("starts", 1)),
+        res = fit_dynamic(curves, model, free=free, names=names,
+                          **({"starts": int(params["starts"])} if "starts" in params else {}),
                           profile=None if params.get("profile", True) else (),
                           compare=bool(params.get("compare", True)), progress=progress,
                           # the files' lever unless the form gives one, as `afmforce fit` (issue 34)

@@ -119,13 +119,14 @@ def read_curve_group(group, where: str) -> RawCurve:
         if g is not None:
             truth = json.loads(_attr_str(safe_attr(g, "scalars", "{}")))
             for key in g:
+                _check_size(g[key].shape or (), g[key].name)
                 truth[key] = np.asarray(g[key][()], dtype=np.float64)
         measured = f.get("piezo_measured")
         measured = None if measured is None else _floats(measured)
         return RawCurve(time=_floats(data["time"]),
                         piezo_nominal=_floats(data["piezo_nominal"]),
                         deflection_signal=_floats(data["deflection_signal"]),
-                        segment=np.asarray(data["segment"][()]).astype(np.int8),
+                        segment=np.asarray(_checked(data["segment"])[()]).astype(np.int8),
                         piezo_measured=measured, metadata=metadata, truth=truth, deflection_unit=dunit)
     except FileFormatError as exc:
         raise FileFormatError(str(exc) if str(exc).startswith(where) else f"{where}: {exc}") from None
@@ -133,13 +134,31 @@ def read_curve_group(group, where: str) -> RawCurve:
         raise FileFormatError(f"{where}: malformed afmforce raw HDF5 file ({exc})") from exc
 
 
+def _check_size(dims, name: str) -> None:
+    """Refuse a dataset of more than :data:`afmforce.limits.MAX_SAMPLES` values before it is read: a
+    compressed (or never written) dataset declared with 1e9 values is a file of a few kB."""
+    from ...limits import MAX_SAMPLES
+
+    n = int(np.prod(dims, dtype=np.float64)) if len(dims) else 1
+    if n > MAX_SAMPLES:
+        raise FileFormatError(f"dataset {name} declares {n:,} values, more than a force curve holds "
+                              f"({MAX_SAMPLES:,} samples); a damaged file or a decompression bomb: not read")
+
+
+def _checked(dataset):
+    _check_size(dataset.shape or (), dataset.name)
+    return dataset
+
+
 def _floats(dataset) -> np.ndarray:
     """A dataset read as float64 by HDF5's own conversion into a new array (the same values as
     ``np.asarray(dataset[()], np.float64)``, without h5py's selection machinery: a map reads
-    thousands of small datasets)."""
+    thousands of small datasets); at most :data:`afmforce.limits.MAX_SAMPLES` values."""
     h5py = _h5py()
     dset = dataset.id
-    out = np.empty(dset.get_space().get_simple_extent_dims(), dtype=np.float64)
+    dims = dset.get_space().get_simple_extent_dims()
+    _check_size(dims, dataset.name)
+    out = np.empty(dims, dtype=np.float64)
     dset.read(h5py.h5s.ALL, h5py.h5s.ALL, out)
     return out
 

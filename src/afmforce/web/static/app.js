@@ -811,7 +811,8 @@ $("an-calfile").addEventListener("change", (e) => { if (e.target.files[0]) loadC
     Object.assign(SCHEMA, await api("api/schema"));
     SCHEMA.examples.forEach((e) => $("an-example").append(el("option", { value: e.name, text: `${e.name}: ${e.description}` })));
     buildOptions(); buildCalibration(); buildFitCalibration(); buildSim();
-    SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: ["hamaker", "xi"].includes(p.name) }), ` ${p.name} [${p.unit}]`)));
+    SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: SCHEMA.fit_defaults.free.includes(p.name) }), ` ${p.name} [${p.unit}]`)));
+    $("fit-profile").checked = SCHEMA.fit_defaults.profile; $("fit-compare").checked = SCHEMA.fit_defaults.compare;   // afmforce fit's
     await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });
     document.body.dataset.ready = "1";
     window.READY_MS = performance.now();   // page load to interactive (benchmarks/bench_web.py)
