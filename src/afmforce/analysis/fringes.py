@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._fringe_kernel import _prepare, _thin_indices, finish_stats, fit_orders
+from ._fringe_kernel import _prepare, _thin_indices, finish_stats, fit_orders, variance
 from ._numeric import lstsq_qr, polyfit, ptp
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
@@ -376,7 +376,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     r = np.asarray(r, float)
     t = None if t is None else np.asarray(t, float)
     p0 = None
-    var_r = float(np.var(r)) if z.size >= 16 else None  # computed once: the search, the fit, the verdict
+    var_r = variance(r) if z.size >= 16 else None  # computed once: the search, the fit, the verdict (np.var's number)
     if not (period or z.size < 16 or var_r == 0):
         p0, fraction = _periodogram_fast(z, r, var_r)  # compiled: the same starting period (a grid value)
         if not math.isfinite(p0) or fraction < min_explained / 3:
