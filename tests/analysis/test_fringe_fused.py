@@ -88,7 +88,7 @@ SIZES = [1, 2, 7, 8, 9, 15, 16, 17, 127, 128, 129, 255, 256, 257, 300, 1000, 134
 def test_variance_and_statistics_equal_numpy_to_the_bit(compiled):
     rng = np.random.default_rng(11)
     var = K._var if compiled else K._var.py_func
-    stats = K.finish_stats if compiled else K.finish_stats.py_func
+    stats = K._finish_stats if compiled else K._finish_stats.py_func
     for n in SIZES if compiled else SIZES[:-3]:
         a = rng.standard_normal(n) * 10.0 ** rng.uniform(-6, 6) + rng.uniform(-50, 50)
         assert var(a) == np.var(a)
@@ -99,6 +99,7 @@ def test_variance_and_statistics_equal_numpy_to_the_bit(compiled):
         assert dev == np.max(np.abs(u - np.polyval(p, z)))
         assert v == np.var(a)
         assert rms == np.sqrt(np.mean(a ** 2))
+        assert K.finish_stats(a, u, z, p[0], p[1]) == (dev, v, rms)
     with pytest.warns(RuntimeWarning):
         assert math.isnan(K.variance(np.array([])))  # numpy's NaN and its warning for no samples
 
