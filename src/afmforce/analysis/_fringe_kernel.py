@@ -16,11 +16,15 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
+from numba import config as _numba_config, njit
 
-from ._numeric import ptp, solve_small as _solve_small
+from ._numeric import solve_small as _solve_small
 
-__all__ = ["vp_eval", "lm_fit"]
+__all__ = ["vp_eval", "lm_fit", "fit_orders", "finish_stats", "variance"]
+
+#: The kernels run as Python (``NUMBA_DISABLE_JIT``, the first run: ``cli/_firstrun.py``): the sums that
+#: numpy does in one call are then left to numpy (the same numbers).
+_INTERPRETED = bool(_numba_config.DISABLE_JIT)
 
 
 @dataclass(frozen=True)
@@ -40,19 +44,24 @@ class _Prep:
 def _prepare(z: np.ndarray, r: np.ndarray, t: np.ndarray | None, var0: float | None = None) -> _Prep:
     """Normalised position and its powers, and the residual with the line projected out (``var0``:
     ``np.var(r)`` when the caller has it)."""
-    zm = 0.5 * (z.max() + z.min())
-    L = 0.5 * float(ptp(z)) or 1.0
-    xt = None
+    z_hi, z_lo = z.max(), z.min()
+    zm = 0.5 * (z_hi + z_lo)
+    L = 0.5 * float(z_hi - z_lo) or 1.0  # ptp(z)
+    x = np.ascontiguousarray((z - zm) / L)
+    X = np.empty((x.size, 2))  # the line's columns (1, x or t)
+    X[:, 0] = 1.0
     if t is not None:
         t = np.asarray(t, float)
-        tm, tL = 0.5 * (t.max() + t.min()), 0.5 * float(ptp(t)) or 1.0
-        xt = (t - tm) / tL
-    var0 = float(np.var(r)) if var0 is None else var0
-    x = np.ascontiguousarray((z - zm) / L)
+        t_hi, t_lo = t.max(), t.min()
+        tm, tL = 0.5 * (t_hi + t_lo), 0.5 * float(t_hi - t_lo) or 1.0
+        X[:, 1] = (t - tm) / tL
+    else:
+        X[:, 1] = x
+    var0 = variance(r) if var0 is None else var0
     x2, x3 = x * x, x * x * x
     # variable projection: the line (1, x or t) is projected out once (thin QR), the cos/sin
     # amplitudes are a 2x2 solve per evaluation (compiled: analysis._fringe_kernel)
-    Q0, _ = np.linalg.qr(np.column_stack([np.ones_like(x), x if xt is None else xt]))
+    Q0, _ = np.linalg.qr(X)
     Q0 = np.ascontiguousarray(Q0)
     r_perp = np.ascontiguousarray(r - Q0 @ (Q0.T @ r))
     return _Prep(zm, L, var0, x, x2, x3, Q0, r_perp)
@@ -256,3 +265,182 @@ def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, fto
         if not accepted:
             break
     return q, cost, 0
+
+
+@njit(cache=True)
+def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol):
+    """The map orders ``o_first..o_last`` fitted in turn by :func:`lm_fit` (what :func:`.fringes._fit_order`
+    did per order, in one call: the same starts, the same numbers), the best by the Bayesian
+    information criterion ``n ln(SSR/n) + (order + 3) ln n`` (the first of equals).
+
+    Each order starts from the lower order's map when that converged (a warm start); the cubic from
+    a3 = 0, and from a3 = +-0.05 only while its best cost does not improve on the lower order's.
+    Returns ``(P, c1, a2, a3, converged, rms residual)`` of the best order."""
+    n = x.size
+    best_bic = math.inf
+    bP, bc1, ba2, ba3, bconv, bres = math.nan, 1.0, 0.0, 0.0, False, math.nan
+    have = False  # a lower order was fitted: its map, residual and convergence
+    pP, pc1, pa2, pres, pconv = math.nan, 1.0, 0.0, math.nan, False
+    for o in range(o_first, o_last + 1):
+        n_map = max(0, min(o, 3) - 1)
+        ref = 0.5 * n * (pres * pres) if have and math.isfinite(pres) else math.nan  # NaN: none
+        q0 = np.zeros(1 + n_map)
+        q0[0] = 1.0 if known else 0.0
+        if have and pconv and math.isfinite(pP):  # the lower order's map: nested models, a warm start
+            q0[0] = pc1 if known else math.log(pP / P0)
+            if n_map >= 1:
+                q0[1] = pa2
+        n_starts = 1 if n_map < 2 else 3
+        bq = q0
+        bcost = math.inf
+        bstatus = 0
+        first = True
+        for s in range(n_starts):
+            q = q0.copy()
+            if n_map >= 2:
+                q[2] = 0.0 if s == 0 else (0.05 if s == 1 else -0.05)
+            qs, cost, status = lm_fit(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol)
+            if first or cost < bcost:
+                bq, bcost, bstatus = qs, cost, status
+                first = False
+            if not math.isnan(ref) and bcost < ref:
+                break  # the cubic already improves on the lower order: not stuck, no other start needed
+        if known:
+            c1 = bq[0]
+            P = period
+        else:
+            c1 = 1.0
+            P = P0 * math.exp(bq[0])
+        a2 = bq[1] if n_map >= 1 else 0.0
+        a3 = bq[2] if n_map >= 2 else 0.0
+        res = math.sqrt(2.0 * bcost / n)
+        conv = bstatus > 0
+        if math.isfinite(res):
+            r2 = max(res, 1e-300)
+            bic = n * math.log(r2 * r2) + (o + 3) * math.log(n)
+        else:
+            bic = math.inf
+        if o == o_first or bic < best_bic:
+            best_bic = bic
+            bP, bc1, ba2, ba3, bconv, bres = P, c1, a2, a3, conv, res
+        have = True
+        pP, pc1, pa2, pres, pconv = P, c1, a2, res, conv
+    return bP, bc1, ba2, ba3, bconv, bres
+
+
+@njit(cache=True)
+def _pairwise_block(a, lo, n):
+    """numpy's pairwise sum of ``a[lo:lo + n]`` for ``n <= 128``: sequential under 8, else 8 accumulators."""
+    if n < 8:
+        s = -0.0
+        for i in range(lo, lo + n):
+            s += a[i]
+        return s
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    stop = n - n % 8
+    while i < stop:
+        j = lo + i
+        r0 += a[j]
+        r1 += a[j + 1]
+        r2 += a[j + 2]
+        r3 += a[j + 3]
+        r4 += a[j + 4]
+        r5 += a[j + 5]
+        r6 += a[j + 6]
+        r7 += a[j + 7]
+        i += 8
+    s = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        s += a[lo + i]
+        i += 1
+    return s
+
+
+@njit(cache=True)
+def _pairwise(a):
+    """``np.add.reduce(a)`` (1-D contiguous float64): numpy's pairwise summation, the same additions
+    in the same order (blocks of at most 128 summed by :func:`_pairwise_block`; above, the halves
+    ``n2 = n // 2 - (n // 2) % 8`` summed apart and added). The recursion is an explicit stack (numba's
+    cache does not load a recursive function safely)."""
+    n = a.size
+    if n <= 128:
+        return _pairwise_block(a, 0, n)
+    los = np.empty(128, np.int64)  # frames: start, length, expanded; two per level of halving
+    ns = np.empty(128, np.int64)
+    expanded = np.zeros(128, np.bool_)
+    vals = np.empty(128)
+    sp = 1
+    nv = 0
+    los[0], ns[0], expanded[0] = 0, n, False
+    while sp > 0:
+        k = sp - 1
+        lo, m = los[k], ns[k]
+        if m <= 128:
+            vals[nv] = _pairwise_block(a, lo, m)
+            nv += 1
+            sp -= 1
+        elif not expanded[k]:
+            expanded[k] = True
+            n2 = m // 2
+            n2 -= n2 % 8
+            los[sp], ns[sp], expanded[sp] = lo, n2, False
+            los[sp + 1], ns[sp + 1], expanded[sp + 1] = lo + n2, m - n2, False
+            sp += 2
+        else:  # both halves summed: the first half's on top (IEEE addition commutes)
+            vals[nv - 2] = vals[nv - 2] + vals[nv - 1]
+            nv -= 1
+            sp -= 1
+    return vals[0]
+
+
+def finish_stats(res: np.ndarray, u: np.ndarray, z: np.ndarray, p0: float, p1: float) -> tuple[float, float, float]:
+    """:func:`.fringes._finish`'s statistics: ``np.max(np.abs(u - np.polyval((p0, p1), z)))``,
+    ``np.var(res)`` and ``np.sqrt(np.mean(res**2))``, in one compiled call (the same numbers, bit for
+    bit); those numpy calls themselves where the kernels run as Python (the first run's
+    ``NUMBA_DISABLE_JIT``: the loops as Python cost ~10 ms on 1,300 samples)."""
+    if _INTERPRETED:
+        return (float(np.max(np.abs(u - np.polyval(np.array([p0, p1]), z)))), float(np.var(res)),
+                float(np.sqrt(np.mean(res**2))))
+    return _finish_stats(res, u, z, p0, p1)
+
+
+@njit(cache=True)
+def _finish_stats(res, u, z, p0, p1):
+    """:func:`finish_stats` compiled (numpy's pairwise sums: :func:`_pairwise`)."""
+    n = res.size
+    dev = -math.inf
+    for i in range(n):
+        lin = (0.0 * z[i] + p0) * z[i] + p1  # np.polyval's Horner from zeros
+        d = abs(u[i] - lin)
+        if d > dev or d != d:
+            dev = d
+            if d != d:
+                break
+    var = _var(res)
+    w = np.empty(n)
+    for i in range(n):
+        w[i] = res[i] * res[i]
+    rms = math.sqrt(_pairwise(w) / n)
+    return dev, var, rms
+
+
+@njit(cache=True)
+def _var(a):
+    """``np.var(a)`` of a non-empty 1-D contiguous float64 array, bit for bit (its pairwise sums)."""
+    n = a.size
+    mean = _pairwise(a) / n
+    w = np.empty(n)
+    for i in range(n):
+        e = a[i] - mean
+        w[i] = e * e
+    return _pairwise(w) / n
+
+
+def variance(a: np.ndarray) -> float:
+    """``float(np.var(a))`` (the same number) without numpy's ~10 us of wrappers."""
+    a = np.asarray(a, dtype=float)
+    if a.ndim != 1 or a.size == 0 or _INTERPRETED:
+        return float(np.var(a))
+    return float(_var(np.ascontiguousarray(a)))

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._fringe_kernel import _Prep, _prepare, _thin_indices, lm_fit
+from ._fringe_kernel import _prepare, _thin_indices, finish_stats, fit_orders, variance
 from ._numeric import lstsq_qr, polyfit, ptp
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
@@ -376,7 +376,7 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
     r = np.asarray(r, float)
     t = None if t is None else np.asarray(t, float)
     p0 = None
-    var_r = float(np.var(r)) if z.size >= 16 else None  # computed once: the search, the fit, the verdict
+    var_r = variance(r) if z.size >= 16 else None  # computed once: the search, the fit, the verdict (np.var's number)
     if not (period or z.size < 16 or var_r == 0):
         p0, fraction = _periodogram_fast(z, r, var_r)  # compiled: the same starting period (a grid value)
         if not math.isfinite(p0) or fraction < min_explained / 3:
@@ -388,97 +388,38 @@ def fit_fringes(z: np.ndarray, r: np.ndarray, *, period: float | None = _Fr.peri
         if z.size > m:
             keep = _thin_indices(z.size, m)  # np.unique(np.linspace(0, n - 1, m).round().astype(np.int64))
     zs, rs, ts = (z, r, t) if keep is None else (z[keep], r[keep], None if t is None else t[keep])
-    orders = (1, 2, 3) if order == "auto" else (int(order),)
-    fits = []
-    prep = _prepare(zs, rs, ts, var_r if keep is None else None) if zs.size >= 16 else None  # shared by the orders
-    for o in orders:
-        ref = 0.5 * zs.size * fits[-1].residual ** 2 if fits and math.isfinite(fits[-1].residual) else None
-        warm = fits[-1] if fits and fits[-1].converged and math.isfinite(fits[-1].period) else None
-        fits.append(_fit_order(zs, rs, period, o, min_explained, min_cycles, ts, p0, ref, warm, prep))
-    if len(fits) > 1:
-        n = max(zs.size, 1)
-        bic = [n * math.log(max(f.residual, 1e-300) ** 2) + (o + 3) * math.log(n) if math.isfinite(f.residual)
-               else math.inf for o, f in zip(orders, fits)]
-        best = fits[int(np.argmin(bic))]
-    else:
-        best = fits[0]
+    best = _fit_map(zs, rs, ts, period, order, p0, var_r if keep is None else None)
     if not math.isfinite(best.period):
         return best
     return _finish(z, r, t, best.period, best.scale, best.a2, best.a3, min_explained, min_cycles,
                    converged=best.converged, var_r=var_r)
 
 
-def _fit_order(z, r, period, order, min_explained, min_cycles, t=None, p_start=None,
-               reference_cost=None, start: FringeRun | None = None, prep: "_Prep | None" = None) -> FringeRun:
-    """:func:`fit_fringes` for one map order (on the samples given): the map and its residual
-    (amplitude, line and verdict are left to :func:`_finish`).
-
-    Starts from ``start`` (the lower order's fit) when given. The cubic map starts from
-    a3 = 0, and from a3 = +-0.05 only when the first start does not improve on
-    ``reference_cost`` (the lower order's cost, a sign of a local minimum).
-    """
-    z = np.asarray(z, float)
-    r = np.asarray(r, float)
+def _fit_map(z, r, t, period, order, p_start, var0=None) -> FringeRun:
+    """:func:`fit_fringes`'s nonlinear fit on the samples given: the map of the best order (``"auto"``:
+    1, 2, 3 by the Bayesian information criterion) and its residual; amplitude, line and verdict are
+    left to :func:`_finish`. The orders and their starts run in one compiled call
+    (:func:`._fringe_kernel.fit_orders`): each order starts from the lower order's map; the cubic from
+    a3 = 0, and from a3 = +-0.05 only when the first start does not improve on the lower order's cost
+    (a sign of a local minimum)."""
     nan = math.nan
     if z.size < 16:
         return FringeRun(False, nan, 0.0, 0.0, 1.0, 0.0, 0.0, nan, 1.0, 0.0, 0.0, 0.0, nan)
-    if prep is None:
-        prep = _prepare(z, r, t)
+    prep = _prepare(z, r, t, var0)
     zm, L, var0 = prep.zm, prep.L, prep.var0
-    if var0 == 0:
+    P0 = float(period) if period else p_start
+    if var0 == 0 or not (P0 and math.isfinite(P0)):
         return FringeRun(False, nan, 0.0, 0.0, 1.0, 0.0, 0.0, zm, L, 0.0, 0.0, 0.0, nan)
-    P0 = float(period) if period else (p_start if p_start else _initial_period(z, r))
-    if not math.isfinite(P0):
-        return FringeRun(False, nan, 0.0, 0.0, 1.0, 0.0, 0.0, zm, L, 0.0, 0.0, 0.0, nan)
-    n_map = max(0, min(order, 3) - 1)
-
-    def unpack(q):
-        if period:
-            c1, P, rest = q[0], float(period), q[1:]
-        else:
-            c1, P, rest = 1.0, P0 * math.exp(q[0]), q[1:]
-        a2 = rest[0] if n_map >= 1 else 0.0
-        a3 = rest[1] if n_map >= 2 else 0.0
-        return P, c1, a2, a3
-
-    x, x2, x3, Q0, r_perp = prep.x, prep.x2, prep.x3, prep.Q0, prep.r_perp
-    known = bool(period)
-    per = float(period) if period else 0.0
-
-    q0 = np.zeros(1 + n_map)
-    q0[0] = 1.0 if period else 0.0
-    if start is not None:  # the lower order's map: nested models, a warm start
-        q0[0] = start.scale if period else math.log(start.period / P0)
-        if n_map >= 1:
-            q0[1] = start.a2
-    best = None
-    for a3_start in (0.0,) if n_map < 2 else (0.0, 0.05, -0.05):
-        q = q0.copy()
-        if n_map >= 2:
-            q[2] = a3_start
-        qs, cost, status = lm_fit(q, known, float(P0), per, n_map, x, x2, x3, float(zm), float(L), Q0, r_perp,
-                                  MAX_NFEV, 1e-6, 1e-7)
-        sol = _Solution(qs, float(cost), int(status))
-        if best is None or sol.cost < best.cost:
-            best = sol
-        if reference_cost is not None and best.cost < reference_cost:
-            break  # the cubic already improves on the lower order: not stuck, no other start needed
-    P, c1, a2, a3 = unpack(best.x)
-    # the map only (the line, amplitude and verdict come from _finish on every sample)
-    rms = math.sqrt(2.0 * best.cost / z.size)
+    o_first, o_last = (1, 3) if order == "auto" else (int(order), int(order))
+    P, c1, a2, a3, converged, rms = fit_orders(o_first, o_last, bool(period), float(P0),
+                                               float(period) if period else 0.0, prep.x, prep.x2, prep.x3,
+                                               float(zm), float(L), prep.Q0, prep.r_perp, MAX_NFEV, 1e-6, 1e-7)
     return FringeRun(False, float(P), 0.0, 0.0, float(c1), float(a2), float(a3), float(zm), float(L), 0.0,
-                     1.0 - rms**2 / var0, float(ptp(z)) / P if P > 0 else 0.0, rms, converged=best.status > 0)
-
-
-@dataclass
-class _Solution:
-    x: np.ndarray
-    cost: float  # half the sum of squared residuals
-    status: int  # 0: evaluation budget spent; 1: converged
+                     1.0 - rms**2 / var0, float(ptp(z)) / P if P > 0 else 0.0, rms, converged=bool(converged))
 
 
 def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, lapack=False,
-            var_r=None, _design_of=None) -> FringeRun:
+            var_r=None, _design_of=None, lin_coef=None) -> FringeRun:
     """The linear coefficients, residual and verdict of a map (P, c1, a2, a3) on every sample.
 
     The linear solve is the compiled :func:`~._numeric.lstsq_qr` (equal to rounding) where the map is
@@ -510,20 +451,23 @@ def _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged=True, l
     # a linear map (a2 = a3 = 0) leaves rounding noise here: np.polyfit's, kept bit for bit; a curved one
     # a nonlinearity far above rounding, which the compiled fit gives to ~1e-13 of it
     curved = abs(a2) + abs(a3) > 1e-3  # (u does not depend on the linear solve: LAPACK or not alike)
-    lin = np.polyval((polyfit if curved else np.polyfit)(z, u, 1), z)
-    nonlin = float(np.max(np.abs(u - lin)) / max(u_range, 1e-300))
-    explained = 1.0 - float(np.var(res)) / (float(np.var(r)) if var_r is None else var_r)
+    if lin_coef is None:
+        lin_coef = (polyfit if curved else np.polyfit)(z, u, 1)
+    # numpy's max |u - polyval|, var(res) and sqrt(mean(res^2)), bit for bit, in one compiled call
+    dev, var_res, rms = finish_stats(res, u, z, float(lin_coef[0]), float(lin_coef[1]))
+    nonlin = float(dev / max(u_range, 1e-300))
+    explained = 1.0 - float(var_res) / (float(np.var(r)) if var_r is None else var_r)
     cycles = float(u_range / P)
     found = converged and explained >= min_explained and cycles >= min_cycles and monotonic_map(c1, a2, a3)
     if found and ok:
         return _finish(z, r, t, P, c1, a2, a3, min_explained, min_cycles, converged, lapack=True, var_r=var_r,
-                       _design_of=(zm, L, xt, tm, tL, X, x, u, u_range))
+                       _design_of=(zm, L, xt, tm, tL, X, x, u, u_range), lin_coef=lin_coef)
     if xt is None:
         base = (float(coef[2]), float(coef[3]) / L, float(zm), "position")
     else:
         base = (float(coef[2]), float(coef[3]) / tL, float(tm), "time")
     return FringeRun(bool(found), float(P), amp, phase, float(c1), float(a2), float(a3), float(zm), float(L),
-                     nonlin, float(explained), cycles, float(np.sqrt(np.mean(res**2))), *base, converged=converged)
+                     nonlin, float(explained), cycles, float(rms), *base, converged=converged)
 
 
 def monotonic_map(c1: float, a2: float, a3: float, reach: float = 1.5) -> bool:
