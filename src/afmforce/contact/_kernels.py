@@ -10,7 +10,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["ramp_weight", "scan_power_law", "scan_dmt"]
+__all__ = ["ramp_weight", "scan_power_law", "search_power_law", "scan_dmt"]
 
 
 @njit(cache=True)
@@ -31,6 +31,12 @@ def scan_power_law(u, F, cands, k, p, width):  # pragma: no cover - compiled
     E = np.empty(m)
     b = np.empty(m)
     ssr = np.empty(m)
+    ascending = True
+    for j in range(1, m):
+        if not cands[j] > cands[j - 1]:
+            ascending = False
+    if width <= 0 and ascending:
+        return _scan_unweighted(u, F, cands, k, p, E, b, ssr)
     for j in range(m):
         c = cands[j]
         s0 = s1 = s2 = sy = sxy = syy = 0.0
@@ -66,6 +72,101 @@ def scan_power_law(u, F, cands, k, p, width):  # pragma: no cover - compiled
             b[j] = np.nan
             ssr[j] = np.inf
     return E, b, ssr
+
+
+@njit(cache=True)
+def _scan_unweighted(u, F, cands, k, p, E, b, ssr):  # pragma: no cover - compiled
+    """:func:`scan_power_law` with unit weights and strictly ascending candidates, the same sums: the
+    weight, force and force-squared sums do not depend on the contact point (computed once, in the same
+    order), and a sample before a contact point adds zeros to its other sums (left out). Each sample adds
+    its terms to the candidates below it (a prefix of the grid: the inner loop), so every candidate's
+    sums still run over the samples in their order."""
+    m = cands.size
+    n = u.size
+    s0 = sy = syy = 0.0
+    for i in range(n):
+        f = F[i]
+        s0 += 1.0
+        sy += f
+        syy += f * f
+    s1 = np.zeros(m)
+    s2 = np.zeros(m)
+    sxy = np.zeros(m)
+    for i in range(n):
+        ui = u[i]
+        f = F[i]
+        top = np.searchsorted(cands, ui)  # the candidates c < u[i]: u[i] - c > 0
+        if p == 1.5:
+            for j in range(top):
+                d = ui - cands[j]
+                phi = k * d * math.sqrt(d)
+                s1[j] += phi
+                s2[j] += phi * phi
+                sxy[j] += phi * f
+        elif p == 2.0:
+            for j in range(top):
+                d = ui - cands[j]
+                phi = k * d * d
+                s1[j] += phi
+                s2[j] += phi * phi
+                sxy[j] += phi * f
+        else:
+            for j in range(top):
+                d = ui - cands[j]
+                phi = k * d ** p
+                s1[j] += phi
+                s2[j] += phi * phi
+                sxy[j] += phi * f
+    for j in range(m):
+        det = s0 * s2[j] - s1[j] * s1[j]
+        if det > 0:
+            e = (s0 * sxy[j] - s1[j] * sy) / det
+            bb = (s2[j] * sy - s1[j] * sxy[j]) / det
+            r = syy - e * sxy[j] - bb * sy
+            E[j] = e
+            b[j] = bb
+            ssr[j] = r if (e > 0 and math.isfinite(r)) else np.inf
+        else:
+            E[j] = np.nan
+            b[j] = np.nan
+            ssr[j] = np.inf
+    return E, b, ssr
+
+
+@njit(cache=True)
+def search_power_law(u, F, cands, k, p, width, stride):  # pragma: no cover - compiled
+    """The contact-point search of :func:`afmforce.contact.fit._linear_fit` for a power law, in one call:
+    four rounds of :func:`scan_power_law`, each on the candidates made unique and sorted (``np.unique``),
+    the first three on every ``stride``-th sample, the last on all; after each round the grid is 17 points
+    (``np.linspace``, bit for bit) between the best candidate's neighbours. Returns ``(ok, c, E, b, ssr)``
+    of the last round's best candidate; ``ok`` False where no candidate gives a positive modulus."""
+    if stride > 1:
+        us = np.ascontiguousarray(u[::stride])
+        fs = np.ascontiguousarray(F[::stride])
+    else:
+        us = u
+        fs = F
+    c0 = e0 = b0 = s0 = np.nan
+    for rnd in range(4):
+        cands = np.unique(cands)
+        if rnd < 3:
+            E, b, ssr = scan_power_law(us, fs, cands, k, p, width)
+        else:
+            E, b, ssr = scan_power_law(u, F, cands, k, p, width)
+        i = 0
+        for j in range(1, ssr.size):  # np.argmin: the first smallest (no NaN here)
+            if ssr[j] < ssr[i]:
+                i = j
+        if not math.isfinite(ssr[i]):
+            return False, np.nan, np.nan, np.nan, np.inf
+        c0, e0, b0, s0 = cands[i], E[i], b[i], ssr[i]
+        left, right = cands[max(i - 1, 0)], cands[min(i + 1, cands.size - 1)]
+        step = (right - left) / 16.0  # np.linspace(left, right, 17): i * step + left, the last right
+        cands = np.empty(17)
+        for j in range(17):
+            cands[j] = j * step + left
+        cands[16] = right
+    return True, c0, e0, b0, s0
 
 
 @njit(cache=True)

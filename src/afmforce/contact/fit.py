@@ -125,6 +125,12 @@ def _scan(u, F, cands, key, geom, nu, width):
     return E, b, ssr
 
 
+#: The fixed parts of the candidate grid of :func:`_linear_fit` (np.geomspace, np.linspace: computed once).
+_GEO = np.geomspace(1e-3, 1.0, 64)
+_AROUND = np.linspace(-0.02, 0.02, 9)
+_EVEN = np.arange(1.0, 32.0)  # np.linspace(lo, hi, 33)[1:-1] is _EVEN * ((hi - lo) / 32) + lo
+
+
 def _linear_fit(u, F, key, geom, nu, width, guess):
     lo, hi = float(np.min(u)), float(np.max(u))
     span = hi - lo
@@ -132,24 +138,37 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
         raise AnalysisError("the tip does not move: no indentation to fit")
     # indentations from 0.1 % of the travel to all of it, on a log scale (the contact is near the top
     # on most curves), and evenly over the travel
-    cands = np.concatenate((hi - span * np.geomspace(1e-3, 1.0, 64), np.linspace(lo, hi, 33)[1:-1]))
+    step = (hi - lo) / 32
+    even = _EVEN * step + lo if step != 0 else np.linspace(lo, hi, 33)[1:-1]
+    parts = (hi - span * _GEO, even)
     if guess is not None and math.isfinite(guess):
-        cands = np.concatenate((cands, guess + span * np.linspace(-0.02, 0.02, 9)))
+        parts += (guess + span * _AROUND,)
+    cands = np.concatenate(parts)
     stride = max(1, u.size // 2000)  # long runs: the first rounds on every stride-th sample, the last on all
-    for rnd in range(4):
-        cands = np.unique(cands)
-        us, Fs = (u[::stride], F[::stride]) if rnd < 3 else (u, F)
-        E, b, ssr = _scan(us, Fs, cands, key, geom, nu, width)
-        i = int(np.argmin(ssr))
-        if not math.isfinite(ssr[i]):
+    if key in _POWER:  # the four rounds in one compiled call (the same numbers)
+        from ._kernels import search_power_law
+
+        kf, p = _POWER[key]
+        ok, c, E0, b0, best = search_power_law(u, F, cands, kf(geom, 1.0 / (1.0 - nu * nu)), p, float(width),
+                                               stride)
+        if not ok:
             raise AnalysisError("no contact point gives a positive modulus: the curve does not rise into contact")
-        c0 = float(cands[i])
-        left, right = cands[max(i - 1, 0)], cands[min(i + 1, cands.size - 1)]
-        cands = np.linspace(left, right, 17)
-    c, E0, b0 = c0, float(E[i]), float(b[i])
+        c, E0, b0 = float(c), float(E0), float(b0)
+    else:
+        for rnd in range(4):
+            cands = np.unique(cands)
+            us, Fs = (u[::stride], F[::stride]) if rnd < 3 else (u, F)
+            E, b, ssr = _scan(us, Fs, cands, key, geom, nu, width)
+            i = int(np.argmin(ssr))
+            if not math.isfinite(ssr[i]):
+                raise AnalysisError("no contact point gives a positive modulus: the curve does not rise into "
+                                    "contact")
+            c0 = float(cands[i])
+            left, right = cands[max(i - 1, 0)], cands[min(i + 1, cands.size - 1)]
+            cands = np.linspace(left, right, 17)
+        c, E0, b0, best = c0, float(E[i]), float(b[i]), ssr[i]
     # Gauss-Newton on (E, c, b): the weights at the current c
     p = np.array([E0, c, b0])
-    best = ssr[i]
     for _ in range(2):  # the scan has the contact point to ~1e-4 of a grid step: a polish
         d = u - p[1]
         phi, dphi = shape_and_slope(key, d, geom, nu)
@@ -400,7 +419,7 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
         E_low, E_high = 0.0, math.nan
     in_contact = used & (d > 0)
     dmax = float(d[in_contact].max()) if in_contact.any() else 0.0
-    fmodel = model_force(model, d, E, geom, nu, 0.0, transition, branch) if m.linear else a.model
+    fmodel = E * phi if m.linear else a.model  # model_force(model, d, E, ...): E times the shape at d
     resid = (F - fmodel - b)[used]
     warn = list(validity(model, geom, dmax, thickness, int(in_contact.sum())))
     if undetermined:
