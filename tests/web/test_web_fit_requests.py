@@ -49,7 +49,8 @@ def test_running_jobs_are_capped_per_session_and_per_server(recorded, workers):
         _as_session(client, n)
         answers.append(client.post("/api/fit", json=body).status_code)
     assert answers.count(202) == MAX_JOBS - MAX_SESSION_JOBS and answers.count(429) == MAX_SESSION_JOBS
-    assert len(started) == MAX_JOBS + 1 and workers() == before   # (one of them cancelled)
+    # no process started (children an earlier test left may end meanwhile: at most as many as before)
+    assert len(started) == MAX_JOBS + 1 and workers() <= before   # (one of them cancelled)
 
 
 def test_virtual_curves_at_one_speed_are_refused_before_a_job_starts(recorded):
