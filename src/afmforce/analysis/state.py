@@ -249,11 +249,14 @@ def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> Non
     head = a[: max(5, n // 3)]
     step = np.diff(head)
     noise = 1.4826 * float(np.median(np.abs(step - np.median(step)))) / math.sqrt(2.0)
-    if not noise > 0.0:
-        return
+    if not noise > 0.0:      # quieter than its digitisation (most steps equal): one quantum, the least step
+        moved = np.abs(step[step != 0.0])
+        if not moved.size:
+            return
+        noise = float(moved.min())
     base = float(np.median(head))
     tail = float(np.median(a[-max(3, n // 50):])) - base
-    start = float(np.median(s[retract][: max(3, retract.size // 50)])) - base
+    start = float(np.median(s[retract[: max(3, retract.size // 50)]])) - base
     peak = float(a.max()) - base
     if tail < -INVERTED_SIGMAS * noise and start < -INVERTED_SIGMAS * noise and peak < 0.5 * -tail:
         raise AnalysisError(f"the deflection signal falls as the tip is pressed on the sample: it ends the approach "
