@@ -129,6 +129,7 @@ def test_errors_are_afmforce_errors():
 
 
 @pytest.mark.parametrize("name", ["asylum-mfp3d_SiN-tip_air.ibw", "bruker-nanoscope_PyFMlab_Egel4_00025.spm",
+                                  "bruker-nanoscope_sapphire_TAP525.001",   # quantised: its noise is one quantum
                                   "corpus/asylum-ibw_ForceMetric_X60_3_x4_0146.ibw"])
 def test_inverted_deflection_sign_is_refused(name):
     """A deflection stored with the other sign (falling as the tip presses on the sample) would give a
