@@ -18,6 +18,7 @@ import pytest
 from afmforce.analysis.options import ProbeCalibration
 from afmforce.analysis.pipeline import analyze
 from afmforce.analysis.plausibility import IMPOSSIBLE, MODULUS_RANGE, impossible_modulus
+from afmforce.analysis.state import prepare
 from afmforce.errors import AfmforceError, AnalysisError
 from afmforce.io import load
 from afmforce.io.native.rawfile import write_raw
@@ -125,3 +126,21 @@ def test_cli_batch_reports_a_still_position_and_goes_on(tmp_path, sin, capsys):
 
 def test_errors_are_afmforce_errors():
     assert issubclass(AnalysisError, AfmforceError)
+
+
+@pytest.mark.parametrize("name", ["asylum-mfp3d_SiN-tip_air.ibw", "bruker-nanoscope_PyFMlab_Egel4_00025.spm",
+                                  "bruker-nanoscope_sapphire_TAP525.001",   # quantised: its noise is one quantum
+                                  "corpus/asylum-ibw_ForceMetric_X60_3_x4_0146.ibw"])
+def test_inverted_deflection_sign_is_refused(name):
+    """A deflection stored with the other sign (falling as the tip presses on the sample) would give a
+    soft result with a wrong adhesion: refused, saying what to do. The intact curves pass, among them one
+    whose approach ends below its baseline without the rise (the 0146 corpus curve); its negated copy
+    rises as a pressed lever does, so it passes too."""
+    curve = load(DATA / name)[0]
+    prepare(curve)                                                   # the file as read: no refusal
+    negated = dataclasses.replace(curve, deflection_signal=-np.asarray(curve.deflection_signal))
+    if "0146" in name:
+        prepare(negated)
+        return
+    with pytest.raises(AnalysisError, match="sign is inverted.*negate the deflection signal"):
+        analyze(negated)

@@ -184,3 +184,23 @@ def test_ascii_column_name_variants(name, expected):
     from afmforce.io.bruker import parse_column_name
 
     assert parse_column_name(name) == expected
+
+
+@pytest.mark.parametrize("name, stated, typed", [
+    ("bruker-nanoscope_sapphire_TAP525.001", b"\\Spring Constant: 90\r", b"\\Spring Constant: -9\r"),
+    ("bruker-nanoscope_sapphire_TAP525.001", b"\\Spring Constant: 90\r", b"\\Spring Constant: 00\r"),
+    ("bruker-ascii_nm_retract-reversed.txt", b"\\Spring Constant: 0.34", b"\\Spring Constant: -0.3"),
+])
+def test_impossible_header_spring_constant_is_refused_like_asylum(tmp_path, name, stated, typed):
+    """A header spring constant <= 0 is refused (FileFormatError naming `spring_constant`), as the
+    Asylum reader refuses one (the shared rule of ``finalize_curve``), not dropped into a run without
+    forces; the user's value replaces it. The copy keeps the header's length (same-size edit)."""
+    raw = (DATA / name).read_bytes()
+    assert raw.count(stated) == 1 and len(stated) == len(typed)
+    path = tmp_path / name
+    path.write_bytes(raw.replace(stated, typed))
+    with pytest.raises(FileFormatError, match="spring_constant.*positive.*`spring_constant`"):
+        load(path)
+    c = load(path, meta_override={"spring_constant": 0.07})[0]
+    assert c.metadata["spring_constant"] == 0.07
+    assert load(DATA / name)[0].metadata["spring_constant"] == float(stated.split(b":")[1])  # the deflection's

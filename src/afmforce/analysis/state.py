@@ -195,6 +195,7 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     _check_calibration(curve.metadata, probe, curve.deflection_unit)
     notes: list[str] = []
     z, use_measured = _moving_position(curve, z, use_measured, channel, runs, notes)
+    _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
     if processed:
         notes.insert(0, f"read as a processed export: {processed}")
@@ -230,6 +231,39 @@ def _check_calibration(metadata: Mapping[str, Any], probe: ProbeCalibration, uni
                 continue
             raise AnalysisError(f"the curve's {spec.help} is {spec.show(v)}, outside {spec.range_text()} (no "
                                 f"cantilever has it: a damaged, unset or mis-scaled header value); give `{key}`")
+
+
+#: How far below its free baseline [robust noise sigmas] a deflection that ends the approach and
+#: starts the retract there, never rising above it by half as much, says its sign is inverted.
+INVERTED_SIGMAS = 20.0
+
+
+def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> None:
+    """Refuse a deflection signal whose sign is inverted: pressed on the sample, a lever bends away
+    from it (the signal rises); one that ends the approach and starts the retract far below its free
+    baseline, never having risen above it by half as much, was stored with the other sign."""
+    n = approach.size
+    if n < 20 or retract.size < 3:
+        return
+    a = s[approach]
+    head = a[: max(5, n // 3)]
+    step = np.diff(head)
+    noise = 1.4826 * float(np.median(np.abs(step - np.median(step)))) / math.sqrt(2.0)
+    if not noise > 0.0:      # quieter than its digitisation (most steps equal): one quantum, the least step
+        moved = np.abs(step[step != 0.0])
+        if not moved.size:
+            return
+        noise = float(moved.min())
+    base = float(np.median(head))
+    tail = float(np.median(a[-max(3, n // 50):])) - base
+    start = float(np.median(s[retract[: max(3, retract.size // 50)]])) - base
+    peak = float(a.max()) - base
+    if tail < -INVERTED_SIGMAS * noise and start < -INVERTED_SIGMAS * noise and peak < 0.5 * -tail:
+        raise AnalysisError(f"the deflection signal falls as the tip is pressed on the sample: it ends the approach "
+                            f"{-tail / noise:.3g} noise sigmas below its free baseline and never rises above it by "
+                            "half as much: its sign is inverted (stored with the other sign convention), which would "
+                            "give a soft contact and a wrong adhesion; negate the deflection signal (the "
+                            "deflection away from the sample positive, as the readers give it) and analyse it again")
 
 
 def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel: str, runs: dict,

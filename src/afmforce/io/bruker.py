@@ -317,10 +317,11 @@ def _in_time_order(runs: dict[str, dict]) -> tuple[list[dict], np.ndarray]:
 
 
 def _calibration(header: dict[str, str]) -> dict[str, float]:
-    """The spring constant [N/m] and the deflection sensitivity [m/V] the header states (positive ones)."""
+    """The spring constant [N/m] (as stated: :func:`finalize_curve` refuses an impossible one, <= 0, as
+    every reader does) and the deflection sensitivity [m/V] (a positive one) the header states."""
     meta = {}
     k = _header_value(header, "Spring Constant")
-    if k and k > 0:
+    if k is not None:
         meta["spring_constant"] = k
     sens = _header_value(header, "Sens. DeflSens")
     if sens and sens > 0:

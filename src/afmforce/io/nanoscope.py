@@ -325,7 +325,7 @@ class NanoscopeFile:
         meta: dict[str, Any] = {"instrument": _find(sections, "Microscope") or "Bruker NanoScope",
                                 "nanoscope_version": _find(sections, "Version") or ""}
         k = _find([("", defl)], "Spring Constant") or _find(sections, "Spring Constant")  # the deflection's list
-        if k is not None and _number(k, where, "Spring Constant") > 0:
+        if k is not None:  # as stated: finalize_curve refuses an impossible one (<= 0), as every reader does
             meta["spring_constant"] = _number(k, where, "Spring Constant")
         sens = _sens(sections, "DeflSens") or _sens(sections, "Deflection")
         if sens is not None and sens[0] > 0:
