@@ -247,6 +247,12 @@ def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> Non
         return
     a = s[approach]
     head = a[: max(5, n // 3)]
+    base = float(np.median(head))
+    tail = float(np.median(a[-max(3, n // 50):])) - base
+    start = float(np.median(s[retract[: max(3, retract.size // 50)]])) - base
+    peak = float(a.max()) - base
+    if not (tail < 0.0 and start < 0.0 and peak < 0.5 * -tail):
+        return  # (the test below needs all three for any noise > 0: a normal curve pays no noise estimate)
     step = np.diff(head)
     noise = 1.4826 * float(np.median(np.abs(step - np.median(step)))) / math.sqrt(2.0)
     if not noise > 0.0:      # quieter than its digitisation (most steps equal): one quantum, the least step
@@ -254,11 +260,7 @@ def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> Non
         if not moved.size:
             return
         noise = float(moved.min())
-    base = float(np.median(head))
-    tail = float(np.median(a[-max(3, n // 50):])) - base
-    start = float(np.median(s[retract[: max(3, retract.size // 50)]])) - base
-    peak = float(a.max()) - base
-    if tail < -INVERTED_SIGMAS * noise and start < -INVERTED_SIGMAS * noise and peak < 0.5 * -tail:
+    if tail < -INVERTED_SIGMAS * noise and start < -INVERTED_SIGMAS * noise:
         raise AnalysisError(f"the deflection signal falls as the tip is pressed on the sample: it ends the approach "
                             f"{-tail / noise:.3g} noise sigmas below its free baseline and never rises above it by "
                             "half as much: its sign is inverted (stored with the other sign convention), which would "
