@@ -45,6 +45,8 @@ def test_a_session_past_its_total_is_refused_and_keeps_its_files(make_client):
     assert "600 bytes" in error["message"] and "1,000 bytes" in error["message"]
     assert "delete" in error["message"] and "new session" in error["message"]
     assert stored_files(client) == before               # nothing evicted, nothing added
+    state = client.get("/api/session").json()
+    assert state["stored"] == 600 and state["max_stored"] == 1000
     sessions = client.app.state.sessions
     assert sessions.stored_bytes() == 600
     seed(client, 400)                                   # exactly the total is allowed
