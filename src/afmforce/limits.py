@@ -15,7 +15,7 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "SERVER_MAX_SAMPLES", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "SERVER_MAX_SAMPLES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
@@ -29,6 +29,12 @@ MAX_MEMBER_BYTES = MAX_SAMPLES * 8
 #: memory among its clients (about 90 MB of trajectory per request; issue 33). Declared here, beside
 #: :data:`MAX_SAMPLES`, so that every face reads its caps from one module.
 SERVER_MAX_SAMPLES = 1_000_000
+#: The most bytes of uploads one session of ``afmforce serve`` may keep stored (all its files
+#: together; ten uploads of the largest size a request may carry, 200 MB). One more upload is
+#: refused (413) until the session deletes files or expires; nothing stored is ever evicted.
+SERVER_SESSION_STORAGE = 2_000_000_000
+#: The most bytes of uploads ``afmforce serve`` keeps stored for all its sessions together.
+SERVER_STORAGE = 20_000_000_000
 #: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
 CONFIRM_RUNS = 100_000
 #: The most runs of one sweep, even with a yes (its parameter table is built before any run).
@@ -110,6 +116,9 @@ def caps_markdown() -> str:
     rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
             ("bytes one member of a JPK archive unpacks to", MAX_MEMBER_BYTES, "the JPK readers"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
+            ("bytes of uploads one web session keeps stored", SERVER_SESSION_STORAGE,
+             "afmforce serve (--session-storage)"),
+            ("bytes of uploads of all web sessions together", SERVER_STORAGE, "afmforce serve (--server-storage)"),
             ("runs of one sweep run without asking for a yes", CONFIRM_RUNS, "sweep"),
             ("runs of one sweep", MAX_RUNS, "sweep"),
             ("curves in a design", MAX_DESIGN_CURVES, "plan"),

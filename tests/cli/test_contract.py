@@ -119,7 +119,8 @@ PER_COMMAND = {
 
 
 @pytest.mark.parametrize("argv", [["serve", "--port", "70000"], ["serve", "--budget", "-1"],
-                                  ["serve", "--max-upload", "lots"]])
+                                  ["serve", "--max-upload", "lots"], ["serve", "--session-storage", "0"],
+                                  ["serve", "--server-storage", "lots"]])
 def test_serve_refuses_bad_values_before_listening(argv, odd_files, capsys, monkeypatch):
     monkeypatch.chdir(odd_files)
     check_error(capsys, argv, 2)

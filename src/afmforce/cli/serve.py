@@ -31,6 +31,13 @@ def register(sub) -> None:
     p.add_argument("--session-ttl", default="24h", metavar="TIME",
                    help="a browser session's uploads and jobs are removed this long after its last use "
                         "(default 24h; units: s, min, h, d)")
+    from ..limits import SERVER_SESSION_STORAGE, SERVER_STORAGE
+
+    p.add_argument("--session-storage", default=None, metavar="SIZE",
+                   help=f"bytes of uploads one browser session may keep stored (default {SERVER_SESSION_STORAGE / 1e9:g}GB); "
+                        "its next upload gets HTTP 413 until it deletes files")
+    p.add_argument("--server-storage", default=None, metavar="SIZE",
+                   help=f"bytes of uploads all sessions together may keep stored (default {SERVER_STORAGE / 1e9:g}GB)")
     p.set_defaults(func=run)
 
 
@@ -61,6 +68,9 @@ def run(args: argparse.Namespace) -> int:
     from ..web.settings import Settings, parse_size
 
     kw = {"data": args.data} if args.data is not None else {}
+    for flag, name in (("--session-storage", "session_storage"), ("--server-storage", "server_storage")):
+        if getattr(args, name) is not None:
+            kw[name] = parse_size(getattr(args, name), flag)
     settings = Settings(host=args.host, port=args.port, token=args.token, max_upload=parse_size(args.max_upload),
                         request_budget=args.budget, allow_origins=tuple(args.allow_origin),
                         session_ttl=session_ttl(args.session_ttl), **kw).resolved()

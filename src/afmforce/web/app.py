@@ -24,7 +24,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     settings = (settings or Settings()).resolved()
     settings.data.mkdir(parents=True, exist_ok=True)
     jobs = JobManager(settings.data, budget=settings.job_budget, spare=settings.spare_job)
-    sessions = Sessions(settings.data, ttl=settings.session_ttl)
+    sessions = Sessions(settings.data, ttl=settings.session_ttl, session_bytes=settings.session_storage,
+                        server_bytes=settings.server_storage)
     stop = threading.Event()
 
     def expire() -> None:   # sessions unused past --session-ttl: their uploads and finished jobs go

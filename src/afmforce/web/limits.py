@@ -2,14 +2,15 @@
 
 Time is bounded by the settings (``--budget``, the job budget); these bound memory: how many
 samples a simulation may have, how many values a response may carry, how many runs a sweep may
-have and how long the lists of a request may be. A request over a limit gets 422 naming the field
+have, how long the lists of a request may be and how many bytes of uploads a session and the
+server keep stored (the disk). A request over a limit gets 422 naming the field
 before anything is computed.
 """
 
 from __future__ import annotations
 
 __all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
-           "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL", "MAX_JOBS", "MAX_SESSION_JOBS"]
+           "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL", "SESSION_STORAGE", "SERVER_STORAGE", "MAX_JOBS", "MAX_SESSION_JOBS"]
 
 #: Samples one simulated cycle may have: the library's cap for a server (``afmforce.limits``).
 from ..limits import SERVER_MAX_SAMPLES as MAX_SAMPLES  # noqa: E402
@@ -32,5 +33,10 @@ MAX_JOBS = 4
 MAX_SESSION_JOBS = 2
 #: Bytes of an uploaded probe calibration file (``afmforce calibrate --out`` writes about 1 kB).
 CALIBRATION_BYTES = 65_536
+#: Default bytes of uploads one session may keep stored (``--session-storage``); its next upload is
+#: refused (413 ``storage_full``) until it deletes files or expires: stored files are never evicted.
+from ..limits import SERVER_SESSION_STORAGE as SESSION_STORAGE  # noqa: E402
+#: Default bytes of uploads the server keeps stored for all sessions together (``--server-storage``).
+from ..limits import SERVER_STORAGE  # noqa: E402
 #: Default lifetime of an unused session (its uploads and jobs) [s].
 SESSION_TTL = 24 * 3600.0

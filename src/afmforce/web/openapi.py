@@ -119,7 +119,7 @@ def _simulate_response() -> dict[str, Any]:
 
 ERROR = {"title": "Error", "type": "object", "required": ["error"], "properties": {"error": {
     "type": "object", "required": ["type", "message", "field"], "properties": {
-        "type": {"type": "string", "description": "invalid_value, invalid_request, too_large, forbidden, ..."},
+        "type": {"type": "string", "description": "invalid_value, invalid_request, too_large, storage_full, forbidden, ..."},
         "message": {"type": "string", "description": "one readable line"},
         "field": {"type": ["string", "null"], "description": "the value refused, as the request spells it"}}}}}
 
@@ -158,6 +158,10 @@ def build(app) -> dict[str, Any]:
                 "failed": {"type": "array", "items": {"type": "object"}},
                 "files": {"type": "array", "items": {"type": "object"}},
                 "wall_time": {"type": "number", "description": "[s]"}}}}}}
+        ana["responses"]["413"] = {"description": "too_large: the body is over --max-upload; storage_full: the "
+                                          "session's (or server's) stored uploads would pass --session-storage "
+                                          "(--server-storage): delete files or start a new session",
+                                   **_json_body("Error")}
         form = ana.get("requestBody", {}).get("content", {}).get("multipart/form-data", {}).get("schema", {})
         ref = form.get("$ref", "").rsplit("/", 1)[-1]
         body = schemas.get(ref, {}).get("properties", {})

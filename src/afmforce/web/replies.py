@@ -1,7 +1,7 @@
 """Every refusal of the server in one shape: ``{"error": {"type", "message", "field"}}``.
 
 ``type`` says what kind of refusal it is (``invalid_value``, ``invalid_request``,
-``too_large``, ``forbidden``, ``unauthorized``, ``not_found``, ``past_budget``, ``job_failed``;
+``too_large``, ``storage_full``, ``forbidden``, ``unauthorized``, ``not_found``, ``past_budget``, ``job_failed``;
 a library error's class in snake case, e.g. ``parameter_error``), ``message`` is one readable
 line in the words of the command line, ``field`` names the value refused as the request spells
 it (``velocity``, ``truth.xi``, ``velocities[0]``, ``max_points``) or is null. FastAPI's own
@@ -73,6 +73,7 @@ def install(app) -> None:
     from fastapi.responses import JSONResponse
     from starlette.exceptions import HTTPException
 
+    from .sessions import StorageFull
     from .validate import FieldError
 
     @app.exception_handler(AfmforceError)
@@ -98,6 +99,10 @@ def install(app) -> None:
     async def _http(request, exc: HTTPException):
         return JSONResponse(error_body(_STATUS_TYPES.get(exc.status_code, "error"), str(exc.detail)),
                             status_code=exc.status_code, headers=getattr(exc, "headers", None))
+
+    @app.exception_handler(StorageFull)
+    async def _full(request, exc: StorageFull):   # the session's (or server's) stored uploads: 413, nothing evicted
+        return JSONResponse(error_body("storage_full", str(exc)), status_code=413)
 
     @app.exception_handler(PastBudget)
     async def _budget(request, exc: PastBudget):

@@ -59,10 +59,8 @@ async def analyze(request: Request,
         given = {str(t).partition("=")[0].strip() for t in probe}
         values = calibration_file(await calibration.read(), calibration.filename or "calibration")
         probe = list(probe) + [f"{k}={v!r}" for k, v in values.items() if k not in given]
-    stored = []
-    for up in file:
-        data = await up.read()
-        stored.append(sessions.save(session, up.filename or "upload", data))
+    uploads = [(up.filename or "upload", await up.read()) for up in file]
+    stored = sessions.save_all(session, uploads)   # all or none; 413 storage_full past the totals
     paths = [sessions.path(session, s["id"]) for s in stored]
     for i, fid in enumerate(file_id):
         try:

@@ -56,12 +56,14 @@ def health(request: Request) -> dict:
 def session(request: Request) -> dict:
     """This browser's session, for the page to restore after a reload: ``files`` (the uploads, as
     ``GET /api/files``), ``jobs`` (as ``GET /api/jobs``), ``ttl`` [s] and ``expires`` (s since the
-    epoch; null while the session has stored nothing). Reading it stores nothing."""
+    epoch; null while the session has stored nothing), ``stored`` (bytes of its uploads) and
+    ``max_stored`` (the bytes it may keep, ``--session-storage``). Reading it stores nothing."""
     sid = request.state.session
     sessions, jobs = request.app.state.sessions, request.app.state.jobs
     used = sessions.last_used(sid)
     return {"files": sessions.files(sid), "jobs": [j.public(result=False) for j in jobs.list(sid)],
-            "ttl": sessions.ttl, "expires": None if used is None else used + sessions.ttl}
+            "ttl": sessions.ttl, "expires": None if used is None else used + sessions.ttl,
+            "stored": sessions.stored_bytes(sid), "max_stored": sessions.session_bytes}
 
 
 @router.get("/api/schema", tags=["server"])

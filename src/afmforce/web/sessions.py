@@ -15,12 +15,19 @@ upload (or job, :meth:`Sessions.touch`), never by a request that only reads. It 
 ``ttl`` seconds after its last use (the folder's ``last-used`` stamp, renewed at most once
 a minute); :meth:`Sessions.expire` removes the folders of sessions past it (the server runs
 it at start and then every few minutes, with the jobs of those sessions).
+
+Disk is bounded: a session keeps at most ``session_bytes`` of uploads and all sessions together
+``server_bytes`` (:data:`~.limits.SESSION_STORAGE`, :data:`~.limits.SERVER_STORAGE`). The bytes
+stored are counted from the folders themselves at each upload, so a deleted upload or an expired
+session frees its space at once; an upload over either total is refused (:class:`StorageFull`)
+before anything is written, all the files of one request or none. Stored files are never evicted.
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
+import os
 import re
 import secrets
 import shutil
@@ -30,9 +37,20 @@ from pathlib import Path
 from typing import Any
 
 from .._files import atomic_write_text
-from ..errors import ParameterError
+from ..errors import AfmforceError, ParameterError
+from .limits import SERVER_STORAGE, SESSION_STORAGE
 
-__all__ = ["Sessions", "channel_name", "safe_suffix", "session_key"]
+__all__ = ["Sessions", "StorageFull", "channel_name", "safe_suffix", "session_key"]
+
+
+class StorageFull(AfmforceError):
+    """An upload that would take a session (or the server) past the bytes it may keep stored (413)."""
+
+
+def _bytes(n: float) -> str:
+    """``1234`` -> ``'1,234 bytes'``; ``2e9`` -> ``'2 GB'`` (decimal units, as ``--max-upload``)."""
+    return next((f"{n / f:.3g} {u}" for f, u in ((1e12, "TB"), (1e9, "GB"), (1e6, "MB")) if n >= f),
+                f"{n:,.0f} bytes")
 
 _SUFFIX = re.compile(r"^\.[A-Za-z0-9][A-Za-z0-9-]{0,19}$")
 _ID = re.compile(r"^[0-9a-f]{32}$")
@@ -85,11 +103,18 @@ class Sessions:
         The data folder.
     ttl : float
         Lifetime of a session after its last use [s].
+    session_bytes : int
+        Bytes of uploads one session may keep stored [bytes].
+    server_bytes : int
+        Bytes of uploads all sessions together may keep stored [bytes].
     """
 
-    def __init__(self, root: Path, ttl: float = 24 * 3600.0):
+    def __init__(self, root: Path, ttl: float = 24 * 3600.0, session_bytes: int = SESSION_STORAGE,
+                 server_bytes: int = SERVER_STORAGE):
         self.root = Path(root) / "sessions"
         self.ttl = float(ttl)
+        self.session_bytes = int(session_bytes)
+        self.server_bytes = int(server_bytes)
         self._lock = threading.Lock()
         self._touched: dict[str, float] = {}
 
@@ -162,22 +187,86 @@ class Sessions:
         except (OSError, ValueError):
             return {}
 
+    @staticmethod
+    def _folder_bytes(path: Path) -> int:
+        """Bytes of the uploads stored in one session's folder (its index and stamp not counted)."""
+        total = 0
+        try:
+            with os.scandir(path) as entries:
+                for entry in entries:
+                    if entry.name not in ("index.json", _STAMP) and not entry.name.startswith("."):
+                        try:
+                            total += entry.stat(follow_symlinks=False).st_size
+                        except OSError:
+                            pass
+        except OSError:
+            pass
+        return total
+
+    def stored_bytes(self, session: str | None = None) -> int:
+        """Bytes of uploads the session keeps stored (None: all sessions together) [bytes], counted
+        from the folders (a deleted upload or an expired session is freed at once)."""
+        if session is not None:
+            return self._folder_bytes(self.root / session_key(session))
+        return sum(self._folder_bytes(p) for p in (self.root.iterdir() if self.root.is_dir() else ())
+                   if p.is_dir())
+
+    def _check_room(self, session: str, planned: list[tuple[str, int]]) -> None:
+        """Refuse (:class:`StorageFull`) uploads ``[(stored name, bytes)]`` that would take the session
+        or the server past its total; a stored name already there (a replaced wave) frees its bytes."""
+        folder = self.root / session_key(session)
+        adding = 0
+        for stored, size in planned:
+            try:
+                adding += size - (folder / stored).stat().st_size
+            except OSError:
+                adding += size
+        if adding <= 0:
+            return
+        mine = self.stored_bytes(session)
+        if mine + adding > self.session_bytes:
+            raise StorageFull(
+                f"this session keeps {_bytes(mine)} of uploads; {_bytes(adding)} more would pass the "
+                f"{_bytes(self.session_bytes)} a session may store: delete uploads you no longer need "
+                "(Your uploads, DELETE /api/files/ID) or start a new session, then upload again")
+        everyone = self.stored_bytes()
+        if everyone + adding > self.server_bytes:
+            raise StorageFull(
+                f"the server keeps {_bytes(everyone)} of uploads for all sessions; {_bytes(adding)} more "
+                f"would pass the {_bytes(self.server_bytes)} it may store: delete uploads you no longer "
+                "need, or ask its operator to free space (afmforce serve --server-storage), then upload again")
+
     def save(self, session: str, name: str, data: bytes) -> dict[str, Any]:
-        """Store an upload; returns ``{"id", "name", "size"}`` (``name``: as given, display only)."""
-        file_id = secrets.token_hex(16)
-        folder = self.folder(session)
-        paired = channel_name(name, session)     # one channel of an Asylum curve: beside its partner
-        stored = paired or f"{file_id}{safe_suffix(name)}"
-        shown = re.split(r"[\\/]", name or "")[-1][:200] or "upload"
+        """Store an upload; returns ``{"id", "name", "size"}`` (``name``: as given, display only).
+        Raises :class:`StorageFull` past the session's or the server's total (nothing is written)."""
+        return self.save_all(session, [(name, data)])[0]
+
+    def save_all(self, session: str, uploads: list[tuple[str, bytes]]) -> list[dict[str, Any]]:
+        """Store the uploads of one request, all or none: :class:`StorageFull` (nothing written) when
+        together they would take the session or the server past its total; else :meth:`save`'s
+        answer for each."""
+        planned = []
+        for name, data in uploads:
+            file_id = secrets.token_hex(16)
+            paired = channel_name(name, session)     # one channel of an Asylum curve: beside its partner
+            planned.append((file_id, name, data, paired, paired or f"{file_id}{safe_suffix(name)}"))
+        answers = []
         with self._lock:
-            (folder / stored).write_bytes(data)
+            self._check_room(session, [(stored, len(data)) for _, _, data, _, stored in planned])
+            if not planned:
+                return answers
+            folder = self.folder(session)
             index = self._index(session)
-            if paired:       # the same wave name uploaded again replaces the earlier upload
-                index = {k: v for k, v in index.items() if v.get("stored") != paired}
-            index[file_id] = {"name": shown, "suffix": safe_suffix(name), "size": len(data),
-                              "uploaded": time.time(), **({"stored": paired} if paired else {})}
+            for file_id, name, data, paired, stored in planned:
+                shown = re.split(r"[\\/]", name or "")[-1][:200] or "upload"
+                (folder / stored).write_bytes(data)
+                if paired:       # the same wave name uploaded again replaces the earlier upload
+                    index = {k: v for k, v in index.items() if v.get("stored") != paired}
+                index[file_id] = {"name": shown, "suffix": safe_suffix(name), "size": len(data),
+                                  "uploaded": time.time(), **({"stored": paired} if paired else {})}
+                answers.append({"id": file_id, "name": shown, "size": len(data)})
             atomic_write_text(folder / "index.json", json.dumps(index), force=True)
-        return {"id": file_id, "name": shown, "size": len(data)}
+        return answers
 
     def mark_read(self, session: str, file_ids) -> None:
         """Record that these uploads were read once without failing: later analyses of them

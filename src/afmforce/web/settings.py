@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ParameterError
-from .limits import SESSION_TTL
+from .limits import SERVER_STORAGE, SESSION_STORAGE, SESSION_TTL
 
 __all__ = ["Settings", "parse_size", "is_loopback"]
 
@@ -18,17 +18,18 @@ _FACTOR = {"": 1, "b": 1, "kb": 1e3, "mb": 1e6, "gb": 1e9, "kib": 2**10, "mib": 
            "k": 1e3, "m": 1e6, "g": 1e9}
 
 
-def parse_size(text: str | int) -> int:
-    """``"200MB"`` -> 200000000 [bytes]; plain numbers are bytes (kB/MB/GB decimal, KiB/MiB/GiB binary)."""
+def parse_size(text: str | int, flag: str = "--max-upload") -> int:
+    """``"200MB"`` -> 200000000 [bytes]; plain numbers are bytes (kB/MB/GB decimal, KiB/MiB/GiB binary);
+    ``flag`` names the option in the message."""
     if isinstance(text, int):
         value = text
     else:
         m = _SIZE.match(str(text))
         if not m or (m.group(2) or "").lower() not in _FACTOR:
-            raise ParameterError(f"--max-upload {text!r}: give a size such as 200MB, 1GB or 500kB")
+            raise ParameterError(f"{flag} {text!r}: give a size such as 200MB, 1GB or 500kB")
         value = int(float(m.group(1)) * _FACTOR[(m.group(2) or "").lower()])
     if value < 1:
-        raise ParameterError(f"--max-upload must be at least 1 byte, got {text!r}")
+        raise ParameterError(f"{flag} must be at least 1 byte, got {text!r}")
     return value
 
 
@@ -72,6 +73,11 @@ class Settings:
     session_ttl : float
         Lifetime of a session after its last use [s] (``--session-ttl``): then its uploads and
         jobs are removed.
+    session_storage : int
+        Bytes of uploads one session may keep stored (``--session-storage``); its next upload is
+        refused (413) until it deletes files or expires.
+    server_storage : int
+        Bytes of uploads all sessions together may keep stored (``--server-storage``).
     """
 
     host: str = "127.0.0.1"
@@ -84,6 +90,8 @@ class Settings:
     spare_job: bool = True
     allow_origins: tuple[str, ...] = ()
     session_ttl: float = SESSION_TTL
+    session_storage: int = SESSION_STORAGE
+    server_storage: int = SERVER_STORAGE
 
     def __post_init__(self) -> None:
         from .guard import normal_origin
@@ -95,6 +103,9 @@ class Settings:
         object.__setattr__(self, "allow_origins", tuple(normal_origin(o) for o in self.allow_origins))
         if not (isinstance(self.session_ttl, (int, float)) and 60 <= self.session_ttl <= 365 * 86400):
             raise ParameterError(f"--session-ttl must lie in [1 min, 365 d], got {self.session_ttl!r} s")
+        for flag, value in (("--session-storage", self.session_storage), ("--server-storage", self.server_storage)):
+            if not (isinstance(value, int) and value >= 1):
+                raise ParameterError(f"{flag} must be a whole number of bytes >= 1, got {value!r}")
         if not 0 <= self.port < 65536:
             raise ParameterError(f"--port must lie in [0, 65535], got {self.port}")
         if self.token is not None and len(self.token) < 8:
