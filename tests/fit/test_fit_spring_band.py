@@ -9,14 +9,15 @@ preparation warns by, is that declaration, not a second copy.
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import pytest
 
+import afmforce.datasets
 from afmforce._fields import QUANTITIES
 from afmforce.analysis.plausibility import SPRING_CONSTANT_RANGE
 from afmforce.fit import prepare_curves
-
-from fit_virtual import make_curves
+from afmforce.io.native.rawfile import read_raw
 
 SPEC = QUANTITIES["spring_constant"]
 
@@ -29,7 +30,8 @@ def test_band_declared_once_inside_the_valid_range():
 
 @pytest.fixture(scope="module")
 def curve():
-    return make_curves(0.005, seed=3, speeds=(1e-6,), spacing=0.5e-9)[0]
+    # a packaged virtual curve (221 samples, k 0.1387 N/m): no simulation
+    return read_raw(Path(afmforce.datasets.__file__).parent / "data" / "fit-speed-4.txt")
 
 
 def _notes(curve, k: float) -> str:
