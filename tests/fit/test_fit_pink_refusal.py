@@ -7,9 +7,10 @@ that decides: :func:`afmforce.fit.noise.estimate_pink` on the residuals of a whi
 :func:`afmforce.fit.noise.pink_refusal`. Here both get residuals built without a simulation: a
 stand-in for the fit problem whose residuals are ``D b`` (``D`` removes the offset, the drift and
 the span of a one-column Jacobian) for (a) the ``typical`` instrument's noise (0.05 nm white +
-0.05 nm 1/f, :func:`afmforce.instrument.noise.pink_noise`) and (b) the same noise plus a model
-error of the closed form of a wrong stiffness (the approach's jump-in force ramp: a deflection
-``F / k`` that differs by tens of nm, an exponential of decay length 5 % of the record).
+0.05 nm 1/f, :func:`afmforce.instrument.noise.pink_noise`) and (b) the same noise plus a
+60 nm model error of a shape the fitted column cannot take (the fitted column decays over 5 % of
+the record before contact, the error over 2 %, with a linear ramp): what a wrong stiffness
+leaves, tens of nm of smooth misfit near contact.
 """
 
 from __future__ import annotations
