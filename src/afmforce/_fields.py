@@ -99,6 +99,10 @@ class FieldSpec:
     display : str
         Unit in which defaults, ranges and messages are shown (e.g. ``um/s``);
         "" shows SI, lengths and forces with an automatic prefix.
+    plausible : tuple of float or None
+        Narrower band [SI] inside the valid range where real instruments' values lie: a value
+        outside it is accepted (a valid number) but warned about as a likely slip of units.
+        ``None``: no such band.
     """
 
     dimension: str
@@ -109,6 +113,7 @@ class FieldSpec:
     lo_open: bool = False
     hi_open: bool = False
     display: str = ""
+    plausible: tuple[float, float] | None = None
 
     def show(self, value) -> str:
         """``value`` [SI] in this field's display unit."""
@@ -182,8 +187,9 @@ def spec_of(f: dataclasses.Field) -> FieldSpec | None:
     return f.metadata.get("spec")
 
 
-def _q(dimension, unit, help, lo=None, hi=None, *, lo_open=False, hi_open=False, display=""):
-    return FieldSpec(dimension, unit, help, lo, hi, lo_open, hi_open, display)
+def _q(dimension, unit, help, lo=None, hi=None, *, lo_open=False, hi_open=False, display="",
+       plausible=None):
+    return FieldSpec(dimension, unit, help, lo, hi, lo_open, hi_open, display, plausible)
 
 
 _POS = {"lo": 0.0, "lo_open": True}
@@ -201,7 +207,9 @@ QUANTITIES: dict[str, FieldSpec] = {
                  display="deg"),
     "m_joint": _q("mass", "kg", "point mass at the beam-base joint", hi=1e-5, display="ng", **_POS),
     "m_base": _q("mass", "kg", "mass spread along the base", hi=1e-5, display="ng", **_POS),
-    "spring_constant": _q("stiffness", "N/m", "spring constant k", 1e-4, 1e3),
+    # valid: any lever a model may hold; plausible: the cantilevers made (1 mN/m .. 100 N/m), outside
+    # which a file's or a user's k is warned about (a unit slip: 200 for 0.2 N/m) by the analysis and the fit
+    "spring_constant": _q("stiffness", "N/m", "spring constant k", 1e-4, 1e3, plausible=(1e-3, 100.0)),
     "mass": _q("mass", "kg", "effective mass m", hi=1e-5, display="ug", **_POS),
     "resonance_frequency": _q("frequency", "Hz", "resonance frequency", 1.0, 1e8, display="kHz"),
     "quality_factor": _q("dimensionless", "", "quality factor Q of the lever in its medium (none: undamped)",

@@ -6,7 +6,7 @@ Each check says the number, its range and what usually causes it:
 * the Hamaker constant ``A`` (the probe's radius, else the pull-off's JKR/DMT radius with the
   fitted ``A R``) outside :data:`HAMAKER_RANGE` (1e-21 to 1e-18 J: condensed media across vacuum,
   air or water);
-* a spring constant outside :data:`SPRING_CONSTANT_RANGE` (1e-3 to 100 N/m, the cantilevers made),
+* a spring constant outside :data:`SPRING_CONSTANT_RANGE` (1e-3 to 100 N/m, the cantilevers made; declared with the quantity in `afmforce._fields.QUANTITIES`),
   and one inferred from a compliance slope far from the file's (one inferred outside that range: the
   force steps refuse, :func:`impossible_steps`);
 * a sensitivity fitted on fewer than :data:`MIN_COMPLIANCE_SAMPLES` contact samples;
@@ -21,6 +21,7 @@ import math
 
 import numpy as np
 
+from .._fields import QUANTITIES
 from ._glue_kernel import COMPILED, span_stats
 from ._numeric import ptp
 from .state import State
@@ -46,8 +47,8 @@ HAMAKER_RANGE = (1e-21, 1e-18)
 #: Young's moduli of the softest (mucus, biofilms, brain: ~10 Pa) to the stiffest (diamond: 1.2 TPa) materials an
 #: AFM indents, with margin [Pa]: a modulus outside comes from a wrong scale, not from the sample.
 MODULUS_RANGE = (1.0, 1.2e12)
-#: Spring constants of AFM cantilevers [N/m].
-SPRING_CONSTANT_RANGE = (1e-3, 100.0)
+#: Spring constants of AFM cantilevers [N/m]: the band declared with the quantity (its ``plausible``).
+SPRING_CONSTANT_RANGE = QUANTITIES["spring_constant"].plausible
 #: Fewest contact samples a fitted sensitivity is trusted from [-].
 MIN_COMPLIANCE_SAMPLES = 20
 #: A contact line steeper than this (deflection per position, calibrated) runs backwards [-].

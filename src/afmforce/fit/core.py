@@ -257,7 +257,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     check_value("fringe_period", fringe_period)
     from .adequacy import adequacy, undetermined_verdict
     from .damping_check import damping_check, undamped_verdict
-    from .noise import PINK_SIGNIFICANCE, estimate_pink, set_noise_model
+    from .noise import PINK_SIGNIFICANCE, estimate_pink, pink_refusal, set_noise_model
     from .uncertainty import compare_models, fit_nested, profile_interval
 
     if calibration not in ("auto", "file"):
@@ -322,7 +322,10 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         dof = max(n_data - (len(shifts0) + len(free) + ev.n_linear()), 1)
         chi2, x, res, nested = _refit_all(prob, [x] + first, nested, max_nfev)
     s2p, signif = estimate_pink(prob, x, drift) if noise == "auto" else (0.0, 0.0)
-    if signif > PINK_SIGNIFICANCE:   # 1/f noise: refit with the whitened residuals from the
+    not_noise = pink_refusal(s2p, [c.sigma for c in fc]) if signif > PINK_SIGNIFICANCE else None
+    if not_noise:                    # a misfit taken for 1/f noise would pass any model
+        pre_warns.append(not_noise)
+    elif signif > PINK_SIGNIFICANCE:  # 1/f noise: refit with the whitened residuals from the
         set_noise_model(fc, s2p)      # white optimum and the valley's best points
         chi2, x, res, nested = _refit_all(prob, [x] + first, nested, max_nfev)
         report("refit with 1/f noise")

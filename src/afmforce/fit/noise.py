@@ -34,10 +34,15 @@ import math
 import numpy as np
 
 __all__ = ["pink_correlation", "estimate_pink", "set_noise_model", "ARWhitener",
-           "PINK_SIGNIFICANCE", "AR_ORDER"]
+           "PINK_SIGNIFICANCE", "PINK_MAX_RATIO", "pink_refusal", "AR_ORDER"]
 
 #: The 1/f term is used when the pooled excess exceeds this many of its standard deviations.
 PINK_SIGNIFICANCE = 3.0
+#: The largest plausible ratio of the 1/f rms to the white rms of a deflection signal [-]. An
+#: AFM's detector has 1/f noise of the order of its white noise over a record (the ``typical``
+#: virtual AFM: 1:1); a fitted 1/f level far above it is a misfit of the model (a wrong spring
+#: constant, a missing force) taken for noise, and whitening with it would make any model pass.
+PINK_MAX_RATIO = 10.0
 #: Order of the autoregressive whitening filter (lags of C matched exactly).
 AR_ORDER = 200
 
@@ -126,6 +131,25 @@ def estimate_pink(prob, x, drift: bool = True) -> tuple[float, float]:
     if trace <= 0:
         return 0.0, 0.0
     return max(excess / trace, 0.0), excess / math.sqrt(2.0 * sel.sum())
+
+
+def pink_refusal(sigma_p2: float, sigmas) -> str | None:
+    """Why a fitted 1/f level is not detector noise, or None when it is plausible.
+
+    ``sigma_p2`` [m^2] is the 1/f variance :func:`estimate_pink` found, ``sigmas`` [m] the
+    curves' white noise rms. A 1/f rms above ``PINK_MAX_RATIO`` times the largest white rms
+    is the model's misfit, not noise: the fit keeps the white noise model (its adequacy
+    test then judges the misfit) and warns with the returned text.
+    """
+    white = max((float(s) for s in sigmas), default=0.0)
+    pink = math.sqrt(max(float(sigma_p2), 0.0))
+    if not (math.isfinite(pink) and pink > PINK_MAX_RATIO * white):
+        return None
+    return (f"the residuals' slow excess, read as 1/f noise, would be {pink * 1e9:.3g} nm rms against "
+            f"{white * 1e9:.3g} nm of white noise (more than {PINK_MAX_RATIO:g} x: no AFM's detector "
+            "has such 1/f noise): it is the model's misfit (a wrong spring constant or calibration, "
+            "a force the model lacks), so the fit keeps the white noise model and its adequacy "
+            "test judges the misfit")
 
 
 def _levinson(acov: np.ndarray, order: int) -> tuple[np.ndarray, np.ndarray]:
