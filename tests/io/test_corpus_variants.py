@@ -209,11 +209,11 @@ def test_mutated_variants_load_cleanly_or_fail_with_one_named_error(name, tmp_pa
     """The readers of these variants (JPK text, float data, maps read directly, Asylum notes without
     keys) under the fuzz test's mutations: a valid curve or one FileFormatError naming the file."""
     from afmforce.io._guard import run_with_timeout
-    from test_fuzz import SECONDS_PER_FILE, SLOW, _fuzz
+    from test_fuzz import ENDINGS, MUTATIONS, SLOW, _fuzz
 
     result = run_with_timeout(_fuzz, CORPUS / name, tmp_path, sum(map(ord, name)), None,
-                              timeout=SECONDS_PER_FILE + 8 * (SLOW + 1) + 60, path=name)
-    assert result["n"] >= 20 and not result["bad"], result["bad"]
+                              timeout=MUTATIONS + len(ENDINGS) + 8 * (SLOW + 1) + 60, path=name)
+    assert result["n"] >= MUTATIONS and not result["bad"], result["bad"]
     assert not result["slow"], result["slow"]
 
 

@@ -23,7 +23,7 @@ __all__ = ["pairwise_sum", "block_mean", "linspace", "fit_grid", "soft_contact_k
 def _leaf_sum(a, lo, n):
     """numpy's pairwise summation of at most 128 values: 8 running partial sums (sequential below 8)."""
     if n < 8:
-        res = 0.0
+        res = -0.0  # numpy starts a short run at -0.0 (a sum of -0.0 values stays -0.0)
         for i in range(lo, lo + n):
             res += a[i]
         return res

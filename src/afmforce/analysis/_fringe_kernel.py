@@ -18,6 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import config as _numba_config, njit
 
+from ._contact_kernel import pairwise_sum
 from ._numeric import solve_small as _solve_small
 
 __all__ = ["vp_eval", "lm_fit", "fit_orders", "finish_stats", "variance"]
@@ -329,70 +330,10 @@ def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max
 
 
 @njit(cache=True)
-def _pairwise_block(a, lo, n):
-    """numpy's pairwise sum of ``a[lo:lo + n]`` for ``n <= 128``: sequential under 8, else 8 accumulators."""
-    if n < 8:
-        s = -0.0
-        for i in range(lo, lo + n):
-            s += a[i]
-        return s
-    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
-    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
-    i = 8
-    stop = n - n % 8
-    while i < stop:
-        j = lo + i
-        r0 += a[j]
-        r1 += a[j + 1]
-        r2 += a[j + 2]
-        r3 += a[j + 3]
-        r4 += a[j + 4]
-        r5 += a[j + 5]
-        r6 += a[j + 6]
-        r7 += a[j + 7]
-        i += 8
-    s = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
-    while i < n:
-        s += a[lo + i]
-        i += 1
-    return s
-
-
-@njit(cache=True)
 def _pairwise(a):
-    """``np.add.reduce(a)`` (1-D contiguous float64): numpy's pairwise summation, the same additions
-    in the same order (blocks of at most 128 summed by :func:`_pairwise_block`; above, the halves
-    ``n2 = n // 2 - (n // 2) % 8`` summed apart and added). The recursion is an explicit stack (numba's
-    cache does not load a recursive function safely)."""
-    n = a.size
-    if n <= 128:
-        return _pairwise_block(a, 0, n)
-    los = np.empty(128, np.int64)  # frames: start, length, expanded; two per level of halving
-    ns = np.empty(128, np.int64)
-    expanded = np.zeros(128, np.bool_)
-    vals = np.empty(128)
-    sp = 1
-    nv = 0
-    los[0], ns[0], expanded[0] = 0, n, False
-    while sp > 0:
-        k = sp - 1
-        lo, m = los[k], ns[k]
-        if m <= 128:
-            vals[nv] = _pairwise_block(a, lo, m)
-            nv += 1
-            sp -= 1
-        elif not expanded[k]:
-            expanded[k] = True
-            n2 = m // 2
-            n2 -= n2 % 8
-            los[sp], ns[sp], expanded[sp] = lo, n2, False
-            los[sp + 1], ns[sp + 1], expanded[sp + 1] = lo + n2, m - n2, False
-            sp += 2
-        else:  # both halves summed: the first half's on top (IEEE addition commutes)
-            vals[nv - 2] = vals[nv - 2] + vals[nv - 1]
-            nv -= 1
-            sp -= 1
-    return vals[0]
+    """``np.add.reduce(a)`` (1-D contiguous float64): numpy's pairwise summation, bit for bit
+    (:func:`._contact_kernel.pairwise_sum`, the one copy)."""
+    return pairwise_sum(a, 0, a.size)
 
 
 def finish_stats(res: np.ndarray, u: np.ndarray, z: np.ndarray, p0: float, p1: float) -> tuple[float, float, float]:
