@@ -195,7 +195,9 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     _check_calibration(curve.metadata, probe, curve.deflection_unit)
     notes: list[str] = []
     z, use_measured = _moving_position(curve, z, use_measured, channel, runs, notes)
-    _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
+    inverted = _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
+    if inverted:
+        notes.append(inverted)
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
     if processed:
         notes.insert(0, f"read as a processed export: {processed}")
@@ -238,13 +240,16 @@ def _check_calibration(metadata: Mapping[str, Any], probe: ProbeCalibration, uni
 INVERTED_SIGMAS = 20.0
 
 
-def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> None:
-    """Refuse a deflection signal whose sign is inverted: pressed on the sample, a lever bends away
-    from it (the signal rises); one that ends the approach and starts the retract far below its free
-    baseline, never having risen above it by half as much, was stored with the other sign."""
+def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> str | None:
+    """A warning when the deflection signal's sign looks inverted: pressed on the sample, a lever bends
+    away from it (the signal rises); one that ends the approach and starts the retract far below its
+    free baseline, never having risen above it by half as much, was stored with the other sign -- or
+    turned round before contact, held by an attraction (a curve that never reaches the sample looks
+    the same: tests/fit/test_fit_bad_input.py's). So a warning, not a refusal: the analysis goes on and
+    says what to check."""
     n = approach.size
     if n < 20 or retract.size < 3:
-        return
+        return None
     a = s[approach]
     head = a[: max(5, n // 3)]
     base = float(np.median(head))
@@ -252,20 +257,22 @@ def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> Non
     start = float(np.median(s[retract[: max(3, retract.size // 50)]])) - base
     peak = float(a.max()) - base
     if not (tail < 0.0 and start < 0.0 and peak < 0.5 * -tail):
-        return  # (the test below needs all three for any noise > 0: a normal curve pays no noise estimate)
+        return None  # (the test below needs all three for any noise > 0: a normal curve pays no noise estimate)
     step = np.diff(head)
     noise = 1.4826 * float(np.median(np.abs(step - np.median(step)))) / math.sqrt(2.0)
     if not noise > 0.0:      # quieter than its digitisation (most steps equal): one quantum, the least step
         moved = np.abs(step[step != 0.0])
         if not moved.size:
-            return
+            return None
         noise = float(moved.min())
     if tail < -INVERTED_SIGMAS * noise and start < -INVERTED_SIGMAS * noise:
-        raise AnalysisError(f"the deflection signal falls as the tip is pressed on the sample: it ends the approach "
-                            f"{-tail / noise:.3g} noise sigmas below its free baseline and never rises above it by "
-                            "half as much: its sign is inverted (stored with the other sign convention), which would "
-                            "give a soft contact and a wrong adhesion; negate the deflection signal (the "
-                            "deflection away from the sample positive, as the readers give it) and analyse it again")
+        return (f"the deflection signal falls as the tip approaches the sample: it ends the approach "
+                f"{-tail / noise:.3g} noise sigmas below its free baseline and never rises above it by half "
+                "as much: either the approach stopped before contact, held by an attraction, or the signal's "
+                "sign is inverted (stored with the other sign convention: the contact and the adhesion are "
+                "then wrong; negate the deflection signal, the deflection away from the sample positive as "
+                "the readers give it, and analyse it again)")
+    return None
 
 
 def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel: str, runs: dict,
