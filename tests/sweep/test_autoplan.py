@@ -30,6 +30,20 @@ def test_cheap_runs_stay_in_this_process():
     assert plan.seconds_per_run >= 0.002
 
 
+def _raiser() -> None:
+    raise ValueError("a file without its calibration")
+
+
+def test_a_call_that_raises_is_left_out_of_the_timing():
+    """Before: one failing item among the three timed (a folder's uncalibrated file) left the cost
+    unknown ("the timing run raised") and the plan took the cluster whatever the others cost."""
+    calls = [_raiser, functools.partial(_sleeper, 0.002), functools.partial(_sleeper, 0.002)]
+    plan = plan_execution(calls, 500, workers=2, default_chunk_size=8)
+    assert plan.seconds_per_run is not None and 0.002 <= plan.seconds_per_run < 0.2
+    assert plan.executor == "serial" and "raised" not in plan.reason
+    assert plan_execution([_raiser, _raiser], 500, workers=2).seconds_per_run is None
+
+
 def test_costly_sweeps_go_to_a_cluster_with_chunks_sized_by_cost():
     plan = plan_execution(functools.partial(_sleeper, 0.05), 1000, workers=2)
     assert plan.executor == "dask"

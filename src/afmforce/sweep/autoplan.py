@@ -85,26 +85,27 @@ class ExecutionPlan:
 
 
 def _time_calls(calls: Sequence[Callable[[], Any]], n_runs: int) -> float | None:
-    """Mean seconds of one call over ``calls``.
+    """Mean seconds of one call over ``calls``, over the calls that did not raise (None: all raised).
 
     The first call may load or compile code (seconds in a fresh process: the numba cache), so
     it is timed again, unless it took ``_RETIME_BELOW`` or more and the sweep is so short
     (fewer than ``_RETIME_RUNS`` runs) that an extra run would cost a noticeable share of it.
+    A call that raises (a file without its calibration among a folder's) says nothing of the
+    others' cost: it is left out (the sweep itself records the error of each run).
     """
-    try:
+    def timed(call) -> float | None:
         t0 = time.perf_counter()
-        calls[0]()
-        first = time.perf_counter() - t0
-        if first >= _RETIME_BELOW and n_runs < _RETIME_RUNS:
-            return first
-        times = []
-        for call in calls:
-            t0 = time.perf_counter()
+        try:
             call()
-            times.append(time.perf_counter() - t0)
-        return sum(times) / len(times)
-    except Exception:  # the sweep itself records the error of each run
-        return None
+        except Exception:
+            return None
+        return time.perf_counter() - t0
+
+    first = timed(calls[0])
+    if first is not None and first >= _RETIME_BELOW and n_runs < _RETIME_RUNS:
+        return first
+    times = [t for t in map(timed, calls) if t is not None]
+    return sum(times) / len(times) if times else None
 
 
 def plan_execution(call: Callable[[], Any] | Sequence[Callable[[], Any]], n_runs: int, workers: int, *,
