@@ -59,19 +59,21 @@ def scan_power_law(u, F, cands, k, p, width):  # pragma: no cover - compiled
             sy += q * f
             sxy += q * phi * f
             syy += q * f * f
-        det = s0 * s2 - s1 * s1
-        if det > 0:
-            e = (s0 * sxy - s1 * sy) / det
-            bb = (s2 * sy - s1 * sxy) / det
-            r = syy - e * sxy - bb * sy
-            E[j] = e
-            b[j] = bb
-            ssr[j] = r if (e > 0 and math.isfinite(r)) else np.inf
-        else:
-            E[j] = np.nan
-            b[j] = np.nan
-            ssr[j] = np.inf
+        E[j], b[j], ssr[j] = _candidate_line(s0, s1, s2, sy, sxy, syy)
     return E, b, ssr
+
+
+@njit(cache=True, inline="always")
+def _candidate_line(s0, s1, s2, sy, sxy, syy):  # pragma: no cover - compiled
+    """One candidate's weighted line ``F = E phi + b`` from its sums: (E, b, SSR); SSR inf where
+    E <= 0 or the sums are degenerate (NaN E, b then)."""
+    det = s0 * s2 - s1 * s1
+    if det > 0:
+        e = (s0 * sxy - s1 * sy) / det
+        bb = (s2 * sy - s1 * sxy) / det
+        r = syy - e * sxy - bb * sy
+        return e, bb, (r if (e > 0 and math.isfinite(r)) else np.inf)
+    return np.nan, np.nan, np.inf
 
 
 @njit(cache=True)
@@ -118,18 +120,7 @@ def _scan_unweighted(u, F, cands, k, p, E, b, ssr):  # pragma: no cover - compil
                 s2[j] += phi * phi
                 sxy[j] += phi * f
     for j in range(m):
-        det = s0 * s2[j] - s1[j] * s1[j]
-        if det > 0:
-            e = (s0 * sxy[j] - s1[j] * sy) / det
-            bb = (s2[j] * sy - s1[j] * sxy[j]) / det
-            r = syy - e * sxy[j] - bb * sy
-            E[j] = e
-            b[j] = bb
-            ssr[j] = r if (e > 0 and math.isfinite(r)) else np.inf
-        else:
-            E[j] = np.nan
-            b[j] = np.nan
-            ssr[j] = np.inf
+        E[j], b[j], ssr[j] = _candidate_line(s0, s1[j], s2[j], sy, sxy[j], syy)
     return E, b, ssr
 
 
