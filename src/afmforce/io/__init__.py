@@ -169,6 +169,12 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  _lazy("chiaro", "detect_chiaro"), _lazy("chiaro", "load_chiaro"),
                  via="afmformats", supplies=("spring_constant", "velocity"),
                  signature="Device: Chiaro header line, Time (s)/Load/Indentation/Cantilever/Piezo columns"),
+    ReaderFormat("wsxm-curves", "WSxM (Nanotec) force curves", (".curves",),
+                 _lazy("wsxm", "detect_wsxm_curves"), _lazy("wsxm", "load_wsxm_curves"),
+                 via="afmforce", deflection="V (m or N as the Y axis unit says)", requires=("sensitivity",),
+                 signature='"WSxM file copyright" header, an image, then FZ curve blocks (forward = approach, '
+                           'backward = retract) of a Normal force channel (Amplitude/Phase curves: refused)',
+                 supplies=("spring_constant", "sample_rate", "velocity")),
 )}
 
 

@@ -70,6 +70,12 @@ SOURCES = {
     "jpk-qi-series_2021.04.13.jpk-qi-series": ("JPK QI series", "AFM-analysis/afmformats", "tests/data/fmt-jpk-fd_qi-data-2021.04.13.jpk-qi-series", "MIT"),
     "jpk-txt_dp-export_SMFS_0441.txt": ("JPK DP text export", "galvanetto/Fodis", "Datasets/JPK example files/txt exported/force-save-0441.txt", "Apache-2.0"),
     "ntmdt-txt_gel4_Curve_DFL_Height_51.txt": ("NT-MDT Nova text", "AFM-analysis/afmformats", "tests/data/fmt-ntmdt-txt-fd_2015_01_17_gel4-0,1_mQ_adh_6B_Curve_DFL_Height_51.txt", "MIT"),
+    "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": ("WSxM curves (Nanotec)", "pycroscopy/SciFiDatasets", "data/microscopy/spm/afm/wsxm/WSxM1DReader_spectrocurve_0001_Normalforce.f.curves", "MIT"),
+}
+
+#: files taken from another commit than the repository's in COMMITS (a pull request's head)
+FILE_COMMITS = {
+    "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": "eabc7a708e316bdf19cd344c603f014b99c3daea",
 }
 
 #: what the file lacks and a user gives (stand-ins; the gallery passes them as meta_override)
@@ -251,8 +257,34 @@ def _chiaro(path: Path) -> dict:
     return {"spring_constant": k, "sensitivity": None, "sample_rate": None, "curves": 1, "segments": None}
 
 
+def _wsxm(path: Path) -> dict:
+    """WSxM ``.curves``: the first header's Force constant and image size, then each curve block's header
+    (its own ``Image header size``), counted; the rate is points over ``Forward plot total time``."""
+    data = path.read_bytes()
+    size = int(re.search(rb"Image header size: (\d+)", data).group(1))
+    top = data[:size].decode("latin-1")
+    k = float(re.search(r"Force constant: ([\d.eE+-]+) N/m", top).group(1))
+    rows = int(re.search(r"Number of rows: (\d+)", top).group(1))
+    cols = int(re.search(r"Number of columns: (\d+)", top).group(1))
+    width = {"double": 8, "float-data": 4, "short": 2}[re.search(r"Image Data Type: (\S+)", top).group(1)]
+    at, curves, rate, points = size + rows * cols * width, 0, None, None
+    while at < len(data):
+        hsize = int(re.search(rb"Image header size: (\d+)", data[at:at + 200]).group(1))
+        head = data[at:at + hsize].decode("latin-1")
+        points = int(re.search(r"Number of points: (\d+)", head).group(1))
+        lines = int(re.search(r"Number of lines: (\d+)", head).group(1))
+        ms = float(re.search(r"Forward plot total time: ([\d.]+) ms", head).group(1))
+        rate = points / (ms * 1e-3)
+        curves += lines // 2
+        at += hsize + points * lines * 2 * width
+    return {"spring_constant": k, "sensitivity": None, "sample_rate": rate, "curves": curves,
+            "segments": [["extend", points], ["retract", points]]}
+
+
 def header(path: Path) -> dict:
     name = path.name
+    if name.startswith("wsxm-curves"):
+        return _wsxm(path)
     if name.startswith(("jpk-force", "jpk-dp", "jpk-qi")):
         return _jpk(path)
     if name.endswith(".ibw"):
@@ -291,7 +323,8 @@ def readme(table: dict) -> str:
         "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018),",
         "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). The full licence texts are in",
         "`LICENSES`. Commits: "
-        + "; ".join(f"{r} `{c[:10]}`" for r, c in COMMITS.items()) + ".",
+        + "; ".join(f"{r} `{c[:10]}`" for r, c in COMMITS.items()) + "; "
+        + "; ".join(f"`{n}` from `{c[:10]}`" for n, c in FILE_COMMITS.items()) + ".",
         "",
         "| file | family | bytes | k [N/m] | InvOLS [nm/V] | rate [Hz] | curves | segments (points) | expected | source (repository: path) | licence |",
         "|---|---|---|---|---|---|---|---|---|---|---|",
@@ -313,7 +346,8 @@ def main() -> None:
     for name, (family, repo, src, licence) in sorted(SOURCES.items()):
         path = HERE / name
         entry = {"family": family, "bytes": path.stat().st_size,
-                 "source": {"repository": repo, "path": src, "commit": COMMITS[repo], "licence": licence},
+                 "source": {"repository": repo, "path": src, "commit": FILE_COMMITS.get(name, COMMITS[repo]),
+                            "licence": licence},
                  "header": header(path)}
         if name in GIVEN:
             entry["given"] = GIVEN[name]
