@@ -123,6 +123,18 @@ def test_a_deflection_in_nm_and_the_conversion_factor_sign(tmp_path):
         load_wsxm_curves(bad)
 
 
+def test_a_backward_line_stored_in_time_order_is_not_reversed_again(tmp_path):
+    raw = bytearray(RAW)
+    for _, start, n, _ in BLOCKS:
+        bwd = np.frombuffer(RAW, "<f8", count=2 * n, offset=start + 16 * n).reshape(n, 2)
+        raw[start + 16 * n:start + 32 * n] = bwd[::-1].tobytes()
+    path = tmp_path / "time-order.f.curves"
+    path.write_bytes(bytes(raw))
+    for a, b in zip(load(FILE), load(path)):
+        np.testing.assert_array_equal(a.piezo_nominal, b.piezo_nominal)
+        np.testing.assert_array_equal(a.deflection_signal, b.deflection_signal)
+
+
 @pytest.mark.parametrize("cut", [100, 3000, 3225 + 1000, BLOCKS[0][1] - 500, BLOCKS[0][1] + 4000,
                                  BLOCKS[2][1] + 16384, len(RAW) - 8])
 def test_truncated_copies_give_a_clean_error(tmp_path, cut):
@@ -142,6 +154,7 @@ def test_truncated_copies_give_a_clean_error(tmp_path, cut):
     (b"Number of lines: 2", b"Number of lines: 3", "pairs|truncated"),
     (b"X axis unit: nm", b"X axis unit: Hz", "not a length"),
     (b"[Header end]", b"[Header and]", "Header end"),
+    (b"Image header size: 3225", b"Image header size: 3224", "not a ramp|non-finite|damaged"),  # data 1 byte off
 ])
 def test_garbled_copies_give_a_clean_error(tmp_path, old, new, words):
     assert old in RAW
@@ -181,3 +194,26 @@ def test_afmforce_analyze_as_a_user_types_it(tmp_path, capsys):
     err = capsys.readouterr().err.strip()
     assert err.startswith(("failed:", "error:")) and len(err.splitlines()) == 1
     assert "'Amplitude'" in err and "Normal force" in err and "Traceback" not in err
+
+
+def test_mutated_headers_are_read_or_refused_in_the_readers_words(tmp_path):
+    """Bytes of the headers (where every length and count lives) overwritten at random: the reader
+    either reads the file or raises its FileFormatError, never another exception."""
+    rng = np.random.default_rng(7)
+    spans = [(0, 3225)] + [(start - len(head), start) for head, start, _, _ in BLOCKS]
+    path = tmp_path / "mutated.f.curves"
+    refused = 0
+    for _ in range(60):
+        raw = bytearray(RAW)
+        a, b = spans[rng.integers(len(spans))]
+        for at in rng.integers(a, b, size=rng.integers(1, 4)):
+            raw[at] = int(rng.choice(list(b"0123456789:[] \r\nx-.")))
+        path.write_bytes(bytes(raw))
+        try:
+            curves = load_wsxm_curves(path)
+        except FileFormatError as exc:
+            refused += 1
+            assert str(path) in str(exc)
+        else:
+            assert curves and all(np.all(np.isfinite(c.deflection_signal)) for c in curves)
+    assert refused > 0

@@ -16,7 +16,9 @@ checked on the files of pycroscopy/SciFiDatasets; this code is afmforce's own):
 What afmforce takes from it: the X axis (``Z``, a length) is the piezo position, increasing
 towards the sample (in contact the deflection rises with it); the lines come in pairs, the
 forward line the approach and the backward line the retract (``First Forward: No`` swaps them).
-WSxM stores both lines on one ascending X axis: the retract is reversed into time order. The Y
+WSxM stores both lines on one ascending X axis: a backward line that runs the same way as the
+forward one is reversed into time order. A line whose values are not finite or whose Z is not a
+ramp (data read from a wrong offset) is refused as damaged. The Y
 values are ``Conversion Offset 00 + Conversion Factor 00 x value`` (sign flipped where ``Channel
 is inverted: Yes``) in the factor's unit, which must agree with ``Y axis unit``: volts give a
 photodiode signal in V (the file stores no deflection sensitivity: the user gives it), a length
@@ -122,6 +124,8 @@ def _count(sections, section: str, key: str, where: str, least: int = 1) -> int:
 def _quantity(text: str) -> tuple[float, str]:
     """``"5.33904 N/m"`` -> (5.33904, "N/m"); ValueError if the number is not one."""
     parts = text.split(None, 1)
+    if not parts:
+        raise ValueError("no number")
     return float(parts[0]), (parts[1].strip() if len(parts) > 1 else "")
 
 
@@ -174,6 +178,9 @@ def _y_scale(curve_h, where: str) -> tuple[str, float, float, str]:
         except ValueError:
             raise FileFormatError(f"{where}: 'Conversion Factor 00' {info['Conversion Factor 00']!r} or its offset "
                                   "is not a number with a unit; the file is damaged") from None
+        if not (np.isfinite(factor) and np.isfinite(offset) and factor != 0):
+            raise FileFormatError(f"{where}: Conversion Factor 00 {factor!r} {unit} and offset {offset!r} do not "
+                                  "convert the signal (a finite, non-zero factor); the file is damaged")
         if off_unit and off_unit != unit:
             raise FileFormatError(f"{where}: Conversion Factor 00 in {unit!r} but its offset in {off_unit!r}")
         if axis_unit and unit != axis_unit:
@@ -195,7 +202,23 @@ def _point(text: str | None) -> tuple[float, float] | None:
     ux, uy = _unit(m.group(2)), _unit(m.group(4))
     if ux is None or uy is None or ux[0] != "m" or uy[0] != "m":
         return None
-    return float(m.group(1)) * ux[1], float(m.group(3)) * uy[1]
+    try:
+        return float(m.group(1)) * ux[1], float(m.group(3)) * uy[1]
+    except ValueError:  # a position is optional metadata: a damaged one is left out
+        return None
+
+
+def _ramp(line: np.ndarray, index: Any, which: str, where: str) -> np.ndarray:
+    """A line's (Z, signal) pairs, checked: finite, and Z a ramp (at least 90 % of its steps one way;
+    values read from a wrong offset of a damaged file are neither)."""
+    if not np.all(np.isfinite(line)):
+        raise FileFormatError(f"{where}: curve {index}, {which} line: non-finite values; the data do not line "
+                              "up with the header (the file is damaged)")
+    step = np.sign(np.diff(line[:, 0]))
+    if step.size >= 10 and max(np.sum(step > 0), np.sum(step < 0)) < 0.9 * step.size:
+        raise FileFormatError(f"{where}: curve {index}, {which} line: the Z column is not a ramp; the data do "
+                              "not line up with the header (the file is damaged)")
+    return line
 
 
 def _index(text: str) -> int | str:
@@ -286,8 +309,12 @@ def load_wsxm_curves(path: Path, *, meta_override: Mapping[str, Any] | None = No
         t_fwd, t_bwd = _seconds(control.get("Forward plot total time")), _seconds(control.get("Backward plot total time"))
         for p in range(lines // 2):
             fwd, bwd = (pairs[2 * p], pairs[2 * p + 1]) if forward_first else (pairs[2 * p + 1], pairs[2 * p])
-            z_app, z_ret = fwd[:, 0] * x_scale, bwd[::-1, 0] * x_scale
-            d_app, d_ret = y_offset + y_scale * fwd[:, 1], y_offset + y_scale * bwd[::-1, 1]
+            fwd, bwd = _ramp(fwd, index, "forward", where), _ramp(bwd, index, "backward", where)
+            if n > 1 and (bwd[-1, 0] - bwd[0, 0]) * (fwd[-1, 0] - fwd[0, 0]) > 0:
+                bwd = bwd[::-1]  # stored on the forward's axis: put the retract in time order
+            with np.errstate(all="ignore"):  # overflow of a damaged factor: refused by finalize_curve
+                z_app, z_ret = fwd[:, 0] * x_scale, bwd[:, 0] * x_scale
+                d_app, d_ret = y_offset + y_scale * fwd[:, 1], y_offset + y_scale * bwd[:, 1]
             meta = dict(base)
             meta.update(curve_index=_index(index) if lines == 2 else f"{index}{chr(ord('a') + p)}",
                         curves_in_series=declared, channel=channel)
