@@ -306,7 +306,8 @@ def load_wsxm_curves(path: Path, *, meta_override: Mapping[str, Any] | None = No
         x_scale = _length_factor(info.get("X axis unit", ""), "the X axis", where)
         unit, y_scale, y_offset, channel = _y_scale(head, where)
         forward_first = head.get("Miscellaneous", {}).get("First Forward", "Yes").strip().lower() != "no"
-        t_fwd, t_bwd = _seconds(control.get("Forward plot total time")), _seconds(control.get("Backward plot total time"))
+        t_fwd = _seconds(control.get("Forward plot total time"))
+        t_bwd = _seconds(control.get("Backward plot total time"))
         for p in range(lines // 2):
             fwd, bwd = (pairs[2 * p], pairs[2 * p + 1]) if forward_first else (pairs[2 * p + 1], pairs[2 * p])
             fwd, bwd = _ramp(fwd, index, "forward", where), _ramp(bwd, index, "backward", where)
