@@ -1,7 +1,7 @@
 """Nanosurf .nid: force spectroscopy (single curves and maps) and thermal tunes.
 
 Real files: a trimmed 2 x 2 map of Nanosurf's own FlexAFM example (NSFopen, MIT; tests/data,
-``make_nid_trimmed.py``), the whole 10 x 10 map and an image-only file from
+``make_nid_trimmed.py``), the whole 10 x 10 map from
 ``shared/data/real`` (skipped when absent), and a real FlexAFM thermal tune
 (``tests/data/spectra``). Expected values are read from the files here with ``configparser``,
 ``re`` and numpy (the scaling ``min + range (n / 2^32 + 1/2)`` of NSFopen), never from the reader.
@@ -30,7 +30,6 @@ MAP = DATA / "nanosurf-nid_spectroscopy-map_2x2_trimmed.nid"
 THERMAL = DATA / "spectra" / "nanosurf-nid_thermal-tune_ACL-A.nid"
 REAL = Path(os.environ.get("AFMFORCE_REAL_DATA", "/nonexistent"))
 FULL_MAP = REAL / "nanosurf-nid_spectroscopy-map_10x10_Tap150Al.nid"
-IMAGE = REAL / "nanosurf-nid_image-only.nid"
 
 
 def _header(path: Path) -> configparser.ConfigParser:
@@ -141,9 +140,8 @@ def test_truncated_and_image_only_files_are_refused_cleanly(tmp_path):
             "Dim2Name=Z-Axis\r\nDim2Unit=m\r\nDim2Range=1e-06\r\nDim2Min=-5e-07\r\nSaveMode=Binary\r\nSaveBits=32\r\n"
             "SaveSign=Signed\r\nSaveOrder=Intel\r\n\r\n")
     image.write_bytes(text.encode() + b"\r\n#!" + np.arange(8, dtype="<i4").tobytes())
-    for path in (image, IMAGE) if IMAGE.is_file() else (image,):
-        with pytest.raises(FileFormatError, match="holds images .*no force curve"):
-            load(path)
+    with pytest.raises(FileFormatError, match="holds images .*no force curve"):
+        load(image)
     with pytest.raises(FileFormatError, match="thermal tune, no force curve"):
         load(THERMAL)
 

@@ -77,7 +77,8 @@ def _typed(entries: dict, key: str, unit: str | None = None) -> float | None:
 def _calibration(nid: NidFile) -> dict[str, Any]:
     meta: dict[str, Any] = {}
     lever = _section(nid, "DataSet\\Calibration\\Cantilever")
-    for i in range(int(lever.get("PropCount", "0") or 0) if str(lever.get("PropCount", "0")).isdigit() else 0):
+    count = lever.get("PropCount", "0").strip()
+    for i in range(min(int(count), 1000) if count.isdigit() else 0):   # real files: 14 properties
         v = typed_value(lever.get(f"Prop{i}"))
         if v is not None and v[1] == "N/m" and v[0] > 0:
             meta["spring_constant"] = v[0]
