@@ -237,3 +237,49 @@ def test_calibrate_thermal_as_a_user_types_it(capsys):
     # chi 0.817 of 8.9-11 N/m: a stiff tapping lever (ACL: 20-95 N/m nominal) calibrated on a
     # sensitivity the tune does not record; plausible in magnitude, a third of the file's Sader k
     assert 5.0 < d["spring_constant"] < 15.0 and d["spring_constant_se"] < 0.05 * d["spring_constant"]
+
+
+def _write_nid(path: Path, frames: list[tuple[str, str, str, np.ndarray, float, float]], info: str) -> None:
+    """A one-curve .nid in the container's layout (our writer): per frame (name, channel, unit,
+    values, ramp start, ramp span); int32 counts n = (v - min) / range 2^32 - 2^31."""
+    groups = list(dict.fromkeys(f[0] for f in frames))
+    top = ["[DataSet]", "Version=2", f"GroupCount={len(groups)}"]
+    for g, name in enumerate(groups):
+        top += [f"Gr{g}-Name={name}", f"Gr{g}-ID=1", f"Gr{g}-Count={sum(f[0] == name for f in frames)}"]
+    sections, blobs = [], []
+    for j, (name, channel, unit, values, start, span) in enumerate(frames):
+        g, c = groups.index(name), [f for f in frames if f[0] == name].index(frames[j])
+        top.append(f"Gr{g}-Ch{c}=DataSet-{g}:{c}")
+        low, rng = float(values.min()) - 1e-9, float(np.ptp(values)) + 2e-9
+        sections += [f"[DataSet-{g}:{c}]", "Version=3", f"Points={len(values)}", "Lines=1", f"Frame={name}",
+                     "Dim0Name=Z-Axis", "Dim0Unit=m", f"Dim2Name={channel}", f"Dim2Unit={unit}",
+                     f"Dim2Range={rng!r}", f"Dim2Min={low!r}", f"LineDim0Min={start!r}", f"LineDim0Range={span!r}",
+                     f"LineDim0Points={len(values)}", "SaveMode=Binary", "SaveBits=32", "SaveSign=Signed",
+                     "SaveOrder=Intel", ""]
+        blobs.append(np.round((values - low) / rng * 2**32 - 2**31).astype("<i4").tobytes())
+    text = "\r\n".join(top + ["", "[DataSet-Info]", info, ""] + sections)
+    path.write_bytes(text.encode() + b"\r\n#!" + b"".join(blobs))
+
+
+def test_a_single_curve_with_a_pause_in_metres(tmp_path):
+    """One curve (no map): approach, forward pause, retract in time order (segments 0, 2, 1); a
+    deflection in m kept in m; no Z sensor: the commanded ramp is z; the sample rate from the
+    [DataSet-Info] 'Modulation time' and 'Data points' (older files)."""
+    z = np.linspace(0.0, 100e-9, 100)
+    app = np.where(z > 80e-9, (z - 80e-9) * 0.9, 0.0)
+    pause = np.full(20, app[-1]) - np.linspace(0, 1e-9, 20)
+    back = np.where(z > 85e-9, (z - 85e-9) * 0.9, 0.0)[::2]     # stored far end first, as Nanosurf does
+    path = tmp_path / "single.nid"
+    _write_nid(path, [("Spec forward", "Deflection", "m", app, 1e-6, 100e-9),
+                      ("Spec fwd pause", "Deflection", "m", pause, 1.1e-6, 0.0),
+                      ("Spec backward", "Deflection", "m", back, 1e-6, 100e-9)],
+               "Modulation time=0.5 s\r\nData points=100\r\nHead type=CoreAFM")
+    (c,) = load(path)
+    assert c.deflection_unit == "m" and c.piezo_measured is None and "map_x" not in c.metadata
+    assert c.metadata["sample_rate"] == 200.0 and c.metadata["instrument"] == "Nanosurf CoreAFM"
+    np.testing.assert_array_equal(c.segment, [0] * 100 + [2] * 20 + [1] * 50)
+    step = 100e-9 * 2**-32 * 2                                    # a count of the widest block
+    np.testing.assert_allclose(c.deflection_signal, np.concatenate([app, pause, back[::-1]]), atol=step)
+    np.testing.assert_allclose(c.piezo_nominal[:100], 1e-6 + z, rtol=1e-12)
+    np.testing.assert_allclose(c.piezo_nominal[120:], (1e-6 + np.linspace(0, 100e-9, 50))[::-1], rtol=1e-12)
+    np.testing.assert_allclose(np.diff(c.time), 1 / 200.0)
