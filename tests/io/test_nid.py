@@ -105,6 +105,14 @@ def test_map_reads_as_its_header_and_data_say():
         (float(x0), float(y0)), (float(x1), float(y0)), (float(x1), float(y1)), (float(x0), float(y1))]
 
 
+def test_a_map_is_planned_curve_by_curve_from_its_header():
+    """The batch engine (analyze of a folder, --fast-map) sees one item per curve of a .nid map."""
+    from afmforce.sweep.files import plan_curves
+
+    refs = plan_curves([MAP])
+    assert [(r.index, r.format) for r in refs] == [(i, "nanosurf-nid") for i in range(4)]
+
+
 @pytest.mark.skipif(not FULL_MAP.is_file(), reason="shared real data not present")
 def test_the_whole_map_runs_back_and_forth():
     """The contact heights (z where the approach stopped) of the 10 x 10 map lie on a smooth surface

@@ -264,7 +264,7 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
         vendor["method"] = head["settings.method"]
     return ThermalSpectrum(data[:, 0], data[:, col], unit=unit, temperature=temperature,
                            medium=medium.lower() if medium else None, sensitivity=sensitivity,
-                           correction=correction, tilt=tilt, vendor=vendor, source=str(path), window=window)
+                           correction=correction, tilt=tilt, vendor=vendor, source=str(path))
 
 
 # -- plain two-column text (any instrument's export) -----------------------------------------
@@ -366,7 +366,8 @@ def read_nid_spectrum(path: str | Path):
     return ThermalSpectrum(frequency, asd * asd, unit=squared,
                            temperature=None if temperature is None else temperature + 273.15,
                            medium=(info.get("Measurement environment") or "").lower() or None,
-                           averages=int(averages) if averages.isdigit() else None, vendor=vendor, source=str(path), window=window)
+                           averages=int(averages) if averages.isdigit() else None, vendor=vendor, source=str(path),
+                           window=window)
 
 
 

@@ -44,7 +44,7 @@ from ..errors import FileFormatError
 from .curve import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
 from ._meta import finalize_curve
 
-__all__ = ["detect_nid", "load_nid", "SPEC_FRAMES"]
+__all__ = ["detect_nid", "load_nid", "count_curves", "SPEC_FRAMES"]
 
 #: the spectroscopy frames in time order and their segment codes
 SPEC_FRAMES = (("Spec forward", SEGMENT_APPROACH), ("Spec fwd pause", SEGMENT_DWELL),
@@ -61,6 +61,14 @@ def detect_nid(path: Path) -> bool:
             return is_nid(fh.read(4096))
     except OSError:
         return False
+
+
+def count_curves(path: str | Path) -> int | None:
+    """The curves of a .nid spectroscopy map, from its header alone (None: not a map)."""
+    nid = read_nid(path)
+    block = nid.block("Spec forward", "Deflection")
+    grid = _map(nid)
+    return block.lines if block is not None and grid is not None and grid[4] * grid[5] == block.lines else None
 
 
 def _section(nid: NidFile, name: str) -> dict:
