@@ -6,6 +6,8 @@
 * **Plain text**: two numeric columns, frequency (in Hz) and the spectrum, with the unit stated in
   a header line (``m^2/Hz``, ``V^2/Hz``, or an amplitude ``m/sqrt(Hz)``, ``V/sqrt(Hz)``, squared
   here) or given by the caller.
+* **Nanosurf thermal tune** (``.nid``, :mod:`afmforce.calibration.nid`): the ``Spectrum FFT``
+  frame (an amplitude spectral density in m/sqrt(Hz), squared) and the tune's own results.
 * **JPK thermal noise data** (``.tnd``, JPK/Bruker NanoWizard "Calibration manager" export):
   ``#`` header with the vendor's calibration (``sensitivity``, ``spring constant``,
   ``parameter.f``, ``parameter.Q``, ``settings.temperature``, ``settings.environment``,
@@ -30,11 +32,11 @@ import numpy as np
 from .._files import atomic_write_text
 from ..errors import FileFormatError, MissingMetadataError, ParameterError
 
-__all__ = ["ThermalSpectrum", "read_spectrum", "write_spectrum", "SPECTRUM_SUFFIXES", "TEXT_UNITS"]
+__all__ = ["ThermalSpectrum", "read_spectrum", "read_nid_spectrum", "write_spectrum", "SPECTRUM_SUFFIXES", "TEXT_UNITS"]
 
 _MAGIC = "# afmforce thermal spectrum 1"
 #: suffixes the thermal readers accept
-SPECTRUM_SUFFIXES = (".tnd", ".psd", ".txt", ".csv")
+SPECTRUM_SUFFIXES = (".tnd", ".psd", ".txt", ".csv", ".nid")
 
 
 @dataclass(frozen=True, eq=False)
@@ -55,6 +57,8 @@ class ThermalSpectrum:
     vendor : dict  the file's own calibration, SI (``spring_constant`` [N/m],
         ``resonance_frequency`` [Hz], ``quality_factor`` [-], ...)
     source : str  where it came from
+    window : (float, float) or None  the frequency window the instrument fitted [Hz] (the default
+        window of :func:`~afmforce.calibration.fit_thermal` for this file)
     """
 
     frequency: np.ndarray
@@ -68,6 +72,7 @@ class ThermalSpectrum:
     averages: int | None = None
     vendor: dict[str, Any] = field(default_factory=dict)
     source: str = ""
+    window: tuple[float, float] | None = None
 
     def __post_init__(self) -> None:
         if self.unit not in ("m^2/Hz", "V^2/Hz"):
@@ -307,8 +312,68 @@ def _read_text(path: Path, text: str, unit: str | None) -> ThermalSpectrum:
     return ThermalSpectrum(data[:, 0], psd, unit=unit, source=str(path))
 
 
+def _is_nid(head: bytes) -> bool:
+    from .nid import is_nid
+
+    return is_nid(head)
+
+
+# -- Nanosurf .nid thermal tune ---------------------------------------------------------------
+
+def read_nid_spectrum(path: str | Path):
+    """The thermal tune of a .nid (``Spectrum FFT`` frame, an amplitude spectral density in
+    m/sqrt(Hz), squared here) with the tune's own results from ``[DataSet-Info]``
+    (``Frequency:``, ``Q Factor:``, ``Spring Constant:``, ``Peak Value:``) as the vendor's values
+    and its ``Cantilever temperature``.
+
+    Raises
+    ------
+    FileFormatError
+        Not a .nid, or no ``Spectrum FFT`` frame (an image or a force curve).
+    """
+    from .nid import _number, read_nid, si_value
+
+    nid = read_nid(path)
+    block = next((b for b in nid.blocks if b.frame == "Spectrum FFT"), None)
+    if block is None:
+        raise FileFormatError(f"{path}: this Nanosurf .nid holds no thermal tune ('Spectrum FFT' frame); it "
+                              f"holds {', '.join(nid.frames()) or 'no data'}")
+    unit = block.unit.replace(" ", "")
+    squared = {"m/sqrt(Hz)": "m^2/Hz", "V/sqrt(Hz)": "V^2/Hz"}.get(unit)
+    if squared is None:
+        raise FileFormatError(f"{path}: the thermal tune is in {block.unit!r}; expected m/sqrt(Hz) or V/sqrt(Hz)")
+    h = block.header
+    f0, span = _number(h, "Dim0Min", nid.path, block.name), _number(h, "Dim0Range", nid.path, block.name)
+    asd = nid.values(block)[0]
+    frequency = f0 + span * np.arange(block.points) / max(block.points - 1, 1)
+    info = nid.sections.get("DataSet-Info", {})
+    vendor = {}
+    for key, name, base in (("Spring Constant:", "spring_constant", "N/m"), ("Frequency:", "resonance_frequency", "Hz"),
+                            ("Peak Value:", "peak_amplitude", "m/sqrt(Hz)")):
+        v = si_value(info.get(key), base)
+        if v is not None:
+            vendor[name] = v
+    q = si_value(info.get("Q Factor:"), "")
+    if q is None and (info.get("Q Factor:") or "").strip().endswith("k"):
+        q = si_value(info["Q Factor:"].strip()[:-1], "")
+        q = None if q is None else q * 1e3
+    if q is not None:
+        vendor["quality_factor"] = q
+    temperature = si_value(info.get("Cantilever temperature"), "°C")
+    averages = info.get("Averages", "")
+    lo, hi = si_value(info.get("Peak fit min"), "Hz"), si_value(info.get("Peak fit max"), "Hz")
+    window = (lo, hi) if lo is not None and hi is not None and 0 <= lo < hi else None
+    return ThermalSpectrum(frequency, asd * asd, unit=squared,
+                           temperature=None if temperature is None else temperature + 273.15,
+                           medium=(info.get("Measurement environment") or "").lower() or None,
+                           averages=int(averages) if averages.isdigit() else None, vendor=vendor, source=str(path),
+                           window=window)
+
+
+
 def read_spectrum(path, unit: str | None = None) -> ThermalSpectrum:
-    """Read a thermal spectrum: JPK ``.tnd``, afmforce's own format, or two numeric columns
+    """Read a thermal spectrum: JPK ``.tnd``, a Nanosurf ``.nid`` thermal tune
+    (:func:`afmforce.calibration.nid.read_nid_spectrum`), afmforce's own format, or two numeric columns
     (frequency [Hz], spectrum) whose header states the unit or ``unit`` gives it (one of
     :data:`TEXT_UNITS`; an amplitude spectral density is squared).
 
@@ -319,6 +384,9 @@ def read_spectrum(path, unit: str | None = None) -> ThermalSpectrum:
     """
     path = Path(path)
     try:
+        with open(path, "rb") as fh:
+            if _is_nid(fh.read(4096)):
+                return read_nid_spectrum(path)
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as exc:
         raise FileFormatError(f"cannot read {path}: {exc.strerror or exc}") from None

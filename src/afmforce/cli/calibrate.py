@@ -195,6 +195,9 @@ def run_thermal(args: argparse.Namespace) -> int:
         if not lo < hi:
             raise ParameterError(f"--frequency-min {lo:g} Hz must lie below --frequency-max {hi:g} Hz")
         f_range = (lo, hi)
+    elif sp.window is not None:   # the window the instrument fitted (a Nanosurf thermal tune's)
+        f_range = sp.window
+        sources["window"] = "file"
     fit = fit_thermal(sp.frequency, sp.displacement_psd(sensitivity), temperature=temperature,
                       correction=correction, tilt=tilt, f_range=f_range, pink=args.pink)
     if args.plot:

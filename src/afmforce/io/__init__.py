@@ -156,6 +156,12 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  via="afmformats", deflection="N (m or V for per-channel waves)",
                  signature="Igor binary wave v5: all channels in one wave, or one per channel (...Defl + ...ZSnsr)",
                  supplies=(*_CAL, "sample_rate", "resonance_frequency")),
+    ReaderFormat("nanosurf-nid", "Nanosurf spectroscopy (.nid: single curves and maps)", (".nid",),
+                 _lazy("nanosurf", "detect_nid"), _lazy("nanosurf", "load_nid"),
+                 via="afmforce", deflection="N (m or V as stored)",
+                 signature="[DataSet] header with GroupCount, then #! and binary blocks; 'Spec forward' / "
+                           "'Spec backward' frames (images and thermal tunes only: refused by name)",
+                 supplies=(*_CAL, "velocity", "sample_rate")),
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_workshop"),
                  via="afmformats", deflection="N (V for T-B(V) files)",

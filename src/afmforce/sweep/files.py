@@ -87,6 +87,10 @@ def _count_curves(path: Path, fmt) -> int | None:
         from ..io.nanoscope import count_curves
 
         return count_curves(path)
+    if fmt.identifier == "nanosurf-nid":  # a spectroscopy map: its grid, from the header alone
+        from ..io.nanosurf import count_curves as nid_curves
+
+        return nid_curves(path)
     return None
 
 
