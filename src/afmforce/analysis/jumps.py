@@ -138,7 +138,8 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
 
 
 def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: float,
-                  spring_constant: float, nsigma: float = _J.nsigma, window: int = _J.window) -> PullOff:
+                  spring_constant: float, nsigma: float = _J.nsigma, window: int = _J.window,
+                  attractive_below: float = math.inf) -> PullOff:
     """The last retract sample on the contact line before the cantilever leaves it.
 
     The contact (compliance and adhesion) line is fitted robustly on the
@@ -148,6 +149,13 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
     after leaving the surface cannot be mistaken for the jump this way. If
     the contact is not a line (a soft sample), the largest upward step within
     ``window`` samples of the end of contact is used instead.
+
+    A pull-off is an attraction: a departure from the line while the deflection
+    has stayed above ``attractive_below`` [m] all the way (the retract leaving the
+    compliance line in contact, displaced by friction or a slip at a repulsive
+    load) is not the jump out of contact: then the pull-off is the largest rise after
+    the deflection has come down to ``attractive_below`` (none there: no pull-off).
+    The default, ``inf``, takes the first departure whatever its load.
     """
     idx = run.index
     dr = d[idx]
@@ -166,10 +174,16 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
         above = (r > thr) & ~run.saturated  # a clipped signal leaves the line without leaving contact
         start = int(comp.max())
         cand = np.flatnonzero(above[start:-1] & above[start + 1:]) + start
-        if cand.size and cand[0] > start:
+        if cand.size and cand[0] > start and dr[: cand[0]].min() > attractive_below:
+            # the retract left the line at a repulsive load (friction, a slip): not the pull-off; the jump out
+            # of contact is the largest rise after the deflection has come down to an attraction
+            low = np.flatnonzero(dr[: idx.size - 1] <= attractive_below)
+            i = largest_step(dr, int(low[0]), idx.size, +1.0) if low.size else -1
+            i = i if i >= 0 else -2  # -2: no attractive pull-off (no fall-back on the steps near the split)
+        elif cand.size and cand[0] > start:
             i = int(cand[0]) - 1
             rise = float(r[i + 1])  # height above the line: a clipped contact has no step of its own
-    if i < 0:  # fall back on the largest step near the end of contact
+    if i == -1:  # fall back on the largest step near the end of contact
         i = largest_step(dr, max(run.split - window, 0), min(run.split + window, idx.size), +1.0)
     if i < 0 or i + 1 >= idx.size:
         return PullOff(False, -1, nan, nan, nan, nan, 0.0, False)

@@ -44,7 +44,8 @@ def jumps(st: State, o: JumpsOptions) -> State:
     if clipped:  # the pull-off is not in the record
         po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
     else:
-        po = find_pull_off(st.deflection, st.position, ret, noise, k, nsigma, window)
+        po = find_pull_off(st.deflection, st.position, ret, noise, k, nsigma, window,
+                           attractive_below=nsigma * noise)  # a pull-off at a repulsive load is no pull-off
     tol = nsigma * noise
     bad_in, bad_off = _repulsive(ji, None, tol), _repulsive(None, po, tol)
     if bad_in and bad_off:  # no number: the jumps found are not there (the later steps see none)
