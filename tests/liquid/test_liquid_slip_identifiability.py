@@ -17,7 +17,6 @@ import sys
 import warnings
 from pathlib import Path
 
-import pytest
 
 from afmforce.fit import fit_dynamic, virtual_curves
 

@@ -173,8 +173,6 @@ class JobManager:
         ParameterError
             The job is still running (cancel it first).
         """
-        import shutil
-
         from ..errors import ParameterError
 
         job = self.get(job_id, session)

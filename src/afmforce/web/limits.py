@@ -42,8 +42,9 @@ from ..limits import SERVER_SESSION_STORAGE as SESSION_STORAGE  # noqa: E402
 from ..limits import SERVER_STORAGE  # noqa: E402
 #: The most bytes a job's record holds besides its result (parameters, progress, error) [bytes].
 JOB_RECORD_BYTES = 200_000
-#: The most bytes one fitted curve adds to a fit's result (its plot: 1,500 samples of position, data,
-#: mask and model as JSON, ~120 kB, and its row of the tables) [bytes].
+#: The most bytes one fitted curve adds to a fit's result (its plot: at most 1,500 samples of position,
+#: data, mask and model as JSON, ~100 kB, and its row of the tables) [bytes]; measured: 25 kB for the
+#: whole result of a fit of two virtual curves (1 and 4 um/s, profiles and model comparison).
 FIT_RESULT_BYTES_PER_CURVE = 250_000
 #: The most bytes one value of a sweep's table (a run times a column) takes on disk, all its copies
 #: together: the stored chunk and results.parquet, results.csv, results.nc, results.html and the
