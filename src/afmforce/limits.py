@@ -29,11 +29,12 @@ MAX_MEMBER_BYTES = MAX_SAMPLES * 8
 #: memory among its clients (about 90 MB of trajectory per request; issue 33). Declared here, beside
 #: :data:`MAX_SAMPLES`, so that every face reads its caps from one module.
 SERVER_MAX_SAMPLES = 1_000_000
-#: The most bytes of uploads one session of ``afmforce serve`` may keep stored (all its files
-#: together; ten uploads of the largest size a request may carry, 200 MB). One more upload is
-#: refused (413) until the session deletes files or expires; nothing stored is ever evicted.
+#: The most bytes one session of ``afmforce serve`` may keep stored: its uploads, its jobs' records
+#: with their results and its sweeps' stores (ten uploads of the largest size a request may carry,
+#: 200 MB). One more upload or job is refused (413) until the session deletes files or jobs or
+#: expires; nothing stored is ever evicted.
 SERVER_SESSION_STORAGE = 2_000_000_000
-#: The most bytes of uploads ``afmforce serve`` keeps stored for all its sessions together.
+#: The most bytes ``afmforce serve`` keeps stored for all its sessions together (uploads, job results, sweep stores).
 SERVER_STORAGE = 20_000_000_000
 #: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
 CONFIRM_RUNS = 100_000
@@ -116,9 +117,9 @@ def caps_markdown() -> str:
     rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
             ("bytes one member of a JPK archive unpacks to", MAX_MEMBER_BYTES, "the JPK readers"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
-            ("bytes of uploads one web session keeps stored", SERVER_SESSION_STORAGE,
+            ("bytes one web session keeps stored (uploads, job results, sweep stores)", SERVER_SESSION_STORAGE,
              "afmforce serve (its setting `session_storage`)"),
-            ("bytes of uploads of all web sessions together", SERVER_STORAGE, "afmforce serve (its setting `server_storage`)"),
+            ("bytes all web sessions keep stored together", SERVER_STORAGE, "afmforce serve (its setting `server_storage`)"),
             ("runs of one sweep run without asking for a yes", CONFIRM_RUNS, "sweep"),
             ("runs of one sweep", MAX_RUNS, "sweep"),
             ("curves in a design", MAX_DESIGN_CURVES, "plan"),

@@ -79,3 +79,59 @@ def test_lone_channel_says_what_is_missing(tmp_path):
     (tmp_path / "Map0001Point0000ZSnsr.ibw").unlink()
     with pytest.raises(FileFormatError, match="Point0000Defl.ibw: one channel.*ZSnsr.ibw together"):
         load(tmp_path / "Map0001Point0000Defl.ibw")
+
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+
+
+def _real_pair(folder: Path, spring: str | None = None, invols: str | None = None):
+    """The real single wave ``asylum-mfp3d_SiN-tip_air.ibw`` split into its ``Defl`` and ``ZSnsr`` waves
+    (one per channel, as the instrument saves them), its note copied with ``SpringConstant`` / ``InvOLS``
+    replaced by the given texts. Returns the note's own (spring constant, InvOLS) read independently."""
+    from afmforce.io.ibw_wave import read_wave5
+
+    wave = read_wave5(DATA / "asylum-mfp3d_SiN-tip_air.ibw")
+    labels = [x.decode() for x in wave.labels[1] if x]
+    note = wave.note.decode("latin-1")
+    entries = dict(line.split(":", 1) for line in note.split("\r") if ":" in line)
+    stated = float(entries["SpringConstant"]), float(entries["InvOLS"])
+    for key, text in (("SpringConstant", spring), ("InvOLS", invols)):
+        if text is not None:
+            old = f"\r{key}:{entries[key]}\r"      # every line of it (the note states it twice)
+            assert note.count(old) >= 1
+            note = note.replace(old, f"\r{key}: {text}\r")
+    for channel in ("Defl", "ZSnsr"):
+        write_ibw(folder / f"X60Point0000{channel}.ibw", wave.data[:, labels.index(channel)], note, step=1 / 2000)
+    return stated
+
+
+def test_real_pair_reads_the_notes_calibration(tmp_path):
+    k, invols = _real_pair(tmp_path)
+    md = load(tmp_path / "X60Point0000Defl.ibw")[0].metadata
+    assert (md["spring_constant"], md["sensitivity"]) == (k, invols) == (1.1841, 4.499e-08)
+
+
+@pytest.mark.parametrize("key, field, value", [("spring", "spring_constant", "-1.1841"),
+                                               ("spring", "spring_constant", "0"),
+                                               ("invols", "sensitivity", "-4.499e-08"),
+                                               ("invols", "sensitivity", "0")])
+def test_impossible_note_calibration_is_refused_like_every_reader(tmp_path, key, field, value):
+    """A note's SpringConstant or InvOLS <= 0 is refused (FileFormatError naming the quantity), as the
+    single-wave path and the Bruker/JPK readers refuse one (finalize_curve), not dropped as if absent."""
+    _real_pair(tmp_path, **{key: value})
+    with pytest.raises(FileFormatError, match=f"{field}.*positive.*`{field}`"):
+        load(tmp_path / "X60Point0000Defl.ibw")
+
+
+def test_user_spring_constant_replaces_an_impossible_one(tmp_path):
+    _real_pair(tmp_path, spring="-1.1841")
+    c = load(tmp_path / "X60Point0000ZSnsr.ibw", meta_override={"spring_constant": 0.9})[0]
+    assert c.metadata["spring_constant"] == 0.9 and c.metadata["sensitivity"] == 4.499e-08
+
+
+def test_user_sensitivity_cannot_rescale_metres_from_an_impossible_invols(tmp_path):
+    """Defl [m] was computed with the note's InvOLS: a user's sensitivity rescales it by their ratio,
+    which a zero or negative InvOLS cannot give (refused, as the single-wave path's rescale_force)."""
+    _real_pair(tmp_path, invols="0")
+    with pytest.raises(FileFormatError, match="InvOLS.*cannot rescale.*sensitivity"):
+        load(tmp_path / "X60Point0000Defl.ibw", meta_override={"sensitivity": 4e-8})

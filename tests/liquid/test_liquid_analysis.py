@@ -76,8 +76,10 @@ def test_drag_baselines_give_the_lever_drag_and_split_drainage(tmp_path):
     # at equal separation the velocity part is v (c + beta / h) far out: c and eta R^2 in situ
     h = cal.separation(z, vs)
     hs, fs, fv = split_drainage(h[a], K * d[a], h[r], K * d[r])
-    c, b = velocity_force_fit(hs, fv, v, 60e-9, 350e-9)
+    vf = velocity_force_fit(hs, fv, v, 60e-9, 350e-9)
+    c, b = vf.lever_drag, vf.drainage_coefficient
     assert c == pytest.approx(1e-5, rel=0.05) and b == pytest.approx(beta, rel=0.1)
+    assert vf.undetermined == "" and abs(c - 1e-5) < 4 * vf.lever_drag_se and abs(b - beta) < 4 * vf.drainage_coefficient_se
     far = (hs > 150e-9) & (hs < 350e-9)     # (closer in, the retract still relaxes from pull-off)
     noise = K * 0.05e-9       # force noise of one sample (0.03 nm white + 0.03 nm 1/f)
     assert np.max(np.abs(fs[far])) < 5 * noise and abs(np.mean(fs[far])) < 0.015 * 1e-5 * v

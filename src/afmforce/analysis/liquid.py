@@ -30,7 +30,7 @@ import numpy as np
 from ..errors import AnalysisError
 
 __all__ = ["ComplianceCalibration", "quadratic_compliance", "DragBaselines", "drag_baselines",
-           "split_drainage", "velocity_force_fit", "DLVOFit", "fit_dlvo", "calibrate_liquid_curve"]
+           "split_drainage", "velocity_force_fit", "VelocityForceFit", "VELOCITY_FIT_MIN_POINTS", "DLVOFit", "fit_dlvo", "calibrate_liquid_curve"]
 
 
 @dataclass(frozen=True)
@@ -211,19 +211,87 @@ def split_drainage(h_app, f_app, h_ret, f_ret, h=None):
     return h, 0.5 * (a + r), 0.5 * (a - r)
 
 
-def velocity_force_fit(h, f_v, velocity: float, h_min: float, h_max: float) -> tuple[float, float]:
+@dataclass(frozen=True)
+class VelocityForceFit:
+    """``F_v = v (c + beta / h)`` fitted far out: values, standard errors, and why not when undetermined.
+
+    Attributes
+    ----------
+    lever_drag, drainage_coefficient : float
+        c [N s/m] and ``beta = 6 pi eta R_eff^2`` [N s] (NaN when undetermined).
+    lever_drag_se, drainage_coefficient_se : float
+        Their standard errors [N s/m], [N s]: the least-squares covariance with the residuals'
+        variance, widened by their correlation time (NaN when undetermined).
+    n : int
+        Samples in the separation range [-].
+    correlation_time : float
+        The residuals' integrated correlation time [samples] (1: white).
+    undetermined : str
+        Why the data cannot determine c and beta ("" when they do): too few samples, a speed that is
+        not a positive number, or no spread of 1/h (c and beta collinear).
+    """
+
+    lever_drag: float
+    drainage_coefficient: float
+    lever_drag_se: float = math.nan
+    drainage_coefficient_se: float = math.nan
+    n: int = 0
+    correlation_time: float = 1.0
+    undetermined: str = ""
+
+
+#: Fewest samples a velocity-force fit takes (two parameters and a variance from the rest).
+VELOCITY_FIT_MIN_POINTS = 5
+
+
+def velocity_force_fit(h, f_v, velocity: float, h_min: float, h_max: float) -> VelocityForceFit:
     """Separate the lever drag from the drainage in the velocity-dependent force.
 
     Far out (h >> slip length) ``F_v = v (c + beta / h)`` with c the lever drag and
-    ``beta = 6 pi eta R_eff^2`` (Reynolds); a linear fit in 1/h over ``[h_min, h_max]``.
-    Returns ``(c [N s/m], beta [kg m])``: beta checks eta R^2 in situ.
+    ``beta = 6 pi eta R_eff^2`` (Reynolds); a linear least-squares fit of ``F_v / v`` in 1/h over
+    ``[h_min, h_max]`` [m]: beta checks eta R^2 in situ. The standard errors are those of ordinary
+    least squares (``s^2 (X'X)^-1``, s^2 the residual variance with n - 2 degrees of freedom) times
+    the square root of the residuals' correlation time (the velocity force is a difference of two
+    runs interpolated on one grid, with drift and 1/f noise: neighbouring samples are not
+    independent). Undetermined (NaN, and the reason) with fewer than
+    :data:`VELOCITY_FIT_MIN_POINTS` samples in the range, a speed that is not positive, or no
+    spread of 1/h.
+
+    Parameters
+    ----------
+    h, f_v : array_like
+        Separation [m] and velocity-dependent force [N] (:func:`split_drainage`).
+    velocity : float
+        Mean speed of the two runs [m/s].
+    h_min, h_max : float
+        Separation range fitted [m].
     """
     h, f_v = np.asarray(h, float), np.asarray(f_v, float)
-    m = (h >= h_min) & (h <= h_max)
-    if m.sum() < 5:
-        raise AnalysisError("velocity_force_fit: fewer than 5 samples in the separation range")
-    beta, c = np.polyfit(1.0 / h[m], f_v[m] / velocity, 1)
-    return float(c), float(beta)
+    m = (h >= h_min) & (h <= h_max) & np.isfinite(h) & np.isfinite(f_v) & (h > 0)
+    n = int(m.sum())
+    why = ""
+    if n < VELOCITY_FIT_MIN_POINTS:
+        why = (f"{n} samples between {h_min * 1e9:.3g} and {h_max * 1e9:.3g} nm (fewer than "
+               f"{VELOCITY_FIT_MIN_POINTS})")
+    elif not (math.isfinite(velocity) and velocity > 0):
+        why = f"the speed is {velocity!r} m/s (not positive): no velocity force to divide"
+    else:
+        x = 1.0 / h[m]
+        if not np.ptp(x) > 1e-9 * float(np.max(np.abs(x))):
+            why = "all samples at one separation: 1/h has no spread, c and beta are collinear"
+    if why:
+        return VelocityForceFit(math.nan, math.nan, n=n, undetermined=why)
+    y = f_v[m] / velocity
+    X = np.column_stack([np.ones_like(x), x - x.mean()])     # centred: the two columns orthogonal
+    coef, *_ = np.linalg.lstsq(X, y, rcond=None)
+    r = y - X @ coef
+    tau = _correlation_time(r)
+    s2 = float(r @ r) / (n - 2) * tau
+    cov = s2 * np.linalg.inv(X.T @ X)
+    beta = float(coef[1])
+    c = float(coef[0] - beta * x.mean())
+    var_c = cov[0, 0] + x.mean() ** 2 * cov[1, 1] - 2.0 * x.mean() * cov[0, 1]
+    return VelocityForceFit(c, beta, math.sqrt(max(var_c, 0.0)), math.sqrt(max(cov[1, 1], 0.0)), n, tau)
 
 
 @dataclass(frozen=True)

@@ -34,10 +34,12 @@ def register(sub) -> None:
     from ..limits import SERVER_SESSION_STORAGE, SERVER_STORAGE
 
     p.add_argument("--session-storage", default=None, metavar="SIZE",
-                   help=f"bytes of uploads one browser session may keep stored (default {SERVER_SESSION_STORAGE / 1e9:g}GB); "
-                        "its next upload gets HTTP 413 until it deletes files")
+                   help=f"bytes one browser session may keep stored: uploads, job results, sweep stores (default "
+                        f"{SERVER_SESSION_STORAGE / 1e9:g}GB); its next upload or job gets HTTP 413 until it deletes "
+                        "files or jobs")
     p.add_argument("--server-storage", default=None, metavar="SIZE",
-                   help=f"bytes of uploads all sessions together may keep stored (default {SERVER_STORAGE / 1e9:g}GB)")
+                   help=f"bytes all sessions together may keep stored: uploads, job results, sweep stores (default "
+                        f"{SERVER_STORAGE / 1e9:g}GB)")
     p.set_defaults(func=run)
 
 

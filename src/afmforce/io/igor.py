@@ -181,6 +181,16 @@ def _wave(path: Path) -> tuple[np.ndarray, dict[str, str], float]:
     return np.asarray(w["wData"], dtype=float).ravel(), entries, step
 
 
+def _stated_entry(entries: Mapping[str, str], key: str) -> float | None:
+    """The finite number a wave note states under ``key`` (any sign: an impossible one is refused by
+    :func:`~afmforce.io._meta.finalize_curve`, not dropped), or None where it is missing or not a number."""
+    try:
+        v = float(entries[key])
+    except (KeyError, ValueError):
+        return None
+    return v if np.isfinite(v) else None
+
+
 def _split_name(path: Path) -> tuple[str, str] | None:
     stem = path.name[: -len(path.suffix)] if path.suffix else path.name
     for ch in (*CHANNELS, *POSITIONS):
@@ -216,8 +226,11 @@ def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCur
     note = {**znote, **note}
     unit = CHANNELS[sig_ch]
     meta: dict[str, Any] = {"instrument": "Asylum Research", "channels": f"{sig_ch}+{pos_ch}"}
-    for key, ours in (("SpringConstant", "spring_constant"), ("InvOLS", "sensitivity"),
-                      ("NumPtsPerSec", "sample_rate"), ("ThermalFrequency", "resonance_frequency"),
+    for key, ours in (("SpringConstant", "spring_constant"), ("InvOLS", "sensitivity")):
+        value = _stated_entry(note, key)    # as stated: finalize_curve refuses one <= 0, as every reader
+        if value is not None:
+            meta[ours] = value
+    for key, ours in (("NumPtsPerSec", "sample_rate"), ("ThermalFrequency", "resonance_frequency"),
                       ("ThermalQ", "quality_factor")):
         value = positive_entry(note, key)
         if value is not None:
@@ -225,6 +238,9 @@ def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCur
     if "sample_rate" not in meta and step > 0:
         meta["sample_rate"] = 1.0 / step
     if unit == "m" and "sensitivity" in meta_override and "sensitivity" in meta:
+        if not meta["sensitivity"] > 0:     # Defl was computed with it: nothing to rescale from
+            raise FileFormatError(f"{where}: the wave note's InvOLS (sensitivity) is {meta['sensitivity']!r}; "
+                                  "cannot rescale its deflection to the given sensitivity")
         signal = signal * float(meta_override["sensitivity"]) / meta["sensitivity"]
     meta.update(meta_override)
     need = ["spring_constant"] + (["sensitivity"] if unit == "V" else [])

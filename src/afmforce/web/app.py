@@ -25,7 +25,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     settings.data.mkdir(parents=True, exist_ok=True)
     jobs = JobManager(settings.data, budget=settings.job_budget, spare=settings.spare_job)
     sessions = Sessions(settings.data, ttl=settings.session_ttl, session_bytes=settings.session_storage,
-                        server_bytes=settings.server_storage)
+                        server_bytes=settings.server_storage, extra=jobs.stored_bytes)
+    jobs.room = sessions.room_refusal     # a job's results count against the same totals as uploads
     stop = threading.Event()
 
     def expire() -> None:   # sessions unused past --session-ttl: their uploads and finished jobs go

@@ -28,14 +28,29 @@ from pathlib import Path
 from typing import Any
 
 from .._files import atomic_write_text
-from .limits import MAX_JOBS, MAX_SESSION_JOBS
+from .limits import (FIT_RESULT_BYTES_PER_CURVE, JOB_RECORD_BYTES, MAX_JOBS, MAX_SESSION_JOBS,
+                     SWEEP_BYTES_PER_VALUE)
 from .replies import JobStartError, TooManyJobs
-from .sessions import session_key
+from .sessions import StorageFull, session_key
 from .tasks import standby
 
-__all__ = ["Job", "JobManager", "FINISHED"]
+__all__ = ["Job", "JobManager", "FINISHED", "fit_reserve", "sweep_reserve"]
 
 FINISHED = ("done", "failed", "cancelled", "interrupted")
+
+
+def fit_reserve(n_curves: int) -> int:
+    """The most bytes a fit of ``n_curves`` curves stores (its record with the result) [bytes]."""
+    return JOB_RECORD_BYTES + FIT_RESULT_BYTES_PER_CURVE * max(int(n_curves), 1)
+
+
+def sweep_reserve(n_runs: int, n_parameters: int) -> int:
+    """The most bytes a sweep of ``n_runs`` runs of ``n_parameters`` parameters stores (its store, its
+    result files and its record) [bytes]."""
+    from ..sweep.simulation import OUTPUT_UNITS
+
+    columns = n_parameters + len(OUTPUT_UNITS) + 2          # and the run's error and index
+    return JOB_RECORD_BYTES + SWEEP_BYTES_PER_VALUE * max(int(n_runs), 1) * columns
 
 
 def owner_of(session: str) -> str:
@@ -76,7 +91,7 @@ class Job:
         """What the API shows (no owner)."""
         d = asdict(self)
         d.pop("owner")
-        d["params"] = {k: v for k, v in self.params.items() if k not in ("files", "store")}
+        d["params"] = {k: v for k, v in self.params.items() if k not in ("files", "store", "reserve")}
         if not result:
             d.pop("result")
         return d
@@ -109,6 +124,9 @@ class JobManager:
         self._spare = None
         self._keep_spare = spare
         self._all: list = []         # every process started: shutdown stops each one
+        #: ``room(owner, bytes, what)``: why ``bytes`` more would pass the owner's or the server's
+        #: storage total, or None (the app sets :meth:`~.sessions.Sessions.room_refusal`)
+        self.room = None
 
     # -- records -----------------------------------------------------------------------
     def _save(self, job: Job) -> None:
@@ -130,6 +148,52 @@ class JobManager:
     def processes(self) -> list:
         """The job processes alive now (spare included)."""
         return [p for p in self._all if p.is_alive()]
+
+    def stored_bytes(self, owner: str | None = None) -> int:
+        """Bytes the records of ``owner``'s jobs (None: every job) take on disk, a running job at its
+        declared most (``params["reserve"]``, :func:`fit_reserve`, :func:`sweep_reserve`) on top:
+        what a session may not fill with uploads while it runs [bytes]."""
+        total = 0
+        for job in list(self._jobs.values()):
+            if owner is not None and job.owner != owner:
+                continue
+            try:
+                total += (self.folder / f"{job.id}.json").stat().st_size
+            except OSError:
+                pass
+            if job.state not in FINISHED:
+                total += int(job.params.get("reserve", 0))
+        return total
+
+    def delete(self, job_id: str, session: str) -> Job | None:
+        """Remove a finished job of ``session``: its record and its sweep's store (None: not the session's).
+
+        Raises
+        ------
+        ParameterError
+            The job is still running (cancel it first).
+        """
+        from ..errors import ParameterError
+
+        job = self.get(job_id, session)
+        if job is None:
+            return None
+        if job.state not in FINISHED:
+            raise ParameterError(f"job {job_id} is {job.state}; cancel it first (POST /api/jobs/{job_id}/cancel), "
+                                 "then delete it")
+        self._jobs.pop(job.id, None)
+        (self.folder / f"{job.id}.json").unlink(missing_ok=True)
+        self._remove_store(job)
+        return job
+
+    @staticmethod
+    def _remove_store(job: Job) -> None:
+        """Remove the job's own sweep store (``<sweeps>/<job id>``; a store shared by an older layout stays)."""
+        import shutil
+
+        store = job.params.get("store")
+        if job.kind == "sweep" and store and Path(store).name == job.id:
+            shutil.rmtree(store, ignore_errors=True)
 
     def expire(self, owners, ttl: float, live=(), now: float | None = None) -> list[str]:
         """Remove the finished jobs of expired sessions (``owners``: their keys) and the finished jobs
@@ -166,15 +230,22 @@ class JobManager:
         return restarted
 
     # -- API ---------------------------------------------------------------------------
-    def submit(self, kind: str, session: str, params: dict[str, Any]) -> Job:
+    def submit(self, kind: str, session: str, params: dict[str, Any], *, reserve: int = 0,
+               store: Path | None = None) -> Job:
         """Start a job for ``session``; returns it (state ``running``).
+
+        ``reserve`` [bytes]: the most the job stores (:func:`fit_reserve`, :func:`sweep_reserve`),
+        held against the session's and the server's storage totals while it runs; ``store``: the
+        folder of the session's sweep stores (the sweep's own is ``store/<job id>``).
 
         Raises :class:`~.replies.TooManyJobs` when the server runs :data:`~.limits.MAX_JOBS` jobs or
         the session :data:`~.limits.MAX_SESSION_JOBS` (each job is a process: without a cap, a client
-        posting fits in a loop would start a process each, until the machine's memory ran out)."""
+        posting fits in a loop would start a process each, until the machine's memory ran out), and
+        :class:`~.sessions.StorageFull` when ``reserve`` would pass a storage total (413)."""
         job = Job(secrets.token_hex(8), kind, owner_of(session), dict(params))
+        job.params["reserve"] = int(reserve)
         if kind == "sweep":
-            job.params["store"] = str(self.root / "sweeps")
+            job.params["store"] = str(Path(store if store is not None else self.root / "sweeps") / job.id)
         with self._lock:
             live = [j for j in self._jobs.values() if j.state not in FINISHED]
             mine = sum(1 for j in live if j.owner == job.owner)
@@ -183,6 +254,9 @@ class JobManager:
                     f"{mine} of this session's jobs and {len(live)} in all are running; a session may run "
                     f"{MAX_SESSION_JOBS} and the server {MAX_JOBS} fits and sweeps at once: wait for one to "
                     "end or cancel one (POST /api/jobs/ID/cancel)")
+            why = self.room(job.owner, int(reserve), f"this {kind}'s results, at most") if self.room else None
+            if why:
+                raise StorageFull(why)
             self._jobs[job.id] = job
         self._start(job)
         return job
@@ -286,6 +360,22 @@ class JobManager:
                 self._procs.pop(job.id, None)
                 self._cancel.discard(job.id)
 
+    def _keep_result(self, job: Job, value) -> None:
+        """``job`` done with ``value``, unless its record would take its session or the server past
+        the storage totals (its reserve under-counted: a map's many curves): then it fails saying
+        so and its sweep store is removed (nothing over the totals stays on disk)."""
+        size = len(json.dumps(value, allow_nan=True)) if self.room is not None else 0
+        reserve = int(job.params.get("reserve", 0))
+        job.params["reserve"] = 0            # its own hold no longer counts against itself
+        why = self.room(job.owner, size, f"this {job.kind}'s results") if self.room is not None else None
+        if why:
+            job.params["reserve"] = reserve
+            job.state, job.result, job.error = "failed", None, f"the {job.kind}'s results were not kept: {why}"
+            self._remove_store(job)
+            job.params["reserve"] = 0
+            return
+        job.state, job.result = "done", value
+
     def _follow(self, job: Job, proc, q) -> None:
         deadline = time.monotonic() + self.budget
         last_save = 0.0
@@ -303,7 +393,7 @@ class JobManager:
                     last_save = time.monotonic()
                 continue
             if kind == "result":
-                job.state, job.result = "done", value
+                self._keep_result(job, value)
                 break
             if kind == "error":
                 job.state, job.error = "failed", value
@@ -317,9 +407,11 @@ class JobManager:
             if not proc.is_alive():
                 try:  # a last report may still be in the queue
                     kind, value = q.get(timeout=0.5)
-                    if kind in ("result", "error"):
-                        job.state = "done" if kind == "result" else "failed"
-                        job.result, job.error = (value, None) if kind == "result" else (None, value)
+                    if kind == "result":
+                        self._keep_result(job, value)
+                        break
+                    if kind == "error":
+                        job.state, job.result, job.error = "failed", None, value
                         break
                     continue
                 except _queue.Empty:

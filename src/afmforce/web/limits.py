@@ -10,7 +10,8 @@ before anything is computed.
 from __future__ import annotations
 
 __all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
-           "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL", "SESSION_STORAGE", "SERVER_STORAGE", "MAX_JOBS", "MAX_SESSION_JOBS"]
+           "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL", "SESSION_STORAGE", "SERVER_STORAGE", "MAX_JOBS", "MAX_SESSION_JOBS",
+           "JOB_RECORD_BYTES", "FIT_RESULT_BYTES_PER_CURVE", "SWEEP_BYTES_PER_VALUE"]
 
 #: Samples one simulated cycle may have: the library's cap for a server (``afmforce.limits``).
 from ..limits import SERVER_MAX_SAMPLES as MAX_SAMPLES  # noqa: E402
@@ -33,10 +34,21 @@ MAX_JOBS = 4
 MAX_SESSION_JOBS = 2
 #: Bytes of an uploaded probe calibration file (``afmforce calibrate --out`` writes about 1 kB).
 CALIBRATION_BYTES = 65_536
-#: Default bytes of uploads one session may keep stored (``--session-storage``); its next upload is
-#: refused (413 ``storage_full``) until it deletes files or expires: stored files are never evicted.
+#: Default bytes one session may keep stored (``--session-storage``): uploads, sweep stores and job
+#: records; its next upload or job is refused (413 ``storage_full``) until it deletes files or jobs or
+#: expires: stored files are never evicted.
 from ..limits import SERVER_SESSION_STORAGE as SESSION_STORAGE  # noqa: E402
-#: Default bytes of uploads the server keeps stored for all sessions together (``--server-storage``).
+#: Default bytes the server keeps stored for all sessions together (``--server-storage``).
 from ..limits import SERVER_STORAGE  # noqa: E402
+#: The most bytes a job's record holds besides its result (parameters, progress, error) [bytes].
+JOB_RECORD_BYTES = 200_000
+#: The most bytes one fitted curve adds to a fit's result (its plot: at most 1,500 samples of position,
+#: data, mask and model as JSON, ~100 kB, and its row of the tables) [bytes]; measured: 25 kB for the
+#: whole result of a fit of two virtual curves (1 and 4 um/s, profiles and model comparison).
+FIT_RESULT_BYTES_PER_CURVE = 250_000
+#: The most bytes one value of a sweep's table (a run times a column) takes on disk, all its copies
+#: together: the stored chunk and results.parquet, results.csv, results.nc, results.html and the
+#: rows the job's record shows [bytes].
+SWEEP_BYTES_PER_VALUE = 160
 #: Default lifetime of an unused session (its uploads and jobs) [s].
 SESSION_TTL = 24 * 3600.0

@@ -159,9 +159,17 @@ def build(app) -> dict[str, Any]:
                 "files": {"type": "array", "items": {"type": "object"}},
                 "wall_time": {"type": "number", "description": "[s]"}}}}}}
         ana["responses"]["413"] = {"description": "too_large: the body is over --max-upload; storage_full: the "
-                                          "session's (or server's) stored uploads would pass --session-storage "
-                                          "(--server-storage): delete files or start a new session",
+                                          "session's (or server's) stored uploads and job results would pass "
+                                          "--session-storage (--server-storage): delete files or jobs or start a "
+                                          "new session",
                                    **_json_body("Error")}
+    for job_path in ("/api/fit", "/api/sweep"):    # a job whose results would not fit: the same 413
+        op = paths.get(job_path, {}).get("post")
+        if op is not None:
+            op.setdefault("responses", {})["413"] = {
+                "description": "storage_full: its results (at most) would take the session's (or server's) "
+                               "stored uploads and job results past --session-storage (--server-storage)",
+                **_json_body("Error")}
         form = ana.get("requestBody", {}).get("content", {}).get("multipart/form-data", {}).get("schema", {})
         ref = form.get("$ref", "").rsplit("/", 1)[-1]
         body = schemas.get(ref, {}).get("properties", {})

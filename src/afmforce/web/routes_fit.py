@@ -9,6 +9,7 @@ from pydantic import BaseModel, ConfigDict, Field
 
 from ..errors import AfmforceError
 from . import validate
+from .jobs import fit_reserve
 from .limits import MAX_CURVES, MAX_ITEMS
 from .schema import fit_defaults
 
@@ -85,5 +86,6 @@ def fit(request: Request, body: FitRequest) -> dict:
     params["files"] = [(str(p), name) for p, name in files]
     params["meta"] = validate.metadata(body.meta)
     request.app.state.sessions.touch(session)
-    job = request.app.state.jobs.submit("fit", session, params)
+    job = request.app.state.jobs.submit("fit", session, params,    # 413 storage_full past the totals
+                                        reserve=fit_reserve(len(files) or len(velocities)))
     return {"id": job.id, "state": job.state}

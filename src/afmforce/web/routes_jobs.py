@@ -40,6 +40,15 @@ def cancel(request: Request, job_id: str) -> dict:
     return {"id": job_id, "cancel": True}
 
 
+@router.delete("/api/jobs/{job_id}")
+def delete(request: Request, job_id: str) -> dict:
+    """Remove a finished job: its record, its result and its sweep's store (their bytes are freed from
+    the session's storage at once). A running job: 422, cancel it first."""
+    if request.app.state.jobs.delete(job_id, request.state.session) is None:
+        _job(request, job_id)        # 404
+    return {"id": job_id, "deleted": True}
+
+
 @router.get("/api/jobs/{job_id}/events")
 async def events(request: Request, job_id: str) -> StreamingResponse:
     """Server-sent events: one ``progress`` event per change, then ``end`` with the job (and result)."""

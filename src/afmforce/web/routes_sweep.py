@@ -6,6 +6,7 @@ from fastapi import APIRouter, Request
 from pydantic import BaseModel, ConfigDict, Field
 
 from . import validate
+from .jobs import sweep_reserve
 from .limits import MAX_ITEMS, MAX_RUNS
 
 router = APIRouter(tags=["sweep"])
@@ -31,9 +32,14 @@ class SweepRequest(BaseModel):
 @router.post("/api/sweep", status_code=202)
 def sweep(request: Request, body: SweepRequest) -> dict:
     """Start a sweep; returns ``{"id"}``. Chunks are stored as they finish; a server restart resumes it.
-    Bad names and values, too many runs or samples: 422 before a process starts."""
-    validate.sweep_spec(body.grid, body.ranges, body.sets, sample=body.sample, n=body.n, seed=body.seed)
-    request.app.state.sessions.touch(request.state.session)
+    Bad names and values, too many runs or samples: 422 before a process starts; results that would
+    not fit in the session's or the server's storage (at most :func:`~.jobs.sweep_reserve`): 413."""
+    spec = validate.sweep_spec(body.grid, body.ranges, body.sets, sample=body.sample, n=body.n, seed=body.seed)
+    sessions, session = request.app.state.sessions, request.state.session
+    sessions.touch(session)
     params = {**body.model_dump(), "max_runs": MAX_RUNS}
-    job = request.app.state.jobs.submit("sweep", request.state.session, params)
+    n_parameters = len(spec.grid) + len(spec.ranges) + len(spec.fixed)
+    job = request.app.state.jobs.submit("sweep", session, params,      # 413 storage_full past the totals
+                                        reserve=sweep_reserve(spec.n_runs, n_parameters),
+                                        store=sessions.sweeps(session))
     return {"id": job.id, "state": job.state}

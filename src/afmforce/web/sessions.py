@@ -16,11 +16,15 @@ upload (or job, :meth:`Sessions.touch`), never by a request that only reads. It 
 a minute); :meth:`Sessions.expire` removes the folders of sessions past it (the server runs
 it at start and then every few minutes, with the jobs of those sessions).
 
-Disk is bounded: a session keeps at most ``session_bytes`` of uploads and all sessions together
-``server_bytes`` (:data:`~.limits.SESSION_STORAGE`, :data:`~.limits.SERVER_STORAGE`). The bytes
-stored are counted from the folders themselves at each upload, so a deleted upload or an expired
-session frees its space at once; an upload over either total is refused (:class:`StorageFull`)
-before anything is written, all the files of one request or none. Stored files are never evicted.
+Disk is bounded: a session keeps at most ``session_bytes`` and all sessions together
+``server_bytes`` (:data:`~.limits.SESSION_STORAGE`, :data:`~.limits.SERVER_STORAGE`) of everything
+the server writes for them: uploads, the stores of their sweeps (``<session folder>/sweeps/<job
+id>/``) and the records of their jobs (with the results; ``jobs/<id>.json``, counted by the job
+manager through ``extra``, a running job at its declared most, :func:`~.jobs.job_reserve`). The
+bytes stored are counted from the files themselves at each upload or job, so a deleted upload, a
+deleted job or an expired session frees its space at once; an upload or a job over either total is
+refused (:class:`StorageFull`) before anything is written, all the files of one request or none.
+Stored files are never evicted.
 """
 
 from __future__ import annotations
@@ -34,7 +38,7 @@ import shutil
 import threading
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 from .._files import atomic_write_text
 from ..errors import AfmforceError, ParameterError
@@ -110,11 +114,13 @@ class Sessions:
     """
 
     def __init__(self, root: Path, ttl: float = 24 * 3600.0, session_bytes: int = SESSION_STORAGE,
-                 server_bytes: int = SERVER_STORAGE):
+                 server_bytes: int = SERVER_STORAGE, extra: Callable[[str | None], int] | None = None):
         self.root = Path(root) / "sessions"
         self.ttl = float(ttl)
         self.session_bytes = int(session_bytes)
         self.server_bytes = int(server_bytes)
+        #: bytes stored for a session outside its folder (its key; None: all sessions): its jobs' records
+        self.extra = extra
         self._lock = threading.Lock()
         self._touched: dict[str, float] = {}
 
@@ -189,27 +195,60 @@ class Sessions:
 
     @staticmethod
     def _folder_bytes(path: Path) -> int:
-        """Bytes of the uploads stored in one session's folder (its index and stamp not counted)."""
+        """Bytes of everything stored in one session's folder, sub-folders included (its uploads and
+        its sweeps' stores; the index and the stamp not counted)."""
         total = 0
-        try:
-            with os.scandir(path) as entries:
-                for entry in entries:
-                    if entry.name not in ("index.json", _STAMP) and not entry.name.startswith("."):
-                        try:
-                            total += entry.stat(follow_symlinks=False).st_size
-                        except OSError:
-                            pass
-        except OSError:
-            pass
+        for folder, _, names in os.walk(path):
+            for name in names:
+                if folder == str(path) and (name in ("index.json", _STAMP) or name.startswith(".")):
+                    continue
+                try:
+                    total += os.lstat(os.path.join(folder, name)).st_size
+                except OSError:
+                    pass
         return total
 
     def stored_bytes(self, session: str | None = None) -> int:
-        """Bytes of uploads the session keeps stored (None: all sessions together) [bytes], counted
-        from the folders (a deleted upload or an expired session is freed at once)."""
-        if session is not None:
-            return self._folder_bytes(self.root / session_key(session))
+        """Bytes the session keeps stored, uploads, sweep stores and job records (None: all sessions
+        together) [bytes], counted from the files (a deleted upload or job, an expired session is freed
+        at once)."""
+        return self._key_bytes(None if session is None else session_key(session))
+
+    def _key_bytes(self, key: str | None) -> int:
+        extra = self.extra(key) if self.extra is not None else 0
+        if key is not None:
+            return self._folder_bytes(self.root / key) + extra
         return sum(self._folder_bytes(p) for p in (self.root.iterdir() if self.root.is_dir() else ())
-                   if p.is_dir())
+                   if p.is_dir()) + extra
+
+    def sweeps(self, session: str) -> Path:
+        """The folder of the session's sweep stores (inside its folder: counted, and removed with it)."""
+        return self.root / session_key(session) / "sweeps"
+
+    def room_refusal(self, key: str, adding: int, what: str = "uploads") -> str | None:
+        """Why ``adding`` more bytes for the session ``key`` would pass the session's or the server's
+        total (one line saying what to do), or None when they fit. ``what``: what would be added."""
+        if adding <= 0:
+            return None
+        mine = self._key_bytes(key)
+        if mine + adding > self.session_bytes:
+            return (f"this session keeps {_bytes(mine)} of uploads and job results; {_bytes(adding)} more would "
+                    f"pass the {_bytes(self.session_bytes)} a session may store ({what}): delete uploads or finished "
+                    "jobs you no longer need (Your uploads, DELETE /api/files/ID, DELETE /api/jobs/ID) or start "
+                    "a new session, then try again")
+        everyone = self._key_bytes(None)
+        if everyone + adding > self.server_bytes:
+            return (f"the server keeps {_bytes(everyone)} of uploads and job results for all sessions; "
+                    f"{_bytes(adding)} more would pass the {_bytes(self.server_bytes)} it may store ({what}): "
+                    "delete uploads or finished jobs you no longer need, or ask its operator to free space "
+                    "(afmforce serve --server-storage), then try again")
+        return None
+
+    def check_room(self, session: str, adding: int, what: str) -> None:
+        """Refuse (:class:`StorageFull`) ``adding`` more bytes (``what``: e.g. "this fit's result, at most")."""
+        why = self.room_refusal(session_key(session), adding, what)
+        if why:
+            raise StorageFull(why)
 
     def _check_room(self, session: str, planned: list[tuple[str, int]]) -> None:
         """Refuse (:class:`StorageFull`) uploads ``[(stored name, bytes)]`` that would take the session
@@ -221,20 +260,7 @@ class Sessions:
                 adding += size - (folder / stored).stat().st_size
             except OSError:
                 adding += size
-        if adding <= 0:
-            return
-        mine = self.stored_bytes(session)
-        if mine + adding > self.session_bytes:
-            raise StorageFull(
-                f"this session keeps {_bytes(mine)} of uploads; {_bytes(adding)} more would pass the "
-                f"{_bytes(self.session_bytes)} a session may store: delete uploads you no longer need "
-                "(Your uploads, DELETE /api/files/ID) or start a new session, then upload again")
-        everyone = self.stored_bytes()
-        if everyone + adding > self.server_bytes:
-            raise StorageFull(
-                f"the server keeps {_bytes(everyone)} of uploads for all sessions; {_bytes(adding)} more "
-                f"would pass the {_bytes(self.server_bytes)} it may store: delete uploads you no longer "
-                "need, or ask its operator to free space (afmforce serve --server-storage), then upload again")
+        self.check_room(session, adding, "uploads")
 
     def save(self, session: str, name: str, data: bytes) -> dict[str, Any]:
         """Store an upload; returns ``{"id", "name", "size"}`` (``name``: as given, display only).

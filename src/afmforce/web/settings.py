@@ -74,10 +74,10 @@ class Settings:
         Lifetime of a session after its last use [s] (``--session-ttl``): then its uploads and
         jobs are removed.
     session_storage : int
-        Bytes of uploads one session may keep stored (``--session-storage``); its next upload is
-        refused (413) until it deletes files or expires.
+        Bytes one session may keep stored (``--session-storage``): uploads, job records and results,
+        sweep stores; its next upload or job is refused (413) until it deletes files or jobs or expires.
     server_storage : int
-        Bytes of uploads all sessions together may keep stored (``--server-storage``).
+        Bytes all sessions together may keep stored (``--server-storage``).
     """
 
     host: str = "127.0.0.1"

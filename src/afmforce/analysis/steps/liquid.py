@@ -65,6 +65,9 @@ class LiquidResult:
     lever_drag_se : float  its standard error, from the far lines' scatter [N s/m]
     lever_drag_total : float  ``k offset / (v_app + v_ret)`` (lever drag plus that drainage) [N s/m]
     lever_drag_fit, drainage_coefficient : float  ``F_v = v (c + beta / h)`` fitted: c [N s/m], beta [N s]
+        (NaN when undetermined: ``velocity_fit_undetermined`` says why)
+    lever_drag_fit_se, drainage_coefficient_se : float  their standard errors [N s/m], [N s]
+    velocity_fit_undetermined : str  why the velocity force cannot determine c and beta ("" when it does)
     drainage_coefficient_expected : float  ``6 pi eta R_eff^2`` (Reynolds) [N s]
     force_noise : float  rms of the static force far out [N]
     surface_potential, surface_potential_se : float  psi and its standard error [V]
@@ -100,7 +103,10 @@ class LiquidResult:
     lever_drag_total: float = _u("N s/m")
     lever_drag_se: float = _u("N s/m", math.nan)
     lever_drag_fit: float = _u("N s/m", math.nan)
+    lever_drag_fit_se: float = _u("N s/m", math.nan)
     drainage_coefficient: float = _u("N s", math.nan)
+    drainage_coefficient_se: float = _u("N s", math.nan)
+    velocity_fit_undetermined: str = ""
     drainage_coefficient_expected: float = _u("N s", math.nan)
     force_noise: float = _u("N", math.nan)
     surface_potential: float = _u("V", math.nan)
@@ -175,13 +181,12 @@ def liquid(st: State, o: LiquidOptions) -> State:
     h_far = cal.z_contact - far + o.contact_separation
     noise = _robust_std(fs[hs > h_far])
     vmean = 0.5 * (va + vr)
-    try:
-        c_fit, beta = velocity_force_fit(hs, fv, vmean, max(10 * o.min_separation, 0.25 * h_far),
-                                         float(hs.max()))
-    except AnalysisError:
-        c_fit = beta = math.nan
+    vf = velocity_force_fit(hs, fv, vmean, max(10 * o.min_separation, 0.25 * h_far),
+                            float(hs.max()) if hs.size else math.nan)
     drag = drag_estimate = db.lever_drag - beta0 / h_drag
     warn = []
+    if vf.undetermined:
+        warn.append(f"liquid: lever drag and drainage coefficient of the velocity force undetermined: {vf.undetermined}")
     if not drag - 1.96 * db.lever_drag_se > 0:
         # a drag the offset does not resolve (too slow, too noisy) is no result; a negative one is impossible
         warn.append(f"liquid: lever drag undetermined: {drag:.3g} +- {db.lever_drag_se:.2g} N s/m (the drag "
@@ -194,8 +199,9 @@ def liquid(st: State, o: LiquidOptions) -> State:
                   nonlinearity_length=-cal.a ** 2 / cal.c if cal.c != 0 else math.inf, signal_zero=cal.v0,
                   compliance_rms=cal.rms, compliance_points=cal.n, contact_position=-cal.z_contact,
                   drag_offset=db.gap, drag_separation=h_drag, lever_drag=drag,
-                  lever_drag_total=db.lever_drag, lever_drag_se=db.lever_drag_se, lever_drag_fit=c_fit,
-                  drainage_coefficient=beta,
+                  lever_drag_total=db.lever_drag, lever_drag_se=db.lever_drag_se, lever_drag_fit=vf.lever_drag,
+                  lever_drag_fit_se=vf.lever_drag_se, drainage_coefficient=vf.drainage_coefficient,
+                  drainage_coefficient_se=vf.drainage_coefficient_se, velocity_fit_undetermined=vf.undetermined,
                   drainage_coefficient_expected=beta0, force_noise=noise,
                   static_separation=hs, static_force=fs, velocity_force=fv)
     st = st.update(separation=h, force=force, deflection=d - base)
