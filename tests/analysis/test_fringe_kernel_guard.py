@@ -43,3 +43,35 @@ def test_fit_from_a_far_start_ends_without_error():
     q, cost, _ = lm_fit(np.array([0.03]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp,
                         200, 1e-10, 1e-12)
     assert 150e-9 * math.exp(q[0]) == pytest.approx(150e-9, rel=0.01)  # converges to the period
+
+
+def test_the_first_runs_python_kernels_reject_an_overflowing_trial_step_too(tmp_path):
+    """The first `afmforce analyze` after an install runs these kernels as Python (cli/_firstrun),
+    where math.exp(800) raises OverflowError instead of giving inf: the audit's first run of the
+    corpus failed jpk-force_stress-relaxation_cell1-0001.jpk-force with "unexpected OverflowError:
+    math range error" (its fringe fit's trial step). The same calls as above, with numba's JIT off."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    script = tmp_path / "python_kernels.py"
+    script.write_text(
+        "import math, numpy as np\n"
+        "from afmforce.analysis._fringe_kernel import _prepare, lm_fit, vp_eval\n"
+        "z = np.linspace(0, 1.2e-6, 200)\n"
+        "r = 0.02 * np.cos(2 * np.pi * z / 150e-9 + 0.4)\n"
+        "p = _prepare(z, r, None)\n"
+        "res, J = np.empty(z.size), np.empty((z.size, 1))\n"
+        "for q0 in (-800.0, 800.0):\n"
+        "    c = vp_eval(np.array([q0]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp,"
+        " res, J, False)\n"
+        "    assert c == math.inf, c\n"
+        "q, cost, status = lm_fit(np.array([700.0]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0,"
+        " p.r_perp, 50, 1e-6, 1e-7)\n"
+        "print('ok', status)\n")
+    src = str(Path(__file__).resolve().parents[2] / "src")
+    env = {**os.environ, "NUMBA_DISABLE_JIT": "1",
+           "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    out = subprocess.run([sys.executable, str(script)], env=env, capture_output=True, text=True, timeout=600)
+    assert out.returncode == 0 and out.stdout.startswith("ok"), out.stderr[-2000:]

@@ -145,3 +145,22 @@ def test_slope_of_a_separation_or_a_soft_contact_is_not_the_levers_spring_consta
     assert r.contact_kind == "soft" and math.isnan(r.spring_constant) and math.isnan(r.youngs_modulus)
     assert "the contact is soft" in r.not_applicable["indentation"]
     assert any("2.7 N/m from the compliance slope not reported" in w for w in r.warnings)
+
+
+def test_negative_indentation_is_not_reported():
+    """The Asylum force-map curve whose wave note keeps an uncalibrated InvOLS (100 nm/V): read
+    independently (igor2), its deflection rises more than the ZSnsr position travels over the
+    approach's last 60 samples, so no indentation (z travel less deflection rise) can be positive;
+    the audit found -1.59 nm reported as the curve's indentation."""
+    from igor2 import binarywave
+
+    path = DATA / "corpus" / "asylum-ibw_no-date_ForceMap.ibw"
+    wave = binarywave.load(str(path))["wave"]
+    defl, zsnsr = wave["wData"][:, 1], wave["wData"][:, 2]
+    end = 224   # Indexes 0,224,...: the approach ends at sample 224 (wave note)
+    assert defl[end] - defl[end - 60] > zsnsr[end] - zsnsr[end - 60] > 0
+    r = analyze(load(path)[0])
+    assert r.contact_kind == "soft"
+    assert math.isnan(r.indentation)
+    why = [w for w in r.warnings if "negative indentation" in w]
+    assert why and why[0].startswith(IMPOSSIBLE) and "suspect input: sensitivity" in why[0]

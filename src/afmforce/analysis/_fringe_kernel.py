@@ -89,6 +89,17 @@ def _thin_indices(n, m):
     return out[:k].copy()
 
 
+#: log of the largest float: math.exp beyond it overflows (+inf compiled; OverflowError as Python).
+_LOG_MAX = 709.782712893384
+
+
+@njit(cache=True)
+def _exp(q):
+    """``exp(q)``, +inf where it overflows, compiled and as Python alike (the first run's Python
+    kernels, cli/_firstrun: math.exp raises OverflowError there, and the file failed)."""
+    return math.exp(q) if q < _LOG_MAX else math.inf
+
+
 @njit(cache=True)
 def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
     """The model at ``q``: fills the workspace ``W`` (rows: residual, theta, map polynomial, cos, sin,
@@ -100,7 +111,7 @@ def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
         P = period
     else:
         c1 = 1.0
-        P = P0 * math.exp(q[0])
+        P = P0 * _exp(q[0])
     a2 = q[1] if n_map >= 1 else 0.0
     a3 = q[2] if n_map >= 2 else 0.0
     if not (P > 0.0 and P < math.inf):  # exp(q) under- or overflowed: a trial step far off, rejected
@@ -311,7 +322,7 @@ def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max
             P = period
         else:
             c1 = 1.0
-            P = P0 * math.exp(bq[0])
+            P = P0 * _exp(bq[0])
         a2 = bq[1] if n_map >= 1 else 0.0
         a3 = bq[2] if n_map >= 2 else 0.0
         res = math.sqrt(2.0 * bcost / n)

@@ -73,7 +73,7 @@ def register(subparsers) -> argparse.ArgumentParser:
                     "See docs/fit.md.")
     p.add_argument("curves", nargs="*", metavar="CURVE",
                    help="force-curve files with a calibrated deflection [m] (or volts/newtons with the "
-                        "file's calibration), at several driving speeds")
+                        "file's calibration), at several driving speeds, or folders of them")
     p.add_argument("--example", metavar="NAME", default=None,
                    help="fit sample curves shipped with afmforce instead of files: speeds (simulated Fig 5 "
                         "beam, xi = 0.01 kg/s, at 0.5, 1, 2 and 5 um/s)")
@@ -176,9 +176,14 @@ def run(args: argparse.Namespace) -> int:
         args.curves = list(args.curves) + [str(p) for p in fit_example(args.example)]
     if not args.curves:
         raise ParameterError("give force-curve files at several speeds, or --example speeds")
-    missing = [c for c in args.curves if not Path(c).is_file()]
+    missing = [c for c in args.curves if not Path(c).exists()]
     if missing:
-        raise ParameterError(f"no such file: {', '.join(missing)}")
+        raise ParameterError(f"no such file or folder: {', '.join(missing)}")
+    from .analyze import _inputs  # folders as `analyze` reads them: every curve file in them
+
+    args.curves = [str(p) for p in _inputs(args.curves)]
+    if not args.curves:
+        raise ParameterError("no force-curve files found in the given folders")
     check_outputs([("--out", args.out), ("--report", args.report)], force=args.force)
     if args.plots:   # never replace an earlier run's figures silently
         check_folder_outputs(args.plots, ("fit_curve*.png", "fit_profiles.png", "fit_residuals.png"),

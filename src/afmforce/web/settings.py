@@ -101,6 +101,7 @@ class Settings:
                 raise ParameterError(f"--allow-origin {origin!r}: give an origin such as "
                                      "https://lab.example.org or http://127.0.0.1:9000 (scheme, host, port)")
         object.__setattr__(self, "allow_origins", tuple(normal_origin(o) for o in self.allow_origins))
+        object.__setattr__(self, "data", Path(self.data))  # a folder given as text (create_app mkdirs it)
         if not (isinstance(self.session_ttl, (int, float)) and 60 <= self.session_ttl <= 365 * 86400):
             raise ParameterError(f"--session-ttl must lie in [1 min, 365 d], got {self.session_ttl!r} s")
         for flag, value in (("--session-storage", self.session_storage), ("--server-storage", self.server_storage)):

@@ -73,8 +73,18 @@ def kind(st: State, o: KindOptions) -> State:
                             f"{cp.position * 1e6:.4g} um (indentation {cp.indentation * 1e6:.3g} um), fitted to the "
                             f"whole approach at {alt.position * 1e6:.4g} um ({gap * 1e6:+.3g} um): a slowly rising "
                             "baseline or a long-range force before contact makes the onset ambiguous")
+        if not cp.indentation > 0:  # the deflection rose more than the position travelled: no indentation
+            warn = [warn, NEGATIVE_INDENTATION.format(rise=(cp.indentation * -1e9))]
         new = new.update("contact_point", cp, warn=warn)
     return new
+
+
+#: A soft contact whose deflection rises more than its position travels after the contact point (the
+#: indentation, their difference, negative): the deflection is overestimated, so no indentation is reported.
+NEGATIVE_INDENTATION = (
+    "physically impossible: after the contact point the deflection rises {rise:.3g} nm more than the position "
+    "travels (a negative indentation): the deflection is overestimated, so the indentation is not reported; "
+    "suspect input: sensitivity (an uncalibrated or stale InvOLS; `calibration` fit uses the compliance slope)")
 
 
 #: A hard contact's straight compliance line this far from the file's sensitivity (ratio) recalibrates it.
@@ -152,7 +162,7 @@ def _steep_contact(st: State, cp, method: str, window: float):
 def _kind_fields(st: State) -> dict:
     k, cp = st.details["kind"], st.details.get("contact_point")
     return dict(contact_kind=k.kind, contact_kind_reason=k.reason,
-                **({"indentation": cp.indentation} if cp is not None else {}))
+                **({"indentation": cp.indentation if cp.indentation > 0 else math.nan} if cp is not None else {}))
 
 
 KIND = AnalysisStep(
