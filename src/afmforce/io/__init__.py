@@ -156,6 +156,12 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  via="afmformats", deflection="N (m or V for per-channel waves)",
                  signature="Igor binary wave v5: all channels in one wave, or one per channel (...Defl + ...ZSnsr)",
                  supplies=(*_CAL, "sample_rate", "resonance_frequency")),
+    ReaderFormat("asylum-ardf", "Asylum Research ARDF force map (MFP-3D, Cypher)", (".ardf",),
+                 _lazy("ardf", "detect_ardf"), _lazy("ardf", "load_ardf"),
+                 via="afmforce", deflection="m (V for a DeflV-only map)",
+                 signature="16-byte records: ARDF, FTOC, TTOC note, VOLM (VDEF grid, VCHN channels, VTOC line table), "
+                           "then VSET/VNAM/VDAT per curve",
+                 supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency")),
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_workshop"),
                  via="afmformats", deflection="N (V for T-B(V) files)",

@@ -1,0 +1,281 @@
+"""Asylum Research ARDF force maps (:mod:`afmforce.io.ardf`).
+
+No public ARDF file under an MIT-compatible licence could be found (PyFMlab_DyNaMo's repository
+holds none; gnezd/ARDF_read's test map is absent from its snapshot and unlicensed), so the files
+are built here byte by byte with ``struct`` (tests/io/_ardf_build.py, from the public description
+of the layout, without afmforce) from real data: the curve and wave note of
+``asylum-ibw_no-date_ForceMap.ibw`` (an MFP-3D curve exported from an ARDF force map: channels
+Raw, Defl, ZSnsr in m). Expected values are read from the built file's bytes with ``re`` and
+``struct``, or from the .ibw itself. A real ARDF placed in the shared data folder
+(``AFMFORCE_REAL_DATA``, any ``*.ARDF``) is read and checked the same way (skipped without one).
+
+The virtual AFM's soft map written as ARDF is analysed curve by curve: its modulus and
+topography equal the known fields within their intervals.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import struct
+import warnings
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from _ardf_build import SOURCE, build_ardf, source_curve, write_ardf  # noqa: E402 (tests/io on sys.path)
+from afmforce.cli.main import main
+from afmforce.errors import AfmforceError, FileFormatError, MissingMetadataError
+from afmforce.io import find_format, load
+from afmforce.io.ardf import ArdfFile, count_curves
+from afmforce.io.map_curves import open_map
+from realdata import SHARED  # noqa: E402
+
+NX, NY = 4, 3
+
+
+@pytest.fixture(scope="module")
+def built(tmp_path_factory):
+    path = tmp_path_factory.mktemp("ardf") / "ForceMap0001.ARDF"
+    return path, build_ardf(path, nx=NX, ny=NY)
+
+
+def _note_of(path: Path) -> dict[str, str]:
+    """The main note, found in the raw bytes: the first TEXT record (uint32, uint32 length, text)."""
+    raw = path.read_bytes()
+    at = raw.index(b"TEXT") - 8
+    length = struct.unpack("<I", raw[at + 20:at + 24])[0]
+    text = raw[at + 24:at + 24 + length].decode("latin-1")
+    out: dict[str, str] = {}
+    for key, value in re.findall(r"([^:\r\n]+):[ \t]*([^\r\n]*)", text):
+        out.setdefault(key.strip(), value.strip())  # the first of a key repeated
+    return out
+
+
+def test_detected_and_read_with_the_notes_values(built):
+    path, info = built
+    note = _note_of(path)
+    assert find_format(path).identifier == "asylum-ardf"
+    curves = load(path)
+    assert len(curves) == NX * NY == count_curves(path)
+    for c in curves:
+        md = c.metadata
+        assert md["spring_constant"] == float(note["SpringConstant"]) == 0.018189
+        assert md["sensitivity"] == float(note["InvOLS"]) == 1e-7
+        assert md["sample_rate"] == float(note["NumPtsPerSec"]) == 2000
+        assert md["velocity"] == float(note["ApproachVelocity"])
+        assert md["map_width"] == float(note["FastScanSize"]) == 9e-6
+        assert c.deflection_unit == "m"
+
+
+def test_grid_positions_and_curves_equal_the_bytes_written(built):
+    path, info = built
+    curves = load(path)
+    width = 9e-6
+    for c, w in zip(curves, info["curves"]):
+        md = c.metadata
+        assert (md["map_x"], md["map_y"], md["map_nx"], md["map_ny"]) == (w["x"], w["y"], NX, NY)
+        assert md["position_x"] == pytest.approx((w["x"] + 0.5) * width / NX)
+        assert md["position_y"] == pytest.approx((w["y"] + 0.5) * width / NY)
+        cols = w["columns"]
+        n = cols["Defl"].size
+        np.testing.assert_array_equal(c.deflection_signal, cols["Defl"].astype(float))
+        # z grows on the approach in the file already (Raw rises over the extend): kept as stored
+        np.testing.assert_array_equal(c.piezo_nominal, cols["Raw"].astype(float))
+        np.testing.assert_array_equal(c.piezo_measured, cols["ZSnsr"].astype(float))
+        np.testing.assert_allclose(c.time, np.arange(n) / 2000.0)
+        # the note's Indexes 0,224,1232,1260 and Direction NaN,1,-1,0: extend, retract, then away
+        assert (c.approach.sum(), c.retract.sum()) == (224, 1232 - 224)
+        assert np.all(c.segment[1232:] == 2)
+
+
+def test_units_and_ranges_are_physical(built):
+    path, _ = built
+    for c in load(path):
+        z = c.position()
+        ramp = np.ptp(z)
+        assert 1e-9 < ramp < 20e-6                                  # a ramp of nm..um, in metres
+        app = c.approach
+        assert z[app][-1] > z[app][0]                              # z grows towards the sample
+        rise = c.deflection_signal[app].max() - c.deflection_signal[app][:20].mean()
+        assert 0 < rise < ramp                                     # the lever bends less than z moves
+        assert np.all(np.abs(c.deflection_signal) < 1e-5)          # metres, not volts or nanometres
+
+
+def test_agrees_with_the_asylum_ibw_reader_on_the_same_curve(built):
+    """Curve (0, 0) is stored unshifted: afmforce's .ibw reader (through afmformats) gives the force
+    k x Defl and the same positions."""
+    path, _ = built
+    (ibw,) = load(SOURCE)
+    ardf = load(path)[0]
+    k = ardf.metadata["spring_constant"]
+    assert ibw.deflection_unit == "N"
+    np.testing.assert_allclose(ibw.deflection_signal, k * ardf.deflection_signal, rtol=1e-6, atol=1e-18)
+    np.testing.assert_allclose(ibw.position(), ardf.position(), rtol=1e-6)
+    assert ibw.approach.sum() == ardf.approach.sum() and ibw.retract.sum() == ardf.retract.sum()
+
+
+def test_streamed_one_curve_at_a_time(built):
+    path, _ = built
+    whole = load(path)
+    reader = open_map(path, "asylum-ardf")
+    try:
+        assert len(reader) == NX * NY
+        for i in (7, 0, 11, 3):  # any order: offsets of the line last read are kept
+            np.testing.assert_array_equal(reader.read(i).deflection_signal, whole[i].deflection_signal)
+        with pytest.raises(FileFormatError, match="no curve 12"):
+            reader.read(12)
+    finally:
+        reader.close()
+
+
+def test_a_stopped_map_holds_the_curves_recorded(tmp_path):
+    path = tmp_path / "stopped.ARDF"
+    build_ardf(path, nx=3, ny=4, lines_done=2, last_line=2)
+    curves = load(path)
+    assert len(curves) == 3 + 2
+    assert [(c.metadata["map_x"], c.metadata["map_y"]) for c in curves] == [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1)]
+    assert curves[0].metadata["map_ny"] == 4
+
+
+def test_user_calibration_wins_and_rescales_the_metres(built):
+    path, _ = built
+    (c0,) = load(path)[:1]
+    c = load(path, meta_override={"sensitivity": 2e-7, "spring_constant": 0.05})[0]
+    assert c.metadata["spring_constant"] == 0.05 and c.metadata["sensitivity"] == 2e-7
+    np.testing.assert_allclose(c.deflection_signal, 2 * c0.deflection_signal)  # Defl = volts x InvOLS
+
+
+@pytest.mark.parametrize("key,value", [("SpringConstant", "0"), ("InvOLS", "-1e-7"), ("SpringConstant", "NaN")])
+def test_impossible_calibration_in_the_note_is_refused(tmp_path, key, value):
+    _, note = source_curve()
+    bad = re.sub(rf"(?<![A-Za-z]){key}:[^\r]*", f"{key}: {value}", note)
+    assert bad != note
+    path = tmp_path / "bad.ARDF"
+    build_ardf(path, nx=2, ny=1, note=bad)
+    with pytest.raises(FileFormatError, match=key):
+        load(path)
+    ours = "spring_constant" if key == "SpringConstant" else "sensitivity"
+    assert load(path, meta_override={ours: 0.02 if ours == "spring_constant" else 5e-8})
+
+
+def test_a_map_without_spring_constant_asks_for_it(tmp_path):
+    _, note = source_curve()
+    path = tmp_path / "nok.ARDF"
+    build_ardf(path, nx=2, ny=1, note=re.sub(r"(?<![A-Za-z])SpringConstant:[^\r]*\r", "", note))
+    with pytest.raises(MissingMetadataError, match="spring_constant"):
+        load(path)
+    assert count_curves(path) == 2  # planning a batch needs no calibration
+    assert load(path, meta_override={"spring_constant": 0.02})[0].metadata["spring_constant"] == 0.02
+
+
+@pytest.mark.parametrize("cut", [20, 100, 3000, -5000, -10])
+def test_truncated_copy_gives_a_clean_error(built, tmp_path, cut):
+    path, _ = built
+    raw = path.read_bytes()
+    bad = tmp_path / "cut.ARDF"
+    bad.write_bytes(raw[:cut] if cut > 0 else raw[:len(raw) + cut])
+    with pytest.raises(FileFormatError, match="truncated|too short|damaged|ends inside"):
+        load(bad)
+    assert bad.read_bytes() == (raw[:cut] if cut > 0 else raw[:len(raw) + cut])
+
+
+def test_damaged_sizes_and_renamed_files_are_refused_by_name(built, tmp_path):
+    path, _ = built
+    raw = bytearray(path.read_bytes())
+    at = raw.index(b"VDEF")
+    raw[at + 4:at + 12] = struct.pack("<II", 0, 10**6)  # a grid of 0 x 10^6
+    (tmp_path / "grid.ARDF").write_bytes(bytes(raw))
+    with pytest.raises(FileFormatError, match="grid"):
+        load(tmp_path / "grid.ARDF")
+    other = tmp_path / "image.ARDF"
+    other.write_bytes(SOURCE.read_bytes())  # an .ibw renamed
+    with pytest.raises(FileFormatError, match="not recognised"):
+        load(other)
+    with pytest.raises(FileFormatError, match="ARDF"):
+        load(other, format="asylum-ardf")
+
+
+def test_cli_refuses_a_truncated_map_in_one_line(built, tmp_path, capsys):
+    path, _ = built
+    bad = tmp_path / "cut.ARDF"
+    bad.write_bytes(path.read_bytes()[:-3000])
+    code = main(["analyze", str(bad), "--out", str(tmp_path / "out")])
+    err = capsys.readouterr().err
+    assert code != 0 and "Traceback" not in err and "truncated" in err
+
+
+def test_analyze_as_a_user_types_it(tmp_path, capsys):
+    path = tmp_path / "map.ARDF"
+    build_ardf(path, nx=2, ny=2)
+    out = tmp_path / "out"
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["analyze", str(path), "--out", str(out)]) == 0
+    capsys.readouterr()
+    import pandas as pd
+
+    (summary,) = out.glob("batch-*/summary.csv")
+    table = pd.read_csv(summary)
+    assert len(table) == 4 and table["error"].isna().all()
+    assert sorted(zip(table["map_y"], table["map_x"])) == [(0, 0), (0, 1), (1, 0), (1, 1)]
+    assert (table["spring_constant [N/m]"] == 0.018189).all()
+    e = table["youngs_modulus [Pa]"].dropna()
+    assert ((e > 0) & (e < 1e12)).all()                              # none impossible
+    zmin, zmax = 4.73e-6, 4.96e-6                                    # the ramp of the four curves [m]
+    cp = table["contact_point [m]"].dropna()
+    assert ((cp.abs() > zmin - 1e-7) & (cp.abs() < zmax + 1e-7)).all() or cp.empty
+    assert list(out.glob("batch-*/map.ARDF.maps.h5"))                 # the map outputs, as for a JPK map
+
+
+def test_virtual_soft_map_as_ardf_gives_its_modulus_and_topography(tmp_path):
+    """The virtual AFM's 4 x 4 soft map (tests/contact/test_map_vendor.py), its deflection stored in metres
+    as an MFP-3D does, read back and analysed curve by curve."""
+    from afmforce.analysis.options import IndentationOptions
+    from afmforce.instrument.soft_map import SoftMapConfig, soft_map_curves, soft_map_fields
+    from afmforce.sweep.map_fast import PixelAnalysis, analyze_map
+
+    cfg = SoftMapConfig(nx=4, ny=4, seed=11)
+    rows, n_app = [], None
+    for c in soft_map_curves(cfg):
+        n_app = int(c.approach.sum())
+        z = np.asarray(c.position(), dtype=float)
+        rows.append((c.metadata["map_x"], c.metadata["map_y"],
+                     {"Raw": z, "Defl": np.asarray(c.deflection_signal) * cfg.sensitivity, "ZSnsr": z}))
+    rate = c.metadata["sample_rate"]
+    note = "\r".join([f"SpringConstant: {cfg.spring_constant}", f"InvOLS: {cfg.sensitivity}",
+                      f"NumPtsPerSec: {rate}", f"ApproachVelocity: {cfg.velocity}",
+                      f"FastScanSize: {cfg.step * cfg.nx}", f"SlowScanSize: {cfg.step * cfg.ny}", ""])
+    path = tmp_path / "soft.ARDF"
+    write_ardf(path, rows, nx=cfg.nx, ny=cfg.ny, note=note, ends=(n_app, len(z), len(z)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        table = analyze_map([path], PixelAnalysis(IndentationOptions(tip_radius=cfg.radius, poisson=cfg.poisson)),
+                            executor="serial").table().sort_values(["map_y", "map_x"]).reset_index(drop=True)
+    assert len(table) == 16 and table["error"].isna().all()
+    fields = soft_map_fields(cfg)
+    at = (table["map_y"].to_numpy(int), table["map_x"].to_numpy(int))
+    for column, sign, field in (("youngs_modulus", 1, "youngs_modulus"), ("contact_point", -1, "topography")):
+        z = np.abs(sign * table[column] - fields[field][at]) / table[column + "_se"]
+        assert z.max() < 4.5 and np.median(z) < 1.5, column
+
+
+REAL = sorted(SHARED.glob("*.ARDF")) + sorted(SHARED.glob("*.ardf")) if SHARED.is_dir() else []
+
+
+@pytest.mark.skipif(not REAL, reason=f"no real ARDF file in {SHARED}")
+@pytest.mark.parametrize("real", REAL, ids=[p.name for p in REAL])
+def test_real_ardf_file(real):
+    note = _note_of(real)
+    reader = open_map(real, "asylum-ardf")
+    try:
+        assert len(reader) >= 1
+        for i in sorted({0, len(reader) // 2, len(reader) - 1}):
+            c = reader.read(i)
+            assert c.metadata["spring_constant"] == float(note["SpringConstant"])
+            assert c.metadata["sensitivity"] == float(note["InvOLS"])
+            assert 1e-9 < np.ptp(c.position()) < 100e-6
+            assert c.approach.any() and c.retract.any()
+    finally:
+        reader.close()
