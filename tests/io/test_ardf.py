@@ -15,7 +15,6 @@ topography equal the known fields within their intervals.
 
 from __future__ import annotations
 
-import json
 import re
 import struct
 import warnings
@@ -26,9 +25,9 @@ import pytest
 
 from _ardf_build import SOURCE, build_ardf, source_curve, write_ardf  # noqa: E402 (tests/io on sys.path)
 from afmforce.cli.main import main
-from afmforce.errors import AfmforceError, FileFormatError, MissingMetadataError
+from afmforce.errors import FileFormatError, MissingMetadataError
 from afmforce.io import find_format, load
-from afmforce.io.ardf import ArdfFile, count_curves
+from afmforce.io.ardf import count_curves
 from afmforce.io.map_curves import open_map
 from realdata import SHARED  # noqa: E402
 
@@ -170,6 +169,24 @@ def test_a_map_without_spring_constant_asks_for_it(tmp_path):
     assert load(path, meta_override={"spring_constant": 0.02})[0].metadata["spring_constant"] == 0.02
 
 
+def test_channels_choose_unit_and_position(tmp_path):
+    """A map holding the deflection in volts only (DeflV) gives volts; one without ZSnsr takes Raw alone; one
+    without a deflection channel is refused naming the channels it has."""
+    volts = tmp_path / "volts.ARDF"
+    info = build_ardf(volts, nx=2, ny=1, channels=("Raw", "DeflV", "ZSnsr"))
+    c = load(volts)[0]
+    assert c.deflection_unit == "V" and c.metadata["sensitivity"] == 1e-7
+    np.testing.assert_array_equal(c.deflection_signal, info["curves"][0]["columns"]["DeflV"].astype(float))
+    raw_only = tmp_path / "raw.ARDF"
+    build_ardf(raw_only, nx=2, ny=1, channels=("Raw", "Defl"))
+    c = load(raw_only)[1]
+    assert c.piezo_measured is None and c.metadata["position_channel"] == "Raw"
+    none = tmp_path / "none.ARDF"
+    build_ardf(none, nx=2, ny=1, channels=("Raw", "ZSnsr"))
+    with pytest.raises(FileFormatError, match="no deflection channel.*Raw, ZSnsr"):
+        load(none)
+
+
 @pytest.mark.parametrize("cut", [20, 100, 3000, -5000, -10])
 def test_truncated_copy_gives_a_clean_error(built, tmp_path, cut):
     path, _ = built
@@ -206,59 +223,79 @@ def test_cli_refuses_a_truncated_map_in_one_line(built, tmp_path, capsys):
     assert code != 0 and "Traceback" not in err and "truncated" in err
 
 
-def test_analyze_as_a_user_types_it(tmp_path, capsys):
-    path = tmp_path / "map.ARDF"
-    build_ardf(path, nx=2, ny=2)
-    out = tmp_path / "out"
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        assert main(["analyze", str(path), "--out", str(out)]) == 0
-    capsys.readouterr()
+def _summary(out: Path):
     import pandas as pd
 
     (summary,) = out.glob("batch-*/summary.csv")
-    table = pd.read_csv(summary)
+    return pd.read_csv(summary)
+
+
+def _analyze(args, capsys) -> None:
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        assert main(["analyze", *map(str, args)]) == 0
+    capsys.readouterr()
+
+
+def test_analyze_as_a_user_types_it_equals_the_ibw_of_the_same_curve(tmp_path, capsys):
+    """``afmforce analyze map.ARDF --out DIR``: four cells of the real curve (z shifted per cell) give, cell
+    by cell, the numbers ``afmforce analyze`` gives for the .ibw of that curve (afmformats' reader, force in
+    N): the same analysis of the same data, read by two readers. z shifts move no force or distance."""
+    path = tmp_path / "map.ARDF"
+    build_ardf(path, nx=2, ny=2)
+    _analyze([path, "--out", tmp_path / "ardf"], capsys)
+    _analyze([SOURCE, "--out", tmp_path / "ibw"], capsys)
+    table, ibw = _summary(tmp_path / "ardf"), _summary(tmp_path / "ibw")
     assert len(table) == 4 and table["error"].isna().all()
     assert sorted(zip(table["map_y"], table["map_x"])) == [(0, 0), (0, 1), (1, 0), (1, 1)]
-    assert (table["spring_constant [N/m]"] == 0.018189).all()
-    e = table["youngs_modulus [Pa]"].dropna()
-    assert ((e > 0) & (e < 1e12)).all()                              # none impossible
-    zmin, zmax = 4.73e-6, 4.96e-6                                    # the ramp of the four curves [m]
-    cp = table["contact_point [m]"].dropna()
-    assert ((cp.abs() > zmin - 1e-7) & (cp.abs() < zmax + 1e-7)).all() or cp.empty
-    assert list(out.glob("batch-*/map.ARDF.maps.h5"))                 # the map outputs, as for a JPK map
+    assert list(table["map_nx"]) == [2] * 4 and list(table["position_x [m]"]) == [2.25e-6, 6.75e-6] * 2
+    assert (table["deflection_unit"] == "m").all() and ibw["deflection_unit"][0] == "N"
+    compared = 0
+    for column in ("spring_constant [N/m]", "sensitivity_fit [m/V]", "indentation [m]", "adhesion_distance [m]",
+                   "adhesion_noise [N]", "force_gradient [N/m]", "velocity [m/s]"):
+        want = ibw[column][0]
+        assert np.isfinite(want), column
+        np.testing.assert_allclose(table[column], want, rtol=1e-4, err_msg=column)
+        compared += 1
+    assert compared == 7 and (table["contact_kind"] == ibw["contact_kind"][0]).all()
+    assert list(tmp_path.glob("ardf/batch-*/map.ARDF.maps.h5"))        # the map outputs, as for a JPK map
 
 
-def test_virtual_soft_map_as_ardf_gives_its_modulus_and_topography(tmp_path):
+def test_virtual_soft_map_as_ardf_gives_its_modulus_and_topography(tmp_path, capsys):
     """The virtual AFM's 4 x 4 soft map (tests/contact/test_map_vendor.py), its deflection stored in metres
-    as an MFP-3D does, read back and analysed curve by curve."""
-    from afmforce.analysis.options import IndentationOptions
-    from afmforce.instrument.soft_map import SoftMapConfig, soft_map_curves, soft_map_fields
-    from afmforce.sweep.map_fast import PixelAnalysis, analyze_map
+    as an MFP-3D stores it, analysed with ``afmforce analyze soft.ARDF --tip-radius R --out DIR``: the
+    modulus and the contact points (topography) equal the known fields within their intervals; none is
+    impossible and every contact point lies within its curve's ramp."""
+    from afmforce.instrument.soft_map import SoftMapConfig, soft_map_curves, soft_map_fields  # noqa: I001
 
     cfg = SoftMapConfig(nx=4, ny=4, seed=11)
-    rows, n_app = [], None
+    rows, ramps = [], {}
     for c in soft_map_curves(cfg):
         n_app = int(c.approach.sum())
         z = np.asarray(c.position(), dtype=float)
-        rows.append((c.metadata["map_x"], c.metadata["map_y"],
-                     {"Raw": z, "Defl": np.asarray(c.deflection_signal) * cfg.sensitivity, "ZSnsr": z}))
+        x, y = c.metadata["map_x"], c.metadata["map_y"]
+        ramps[(y, x)] = (z.min(), z.max())
+        rows.append((x, y, {"Raw": z, "Defl": np.asarray(c.deflection_signal) * cfg.sensitivity, "ZSnsr": z}))
     rate = c.metadata["sample_rate"]
     note = "\r".join([f"SpringConstant: {cfg.spring_constant}", f"InvOLS: {cfg.sensitivity}",
                       f"NumPtsPerSec: {rate}", f"ApproachVelocity: {cfg.velocity}",
                       f"FastScanSize: {cfg.step * cfg.nx}", f"SlowScanSize: {cfg.step * cfg.ny}", ""])
     path = tmp_path / "soft.ARDF"
     write_ardf(path, rows, nx=cfg.nx, ny=cfg.ny, note=note, ends=(n_app, len(z), len(z)))
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        table = analyze_map([path], PixelAnalysis(IndentationOptions(tip_radius=cfg.radius, poisson=cfg.poisson)),
-                            executor="serial").table().sort_values(["map_y", "map_x"]).reset_index(drop=True)
+    _analyze([path, "--tip-radius", f"{cfg.radius}m", "--poisson", cfg.poisson, "--out", tmp_path / "out"], capsys)
+    table = _summary(tmp_path / "out").sort_values(["map_y", "map_x"]).reset_index(drop=True)
     assert len(table) == 16 and table["error"].isna().all()
     fields = soft_map_fields(cfg)
     at = (table["map_y"].to_numpy(int), table["map_x"].to_numpy(int))
-    for column, sign, field in (("youngs_modulus", 1, "youngs_modulus"), ("contact_point", -1, "topography")):
-        z = np.abs(sign * table[column] - fields[field][at]) / table[column + "_se"]
-        assert z.max() < 4.5 and np.median(z) < 1.5, column
+    e, cp = table["youngs_modulus [Pa]"], table["contact_point [m]"]
+    assert ((e > 1e2) & (e < 1e6)).all() and cp.notna().all()
+    z = np.abs(e - fields["youngs_modulus"][at]) / table["youngs_modulus_se [Pa]"]
+    assert z.max() < 4.5 and np.median(z) < 1.5
+    offset = -cp - fields["topography"][at]    # the contact point is -height, up to one offset
+    assert np.abs(offset).max() < 2e-9      # within 2 nm on a sample 400 nm high
+    for (y, x), point in zip(zip(*at), cp):
+        low, high = ramps[(y, x)]
+        assert low < point < high           # the contact point is a position of the ramp
 
 
 REAL = sorted(SHARED.glob("*.ARDF")) + sorted(SHARED.glob("*.ardf")) if SHARED.is_dir() else []
