@@ -63,7 +63,12 @@ def test_detected_and_read_with_the_notes_values(built):
         assert md["spring_constant"] == float(note["SpringConstant"]) == 0.018189
         assert md["sensitivity"] == float(note["InvOLS"]) == 1e-7
         assert md["sample_rate"] == float(note["NumPtsPerSec"]) == 2000
-        assert md["velocity"] == float(note["ApproachVelocity"])
+        # UseVelocity 0: the ramp runs at Velocity (2 x ForceDist x ForceScanRate) both ways, and the data agree
+        assert note["UseVelocity"] == "0" and md["velocity"] == md["retract_velocity"] == float(note["Velocity"])
+        assert md["velocity"] == pytest.approx(2 * float(note["ForceDist"]) * float(note["ForceScanRate"]), rel=1e-3)
+        ret = c.retract
+        slope = -np.polyfit(c.time[ret], c.position()[ret], 1)[0]
+        assert slope == pytest.approx(md["velocity"], rel=0.05)
         assert md["map_width"] == float(note["FastScanSize"]) == 9e-6
         assert c.deflection_unit == "m"
 
@@ -136,6 +141,13 @@ def test_a_stopped_map_holds_the_curves_recorded(tmp_path):
     assert len(curves) == 3 + 2
     assert [(c.metadata["map_x"], c.metadata["map_y"]) for c in curves] == [(0, 0), (1, 0), (2, 0), (0, 1), (1, 1)]
     assert curves[0].metadata["map_ny"] == 4
+
+
+def test_padding_after_the_curves_is_not_a_curve(built, tmp_path):
+    path, _ = built
+    padded = tmp_path / "padded.ARDF"
+    padded.write_bytes(path.read_bytes() + b"\0" * 64)
+    assert len(load(padded)) == NX * NY
 
 
 def test_user_calibration_wins_and_rescales_the_metres(built):
@@ -278,7 +290,7 @@ def test_virtual_soft_map_as_ardf_gives_its_modulus_and_topography(tmp_path, cap
         rows.append((x, y, {"Raw": z, "Defl": np.asarray(c.deflection_signal) * cfg.sensitivity, "ZSnsr": z}))
     rate = c.metadata["sample_rate"]
     note = "\r".join([f"SpringConstant: {cfg.spring_constant}", f"InvOLS: {cfg.sensitivity}",
-                      f"NumPtsPerSec: {rate}", f"ApproachVelocity: {cfg.velocity}",
+                      f"NumPtsPerSec: {rate}", f"Velocity: {cfg.velocity}",
                       f"FastScanSize: {cfg.step * cfg.nx}", f"SlowScanSize: {cfg.step * cfg.ny}", ""])
     path = tmp_path / "soft.ARDF"
     write_ardf(path, rows, nx=cfg.nx, ny=cfg.ny, note=note, ends=(n_app, len(z), len(z)))

@@ -36,8 +36,8 @@ else a ``DeflV``/``DeflVolts`` channel in volts; ``Raw`` is the commanded piezo 
 deflection's VDAT split the curve (extend, retract, then the tail away from the surface, or a
 dwell); each part is named from what z does in it (rises: approach, falls: retract, stays:
 dwell), else the curve turns at the extreme of z. Note keys: ``SpringConstant`` [N/m],
-``InvOLS`` [m/V], ``NumPtsPerSec`` [Hz], ``ApproachVelocity``/``Velocity``,
-``RetractVelocity`` [m/s], ``ThermalFrequency`` [Hz], ``ThermalQ``.
+``InvOLS`` [m/V], ``NumPtsPerSec`` [Hz], ``Velocity`` [m/s] (or ``ApproachVelocity`` and
+``RetractVelocity`` when ``UseVelocity`` is 1), ``ThermalFrequency`` [Hz], ``ThermalQ``.
 
 The file is never read whole: opening it reads the headers and one pointer per line; a curve
 is read from its place (the record offsets of the line last read are kept, a few bytes a
@@ -250,9 +250,12 @@ class ArdfFile:
                 raise FileFormatError(f"{where}: the ARDF note's {key} is {note[key]!r}, not a positive number "
                                       f"(the {ours.replace('_', ' ')}); the map was saved uncalibrated: give "
                                       f"`{ours}`")
+        # the ramp's speeds: with UseVelocity 1 the approach and retract speeds typed in, else the one
+        # Velocity (2 x ForceDist x ForceScanRate) both ways; the unused ones keep stale values
+        speeds = (("ApproachVelocity", "velocity"), ("RetractVelocity", "retract_velocity")) \
+            if note.get("UseVelocity", "").strip() == "1" else (("Velocity", "velocity"), ("Velocity", "retract_velocity"))
         for key, ours in (("SpringConstant", "spring_constant"), ("InvOLS", "sensitivity"),
-                          ("NumPtsPerSec", "sample_rate"), ("ApproachVelocity", "velocity"),
-                          ("Velocity", "velocity"), ("RetractVelocity", "retract_velocity"),
+                          ("NumPtsPerSec", "sample_rate"), *speeds,
                           ("ThermalFrequency", "resonance_frequency"), ("ThermalQ", "quality_factor")):
             value = _positive(note, key)
             if value is not None:
@@ -284,13 +287,14 @@ class ArdfFile:
         self._record(at, "VSET")
         line = _VSET.unpack(self._bytes(at + 16, 32, "VSET record"))[1]
         while at < self._size:  # to the end of the line's last curve: a truncated one is found here
-            kind, size = self._record(at)
-            if kind == "VSET":
+            kind = self._bytes(at, 16, "record header")[8:12]
+            if kind not in (b"VSET", b"VNAM", b"VDAT", b"XDAT"):
+                break  # another part of the file (or padding) follows the curves
+            _, size = self._record(at)
+            if kind == b"VSET":
                 if len(found) == self.nx or _VSET.unpack(self._bytes(at + 16, 32, "VSET record"))[1] != line:
                     break  # the next line follows
                 found.append(at)
-            elif kind not in ("VNAM", "VDAT", "XDAT"):
-                break
             at += size
         offsets = np.array(found, dtype=np.int64)
         self._cache = (j, offsets)
