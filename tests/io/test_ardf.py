@@ -134,6 +134,28 @@ def test_streamed_one_curve_at_a_time(built):
         reader.close()
 
 
+def test_memory_flat_in_the_map_size(tmp_path):
+    """Issue 35: a 32 x 32 map (15 MB) read curve by curve allocates a small fraction of the file at its peak
+    (tracemalloc, numpy's buffers included): the line table and one curve, never the map."""
+    import tracemalloc
+
+    path = tmp_path / "big.ARDF"
+    info = build_ardf(path, nx=32, ny=32)
+    assert info["size"] > 15e6
+    tracemalloc.start()
+    try:
+        reader = open_map(path, "asylum-ardf")
+        total = 0.0
+        for i in range(len(reader)):
+            total += float(reader.read(i).deflection_signal[-1])
+        reader.close()
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert len(reader) == 1024 and np.isfinite(total)
+    assert peak < 1.5e6, peak
+
+
 def test_a_stopped_map_holds_the_curves_recorded(tmp_path):
     path = tmp_path / "stopped.ARDF"
     build_ardf(path, nx=3, ny=4, lines_done=2, last_line=2)
