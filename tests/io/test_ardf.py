@@ -316,8 +316,21 @@ def test_virtual_soft_map_as_ardf_gives_its_modulus_and_topography(tmp_path, cap
                       f"FastScanSize: {cfg.step * cfg.nx}", f"SlowScanSize: {cfg.step * cfg.ny}", ""])
     path = tmp_path / "soft.ARDF"
     write_ardf(path, rows, nx=cfg.nx, ny=cfg.ny, note=note, ends=(n_app, len(z), len(z)))
-    _analyze([path, "--tip-radius", f"{cfg.radius}m", "--poisson", cfg.poisson, "--out", tmp_path / "out"], capsys)
+    quantities = ("youngs_modulus", "contact_point", "adhesion")
+    _analyze([path, "--tip-radius", f"{cfg.radius}m", "--poisson", cfg.poisson, "--out", tmp_path / "out",
+              *[a for q in quantities for a in ("--map-quantity", q)]], capsys)
     table = _summary(tmp_path / "out").sort_values(["map_y", "map_x"]).reset_index(drop=True)
+    (maps,) = (tmp_path / "out").glob("batch-*/soft.ARDF.maps.h5")
+    import h5py
+
+    with h5py.File(maps, "r") as h5:                   # the images: one per quantity, on the file's grid
+        for q in quantities:
+            assert (maps.parent / f"soft.ARDF.{q}.png").is_file(), q
+            image = np.asarray(h5[q])
+            assert image.shape in ((cfg.ny, cfg.nx), (cfg.nx, cfg.ny)), (q, image.shape)
+        unit = " [Pa]"
+        np.testing.assert_allclose(np.asarray(h5["youngs_modulus"])[table["map_y"], table["map_x"]],
+                                   table["youngs_modulus" + unit], rtol=1e-6)
     assert len(table) == 16 and table["error"].isna().all()
     fields = soft_map_fields(cfg)
     at = (table["map_y"].to_numpy(int), table["map_x"].to_numpy(int))
