@@ -1,8 +1,8 @@
 """Reader of Asylum Research ARDF force maps (``.ARDF``, MFP-3D and Cypher).
 
 Layout (as described publicly by Matt Poss' MATLAB reader, "ARDF to MATLAB", MathWorks File
-Exchange 80212, BSD, and its Python port in PyFMlab; this module is written from that
-description, no code is copied). Every record starts with a 16-byte header: CRC-32 (uint32),
+Exchange 80212, BSD, and a Python port of it by Carlota Carbajo, 2025; this module is written
+from that description, no code is copied). Every record starts with a 16-byte header: CRC-32 (uint32),
 the record's size in bytes including the header (uint32), a four-letter type, a uint32; all
 numbers little-endian::
 
