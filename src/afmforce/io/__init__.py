@@ -162,6 +162,12 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  signature="[DataSet] header with GroupCount, then #! and binary blocks; 'Spec forward' / "
                            "'Spec backward' frames (images and thermal tunes only: refused by name)",
                  supplies=(*_CAL, "velocity", "sample_rate")),
+    ReaderFormat("asylum-ardf", "Asylum Research ARDF force map (MFP-3D, Cypher)", (".ardf",),
+                 _lazy("ardf", "detect_ardf"), _lazy("ardf", "load_ardf"),
+                 via="afmforce", deflection="m (V for a DeflV-only map)",
+                 signature="16-byte records: ARDF, FTOC, TTOC note, VOLM (VDEF grid, VCHN channels, VTOC line table), "
+                           "then VSET/VNAM/VDAT per curve",
+                 supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency")),
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_workshop"),
                  via="afmformats", deflection="N (V for T-B(V) files)",

@@ -1,13 +1,14 @@
 """Force maps read one curve at a time: a map of any size in the memory of one curve.
 
 :func:`open_map` opens a force map (an afmforce map file, JPK force-map or QI data, a Bruker
-NanoScope force volume) and returns a reader with ``len(reader)``, ``reader.read(i)`` (curve ``i``
+NanoScope force volume, an Asylum ARDF force map) and returns a reader with ``len(reader)``, ``reader.read(i)`` (curve ``i``
 as the format's reader in :data:`afmforce.io.FORMATS` gives it, with the user's
 ``meta_override``) and ``close()``; the batch engine's workers keep one open per map
 (:mod:`afmforce.sweep.files`). What each keeps in memory: the HDF5 file's index; the zip
 archive's directory in arrays (:mod:`afmforce.io._lean_zip`: about 100 bytes a member) and the two
 shared headers (a curve's own header and segments are read when it is); the NanoScope header
-(each curve's samples are read from their place in the file).
+(each curve's samples are read from their place in the file); the ARDF's line table and the
+record offsets of the line last read (:mod:`afmforce.io.ardf`).
 """
 
 from __future__ import annotations
@@ -25,7 +26,7 @@ from .curve import RawCurve
 __all__ = ["MapCurves", "open_map", "STREAMED_FORMATS"]
 
 #: Reader identifiers whose maps :func:`open_map` reads curve by curve.
-STREAMED_FORMATS = ("afmforce-map", "jpk-force", "jpk-zip", "bruker-nanoscope")
+STREAMED_FORMATS = ("afmforce-map", "jpk-force", "jpk-zip", "bruker-nanoscope", "asylum-ardf")
 
 
 class MapCurves(Protocol):
@@ -49,6 +50,10 @@ def open_map(path: str | os.PathLike, format: str, meta_override: Mapping[str, A
         f = NanoscopeFile(path, meta)
         f.read = f.curve  # type: ignore[attr-defined]
         return f  # type: ignore[return-value]
+    if format == "asylum-ardf":
+        from .ardf import ArdfFile
+
+        return ArdfFile(path, meta)
     raise FileFormatError(f"{path}: reader {format!r} does not read maps curve by curve "
                           f"(those that do: {', '.join(STREAMED_FORMATS)})")
 

@@ -91,6 +91,10 @@ def _count_curves(path: Path, fmt) -> int | None:
         from ..io.nanosurf import count_curves as nid_curves
 
         return nid_curves(path)
+    if fmt.identifier == "asylum-ardf":  # a force map: its line table, from the headers alone
+        from ..io.ardf import count_curves as count_ardf
+
+        return count_ardf(path)
     return None
 
 
