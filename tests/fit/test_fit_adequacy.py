@@ -168,3 +168,23 @@ def test_profile_figure_draws_a_one_sided_interval(tmp_path):
                           parameters={"xi": est}, level=0.95)
     path = plot_profiles(res, tmp_path / "profiles.png")
     assert path.is_file() and path.stat().st_size > 1000
+
+
+def test_a_profile_open_on_both_sides_is_undetermined_not_a_tight_standard_error():
+    """Data that bound A on neither side (noise 100x the signal of a weak attraction): the profile
+    stays below the 95 % threshold out to both search bounds, and the estimate is reported
+    undetermined with no standard error, whatever the Jacobian's curvature says (a parameter the data
+    cannot determine is never given a tight interval)."""
+    from afmforce.fit.uncertainty import profiled_estimate
+
+    base = base_config("beam")
+    c, ev = _static_curve(base, 1e-21, seed=4, sigma=5e-9)
+    prob = Problem(ev, ("hamaker",))
+    x, _ = local_fit(prob, prob.pack({"hamaker": 1e-20}, [3e-9]), 40)
+    lo, hi, pts, note = profile_interval(prob, x, prob.chi2(x), "hamaker", 1e-21, 1.0, 0.95)
+    assert lo is None and hi is None, (lo, hi)
+    assert max(pts["delta_chi2"]) < 3.84                    # flat as far as the profile went
+    method, se, text = profiled_estimate("hamaker", lo, hi, note, 1e-21, "J")
+    assert method == "undetermined" and math.isnan(se) and "undetermined" in text
+    # a bounded profile keeps its standard error and method
+    assert profiled_estimate("hamaker", 1e-20, None, "", 2e-21, "J")[:2] == ("profile", 2e-21)

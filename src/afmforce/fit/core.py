@@ -282,7 +282,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     from .adequacy import adequacy, undetermined_verdict
     from .damping_check import damping_check, undamped_verdict
     from .noise import PINK_SIGNIFICANCE, estimate_pink, pink_refusal, set_noise_model
-    from .uncertainty import compare_models, fit_nested, profile_interval
+    from .uncertainty import compare_models, fit_nested, profile_interval, profiled_estimate
 
     if calibration not in ("auto", "file"):
         raise ParameterError(f"calibration must be 'auto' or 'file', got {calibration!r}")
@@ -400,8 +400,9 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     for name in todo:
         lo, hi, pts, note = profile_interval(prob, x, chi2, name, float(sd[free.index(name)]),
                                              max(redchi, 1.0), level, cov=cov)
-        params[name].interval, params[name].interval_method = (lo, hi), "profile"
-        params[name].note = note
+        e = params[name]
+        e.interval = (lo, hi)
+        e.interval_method, e.stderr, e.note = profiled_estimate(name, lo, hi, note, e.stderr, e.unit)
         profiles[name] = pts
         report(f"profile of {name}")
     if "slip_length" in params and "slip_length" not in profiles:
