@@ -27,7 +27,7 @@ from ._numeric import ptp
 from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
-           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
+           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "SURFACE_ENERGY_MAX", "unphysical_surface_energy", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
            "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers"]
 
 #: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
@@ -273,6 +273,21 @@ def slope_not_the_levers(st: State) -> str | None:
         return None
     return (f"spring constant {conv.spring_constant:.3g} N/m from the compliance slope not reported: {why}; "
             "give the lever's spring constant (the forces are the file's)")
+
+
+#: The largest surface energy of a solid [J/m^2]: polymers ~0.02-0.05, oxides and mica ~0.1-1, clean metals
+#: 1-3, diamond's (111) face ~5.3 (calculated). A JKR/DMT gamma from a pull-off above it is no surface energy.
+SURFACE_ENERGY_MAX = 6.0
+
+
+def unphysical_surface_energy(gamma: float, radius: float) -> str | None:
+    """Why a surface energy [J/m^2] from the pull-off and the radius [m] is none (None: it can be one)."""
+    if not (math.isfinite(gamma) and gamma > SURFACE_ENERGY_MAX):
+        return None
+    return (f"not a surface energy: {gamma:.3g} J/m^2 from the pull-off and the radius {radius * 1e9:.3g} nm is "
+            f"beyond any solid's (at most {SURFACE_ENERGY_MAX:g} J/m^2): the pull-off is not the JKR/DMT "
+            "adhesion of that radius (a capillary meniscus in air, a blunter probe than the radius given, "
+            "electrostatics); give the probe's real radius, or read the adhesion force itself")
 
 
 def impossible_modulus(modulus: float) -> str | None:

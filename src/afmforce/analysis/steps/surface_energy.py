@@ -5,10 +5,14 @@ Declared once by its record :data:`SURFACE_ENERGY` (:mod:`afmforce.analysis.regi
 
 from __future__ import annotations
 
+import dataclasses
+import math
+
 from ...errors import AnalysisError
 from .._step_helpers import _kind, _skip
 from ..jumps import adhesion
 from ..options import SurfaceEnergyOptions
+from ..plausibility import unphysical_surface_energy
 from ..registry import AnalysisStep, ResultField
 from ..state import State
 
@@ -27,8 +31,11 @@ def surface_energy(st: State, o: SurfaceEnergyOptions) -> State:
     if not j.pull_off.found:
         return _skip(st, "surface_energy", "no pull-off found")
     radius = st.probe.value("radius", st.metadata)
-    return st.update("surface_energy", adhesion(j.pull_off, st.spring_constant, radius=radius, model=o.model,
-                                                hamaker=o.hamaker, z0=o.z0))
+    res = adhesion(j.pull_off, st.spring_constant, radius=radius, model=o.model, hamaker=o.hamaker, z0=o.z0)
+    why = unphysical_surface_energy(res.surface_energy, res.radius_given)
+    if why:  # no solid has it: not a result (the radius estimate from the jump-out stays)
+        return _skip(st, "surface_energy", why, dataclasses.replace(res, surface_energy=math.nan))
+    return st.update("surface_energy", res)
 
 
 SURFACE_ENERGY = AnalysisStep(
