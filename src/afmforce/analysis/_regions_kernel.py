@@ -187,7 +187,7 @@ def _repulsive_onset(zr, sr, far, zero_force, split, sigma, consts):
             zb[nb] = zr[far[i]]
             sb[nb] = sr[far[i]]
             nb += 1
-    x0 = pairwise_sum(zb, np.int64(0), nb) / nb
+    x0 = pairwise_sum(zb, np.int64(0), zb.size) / nb  # zb.size: nb counted from a literal 0 compiled another copy
     a, b, _, _, _, _ = thin_robust_line(zb - x0, sb, np.int64(4001))
     if not (np.isfinite(a) and np.isfinite(b)):
         return split, True
