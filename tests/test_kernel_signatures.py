@@ -7,7 +7,10 @@ twice or three times (``_robust_line``, ``_polyfit_qr``, ``pairwise_sum``, ...: 
 an empty cache). Callers pass ``np.int64(0)``, ``np.bool_(True)`` instead, which numba types as
 ``int64``/``bool`` (the same values: the compiled code and its numbers do not change).
 ``benchmarks/kernel_signatures.py`` measures what is compiled (numba's compile events) on an
-empty cache; this test keeps the rule without compiling anything.
+empty cache; this test keeps the rule without compiling anything. What it cannot see: a counter
+that starts at a literal ``0`` and is passed after a loop may be compiled for ``Literal[int](0)``
+too, depending on the order numba types the function in (``_repulsive_onset`` and
+``compliance_line`` did; the integrator's counters do not): the measurement finds those.
 """
 
 from __future__ import annotations
