@@ -116,7 +116,7 @@ def test_adhesion_core_hands_non_finite_residuals_back():
     free, a, b, xm, _ = _fit(x, d, run)
     d = d.copy()
     d[300] = np.nan
-    assert not adhesion_core(x, d, free, run.saturated, a, b, xm, 5.0, 3, -1)[0]
+    assert not adhesion_core(x, d, free, run.saturated, a, b, xm, 5.0, 3, -1, -1.0)[0]  # hint as the library passes it: no second compile
     # ... and retract_adhesion then gives the numpy path's answer
     fast = unbinding.retract_adhesion(d, x, run, 0.1)
     assert repr(fast) == repr(_numpy_adhesion(d, x, run, 0.1))  # repr: every float exactly, NaN equal

@@ -119,7 +119,7 @@ def adhesion_core(x: np.ndarray, y: np.ndarray, free: np.ndarray, saturated: np.
     last = -1
     if not found:
         return True, sigma, j, depth, found, last, step_at, step_rise
-    us = running_median_nearest(u, w, j)  # us[i - j] is the running median at sample i
+    us = running_median_nearest(u, w, np.int64(j))  # us[i - j] is the running median at sample i
     last = j
     for i in range(n - 1, j - 1, -1):
         if us[i - j] < -thr:

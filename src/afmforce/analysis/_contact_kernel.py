@@ -297,7 +297,7 @@ def soft_contact_kernel(zi, di, exponent, force_fraction, window, grid, max_poin
     _, coarse_rss = fit_grid(x, y, coarse, exponent)
     j = _argmin(coarse_rss)
     step = coarse[1] - coarse[0]  # refine: a finer grid over the neighbouring cells
-    cands = linspace(max(coarse[j] - step, 0.0), min(coarse[j] + step, 1.0), 41)
+    cands = linspace(max(coarse[j] - step, 0.0), min(coarse[j] + step, 1.0), np.int64(41))
     coef, rss = fit_grid(x, y, cands, exponent)
     j = _argmin(rss)
     zc = zb[0] + cands[j] * span
@@ -349,10 +349,10 @@ def _slope_fit(z, d, order, lo, hi):
         ys[i] = d[order[lo + i]]
     if n < 3 or xs.max() - xs.min() == 0:
         return np.nan
-    xm = pairwise_sum(xs, 0, n) / n
+    xm = pairwise_sum(xs, np.int64(0), n) / n
     for i in range(n):
         xs[i] = xs[i] - xm
-    c, ok = _polyfit_qr(xs, ys, 1)
+    c, ok = _polyfit_qr(xs, ys, np.int64(1))
     if not (ok and math.isfinite(c[0]) and math.isfinite(c[1])):
         return -np.inf
     return c[0]
@@ -364,4 +364,4 @@ def curvature_kernel(z, d, contact):
     of the contact samples in the order of position, ties in time order); -inf: the caller's polyfit."""
     order = contact[np.argsort(z[contact], kind="mergesort")]
     n3 = order.size // 3
-    return _slope_fit(z, d, order, 0, n3), _slope_fit(z, d, order, order.size - n3, order.size)
+    return _slope_fit(z, d, order, np.int64(0), n3), _slope_fit(z, d, order, order.size - n3, order.size)

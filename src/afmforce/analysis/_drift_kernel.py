@@ -32,7 +32,7 @@ LINES = ("approach", "continuous", "separate", "offset", "approach slope", "posi
 _MAX_POINTS = 4001      # drift.MAX_POINTS
 _SELECT_POINTS = 1000   # drift.SELECT_POINTS
 _TUNING = 4.685
-_N_ITER = 6
+_N_ITER = np.int64(6)   # int64 as drift.py's calls from Python pass it: irls_bisquare compiled once
 
 
 @njit(cache=True)
@@ -145,12 +145,12 @@ def is_settling(t, s, nsigma=5.0):
     cov = inv2[2] * sigma ** 2
     c = coef[2]
     se = math.sqrt(max(cov, 0.0))
-    bow = abs(c) * _ptp(X[:, 2])
+    bow = abs(c) * _ptp(np.ascontiguousarray(X[:, 2]))
     if not (abs(c) > nsigma * se and bow > nsigma * sigma):
         return False, True
     half = n // 2
-    c1, ok1 = _polyfit_qr(t[:half], s[:half], 1)
-    c2, ok2 = _polyfit_qr(t[half:], s[half:], 1)
+    c1, ok1 = _polyfit_qr(t[:half], s[:half], np.int64(1))
+    c2, ok2 = _polyfit_qr(t[half:], s[half:], np.int64(1))
     if not (ok1 and ok2 and np.isfinite(c1).all() and np.isfinite(c2).all()):
         return False, False
     s1 = c1[0]
@@ -495,14 +495,14 @@ def decide(t, s, a_index, a_zf, a_split, r_index, r_zf, z, has_z, order, min_poi
     if ir.size >= min_points:
         tr = t[ir]
         sr = s[ir]
-        off, slope, noise_r, ok = fit_baseline(tr, sr, order, tail, False)
+        off, slope, noise_r, ok = fit_baseline(tr, sr, order, tail, np.bool_(False))
         if not ok:
             return 1, nan, nan, nan, nan, 0, False, nan, nan, nan, 0.0, 0.0, 0, -1
         if noise > 0 and noise_r > max_noise_ratio * noise:
             tilt = nan
             if has_z and ia.size > 2 and _ptp(ta) > 0:
                 za = z[ia]
-                c, okp = _polyfit_qr(ta - t0a, za, 1)
+                c, okp = _polyfit_qr(ta - t0a, za, np.int64(1))
                 if not (okp and np.isfinite(c).all()):
                     return 1, nan, nan, nan, nan, 0, False, nan, nan, nan, 0.0, 0.0, 0, -1
                 v = c[0]

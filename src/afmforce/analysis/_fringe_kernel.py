@@ -344,7 +344,7 @@ def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max
 def _pairwise(a):
     """``np.add.reduce(a)`` (1-D contiguous float64): numpy's pairwise summation, bit for bit
     (:func:`._contact_kernel.pairwise_sum`, the one copy)."""
-    return pairwise_sum(a, 0, a.size)
+    return pairwise_sum(a, np.int64(0), a.size)
 
 
 def finish_stats(res: np.ndarray, u: np.ndarray, z: np.ndarray, p0: float, p1: float) -> tuple[float, float, float]:

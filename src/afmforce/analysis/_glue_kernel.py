@@ -77,7 +77,7 @@ def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float 
     without its standard errors. Returns ``(a, b, mad, ok)``: ``mad`` the residuals' last median
     absolute deviation (a hint for the caller's own medians, :func:`middle_bracket`); ``ok`` False for
     fewer than three samples or a sample that is not finite (then all NaN: the caller uses ``robust_line``)."""
-    a, b, _, _, _, _, mad, ok = _robust_line(x, y, n_iter, tuning, False)
+    a, b, _, _, _, _, mad, ok = _robust_line(x, y, np.int64(n_iter), np.float64(tuning), np.bool_(False))
     if not ok:
         return np.nan, np.nan, np.nan, False
     return a, b, mad, True

@@ -369,7 +369,7 @@ def robust_line(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float = 4
     n_used : int
         Number of samples with non-zero weight.
     """
-    a, b, se_a, se_b, sigma, n_used, _, _ = _robust_line(x, y, n_iter, tuning, True)
+    a, b, se_a, se_b, sigma, n_used, _, _ = _robust_line(x, y, np.int64(n_iter), np.float64(tuning), np.bool_(True))
     return a, b, se_a, se_b, sigma, n_used
 
 

@@ -35,7 +35,7 @@ def detrend(t, r, w):
     tt = np.empty(n)
     for i in range(n):
         tt[i] = (t[i] - t[0]) / span
-    c, ok = _polyfit_qr(tt, r, 3)
+    c, ok = _polyfit_qr(tt, r, np.int64(3))
     if not ok:
         return dt, xw, False
     for j in range(4):

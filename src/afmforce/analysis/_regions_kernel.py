@@ -92,8 +92,8 @@ def _slope(x, y):
     n = x.size
     if n < 3 or x.max() - x.min() == 0:
         return np.nan
-    xm = pairwise_sum(x, 0, n) / n
-    return thin_robust_line(x - xm, y, 4001)[1]
+    xm = pairwise_sum(x, np.int64(0), n) / n
+    return thin_robust_line(x - xm, y, np.int64(4001))[1]
 
 
 @njit(cache=True)
@@ -115,7 +115,7 @@ def region_slope(z, s, index, region, saturated):
 @njit(cache=True)
 def _polyslope(x, y):
     """``polyfit(x, y, 1)[0]`` by the compiled solver; NaN and False when it refused."""
-    c, ok = _polyfit_qr(x, y, 1)
+    c, ok = _polyfit_qr(x, y, np.int64(1))
     if not (ok and math.isfinite(c[0]) and math.isfinite(c[1])):
         return np.nan, False
     return c[0], True
@@ -127,7 +127,7 @@ def _surface_force_like(z, rise, z_split, sigma, min_nsigma, decay_lo, decay_hi,
     compiled line fit refused (the caller's numpy path decides)."""
     if not sigma > 0:
         return False, True
-    d = z_split - pairwise_sum(z, 0, z.size) / z.size
+    d = z_split - pairwise_sum(z, np.int64(0), z.size) / z.size
     toward = 1.0 if d > 0 else -1.0 if d < 0 else 1.0 if d == 0 else np.nan
     m = 0
     for i in range(z.size):
@@ -187,8 +187,8 @@ def _repulsive_onset(zr, sr, far, zero_force, split, sigma, consts):
             zb[nb] = zr[far[i]]
             sb[nb] = sr[far[i]]
             nb += 1
-    x0 = pairwise_sum(zb, 0, nb) / nb
-    a, b, _, _, _, _ = thin_robust_line(zb - x0, sb, 4001)
+    x0 = pairwise_sum(zb, np.int64(0), zb.size) / nb  # zb.size: nb counted from a literal 0 compiled another copy
+    a, b, _, _, _, _ = thin_robust_line(zb - x0, sb, np.int64(4001))
     if not (np.isfinite(a) and np.isfinite(b)):
         return split, True
     nf = 0

@@ -91,7 +91,7 @@ def compliance_line(z, s, index, region, saturated):
             x[m] = z[index[i]]
             y[m] = s[index[i]]
             m += 1
-    xm = pairwise_sum(x, 0, n) / n
+    xm = pairwise_sum(x, np.int64(0), x.size) / n  # x.size: n counted from a literal 0 compiled another copy
     a, b, se_a, se_b, sigma, n_used = robust_line(x - xm, y)
     out[1] = a - b * xm
     out[2] = b

@@ -42,7 +42,7 @@ def oscillation(st: State, o: OscillationOptions) -> State:
         zi = st.z[idx]
         di = st.deflection[idx]
         x = zi - zi.mean()
-        a, b, *_ = robust_line(x, di, 6, 4.685)
+        a, b, *_ = robust_line(x, di)
         resid = di - (a + b * x)
         peaks[run.kind] = find_peak(st.time[idx], resid, v, run.kind, min_cycles=o.min_cycles,
                                     false_alarm=o.false_alarm)
