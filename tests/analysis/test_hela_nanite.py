@@ -99,18 +99,55 @@ def test_with_nanites_choices_afmforce_agrees_with_nanite(i):
     assert _afm(curve, weight=1e-6, drift_order=0).youngs_modulus == pytest.approx(theirs[1e-6], rel=0.05)
 
 
+CFG = SoftMapConfig(radius=R, poisson=NU, spring_constant=0.19, sensitivity=15e-9, setpoint=1e-9, ramp=4e-6,
+                    points=2000, velocity=4e-6, noise=20e-12 / 0.19)
+
+
+@lru_cache(maxsize=1)
+def _virtual():
+    """A virtual HeLa-like curve of E = 500 Pa, clean and with a 200 pN baseline tilt linear in z."""
+    clean = soft_curve(CFG, 500.0, 0.0, 0.0, seed=1)
+    z = np.asarray(clean.piezo_nominal)
+    tilt = -200e-12 * (z - z.min()) / np.ptp(z) / CFG.spring_constant / CFG.sensitivity  # [V]
+    return clean, dataclasses.replace(clean, deflection_signal=np.asarray(clean.deflection_signal) + tilt)
+
+
 def test_virtual_hela_like_curve_drift_line_and_weighting():
     """E = 500 Pa, HeLa-like (k 0.19 N/m, R 5 um, 1 nN, 4 um ramp, 20 pN noise), with a 200 pN baseline tilt
     linear in z added (as on the real curves 3 and 12): the drift line recovers E, an offset alone does not;
     nanite's 1 um weighting moves E away from the truth even on the clean curve."""
-    cfg = SoftMapConfig(radius=R, poisson=NU, spring_constant=0.19, sensitivity=15e-9, setpoint=1e-9, ramp=4e-6,
-                        points=2000, velocity=4e-6, noise=20e-12 / 0.19)
-    clean = soft_curve(cfg, 500.0, 0.0, 0.0, seed=1)
-    z = np.asarray(clean.piezo_nominal)
-    tilt = -200e-12 * (z - z.min()) / np.ptp(z) / cfg.spring_constant / cfg.sensitivity  # [V]
-    tilted = dataclasses.replace(clean, deflection_signal=np.asarray(clean.deflection_signal) + tilt)
+    clean, tilted = _virtual()
     assert _afm(clean).youngs_modulus == pytest.approx(500.0, rel=0.01)
     assert _afm(tilted).youngs_modulus == pytest.approx(500.0, rel=0.01)
     assert _afm(tilted, drift_order=0).youngs_modulus > 1.05 * 500.0
     weighted = _afm(clean, weight=1e-6).youngs_modulus
     assert abs(weighted / 500.0 - 1) > abs(_afm(clean).youngs_modulus / 500.0 - 1)
+
+
+def test_virtual_hela_like_curve_through_nanite():
+    """nanite itself on the same virtual curves (the file's calibration, as benchmarks/bench_contact.py gives it)."""
+    nanite = pytest.importorskip("nanite", reason="nanite (bench extra) not installed")
+
+    def nanite_modulus(curve, weight):
+        seg = np.asarray(curve.segment)
+        data = {"force": np.asarray(curve.deflection_signal) * CFG.sensitivity * CFG.spring_constant,
+                "height (measured)": -np.asarray(curve.piezo_nominal), "segment": seg.astype(bool),
+                "time": np.asarray(curve.time)}
+        md = {"spring constant": CFG.spring_constant, "sensitivity": 1.0, "path": "virtual", "enum": 0,
+              "imaging mode": "force-distance", "duration": 1.0, "point count": int(seg.size)}
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            idnt = nanite.Indentation(data=data, metadata=md)
+            idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
+                                     options={"correct_tip_offset": {"method": "deviation_from_baseline"}})
+            p = idnt.get_initial_fit_parameters(model_key="hertz_para")
+            p["R"].set(value=R)
+            p["nu"].set(value=NU)
+            idnt.fit_model(model_key="hertz_para", params_initial=p, range_x=(0, 0), range_type="absolute",
+                           segment="approach", weight_cp=weight)
+        return idnt.fit_properties["params_fitted"]["E"].value
+
+    clean, tilted = _virtual()
+    assert nanite_modulus(clean, 0.0) == pytest.approx(500.0, rel=0.01)
+    assert nanite_modulus(tilted, 0.0) > 1.05 * 500.0  # the offset leaves the tilt
+    assert nanite_modulus(tilted, 1e-6) < 0.9 * 500.0  # and the default weighting moves E further
