@@ -114,16 +114,37 @@ def _nan_jump_in() -> JumpIn:
 
 
 def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, run: RunRegions,
-                 noise: float, spring_constant: float, nsigma: float = _J.nsigma, window: int = _J.window) -> JumpIn:
+                 noise: float, spring_constant: float, nsigma: float = _J.nsigma, window: int = _J.window,
+                 attractive_below: float = math.inf) -> JumpIn:
     """Largest downward step of the approach within ``window`` samples of the contact split.
 
     ``noise`` is the deflection noise [m]; the step noise is ``sqrt(2) noise``.
+
+    A jump into contact starts free and lands in attraction: a step that starts and lands above
+    ``attractive_below`` [m] is a slip in contact (the split placed after a curved onset), not the jump.
+    The jump is then the step into the attractive stretch that precedes that contact: walking back from
+    the slip over the contact (deflection above ``attractive_below``) and the attraction (below
+    ``-attractive_below``), the largest downward step into and within that attraction, if it makes at
+    least half of the attraction's depth (a lever that snaps; none such: the tip crept in through a
+    gradual attraction, and the slip is judged as before). Default ``inf``: the
+    largest step near the split, whatever its load.
     """
     idx = run.index
     dr = d[idx]
     i = largest_step(dr, max(run.split - window, 0), min(run.split + window, idx.size), -1.0)
     if i < 0:
         return _nan_jump_in()
+    if dr[i] > attractive_below and dr[i + 1] > attractive_below:  # a slip in contact: look before it
+        j = i
+        while j >= 0 and dr[j] > attractive_below:  # back over the contact
+            j -= 1
+        m = j  # the last attractive sample before the contact
+        while j >= 0 and dr[j] < -attractive_below:  # and over the attraction after the jump
+            j -= 1
+        if j >= 0 and m > j:  # the jump: the largest downward step into and within that attraction ...
+            jump = largest_step(dr, j, m + 1, -1.0)
+            if dr[jump] - dr[jump + 1] >= 0.5 * (-dr[j + 1: m + 1].min()):  # ... if it makes most of it
+                i = jump  # (a lever that snaps; a gradual attraction has no such step: crept in)
     step = dr[i] - dr[i + 1]
     sig = step / (math.sqrt(2.0) * noise) if noise > 0 else math.inf
     found = bool(sig > nsigma)

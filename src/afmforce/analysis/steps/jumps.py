@@ -38,7 +38,8 @@ def jumps(st: State, o: JumpsOptions) -> State:
         steps = steps[steps > 0]
         noise = float(steps.min()) * abs(st.factor) / math.sqrt(12.0) if steps.size else noise
     k = st.spring_constant
-    ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window)
+    ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window,
+                      attractive_below=nsigma * noise)  # a step in contact is a slip, not the jump
     ret = st.retract
     clipped = not ret.has_compliance and bool(ret.contact.any())  # its whole contact is clipped
     if clipped:  # the pull-off is not in the record
