@@ -41,6 +41,18 @@ def on_disk(data: Path, client) -> int:
     return total
 
 
+def settled(sessions, sid, data, client, tries=100):
+    """The session's counted bytes and the bytes on disk, once they agree: a finished job's record is
+    rewritten by its worker thread just after the state reads "done", so one count may see it and the
+    other not; what must hold is that they agree once nothing is being written (at most ``tries`` x 0.1 s)."""
+    for _ in range(tries):
+        stored, disk = sessions.stored_bytes(sid), on_disk(data, client)
+        if stored == disk and sessions.stored_bytes(sid) == stored:
+            break
+        time.sleep(0.1)
+    return stored, disk
+
+
 def finish(client, job_id, limit=300.0):
     deadline = time.monotonic() + limit
     while (state := client.get(f"/api/jobs/{job_id}").json())["state"] == "running" and time.monotonic() < deadline:
@@ -82,8 +94,8 @@ def test_sweep_results_count_and_are_freed_by_delete_and_by_expiry(make_client, 
         assert finish(client, job_id)["state"] == "done"
         store = data / "sessions" / session_key(sid) / "sweeps" / job_id
         assert list(store.glob("sweep-*/results.parquet"))        # the store lives in the session's folder
-    stored = sessions.stored_bytes(sid)
-    assert stored == on_disk(data, client) > 0                    # all of it counted, nothing else
+    stored, disk = settled(sessions, sid, data, client)
+    assert stored == disk > 0                                     # all of it counted, nothing else
     assert stored <= 2 * jobs_module.sweep_reserve(2, 2)          # the declared most held while they ran
     assert client.get("/api/session").json()["stored"] == stored
     # no upload yet, but the results fill the session: an upload past the total is refused
@@ -95,8 +107,8 @@ def test_sweep_results_count_and_are_freed_by_delete_and_by_expiry(make_client, 
     assert not (data / "sessions" / session_key(sid) / "sweeps" / ids[0]).exists()
     assert not (data / "jobs" / f"{ids[0]}.json").exists()
     assert client.get(f"/api/jobs/{ids[0]}").status_code == 404
-    left = sessions.stored_bytes(sid)
-    assert left == on_disk(data, client) and 0 < left < stored
+    left, disk = settled(sessions, sid, data, client)
+    assert left == disk and 0 < left < stored
     assert client.post("/api/analyze", files=[("file", ("x.txt", b"x" * 200))]).status_code != 413
     # the session's expiry frees the rest: its folder (uploads, stores) and its jobs' records
     gone = sessions.expire(now=time.time() + sessions.ttl + 10)

@@ -37,6 +37,7 @@ from .tasks import standby
 __all__ = ["Job", "JobManager", "FINISHED", "fit_reserve", "sweep_reserve"]
 
 FINISHED = ("done", "failed", "cancelled", "interrupted")
+_NONE = object()  # no result received
 
 
 def fit_reserve(n_curves: int) -> int:
@@ -379,6 +380,7 @@ class JobManager:
     def _follow(self, job: Job, proc, q) -> None:
         deadline = time.monotonic() + self.budget
         last_save = 0.0
+        result = _NONE  # kept once the process has ended: "done" is shown with its record and store complete
         while True:
             if self._closing:
                 return
@@ -393,7 +395,7 @@ class JobManager:
                     last_save = time.monotonic()
                 continue
             if kind == "result":
-                self._keep_result(job, value)
+                result = value
                 break
             if kind == "error":
                 job.state, job.error = "failed", value
@@ -408,7 +410,7 @@ class JobManager:
                 try:  # a last report may still be in the queue
                     kind, value = q.get(timeout=0.5)
                     if kind == "result":
-                        self._keep_result(job, value)
+                        result = value
                         break
                     if kind == "error":
                         job.state, job.result, job.error = "failed", None, value
@@ -418,6 +420,8 @@ class JobManager:
                     job.state, job.error = "failed", f"the job's process ended (exit code {proc.exitcode})"
                     break
         self._reap(proc)
+        if result is not _NONE:
+            self._keep_result(job, result)
         try:
             self._save(job)
         except (ValueError, TypeError) as exc:   # a result JSON cannot carry (NaN): the job fails
