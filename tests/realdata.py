@@ -1,7 +1,8 @@
 """Where the tests find the real instrument files of ``shared/data/real`` (beside the
 repository): there, or their byte-identical copies in ``tests/data`` (some under a name
 that says the instrument), so that a checkout without the shared folder still tests them.
-Only files too large for ``tests/data`` (the 0.6-1 MB JPK files) are skipped without it."""
+Only files too large for ``tests/data`` (the 0.6-1 MB JPK files, the 2 MB Bruker force volume, the
+HeLa JPK map, the 5.5 MB Nanosurf map) are skipped without it."""
 
 from __future__ import annotations
 

@@ -101,11 +101,9 @@ def _exp(q):
 
 
 @njit(cache=True)
-def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
-    """The model at ``q``: fills the workspace ``W`` (rows: residual, theta, map polynomial, cos, sin,
-    projected cos, projected sin) and returns ``(half the SSR, p, q amplitudes, the inverse 2x2
-    normal matrix i00, i01, i11, 2 pi / P, c1)``; half the SSR is +inf where no fit exists."""
-    n = x.size
+def _unpack(q, known, P0, period, n_map):
+    """The map ``(P, c1, a2, a3)`` of the nonlinear parameters ``q``: ``q[0]`` is c1 when the period is
+    ``known``, else ln(P / P0) (c1 = 1); a2, a3 follow as the map's order ``n_map`` has them."""
     if known:
         c1 = q[0]
         P = period
@@ -114,6 +112,16 @@ def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
         P = P0 * _exp(q[0])
     a2 = q[1] if n_map >= 1 else 0.0
     a3 = q[2] if n_map >= 2 else 0.0
+    return P, c1, a2, a3
+
+
+@njit(cache=True)
+def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
+    """The model at ``q``: fills the workspace ``W`` (rows: residual, theta, map polynomial, cos, sin,
+    projected cos, projected sin) and returns ``(half the SSR, p, q amplitudes, the inverse 2x2
+    normal matrix i00, i01, i11, 2 pi / P, c1)``; half the SSR is +inf where no fit exists."""
+    n = x.size
+    P, c1, a2, a3 = _unpack(q, known, P0, period, n_map)
     if not (P > 0.0 and P < math.inf):  # exp(q) under- or overflowed: a trial step far off, rejected
         return math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, c1
     w = 2.0 * math.pi / P
@@ -317,14 +325,7 @@ def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max
                 first = False
             if not math.isnan(ref) and bcost < ref:
                 break  # the cubic already improves on the lower order: not stuck, no other start needed
-        if known:
-            c1 = bq[0]
-            P = period
-        else:
-            c1 = 1.0
-            P = P0 * _exp(bq[0])
-        a2 = bq[1] if n_map >= 1 else 0.0
-        a3 = bq[2] if n_map >= 2 else 0.0
+        P, c1, a2, a3 = _unpack(bq, known, P0, period, n_map)
         res = math.sqrt(2.0 * bcost / n)
         conv = bstatus > 0
         if math.isfinite(res):
