@@ -37,3 +37,17 @@ def real_file(name: str) -> Path:
     if path is None:
         pytest.skip(f"{name} is neither in {SHARED} nor in tests/data (too large to copy)")
     return path
+
+
+def wave_note(path) -> dict[str, str]:
+    """An Igor binary wave's note as ``{Key: value}`` (its ``Key:value`` lines, the first of each key),
+    read with igor2, not afmforce: the header values a test checks afmforce's numbers against."""
+    from igor2 import binarywave
+
+    note = binarywave.load(str(path))["wave"]["note"].decode("latin-1")
+    out: dict[str, str] = {}
+    for line in note.replace("\n", "\r").split("\r"):
+        key, sep, value = line.partition(":")
+        if sep and key not in out:
+            out[key] = value.strip()
+    return out

@@ -18,7 +18,7 @@ from afmforce.analysis.drift import borrowed_line
 from afmforce.analysis.options import CalibrationOptions, ForceOptions
 from afmforce.analysis.pipeline import analyze
 from afmforce.io import load
-from realdata import real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
+from realdata import real_file, wave_note  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
 
 _CACHE: dict = {}
 
@@ -103,38 +103,68 @@ def test_cellhesion_contact_rupture_steps_and_oscillation_agree_with_the_figure(
     assert "contact region, enlarged" in titles
 
 
-def test_asylum_stale_sensitivity_recalibrates_with_the_thermal_k():
-    """Asylum SiN in air: the contact line follows the position only 0.46 x with the file's InvOLS (slanted
-    lines, pull-off drawn at h = +15 nm); --calibration fit made it vertical but doubled the forces
-    (-27.3 nN) by keeping the thermal k. A thermal k goes as 1/InvOLS^2: forces scale by file's/fitted."""
+def _asylum_air():
+    """The Asylum SiN curve in air, independently: afmformats' force column (the file's calibration),
+    the approach's contact line by plain least squares, and k and InvOLS from the wave note (igor2)."""
     import afmformats
 
     path = real_file("asylum-mfp3d_SiN-tip_air.ibw")
+    note = wave_note(path)
+    k, invols = float(note["SpringConstant"]), float(note["InvOLS"])
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         dd = afmformats.load_data(path)[0]
     f_file = np.asarray(dd["force"])
     zs = -np.asarray(dd["height (measured)"])
     turn = 1008
-    top = np.arange(turn - 40, turn)  # the approach's contact line, independently: plain least squares
-    slope = np.polyfit(zs[top], f_file[top] / 1.1841, 1)[0]  # deflection per position with the file's InvOLS
+    top = np.arange(turn - 40, turn)
+    slope = np.polyfit(zs[top], f_file[top] / k, 1)[0]  # deflection per position with the file's InvOLS
     base = np.median(f_file[turn + 800:])
-    pull_file = float(np.min(f_file[turn:]) - base)
+    return k, invols, slope, float(np.min(f_file[turn:]) - base)
+
+
+def test_asylum_air_uses_the_files_calibration_by_default():
+    """The file's stored InvOLS and thermal k are the default, as nanite, JPK DP and Asylum's software use
+    them: k 1.1841 N/m and InvOLS 44.99 nm/V of the wave note. Before, a hard contact whose line followed the
+    position 0.47 x refitted the InvOLS to 96.4 nm/V and rescaled k to 0.258 N/m, with a warning only, while
+    `afmforce calibrate invols` said the same 2.14 x may be a soft sample, a changed laser alignment or a
+    position channel that is not the tip-sample distance. The refit stays a reported diagnostic."""
+    k, invols, slope, pull_file = _asylum_air()
+    assert (k, invols) == (1.1841, 4.499e-08)
     _, res = _run("asylum-mfp3d_SiN-tip_air.ibw")
-    assert res.calibration_source == "fit"
-    assert res.sensitivity_fit == pytest.approx(44.99e-9 / slope, rel=0.03)
-    assert res.spring_constant == pytest.approx(1.1841 * slope**2, rel=0.06)
-    assert res.pull_off_force == pytest.approx(pull_file * slope, rel=0.05)
-    h_pull = res.separation[np.argmin(np.where(res.segment == 1, res.force, np.inf))]
-    assert abs(h_pull) < 3e-9  # pulled off at the surface, not 15 nm away
+    assert res.calibration_source == "metadata"
+    assert res.sensitivity_used == pytest.approx(invols, rel=1e-12) and res.sensitivity == res.sensitivity_used
+    assert res.spring_constant == pytest.approx(k, rel=1e-12)
+    assert res.pull_off_force == pytest.approx(pull_file, rel=0.03)    # the file's forces
+    assert res.sensitivity_fit == pytest.approx(invols / slope, rel=0.03)   # the refit, reported beside
+    mismatch = [w for w in res.warnings if "x the file's" in w and "compliance slope" in w]
+    assert mismatch and f"{1 / slope:.2g}" in mismatch[0] and "the file's is used" in mismatch[0]
+    assert not any("rescaled" in w for w in res.warnings)
     assert not res.dynamic and res.dynamic_assessed and "likely capillary" in res.verdict
     hw = [w for w in res.warnings if w.startswith("Hamaker constant")]
     assert hw and "outside the physical range" in hw[0]
-    # the file's calibration kept when asked: the old numbers, the same flags
-    _, old = _run("asylum-mfp3d_SiN-tip_air.ibw",
-                  options=[CalibrationOptions(source="metadata"), ForceOptions(thermal_k=False)])
-    assert old.pull_off_force == pytest.approx(pull_file, rel=0.03)
-    assert old.spring_constant == pytest.approx(1.1841)
+    # `calibration` metadata (the file's always) gives the same numbers here
+    _, meta = _run("asylum-mfp3d_SiN-tip_air.ibw", options=[CalibrationOptions(source="metadata")])
+    assert (meta.spring_constant, meta.pull_off_force) == (res.spring_constant, res.pull_off_force)
+
+
+def test_asylum_air_refit_when_asked_rescales_the_thermal_k():
+    """`calibration` fit (asked for): the compliance slope calibrates and the thermal k goes as 1/InvOLS^2,
+    so forces scale by file's/fitted (k x (slope)^2, deflections / slope); the lines then stand vertical
+    (pulled off at h ~ 0). force.thermal_k=false keeps the file's k (forces doubled, -27 nN)."""
+    k, invols, slope, pull_file = _asylum_air()
+    _, res = _run("asylum-mfp3d_SiN-tip_air.ibw", options=[CalibrationOptions(source="fit")])
+    assert res.calibration_source == "fit"
+    assert res.sensitivity_used == res.sensitivity_fit == pytest.approx(invols / slope, rel=0.03)
+    assert res.spring_constant == pytest.approx(k * slope**2, rel=0.06)
+    assert res.pull_off_force == pytest.approx(pull_file * slope, rel=0.05)
+    assert any("rescaled with the refitted sensitivity" in w for w in res.warnings)
+    h_pull = res.separation[np.argmin(np.where(res.segment == 1, res.force, np.inf))]
+    assert abs(h_pull) < 3e-9
+    _, kept = _run("asylum-mfp3d_SiN-tip_air.ibw",
+                   options=[CalibrationOptions(source="fit"), ForceOptions(thermal_k=False)])
+    assert kept.spring_constant == pytest.approx(k, rel=1e-12)
+    assert kept.pull_off_force == pytest.approx(pull_file / slope, rel=0.05)
 
 
 def test_diagnosis_names_capillarity_in_air_and_keeps_dynamics_in_liquid():

@@ -40,13 +40,13 @@ def _prepare(curve, name="c"):
         return prepare_curves([curve], [name])[0]
 
 
-def _analysed_and_prepared(name: str):
+def _analysed_and_prepared(name: str, calibration: str = "auto", options=None):
     """``(curve, analysis with the kind step, fit curve, its calibration)`` of a real file's first curve."""
     curve = _load(name)[0]
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        ana = analyze(curve, steps=["kind"])
-    fc = _prepare(curve, name)
+        ana = analyze(curve, steps=["kind"], options=options)
+        fc = prepare_curves([curve], [name], calibration=calibration)[0]
     return curve, ana, fc, fc.metadata["calibration"]
 
 
@@ -111,11 +111,41 @@ def test_map_file_each_curve_and_one_json_refusal(capsys):
     assert d["error"]["message"].startswith(f"{path.name}#1: soft contact")
 
 
-def test_stale_sensitivity_recalibrated_as_the_analysis():
-    """The MFP-3D SiN curve (hard contact, measured ZSnsr): with the file's InvOLS (44.99 nm/V) the
-    deflection follows the position 0.47x in contact; the fit takes the analysis's recalibration."""
+def test_asylum_air_prepared_with_the_files_calibration_as_the_analysis():
+    """The MFP-3D SiN curve (hard contact, measured ZSnsr): the fit's preprocessing takes the calibration
+    `afmforce analyze` uses, by default the file's (InvOLS 44.99 nm/V, k 1.1841 N/m of the wave note, read
+    with igor2): with it the deflection follows the position 0.47x in contact, so the fit refuses the
+    curve as not rigid, naming the calibration, instead of refitting the InvOLS behind the user's back."""
+    from realdata import wave_note
+
     name = "asylum-mfp3d_SiN-tip_air.ibw"
-    curve, ana, fc, cal = _analysed_and_prepared(name)
+    note = wave_note(real_file(name))
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        curve = _load(name)[0]
+        ana = analyze(curve)
+    from afmforce.fit.preprocess import analysis_inputs
+
+    inp = analysis_inputs(curve, name, np.flatnonzero(np.asarray(curve.segment) == 0))
+    assert ana.calibration_source == "metadata" and inp.source == "file"
+    assert inp.factor == pytest.approx(ana.details["calibration"].factor, rel=1e-12)
+    assert inp.spring_constant == ana.spring_constant == pytest.approx(float(note["SpringConstant"]), rel=1e-12)
+    assert inp.file_sensitivity == pytest.approx(float(note["InvOLS"]), rel=1e-12)
+    assert not any("rescaled" in n or "calibrates" in n for n in inp.notes)
+    assert 0.4 < inp.slope < 0.55                  # the file's calibration: far below 1 in contact
+    with pytest.raises(AnalysisError, match=r"slope 0\.4\d+, not ~1 \(calibrated: file\).*`calibration` fit"):
+        _prepare(curve, name)
+
+
+def test_asylum_air_refit_asked_for_as_the_analysis():
+    """`calibration="fit"`, as `afmforce analyze --calibration fit`: the compliance slope calibrates (the
+    deflection follows the position 0.47x with the file's InvOLS) and the thermal k is rescaled, the
+    same numbers as the analysis asked the same."""
+    from afmforce.analysis.options import CalibrationOptions
+
+    name = "asylum-mfp3d_SiN-tip_air.ibw"
+    curve, ana, fc, cal = _analysed_and_prepared(name, calibration="fit",
+                                                 options=[CalibrationOptions(source="fit")])
     assert ana.contact_kind == "hard" and ana.calibration_source == "fit"
     assert cal["source"] == "recalibrated"
     factor = ana.details["calibration"].factor
@@ -125,7 +155,7 @@ def test_stale_sensitivity_recalibrated_as_the_analysis():
     k = curve.metadata["spring_constant"]
     slope = np.polyfit(np.asarray(curve.piezo_measured)[app],
                        np.asarray(curve.deflection_signal)[app] / k, 1)[0]
-    assert 0.4 < slope < 0.55                      # stale: far below 1 with the file's calibration
+    assert 0.4 < slope < 0.55                      # far below 1 with the file's calibration
     assert cal["factor"] == pytest.approx(1.0 / (k * slope), rel=0.05)
     assert cal["contact_slope"] == pytest.approx(1.0, rel=1e-9)
     assert np.ptp(fc.deflection) == pytest.approx(np.ptp(np.asarray(curve.deflection_signal)[
@@ -139,8 +169,8 @@ def test_stale_sensitivity_recalibrated_as_the_analysis():
     assert cal["spring_constant"] == pytest.approx(k, rel=1e-6)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        assert cal["spring_constant"] == pytest.approx(analyze(curve, steps=["kind", "force"]).spring_constant,
-                                                       rel=1e-12)
+        assert cal["spring_constant"] == pytest.approx(analyze(curve, steps=["kind", "force"], options=[
+            CalibrationOptions(source="fit")]).spring_constant, rel=1e-12)
     assert any(f"spring constant is {k:.4g} N/m" in w and "(`k0` " in w and "`model` spring" in w for w in notes)
 
 
@@ -257,14 +287,19 @@ def test_paper_preset_backlash_and_a_jump_below_the_noise():
 
 
 def test_asylum_air_fit_via_the_cli_warns_like_the_analysis(capsys):
-    """`afmforce fit FILE --free hamaker --json` on the MFP-3D SiN curve in air: one JSON object with
+    """`afmforce fit FILE --free hamaker --json` on the MFP-3D SiN curve in air: with the file's calibration
+    (the default) the contact is not rigid, refused naming --calibration fit; with it, one JSON object with
     the analysis's calibration per curve; the jump-in in air is a capillary one, far beyond van der
     Waals: both the fit and the analysis (its vdW step) put A above the physical range and say so."""
     from afmforce.analysis.plausibility import HAMAKER_RANGE
 
     name = "asylum-mfp3d_SiN-tip_air.ibw"
     path = real_file(name)
-    assert main(["fit", str(path), "--free", "hamaker", "--no-profile", "--no-compare", "--json"]) == 0
+    assert main(["fit", str(path), "--free", "hamaker", "--json"]) == 1    # the file's calibration: not rigid
+    err = json.loads(capsys.readouterr().out)["error"]["message"]
+    assert "not ~1 (calibrated: file)" in err and "--calibration fit" in err
+    assert main(["fit", str(path), "--free", "hamaker", "--no-profile", "--no-compare", "--json",
+                 "--calibration", "fit"]) == 0
     out = capsys.readouterr().out
     d, end = json.JSONDecoder().raw_decode(out)
     assert end == len(out.rstrip())                  # one JSON object, nothing else on stdout
@@ -280,11 +315,12 @@ def test_asylum_air_fit_via_the_cli_warns_like_the_analysis(capsys):
                and "capillary meniscus" in w for w in d["warnings"])
 
 
-def test_stale_sensitivity_on_one_virtual_curve_recalibrated():
+def test_impossible_sensitivity_on_one_virtual_curve_recalibrated():
     """Two virtual curves in volts with the file's 50 nm/V; the laser of the second was realigned
-    (its signal 1.6x larger for the same deflection): the analysis's stale-sensitivity rule gives it
-    the compliance slope's calibration (the truth, 31.25 nm/V, within 2 %), and the fit says the
-    curves' calibrations differ."""
+    (its signal 1.6x larger for the same deflection): with the file's sensitivity its deflection would
+    outrun the position 1.6x in contact, which no contact allows, so the analysis's rule (the one case
+    `auto` refits a stored sensitivity) gives it the compliance slope's calibration (the truth,
+    31.25 nm/V, within 2 %), and the fit says the curves' calibrations differ."""
     # 40 nm in contact: the analysis recalibrates only a contact line it finds straight
     c1, c2 = make_curves(0.005, seed=3, speeds=(1e-6, 4e-6), spacing=0.5e-9, turn=40e-9)
     s = 50e-9
@@ -302,24 +338,46 @@ def test_stale_sensitivity_on_one_virtual_curve_recalibrated():
     assert fc2.jump_index == ref.jump_index and np.array_equal(fc2.mask, ref.mask)
     notes = preparation_warnings([fc1, fc2], base_config("beam"))
     assert any(w.startswith("the curves' sensitivities differ") for w in notes)
-    assert any("stale sensitivity" in w and fc2.name in w for w in notes)
+    assert any("the file's is impossible on this hard contact" in w and fc2.name in w for w in notes)
 
 
-def test_calibration_file_keeps_the_files_sensitivity():
-    """`calibration="file"` (`--calibration file`): the file's sensitivity even where a hard
-    contact's compliance line calls it stale (a position sensor that is off in contact, the `paper`
-    preset's backlashing one, makes the line lie); `auto` recalibrates as the analysis does."""
+def test_calibration_words_are_the_analysis_words():
+    """The fit's `calibration` is the analysis's `calibration.source` (one rule): `metadata` (and `file`,
+    its former word) keeps the file's sensitivity even where a hard contact's line calls it impossible;
+    `auto` refits only that impossible case (gain 1.6: the deflection would outrun the position), and keeps
+    the file's where the deflection follows the position less than 1 (gain 0.625: possible on a soft
+    sample or with a changed alignment); `fit` refits both. Truth: 50 nm/V / gain."""
+    from afmforce.analysis.options import CALIBRATION_SOURCES, CalibrationOptions
+
     c1, c2 = make_curves(0.005, seed=3, speeds=(1e-6, 4e-6), spacing=0.5e-9, turn=40e-9)
     s = 50e-9
-    v2 = dataclasses.replace(c2, deflection_signal=np.asarray(c2.deflection_signal) / s * 1.6,
-                             deflection_unit="V", metadata={**c2.metadata, "sensitivity": s})
+
+    def volts(gain):
+        return dataclasses.replace(c2, deflection_signal=np.asarray(c2.deflection_signal) / s * gain,
+                                   deflection_unit="V", metadata={**c2.metadata, "sensitivity": s})
+
+    v2, low = volts(1.6), volts(0.625)
     auto = prepare_curves([v2])[0]
     kept = prepare_curves([v2], calibration="file")[0]
+    meta = prepare_curves([v2], calibration="metadata")[0]
     assert auto.metadata["calibration"]["source"] == "recalibrated"
-    assert kept.metadata["calibration"]["source"] == "file"
+    assert kept.metadata["calibration"]["source"] == meta.metadata["calibration"]["source"] == "file"
     assert kept.metadata["calibration"]["factor"] == pytest.approx(s, rel=1e-12)
     np.testing.assert_allclose(kept.deflection, np.asarray(v2.deflection_signal)[: kept.n] * s,
                                rtol=1e-12)
+    np.testing.assert_array_equal(kept.deflection, meta.deflection)
+    low_auto, low_fit = (prepare_curves([low], calibration=c)[0].metadata["calibration"] for c in ("auto", "fit"))
+    assert low_auto["source"] == "file" and low_auto["factor"] == pytest.approx(s, rel=1e-12)
+    assert low_fit["source"] == "recalibrated" and low_fit["sensitivity"] == pytest.approx(s / 0.625, rel=0.02)
+    # the analysis decides the same for each word (one rule)
+    for word in CALIBRATION_SOURCES:
+        for curve in (v2, low):
+            with warnings.catch_warnings():
+                warnings.simplefilter("ignore")
+                ana = analyze(curve, steps=["kind"], options=[CalibrationOptions(source=word)])
+                fc = prepare_curves([curve], calibration=word)[0]
+            assert fc.metadata["calibration"]["factor"] == pytest.approx(ana.details["calibration"].factor,
+                                                                         rel=1e-12), (word, curve is v2)
     from afmforce.errors import ParameterError
     from afmforce.fit import fit_dynamic
 

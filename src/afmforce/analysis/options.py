@@ -38,7 +38,7 @@ __all__ = ["ProbeCalibration", "StepOptions", "SmoothOptions", "ContactOptions",
            "FringesOptions", "ComplianceOptions", "CalibrationOptions", "KindOptions", "ShiftOptions",
            "ZeroOptions", "ForceOptions", "JumpsOptions", "AdhesionOptions", "SurfaceEnergyOptions",
            "VdwOptions", "OscillationOptions", "FrictionOptions", "DiagnosisOptions", "IndentationOptions",
-           "LiquidOptions", "OPTIONS", "option_field"]
+           "LiquidOptions", "OPTIONS", "option_field", "CALIBRATION_SOURCES"]
 
 
 def _opt(default: Any, dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,
@@ -251,13 +251,26 @@ class ComplianceOptions(StepOptions):
     step: ClassVar[str] = "compliance"
 
 
+#: The words of ``calibration.source`` (the CLI's ``--calibration`` of analyze and fit repeat them without
+#: importing this module, which loads numba: tests/cli/test_faces_agree.py holds them equal).
+CALIBRATION_SOURCES = ("auto", "fit", "metadata")
+
+
 @dataclass(frozen=True)
 class CalibrationOptions(StepOptions):
-    """Deflection sensitivity: the file's or user's, or from the compliance slope."""
+    """Deflection sensitivity: the file's or user's, or from the compliance slope.
+
+    ``source`` (declared here once; ``afmforce analyze --calibration``, the web's option and the fit's
+    preprocessing, ``afmforce fit --calibration``, take these words): ``auto`` uses the file's or user's
+    sensitivity wherever there is one, the compliance slope only without one or where the file's is
+    impossible on a hard contact (:func:`afmforce.analysis.steps.kind.kind`); ``fit`` always uses the
+    slope (and rescales a file's thermal spring constant, step ``force``); ``metadata`` always the
+    file's or user's (an error without one). See docs/analysis.md, "Which calibration".
+    """
 
     step: ClassVar[str] = "calibration"
-    source: str = _opt("auto", "choice", "", "calibration source (auto: the file's or user's if any)",
-                       choices=("auto", "fit", "metadata"))
+    source: str = _opt("auto", "choice", "", "calibration source (auto: the file's or user's if any, the "
+                       "compliance slope without; fit: the slope)", choices=CALIBRATION_SOURCES)
     run: str = _opt("approach", "choice", "", "compliance line giving the slope",
                     choices=("approach", "retract", "both"))
 

@@ -99,8 +99,10 @@ def register(sub) -> None:
               help="separation given to the compliance line (paper: z0; 0 also common); the same as "
                    "--option zero.contact_separation=VALUE")
     lazy_help(g.add_argument("--calibration", choices=("auto", "fit", "metadata"), default=None,
-                             help="deflection calibration: from the file/--sensitivity, or the compliance slope "
-                                  "(the same as --option calibration.source=VALUE; default "),
+                             help="deflection calibration: auto: the file's or --sensitivity (the compliance "
+                                  "slope only without one); fit: the compliance slope, a file's thermal k "
+                                  "rescaled; metadata: the file's always (the same as --option "
+                                  "calibration.source=VALUE; default "),
               lambda: f"{_default('calibration', 'source')})")
     _indentation_flags(p)
     liquid_flags(p)

@@ -116,9 +116,11 @@ def register(subparsers) -> argparse.ArgumentParser:
                    help="interference fringes in the baseline: periodic (default) cos and sin of "
                         "the separation shared by all curves (one spot); parabola: a line and a "
                         "parabola before contact per curve; off")
-    g.add_argument("--calibration", choices=("auto", "file"), default="auto",
-                   help="auto (default): as analyze calibrates (a hard contact's compliance line far "
-                        "off the file's sensitivity replaces it); file: the files' sensitivities always")
+    g.add_argument("--calibration", choices=("auto", "fit", "metadata"), default="auto",
+                   type=lambda w: "metadata" if w == "file" else w,  # "file": the former word for metadata
+                   help="as analyze's --calibration (one rule): auto (default): the files' sensitivities "
+                        "(the compliance slope only without one); fit: the compliance slope (a thermal k "
+                        "rescaled); metadata: the files' always")
     add_field(g, "fringe_period", default=335e-9,
               help="fringe period in the separation: half the laser wavelength (335 nm: a 670 nm laser)")
     add_field(g, "jump_window", default=None,

@@ -254,11 +254,13 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     fringe_period : float
         Period of the ``periodic`` fringes in the separation [m]: half the laser
         wavelength at normal incidence (default 335 nm, a 670 nm laser diode).
-    calibration : {"auto", "file"}
-        ``auto``: as ``afmforce analyze`` calibrates (a hard contact's straight compliance
-        line more than 1.25x off the file's sensitivity replaces it: a realigned laser);
-        ``file``: the files' sensitivities always (a position sensor that is off in
-        contact makes the compliance line lie).
+    calibration : {"auto", "fit", "metadata"}
+        The analysis's ``calibration.source``, one rule with ``afmforce analyze``
+        (:class:`~afmforce.analysis.options.CalibrationOptions`): ``auto`` the files'
+        sensitivities wherever they have one (the compliance slope without one, or where a hard
+        contact's straight line makes the file's impossible); ``fit`` the compliance slope (a
+        file's thermal k rescaled); ``metadata`` the files' always. ``file``: the former word
+        for ``metadata``.
     lever : {"file", "model"}
         ``file`` (default): the model's lever calibrated as the curves are: the spring
         model's ``spring_constant`` is the curves' (the analysis's k), the beam's rigidity
@@ -284,8 +286,8 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     from .noise import PINK_SIGNIFICANCE, estimate_pink, pink_refusal, set_noise_model
     from .uncertainty import compare_models, fit_nested, profile_interval, profiled_estimate
 
-    if calibration not in ("auto", "file"):
-        raise ParameterError(f"calibration must be 'auto' or 'file', got {calibration!r}")
+    from .preprocess import calibration_source
+    calibration = calibration_source(calibration)   # the analysis's words (calibration.source); "file": metadata
     if noise not in ("auto", "white"):
         raise ParameterError(f"noise must be 'auto' or 'white', got {noise!r}")
     if not 0.5 < level < 1.0:

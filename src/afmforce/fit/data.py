@@ -14,8 +14,8 @@ the measured one when the file has it), the speed of a run
 stepped sensor channel and the robust drift baseline
 (:func:`afmforce.analysis.drift.fit_baseline`), and through
 :mod:`afmforce.fit.preprocess` the analysis steps ``contact`` ... ``kind``: the
-calibration (the file's; the compliance slope where the file has none or a stale
-sensitivity), the contact kind (a soft contact is refused), the jump-in, the
+calibration (the file's; the compliance slope where the file has none, where asked, or
+where the file's is impossible on a hard contact), the contact kind (a soft contact is refused), the jump-in, the
 contact onset and the compliance line of the rigid-contact test. Still the fit's
 own: the noise (second differences, whose spread the adequacy test of
 :mod:`afmforce.fit.adequacy` is built on, and the 1/f part in
@@ -155,8 +155,9 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
     ``jump_window``: samples this long after the jump-in [s] are left out; None (default):
     until the deflection has landed on the contact line (:func:`landing_samples`).
     ``soft``: what to do with a curve the analysis classifies as a soft contact
-    (:func:`prepare_curves`); ``calibration``: ``auto`` as the analysis calibrates (a stale
-    sensitivity replaced by the compliance slope), ``file`` the file's sensitivity always.
+    (:func:`prepare_curves`); ``calibration``: the analysis's ``calibration.source`` (``auto``: the file's sensitivity
+    where it has one, as ``afmforce analyze``; ``fit``: the compliance slope; ``metadata``, or
+    ``file``: the file's always).
 
     With ``retract=True`` the retract run that follows it is appended
     (:func:`_append_retract`): its contact part is fitted, the pull-off and the
@@ -216,8 +217,8 @@ def prepare_curve(curve: RawCurve, name: str = "curve", *, velocity: float | Non
             f"{name}: in contact the deflection follows the position with slope {a:.3g}, not ~1 "
             f"(calibrated: {ana.source}): a deformable sample or a wrong deflection calibration; "
             "the dynamic model assumes rigid surfaces (eq 2), so this curve cannot be fitted as it "
-            "is: give the right calibration (`sensitivity`) or analyse it with "
-            f"`afmforce analyze {name}`")
+            "is: give the right calibration (`sensitivity`, or `calibration` fit to take the compliance "
+            f"slope's on a rigid contact) or analyse it with `afmforce analyze {name}`")
     i_c, j = min(ana.contact, n - 1), min(max(ana.jump, 1), n - 1)
     n_noise = max(12, int(0.8 * j))
     sigma = max(_noise_sigma(y[:n_noise]), 1e-15)

@@ -5,13 +5,15 @@ same steps as ``afmforce analyze`` (:mod:`afmforce.analysis.pipeline`: ``contact
 ``drift``, ``compliance``, ``calibration``, ``kind``), so that a fix to an artefact
 in one place serves both:
 
-* **Calibration.** The analysis's deflection in metres: the file's sensitivity (or
-  spring constant for a force); where the file has none, the slope of the approach's
-  constant-compliance line (the paper's section 3.1; the rigid contact the dynamic
-  model assumes anyway); a *stale* sensitivity (a hard, straight compliance line on a
-  measured position channel that follows the position more than 1.25x away from 1)
-  replaced by the compliance slope (:func:`afmforce.analysis.steps.kind._recalibrate_hard`).
-  Each change is said in a note with its numbers.
+* **Calibration.** The analysis's deflection in metres, by its one rule
+  (``calibration.source``, :class:`afmforce.analysis.options.CalibrationOptions`; the fit's
+  ``calibration`` takes the same words): the file's sensitivity (or spring constant for a
+  force) wherever the file has one; the slope of the approach's constant-compliance line (the
+  paper's section 3.1; the rigid contact the dynamic model assumes anyway) where the file has
+  none, where it is asked for (``fit``), or where the file's is impossible on a hard contact
+  (the deflection outrunning the position more than 1.25x on a straight line:
+  :func:`afmforce.analysis.steps.kind._recalibrate_hard`). Each change is said in a note with
+  its numbers.
 * **Contact kind.** A soft (curved) contact is refused with the analysis's reason: the
   dynamic model's surfaces are rigid (eq 2); ``afmforce analyze`` fits the indentation.
 * **Jump-in and contact.** The analysis's jump-in (:func:`afmforce.analysis.jumps.find_jump_in`,
@@ -34,7 +36,7 @@ import numpy as np
 from ..errors import AnalysisError, MissingMetadataError
 from ..io.curve import RawCurve
 
-__all__ = ["AnalysisInputs", "analysis_inputs"]
+__all__ = ["AnalysisInputs", "analysis_inputs", "calibration_source"]
 
 
 @dataclass(frozen=True)
@@ -47,8 +49,8 @@ class AnalysisInputs:
         Deflection signal to metres [m / signal unit].
     source : str
         ``"file"`` (the file's calibration, or metres), ``"compliance"`` (no calibration
-        in the file: the compliance slope) or ``"recalibrated"`` (a stale sensitivity
-        replaced by the compliance slope).
+        in the file: the compliance slope) or ``"recalibrated"`` (the file's sensitivity
+        replaced by the compliance slope: asked for, or impossible on a hard contact).
     sensitivity, file_sensitivity : float
         Sensitivity used and the file's [m/V] (NaN unless the signal is in volts).
     jump : int
@@ -110,6 +112,25 @@ def _refuse_soft(name: str, curve: RawCurve, reason: str) -> AnalysisError:
         f"`afmforce analyze {name.split('#')[0]}` (its indentation step fits Young's modulus)")
 
 
+def calibration_source(calibration: str) -> str:
+    """The analysis's ``calibration.source`` for the fit's ``calibration``: the same words
+    (:data:`afmforce.analysis.options.CALIBRATION_SOURCES`), and ``"file"``, the fit's former word
+    for ``"metadata"``.
+
+    Raises
+    ------
+    ParameterError
+        Any other word.
+    """
+    from ..analysis.options import CALIBRATION_SOURCES
+    from ..errors import ParameterError
+
+    word = "metadata" if calibration == "file" else calibration
+    if word not in CALIBRATION_SOURCES:
+        raise ParameterError(f"calibration must be one of {', '.join(CALIBRATION_SOURCES)}, got {calibration!r}")
+    return word
+
+
 def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "refuse",
                     calibration: str = "auto") -> AnalysisInputs:
     """Run the analysis steps up to ``kind`` on ``curve`` and take the fit's inputs from them.
@@ -137,9 +158,7 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "re
 
     from ..analysis.options import CalibrationOptions
 
-    # "file": the file's sensitivity even where a hard contact's compliance line calls it stale
-    opts, _ = resolve_options([CalibrationOptions(source="metadata")] if calibration == "file"
-                              else None)
+    opts, _ = resolve_options([CalibrationOptions(source=calibration_source(calibration))])
     if run_indices(np.asarray(curve.segment), 1).size == 0:
         return _approach_only(curve, name, idx, opts["kind"].nsigma, int(opts["jumps"].window))
     try:
@@ -166,12 +185,12 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "re
     source = "file"
     notes = soft_note
     if cal.source == "fit" and math.isfinite(cal.factor_given):
-        source = "recalibrated"    # the kind step replaced a stale sensitivity (hard, straight line)
-        notes.append(
-            f"{name}: stale sensitivity: on this hard contact the compliance line follows the position "
-            f"{cal.factor_given / factor:.3g} x with the file's sensitivity (1 on a rigid contact); as "
-            f"`afmforce analyze` does, the compliance slope calibrates: {cal.sensitivity_fit * 1e9:.4g} "
-            f"nm/V instead of the file's {cal.sensitivity * 1e9:.4g} nm/V")
+        source = "recalibrated"    # asked for (`fit`), or the kind step found the file's impossible (hard, straight)
+        why = ("as asked (calibration 'fit')" if cal.requested == "fit" else
+               f"the file's is impossible on this hard contact (its compliance line moves the deflection "
+               f"{cal.factor_given / factor:.3g} x the position, at most 1 on any contact), as `afmforce analyze` does")
+        notes.append(f"{name}: the compliance slope calibrates, {why}: {cal.sensitivity_fit * 1e9:.4g} nm/V "
+                     f"instead of the file's {cal.sensitivity * 1e9:.4g} nm/V")
     elif cal.source == "fit":
         source = "compliance"
         from ..analysis.plausibility import SPRING_CONSTANT_RANGE

@@ -18,7 +18,13 @@ __all__ = ["calibration", "CALIBRATION"]
 
 
 def calibration(st: State, o: CalibrationOptions) -> State:
-    """Calibration factor (InvOLS) and the deflection in metres (the probe's sensitivity, if given, over the file's)."""
+    """Calibration factor (InvOLS) and the deflection in metres (the probe's sensitivity, if given, over the file's).
+
+    ``source=auto`` (the default) uses the user's or the file's sensitivity wherever there is one and reports
+    the compliance slope's beside it (``sensitivity_fit``, with a warning beyond 10 %); the slope calibrates
+    only without one, or when asked (``fit``), or where the file's is impossible on a hard contact (step
+    ``kind``). See :class:`~afmforce.analysis.options.CalibrationOptions`.
+    """
     comp = st.details.get("compliance")
     if comp is None:
         raise AnalysisError("step 'calibration' needs the compliance lines")
@@ -33,8 +39,10 @@ def calibration(st: State, o: CalibrationOptions) -> State:
     if res.source == "metadata" and math.isfinite(res.factor_fit) and res.factor_fit > 0:
         ratio = res.factor_fit / res.factor
         if abs(ratio - 1) > 0.1:
-            warn.append(f"the compliance slope gives a calibration {ratio:.3g} x the file's: a soft contact, or a "
-                        "stale sensitivity (calibration source 'fit', `calibration` fit, uses the slope)")
+            warn.append(f"the compliance slope gives a calibration {ratio:.3g} x the file's (a soft sample the tip "
+                        "indents, a changed laser alignment, or a position channel that is not the tip-sample "
+                        "distance): the file's is used; `calibration` fit uses the slope (and rescales a thermal "
+                        "spring constant)")
     if not (math.isfinite(res.factor) and res.factor != 0):
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
     res = dataclasses.replace(res, requested=o.source)

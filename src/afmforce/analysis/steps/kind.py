@@ -87,27 +87,33 @@ NEGATIVE_INDENTATION = (
     "suspect input: sensitivity (an uncalibrated or stale InvOLS; `calibration` fit uses the compliance slope)")
 
 
-#: A hard contact's straight compliance line this far from the file's sensitivity (ratio) recalibrates it.
+#: The deflection may move at most this many times the position on a hard contact's straight compliance
+#: line with the file's sensitivity before the file's is taken for impossible and the slope calibrates.
 STALE_SENSITIVITY = 1.25
 
 
 def _recalibrate_hard(st: State, cal, curvature: float, max_curvature: float) -> State:
-    """A hard contact on a measured (linear) position channel whose straight compliance line disagrees
-    with the file's sensitivity by more than :data:`STALE_SENSITIVITY`: on a rigid contact the
-    deflection follows the position one to one, so the file's sensitivity is stale (a realigned laser)
-    and the compliance slope is the calibration (the paper's, section 3.1). Not with a sensitivity the
-    user gave, nor with ``calibration.source=metadata`` (the result's source stays the file's then)."""
+    """The one case ``calibration.source=auto`` replaces the file's sensitivity by the compliance slope's:
+    a hard contact on a measured (linear) position channel whose straight compliance line, with the file's
+    sensitivity, has the deflection moving more than :data:`STALE_SENSITIVITY` times the position. In
+    contact the position's travel is the deflection's plus the indentation's, and no sample indents
+    backwards, so no contact lets the deflection outrun the position: the file's sensitivity is too large
+    (a placeholder, such as an uncalibrated 100 nm/V, or a stale one) and the slope is the only calibration
+    the curve allows. The opposite disagreement (the deflection moving less than the position: the
+    Asylum SiN curve in air, 0.47 x) is possible (a soft sample the tip indents, a changed laser
+    alignment, a position channel that is not the tip-sample distance): the file's sensitivity is kept
+    and the calibration step warns. Never with a sensitivity the user gave, nor with
+    ``calibration.source=metadata``; ``fit`` uses the slope anyway (compliance.calibrate)."""
     ratio = cal.factor_fit / cal.factor if cal.source == "metadata" and cal.factor else math.nan
     straight = math.isfinite(curvature) and 1 / max_curvature <= curvature <= max_curvature
     if (st.probe.sensitivity is not None or st.channel != "measured" or not straight or not math.isfinite(ratio)
-            or ratio <= 0 or 1 / STALE_SENSITIVITY <= ratio <= STALE_SENSITIVITY
-            or cal.requested == "metadata"):
+            or not 0 < ratio < 1 / STALE_SENSITIVITY or cal.requested == "metadata"):
         return st
     new = dataclasses.replace(cal, factor=cal.factor_fit, source="fit")
-    warn = (f"hard contact whose straight compliance line follows the position {1 / ratio:.3g} x with the file's "
-            f"sensitivity (1 on a rigid contact): the file's sensitivity is stale, the compliance slope calibrates ("
-            f"{cal.sensitivity_fit * 1e9:.4g} nm/V instead of {cal.sensitivity * 1e9:.4g}; "
-            "`calibration` metadata keeps the file's)")
+    warn = (f"hard contact whose straight compliance line moves the deflection {1 / ratio:.3g} x the position with "
+            f"the file's sensitivity (at most 1 on any contact): the file's sensitivity is impossible here (a "
+            f"placeholder or stale InvOLS), the compliance slope calibrates ({cal.sensitivity_fit * 1e9:.4g} nm/V "
+            f"instead of {cal.sensitivity * 1e9:.4g}; `calibration` metadata keeps the file's)")
     return st.update("calibration", new, warn=warn, factor=new.factor, deflection=st.signal * new.factor)
 
 
