@@ -164,33 +164,47 @@ def test_option_flag_matches_the_library_records(capsys):
 def test_table_sensitivity_is_the_one_used_and_agrees_with_json_and_figure(tmp_path, capsys):
     """The table showed the file's sensitivity where the fitted one was used (Asylum SiN: 44.99 nm/V in the
     table, forces with 96.4): the column is the sensitivity used, tagged fit/file/user, equal to the JSON's
-    ``sensitivity_used`` and to the calibration factor the forces were computed with, and the figure's."""
+    ``sensitivity_used`` and to the calibration factor the forces were computed with, and the figure's.
+    By default the Asylum curve uses its wave note's InvOLS (read with igor2); `--calibration fit` the
+    compliance slope's (the "sens. fit" column, reported either way)."""
     import re
 
+    from afmforce.analysis.options import CalibrationOptions
     from afmforce.analysis.pipeline import analyze
     from afmforce.io import load
     from afmforce.plotting import plot_summary
+    from realdata import wave_note
 
     files = [str(DATA / "asylum-mfp3d_SiN-tip_air.ibw"), str(DATA / "bruker-nanoscope_synthetic.txt")]
-    assert main(["analyze", *files]) == 0
-    lines = capsys.readouterr().out.splitlines()
-    head = re.split(r"\s{2,}", lines[0].strip())
-    col = head.index("sens. used [nm/V]")
-    cells = {re.split(r"\s{2,}", line.strip())[0]: re.split(r"\s{2,}", line.strip())[col] for line in lines[1:3]}
-    assert main(["analyze", *files, "--json"]) == 0
-    payload = json.loads(capsys.readouterr().out)["results"]
-    for name, tag in (("asylum-mfp3d_SiN-tip_air.ibw", "fit"), ("bruker-nanoscope_synthetic.txt", "file")):
-        res = payload[name]
-        used = res["sensitivity_fit"] if tag == "fit" else res["sensitivity"]
-        assert res["calibration_source"] == ("fit" if tag == "fit" else "metadata")
-        assert res["sensitivity_used"] == pytest.approx(used) and res["units"]["sensitivity_used"] == "m/V"
-        assert cells[name] == f"{used * 1e9:.4g} ({tag})"
-    assert payload["asylum-mfp3d_SiN-tip_air.ibw"]["sensitivity_used"] > 2 * 44.99e-9  # not the file's
+    invols = float(wave_note(files[0])["InvOLS"])
+    for extra, tag_asylum in (((), "file"), (("--calibration", "fit"), "fit")):
+        assert main(["analyze", *files, *extra]) == 0
+        lines = capsys.readouterr().out.splitlines()
+        head = re.split(r"\s{2,}", lines[0].strip())
+        col, col_fit = head.index("sens. used [nm/V]"), head.index("sens. fit [nm/V]")
+        rows = {re.split(r"\s{2,}", line.strip())[0]: re.split(r"\s{2,}", line.strip()) for line in lines[1:3]}
+        assert main(["analyze", *files, *extra, "--json"]) == 0
+        payload = json.loads(capsys.readouterr().out)["results"]
+        tags = (("asylum-mfp3d_SiN-tip_air.ibw", tag_asylum),
+                ("bruker-nanoscope_synthetic.txt", "fit" if extra else "file"))
+        for name, tag in tags:
+            res = payload[name]
+            used = res["sensitivity_fit"] if tag == "fit" else res["sensitivity"]
+            assert res["calibration_source"] == ("fit" if tag == "fit" else "metadata")
+            assert res["sensitivity_used"] == pytest.approx(used) and res["units"]["sensitivity_used"] == "m/V"
+            assert rows[name][col] == f"{used * 1e9:.4g} ({tag})"
+            assert rows[name][col_fit] == f"{res['sensitivity_fit'] * 1e9:.4g}"
+        asylum = payload["asylum-mfp3d_SiN-tip_air.ibw"]
+        if tag_asylum == "file":
+            assert asylum["sensitivity_used"] == pytest.approx(invols, rel=1e-12)   # the wave note's
+        else:
+            assert asylum["sensitivity_used"] > 2 * invols                         # the slope's, asked for
     curve = load(DATA / "asylum-mfp3d_SiN-tip_air.ibw")[0]
-    res = analyze(curve)
-    cal = res.details["calibration"]  # the signal is in newtons: the forces' factor scales as the sensitivity
-    assert cal.factor / cal.factor_given == pytest.approx(res.sensitivity_used / res.sensitivity)
-    title = plot_summary(res, curve).axes[0].get_title()
-    assert f"{res.sensitivity_used * 1e9:.4g} nm/V" in title and "fit" in title
+    for source, tag in (("auto", "the file's"), ("fit", "fit")):
+        res = analyze(curve, options=[CalibrationOptions(source=source)])
+        cal = res.details["calibration"]  # the signal is in newtons: the forces' factor scales as the sensitivity
+        assert cal.factor / cal.factor_given == pytest.approx(res.sensitivity_used / res.sensitivity)
+        title = plot_summary(res, curve).axes[0].get_title()
+        assert f"{res.sensitivity_used * 1e9:.4g} nm/V" in title and tag in title
     assert main(["analyze", files[1], "--sensitivity", "50nm/V"]) == 0
     assert "50 (user)" in capsys.readouterr().out

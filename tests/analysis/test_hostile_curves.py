@@ -43,7 +43,8 @@ def _numbers(r):
 
 def test_position_stored_as_distance_from_the_sample_is_turned_round(sin):
     """z falling on the approach (a distance from the sample): the same numbers as the intact curve, with a
-    note. Before, the hard contact's stale-sensitivity check saw another slope: k 1.184 instead of 0.258 N/m."""
+    note. Before, the hard contact's stale-sensitivity check (the refit default until the file's calibration
+    became the default) saw another slope: k 1.184 instead of 0.258 N/m."""
     ref = analyze(sin)
     flipped = dataclasses.replace(sin, piezo_nominal=-np.asarray(sin.piezo_nominal),
                                   piezo_measured=-np.asarray(sin.piezo_measured))

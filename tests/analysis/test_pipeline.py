@@ -164,11 +164,9 @@ def test_asylum_jump_in_and_pull_off():
     """Issue 5 (README): jump-in to about -2.7 nN, pull-off at about -12.9 nN (baseline = 0).
     Independent check by hand: the baseline is the mean of the first 300 samples (-3.88 nN),
     the pull-off the minimum of the retract, the jump-in the sample after the largest drop. With the
-    file's calibration kept (by default its stale InvOLS is refitted, issue 24: test_issue24_realfiles)."""
-    from afmforce.analysis.options import CalibrationOptions, ForceOptions
-
+    file's calibration, the default (test_issue24_realfiles: the refit when asked)."""
     path = DATA / "asylum-mfp3d_SiN-tip_air.ibw"
-    res = analyze(load(path)[0], options=[CalibrationOptions(source="metadata"), ForceOptions(thermal_k=False)])
+    res = analyze(load(path)[0])
     assert res.spring_constant == pytest.approx(1.1841)
     assert res.jump_in_force == pytest.approx(-2.7e-9, abs=0.15e-9)
     assert res.pull_off_force == pytest.approx(-12.9e-9, abs=0.25e-9)

@@ -142,3 +142,42 @@ def test_a_bad_or_foreign_calibration_file_is_refused(client, body, field, words
         assert r.status_code == 422, (url, r.text)
         err = r.json()["error"]
         assert err["field"] == field and words in err["message"], err
+
+
+def test_web_analysis_calibrates_as_the_cli_and_the_fit(client, tmp_path):
+    """One calibration rule for every face: the page's analysis of the shipped Asylum curve uses the wave
+    note's InvOLS and k (read with igor2), as `afmforce analyze` and the fit's preprocessing do; the option
+    calibration.source=fit gives the CLI's `--calibration fit` numbers (the refit, k rescaled)."""
+    import numpy as np
+
+    from afmforce.cli.main import main
+    from afmforce.datasets import path
+    from afmforce.fit.preprocess import analysis_inputs
+    from afmforce.io import load
+    from realdata import wave_note
+
+    src = path("asylum-air")
+    note = wave_note(src)
+    local = tmp_path / src.name
+    local.write_bytes(src.read_bytes())
+    curve = load(local)[0]
+    fit_in = analysis_inputs(curve, src.name, np.flatnonzero(np.asarray(curve.segment) == 0))
+    for extra, source in (((), "metadata"), (("--calibration", "fit"), "fit")):
+        out = io.StringIO()
+        with redirect_stdout(out):
+            assert main(["analyze", str(local), "--json", *extra]) == 0
+        cli = json.loads(out.getvalue())["results"][src.name]
+        data = {"option": ["calibration.source=fit"]} if extra else {}
+        api = client.post("/api/analyze", files={"file": (src.name, src.read_bytes())}, data=data).json()
+        api = api["results"][src.name]
+        assert api["calibration_source"] == cli["calibration_source"] == source
+        for key in ("spring_constant", "sensitivity_used", "sensitivity_fit", "pull_off_force"):
+            assert api[key] == cli[key], key
+        if source == "metadata":
+            assert api["spring_constant"] == pytest.approx(float(note["SpringConstant"]), rel=1e-12)
+            assert api["sensitivity_used"] == pytest.approx(float(note["InvOLS"]), rel=1e-12)
+            assert fit_in.spring_constant == api["spring_constant"] and fit_in.source == "file"
+        else:
+            assert api["sensitivity_used"] == api["sensitivity_fit"] > 2 * float(note["InvOLS"])
+            k = float(note["SpringConstant"]) * (float(note["InvOLS"]) / api["sensitivity_fit"]) ** 2
+            assert api["spring_constant"] == pytest.approx(k, rel=1e-9)
