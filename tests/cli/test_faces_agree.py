@@ -76,3 +76,15 @@ def test_analyze_calibration_flag_is_the_steps_option():
     flag = _actions("analyze")["calibration"]
     assert tuple(flag.choices) == tuple(field.metadata["choices"])
     assert f"default {field.default})" in _help(flag)
+
+
+def test_fit_calibration_flag_takes_the_analysis_words():
+    """`afmforce fit --calibration` is the analysis's calibration.source (one rule for analyze, fit and the
+    web): the same words and default; `file`, its former word, still reads as `metadata`."""
+    from afmforce.analysis.options import CALIBRATION_SOURCES, CalibrationOptions
+
+    field = {f.name: f for f in dataclasses.fields(CalibrationOptions)}["source"]
+    flag = _actions("fit")["calibration"]
+    assert tuple(flag.choices) == tuple(field.metadata["choices"]) == CALIBRATION_SOURCES
+    assert flag.default == field.default
+    assert flag.type("file") == "metadata" and flag.type("fit") == "fit"
