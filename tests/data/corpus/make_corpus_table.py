@@ -16,6 +16,8 @@ import re
 import zipfile
 from pathlib import Path
 
+import numpy as np
+
 HERE = Path(__file__).resolve().parent
 
 COMMITS = {
@@ -160,6 +162,38 @@ def _jpk(path: Path) -> dict:
            "curves": len(curves), "segments": curves[0]["segments"]}
     if len(curves) > 1:  # a map's curves differ where an extend stopped at the trigger
         out["per_curve"] = [{"sample_rate": c["rate"], "segments": c["segments"]} for c in curves]
+    return out
+
+
+#: files whose every curve is a hard adhesive contact the tip leaves with one clean jump (seen on the raw
+#: curves): the pull-off force the analysis must give is read from the raw retract, below
+PULL_OFF = {"jpk-qi-data_v8.1_format-2.0.jpk-qi-data"}
+
+
+def _jpk_pull_off(path: Path) -> list[float]:
+    """Each curve's pull-off force [N] from the raw vDeflection: the integers decoded by the shared
+    ``lcd-info`` encoder, times the distance and force multipliers; the deepest retract sample before
+    its largest single-sample rise (the tip springing off), less the median of the approach's first
+    half (the free baseline)."""
+    out = []
+    with zipfile.ZipFile(path) as arc:
+        shared = _props(arc.read("shared-data/header.properties"))
+        idx = sorted({int(m.group(1)) for n in arc.namelist() if (m := re.match(r"index/(\d+)/segments/", n))})
+        for i in idx:
+            force = []
+            for seg in (0, 1):
+                h = _props(arc.read(f"index/{i}/segments/{seg}/segment-header.properties"))
+                p = f"lcd-info.{h['channel.vDeflection.lcd-info.*']}."
+                c = {k[len(p):]: float(v) for k, v in shared.items() if k.startswith(p) and k.endswith(
+                    ("encoder.scaling.multiplier", "encoder.scaling.offset", "distance.scaling.multiplier",
+                     "force.scaling.multiplier"))}
+                raw = np.frombuffer(arc.read(f"index/{i}/segments/{seg}/channels/vDeflection.dat"), ">i4")
+                volts = raw * c["encoder.scaling.multiplier"] + c["encoder.scaling.offset"]
+                force.append(volts * c["conversion-set.conversion.distance.scaling.multiplier"]
+                             * c["conversion-set.conversion.force.scaling.multiplier"])
+            ext, ret = force
+            jump = int(np.argmax(np.diff(ret)))
+            out.append(float(ret[: jump + 1].min() - np.median(ext[: ext.size // 2])))
     return out
 
 
@@ -362,11 +396,12 @@ def readme(table: dict) -> str:
         h = e["header"]
         segs = ", ".join(f"{t} {n}" for t, n in h["segments"]) if h["segments"] else "-"
         exp = e["expect"]
+        checked = "; pull-off of every curve checked" if "expected" in e else ""
         expect = "read, plausible" if exp == {"read": "read", "analysis": "plausible"} else (
             exp["read"] if exp["read"] != "read" else "read; analysis: " + exp["analysis"])
         lines.append(f"| `{name}` | {e['family']} | {e['bytes']} | {_fmt(h['spring_constant'])} | "
                      f"{_fmt(h['sensitivity'], 1e9)} | {_fmt(h['sample_rate'], 1, 6)} | {h['curves']} | {segs} | "
-                     f"{expect} | {e['source']['repository']}: `{e['source']['path']}` | {e['source']['licence']} |")
+                     f"{expect}{checked} | {e['source']['repository']}: `{e['source']['path']}` | {e['source']['licence']} |")
     return "\n".join(lines) + "\n"
 
 
@@ -381,6 +416,8 @@ def main() -> None:
         if name in GIVEN:
             entry["given"] = GIVEN[name]
         entry["expect"] = {"read": PENDING_READ.get(name, "read"), "analysis": PENDING_ANALYSIS.get(name, "plausible")}
+        if name in PULL_OFF:  # numbers the analysis must give, per curve (test_corpus_gallery)
+            entry["expected"] = {"pull_off_force": _jpk_pull_off(path)}
         table[name] = entry
     (HERE / "corpus.json").write_text(json.dumps(table, indent=1) + "\n")
     (HERE / "README.md").write_text(readme(table))
