@@ -176,7 +176,8 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
     compliance line in contact, displaced by friction or a slip at a repulsive
     load) is not the jump out of contact: then the pull-off is the largest rise after
     the deflection has come down to ``attractive_below`` (none there: no pull-off).
-    The default, ``inf``, takes the first departure whatever its load.
+    The default, ``inf``, takes the first departure whatever its load. A departure without a rise
+    after which the retract goes deeper is not the pull-off either (:func:`_still_in_contact`).
     """
     idx = run.index
     dr = d[idx]
