@@ -176,7 +176,8 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
     compliance line in contact, displaced by friction or a slip at a repulsive
     load) is not the jump out of contact: then the pull-off is the largest rise after
     the deflection has come down to ``attractive_below`` (none there: no pull-off).
-    The default, ``inf``, takes the first departure whatever its load.
+    The default, ``inf``, takes the first departure whatever its load. A departure without a rise
+    after which the retract goes deeper is not the pull-off either (:func:`_still_in_contact`).
     """
     idx = run.index
     dr = d[idx]
@@ -204,6 +205,7 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
         elif cand.size and cand[0] > start:
             i = int(cand[0]) - 1
             rise = float(r[i + 1])  # height above the line: a clipped contact has no step of its own
+            i, rise = _still_in_contact(dr, i, rise, thr, run.saturated)
     if i == -1:  # fall back on the largest step near the end of contact
         i = largest_step(dr, max(run.split - window, 0), min(run.split + window, idx.size), +1.0)
     if i < 0 or i + 1 >= idx.size:
@@ -222,6 +224,30 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
         d_ext = line(i)
     return PullOff(True, int(idx[i]), float(position[idx[i]]), dmin, float(spring_constant * dmin),
                    abs(dmin), float(sig), sat, float(d_ext))
+
+
+def _still_in_contact(dr: np.ndarray, i: int, rise: float, thr: float, saturated: np.ndarray) -> tuple[int, float]:
+    """The pull-off, given ``i``, the last sample on the contact line before the retract left it.
+
+    A tip that leaves the surface springs back towards the baseline: its deflection rises and
+    never again goes deeper than where it left (a freed lever rings about the baseline, with no
+    more than the pull-off's amplitude). A retract that bends away from the line without rising
+    (an adhesive contact that is not a straight line: the JPK QI curves of SPM 8.1, whose contact
+    line flattens before the tip snaps off 9 nm lower) and then goes deeper than at ``i`` by more
+    than ``thr`` is still in contact: the pull-off is the largest rise after that deeper point.
+    A departure that is itself a jump (a surface pull-off followed by a tethered molecule that
+    pulls deeper later) stays the pull-off.
+    """
+    if i + 1 >= dr.size or dr[i + 1] - dr[i] > thr:
+        return i, rise
+    after = np.flatnonzero(~saturated[i + 1:]) + i + 1
+    if after.size < 2:
+        return i, rise
+    deep = int(after[np.argmin(dr[after])])
+    if not dr[deep] < float(dr[: i + 1].min()) - thr:
+        return i, rise
+    j = largest_step(dr, deep, dr.size, +1.0)
+    return (j, -math.inf) if j >= 0 else (i, rise)
 
 
 def pull_off_estimate(po: PullOff, spring_constant: float) -> float:

@@ -16,6 +16,8 @@ import re
 import zipfile
 from pathlib import Path
 
+import numpy as np
+
 HERE = Path(__file__).resolve().parent
 
 COMMITS = {
@@ -25,6 +27,8 @@ COMMITS = {
     "galvanetto/Fodis": "e1af81f09b667ba51a8840dc8ee493d98567acf1",
     "jcbs/ForceMetric": "da100476581856522cfd66c5ea7328c7baf3a282",
     "ilyasku/jpkfile": "ccde5ac33a76cf893211295f678dc304ff2b1c0d",
+    "bicarlsen/jpk_reader": "e9486d42bf89a8b36a8d2ef4c6e3bbd885571352",
+    "HoseynAAmiri/pyrtz2": "016ef73e7ccc88305f3186f7a8f2e9931b9e8560",
 }
 
 #: file -> (family, repository, path in it (zip member after ":"), licence)
@@ -33,7 +37,11 @@ SOURCES = {
     "afm-workshop_single_2020-02-14.csv": ("AFM Workshop CSV", "AFM-analysis/afmformats", "tests/data/fmt-afm-workshop-fd_single_2020-02-14_13.41.25.csv", "MIT"),
     "afm-workshop_single_2021-01-15.csv": ("AFM Workshop CSV", "AFM-analysis/afmformats", "tests/data/fmt-afm-workshop-fd_single_2021-01-15.csv", "MIT"),
     "afm-workshop_single_2021-10-22.csv": ("AFM Workshop CSV", "AFM-analysis/afmformats", "tests/data/fmt-afm-workshop-fd_single_2021-10-22_14.16.csv", "MIT"),
+    "afmformats-hdf5_v0.13.3_jpk-force-save.h5": ("afmformats HDF5 export (v0.13.3, of a JPK CellHesion curve)", "AFM-analysis/afmformats", "tests/data/fmt-hdf5-fd_version_0.13.3.h5", "MIT"),
+    "afmformats-tab_v0.13.3_jpk-force-save.tab": ("afmformats tab export (v0.13.3, of a JPK CellHesion curve, cropped)", "AFM-analysis/afmformats", "tests/data/fmt-tab-fd_version_0.13.3.tab", "MIT"),
     "afm-workshop_volts_2018-08-01.csv": ("AFM Workshop CSV", "AFM-analysis/afmformats", "tests/data/fmt-afm-workshop-fd_single_2018-08-01_13.06.09.csv", "MIT"),
+    "asylum-ibw_AR16_dwell-10s_cell37m0000.ibw": ("Asylum .ibw (AR 16.05, MFP-3D, 10 s dwell)", "HoseynAAmiri/pyrtz2", "data/example/label1val1label2val1cell37m0000.ibw", "MIT"),
+    "asylum-ibw_AR16_dwell-10s_cell39m0000.ibw": ("Asylum .ibw (AR 16.05, MFP-3D, 10 s dwell)", "HoseynAAmiri/pyrtz2", "data/example/label1val3label2val3cell39m0000.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0100.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0100.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0120.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0120.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0146.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0146.ibw", "MIT"),
@@ -67,6 +75,7 @@ SOURCES = {
     "jpk-force_stress-relaxation_cell1-0001.jpk-force": ("JPK .jpk-force", "AFM-analysis/afmformats", "examples/data/10.1002_btm2.10294_fig5d-cell1.zip:cell1-0001.jpk-force", "MIT"),
     "jpk-force_stress-relaxation_cell1-0008.jpk-force": ("JPK .jpk-force", "AFM-analysis/afmformats", "tests/data/fmt-jpk-sr_cell1-0008.jpk-force", "MIT"),
     "jpk-qi-data_2020.02.07.jpk-qi-data": ("JPK QI data", "AFM-analysis/afmformats", "tests/data/fmt-jpk-fd_2020.02.07-16.29.05.036.jpk-qi-data", "MIT"),
+    "jpk-qi-data_v8.1_format-2.0.jpk-qi-data": ("JPK QI data (SPM 8.1.64, file format 2.0)", "bicarlsen/jpk_reader", "data/qi_data/qi_data-2_0-xs/ (the archive's 234 members, published unzipped; zipped here, bytes unchanged)", "MIT"),
     "jpk-qi-series_2021.04.13.jpk-qi-series": ("JPK QI series", "AFM-analysis/afmformats", "tests/data/fmt-jpk-fd_qi-data-2021.04.13.jpk-qi-series", "MIT"),
     "jpk-txt_dp-export_SMFS_0441.txt": ("JPK DP text export", "galvanetto/Fodis", "Datasets/JPK example files/txt exported/force-save-0441.txt", "Apache-2.0"),
     "ntmdt-txt_gel4_Curve_DFL_Height_51.txt": ("NT-MDT Nova text", "AFM-analysis/afmformats", "tests/data/fmt-ntmdt-txt-fd_2015_01_17_gel4-0,1_mQ_adh_6B_Curve_DFL_Height_51.txt", "MIT"),
@@ -153,6 +162,38 @@ def _jpk(path: Path) -> dict:
            "curves": len(curves), "segments": curves[0]["segments"]}
     if len(curves) > 1:  # a map's curves differ where an extend stopped at the trigger
         out["per_curve"] = [{"sample_rate": c["rate"], "segments": c["segments"]} for c in curves]
+    return out
+
+
+#: files whose every curve is a hard adhesive contact the tip leaves with one clean jump (seen on the raw
+#: curves): the pull-off force the analysis must give is read from the raw retract, below
+PULL_OFF = {"jpk-qi-data_v8.1_format-2.0.jpk-qi-data"}
+
+
+def _jpk_pull_off(path: Path) -> list[float]:
+    """Each curve's pull-off force [N] from the raw vDeflection: the integers decoded by the shared
+    ``lcd-info`` encoder, times the distance and force multipliers; the deepest retract sample before
+    its largest single-sample rise (the tip springing off), less the median of the approach's first
+    half (the free baseline)."""
+    out = []
+    with zipfile.ZipFile(path) as arc:
+        shared = _props(arc.read("shared-data/header.properties"))
+        idx = sorted({int(m.group(1)) for n in arc.namelist() if (m := re.match(r"index/(\d+)/segments/", n))})
+        for i in idx:
+            force = []
+            for seg in (0, 1):
+                h = _props(arc.read(f"index/{i}/segments/{seg}/segment-header.properties"))
+                p = f"lcd-info.{h['channel.vDeflection.lcd-info.*']}."
+                c = {k[len(p):]: float(v) for k, v in shared.items() if k.startswith(p) and k.endswith(
+                    ("encoder.scaling.multiplier", "encoder.scaling.offset", "distance.scaling.multiplier",
+                     "force.scaling.multiplier"))}
+                raw = np.frombuffer(arc.read(f"index/{i}/segments/{seg}/channels/vDeflection.dat"), ">i4")
+                volts = raw * c["encoder.scaling.multiplier"] + c["encoder.scaling.offset"]
+                force.append(volts * c["conversion-set.conversion.distance.scaling.multiplier"]
+                             * c["conversion-set.conversion.force.scaling.multiplier"])
+            ext, ret = force
+            jump = int(np.argmax(np.diff(ret)))
+            out.append(float(ret[: jump + 1].min() - np.median(ext[: ext.size // 2])))
     return out
 
 
@@ -281,8 +322,29 @@ def _wsxm(path: Path) -> dict:
             "segments": [["extend", points], ["retract", points]]}
 
 
+def _afmformats_export(path: Path) -> dict:
+    """An afmformats export: the metadata (HDF5 attributes through h5py, or the tab file's JSON block), the
+    points of each segment counted (HDF5 ``segment`` 0/1; tab ``segment`` column False/True)."""
+    if path.suffix == ".h5":
+        import h5py
+
+        with h5py.File(path, "r") as h5:
+            meta = dict(h5["0"].attrs)
+            seg = h5["0/segment"][:].astype(int).tolist()
+    else:
+        text = path.read_text("latin-1")
+        block = text[text.index("# BEGIN METADATA"):text.index("# END METADATA")].splitlines()[1:]
+        meta = json.loads("\n".join(line[2:] for line in block))
+        seg = [int(line.split("\t")[3] == "True") for line in text.splitlines() if line and not line.startswith("#")]
+    return {"spring_constant": float(meta["spring constant"]), "sensitivity": float(meta["sensitivity"]),
+            "sample_rate": float(meta["rate approach"]), "curves": 1,
+            "segments": [["extend", seg.count(0)], ["retract", seg.count(1)]]}
+
+
 def header(path: Path) -> dict:
     name = path.name
+    if name.startswith("afmformats-"):
+        return _afmformats_export(path)
     if name.startswith("wsxm-curves"):
         return _wsxm(path)
     if name.startswith(("jpk-force", "jpk-dp", "jpk-qi")):
@@ -319,7 +381,8 @@ def readme(table: dict) -> str:
         "header lines; `-`: the file does not store it (the gallery gives the stand-ins in `given`).",
         "",
         "Licences: MIT (afmformats (c) 2019 Paul Mueller; SciFiDatasets (c) 2021 pycroscopy; PyFMlab_DyNaMo",
-        "(c) 2023 Javier Lopez Alonso; ForceMetric (c) 2018 Jacob Kienast; jpkfile (c) 2016 Ilyas Kuhlemann),",
+        "(c) 2023 Javier Lopez Alonso; ForceMetric (c) 2018 Jacob Kienast; jpkfile (c) 2016 Ilyas Kuhlemann;",
+        "pyrtz2 (c) 2024 Hoseyn Amiri; jpk_reader (c) 2025 Brian Carlsen, MIT or Apache-2.0 at the user's choice: MIT taken),",
         "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018),",
         "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). The full licence texts are in",
         "`LICENSES`. Commits: "
@@ -333,11 +396,12 @@ def readme(table: dict) -> str:
         h = e["header"]
         segs = ", ".join(f"{t} {n}" for t, n in h["segments"]) if h["segments"] else "-"
         exp = e["expect"]
+        checked = "; pull-off of every curve checked" if "expected" in e else ""
         expect = "read, plausible" if exp == {"read": "read", "analysis": "plausible"} else (
             exp["read"] if exp["read"] != "read" else "read; analysis: " + exp["analysis"])
         lines.append(f"| `{name}` | {e['family']} | {e['bytes']} | {_fmt(h['spring_constant'])} | "
                      f"{_fmt(h['sensitivity'], 1e9)} | {_fmt(h['sample_rate'], 1, 6)} | {h['curves']} | {segs} | "
-                     f"{expect} | {e['source']['repository']}: `{e['source']['path']}` | {e['source']['licence']} |")
+                     f"{expect}{checked} | {e['source']['repository']}: `{e['source']['path']}` | {e['source']['licence']} |")
     return "\n".join(lines) + "\n"
 
 
@@ -352,6 +416,8 @@ def main() -> None:
         if name in GIVEN:
             entry["given"] = GIVEN[name]
         entry["expect"] = {"read": PENDING_READ.get(name, "read"), "analysis": PENDING_ANALYSIS.get(name, "plausible")}
+        if name in PULL_OFF:  # numbers the analysis must give, per curve (test_corpus_gallery)
+            entry["expected"] = {"pull_off_force": _jpk_pull_off(path)}
         table[name] = entry
     (HERE / "corpus.json").write_text(json.dumps(table, indent=1) + "\n")
     (HERE / "README.md").write_text(readme(table))
