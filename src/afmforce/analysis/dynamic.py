@@ -193,6 +193,7 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
             words.append(f"{what}: " + (f"{friction_words} or an extra attraction (capillarity)" if no_inertia
                                          else "dynamic effects (friction, inertia) or an extra attraction "
                                               "(capillarity)"))
+            friction_words = "friction" if no_inertia else ""  # said once
     if friction == "constant":  # viscous friction's offset grows with xi v (spec section 7)
         dynamic = True
         words.append(f"friction signature ({friction_verdict}): friction underestimates the precontact "
