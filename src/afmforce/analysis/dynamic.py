@@ -142,9 +142,10 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
         curve was recorded in air.
 
     An early jump-in or an attraction weaker than the pull-off implies is dynamics (friction,
-    inertia) or an extra attraction. It flags the run dynamic only when neither is excluded: in
-    air (a meniscus forms at the contact) it is named likely capillary, and where inertia
-    (eq 3 < 1) and friction (no signature) are both excluded it is an extra attraction.
+    inertia) or an extra attraction. In air (a meniscus forms at the contact) it is named likely
+    capillary; elsewhere it flags the run dynamic. Inertia excluded (eq 3 < 1) leaves friction:
+    coincident compliance lines do not exclude it (the paper's xi = 0.1 kg/s at 0.1 um/s offsets
+    them by 0.5 nm while hiding about half the precontact attraction, Figs 5-6).
     """
     nan = math.nan
     f = nan if resonance_frequency is None else float(resonance_frequency)
@@ -176,14 +177,11 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
                          f"{lag * 1e9:.3g} nm (eq 4)")
     excess = jump_in_separation - static_jump_in_separation
     in_air = math.isfinite(quality_factor) and quality_factor >= air_quality
-    static_run = math.isfinite(r_par) and r_par <= 1 and friction == "none"
-    if in_air:
-        extra = f"likely capillary (in air: quality factor {quality_factor:.3g})"
-    elif static_run:
-        extra = ("an extra attraction (capillary, electrostatic), not dynamics (inertia parameter "
-                 f"{r_par:.2g} < 1, no friction signature)")
-    else:
-        extra = ""
+    extra = f"likely capillary (in air: quality factor {quality_factor:.3g})" if in_air else ""
+    # inertia excluded leaves friction, which coincident compliance lines cannot exclude (Figs 5-6)
+    no_inertia = math.isfinite(r_par) and r_par <= 1
+    friction_words = (f"friction (inertia excluded, eq 3: {r_par:.2g} < 1; coincident compliance lines do not "
+                      "exclude friction, Figs 5-6)" if no_inertia else "")
     if (math.isfinite(excess) and excess > jump_tolerance + abs(sample_step)
             and excess > jump_fraction * static_jump_in_separation):
         what = (f"jump-in at {jump_in_separation * 1e9:.3g} nm, {excess * 1e9:.3g} nm farther out than "
@@ -192,7 +190,10 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
             words.append(f"{what}: {extra}")
         else:
             dynamic = True
-            words.append(f"{what}: dynamic effects (friction, inertia) or an extra attraction (capillarity)")
+            words.append(f"{what}: " + (f"{friction_words} or an extra attraction (capillarity)" if no_inertia
+                                         else "dynamic effects (friction, inertia) or an extra attraction "
+                                              "(capillarity)"))
+            friction_words = "friction" if no_inertia else ""  # said once
     if friction == "constant":  # viscous friction's offset grows with xi v (spec section 7)
         dynamic = True
         words.append(f"friction signature ({friction_verdict}): friction underestimates the precontact "
@@ -215,7 +216,9 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
             words.append(f"{what}: an extra adhesion, {extra}")
         else:
             dynamic = True
-            words.append(f"{what}: underestimated by friction or speed, or an extra adhesion (capillarity)")
+            words.append(f"{what}: underestimated by " + (f"{friction_words}, or an extra adhesion (capillarity)"
+                                                          if no_inertia else
+                                                          "friction or speed, or an extra adhesion (capillarity)"))
     # "not dynamic" needs both mechanisms excluded: inertia (eq 3) and friction (the compliance lines);
     # the jump-in and attraction tests can only flag a dynamic run, not clear one
     friction_assessed = friction in ("none", "constant", "load-proportional", "opposite", "pinned")

@@ -26,7 +26,7 @@ from .damping import beam_damping, spring_damping
 from .models import beam_couplings, beam_matrices
 from .parts import BeamProbe, SpringProbe
 
-__all__ = ["probe_matrices", "thermal_spectrum", "MAX_BINS"]
+__all__ = ["probe_matrices", "free_resonance", "thermal_spectrum", "MAX_BINS"]
 
 #: the most bins a default spectrum has
 MAX_BINS = 1 << 17
@@ -44,6 +44,23 @@ def probe_matrices(probe) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarra
         hq = beam_couplings(probe.cantilever)[0]
         return -np.asarray(A), np.diag(masses), np.asarray(C), np.asarray(hq)
     raise ParameterError(f"a thermal spectrum needs a SpringProbe or BeamProbe, got {type(probe).__name__}")
+
+
+def free_resonance(probe) -> tuple[float, float | None]:
+    """(f1 [Hz], Q1 [-] or None) of the probe's first free mode: what its thermal tune records.
+
+    ``f1`` is the undamped natural frequency of the probe's own mass and stiffness (the matrices of
+    :func:`probe_matrices`): ``sqrt(k/m) / (2 pi)`` for the spring, the lower eigenfrequency of the
+    beam's ``K q = w^2 M q`` (about 4.06 kHz for the paper's beam). ``Q1`` is the lever damping's
+    quality factor of that mode (``quality_factor``; the beam's Rayleigh damping gives its first
+    mode exactly that Q), None for the paper's undamped lever. The drag on the lever in a liquid
+    (``lever_drag``) and the paper's friction (which acts on the tip) are forces of the surface,
+    not of the lever: they are not counted, as in :func:`thermal_spectrum`.
+    """
+    K, M, _, out = probe_matrices(probe)
+    freqs, _ = mode_shares(K, M, out)
+    q = probe.quality_factor
+    return float(freqs[0]), (None if q is None else float(q))
 
 
 def thermal_spectrum(probe, *, temperature: float = DEFAULT_TEMPERATURE, f_max: float | None = None,
@@ -83,9 +100,10 @@ def thermal_spectrum(probe, *, temperature: float = DEFAULT_TEMPERATURE, f_max: 
     elif white:
         psd = psd + white
     k = float(probe.force_constant)
-    vendor = {"spring_constant": k, "resonance_frequency": float(freqs[0])}
-    if probe.quality_factor is not None:
-        vendor["quality_factor"] = float(probe.quality_factor)
+    f1, q_first = free_resonance(probe)
+    vendor = {"spring_constant": k, "resonance_frequency": f1}
+    if q_first is not None:
+        vendor["quality_factor"] = q_first
     if len(freqs) > 1:
         vendor["resonance_frequency_2"] = float(freqs[1])
     return ThermalSpectrum(f, psd, unit="m^2/Hz", temperature=float(temperature), medium=medium,

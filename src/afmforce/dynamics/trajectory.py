@@ -143,6 +143,22 @@ class Trajectory:
     def __len__(self) -> int:
         return int(self.time.size)
 
+    @property
+    def resonance_frequency(self) -> float:
+        """The probe's first free resonance [Hz]: ``sqrt(k/m) / (2 pi)`` for the spring, the beam's
+        first mode (:func:`afmforce.dynamics.thermal.free_resonance`)."""
+        from .thermal import free_resonance
+
+        return free_resonance(self.config.probe)[0]
+
+    @property
+    def quality_factor(self) -> float | None:
+        """Quality factor of that resonance (the lever damping's ``quality_factor``) [-]; None for
+        the paper's undamped lever."""
+        from .thermal import free_resonance
+
+        return free_resonance(self.config.probe)[1]
+
     def columns(self) -> dict[str, np.ndarray]:
         """The sampled columns by name (see :data:`COLUMNS`)."""
         return {name: getattr(self, name) for name in COLUMNS}

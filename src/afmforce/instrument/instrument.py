@@ -17,7 +17,10 @@ works (duck typing): ``time``, ``piezo_position`` and ``segment`` are
 required; ``apparent_deflection`` (else ``calibration_factor * angle``, else
 ``deflection``), ``separation`` (else ``deflection - piezo_position``) and
 the other columns are used when present; ``spring_constant``,
-``calibration_factor`` and ``config.velocity`` go into the metadata/truth.
+``calibration_factor`` and ``config.velocity`` go into the metadata/truth, and the
+lever's ``resonance_frequency`` [Hz] and ``quality_factor`` (its first free mode, as a
+thermal tune records it) into the metadata when the trajectory has them (a Trajectory
+does; a quasi-static curve without a lever mass does not).
 """
 
 from __future__ import annotations
@@ -199,6 +202,10 @@ class Instrument:
             metadata["spring_constant"] = k
         if pd.sensitivity is not None:
             metadata["sensitivity"] = pd.sensitivity
+        for key in ("resonance_frequency", "quality_factor"):  # the lever's, as its thermal tune gives them
+            value = _scalar(trajectory, key)
+            if value is not None:
+                metadata[key] = value
 
         truth: dict[str, Any] = {}
         for name in TRUTH_COLUMNS:

@@ -9,6 +9,7 @@ column names with units in brackets, then tab-separated data::
     # version: 1
     # spring_constant: 0.21 N/m
     # velocity: 1.7e-05 m/s
+    # resonance_frequency: 4061.8 Hz
     # instrument: "paper"
     # truth.calibration_factor: 0.000129 m/rad
     time [s]	piezo_nominal [m]	piezo_measured [m]	deflection_signal [V]	segment [1]	truth.separation [m]
@@ -31,6 +32,9 @@ column names with units in brackets, then tab-separated data::
   ``segment`` (0 approach, 1 retract, 2 dwell) are required;
   ``piezo_measured`` [m] and ``truth.<name>`` columns are optional. Positions
   increase towards the probe (see :mod:`afmforce.io.curve`).
+* ``resonance_frequency`` [Hz] and ``quality_factor`` are the lever's first free mode (a thermal
+  tune's; the virtual AFM writes the model's own, docs/instrument.md): the dynamic diagnosis
+  (eq 3) reads the first. Both are optional; a file without them reads as before.
 * Keys and columns prefixed ``truth.`` form ``RawCurve.truth`` (simulated curves).
 
 We write SI values with Python's ``repr`` of each float (the shortest text
@@ -72,7 +76,7 @@ HDF5_SUFFIXES = (".h5", ".hdf5", ".hdf")
 #: SI unit of each known metadata key ("" for plain values).
 METADATA_UNITS: dict[str, str] = {
     "spring_constant": "N/m", "sensitivity": "m/V", "velocity": "m/s", "retract_velocity": "m/s",
-    "sample_rate": "Hz", "dwell_time": "s", "temperature": "K",
+    "sample_rate": "Hz", "dwell_time": "s", "temperature": "K", "resonance_frequency": "Hz", "quality_factor": "",
     "seed": "", "instrument": "", "source": "", "source_file": "", "comment": "",
 }
 _COLUMNS = {"time": "s", "piezo_nominal": "m", "piezo_measured": "m", "deflection_signal": None, "segment": "1"}
