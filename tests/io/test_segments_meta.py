@@ -296,3 +296,14 @@ def test_chiaro_displacement_profile_with_a_hold(tmp_path):
     np.testing.assert_allclose(c.deflection_signal, table[:, 1] * 1e-6, atol=1e-15)
     user = load(path, meta_override={"spring_constant": 0.25})[0]
     np.testing.assert_allclose(user.deflection_signal, 0.25 * table[:, 3] * 1e-9, rtol=1e-12, atol=1e-18)
+
+
+def test_chiaro_truncated_row_is_named(tmp_path):
+    """A Chiaro export cut inside its last row: a FileFormatError naming the row, not a numpy message."""
+    from afmforce.errors import FileFormatError
+
+    path = tmp_path / "cut.txt"
+    table = _chiaro(path, b"\xb5")
+    path.write_bytes(path.read_bytes()[:-20])
+    with pytest.raises(FileFormatError, match=f"row {table.shape[0]} of the Chiaro table has fewer"):
+        load(path)

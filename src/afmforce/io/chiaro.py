@@ -149,6 +149,10 @@ def load_chiaro(path: Path, *, meta_override: Mapping[str, Any], callback: Calla
     head = _header(lines[:top])
     names = [s.strip() for s in lines[top].split("\t")]
     rows = [ln for ln in lines[top + 1:] if ln.strip()]
+    short = next((i for i, ln in enumerate(rows) if len(ln.split("\t")) < len(names)), None)
+    if short is not None:
+        raise FileFormatError(f"{path}: row {short + 1} of the Chiaro table has fewer than its {len(names)} "
+                              "columns: the file is truncated or damaged")
     try:
         table = np.array([[float(v) for v in ln.split("\t")[: len(names)]] for ln in rows], dtype=float)
     except ValueError as exc:
