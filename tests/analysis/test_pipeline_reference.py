@@ -8,7 +8,9 @@ number within 1e-9 relative (NaN where NaN).
 Since stored: the calibration-mismatch warning's wording (the file's calibration became the default, its
 warning now says the file's is used and names the causes as `afmforce calibrate invols` does) was
 substituted in the stored strings (32 warnings of the 34 soft curves, none of which the new default
-recalibrates); every number is still main's of 8787912, checked equal before the substitution.
+recalibrates); every number is still main's of 8787912, checked equal before the substitution. The Chiaro reader
+now passes the header's tip radius (a modulus is fitted): its case is analysed without it, as stored
+(``make_pipeline_reference.WITHOUT_RADIUS``).
 """
 
 from __future__ import annotations

@@ -232,7 +232,7 @@ def test_other_metadata_overrides_reach_the_readers():
 
 
 def _chiaro(path: Path, micro: bytes) -> np.ndarray:
-    """A SYNTHETIC Optics11 Chiaro export in the layout afmformats' reader parses; returns its table."""
+    """A SYNTHETIC Optics11 Chiaro export in the "Peak Load Poking" layout (V3.5); returns its table."""
     n = 200
     t = np.arange(2 * n) * 0.005  # s: 2000 nm per run at the header's 2 um/s
     piezo = np.concatenate([np.linspace(0, 2000, n), np.linspace(2000, 0, n)])  # nm, into the sample
@@ -251,7 +251,8 @@ def _chiaro(path: Path, micro: bytes) -> np.ndarray:
 
 @pytest.mark.parametrize("micro", [b"\xb5", b"\xc2\xb5", b"\xce\xbc"], ids=["latin-1", "utf-8", "greek-mu"])
 def test_chiaro_any_micro_sign(tmp_path, micro):
-    """afmformats fails on a UTF-8 micro sign (KeyError); we transcode a temporary copy."""
+    """The header's micro sign in ISO-8859-1 (as exported), UTF-8 or as the Greek mu: all read (afmformats
+    0.18 fails on the last two with a KeyError)."""
     path = tmp_path / "indent.txt"
     table = _chiaro(path, micro)
     before = path.read_bytes()
@@ -264,3 +265,45 @@ def test_chiaro_any_micro_sign(tmp_path, micro):
     assert c.piezo_measured is None
     app = c.piezo_nominal[c.approach]
     assert app[-1] > app[0]
+
+
+def test_chiaro_displacement_profile_with_a_hold(tmp_path):
+    """A SYNTHETIC V3.4 "Displacement" export: no 'Max load' or 'Piezo speed' line (afmformats 0.18 fails
+    with a KeyError), a profile 0 -> 2000 nm in 1 s, held 0.5 s, back in 1 s. The hold is a dwell
+    (not the start of the retract, where the maximum load would put it), the speeds are the profile's
+    ramps, the tip radius is the header's, and a user's k recomputes the force from the Cantilever column."""
+    dt = 0.001
+    piezo = np.concatenate([np.linspace(0, 2000, 1000), np.full(500, 2000.0), np.linspace(2000, 0, 1000)[1:]])
+    t = np.arange(piezo.size) * dt
+    load_un = np.clip(piezo - 1500, 0, None) * 1e-3
+    load_un[1000:1500] *= np.exp(-np.arange(500) * dt / 0.2) * 0.5 + 0.5  # relaxation in the hold: max load first
+    cant = load_un * 1e-6 / 0.5 * 1e9  # nm, k = 0.5 N/m
+    table = np.round(np.column_stack([t, load_un, piezo - cant, cant, piezo, np.zeros_like(t)]), 6)
+    head = ("Date\t08/06/2021\tTime\t15:42:17\tStatus\tOK\nk (N/m)\t0.500\nTip radius (um)\t22.000\n"
+            "Device:\tChiaro\nSoftware version: V3.4.1\n\nControl mode: Displacement\nProfile:\n"
+            "D[Z1] (nm)\t0.000\tt[1] (s)\t0.000\nD[Z2] (nm)\t2000.000\tt[2] (s)\t1.000\n"
+            "D[Z3] (nm)\t2000.000\tt[3] (s)\t0.500\nD[Z4] (nm)\t0.000\tt[4] (s)\t1.000\n\n"
+            "Time (s)\tLoad (uN)\tIndentation (nm)\tCantilever (nm)\tPiezo (nm)\tAuxiliary\n")
+    path = tmp_path / "displacement.txt"
+    path.write_text(head + "".join("\t".join(f"{v:.6f}" for v in row) + "\n" for row in table))
+    c = load(path)[0]
+    hold = np.flatnonzero(piezo >= 2000 - 0.005 * 2000)  # the dwell rule: within 0.5 % of the travel
+    np.testing.assert_array_equal(np.flatnonzero(c.segment == 2), hold)
+    assert np.all(c.segment[:hold[0]] == 0) and np.all(c.segment[hold[-1] + 1:] == 1)
+    assert np.argmax(load_un) < hold[-1]  # the maximum-load rule would have ended the approach in the hold
+    assert c.metadata["velocity"] == pytest.approx(2e-6) and c.metadata["retract_velocity"] == pytest.approx(2e-6)
+    assert c.metadata["radius"] == pytest.approx(22e-6) and c.metadata["spring_constant"] == 0.5
+    np.testing.assert_allclose(c.deflection_signal, table[:, 1] * 1e-6, atol=1e-15)
+    user = load(path, meta_override={"spring_constant": 0.25})[0]
+    np.testing.assert_allclose(user.deflection_signal, 0.25 * table[:, 3] * 1e-9, rtol=1e-12, atol=1e-18)
+
+
+def test_chiaro_truncated_row_is_named(tmp_path):
+    """A Chiaro export cut inside its last row: a FileFormatError naming the row, not a numpy message."""
+    from afmforce.errors import FileFormatError
+
+    path = tmp_path / "cut.txt"
+    table = _chiaro(path, b"\xb5")
+    path.write_bytes(path.read_bytes()[:-20])
+    with pytest.raises(FileFormatError, match=f"row {table.shape[0]} of the Chiaro table has fewer"):
+        load(path)

@@ -179,7 +179,7 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  signature="three tab-separated numeric columns (decimal commas)"),
     ReaderFormat("chiaro-txt", "Optics11 Chiaro indenter text export", (".txt",),
                  _lazy("chiaro", "detect_chiaro"), _lazy("chiaro", "load_chiaro"),
-                 via="afmformats", supplies=("spring_constant", "velocity"),
+                 via="afmforce", supplies=("spring_constant", "velocity", "radius"),
                  signature="Device: Chiaro header line, Time (s)/Load/Indentation/Cantilever/Piezo columns"),
     ReaderFormat("wsxm-curves", "WSxM (Nanotec) force curves", (".curves",),
                  _lazy("wsxm", "detect_wsxm_curves"), _lazy("wsxm", "load_wsxm_curves"),

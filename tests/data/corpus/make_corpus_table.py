@@ -29,6 +29,7 @@ COMMITS = {
     "ilyasku/jpkfile": "ccde5ac33a76cf893211295f678dc304ff2b1c0d",
     "bicarlsen/jpk_reader": "e9486d42bf89a8b36a8d2ef4c6e3bbd885571352",
     "HoseynAAmiri/pyrtz2": "016ef73e7ccc88305f3186f7a8f2e9931b9e8560",
+    "CellMechLab/softmech": "d94b9dc40d11032b11596fd116c2e24703b6474d",
 }
 
 #: file -> (family, repository, path in it (zip member after ":"), licence)
@@ -55,6 +56,7 @@ SOURCES = {
     "bruker-nanoscope_force-volume_v9.2_Egel2_00023.spm": ("Bruker NanoScope binary (force volume)", "DyNaMo-INSERM/PyFMlab_DyNaMo", "PyFMReader_DyNaMo/tests/testfiles/20200903_Egel2.0_00023.spm", "MIT"),
     "bruker-nanoscope_v8.15_sapphire_TAP525.001": ("Bruker NanoScope binary", "pycroscopy/SciFiDatasets", "data/microscopy/spm/afm/BrukerReader_ForceCurve_Sapphire_TAP525.001", "MIT"),
     "bruker-nanoscope_v9.2_Egel4_00025.spm": ("Bruker NanoScope binary", "DyNaMo-INSERM/PyFMlab_DyNaMo", "PyFMReader_DyNaMo/tests/testfiles/20200904_Egel4-Z1.0_00025.spm", "MIT"),
+    "chiaro-txt_V3.4.1_displacement-hold.txt": ("Optics11 Chiaro text (V3.4.1, displacement profile with a 1 s hold)", "CellMechLab/softmech", "optics11_new_new.txt", "MIT"),
     "chiaro-txt_AEBP1_Indentation_002.txt": ("Optics11 Chiaro text", "AFM-analysis/afmformats", "tests/data/fmt-chiaro-txt_AEBP1_Indentation_002.zip:fmt-chiaro-txt_AEBP1_Indentation_002.txt", "MIT"),
     "jpk-dp_float-data_SMFS_0441.jpk-force": ("JPK re-saved by JPK DP (float data)", "galvanetto/Fodis", "Datasets/JPK example files/jpk-force/force-save-0441.jpk-force", "Apache-2.0"),
     "jpk-dp_float-data_SMFS_0578.jpk-force": ("JPK re-saved by JPK DP (float data)", "galvanetto/Fodis", "Datasets/JPK example files/jpk-force/force-save-0578.jpk-force", "Apache-2.0"),
@@ -84,6 +86,7 @@ SOURCES = {
 
 #: files taken from another commit than the repository's in COMMITS (a pull request's head)
 FILE_COMMITS = {
+    "chiaro-txt_V3.4.1_displacement-hold.txt": "b193b42ba1e31464145b0952f574d0d360ef2056",  # removed by 584de05
     "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": "eabc7a708e316bdf19cd344c603f014b99c3daea",
 }
 
@@ -298,6 +301,13 @@ def _chiaro(path: Path) -> dict:
     return {"spring_constant": k, "sensitivity": None, "sample_rate": None, "curves": 1, "segments": None}
 
 
+def _chiaro_modulus(path: Path) -> list[float]:
+    """The Chiaro software's own Hertz fit of the curve: ``E[v=0.500] (Pa)`` (Poisson ratio 0.5, the
+    header's tip radius), written in the export's header [Pa]."""
+    text = path.read_text("latin-1")
+    return [float(re.search(r"E\[v=0\.500\] \(Pa\)\t([\d.]+)", text).group(1))]
+
+
 def _wsxm(path: Path) -> dict:
     """WSxM ``.curves``: the first header's Force constant and image size, then each curve block's header
     (its own ``Image header size``), counted; the rate is points over ``Forward plot total time``."""
@@ -364,6 +374,10 @@ def header(path: Path) -> dict:
     return {"spring_constant": None, "sensitivity": None, "sample_rate": None, "curves": 1, "segments": None}
 
 
+#: what an ``expected`` entry checks, in the README's words
+CHECKED = {"pull_off_force": "pull-off of every curve", "youngs_modulus": "modulus (the Chiaro's own Hertz fit)"}
+
+
 def _fmt(v, scale=1.0, digits=5):
     return "-" if v is None else f"{v * scale:.{digits}g}"
 
@@ -382,7 +396,7 @@ def readme(table: dict) -> str:
         "",
         "Licences: MIT (afmformats (c) 2019 Paul Mueller; SciFiDatasets (c) 2021 pycroscopy; PyFMlab_DyNaMo",
         "(c) 2023 Javier Lopez Alonso; ForceMetric (c) 2018 Jacob Kienast; jpkfile (c) 2016 Ilyas Kuhlemann;",
-        "pyrtz2 (c) 2024 Hoseyn Amiri; jpk_reader (c) 2025 Brian Carlsen, MIT or Apache-2.0 at the user's choice: MIT taken),",
+        "pyrtz2 (c) 2024 Hoseyn Amiri; softmech (c) 2021 Massimo Vassalli; jpk_reader (c) 2025 Brian Carlsen, MIT or Apache-2.0 at the user's choice: MIT taken),",
         "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018),",
         "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). The full licence texts are in",
         "`LICENSES`. Commits: "
@@ -396,7 +410,7 @@ def readme(table: dict) -> str:
         h = e["header"]
         segs = ", ".join(f"{t} {n}" for t, n in h["segments"]) if h["segments"] else "-"
         exp = e["expect"]
-        checked = "; pull-off of every curve checked" if "expected" in e else ""
+        checked = "".join(f"; {CHECKED[k]} checked" for k in e.get("expected", {}))
         expect = "read, plausible" if exp == {"read": "read", "analysis": "plausible"} else (
             exp["read"] if exp["read"] != "read" else "read; analysis: " + exp["analysis"])
         lines.append(f"| `{name}` | {e['family']} | {e['bytes']} | {_fmt(h['spring_constant'])} | "
@@ -418,6 +432,8 @@ def main() -> None:
         entry["expect"] = {"read": PENDING_READ.get(name, "read"), "analysis": PENDING_ANALYSIS.get(name, "plausible")}
         if name in PULL_OFF:  # numbers the analysis must give, per curve (test_corpus_gallery)
             entry["expected"] = {"pull_off_force": _jpk_pull_off(path)}
+        if name.startswith("chiaro-txt"):  # the instrument's Hertz modulus (test_corpus_gallery)
+            entry["expected"] = {"youngs_modulus": _chiaro_modulus(path)}
         table[name] = entry
     (HERE / "corpus.json").write_text(json.dumps(table, indent=1) + "\n")
     (HERE / "README.md").write_text(readme(table))
