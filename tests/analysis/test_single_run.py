@@ -117,3 +117,19 @@ def test_batch_summary_and_figures_of_one_run_curves(tmp_path):
     adhesion = [c for c in table.columns if c.startswith("adhesion_force")][0]
     assert row[names[0]][adhesion] < 0 and np.isnan(row[names[1]][adhesion])
     assert len(list((tmp_path / "out").glob("*.afmforce.png"))) == 3
+
+
+def test_the_web_analyses_a_retract_export(tmp_path):
+    """The web's /api/analyze on the retract export: the CLI's numbers, the missing run's steps with the reason."""
+    pytest.importorskip("fastapi")
+    from fastapi.testclient import TestClient
+
+    from afmforce.web import Settings, create_app
+
+    name = "bruker-ascii_fodis_mica-GA6_baseline-corrected.txt"
+    with TestClient(create_app(Settings(data=tmp_path / "data", spare_job=False)), base_url="http://127.0.0.1") as c:
+        r = c.post("/api/analyze", files={"file": (name, (CORPUS / name).read_bytes())})
+    assert r.status_code == 200, r.text
+    api = r.json()["results"][name]
+    assert api["adhesion_force"] == pytest.approx(analyze(load(CORPUS / name)[0]).adhesion_force, rel=1e-9)
+    assert api["not_applicable"]["kind"] == NO_APPROACH
