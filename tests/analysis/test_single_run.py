@@ -44,9 +44,11 @@ def test_retract_only_export_gives_the_adhesion_numpy_finds():
     # the deepest point is the one numpy finds (within the analysis's running window of a few samples)
     assert abs(res.details["adhesion"].index - int(np.argmin(residual))) <= 3   # one run: sample = row
     assert res.rupture_distance >= res.adhesion_distance > 0
-    for step in ("kind", "shift", "vdw", "friction", "indentation", "jump_in"):
+    for step in ("kind", "shift", "vdw", "friction", "indentation", "jumps"):
         assert res.not_applicable[step] == NO_APPROACH
-    assert np.isnan(res.jump_in_force) and res.contact_kind == "" and np.isnan(res.shift)
+    # no contact kind without the approach: no hard contact's pull-off jump told from an unbinding step
+    assert np.isnan(res.jump_in_force) and np.isnan(res.pull_off_force) and res.contact_kind == ""
+    assert np.isnan(res.shift)
 
 
 def _synthetic_retract(k: float = 0.05, noise: float = 0.02e-9, seed: int = 3) -> tuple[RawCurve, list[float]]:

@@ -38,13 +38,8 @@ def jumps(st: State, o: JumpsOptions) -> State:
         steps = steps[steps > 0]
         noise = float(steps.min()) * abs(st.factor) / math.sqrt(12.0) if steps.size else noise
     k = st.spring_constant
-    nan = math.nan
-    if st.approach is None:  # a curve of one run: the missing run's jump is not available (not searched)
-        st = st.update(skipped={**st.skipped, "jump_in": "not available: no approach run"})
-        ji = JumpIn(False, -1, *([nan] * 6), 0.0)
-    else:
-        ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window,
-                          attractive_below=nsigma * noise)  # a step in contact is a slip, not the jump
+    ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window,
+                      attractive_below=nsigma * noise)  # a step in contact is a slip, not the jump
     ret = st.retract
     clipped = ret is not None and not ret.has_compliance and bool(ret.contact.any())  # its whole contact is clipped
     if ret is None:
@@ -67,9 +62,7 @@ def jumps(st: State, o: JumpsOptions) -> State:
         st = st.update(skipped={**st.skipped, "pull_off": bad_off})
         po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
     warn = jump_warnings(ji, po, k, clipped)
-    if st.approach is None:  # its first says why no jump-in was found: none was looked for
-        warn = warn[1:]
-    if ret is None:
+    if ret is None:  # an approach exported alone: no pull-off was looked for
         warn = [w for w in warn if w != "no pull-off found on the retract run"]
     z0 = st.details["zero"].contact_separation if "zero" in st.details else Z0
     if 0 <= ji.index < st.separation.size - 1:
@@ -115,7 +108,7 @@ def _jumps_fields(st: State) -> dict:
 
 JUMPS = AnalysisStep(
     "jumps", "Jump into contact and pull-off", jumps, JumpsOptions, requires=("zero", "force"),
-    channels=("separation",), reference="section 2.1, Fig 9", runs=(),
+    channels=("separation",), reference="section 2.1, Fig 9", runs=("approach",),
     fields=(ResultField("jump_in_separation", "m", "jump-in separation", summary=True, column=True),
             ResultField("jump_in_force", "N", "jump-in force", summary=True, column=True),
             ResultField("jump_in_deflection", "m", "jump-in deflection", column=True),
