@@ -51,6 +51,18 @@ def test_retract_only_export_gives_the_adhesion_numpy_finds():
     assert np.isnan(res.shift)
 
 
+def test_the_retract_export_gives_the_whole_curves_retract_quantities():
+    """The same ScanAsyst glass curve exported whole (both runs) and as its retract alone: the adhesion is
+    measured from the retract's own baseline either way, so its noise, depth and verdict agree (the
+    one-run export is the whole export's retract columns, to its 7 printed digits)."""
+    (whole,) = load(CORPUS / "bruker-ascii_fodis_ScanAsyst-glass.txt")
+    (alone,) = load(CORPUS / "bruker-ascii_fodis_ScanAsyst-glass_retract.txt")
+    a, b = analyze(whole), analyze(alone)
+    assert b.adhesion_noise == pytest.approx(a.adhesion_noise, rel=1e-3)
+    assert b.adhesion_verdict == a.adhesion_verdict            # here: a dip of 3.9 noise sigmas, below 5
+    assert np.isnan(b.adhesion_force) == np.isnan(a.adhesion_force)
+
+
 def _synthetic_retract(k: float = 0.05, noise: float = 0.02e-9, seed: int = 3) -> tuple[RawCurve, list[float]]:
     """A retract of one run (deflection in m): the compliance line d = z in contact (z > 0), then a tether
     plateau at -3 nm that lets go in two steps (to -1.5 nm at 100 nm from contact, to 0 at 200 nm)."""
@@ -86,6 +98,13 @@ def test_approach_only_export_gives_the_approach_and_no_pull_off():
     for step in ("adhesion", "shift", "friction", "surface_energy"):
         assert res.not_applicable[step] == NO_RETRACT
     assert np.isnan(res.pull_off_force) and np.isnan(res.adhesion_force) and res.unbinding_steps == 0
+    z = np.asarray(curve.piezo_nominal)
+    cp = res.details["contact_point"].position       # the soft contact point, on the recorded approach
+    assert z.min() < cp < z.max()
+    # the modulus from the approach, as nanite fits it, once the lever's k and the tip's radius are given
+    from afmforce.analysis.options import ProbeCalibration
+    given = analyze(curve, probe=ProbeCalibration(spring_constant=0.1, radius=20e-9))
+    assert "indentation" not in given.not_applicable and given.youngs_modulus > 0
 
 
 def test_a_two_segment_less_curve_that_is_no_export_of_one_run_is_still_refused():
