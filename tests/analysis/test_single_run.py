@@ -49,6 +49,8 @@ def test_retract_only_export_gives_the_adhesion_numpy_finds():
     # no contact kind without the approach: no hard contact's pull-off jump told from an unbinding step
     assert np.isnan(res.jump_in_force) and np.isnan(res.pull_off_force) and res.contact_kind == ""
     assert np.isnan(res.shift)
+    said = [w for w in res.warnings if w.startswith("the curve holds the retract run only: " + NO_APPROACH)]
+    assert len(said) == 1 and "kind" in said[0] and "jumps" in said[0]    # once, in every output
 
 
 def test_the_retract_export_gives_the_whole_curves_retract_quantities():

@@ -197,6 +197,12 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
             return _no_contact(st, tuple(order), str(exc))
         if key is not None and i == head - 1:
             memo[key] = (arrays, st)
+    if missing:  # said once, where every output shows it (the steps' own reasons are in not_applicable)
+        why = f"not available: no {missing} run"
+        gone = [s for s, w in st.skipped.items() if w == why]
+        if gone:
+            st = st.update(warn=f"the curve holds the {'retract' if missing == 'approach' else 'approach'} run only: "
+                                f"{why}: {', '.join(gone)}")
     return _result(st, tuple(order), known)
 
 
