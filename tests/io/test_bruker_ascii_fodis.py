@@ -12,7 +12,6 @@ import numpy as np
 import pytest
 
 from afmforce.analysis.pipeline import analyze
-from afmforce.errors import AnalysisError
 from afmforce.io import find_format, load
 
 CORPUS = Path(__file__).resolve().parents[1] / "data" / "corpus"

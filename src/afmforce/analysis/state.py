@@ -315,8 +315,9 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
         trend.append(float(np.median(z[i[-n:]]) - np.median(z[i[:n]])))
     signs = {"approach": -1.0, "retract": 1.0}   # the position falls on the approach, rises on the retract
     if all(signs[w] * t > 0.0 for w, t in zip(words, trend)):
-        notes.append("the position falls during the approach and rises during the retract (stored as the "
-                     "distance from the sample): turned round to grow towards the sample")
+        moved = (" and ".join(f"{'falls' if w == 'approach' else 'rises'} during the {w}" for w in words))
+        notes.append(f"the position {moved} (stored as the distance from the sample): turned round to grow "
+                     "towards the sample")
         return -z, use_measured
     return z, use_measured
 
