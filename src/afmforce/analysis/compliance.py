@@ -107,16 +107,18 @@ def _fit_line(z: np.ndarray, s: np.ndarray, run: RunRegions) -> ComplianceLine:
                           z_max=float(z_max), s_min=float(s_min), s_max=float(s_max))
 
 
-def fit_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract: RunRegions,
+def fit_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions | None, retract: RunRegions | None,
                    unit: str) -> ComplianceResult:
-    """Fit the constant-compliance line of both runs (a NaN line for a run without one).
+    """Fit the constant-compliance line of both runs (a NaN line for a run without one, or absent: None).
 
     A run whose line is degenerate (no spread of its positions: a stepped, backlashing position
     sensor that barely moves over the region) gets a NaN line and a note, and the other run's
     line serves (as for a run without a compliance region); both degenerate raise.
     """
-    lines, notes = {}, []
+    lines, notes = {"approach": ComplianceLine.missing(), "retract": ComplianceLine.missing()}, []
     for run in (approach, retract):
+        if run is None:  # a curve of one run: the missing run has no line
+            continue
         try:
             lines[run.kind] = _fit_line(z, s, run)
         except AnalysisError as exc:

@@ -186,13 +186,23 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
         hit = memo.get(key)
         if hit is not None and all(a is b for a, b in zip(hit[0], arrays)):
             st, start = dataclasses.replace(hit[1], curve=curve, probe=st.probe), head
+    missing = st.missing_run
     for i, name in enumerate(order[start:], start):
+        if missing and missing in known[name].runs:  # a curve of one run: the step needs the other
+            st = st.update(skipped={**st.skipped, name: f"not available: no {missing} run"})
+            continue
         try:
             st = known[name].run(st, opts[name])
         except NoContact as exc:  # a curve that never touches: contact kind "none", not a failure
             return _no_contact(st, tuple(order), str(exc))
         if key is not None and i == head - 1:
             memo[key] = (arrays, st)
+    if missing:  # said once, where every output shows it (the steps' own reasons are in not_applicable)
+        why = f"not available: no {missing} run"
+        gone = [s for s, w in st.skipped.items() if w == why]
+        if gone:
+            st = st.update(warn=f"the curve holds the {'retract' if missing == 'approach' else 'approach'} run only: "
+                                f"{why}: {', '.join(gone)}")
     return _result(st, tuple(order), known)
 
 

@@ -148,8 +148,8 @@ def _span(st: State) -> list[str]:
         signal_span = float(smax - smin) * abs(st.factor) * st.spring_constant
         span = float(fmax - fmin)
     else:
-        runs = (np.concatenate([st.approach.index, st.retract.index]) if st.approach is not None
-                else np.array([], int))
+        present = [r.index for r in (st.approach, st.retract) if r is not None]  # a curve of one run: its own
+        runs = np.concatenate(present) if present else np.array([], int)
         f = st.force[runs]
         f = f[np.isfinite(f)]
         if f.size < 2:

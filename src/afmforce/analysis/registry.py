@@ -106,6 +106,11 @@ class AnalysisStep:
         The result fields it fills.
     collect : callable, optional
         ``collect(state) -> {field: value}``, called when the step left its details.
+    runs : tuple of str
+        The runs (``"approach"``, ``"retract"``) it reads. On a curve of one run (an export of the
+        retract or of the approach alone) a step that needs the missing run is skipped, reported
+        ``"not available: no approach run"`` (docs/analysis.md, "Curves of one run"); ``()``: it
+        works on whichever run the curve has.
     """
 
     identifier: str
@@ -118,6 +123,7 @@ class AnalysisStep:
     reference: str = ""
     fields: tuple[ResultField, ...] = ()
     collect: Callable[[Any], Mapping[str, Any]] | None = field(default=None, compare=False)
+    runs: tuple[str, ...] = ("approach", "retract")
 
     def run(self, state, options):
         """The step on ``state`` (AnalysisError naming a missing channel first)."""

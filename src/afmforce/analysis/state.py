@@ -124,6 +124,15 @@ class State:
         object.__setattr__(out, "__dict__", {**self.__dict__, **changes})
         return out
 
+    @property
+    def missing_run(self) -> str | None:
+        """``"approach"`` or ``"retract"`` when the curve holds the other run only (an export of one run:
+        the steps that need the missing one are skipped), else None."""
+        for which, word in ((0, "approach"), (1, "retract")):
+            if self.run_index(which).size == 0:
+                return word
+        return None
+
     def run_index(self, which: int) -> np.ndarray:
         """Indices of the curve's segment ``which`` (0 approach, 1 retract), in time order
         (:func:`~.regions.run_indices`, found once per curve: read it, do not change it)."""
@@ -181,14 +190,11 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
                 raise AnalysisError(f"the {name} has {int(bad.sum())} NaN or infinite samples "
                                     f"(first at {int(np.argmax(bad))}); clean the data first")
     seg = np.asarray(curve.segment)
-    runs = {}
+    runs = {("run", which): (curve.segment, run_indices(seg, which)) for which in (0, 1)}
+    sizes = [runs[("run", which)][1].size for which in (0, 1)]
+    single = curve.metadata.get("single_run")   # an export of one run (the readers say which)
     for which, word in ((0, "approach"), (1, "retract")):
-        runs[("run", which)] = (curve.segment, run_indices(seg, which))
-        if runs[("run", which)][1].size == 0:
-            single = curve.metadata.get("single_run")
-            if single:  # an export of one run: nothing to split
-                raise AnalysisError(f"the file holds the {single} run only (no {word}); the analysis needs both "
-                                    "runs: export the whole curve (approach and retract)")
+        if sizes[which] == 0 and not (single and sizes[1 - which]):
             raise AnalysisError(f"the curve has no {word} segment (one segment only); the analysis needs "
                                 "both runs: split the curve at its turning point")
     probe = probe if probe is not None else _default_probe()
@@ -284,8 +290,9 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
     than :data:`MAX_POSITION_SPAN`, is refused; a position that falls on the approach and rises on the
     retract (stored as the distance from the sample) is turned round, with a note.
     """
-    idx = [runs[("run", which)][1] for which in (0, 1)]
-    words = ("approach", "retract")
+    present = [(runs[("run", which)][1], word) for which, word in ((0, "approach"), (1, "retract"))
+               if runs[("run", which)][1].size]   # a curve of one run: that run's checks only
+    idx, words = [i for i, _ in present], tuple(w for _, w in present)
     spans = [float(ptp(z[i])) if i.size else 0.0 for i in idx]
     if min(spans) <= 0.0 and use_measured and channel == "auto":
         nominal = np.array(curve.piezo_nominal, dtype=float)
@@ -306,9 +313,11 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
     for i in idx:
         n = max(1, i.size // 10)
         trend.append(float(np.median(z[i[-n:]]) - np.median(z[i[:n]])))
-    if trend[0] < 0.0 < trend[1]:
-        notes.append("the position falls during the approach and rises during the retract (stored as the "
-                     "distance from the sample): turned round to grow towards the sample")
+    signs = {"approach": -1.0, "retract": 1.0}   # the position falls on the approach, rises on the retract
+    if all(signs[w] * t > 0.0 for w, t in zip(words, trend)):
+        moved = (" and ".join(f"{'falls' if w == 'approach' else 'rises'} during the {w}" for w in words))
+        notes.append(f"the position {moved} (stored as the distance from the sample): turned round to grow "
+                     "towards the sample")
         return -z, use_measured
     return z, use_measured
 

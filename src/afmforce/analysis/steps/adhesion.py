@@ -47,7 +47,7 @@ def _adhesion_fields(st: State) -> dict:
 ADHESION = AnalysisStep(
     "adhesion", "Adhesion: deepest retract dip below its own baseline, last rupture, unbinding steps",
     adhesion_step, AdhesionOptions, requires=("zero", "force"), channels=("position",),
-    reference="afmforce (every contact kind)",
+    reference="afmforce (every contact kind)", runs=("retract",),
     fields=(ResultField("adhesion_force", "N", "adhesion (deepest retract dip)", summary=True, column=True),
             ResultField("adhesion_deflection", "m", "adhesion as a deflection"),
             ResultField("adhesion_distance", "m", "adhesion position from contact", summary=True, column=True),

@@ -56,7 +56,7 @@ def _calibration_fields(st: State) -> dict:
 
 CALIBRATION = AnalysisStep(
     "calibration", "Deflection sensitivity (InvOLS): the file's, or from the compliance slope", calibration,
-    CalibrationOptions, requires=("compliance",), reference="section 3.1; eq 15",
+    CalibrationOptions, requires=("compliance",), reference="section 3.1; eq 15", runs=(),
     fields=(ResultField("sensitivity_used", "m/V", "sensitivity used (the forces'; calibration source says which)",
                         summary=True, column=True, compute=lambda r: r.sensitivity_fit
                         if r.calibration_source == "fit" else r.sensitivity),

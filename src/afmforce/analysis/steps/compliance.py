@@ -20,4 +20,4 @@ def compliance(st: State, o: ComplianceOptions) -> State:
 
 
 COMPLIANCE = AnalysisStep("compliance", "Constant-compliance lines (robust fit)", compliance, ComplianceOptions,
-                          requires=("drift",), after=("fringes",), channels=("approach",), reference="section 3.1")
+                          requires=("drift",), after=("fringes",), reference="section 3.1", runs=())

@@ -53,6 +53,8 @@ def contact(st: State, o: ContactOptions) -> State:
     sat = saturated_mask(st.signal)
     kw = dict(saturated=sat, min_points=int(o.min_points), baseline_fraction=o.baseline_fraction,
               compliance_fraction=o.compliance_fraction)
+    if st.missing_run:
+        return _one_run(st, sat, kw)
     try:
         app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach", **kw)
     except AnalysisError as exc:
@@ -82,5 +84,23 @@ def contact(st: State, o: ContactOptions) -> State:
     return st.update("contact", summary, warn=warn, approach=app, retract=ret, noise=app.noise)
 
 
+def _one_run(st: State, sat: np.ndarray, kw: dict) -> State:
+    """The regions of a curve of one run (the other is None; its region sizes -1): the run's own noise."""
+    which, word = (1, "retract") if st.missing_run == "approach" else (0, "approach")
+    try:
+        run = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, which), word, **kw)
+    except AnalysisError as exc:
+        if not str(exc).startswith("no contact region"):
+            raise
+        raise NoContact(str(exc)) from None
+    split = int(run.index[min(run.split, run.index.size - 1)])
+    own = (split, int(run.zero_force.sum()), int(run.compliance.sum()))
+    app, ret = (own, (-1, -1, -1)) if word == "approach" else ((-1, -1, -1), own)
+    summary = ContactSummary(app[0], ret[0], app[1], ret[1], app[2], ret[2], int(sat.sum()))
+    warn = [f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits"] if sat.any() else []
+    warn += [run.note] if run.note else []
+    return st.update("contact", summary, warn=warn, noise=run.noise, **{word: run})
+
+
 CONTACT = AnalysisStep("contact", "Contact, constant-compliance and zero-force regions", contact, ContactOptions,
-                       after=("smooth",), reference="section 3.1, Fig 7")
+                       after=("smooth",), reference="section 3.1, Fig 7", runs=())

@@ -49,6 +49,6 @@ def force(st: State, o: ForceOptions) -> State:
 
 
 FORCE = AnalysisStep("force", "Deflection to force (tilt-corrected spring constant)", force, ForceOptions,
-                     requires=("calibration",), channels=("deflection",), reference="eqs 13, 14",
+                     requires=("calibration",), channels=("deflection",), reference="eqs 13, 14", runs=(),
                      fields=(ResultField("spring_constant", "N/m", "spring constant", summary=True, column=True),),
                      collect=lambda st: {"spring_constant": st.details["force"].spring_constant})

@@ -24,7 +24,7 @@ def _indentation_fields(st: State) -> dict:
 
 INDENTATION = AnalysisStep(
     "indentation", "Young's modulus (and work of adhesion) of a soft contact: indentation model fitted with the "
-    "contact point", indentation, IndentationOptions, requires=("kind", "force"),
+    "contact point", indentation, IndentationOptions, requires=("kind", "force"), runs=("approach",),
     reference="Hertz, Sneddon, Bilodeau, Dimitriadis, JKR, DMT, Maugis (docs/contact.md); checked against nanite",
     fields=(ResultField("indentation_model", None, default=""),
             ResultField("youngs_modulus", "Pa", "Young's modulus (indentation fit)", summary=True, column=True),

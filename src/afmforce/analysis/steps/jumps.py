@@ -41,8 +41,10 @@ def jumps(st: State, o: JumpsOptions) -> State:
     ji = find_jump_in(st.deflection, st.separation, st.position, st.approach, noise, k, nsigma, window,
                       attractive_below=nsigma * noise)  # a step in contact is a slip, not the jump
     ret = st.retract
-    clipped = not ret.has_compliance and bool(ret.contact.any())  # its whole contact is clipped
-    if clipped:  # the pull-off is not in the record
+    clipped = ret is not None and not ret.has_compliance and bool(ret.contact.any())  # its whole contact is clipped
+    if ret is None:
+        st = st.update(skipped={**st.skipped, "pull_off": "not available: no retract run"})
+    if clipped or ret is None:  # the pull-off is not in the record
         po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
     else:
         po = find_pull_off(st.deflection, st.position, ret, noise, k, nsigma, window,
@@ -60,6 +62,8 @@ def jumps(st: State, o: JumpsOptions) -> State:
         st = st.update(skipped={**st.skipped, "pull_off": bad_off})
         po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
     warn = jump_warnings(ji, po, k, clipped)
+    if ret is None:  # an approach exported alone: no pull-off was looked for
+        warn = [w for w in warn if w != "no pull-off found on the retract run"]
     z0 = st.details["zero"].contact_separation if "zero" in st.details else Z0
     if 0 <= ji.index < st.separation.size - 1:
         # at a rigid contact the first contact sample lies on the compliance line (h = z0)
@@ -104,7 +108,7 @@ def _jumps_fields(st: State) -> dict:
 
 JUMPS = AnalysisStep(
     "jumps", "Jump into contact and pull-off", jumps, JumpsOptions, requires=("zero", "force"),
-    channels=("separation",), reference="section 2.1, Fig 9",
+    channels=("separation",), reference="section 2.1, Fig 9", runs=("approach",),
     fields=(ResultField("jump_in_separation", "m", "jump-in separation", summary=True, column=True),
             ResultField("jump_in_force", "N", "jump-in force", summary=True, column=True),
             ResultField("jump_in_deflection", "m", "jump-in deflection", column=True),

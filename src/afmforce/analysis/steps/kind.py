@@ -173,7 +173,7 @@ def _kind_fields(st: State) -> dict:
 
 KIND = AnalysisStep(
     "kind", "Contact kind (hard: jump-in or straight line; soft: curved) and a soft contact point", kind, KindOptions,
-    requires=("calibration",), channels=("deflection",),
+    requires=("calibration",), channels=("deflection",), runs=("approach",),
     reference="afmforce (baseline line + power-law contact term; checked against nanite's fit_line_polynomial)",
     fields=(ResultField("contact_kind", None, default=""), ResultField("contact_kind_reason", None, default=""),
             ResultField("indentation", "m", "indentation (soft contact)", summary=True, column=True)),

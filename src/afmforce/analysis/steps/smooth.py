@@ -79,4 +79,4 @@ def smooth(st: State, o: SmoothOptions) -> State:
 
 
 SMOOTH = AnalysisStep("smooth", "Digitization smoothing of the position (running average)", smooth, SmoothOptions,
-                      reference="section 3.1, Fig 7C")
+                      reference="section 3.1, Fig 7C", runs=())

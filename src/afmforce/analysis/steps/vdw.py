@@ -53,7 +53,7 @@ def _vdw_fields(st: State) -> dict:
 
 
 VDW = AnalysisStep(
-    "vdw", "van der Waals fit before the jump (A R or A)", vdw, VdwOptions, requires=("jumps",), reference="eq 2",
+    "vdw", "van der Waals fit before the jump (A R or A)", vdw, VdwOptions, requires=("jumps",), reference="eq 2", runs=("approach",),
     fields=(ResultField("hamaker_radius", "J m", "A R", summary=True, column=True),
             ResultField("hamaker_radius_se", "J m", "standard error of A R", column=True),
             ResultField("hamaker", "J", "Hamaker constant", summary=True, column=True),

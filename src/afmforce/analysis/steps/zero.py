@@ -45,9 +45,11 @@ def zero(st: State, o: ZeroOptions) -> State:
                 warn.append(f"compliance lines not parallel (slope ratio {ratio:.3g}): zero of separation from "
                             "the inward line; the outward run's separations are approximate")
     regions = st.retract if run == "retract" else st.approach
-    if not regions.has_compliance:  # that run's contact is clipped: the other line
+    if regions is None or not regions.has_compliance:  # that run's contact is clipped (or not recorded): the other
         regions = st.approach if run == "retract" else st.retract
-    if not (st.approach.has_compliance and st.retract.has_compliance):
+    if st.missing_run:  # a curve of one run: its own line, no other run to correct
+        pass
+    elif not (st.approach.has_compliance and st.retract.has_compliance):
         warn.append(f"zero of separation from the {regions.kind} run's compliance line alone: friction or "
                     f"hysteresis between the runs would offset it by up to half their distance (not measured), "
                     f"and the other run's separations are not corrected for the shift")
@@ -56,7 +58,7 @@ def zero(st: State, o: ZeroOptions) -> State:
 
 
 ZERO = AnalysisStep("zero", "Zero of separation at the compliance line", zero, ZeroOptions, requires=("kind",),
-                    after=("shift",), channels=("deflection",), reference="section 3.2, Fig 9",
+                    after=("shift",), channels=("deflection",), reference="section 3.2, Fig 9", runs=(),
                     fields=(ResultField("contact_separation", "m", "separation given to the compliance line",
                                         column=True),),
                     collect=lambda st: {"contact_separation": st.details["zero"].contact_separation})
