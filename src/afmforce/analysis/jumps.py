@@ -7,6 +7,14 @@
   Without a significant step (the tip crept into contact, or the jump is below
   the noise) ``found`` is False and the numbers describe the onset of contact:
   the last sample before the split.
+* Through a barrier: a jump that starts at a repulsive force, after the force rose from the free
+  baseline, is the jump through a repulsive barrier (a double layer's, a steric layer's, a surface
+  layer that yields): the tip goes over the top once the force gradient beyond it exceeds k
+  (dF/dh = k) and jumps into the primary minimum or onto the contact, where it may land repulsive
+  too on a hard contact (Israelachvili, *Intermolecular and Surface Forces*, 3rd ed., ch. 14; Butt,
+  Cappella & Kappl, Surf. Sci. Rep. 59, 1 (2005); a layer that yields: Butt & Franz, Phys. Rev. E 66,
+  031601 (2002)). ``force_before`` is then the barrier height, ``deflection_before - deflection_after``
+  the distance the tip jumps (:attr:`JumpIn.jump_distance`).
 * Pull-off: the last retract sample on the contact line (see
   :func:`find_pull_off`); its force is the most negative deflection up to it
   (the adhesion), its jump-out distance that deflection as a positive length
@@ -51,6 +59,9 @@ class JumpIn:
     deflection_before, deflection_after : float  [m]
     force_before, force_after : float  [N] (NaN without spring constant)
     significance : float  step / step noise [-]
+    through_barrier : bool  the jump starts at a repulsive force the approach rose to from the free
+        baseline: a jump through a repulsive barrier, whose height is ``force_before`` and whose
+        length is ``deflection_before - deflection_after``
     """
 
     found: bool
@@ -62,6 +73,12 @@ class JumpIn:
     force_before: float = _u("N")
     force_after: float = _u("N")
     significance: float = _u("")
+    through_barrier: bool = False
+
+    @property
+    def jump_distance(self) -> float:
+        """How far the tip jumps towards the surface at a fixed base [m]: the deflection's fall."""
+        return self.deflection_before - self.deflection_after
 
 
 @dataclass(frozen=True)
@@ -128,6 +145,11 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
     least half of the attraction's depth (a lever that snaps; none such: the tip crept in through a
     gradual attraction, and the slip is judged as before). Default ``inf``: the
     largest step near the split, whatever its load.
+
+    A downward step that starts above ``attractive_below`` (repulsive) after the approach had come down
+    to it (the force rose from the free baseline to the step) is a jump through a repulsive barrier:
+    ``through_barrier``. A step that starts repulsive on a free branch that never came down to zero
+    force is not one (the zero of force is misplaced: the step judges it).
     """
     idx = run.index
     dr = d[idx]
@@ -154,8 +176,10 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
             return _nan_jump_in()
     g = idx[i]
     k = spring_constant
+    barrier = bool(found and dr[i] > attractive_below and dr[i] > dr[i + 1]
+                   and bool(np.any(dr[:i] <= attractive_below)))  # the force rose from zero to the barrier
     return JumpIn(found, int(g), float(position[g]), float(separation[g]), float(dr[i]), float(dr[i + 1]),
-                  float(k * dr[i]), float(k * dr[i + 1]), float(sig))
+                  float(k * dr[i]), float(k * dr[i + 1]), float(sig), barrier)
 
 
 def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: float,
