@@ -152,6 +152,13 @@ def test_only_a_rise_makes_a_barrier():
     ji = find_jump_in(offset, z, z, run, 0.02e-9, K, attractive_below=0.1e-9)
     assert ji.found and not ji.through_barrier
     assert "physically impossible: the jump into contact lands at" in _repulsive(ji, None, 0.1e-9)
+    # a rise that starts in an attraction (the tip jumped in before it, 6 samples before the split) and a fall
+    # into attraction: a slip in contact (a stiff lever's in air; the Nanosurf map's curve 52: +3.7 -> -0.6 nN
+    # after a jump to -2.8 nN), not a barrier
+    slip = rise.copy()
+    slip[22:25], slip[30] = -2e-9, -0.5e-9
+    ji = find_jump_in(slip, z, z, run, 0.02e-9, K, attractive_below=0.1e-9)
+    assert ji.found and ji.index == 29 and not ji.through_barrier
     # a jump-in that rises (a step away from the surface on the approach) stays impossible
     nan = math.nan
     away = JumpIn(True, 10, nan, 1e-9, 0.0, 1.5e-9, 0.0, 3e-11, 30.0)

@@ -146,10 +146,11 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
     gradual attraction, and the slip is judged as before). Default ``inf``: the
     largest step near the split, whatever its load.
 
-    A downward step that starts above ``attractive_below`` (repulsive) after the approach had come down
-    to it (the force rose from the free baseline to the step) is a jump through a repulsive barrier:
-    ``through_barrier``. A step that starts repulsive on a free branch that never came down to zero
-    force is not one (the zero of force is misplaced: the step judges it).
+    A downward step that starts above ``attractive_below`` (repulsive) after the force rose to it from zero
+    (walking back from the step, the first sample at or below ``attractive_below`` is not below
+    ``-attractive_below``) is a jump through a repulsive barrier: ``through_barrier``. Not one: a step whose
+    rise began in an attraction (the tip had jumped in already: a slip in contact, e.g. a stiff lever's in
+    air), or one on a free branch that never came down to zero force (a misplaced zero: the step judges it).
     """
     idx = run.index
     dr = d[idx]
@@ -176,8 +177,12 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
             return _nan_jump_in()
     g = idx[i]
     k = spring_constant
-    barrier = bool(found and dr[i] > attractive_below and dr[i] > dr[i + 1]
-                   and bool(np.any(dr[:i] <= attractive_below)))  # the force rose from zero to the barrier
+    barrier = False
+    if found and dr[i] > attractive_below and dr[i] > dr[i + 1]:  # a fall that starts repulsive
+        below = np.flatnonzero(dr[:i] <= attractive_below)
+        # the force rose to it from zero force (the free branch), not from an attraction (the tip already
+        # jumped in: a slip in contact), nor from nowhere (a free branch above zero: a misplaced zero)
+        barrier = bool(below.size and dr[below[-1]] >= -attractive_below)
     return JumpIn(found, int(g), float(position[g]), float(separation[g]), float(dr[i]), float(dr[i + 1]),
                   float(k * dr[i]), float(k * dr[i + 1]), float(sig), barrier)
 
