@@ -125,6 +125,14 @@ class Jumps:
     pull_off: PullOff
 
 
+#: A jump through a barrier starts at least this many times ``attractive_below`` above zero force [-]: below,
+#: a drift line's offset near contact (the Nanosurf map in air: 3 x on a flat free branch) is not told from one.
+BARRIER_MIN = 4.0
+#: The free branch before a barrier's rise holds no attraction over this many samples [-] (one there: the tip
+#: had jumped in, and the rise and fall are in contact).
+BARRIER_FREE = 10
+
+
 def _nan_jump_in() -> JumpIn:
     nan = math.nan
     return JumpIn(False, -1, nan, nan, nan, nan, nan, nan, 0.0)
@@ -146,9 +154,10 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
     gradual attraction, and the slip is judged as before). Default ``inf``: the
     largest step near the split, whatever its load.
 
-    A downward step that starts above ``attractive_below`` (repulsive) after the force rose to it from zero
-    (walking back from the step, the first sample at or below ``attractive_below`` is not below
-    ``-attractive_below``) is a jump through a repulsive barrier: ``through_barrier``. Not one: a step whose
+    A downward step that starts above :data:`BARRIER_MIN` x ``attractive_below`` (repulsive) after the force
+    rose to it from zero (walking back from the step, the first sample at or below ``attractive_below`` and
+    the :data:`BARRIER_FREE` before it are not below ``-attractive_below``) is a jump through a repulsive
+    barrier: ``through_barrier``. Not one: a step whose
     rise began in an attraction (the tip had jumped in already: a slip in contact, e.g. a stiff lever's in
     air), or one on a free branch that never came down to zero force (a misplaced zero: the step judges it).
     """
@@ -178,11 +187,13 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
     g = idx[i]
     k = spring_constant
     barrier = False
-    if found and dr[i] > attractive_below and dr[i] > dr[i + 1]:  # a fall that starts repulsive
+    if found and dr[i] > BARRIER_MIN * attractive_below and dr[i] > dr[i + 1]:  # a fall that starts repulsive
         below = np.flatnonzero(dr[:i] <= attractive_below)
         # the force rose to it from zero force (the free branch), not from an attraction (the tip already
         # jumped in: a slip in contact), nor from nowhere (a free branch above zero: a misplaced zero)
-        barrier = bool(below.size and dr[below[-1]] >= -attractive_below)
+        if below.size:
+            b = int(below[-1])
+            barrier = bool(dr[max(b - BARRIER_FREE, 0): b + 1].min() >= -attractive_below)
     return JumpIn(found, int(g), float(position[g]), float(separation[g]), float(dr[i]), float(dr[i + 1]),
                   float(k * dr[i]), float(k * dr[i + 1]), float(sig), barrier)
 
