@@ -32,11 +32,13 @@ def kind(st: State, o: KindOptions) -> State:
     o.check_method(CONTACT_POINT_METHODS)
     noise = abs(st.noise * st.factor)
     app = st.approach
-    # a step in contact is a slip, and a jump through a repulsive barrier (the tip already pushing on a
-    # double layer, a surface layer that yields: a gel's breakthrough) says nothing of the contact after it:
-    # neither makes the contact hard; its line then decides
-    ji = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma, attractive_below=nsigma * noise)
-    sig = ji.significance if ji.index >= 0 and not ji.through_barrier else 0.0
+    # a jump through a repulsive barrier (the tip already pushing on a double layer, a surface layer that
+    # yields: a gel's breakthrough) says nothing of the contact after it: it does not make the contact hard;
+    # its line then decides
+    ji = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma)
+    jb = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma, attractive_below=nsigma * noise)
+    barrier = jb.through_barrier and jb.index == ji.index  # the largest step near the split, through a barrier
+    sig = ji.significance if ji.index >= 0 and not barrier else 0.0
     cal = st.details["calibration"]
     comp = st.details["compliance"]
     stiff = (comp.approach.slope * cal.factor if cal.source == "metadata" and comp.approach.found else math.nan)
