@@ -26,7 +26,7 @@ import pytest
 from afmforce.analysis.jumps import JumpIn, PullOff
 from afmforce.analysis.pipeline import analyze
 from afmforce.analysis.regions import find_run_regions, run_indices, saturated_mask
-from afmforce.analysis.plausibility import DETECTOR_RANGE, IMPOSSIBLE, beyond_detector
+from afmforce.analysis.plausibility import DETECTOR_RANGE, IMPOSSIBLE, K_UNDETERMINED, beyond_detector
 from afmforce.analysis.steps.jumps import _repulsive
 from afmforce.analysis.synthetic import static_curve
 from afmforce.io import load
@@ -127,16 +127,45 @@ def test_spring_constant_inferred_from_the_slope_outside_any_lever_is_refused():
     ok = analyze(_force_export(c))
     assert ok.spring_constant == pytest.approx(0.21, rel=0.05)  # control: the slope's k is the lever's
     assert ok.pull_off_force < 0 and not ok.verdict.startswith(IMPOSSIBLE)
-    for scale, cause in ((1e4, "2.1e-05 N/m inferred from the compliance slope of the force signal is outside the "
-                                "range of cantilevers made (0.001..100 N/m): the contact is soft"),  # 1e4 x the travel
-                         (1e-3, "the position is mis-scaled")):  # 1e-3 x the travel: k about 200 N/m
+    # 1e4 x the travel: a slope of 2.1e-5 N/m, softer than any lever: no hard contact, k undetermined (not an
+    # impossible number: the signal is a force, only not one that fixes k); 1e-3 x the travel: about 200 N/m,
+    # stiffer than any lever, which a rigid contact's slope (the lever's) cannot be: impossible
+    for scale, start, cause in (
+            (1e4, K_UNDETERMINED, "the force signal has no hard contact: its compliance slope, 2.1e-05 N/m, is "
+                                  "softer than any cantilever made (at least 0.001 N/m)"),
+            (1e-3, IMPOSSIBLE, "the position is mis-scaled")):
         r = analyze(_force_export(c, scale))
         assert math.isnan(r.spring_constant)  # no lever is 2e-5 or 2e2 N/m: not reported
-        assert r.verdict.startswith(IMPOSSIBLE) and "suspect input: spring_constant" in r.verdict
+        assert r.verdict.startswith(start) and "spring_constant" in r.verdict
         assert cause in r.verdict
         for step in ("jumps", "adhesion", "vdw", "indentation"):
-            assert r.not_applicable[step].startswith(IMPOSSIBLE)
+            assert r.not_applicable[step].startswith(start)
         assert all(math.isnan(v) for v in (r.pull_off_force, r.jump_in_force, r.adhesion_force, r.youngs_modulus))
+
+
+def test_afm_workshop_force_without_a_hard_contact_leaves_k_undetermined():
+    """The AFM Workshop export (shared/data/real): extend and retract Z-sense [nm] and force [nN], one
+    segment each, no other column, no k. Read here without afmforce: the extend's force rises 20 pN over its
+    last 300 nm of travel, where any lever (>= 1e-3 N/m) on a hard contact would rise >= 300 pN: the
+    approach reaches no hard contact (a soft sample, or a rise before contact), so its slope (5.1e-5 N/m) is
+    not the lever's and k is undetermined, not "physically impossible"."""
+    from realdata import real_file
+
+    path = real_file("afm-workshop_single.csv")
+    lines = path.read_text().splitlines()
+    head = next(i for i, ln in enumerate(lines) if ln.startswith("Extend Z-Sense"))
+    assert lines[head].split(",") == ["Extend Z-Sense(nm)", "Extend Force(nN)", "Retract Z-Sense(nm)",
+                                      "Retract Force(nN)"]                   # the four columns, no other
+    rows = [ln.split(",") for ln in lines[head + 1:] if ln.strip()]
+    assert all(len(r) <= 4 for r in rows)
+    ext = np.array([[float(r[0]), float(r[1])] for r in rows if len(r) >= 2 and r[0].strip()])
+    last = ext[:, 0] > ext[-1, 0] - 300.0                       # nm
+    rise = (ext[last, 1].max() - ext[last, 1].min()) * 1e-9      # nN -> N
+    assert rise < 0.1 * 1e-3 * 300e-9                            # a tenth of the softest lever's rise
+    r = analyze(load(path)[0])
+    assert r.verdict.startswith(K_UNDETERMINED) and IMPOSSIBLE not in r.verdict
+    assert "no hard contact" in r.verdict and "5.13e-05 N/m" in r.verdict and "give spring_constant" in r.verdict
+    assert math.isnan(r.spring_constant)
 
 
 def test_slope_of_a_separation_or_a_soft_contact_is_not_the_levers_spring_constant():

@@ -29,11 +29,14 @@ import make_pipeline_reference as M  # noqa: E402
 
 REFERENCE = json.loads(gzip.decompress(M.OUT.read_bytes()))
 RTOL = 1e-9
+#: Keys declared after the reference was made (new quantities, no number of the old ones changed): they
+#: may appear in today's JSON; every key of the reference must still be there with its value.
+ADDED = {"barrier_force", "barrier_jump_distance", "through_barrier"}
 
 
 def _compare(new, old, where: str, out: list[str]) -> None:
     if isinstance(old, dict):
-        if not isinstance(new, dict) or set(new) != set(old):
+        if not isinstance(new, dict) or (set(new) - ADDED) != set(old):
             out.append(f"{where}: keys {sorted(set(new) ^ set(old)) if isinstance(new, dict) else type(new)}")
             return
         for k in old:

@@ -27,12 +27,15 @@ from ._numeric import ptp
 from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
-           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "SURFACE_ENERGY_MAX", "unphysical_surface_energy", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
+           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "K_UNDETERMINED", "SURFACE_ENERGY_MAX", "unphysical_surface_energy", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
            "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers"]
 
 #: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
 #: the verdict repeats every such reason, each naming the suspect input.
 IMPOSSIBLE = "physically impossible"
+#: How the reason starts when a force signal's spring constant cannot be inferred (its contact slope is
+#: softer than any lever: no hard contact); a refusal like :data:`IMPOSSIBLE`'s, repeated in the verdict.
+K_UNDETERMINED = "spring constant undetermined"
 #: The widest photodiode ADC of the instruments read [V]: a 16-bit NanoScope channel at 0.375 mV/LSB
 #: (+-12.3 V; JPK and Asylum digitise +-10 V). A reader may give its own as metadata ``adc_range`` [V].
 DETECTOR_RANGE = 2**15 * 0.000375
@@ -239,7 +242,10 @@ def _inferred_spring_constant(st: State) -> str | None:
     (a rigid contact); it is inferred only when neither the file nor the user gives one (a given one is
     used, never compared). A value outside :data:`SPRING_CONSTANT_RANGE` (no cantilever is made so soft
     or so stiff) says the contact was not rigid or not reached: the separations and every number from
-    them would be wrong.
+    them would be wrong. Softer than any lever (a force that barely rises in "contact": a soft sample, or
+    an approach that never reached a hard contact) the spring constant is undetermined (:data:`K_UNDETERMINED`),
+    not impossible: the signal is a force, only not one that fixes k. Stiffer than any lever is
+    impossible (a rigid contact's slope is the lever's, a soft one's less): the position is mis-scaled.
     """
     conv = st.details.get("force")
     if conv is None or getattr(conv, "method", "") != "compliance slope" or "force" in st.skipped:
@@ -248,8 +254,13 @@ def _inferred_spring_constant(st: State) -> str | None:
     lo, hi = SPRING_CONSTANT_RANGE
     if not math.isfinite(k) or lo <= k <= hi:
         return None
-    cause = ("the contact is soft or was not reached" if k < lo else
-             "the position is mis-scaled or does not move the lever's base")
+    if k < lo:
+        return (f"{K_UNDETERMINED}: the force signal has no hard contact: its compliance slope, {k:.3g} N/m, is "
+                f"softer than any cantilever made (at least {lo:g} N/m), so it is a soft sample's or an approach's "
+                "that never reached a hard contact, not the lever's; without the lever's spring constant the "
+                "deflection, the separations and every number from them are unknown; give spring_constant (the "
+                "lever's)")
+    cause = "the position is mis-scaled or does not move the lever's base"
     return (f"{IMPOSSIBLE}: the spring constant {k:.3g} N/m inferred from the compliance slope of the force signal "
             f"is outside the range of cantilevers made ({lo:g}..{hi:g} N/m): {cause}, so the slope is not the "
             "lever's; suspect input: "
@@ -301,5 +312,7 @@ def impossible_modulus(modulus: float) -> str | None:
 
 
 def impossible_reasons(skipped) -> list[str]:
-    """The distinct physically-impossible reasons among a result's ``not_applicable`` (for the verdict)."""
-    return list(dict.fromkeys(r for r in dict(skipped).values() if str(r).startswith(IMPOSSIBLE)))
+    """The distinct physically-impossible reasons (and an undetermined spring constant's, :data:`K_UNDETERMINED`)
+    among a result's ``not_applicable`` (for the verdict)."""
+    return list(dict.fromkeys(r for r in dict(skipped).values()
+                              if str(r).startswith(IMPOSSIBLE) or str(r).startswith(K_UNDETERMINED)))

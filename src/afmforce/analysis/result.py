@@ -82,6 +82,11 @@ class AnalysisResult:
         Force the tip jumps to, relative to the baseline [N].
     jump_in_deflection : float
         Deflection the tip jumps to [m].
+    barrier_force : float
+        A jump-in through a repulsive barrier (it starts at a repulsive force the approach rose to,
+        a double layer's in liquid): the force at its start, the barrier's height [N] (NaN otherwise).
+    barrier_jump_distance : float
+        How far the tip jumps through that barrier, the deflection's fall [m] (NaN otherwise).
     contact_onset_separation : float
         Separation at the last sample before contact, jump or not [m] (a tip that
         creeps in, or jumps by less than the noise, has only this).

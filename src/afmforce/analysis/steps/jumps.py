@@ -78,9 +78,14 @@ def jumps(st: State, o: JumpsOptions) -> State:
 def _repulsive(ji: JumpIn | None, po: PullOff | None, tolerance: float) -> str | None:
     """Why the jumps are physically impossible: a jump into contact or a pull-off landing at a repulsive
     (positive) deflection beyond ``tolerance`` [m]. Both are attractions (F < 0): the zero of force or the
-    contact point is misplaced (None: both plausible, or not given)."""
+    contact point is misplaced (None: both plausible, or not given).
+
+    A jump through a repulsive barrier (``JumpIn.through_barrier``: a fall of the deflection from a
+    repulsive force the approach rose to) may land repulsive on a hard contact: it is physics, not
+    judged here. What stays impossible is a jump-in that lands repulsive any other way: a step away from
+    the surface, or one on a free branch that never came down to zero force (a misplaced zero)."""
     bad = []
-    if ji is not None and ji.found and ji.deflection_after > tolerance:
+    if ji is not None and ji.found and ji.deflection_after > tolerance and not ji.through_barrier:
         bad.append(f"the jump into contact lands at {ji.force_after * 1e9:+.4g} nN")
     if po is not None and po.found and po.deflection > tolerance:
         bad.append(f"the pull-off is at {po.force * 1e9:+.4g} nN")
@@ -103,6 +108,8 @@ def _jumps_fields(st: State) -> dict:
     if ji.found:  # without a significant jump the tip crept in: only the onset of contact
         out.update(jump_in_separation=ji.separation, jump_in_force=ji.force_after,
                    jump_in_deflection=ji.deflection_after)
+    if ji.through_barrier:  # the jump starts on a repulsive barrier: its height and how far the tip jumps
+        out.update(barrier_force=ji.force_before, barrier_jump_distance=ji.jump_distance)
     return out
 
 
@@ -112,6 +119,10 @@ JUMPS = AnalysisStep(
     fields=(ResultField("jump_in_separation", "m", "jump-in separation", summary=True, column=True),
             ResultField("jump_in_force", "N", "jump-in force", summary=True, column=True),
             ResultField("jump_in_deflection", "m", "jump-in deflection", column=True),
+            ResultField("barrier_force", "N", "repulsive barrier the jump-in crossed (force at its start)",
+                        summary=True, column=True),
+            ResultField("barrier_jump_distance", "m", "jump through the barrier (deflection's fall)",
+                        summary=True, column=True),
             ResultField("contact_onset_separation", "m", "contact onset separation", summary=True),
             ResultField("pull_off_force", "N", "pull-off force", summary=True, column=True),
             ResultField("pull_off_saturated", None, default=False),

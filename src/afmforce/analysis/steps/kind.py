@@ -22,7 +22,8 @@ def kind(st: State, o: KindOptions) -> State:
     """Contact kind (hard with jump-in or straight line / soft curved) and a soft contact's contact point.
 
     See :mod:`~afmforce.analysis.contact_point`: hard when the approach jumps
-    into contact (above ``nsigma`` step noise) or its contact is a straight line
+    into contact (above ``nsigma`` step noise; a jump through a repulsive barrier
+    does not count, :attr:`~afmforce.analysis.jumps.JumpIn.through_barrier`) or its contact is a straight line
     the deflection follows (late/early slope ratio at most ``max_curvature``,
     deflection per position at least ``min_stiffness`` when the calibration is
     the file's); soft otherwise, with the contact point by ``method``.
@@ -31,8 +32,13 @@ def kind(st: State, o: KindOptions) -> State:
     o.check_method(CONTACT_POINT_METHODS)
     noise = abs(st.noise * st.factor)
     app = st.approach
+    # a jump through a repulsive barrier (the tip already pushing on a double layer, a surface layer that
+    # yields: a gel's breakthrough) says nothing of the contact after it: it does not make the contact hard;
+    # its line then decides
     ji = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma)
-    sig = ji.significance if ji.index >= 0 else 0.0
+    jb = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma, attractive_below=nsigma * noise)
+    barrier = jb.through_barrier and jb.index == ji.index  # the largest step near the split, through a barrier
+    sig = ji.significance if ji.index >= 0 and not barrier else 0.0
     cal = st.details["calibration"]
     comp = st.details["compliance"]
     stiff = (comp.approach.slope * cal.factor if cal.source == "metadata" and comp.approach.found else math.nan)
