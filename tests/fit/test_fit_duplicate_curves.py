@@ -39,3 +39,4 @@ def test_the_cli_names_the_duplicate(capsys):
     assert main(["fit", p, p, "--free", "hamaker", "--no-profile"]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "hold the same samples" in err and err.startswith("error: curves ")
+
