@@ -53,3 +53,21 @@ def test_the_cli_says_one_error_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and err.startswith(f"error: {path}: 1 spectrum bin(s)")
     assert path.read_bytes() == before
+
+
+@pytest.mark.parametrize("key, value, says", [
+    ("temperature", "abc K", "header 'temperature' must be a finite number, got 'abc K'"),    # was ValueError
+    ("temperature", "", "header 'temperature' must be a finite number, got ''"),             # was IndexError
+    ("temperature", "nan K", "header 'temperature' must be a finite number, got 'nan K'"),
+    ("correction", "1e400", "header 'correction' must be a finite number, got '1e400'"),
+    ("averages", "inf", "header 'averages' must be a finite number, got 'inf'"),            # was OverflowError
+    ("averages", "-3", "header 'averages' must be a whole number >= 1, got '-3'"),            # was taken as -3
+])
+def test_a_damaged_header_value_is_a_file_format_error(tmp_path, key, value, says):
+    lines = example_path("virtual-air").read_text(encoding="utf-8").splitlines()
+    lines = [f"# {key}: {value}" if line.startswith(f"# {key}:") else line for line in lines]
+    path = tmp_path / "header.psd"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.raises(FileFormatError) as err:
+        read_spectrum(path)
+    assert str(err.value).startswith(f"{path}: {says}: the file is damaged")

@@ -150,10 +150,22 @@ def _read_own(path: Path, text: str) -> ThermalSpectrum:
 
     def num(key):
         v = head.get(key)
-        return None if v is None else float(v.split()[0])
+        if v is None:
+            return None
+        try:
+            x = float(v.split()[0])
+        except (ValueError, IndexError):
+            x = math.nan
+        if not math.isfinite(x):
+            raise FileFormatError(f"{path}: header '{key}' must be a finite number, got {v[:40]!r}: the file is "
+                                  "damaged; correct or remove that line")
+        return x
 
     vendor = {k[len("vendor."):]: _maybe_float(v) for k, v in head.items() if k.startswith("vendor.")}
     averages = num("averages")
+    if averages is not None and not (averages >= 1 and averages == int(averages)):
+        raise FileFormatError(f"{path}: header 'averages' must be a whole number >= 1, got {head['averages'][:40]!r}: "
+                              "the file is damaged; correct or remove that line")
     return ThermalSpectrum(data[:, 0], data[:, 1], unit=head.get("unit", "m^2/Hz"),
                            temperature=num("temperature"), medium=head.get("medium"),
                            sensitivity=num("sensitivity"), correction=num("correction"),
