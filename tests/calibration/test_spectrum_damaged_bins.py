@@ -71,3 +71,16 @@ def test_a_damaged_header_value_is_a_file_format_error(tmp_path, key, value, say
     with pytest.raises(FileFormatError) as err:
         read_spectrum(path)
     assert str(err.value).startswith(f"{path}: {says}: the file is damaged")
+
+
+@pytest.mark.parametrize("value, shown", [("-5 nm/V", "-5e-09"), ("0 nm/V", "0")])
+def test_a_jpk_file_with_a_sensitivity_that_is_no_invols_is_refused(tmp_path, value, shown):
+    """Before: InvOLS -5 nm/V was used (k 219.66 mN/m, squared away), 0 nm/V said 'fewer than 8 bins'."""
+    lines = example_path("jpk-water").read_text(encoding="utf-8").splitlines()
+    lines = [f"# sensitivity: {value}" if line.startswith("# sensitivity:") else line for line in lines]
+    path = tmp_path / "bad.tnd"
+    path.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    with pytest.raises(FileFormatError) as err:
+        read_spectrum(path)
+    assert str(err.value) == (f"{path}: its sensitivity is {shown}, not a positive number: the file is damaged; "
+                              "correct that header line")

@@ -414,6 +414,11 @@ def _checked(path: Path, spectrum: ThermalSpectrum) -> ThermalSpectrum:
     """``spectrum`` when every bin is a power (finite, >= 0) at a finite frequency; else the file is
     damaged: a FileFormatError naming the bins (the fit would drop them silently -- a NaN or a
     negative bin at the peak moved k by 0.6 %, and nothing said so)."""
+    for key, value in (("sensitivity", spectrum.sensitivity), ("temperature", spectrum.temperature),
+                       ("correction", spectrum.correction)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise FileFormatError(f"{path}: its {key} is {value:g}, not a positive number: the file is damaged; "
+                                  "correct that header line")
     bad = ~(np.isfinite(spectrum.frequency) & np.isfinite(spectrum.psd) & (spectrum.psd >= 0))
     if bad.any():
         i = int(np.flatnonzero(bad)[0])
