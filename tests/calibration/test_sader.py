@@ -113,3 +113,28 @@ def test_refusals():
         sader_rectangular(1e-4, 1e-5, 1e4, float("nan"), "air")
     with pytest.raises(ParameterError, match="exponent"):
         general_constant(0.1, 1e4, 10, "air")
+
+
+def test_a_lever_shorter_than_three_widths_is_not_described_by_eq_1(capsys):
+    """Eq (1) takes the hydrodynamic function of an infinitely long beam (Sader, Chon & Mulvaney
+    1999: L/b > 3). Before, a 54 x 54 um plate in water gave k = 364 mN/m as if it were a result."""
+    from afmforce.calibration.sader import MIN_ASPECT
+    from afmforce.cli.main import main
+
+    assert MIN_ASPECT == 3.0
+    with pytest.raises(ParameterError, match=r"lever_length / lever_width = 1: .* L/b > 3"):
+        sader_rectangular(54e-6, 54e-6, 24e3, 2.0, "water")
+    with pytest.raises(ParameterError, match=r"= 2.99"):
+        sader_rectangular(2.99 * 4.5e-6, 4.5e-6, 24e3, 2.0, "water")
+    ok = sader_rectangular(3 * 4.5e-6, 4.5e-6, 24e3, 2.0, "water")     # the edge is still eq (1)
+    assert ok.spring_constant == pytest.approx(0.1906 * ok.density * (4.5e-6) ** 2 * 13.5e-6 * 2.0
+                                               * ok.gamma_imag * (2 * math.pi * 24e3) ** 2, rel=1e-12)
+    assert main(["calibrate", "sader", "--length", "54um", "--width", "54um", "--frequency", "24kHz",
+                 "--quality-factor", "2", "--medium", "water"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("error: lever_length / lever_width = 1")
+    # the thermal calibration goes on without its Sader cross-check, and says why
+    assert main(["calibrate", "thermal", "--example", "jpk-water", "--length", "10um", "--width", "10um"]) == 0
+    out, err = capsys.readouterr()
+    assert "Sader k" not in out and "spring constant k                  45.056" in out
+    assert "warning: no Sader k: lever_length / lever_width = 1" in err

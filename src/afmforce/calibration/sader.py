@@ -141,6 +141,11 @@ def _checked(name: str, value) -> float:
     return float(QUANTITIES[name].check(float(value), name))
 
 
+#: The shortest lever (length over width) eq (1) describes: Sader, Chon & Mulvaney (1999) take the
+#: hydrodynamic function of an infinitely long beam, accurate for L/b > 3.
+MIN_ASPECT = 3.0
+
+
 def sader_rectangular(length: float, width: float, resonance_frequency: float,
                       quality_factor: float, medium: str | None = "air", *,
                       density: float | None = None, viscosity: float | None = None) -> SaderResult:
@@ -152,11 +157,22 @@ def sader_rectangular(length: float, width: float, resonance_frequency: float,
     resonance_frequency : float  f_f of the fundamental mode in the fluid [Hz]
     quality_factor : float  Q_f there [-]
     medium : str  ``"air"`` or ``"water"`` (:data:`FLUIDS`); density, viscosity override it
+
+    Raises
+    ------
+    ParameterError
+        A value out of its range, or a lever shorter than :data:`MIN_ASPECT` widths.
     """
     L = _checked("lever_length", length)
     b = _checked("lever_width", width)
     f = _checked("resonance_frequency", resonance_frequency)
     q = _checked("quality_factor", quality_factor)
+    if L < MIN_ASPECT * b:
+        raise ParameterError(
+            f"lever_length / lever_width = {L / b:.3g}: the rectangular Sader method (eq 1, the "
+            f"hydrodynamics of an infinitely long beam) holds for a long lever, L/b > {MIN_ASPECT:g}; "
+            "this lever is not one: calibrate it by its thermal spectrum or by the general method "
+            "with a reference lever of its type")
     rho, eta = fluid(medium, density, viscosity)
     re = float(reynolds_number(f, b, rho, eta))
     g = complex(hydrodynamic_function(re))

@@ -150,10 +150,22 @@ def _read_own(path: Path, text: str) -> ThermalSpectrum:
 
     def num(key):
         v = head.get(key)
-        return None if v is None else float(v.split()[0])
+        if v is None:
+            return None
+        try:
+            x = float(v.split()[0])
+        except (ValueError, IndexError):
+            x = math.nan
+        if not math.isfinite(x):
+            raise FileFormatError(f"{path}: header '{key}' must be a finite number, got {v[:40]!r}: the file is "
+                                  "damaged; correct or remove that line")
+        return x
 
     vendor = {k[len("vendor."):]: _maybe_float(v) for k, v in head.items() if k.startswith("vendor.")}
     averages = num("averages")
+    if averages is not None and not (averages >= 1 and averages == int(averages)):
+        raise FileFormatError(f"{path}: header 'averages' must be a whole number >= 1, got {head['averages'][:40]!r}: "
+                              "the file is damaged; correct or remove that line")
     return ThermalSpectrum(data[:, 0], data[:, 1], unit=head.get("unit", "m^2/Hz"),
                            temperature=num("temperature"), medium=head.get("medium"),
                            sensitivity=num("sensitivity"), correction=num("correction"),
@@ -392,7 +404,26 @@ def read_spectrum(path, unit: str | None = None) -> ThermalSpectrum:
         raise FileFormatError(f"cannot read {path}: {exc.strerror or exc}") from None
     first = text.lstrip()[:200]
     if first.startswith(_MAGIC):
-        return _read_own(path, text)
+        return _checked(path, _read_own(path, text))
     if first.startswith("# thermal noise data"):
-        return _read_tnd(path, text)
-    return _read_text(path, text, unit)
+        return _checked(path, _read_tnd(path, text))
+    return _checked(path, _read_text(path, text, unit))
+
+
+def _checked(path: Path, spectrum: ThermalSpectrum) -> ThermalSpectrum:
+    """``spectrum`` when every bin is a power (finite, >= 0) at a finite frequency; else the file is
+    damaged: a FileFormatError naming the bins (the fit would drop them silently -- a NaN or a
+    negative bin at the peak moved k by 0.6 %, and nothing said so)."""
+    for key, value in (("sensitivity", spectrum.sensitivity), ("temperature", spectrum.temperature),
+                       ("correction", spectrum.correction)):
+        if value is not None and not (math.isfinite(value) and value > 0):
+            raise FileFormatError(f"{path}: its {key} is {value:g}, not a positive number: the file is damaged; "
+                                  "correct that header line")
+    bad = ~(np.isfinite(spectrum.frequency) & np.isfinite(spectrum.psd) & (spectrum.psd >= 0))
+    if bad.any():
+        i = int(np.flatnonzero(bad)[0])
+        raise FileFormatError(
+            f"{path}: {int(bad.sum())} spectrum bin(s) are not a power (NaN, infinite or negative; the first: "
+            f"{float(spectrum.psd[i]):g} at {float(spectrum.frequency[i]):.6g} Hz, bin {i + 1}): the file is damaged; "
+            "export the spectrum again")
+    return spectrum

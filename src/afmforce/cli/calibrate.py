@@ -19,7 +19,8 @@ import math
 from ..errors import ParameterError
 from ..constants import SADER_FLUIDS as FLUIDS
 from ._validate import add_field, check_output
-from .common import print_json, print_table
+from ._outcome import render
+from .common import eprint, print_json, print_table
 
 
 def _common(p, method: bool = True) -> None:
@@ -222,9 +223,13 @@ def run_thermal(args: argparse.Namespace) -> int:
     if length and width and medium in FLUIDS:
         from ..calibration import sader_rectangular
 
-        sader = sader_rectangular(length, width, fit.resonance_frequency, fit.quality_factor, medium)
-        values["spring_constant_sader"] = sader.spring_constant
-        units["spring_constant_sader"] = "N/m"
+        try:
+            sader = sader_rectangular(length, width, fit.resonance_frequency, fit.quality_factor, medium)
+        except ParameterError as exc:   # a lever the rectangular method does not describe: no Sader k
+            eprint(f"warning: no Sader k: {render(str(exc))}")
+        else:
+            values["spring_constant_sader"] = sader.spring_constant
+            units["spring_constant_sader"] = "N/m"
     rows = [("spring constant k", _pm(fit.spring_constant, fit.spring_constant_se, 1e3), "mN/m"),
             ("resonance frequency", _pm(fit.resonance_frequency, fit.resonance_frequency_se, 1e-3), "kHz"),
             ("quality factor Q", _pm(fit.quality_factor, fit.quality_factor_se, 1.0), ""),

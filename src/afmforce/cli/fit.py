@@ -138,14 +138,16 @@ def register(subparsers) -> argparse.ArgumentParser:
     return p
 
 
-def _load(paths, meta=None):
-    """The curves of ``paths`` and their names: every curve of a file with several (a force map,
-    ``FILE#2``...); a missing calibration asked for with the fit's ``--meta`` (its
-    ``--spring-constant`` is the model lever's)."""
-    from ..errors import MissingMetadataError
+def _load(paths, meta=None, found=frozenset()):
+    """The curves of ``paths``, their names and the files skipped: every curve of a file with
+    several (a force map, ``FILE#2``...); a missing calibration asked for with the fit's ``--meta``
+    (its ``--spring-constant`` is the model lever's). A file ``found`` in a folder that no reader
+    can read is skipped, ``(path, message)``, as ``afmforce analyze`` goes on past a bad file of a
+    batch; a file named is read or the error is the command's."""
+    from ..errors import FileFormatError, MissingMetadataError
     from ..io import load
 
-    curves, names = [], []
+    curves, names, skipped = [], [], []
     for path in paths:
         try:
             got = load(path, meta_override=meta or None)
@@ -158,10 +160,18 @@ def _load(paths, meta=None):
                 f"{what}; give them with {flags} (e.g. --meta spring_constant=0.1N/m "
                 "--meta sensitivity=50nm/V; in `afmforce fit` --spring-constant is the model's lever)",
                 keys=exc.keys, flags=("--meta",)) from None
+        except FileFormatError as exc:
+            if str(path) not in found:
+                raise
+            skipped.append((str(path), str(exc)))
+            continue
         name = Path(path).name
         curves += list(got)
         names += [name] if len(got) == 1 else [f"{name}#{i + 1}" for i in range(len(got))]
-    return curves, names
+    if skipped and not curves:
+        raise FileFormatError(f"no file could be read: {skipped[0][1]}"
+                              + (f" (and {len(skipped) - 1} more)" if len(skipped) > 1 else ""))
+    return curves, names, skipped
 
 
 def run(args: argparse.Namespace) -> int:
@@ -183,7 +193,9 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"no such file or folder: {', '.join(missing)}")
     from .analyze import _inputs  # folders as `analyze` reads them: every curve file in them
 
+    named = {str(Path(c)) for c in args.curves if not Path(c).is_dir()}
     args.curves = [str(p) for p in _inputs(args.curves)]
+    found = frozenset(c for c in args.curves if c not in named)      # files found in the folders
     if not args.curves:
         raise ParameterError("no force-curve files found in the given folders")
     check_outputs([("--out", args.out), ("--report", args.report)], force=args.force)
@@ -198,7 +210,9 @@ def run(args: argparse.Namespace) -> int:
     check_free(args.free.split(","), cfg.model, cfg.friction.law if cfg.model == "beam" else None)  # before loading
     from ..io import parse_meta_args
 
-    curves, names = _load(args.curves, parse_meta_args(args.meta))
+    curves, names, skipped = _load(args.curves, parse_meta_args(args.meta), found)
+    for path, message in skipped:
+        eprint(f"warning: skipped {render(message)}")
     for flag, vals in (("--velocities", args.velocities), ("--sample-rates", args.sample_rates)):
         if vals is not None and len(vals) != len(curves):
             raise ParameterError(f"{flag} has {len(vals)} values for {len(curves)} curves"
@@ -224,6 +238,7 @@ def run(args: argparse.Namespace) -> int:
     d = res.to_dict()
     # how each curve was calibrated (the analysis's calibration: the file's, or the compliance slope)
     d["calibration"] = {c.name: c.metadata.get("calibration") for c in res._problem.ev.curves}
+    d["skipped_files"] = [{"file": path, "error": message} for path, message in skipped]
     if args.plots:
         written = plot_curves(res, res._problem.ev.curves, args.plots, force=True)
         prof = plot_profiles(res, Path(args.plots) / "fit_profiles.png", force=True)
@@ -243,4 +258,6 @@ def run(args: argparse.Namespace) -> int:
         print(render(res.markdown()))
     for w in res.warnings:
         eprint(f"warning: {render(w)}")
-    return 0
+    if skipped:      # as `afmforce analyze`: the batch went on, the status says a file failed
+        eprint(f"warning: {len(skipped)} file(s) of the folders could not be read and were left out of the fit")
+    return 1 if skipped else 0

@@ -288,13 +288,27 @@ def _print_summary(traj) -> None:
         ("apparent-deflection spike", e.spike_height, "m"),
         ("compliance offset z_in - z_out", e.hysteresis_offset, "m"),
         ("simulated calibration slope", f"{e.compliance_slope * 1e9:.5g} nm/rad", ""),
-        ("pull-off position z", e.pull_off_position, "m"),
-        ("pull-off force", e.pull_off_force, "N"),
+        *_pull_off_rows(traj),
         ("solver", f"{s.status}: {s.steps} steps ({s.rejected} rejected), "
                    f"{s.rhs_evaluations} f-evals, {s.wall_time:.3g} s", ""),
         ("convergence check", s.check, ""),
     ]
     print_table(rows, title="afmforce simulate")
+
+
+def _pull_off_rows(traj) -> list[tuple]:
+    """The pull-off rows. A retract that ends in contact has no pull-off: the most negative force
+    on it (``events.pull_off_force``, the lever's pull at the end of the travel or a bounce) is
+    then a bound on the adhesion, not shown as a pull-off force beside a NaN position."""
+    import math
+
+    e = traj.events
+    if math.isfinite(e.contact_time) and not math.isfinite(e.pull_off_position):
+        end = float(traj.piezo_position[-1]) * 1e9
+        return [("pull-off", f"none: still in contact at the end of the retract (z = {end:.4g} nm); "
+                             "retract further (end)", ""),
+                ("most negative force in contact", e.pull_off_force, "N")]
+    return [("pull-off position z", e.pull_off_position, "m"), ("pull-off force", e.pull_off_force, "N")]
 
 
 def plot_trajectory(traj, path, force: bool = False):

@@ -386,4 +386,24 @@ def prepare_curves(curves: Sequence[RawCurve | FitCurve], names: Sequence[str] |
                                  sample_rate=None if sample_rates is None else sample_rates[i],
                                  jump_window=jump_window, retract=retract, soft=soft,
                                  calibration=calibration))
+    _refuse_duplicates(out)
     return out
+
+
+def _refuse_duplicates(curves: Sequence[FitCurve]) -> None:
+    """Raise ParameterError when two curves hold the same samples (one measurement given twice:
+    a file named twice, an upload listed twice). The joint fit counts every curve as independent
+    data, so a copy shrinks every standard error by sqrt(2) with no new information."""
+    import hashlib
+
+    seen: dict[bytes, str] = {}
+    for c in curves:
+        h = hashlib.blake2b(digest_size=16)
+        for a in (c.time, c.position, c.deflection):
+            h.update(np.ascontiguousarray(a, dtype=float).tobytes())
+        key = h.digest()
+        if key in seen:
+            raise ParameterError(f"curves {seen[key]} and {c.name} hold the same samples: one measurement "
+                                 "given twice would count as two and make every interval too tight; "
+                                 "give each curve once")
+        seen[key] = c.name

@@ -256,7 +256,7 @@ def find_format(path: str | Path) -> ReaderFormat:
     """
     path = Path(path)
     if not path.is_file():
-        raise FileFormatError(f"{path}: no such file")
+        raise FileFormatError(_not_a_file(path))
     if path.suffix.lower() in HDF5_SUFFIXES:
         from ._guard import run_with_timeout
 
@@ -357,6 +357,13 @@ HDF5_SUFFIXES = (".h5", ".hdf5", ".hdf")
 HDF5_TIMEOUT = 120.0
 
 
+def _not_a_file(path: Path) -> str:
+    """Why ``path`` cannot be read as a file: it is a folder (give the files in it), or it is not there."""
+    if path.is_dir():
+        return f"{path} is a folder, not a force-curve file: give the files in it (or the folder to a batch)"
+    return f"{path}: no such file"
+
+
 def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
     path = Path(path)
     meta = check_meta_override(meta_override)
@@ -364,7 +371,7 @@ def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
         if format not in FORMATS:
             raise ParameterError(f"unknown format {format!r}; choose one of {', '.join(FORMATS)}")
         if not path.is_file():
-            raise FileFormatError(f"{path}: no such file")
+            raise FileFormatError(_not_a_file(path))
         fmt = FORMATS[format]
     else:
         fmt = find_format(path)

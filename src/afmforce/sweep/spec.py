@@ -312,26 +312,68 @@ def _from_toml(path: Path, dimensions: Dimensions | None) -> dict:
     if unknown:
         raise ParameterError(f"`config` {path}: unknown table(s) {sorted(unknown)}; "
                              "use [sweep], [grid], [range], [set]")
-    out: dict[str, Any] = dict(data.get("sweep", {}))
+    for table in ("sweep", "grid", "range", "set"):
+        if not isinstance(data.get(table, {}), dict):
+            raise ParameterError(f"`config` {path}: {table} must be a table ([{table}]), got {data[table]!r}")
+    out: dict[str, Any] = _sweep_options(path, data.get("sweep", {}))
     grid = []
     for name, v in data.get("grid", {}).items():
         if isinstance(v, list):
             grid.append(GridAxis(name, tuple(_value(name, x, dimensions, "[grid]") for x in v)))
         elif isinstance(v, dict):
-            lo, hi = (_value(name, v[k], dimensions, "[grid]") for k in ("lo", "hi"))
-            grid.append(GridAxis.spaced(name, lo, hi, v.get("n", 1), bool(v.get("log", False))))
+            lo, hi, n, log = _bounds(path, "grid", name, v, dimensions)
+            grid.append(GridAxis.spaced(name, lo, hi, n, log))
         else:
             grid.append(_grid_from_text(name, str(v), dimensions, "[grid]"))
     ranges = []
     for name, v in data.get("range", {}).items():
         if isinstance(v, dict):
-            lo, hi = (_value(name, v[k], dimensions, "[range]") for k in ("lo", "hi"))
-            ranges.append(SampledRange(name, lo, hi, bool(v.get("log", False))))
+            lo, hi, _, log = _bounds(path, "range", name, v, dimensions)
+            ranges.append(SampledRange(name, lo, hi, log))
         else:
             ranges.append(parse_range(f"{name}={v}", dimensions))
     fixed = [(k, _value(k, v, dimensions, "[set]")) for k, v in data.get("set", {}).items()]
     out.update(grid=grid, ranges=ranges, fixed=fixed)
     return out
+
+
+#: The options of a sweep file's ``[sweep]`` table: name -> (whole number?, what it is).
+_SWEEP_OPTIONS = {"sample": (False, "the sampler, 'random' or 'lhs'"), "n": (True, "the number of samples"),
+                  "seed": (True, "the sampler's seed"), "chunk_size": (True, "runs per chunk")}
+
+
+def _sweep_options(path: Path, table: dict) -> dict[str, Any]:
+    """The ``[sweep]`` table checked: whole numbers (TOML integers, not 1e400 or "4") and a sampler."""
+    unknown = set(table) - set(_SWEEP_OPTIONS)
+    if unknown:
+        raise ParameterError(f"`config` {path}: unknown [sweep] option(s) {sorted(unknown)}; "
+                             f"use {', '.join(_SWEEP_OPTIONS)}")
+    for name, value in table.items():
+        whole, what = _SWEEP_OPTIONS[name]
+        if whole and (isinstance(value, bool) or not isinstance(value, int) or value < 0):
+            raise ParameterError(f"`config` {path}: [sweep] {name} ({what}) must be a whole number "
+                                 f">= 0, got {value!r}")
+        if not whole and value not in ("random", "lhs"):
+            raise ParameterError(f"`config` {path}: [sweep] {name} must be {what}, got {value!r}")
+    return dict(table)
+
+
+def _bounds(path: Path, table: str, name: str, v: dict, dimensions: Dimensions | None):
+    """``(lo, hi, n, log)`` of an inline table ``name = { lo = ..., hi = ..., n = ..., log = ... }``."""
+    keys = {"lo", "hi", "log"} | ({"n"} if table == "grid" else set())
+    form = "{ lo = ..., hi = ...%s, log = true }" % (", n = ..." if table == "grid" else "")
+    if set(v) - keys or not {"lo", "hi"} <= set(v):
+        raise ParameterError(f"`config` {path}: [{table}] {name} must be a table {form}, got keys "
+                             f"{sorted(v)}")
+    lo, hi = (_value(name, v[k], dimensions, f"[{table}]") for k in ("lo", "hi"))
+    if isinstance(lo, str) or isinstance(hi, str):
+        raise ParameterError(f"`config` {path}: [{table}] {name}: lo and hi must be numbers")
+    n, log = v.get("n", 1), v.get("log", False)
+    if isinstance(n, bool) or not isinstance(n, int):
+        raise ParameterError(f"`config` {path}: [{table}] {name}: n must be a whole number, got {n!r}")
+    if not isinstance(log, bool):
+        raise ParameterError(f"`config` {path}: [{table}] {name}: log must be true or false, got {log!r}")
+    return lo, hi, n, log
 
 
 def _merge(first: list, second: list, key: Callable) -> list:
@@ -380,7 +422,10 @@ def chunk_size_from_config(config: str | Path | None) -> int | None:
     if not config:
         return None
     try:
-        value = tomllib.loads(Path(config).read_text(encoding="utf-8")).get("sweep", {}).get("chunk_size")
+        table = tomllib.loads(Path(config).read_text(encoding="utf-8")).get("sweep", {})
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return None  # build_spec reports unreadable files
-    return None if value is None else int(value)
+    value = _sweep_options(Path(config), table if isinstance(table, dict) else {}).get("chunk_size")
+    if value is not None and value < 1:
+        raise ParameterError(f"`config` {config}: [sweep] chunk_size must be at least 1, got {value}")
+    return value

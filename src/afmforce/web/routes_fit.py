@@ -58,6 +58,9 @@ def fit(request: Request, body: FitRequest) -> dict:
             raise validate.FieldError(f"truth.{name}", f"truth.{name}: each virtual curve's {name} is set by "
                                       "velocities (sample rate: 2 samples per nm of travel); drop it from truth")
     validate.build_config(truth, "truth.")     # names, ranges and their combination
+    twice = sorted({fid for fid in body.file_ids if body.file_ids.count(fid) > 1})
+    if twice:       # one measurement twice counts as two (fit.data: the same samples are refused)
+        raise validate.FieldError("file_ids", f"file_ids: {twice[0]} is listed twice; give each upload once")
     files = []
     for i, fid in enumerate(body.file_ids):
         try:

@@ -36,10 +36,18 @@ def plotly() -> Response:
 
 @router.get("/static/{name}", include_in_schema=False)
 def static(name: str) -> FileResponse:
-    path = STATIC / name
-    if "/" in name or "\\" in name or name.startswith(".") or not path.is_file():
+    # only a file listed in the folder: a name is never handed to the file system (a name too long
+    # for it, a NUL byte or a path trick answered 500 or could leave the folder)
+    if name not in _static_files():
         raise HTTPException(404, "no such file")
+    path = STATIC / name
     return FileResponse(path, media_type=_TYPES.get(path.suffix, "application/octet-stream"))
+
+
+@lru_cache(maxsize=1)
+def _static_files() -> frozenset[str]:
+    """The names of the page's static files (the folder's plain files, none hidden)."""
+    return frozenset(p.name for p in STATIC.iterdir() if p.is_file() and not p.name.startswith("."))
 
 
 @router.get("/api/health", tags=["server"])
