@@ -260,18 +260,8 @@ def find_format(path: str | Path) -> ReaderFormat:
     if path.suffix.lower() in HDF5_SUFFIXES:
         from ._guard import run_with_timeout
 
-        _import_h5py()
         return FORMATS[run_with_timeout(_find_format_id, path, timeout=HDF5_TIMEOUT, path=str(path))]
     return _find_format(path)
-
-
-def _import_h5py() -> None:
-    """Import h5py here, before an HDF5 file is read in a forked child: each child then inherits
-    it instead of importing it anew (~0.1 s a read; a nested detection child imported it twice)."""
-    try:
-        import h5py  # noqa: F401
-    except ImportError:  # the reader in the child says what is missing
-        pass
 
 
 def _find_format_id(path: Path) -> str:
@@ -344,8 +334,6 @@ def load(path: str | Path, *, meta_override: Mapping[str, Any] | None = None,
     if timeout is not None:
         from ._guard import run_with_timeout
 
-        if Path(path).suffix.lower() in HDF5_SUFFIXES:
-            _import_h5py()
         return run_with_timeout(_load, path, timeout=timeout, path=str(path), meta_override=meta_override,
                                 callback=None, format=format, require=require)
     return _load(path, meta_override=meta_override, callback=_file_progress(path, progress), format=format,
