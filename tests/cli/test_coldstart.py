@@ -356,15 +356,21 @@ def test_the_integrator_as_python_takes_the_compiled_steps_bitwise(tmp_path):
     script.write_text(_SIMULATE_RUNS)
     full = {k: v for k, v in os.environ.items() if k != _firstrun.ENV}
     full.update(PYTHONPATH=str(SRC), NUMBA_DISABLE_JIT="1", NUMBA_CACHE_DIR=str(tmp_path / "numba"))
-    proc = subprocess.run([sys.executable, str(script), str(tmp_path / "python.pkl")], capture_output=True,
-                          text=True, env=full, cwd=tmp_path, timeout=900)
-    assert proc.returncode == 0, proc.stderr
+    # the interpreted runs in their process while this one runs the compiled: the same two
+    # computations as one after the other, side by side (the suite runs on one core of two)
+    with subprocess.Popen([sys.executable, str(script), str(tmp_path / "python.pkl")], stdout=subprocess.PIPE,
+                          stderr=subprocess.PIPE, text=True, env=full, cwd=tmp_path) as child:
+        try:
+            namespace: dict = {}
+            compiled_runs = _SIMULATE_RUNS.replace("sys.argv[1]", repr(str(tmp_path / "compiled.pkl")))
+            exec(compiled_runs, namespace)                              # compiled, in this process
+            _, stderr = child.communicate(timeout=900)
+        finally:
+            if child.poll() is None:
+                child.kill()
+    assert child.returncode == 0, stderr
     assert [f for f in _files(tmp_path / "numba") if f.suffix in (".nbi", ".nbc")] == []   # nothing compiled
     interpreted = pickle.loads((tmp_path / "python.pkl").read_bytes())
-
-    namespace: dict = {}
-    compiled_runs = _SIMULATE_RUNS.replace("sys.argv[1]", repr(str(tmp_path / "compiled.pkl")))
-    exec(compiled_runs, namespace)                                      # compiled, in this process
     compiled = pickle.loads((tmp_path / "compiled.pkl").read_bytes())
     assert [label for label, _ in interpreted] == [label for label, _ in compiled]
     for (label, a), (_, b) in zip(interpreted, compiled):
