@@ -8,3 +8,40 @@ import os
 # compile as before, so no test's stderr depends on which test ran first, and no detached warmup
 # outlives the suite; tests/cli/test_coldstart.py removes this to test the first run itself.
 os.environ.setdefault("AFMFORCE_FIRST_RUN", "compile")
+
+
+# The whole suite on a fresh checkout (.ci/run) starts with an empty numba cache and leaves one of
+# two cores idle while pytest runs single-threaded: compile the kernels of later test folders there
+# meanwhile (`afmforce warmup`: the demo's integrators, liquids and virtual AFM, then the default
+# simulate), niced, in its own process group. Only for a run of many tests (a single file does not
+# wait for it); stopped at the end if still running (numba writes its cache files atomically).
+# A test's verdict does not depend on it: a kernel not yet in the cache is compiled where it is used.
+# AFMFORCE_TEST_WARMUP=0 turns it off.
+WARMUP_MIN_TESTS = 1000
+
+
+def pytest_collection_modifyitems(session, config, items):
+    import subprocess
+    import sys
+
+    if (len(items) < WARMUP_MIN_TESTS or os.environ.get("AFMFORCE_TEST_WARMUP", "1") == "0"
+            or (os.cpu_count() or 1) < 2 or getattr(config, "_afmforce_warmup", None) is not None):
+        return
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
+    config._afmforce_warmup = subprocess.Popen(
+        [sys.executable, "-m", "afmforce.cli.main", "warmup", "--only", "demo", "--only", "simulate"],
+        stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env,
+        start_new_session=True, preexec_fn=lambda: os.nice(10))
+    os.environ["AFMFORCE_TEST_WARMUP_PGID"] = str(config._afmforce_warmup.pid)  # not a worker (tests/web)
+
+
+def pytest_unconfigure(config):
+    import signal
+
+    proc = getattr(config, "_afmforce_warmup", None)
+    if proc is not None and proc.poll() is None:
+        try:
+            os.killpg(proc.pid, signal.SIGTERM)
+        except OSError:
+            pass
+        proc.wait(timeout=30)
