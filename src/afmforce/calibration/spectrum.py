@@ -216,6 +216,23 @@ def _try(parse, text):
         return None
 
 
+def _stored(parse, head: dict[str, str], key: str, path: Path):
+    """``parse`` of the header value ``key``: None where the file does not store it (absent or
+    empty); a value it stores but that cannot be read (or is not finite) is refused, never replaced
+    by a default (a garbled temperature would silently become 295 K in k = kT/<x^2>)."""
+    text = head.get(key)
+    if text is None or not text.strip():
+        return None
+    try:
+        value = parse(text)
+    except ValueError:
+        value = None
+    if value is None or not math.isfinite(value[0] if isinstance(value, tuple) else value):
+        raise FileFormatError(f"{path}: the header's {key!r} is {text.strip()[:40]!r}, not a number: the "
+                              "file is damaged; repair the line or remove it to use the default")
+    return value
+
+
 def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
     head: dict[str, str] = {}
     rows = []
@@ -238,10 +255,7 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
     if unit not in ("V^2/Hz", "m^2/Hz"):
         raise FileFormatError(f"{path}: the spectrum column is in {units[col]!r}; expected V²/Hz or m²/Hz")
     vendor: dict[str, Any] = {}
-    try:
-        sensitivity = _jpk_si(head["sensitivity"], "m/V")
-    except (KeyError, ValueError):
-        sensitivity = None
+    sensitivity = _stored(lambda v: _jpk_si(v, "m/V"), head, "sensitivity", path)
     for key, name, base in (("spring constant", "spring_constant", "N/m"),
                             ("parameter.f", "resonance_frequency", "Hz"),
                             ("parameter.noise", "white", "V²/Hz")):
@@ -255,10 +269,10 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
     if sensitivity is not None:
         vendor["sensitivity"] = sensitivity
     temperature = None
-    t = _try(_jpk_number, head.get("settings.temperature"))
+    t = _stored(_jpk_number, head, "settings.temperature", path)
     if t is not None:
         temperature = t[0] + 273.15 if t[1] in ("℃", "°C", "C", "degC") else t[0]
-    c = _try(_jpk_number, head.get("cantilever.correction factor"))
+    c = _stored(_jpk_number, head, "cantilever.correction factor", path)
     correction = c[0] if c is not None else None
     tilt = None
     if "cantilever.angle" in head:   # '10° + 0.0 °': nominal angle plus the user's offset
