@@ -344,6 +344,8 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
     n = simulation_samples(**worst)
     if n > MAX_SAMPLES:
         check_samples(n, where="the most demanding run of this sweep: ")
+    from ..sweep.simulation import check_runs
+    check_runs(spec)
 
 
 #: Integer options of any command (dest -> smallest valid value), checked by :func:`check_common`.

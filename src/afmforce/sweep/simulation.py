@@ -25,7 +25,12 @@ from ..errors import MissingDependencyError
 from ..forces import static_jump_in_separation, vdw_force
 from .chunks import flatten
 
-__all__ = ["simulate_run", "simulate_runs", "simulation_dimensions", "OUTPUT_UNITS", "parameter_units"]
+__all__ = ["simulate_run", "simulate_runs", "simulation_dimensions", "OUTPUT_UNITS", "parameter_units",
+           "check_runs", "CHECK_RUNS"]
+
+#: How many of a sweep's runs :func:`check_runs` builds before any work (evenly spread over its table;
+#: ~13 us each)
+CHECK_RUNS = 2000
 
 #: Output column -> SI unit ("" for plain numbers and text).
 OUTPUT_UNITS: dict[str, str] = {
@@ -83,6 +88,42 @@ def simulate_run(**parameters) -> dict:
         warnings.simplefilter("always")
         trajectory = dyn.simulate(config)
     return _row(config, trajectory, caught)
+
+
+def check_runs(spec) -> None:
+    """Refuse a sweep none of whose runs is a valid simulation, before anything is dispatched.
+
+    Each value on its own may lie in its field's range while no run is a valid configuration
+    (``--set start=1um`` with the default turn at 20 nm: the drive would move the wrong way), and
+    every run would then fail one by one. Builds the :class:`SimulationConfig` of up to
+    :data:`CHECK_RUNS` runs spread over the table; a sweep with at least one valid run goes on
+    (its invalid runs are recorded with their error, as before).
+
+    Raises
+    ------
+    ParameterError
+        None of the runs checked is valid; the message is the first run's error.
+    """
+    import numpy as np
+
+    from ..errors import AfmforceError, ParameterError
+
+    dyn = _dynamics()
+    table = spec.table()
+    n = len(table)
+    if n == 0:
+        return
+    picks = np.unique(np.linspace(0, n - 1, min(n, CHECK_RUNS)).round().astype(np.int64))
+    first = None
+    for i in picks:
+        row = table.iloc[[int(i)]].to_dict("records")[0]
+        try:
+            dyn.SimulationConfig(**row)
+            return
+        except AfmforceError as exc:
+            first = first or (int(i), exc)
+    raise ParameterError(f"no run of this sweep is a valid simulation ({len(picks)} of {n} checked; run "
+                         f"{first[0]}: {first[1]}): change the settings shared by every run")
 
 
 def simulate_runs(parameter_rows: list[dict], threads: int | None = None) -> list:

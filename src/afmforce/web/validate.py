@@ -302,6 +302,11 @@ def sweep_spec(grid: Any, ranges: Any, sets: Any, *, sample=None, n=None, seed=N
             _item(f"ranges[{i}]", {**fixed, rng.name: v})
         values[rng.name] = [rng.lo, rng.hi]
     _check_samples(fixed, values)
+    from ..sweep.simulation import check_runs
+    try:
+        check_runs(spec)
+    except ParameterError as exc:
+        raise FieldError("sets", str(exc)) from None
     return spec
 
 
