@@ -173,14 +173,15 @@ def test_diagnosis_names_capillarity_in_air_and_keeps_dynamics_in_liquid():
     air = diagnose_curve(**common, friction="none", quality_factor=139.0)
     assert not air.dynamic and "likely capillary" in air.verdict
     liquid = diagnose_curve(**common, friction="not assessed", quality_factor=3.0)
-    assert liquid.dynamic and "dynamic effects" in liquid.verdict
+    # inertia excluded (eq 3: 0.27 < 1) leaves friction, which coincident lines cannot exclude (Figs 5-6)
+    assert liquid.dynamic and "friction (inertia excluded" in liquid.verdict
 
 
 def test_implausible_spring_constant_and_sensitivity_are_flagged():
     _, ws = _run("afm-workshop_single.csv")  # k inferred from the slope of a soft contact: 5.1e-5 N/m
     assert math.isnan(ws.spring_constant)  # no lever's: flagged, and not reported (issue 32, item 6)
     assert any(w.startswith("spring constant 5.13e-05 N/m") and "outside" in w for w in ws.warnings)
-    assert "suspect input: spring_constant" in ws.verdict
+    assert "spring constant undetermined" in ws.verdict and "spring_constant" in ws.verdict
     _, cal = _run("jpk_calibration-curve_raw-volts.jpk-force")  # 6 samples in contact at 205 Hz
     n = cal.details["compliance"].approach.n_points
     assert n < 20

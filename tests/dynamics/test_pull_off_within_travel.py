@@ -47,3 +47,13 @@ def test_a_retract_far_enough_shows_its_pull_off(capsys):
     assert main(ARGV + ["--end=-600nm"]) == 0
     out = capsys.readouterr().out
     assert "pull-off force" in out and f"{e.pull_off_force / nm:.5g} nN" in out and "none: still" not in out
+
+
+@pytest.mark.filterwarnings("ignore:the retract ended in contact")
+def test_the_summary_a_sweep_tabulates_has_no_pull_off_force_without_a_pull_off():
+    """``Trajectory.summary()`` (the sweep's columns, the web's and `simulate --json`'s summary):
+    NaN for both pull-off entries when the retract ends in contact, the event's force otherwise."""
+    short = simulate(**SPHERE, end=-300 * nm).summary()["pull_off"]
+    assert math.isnan(short["piezo_position"]) and math.isnan(short["force"])
+    long = simulate(**SPHERE, end=-600 * nm)
+    assert long.summary()["pull_off"]["force"] == long.events.pull_off_force < -30 * nm

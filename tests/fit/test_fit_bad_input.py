@@ -20,8 +20,15 @@ def two():
     return make_curves(0.005, seed=3, speeds=(1e-6, 4e-6), spacing=0.5e-9)
 
 
-def test_one_speed_not_identifiable(two):
-    same = [two[0], dataclasses.replace(two[0])]
+@pytest.fixture(scope="module")
+def one_speed(two):
+    """Two measurements at the first speed, different noise (a curve given twice is refused before:
+    tests/fit/test_fit_duplicate_curves.py)."""
+    return [two[0], make_curves(0.005, seed=4, speeds=(1e-6,), spacing=0.5e-9)[0]]
+
+
+def test_one_speed_not_identifiable(one_speed):
+    same = one_speed
     with pytest.raises(IdentifiabilityError, match="one driving speed"):
         fit_dynamic(same, "beam", free=("hamaker", "xi"))
 
@@ -65,8 +72,8 @@ def test_free_parameter_checks(two):
         fit_dynamic(two, "beam", free=("friction",))
 
 
-def test_cli_one_line_exit_2(two, tmp_path, capsys):
-    paths = write_curves([two[0], dataclasses.replace(two[0])], tmp_path)
+def test_cli_one_line_exit_2(one_speed, tmp_path, capsys):
+    paths = write_curves(one_speed, tmp_path)
     rc = main(["fit", *map(str, paths), "--free", "hamaker,xi", "--json"])
     err = capsys.readouterr().err
     assert rc == 2

@@ -131,6 +131,11 @@ BARRIER_MIN = 4.0
 #: The free branch before a barrier's rise holds no attraction over this many samples [-] (one there: the tip
 #: had jumped in, and the rise and fall are in contact).
 BARRIER_FREE = 10
+#: A jump through a barrier that lands above this fraction of the deflection it started from keeps most of
+#: the barrier's load: a yielding layer's breakthrough (a gel: +4.38 -> +3.58 nm), not evidence of a jump
+#: into hard contact (the contact kind's line decides); one that releases more (a double layer's barrier:
+#: 57 -> 20 pN; a drag-loaded jump at 4 um/s: +1.76 -> -0.55 nm) has jumped into contact [-].
+BARRIER_KEEPS = 0.5
 
 
 def _nan_jump_in() -> JumpIn:

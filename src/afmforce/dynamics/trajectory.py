@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import json
+import math
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -164,7 +165,8 @@ class Trajectory:
         return {name: getattr(self, name) for name in COLUMNS}
 
     def summary(self) -> dict[str, Any]:
-        """Summary of the run (SI values; NaN where an event did not occur).
+        """Summary of the run (SI values; NaN where an event did not occur: a retract that ends in
+        contact has no pull-off position and no pull-off force).
 
         Keys: ``jump_in`` {time, piezo_position, separation}, ``pull_off``
         {piezo_position, force}, ``min_deflection``, ``min_apparent_deflection``,
@@ -176,7 +178,10 @@ class Trajectory:
         return {
             "jump_in": {"time": e.jump_in_time, "piezo_position": e.jump_in_position,
                         "separation": e.jump_in_separation},
-            "pull_off": {"piezo_position": e.pull_off_position, "force": e.pull_off_force},
+            # no pull-off (the retract ends in contact): no pull-off force either; the events keep the
+            # most negative force in contact (what the convergence check compares)
+            "pull_off": {"piezo_position": e.pull_off_position,
+                         "force": e.pull_off_force if math.isfinite(e.pull_off_position) else math.nan},
             "min_deflection": e.min_deflection,
             "min_apparent_deflection": e.min_apparent_deflection,
             "hysteresis_offset": e.hysteresis_offset,

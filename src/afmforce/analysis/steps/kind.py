@@ -10,7 +10,7 @@ import math
 
 from ...errors import AnalysisError
 from ..contact_point import CONTACT_POINT_METHODS, classify_contact, curvature_ratio
-from ..jumps import find_jump_in
+from ..jumps import BARRIER_KEEPS, find_jump_in
 from ..options import KindOptions
 from ..registry import AnalysisStep, ResultField
 from ..state import State
@@ -32,12 +32,15 @@ def kind(st: State, o: KindOptions) -> State:
     o.check_method(CONTACT_POINT_METHODS)
     noise = abs(st.noise * st.factor)
     app = st.approach
-    # a jump through a repulsive barrier (the tip already pushing on a double layer, a surface layer that
-    # yields: a gel's breakthrough) says nothing of the contact after it: it does not make the contact hard;
-    # its line then decides
+    # a jump through a repulsive barrier that keeps most of its load (a surface layer that yields: a gel's
+    # breakthrough, Egel force volume curve 22: +4.38 -> +3.58 nm) says nothing of the contact after it: it
+    # does not make the contact hard; its line then decides ...
     ji = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma)
     jb = find_jump_in(st.deflection, st.z, st.z, app, noise, math.nan, nsigma, attractive_below=nsigma * noise)
-    barrier = jb.through_barrier and jb.index == ji.index  # the largest step near the split, through a barrier
+    # ... unless it releases most of the load the barrier held: a tip that falls from the barrier into the
+    # attraction or onto the contact (the DLVO jump; a drag-loaded jump at speed) has jumped into contact
+    barrier = (jb.through_barrier and jb.index == ji.index     # the largest step near the split, through a barrier
+               and jb.deflection_after > BARRIER_KEEPS * jb.deflection_before)
     sig = ji.significance if ji.index >= 0 and not barrier else 0.0
     cal = st.details["calibration"]
     comp = st.details["compliance"]
