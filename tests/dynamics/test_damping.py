@@ -223,7 +223,11 @@ def test_cli_takes_the_quality_factor(capsys):
             "--velocity", "7.2um/s", "--quality-factor", "30", "--check", "off"]
     assert main(argv) == 0
     s = json.loads(capsys.readouterr().out)
-    assert s["pull_off"]["force"] == _sim(**BOUNCING, quality_factor=30.0).events.pull_off_force
+    ref = _sim(**BOUNCING, quality_factor=30.0).events
+    assert s["min_deflection"] == ref.min_deflection and s["hysteresis_offset"] == ref.hysteresis_offset
+    # this retract ends in contact: no pull-off, so no pull-off force in the summary (the event keeps the
+    # most negative force in contact, which the convergence check compares)
+    assert math.isnan(ref.pull_off_position) and s["pull_off"]["force"] is None
     for cmd in ("fit", "plan"):
         args = build_parser(cmd).parse_args([cmd, *(["x.txt"] if cmd == "fit" else []),
                                              "--quality-factor", "300", "--quality-factor-2", "40"])
