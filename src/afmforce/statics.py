@@ -25,7 +25,10 @@ __all__ = [
     "static_analysis",
     "constant_friction_force_difference",
     "constant_friction_offset",
+    "constant_friction_for_offset",
     "load_friction_constants",
+    "load_friction_slope_ratio",
+    "load_friction_for_slope_ratio",
     "load_friction_gap",
     "pinned_calibration_factor",
     "pinned_spring_constant",
@@ -106,6 +109,19 @@ def constant_friction_offset(c: InclinedCantilever, mu: float) -> float:
                                + 2.0 * mu * (2.0 / 3.0 * L0**3 * s + c.b * L0**2))
 
 
+def constant_friction_for_offset(c: InclinedCantilever, offset: float) -> float:
+    """The constant friction ``mu`` whose eq-16 offset ``z+(theta) - z-(theta)`` is ``offset`` [N].
+
+    Eq 16 with eq 17 is linear in mu: ``offset = mu * D`` with ``D`` =
+    :func:`constant_friction_offset` ``(c, 1)`` [m/N], so ``mu = offset / D``. D vanishes for a
+    tip on the beam's axis (L1 = L2 = 0: a = b = 0, the friction only bends the beam along its
+    own compliance line) and grows about as ``L2 / (L0 k)``: without the lever's geometry an
+    offset fixes no friction force. NaN when ``D`` is not positive.
+    """
+    d = constant_friction_offset(c, 1.0)
+    return float(offset / d) if d > 0 else math.nan
+
+
 # --- friction proportional to load (eqs 18, 19) -------------------------------------
 def load_friction_constants(c: InclinedCantilever, lam: float, direction: int) -> tuple[float, float]:
     """Spring constant and calibration factor for ``Fy = +-lambda Fz`` (eqs 18, 19).
@@ -141,6 +157,51 @@ def load_friction_gap(c: InclinedCantilever, lam: float, deflection: float) -> f
     k_out, b_out = load_friction_constants(c, lam, -1)
     theta = deflection / b_in
     return deflection - b_out * theta
+
+
+def load_friction_slope_ratio(c: InclinedCantilever, lam: float) -> float:
+    """Approach / retract constant-compliance slope for ``Fy = +-lambda Fz`` (eqs 18, 19) [-].
+
+    In hard contact the tip follows the substrate (``dz2 = dz``) and the photodiode reads
+    ``theta = z2 / beta``, so a run's compliance slope is proportional to ``1 / beta`` and
+    the ratio is ``beta_out / beta_in`` (Fig 4, lambda = 2: 1.2772e5 / 1.3654e5 = 0.9354).
+    """
+    return load_friction_constants(c, lam, -1)[1] / load_friction_constants(c, lam, +1)[1]
+
+
+def load_friction_for_slope_ratio(c: InclinedCantilever, ratio: float) -> float:
+    """Smallest ``lambda >= 0`` at which :func:`load_friction_slope_ratio` equals ``ratio`` [-].
+
+    With ``C`` the compliance matrix and ``g`` the angle compliance (eqs 7-12),
+    ``beta(+-lambda) = (Czz +- lambda Czy) / (gz +- lambda gy)`` (eqs 18, 19: the bracket of
+    eq 18 is ``2B (Czz +- lambda Czy)``, that of eq 19 ``2B (gz +- lambda gy) / k``), so
+    ``ratio = (Czz - l Czy)(gz + l gy) / ((gz - l gy)(Czz + l Czy))``; clearing denominators,
+
+        ``-(1 - ratio) Czy gy l^2 + (1 + ratio)(Czz gy - Czy gz) l + (1 - ratio) Czz gz = 0``,
+
+    a quadratic in ``l``. Its smallest root in ``(0, lambda_max)`` is returned, ``lambda_max``
+    the first lambda where a run's compliance or ``beta`` changes sign (the tip turns
+    mechanically unstable or the optical lever's reading reverses); ``inf`` when none: the
+    ratio does not bound lambda below that limit. ``0`` for ``ratio == 1``.
+    """
+    C, g = c.compliance_matrix, c.angle_compliance
+    czz, czy, gz, gy = float(C[0, 0]), float(C[0, 1]), float(g[0]), float(g[1])
+    if ratio == 1.0:
+        return 0.0
+    poles = [abs(a / b) for a, b in ((czz, czy), (gz, gy)) if b != 0.0]
+    lam_max = min(poles) if poles else math.inf
+    qa, qb, qc = -(1.0 - ratio) * czy * gy, (1.0 + ratio) * (czz * gy - czy * gz), (1.0 - ratio) * czz * gz
+    if qa == 0.0:
+        roots = [-qc / qb] if qb != 0.0 else []
+    else:
+        disc = qb * qb - 4.0 * qa * qc
+        if disc < 0.0:
+            return math.inf
+        sq = math.sqrt(disc)
+        q = -0.5 * (qb + math.copysign(sq, qb))   # the stable form of the two roots
+        roots = [q / qa] + ([qc / q] if q != 0.0 else [])
+    ok = [r for r in roots if 0.0 < r < lam_max]
+    return float(min(ok)) if ok else math.inf
 
 
 # --- pinned tip (eqs 20, 21) --------------------------------------------------------

@@ -177,3 +177,42 @@ def test_friction_offset_matches_the_trajectory():
     tr, cfg, raw, res = _run(1e-6, model="beam", xi=0.01)
     assert tr.events.hysteresis_offset == pytest.approx(0.454e-9, abs=0.005e-9)
     assert res.details["friction"].offset == pytest.approx(tr.events.hysteresis_offset, abs=0.05e-9)
+
+
+#: the beam's lever as the user gives it (spec section 5: the Figs 5-6 geometry, k0 = 3 B / L0^3)
+BEAM_PROBE = ProbeCalibration(theta0=math.radians(-15.0), L0=200e-6, L1=2e-6, L2=4e-6,
+                              spring_constant=3 * 3.5e-13 / (200e-6) ** 3)
+
+
+def _xi_per_offset() -> float:
+    """xi [kg/s] per metre of offset at 1 um/s, from the spec's numbers alone: xi v = 1e-8 N offsets the
+    beam's lines by 0.454 nm (section 7), and the offset is linear in the friction (eq 16)."""
+    return (1e-8 / 1e-6) / 0.454e-9
+
+
+@pytest.mark.parametrize("xi", [0.001, 0.01])
+def test_friction_below_the_resolution_is_bounded_not_excluded(xi):
+    """xi v = 1e-9 N (0.045 nm, below the 0.2 nm tolerance) and 1e-8 N (0.454 nm, inside the drift
+    uncertainty the relaxing retract leaves): 'not detected', never 'no friction', and the viscous
+    bound the lines give lies above the true xi; it is the offset bound converted by eq 16."""
+    tr, cfg = _trajectory(1e-6, model="beam", xi=xi)
+    res = analyze(_instrument().record(tr, seed=3), probe=BEAM_PROBE)
+    sig = res.details["friction"]
+    assert res.spring_constant == pytest.approx(tr.spring_constant, rel=1e-6)   # eq 13 of the given lever
+    assert res.friction == "not detected" and "not excluded" in res.friction_verdict
+    assert sig.offset_bound >= tr.events.hysteresis_offset
+    assert res.viscous_friction_bound > xi
+    assert res.viscous_friction_bound == pytest.approx(sig.offset_bound * _xi_per_offset(), rel=0.01)
+    assert res.friction_offset_bound == sig.offset_bound and res.friction_force_bound == sig.friction_force_bound
+    assert res.dynamic_assessed
+
+
+def test_friction_above_the_resolution_is_detected():
+    """xi v = 5e-9 N: the lines 0.23 nm apart (trajectory) are 'constant', and the offset gives xi back
+    through eq 16 within 10 %; the bound still holds the true xi."""
+    tr, cfg = _trajectory(1e-6, model="beam", xi=0.005)
+    res = analyze(_instrument().record(tr, seed=3), probe=BEAM_PROBE)
+    sig = res.details["friction"]
+    assert res.friction == "constant"
+    assert sig.offset * _xi_per_offset() == pytest.approx(0.005, rel=0.10)
+    assert 0.005 < res.viscous_friction_bound

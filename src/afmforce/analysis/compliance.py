@@ -10,14 +10,15 @@
   +4, +7 nm"; Fig 7C: "+57 nm"); the shift is the hysteresis.
 * The two lines carry friction's signature (sections 2.2.2-2.2.4): a parallel
   offset (constant friction, eq 16), different slopes (friction proportional to
-  load, eqs 18-19), a negative slope (pinned tip, eqs 20-21), or none.
+  load, eqs 18-19), a negative slope (pinned tip, eqs 20-21), or coincident lines:
+  friction not detected, with the largest friction the lines allow (never "no friction").
 """
 
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any, Mapping
+from typing import TYPE_CHECKING, Any, Mapping
 
 import numpy as np
 
@@ -27,6 +28,9 @@ from ._smooth_kernel import compliance_line
 from .regions import RunRegions
 from ._units import unit as _u
 from .options import CalibrationOptions as _C, FrictionOptions as _F  # defaults declared once
+
+if TYPE_CHECKING:
+    from ..cantilever import InclinedCantilever
 
 __all__ = ["ComplianceLine", "ComplianceResult", "fit_compliance", "CalibrationResult", "calibrate",
            "ShiftResult", "compliance_shift", "FrictionSignature", "friction_signature"]
@@ -272,15 +276,22 @@ def compliance_shift(compliance: ComplianceResult, applied: bool = True) -> Shif
 class FrictionSignature:
     """What the two compliance lines say about friction (paper sections 2.2.2-2.2.4).
 
+    Coincident lines do not exclude friction: friction smaller than the lines resolve hides
+    in them (and in Figs 5-6 viscous friction underestimates the precontact attraction with
+    lines 0.05-0.5 nm apart). So no kind says "no friction": coincident lines are
+    ``"not detected"``, with the largest friction the data allow (the ``*_bound`` fields; see
+    :func:`friction_signature` for their derivation).
+
     Attributes
     ----------
     kind : str
-        ``"none"``, ``"constant"`` (parallel, inward line at larger z), ``"opposite"``
-        (parallel, inward line at smaller z: an instrument artefact, Fig 7B),
+        ``"not detected"`` (the lines coincide within the resolution: friction up to the
+        bounds is compatible), ``"constant"`` (parallel, inward line at larger z),
+        ``"opposite"`` (parallel, inward line at smaller z: an instrument artefact, Fig 7B),
         ``"load-proportional"`` (slopes differ by up to ``friction_slope_limit``),
         ``"nonlinear"`` (slopes differ by more than friction makes: the position channel
-        or a soft contact), ``"pinned"`` (negative slope) or ``"undetermined"`` (one
-        line only).
+        or a soft contact), ``"pinned"`` (negative slope), ``"undetermined"`` (one line
+        only) or ``"not assessed"`` (set by the step: a soft or curved contact).
     offset : float
         ``z_in - z_out`` at equal deflection [m] (friction makes it positive, spec 7).
     offset_se : float  [m]
@@ -289,6 +300,23 @@ class FrictionSignature:
     slope_ratio_se : float  [-]
     verdict : str
         Plain words.
+    offset_bound : float
+        Largest ``|offset|`` compatible with the lines: ``|offset| + nsigma offset_se`` plus
+        the drift's systematic offset, at least the offset tolerance [m] (NaN unless the kind
+        is ``"not detected"``, ``"constant"`` or ``"load-proportional"``).
+    slope_difference_bound : float
+        Largest ``|slope_ratio - 1|`` compatible, likewise [-].
+    friction_force_bound : float
+        Largest constant friction ``mu`` (``Fy = +-mu``) the offset bound allows, eq 16 [N];
+        NaN without the lever's geometry (``theta0``, ``L0``, ``L1``, ``L2``).
+    viscous_friction_bound : float
+        Largest viscous coefficient ``xi`` (eq 28) the offset bound allows at the approach
+        speed, in steady sliding ``mu = xi |dy2/dz2| v`` [kg/s]; NaN without the geometry
+        or the speed.
+    load_friction_bound : float
+        Largest ``lambda`` (``Fy = +-lambda Fz``) the slope bound allows, eqs 18-19 [-]; NaN
+        without the geometry or when the slope bound reaches no lambda below the lever's
+        stability limit (lambda undetermined).
     """
 
     kind: str
@@ -297,12 +325,54 @@ class FrictionSignature:
     slope_ratio: float = _u("")
     slope_ratio_se: float = _u("")
     verdict: str
+    offset_bound: float = _u("m", math.nan)
+    slope_difference_bound: float = _u("", math.nan)
+    friction_force_bound: float = _u("N", math.nan)
+    viscous_friction_bound: float = _u("kg/s", math.nan)
+    load_friction_bound: float = _u("", math.nan)
+
+
+#: Kinds whose lines bound friction from above (the others: no line pair, an artefact, not friction).
+BOUNDED_KINDS = ("not detected", "constant", "load-proportional")
+
+
+def _friction_bounds(lever: "InclinedCantilever | None", offset_bound: float, slope_bound: float,
+                     velocity: float) -> tuple[float, float, float]:
+    """(mu, xi, lambda) bounds of :func:`friction_signature` (NaN where not determined)."""
+    nan = math.nan
+    if lever is None:
+        return nan, nan, nan
+    from ..statics import constant_friction_for_offset, load_friction_for_slope_ratio
+
+    mu = constant_friction_for_offset(lever, offset_bound)
+    slide = abs(lever.slide_ratio)
+    xi = mu / (slide * velocity) if math.isfinite(velocity) and velocity > 0 and slide > 0 else nan
+    lam = min(load_friction_for_slope_ratio(lever, 1.0 - slope_bound),
+              load_friction_for_slope_ratio(lever, 1.0 + slope_bound))
+    return float(mu), float(xi), float(lam) if math.isfinite(lam) else nan
+
+
+def _bound_words(sig_bounds: tuple[float, float, float], lever, velocity: float) -> str:
+    mu, xi, lam = sig_bounds
+    if lever is None:
+        return ("no friction force follows without the lever's geometry (`theta0`, `L0`, `L1`, `L2`: eq 16's "
+                "offset vanishes for a tip on the beam's axis)")
+    parts = [f"constant friction mu up to {mu * 1e9:.3g} nN (eq 16)" if math.isfinite(mu) else
+             "no constant friction bound (this geometry makes no eq-16 offset)"]
+    if math.isfinite(xi):
+        parts.append(f"viscous xi up to {xi:.3g} kg/s at {velocity * 1e6:.3g} um/s (eq 28, steady sliding)")
+    parts.append(f"load-proportional lambda up to {lam:.3g} (eqs 18-19)" if math.isfinite(lam) else
+                 "load-proportional lambda undetermined (any lambda below the lever's stability limit fits "
+                 "the slopes, eqs 18-19)")
+    return "; ".join(parts)
 
 
 def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsigma: float = _F.nsigma,
                        slope_tolerance: float = _F.slope_tolerance, offset_tolerance: float = _F.offset_tolerance,
-                       friction_slope_limit: float = 0.25, channel: str = "") -> FrictionSignature:
-    """Classify the pair of compliance lines.
+                       friction_slope_limit: float = 0.25, channel: str = "", offset_systematic: float = 0.0,
+                       slope_systematic: float = 0.0, lever: "InclinedCantilever | None" = None,
+                       velocity: float = math.nan) -> FrictionSignature:
+    """Classify the pair of compliance lines and bound the friction they allow.
 
     Parameters
     ----------
@@ -317,6 +387,44 @@ def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsig
         (Fig 4: 7 % for lambda = 2, spec section 4.2); beyond it the kind is ``"nonlinear"``.
     channel : str
         Position channel (``"nominal"``: a creeping piezo changes the slopes).
+    offset_systematic, slope_systematic : float
+        How far a systematic error (the drift line's, see the step) can move the offset [m]
+        and the slope ratio [-]: added to the bounds.
+    lever : InclinedCantilever or None
+        The lever's geometry and stiffness (eqs 7-12): converts the bounds into friction
+        parameters. None: the bounds stay in the lines' units.
+    velocity : float
+        Approach speed [m/s] (the viscous bound).
+
+    Notes
+    -----
+    The bounds (kinds ``"not detected"``, ``"constant"``, ``"load-proportional"``):
+
+    * offset: ``|offset| + nsigma offset_se + offset_systematic``, at least ``offset_tolerance``
+      (the largest offset the data allow at the chosen significance; below the tolerance the
+      lines count as coincident whatever their standard errors);
+    * slopes: ``|slope_ratio - 1| + nsigma slope_ratio_se + slope_systematic``, at least
+      ``slope_tolerance``.
+
+    Converted with the lever, each law alone:
+
+    * constant friction ``Fy = +-mu`` (eqs 16, 17): at fixed theta the inward and outward
+      positions differ by ``z+ - z- = (cos th0 / 2B)[(2/3 L0^3 cos th0 + a L0^2)(Fz+ - Fz-)
+      + 2 mu (2/3 L0^3 sin th0 + b L0^2)]`` with ``Fz+ - Fz- = -2 mu (L0^2 sin th0 + 2 b L0) /
+      (L0^2 cos th0 + 2 a L0)`` (eq 17): linear in mu, ``z+ - z- = mu D``, so
+      ``mu <= offset_bound / D`` (:func:`afmforce.statics.constant_friction_for_offset`;
+      Fig 3: D = 0.152 nm/nN). In hard contact the substrate position differs as the tip's.
+    * viscous friction ``Fy = -xi dy2/dt`` (eq 28) in steady sliding along the compliance
+      line: ``|Fy| = xi |dy2/dz2| v`` (spec section 7: xi v = 1e-8 N gives 0.454 nm), so
+      ``xi <= mu_bound / (|dy2/dz2| v)``.
+    * friction proportional to load ``Fy = +-lambda Fz`` (eqs 18, 19): the compliance slope
+      of a run goes as ``1 / beta``, so the slope ratio is ``beta_out / beta_in``, a ratio of
+      linear functions of lambda; ``|ratio - 1| <= slope_bound`` holds up to the smallest
+      root of a quadratic (:func:`afmforce.statics.load_friction_for_slope_ratio`), the bound
+      on lambda (NaN: undetermined below the stability limit).
+
+    The bounds assume the position channel adds no offset or slope of its own: an opposite
+    backlash (Fig 7B) could hide more friction than they say.
     """
     a, r = compliance.approach, compliance.retract
     nan = math.nan
@@ -353,7 +461,23 @@ def friction_signature(compliance: ComplianceResult, shift: ShiftResult, *, nsig
             verdict = (f"parallel lines, inward {-offset * 1e9:.3g} nm to the left of outward: opposite to "
                        "friction, an instrument artefact (backlash or piezo hysteresis, Fig 7B)")
     else:
-        kind = "none"
-        verdict = "compliance lines coincide: no sign of friction"
+        kind = "not detected"
+        verdict = ""
+    if kind not in BOUNDED_KINDS:
+        return FrictionSignature(kind=kind, offset=float(offset), offset_se=float(off_se),
+                                 slope_ratio=float(ratio), slope_ratio_se=float(ratio_se), verdict=verdict)
+    off_bound = max(abs(offset) + nsigma * off_se + abs(offset_systematic), offset_tolerance)
+    slope_bound = max(abs(ratio - 1.0) + nsigma * ratio_se + abs(slope_systematic), slope_tolerance)
+    bounds = _friction_bounds(lever, off_bound, slope_bound, velocity)
+    allow = (f"offset up to {off_bound * 1e9:.3g} nm and slopes differing by up to {slope_bound * 100:.3g} % "
+             f"({nsigma:g} standard errors)")
+    if kind == "not detected":
+        verdict = (f"compliance lines coincide within the resolution: friction not detected, not excluded "
+                   f"(Figs 5-6: friction hides without separated lines); the lines allow an {allow}: "
+                   f"{_bound_words(bounds, lever, velocity)}")
+    elif lever is not None:
+        verdict = f"{verdict}; at most (the lines allow an {allow}): {_bound_words(bounds, lever, velocity)}"
     return FrictionSignature(kind=kind, offset=float(offset), offset_se=float(off_se), slope_ratio=float(ratio),
-                             slope_ratio_se=float(ratio_se), verdict=verdict)
+                             slope_ratio_se=float(ratio_se), verdict=verdict, offset_bound=float(off_bound),
+                             slope_difference_bound=float(slope_bound), friction_force_bound=bounds[0],
+                             viscous_friction_bound=bounds[1], load_friction_bound=bounds[2])

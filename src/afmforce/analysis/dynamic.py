@@ -128,7 +128,8 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
         Position step between samples [m], added to ``jump_tolerance`` (the last
         sample before the jump may lie up to one step outside the static point).
     friction, friction_verdict : str
-        Kind and words of the :class:`~.compliance.FrictionSignature`.
+        Kind and words of the :class:`~.compliance.FrictionSignature` (``"not detected"``:
+        coincident lines, which bound friction but never exclude it).
     hamaker_radius : float
         A R of the approach fit [J m].
     pull_off_force : float
@@ -221,7 +222,8 @@ def diagnose_curve(*, velocity: float, spring_constant: float, resonance_frequen
                                                           "friction or speed, or an extra adhesion (capillarity)"))
     # "not dynamic" needs both mechanisms excluded: inertia (eq 3) and friction (the compliance lines);
     # the jump-in and attraction tests can only flag a dynamic run, not clear one
-    friction_assessed = friction in ("none", "constant", "load-proportional", "opposite", "pinned")
+    # "not detected" is assessed: the lines were compared (and bound the friction they allow), not cleared
+    friction_assessed = friction in ("not detected", "constant", "load-proportional", "opposite", "pinned")
     assessed = dynamic or (math.isfinite(r_par) and friction_assessed)
     if not assessed:
         missing = [w for w, ok in (("inertia", math.isfinite(r_par)), ("friction", friction_assessed)) if not ok]

@@ -63,16 +63,33 @@ def friction(st: State, o: FrictionOptions) -> State:
     sh = st.details.get("shift") or cc.compliance_shift(comp, applied=False)
     slope_unc, offset_unc, rate_gap = _drift_uncertainty(st, comp)
     sig = cc.friction_signature(comp, sh, nsigma=nsigma, slope_tolerance=max(slope_tolerance, slope_unc),
-                                offset_tolerance=max(offset_tolerance, offset_unc), channel=st.channel)
+                                offset_tolerance=max(offset_tolerance, offset_unc), channel=st.channel,
+                                offset_systematic=offset_unc, slope_systematic=slope_unc, lever=_lever(st),
+                                velocity=st.velocity(st.approach.index) if st.time_known else math.nan)
     if rate_gap > 0 and (slope_unc > slope_tolerance or offset_unc > offset_tolerance):
         bounds = (f"the drift rate holds to {rate_gap:.3g} {st.unit}/s between the halves of the baselines, so "
                   f"the lines are known to a slope of {slope_unc * 100:.2g} % and an offset of "
                   f"{offset_unc * 1e9:.3g} nm")
-        if sig.kind == "none":
-            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} within the drift uncertainty ({bounds})")
+        if sig.kind == "not detected":
+            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} (the bounds include the drift uncertainty: {bounds})")
         else:
             sig = dataclasses.replace(sig, verdict=f"{sig.verdict} (beyond the drift uncertainty: {bounds})")
     return st.update("friction", sig)
+
+
+def _lever(st: State):
+    """The lever of eq 13 when the probe's geometry is given (theta0, L0, L1, L2 and k), else None.
+
+    The same lever the force step converts with (``k`` given is the intrinsic k0, rescaled when
+    the force step rescaled a thermal k).
+    """
+    p = st.probe
+    conv = st.details.get("force")
+    if conv is None or conv.method != "eq 13" or None in (p.L0, p.L1, p.L2):
+        return None
+    from ...cantilever import InclinedCantilever
+
+    return InclinedCantilever(L0=p.L0, L1=p.L1, L2=p.L2, theta0=conv.theta0, k0=conv.spring_constant_given)
 
 
 def _drift_uncertainty(st: State, comp) -> tuple[float, float, float]:
@@ -114,6 +131,17 @@ def _drift_uncertainty(st: State, comp) -> tuple[float, float, float]:
 
 FRICTION = AnalysisStep(
     "friction", "Friction signature of the compliance lines (hard contacts, straight lines)", friction,
-    FrictionOptions, requires=("kind",), after=("shift",), reference="sections 2.2.2-2.2.4, eqs 16-21",
-    fields=(ResultField("friction", None, default=""), ResultField("friction_verdict", None, default="")),
-    collect=lambda st: {"friction": st.details["friction"].kind, "friction_verdict": st.details["friction"].verdict})
+    FrictionOptions, requires=("kind",), after=("shift", "force"), reference="sections 2.2.2-2.2.4, eqs 16-21",
+    fields=(ResultField("friction", None, default=""), ResultField("friction_verdict", None, default=""),
+            ResultField("friction_offset_bound", "m", "largest friction offset the lines allow", column=True, map=True),
+            ResultField("friction_force_bound", "N", "largest constant friction the lines allow (eq 16)",
+                        column=True, map=True),
+            ResultField("viscous_friction_bound", "kg/s", "largest viscous friction the lines allow (eq 28)",
+                        column=True, map=True),
+            ResultField("load_friction_bound", "", "largest load-proportional friction the lines allow (eqs 18-19)",
+                        column=True, map=True)),
+    collect=lambda st: {"friction": st.details["friction"].kind, "friction_verdict": st.details["friction"].verdict,
+                        "friction_offset_bound": st.details["friction"].offset_bound,
+                        "friction_force_bound": st.details["friction"].friction_force_bound,
+                        "viscous_friction_bound": st.details["friction"].viscous_friction_bound,
+                        "load_friction_bound": st.details["friction"].load_friction_bound})
