@@ -170,7 +170,7 @@ def test_asylum_air_refit_when_asked_rescales_the_thermal_k():
 def test_diagnosis_names_capillarity_in_air_and_keeps_dynamics_in_liquid():
     common = dict(velocity=4e-7, spring_constant=0.26, resonance_frequency=2.3e4, resolution=1e-11,
                   force_gradient=0.16, jump_in_separation=6e-9, static_jump_in_separation=4e-9)
-    air = diagnose_curve(**common, friction="none", quality_factor=139.0)
+    air = diagnose_curve(**common, friction="not detected", quality_factor=139.0)
     assert not air.dynamic and "likely capillary" in air.verdict
     liquid = diagnose_curve(**common, friction="not assessed", quality_factor=3.0)
     # inertia excluded (eq 3: 0.27 < 1) leaves friction, which coincident lines cannot exclude (Figs 5-6)

@@ -173,7 +173,7 @@ def _line(slope, z_at_zero):
 
 
 @pytest.mark.parametrize("app,ret,shift,kind", [
-    ((2e7, 0.0), (2e7, 0.0), 0.0, "none"),
+    ((2e7, 0.0), (2e7, 0.0), 0.0, "not detected"),  # coincident: bounded, not excluded
     ((2e7, 0.76e-9), (2e7, 0.0), -0.76e-9, "constant"),  # Fig 3: inward 0.76 nm to the right
     ((2e7, -57e-9), (2e7, 0.0), 57e-9, "opposite"),  # Fig 7B: backlash
     ((2.4e7, 0.0), (2e7, 0.0), 0.0, "load-proportional"),  # Fig 4: non-parallel

@@ -19,7 +19,7 @@ def test_frictionless_run_recovers_hamaker(runs):
     _, (static, _) = runs
     # quasi-static, no friction, 'typical' instrument noise: the fit finds the true A (eq 2)
     assert static.relative_error == pytest.approx(0.0, abs=0.15)
-    assert static.friction == "none"
+    assert static.friction == "not detected"
 
 
 def test_friction_underestimates_attraction(runs):
