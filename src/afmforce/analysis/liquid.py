@@ -23,7 +23,7 @@ Everything is SI; the functions take arrays (one run each) and return small reco
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
@@ -297,7 +297,9 @@ def velocity_force_fit(h, f_v, velocity: float, h_min: float, h_max: float) -> V
 @dataclass(frozen=True)
 class DLVOFit:
     """Least-squares DLVO fit: values, standard errors [SI], reduced chi-square, and the residuals'
-    correlation time [samples] the standard errors are widened by (its square root; 1: white)."""
+    correlation time [samples] the standard errors are widened by (its square root; 1: white),
+    each parameter's 95 % profile-likelihood interval (``interval``: (low, high) [SI], None for an
+    end the data leave open) and ``note``: why a value or a standard error is NaN."""
 
     surface_potential: float
     debye_length: float
@@ -305,6 +307,8 @@ class DLVOFit:
     stderr: dict
     redchi: float
     correlation_time: float = 1.0
+    interval: dict = field(default_factory=dict)
+    note: str = ""
 
 
 def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-flat",
@@ -318,6 +322,13 @@ def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-f
     ``viscosity`` [Pa s] the drainage with slip (:func:`afmforce.forces.slip_drainage_force`,
     known) is part of the model, so an approach at finite speed gives the static force.
     Standard errors from the covariance, scaled by the reduced chi-square when it exceeds 1.
+
+    The covariance is local: each parameter's profile likelihood (the others re-fitted,
+    :func:`~.surface_law_fit.profile_interval`, chi-square in the same noise units) gives its 95 %
+    interval. Open to a bound (a Debye length beyond the data range: only psi^2 / lambda is seen,
+    the fit had psi = -0.0027 +- 0.0011 V for a true -0.03 V at lambda = 3 um over 2-30 nm), or a
+    better fit elsewhere: the value and its error are NaN; an interval more than twice as wide as
+    the error says on a side: the error is NaN (the value and its interval stay).
     """
     from scipy.optimize import least_squares
 
@@ -341,10 +352,33 @@ def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-f
     tau = _correlation_time(res.fun)
     cov = np.linalg.pinv(res.jac.T @ res.jac) * max(redchi, 1.0) * tau
     se = np.sqrt(np.clip(np.diag(cov), 0, None)) * scale
-    psi, lam, a = res.x * scale
-    return DLVOFit(float(psi), float(lam), float(a),
-                   {"surface_potential": float(se[0]), "debye_length": float(se[1]),
-                    "hamaker": float(se[2])}, redchi, tau)
+    from .surface_law_fit import profile_interval
+
+    names = ("surface_potential", "debye_length", "hamaker")
+    values = dict(zip(names, (float(v) for v in res.x * scale)))
+    stderr = dict(zip(names, (float(v) for v in se)))
+    lo, hi = np.array([-100, 1e-3, 1e-3]), np.array([100, 1e3, 1e4])
+    interval, why = {}, []
+    for i, n in enumerate(names):
+        if not (math.isfinite(se[i]) and se[i] > 0):
+            values[n], stderr[n] = math.nan, math.nan
+            why.append(f"{n}: no standard error (the data do not move the model along it)")
+            continue
+        low, high, better = profile_interval(res, i, lambda p: model(p) / sigma, ff / sigma, 1.0, lo, hi,
+                                             se[i] / scale[i], max(redchi, 1.0) * tau)
+        low, high = (None if e is None else float(e * scale[i]) for e in (low, high))
+        interval[n] = (low, high)
+        shown = f"[{'-' if low is None else f'{low:.3g}'}, {'-' if high is None else f'{high:.3g}'}]"
+        if better is not None or low is None or high is None:
+            why.append(f"{n} undetermined: " + (f"a better fit lies at {better * scale[i]:.3g}" if better is not None
+                                                  else f"its 95 % profile interval {shown} is open"))
+            values[n], stderr[n] = math.nan, math.nan
+        elif max(values[n] - low, high - values[n]) > 2 * 1.96 * se[i]:
+            why.append(f"{n} = {values[n]:.3g}: its 95 % profile interval {shown} is far wider than the "
+                       f"standard error {se[i]:.2g} says (no standard error given)")
+            stderr[n] = math.nan
+    return DLVOFit(values["surface_potential"], values["debye_length"], values["hamaker"], stderr, redchi, tau,
+                   interval, "; ".join(why))
 
 
 def _correlation_time(r) -> float:

@@ -29,7 +29,7 @@ from .._fields import QUANTITIES
 from ..errors import ParameterError
 from ..surface_laws import law as _law
 
-__all__ = ["LawFit", "fit_surface_law"]
+__all__ = ["LawFit", "fit_surface_law", "profile_interval", "PROFILE_THRESHOLD"]
 
 
 @dataclass(frozen=True)
@@ -59,7 +59,7 @@ def _value(v):
 PROFILE_THRESHOLD = 3.84
 
 
-def _profile_interval(res, i: int, model, f, unit: float, lo, hi, step: float,
+def profile_interval(res, i: int, model, f, unit: float, lo, hi, step: float,
                       noise_var: float) -> tuple[float | None, float | None, float | None]:
     """The 95 % profile-likelihood interval of parameter ``i`` (scaled units): ``(low, high, better)``.
 
@@ -191,7 +191,7 @@ def fit_surface_law(separation, force, law: str, *, radius: float, free: Sequenc
             bad.append(n)
             values[n], stderr[n] = math.nan, math.nan
             continue
-        low, high, better = _profile_interval(res, i, model, f, unit, lo, hi, se[i] / scale[i], noise_var)
+        low, high, better = profile_interval(res, i, model, f, unit, lo, hi, se[i] / scale[i], noise_var)
         low, high = (None if e is None else float(e * scale[i]) for e in (low, high))
         interval[n] = (low, high)
         shown = f"[{'-' if low is None else f'{low:.3g}'}, {'-' if high is None else f'{high:.3g}'}]"

@@ -218,6 +218,8 @@ def liquid(st: State, o: LiquidOptions) -> State:
     sign = -1.0 if o.potential_sign == "negative" else 1.0
     fit = fit_dlvo(ha[sel], fa[sel], radius, sigma=noise * math.sqrt(2.0), geometry=o.geometry,
                    law=o.double_layer, permittivity=eps, z0=o.z0, guess=(sign * psi0, lam0, 1e-20))
+    if fit.note:   # a parameter the profile likelihood leaves open, or wider than its error says
+        warn.append(f"liquid: DLVO fit: {fit.note}")
     from ...forces import double_layer_force, paper_radius, vdw_force
 
     hf = ha[sel]
