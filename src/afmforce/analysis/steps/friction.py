@@ -71,7 +71,8 @@ def friction(st: State, o: FrictionOptions) -> State:
                   f"the lines are known to a slope of {slope_unc * 100:.2g} % and an offset of "
                   f"{offset_unc * 1e9:.3g} nm")
         if sig.kind == "not detected":
-            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} (the bounds include the drift uncertainty: {bounds})")
+            sig = dataclasses.replace(sig, verdict=f"{sig.verdict} (the bounds include the drift uncertainty: "
+                                                   f"{bounds})")
         else:
             sig = dataclasses.replace(sig, verdict=f"{sig.verdict} (beyond the drift uncertainty: {bounds})")
     return st.update("friction", sig)
