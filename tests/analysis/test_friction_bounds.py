@@ -170,8 +170,6 @@ def test_bound_against_numpy_on_a_real_curve(monkeypatch):
     se = math.hypot(*[math.sqrt(np.array([1.0, z_at[k]]) @ cov[::-1, ::-1] @ np.array([1.0, z_at[k]])) / abs(b)
                       for k, (a, b, cov, *_ ) in lines.items()])
     ratio_se = abs(ratio) * math.hypot(*[math.sqrt(cov[0, 0]) / abs(b) for (a, b, cov, *_ ) in lines.values()])
-    print(offset, se, sig.offset, sig.offset_se, sig.offset_bound, ratio, ratio_se, sig.slope_ratio,
-          sig.slope_ratio_se, sig.slope_difference_bound)
     assert offset == pytest.approx(sig.offset, abs=0.1 * sig.offset_bound)
     assert ratio == pytest.approx(sig.slope_ratio, abs=0.1 * sig.slope_difference_bound)
     assert sig.offset_bound >= abs(offset) + 3 * se
