@@ -80,6 +80,8 @@ SOURCES = {
     "jpk-qi-data_v8.1_format-2.0.jpk-qi-data": ("JPK QI data (SPM 8.1.64, file format 2.0)", "bicarlsen/jpk_reader", "data/qi_data/qi_data-2_0-xs/ (the archive's 234 members, published unzipped; zipped here, bytes unchanged)", "MIT"),
     "jpk-qi-series_2021.04.13.jpk-qi-series": ("JPK QI series", "AFM-analysis/afmformats", "tests/data/fmt-jpk-fd_qi-data-2021.04.13.jpk-qi-series", "MIT"),
     "jpk-txt_dp-export_SMFS_0441.txt": ("JPK DP text export", "galvanetto/Fodis", "Datasets/JPK example files/txt exported/force-save-0441.txt", "Apache-2.0"),
+    "jpk-txt_spm6.1_creep-compliance_JPK00556_index62.txt": ("JPK SPM 6.1 text export (CellHesion 200, creep compliance: extend, pause, retract)", "AFM-analysis/afmformats", "tests/data/example2_creep.txt", "MIT"),
+    "jpk-txt_spm6.1_creep-compliance_JPK01466_index7.txt": ("JPK SPM 6.1 text export (CellHesion 200, creep compliance: extend, pause, retract)", "AFM-analysis/afmformats", "tests/data/example1_creep.txt", "MIT"),
     "ntmdt-txt_gel4_Curve_DFL_Height_51.txt": ("NT-MDT Nova text", "AFM-analysis/afmformats", "tests/data/fmt-ntmdt-txt-fd_2015_01_17_gel4-0,1_mQ_adh_6B_Curve_DFL_Height_51.txt", "MIT"),
     "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": ("WSxM curves (Nanotec)", "pycroscopy/SciFiDatasets", "data/microscopy/spm/afm/wsxm/WSxM1DReader_spectrocurve_0001_Normalforce.f.curves", "MIT"),
 }
@@ -88,6 +90,9 @@ SOURCES = {
 FILE_COMMITS = {
     "chiaro-txt_V3.4.1_displacement-hold.txt": "b193b42ba1e31464145b0952f574d0d360ef2056",  # removed by 584de05
     "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": "eabc7a708e316bdf19cd344c603f014b99c3daea",
+    # afmformats pull request 14 (issue 9, "added example creep files"); removed from it by b55004f
+    "jpk-txt_spm6.1_creep-compliance_JPK00556_index62.txt": "85676d0271dec3df10c56a82aef9938bf97125b8",
+    "jpk-txt_spm6.1_creep-compliance_JPK01466_index7.txt": "85676d0271dec3df10c56a82aef9938bf97125b8",
 }
 
 #: what the file lacks and a user gives (stand-ins; the gallery passes them as meta_override)
@@ -263,19 +268,49 @@ def _bruker_ascii(path: Path) -> dict:
             "segments": [["extend", ext], ["retract", len(rows)]]}
 
 
-def _jpk_text(path: Path) -> dict:
-    segs, k, s, cur = [], None, None, None
+def _jpk_text_segments(path: Path) -> list[tuple[str, dict[str, np.ndarray]]]:
+    """Each ``# segment:`` block's columns (its ``# columns:`` names) as numpy arrays."""
+    out, names, rows = [], [], None
     for line in path.read_text("latin-1").splitlines():
         if line.startswith("# segment:"):
-            cur = [line.split(":", 1)[1].strip(), 0]
-            segs.append(cur)
-        elif line.startswith("# springConstant:") and k is None:
+            rows = []
+            out.append((line.split(":", 1)[1].strip(), rows))
+        elif line.startswith("# columns:"):
+            names.append(line.split(":", 1)[1].split())
+        elif line.strip() and not line.startswith("#") and rows is not None:
+            rows.append([float(v) for v in line.split()])
+    return [(seg, dict(zip(cols, np.array(rows, dtype=float).T))) for (seg, rows), cols in zip(out, names)]
+
+
+def _jpk_text(path: Path) -> dict:
+    """k and the sensitivity from the first segment's header lines; the sample rate from the extend's
+    ``time`` column (1 / its median step); the rows of each segment counted."""
+    k = s = None
+    for line in path.read_text("latin-1").splitlines():
+        if line.startswith("# springConstant:") and k is None:
             k = float(line.split(":", 1)[1])
         elif line.startswith("# sensitivity:") and s is None:
             s = float(line.split(":", 1)[1])
-        elif line.strip() and not line.startswith("#") and cur is not None:
-            cur[1] += 1
-    return {"spring_constant": k, "sensitivity": s, "sample_rate": None, "curves": 1, "segments": segs}
+    segs = _jpk_text_segments(path)
+    extend = next(cols for seg, cols in segs if seg == "extend")
+    rate = 1.0 / float(np.median(np.diff(extend["time"])))
+    return {"spring_constant": k, "sensitivity": s, "sample_rate": rate, "curves": 1,
+            "segments": [[seg, len(next(iter(cols.values())))] for seg, cols in segs]}
+
+
+#: JPK text exports whose adhesion the analysis must give (a deep, clean adhesion: -20 nN, noise 5 pN)
+ADHESION = {"jpk-txt_spm6.1_creep-compliance_JPK01466_index7.txt"}
+
+
+def _jpk_text_adhesion(path: Path) -> list[float]:
+    """The adhesion force [N]: the retract's deepest vDeflection [N] less the baseline there, a straight
+    line fitted against ``seriesTime`` to the retract's last half (the free tip drifting)."""
+    ret = dict(_jpk_text_segments(path))["retract"]
+    force, t = ret["vDeflection"], ret["seriesTime"]
+    half = slice(force.size // 2, None)
+    line = np.polyfit(t[half], force[half], 1)
+    i = int(np.argmin(force))
+    return [float(force[i] - np.polyval(line, t[i]))]
 
 
 def _workshop(path: Path) -> dict:
@@ -375,7 +410,8 @@ def header(path: Path) -> dict:
 
 
 #: what an ``expected`` entry checks, in the README's words
-CHECKED = {"pull_off_force": "pull-off of every curve", "youngs_modulus": "modulus (the Chiaro's own Hertz fit)"}
+CHECKED = {"pull_off_force": "pull-off of every curve", "youngs_modulus": "modulus (the Chiaro's own Hertz fit)",
+           "adhesion_force": "adhesion (numpy on the retract column)"}
 
 
 def _fmt(v, scale=1.0, digits=5):
@@ -432,6 +468,8 @@ def main() -> None:
         entry["expect"] = {"read": PENDING_READ.get(name, "read"), "analysis": PENDING_ANALYSIS.get(name, "plausible")}
         if name in PULL_OFF:  # numbers the analysis must give, per curve (test_corpus_gallery)
             entry["expected"] = {"pull_off_force": _jpk_pull_off(path)}
+        if name in ADHESION:
+            entry["expected"] = {"adhesion_force": _jpk_text_adhesion(path)}
         if name.startswith("chiaro-txt"):  # the instrument's Hertz modulus (test_corpus_gallery)
             entry["expected"] = {"youngs_modulus": _chiaro_modulus(path)}
         table[name] = entry
