@@ -124,6 +124,20 @@ def read_wave5(path: str | Path) -> IgorWave5 | None:
     return IgorWave5(data, note_b, _labels(block, dim_labels), sfa)
 
 
+def _feedback_mode_known(mode: str) -> bool:
+    """Does afmformats' metadata vocabulary hold this feedback mode? Its list ('contact',
+    'force-modulation') lacks modes Asylum writes in a force curve's ``ImagingMode`` ('PFM Mode'
+    on a Cypher, 'AC Mode'), and afmformats refuses the whole curve over it (``ValueError``); such a
+    mode is left out of the metadata instead (the curve does not depend on it)."""
+    from afmformats.meta import DEF_ALL
+
+    try:
+        DEF_ALL["feedback mode"][2](mode)
+    except (KeyError, ValueError):
+        return False
+    return True
+
+
 def afmformats_igor(path: str | Path, callback: Callable | None = None,
                     calibration: dict[str, float] | None = None) -> list | None:
     """What ``afmformats.load_data(path)`` returns for an Asylum ``.ibw`` force curve, from
@@ -153,7 +167,7 @@ def afmformats_igor(path: str | Path, callback: Callable | None = None,
     try:
         metadata: dict[str, Any] = {}
         metadata["imaging mode"] = "force-distance"
-        if "ImagingMode" in notes:
+        if "ImagingMode" in notes and _feedback_mode_known(notes["ImagingMode"].lower()):
             metadata["feedback mode"] = notes["ImagingMode"].lower()
         if "NumPtsPerSec" in notes:
             metadata["rate approach"] = float(notes["NumPtsPerSec"])

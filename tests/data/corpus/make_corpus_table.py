@@ -43,6 +43,7 @@ SOURCES = {
     "afm-workshop_volts_2018-08-01.csv": ("AFM Workshop CSV", "AFM-analysis/afmformats", "tests/data/fmt-afm-workshop-fd_single_2018-08-01_13.06.09.csv", "MIT"),
     "asylum-ibw_AR16_dwell-10s_cell37m0000.ibw": ("Asylum .ibw (AR 16.05, MFP-3D, 10 s dwell)", "HoseynAAmiri/pyrtz2", "data/example/label1val1label2val1cell37m0000.ibw", "MIT"),
     "asylum-ibw_AR16_dwell-10s_cell39m0000.ibw": ("Asylum .ibw (AR 16.05, MFP-3D, 10 s dwell)", "HoseynAAmiri/pyrtz2", "data/example/label1val3label2val3cell39m0000.ibw", "MIT"),
+    "asylum-ibw_Cypher_AR15_PFM-mode_LRCol0_MS_LG7d0001.ibw": ("Asylum .ibw (Cypher, AR 15.09, ImagingMode 'PFM Mode', 5 channels)", "jcbs/ForceMetric", "Examples/LRCol0_MS_LG7d0001.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0100.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0100.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0120.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0120.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0146.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0146.ibw", "MIT"),
@@ -90,6 +91,7 @@ SOURCES = {
 FILE_COMMITS = {
     "chiaro-txt_V3.4.1_displacement-hold.txt": "b193b42ba1e31464145b0952f574d0d360ef2056",  # removed by 584de05
     "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": "eabc7a708e316bdf19cd344c603f014b99c3daea",
+    "asylum-ibw_Cypher_AR15_PFM-mode_LRCol0_MS_LG7d0001.ibw": "54649d12785f1c506188fdcb87d12d799160fef5",  # removed later
     # afmformats pull request 14 (issue 9, "added example creep files"); removed from it by b55004f
     "jpk-txt_spm6.1_creep-compliance_JPK00556_index62.txt": "85676d0271dec3df10c56a82aef9938bf97125b8",
     "jpk-txt_spm6.1_creep-compliance_JPK01466_index7.txt": "85676d0271dec3df10c56a82aef9938bf97125b8",
