@@ -90,3 +90,15 @@ def test_cli_prints_one_error_line_and_fails(tmp_path, capsys):
     assert rc not in (0, None) and "Traceback" not in err
     lines = [line for line in err.splitlines() if "NT-MDT" in line]
     assert len(lines) == 1 and "ntmdt-txt" in lines[0]
+
+
+def test_a_nanoscope_ramp_script_is_refused_not_cut_into_curves():
+    """Bruker's own v9.70 ramp-script example (Apache-2.0: 18 scripted segments, 16 of them tip-bias
+    sweeps at a held height): its 11,264 samples were once cut into 11 'force curves' of 512 + 512
+    points (one analysis then crashed with an IndexError). Refused by name, with the segments."""
+    path = UFF.parent / "bruker-nanoscope_v9.70_Bruker-example_ScriptTipBiasSweep.spm"
+    with pytest.raises(FileFormatError) as err:
+        load(path)
+    msg = str(err.value)
+    assert "\n" not in msg and "a NanoScope ramp-script file (18 scripted segments (ramps: Z, Sweep," in msg
+    assert "'bruker-ascii'" in msg

@@ -55,6 +55,9 @@ SOURCES = {
     "bruker-ascii_fodis_extracted.txt": ("NanoScope Analysis export (processed)", "galvanetto/Fodis", "Datasets/Bruker example files/Bruker_extracted_file1.txt", "Apache-2.0"),
     "bruker-ascii_fodis_mica-GA6_baseline-corrected.txt": ("NanoScope Analysis export (processed)", "galvanetto/Fodis", "Datasets/Bruker example files/Mica in DDW with GA6 2.8.17.0_00000.spm-CD58_ForceCurveIndex_2294BaseLine Correction_1.spm - NanoScope Analysis.txt", "Apache-2.0"),
     "bruker-nanoscope_force-volume_v9.2_Egel2_00023.spm": ("Bruker NanoScope binary (force volume)", "DyNaMo-INSERM/PyFMlab_DyNaMo", "PyFMReader_DyNaMo/tests/testfiles/20200903_Egel2.0_00023.spm", "MIT"),
+    "bruker-nanoscope_v8.15_Bruker-example_Force.spm": ("Bruker NanoScope binary (Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/Force.spm", "Apache-2.0"),
+    "bruker-nanoscope_v9.30_Bruker-example_ForceHold.spm": ("Bruker NanoScope binary (force hold: extend, 0.1 s hold, retract; Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/ForceHold.spm", "Apache-2.0"),
+    "bruker-nanoscope_v9.40_Bruker-example_ForceHoldSweep.spm": ("Bruker NanoScope binary (force hold with amplitude and phase channels; Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/ForceHoldSweep.spm", "Apache-2.0"),
     "bruker-nanoscope_v8.15_sapphire_TAP525.001": ("Bruker NanoScope binary", "pycroscopy/SciFiDatasets", "data/microscopy/spm/afm/BrukerReader_ForceCurve_Sapphire_TAP525.001", "MIT"),
     "bruker-nanoscope_v9.2_Egel4_00025.spm": ("Bruker NanoScope binary", "DyNaMo-INSERM/PyFMlab_DyNaMo", "PyFMReader_DyNaMo/tests/testfiles/20200904_Egel4-Z1.0_00025.spm", "MIT"),
     "chiaro-txt_V3.4.1_displacement-hold.txt": ("Optics11 Chiaro text (V3.4.1, displacement profile with a 1 s hold)", "CellMechLab/softmech", "optics11_new_new.txt", "MIT"),
@@ -86,6 +89,10 @@ SOURCES = {
     "ntmdt-txt_gel4_Curve_DFL_Height_51.txt": ("NT-MDT Nova text", "AFM-analysis/afmformats", "tests/data/fmt-ntmdt-txt-fd_2015_01_17_gel4-0,1_mQ_adh_6B_Curve_DFL_Height_51.txt", "MIT"),
     "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": ("WSxM curves (Nanotec)", "pycroscopy/SciFiDatasets", "data/microscopy/spm/afm/wsxm/WSxM1DReader_spectrocurve_0001_Normalforce.f.curves", "MIT"),
 }
+
+#: sources that are not git repositories: the SHA-1 of the published archive stands for the commit
+#: (``sha1sum nanoscope-1.2.300-py2.py3-none-any.whl``, Bruker's wheel on PyPI, Apache-2.0)
+COMMITS["PyPI nanoscope 1.2.300"] = "a64456866b3e68e88e8db7df1757e2761b1ecb7b"
 
 #: files taken from another commit than the repository's in COMMITS (a pull request's head)
 FILE_COMMITS = {
@@ -239,8 +246,13 @@ def _nanoscope(path: Path) -> dict:
     scan = float(re.search(r"\\Scan rate: ([\d.eE+-]+)", force_list).group(1))
     grid = re.search(r"Ciao scan list.*?\\Samps/line: (\d+)", text, re.S).group(1)
     fv = "force-volume" in path.name
+    segs = [["extend", ext], ["retract", ret]]
+    hold = re.search(r"\\Hold Samples: (\d+)", force_list)
+    length = int(re.search(r"\\Data length: (\d+)", defl).group(1))
+    if hold and int(hold.group(1)) and any(length == (ext + ret + int(hold.group(1))) * b for b in (2, 4)):
+        segs.insert(1, ["hold", int(hold.group(1))])  # a force hold: its samples stored after both runs
     return {"spring_constant": k, "sensitivity": s, "sample_rate": (ext + ret) * scan,
-            "curves": int(grid) ** 2 if fv else 1, "segments": [["extend", ext], ["retract", ret]]}
+            "curves": int(grid) ** 2 if fv else 1, "segments": segs}
 
 
 #: NanoScope Analysis exports of one plotted run (a unit row, no header): which run, read by eye from
@@ -435,7 +447,8 @@ def readme(table: dict) -> str:
         "Licences: MIT (afmformats (c) 2019 Paul Mueller; SciFiDatasets (c) 2021 pycroscopy; PyFMlab_DyNaMo",
         "(c) 2023 Javier Lopez Alonso; ForceMetric (c) 2018 Jacob Kienast; jpkfile (c) 2016 Ilyas Kuhlemann;",
         "pyrtz2 (c) 2024 Hoseyn Amiri; softmech (c) 2021 Massimo Vassalli; jpk_reader (c) 2025 Brian Carlsen, MIT or Apache-2.0 at the user's choice: MIT taken),",
-        "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018),",
+        "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018); the NanoScope Python Toolbox",
+        "(c) 2021 Bruker Inc., PyPI `nanoscope` 1.2.300, whose wheel's SHA-1 stands for the commit),",
         "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). The full licence texts are in",
         "`LICENSES`. Commits: "
         + "; ".join(f"{r} `{c[:10]}`" for r, c in COMMITS.items()) + "; "
