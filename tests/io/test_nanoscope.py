@@ -237,3 +237,28 @@ def test_force_hold_is_read_as_extend_hold_retract_in_time_order():
     np.testing.assert_array_equal(app, counts[:4096][::-1])
     np.testing.assert_array_equal(ret, counts[4096:8192])
     np.testing.assert_array_equal(hold, counts[8192:])
+
+
+def test_a_triggered_ramps_unrecorded_samples_are_dropped(tmp_path):
+    """A ramp stopped at its trigger leaves the far end of its stored run at -32768 counts (Bruker's
+    v8.15 force-volume example, 4.2 MB, not in the corpus: 856 of 1024 curves began with 14-174 samples
+    at -12.288 V, then -0.45 V). Written here into Bruker's v8.15 single curve (corpus, int16 at the
+    deflection list's offset, the approach stored from the turning point): the 37 fillers are dropped,
+    every other sample is the original's."""
+    src = DATA / "corpus" / "bruker-nanoscope_v8.15_Bruker-example_Force.spm"
+    raw = bytearray(src.read_bytes())
+    lists = raw[:raw.index(b"File list end")].decode("latin-1").split("\\*")
+    defl = next(t for t in lists if t.startswith("Ciao force image list") and "Deflection Error" in t)
+    off = int(defl.split("\\Data offset: ")[1].split()[0])
+    n = 1024
+    counts = np.frombuffer(bytes(raw[off:off + 4 * n]), "<i2").copy()
+    counts[n - 37:n] = -32768  # the approach's far end (stored last)
+    raw[off:off + 4 * n] = counts.tobytes()
+    path = tmp_path / "triggered.spm"
+    path.write_bytes(bytes(raw))
+    orig, cut = load(src)[0], load(path)[0]
+    assert np.bincount(cut.segment).tolist() == [n - 37, n] and cut.metadata["unrecorded_samples"] == 37
+    keep = np.r_[np.zeros(37, bool), np.ones(2 * n - 37, bool)]
+    for name in ("time", "piezo_nominal", "deflection_signal", "segment"):
+        np.testing.assert_array_equal(getattr(cut, name), getattr(orig, name)[keep])
+    assert cut.deflection_signal.min() > -12  # no -12.288 V sample left

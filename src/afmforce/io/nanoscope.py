@@ -269,6 +269,23 @@ def _adc_shift(chunks, bpp: int, channel: str, where: str, vlsb: float | None = 
     return divisor
 
 
+def _recorded(counts: np.ndarray, n_app: int, n_ret: int) -> np.ndarray:
+    """False for the samples a run did not record, in storage order: a ramp stopped at its trigger
+    leaves the far end of its run (stored last, from the turning point) at the ADC's most negative
+    count, -32768 (Bruker's v8.15 force volume example: 14-174 such samples before the approach's first
+    real one, -12.288 V, then -0.45 V). Only that trailing run of each run is dropped; a -32768 inside a
+    run is a clipped sample and is kept."""
+    keep = np.ones(counts.size, dtype=bool)
+    for start, stop in ((0, n_app), (n_app, n_app + n_ret)):
+        run = counts[start:stop]
+        filler = run == -ADC_COUNTS
+        if filler.size and filler[-1]:
+            n = int(np.argmin(filler[::-1])) if not filler.all() else filler.size
+            if n < filler.size:  # a run of fillers alone is left to the checks that follow
+                keep[stop - n:stop] = False
+    return keep
+
+
 def _refuse_ramp_script(sections, where: str) -> None:
     """A ramp-script file (``Use Ramp Script: Yes``: NanoScope's scripted segments, e.g. tip-bias sweeps
     at a held height, SECM approaches) stores the script's segments one after the other, not an
@@ -442,8 +459,10 @@ class NanoscopeFile:
             return np.concatenate([x[:n_app][::-1], x[n_app + n_ret:], x[n_app:n_app + n_ret]])
 
         off, bpp, div, vlsb = self._defl
-        volts = self._samples(off, bpp, i * per, per).astype(float) / div * vlsb
+        counts = self._samples(off, bpp, i * per, per).astype(float) / div
+        volts = counts * vlsb
         signal = in_time_order(volts)
+        keep = in_time_order(_recorded(counts, n_app, n_ret))
         zm = None
         if self._zsen is not None:
             off, bpp, div, vlsb, sens = self._zsen
@@ -453,8 +472,11 @@ class NanoscopeFile:
                 zm = -zm
         meta = {**self._meta, "curve_index": i, **_grid_point(self._grid, i)} if self.n_curves > 1 \
             else dict(self._meta)
-        curve = RawCurve(time=self._time.copy(), piezo_nominal=self._z.copy(), piezo_measured=zm,
-                         deflection_signal=signal, segment=self._seg.copy(), metadata=meta, deflection_unit="V")
+        if not keep.all():  # a triggered ramp's unrecorded samples (-32768 fillers) are no data
+            meta["unrecorded_samples"] = int((~keep).sum())
+        curve = RawCurve(time=self._time[keep], piezo_nominal=self._z[keep],
+                         piezo_measured=None if zm is None else zm[keep], deflection_signal=signal[keep],
+                         segment=self._seg[keep], metadata=meta, deflection_unit="V")
         return finalize_curve(curve, self.where)
 
     def close(self) -> None:
