@@ -147,3 +147,28 @@ def test_not_recognised_goes_to_afmformats(tmp_path):
     r = tmp_path / "nonote.ibw"  # a plain wave, but no note keys afmformats needs: afmformats decides
     _write(r, data, labels=[_field(b""), _field(b"Raw"), _field(b"Defl"), _field(b"ZSnsr")])
     assert read_wave5(r) is not None and afmformats_igor(r) is None
+
+
+@pytest.mark.parametrize("mode, date", [("AC Mode", "2016-11-06"), ("PFM Mode", "2016-11-06")])
+def test_descriptive_values_afmformats_refuses_are_left_out_not_the_curve(tmp_path, mode, date):
+    """afmformats refuses a whole curve over a descriptive note value outside its vocabulary (an
+    ImagingMode other than contact or force modulation); the fast path leaves
+    that value out and reads the curve: force = Defl x SpringConstant, the rest as in the note."""
+    import afmformats
+
+    z = np.r_[np.linspace(0, 1e-6, 20), np.linspace(1e-6, 0, 20)]
+    defl = np.r_[np.zeros(15), np.linspace(0, 5e-9, 10), np.zeros(15)]
+    note = (f"Note: 1\rSpringConstant: 0.5\rInvOLS: 5e-08\rNumPtsPerSec: 2000\rImagingMode: {mode}\rDate: {date}\r"
+            "Time: 10:00:00 AM\rMicroscopeModel: MFP3D\rTriggerChannel: DeflVolts\rTriggerPoint: 1\r"
+            "InputTime: 0.02\rApproachVelocity: 1e-06\rRetractVelocity: 1e-06\rVersion: 16.05.193\r").encode()
+    p = tmp_path / "odd.ibw"
+    _write(p, np.c_[z, defl, z], note=note, labels=[_field(b""), _field(b"Raw"), _field(b"Defl"), _field(b"ZSnsr")],
+           wtype=4)
+    with pytest.raises(ValueError, match=mode.lower()):  # afmformats refuses the curve over its mode
+        afmformats.load_data(p)
+    fast = afmformats_igor(p)[0]
+    np.testing.assert_array_equal(fast["force"], defl * 0.5)
+    assert fast.metadata["spring constant"] == 0.5 and fast.metadata["sensitivity"] == 5e-8
+    assert "feedback mode" not in fast.metadata and fast.metadata["date"] == date  # only the mode left out
+    curve = load(p)[0]
+    assert curve.metadata["spring_constant"] == 0.5 and curve.deflection_unit == "N"

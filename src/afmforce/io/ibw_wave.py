@@ -124,16 +124,20 @@ def read_wave5(path: str | Path) -> IgorWave5 | None:
     return IgorWave5(data, note_b, _labels(block, dim_labels), sfa)
 
 
-def _feedback_mode_known(mode: str) -> bool:
-    """Does afmformats' metadata vocabulary hold this feedback mode? Its list ('contact',
-    'force-modulation') lacks modes Asylum writes in a force curve's ``ImagingMode`` ('PFM Mode'
-    on a Cypher, 'AC Mode'), and afmformats refuses the whole curve over it (``ValueError``); such a
-    mode is left out of the metadata instead (the curve does not depend on it)."""
+#: descriptive note values afmformats validates (and refuses the whole curve over); never calibration
+_DESCRIPTIVE = ("feedback mode", "instrument", "software version", "date", "time")
+
+
+def _afmformats_accepts(key: str, value: Any) -> bool:
+    """Does afmformats' metadata vocabulary accept this value? Its feedback modes ('contact',
+    'force-modulation') lack modes Asylum writes in a force curve's ``ImagingMode`` ('PFM Mode' on a
+    Cypher, 'AC Mode'), and afmformats refuses the whole curve over such a descriptive value
+    (``ValueError``); the value is left out of the metadata instead (the curve does not depend on it)."""
     from afmformats.meta import DEF_ALL
 
     try:
-        DEF_ALL["feedback mode"][2](mode)
-    except (KeyError, ValueError):
+        DEF_ALL[key][2](value)
+    except (KeyError, ValueError, TypeError):
         return False
     return True
 
@@ -167,7 +171,7 @@ def afmformats_igor(path: str | Path, callback: Callable | None = None,
     try:
         metadata: dict[str, Any] = {}
         metadata["imaging mode"] = "force-distance"
-        if "ImagingMode" in notes and _feedback_mode_known(notes["ImagingMode"].lower()):
+        if "ImagingMode" in notes:
             metadata["feedback mode"] = notes["ImagingMode"].lower()
         if "NumPtsPerSec" in notes:
             metadata["rate approach"] = float(notes["NumPtsPerSec"])
@@ -199,6 +203,9 @@ def afmformats_igor(path: str | Path, callback: Callable | None = None,
             metadata["time"] = notes["Time"]
     except (KeyError, ValueError):
         return None  # no calibration in the note (or not a number): afmformats says what is wrong
+    for key in _DESCRIPTIVE:
+        if key in metadata and not _afmformats_accepts(key, metadata[key]):
+            del metadata[key]
     labels = [li.decode() for ll in wave.labels for li in ll if li]
     if len(labels) != wdata.shape[1]:
         return None
