@@ -31,6 +31,20 @@ def _has_date(path) -> bool:
     return any(line.startswith("Date:") for line in note.split("\r"))
 
 
+def _mode_afmformats_refuses(path) -> bool:
+    """The note's ImagingMode is outside afmformats' feedback modes ('PFM Mode' on a Cypher)."""
+    from afmformats.meta import DEF_ALL
+
+    note = _igor2(path)["note"].decode("latin-1").replace("\n", "\r")
+    modes = [line.split(":", 1)[1].strip().lower() for line in note.split("\r") if line.startswith("ImagingMode:")]
+    try:
+        for mode in modes:
+            DEF_ALL["feedback mode"][2](mode)
+    except ValueError:
+        return True
+    return False
+
+
 def _same_wave(path):
     w, f = _igor2(path), read_wave5(path)
     assert f is not None
@@ -53,6 +67,17 @@ def test_same_wave_and_afmformats_data_as_igor2(path):
         fast = afmformats_igor(path)[0]
         assert "date" not in fast.metadata and fast.metadata["spring constant"] > 0
         return
+    if _mode_afmformats_refuses(path):
+        # afmformats refuses the whole curve over its imaging mode (ValueError); afmforce leaves the
+        # mode out and reads the curve: force = Defl x the note's spring constant, sample for sample
+        with pytest.raises(ValueError, match="Invalid value"):
+            afmformats.load_data(path)
+        fast, wave = afmformats_igor(path)[0], _igor2(path)
+        assert "feedback mode" not in fast.metadata
+        labels = [x.decode() for x in wave["labels"][1] if x]
+        defl = wave["wData"][:, labels.index("Defl")]
+        assert np.array_equal(fast["force"], defl * fast.metadata["spring constant"])
+        return
     ref, fast = afmformats.load_data(path)[0], afmformats_igor(path)[0]
     assert fast.columns == ref.columns
     for col in ref.columns:
@@ -65,8 +90,9 @@ def test_same_wave_and_afmformats_data_as_igor2(path):
 def test_loaded_curve_identical_to_the_afmformats_route(path, monkeypatch):
     """afmforce's RawCurve from the fast path equals the one built from afmformats.load_data."""
     fast = load(path)[0]
-    if not _has_date(path):
-        pytest.skip("afmformats cannot read a wave without Date: no fallback route to compare with")
+    if not _has_date(path) or _mode_afmformats_refuses(path):
+        pytest.skip("afmformats cannot read this wave (no Date, or an imaging mode it refuses): no fallback "
+                    "route to compare with")
     monkeypatch.setattr("afmforce.io.igor.afmformats_igor", lambda *a, **k: None)  # force the fallback
     slow = load(path)[0]
     for name in ("time", "piezo_nominal", "piezo_measured", "deflection_signal", "segment"):
@@ -121,3 +147,28 @@ def test_not_recognised_goes_to_afmformats(tmp_path):
     r = tmp_path / "nonote.ibw"  # a plain wave, but no note keys afmformats needs: afmformats decides
     _write(r, data, labels=[_field(b""), _field(b"Raw"), _field(b"Defl"), _field(b"ZSnsr")])
     assert read_wave5(r) is not None and afmformats_igor(r) is None
+
+
+@pytest.mark.parametrize("mode, date", [("AC Mode", "2016-11-06"), ("PFM Mode", "2016-11-06")])
+def test_descriptive_values_afmformats_refuses_are_left_out_not_the_curve(tmp_path, mode, date):
+    """afmformats refuses a whole curve over a descriptive note value outside its vocabulary (an
+    ImagingMode other than contact or force modulation); the fast path leaves
+    that value out and reads the curve: force = Defl x SpringConstant, the rest as in the note."""
+    import afmformats
+
+    z = np.r_[np.linspace(0, 1e-6, 20), np.linspace(1e-6, 0, 20)]
+    defl = np.r_[np.zeros(15), np.linspace(0, 5e-9, 10), np.zeros(15)]
+    note = (f"Note: 1\rSpringConstant: 0.5\rInvOLS: 5e-08\rNumPtsPerSec: 2000\rImagingMode: {mode}\rDate: {date}\r"
+            "Time: 10:00:00 AM\rMicroscopeModel: MFP3D\rTriggerChannel: DeflVolts\rTriggerPoint: 1\r"
+            "InputTime: 0.02\rApproachVelocity: 1e-06\rRetractVelocity: 1e-06\rVersion: 16.05.193\r").encode()
+    p = tmp_path / "odd.ibw"
+    _write(p, np.c_[z, defl, z], note=note, labels=[_field(b""), _field(b"Raw"), _field(b"Defl"), _field(b"ZSnsr")],
+           wtype=4)
+    with pytest.raises(ValueError, match=mode.lower()):  # afmformats refuses the curve over its mode
+        afmformats.load_data(p)
+    fast = afmformats_igor(p)[0]
+    np.testing.assert_array_equal(fast["force"], defl * 0.5)
+    assert fast.metadata["spring constant"] == 0.5 and fast.metadata["sensitivity"] == 5e-8
+    assert "feedback mode" not in fast.metadata and fast.metadata["date"] == date  # only the mode left out
+    curve = load(p)[0]
+    assert curve.metadata["spring_constant"] == 0.5 and curve.deflection_unit == "N"

@@ -3,6 +3,7 @@ synthetic files written here with known content (versions 5 and 9 layouts)."""
 
 from __future__ import annotations
 
+
 from pathlib import Path
 
 import numpy as np
@@ -204,3 +205,60 @@ def test_impossible_header_spring_constant_is_refused_like_asylum(tmp_path, name
     c = load(path, meta_override={"spring_constant": 0.07})[0]
     assert c.metadata["spring_constant"] == 0.07
     assert load(DATA / name)[0].metadata["spring_constant"] == float(stated.split(b":")[1])  # the deflection's
+
+
+def test_force_hold_is_read_as_extend_hold_retract_in_time_order():
+    """Bruker's own v9.30 example (Apache-2.0): 4096 + 4096 points and a 0.1 s hold of 260 stored
+    after both runs in 4-byte samples (33808 bytes = 8452 x 4; once refused as 'not a whole number of
+    curves'). The physics of a hold checks the order: the Height Sensor stands still at the turning
+    point while the deflection stays at its contact value, and the retract starts where the hold ends.
+    The Height Sensor's V/LSB (0.00000000572205 V/LSB, a 32-bit scale) is applied as it is."""
+    path = DATA / "corpus" / "bruker-nanoscope_v9.30_Bruker-example_ForceHold.spm"
+    raw = path.read_bytes()
+    c = load(path)[0]
+    assert np.bincount(c.segment).tolist() == [4096, 4096, 260]
+    assert c.metadata["segment_types"] == ["extend", "hold", "retract"]
+    assert np.all(np.diff(c.time) > 0)
+    t_hold = c.time[c.segment == 2]
+    assert (t_hold[-1] - t_hold[0]) * 260 / 259 == pytest.approx(0.1, rel=1e-9)  # Hold Time: 0.1
+    app, hold, ret = (c.deflection_signal[c.segment == k] for k in (0, 2, 1))
+    z_app, z_hold, z_ret = (c.piezo_measured[c.segment == k] for k in (0, 2, 1))
+    ramp = np.ptp(z_app)
+    assert 0.4e-6 < ramp < 0.6e-6  # 17.649 V x 29.xx nm/V commanded; the sensor agrees within 3 %
+    assert np.ptp(z_hold) < 0.01 * ramp and abs(z_hold[0] - z_app[-1]) < 0.01 * ramp
+    assert abs(z_ret[0] - z_hold[-1]) < 0.01 * ramp
+    span = np.ptp(app)
+    assert abs(hold.mean() - app[-1]) < 0.02 * span and abs(ret[0] - hold[-1]) < 0.02 * span
+    # the samples themselves: int32 counts x 0.000375 V/LSB, read here from the header's offsets
+    lists = raw[:raw.index(b"File list end")].decode("latin-1").split("\\*")
+    defl = next(t for t in lists if t.startswith("Ciao force image list") and "Deflection Error" in t)
+    off = int(defl.split("\\Data offset: ")[1].split()[0])
+    counts = np.frombuffer(raw[off:off + 33808], "<i4").astype(float) * 0.000375
+    np.testing.assert_array_equal(app, counts[:4096][::-1])
+    np.testing.assert_array_equal(ret, counts[4096:8192])
+    np.testing.assert_array_equal(hold, counts[8192:])
+
+
+def test_a_triggered_ramps_unrecorded_samples_are_dropped(tmp_path):
+    """A ramp stopped at its trigger leaves the far end of its stored run at -32768 counts (Bruker's
+    v8.15 force-volume example, 4.2 MB, not in the corpus: 856 of 1024 curves began with 14-174 samples
+    at -12.288 V, then -0.45 V). Written here into Bruker's v8.15 single curve (corpus, int16 at the
+    deflection list's offset, the approach stored from the turning point): the 37 fillers are dropped,
+    every other sample is the original's."""
+    src = DATA / "corpus" / "bruker-nanoscope_v8.15_Bruker-example_Force.spm"
+    raw = bytearray(src.read_bytes())
+    lists = raw[:raw.index(b"File list end")].decode("latin-1").split("\\*")
+    defl = next(t for t in lists if t.startswith("Ciao force image list") and "Deflection Error" in t)
+    off = int(defl.split("\\Data offset: ")[1].split()[0])
+    n = 1024
+    counts = np.frombuffer(bytes(raw[off:off + 4 * n]), "<i2").copy()
+    counts[n - 37:n] = -32768  # the approach's far end (stored last)
+    raw[off:off + 4 * n] = counts.tobytes()
+    path = tmp_path / "triggered.spm"
+    path.write_bytes(bytes(raw))
+    orig, cut = load(src)[0], load(path)[0]
+    assert np.bincount(cut.segment).tolist() == [n - 37, n] and cut.metadata["unrecorded_samples"] == 37
+    keep = np.r_[np.zeros(37, bool), np.ones(2 * n - 37, bool)]
+    for name in ("time", "piezo_nominal", "deflection_signal", "segment"):
+        np.testing.assert_array_equal(getattr(cut, name), getattr(orig, name)[keep])
+    assert cut.deflection_signal.min() > -12  # no -12.288 V sample left

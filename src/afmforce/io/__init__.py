@@ -273,8 +273,11 @@ def _find_format(path: Path) -> ReaderFormat:
         raise FileFormatError(f"{path}: empty file (0 bytes)")
     candidates = [f for f in FORMATS.values() if f.claims(path.name)]
     if not candidates:
-        raise FileFormatError(
-            f"{path}: unknown file type; supported endings: {', '.join(supported_suffixes())}, .000-.999")
+        from ._unread import unread_refusal
+
+        raise FileFormatError(unread_refusal(path) or
+                              f"{path}: unknown file type; supported endings: {', '.join(supported_suffixes())}, "
+                              ".000-.999")
     for fmt in candidates:
         try:
             if fmt.detect(path):

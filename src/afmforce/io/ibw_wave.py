@@ -124,6 +124,24 @@ def read_wave5(path: str | Path) -> IgorWave5 | None:
     return IgorWave5(data, note_b, _labels(block, dim_labels), sfa)
 
 
+#: descriptive note values afmformats validates (and refuses the whole curve over); never calibration
+_DESCRIPTIVE = ("feedback mode", "instrument", "software version", "date", "time")
+
+
+def _afmformats_accepts(key: str, value: Any) -> bool:
+    """Does afmformats' metadata vocabulary accept this value? Its feedback modes ('contact',
+    'force-modulation') lack modes Asylum writes in a force curve's ``ImagingMode`` ('PFM Mode' on a
+    Cypher, 'AC Mode'), and afmformats refuses the whole curve over such a descriptive value
+    (``ValueError``); the value is left out of the metadata instead (the curve does not depend on it)."""
+    from afmformats.meta import DEF_ALL
+
+    try:
+        DEF_ALL[key][2](value)
+    except (KeyError, ValueError, TypeError):
+        return False
+    return True
+
+
 def afmformats_igor(path: str | Path, callback: Callable | None = None,
                     calibration: dict[str, float] | None = None) -> list | None:
     """What ``afmformats.load_data(path)`` returns for an Asylum ``.ibw`` force curve, from
@@ -185,6 +203,9 @@ def afmformats_igor(path: str | Path, callback: Callable | None = None,
             metadata["time"] = notes["Time"]
     except (KeyError, ValueError):
         return None  # no calibration in the note (or not a number): afmformats says what is wrong
+    for key in _DESCRIPTIVE:
+        if key in metadata and not _afmformats_accepts(key, metadata[key]):
+            del metadata[key]
     labels = [li.decode() for ll in wave.labels for li in ll if li]
     if len(labels) != wdata.shape[1]:
         return None

@@ -239,10 +239,16 @@ def _adc_counts(ints: np.ndarray, bpp: int, channel: str, where: str) -> np.ndar
     return ints.astype(float) / _adc_shift([ints], bpp, channel, where)
 
 
-def _adc_shift(chunks, bpp: int, channel: str, where: str) -> float:
-    """The divisor (1, 256 or 65536) turning a channel's samples into 16-bit ADC counts (the unit of its
-    ``V/LSB``), decided on all its samples (given in chunks) as :func:`_adc_counts` describes."""
-    if bpp == 2:
+#: a V/LSB whose 32-bit full scale (x 2^31) is below this [V] is the scale of 32-bit samples (v9.3 files'
+#: Height Sensor: 0.00000000572205 V/LSB, +-12.3 V), not of the 16-bit ADC's counts (0.000375 V/LSB)
+SCALE_32BIT_VOLTS = 1000.0
+
+
+def _adc_shift(chunks, bpp: int, channel: str, where: str, vlsb: float | None = None) -> float:
+    """The divisor (1, 256 or 65536) turning a channel's samples into the counts of its ``V/LSB``, decided
+    on all its samples (given in chunks) as :func:`_adc_counts` describes; 1 for 4-byte samples whose
+    ``V/LSB`` is itself a 32-bit scale (``vlsb`` x 2^31 < :data:`SCALE_32BIT_VOLTS`)."""
+    if bpp == 2 or (bpp == 4 and vlsb is not None and 0 < vlsb * 2.0**31 < SCALE_32BIT_VOLTS):
         return 1.0
     peak, aligned = 0, {16: True, 8: True}
     for ints in chunks:
@@ -261,6 +267,56 @@ def _adc_shift(chunks, bpp: int, channel: str, where: str) -> float:
             f"ADC range ({ADC_COUNTS}) its V/LSB scale is for, and their low bits carry data: the scale of this "
             "NanoScope version is not known to afmforce; export the curves as NanoScope Analysis text")
     return divisor
+
+
+def _recorded(counts: np.ndarray, n_app: int, n_ret: int) -> np.ndarray:
+    """False for the samples a run did not record, in storage order: a ramp stopped at its trigger
+    leaves the far end of its run (stored last, from the turning point) at the ADC's most negative
+    count, -32768 (Bruker's v8.15 force volume example: 14-174 such samples before the approach's first
+    real one, -12.288 V, then -0.45 V). Only that trailing run of each run is dropped; a -32768 inside a
+    run is a clipped sample and is kept."""
+    keep = np.ones(counts.size, dtype=bool)
+    for start, stop in ((0, n_app), (n_app, n_app + n_ret)):
+        run = counts[start:stop]
+        filler = run == -ADC_COUNTS
+        if filler.size and filler[-1]:
+            n = int(np.argmin(filler[::-1])) if not filler.all() else filler.size
+            if n < filler.size:  # a run of fillers alone is left to the checks that follow
+                keep[stop - n:stop] = False
+    return keep
+
+
+def _refuse_ramp_script(sections, where: str) -> None:
+    """A ramp-script file (``Use Ramp Script: Yes``: NanoScope's scripted segments, e.g. tip-bias sweeps
+    at a held height, SECM approaches) stores the script's segments one after the other, not an
+    approach and a retract of ``Samps/line`` points each: read as force curves its samples would be cut
+    into curves that are not there. It is refused by name."""
+    use = _find(sections, "Use Ramp Script", "Ciao force list")
+    if use is None or not use.strip().lower().startswith("yes"):
+        return
+    kinds = [k.strip() for k in (_find(sections, "Segment Ramp Type", "Ciao force list") or "").split(",")]
+    n = len([k for k in (_find(sections, "Segment Type", "Ciao force list") or "").split(",") if k.strip()])
+    what = (f"{n} scripted segments (ramps: {', '.join(k or '-' for k in kinds[:n])})" if n
+            else "Use Ramp Script: Yes")
+    raise FileFormatError(f"{where}: a NanoScope ramp-script file ({what}): its data follow the script's segments, "
+                          "not an approach and a retract, a layout afmforce does not read; export the ramps from "
+                          "NanoScope Analysis as text (read by 'bruker-ascii')")
+
+
+def _hold_samples(sections, defl: Mapping[str, str], per: int, n_curves: int, where: str) -> int:
+    """The samples of a force hold (``Hold Samples``, the piezo stopped at the turning point for ``Hold
+    Time``), stored after the approach and the retract of each curve; 0 without a hold, or when the
+    deflection channel's length holds the two runs alone (2- or 4-byte samples)."""
+    said = _find(sections, "Hold Samples", "Ciao force list")
+    if said is None or not re.search(_NUMBER, said):
+        return 0
+    hold = int(_number(said, where, "Hold Samples"))
+    length = defl.get("Data length")
+    if hold <= 0 or length is None or not re.search(_NUMBER, length):
+        return 0
+    length = int(_number(length, where, "Data length"))
+    fits = [length % (p * n_curves) == 0 and length // (p * n_curves) in (2, 4) for p in (per + hold, per)]
+    return hold if fits[0] and not fits[1] else 0
 
 
 class NanoscopeFile:
@@ -289,6 +345,7 @@ class NanoscopeFile:
         chans = _channels(sections)
         if not chans:
             raise FileFormatError(f"{where}: no '\\*Ciao force image list' (no curve data) in the header")
+        _refuse_ramp_script(sections, where)
         samps = _find(sections, "Samps/line", "Ciao force list") or _find(sections, "Samps/line", "Ciao force image list")
         counts = [int(float(v)) for v in re.findall(_NUMBER, samps or "")]
         if not counts or min(counts) < 2 or max(counts) > 10**7:
@@ -299,7 +356,8 @@ class NanoscopeFile:
 
         grid = self._grid = _grid(sections, where)
         n_curves = grid[0] * grid[1] if grid is not None else 1
-        per = n_app + n_ret
+        n_hold = _hold_samples(sections, defl, n_app + n_ret, n_curves, where)
+        per = n_app + n_ret + n_hold
 
         def place(entries) -> tuple[int, int, int, float, float]:
             """(offset, bytes per sample, curves, V/LSB, sensitivity) of a channel, its ADC shift checked."""
@@ -314,14 +372,14 @@ class NanoscopeFile:
             return offset, bpp, rows, vlsb, sens
 
         d_off, d_bpp, rows, d_vlsb, _ = place(defl)
-        self._defl = (d_off, d_bpp, self._divisor(d_off, d_bpp, rows * per, _channel_name(defl)), d_vlsb)
+        self._defl = (d_off, d_bpp, self._divisor(d_off, d_bpp, rows * per, _channel_name(defl), d_vlsb), d_vlsb)
         self._zsen = None
         if zsen is not None:
             z_off, z_bpp, z_rows, z_vlsb, z_sens = place(zsen)
             if z_rows == rows:
-                self._zsen = (z_off, z_bpp, self._divisor(z_off, z_bpp, rows * per, _channel_name(zsen)),
+                self._zsen = (z_off, z_bpp, self._divisor(z_off, z_bpp, rows * per, _channel_name(zsen), z_vlsb),
                               z_vlsb, z_sens)
-        self.n_curves, self._n = rows, (n_app, n_ret)
+        self.n_curves, self._n = rows, (n_app, n_ret, n_hold)
         meta: dict[str, Any] = {"instrument": _find(sections, "Microscope") or "Bruker NanoScope",
                                 "nanoscope_version": _find(sections, "Version") or ""}
         k = _find([("", defl)], "Spring Constant") or _find(sections, "Spring Constant")  # the deflection's list
@@ -356,11 +414,19 @@ class NanoscopeFile:
         meta.update(velocity=v_app, retract_velocity=v_ret, sample_rate=v_app * n_app / ramp_m,
                     adc_range=ADC_COUNTS * d_vlsb)  # [V]: the deflection channel's 16-bit ADC
         dt_app, dt_ret = ramp_m / (v_app * n_app), ramp_m / (v_ret * n_ret)
-        self._time = np.concatenate([dt_app * np.arange(n_app), dt_app * n_app + dt_ret * np.arange(n_ret)])
+        hold_time = _find(sections, "Hold Time", "Ciao force list")
+        dt_hold = dt_app
+        if n_hold:  # a force hold: the piezo stops at the turning point for Hold Time [s]
+            t_hold = _number(hold_time, where, "Hold Time") if hold_time is not None else math.nan
+            dt_hold = t_hold / n_hold if t_hold > 0 else dt_app
+            meta.update(segment_types=["extend", "hold", "retract"])
+        t_ret0 = dt_app * n_app + dt_hold * n_hold
+        self._time = np.concatenate([dt_app * np.arange(n_app), dt_app * n_app + dt_hold * np.arange(n_hold),
+                                     t_ret0 + dt_ret * np.arange(n_ret)])
         z_app = np.linspace(0.0, ramp_m, n_app, endpoint=False) + ramp_m / n_app  # towards the sample
         z_ret = ramp_m - np.arange(n_ret) * (ramp_m / n_ret)
-        self._z = np.concatenate([z_app, z_ret])
-        self._seg = np.concatenate([np.zeros(n_app, np.int8), np.ones(n_ret, np.int8)])
+        self._z = np.concatenate([z_app, np.full(n_hold, ramp_m), z_ret])
+        self._seg = np.concatenate([np.zeros(n_app, np.int8), np.full(n_hold, 2, np.int8), np.ones(n_ret, np.int8)])
         meta.update(dict(meta_override or {}))
         meta.update(source_file=where, reader="bruker-nanoscope", format="Bruker NanoScope binary force file",
                     position_sign=1.0)
@@ -373,10 +439,10 @@ class NanoscopeFile:
             raise FileFormatError(f"{self.where}: the file ends inside its curve data; truncated")
         return np.frombuffer(raw, dtype=f"<i{bpp}")
 
-    def _divisor(self, offset: int, bpp: int, total: int, channel: str) -> float:
+    def _divisor(self, offset: int, bpp: int, total: int, channel: str, vlsb: float | None = None) -> float:
         step = 2**22  # samples per chunk: the decision sees every sample, in bounded memory
         chunks = (self._samples(offset, bpp, i, min(step, total - i)) for i in range(0, total, step))
-        return _adc_shift(chunks, bpp, channel, self.where)
+        return _adc_shift(chunks, bpp, channel, self.where, vlsb)
 
     def __len__(self) -> int:
         return self.n_curves
@@ -385,22 +451,32 @@ class NanoscopeFile:
         """Curve ``i`` (in file order: row by row in a force volume)."""
         if not 0 <= i < self.n_curves:
             raise FileFormatError(f"{self.where}: no curve {i} (the file holds {self.n_curves})")
-        n_app, n_ret = self._n
-        per = n_app + n_ret
+        n_app, n_ret, n_hold = self._n
+        per = n_app + n_ret + n_hold
+
+        def in_time_order(x: np.ndarray) -> np.ndarray:
+            """Stored: the approach and the retract from the turning point, then a force hold's samples."""
+            return np.concatenate([x[:n_app][::-1], x[n_app + n_ret:], x[n_app:n_app + n_ret]])
+
         off, bpp, div, vlsb = self._defl
-        volts = self._samples(off, bpp, i * per, per).astype(float) / div * vlsb
-        signal = np.concatenate([volts[:n_app][::-1], volts[n_app:]])  # both runs start at the turning point
+        counts = self._samples(off, bpp, i * per, per).astype(float) / div
+        volts = counts * vlsb
+        signal = in_time_order(volts)
+        keep = in_time_order(_recorded(counts, n_app, n_ret))
         zm = None
         if self._zsen is not None:
             off, bpp, div, vlsb, sens = self._zsen
             zr = self._samples(off, bpp, i * per, per).astype(float) / div * vlsb * sens
-            zm = np.concatenate([zr[:n_app][::-1], zr[n_app:]])
+            zm = in_time_order(zr)
             if zm[n_app - 1] < zm[0]:
                 zm = -zm
         meta = {**self._meta, "curve_index": i, **_grid_point(self._grid, i)} if self.n_curves > 1 \
             else dict(self._meta)
-        curve = RawCurve(time=self._time.copy(), piezo_nominal=self._z.copy(), piezo_measured=zm,
-                         deflection_signal=signal, segment=self._seg.copy(), metadata=meta, deflection_unit="V")
+        if not keep.all():  # a triggered ramp's unrecorded samples (-32768 fillers) are no data
+            meta["unrecorded_samples"] = int((~keep).sum())
+        curve = RawCurve(time=self._time[keep], piezo_nominal=self._z[keep],
+                         piezo_measured=None if zm is None else zm[keep], deflection_signal=signal[keep],
+                         segment=self._seg[keep], metadata=meta, deflection_unit="V")
         return finalize_curve(curve, self.where)
 
     def close(self) -> None:

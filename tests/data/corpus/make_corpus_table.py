@@ -43,6 +43,7 @@ SOURCES = {
     "afm-workshop_volts_2018-08-01.csv": ("AFM Workshop CSV", "AFM-analysis/afmformats", "tests/data/fmt-afm-workshop-fd_single_2018-08-01_13.06.09.csv", "MIT"),
     "asylum-ibw_AR16_dwell-10s_cell37m0000.ibw": ("Asylum .ibw (AR 16.05, MFP-3D, 10 s dwell)", "HoseynAAmiri/pyrtz2", "data/example/label1val1label2val1cell37m0000.ibw", "MIT"),
     "asylum-ibw_AR16_dwell-10s_cell39m0000.ibw": ("Asylum .ibw (AR 16.05, MFP-3D, 10 s dwell)", "HoseynAAmiri/pyrtz2", "data/example/label1val3label2val3cell39m0000.ibw", "MIT"),
+    "asylum-ibw_Cypher_AR15_PFM-mode_LRCol0_MS_LG7d0001.ibw": ("Asylum .ibw (Cypher, AR 15.09, ImagingMode 'PFM Mode', 5 channels)", "jcbs/ForceMetric", "Examples/LRCol0_MS_LG7d0001.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0100.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0100.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0120.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0120.ibw", "MIT"),
     "asylum-ibw_ForceMetric_X60_3_x4_0146.ibw": ("Asylum .ibw", "jcbs/ForceMetric", "Examples/Data/X60_3_x4_0146.ibw", "MIT"),
@@ -54,6 +55,9 @@ SOURCES = {
     "bruker-ascii_fodis_extracted.txt": ("NanoScope Analysis export (processed)", "galvanetto/Fodis", "Datasets/Bruker example files/Bruker_extracted_file1.txt", "Apache-2.0"),
     "bruker-ascii_fodis_mica-GA6_baseline-corrected.txt": ("NanoScope Analysis export (processed)", "galvanetto/Fodis", "Datasets/Bruker example files/Mica in DDW with GA6 2.8.17.0_00000.spm-CD58_ForceCurveIndex_2294BaseLine Correction_1.spm - NanoScope Analysis.txt", "Apache-2.0"),
     "bruker-nanoscope_force-volume_v9.2_Egel2_00023.spm": ("Bruker NanoScope binary (force volume)", "DyNaMo-INSERM/PyFMlab_DyNaMo", "PyFMReader_DyNaMo/tests/testfiles/20200903_Egel2.0_00023.spm", "MIT"),
+    "bruker-nanoscope_v8.15_Bruker-example_Force.spm": ("Bruker NanoScope binary (Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/Force.spm", "Apache-2.0"),
+    "bruker-nanoscope_v9.30_Bruker-example_ForceHold.spm": ("Bruker NanoScope binary (force hold: extend, 0.1 s hold, retract; Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/ForceHold.spm", "Apache-2.0"),
+    "bruker-nanoscope_v9.40_Bruker-example_ForceHoldSweep.spm": ("Bruker NanoScope binary (force hold with amplitude and phase channels; Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/ForceHoldSweep.spm", "Apache-2.0"),
     "bruker-nanoscope_v8.15_sapphire_TAP525.001": ("Bruker NanoScope binary", "pycroscopy/SciFiDatasets", "data/microscopy/spm/afm/BrukerReader_ForceCurve_Sapphire_TAP525.001", "MIT"),
     "bruker-nanoscope_v9.2_Egel4_00025.spm": ("Bruker NanoScope binary", "DyNaMo-INSERM/PyFMlab_DyNaMo", "PyFMReader_DyNaMo/tests/testfiles/20200904_Egel4-Z1.0_00025.spm", "MIT"),
     "chiaro-txt_V3.4.1_displacement-hold.txt": ("Optics11 Chiaro text (V3.4.1, displacement profile with a 1 s hold)", "CellMechLab/softmech", "optics11_new_new.txt", "MIT"),
@@ -80,14 +84,24 @@ SOURCES = {
     "jpk-qi-data_v8.1_format-2.0.jpk-qi-data": ("JPK QI data (SPM 8.1.64, file format 2.0)", "bicarlsen/jpk_reader", "data/qi_data/qi_data-2_0-xs/ (the archive's 234 members, published unzipped; zipped here, bytes unchanged)", "MIT"),
     "jpk-qi-series_2021.04.13.jpk-qi-series": ("JPK QI series", "AFM-analysis/afmformats", "tests/data/fmt-jpk-fd_qi-data-2021.04.13.jpk-qi-series", "MIT"),
     "jpk-txt_dp-export_SMFS_0441.txt": ("JPK DP text export", "galvanetto/Fodis", "Datasets/JPK example files/txt exported/force-save-0441.txt", "Apache-2.0"),
+    "jpk-txt_spm6.1_creep-compliance_JPK00556_index62.txt": ("JPK SPM 6.1 text export (CellHesion 200, creep compliance: extend, pause, retract)", "AFM-analysis/afmformats", "tests/data/example2_creep.txt", "MIT"),
+    "jpk-txt_spm6.1_creep-compliance_JPK01466_index7.txt": ("JPK SPM 6.1 text export (CellHesion 200, creep compliance: extend, pause, retract)", "AFM-analysis/afmformats", "tests/data/example1_creep.txt", "MIT"),
     "ntmdt-txt_gel4_Curve_DFL_Height_51.txt": ("NT-MDT Nova text", "AFM-analysis/afmformats", "tests/data/fmt-ntmdt-txt-fd_2015_01_17_gel4-0,1_mQ_adh_6B_Curve_DFL_Height_51.txt", "MIT"),
     "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": ("WSxM curves (Nanotec)", "pycroscopy/SciFiDatasets", "data/microscopy/spm/afm/wsxm/WSxM1DReader_spectrocurve_0001_Normalforce.f.curves", "MIT"),
 }
+
+#: sources that are not git repositories: the SHA-1 of the published archive stands for the commit
+#: (``sha1sum nanoscope-1.2.300-py2.py3-none-any.whl``, Bruker's wheel on PyPI, Apache-2.0)
+COMMITS["PyPI nanoscope 1.2.300"] = "a64456866b3e68e88e8db7df1757e2761b1ecb7b"
 
 #: files taken from another commit than the repository's in COMMITS (a pull request's head)
 FILE_COMMITS = {
     "chiaro-txt_V3.4.1_displacement-hold.txt": "b193b42ba1e31464145b0952f574d0d360ef2056",  # removed by 584de05
     "wsxm-curves_spectrocurve_0001_Normalforce.f.curves": "eabc7a708e316bdf19cd344c603f014b99c3daea",
+    "asylum-ibw_Cypher_AR15_PFM-mode_LRCol0_MS_LG7d0001.ibw": "54649d12785f1c506188fdcb87d12d799160fef5",  # removed later
+    # afmformats pull request 14 (issue 9, "added example creep files"); removed from it by b55004f
+    "jpk-txt_spm6.1_creep-compliance_JPK00556_index62.txt": "85676d0271dec3df10c56a82aef9938bf97125b8",
+    "jpk-txt_spm6.1_creep-compliance_JPK01466_index7.txt": "85676d0271dec3df10c56a82aef9938bf97125b8",
 }
 
 #: what the file lacks and a user gives (stand-ins; the gallery passes them as meta_override)
@@ -232,8 +246,13 @@ def _nanoscope(path: Path) -> dict:
     scan = float(re.search(r"\\Scan rate: ([\d.eE+-]+)", force_list).group(1))
     grid = re.search(r"Ciao scan list.*?\\Samps/line: (\d+)", text, re.S).group(1)
     fv = "force-volume" in path.name
+    segs = [["extend", ext], ["retract", ret]]
+    hold = re.search(r"\\Hold Samples: (\d+)", force_list)
+    length = int(re.search(r"\\Data length: (\d+)", defl).group(1))
+    if hold and int(hold.group(1)) and any(length == (ext + ret + int(hold.group(1))) * b for b in (2, 4)):
+        segs.insert(1, ["hold", int(hold.group(1))])  # a force hold: its samples stored after both runs
     return {"spring_constant": k, "sensitivity": s, "sample_rate": (ext + ret) * scan,
-            "curves": int(grid) ** 2 if fv else 1, "segments": [["extend", ext], ["retract", ret]]}
+            "curves": int(grid) ** 2 if fv else 1, "segments": segs}
 
 
 #: NanoScope Analysis exports of one plotted run (a unit row, no header): which run, read by eye from
@@ -263,19 +282,49 @@ def _bruker_ascii(path: Path) -> dict:
             "segments": [["extend", ext], ["retract", len(rows)]]}
 
 
-def _jpk_text(path: Path) -> dict:
-    segs, k, s, cur = [], None, None, None
+def _jpk_text_segments(path: Path) -> list[tuple[str, dict[str, np.ndarray]]]:
+    """Each ``# segment:`` block's columns (its ``# columns:`` names) as numpy arrays."""
+    out, names, rows = [], [], None
     for line in path.read_text("latin-1").splitlines():
         if line.startswith("# segment:"):
-            cur = [line.split(":", 1)[1].strip(), 0]
-            segs.append(cur)
-        elif line.startswith("# springConstant:") and k is None:
+            rows = []
+            out.append((line.split(":", 1)[1].strip(), rows))
+        elif line.startswith("# columns:"):
+            names.append(line.split(":", 1)[1].split())
+        elif line.strip() and not line.startswith("#") and rows is not None:
+            rows.append([float(v) for v in line.split()])
+    return [(seg, dict(zip(cols, np.array(rows, dtype=float).T))) for (seg, rows), cols in zip(out, names)]
+
+
+def _jpk_text(path: Path) -> dict:
+    """k and the sensitivity from the first segment's header lines; the sample rate from the extend's
+    ``time`` column (1 / its median step); the rows of each segment counted."""
+    k = s = None
+    for line in path.read_text("latin-1").splitlines():
+        if line.startswith("# springConstant:") and k is None:
             k = float(line.split(":", 1)[1])
         elif line.startswith("# sensitivity:") and s is None:
             s = float(line.split(":", 1)[1])
-        elif line.strip() and not line.startswith("#") and cur is not None:
-            cur[1] += 1
-    return {"spring_constant": k, "sensitivity": s, "sample_rate": None, "curves": 1, "segments": segs}
+    segs = _jpk_text_segments(path)
+    extend = next(cols for seg, cols in segs if seg == "extend")
+    rate = 1.0 / float(np.median(np.diff(extend["time"])))
+    return {"spring_constant": k, "sensitivity": s, "sample_rate": rate, "curves": 1,
+            "segments": [[seg, len(next(iter(cols.values())))] for seg, cols in segs]}
+
+
+#: JPK text exports whose adhesion the analysis must give (a deep, clean adhesion: -20 nN, noise 5 pN)
+ADHESION = {"jpk-txt_spm6.1_creep-compliance_JPK01466_index7.txt"}
+
+
+def _jpk_text_adhesion(path: Path) -> list[float]:
+    """The adhesion force [N]: the retract's deepest vDeflection [N] less the baseline there, a straight
+    line fitted against ``seriesTime`` to the retract's last half (the free tip drifting)."""
+    ret = dict(_jpk_text_segments(path))["retract"]
+    force, t = ret["vDeflection"], ret["seriesTime"]
+    half = slice(force.size // 2, None)
+    line = np.polyfit(t[half], force[half], 1)
+    i = int(np.argmin(force))
+    return [float(force[i] - np.polyval(line, t[i]))]
 
 
 def _workshop(path: Path) -> dict:
@@ -375,7 +424,8 @@ def header(path: Path) -> dict:
 
 
 #: what an ``expected`` entry checks, in the README's words
-CHECKED = {"pull_off_force": "pull-off of every curve", "youngs_modulus": "modulus (the Chiaro's own Hertz fit)"}
+CHECKED = {"pull_off_force": "pull-off of every curve", "youngs_modulus": "modulus (the Chiaro's own Hertz fit)",
+           "adhesion_force": "adhesion (numpy on the retract column)"}
 
 
 def _fmt(v, scale=1.0, digits=5):
@@ -397,7 +447,8 @@ def readme(table: dict) -> str:
         "Licences: MIT (afmformats (c) 2019 Paul Mueller; SciFiDatasets (c) 2021 pycroscopy; PyFMlab_DyNaMo",
         "(c) 2023 Javier Lopez Alonso; ForceMetric (c) 2018 Jacob Kienast; jpkfile (c) 2016 Ilyas Kuhlemann;",
         "pyrtz2 (c) 2024 Hoseyn Amiri; softmech (c) 2021 Massimo Vassalli; jpk_reader (c) 2025 Brian Carlsen, MIT or Apache-2.0 at the user's choice: MIT taken),",
-        "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018),",
+        "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018); the NanoScope Python Toolbox",
+        "(c) 2021 Bruker Inc., PyPI `nanoscope` 1.2.300, whose wheel's SHA-1 stands for the commit),",
         "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). The full licence texts are in",
         "`LICENSES`. Commits: "
         + "; ".join(f"{r} `{c[:10]}`" for r, c in COMMITS.items()) + "; "
@@ -432,6 +483,8 @@ def main() -> None:
         entry["expect"] = {"read": PENDING_READ.get(name, "read"), "analysis": PENDING_ANALYSIS.get(name, "plausible")}
         if name in PULL_OFF:  # numbers the analysis must give, per curve (test_corpus_gallery)
             entry["expected"] = {"pull_off_force": _jpk_pull_off(path)}
+        if name in ADHESION:
+            entry["expected"] = {"adhesion_force": _jpk_text_adhesion(path)}
         if name.startswith("chiaro-txt"):  # the instrument's Hertz modulus (test_corpus_gallery)
             entry["expected"] = {"youngs_modulus": _chiaro_modulus(path)}
         table[name] = entry

@@ -1,0 +1,130 @@
+"""Force-curve families afmforce knows but does not read: one clear refusal each.
+
+A file whose ending no reader claims would otherwise get "unknown file type" and a list of
+endings; a user holding a Nanosurf ``.nhf``, an NT-MDT ``.mdt`` or a Park Systems ``.tiff``
+learns more from the format's name and what to do with it (export the curves to a format
+afmforce reads, or read the instrument's own file). :func:`unread_refusal` gives that line.
+These endings are not claimed (:func:`afmforce.io.is_supported` stays False), so a folder
+given to ``afmforce analyze`` skips them.
+"""
+
+from __future__ import annotations
+
+import struct
+from pathlib import Path
+
+_EXPORT = "export the curves in a format `afmforce formats` lists, or as afmforce raw text (docs/formats.md)"
+
+#: ending -> (format, why afmforce does not read it, what to do)
+UNREAD: dict[str, tuple[str, str, str]] = {
+    ".nhf": ("Nanosurf NHF file (HDF5, Nanosurf Studio / DriveAFM)",
+             "no public NHF force-curve file of a usable size and licence was found to test a reader against",
+             "save the curves as .nid from the Nanosurf software (read by 'nanosurf-nid'), or " + _EXPORT),
+    ".mdt": ("NT-MDT MDT binary file (Nova)",
+             "no public MDT force-curve file with a usable licence was found to test a reader against",
+             "export the curves from Nova as text (three columns: read by 'ntmdt-txt'), or " + _EXPORT),
+    ".gsi": ("WSxM force volume (.gsi, a 3D curve grid)",
+             "only WSxM's force-curve series (.curves) are read",
+             "save the curves from WSxM as a .curves series (read by 'wsxm-curves'), or " + _EXPORT),
+    ".cur": ("WSxM text curve (.cur)", "only WSxM's force-curve series (.curves) are read",
+             "save the curves from WSxM as a .curves series (read by 'wsxm-curves'), or " + _EXPORT),
+    ".stp": ("WSxM image (.stp)", "it is an image, not a force curve",
+             "give the force curves of the session (.curves)"),
+    ".tiff": ("TIFF file", "", ""),
+    ".tif": ("TIFF file", "", ""),
+    ".uff": ("PyFMReader UFF text file (a re-saved curve)",
+             "it has no time column, and one made from a Bruker file keeps the approach in that file's order "
+             "(turning point first) and gives the ramp rate as its sampling rate",
+             "read the instrument file it was made from"),
+    ".jpk": ("JPK image file", "it is an image, not a force curve",
+             "give the force curves (.jpk-force, .jpk-force-map, .jpk-qi-data)"),
+    ".jpk-qi-image": ("JPK QI image file", "it holds the maps computed from a QI measurement, not the curves",
+                      "give the curves (.jpk-qi-data)"),
+}
+
+#: Park Systems' private TIFF tags (XEI): the magic number and the header block
+_PARK_MAGIC, _PARK_HEADER = 50432, 50435
+
+
+def _tiff_tags(path: Path) -> tuple[str, dict[int, tuple[int, int, int]]]:
+    """The byte order and the first IFD's tags (tag -> (type, count, value or offset)); {} if not a TIFF."""
+    with open(path, "rb") as fh:
+        head = fh.read(8)
+        if head[:4] not in (b"II*\x00", b"MM\x00*"):
+            return "<", {}
+        end = "<" if head[:2] == b"II" else ">"
+        (ifd,) = struct.unpack(end + "I", head[4:8])
+        fh.seek(ifd)
+        raw = fh.read(2)
+        if len(raw) < 2:
+            return end, {}
+        (n,) = struct.unpack(end + "H", raw)
+        block = fh.read(12 * min(n, 4096))
+    tags = {}
+    for i in range(len(block) // 12):
+        tag, typ, count, value = struct.unpack(end + "HHII", block[12 * i:12 * i + 12])
+        tags[tag] = (typ, count, value)
+    return end, tags
+
+
+def _park_kind(path: Path, end: str, tags: dict) -> str:
+    """'spectroscopy', 'line profile' or 'image' from the Park header's first int (its data type)."""
+    try:
+        _, count, offset = tags[_PARK_HEADER]
+        with open(path, "rb") as fh:
+            fh.seek(offset)
+            raw = fh.read(4)
+        kind = struct.unpack(end + "i", raw)[0]
+    except (KeyError, OSError, struct.error):
+        return ""
+    return {0: "image", 1: "line profile", 2: "spectroscopy"}.get(kind, "")
+
+
+def _tiff(path: Path) -> tuple[str, str, str]:
+    try:
+        end, tags = _tiff_tags(path)
+    except (OSError, struct.error):
+        end, tags = "<", {}
+    if _PARK_MAGIC in tags:
+        kind = _park_kind(path, end, tags)
+        what = f"Park Systems TIFF file (XEI{', ' + kind + ' data' if kind else ''})"
+        if kind in ("image", "line profile"):
+            return what, f"it holds {'an' if kind == 'image' else 'a'} {kind}, not a force curve", \
+                "give the spectroscopy file of the measurement"
+        return what, "no public Park force-curve file with a usable licence was found to test a reader against", \
+            _EXPORT
+    return ("TIFF image", "it is an image, not a force curve", "give the force-curve file of the measurement")
+
+
+def _uff_source(path: Path) -> str:
+    """The instrument file a UFF file names (``HE Entry_filename:``), or ''."""
+    try:
+        with open(path, "r", encoding="utf-8", errors="replace") as fh:
+            for _, line in zip(range(200), fh):
+                if line.startswith("HE Entry_filename:"):
+                    return line.split(":", 1)[1].strip().strip('"')
+    except OSError:
+        pass
+    return ""
+
+
+def unread_refusal(path: str | Path) -> str | None:
+    """The one-line refusal of a file of a family afmforce does not read, or None.
+
+    Parameters
+    ----------
+    path : str or Path
+        A file whose ending no reader claims.
+    """
+    path = Path(path)
+    name = path.name.lower()
+    suffix = next((s for s in sorted(UNREAD, key=len, reverse=True) if name.endswith(s)), None)
+    if suffix is None:
+        return None
+    what, why, todo = _tiff(path) if suffix in (".tiff", ".tif") else UNREAD[suffix]
+    if suffix == ".uff":
+        source = _uff_source(path)
+        if source:
+            todo += f" ({source})"
+    article = "an" if what[:1] in "AEIOU" or what.startswith("NT-") else "a"
+    return f"{path}: {article} {what}, a format afmforce does not read ({why}): {todo}"
