@@ -153,8 +153,9 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
     A jump into contact starts free and lands in attraction: a step that starts and lands above
     ``attractive_below`` [m] is a slip in contact (the split placed after a curved onset), not the jump.
     The jump is then the step into the attractive stretch that precedes that contact: walking back from
-    the slip over the contact (deflection above ``attractive_below``) and the attraction (below
-    ``-attractive_below``), the largest downward step into and within that attraction, if it makes at
+    the slip over the contact (deflection above ``attractive_below``), the line's crossing of zero force
+    (within ``+-attractive_below``, over no more samples than the line then took up to the slip) and the
+    attraction (below ``-attractive_below``), the largest downward step into and within that attraction, if it makes at
     least half of the attraction's depth (a lever that snaps; none such: the tip crept in through a
     gradual attraction, and the slip is judged as before). Default ``inf``: the
     largest step near the split, whatever its load.
@@ -175,12 +176,17 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
         j = i
         while j >= 0 and dr[j] > attractive_below:  # back over the contact
             j -= 1
-        m = j  # the last attractive sample before the contact
-        while j >= 0 and dr[j] < -attractive_below:  # and over the attraction after the jump
+        m = j  # the last sample before the contact
+        # over the line's crossing of zero force (samples within +-attractive_below: no more than the line
+        # took from there up to the slip; a free branch the tip crept in from is longer) ...
+        while j >= 0 and abs(dr[j]) <= attractive_below and m - j < i - m:
             j -= 1
-        if j >= 0 and m > j:  # the jump: the largest downward step into and within that attraction ...
+        a = j  # the last attractive sample before the contact
+        while j >= 0 and dr[j] < -attractive_below:  # ... and over the attraction after the jump
+            j -= 1
+        if j >= 0 and a > j:  # the jump: the largest downward step into and within that attraction ...
             jump = largest_step(dr, j, m + 1, -1.0)
-            if dr[jump] - dr[jump + 1] >= 0.5 * (-dr[j + 1: m + 1].min()):  # ... if it makes most of it
+            if dr[jump] - dr[jump + 1] >= 0.5 * (-dr[j + 1: a + 1].min()):  # ... if it makes most of it
                 i = jump  # (a lever that snaps; a gradual attraction has no such step: crept in)
     step = dr[i] - dr[i + 1]
     sig = step / (math.sqrt(2.0) * noise) if noise > 0 else math.inf
