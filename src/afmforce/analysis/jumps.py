@@ -308,8 +308,10 @@ def pull_off_estimate(po: PullOff, spring_constant: float) -> float:
     return po.force
 
 
-def jump_warnings(ji: JumpIn, po: PullOff, spring_constant: float, clipped: bool = False) -> list[str]:
-    """Plain-words warnings on what the jumps could not give (``clipped``: the retract's contact is)."""
+def jump_warnings(ji: JumpIn, po: PullOff, spring_constant: float, clipped: bool = False,
+                  retract: bool = True) -> list[str]:
+    """Plain-words warnings on what the jumps could not give (``clipped``: the retract's contact is;
+    ``retract`` False: the curve has no retract run, where no pull-off was looked for)."""
     k = spring_constant
     warn = []
     if not ji.found and ji.index >= 0:
@@ -322,7 +324,7 @@ def jump_warnings(ji: JumpIn, po: PullOff, spring_constant: float, clipped: bool
         warn.append("pull-off not in the record: the photodiode was saturated over the whole contact of the "
                     "retract run, so the tip left the surface while the signal was clipped; no pull-off "
                     "force, no adhesion")
-    elif not po.found:
+    elif not po.found and retract:
         warn.append("no pull-off found on the retract run")
     elif po.saturated and math.isfinite(k):
         f_ext = k * po.deflection_extrapolated

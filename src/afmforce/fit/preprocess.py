@@ -244,7 +244,9 @@ def _jump(deflection, z, run, noise: float, nsigma: float, start: int, window: i
     from ..analysis import largest_step
     from ..analysis.jumps import find_jump_in
 
-    ji = find_jump_in(deflection, z, z, run, noise, math.nan, nsigma, window)
+    # as the analysis's jumps step: a step in contact (starting and landing above nsigma noises) is a slip,
+    # the jump is the step into the attraction before it
+    ji = find_jump_in(deflection, z, z, run, noise, math.nan, nsigma, window, attractive_below=nsigma * noise)
     contact = int(run.index[min(run.split, run.index.size - 1)]) - start
     if ji.found:
         return int(ji.index) + 1 - start, True, contact
