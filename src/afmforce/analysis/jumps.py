@@ -284,8 +284,8 @@ def _still_in_contact(dr: np.ndarray, i: int, rise: float, thr: float, saturated
     never again goes deeper than where it left (a freed lever rings about the baseline, with no
     more than the pull-off's amplitude). A retract that bends away from the line without rising
     (an adhesive contact that is not a straight line: the JPK QI curves of SPM 8.1, whose contact
-    line flattens before the tip snaps off 9 nm lower) and then goes deeper than at ``i`` by more
-    than ``thr`` is still in contact: the pull-off is the largest rise after that deeper point.
+    line flattens before the tip snaps off 9 nm lower) and then goes deeper than the retract had been
+    up to ``i`` by more than ``thr`` is still in contact: the pull-off is the largest rise after that deeper point.
     A departure that is itself a jump (a surface pull-off followed by a tethered molecule that
     pulls deeper later) stays the pull-off.
     """
