@@ -37,3 +37,47 @@ def test_a_slip_in_contact_is_not_the_jump_in(n):
     assert "impossible" not in r.verdict, r.verdict
     # within the two baselines' difference (afmforce's is a drift line in time, this one a median)
     assert r.jump_in_force == pytest.approx(landing, abs=0.5e-9), (r.jump_in_force, landing)
+
+
+def _slip_run(step: float, noise: float, seed: int = 0, jump: bool = True):
+    """An approach sampled by hand: a free baseline (zero force), a jump at sample 19 to -2 nm (or none: the
+    tip creeps in along the line from zero force), the compliance line rising ``step`` per sample through
+    zero force, and 1 nm of slip 8 samples before the end. Returns (deflection, run, the slip's index)."""
+    from types import SimpleNamespace
+
+    n, slip = 80, 71
+    d = np.zeros(n)
+    d[20:] = (-2e-9 if jump else 0.0) + np.arange(n - 20) * step
+    d[slip + 1:] -= 1e-9
+    d += noise * np.random.default_rng(seed).standard_normal(n)
+    run = SimpleNamespace(index=np.arange(n), split=slip + 1, has_compliance=True, saturated=np.zeros(n, bool))
+    return d, run, slip
+
+
+@pytest.mark.parametrize("step", [0.08e-9, 0.13e-9, 0.2e-9])
+def test_the_jump_before_a_slip_is_found_across_the_zero_crossing(step):
+    """The compliance line crosses zero force in steps of ``step``: samples within +-attractive_below
+    (5 noises, 0.1 nm) lie between the attraction and the contact. Before, they stopped the walk back
+    from the slip, and the slip (landing at +1.5 nm and more) was taken for the jump into contact."""
+    from afmforce.analysis.jumps import find_jump_in
+
+    noise = 0.02e-9
+    d, run, slip = _slip_run(step, noise)
+    ab = 5 * noise
+    assert np.any(np.abs(d[20:slip]) <= ab)                    # the crossing has samples in the band
+    z = np.arange(d.size) * 1e-9
+    ji = find_jump_in(d, z, z, run, noise, 0.1, attractive_below=ab)
+    assert ji.found and ji.index == 19                          # the step built at sample 19
+    assert ji.deflection_after == pytest.approx(-2e-9, abs=5 * noise)
+
+
+def test_a_crept_in_contact_keeps_its_slip():
+    """No attraction before the line (the tip crept in from zero force): the long free branch within the
+    band is no crossing, and the slip stays the largest step, judged as before."""
+    from afmforce.analysis.jumps import find_jump_in
+
+    noise = 0.02e-9
+    d, run, slip = _slip_run(0.13e-9, noise, jump=False)
+    z = np.arange(d.size) * 1e-9
+    ji = find_jump_in(d, z, z, run, noise, 0.1, attractive_below=5 * noise)
+    assert ji.index == slip and ji.deflection_after > 5 * noise

@@ -100,6 +100,7 @@ def test_approach_only_export_gives_the_approach_and_no_pull_off():
     for step in ("adhesion", "shift", "friction", "surface_energy"):
         assert res.not_applicable[step] == NO_RETRACT
     assert np.isnan(res.pull_off_force) and np.isnan(res.adhesion_force) and res.unbinding_steps == 0
+    assert not any("no pull-off found" in w for w in res.warnings)   # none looked for: no retract run
     z = np.asarray(curve.piezo_nominal)
     cp = res.details["contact_point"].position       # the soft contact point, on the recorded approach
     assert z.min() < cp < z.max()

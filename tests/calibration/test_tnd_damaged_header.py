@@ -49,3 +49,15 @@ def test_absent_or_empty_lines_are_not_stored_and_the_file_reads():
 def test_a_missing_temperature_is_none(tmp_path, value):
     sp = read_spectrum(_with_line(tmp_path, "settings.temperature", value))
     assert sp.temperature is None and sp.correction == pytest.approx(0.9)
+
+
+@pytest.mark.parametrize("value,kelvin", [("298.15 K", 298.15), ("298.15", 298.15), ("25.0 °C", 298.15),
+                                          ("77.0 °F", None), ("25.0 mK", None)])
+def test_the_temperature_unit_is_read_or_the_line_refused(tmp_path, value, kelvin):
+    """Kelvin and Celsius as written; any other unit is refused (before, '77.0 °F' read as 77 K: k 3.9 x low)."""
+    path = _with_line(tmp_path, "settings.temperature", value)
+    if kelvin is None:
+        with pytest.raises(FileFormatError, match="kelvin or degrees Celsius"):
+            read_spectrum(path)
+    else:
+        assert read_spectrum(path).temperature == pytest.approx(kelvin, rel=1e-12)

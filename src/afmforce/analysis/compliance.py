@@ -27,7 +27,7 @@ from ..io.deflection import signal_factor
 from ._smooth_kernel import compliance_line
 from .regions import RunRegions
 from ._units import unit as _u
-from .options import CalibrationOptions as _C, FrictionOptions as _F  # defaults declared once
+from .options import CALIBRATION_SOURCES, CalibrationOptions as _C, FrictionOptions as _F  # declared once
 
 if TYPE_CHECKING:
     from ..cantilever import InclinedCantilever
@@ -198,8 +198,8 @@ def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, sour
     fitted slope otherwise. ``run`` picks the slope: ``"approach"``,
     ``"retract"`` or ``"both"`` (inverse-variance mean).
     """
-    if source not in ("auto", "fit", "metadata"):
-        raise ParameterError(f"calibration source must be auto, fit or metadata, got {source!r}")
+    if source not in CALIBRATION_SOURCES:
+        raise ParameterError(f"calibration source must be one of {', '.join(CALIBRATION_SOURCES)}, got {source!r}")
     if run not in ("approach", "retract", "both"):
         raise ParameterError(f"calibration run must be approach, retract or both, got {run!r}")
     a, r = compliance.approach, compliance.retract

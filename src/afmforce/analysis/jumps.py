@@ -153,8 +153,9 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
     A jump into contact starts free and lands in attraction: a step that starts and lands above
     ``attractive_below`` [m] is a slip in contact (the split placed after a curved onset), not the jump.
     The jump is then the step into the attractive stretch that precedes that contact: walking back from
-    the slip over the contact (deflection above ``attractive_below``) and the attraction (below
-    ``-attractive_below``), the largest downward step into and within that attraction, if it makes at
+    the slip over the contact (deflection above ``attractive_below``), the line's crossing of zero force
+    (within ``+-attractive_below``, over no more samples than the line then took up to the slip) and the
+    attraction (below ``-attractive_below``), the largest downward step into and within that attraction, if it makes at
     least half of the attraction's depth (a lever that snaps; none such: the tip crept in through a
     gradual attraction, and the slip is judged as before). Default ``inf``: the
     largest step near the split, whatever its load.
@@ -175,12 +176,17 @@ def find_jump_in(d: np.ndarray, separation: np.ndarray, position: np.ndarray, ru
         j = i
         while j >= 0 and dr[j] > attractive_below:  # back over the contact
             j -= 1
-        m = j  # the last attractive sample before the contact
-        while j >= 0 and dr[j] < -attractive_below:  # and over the attraction after the jump
+        m = j  # the last sample before the contact
+        # over the line's crossing of zero force (samples within +-attractive_below: no more than the line
+        # took from there up to the slip; a free branch the tip crept in from is longer) ...
+        while j >= 0 and abs(dr[j]) <= attractive_below and m - j < i - m:
             j -= 1
-        if j >= 0 and m > j:  # the jump: the largest downward step into and within that attraction ...
+        a = j  # the last attractive sample before the contact
+        while j >= 0 and dr[j] < -attractive_below:  # ... and over the attraction after the jump
+            j -= 1
+        if j >= 0 and a > j:  # the jump: the largest downward step into and within that attraction ...
             jump = largest_step(dr, j, m + 1, -1.0)
-            if dr[jump] - dr[jump + 1] >= 0.5 * (-dr[j + 1: m + 1].min()):  # ... if it makes most of it
+            if dr[jump] - dr[jump + 1] >= 0.5 * (-dr[j + 1: a + 1].min()):  # ... if it makes most of it
                 i = jump  # (a lever that snaps; a gradual attraction has no such step: crept in)
     step = dr[i] - dr[i + 1]
     sig = step / (math.sqrt(2.0) * noise) if noise > 0 else math.inf
@@ -278,8 +284,8 @@ def _still_in_contact(dr: np.ndarray, i: int, rise: float, thr: float, saturated
     never again goes deeper than where it left (a freed lever rings about the baseline, with no
     more than the pull-off's amplitude). A retract that bends away from the line without rising
     (an adhesive contact that is not a straight line: the JPK QI curves of SPM 8.1, whose contact
-    line flattens before the tip snaps off 9 nm lower) and then goes deeper than at ``i`` by more
-    than ``thr`` is still in contact: the pull-off is the largest rise after that deeper point.
+    line flattens before the tip snaps off 9 nm lower) and then goes deeper than the retract had been
+    up to ``i`` by more than ``thr`` is still in contact: the pull-off is the largest rise after that deeper point.
     A departure that is itself a jump (a surface pull-off followed by a tethered molecule that
     pulls deeper later) stays the pull-off.
     """
@@ -302,8 +308,10 @@ def pull_off_estimate(po: PullOff, spring_constant: float) -> float:
     return po.force
 
 
-def jump_warnings(ji: JumpIn, po: PullOff, spring_constant: float, clipped: bool = False) -> list[str]:
-    """Plain-words warnings on what the jumps could not give (``clipped``: the retract's contact is)."""
+def jump_warnings(ji: JumpIn, po: PullOff, spring_constant: float, clipped: bool = False,
+                  retract: bool = True) -> list[str]:
+    """Plain-words warnings on what the jumps could not give (``clipped``: the retract's contact is;
+    ``retract`` False: the curve has no retract run, where no pull-off was looked for)."""
     k = spring_constant
     warn = []
     if not ji.found and ji.index >= 0:
@@ -316,7 +324,7 @@ def jump_warnings(ji: JumpIn, po: PullOff, spring_constant: float, clipped: bool
         warn.append("pull-off not in the record: the photodiode was saturated over the whole contact of the "
                     "retract run, so the tip left the surface while the signal was clipped; no pull-off "
                     "force, no adhesion")
-    elif not po.found:
+    elif not po.found and retract:
         warn.append("no pull-off found on the retract run")
     elif po.saturated and math.isfinite(k):
         f_ext = k * po.deflection_extrapolated

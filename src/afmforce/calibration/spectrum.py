@@ -233,6 +233,11 @@ def _stored(parse, head: dict[str, str], key: str, path: Path):
     return value
 
 
+#: How a .tnd header writes the units of its temperature.
+_CELSIUS = ("℃", "°C", "C", "degC")
+_KELVIN = ("K", "")
+
+
 def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
     head: dict[str, str] = {}
     rows = []
@@ -271,7 +276,10 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
     temperature = None
     t = _stored(_jpk_number, head, "settings.temperature", path)
     if t is not None:
-        temperature = t[0] + 273.15 if t[1] in ("℃", "°C", "C", "degC") else t[0]
+        if t[1] not in _CELSIUS + _KELVIN:   # never a number in an unknown unit taken for kelvin
+            raise FileFormatError(f"{path}: the header's 'settings.temperature' is {head['settings.temperature']!r}: "
+                                  "a temperature in kelvin or degrees Celsius was expected; correct that line")
+        temperature = t[0] + 273.15 if t[1] in _CELSIUS else t[0]
     c = _stored(_jpk_number, head, "cantilever.correction factor", path)
     correction = c[0] if c is not None else None
     tilt = None

@@ -23,7 +23,7 @@ in one place serves both:
   in calibrated units: the deflection must follow the position with slope ~1.
 
 An approach-only curve (the analysis needs both runs) gets the same functions on its
-one run, with the file's calibration.
+one run, with the file's calibration (``calibration`` "fit" is refused there, not ignored).
 """
 
 from __future__ import annotations
@@ -33,7 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import AnalysisError, MissingMetadataError
+from ..errors import AnalysisError, MissingMetadataError, ParameterError
 from ..io.curve import RawCurve
 
 __all__ = ["AnalysisInputs", "analysis_inputs", "calibration_source"]
@@ -123,7 +123,6 @@ def calibration_source(calibration: str) -> str:
         Any other word.
     """
     from ..analysis.options import CALIBRATION_SOURCES
-    from ..errors import ParameterError
 
     word = "metadata" if calibration == "file" else calibration
     if word not in CALIBRATION_SOURCES:
@@ -151,6 +150,8 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "re
         (its message, prefixed by ``name``).
     MissingMetadataError
         An approach-only curve in volts or newtons without the file's calibration.
+    ParameterError
+        ``calibration`` "fit" on an approach-only curve (calibrated with the file's only).
     """
     from ..analysis.pipeline import STEPS, resolve_options, resolve_steps
     from ..analysis.regions import run_indices
@@ -160,6 +161,11 @@ def analysis_inputs(curve: RawCurve, name: str, idx: np.ndarray, soft: str = "re
 
     opts, _ = resolve_options([CalibrationOptions(source=calibration_source(calibration))])
     if run_indices(np.asarray(curve.segment), 1).size == 0:
+        if opts["calibration"].source == "fit":   # never the file's in silence where the slope was asked for
+            raise ParameterError(
+                f"{name}: calibration 'fit' (the compliance slope, with a thermal spring constant rescaled) is "
+                "not available on a curve without a retract run, which the fit calibrates with the file's "
+                "sensitivity: use calibration auto or metadata, or give the sensitivity (`sensitivity`)")
         return _approach_only(curve, name, idx, opts["kind"].nsigma, int(opts["jumps"].window))
     try:
         st = prepare(curve)
@@ -238,7 +244,9 @@ def _jump(deflection, z, run, noise: float, nsigma: float, start: int, window: i
     from ..analysis import largest_step
     from ..analysis.jumps import find_jump_in
 
-    ji = find_jump_in(deflection, z, z, run, noise, math.nan, nsigma, window)
+    # as the analysis's jumps step: a step in contact (starting and landing above nsigma noises) is a slip,
+    # the jump is the step into the attraction before it
+    ji = find_jump_in(deflection, z, z, run, noise, math.nan, nsigma, window, attractive_below=nsigma * noise)
     contact = int(run.index[min(run.split, run.index.size - 1)]) - start
     if ji.found:
         return int(ji.index) + 1 - start, True, contact

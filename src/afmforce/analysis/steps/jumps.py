@@ -61,9 +61,7 @@ def jumps(st: State, o: JumpsOptions) -> State:
     if bad_off:
         st = st.update(skipped={**st.skipped, "pull_off": bad_off})
         po = PullOff(False, -1, math.nan, math.nan, math.nan, math.nan, 0.0, False)
-    warn = jump_warnings(ji, po, k, clipped)
-    if ret is None:  # an approach exported alone: no pull-off was looked for
-        warn = [w for w in warn if w != "no pull-off found on the retract run"]
+    warn = jump_warnings(ji, po, k, clipped, retract=ret is not None)  # an approach alone: no pull-off looked for
     z0 = st.details["zero"].contact_separation if "zero" in st.details else Z0
     if 0 <= ji.index < st.separation.size - 1:
         # at a rigid contact the first contact sample lies on the compliance line (h = z0)
