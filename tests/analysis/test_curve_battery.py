@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import json
+import math
 from pathlib import Path
 
 import numpy as np
@@ -191,3 +192,28 @@ def test_real_curve_cut_to_its_contact_is_refused(sin):
     keep = np.flatnonzero(f - base > (f.max() - base) / 3)
     with pytest.raises(AnalysisError, match="no free baseline"):
         analyze(_take(c, keep))
+
+
+@pytest.mark.parametrize("end", [-100e-9, -200e-9, -260e-9])
+def test_retract_ending_before_the_pull_off_reports_no_adhesion_but_its_bound(end):
+    """The record stops while the tip is still held on its adhesive contact line (the static curve's
+    pull-off is at -267 nm): no adhesion, but why, with the pull at the last sample as a lower bound
+    (k x the truth's deflection there). Before: an adhesion of 0.11 nN "at -3237 nm from contact" (at
+    -100 nm), against the truth's 56 nN pull-off."""
+    c = static_curve(noise=0.05e-9)
+    keep = np.flatnonzero(np.asarray(c.piezo_nominal) > end)
+    res = analyze(_take(c, keep))
+    assert math.isnan(res.adhesion_force) and math.isnan(res.pull_off_force)
+    why = res.not_applicable["adhesion"]
+    assert why.startswith("not available: the retract ends before the pull-off")
+    bound = float(why.split("larger than ")[1].split(" nN")[0]) * 1e-9
+    pulled = -c.truth["spring_constant"] * c.truth["deflection"][keep[-1]]     # the pull at the last sample
+    assert bound == pytest.approx(pulled, rel=0.05)
+    assert bound < -forces.max_attraction_force(220e-9, HAMAKER, Z0)           # a lower bound of the truth
+
+
+def test_retract_reaching_past_the_pull_off_keeps_its_adhesion(virtual):
+    """The same curve with the whole retract: the adhesion is the truth's, no such reason."""
+    c, r = virtual
+    assert "adhesion" not in r.not_applicable
+    assert r.adhesion_force == pytest.approx(forces.max_attraction_force(220e-9, HAMAKER, Z0), rel=0.01)
