@@ -28,6 +28,7 @@ from . import options as O
 from . import registry
 from .contact_point import CONTACT_POINT_METHODS
 from .options_text import show_default
+from .orientation import orient
 from .plausibility import (beyond_detector, impossible_reasons, impossible_steps, plausibility_warnings,
                            slope_not_the_levers)
 from .registry import AnalysisStep, ResultField, register_step
@@ -173,7 +174,10 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
     order = resolve_steps(steps)
     opts, probe = resolve_options(options, probe)
     known = registry.steps()
+    curve, reordered = orient(curve, channel)   # one cycle, each run in acquisition order, labelled right
     st = prepare(curve, channel, probe)
+    if reordered:
+        st = st.update(warnings=reordered + st.warnings)
     misread = beyond_detector(curve)
     if misread:  # no photodiode gives this signal: every number from it would be impossible
         return _refused(st, tuple(order), misread)
