@@ -359,6 +359,10 @@ def check_common(args: argparse.Namespace) -> None:
         value = getattr(args, dest, None)
         if isinstance(value, int) and not isinstance(value, bool) and value < lo:
             raise ParameterError(f"{_flag(dest)} must be at least {lo}, got {value}")
+    if isinstance(getattr(args, "workers", None), int):
+        from ..sweep.executors import check_workers
+
+        check_workers(args.workers)
     if getattr(args, "scheduler", None) is not None:
         from ..sweep.executors import check_scheduler
 
