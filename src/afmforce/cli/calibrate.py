@@ -16,7 +16,7 @@ import argparse
 import dataclasses
 import math
 
-from ..errors import ParameterError
+from ..errors import AnalysisError, ParameterError
 from ..constants import SADER_FLUIDS as FLUIDS
 from ._validate import add_field, check_outputs
 from ._outcome import render
@@ -224,7 +224,7 @@ def run_thermal(args: argparse.Namespace) -> int:
 
         try:
             sader = sader_rectangular(length, width, fit.resonance_frequency, fit.quality_factor, medium)
-        except ParameterError as exc:   # a lever the rectangular method does not describe: no Sader k
+        except (ParameterError, AnalysisError) as exc:   # a lever the method does not describe: no Sader k
             eprint(f"warning: no Sader k: {render(str(exc))}")
         else:
             values["spring_constant_sader"] = sader.spring_constant
