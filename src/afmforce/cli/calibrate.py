@@ -378,8 +378,8 @@ def run_virtual(args: argparse.Namespace) -> int:
     _check_out(args, ("--spectrum", args.spectrum))
     if args.averages < 1:
         raise ParameterError(f"--averages must be at least 1, got {args.averages}")
-    if not args.white >= 0:
-        raise ParameterError(f"--white must be a non-negative PSD [m^2/Hz], got {args.white}")
+    if not (math.isfinite(args.white) and args.white >= 0):    # inf wrote a spectrum of infinite bins
+        raise ParameterError(f"--white must be a finite, non-negative PSD [m^2/Hz], got {args.white}")
     if args.model == "spring":
         if args.quality_factor_2 is not None:
             raise ParameterError("--quality-factor-2 is the beam's second mode; the spring has one")
