@@ -43,3 +43,13 @@ def test_parse_typed_integer_quantity_and_plain():
     with pytest.raises(ParameterError, match="whole number"):
         parse_typed("three", "integer", "--n")
     assert parse_typed("200nm", "length", "--x") == pytest.approx(200e-9)
+
+
+@pytest.mark.parametrize("text", ["1e400nm", "1e400", "1e308 km", "-1e400 um"])
+def test_a_number_beyond_the_largest_float_says_why(text):
+    """``1e400nm`` overflows to inf: before, the message was only "expects a length, got 1e400nm"
+    (the same as for a wrong unit); it now says the number is not finite (audit)."""
+    from afmforce.units import UnitError, parse_value
+
+    with pytest.raises(UnitError, match=r"not a finite number: beyond the largest float"):
+        parse_value(text, "length", "radius")

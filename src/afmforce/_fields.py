@@ -160,15 +160,25 @@ class FieldSpec:
 
             --radius -5nm is out of range: radius, the effective radius R, must lie in (0, 1 mm]
         """
-        if value is None or isinstance(value, str) or not self.bounded:
+        if value is None or not self.bounded:
             return value
-        if isinstance(value, bool):
-            raise ParameterError(f"{where or name} expects a number, got {value!r}")
+        if isinstance(value, bool) or not _real(value):
+            hint = " (a text with units: read it with afmforce.units.parse_value)" if isinstance(value, str) else ""
+            raise ParameterError(f"{where or name} expects a number [{self.unit}], got {value!r}{hint}")
         if self.contains(value):
             return value
         shown = typed if typed is not None else self.show(value)
         head = f"{where} {shown}" if where else f"{name} = {shown}"
         raise ParameterError(f"{head} is out of range: {name}, the {self.help}, must lie in {self.range_text()}")
+
+
+def _real(value) -> bool:
+    """Whether ``value`` is one real number (``float()`` takes it): not a list, a complex, a text."""
+    try:
+        float(value)
+    except (TypeError, ValueError):
+        return False
+    return True
 
 
 def meta(dimension: str, unit: str, help: str, *, lo: float | None = None, hi: float | None = None,

@@ -40,14 +40,19 @@ def display_path(path: str | os.PathLike) -> str:
 def check_writable(path: str | os.PathLike, force: bool = True) -> Path:
     """Raise :class:`OutputExistsError` if ``path`` exists and ``force`` is false.
 
-    Raises :class:`~afmforce.errors.ParameterError` for an empty name or a folder
-    (even with ``force``: a folder is never replaced by a file).
+    Raises :class:`~afmforce.errors.ParameterError` for an empty name, a folder
+    (even with ``force``: a folder is never replaced by a file) or anything else that is not a
+    plain file (a device such as ``/dev/full``, a pipe, a socket): the atomic rename would
+    replace that node by a file, not write into it.
     """
     if not str(path).strip():
         raise ParameterError("empty output file name; give a file name")
     path = Path(path)
     if path.is_dir():
         raise ParameterError(f"{path} is a folder; give a file name (a folder is never replaced by a file)")
+    if path.exists() and not path.is_file():
+        raise ParameterError(f"{path} is not a plain file (a device, pipe or socket); give a file name "
+                             "(outputs are written to a new file and renamed, which would replace it)")
     if path.exists() and not force:
         raise OutputExistsError(f"{path} exists; choose another name or pass `force` to overwrite")
     return path

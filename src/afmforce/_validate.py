@@ -9,7 +9,7 @@ from .errors import ParameterError
 
 def positive(name: str, value: float, unit: str = "") -> float:
     """Return ``value`` as float or raise :class:`ParameterError` if not > 0."""
-    v = float(value)
+    v = _float(name, value, unit)
     if not math.isfinite(v) or v <= 0.0:
         raise ParameterError(f"{name} must be a positive finite number{_u(unit)}, got {value!r}")
     return v
@@ -17,7 +17,7 @@ def positive(name: str, value: float, unit: str = "") -> float:
 
 def non_negative(name: str, value: float, unit: str = "") -> float:
     """Return ``value`` as float or raise :class:`ParameterError` if not >= 0."""
-    v = float(value)
+    v = _float(name, value, unit)
     if not math.isfinite(v) or v < 0.0:
         raise ParameterError(f"{name} must be zero or positive{_u(unit)}, got {value!r}")
     return v
@@ -25,10 +25,19 @@ def non_negative(name: str, value: float, unit: str = "") -> float:
 
 def finite(name: str, value: float, unit: str = "") -> float:
     """Return ``value`` as float or raise :class:`ParameterError` if not finite."""
-    v = float(value)
+    v = _float(name, value, unit)
     if not math.isfinite(v):
         raise ParameterError(f"{name} must be a finite number{_u(unit)}, got {value!r}")
     return v
+
+
+def _float(name: str, value, unit: str) -> float:
+    """``float(value)``, or :class:`ParameterError` naming ``name`` for a value that is no number."""
+    try:
+        return float(value)
+    except (TypeError, ValueError):
+        hint = " (a text with units: read it with afmforce.units.parse_value)" if isinstance(value, str) else ""
+        raise ParameterError(f"{name} expects a number{_u(unit)}, got {value!r}{hint}") from None
 
 
 def _u(unit: str) -> str:

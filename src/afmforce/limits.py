@@ -77,7 +77,7 @@ def check_samples(n: float, where: str = "") -> None:
         raise ParameterError(
             f"{where}the cycle would have about {n:.3g} samples ({_memory(n * _BYTES_PER_SAMPLE)} of "
             f"trajectory), more than the {MAX_SAMPLES:.0e} a run may have; lower `sample_rate`, raise "
-            "`velocity` or shorten the drive (`start`, `turn`, `end`)")
+            "`velocity`, shorten the drive (`start`, `turn`, `end`) or the `dwell`")
 
 
 def check_count(name: str, n: float, cap: int, what: str) -> None:

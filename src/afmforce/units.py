@@ -131,8 +131,9 @@ def parse_quantity(text: str | float | int, dimension: str, name: str = "value")
             if _DOT_PRODUCT.search(match.group(2)):
                 s = match.group(1) + " " + _DOT_PRODUCT.sub("*", match.group(2))
             value = _parse_with_pint(s, si, word, name, text)
-    if not math.isfinite(value):
-        raise UnitError(f"{name} expects {word}, got {text}")
+    if not math.isfinite(value):    # 1e400nm: a number beyond the largest float (1.8e308), read as inf
+        raise UnitError(f"{name} expects {word}, got {text} (not a finite number: beyond the largest float, "
+                        f"1.8e308; e.g. {_EXAMPLE.get(dimension, '1.5')})")
     return value
 
 

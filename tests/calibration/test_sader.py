@@ -138,3 +138,29 @@ def test_a_lever_shorter_than_three_widths_is_not_described_by_eq_1(capsys):
     out, err = capsys.readouterr()
     assert "Sader k" not in out and "spring constant k                  45.056" in out
     assert "warning: no Sader k: lever_length / lever_width = 1" in err
+
+
+# ---- audit: a number no lever has is not a result -------------------------------------------------
+
+def test_an_overdamped_lever_has_no_sader_constant():
+    """Eqs (1) and (3) assume a weakly damped resonance (Q >> 1); Q = 0.5 gave 0.337 mN/m."""
+    with pytest.raises(ParameterError, match=r"quality_factor = 0.5 < 1"):
+        sader_rectangular(100e-6, 20e-6, 20e3, 0.5, "air")
+
+
+@pytest.mark.parametrize("f, L, b, medium", [(100e6, 1e-3, 300e-6, "water"),   # Re 1.6e7: k was 1.0e7 N/m
+                                             (1.0, 3e-6, 1e-6, "air")])        # Re 1.0e-7
+def test_reynolds_number_outside_the_hydrodynamic_fit_is_refused(f, L, b, medium):
+    rho, eta = {"water": (997.05, 0.890e-3), "air": (1.184, 18.49e-6)}[medium]   # CRC, 25 C
+    re = rho * 2 * math.pi * f * b * b / (4 * eta)
+    assert not 1e-6 <= re <= 1e4
+    with pytest.raises(ParameterError, match="Reynolds number"):
+        sader_rectangular(L, b, f, 5.0, medium)
+
+
+def test_a_spring_constant_no_lever_has_is_not_a_result():
+    """1 Hz on a 100 x 20 um lever in air: Re = 4.0e-5 is inside the fit, k = 3.2e-8 N/m is no lever's."""
+    from afmforce.errors import AnalysisError
+
+    with pytest.raises(AnalysisError, match=r"spring_constant = 3.23e-08 N/m, outside any AFM lever's"):
+        sader_rectangular(100e-6, 20e-6, 1.0, 5.0, "air")

@@ -91,3 +91,20 @@ def test_beam_modes_are_the_dynamics_free_modes():
     A, masses = beam_matrices(probe.cantilever, probe.m_joint, probe.m_base)
     freqs, _ = mode_shares(K, M, out)
     np.testing.assert_allclose(freqs, free_modes(A, masses) / (2 * math.pi), rtol=1e-10)
+
+
+@pytest.mark.parametrize("white", [float("inf"), float("nan"), -1e-27])
+def test_a_white_floor_that_is_no_finite_psd_is_refused(white, capsys, tmp_path):
+    """``afmforce calibrate virtual --white inf`` (or 1e400) wrote a spectrum of infinite bins (audit);
+    the library and the command refuse it, and nothing is written."""
+    from afmforce.cli.main import main
+    from afmforce.dynamics.parts import SpringProbe
+    from afmforce.dynamics.thermal import thermal_spectrum
+    from afmforce.errors import ParameterError
+
+    with pytest.raises(ParameterError, match=r"^white must be zero or positive \[m\^2/Hz\]"):
+        thermal_spectrum(SpringProbe(quality_factor=30.0), white=white)
+    out = tmp_path / "v.psd"
+    assert main(["calibrate", "virtual", "--white", str(white), "--spectrum", str(out)]) == 2
+    assert "--white must be a finite, non-negative PSD" in capsys.readouterr().err
+    assert not out.exists()

@@ -179,3 +179,19 @@ def test_thermal_plot(capsys, tmp_path):
     png = tmp_path / "fit.png"
     code, out, _ = run(capsys, ["calibrate", "thermal", "--example", "jpk-water", "--plot", str(png)])
     assert code == 0 and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and f"wrote {png}" in out
+
+
+def test_thermal_s_sader_cross_check_that_is_no_result_is_a_warning(monkeypatch, capsys):
+    """The Sader cross-check of `calibrate thermal` may now be refused as no lever's k (AnalysisError,
+    audit): the thermal calibration still stands, with a warning."""
+    import afmforce.calibration as calibration
+    from afmforce.errors import AnalysisError
+
+    def refuse(*args, **kwargs):
+        raise AnalysisError("the rectangular Sader method gives spring_constant = 1e7 N/m, outside any lever's")
+
+    monkeypatch.setattr(calibration, "sader_rectangular", refuse)
+    code = main(["calibrate", "thermal", "--example", "jpk-water", "--length", "100um", "--width", "20um"])
+    out, err = capsys.readouterr()
+    assert code == 0 and "warning: no Sader k: the rectangular Sader method gives" in err, err
+    assert "Sader k" not in out and "spring constant k" in out

@@ -37,7 +37,7 @@ import numpy as np
 
 from .._fields import QUANTITIES
 from ..constants import SADER_FLUIDS
-from ..errors import ParameterError
+from ..errors import AnalysisError, ParameterError
 
 __all__ = ["FLUIDS", "fluid", "reynolds_number", "gamma_circular", "omega_rectangular",
            "hydrodynamic_function", "hydrodynamic_exponent", "SaderResult", "sader_rectangular",
@@ -145,6 +145,32 @@ def _checked(name: str, value) -> float:
 #: hydrodynamic function of an infinitely long beam, accurate for L/b > 3.
 MIN_ASPECT = 3.0
 
+#: The Reynolds numbers where the rectangular correction Omega (Sader 1998, eq 21) is accurate (0.1 %).
+REYNOLDS_RANGE = (1e-6, 1e4)
+
+#: The lowest quality factor the Sader method takes: eqs (1) and (3) assume a weakly damped
+#: resonance (Q_f >> 1, Sader, Chon & Mulvaney 1999); below 1 the lever is overdamped.
+MIN_QUALITY = 1.0
+
+
+def _plausible(k: float, method: str) -> float:
+    """``k`` [N/m], or :class:`AnalysisError` when no AFM lever has it (the declared range of
+    ``spring_constant``): a resonance, quality factor, size or medium that belong to no lever."""
+    spec = QUANTITIES["spring_constant"]
+    if not spec.contains(k):
+        raise AnalysisError(f"the {method} Sader method gives spring_constant = {k:.4g} N/m, outside any AFM "
+                            f"lever's ({spec.range_text()}): check the resonance_frequency, quality_factor, "
+                            "the lever's size and the medium")
+    return k
+
+
+def _damped(q: float) -> float:
+    if q < MIN_QUALITY:
+        raise ParameterError(f"quality_factor = {q:g} < {MIN_QUALITY:g}: the Sader method assumes a weakly damped "
+                             "resonance (Q >> 1); an overdamped lever has none: calibrate it by its thermal "
+                             "spectrum")
+    return q
+
 
 def sader_rectangular(length: float, width: float, resonance_frequency: float,
                       quality_factor: float, medium: str | None = "air", *,
@@ -173,12 +199,18 @@ def sader_rectangular(length: float, width: float, resonance_frequency: float,
             f"hydrodynamics of an infinitely long beam) holds for a long lever, L/b > {MIN_ASPECT:g}; "
             "this lever is not one: calibrate it by its thermal spectrum or by the general method "
             "with a reference lever of its type")
+    _damped(q)
     rho, eta = fluid(medium, density, viscosity)
     re = float(reynolds_number(f, b, rho, eta))
+    lo, hi = REYNOLDS_RANGE
+    if not lo <= re <= hi:
+        raise ParameterError(f"the Reynolds number of this lever, rho w b^2 / (4 eta) = {re:.3g}, lies outside "
+                             f"{lo:g}..{hi:g}, where the rectangular hydrodynamic function holds (Sader 1998, "
+                             "eq 21): check the resonance_frequency, the lever_width and the medium")
     g = complex(hydrodynamic_function(re))
     w = 2.0 * math.pi * f
     k = 0.1906 * rho * b * b * L * q * g.imag * w * w
-    return SaderResult(k, re, g.real, g.imag, rho, eta, "rectangular")
+    return SaderResult(_plausible(k, "rectangular"), re, g.real, g.imag, rho, eta, "rectangular")
 
 
 @dataclass(frozen=True)
@@ -222,8 +254,8 @@ def sader_general(resonance_frequency: float, quality_factor: float, constant: G
                   viscosity: float | None = None) -> SaderResult:
     """Eq (3): k [N/m] of a lever of the reference's type from its f [Hz] and Q [-]."""
     f = _checked("resonance_frequency", resonance_frequency)
-    q = _checked("quality_factor", quality_factor)
+    q = _damped(_checked("quality_factor", quality_factor))
     rho, eta = fluid(medium, density, viscosity)
     a = constant.exponent
     k = constant.constant * rho ** (1 - a) * eta**a * q * f ** (2 - a)
-    return SaderResult(k, math.nan, math.nan, math.nan, rho, eta, "general")
+    return SaderResult(_plausible(k, "general"), math.nan, math.nan, math.nan, rho, eta, "general")

@@ -127,8 +127,22 @@ def fail(kind: str, message: str, status: int) -> int:
     RunState.written, RunState.reported = [], []
     print(f"error: {message}", file=sys.stderr, flush=True)
     if RunState.json:
-        print(json.dumps({"error": {"type": kind, "message": message, "exit_status": status}}), flush=True)
+        try:
+            print(json.dumps({"error": {"type": kind, "message": message, "exit_status": status}}), flush=True)
+        except OSError:     # stdout itself cannot be written (a full disk, /dev/full): the stderr line stands
+            _drop_stdout()
     return status
+
+
+def _drop_stdout() -> None:
+    """Send the rest of stdout to the null device (a write that failed leaves its text buffered: the
+    interpreter's flush at exit would fail again and print a traceback)."""
+    import os
+
+    try:
+        sys.stdout = open(os.devnull, "w")
+    except OSError:
+        pass
 
 
 def capture_stdout() -> None:

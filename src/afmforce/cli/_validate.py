@@ -169,12 +169,14 @@ def check_output(path, *, flag: str = "--out", force: bool = True, folder: bool 
     return path
 
 
-def check_outputs(outputs: Iterable[tuple[str, Any]], *, force: bool) -> list[Path]:
+def check_outputs(outputs: Iterable[tuple[str, Any]], *, force: bool, inputs: Iterable[Any] = ()) -> list[Path]:
     """Every output file of one command, checked before any work.
 
     ``outputs``: ``(flag, path)`` pairs (a ``None`` path is skipped). Each must be
     writable (:func:`check_output`), an existing file is refused without ``force``,
-    and no two flags may name the same file (the second would replace the first).
+    no two flags may name the same file (the second would replace the first), and none
+    may be one of the command's ``inputs`` (files it reads; ``None`` skipped), even with
+    ``force``: an input file is never modified.
 
     Raises
     ------
@@ -183,10 +185,14 @@ def check_outputs(outputs: Iterable[tuple[str, Any]], *, force: bool) -> list[Pa
     from .._files import check_writable
 
     seen: dict[str, str] = {}
+    read = {os.path.normcase(os.path.realpath(p)) for p in inputs if p and Path(p).is_file()}
     out = []
     for flag, path in outputs:
         if not path:
             continue
+        if os.path.normcase(os.path.realpath(path)) in read:
+            raise ParameterError(f"{flag} {path} is a file this command reads; give the output another name "
+                                 "(input files are never modified)")
         check_writable(path, force)
         p = check_output(path, flag=flag, force=force)
         key = os.path.normcase(os.path.realpath(p))
@@ -359,6 +365,10 @@ def check_common(args: argparse.Namespace) -> None:
         value = getattr(args, dest, None)
         if isinstance(value, int) and not isinstance(value, bool) and value < lo:
             raise ParameterError(f"{_flag(dest)} must be at least {lo}, got {value}")
+    if isinstance(getattr(args, "workers", None), int):
+        from ..sweep.executors import check_workers
+
+        check_workers(args.workers)
     if getattr(args, "scheduler", None) is not None:
         from ..sweep.executors import check_scheduler
 

@@ -225,8 +225,14 @@ def run(args: argparse.Namespace) -> int:
     steps = _check(args)
     from ..io import parse_meta_args
 
-    meta = {**parse_meta_args(args.meta), **{k: v for k, v in (("spring_constant", args.spring_constant),
-                                                              ("sensitivity", args.sensitivity)) if v is not None}}
+    meta = parse_meta_args(args.meta)
+    for key, value in (("spring_constant", args.spring_constant), ("sensitivity", args.sensitivity)):
+        if value is None:
+            continue
+        if key in meta and not math.isclose(meta[key], value, rel_tol=1e-9):      # which one was meant: never one of them silently
+            raise ParameterError(f"--{key.replace('_', '-')} and --meta {key} give different values "
+                                 f"({value:g} and {meta[key]:g} [SI]); give one")
+        meta[key] = value
     _check_liquid_radius(args, meta)
     files = _inputs(args.files)
     if not files:

@@ -16,9 +16,9 @@ import argparse
 import dataclasses
 import math
 
-from ..errors import ParameterError
+from ..errors import AnalysisError, ParameterError
 from ..constants import SADER_FLUIDS as FLUIDS
-from ._validate import add_field, check_output
+from ._validate import add_field, check_outputs
 from ._outcome import render
 from .common import eprint, print_json, print_table
 
@@ -136,16 +136,15 @@ def _finish(args, method: str, values: dict, units: dict, rows: list, title: str
     return 0
 
 
-def _check_out(args) -> None:
-    """Refuse an --out that cannot be written before any work (exit 2)."""
-    if args.out:
-        check_output(args.out, force=args.force)
+def _check_out(args, *more: tuple[str, str | None]) -> None:
+    """Refuse, before any work (exit 2), an --out (and the ``more`` ``(flag, path)`` outputs) that cannot
+    be written, that two of them name the same file, or that one is the file read."""
+    check_outputs([("--out", args.out), *more], force=args.force,
+                  inputs=(getattr(args, "file", None), getattr(args, "probe_calibration", None)))
 
 
 def run_thermal(args: argparse.Namespace) -> int:
-    _check_out(args)
-    if args.plot:
-        check_output(args.plot, flag="--plot", force=args.force)
+    _check_out(args, ("--plot", args.plot))
     from ..calibration import BUTT_JASCHKE, DEFAULT_TEMPERATURE, fit_thermal, read_spectrum
     from ..calibration.thermal import ThermalFit
 
@@ -225,7 +224,7 @@ def run_thermal(args: argparse.Namespace) -> int:
 
         try:
             sader = sader_rectangular(length, width, fit.resonance_frequency, fit.quality_factor, medium)
-        except ParameterError as exc:   # a lever the rectangular method does not describe: no Sader k
+        except (ParameterError, AnalysisError) as exc:   # a lever the method does not describe: no Sader k
             eprint(f"warning: no Sader k: {render(str(exc))}")
         else:
             values["spring_constant_sader"] = sader.spring_constant
@@ -376,12 +375,11 @@ def run_virtual(args: argparse.Namespace) -> int:
     from ..dynamics.parts import BeamProbe, SpringProbe
     from ..dynamics.thermal import thermal_spectrum
 
-    _check_out(args)
-    check_output(args.spectrum, flag="--spectrum", force=args.force)
+    _check_out(args, ("--spectrum", args.spectrum))
     if args.averages < 1:
         raise ParameterError(f"--averages must be at least 1, got {args.averages}")
-    if not args.white >= 0:
-        raise ParameterError(f"--white must be a non-negative PSD [m^2/Hz], got {args.white}")
+    if not (math.isfinite(args.white) and args.white >= 0):    # inf wrote a spectrum of infinite bins
+        raise ParameterError(f"--white must be a finite, non-negative PSD [m^2/Hz], got {args.white}")
     if args.model == "spring":
         if args.quality_factor_2 is not None:
             raise ParameterError("--quality-factor-2 is the beam's second mode; the spring has one")

@@ -198,7 +198,8 @@ def run(args: argparse.Namespace) -> int:
     found = frozenset(c for c in args.curves if c not in named)      # files found in the folders
     if not args.curves:
         raise ParameterError("no force-curve files found in the given folders")
-    check_outputs([("--out", args.out), ("--report", args.report)], force=args.force)
+    check_outputs([("--out", args.out), ("--report", args.report)], force=args.force,
+                  inputs=[*args.curves, getattr(args, "probe_calibration", None)])
     if args.plots:   # never replace an earlier run's figures silently
         check_folder_outputs(args.plots, ("fit_curve*.png", "fit_profiles.png", "fit_residuals.png"),
                              flag="--plots", force=args.force)

@@ -69,6 +69,10 @@ def run(args: argparse.Namespace) -> int:
     from ..web import create_app
     from ..web.settings import Settings, parse_size
 
+    if args.data is not None:       # before any folder is made in it ("/etc/passwd: File exists" said before)
+        from ._validate import check_output
+
+        check_output(args.data, flag="--data", folder=True)
     kw = {"data": args.data} if args.data is not None else {}
     for flag, name in (("--session-storage", "session_storage"), ("--server-storage", "server_storage")):
         if getattr(args, name) is not None:

@@ -243,7 +243,7 @@ def run(args: argparse.Namespace) -> int:
     from ..dynamics.guard import ConvergenceWarning
 
     check_outputs([("--" + dest.replace("_", "-"), getattr(args, dest, None)) for dest in OUTPUT_FLAGS],
-                  force=args.force)
+                  force=args.force, inputs=[getattr(args, "probe_calibration", None)])
     if args.out and Path(args.out).suffix.lower() not in (".csv", ".h5", ".hdf5"):
         raise ParameterError(f"cannot write {args.out}: --out takes a .csv or .h5 file")
     if args.plot and Path(args.plot).suffix.lower() != ".png":

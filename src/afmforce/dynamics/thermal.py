@@ -21,6 +21,7 @@ import numpy as np
 from ..calibration.spectrum import ThermalSpectrum
 from ..calibration.thermal import DEFAULT_TEMPERATURE
 from ..calibration.virtual import linear_thermal_psd, mode_shares, sample_spectrum
+from .._validate import non_negative
 from ..errors import ParameterError
 from .damping import beam_damping, spring_damping
 from .models import beam_couplings, beam_matrices
@@ -85,6 +86,7 @@ def thermal_spectrum(probe, *, temperature: float = DEFAULT_TEMPERATURE, f_max: 
     """
     if probe.quality_factor is None and getattr(probe, "quality_factor_2", None) is None:
         raise ParameterError("an undamped probe has no thermal spectrum: give the quality_factor")
+    white = non_negative("white", white, "m^2/Hz")     # finite too: inf gave a spectrum of infinite bins
     K, M, C, out = probe_matrices(probe)
     freqs, shares = mode_shares(K, M, out)
     q1 = probe.quality_factor if probe.quality_factor is not None else probe.quality_factor_2

@@ -93,6 +93,13 @@ _DIMENSION = {"N/m": "stiffness", "m/V": "sensitivity", "m/s": "velocity", "Hz":
               "m": "length"}
 
 
+def _same(a, b) -> bool:
+    """Whether two parsed metadata values are the same (numbers to rounding: ``0.3`` and ``300mN/m``)."""
+    if isinstance(a, (int, float)) and isinstance(b, (int, float)):
+        return math.isclose(a, b, rel_tol=1e-9)
+    return a == b
+
+
 def parse_meta_args(items) -> dict[str, Any]:
     """``["sample_rate=6kHz", "instrument=MFP-3D"]`` (the command line's ``KEY=VALUE`` items) -> SI metadata.
 
@@ -111,7 +118,11 @@ def parse_meta_args(items) -> dict[str, Any]:
             raise ParameterError(f"`meta_override` {key}: unknown metadata key; known keys: "
                                  f"{', '.join(sorted(METADATA))}")
         dim = _DIMENSION.get(METADATA[key].unit)
-        out[key] = parse_value(value.strip(), dim, f"`meta_override` {key}") if dim else value.strip()
+        parsed = parse_value(value.strip(), dim, f"`meta_override` {key}") if dim else value.strip()
+        if key in out and not _same(out[key], parsed):       # which one was meant: never the last silently
+            raise ParameterError(f"`meta_override` {key} given twice with different values ({out[key]!r} and "
+                                 f"{parsed!r} [SI]); give it once")
+        out[key] = parsed
         if key in QUANTITIES:   # the same range as the quantity's own flag or field and the records
             QUANTITIES[key].check(out[key], key, f"`meta_override` {key}", typed=value.strip())
     return check_meta_override(out)

@@ -22,7 +22,31 @@ from typing import Any, Callable, Hashable, Iterable, Iterator
 from .._cores import available_cores
 from ..errors import ParameterError
 
-__all__ = ["Outcome", "SerialExecutor", "DaskExecutor", "make_executor", "available_cores", "check_scheduler"]
+__all__ = ["Outcome", "SerialExecutor", "DaskExecutor", "make_executor", "available_cores", "check_scheduler",
+           "check_workers", "WORKERS_PER_CORE"]
+
+#: The most worker processes a local cluster may start per core this process may use: more only
+#: share the same cores while each holds its own interpreter and kernels in memory.
+WORKERS_PER_CORE = 4
+
+
+def check_workers(workers) -> int | None:
+    """``workers`` (a local cluster's process count) as an int, or :class:`ParameterError`: below 1,
+    or more than :data:`WORKERS_PER_CORE` per available core (``--workers 1000`` on 2 cores started
+    1000 processes)."""
+    if workers is None:
+        return None
+    if isinstance(workers, bool) or not float(workers).is_integer():
+        raise ParameterError(f"`workers` must be a whole number, got {workers!r}")
+    n, cores = int(workers), available_cores()
+    if n < 1:
+        raise ParameterError(f"`workers` must be at least 1, got {workers}")
+    most = WORKERS_PER_CORE * cores
+    if n > most:
+        raise ParameterError(f"`workers` = {n} is more than {most} ({WORKERS_PER_CORE} per core; this process may use "
+                             f"{cores}): each worker is a process with its own memory, and more only share the "
+                             f"same cores; give at most {most}")
+    return n
 
 
 @dataclass(frozen=True)
@@ -112,8 +136,7 @@ class DaskExecutor:
 
     def __init__(self, workers: int | None = None, scheduler: str | None = None, client=None,
                  window: int | None = None, warmup: Callable[[], Any] | None = None) -> None:
-        if workers is not None and int(workers) < 1:
-            raise ParameterError(f"`workers` must be at least 1, got {workers}")
+        workers = check_workers(workers)
         if client is not None and scheduler is not None:
             raise ParameterError("give a scheduler address or a client, not both")
         if scheduler is not None:

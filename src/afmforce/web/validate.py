@@ -203,6 +203,10 @@ def metadata(items: Any, field: str = "meta") -> dict[str, Any]:
             if spec is not None and isinstance(value, (int, float)) and not isinstance(value, bool):
                 number(value, spec, key, where)
         out.update(parsed)
+    try:                # a key given twice with different values: which one was meant, never the last silently
+        parse_meta_args(_strings(items, field))
+    except ParameterError as exc:
+        raise FieldError(field, str(exc).replace("`meta_override`", field)) from None
     return out
 
 
