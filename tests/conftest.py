@@ -3,6 +3,24 @@ so tests import the shared helper :mod:`realdata`."""
 
 import os
 
+import pytest
+
+# The README's test command (and .ci/run) is `pytest -n auto`: pytest-xdist runs the suite in one
+# worker process per usable core, each file on one worker (`--dist loadfile`, pyproject.toml: a
+# file's module fixtures are built once). "auto" here is the cores this process may run on (not
+# xdist's default, psutil's *physical* cores: a 2-vCPU machine may report 1), and no worker at all
+# on a single core (the tests run in this process, as a plain `pytest`); PYTEST_XDIST_AUTO_NUM_WORKERS
+# still overrides. A plain `pytest tests/x.py` starts no worker.
+@pytest.hookimpl(optionalhook=True)             # a hook of pytest-xdist (the test extra)
+def pytest_xdist_auto_num_workers(config):
+    if os.environ.get("PYTEST_XDIST_AUTO_NUM_WORKERS"):
+        return None                                         # xdist's own hook reads it
+    try:
+        cores = len(os.sched_getaffinity(0))
+    except AttributeError:                                  # pragma: no cover - not Linux
+        cores = os.cpu_count() or 1
+    return cores if cores >= 2 else 0
+
 # The first `afmforce analyze` after an install runs its kernels as Python and starts a background
 # warmup (afmforce.cli._firstrun): a test run is not a user's first run. Commands the tests start
 # compile as before, so no test's stderr depends on which test ran first, and no detached warmup
@@ -26,6 +44,7 @@ def pytest_collection_modifyitems(session, config, items):
     import sys
 
     if (len(items) < WARMUP_MIN_TESTS or os.environ.get("AFMFORCE_TEST_WARMUP", "0") != "1"
+            or os.environ.get("PYTEST_XDIST_WORKER")         # `-n`: every core runs tests already
             or (os.cpu_count() or 1) < 2 or getattr(config, "_afmforce_warmup", None) is not None):
         return
     env = {k: v for k, v in os.environ.items() if k != "NUMBA_DISABLE_JIT"}
