@@ -8,6 +8,13 @@ from ._numeric import robust_line
 from .state import State
 
 
+def line_slope(x: np.ndarray, y: np.ndarray) -> float:
+    """Least-squares slope of ``y`` against ``x`` [unit of y / unit of x] (NaN when ``x`` does not move)."""
+    xc = x - x.mean()
+    den = float(np.dot(xc, xc))
+    return float(np.dot(xc, y - y.mean())) / den if den > 0.0 else float("nan")
+
+
 def _kind(st: State) -> str:
     """``"hard"``, ``"soft"`` (or ``"hard"`` when the kind step did not run)."""
     k = st.details.get("kind")

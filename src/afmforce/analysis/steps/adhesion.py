@@ -9,7 +9,7 @@ import math
 
 import numpy as np
 
-from .._step_helpers import _kind
+from .._step_helpers import _kind, line_slope
 from ..options import AdhesionOptions
 from ..registry import AnalysisStep, ResultField
 from ..state import State
@@ -23,12 +23,6 @@ __all__ = ["adhesion_step", "ADHESION"]
 ATTACHED_SLOPE_RATIO = 0.5
 #: ... its last tenth lying this many deflection noise sigmas below zero force [-].
 ATTACHED_SIGMAS = 10.0
-
-
-def _slope(x: np.ndarray, y: np.ndarray) -> float:
-    xc = x - x.mean()
-    den = float(np.dot(xc, xc))
-    return float(np.dot(xc, y - y.mean())) / den if den > 0.0 else math.nan
 
 
 def attached_at_end(st: State) -> str | None:
@@ -52,7 +46,7 @@ def attached_at_end(st: State) -> str | None:
         return None
     z, s = st.z, np.asarray(st.curve.deflection_signal, float)
     tail = ret.index[-max(5, ret.index.size // 10):]
-    line, end = _slope(z[comp], s[comp]), _slope(z[tail], s[tail])
+    line, end = line_slope(z[comp], s[comp]), line_slope(z[tail], s[tail])
     zt, st_ = z[tail], s[tail]   # the tail's line at its last sample: the pull where the record stops
     level = float(st_.mean() + end * (zt[-1] - zt.mean()) - np.median(s[base]))
     if not (line != 0.0 and end / line >= ATTACHED_SLOPE_RATIO and level * math.copysign(1.0, line)

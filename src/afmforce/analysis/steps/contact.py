@@ -13,6 +13,7 @@ from ...errors import AnalysisError
 from ..options import ContactOptions
 from ..regions import check_compliance, find_run_regions, run_indices, saturated_mask
 from ..registry import AnalysisStep
+from .._step_helpers import line_slope
 from ..state import ContactSummary, NoContact, State
 
 __all__ = ["retract_dip", "contact", "CONTACT"]
@@ -47,13 +48,6 @@ NO_BASELINE_RATIO = 0.75
 NO_BASELINE_SIGMAS = 20.0
 
 
-def _line_slope(z: np.ndarray, s: np.ndarray) -> float:
-    """Least-squares slope of ``s`` against ``z`` (NaN when ``z`` does not move)."""
-    zc = z - z.mean()
-    den = float(np.dot(zc, zc))
-    return float(np.dot(zc, s - s.mean())) / den if den > 0.0 else math.nan
-
-
 def free_baseline_ratio(z: np.ndarray, signal: np.ndarray, run) -> tuple[float, float]:
     """The slope of a run's zero-force region over its contact region's [-], and the baseline's climb over
     its positions in noise sigmas [-] (NaN when either region has fewer than 3 samples)."""
@@ -62,7 +56,7 @@ def free_baseline_ratio(z: np.ndarray, signal: np.ndarray, run) -> tuple[float, 
     base, touch = run.zero_force, run.contact
     if base.sum() < 3 or touch.sum() < 3:
         return math.nan, math.nan
-    sb, sc = _line_slope(zz[base], ss[base]), _line_slope(zz[touch], ss[touch])
+    sb, sc = line_slope(zz[base], ss[base]), line_slope(zz[touch], ss[touch])
     climb = abs(sb) * float(np.ptp(zz[base])) / run.noise if run.noise > 0 else math.inf
     return sb / sc if sc != 0 else math.nan, climb
 
