@@ -65,18 +65,21 @@ def median_step(t, index):
 
 
 @njit(cache=True)
-def _running_median_nearest(p, width):
-    """``scipy.ndimage.median_filter(p, size=width, mode="nearest")`` for odd ``width``: a sorted
-    window slid along the edge-extended series (the median is one of the samples: the same number)."""
+def _running_median_nearest(p, width, start=0):
+    """``scipy.ndimage.median_filter(p, size=width, mode="nearest")[start:]`` for odd ``width``: a
+    sorted window slid along the edge-extended series (the median is one of the samples: the same
+    number), O(width) per sample at worst."""
     m = p.size
     h = width // 2
+    out = np.empty(max(m - start, 0))
+    if start >= m:
+        return out
     buf = np.empty(width)
     for j in range(width):
-        buf[j] = p[min(max(j - h, 0), m - 1)]
+        buf[j] = p[min(max(start + j - h, 0), m - 1)]
     buf.sort()
-    out = np.empty(m)
     out[0] = buf[h]
-    for i in range(1, m):
+    for i in range(start + 1, m):
         old = p[min(max(i - 1 - h, 0), m - 1)]
         new = p[min(max(i + h, 0), m - 1)]
         if old != new:
@@ -97,7 +100,7 @@ def _running_median_nearest(p, width):
                     buf[k] = buf[k - 1]
                     k -= 1
             buf[k] = new
-        out[i] = buf[h]
+        out[i - start] = buf[h]
     return out
 
 
