@@ -26,9 +26,9 @@ __all__ = ["adhesion_core", "running_median_nearest"]
 @njit(cache=True, nogil=True)
 def running_median_nearest(u: np.ndarray, w: int, start: int) -> np.ndarray:
     """``scipy.ndimage.median_filter(u, size=w, mode="nearest")[start:]`` for an odd ``w``: the
-    median of the ``w`` samples centred on each (the ends repeated), from ``start`` on; the sorted
-    window of :func:`~._oscillation_kernel._running_median_nearest` (O(w) per sample at worst: the
-    window grows with the run, a window re-sorted per sample made long curves cubic)."""
+    median of the ``w`` samples centred on each (the ends repeated), from ``start`` on; it is
+    :func:`~._oscillation_kernel._running_median_nearest` (O(log n) per sample: the window grows
+    with the run, a window re-sorted per sample made long curves cubic)."""
     return _running_median_nearest(u, w, start)
 
 
