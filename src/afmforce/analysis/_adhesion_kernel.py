@@ -18,6 +18,7 @@ from numba import njit
 
 from ._glue_kernel import BRACKET, middle_bracket
 from ._numeric import mad_sigma
+from ._oscillation_kernel import _running_median_nearest
 
 __all__ = ["adhesion_core", "running_median_nearest"]
 
@@ -25,22 +26,10 @@ __all__ = ["adhesion_core", "running_median_nearest"]
 @njit(cache=True, nogil=True)
 def running_median_nearest(u: np.ndarray, w: int, start: int) -> np.ndarray:
     """``scipy.ndimage.median_filter(u, size=w, mode="nearest")[start:]`` for an odd ``w``: the
-    median of the ``w`` samples centred on each (the ends repeated), from ``start`` on."""
-    n = u.size
-    h = w // 2
-    out = np.empty(max(n - start, 0))
-    buf = np.empty(w)
-    for i in range(start, n):
-        for q in range(w):  # the window, sorted by insertion (w is a few samples)
-            k = min(max(i - h + q, 0), n - 1)
-            v = u[k]
-            p = q
-            while p > 0 and buf[p - 1] > v:
-                buf[p] = buf[p - 1]
-                p -= 1
-            buf[p] = v
-        out[i - start] = buf[h]
-    return out
+    median of the ``w`` samples centred on each (the ends repeated), from ``start`` on; it is
+    :func:`~._oscillation_kernel._running_median_nearest` (O(log n) per sample: the window grows
+    with the run, a window re-sorted per sample made long curves cubic)."""
+    return _running_median_nearest(u, w, start)
 
 
 @njit(cache=True, nogil=True)

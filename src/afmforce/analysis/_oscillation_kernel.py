@@ -65,39 +65,51 @@ def median_step(t, index):
 
 
 @njit(cache=True)
-def _running_median_nearest(p, width):
-    """``scipy.ndimage.median_filter(p, size=width, mode="nearest")`` for odd ``width``: a sorted
-    window slid along the edge-extended series (the median is one of the samples: the same number)."""
+def _running_median_nearest(p, width, start=0):
+    """``scipy.ndimage.median_filter(p, size=width, mode="nearest")[start:]`` for odd ``width``: the
+    window's samples counted by rank in a Fenwick tree, the median found as the middle rank (the
+    median is one of the samples: the same number), O(log n) per sample whatever the width."""
     m = p.size
     h = width // 2
-    buf = np.empty(width)
+    out = np.empty(max(m - start, 0))
+    if start >= m:
+        return out
+    s0 = max(start - h, 0)  # every sample the windows touch lies in p[s0:]
+    q = p[s0:]
+    nq = q.size
+    order = np.argsort(q)
+    sv = q[order]
+    rank = np.empty(nq, np.int64)
+    for r in range(nq):
+        rank[order[r]] = r
+    tree = np.zeros(nq + 1, np.int64)
+    top = 1
+    while top * 2 <= nq:
+        top *= 2
     for j in range(width):
-        buf[j] = p[min(max(j - h, 0), m - 1)]
-    buf.sort()
-    out = np.empty(m)
-    out[0] = buf[h]
-    for i in range(1, m):
-        old = p[min(max(i - 1 - h, 0), m - 1)]
-        new = p[min(max(i + h, 0), m - 1)]
-        if old != new:
-            lo, hi = 0, width  # remove one copy of old (present: it entered the window before)
-            while lo < hi:
-                mid = (lo + hi) // 2
-                if buf[mid] < old:
-                    lo = mid + 1
-                else:
-                    hi = mid
-            k = lo
-            if new >= old:  # shift the elements between down, insert new in order
-                while k + 1 < width and buf[k + 1] < new:
-                    buf[k] = buf[k + 1]
-                    k += 1
-            else:
-                while k > 0 and buf[k - 1] > new:
-                    buf[k] = buf[k - 1]
-                    k -= 1
-            buf[k] = new
-        out[i] = buf[h]
+        i = rank[min(max(start + j - h, 0), m - 1) - s0] + 1
+        while i <= nq:
+            tree[i] += 1
+            i += i & -i
+    for c in range(start, m):
+        if c > start:  # slide: one sample leaves, one enters (ends repeated)
+            i = rank[min(max(c - 1 - h, 0), m - 1) - s0] + 1
+            while i <= nq:
+                tree[i] -= 1
+                i += i & -i
+            i = rank[min(c + h, m - 1) - s0] + 1
+            while i <= nq:
+                tree[i] += 1
+                i += i & -i
+        pos = 0  # the (h + 1)-th smallest in the window
+        k = h + 1
+        step = top
+        while step > 0:
+            if pos + step <= nq and tree[pos + step] < k:
+                pos += step
+                k -= tree[pos]
+            step //= 2
+        out[c - start] = sv[pos]
     return out
 
 

@@ -25,6 +25,9 @@ from ..io.curve import RawCurve
 __all__ = ["static_separation", "static_curve"]
 
 
+_ROWS = 256  # substrate positions per block of the root-bracketing grid (~6 MB of float64 each)
+
+
 def _bisect(g, lo, hi, n_iter=80):
     glo = g(lo)
     for _ in range(n_iter):
@@ -51,20 +54,26 @@ def static_separation(z: np.ndarray, segment: np.ndarray, *, spring_constant: fl
     def g_of(h, zz):
         return forces.vdw_force(h, 1.0, hamaker=ar, z0=z0) - k * (h + zz)
 
-    G = g_of(grid[None, :], z[:, None])
-    change = np.signbit(G[:, :-1]) != np.signbit(G[:, 1:])
-    has_free = (change & (grid[None, 1:] > h_peak)).any(axis=1)
-    has_contact = (change & (grid[None, :-1] < h_peak)).any(axis=1)
-    last = change.shape[1] - 1 - np.argmax(change[:, ::-1], axis=1)  # largest root's bracket
-    first = np.argmax(change, axis=1)  # smallest root's bracket
-    on_contact = np.zeros(z.size, bool)
+    has_free = np.empty(z.size, bool)
+    has_contact = np.empty(z.size, bool)
+    last = np.empty(z.size, np.intp)  # largest root's bracket
+    first = np.empty(z.size, np.intp)  # smallest root's bracket
+    free_cols, contact_cols = grid[None, 1:] > h_peak, grid[None, :-1] < h_peak
+    for a in range(0, z.size, _ROWS):  # row blocks: memory O(_ROWS x grid), not O(n x grid)
+        b = min(a + _ROWS, z.size)
+        G = g_of(grid[None, :], z[a:b, None])
+        change = np.signbit(G[:, :-1]) != np.signbit(G[:, 1:])
+        has_free[a:b] = (change & free_cols).any(axis=1)
+        has_contact[a:b] = (change & contact_cols).any(axis=1)
+        last[a:b] = change.shape[1] - 1 - np.argmax(change[:, ::-1], axis=1)
+        first[a:b] = np.argmax(change, axis=1)
+    on_contact = []
     state = False
-    for i in range(z.size):  # follow the branch: jumps only when the branch ends
-        if segment[i] == 0:
-            state = state or not has_free[i]
-        else:
-            state = state and has_contact[i]
-        on_contact[i] = state
+    for approach, free, contact in zip((np.asarray(segment) == 0).tolist(), has_free.tolist(),
+                                       has_contact.tolist()):  # follow the branch: jumps only when it ends
+        state = (state or not free) if approach else (state and contact)
+        on_contact.append(state)
+    on_contact = np.array(on_contact, bool)
     j = np.where(on_contact, first, last)
     return _bisect(lambda h: g_of(h, z), grid[j], grid[j + 1])
 
