@@ -101,8 +101,9 @@ def kind(st: State, o: KindOptions) -> State:
 SURFACE_FORCE_CONTACT = (
     "no jump into contact; the contact region curves (slope ratio late/early {curvature:.3g}) only because a "
     "repulsive surface force rises before a straight contact line: the rise grows exponentially with the "
-    "separation (decay length {decay:.3g} nm, a double layer's, not a power of an indentation), so it is a force "
-    "before contact, not a soft sample the tip indents; the contact is the straight line's")
+    "separation (decay length {decay:.3g} nm: a double layer, hydration or steric force; an indentation grows as "
+    "a power), so it is a force before contact, not a soft sample the tip indents; the contact is the straight "
+    "line's")
 
 
 def _surface_force_before_line(st: State, noise: float, max_curvature: float) -> float | None:
