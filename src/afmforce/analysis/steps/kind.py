@@ -9,9 +9,12 @@ import dataclasses
 import math
 
 from ...errors import AnalysisError
-from ..contact_point import CONTACT_POINT_METHODS, classify_contact, curvature_ratio
+import numpy as np
+
+from ..contact_point import CONTACT_POINT_METHODS, ContactKind, classify_contact, curvature_ratio
 from ..jumps import BARRIER_KEEPS, find_jump_in
 from ..options import KindOptions
+from ..regions import SURFACE_MIN_NSIGMA, _surface_force_like
 from ..registry import AnalysisStep, ResultField
 from ..state import State
 
@@ -49,6 +52,11 @@ def kind(st: State, o: KindOptions) -> State:
     curv = curvature_ratio(st.z, st.deflection, contact_idx)
     res = classify_contact(jump_significance=sig, stiffness_ratio=stiff, curvature=curv, nsigma=nsigma,
                            min_stiffness=o.min_stiffness, max_curvature=o.max_curvature)
+    if res.kind == "soft" and not (math.isfinite(stiff) and stiff < o.min_stiffness):  # curved, not shallow
+        decay = _surface_force_before_line(st, noise, o.max_curvature)
+        if decay is not None:
+            res = ContactKind("hard", SURFACE_FORCE_CONTACT.format(curvature=curv, decay=decay * 1e9),
+                              sig, stiff, curv)
     new = st.update("kind", res)
     if res.kind == "hard":
         new = _recalibrate_hard(new, cal, curv, o.max_curvature)
@@ -86,6 +94,55 @@ def kind(st: State, o: KindOptions) -> State:
             warn = [warn, NEGATIVE_INDENTATION.format(rise=(cp.indentation * -1e9))]
         new = new.update("contact_point", cp, warn=warn)
     return new
+
+
+#: A contact region curved only because a long-range repulsive surface force lifts the approach before a straight
+#: contact line (a double layer in water: the two lines' split falls within its last decay lengths).
+SURFACE_FORCE_CONTACT = (
+    "no jump into contact; the contact region curves (slope ratio late/early {curvature:.3g}) only because a "
+    "repulsive surface force rises before a straight contact line: the rise grows exponentially with the "
+    "separation (decay length {decay:.3g} nm: a double layer, hydration or steric force; an indentation grows as "
+    "a power), so it is a force before contact, not a soft sample the tip indents; the contact is the straight "
+    "line's")
+
+
+def _surface_force_before_line(st: State, noise: float, max_curvature: float) -> float | None:
+    """Decay length [m] of a repulsive surface force rising before the approach's straight contact line, or
+    None when the rise before that line has a contact's shape (a power of the indentation), or no line.
+
+    The approach's compliance samples (the top of its contact region) must form a straight line; the
+    samples before them in time, less the baseline line through the zero-force samples, must grow like a
+    surface force of the separation (taken as the position less that rise: the deflection widens the gap) (:func:`afmforce.analysis.regions._surface_force_like`: the logarithmic
+    slope does not fall towards the line, a decay length in its range). A Hertz onset's logarithmic slope
+    falls as ``1.5 / delta``; an exponential's (a double layer, hydration, steric) stays ``1 / lambda``.
+    """
+    app = st.approach
+    ok = ~app.saturated
+    comp = app.index[app.compliance & ok]
+    base = app.index[app.zero_force & ok]
+    if comp.size < 3 or base.size < 3 or not noise > 0:
+        return None
+    line_curv = curvature_ratio(st.z, st.deflection, comp, min_points=12)
+    if math.isfinite(line_curv) and not 1 / max_curvature <= line_curv <= max_curvature:
+        return None
+    first = comp.min()
+    before = app.index[ok & (app.index < first) & ~app.zero_force]
+    if before.size < 6:
+        return None
+    z, d = st.z, st.deflection
+    zb = z[base] - z[base].mean()
+    b, a = np.polyfit(zb, d[base], 1)
+    rise = d[before] - (a + b * (z[before] - z[base].mean()))
+    toward = 1.0 if z[comp].mean() > z[before].mean() else -1.0
+    # the separation's change, less a constant: the position less the deflection (which widens the gap; a stiff
+    # force gradient near the line would otherwise bend an exponential of the separation in the position)
+    x = z[before] - toward * rise
+    x_line = float(x.max() if toward > 0 else x.min())  # the side of the line (the test takes its direction)
+    if not _surface_force_like(x, rise, x_line, noise):
+        return None
+    up = rise > SURFACE_MIN_NSIGMA * noise
+    slope = np.polyfit(x[up], np.log(rise[up]), 1)[0]
+    return float(1.0 / abs(slope))
 
 
 #: A soft contact whose deflection rises more than its position travels after the contact point (the
