@@ -134,8 +134,9 @@ def test_errors_are_afmforce_errors():
                                   "corpus/asylum-ibw_ForceMetric_X60_3_x4_0146.ibw"])
 def test_inverted_deflection_sign_is_refused(name):
     """A deflection stored with the other sign (falling as the tip presses on the sample) would give a
-    soft result with a wrong adhesion: a warning saying what to do (not a refusal: an approach that
-    stops before contact, held by an attraction, looks the same; tests/fit/test_fit_bad_input.py). The
+    soft result with a wrong adhesion: prepare warns (not a refusal: an approach that stops before
+    contact, held by an attraction, looks the same; tests/fit/test_fit_bad_input.py), and the analysis,
+    whose compliance line then falls, negates the signal and analyses it again. The
     intact curves get none, among them one whose approach ends below its baseline without the rise (the
     0146 corpus curve); its negated copy rises as a pressed lever does, so it gets none either."""
     curve = load(DATA / name)[0]
@@ -146,4 +147,10 @@ def test_inverted_deflection_sign_is_refused(name):
         assert not said(prepare(negated))
         return
     assert said(prepare(negated))
-    assert any("negate the deflection signal" in w for w in analyze(negated).warnings)
+    # the analysis orients it (its compliance line falls: tests/analysis/test_inverted_sign.py): the
+    # numbers of the file as read, a positive sensitivity from the slope, and a note saying so
+    res, ref = analyze(negated), analyze(curve)
+    assert any("sign is inverted" in w and "negated" in w for w in res.warnings)
+    assert res.sensitivity_fit == pytest.approx(ref.sensitivity_fit, rel=1e-9) and res.sensitivity_fit > 0
+    assert res.contact_kind == ref.contact_kind
+    assert res.adhesion_force == pytest.approx(ref.adhesion_force, rel=1e-9, nan_ok=True)

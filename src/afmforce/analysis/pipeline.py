@@ -39,7 +39,7 @@ from ..errors import ParameterError
 from ..io.curve import RawCurve
 from ..io.deflection import signal_factor
 
-__all__ = ["Step", "AnalysisStep", "ResultField", "register_step", "STEPS", "DEFAULT_STEPS", "analyze",
+__all__ = ["Step", "AnalysisStep", "ResultField", "register_step", "STEPS", "DEFAULT_STEPS", "analyze", "inverted_sign",
            "resolve_steps", "resolve_options", "steps_table", "AnalysisResult"]
 
 #: The record of one step (the name it had before the registry moved to :mod:`.registry`).
@@ -173,11 +173,19 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
                              "options=[...]")
     order = resolve_steps(steps)
     opts, probe = resolve_options(options, probe)
+    return _analyze(curve, order, opts, probe, channel, memo)
+
+
+def _analyze(curve: RawCurve, order: list[str], opts, probe, channel: str, memo: MutableMapping | None,
+             negated: str = "") -> AnalysisResult:
+    """:func:`analyze` of resolved steps and options; ``negated`` is the note of a curve whose deflection
+    signal was negated because its compliance line fell (:func:`inverted_sign`), analysed once more."""
     known = registry.steps()
+    given = curve
     curve, reordered = orient(curve, channel)   # one cycle, each run in acquisition order, labelled right
     st = prepare(curve, channel, probe)
-    if reordered:
-        st = st.update(warnings=reordered + st.warnings)
+    if reordered or negated:
+        st = st.update(warnings=((negated,) if negated else ()) + reordered + st.warnings)
     misread = beyond_detector(curve)
     if misread:  # no photodiode gives this signal: every number from it would be impossible
         return _refused(st, tuple(order), misread)
@@ -199,6 +207,11 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
             st = known[name].run(st, opts[name])
         except NoContact as exc:  # a curve that never touches: contact kind "none", not a failure
             return _no_contact(st, tuple(order), str(exc))
+        if name == "calibration" and not negated:
+            why = inverted_sign(st)
+            if why:  # oriented first, then every step sees a lever that bends away from the sample
+                flipped = dataclasses.replace(given, deflection_signal=-np.asarray(given.deflection_signal))
+                return _analyze(flipped, order, opts, probe, channel, None, negated=why)
         if key is not None and i == head - 1:
             memo[key] = (arrays, st)
     if missing:  # said once, where every output shows it (the steps' own reasons are in not_applicable)
@@ -208,6 +221,29 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
             st = st.update(warn=f"the curve holds the {'retract' if missing == 'approach' else 'approach'} run only: "
                                 f"{why}: {', '.join(gone)}")
     return _result(st, tuple(order), known)
+
+
+def inverted_sign(st: State) -> str | None:
+    """Why the deflection signal's sign is inverted, read off the compliance line the calibration used
+    (None when it rises, as it does on every contact).
+
+    Pressed on the sample, a lever bends away from it: on its compliance (or indentation) line the
+    deflection rises as the position advances, in every unit (volts, metres, newtons). A line that falls
+    says the signal was stored with the other sign convention; its slope would calibrate a negative
+    sensitivity, which no detector has. The curve is then negated and analysed again (:func:`analyze`),
+    the note saying so, so that the sensitivity, the forces and the contact come out as for the curve
+    stored the usual way."""
+    cal = st.details.get("calibration")
+    slope = getattr(cal, "compliance_slope", math.nan)
+    if not (math.isfinite(slope) and slope < 0.0):
+        return None
+    what = (f"a sensitivity of {-1e9 / slope:.4g} nm/V once negated" if st.unit == "V"
+            else "the forces of the curve stored the usual way once negated")
+    return (f"the deflection signal's sign is inverted: on its compliance line it falls as the position presses "
+            f"the tip on the sample ({slope:.4g} {st.unit}/m), which no lever in contact does (it bends away "
+            f"from the sample); a calibration from that slope would be a negative sensitivity. The signal was "
+            f"negated (the deflection away from the sample positive, as the readers give it) and analysed: "
+            f"{what}")
 
 
 def _memo_key(curve: RawCurve, channel: str, names, opts) -> tuple[tuple, tuple]:
