@@ -204,6 +204,9 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     inverted = _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
     if inverted:
         notes.append(inverted)
+    k_note = curve.metadata.get("spring_constant_note")   # a header with several spring constants (the reader's)
+    if k_note and probe.spring_constant is None:
+        notes.append(str(k_note))
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
     if processed:
         notes.insert(0, f"read as a processed export: {processed}")

@@ -171,6 +171,32 @@ def _channel_name(entries: dict[str, str]) -> str:
 
 
 
+def _other_spring_constants(sections, used: dict[str, str], k: float) -> str | None:
+    r"""What the analysis says when the header's lists hold other spring constants than the deflection
+    channel's (``k`` [N/m], from ``used``): each list has its own ``\Spring Constant``, typed when it was
+    captured or changed later offline (NanoScope Analysis keeps one per channel; Bruker's own toolbox,
+    PyPI ``nanoscope``, gives a file's as channel 0's, the first list). None when all agree."""
+    others = []
+    for name, entries in sections:
+        text = entries.get("Spring Constant")
+        if entries is used or text is None or not re.search(_NUMBER, text):
+            continue
+        value = float(re.search(_NUMBER, text).group(0))
+        if math.isfinite(value) and abs(value - k) > 1e-6 * abs(k):
+            what = _channel_name(entries) if name.lower() == "ciao force image list" else ""
+            where_ = f"the {what} list" if what else f"the {name}"
+            if entries.get("Data offset"):
+                where_ += f" at byte {entries['Data offset'].strip()}"
+            others.append(f"{value:.6g} N/m in {where_}")
+    if not others:
+        return None
+    read = f"the {_channel_name(used)} list" + (f" at byte {used['Data offset'].strip()}" if used.get("Data offset")
+                                                else "")
+    return (f"the header holds {len(others) + 1} spring constants: {k:.6g} N/m in {read} (the deflection "
+            f"channel read, used) and {', '.join(others)}; each list keeps the value typed when it was captured "
+            f"or changed offline: give `spring_constant` if the lever's calibrated value is another")
+
+
 #: The ADC's range in the units of a channel's ``V/LSB`` (16-bit signed numbers).
 ADC_COUNTS = 2**15
 
@@ -385,6 +411,9 @@ class NanoscopeFile:
         k = _find([("", defl)], "Spring Constant") or _find(sections, "Spring Constant")  # the deflection's list
         if k is not None:  # as stated: finalize_curve refuses an impossible one (<= 0), as every reader does
             meta["spring_constant"] = _number(k, where, "Spring Constant")
+            note = _other_spring_constants(sections, defl, meta["spring_constant"])
+            if note:
+                meta["spring_constant_note"] = note
         sens = _sens(sections, "DeflSens") or _sens(sections, "Deflection")
         if sens is not None and sens[0] > 0:
             meta["sensitivity"] = sens[0] * 1e-9  # [nm/V]
