@@ -36,6 +36,9 @@ def test_static_scan(plan):
     errs = [s["error"] for s in plan.static_scan]
     assert all(s["force_static"] == pytest.approx(f_static) for s in plan.static_scan)
     assert errs[-1] > errs[0]          # friction x speed lowers the apparent attraction
+    # friction holds the tilt back: its minimum lies before contact, so no note on the fall (test_plan_fall.py)
+    assert not any(s["minimum_at_contact"] for s in plan.static_scan)
+    assert not any("fall from the instability" in n for n in plan.notes)
     ok = [s["speed"] for s in plan.static_scan if s["error"] <= plan.force_error]
     assert (max(ok) if ok else math.nan) == plan.fastest_static_speed or not ok
 
