@@ -88,7 +88,8 @@ def test_modulus_agrees_with_nanite_and_scales_with_k():
     assert e_nanite == pytest.approx(1.935e9, rel=0.01)
     curve = load(FILE)[0]
     res = analyze(curve)
-    assert res.indentation_model == "hertz_paraboloid" and res.details["indentation"].tip_radius == pytest.approx(100e-9, rel=1e-12)
+    assert res.indentation_model == "hertz_paraboloid"
+    assert res.details["indentation"].tip_radius == pytest.approx(100e-9, rel=1e-12)     # the header's
     assert res.youngs_modulus == pytest.approx(e_nanite, rel=0.05)
     other = analyze(curve, probe=ProbeCalibration(spring_constant=13.8772))
     assert other.youngs_modulus / res.youngs_modulus == pytest.approx(1.38772, rel=0.03)
