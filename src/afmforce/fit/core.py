@@ -313,6 +313,9 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     if lever == "model" and {"spring_constant", "k0"} & set(free):
         base = lever_from_files(base, fc, "file")   # a free k starts from the files' (issue 25)
     check_speeds(free, [c.velocity for c in fc])
+    nominal = [(c.metadata or {}).get("velocity") for c in fc]
+    if velocities is None and all(nominal):   # the files' set speeds: a map recorded at one speed is one
+        check_speeds(free, nominal)           # speed, whatever its measured speeds' scatter (a 1.26x outlier)
     undetermined = [] if any(c.retract_start is not None for c in fc) else need
     ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)
