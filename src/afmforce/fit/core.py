@@ -20,7 +20,8 @@ from .problem import Problem, local_fit
 from .search import _refit_all, _search
 from .result import CurveFit, Estimate, FitResult, contain_value, wald_interval
 
-__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT", "check_speeds"]
+__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT", "check_speeds",
+           "MAX_CURVES"]
 
 #: Above this viscosity [Pa s] the medium is a liquid (air 1.8e-5, hexane 3e-4, water 8.9e-4):
 #: drainage and double-layer forces then bend the approach like an indentation does, so a curve
@@ -37,6 +38,11 @@ FRINGE_AMPLITUDE_MAX = 3e-9
 #: lever drag (``lever_height`` 0) is an offset ``c v / k`` of the free approach, absorbed by
 #: each curve's baseline offset; the retract's offset has the opposite sign.
 NEEDS_RETRACT = ("lever_drag",)
+#: Curves one joint fit takes at most: the model is integrated for every curve at every step of
+#: the search, the profiles and the comparison, and each curve adds its own shift, offset and
+#: drift, so a force map's 100 curves would run for hours in a GB (the audit: past 15 minutes);
+#: the fit is for a few curves at several speeds (a map's pixels are analysed one by one).
+MAX_CURVES = 32
 
 
 def retract_follows(curve) -> bool:
@@ -296,6 +302,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     if sampling is not None:
         base = base.replace(sampling=sampling)
     free = check_free(free, base.model, base.friction.law if base.model == "beam" else None)
+    if len(curves) > MAX_CURVES:
+        raise ParameterError(
+            f"a joint fit of {len(curves)} curves: the dynamic fit takes at most {MAX_CURVES} (the model is "
+            "integrated for every curve at every step; a force map's curves would take hours): give a few "
+            "curves at several speeds, and analyse a map's curves one by one with `afmforce analyze` (its vdw "
+            "step fits each curve's A R)")
     need = [n for n in free if n in NEEDS_RETRACT]
     if retract is None:
         retract = bool(need) and all(not isinstance(c, FitCurve) and retract_follows(c)
