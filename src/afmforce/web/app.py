@@ -112,7 +112,8 @@ def warm_up_steps() -> list[str]:
         try:
             step()
         except Exception as exc:       # noqa: BLE001 -- a warm-up only: logged, the server goes on
-            text = f"warm-up of {name} failed ({type(exc).__name__}: {exc}); serving on, the first request that needs it loads it"
+            text = (f"warm-up of {name} failed ({type(exc).__name__}: {exc}); serving on, the first "
+                    "request that needs it loads it")
             _LOG.warning(text)
             failed.append(text)
     return failed
