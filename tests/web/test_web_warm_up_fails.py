@@ -48,3 +48,17 @@ def test_the_server_serves_after_a_failed_warm_up(monkeypatch, caplog, make_clie
     assert health.status_code == 200 and health.json()["warm"] is True
     assert sum("warm-up of" in r.getMessage() for r in caplog.records) == 2
     assert client.get("/api/schema").status_code == 200 and client.get("/").status_code == 200
+
+
+def test_a_spare_job_process_whose_warm_up_fails_logs_it_and_waits_for_its_job(monkeypatch, caplog):
+    """The spare job process (``tasks.standby``) died of its warm-up's exception, a traceback on the
+    server's stderr; it now logs it and waits for its job (here: it leaves, its parent being gone)."""
+    import queue
+
+    from afmforce.web.tasks import standby
+
+    _broken(monkeypatch)
+    with caplog.at_level(logging.WARNING, logger="afmforce.web"):
+        assert standby(queue.Queue(), queue.Queue(), parent=-1, warm=True) is None
+    assert [r.getMessage() for r in caplog.records if r.name == "afmforce.web"] == [
+        "warm-up of a spare job process failed (RuntimeError: no compiled integrator here); it takes its job unwarmed"]
