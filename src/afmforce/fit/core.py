@@ -144,6 +144,35 @@ def lever_from_files(base, curves: list[FitCurve], lever: str = "file"):
     return base.replace(k0=base.cantilever.k0 * k_file / base.force_constant)
 
 
+def files_resonance(curves: list[FitCurve]) -> float | None:
+    """The curves' lever resonance [Hz]: their files' (a thermal tune's ``resonance_frequency``),
+    median over the curves; None where no file gives one."""
+    fs = [(c.metadata or {}).get("resonance_frequency") for c in curves]
+    fs = [float(f) for f in fs if isinstance(f, (int, float)) and math.isfinite(float(f)) and float(f) > 0]
+    return float(np.median(fs)) if fs else None
+
+
+def mass_from_files(base, curves: list[FitCurve], mass: str = "file"):
+    """The model's lever mass set so that its first free resonance is the files' (issue 34:
+    defaults right as typed; the model's default lever rings at 4-6 kHz for the beam, 0.7 kHz for
+    the spring, a real lever's thermal tune at 10-300 kHz, so its inertia was off by 10-10^4 x).
+
+    ``mass="file"``: the spring's ``mass`` becomes ``k / (2 pi f)^2``, the beam's ``m_joint`` and
+    ``m_base`` are scaled together by ``(f_model / f)^2`` (every mode of the beam scales as
+    ``1/sqrt(mass)``); ``"model"``: the masses as ``base`` has them (the user gave one). Curves
+    without a resonance leave ``base``.
+    """
+    f_file = files_resonance(curves)
+    if f_file is None or mass == "model":
+        return base
+    from ..dynamics.thermal import free_resonance
+
+    scale = (free_resonance(base.probe)[0] / f_file) ** 2
+    if base.model == "spring":
+        return base.replace(mass=base.probe.mass * scale)
+    return base.replace(m_joint=base.probe.m_joint * scale, m_base=base.probe.m_base * scale)
+
+
 def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
     JTJ = J.T @ J
     try:
@@ -185,7 +214,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 max_nfev: int = 40, sampling: str | None = "average",
                 retract: bool | None = None, noise: str = "auto", fringes: str | bool = "periodic",
                 fringe_period: float = DEFAULT_FRINGE_PERIOD, calibration: str = "auto",
-                lever: str = "file", progress=None) -> FitResult:
+                lever: str = "file", mass: str = "file", progress=None) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -273,6 +302,11 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         is scaled to give it (:func:`lever_from_files`); ``model``: the lever of ``model``
         as given (a spring constant in ``fixed`` counts as given too). Curves without a
         spring constant keep the model's.
+    mass : {"file", "model"}
+        ``file`` (default): the model lever's mass set so that its first free resonance is the
+        files' ``resonance_frequency`` (:func:`mass_from_files`); ``model``: the masses of
+        ``model`` as given (a mass in ``fixed`` or ``free`` counts as given too). Curves without
+        a resonance keep the model's.
 
     Returns
     -------
@@ -324,6 +358,11 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     base = lever_from_files(base, fc, lever)
     if lever == "model" and {"spring_constant", "k0"} & set(free):
         base = lever_from_files(base, fc, "file")   # a free k starts from the files' (issue 25)
+    if mass not in ("file", "model"):
+        raise ParameterError(f"mass must be 'file' or 'model', got {mass!r}")
+    if {"mass", "m_joint", "m_base"} & (set(fixed or {}) | set(free)):
+        mass = "model"                       # given (or fitted) by the caller
+    base = mass_from_files(base, fc, mass)   # after k: the files' resonance with the files' k
     check_speeds(free, [c.velocity for c in fc])
     nominal = [(c.metadata or {}).get("velocity") for c in fc]
     if velocities is None and all(nominal):   # the files' set speeds: a map recorded at one speed is one
