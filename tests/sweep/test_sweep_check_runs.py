@@ -50,4 +50,22 @@ def test_the_web_answers_422_naming_the_settings():
 
     with pytest.raises(FieldError) as err:
         sweep_spec(["velocity=1e-7:1e-6:2"], [], ["start=1um"])
-    assert err.value.field == "sets" and "no run of this sweep is a valid simulation" in str(err.value)
+    assert err.value.field == "sets[0]" and "no run of this sweep is a valid simulation" in str(err.value)
+
+
+@pytest.mark.parametrize("grid, ranges, sets, field, words", [
+    (["start=1um:2um:2"], [], [], "grid[0]", "change the grid of start"),
+    (["velocity=1e-7:1e-6:2"], ["start=1um:2um"], [], "ranges[0]", "change the range of start"),
+    (["velocity=1e-7:1e-6:2"], [], ["start=1um"], "sets[0]", "change the setting start"),
+    # each alone valid (start 0-1 nm below the default turn, turn above the default start), together never
+    (["start=0nm,1nm"], ["turn=-10nm:-5nm"], [], "grid[0], ranges[0]", "change the grid of start or the range of turn"),
+])
+def test_the_web_names_the_fields_that_cause_it(grid, ranges, sets, field, words):
+    """Before, the web named ``sets`` whatever made every run invalid (the grid or the ranges too)."""
+    pytest.importorskip("fastapi")
+    from afmforce.web.validate import FieldError, sweep_spec
+
+    with pytest.raises(FieldError) as err:
+        sweep_spec(grid, ranges, sets, **({"sample": "random", "n": 2} if ranges else {}))
+    assert err.value.field == field
+    assert str(err.value).startswith("no run of this sweep is a valid simulation") and str(err.value).endswith(words)

@@ -235,7 +235,10 @@ def run(args: argparse.Namespace) -> int:
                           calibration=args.calibration,
                           # the model's lever is the files' unless a flag gives one (issue 34)
                           lever="model" if any(getattr(args, n, None) is not None for n in
-                                               ("spring_constant", "k0", "B")) else "file")
+                                               ("spring_constant", "k0", "B")) else "file",
+                          # and its mass the files' resonance's unless a flag gives one
+                          mass="model" if any(getattr(args, n, None) is not None for n in
+                                              ("mass", "m_joint", "m_base")) else "file")
     d = res.to_dict()
     # how each curve was calibrated (the analysis's calibration: the file's, or the compliance slope)
     d["calibration"] = {c.name: c.metadata.get("calibration") for c in res._problem.ev.curves}

@@ -160,6 +160,18 @@ class Trajectory:
 
         return free_resonance(self.config.probe)[1]
 
+    @property
+    def lever_drag(self) -> float | None:
+        """Drag coefficient of the lever body (the surface's ``lever_drag``) [N s/m]; None without
+        one (in air)."""
+        return self.config.surface.lever_drag or None
+
+    @property
+    def lever_height(self) -> float | None:
+        """Lever height above the substrate at contact [m] (drag ``c H/(h + H)``); None: the drag is
+        constant, or there is none."""
+        return (self.config.surface.lever_height or None) if self.config.surface.lever_drag else None
+
     def columns(self) -> dict[str, np.ndarray]:
         """The sampled columns by name (see :data:`COLUMNS`)."""
         return {name: getattr(self, name) for name in COLUMNS}

@@ -20,7 +20,8 @@ from .problem import Problem, local_fit
 from .search import _refit_all, _search
 from .result import CurveFit, Estimate, FitResult, contain_value, wald_interval
 
-__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT", "check_speeds"]
+__all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT", "check_speeds",
+           "MAX_CURVES"]
 
 #: Above this viscosity [Pa s] the medium is a liquid (air 1.8e-5, hexane 3e-4, water 8.9e-4):
 #: drainage and double-layer forces then bend the approach like an indentation does, so a curve
@@ -37,6 +38,11 @@ FRINGE_AMPLITUDE_MAX = 3e-9
 #: lever drag (``lever_height`` 0) is an offset ``c v / k`` of the free approach, absorbed by
 #: each curve's baseline offset; the retract's offset has the opposite sign.
 NEEDS_RETRACT = ("lever_drag",)
+#: Curves one joint fit takes at most: the model is integrated for every curve at every step of
+#: the search, the profiles and the comparison, and each curve adds its own shift, offset and
+#: drift, so a force map's 100 curves would run for hours in a GB (the audit: past 15 minutes);
+#: the fit is for a few curves at several speeds (a map's pixels are analysed one by one).
+MAX_CURVES = 32
 
 
 def retract_follows(curve) -> bool:
@@ -138,6 +144,35 @@ def lever_from_files(base, curves: list[FitCurve], lever: str = "file"):
     return base.replace(k0=base.cantilever.k0 * k_file / base.force_constant)
 
 
+def files_resonance(curves: list[FitCurve]) -> float | None:
+    """The curves' lever resonance [Hz]: their files' (a thermal tune's ``resonance_frequency``),
+    median over the curves; None where no file gives one."""
+    fs = [(c.metadata or {}).get("resonance_frequency") for c in curves]
+    fs = [float(f) for f in fs if isinstance(f, (int, float)) and math.isfinite(float(f)) and float(f) > 0]
+    return float(np.median(fs)) if fs else None
+
+
+def mass_from_files(base, curves: list[FitCurve], mass: str = "file"):
+    """The model's lever mass set so that its first free resonance is the files' (issue 34:
+    defaults right as typed; the model's default lever rings at 4-6 kHz for the beam, 0.7 kHz for
+    the spring, a real lever's thermal tune at 10-300 kHz, so its inertia was off by 10-10^4 x).
+
+    ``mass="file"``: the spring's ``mass`` becomes ``k / (2 pi f)^2``, the beam's ``m_joint`` and
+    ``m_base`` are scaled together by ``(f_model / f)^2`` (every mode of the beam scales as
+    ``1/sqrt(mass)``); ``"model"``: the masses as ``base`` has them (the user gave one). Curves
+    without a resonance leave ``base``.
+    """
+    f_file = files_resonance(curves)
+    if f_file is None or mass == "model":
+        return base
+    from ..dynamics.thermal import free_resonance
+
+    scale = (free_resonance(base.probe)[0] / f_file) ** 2
+    if base.model == "spring":
+        return base.replace(mass=base.probe.mass * scale)
+    return base.replace(m_joint=base.probe.m_joint * scale, m_base=base.probe.m_base * scale)
+
+
 def _covariance(J: np.ndarray, scale: float) -> np.ndarray:
     JTJ = J.T @ J
     try:
@@ -179,7 +214,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
                 max_nfev: int = 40, sampling: str | None = "average",
                 retract: bool | None = None, noise: str = "auto", fringes: str | bool = "periodic",
                 fringe_period: float = DEFAULT_FRINGE_PERIOD, calibration: str = "auto",
-                lever: str = "file", progress=None) -> FitResult:
+                lever: str = "file", mass: str = "file", progress=None) -> FitResult:
     """Fit the dynamic model jointly to approach curves measured at several speeds.
 
     Parameters
@@ -267,6 +302,11 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         is scaled to give it (:func:`lever_from_files`); ``model``: the lever of ``model``
         as given (a spring constant in ``fixed`` counts as given too). Curves without a
         spring constant keep the model's.
+    mass : {"file", "model"}
+        ``file`` (default): the model lever's mass set so that its first free resonance is the
+        files' ``resonance_frequency`` (:func:`mass_from_files`); ``model``: the masses of
+        ``model`` as given (a mass in ``fixed`` or ``free`` counts as given too). Curves without
+        a resonance keep the model's.
 
     Returns
     -------
@@ -296,6 +336,12 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     if sampling is not None:
         base = base.replace(sampling=sampling)
     free = check_free(free, base.model, base.friction.law if base.model == "beam" else None)
+    if len(curves) > MAX_CURVES:
+        raise ParameterError(
+            f"a joint fit of {len(curves)} curves: the dynamic fit takes at most {MAX_CURVES} (the model is "
+            "integrated for every curve at every step; a force map's curves would take hours): give a few "
+            "curves at several speeds, and analyse a map's curves one by one with `afmforce analyze` (its vdw "
+            "step fits each curve's A R)")
     need = [n for n in free if n in NEEDS_RETRACT]
     if retract is None:
         retract = bool(need) and all(not isinstance(c, FitCurve) and retract_follows(c)
@@ -312,7 +358,15 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     base = lever_from_files(base, fc, lever)
     if lever == "model" and {"spring_constant", "k0"} & set(free):
         base = lever_from_files(base, fc, "file")   # a free k starts from the files' (issue 25)
+    if mass not in ("file", "model"):
+        raise ParameterError(f"mass must be 'file' or 'model', got {mass!r}")
+    if {"mass", "m_joint", "m_base"} & (set(fixed or {}) | set(free)):
+        mass = "model"                       # given (or fitted) by the caller
+    base = mass_from_files(base, fc, mass)   # after k: the files' resonance with the files' k
     check_speeds(free, [c.velocity for c in fc])
+    nominal = [(c.metadata or {}).get("velocity") for c in fc]
+    if velocities is None and all(nominal):   # the files' set speeds: a map recorded at one speed is one
+        check_speeds(free, nominal)           # speed, whatever its measured speeds' scatter (a 1.26x outlier)
     undetermined = [] if any(c.retract_start is not None for c in fc) else need
     ev = Evaluator(fc, base, "dynamic", drift, fringes, fringe_period)
     prob = Problem(ev, free)

@@ -20,7 +20,8 @@ the other columns are used when present; ``spring_constant``,
 ``calibration_factor`` and ``config.velocity`` go into the metadata/truth, and the
 lever's ``resonance_frequency`` [Hz] and ``quality_factor`` (its first free mode, as a
 thermal tune records it) into the metadata when the trajectory has them (a Trajectory
-does; a quasi-static curve without a lever mass does not).
+does; a quasi-static curve without a lever mass does not), and so its body's ``lever_drag``
+[N s/m] in a liquid (with ``lever_height`` [m] when the drag is not constant).
 """
 
 from __future__ import annotations
@@ -39,7 +40,12 @@ from .noise import Drift, Noise
 from .photodiode import Photodiode
 from .piezo import Piezo
 
-__all__ = ["Instrument", "TRUTH_COLUMNS", "trajectory_columns"]
+__all__ = ["Instrument", "TRUTH_COLUMNS", "LEVER_KEYS", "trajectory_columns"]
+
+#: The lever's properties a trajectory may carry that go into the metadata (a real file's header
+#: records the first two from the thermal tune; the drag, of the lever body in a liquid, with them);
+#: their units are :data:`afmforce._fields.QUANTITIES`' (declared once).
+LEVER_KEYS = ("resonance_frequency", "quality_factor", "lever_drag", "lever_height")
 
 #: Trajectory columns copied (resampled) into ``RawCurve.truth`` when present, with units.
 TRUTH_COLUMNS: dict[str, str] = {
@@ -202,7 +208,7 @@ class Instrument:
             metadata["spring_constant"] = k
         if pd.sensitivity is not None:
             metadata["sensitivity"] = pd.sensitivity
-        for key in ("resonance_frequency", "quality_factor"):  # the lever's, as its thermal tune gives them
+        for key in LEVER_KEYS:  # the lever's, as its thermal tune gives them, and its drag in a liquid
             value = _scalar(trajectory, key)
             if value is not None:
                 metadata[key] = value

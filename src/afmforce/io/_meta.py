@@ -47,6 +47,13 @@ def _finite(value: Any) -> float:
     return v
 
 
+def _non_negative(value: Any) -> float:
+    v = float(value)
+    if not math.isfinite(v) or v < 0:
+        raise ValueError("must be a finite number >= 0")
+    return v
+
+
 def _text(value: Any) -> str:
     return str(value)
 
@@ -69,6 +76,10 @@ METADATA: dict[str, MetaField] = {
     "sample_rate": MetaField("Sample rate", "Hz", _positive),
     "resonance_frequency": MetaField("Resonance frequency", "Hz", _positive),
     "quality_factor": MetaField("Quality factor of the free resonance (tells air from liquid)", "", _positive),
+    "lever_drag": MetaField("Drag coefficient of the lever body in the liquid", QUANTITIES["lever_drag"].unit,
+                            _non_negative),
+    "lever_height": MetaField("Lever height above the substrate at contact (drag c H/(h + H))",
+                              QUANTITIES["lever_height"].unit, _non_negative),
     "theta0": MetaField("Cantilever inclination", "rad", _finite),
     "radius": MetaField("Probe radius", "m", _positive),
     "instrument": MetaField("Instrument", "", _text),

@@ -26,7 +26,7 @@ from ..forces import static_jump_in_separation, vdw_force
 from .chunks import flatten
 
 __all__ = ["simulate_run", "simulate_runs", "simulation_dimensions", "OUTPUT_UNITS", "parameter_units",
-           "check_runs", "CHECK_RUNS"]
+           "check_runs", "invalid_run_causes", "CHECK_RUNS"]
 
 #: How many of a sweep's runs :func:`check_runs` builds before any work (evenly spread over its table;
 #: ~13 us each)
@@ -122,8 +122,44 @@ def check_runs(spec) -> None:
             return
         except AfmforceError as exc:
             first = first or (int(i), exc)
-    raise ParameterError(f"no run of this sweep is a valid simulation ({len(picks)} of {n} checked; run "
-                         f"{first[0]}: {first[1]}): change the settings shared by every run")
+    causes = invalid_run_causes(spec)
+    words = {"sets": "the setting", "grid": "the grid of", "ranges": "the range of"}
+    names = " or ".join(f"{words[kind]} {name}" for kind, i, name in causes)
+    exc = ParameterError(f"no run of this sweep is a valid simulation ({len(picks)} of {n} checked; run "
+                         f"{first[0]}: {first[1]}): change {names}")
+    exc.causes = causes
+    raise exc
+
+
+def invalid_run_causes(spec) -> list[tuple[str, int, str]]:
+    """The inputs of a sweep none of whose runs is valid that make it so, as
+    ``(kind, index, parameter)`` with ``kind`` one of ``"sets"``, ``"grid"``, ``"ranges"`` and
+    ``index`` its place in that list (the order of :class:`~afmforce.sweep.SweepSpec`).
+
+    The settings alone (every other parameter at its default) invalid: the settings without which
+    they are valid (all of them when no single one is). Otherwise each grid axis or range all of
+    whose values (a range: its ends and middle) are invalid with the settings; when none is on its
+    own, the combination is: every grid axis and range."""
+    dyn = _dynamics()
+    from ..errors import AfmforceError
+
+    def valid(values: dict) -> bool:
+        try:
+            dyn.SimulationConfig(**values)
+            return True
+        except AfmforceError:
+            return False
+
+    fixed = dict(spec.fixed)
+    if not valid(fixed):
+        sets = [("sets", j, name) for j, (name, _) in enumerate(spec.fixed)
+                if valid({k: v for k, v in fixed.items() if k != name})]
+        return sets or [("sets", j, name) for j, (name, _) in enumerate(spec.fixed)]
+    swept = [("grid", i, axis.name, list(axis.values)) for i, axis in enumerate(spec.grid)]
+    swept += [("ranges", i, r.name, [r.lo, 0.5 * (r.lo + r.hi), r.hi]) for i, r in enumerate(spec.ranges)]
+    alone = [(kind, i, name) for kind, i, name, values in swept
+             if not any(valid({**fixed, name: v}) for v in values)]
+    return alone or [(kind, i, name) for kind, i, name, _ in swept]
 
 
 def simulate_runs(parameter_rows: list[dict], threads: int | None = None) -> list:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import logging
 import threading
 from contextlib import asynccontextmanager
 
@@ -14,7 +15,9 @@ from .jobs import JobManager
 from .sessions import Sessions
 from .settings import Settings
 
-__all__ = ["create_app"]
+__all__ = ["create_app", "warm_up_steps"]
+
+_LOG = logging.getLogger("afmforce.web")
 
 
 def create_app(settings: Settings | None = None) -> FastAPI:
@@ -42,19 +45,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     warm = threading.Event()
 
-    def warm_up():  # load the compiled integrator and the unit parser before the first request needs them
-        from ..dynamics import simulate
-        from ..units import parse_quantity
-
-        from .routes_main import plotly_js
-        from .schema import schema
-
+    def warm_up():
         try:
-            schema()                              # the page's controls: the first page load does not build them
-            plotly_js()                           # read once (4.6 MB)
-            parse_quantity("1 nm", "length")     # pint's registry: 2-5 s on its first use
-            simulate(velocity=1e-5)
-            _warm_analysis()
+            warm_up_steps()
         finally:
             warm.set()
 
@@ -96,6 +89,36 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     return app
 
 
+def warm_up_steps() -> list[str]:
+    """Load what the first requests need before they come (the page's controls, plotly, the unit
+    parser, the compiled integrator and analysis kernels). A step that fails is logged as a warning
+    on ``afmforce.web`` with its reason and the others still run: the server keeps serving, and the
+    request that needs the failed part says what is wrong. Returns the warnings logged."""
+    from .routes_main import plotly_js
+    from .schema import schema
+
+    def units():
+        from ..units import parse_quantity
+        parse_quantity("1 nm", "length")     # pint's registry: 2-5 s on its first use
+
+    def integrator():
+        from ..dynamics import simulate
+        simulate(velocity=1e-5)
+
+    steps = (("the page's controls", schema), ("plotly", plotly_js), ("the unit parser", units),
+             ("the integrator", integrator), ("the analysis", _warm_analysis))
+    failed = []
+    for name, step in steps:
+        try:
+            step()
+        except Exception as exc:       # noqa: BLE001 -- a warm-up only: logged, the server goes on
+            text = (f"warm-up of {name} failed ({type(exc).__name__}: {exc}); serving on, the first "
+                    "request that needs it loads it")
+            _LOG.warning(text)
+            failed.append(text)
+    return failed
+
+
 def _warm_analysis() -> None:
     """Run the default analysis once on a shipped curve: its compiled kernels are loaded (or, with
     an empty numba cache, compiled) here, at start, not in the first upload's request -- which, with
@@ -105,7 +128,4 @@ def _warm_analysis() -> None:
     from ..datasets import path
     from ..io import load
 
-    try:
-        analyze(load(path("asylum-air"))[0])
-    except Exception:       # a warm-up only: the request that needs the kernels says what is wrong
-        pass
+    analyze(load(path("asylum-air"))[0])

@@ -4,7 +4,8 @@
 ``too_large``, ``storage_full``, ``forbidden``, ``unauthorized``, ``not_found``, ``past_budget``, ``job_failed``;
 a library error's class in snake case, e.g. ``parameter_error``), ``message`` is one readable
 line in the words of the command line, ``field`` names the value refused as the request spells
-it (``velocity``, ``truth.xi``, ``velocities[0]``, ``max_points``) or is null. FastAPI's own
+it (``velocity``, ``truth.xi``, ``velocities[0]``, ``max_points``; several, comma-separated, when
+they cause it together: ``grid[0], ranges[1]``) or is null. FastAPI's own
 ``{"detail": [...]}`` never reaches a client: :func:`install` replaces its handlers.
 """
 

@@ -130,9 +130,15 @@ def standby(inbox, queue, parent: int, warm: bool = True) -> None:
     import queue as _queue
 
     if warm:
-        from ..dynamics import simulate
+        try:
+            from ..dynamics import simulate
 
-        simulate(velocity=1e-5)
+            simulate(velocity=1e-5)
+        except Exception as exc:   # noqa: BLE001 -- a warm-up only: logged, the spare still takes its job
+            import logging
+
+            logging.getLogger("afmforce.web").warning(
+                "warm-up of a spare job process failed (%s: %s); it takes its job unwarmed", type(exc).__name__, exc)
     while True:
         try:
             kind, params = inbox.get(timeout=1.0)

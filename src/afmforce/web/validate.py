@@ -309,8 +309,10 @@ def sweep_spec(grid: Any, ranges: Any, sets: Any, *, sample=None, n=None, seed=N
     from ..sweep.simulation import check_runs
     try:
         check_runs(spec)
-    except ParameterError as exc:
-        raise FieldError("sets", str(exc)) from None
+    except ParameterError as exc:      # the field(s) that cause it: settings, grid axes or ranges
+        causes = getattr(exc, "causes", None) or [("sets", None, None)]
+        fields = ", ".join(kind if i is None else f"{kind}[{i}]" for kind, i, _ in causes)
+        raise FieldError(fields, str(exc)) from None
     return spec
 
 

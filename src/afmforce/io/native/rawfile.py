@@ -35,6 +35,8 @@ column names with units in brackets, then tab-separated data::
 * ``resonance_frequency`` [Hz] and ``quality_factor`` are the lever's first free mode (a thermal
   tune's; the virtual AFM writes the model's own, docs/instrument.md): the dynamic diagnosis
   (eq 3) reads the first. Both are optional; a file without them reads as before.
+  ``lever_drag`` [N s/m] (and ``lever_height`` [m] when the drag is not constant) are the lever
+  body's drag in a liquid (the virtual AFM writes the model's own); optional too.
 * Keys and columns prefixed ``truth.`` form ``RawCurve.truth`` (simulated curves).
 
 We write SI values with Python's ``repr`` of each float (the shortest text
@@ -62,6 +64,7 @@ from typing import Any
 
 import numpy as np
 
+from ..._fields import QUANTITIES
 from ..._files import atomic_path
 from ...errors import FileFormatError, ParameterError
 from ._common import _REQUIRED, FORMAT, TRUTH_UNITS, VERSION, _check_truth_array, _json
@@ -78,6 +81,7 @@ METADATA_UNITS: dict[str, str] = {
     "spring_constant": "N/m", "sensitivity": "m/V", "velocity": "m/s", "retract_velocity": "m/s",
     "sample_rate": "Hz", "dwell_time": "s", "temperature": "K", "resonance_frequency": "Hz", "quality_factor": "",
     "seed": "", "instrument": "", "source": "", "source_file": "", "comment": "",
+    **{key: QUANTITIES[key].unit for key in ("lever_drag", "lever_height")},   # the lever body's drag in a liquid
 }
 _COLUMNS = {"time": "s", "piezo_nominal": "m", "piezo_measured": "m", "deflection_signal": None, "segment": "1"}
 _DIMENSIONLESS = {"", "1", "-"}
