@@ -287,7 +287,9 @@ def _still_in_contact(dr: np.ndarray, i: int, rise: float, thr: float, saturated
     line flattens before the tip snaps off 9 nm lower) and then goes deeper than the retract had been
     up to ``i`` by more than ``thr`` is still in contact: the pull-off is the largest rise after that deeper point.
     A departure that is itself a jump (a surface pull-off followed by a tethered molecule that
-    pulls deeper later) stays the pull-off.
+    pulls deeper later) stays the pull-off, and so does a departure after which the retract comes back
+    to its free baseline before the deeper point (:func:`left_surface`: a tether pulled after the tip
+    left the surface; the JPK SMFS curve's unfolding peaks 267 nm away were taken for its pull-off).
     """
     if i + 1 >= dr.size or dr[i + 1] - dr[i] > thr:
         return i, rise
@@ -297,8 +299,23 @@ def _still_in_contact(dr: np.ndarray, i: int, rise: float, thr: float, saturated
     deep = int(after[np.argmin(dr[after])])
     if not dr[deep] < float(dr[: i + 1].min()) - thr:
         return i, rise
+    if left_surface(dr, i + 1, deep, thr):
+        return i, rise   # back at the free baseline before the deeper dip: that dip is a tether (analysis.tethers)
     j = largest_step(dr, deep, dr.size, +1.0)
     return (j, -math.inf) if j >= 0 else (i, rise)
+
+
+def left_surface(dr: np.ndarray, lo: int, hi: int, thr: float) -> bool:
+    """Whether the retract ``dr`` (deflection about zero force [m]) comes back to its free baseline
+    between run samples ``lo`` and ``hi``: its running median (the adhesion step's window, about 1/400 of
+    the run) lies above ``-BACK_FRACTION thr`` (:mod:`.tethers`) for ``BACK_HOLD`` windows in a row."""
+    from .tethers import BACK_FRACTION, BACK_HOLD, baseline_return, running_median
+
+    w = max(3, (dr.size // 400) | 1)
+    if hi - lo < BACK_HOLD * w:
+        return False
+    us = running_median(dr[lo:hi], w)
+    return baseline_return(us, 0, BACK_FRACTION * thr, BACK_HOLD * w) < us.size
 
 
 def pull_off_estimate(po: PullOff, spring_constant: float) -> float:

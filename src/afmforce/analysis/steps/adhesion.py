@@ -69,11 +69,12 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
     attached = None if po is not None and po.found else attached_at_end(st)
     if attached:   # no free part after the pull-off: the retract's "baseline" would be its contact line
         return st.update(skipped={**st.skipped, "adhesion": attached}, warn=attached)
-    hard = po is not None and po.found and _kind(st) == "hard"  # the paper's pull-off jump ends the dip
+    rigid = _kind(st) == "hard"   # the tip leaves the surface, then may pull tethers (analysis.tethers)
+    hard = po is not None and po.found and rigid  # the paper's pull-off jump ends the dip
     res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma,
-                           pull_off=po.index if hard else -1)
+                           pull_off=po.index if hard else -1, separation=st.separation, hard=rigid)
     warn = None
-    if (po is not None and po.found and math.isfinite(po.force) and po.force < 0 and math.isfinite(res.force)
+    if (po is not None and po.found and math.isfinite(po.force) and po.force < 0 and res.found and math.isfinite(res.force)
             and abs(res.force) < 0.5 * abs(po.force)):
         # both are below zero force; they differ only by the baseline each is measured from
         warn = (f"adhesion {res.force * 1e9:.3g} nN (from the retract's own baseline) is under half the pull-off "
