@@ -251,7 +251,10 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
             # the retract left the line at a repulsive load (friction, a slip): not the pull-off; the jump out
             # of contact is the largest rise after the deflection has come down to an attraction
             low = np.flatnonzero(dr[: idx.size - 1] <= attractive_below)
-            i = largest_step(dr, int(low[0]), idx.size, +1.0) if low.size else -1
+            # ... before the retract came back to its free baseline: a later rise is a tether's rupture
+            # (the JPK SMFS curve: its last unfolding peak, 267 nm away, was taken for the pull-off)
+            hi = surface_end(dr, int(low[0]), thr) + 1 if low.size else idx.size
+            i = largest_step(dr, int(low[0]), min(hi, idx.size), +1.0) if low.size else -1
             i = i if i >= 0 else -2  # -2: no attractive pull-off (no fall-back on the steps near the split)
         elif cand.size and cand[0] > start:
             i = int(cand[0]) - 1
@@ -305,17 +308,25 @@ def _still_in_contact(dr: np.ndarray, i: int, rise: float, thr: float, saturated
     return (j, -math.inf) if j >= 0 else (i, rise)
 
 
-def left_surface(dr: np.ndarray, lo: int, hi: int, thr: float) -> bool:
-    """Whether the retract ``dr`` (deflection about zero force [m]) comes back to its free baseline
-    between run samples ``lo`` and ``hi``: its running median (the adhesion step's window, about 1/400 of
-    the run) lies above ``-BACK_FRACTION thr`` (:mod:`.tethers`) for ``BACK_HOLD`` windows in a row."""
+def surface_end(dr: np.ndarray, lo: int, thr: float, hi: int | None = None) -> int:
+    """Run sample from which the retract ``dr`` (deflection about zero force [m]) is back at its free
+    baseline, looked for in ``[lo, hi)`` (``hi`` when never): its running median (the adhesion step's window,
+    about 1/400 of the run) lies above ``-BACK_FRACTION thr`` (:mod:`.tethers`) for ``BACK_HOLD`` windows in
+    a row."""
     from .tethers import BACK_FRACTION, BACK_HOLD, baseline_return, running_median
 
+    hi = dr.size if hi is None else hi
     w = max(3, (dr.size // 400) | 1)
     if hi - lo < BACK_HOLD * w:
-        return False
+        return hi
     us = running_median(dr[lo:hi], w)
-    return baseline_return(us, 0, BACK_FRACTION * thr, BACK_HOLD * w) < us.size
+    return lo + baseline_return(us, 0, BACK_FRACTION * thr, BACK_HOLD * w)
+
+
+def left_surface(dr: np.ndarray, lo: int, hi: int, thr: float) -> bool:
+    """Whether the retract ``dr`` comes back to its free baseline between run samples ``lo`` and ``hi``
+    (:func:`surface_end`)."""
+    return surface_end(dr, lo, thr, hi) < hi
 
 
 def pull_off_estimate(po: PullOff, spring_constant: float) -> float:

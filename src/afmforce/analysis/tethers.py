@@ -119,7 +119,8 @@ def ruptures(u: np.ndarray, us: np.ndarray, x: np.ndarray, h: np.ndarray, idx: n
     A rupture is a rise of the running median ``us`` by more than ``thr`` within ``w`` samples (runs of such
     rises within ``w`` of each other are one rupture, as the unbinding steps). Its last attached sample is
     where the mean of the next two samples of ``u`` rises most above the mean of the two before; the pull
-    there is a parabola through the ``w`` samples up to it (at least 5; the noise averaged, the worm-like
+    there is a parabola through the ``w`` samples before it, read at it (at least 5; the last attached sample
+    itself may have been caught mid-drop by the detector's averaging; the noise averaged, the worm-like
     chain's steepening followed: a line through them read the pull 10-17 % low on a virtual tether), the drop
     the running median's rise.
 
@@ -163,7 +164,7 @@ def ruptures(u: np.ndarray, us: np.ndarray, x: np.ndarray, h: np.ndarray, idx: n
         j = np.arange(max(a, 1), b)
         jump = 0.5 * (u[j + 1] + u[j + 2]) - 0.5 * (u[j - 1] + u[j])
         r = int(j[np.argmax(jump)])
-        seg = slice(max(r - w + 1, 0), r + 1)
+        seg = slice(max(r - w, 0), r)   # r itself left out: a sample caught mid-drop (the SMFS curve's last)
         xs, ys = x[seg], u[seg]
         if xs.size >= 5 and np.ptp(xs) > 0:
             pull = float(np.polyval(np.polyfit(xs - xs.mean(), ys, 2), x[r] - xs.mean()))
