@@ -117,7 +117,10 @@ def ruptures(u: np.ndarray, us: np.ndarray, x: np.ndarray, h: np.ndarray, idx: n
     """Every rupture of the retract from ``start`` on.
 
     A rupture is a rise of the running median ``us`` by more than ``thr`` within ``w`` samples (runs of such
-    rises within ``w`` of each other are one rupture, as the unbinding steps). Its last attached sample is
+    rises within ``w`` of each other are one rupture, as the unbinding steps) after a renewed pull: the running
+    median went deeper, by ``thr``, than where the previous rise (a rupture, or the pull-off) ended; a rise
+    that goes on without one is the relaxation of the last (the detector's or the lever's response after a
+    large snap-off), no new attachment. Its last attached sample is
     where the mean of the next two samples of ``u`` rises most above the mean of the two before; the pull
     there is a parabola through the ``w`` samples before it, read at it (at least 5; the last attached sample
     itself may have been caught mid-drop by the detector's averaging; the noise averaged, the worm-like
@@ -146,6 +149,7 @@ def ruptures(u: np.ndarray, us: np.ndarray, x: np.ndarray, h: np.ndarray, idx: n
     cand = np.flatnonzero(rise > thr)
     out: list[TetherRupture] = []
     i = 0
+    last_end = -1   # where the previous rise (a rupture or the pull-off) ended
     while i < cand.size:
         first = prev = int(cand[i])
         g = first
@@ -156,7 +160,11 @@ def ruptures(u: np.ndarray, us: np.ndarray, x: np.ndarray, h: np.ndarray, idx: n
                 g = prev
             i += 1
         lo, hi = start + first, start + prev + w
+        renewed = last_end < 0 or float(us[last_end:lo + 1].min()) < float(us[last_end]) - thr
+        last_end = min(hi, n - 1)
         if skip >= 0 and lo - w <= skip <= hi:
+            continue
+        if not renewed:   # still rising from the last rupture or the pull-off: a relaxation, no new attachment
             continue
         a, b = start + g, min(start + g + w, n - 3)
         if b <= a:

@@ -189,15 +189,15 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
     more = (f"; {nt} tether(s) after the tip left the surface, ruptures at "
             + ", ".join(f"{t.separation * 1e9:.4g} nm ({t.force * scale:.3g} {unit})" for t in tethers if t.tether)
             if nt else "")
-    where = "separation" if hard and separation is not None else "from contact"
+    where = " separation" if hard and separation is not None else ""
     if found:
         verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
                    f"{noise_v * scale:.2g} {unit}) at {-x[j] * 1e9:.4g} nm from contact; last rupture at "
-                   f"{rupture * 1e9:.4g} nm {where}; {len(steps)} unbinding step(s){more}")
+                   f"{rupture * 1e9:.4g} nm{where}; {len(steps)} unbinding step(s){more}")
     elif within:
         verdict = (f"no tip-surface adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): "
                    f"{val * scale:.2g} {unit} before the retract came back to its baseline; last rupture at "
-                   f"{rupture * 1e9:.4g} nm {where}; {len(steps)} unbinding step(s){more}")
+                   f"{rupture * 1e9:.4g} nm{where}; {len(steps)} unbinding step(s){more}")
     else:
         verdict = (f"no adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): the "
                    f"deepest dip is {-depth / sigma if sigma > 0 else 0:.2g} x the noise")
