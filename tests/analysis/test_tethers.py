@@ -126,3 +126,19 @@ def test_jpk_smfs_unfolding_peaks_are_tethers_not_the_pull_off():
     assert ts[-1].separation == pytest.approx(265e-9, abs=3 * NM)
     assert -0.334e-9 < ts[-1].force < -0.28e-9
     assert res.rupture_distance == ts[-1].separation
+
+
+def test_the_typical_presets_snap_off_relaxation_is_no_attachment(tmp_path):
+    """`afmforce simulate --instrument typical`: a 25 nN pull-off whose signal relaxes over ~50 nm of z (the
+    virtual detector's response). Its figure marked the last rupture at 192-199 nm (where the relaxation
+    crossed 5 noise sigmas); the tip left the surface at the pull-off: the last rupture is there."""
+    from afmforce.cli.main import main
+    from afmforce.io import load
+
+    raw = tmp_path / "typ.txt"
+    assert main(["simulate", "--instrument", "typical", "--raw", str(raw)]) == 0
+    res = analyze(load(raw)[0])
+    po = res.details["jumps"].pull_off
+    assert res.contact_kind == "hard" and po.found and res.pull_off_force < -20e-9
+    assert res.rupture_distance == pytest.approx(float(res.separation[po.index]), abs=2 * NM)
+    assert abs(res.rupture_distance) < 3 * NM and res.unbinding_steps == 0 and res.tethers == 0
