@@ -13,7 +13,11 @@ retract between the deepest point and the last rupture, each larger than
 
 This is the adhesion of soft and biological samples (unbinding, tethers) as well
 as of rigid ones; the paper's hard-contact pull-off (:mod:`.jumps`) stays for
-hard contacts, where it is the same dip ending in one jump.
+hard contacts, where it is the same dip ending in one jump. On a hard contact
+(``hard``) the adhesion is the tip--surface detachment, the dip before the
+retract comes back to its baseline; the tethers pulled after it are reported on
+their own, every rupture counted, the last rupture as a separation
+(:mod:`.tethers`).
 """
 
 from __future__ import annotations
