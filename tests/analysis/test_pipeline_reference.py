@@ -34,7 +34,9 @@ RTOL = 1e-9
 ADDED = {"barrier_force", "barrier_jump_distance", "through_barrier",
          # the friction signature's bounds (coincident lines bound friction, never exclude it)
          "friction_offset_bound", "friction_force_bound", "viscous_friction_bound", "load_friction_bound",
-         "offset_bound", "slope_difference_bound"}
+         "offset_bound", "slope_difference_bound",
+         # the tethers of a hard contact (analysis.tethers): empty and 0 on these soft curves
+         "tethers", "tether_force"}
 
 
 def _compare(new, old, where: str, out: list[str]) -> None:

@@ -251,7 +251,10 @@ def find_pull_off(d: np.ndarray, position: np.ndarray, run: RunRegions, noise: f
             # the retract left the line at a repulsive load (friction, a slip): not the pull-off; the jump out
             # of contact is the largest rise after the deflection has come down to an attraction
             low = np.flatnonzero(dr[: idx.size - 1] <= attractive_below)
-            i = largest_step(dr, int(low[0]), idx.size, +1.0) if low.size else -1
+            # ... before the retract came back to its free baseline: a later rise is a tether's rupture
+            # (the JPK SMFS curve: its last unfolding peak, 267 nm away, was taken for the pull-off)
+            hi = surface_end(dr, int(low[0]), thr) + 1 if low.size else idx.size
+            i = largest_step(dr, int(low[0]), min(hi, idx.size), +1.0) if low.size else -1
             i = i if i >= 0 else -2  # -2: no attractive pull-off (no fall-back on the steps near the split)
         elif cand.size and cand[0] > start:
             i = int(cand[0]) - 1
@@ -287,7 +290,9 @@ def _still_in_contact(dr: np.ndarray, i: int, rise: float, thr: float, saturated
     line flattens before the tip snaps off 9 nm lower) and then goes deeper than the retract had been
     up to ``i`` by more than ``thr`` is still in contact: the pull-off is the largest rise after that deeper point.
     A departure that is itself a jump (a surface pull-off followed by a tethered molecule that
-    pulls deeper later) stays the pull-off.
+    pulls deeper later) stays the pull-off, and so does a departure after which the retract comes back
+    to its free baseline before the deeper point (:func:`left_surface`: a tether pulled after the tip
+    left the surface; the JPK SMFS curve's unfolding peaks 267 nm away were taken for its pull-off).
     """
     if i + 1 >= dr.size or dr[i + 1] - dr[i] > thr:
         return i, rise
@@ -297,8 +302,31 @@ def _still_in_contact(dr: np.ndarray, i: int, rise: float, thr: float, saturated
     deep = int(after[np.argmin(dr[after])])
     if not dr[deep] < float(dr[: i + 1].min()) - thr:
         return i, rise
+    if left_surface(dr, i + 1, deep, thr):
+        return i, rise   # back at the free baseline before the deeper dip: that dip is a tether (analysis.tethers)
     j = largest_step(dr, deep, dr.size, +1.0)
     return (j, -math.inf) if j >= 0 else (i, rise)
+
+
+def surface_end(dr: np.ndarray, lo: int, thr: float, hi: int | None = None) -> int:
+    """Run sample from which the retract ``dr`` (deflection about zero force [m]) is back at its free
+    baseline, looked for in ``[lo, hi)`` (``hi`` when never): its running median (the adhesion step's window,
+    about 1/400 of the run) lies above ``-BACK_FRACTION thr`` (:mod:`.tethers`) for ``BACK_HOLD`` windows in
+    a row."""
+    from .tethers import BACK_FRACTION, BACK_HOLD, baseline_return, running_median
+
+    hi = dr.size if hi is None else hi
+    w = max(3, (dr.size // 400) | 1)
+    if hi - lo < BACK_HOLD * w:
+        return hi
+    us = running_median(dr[lo:hi], w)
+    return lo + baseline_return(us, 0, BACK_FRACTION * thr, BACK_HOLD * w)
+
+
+def left_surface(dr: np.ndarray, lo: int, hi: int, thr: float) -> bool:
+    """Whether the retract ``dr`` comes back to its free baseline between run samples ``lo`` and ``hi``
+    (:func:`surface_end`)."""
+    return surface_end(dr, lo, thr, hi) < hi
 
 
 def pull_off_estimate(po: PullOff, spring_constant: float) -> float:

@@ -108,8 +108,14 @@ class AnalysisResult:
     adhesion_deflection : float  the same as a deflection [m]
     adhesion_distance : float  its distance from the contact point [m]
     adhesion_noise : float  baseline noise of the retract [N]
-    rupture_distance : float  distance from contact of the last rupture [m]
-    unbinding_steps : int  unbinding steps found between the deepest point and the last rupture [-]
+    rupture_distance : float
+        Distance from contact of the last rupture [m]; on a hard contact its tip--sample separation
+        (the pull-off's, about 0, when no tether holds the tip).
+    unbinding_steps : int
+        Unbinding steps found between the deepest point and the last rupture [-]; on a hard contact every
+        rupture after the pull-off.
+    tethers : int  hard contact: tethers pulled after the tip left the surface (details: ``adhesion.tethers``) [-]
+    tether_force : float  hard contact: the largest tether pull at its rupture [N] (< 0)
     adhesion_verdict : str  plain words with the numbers
     indentation : float  soft contact: indentation at the turning point [m]
     surface_energy : float

@@ -20,9 +20,10 @@ import numpy as np
 
 from .. import forces
 from ..constants import HAMAKER, Z0
+from ..errors import ParameterError
 from ..io.curve import RawCurve
 
-__all__ = ["static_separation", "static_curve"]
+__all__ = ["static_separation", "static_curve", "tether_curve"]
 
 
 _ROWS = 256  # substrate positions per block of the root-bracketing grid (~6 MB of float64 each)
@@ -142,3 +143,101 @@ def static_curve(*, spring_constant: float = 0.21, radius: float = 220e-9, hamak
                 source_file="synthetic quasi-static curve")
     return RawCurve(time=t, piezo_nominal=z_nom, piezo_measured=None if any(piezo_quadratic) else z.copy(),
                     deflection_signal=volts, segment=seg, metadata=meta, truth=truth, deflection_unit="V")
+
+
+def tether_curve(*, tethers: tuple[tuple[float, float, float], ...] = ((120e-9, 0.4e-9, 100e-9),),
+                 adhesion: float = 0.0, spring_constant: float = 0.05, sensitivity: float = 50e-9,
+                 push: float = 50e-9, start: float = -300e-9, end: float = -450e-9, step: float = 0.25e-9,
+                 sample_rate: float = 4000.0, noise: float = 0.0, temperature: float = 298.15,
+                 seed: int | None = 0) -> RawCurve:
+    """A quasi-static curve on a hard (rigid) contact that pulls worm-like-chain tethers, with its truth.
+
+    The approach is free (zero deflection) up to contact at z = 0, then on the compliance line
+    (deflection = z) up to ``push``. The retract stays on that line until the pull reaches the tip--surface
+    ``adhesion`` (the deflection -adhesion/k), then leaves the surface; from there the tip, at separation
+    ``h`` from the surface with the sample ``s = -z`` away, is held by the tethers still attached:
+    ``h + F(h)/k = s`` with ``F`` the sum of their Marko--Siggia forces (:func:`~.tethers.wlc_force`). A
+    tether lets go when ``h`` reaches its rupture extension (all attached at the surface's contact).
+
+    Parameters
+    ----------
+    tethers : tuple of (contour length [m], persistence length [m], rupture extension [m])
+        Rupture extensions must grow along the tuple and lie below the contour lengths.
+    adhesion : float  tip--surface adhesion [N] (>= 0; 0: the tip leaves the line at zero force)
+    spring_constant : float  k [N/m]
+    sensitivity : float  InvOLS [m/V]
+    push, start, end : float  turning point, approach start and retract end positions [m]
+    step : float  position step per sample [m]
+    sample_rate : float  [Hz]
+    noise : float  white deflection noise [m]
+    temperature : float  [K]
+    seed : int or None  noise seed
+
+    Returns
+    -------
+    RawCurve
+        Volts against position (m); ``truth`` holds ``deflection``, ``separation``, ``position``,
+        ``adhesion`` [N], ``pull_off_index``, ``ruptures`` (a tuple of dicts: ``separation`` [m],
+        ``position`` [m], ``force`` [N] (< 0: the pull just before the rupture), ``index`` (the last
+        attached sample)).
+    """
+    from .tethers import wlc_force
+
+    k = spring_constant
+    ext = [float(t[2]) for t in tethers]
+    if any(b <= a for a, b in zip(ext, ext[1:])) or any(t[2] >= t[0] for t in tethers) or adhesion < 0:
+        raise ParameterError("tethers: rupture extensions must grow and stay below the contour lengths; adhesion >= 0")
+
+    def pull(h: np.ndarray, first: int) -> np.ndarray:   # the tethers first.. attached: their summed force [N]
+        f = np.zeros_like(h)
+        for L, p, _ in tethers[first:]:
+            f = f + wlc_force(np.clip(h, 0.0, None), L, p, temperature)
+        return f
+
+    z_app = np.arange(start, push, step)
+    z_ret = np.arange(push, end, -step)
+    d_app = np.clip(z_app, 0.0, None)
+    s = -z_ret
+    s_off = adhesion / k                               # the sample's travel beyond contact when the tip leaves
+    on = s < s_off
+    d_ret = np.where(on, z_ret, 0.0)
+    h_ret = np.zeros_like(s)
+    bounds = [s_off] + [x + float(pull(np.array([x]), m)[0]) / k for m, x in enumerate(ext)]  # s at each rupture
+    if any(b <= a for a, b in zip(bounds[1:], bounds[2:])):
+        raise ParameterError("tethers: a later tether breaks before an earlier one (make their ruptures farther apart)")
+    for m in range(len(ext) + 1):
+        lo = bounds[m] if m else s_off
+        hi = bounds[m + 1] if m < len(ext) else math.inf
+        sel = (s >= max(lo, s_off)) & (s < hi)
+        if not sel.any():
+            continue
+        ss = s[sel]
+        cap = ext[m] if m < len(ext) else float(ss.max())
+        a, b = np.zeros_like(ss), np.minimum(ss, cap)     # h + F(h)/k - s: <= 0 at 0, >= 0 at min(s, cap)
+        for _ in range(80):
+            mid = 0.5 * (a + b)
+            low = mid + pull(mid, m) / k < ss
+            a, b = np.where(low, mid, a), np.where(low, b, mid)
+        h_ret[sel] = 0.5 * (a + b)
+        d_ret[sel] = -pull(h_ret[sel], m) / k
+    z = np.concatenate([z_app, z_ret])
+    d = np.concatenate([d_app, d_ret])
+    h = np.concatenate([np.clip(-z_app, 0.0, None), h_ret])
+    seg = np.concatenate([np.zeros(z_app.size, np.int8), np.ones(z_ret.size, np.int8)])
+    rng = np.random.default_rng(seed)
+    volts = (d + noise * rng.standard_normal(z.size)) / sensitivity
+    n0 = z_app.size
+    rupt = []
+    for m, x in enumerate(ext):
+        last = int(np.flatnonzero(s < bounds[m + 1])[-1])   # the last attached sample
+        rupt.append(dict(separation=float(h_ret[last]), position=float(z_ret[last]), index=n0 + last,
+                         force=-float(pull(np.array([h_ret[last]]), m)[0]), extension=x,
+                         force_at_extension=-float(pull(np.array([x]), m)[0])))
+    truth = dict(deflection=d, separation=h, position=z, sensitivity=sensitivity, spring_constant=k,
+                 adhesion=-float(adhesion), pull_off_index=n0 + int(np.flatnonzero(on)[-1]) if on.any() else -1,
+                 ruptures=tuple(rupt))
+    meta = dict(spring_constant=k, sample_rate=sample_rate, velocity=step * sample_rate,
+                source_file="synthetic worm-like-chain tethers on a hard contact")
+    t = np.arange(z.size) / sample_rate
+    return RawCurve(time=t, piezo_nominal=z, piezo_measured=z.copy(), deflection_signal=volts, segment=seg,
+                    metadata=meta, truth=truth, deflection_unit="V")

@@ -13,7 +13,11 @@ retract between the deepest point and the last rupture, each larger than
 
 This is the adhesion of soft and biological samples (unbinding, tethers) as well
 as of rigid ones; the paper's hard-contact pull-off (:mod:`.jumps`) stays for
-hard contacts, where it is the same dip ending in one jump.
+hard contacts, where it is the same dip ending in one jump. On a hard contact
+(``hard``) the adhesion is the tip--surface detachment, the dip before the
+retract comes back to its baseline; the tethers pulled after it are reported on
+their own, every rupture counted, the last rupture as a separation
+(:mod:`.tethers`).
 """
 
 from __future__ import annotations
@@ -28,6 +32,8 @@ from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import mad_sigma, robust_line_thin
 from .regions import RunRegions
 from ._units import unit as _u
+from .tethers import (BACK_FRACTION, BACK_HOLD, TetherRupture, baseline_return, renewed_pull, running_median,
+                      ruptures)
 from .options import AdhesionOptions as _A  # the default: declared once, in the step's record
 
 __all__ = ["UnbindingStep", "Adhesion", "retract_adhesion"]
@@ -62,9 +68,13 @@ class Adhesion:
     distance : float  its distance from the contact point [m]
     noise : float  baseline noise [N] (deflection noise x k)
     nsigma : float  multiple of the noise a dip must exceed [-]
-    rupture_distance : float  distance from the contact point of the last rupture [m]
+    rupture_distance : float  distance from the contact point of the last rupture [m]; on a hard contact
+        the tip--sample separation there (the pull-off's, about 0, when no tether holds the tip)
     steps : tuple of UnbindingStep
     verdict : str
+    tethers : tuple of TetherRupture
+        Hard contact: every rupture after the pull-off (:mod:`.tethers`); ``tether`` marks those after the
+        retract came back to its free baseline (empty on soft contacts: their ruptures are ``steps``)
     """
 
     found: bool
@@ -77,10 +87,17 @@ class Adhesion:
     rupture_distance: float = _u("m")
     steps: tuple[UnbindingStep, ...]
     verdict: str
+    tethers: tuple[TetherRupture, ...] = ()
+
+    @property
+    def tether_count(self) -> int:
+        """Tethers: ruptures after the retract came back to its free baseline [-]."""
+        return sum(1 for t in self.tethers if t.tether)
 
 
 def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, spring_constant: float, *,
-                     nsigma: float = _A.nsigma, smooth: int | None = None, pull_off: int = -1) -> Adhesion:
+                     nsigma: float = _A.nsigma, smooth: int | None = None, pull_off: int = -1,
+                     separation: np.ndarray | None = None, hard: bool = False) -> Adhesion:
     """The retract's deepest dip below its own baseline, last rupture and unbinding steps.
 
     Parameters
@@ -102,6 +119,13 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
         -1: none). The rise that contains it is the end of the dip, the adhesion itself, not an
         unbinding step (the Asylum SiN curve in air: its pull-off and the lever's settling after it
         were counted as one step).
+    separation : ndarray, optional
+        Tip--sample separation [m] of the whole curve (with ``hard``).
+    hard : bool
+        A hard (rigid) contact: the adhesion is the tip--surface detachment, the dip before the retract
+        comes back to its free baseline; later dips are tethers (:mod:`.tethers`), every rupture counted;
+        the last rupture is given as a separation (the pull-off's when no tether holds the tip: a monotone
+        relaxation back to the baseline after a large snap-off is no attachment).
     """
     idx = run.index
     pull_off = int(np.searchsorted(idx, pull_off)) if pull_off >= 0 and idx[0] <= pull_off <= idx[-1] else -1
@@ -138,18 +162,93 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
     if tail is None:
         tail = _tail_numpy(x, y, free, run.saturated, idx, a, b, xm, nsigma, w, k, pull_off)
     sigma, j, depth, found, rupture, steps = tail
+    tethers: tuple[TetherRupture, ...] = ()
+    within = False
+    if hard and separation is not None and sigma > 0:
+        u = y - (a + b * (x - xm))
+        if np.all(np.isfinite(u)):
+            hh = separation[idx]
+            out = _hard(u, x, hh, idx, run, sigma, nsigma, w, k, pull_off, j, depth, found)
+            if out[5] and any(t.tether for t in out[5]):
+                # the tethers lie in the free part the baseline was fitted on: fitted again on the samples
+                # after the last rupture (a virtual curve's tethers pulled its baseline 40-60 pN down)
+                after = free & (np.arange(x.size) > int(np.searchsorted(idx, out[5][-1].index)) + w)
+                if np.count_nonzero(after) >= 10:
+                    xa = x[after]
+                    a2, b2, *_ = robust_line_thin(xa - xa.mean(), y[after])
+                    if math.isfinite(b2):
+                        u2 = y - (a2 + b2 * (x - xa.mean()))
+                        r2 = u2[after]
+                        s2 = float(1.4826 * np.median(np.abs(r2 - np.median(r2))))
+                        if s2 > 0 and np.all(np.isfinite(u2)):
+                            sigma = s2
+                            j, depth, found = int(np.argmin(u2)), min(float(u2.min()), 0.0), False
+                            found = -depth > nsigma * sigma
+                            out = _hard(u2, x, hh, idx, run, sigma, nsigma, w, k, pull_off, j, depth, found)
+            j, depth, found, rupture, steps, tethers, within = out
     force = depth * k
     unit, scale, val = ("nN", 1e9, force) if math.isfinite(k) else ("nm", 1e9, depth)
     noise_v = sigma * (k if math.isfinite(k) else 1.0)
+    nt = sum(1 for t in tethers if t.tether)
+    more = (f"; {nt} tether(s) after the tip left the surface, ruptures at "
+            + ", ".join(f"{t.separation * 1e9:.4g} nm ({t.force * scale:.3g} {unit})" for t in tethers if t.tether)
+            if nt else "")
+    where = " separation" if hard and separation is not None else ""
     if found:
         verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
                    f"{noise_v * scale:.2g} {unit}) at {-x[j] * 1e9:.4g} nm from contact; last rupture at "
-                   f"{rupture * 1e9:.4g} nm; {len(steps)} unbinding step(s)")
+                   f"{rupture * 1e9:.4g} nm{where}; {len(steps)} unbinding step(s){more}")
+    elif within:
+        verdict = (f"no tip-surface adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): "
+                   f"{val * scale:.2g} {unit} before the retract came back to its baseline; last rupture at "
+                   f"{rupture * 1e9:.4g} nm{where}; {len(steps)} unbinding step(s){more}")
     else:
         verdict = (f"no adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): the "
                    f"deepest dip is {-depth / sigma if sigma > 0 else 0:.2g} x the noise")
-    return Adhesion(bool(found), float(force) if found else math.nan, float(depth) if found else math.nan, int(idx[j]), float(-x[j]), float(noise_v), float(nsigma),
-                    float(rupture), tuple(steps), verdict)
+    keep = found or within   # with tethers, an adhesion within the noise is a number: about 0, not the tethers'
+    return Adhesion(bool(found), float(force) if keep else math.nan, float(depth) if keep else math.nan, int(idx[j]), float(-x[j]), float(noise_v), float(nsigma),
+                    float(rupture), tuple(steps), verdict, tuple(tethers))
+
+
+def _hard(u, x, h, idx, run, sigma, nsigma, w, k, pull_off, j, depth, found):
+    """The adhesion of a hard contact and its tethers (:mod:`.tethers`).
+
+    The tip leaves the surface at the pull-off (``pull_off``, run sample; else at the end of the contact
+    line); the surface's adhesion is the deepest dip before the retract's running median comes back to its
+    free baseline (above :data:`~.tethers.BACK_FRACTION` of the threshold below it, for
+    :data:`~.tethers.BACK_HOLD` windows) or, sooner, before a renewed pull (:func:`~.tethers.renewed_pull`:
+    a tether already taut when the tip snaps off). Every rupture after the pull-off is an unbinding step; those after
+    the return are tethers. The last rupture is the last of them, else the pull-off (the separation there).
+
+    Returns ``(j, depth, found, rupture, steps, tethers, within)``; ``within``: tethers hold the tip and the
+    surface's adhesion is within the noise (its number is kept: about 0).
+    """
+    thr = nsigma * sigma
+    us = running_median(u, w)
+    contact = np.flatnonzero(run.contact)
+    start = pull_off if pull_off >= 0 else (int(contact.max()) if contact.size else int(run.split))
+    back = min(baseline_return(us, start + 1, BACK_FRACTION * thr, BACK_HOLD * w),
+               renewed_pull(us, start + 1, thr, BACK_HOLD * w))
+    found_all = found
+    tail = us[back:]
+    if back >= u.size or not np.any(tail < -thr):
+        # no dip after the retract came back: the deepest dip is the surface's (the old answer); a monotone
+        # relaxation after the pull-off holds no tether: the last rupture is the pull-off, unless a rupture
+        # (a renewed pull that let go) lies between the pull-off and the return
+        rs = ruptures(u, us, x, h, idx, start, back, thr, w, k, skip=pull_off)
+        steps = tuple(UnbindingStep(r.index, r.distance, r.drop) for r in rs)
+        if not found_all:
+            return j, depth, found, math.nan, steps, tuple(rs), False
+        end = rs[-1].separation if rs else float(h[min(max(start, j), h.size - 1)])
+        return j, depth, found, end, steps, tuple(rs), False
+    ok = ~run.saturated[:back] | (u[:back] < 0)
+    jj = int(np.argmin(np.where(ok, u[:back], np.inf)))
+    dd = min(float(u[jj]), 0.0)
+    ff = -dd > thr
+    rs = ruptures(u, us, x, h, idx, start, back, thr, w, k, skip=pull_off if ff else -1)
+    steps = tuple(UnbindingStep(r.index, r.distance, r.drop) for r in rs)
+    end = rs[-1].separation if rs else math.nan
+    return jj, dd, ff, end, steps, tuple(rs), not ff
 
 
 def _tail_numpy(x, y, free, saturated, idx, a, b, xm, nsigma, w, k, pull_off):

@@ -1,4 +1,5 @@
-"""The ``adhesion`` step: the deepest retract dip below its own baseline, last rupture, unbinding steps.
+"""The ``adhesion`` step: the deepest retract dip below its own baseline, last rupture, unbinding steps;
+on a hard contact the tip--surface detachment, with the tethers pulled after it (:mod:`..tethers`).
 
 Declared once by its record :data:`ADHESION` (:mod:`afmforce.analysis.registry`).
 """
@@ -63,17 +64,22 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
     """Adhesion for every contact kind: the retract's deepest dip below its own baseline (<= 0).
 
     See :mod:`~afmforce.analysis.unbinding`; the dip counts above ``o.nsigma``
-    baseline noise, with its position, the last rupture and the unbinding steps.
+    baseline noise, with its position, the last rupture and the unbinding steps. On a hard contact the
+    dip is the tip--surface detachment's (before the retract comes back to its baseline) and later dips
+    are tethers, every rupture counted (:mod:`~afmforce.analysis.tethers`).
     """
     po = st.details["jumps"].pull_off if "jumps" in st.details else None
     attached = None if po is not None and po.found else attached_at_end(st)
     if attached:   # no free part after the pull-off: the retract's "baseline" would be its contact line
         return st.update(skipped={**st.skipped, "adhesion": attached}, warn=attached)
-    hard = po is not None and po.found and _kind(st) == "hard"  # the paper's pull-off jump ends the dip
+    # the tip leaves a rigid surface, then may pull tethers (analysis.tethers); a kind not known (a retract
+    # exported alone) keeps the deepest dip
+    rigid = "kind" in st.details and _kind(st) == "hard"
+    hard = po is not None and po.found and rigid  # the paper's pull-off jump ends the dip
     res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma,
-                           pull_off=po.index if hard else -1)
+                           pull_off=po.index if hard else -1, separation=st.separation, hard=rigid)
     warn = None
-    if (po is not None and po.found and math.isfinite(po.force) and po.force < 0 and math.isfinite(res.force)
+    if (po is not None and po.found and math.isfinite(po.force) and po.force < 0 and res.found and math.isfinite(res.force)
             and abs(res.force) < 0.5 * abs(po.force)):
         # both are below zero force; they differ only by the baseline each is measured from
         warn = (f"adhesion {res.force * 1e9:.3g} nN (from the retract's own baseline) is under half the pull-off "
@@ -85,9 +91,10 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
 
 def _adhesion_fields(st: State) -> dict:
     a = st.details["adhesion"]
+    pulls = [t.force for t in a.tethers if t.tether]
     return dict(adhesion_force=a.force, adhesion_deflection=a.deflection, adhesion_distance=a.distance,
                 adhesion_noise=a.noise, rupture_distance=a.rupture_distance, unbinding_steps=len(a.steps),
-                adhesion_verdict=a.verdict)
+                tethers=len(pulls), tether_force=min(pulls) if pulls else math.nan, adhesion_verdict=a.verdict)
 
 
 ADHESION = AnalysisStep(
@@ -98,7 +105,12 @@ ADHESION = AnalysisStep(
             ResultField("adhesion_deflection", "m", "adhesion as a deflection"),
             ResultField("adhesion_distance", "m", "adhesion position from contact", summary=True, column=True),
             ResultField("adhesion_noise", "N", "baseline noise of the retract", column=True),
-            ResultField("rupture_distance", "m", "last rupture from contact", summary=True, column=True),
+            ResultField("rupture_distance", "m", "last rupture from contact (hard contact: its separation)",
+                        summary=True, column=True),
             ResultField("unbinding_steps", "", "unbinding steps", default=0, column=True),
+            ResultField("tethers", "", "tethers pulled after the tip left a hard surface", default=0, column=True,
+                        map=True),
+            ResultField("tether_force", "N", "largest tether pull at its rupture (hard contact)", column=True,
+                        map=True),
             ResultField("adhesion_verdict", None, default="")),
     collect=_adhesion_fields)
