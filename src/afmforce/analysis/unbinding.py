@@ -10,6 +10,10 @@ rupture (where the retract comes back to the baseline for good, as a distance
 from the contact point) and the unbinding steps: upward steps of the smoothed
 retract between the deepest point and the last rupture, each larger than
 ``nsigma`` noise; on a hard contact the pull-off jump that ends the dip is not one.
+The distances count from the approach's contact point, or, when the retract leaves
+its repulsive contact (falls below its baseline) inside it -- a soft sample that
+relaxed during the contact, a cell -- from there (``detach_position``): measured
+from the approach's contact point they came out negative, a rupture "before contact".
 
 This is the adhesion of soft and biological samples (unbinding, tethers) as well
 as of rigid ones; the paper's hard-contact pull-off (:mod:`.jumps`) stays for
@@ -18,6 +22,7 @@ hard contacts, where it is the same dip ending in one jump.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -65,6 +70,9 @@ class Adhesion:
     rupture_distance : float  distance from the contact point of the last rupture [m]
     steps : tuple of UnbindingStep
     verdict : str
+    detach_position : float  where the retract leaves its repulsive contact, from the approach's contact
+        point towards the sample [m] (> 0 on a relaxing sample: the distances above are measured from
+        there; 0: from the approach's contact point)
     """
 
     found: bool
@@ -77,6 +85,7 @@ class Adhesion:
     rupture_distance: float = _u("m")
     steps: tuple[UnbindingStep, ...]
     verdict: str
+    detach_position: float = _u("m", 0.0)
 
 
 def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, spring_constant: float, *,
@@ -138,18 +147,39 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
     if tail is None:
         tail = _tail_numpy(x, y, free, run.saturated, idx, a, b, xm, nsigma, w, k, pull_off)
     sigma, j, depth, found, rupture, steps = tail
+    ref = _detach_position(x, y - (a + b * (x - xm)), j)
+    ref = ref if ref > 0.0 else 0.0
+    if ref > 0.0:  # the retract left the contact inside the approach's contact point: distances from there
+        rupture = rupture + ref if math.isfinite(rupture) else rupture
+        steps = [dataclasses.replace(s, distance=s.distance + ref) for s in steps]
     force = depth * k
     unit, scale, val = ("nN", 1e9, force) if math.isfinite(k) else ("nm", 1e9, depth)
     noise_v = sigma * (k if math.isfinite(k) else 1.0)
     if found:
         verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
-                   f"{noise_v * scale:.2g} {unit}) at {-x[j] * 1e9:.4g} nm from contact; last rupture at "
+                   f"{noise_v * scale:.2g} {unit}) at {(ref - x[j]) * 1e9:.4g} nm from contact; last rupture at "
                    f"{rupture * 1e9:.4g} nm; {len(steps)} unbinding step(s)")
+        if ref > 0.0:
+            verdict += (f" (distances from where the retract leaves its contact, {ref * 1e9:.4g} nm inside the "
+                        "approach's contact point: the sample relaxed)")
     else:
         verdict = (f"no adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): the "
                    f"deepest dip is {-depth / sigma if sigma > 0 else 0:.2g} x the noise")
-    return Adhesion(bool(found), float(force) if found else math.nan, float(depth) if found else math.nan, int(idx[j]), float(-x[j]), float(noise_v), float(nsigma),
-                    float(rupture), tuple(steps), verdict)
+    return Adhesion(bool(found), float(force) if found else math.nan, float(depth) if found else math.nan, int(idx[j]), float(ref - x[j]), float(noise_v), float(nsigma),
+                    float(rupture), tuple(steps), verdict, float(ref))
+
+
+def _detach_position(x: np.ndarray, u: np.ndarray, j: int) -> float:
+    """Where the retract leaves its repulsive contact [m, the position relative to the approach's contact
+    point]: the first sample before the deepest dip ``j`` whose deflection ``u`` (above the retract's own
+    baseline) falls below zero. On a soft, relaxing sample (a cell) the retract crosses zero force inside
+    the approach's contact point (the surface did not come back with the tip), and the dip and the last
+    rupture measured from the approach's contact point would come out negative: a rupture "before
+    contact". The distances are measured from this point when it lies inside the contact point (> 0)."""
+    below = np.flatnonzero(u[: j + 1] < 0.0)
+    if not below.size or below[0] == 0:  # the run starts below its baseline: no contact part to leave
+        return math.nan
+    return float(x[below[0]])
 
 
 def _tail_numpy(x, y, free, saturated, idx, a, b, xm, nsigma, w, k, pull_off):
