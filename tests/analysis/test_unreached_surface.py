@@ -172,3 +172,63 @@ def test_nanite_map_curves_that_never_touched_are_no_contact(name):
     res = analyze(curve)
     assert res.contact_kind == "none"
     assert "setpoint out of range" in " ".join(res.warnings) or "drift" in " ".join(res.warnings)
+
+
+# --- impossible calibration and indentation numbers (NSFopen 1.1.18's `spec.nid`, a FluidFM cell curve) ---
+
+def _line(slope: float):
+    from afmforce.analysis.compliance import ComplianceLine
+
+    return ComplianceLine(0.0, slope, 0.0, abs(slope) * 0.01, 1e-12, 100, 0.0, 1e-6, 0.0, 1e-9)
+
+
+def test_a_falling_compliance_line_gives_no_sensitivity():
+    """A contact line the deflection falls along (the cell curve's: -38470 nm/V) is no compliance line: no
+    fitted sensitivity; the file's calibration stays; asked to calibrate from it, a refusal naming the value."""
+    from afmforce.analysis.compliance import ComplianceResult, calibrate
+
+    meta = {"sensitivity": 55.17e-9, "spring_constant": 0.902264}
+    falling = ComplianceResult(_line(-1.0e-4), _line(-1.2e-4), "N")     # N per m: falls as the tip pushes in
+    cal = calibrate(falling, meta)
+    assert math.isnan(cal.sensitivity_fit) and cal.source == "metadata"
+    assert cal.factor == pytest.approx(1 / 0.902264)                      # the file's: force / k
+    with pytest.raises(AnalysisError, match="sensitivity"):
+        calibrate(falling, {}, source="fit")
+    # a rising line: the sensitivity it gives = file's x (k / slope), as before
+    rising = ComplianceResult(_line(0.902264 / 2), _line(0.902264 / 2), "N")
+    assert calibrate(rising, meta).sensitivity_fit == pytest.approx(2 * 55.17e-9)
+
+
+def test_indentation_undetermined_when_its_contact_point_interval_spans_half_of_it():
+    from afmforce.analysis.contact_point import SoftContactPoint
+    from afmforce.analysis.steps.kind import UNDETERMINED_INDENTATION_RATIO, indentation_determined
+
+    def cp(width, indentation=1e-6):
+        return SoftContactPoint("power_local", 10, 0.0, 0.0, 0.0, indentation, 1.75, 0.0, width)
+
+    assert indentation_determined(cp(0.1e-6))
+    assert not indentation_determined(cp(1.01 * UNDETERMINED_INDENTATION_RATIO * 1e-6))
+    assert not indentation_determined(cp(0.0, indentation=-5e-9))   # the deflection rose more than z moved
+
+
+SPEC = "nsfopen-1.1.18_spec.nid"  # PyPI NSFopen 1.1.18 sdist, NSFopen/example/spec.nid (MIT; 5.4 MB)
+
+
+def test_fluidfm_cell_curves_give_no_negative_sensitivity_nor_an_undetermined_indentation():
+    """Nanosurf FlexAFM 2015 (software 3.4), a FluidFM lever (k 0.902 N/m) on cells, 10 curves triggered at
+    10 nN over up to 42 um: no fitted sensitivity <= 0; an indentation only where its contact point is
+    fixed within half of it; none beyond the approach's travel."""
+    path = SHARED / SPEC
+    if not path.is_file():
+        pytest.skip(f"{SPEC} not in {SHARED} (too large for tests/data): pip download --no-deps NSFopen==1.1.18")
+    for curve in load(path)[:2]:
+        z = np.asarray(curve.piezo_nominal)[np.asarray(curve.segment) == 0]
+        try:
+            res = analyze(curve)
+        except AnalysisError:
+            continue
+        assert not res.sensitivity_fit <= 0
+        cp = res.details["contact_point"]
+        if math.isfinite(res.indentation):
+            assert cp.position_high - cp.position_low <= 0.5 * res.indentation
+            assert res.indentation < np.ptp(z)
