@@ -232,3 +232,17 @@ def test_fluidfm_cell_curves_give_no_negative_sensitivity_nor_an_undetermined_in
         if math.isfinite(res.indentation):
             assert cp.position_high - cp.position_low <= 0.5 * res.indentation
             assert res.indentation < np.ptp(z)
+
+
+def test_a_dip_inside_the_contact_point_with_no_contact_before_it_has_no_distances():
+    """A retract cut short (PyJibe's `invalid_dataset.jpk-force`: 53 of 5000 retract samples, its last
+    rupture was -26.8 nm): it starts below its baseline, inside the approach's contact point, and jumps
+    back 30 nm before it. The adhesion stands; its distance, the last rupture's: undetermined, not negative."""
+    x = np.arange(60.0, -1000.0, -1.0) * NM
+    d = np.where(x > 30 * NM, -20 * NM, 0.0) + 0.1 * NM * np.random.default_rng(2).standard_normal(x.size)
+    n = x.size
+    run = RunRegions("retract", np.arange(n), 0, x > 0, x < -500 * NM, x > 10 * NM, np.zeros(n, bool), 0.1 * NM)
+    res = retract_adhesion(d, x, run, 0.02)
+    assert res.found and res.force == pytest.approx(-20 * NM * 0.02, rel=0.05)
+    assert math.isnan(res.distance) and math.isnan(res.rupture_distance)
+    assert "undetermined" in res.verdict

@@ -152,10 +152,20 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
     if ref > 0.0:  # the retract left the contact inside the approach's contact point: distances from there
         rupture = rupture + ref if math.isfinite(rupture) else rupture
         steps = [dataclasses.replace(s, distance=s.distance + ref) for s in steps]
+    distance = float(ref - x[j])
+    unplaced = found and not distance >= 0.0  # the dip inside the contact point, no contact seen before it
+    if unplaced:  # (a retract cut short: PyJibe's invalid_dataset.jpk-force, 53 of 5000 samples): undetermined
+        distance, rupture = math.nan, math.nan
+        steps = [dataclasses.replace(s, distance=math.nan) for s in steps]
     force = depth * k
     unit, scale, val = ("nN", 1e9, force) if math.isfinite(k) else ("nm", 1e9, depth)
     noise_v = sigma * (k if math.isfinite(k) else 1.0)
-    if found:
+    if unplaced:
+        verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
+                   f"{noise_v * scale:.2g} {unit}), {(x[j] - ref) * 1e9:.4g} nm inside the contact point with no "
+                   "contact recorded before it on the retract (a retract cut short?): its distance, the last "
+                   f"rupture's and the steps' undetermined; {len(steps)} unbinding step(s)")
+    elif found:
         verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
                    f"{noise_v * scale:.2g} {unit}) at {(ref - x[j]) * 1e9:.4g} nm from contact; last rupture at "
                    f"{rupture * 1e9:.4g} nm; {len(steps)} unbinding step(s)")
@@ -165,7 +175,7 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
     else:
         verdict = (f"no adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): the "
                    f"deepest dip is {-depth / sigma if sigma > 0 else 0:.2g} x the noise")
-    return Adhesion(bool(found), float(force) if found else math.nan, float(depth) if found else math.nan, int(idx[j]), float(ref - x[j]), float(noise_v), float(nsigma),
+    return Adhesion(bool(found), float(force) if found else math.nan, float(depth) if found else math.nan, int(idx[j]), distance, float(noise_v), float(nsigma),
                     float(rupture), tuple(steps), verdict, float(ref))
 
 
