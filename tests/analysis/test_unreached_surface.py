@@ -246,3 +246,26 @@ def test_a_dip_inside_the_contact_point_with_no_contact_before_it_has_no_distanc
     assert res.found and res.force == pytest.approx(-20 * NM * 0.02, rel=0.05)
     assert math.isnan(res.distance) and math.isnan(res.rupture_distance)
     assert "undetermined" in res.verdict
+
+
+def test_map_curves_carry_their_flags_and_good_ones_none(tmp_path):
+    """Maps and QI data are read through afmformats, which drops the flags: the readers add them. The
+    corpus' 2 x 2 map (triggered extends: 1627 of 12030 samples, flagged z-start-out-of-range only) and its
+    QI data carry none; a map curve whose extend is flagged z-end and setpoint out of range carries both."""
+    for name in ("jpk-force-map_2x2.jpk-force-map", "jpk-qi-data_2020.02.07.jpk-qi-data"):
+        assert all("recording_flags" not in c.metadata for c in load(DATA / "corpus" / name))
+    src = zipfile.ZipFile(DATA / "corpus" / "jpk-force-map_2x2.jpk-force-map")
+    out = tmp_path / "flagged.jpk-force-map"
+    with zipfile.ZipFile(out, "w", zipfile.ZIP_DEFLATED) as dst:
+        for info in src.infolist():
+            data = src.read(info.filename)
+            if info.filename == "index/0/segments/0/segment-header.properties":
+                text = data.decode("latin-1")
+                for flag in ("z-end-out-of-range", "setpoint-out-of-range"):
+                    assert f"force-scan-flags.{flag}=false" in text
+                    text = text.replace(f"force-scan-flags.{flag}=false", f"force-scan-flags.{flag}=true")
+                data = text.encode("latin-1")
+            dst.writestr(info, data)
+    flags = [c.metadata.get("recording_flags") for c in load(out)]
+    assert "setpoint out of range" in flags[0] and "z end out of range" in flags[0]
+    assert flags[1:] == [None, None, None]
