@@ -20,7 +20,7 @@ from ..io.curve import RawCurve
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import ptp
 from .dynamic import run_velocity
-from .options import ProbeCalibration
+from .options import ContactOptions, ProbeCalibration
 from .regions import RunRegions, run_indices
 from ._units import unit as _u
 
@@ -224,9 +224,9 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
 
 
 #: Fewest samples a run (approach or retract) must hold [-]: what the contact step's two-line split needs
-#: (``2 * min_points + 2`` at its default ``min_points`` = 5). A JPK curve whose piezo ran out of range
+#: (``2 * min_points + 2`` at its default ``min_points``: 12). A JPK curve whose piezo ran out of range
 #: before the setpoint stores an extend of 1 to 3 samples (nanite's `fmt-jpk-fd_single_bad_*` files).
-MIN_RUN_SAMPLES = 12
+MIN_RUN_SAMPLES = 2 * ContactOptions().min_points + 2
 
 
 #: No AFM scanner's z axis travels this far [m] (long-range heads move 100 um): a position spanning

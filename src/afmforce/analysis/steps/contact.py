@@ -16,7 +16,7 @@ from ..registry import AnalysisStep
 from .._step_helpers import line_slope
 from ..state import ContactSummary, NoContact, State
 
-__all__ = ["retract_dip", "contact", "CONTACT"]
+__all__ = ["retract_dip", "approach_end_rise", "FALLBACK_RISE_SIGMAS", "contact", "CONTACT"]
 
 
 def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
