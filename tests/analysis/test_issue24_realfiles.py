@@ -234,4 +234,7 @@ def test_hard_pull_off_is_no_unbinding_step_cell_curves_keep_theirs():
         assert soft.contact_kind == "soft" and soft.unbinding_steps == n, name
         assert all(0 < s.distance <= soft.rupture_distance + 5e-9 for s in soft.details["adhesion"].steps)
     _, spot3 = _run("jpk_cellhesion_spot3.jpk-force")
-    assert spot3.details["adhesion"].steps[0].distance == pytest.approx(57e-9, abs=5e-9)
+    # 57 nm from the approach's contact point; the distances count from where the retract leaves its contact
+    # (detach_position inside the contact point on this relaxing cell: tests/analysis/test_unreached_surface.py)
+    ad3 = spot3.details["adhesion"]
+    assert ad3.steps[0].distance - ad3.detach_position == pytest.approx(57e-9, abs=5e-9)

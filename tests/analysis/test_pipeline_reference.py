@@ -15,9 +15,11 @@ now passes the header's tip radius (a modulus is fitted): its case is analysed w
 
 from __future__ import annotations
 
+import copy
 import gzip
 import json
 import math
+import re
 import sys
 from pathlib import Path
 
@@ -62,6 +64,38 @@ def _compare(new, old, where: str, out: list[str]) -> None:
         out.append(f"{where}: {str(new)[:80]!r} != {str(old)[:80]!r}")
 
 
+#: Since stored (public files tried after the corpus, docs/analysis.md "Curves that never reached the
+#: surface"): the adhesion's distances count from where the retract leaves its contact when that lies
+#: inside the approach's contact point (``details.adhesion.detach_position`` > 0; measured from the
+#: approach's contact point they came out negative on relaxing cells). Undone here before comparing (the
+#: distances less ``detach_position``; the verdicts without their distances): every other number is main's.
+_AT = re.compile(r" at -?[\d.e+-]+ nm from contact; last rupture at -?[\d.e+-]+ nm"
+                 r"| \(distances from where the retract leaves its contact, [^)]*\)")
+
+
+def _before_detach(result, strip_only: bool = False):
+    """``result`` as it was before the detach reference (``strip_only``: the stored one, verdicts only)."""
+    if not isinstance(result, dict) or not isinstance(result.get("details"), dict):
+        return result
+    result = copy.deepcopy(result)
+    d = result["details"].get("adhesion")
+    if not isinstance(d, dict):
+        return result
+    ref = d.pop("detach_position", 0.0) or 0.0
+    result.get("details_units", {}).get("adhesion", {}).pop("detach_position", None)
+    if ref > 0 and not strip_only:
+        for obj, key in ((d, "distance"), (d, "rupture_distance"), (result, "adhesion_distance"),
+                         (result, "rupture_distance")):
+            if isinstance(obj.get(key), float):
+                obj[key] -= ref
+        for step in d.get("steps") or []:
+            step["distance"] -= ref
+    for obj, key in ((d, "verdict"), (result, "adhesion_verdict")):
+        if isinstance(obj.get(key), str):
+            obj[key] = _AT.sub("", obj[key])
+    return result
+
+
 def _bug(result) -> bool:
     """The reference holds an exception that is no AfmforceError (e.g. a ZeroDivisionError)."""
     import afmforce.errors as E
@@ -93,5 +127,5 @@ def test_every_number_unchanged(today):
     for key, old in REFERENCE.items():
         if _bug(old):  # main raised a bare Python error here (a bug, not a refusal): fixing it is no regression
             continue
-        _compare(today[key], old, key, diffs)
+        _compare(_before_detach(today[key]), _before_detach(old, strip_only=True), key, diffs)
     assert not diffs, f"{len(diffs)} differences, first: " + "; ".join(diffs[:8])

@@ -214,16 +214,21 @@ def calibrate(compliance: ComplianceResult, metadata: Mapping[str, Any], *, sour
         wr = 1.0 / r.slope_se**2 if r.slope_se > 0 else 1.0
         slope = (wa * a.slope + wr * r.slope) / (wa + wr)
     unit = compliance.unit
-    f_fit = 1.0 / slope
+    # a "compliance line" the deflection falls along while the tip pushes in is none (a noisy or drifting
+    # contact, a FluidFM cell curve gave -38470 nm/V): no calibration, no sensitivity from it
+    f_fit = 1.0 / slope if slope > 0 else math.nan
     f_meta = _metadata_factor(unit, metadata)
     if source == "metadata" and not math.isfinite(f_meta):
         raise AnalysisError("no calibration in the file: give the sensitivity (`sensitivity`) "
                             "or use the fitted compliance slope (source='fit')")
     use_meta = source == "metadata" or (source == "auto" and math.isfinite(f_meta))
+    if not use_meta and not math.isfinite(f_fit):
+        raise AnalysisError(f"the compliance line's slope is {slope:.3g} (the deflection does not rise as the tip "
+                            "pushes in): no calibration from it; give the sensitivity (`sensitivity`)")
     sens = float(metadata.get("sensitivity", math.nan) or math.nan)
     if unit == "V":
         sens_fit = f_fit
-    elif math.isfinite(f_meta):  # deflection per position on the line, times the file's sensitivity
+    elif math.isfinite(f_meta) and slope > 0:  # deflection per position on the line, times the file's sensitivity
         sens_fit = sens / (slope * f_meta)
     else:
         sens_fit = math.nan

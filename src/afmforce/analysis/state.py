@@ -20,7 +20,7 @@ from ..io.curve import RawCurve
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import ptp
 from .dynamic import run_velocity
-from .options import ProbeCalibration
+from .options import ContactOptions, ProbeCalibration
 from .regions import RunRegions, run_indices
 from ._units import unit as _u
 
@@ -197,9 +197,19 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
         if sizes[which] == 0 and not (single and sizes[1 - which]):
             raise AnalysisError(f"the curve has no {word} segment (one segment only); the analysis needs "
                                 "both runs: split the curve at its turning point")
+    for which, word in ((0, "approach"), (1, "retract")):
+        if 0 < sizes[which] < MIN_RUN_SAMPLES:
+            flags = curve.metadata.get("recording_flags")
+            said = f"; the file says: {flags}" if flags else ""
+            raise AnalysisError(f"the {word} holds only {sizes[which]} sample(s) (the "
+                                f"{('retract', 'approach')[which]} {sizes[1 - which]}): not a force curve, "
+                                f"the recording stopped at once{said}; record the curve again (a "
+                                "larger z range, or a setpoint the sample can reach)")
     probe = probe if probe is not None else _default_probe()
     _check_calibration(curve.metadata, probe, curve.deflection_unit)
     notes: list[str] = []
+    if curve.metadata.get("recording_flags"):  # the instrument's own word on the recording (JPK force-scan flags)
+        notes.append(f"the file flags its recording: {curve.metadata['recording_flags']}")
     z, use_measured = _moving_position(curve, z, use_measured, channel, runs, notes)
     inverted = _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
     if inverted:
@@ -214,6 +224,12 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
                  channel="measured" if use_measured else "nominal",
                  time_known=not bool(curve.metadata.get("time_is_sample_index", False)),
                  probe=probe, warnings=tuple(notes), cache=runs)
+
+
+#: Fewest samples a run (approach or retract) must hold [-]: what the contact step's two-line split needs
+#: (``2 * min_points + 2`` at its default ``min_points``: 12). A JPK curve whose piezo ran out of range
+#: before the setpoint stores an extend of 1 to 3 samples (nanite's `fmt-jpk-fd_single_bad_*` files).
+MIN_RUN_SAMPLES = 2 * ContactOptions().min_points + 2
 
 
 #: No AFM scanner's z axis travels this far [m] (long-range heads move 100 um): a position spanning

@@ -10,6 +10,10 @@ rupture (where the retract comes back to the baseline for good, as a distance
 from the contact point) and the unbinding steps: upward steps of the smoothed
 retract between the deepest point and the last rupture, each larger than
 ``nsigma`` noise; on a hard contact the pull-off jump that ends the dip is not one.
+The distances count from the approach's contact point, or, when the retract leaves
+its repulsive contact (falls below its baseline) inside it -- a soft sample that
+relaxed during the contact, a cell -- from there (``detach_position``): measured
+from the approach's contact point they came out negative, a rupture "before contact".
 
 This is the adhesion of soft and biological samples (unbinding, tethers) as well
 as of rigid ones; the paper's hard-contact pull-off (:mod:`.jumps`) stays for
@@ -22,6 +26,7 @@ their own, every rupture counted, the last rupture as a separation
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -75,6 +80,9 @@ class Adhesion:
     tethers : tuple of TetherRupture
         Hard contact: every rupture after the pull-off (:mod:`.tethers`); ``tether`` marks those after the
         retract came back to its free baseline (empty on soft contacts: their ruptures are ``steps``)
+    detach_position : float  where the retract leaves its repulsive contact, from the approach's contact
+        point towards the sample [m] (> 0 on a relaxing sample: the distances above are measured from
+        there; 0: from the approach's contact point)
     """
 
     found: bool
@@ -88,6 +96,7 @@ class Adhesion:
     steps: tuple[UnbindingStep, ...]
     verdict: str
     tethers: tuple[TetherRupture, ...] = ()
+    detach_position: float = _u("m", 0.0)
 
     @property
     def tether_count(self) -> int:
@@ -186,6 +195,19 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
                             found = -depth > nsigma * sigma
                             out = _hard(u2, x, hh, idx, run, sigma, nsigma, w, k, pull_off, j, depth, found)
             j, depth, found, rupture, steps, tethers, within = out
+    hard_path = hard and separation is not None
+    ref, unplaced = 0.0, False
+    if not hard_path:  # a hard contact's distances are separations (:func:`_hard`)
+        ref = _detach_position(x, y - (a + b * (x - xm)), j)
+        ref = ref if ref > 0.0 else 0.0
+        if ref > 0.0:  # the retract left the contact inside the approach's contact point: distances from there
+            rupture = rupture + ref if math.isfinite(rupture) else rupture
+            steps = [dataclasses.replace(s, distance=s.distance + ref) for s in steps]
+    distance = float(ref - x[j])
+    unplaced = not hard_path and found and not distance >= 0.0  # the dip inside the contact point, no contact
+    if unplaced:  # seen before it (a retract cut short: PyJibe's invalid_dataset.jpk-force, 53 of 5000 samples)
+        distance, rupture = math.nan, math.nan
+        steps = [dataclasses.replace(s, distance=math.nan) for s in steps]
     force = depth * k
     unit, scale, val = ("nN", 1e9, force) if math.isfinite(k) else ("nm", 1e9, depth)
     noise_v = sigma * (k if math.isfinite(k) else 1.0)
@@ -193,11 +215,19 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
     more = (f"; {nt} tether(s) after the tip left the surface, ruptures at "
             + ", ".join(f"{t.separation * 1e9:.4g} nm ({t.force * scale:.3g} {unit})" for t in tethers if t.tether)
             if nt else "")
-    where = " separation" if hard and separation is not None else ""
-    if found:
+    where = " separation" if hard_path else ""
+    if unplaced:
         verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
-                   f"{noise_v * scale:.2g} {unit}) at {-x[j] * 1e9:.4g} nm from contact; last rupture at "
+                   f"{noise_v * scale:.2g} {unit}), {(x[j] - ref) * 1e9:.4g} nm inside the contact point with no "
+                   "contact recorded before it on the retract (a retract cut short?): its distance, the last "
+                   f"rupture's and the steps' undetermined; {len(steps)} unbinding step(s)")
+    elif found:
+        verdict = (f"adhesion {val * scale:.3g} {unit} ({-depth / sigma:.3g} x the baseline noise "
+                   f"{noise_v * scale:.2g} {unit}) at {(ref - x[j]) * 1e9:.4g} nm from contact; last rupture at "
                    f"{rupture * 1e9:.4g} nm{where}; {len(steps)} unbinding step(s){more}")
+        if ref > 0.0:
+            verdict += (f" (distances from where the retract leaves its contact, {ref * 1e9:.4g} nm inside the "
+                        "approach's contact point: the sample relaxed)")
     elif within:
         verdict = (f"no tip-surface adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): "
                    f"{val * scale:.2g} {unit} before the retract came back to its baseline; last rupture at "
@@ -206,8 +236,9 @@ def retract_adhesion(d: np.ndarray, position: np.ndarray, run: RunRegions, sprin
         verdict = (f"no adhesion above {nsigma:g} x the baseline noise ({noise_v * scale:.2g} {unit}): the "
                    f"deepest dip is {-depth / sigma if sigma > 0 else 0:.2g} x the noise")
     keep = found or within   # with tethers, an adhesion within the noise is a number: about 0, not the tethers'
-    return Adhesion(bool(found), float(force) if keep else math.nan, float(depth) if keep else math.nan, int(idx[j]), float(-x[j]), float(noise_v), float(nsigma),
-                    float(rupture), tuple(steps), verdict, tuple(tethers))
+    return Adhesion(bool(found), float(force) if keep else math.nan, float(depth) if keep else math.nan,
+                    int(idx[j]), distance, float(noise_v), float(nsigma), float(rupture), tuple(steps), verdict,
+                    tethers=tuple(tethers), detach_position=float(ref))
 
 
 def _hard(u, x, h, idx, run, sigma, nsigma, w, k, pull_off, j, depth, found):
@@ -249,6 +280,19 @@ def _hard(u, x, h, idx, run, sigma, nsigma, w, k, pull_off, j, depth, found):
     steps = tuple(UnbindingStep(r.index, r.distance, r.drop) for r in rs)
     end = rs[-1].separation if rs else math.nan
     return jj, dd, ff, end, steps, tuple(rs), not ff
+
+
+def _detach_position(x: np.ndarray, u: np.ndarray, j: int) -> float:
+    """Where the retract leaves its repulsive contact [m, the position relative to the approach's contact
+    point]: the first sample before the deepest dip ``j`` whose deflection ``u`` (above the retract's own
+    baseline) falls below zero. On a soft, relaxing sample (a cell) the retract crosses zero force inside
+    the approach's contact point (the surface did not come back with the tip), and the dip and the last
+    rupture measured from the approach's contact point would come out negative: a rupture "before
+    contact". The distances are measured from this point when it lies inside the contact point (> 0)."""
+    below = np.flatnonzero(u[: j + 1] < 0.0)
+    if not below.size or below[0] == 0:  # the run starts below its baseline: no contact part to leave
+        return math.nan
+    return float(x[below[0]])
 
 
 def _tail_numpy(x, y, free, saturated, idx, a, b, xm, nsigma, w, k, pull_off):

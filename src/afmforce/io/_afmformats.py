@@ -197,7 +197,7 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
         try:
             curves = load_afmformats(path, meta_override=meta_override, callback=callback, reader="jpk-force",
                                      styles=lambda dd: segment_styles(arc, dd.metadata.get("enum"), str(path)))
-            return [_header_rate(c, arc, meta_override) for c in curves]
+            return [_header_flags(_header_rate(c, arc, meta_override), arc) for c in curves]
         except MissingMetadataError:
             return load_jpk_zip(path, meta_override=meta_override, callback=callback)
         except FileFormatError as exc:
@@ -221,6 +221,17 @@ def _header_rate(curve: RawCurve, arc: zipfile.ZipFile, meta_override: Mapping[s
     if rate is None or rate == curve.metadata.get("sample_rate"):
         return curve
     return dataclasses.replace(curve, metadata={**curve.metadata, "sample_rate": rate})
+
+
+def _header_flags(curve: RawCurve, arc: zipfile.ZipFile) -> RawCurve:
+    """The curve with its segments' force-scan flags (``recording_flags``: the piezo out of range, the
+    setpoint not reached), which afmformats does not pass on."""
+    from .jpk_zip import curve_recording_flags
+
+    said = curve_recording_flags(arc, curve.metadata.get("afmformats:enum"))
+    if not said:
+        return curve
+    return dataclasses.replace(curve, metadata={**curve.metadata, "recording_flags": said})
 
 
 def _jpk_force(curve: RawCurve) -> RawCurve:

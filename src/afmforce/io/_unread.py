@@ -36,6 +36,9 @@ UNREAD: dict[str, tuple[str, str, str]] = {
              "it has no time column, and one made from a Bruker file keeps the approach in that file's order "
              "(turning point first) and gives the ramp rate as its sampling rate",
              "read the instrument file it was made from"),
+    ".gwy": ("Gwyddion file (.gwy)", "it is Gwyddion's own container of images and processed graphs, "
+             "without the instrument's calibration (spring constant, sensitivity, ramp)",
+             "read the instrument's own file of the curves, or " + _EXPORT),
     ".jpk": ("JPK image file", "it is an image, not a force curve",
              "give the force curves (.jpk-force, .jpk-force-map, .jpk-qi-data)"),
     ".jpk-qi-image": ("JPK QI image file", "it holds the maps computed from a QI measurement, not the curves",

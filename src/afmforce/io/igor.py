@@ -90,6 +90,10 @@ def check_ibw_header(path: Path) -> None:
 def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable | None = None) -> list[RawCurve]:
     """Asylum ``.ibw`` force curve: one wave, split into approach and retract (or a per-channel pair)."""
     check_ibw_header(path)
+    image = _image_wave(path)
+    if image:
+        raise FileFormatError(f"{path}: this Asylum .ibw holds {image}, not a force curve; give the force curves "
+                              "(an .ibw the force panel saved, one wave per curve, or the ARDF force map)")
     if _is_one_channel(path):
         return [load_channel_pair(path, meta_override=meta_override)]
     # the fast path builds what afmformats builds, from a numpy read of the wave (None: not a plain
@@ -142,6 +146,34 @@ def _thermal_frequency(path: Path, key: str = "ThermalFrequency:") -> float | No
     return None
 
 
+
+
+#: A force-curve wave has its samples in rows and at most a few channels in columns (Raw, Defl, ZSnsr, ...);
+#: a wave with more columns than this, or a third dimension (layers), is an image [-].
+MAX_CURVE_CHANNELS = 32
+
+
+def _image_wave(path: Path) -> str:
+    """What an image wave holds (``"an image (256 x 256 pixels, 4 channels: HeightRetrace, ...)"``), or ``""``
+    for a wave shaped like force curves: an Asylum image saved as .ibw (SciFiDatasets' PFM images:
+    256 x 256 x 4 and x 5) has rows and columns of pixels and one layer per channel."""
+    with open(path, "rb") as fh:
+        head = fh.read(64 + 148)
+    if len(head) < 64 + 148:
+        return ""
+    order = "<" if struct.unpack("<h", head[:2])[0] in (1, 2, 3, 5) else ">"
+    if struct.unpack(order + "h", head[:2])[0] != 5:
+        return ""
+    ndim = struct.unpack(order + "4i", head[64 + 68:64 + 84])
+    if not (ndim[2] > 0 or ndim[1] > MAX_CURVE_CHANNELS):
+        return ""
+    layers = max(ndim[2], 1)
+    names = ""
+    wave = read_wave5(path)
+    if wave is not None and len(wave.labels) > 2:
+        found = [b.decode("latin-1") for b in wave.labels[2] if b]
+        names = f": {', '.join(found)}" if found else ""
+    return f"an image ({ndim[0]} x {ndim[1]} pixels, {layers} channel{'s' if layers > 1 else ''}{names})"
 
 
 def _is_one_channel(path: Path) -> bool:

@@ -383,6 +383,63 @@ def _map_position(gen: Mapping[str, str], index: int) -> dict[str, Any]:
     return out
 
 
+#: The instrument's flags of a force segment (``force-segment-header.force-scan-flags.<flag>=true``) and what
+#: each means: a curve whose extend ran out of z range before the setpoint stores few samples, or none in
+#: contact (nanite's `fmt-jpk-fd_single_bad_*` and `fmt-jpk-fd_map_bad_*` test files). Not
+#: ``z-start-out-of-range``: the triggered extends of good map curves carry it (the corpus' 2 x 2 map).
+SEGMENT_FLAGS = {"z-end-out-of-range": "z end out of range (the piezo reached the end of its travel)",
+                 "setpoint-out-of-range": "setpoint out of range (the setpoint was not reached)",
+                 "tipsaver-limit-exceeded": "tip-saver limit exceeded", "aborted": "aborted"}
+
+
+def recording_flags(props: Mapping[str, str], n: int) -> str:
+    """What a JPK segment header's force-scan flags say about its recording (``""`` when none is set), with
+    its samples against the planned ``segment-settings.num-points`` where it stopped short."""
+    said = [text for flag, text in SEGMENT_FLAGS.items()
+            if props.get(f"force-segment-header.force-scan-flags.{flag}", "").strip() == "true"]
+    if not said:
+        return ""
+    planned = props.get("force-segment-header.settings.segment-settings.num-points", "").strip()
+    count = f"{n} of {planned} samples recorded, " if planned.isdigit() and int(planned) > n else ""
+    return count + ", ".join(said)
+
+
+_FLAG_BYTES = tuple(f"force-scan-flags.{flag}=true".encode() for flag in SEGMENT_FLAGS)
+
+
+def curve_recording_flags(arc: zipfile.ZipFile, enum: int | None) -> str:
+    """:func:`recording_flags` of every segment of one curve (``index/<enum>/`` in maps and QI data) that
+    has a flag set, ``"; "``-joined (``""``: none). A segment header is parsed only when its bytes hold a
+    set flag (most hold none: a map of thousands of curves pays a substring search each)."""
+    plain = enum is None
+    if not plain:
+        try:
+            arc.getinfo("segments/0/segment-header.properties")
+            plain = True
+        except KeyError:
+            pass
+    prefix = "" if plain else f"index/{int(enum)}/"
+    out, shared = [], None
+    for j in range(10_000):
+        name = f"{prefix}segments/{j}/segment-header.properties"
+        try:
+            raw = arc.read(name)
+        except KeyError:
+            break
+        if not any(flag in raw for flag in _FLAG_BYTES):
+            continue
+        shared = _shared(arc) if shared is None else shared
+        props = _segment_header(arc, name, shared)
+        try:
+            n = int(props.get("force-segment-header.num-points", "").strip())
+        except ValueError:
+            n = -1
+        said = recording_flags(props, n)
+        if said:
+            out.append(f"{_identifier(props) or _style(props, j)}: {said}")
+    return "; ".join(out)
+
+
 def _read_props(arc: zipfile.ZipFile, name: str) -> dict[str, str]:
     return parse_properties(arc.read(name).decode("utf-8", errors="replace"))
 
@@ -414,6 +471,10 @@ def _read_archive(arc: zipfile.ZipFile, where: str, meta_override: dict, callbac
         volts = _decode(arc, seg_dir, pv, "vDeflection", where)
         meta.update(_calibration(pv))
         n = volts.size
+        flagged = recording_flags(props, n)
+        if flagged:
+            meta["recording_flags"] = "; ".join(filter(None, (meta.get("recording_flags"),
+                                                              f"{_identifier(props) or style}: {flagged}")))
         if "height" in chans:
             ph = _channel_props(props, shared, "height")
             hv = _decode(arc, seg_dir, ph, "height", where)
