@@ -86,3 +86,22 @@ def test_a_rising_compliance_line_is_left_alone(curves):
     plain, _ = curves
     res = analyze(plain)
     assert not _said(res) and math.isfinite(res.sensitivity_fit) and res.sensitivity_fit > 0
+
+
+def test_a_line_that_falls_within_its_noise_is_not_taken_for_an_inverted_sign():
+    """NSFopen 1.1.18's FluidFM cell curve 1 (k 0.902 N/m): its "compliance line" falls by 1.0 x its own
+    residual scale (-0.0013 N/m, 1/700 of k): a creeping contact, not a lever stored with the other sign.
+    It is left as read (no negation, no note); the calibration gives no sensitivity from it."""
+    import os
+    from pathlib import Path
+
+    from afmforce.analysis.pipeline import INVERTED_LINE_SIGMAS
+    from afmforce.io import load
+
+    path = Path(os.environ.get("AFMFORCE_REAL_DATA", "")) / "nsfopen-1.1.18_spec.nid"
+    if not path.is_file():
+        pytest.skip("nsfopen-1.1.18_spec.nid absent (pip download --no-deps NSFopen==1.1.18)")
+    res = analyze(load(path)[1])
+    line = res.details["compliance"].approach
+    assert line.slope < 0 and -line.slope * (line.z_max - line.z_min) < INVERTED_LINE_SIGMAS * line.sigma
+    assert not _said(res) and math.isnan(res.sensitivity_fit)

@@ -203,15 +203,15 @@ def _analyze(curve: RawCurve, order: list[str], opts, probe, channel: str, memo:
         if missing and missing in known[name].runs:  # a curve of one run: the step needs the other
             st = st.update(skipped={**st.skipped, name: f"not available: no {missing} run"})
             continue
+        if name == "calibration" and not negated:
+            why = inverted_sign(st, opts[name].run)
+            if why:  # oriented first, then every step sees a lever that bends away from the sample
+                flipped = dataclasses.replace(given, deflection_signal=-np.asarray(given.deflection_signal))
+                return _analyze(flipped, order, opts, probe, channel, None, negated=why)
         try:
             st = known[name].run(st, opts[name])
         except NoContact as exc:  # a curve that never touches: contact kind "none", not a failure
             return _no_contact(st, tuple(order), str(exc))
-        if name == "calibration" and not negated:
-            why = inverted_sign(st)
-            if why:  # oriented first, then every step sees a lever that bends away from the sample
-                flipped = dataclasses.replace(given, deflection_signal=-np.asarray(given.deflection_signal))
-                return _analyze(flipped, order, opts, probe, channel, None, negated=why)
         if key is not None and i == head - 1:
             memo[key] = (arrays, st)
     if missing:  # said once, where every output shows it (the steps' own reasons are in not_applicable)
@@ -223,19 +223,41 @@ def _analyze(curve: RawCurve, order: list[str], opts, probe, channel: str, memo:
     return _result(st, tuple(order), known)
 
 
-def inverted_sign(st: State) -> str | None:
-    """Why the deflection signal's sign is inverted, read off the compliance line the calibration used
-    (None when it rises, as it does on every contact).
+#: A falling compliance line says the signal's sign is inverted only when it is a compliance line: its fall
+#: over the contact at least this many times its robust residual scale [-] (NSFopen 1.1.18's FluidFM cell
+#: curve 1 falls by 1.0 x its scale: a drifting, creeping contact, no line; the calibration refuses it), and,
+#: where the file's (or the user's) calibration converts it, at least this steep in deflection per
+#: position [m/m] (a very soft gel's indentation line, Bruker's Egel4 file, is 0.021; that FluidFM curve's 0.0014).
+INVERTED_LINE_SIGMAS = 20.0
+INVERTED_LINE_MIN_SLOPE = 0.005
+
+
+def inverted_sign(st: State, run: str = "approach") -> str | None:
+    """Why the deflection signal's sign is inverted, read off the compliance line the calibration would
+    use (``run``; None when it rises, as it does on every contact).
 
     Pressed on the sample, a lever bends away from it: on its compliance (or indentation) line the
     deflection rises as the position advances, in every unit (volts, metres, newtons). A line that falls
-    says the signal was stored with the other sign convention; its slope would calibrate a negative
-    sensitivity, which no detector has. The curve is then negated and analysed again (:func:`analyze`),
-    the note saying so, so that the sensitivity, the forces and the contact come out as for the curve
-    stored the usual way."""
-    cal = st.details.get("calibration")
-    slope = getattr(cal, "compliance_slope", math.nan)
-    if not (math.isfinite(slope) and slope < 0.0):
+    clearly (:data:`INVERTED_LINE_SIGMAS`, :data:`INVERTED_LINE_MIN_SLOPE`) says the signal was stored with
+    the other sign convention; its slope would calibrate a negative sensitivity, which no detector has. The
+    curve is then negated and analysed again (:func:`analyze`), the note saying so, so that the
+    sensitivity, the forces and the contact come out as for the curve stored the usual way. A line that
+    falls within its noise, or too gently to be a contact, is left to the calibration (no sensitivity
+    from it)."""
+    comp = st.details.get("compliance")
+    if comp is None:
+        return None
+    a, r = comp.approach, comp.retract
+    line = a if (run != "retract" and a.found) or not r.found else r
+    slope = float(line.slope)
+    if not (line.found and math.isfinite(slope) and slope < 0.0):
+        return None
+    fall = -slope * (line.z_max - line.z_min)
+    if not fall > INVERTED_LINE_SIGMAS * line.sigma:
+        return None
+    md = st.metadata if st.probe.sensitivity is None else {**st.metadata, "sensitivity": st.probe.sensitivity}
+    scale = signal_factor(st.unit, md.get("sensitivity"), md.get("spring_constant"))
+    if math.isfinite(scale) and scale > 0 and -slope * scale < INVERTED_LINE_MIN_SLOPE:
         return None
     what = (f"a sensitivity of {-1e9 / slope:.4g} nm/V once negated" if st.unit == "V"
             else "the forces of the curve stored the usual way once negated")
