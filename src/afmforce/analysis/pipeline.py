@@ -189,7 +189,7 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
         key, arrays = _memo_key(curve, st.channel, order[:head], opts)
         hit = memo.get(key)
         if hit is not None and all(a is b for a, b in zip(hit[0], arrays)):
-            st, start = dataclasses.replace(hit[1], curve=curve, probe=st.probe), head
+            st, start = dataclasses.replace(hit[1], curve=st.curve, probe=st.probe), head  # prepare's (deglitched)
     missing = st.missing_run
     for i, name in enumerate(order[start:], start):
         if missing and missing in known[name].runs:  # a curve of one run: the step needs the other
@@ -228,6 +228,10 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
     extra: dict[str, Any] = {}
     depth, sigma = retract_dip(st.signal, st.curve.run_indices(1) if hasattr(st.curve, "run_indices")
                                  else np.flatnonzero(st.curve.segment == 1))
+    # the approach's own dip (read from its far end): an attraction that never touched dips both runs alike
+    reach, _ = retract_dip(st.signal, np.flatnonzero(st.curve.segment == 0)[::-1])
+    if math.isfinite(reach) and reach > 0:
+        depth -= reach
     if math.isfinite(depth) and sigma > 0 and depth > nsigma * sigma:
         to_force = signal_factor(st.unit, sens, k, to="force")
         force, noise = -depth * to_force, sigma * to_force

@@ -20,6 +20,7 @@ from ..io.curve import RawCurve
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import ptp
 from .dynamic import run_velocity
+from .glitches import remove_glitches
 from .options import ProbeCalibration
 from .regions import RunRegions, run_indices
 from ._units import unit as _u
@@ -200,6 +201,10 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     probe = probe if probe is not None else _default_probe()
     _check_calibration(curve.metadata, probe, curve.deflection_unit)
     notes: list[str] = []
+    s, glitches = remove_glitches(s)
+    if glitches:   # the steps that read the recorded signal read the repaired one too
+        notes.append(glitches)
+        curve = dataclasses.replace(curve, deflection_signal=s)
     z, use_measured = _moving_position(curve, z, use_measured, channel, runs, notes)
     inverted = _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
     if inverted:

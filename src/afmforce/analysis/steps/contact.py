@@ -16,7 +16,7 @@ from ..registry import AnalysisStep
 from .._step_helpers import line_slope
 from ..state import ContactSummary, NoContact, State
 
-__all__ = ["retract_dip", "contact", "CONTACT"]
+__all__ = ["retract_dip", "contact_rise", "contact", "CONTACT", "CONTACT_RISE_SIGMAS"]
 
 
 def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
@@ -73,6 +73,38 @@ def _check_free_baseline(z: np.ndarray, signal: np.ndarray, run) -> None:
             "is undetermined; record the approach from farther out (a baseline off the surface)")
 
 
+#: An approach reaches the surface when its contact region climbs above its baseline's line by this many
+#: noise sigmas over the contact region's positions [-] (every contact pushes the lever away, even the
+#: adhesive line a jump lands on: a slope of about 1 in deflection; a virtual static curve's approach stopped
+#: 10-30 nm short of its jump bends down by the attraction alone, -1 to -17 sigma, where its compliance
+#: "line" gave a sensitivity of -0.8 to -46 um/V; its contact, 3 nm past the jump, climbs 40 sigma).
+CONTACT_RISE_SIGMAS = 5.0
+
+
+def contact_rise(z: np.ndarray, signal: np.ndarray, run) -> float:
+    """How far the approach's unclipped compliance region climbs above its zero-force line's slope over its
+    positions, in noise sigmas [-] (NaN when either region has fewer than 3 samples or no noise is known)."""
+    idx = run.index
+    zz, ss = z[idx], signal[idx]
+    base, top = run.zero_force, run.compliance & ~run.saturated
+    if base.sum() < 3 or top.sum() < 3 or not run.noise > 0:
+        return math.nan
+    sb, sc = line_slope(zz[base], ss[base]), line_slope(zz[top], ss[top])
+    return (sc - sb) * float(np.ptp(zz[top])) / run.noise
+
+
+def _check_contact_reached(z: np.ndarray, signal: np.ndarray, run) -> None:
+    """Say :class:`NoContact` (contact kind "none") when the approach's contact region does not climb
+    (:data:`CONTACT_RISE_SIGMAS`): the approach stopped short of the surface, and the "compliance line" the
+    regions found is the attraction's bend or the noise."""
+    rise = contact_rise(z, signal, run)
+    if rise < CONTACT_RISE_SIGMAS:
+        how = "bends down (an attraction only)" if rise < -CONTACT_RISE_SIGMAS else "stays on its baseline"
+        raise NoContact(f"no contact reached: the approach's end {how}, {rise:.3g} noise sigmas from its baseline's "
+                        f"line where a contact climbs {CONTACT_RISE_SIGMAS:g} or more; the approach stops short of "
+                        "the surface, so there is no contact point, sensitivity, modulus or adhesion")
+
+
 def contact(st: State, o: ContactOptions) -> State:
     """Contact, constant-compliance and zero-force regions of both runs.
 
@@ -109,6 +141,7 @@ def contact(st: State, o: ContactOptions) -> State:
             raise NoContact(str(exc).replace("no contact region found on the approach run", "no contact reached")
                             ) from None
     _check_free_baseline(st.z, st.signal, app)
+    _check_contact_reached(st.z, st.signal, app)
     ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
     app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
     summary = ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
