@@ -16,7 +16,8 @@ from ..registry import AnalysisStep
 from .._step_helpers import line_slope
 from ..state import ContactSummary, NoContact, State
 
-__all__ = ["retract_dip", "contact_rise", "contact", "CONTACT", "CONTACT_RISE_SIGMAS"]
+__all__ = ["retract_dip", "contact_rise", "contact", "contact_summary", "regions_again", "CONTACT", "CONTACT_RISE_SIGMAS",
+           "REGIONS_KEY"]
 
 
 def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
@@ -144,9 +145,8 @@ def contact(st: State, o: ContactOptions) -> State:
     _check_contact_reached(st.z, st.signal, app)
     ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
     app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
-    summary = ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
-                             int(app.zero_force.sum()), int(ret.zero_force.sum()), int(app.compliance.sum()),
-                             int(ret.compliance.sum()), int(sat.sum()))
+    summary = contact_summary(app, ret, int(sat.sum()))
+    st.cache[REGIONS_KEY] = (kw, flat_ratio, max_slope_ratio)   # for the fringes step's second look
     warn = []
     if sat.any():
         warn.append(f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits")
@@ -154,6 +154,33 @@ def contact(st: State, o: ContactOptions) -> State:
     # noise of the signal from sample-to-sample differences in the approach's free part: blind to
     # slow structure (drift, fringes), so it measures the resolution the jump tests need
     return st.update("contact", summary, warn=warn, approach=app, retract=ret, noise=app.noise)
+
+
+#: Where the contact step leaves its region options in the state's cache (the fringes step finds the regions
+#: again on a signal whose fringes hid them).
+REGIONS_KEY = "contact_regions"
+
+
+def contact_summary(app, ret, saturated: int) -> ContactSummary:
+    """The :class:`ContactSummary` of both runs' regions (``saturated``: the curve's clipped samples)."""
+    return ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
+                          int(app.zero_force.sum()), int(ret.zero_force.sum()), int(app.compliance.sum()),
+                          int(ret.compliance.sum()), int(saturated))
+
+
+def regions_again(st: State, z: np.ndarray, signal: np.ndarray):
+    """Both runs' regions found on another position and signal with the contact step's options (``(approach,
+    retract)``), or None when the contact step left none (a curve of one run) or they cannot be found."""
+    spec = st.cache.get(REGIONS_KEY)
+    if spec is None or st.approach is None or st.retract is None:
+        return None
+    kw, flat_ratio, max_slope_ratio = spec
+    try:
+        app = find_run_regions(z, signal, st.approach.index, "approach", **kw)
+        ret = find_run_regions(z, signal, st.retract.index, "retract", noise=app.noise, **kw)
+        return check_compliance(z, signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
+    except AnalysisError:
+        return None
 
 
 def _one_run(st: State, sat: np.ndarray, kw: dict) -> State:
