@@ -228,11 +228,11 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
     extra: dict[str, Any] = {}
     depth, sigma = retract_dip(st.signal, st.curve.run_indices(1) if hasattr(st.curve, "run_indices")
                                  else np.flatnonzero(st.curve.segment == 1))
-    # the approach's own dip (read from its far end): an attraction that never touched dips both runs alike
+    # the approach's own dip (read from its far end): an attraction that never touched dips both runs alike,
+    # a touch leaves the retract deeper
     reach, _ = retract_dip(st.signal, np.flatnonzero(st.curve.segment == 0)[::-1])
-    if math.isfinite(reach) and reach > 0:
-        depth -= reach
-    if math.isfinite(depth) and sigma > 0 and depth > nsigma * sigma:
+    deeper = depth - (reach if math.isfinite(reach) and reach > 0 else 0.0)
+    if math.isfinite(depth) and sigma > 0 and deeper > nsigma * sigma:
         to_force = signal_factor(st.unit, sens, k, to="force")
         force, noise = -depth * to_force, sigma * to_force
         what = (f"{-force * 1e9:.4g} nN ({depth / sigma:.3g} x the noise)" if math.isfinite(force)
