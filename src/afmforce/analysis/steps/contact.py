@@ -16,8 +16,8 @@ from ..registry import AnalysisStep
 from .._step_helpers import line_slope
 from ..state import ContactSummary, NoContact, State
 
-__all__ = ["retract_dip", "contact_rise", "contact", "contact_summary", "regions_again", "CONTACT", "CONTACT_RISE_SIGMAS",
-           "REGIONS_KEY"]
+__all__ = ["retract_dip", "contact_rise", "contact", "contact_summary", "regions_again", "CONTACT",
+           "CONTACT_RISE_SIGMAS", "REGIONS_KEY"]
 
 
 def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
@@ -76,9 +76,9 @@ def _check_free_baseline(z: np.ndarray, signal: np.ndarray, run) -> None:
 
 #: An approach reaches the surface when its contact region climbs above its baseline's line by this many
 #: noise sigmas over the contact region's positions [-] (every contact pushes the lever away, even the
-#: adhesive line a jump lands on: a slope of about 1 in deflection; a virtual static curve's approach stopped
-#: 10-30 nm short of its jump bends down by the attraction alone, -1 to -17 sigma, where its compliance
-#: "line" gave a sensitivity of -0.8 to -46 um/V; its contact, 3 nm past the jump, climbs 40 sigma).
+#: adhesive line a jump lands on: a slope of about 1 in deflection; a virtual static curve's approach turned
+#: 0.5-3 nm before its jump-in bends down by the attraction alone, -14 to -7 sigma, where its "compliance
+#: line" gave a sensitivity of -0.25 to -0.69 um/V; the intact approach climbs 416 sigma).
 CONTACT_RISE_SIGMAS = 5.0
 
 

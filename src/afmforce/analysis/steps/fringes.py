@@ -66,19 +66,20 @@ def fringes(st: State, o: FringesOptions) -> State:
     regions, notes = {}, []
     if remove and both:
         # fringes as deep as the contact's rise put the contact split on a fringe's flank (a virtual curve's
-        # 15 nm fringes gave a sensitivity of 261 nm/V for 50): the regions are found again without them
+        # 15 nm fringes gave a sensitivity of 214 nm/V for 50): the regions are found again without them
         # on the signal with the fringe term removed everywhere (the baseline clean, the contact bent a little)
         zf, sf = _remove(st, st.approach, st.retract, fa, fr, dataclasses.replace(o, in_contact="follow"), remove,
                          remap)
         again = regions_again(st, zf, sf)
         period = 0.5 * (fa.period + fr.period)
         at = lambda run: st.z[run.index[min(run.split, run.index.size - 1)]]  # noqa: E731
-        moved = 0.0 if again is None else max(abs(at(run) - at(new)) for run, new in zip((st.approach, st.retract), again))
+        moved = 0.0 if again is None else max(abs(at(run) - at(new))
+                                              for run, new in zip((st.approach, st.retract), again))
         if moved > SPLIT_MOVE_PERIODS * period:
             z, s = _remove(st, *again, fa, fr, o, remove, remap)
             regions = dict(approach=again[0], retract=again[1], noise=again[0].noise)
-            notes.append(f"fringes of amplitude {max(fa.amplitude, fr.amplitude):.3g} {st.unit} hid the contact: its regions "
-                         "were found again on the signal without them")
+            notes.append(f"fringes of amplitude {max(fa.amplitude, fr.amplitude):.3g} {st.unit} hid the contact: "
+                         "its regions were found again on the signal without them")
     applied = remap
     width = loop_width(fa, fr, st.z[np.concatenate([st.approach.index, st.retract.index])]) if fa.found and fr.found else math.nan  # (loop_width's own NaN)
     if both:
