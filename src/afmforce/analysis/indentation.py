@@ -94,7 +94,7 @@ def indentation(st: State, o: IndentationOptions) -> State:
         return _skip(st, "indentation", f"the {m.name} model needs the " + " and the ".join(
             f"{g.replace('_', ' ')} (`{keys[g]}`)" for g in missing))
     regions = st.approach if o.run == "approach" else st.retract
-    idx = regions.index
+    idx = regions.index[~regions.saturated]   # a clipped deflection is no force: its samples are left out
     if o.run == "retract":
         idx = idx[::-1]  # the retract read backwards: into the sample, as the fit expects
     z, d, f = st.z[idx], st.deflection[idx], st.force[idx]

@@ -197,7 +197,7 @@ def _analyze(curve: RawCurve, order: list[str], opts, probe, channel: str, memo:
         key, arrays = _memo_key(curve, st.channel, order[:head], opts)
         hit = memo.get(key)
         if hit is not None and all(a is b for a, b in zip(hit[0], arrays)):
-            st, start = dataclasses.replace(hit[1], curve=curve, probe=st.probe), head
+            st, start = dataclasses.replace(hit[1], curve=st.curve, probe=st.probe), head  # prepare's (deglitched)
     missing = st.missing_run
     for i, name in enumerate(order[start:], start):
         if missing and missing in known[name].runs:  # a curve of one run: the step needs the other
@@ -211,6 +211,10 @@ def _analyze(curve: RawCurve, order: list[str], opts, probe, channel: str, memo:
         try:
             st = known[name].run(st, opts[name])
         except NoContact as exc:  # a curve that never touches: contact kind "none", not a failure
+            if not negated and any("sign is inverted" in w for w in st.warnings):
+                alt = _negated_contact(given, order, opts, probe, channel, st, name)
+                if alt is not None:  # its contact fell along a clear line: stored with the other sign
+                    return alt
             return _no_contact(st, tuple(order), str(exc))
         if key is not None and i == head - 1:
             memo[key] = (arrays, st)
@@ -247,25 +251,57 @@ def inverted_sign(st: State, run: str = "approach") -> str | None:
     comp = st.details.get("compliance")
     if comp is None:
         return None
+    md = st.metadata if st.probe.sensitivity is None else {**st.metadata, "sensitivity": st.probe.sensitivity}
+    slope = _clear_line(comp, run, st.unit, md, -1.0)
+    return None if slope is None else _inverted_note(slope, st.unit)
+
+
+def _clear_line(comp, run: str, unit: str, md: Mapping[str, Any], sign: float) -> float | None:
+    """The slope of the compliance line the calibration would use (``run``) when it runs clearly in the
+    direction ``sign`` (-1 falling, +1 rising) by :data:`INVERTED_LINE_SIGMAS` and
+    :data:`INVERTED_LINE_MIN_SLOPE`; None otherwise."""
     a, r = comp.approach, comp.retract
     line = a if (run != "retract" and a.found) or not r.found else r
     slope = float(line.slope)
-    if not (line.found and math.isfinite(slope) and slope < 0.0):
+    if not (line.found and math.isfinite(slope) and sign * slope > 0.0):
         return None
-    fall = -slope * (line.z_max - line.z_min)
-    if not fall > INVERTED_LINE_SIGMAS * line.sigma:
+    if not abs(slope) * (line.z_max - line.z_min) > INVERTED_LINE_SIGMAS * line.sigma:
         return None
-    md = st.metadata if st.probe.sensitivity is None else {**st.metadata, "sensitivity": st.probe.sensitivity}
-    scale = signal_factor(st.unit, md.get("sensitivity"), md.get("spring_constant"))
-    if math.isfinite(scale) and scale > 0 and -slope * scale < INVERTED_LINE_MIN_SLOPE:
+    scale = signal_factor(unit, md.get("sensitivity"), md.get("spring_constant"))
+    if math.isfinite(scale) and scale > 0 and abs(slope) * scale < INVERTED_LINE_MIN_SLOPE:
         return None
-    what = (f"a sensitivity of {-1e9 / slope:.4g} nm/V once negated" if st.unit == "V"
+    return slope
+
+
+def _inverted_note(slope: float, unit: str) -> str:
+    """The note of a curve negated because its compliance line fell at ``slope`` [unit/m] (< 0)."""
+    what = (f"a sensitivity of {-1e9 / slope:.4g} nm/V once negated" if unit == "V"
             else "the forces of the curve stored the usual way once negated")
     return (f"the deflection signal's sign is inverted: on its compliance line it falls as the position presses "
-            f"the tip on the sample ({slope:.4g} {st.unit}/m), which no lever in contact does (it bends away "
+            f"the tip on the sample ({slope:.4g} {unit}/m), which no lever in contact does (it bends away "
             f"from the sample); a calibration from that slope would be a negative sensitivity. The signal was "
             f"negated (the deflection away from the sample positive, as the readers give it) and analysed: "
             f"{what}")
+
+
+def _negated_contact(given: RawCurve, order, opts, probe, channel: str, st: State, name: str):
+    """A curve the contact step finds no contact on (its approach falls: :data:`~.steps.contact.
+    CONTACT_RISE_SIGMAS`) and whose signal ``prepare`` found falling far below its baseline: analysed
+    negated, it is taken when it then climbs along a clear compliance line (:func:`_clear_line`); an
+    approach held off the surface by an attraction bends by a few noise sigmas, never along such a line.
+    None otherwise (the curve stays "no contact")."""
+    flipped = dataclasses.replace(given, deflection_signal=-np.asarray(given.deflection_signal))
+    probe_note = "\x00negated"
+    alt = _analyze(flipped, order, opts, probe, channel, None, negated=probe_note)
+    comp = alt.details.get("compliance")
+    if comp is None or alt.contact_kind == "none":
+        return None
+    cal = opts["calibration"] if "calibration" in opts else O.CalibrationOptions()
+    md = st.metadata if st.probe.sensitivity is None else {**st.metadata, "sensitivity": st.probe.sensitivity}
+    slope = _clear_line(comp, cal.run, st.unit, md, +1.0)
+    if slope is None:
+        return None
+    return _analyze(flipped, order, opts, probe, channel, None, negated=_inverted_note(-slope, st.unit))
 
 
 def _memo_key(curve: RawCurve, channel: str, names, opts) -> tuple[tuple, tuple]:
@@ -286,7 +322,11 @@ def _no_contact(st: State, order: tuple[str, ...], why: str, nsigma: float = 10.
     extra: dict[str, Any] = {}
     depth, sigma = retract_dip(st.signal, st.curve.run_indices(1) if hasattr(st.curve, "run_indices")
                                  else np.flatnonzero(st.curve.segment == 1))
-    if math.isfinite(depth) and sigma > 0 and depth > nsigma * sigma:
+    # the approach's own dip (read from its far end): an attraction that never touched dips both runs alike,
+    # a touch leaves the retract deeper
+    reach, _ = retract_dip(st.signal, np.flatnonzero(st.curve.segment == 0)[::-1])
+    deeper = depth - (reach if math.isfinite(reach) and reach > 0 else 0.0)
+    if math.isfinite(depth) and sigma > 0 and deeper > nsigma * sigma:
         to_force = signal_factor(st.unit, sens, k, to="force")
         force, noise = -depth * to_force, sigma * to_force
         what = (f"{-force * 1e9:.4g} nN ({depth / sigma:.3g} x the noise)" if math.isfinite(force)

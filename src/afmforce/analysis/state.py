@@ -20,6 +20,7 @@ from ..io.curve import RawCurve
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import ptp
 from .dynamic import run_velocity
+from .glitches import remove_glitches
 from .options import ContactOptions, ProbeCalibration
 from .regions import RunRegions, run_indices
 from ._units import unit as _u
@@ -210,6 +211,10 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     notes: list[str] = []
     if curve.metadata.get("recording_flags"):  # the instrument's own word on the recording (JPK force-scan flags)
         notes.append(f"the file flags its recording: {curve.metadata['recording_flags']}")
+    s, glitches = remove_glitches(s)
+    if glitches:   # the steps that read the recorded signal read the repaired one too
+        notes.append(glitches)
+        curve = dataclasses.replace(curve, deflection_signal=s)
     z, use_measured = _moving_position(curve, z, use_measured, channel, runs, notes)
     inverted = _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
     if inverted:

@@ -16,7 +16,8 @@ from ..registry import AnalysisStep
 from .._step_helpers import line_slope
 from ..state import ContactSummary, NoContact, State
 
-__all__ = ["retract_dip", "approach_end_rise", "FALLBACK_RISE_SIGMAS", "contact", "CONTACT"]
+__all__ = ["retract_dip", "approach_end_rise", "FALLBACK_RISE_SIGMAS", "contact_rise", "contact", "contact_summary",
+           "regions_again", "CONTACT", "CONTACT_RISE_SIGMAS", "REGIONS_KEY"]
 
 
 def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
@@ -96,6 +97,40 @@ def _check_free_baseline(z: np.ndarray, signal: np.ndarray, run) -> None:
             "is undetermined; record the approach from farther out (a baseline off the surface)")
 
 
+#: An approach reaches the surface when its contact region climbs above its baseline's line by this many
+#: noise sigmas over the contact region's positions [-] (every contact pushes the lever away, even the
+#: adhesive line a jump lands on: a slope of about 1 in deflection; a virtual static curve's approach turned
+#: 0.5-3 nm before its jump-in bends down by the attraction alone, -14 to -7 sigma, where its "compliance
+#: line" gave a sensitivity of -0.25 to -0.69 um/V; the intact approach climbs 416 sigma).
+CONTACT_RISE_SIGMAS = 5.0
+
+
+def contact_rise(z: np.ndarray, signal: np.ndarray, run) -> float:
+    """How far the approach's unclipped compliance region climbs above its zero-force line's slope over its
+    positions, in noise sigmas [-] (NaN when either region has fewer than 3 samples or no noise is known)."""
+    idx = run.index
+    zz, ss = z[idx], signal[idx]
+    base, top = run.zero_force, run.compliance & ~run.saturated
+    if base.sum() < 3 or top.sum() < 3 or not run.noise > 0:
+        return math.nan
+    sb, sc = line_slope(zz[base], ss[base]), line_slope(zz[top], ss[top])
+    return (sc - sb) * float(np.ptp(zz[top])) / run.noise
+
+
+def _check_contact_reached(z: np.ndarray, signal: np.ndarray, run) -> None:
+    """Say :class:`NoContact` (contact kind "none") when the approach's contact region does not climb
+    (:data:`CONTACT_RISE_SIGMAS`): the approach stopped short of the surface, and the "compliance line" the
+    regions found is the attraction's bend or the noise."""
+    rise = contact_rise(z, signal, run)
+    if rise < CONTACT_RISE_SIGMAS and not approach_end_rise(z, signal, run) > CONTACT_RISE_SIGMAS:
+        # (an approach whose last samples push the lever off its baseline's line touched, whatever its
+        # contact region's slope says: NSFopen 1.1.18's FluidFM cell curve 1 ends 9 nN up at its trigger)
+        how = "bends down (an attraction only)" if rise < -CONTACT_RISE_SIGMAS else "stays on its baseline"
+        raise NoContact(f"no contact reached: the approach's end {how}, {rise:.3g} noise sigmas from its baseline's "
+                        f"line where a contact climbs {CONTACT_RISE_SIGMAS:g} or more; the approach stops short of "
+                        "the surface, so there is no contact point, sensitivity, modulus or adhesion")
+
+
 def contact(st: State, o: ContactOptions) -> State:
     """Contact, constant-compliance and zero-force regions of both runs.
 
@@ -141,11 +176,11 @@ def contact(st: State, o: ContactOptions) -> State:
             raise NoContact(str(exc).replace("no contact region found on the approach run", "no contact reached")
                             ) from None
     _check_free_baseline(st.z, st.signal, app)
+    _check_contact_reached(st.z, st.signal, app)
     ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
     app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
-    summary = ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
-                             int(app.zero_force.sum()), int(ret.zero_force.sum()), int(app.compliance.sum()),
-                             int(ret.compliance.sum()), int(sat.sum()))
+    summary = contact_summary(app, ret, int(sat.sum()))
+    st.cache[REGIONS_KEY] = (kw, flat_ratio, max_slope_ratio)   # for the fringes step's second look
     warn = []
     if sat.any():
         warn.append(f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits")
@@ -153,6 +188,33 @@ def contact(st: State, o: ContactOptions) -> State:
     # noise of the signal from sample-to-sample differences in the approach's free part: blind to
     # slow structure (drift, fringes), so it measures the resolution the jump tests need
     return st.update("contact", summary, warn=warn, approach=app, retract=ret, noise=app.noise)
+
+
+#: Where the contact step leaves its region options in the state's cache (the fringes step finds the regions
+#: again on a signal whose fringes hid them).
+REGIONS_KEY = "contact_regions"
+
+
+def contact_summary(app, ret, saturated: int) -> ContactSummary:
+    """The :class:`ContactSummary` of both runs' regions (``saturated``: the curve's clipped samples)."""
+    return ContactSummary(int(app.index[app.split]), int(ret.index[min(ret.split, ret.index.size - 1)]),
+                          int(app.zero_force.sum()), int(ret.zero_force.sum()), int(app.compliance.sum()),
+                          int(ret.compliance.sum()), int(saturated))
+
+
+def regions_again(st: State, z: np.ndarray, signal: np.ndarray):
+    """Both runs' regions found on another position and signal with the contact step's options (``(approach,
+    retract)``), or None when the contact step left none (a curve of one run) or they cannot be found."""
+    spec = st.cache.get(REGIONS_KEY)
+    if spec is None or st.approach is None or st.retract is None:
+        return None
+    kw, flat_ratio, max_slope_ratio = spec
+    try:
+        app = find_run_regions(z, signal, st.approach.index, "approach", **kw)
+        ret = find_run_regions(z, signal, st.retract.index, "retract", noise=app.noise, **kw)
+        return check_compliance(z, signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
+    except AnalysisError:
+        return None
 
 
 def _one_run(st: State, sat: np.ndarray, kw: dict) -> State:
