@@ -119,8 +119,10 @@ def test_the_files_poisson_ratio_is_the_default():
     res = analyze(curve)                                       # no ratio given: the file's
     d = res.details["indentation"]
     assert (d.poisson, d.poisson_source) == (nu, "file")
+    assert any("Poisson ratio 0.3 is the file's" in w for w in res.warnings)     # said, as the CLI shows it
     half = analyze(curve, options=[IndentationOptions(poisson=0.5)])
     assert (half.details["indentation"].poisson, half.details["indentation"].poisson_source) == (0.5, "user")
+    assert not any("Poisson" in w for w in half.warnings)
     assert res.youngs_modulus / half.youngs_modulus == pytest.approx((1 - nu ** 2) / (1 - 0.5 ** 2), rel=1e-9)
     assert res.youngs_modulus == pytest.approx(_nanite_modulus(nu), rel=0.04)
 

@@ -22,7 +22,7 @@ from ..errors import AnalysisError, ParameterError
 from ..io.deflection import signal_factor
 from ._step_helpers import _kind, _skip
 from ._units import unit as _u
-from .options import IndentationOptions, ProbeCalibration
+from .options import DEFAULT_POISSON, IndentationOptions, ProbeCalibration
 from .plausibility import impossible_modulus
 from .state import State
 
@@ -119,7 +119,11 @@ def indentation(st: State, o: IndentationOptions) -> State:
     if impossible:
         return _skip(st, "indentation", impossible)
     res = _result(fit, u, o, geom, radius, st.spring_constant, nu, nu_source)
-    return st.update("indentation", res, warn=[f"indentation ({o.model}): {w}" for w in fit.warnings])
+    warn = [f"indentation ({o.model}): {w}" for w in fit.warnings]
+    if nu_source == "file" and nu != DEFAULT_POISSON:     # the user sees which ratio E is for
+        warn.append(f"indentation: the sample's Poisson ratio {nu:g} is the file's (not {DEFAULT_POISSON:g}; E "
+                    "scales as 1 - nu^2): give `poisson` to change it")
+    return st.update("indentation", res, warn=warn)
 
 
 def _result(fit, u: np.ndarray, o: IndentationOptions, geom: dict, radius, k: float, nu: float,
