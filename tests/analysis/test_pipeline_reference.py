@@ -38,7 +38,9 @@ ADDED = {"barrier_force", "barrier_jump_distance", "through_barrier",
          "friction_offset_bound", "friction_force_bound", "viscous_friction_bound", "load_friction_bound",
          "offset_bound", "slope_difference_bound",
          # the tethers of a hard contact (analysis.tethers): empty and 0 on these soft curves
-         "tethers", "tether_force"}
+         "tethers", "tether_force",
+         # where the indentation's Poisson ratio came from (user, file, default): the ratio itself is compared
+         "poisson_source"}
 
 
 def _compare(new, old, where: str, out: list[str]) -> None:

@@ -78,3 +78,18 @@ def test_processed_force_vs_separation_needs_no_spring_constant():
     r = analyze(c, steps=("adhesion",))
     assert any("processed export" in w and "no spring constant" in w for w in r.warnings)
     assert r.adhesion_force <= 0
+
+
+def test_the_exports_sample_poisson_ratio_is_the_binary_files():
+    """The export's quoted ``\\Sample Poisson's Ratio`` line (CR CR LF) is read into metadata ``poisson``
+    as the binary file it came from states it (0.3, read here from the bytes); the gel's CSV export
+    carries no such line, and no ratio is made up for it."""
+    import re
+
+    head = (DATA / gen.SAPPHIRE.name).read_bytes()[:40000].decode("latin-1")
+    nu = float(re.search(r"\\Sample Poisson's Ratio:\s*([-+.\d]+)", head).group(1))
+    (c,) = load(DATA / "bruker-ascii_sapphire_quoted-crcrlf.txt")
+    assert c.metadata["poisson"] == nu == 0.3
+    assert load(DATA / gen.SAPPHIRE.name)[0].metadata["poisson"] == nu
+    (gel,) = load(DATA / "bruker-ascii_egel_csv-blank-lines.csv")
+    assert "poisson" not in gel.metadata

@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from afmforce.analysis.options import ProbeCalibration
+from afmforce.analysis.options import IndentationOptions, ProbeCalibration
 from afmforce.analysis.pipeline import analyze
 from afmforce.io import load
 
@@ -58,12 +58,9 @@ def test_one_spring_constant_gives_no_note():
     assert "spring_constant_note" not in curve.metadata
 
 
-def test_modulus_agrees_with_nanite_and_scales_with_k():
-    """1.90 GPa (Hertz paraboloid, R = 100 nm from the header, nu = 0.5, k = 10 N/m); nanite on the curve read
-    by hand from the header's scales (V/LSB 0.000375, DeflSens 21.9 nm/V, Zsens 8.1 nm/V x ramp 6.17284 V
-    = 50 nm) gives 1.935 GPa. Sub-nanometre indentation (0.78 nm at 23 nN) of a stiff sample: a polymer's
-    modulus. With the other list's k (13.8772 N/m) the modulus scales as k (the deflection, and so the
-    indentation, does not depend on k): 2.64 GPa."""
+def _nanite_modulus(nu: float) -> float:
+    """nanite 4.2.3's Hertz paraboloid E on the curve read by hand from the header's scales (V/LSB
+    0.000375, DeflSens 21.9 nm/V, Zsens 8.1 nm/V x ramp 6.17284 V = 50 nm), R = 100 nm, k = 10 N/m."""
     nanite = pytest.importorskip("nanite")
     raw = FILE.read_bytes()
     counts = np.frombuffer(raw[40960:40960 + 4096], "<i2").astype(float)
@@ -81,15 +78,61 @@ def test_modulus_agrees_with_nanite_and_scales_with_k():
                              options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
     p = idnt.get_initial_fit_parameters(model_key="hertz_para")
     p["R"].set(value=100e-9)
-    p["nu"].set(value=0.5)
+    p["nu"].set(value=nu)
     idnt.fit_model(model_key="hertz_para", params_initial=p, weight_cp=0, range_x=(0, 0), range_type="absolute",
                    segment="approach")
-    e_nanite = float(idnt.fit_properties["params_fitted"]["E"].value)
+    return float(idnt.fit_properties["params_fitted"]["E"].value)
+
+
+def _header_poisson() -> float:
+    """``\\Sample Poisson's Ratio`` of the header, read by hand."""
+    head = FILE.read_bytes()[:40960].decode("latin-1")
+    return float(re.search(r"^\\Sample Poisson's Ratio:\s*(\S+)", head, re.M).group(1))
+
+
+def test_modulus_agrees_with_nanite_and_scales_with_k():
+    """1.90 GPa (Hertz paraboloid, R = 100 nm from the header, nu = 0.5 given, k = 10 N/m); nanite on the
+    curve read by hand gives 1.935 GPa. Sub-nanometre indentation (0.78 nm at 23 nN) of a stiff sample: a
+    polymer's modulus. With the other list's k (13.8772 N/m) the modulus scales as k (the deflection, and
+    so the indentation, does not depend on k): 2.64 GPa."""
+    e_nanite = _nanite_modulus(0.5)
     assert e_nanite == pytest.approx(1.935e9, rel=0.01)
     curve = load(FILE)[0]
-    res = analyze(curve)
+    half = IndentationOptions(poisson=0.5)
+    res = analyze(curve, options=[half])
     assert res.indentation_model == "hertz_paraboloid"
     assert res.details["indentation"].tip_radius == pytest.approx(100e-9, rel=1e-12)     # the header's
     assert res.youngs_modulus == pytest.approx(e_nanite, rel=0.05)
-    other = analyze(curve, probe=ProbeCalibration(spring_constant=13.8772))
+    other = analyze(curve, probe=ProbeCalibration(spring_constant=13.8772), options=[half])
     assert other.youngs_modulus / res.youngs_modulus == pytest.approx(1.38772, rel=0.03)
+
+
+def test_the_files_poisson_ratio_is_the_default():
+    """The header's ``\\Sample Poisson's Ratio: 0.3`` is read (metadata ``poisson``) and used when the user
+    gives none: E scales as 1 - nu^2 (the fit is of E / (1 - nu^2)), so E(0.3) / E(0.5) = 0.91 / 0.75 to
+    rounding; nanite 4.2.3 with poisson 0.3 on the curve read by hand gives 2.35 GPa (afmforce 2.30). The
+    user's value wins, and the result says which ratio it used and where from."""
+    nu = _header_poisson()
+    assert nu == 0.3
+    curve = load(FILE)[0]
+    assert curve.metadata["poisson"] == nu
+    res = analyze(curve)                                       # no ratio given: the file's
+    d = res.details["indentation"]
+    assert (d.poisson, d.poisson_source) == (nu, "file")
+    assert any("Poisson ratio 0.3 is the file's" in w for w in res.warnings)     # said, as the CLI shows it
+    half = analyze(curve, options=[IndentationOptions(poisson=0.5)])
+    assert (half.details["indentation"].poisson, half.details["indentation"].poisson_source) == (0.5, "user")
+    assert not any("Poisson" in w for w in half.warnings)
+    assert res.youngs_modulus / half.youngs_modulus == pytest.approx((1 - nu ** 2) / (1 - 0.5 ** 2), rel=1e-9)
+    assert res.youngs_modulus == pytest.approx(_nanite_modulus(nu), rel=0.04)
+
+
+def test_without_a_ratio_in_the_file_the_default_is_said():
+    """A curve whose file states no ratio (or the user's override of the file's) uses 0.5 and says so."""
+    curve = load(FILE, meta_override={"poisson": 0.45})[0]
+    assert curve.metadata["poisson"] == 0.45                   # the user's metadata wins over the header's
+    md = {k: v for k, v in curve.metadata.items() if k != "poisson"}
+    o = IndentationOptions()
+    assert o.sample_poisson(md) == (0.5, "default")
+    assert o.sample_poisson(curve.metadata) == (0.45, "file")
+    assert IndentationOptions(poisson=0.2).sample_poisson(curve.metadata) == (0.2, "user")

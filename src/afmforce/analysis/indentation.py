@@ -3,7 +3,8 @@
 The laws and the fit are :mod:`afmforce.contact` (docs/contact.md); this step takes the
 calibrated run (position ``z`` [m], deflection [m], force [N]), forms the tip depth
 ``u = z - deflection`` and fits the chosen model with the contact point, the modulus and the
-force baseline together, starting near the ``kind`` step's soft contact point. Hard contacts
+force baseline together, starting near the ``kind`` step's soft contact point. The sample's Poisson ratio is the user's,
+else the file's own (metadata ``poisson``), else 0.5; the result says which (``poisson_source``). Hard contacts
 (a constant-compliance line: the tip does not indent) are skipped with the reason, as are
 curves without a spring constant or without the geometry the model needs.
 """
@@ -21,7 +22,7 @@ from ..errors import AnalysisError, ParameterError
 from ..io.deflection import signal_factor
 from ._step_helpers import _kind, _skip
 from ._units import unit as _u
-from .options import IndentationOptions, ProbeCalibration
+from .options import DEFAULT_POISSON, IndentationOptions, ProbeCalibration
 from .plausibility import impossible_modulus
 from .state import State
 
@@ -47,6 +48,8 @@ class IndentationResult:
     n_points, n_contact : int  points fitted, in contact [-]
     rms : float  rms residual [N]
     tip_radius, half_angle, poisson : float  geometry used [m], [rad], [-] (NaN: not used)
+    poisson_source : str  where the Poisson ratio came from: ``user`` (given), ``file`` (the file's
+        own, metadata ``poisson``) or ``default`` (0.5, neither gave one)
     indentation, fit_force, residuals : ndarray  per fitted point: indentation [m], model force [N],
         data minus model [N]
     warnings : tuple of str  the model's validity check
@@ -72,6 +75,7 @@ class IndentationResult:
     tip_radius: float = _u("m")
     half_angle: float = _u("rad")
     poisson: float = _u("")
+    poisson_source: str = "default"
     indentation: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, metadata={"unit": "m"})
     fit_force: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, metadata={"unit": "N"})
     residuals: np.ndarray = field(default_factory=lambda: np.zeros(0), repr=False, metadata={"unit": "N"})
@@ -103,8 +107,9 @@ def indentation(st: State, o: IndentationOptions) -> State:
     cp = st.details.get("contact_point")
     if cp is not None and math.isfinite(cp.position):
         guess = cp.position - cp.deflection
+    nu, nu_source = o.sample_poisson(st.metadata)
     try:
-        fit = fit_indentation(u, f, o.model, {k: v for k, v in geom.items() if v is not None}, nu=o.poisson,
+        fit = fit_indentation(u, f, o.model, {k: v for k, v in geom.items() if v is not None}, nu=nu,
                               weight_width=o.weight_width, contact_guess=guess, thickness=o.thickness,
                               max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
                               transition=o.transition, branch=o.run, contact_point=o.contact_point)
@@ -113,16 +118,21 @@ def indentation(st: State, o: IndentationOptions) -> State:
     impossible = impossible_modulus(fit.youngs_modulus)
     if impossible:
         return _skip(st, "indentation", impossible)
-    res = _result(fit, u, o, geom, radius, st.spring_constant)
-    return st.update("indentation", res, warn=[f"indentation ({o.model}): {w}" for w in fit.warnings])
+    res = _result(fit, u, o, geom, radius, st.spring_constant, nu, nu_source)
+    warn = [f"indentation ({o.model}): {w}" for w in fit.warnings]
+    if nu_source == "file" and nu != DEFAULT_POISSON:     # the user sees which ratio E is for
+        warn.append(f"indentation: the sample's Poisson ratio {nu:g} is the file's (not {DEFAULT_POISSON:g}; E "
+                    "scales as 1 - nu^2): give `poisson` to change it")
+    return st.update("indentation", res, warn=warn)
 
 
-def _result(fit, u: np.ndarray, o: IndentationOptions, geom: dict, radius, k: float) -> IndentationResult:
+def _result(fit, u: np.ndarray, o: IndentationOptions, geom: dict, radius, k: float, nu: float,
+            nu_source: str) -> IndentationResult:
     # z at contact: where u = c, i.e. z = c + d with d the deflection of the fitted baseline force
     z_c = fit.contact + fit.baseline / k
     delta = u[fit.fitted] - fit.contact
     w = 0.0 if math.isnan(fit.work_of_adhesion) else fit.work_of_adhesion
-    model_f = model_force(o.model, delta, fit.youngs_modulus, geom, o.poisson, w, o.transition, o.run)
+    model_f = model_force(o.model, delta, fit.youngs_modulus, geom, nu, w, o.transition, o.run)
     return IndentationResult(
         model=o.model, run=o.run, youngs_modulus=fit.youngs_modulus, youngs_modulus_se=fit.youngs_modulus_se,
         youngs_modulus_low=fit.youngs_modulus_low, youngs_modulus_high=fit.youngs_modulus_high,
@@ -130,7 +140,8 @@ def _result(fit, u: np.ndarray, o: IndentationOptions, geom: dict, radius, k: fl
         work_of_adhesion=fit.work_of_adhesion, work_of_adhesion_se=fit.work_of_adhesion_se,
         max_indentation=fit.max_indentation, max_force=fit.max_force, n_points=fit.n_points,
         n_contact=fit.n_contact, rms=fit.rms, tip_radius=float(radius) if radius is not None else math.nan,
-        half_angle=float(o.half_angle) if o.half_angle is not None else math.nan, poisson=o.poisson,
+        half_angle=float(o.half_angle) if o.half_angle is not None else math.nan, poisson=nu,
+        poisson_source=nu_source,
         indentation=delta, fit_force=np.asarray(model_f + fit.baseline), residuals=fit.residuals,
         warnings=fit.warnings)
 
@@ -174,8 +185,9 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
     radius = o.tip_radius if o.tip_radius is not None else p.value("radius", md)
     geom = {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
     u = z - d
+    nu, nu_source = o.sample_poisson(md)
     fit = fit_indentation(u, d * float(k), o.model, {g: v for g, v in geom.items() if v is not None},
-                          nu=o.poisson, weight_width=o.weight_width, thickness=o.thickness,
+                          nu=nu, weight_width=o.weight_width, thickness=o.thickness,
                           max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
                           transition=o.transition, branch=o.run, contact_point=o.contact_point)
-    return _result(fit, u, o, geom, radius, float(k))
+    return _result(fit, u, o, geom, radius, float(k), nu, nu_source)

@@ -405,6 +405,10 @@ class DiagnosisOptions(StepOptions):
     attraction_ratio: float = _frac(0.75, "share of the jump-in a static attraction must explain")
 
 
+#: The sample's Poisson ratio where neither the user nor the file gives one (incompressible).
+DEFAULT_POISSON = 0.5
+
+
 @dataclass(frozen=True)
 class IndentationOptions(StepOptions):
     """Young's modulus (and work of adhesion) from the indentation of a soft contact (docs/contact.md)."""
@@ -414,7 +418,8 @@ class IndentationOptions(StepOptions):
                       "afmforce.contact.INDENTATION_MODELS)")
     tip_radius: float | None = _q("tip_radius", None)
     half_angle: float | None = _q("half_angle", None)
-    poisson: float = _q("poisson", 0.5)
+    poisson: float | None = _q("poisson", None, "Poisson ratio of the sample (None: the file's own, "
+                               "metadata `poisson`, e.g. NanoScope's Sample Poisson's Ratio; else 0.5)")
     thickness: float | None = _opt(None, "length", "m", "sample (layer) thickness: the thin-layer model's h, "
                                    "the validity check of the others (None: a half space)", lo=0.0, hi=1e-2,
                                    lo_open=True)
@@ -437,6 +442,16 @@ class IndentationOptions(StepOptions):
         if self.model not in INDENTATION_MODELS:
             raise ParameterError(f"indentation.model = {self.model!r} is not valid: choose one of "
                                  f"{', '.join(INDENTATION_MODELS)}")
+
+    def sample_poisson(self, metadata: Mapping[str, Any]) -> tuple[float, str]:
+        """The Poisson ratio to use and where it comes from: the user's (``"user"``), else the file's
+        (metadata ``poisson``: ``"file"``), else :data:`DEFAULT_POISSON` (``"default"``)."""
+        if self.poisson is not None:
+            return float(self.poisson), "user"
+        nu = metadata.get("poisson")
+        if nu is not None:
+            return float(nu), "file"
+        return DEFAULT_POISSON, "default"
 
 
 @dataclass(frozen=True)

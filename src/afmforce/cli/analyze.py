@@ -123,8 +123,8 @@ def _indentation_flags(p) -> None:
                         "indentation.model=KEY)")
     add_field(g, "tip_radius", help="tip radius of a sphere model (default: --radius)")
     add_field(g, "half_angle", help="half-angle of a cone, face angle of a pyramid")
-    add_field(g, "poisson", default_from=lambda: _default("indentation", "poisson"),
-              help="Poisson ratio of the sample")
+    add_field(g, "poisson", help="Poisson ratio of the sample (default: the file's own, e.g. NanoScope's "
+                                 "Sample Poisson's Ratio; else 0.5)")
 
 
 def _example_names() -> list[str]:

@@ -21,7 +21,7 @@ from .search import _refit_all, _search
 from .result import CurveFit, Estimate, FitResult, contain_value, wald_interval
 
 __all__ = ["fit_dynamic", "IdentifiabilityError", "base_config", "local_fit", "SPEED_DEPENDENT", "check_speeds",
-           "MAX_CURVES"]
+           "check_curve_count", "MAX_CURVES"]
 
 #: Above this viscosity [Pa s] the medium is a liquid (air 1.8e-5, hexane 3e-4, water 8.9e-4):
 #: drainage and double-layer forces then bend the approach like an indentation does, so a curve
@@ -58,6 +58,22 @@ def retract_follows(curve) -> bool:
 
 class IdentifiabilityError(ParameterError):
     """The data cannot determine a free parameter (e.g. friction from one speed)."""
+
+
+def check_curve_count(n: int) -> None:
+    """Refuse a joint fit of more than :data:`MAX_CURVES` curves (``n``). Cheap: the web checks the
+    curves its uploads hold before a job starts.
+
+    Raises
+    ------
+    ParameterError
+    """
+    if n > MAX_CURVES:
+        raise ParameterError(
+            f"a joint fit of {n} curves: the dynamic fit takes at most {MAX_CURVES} (the model is "
+            "integrated for every curve at every step; a force map's curves would take hours): give a few "
+            "curves at several speeds, and analyse a map's curves one by one with `afmforce analyze` (its vdw "
+            "step fits each curve's A R)")
 
 
 def check_speeds(free: Sequence[str], velocities: Sequence[float]) -> None:
@@ -336,12 +352,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     if sampling is not None:
         base = base.replace(sampling=sampling)
     free = check_free(free, base.model, base.friction.law if base.model == "beam" else None)
-    if len(curves) > MAX_CURVES:
-        raise ParameterError(
-            f"a joint fit of {len(curves)} curves: the dynamic fit takes at most {MAX_CURVES} (the model is "
-            "integrated for every curve at every step; a force map's curves would take hours): give a few "
-            "curves at several speeds, and analyse a map's curves one by one with `afmforce analyze` (its vdw "
-            "step fits each curve's A R)")
+    check_curve_count(len(curves))
     need = [n for n in free if n in NEEDS_RETRACT]
     if retract is None:
         retract = bool(need) and all(not isinstance(c, FitCurve) and retract_follows(c)

@@ -54,6 +54,13 @@ def _non_negative(value: Any) -> float:
     return v
 
 
+def _poisson(value: Any) -> float:
+    v = float(value)
+    if not (-1.0 < v <= 0.5):
+        raise ValueError("must lie in (-1, 0.5]")
+    return v
+
+
 def _text(value: Any) -> str:
     return str(value)
 
@@ -82,6 +89,7 @@ METADATA: dict[str, MetaField] = {
                               QUANTITIES["lever_height"].unit, _non_negative),
     "theta0": MetaField("Cantilever inclination", "rad", _finite),
     "radius": MetaField("Probe radius", "m", _positive),
+    "poisson": MetaField("Poisson ratio of the sample (the indentation step's default)", "", _poisson),
     "instrument": MetaField("Instrument", "", _text),
     "date": MetaField("Date of the measurement (as the file or the user writes it)", "", _text),
     "format": MetaField("File format", "", _text),

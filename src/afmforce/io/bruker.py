@@ -318,7 +318,8 @@ def _in_time_order(runs: dict[str, dict]) -> tuple[list[dict], np.ndarray]:
 
 def _calibration(header: dict[str, str]) -> dict[str, float]:
     """The spring constant [N/m] (as stated: :func:`finalize_curve` refuses an impossible one, <= 0, as
-    every reader does) and the deflection sensitivity [m/V] (a positive one) the header states."""
+    every reader does), the deflection sensitivity [m/V] (a positive one) and the sample's Poisson
+    ratio (``poisson``, one in (-1, 0.5]) the header states."""
     meta = {}
     k = _header_value(header, "Spring Constant")
     if k is not None:
@@ -326,6 +327,9 @@ def _calibration(header: dict[str, str]) -> dict[str, float]:
     sens = _header_value(header, "Sens. DeflSens")
     if sens and sens > 0:
         meta["sensitivity"] = sens * 1e-9  # nm/V
+    nu = _header_value(header, "Sample Poisson's Ratio")  # the indentation step's default (a ratio only)
+    if nu is not None and -1.0 < nu <= 0.5:
+        meta["poisson"] = nu
     return meta
 
 

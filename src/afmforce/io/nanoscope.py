@@ -42,8 +42,8 @@ nominal ramp (``Ramp Size`` [V] x Zsens, evenly spaced), or the Z-sensor channel
 the forward/reverse velocities, else from the scan rate.
 
 The reader returns the deflection in volts with ``sensitivity`` = DeflSens,
-``spring_constant`` and ``radius`` (``\Tip Radius`` [nm]) from the header (the user's
-``meta_override`` wins).
+``spring_constant``, ``radius`` (``\Tip Radius`` [nm]) and ``poisson`` (``\Sample Poisson's
+Ratio``, the indentation step's default) from the header (the user's ``meta_override`` wins).
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ import numpy as np
 
 from ..errors import FileFormatError
 from .curve import RawCurve
-from ._meta import finalize_curve
+from ._meta import METADATA, finalize_curve
 
 __all__ = ["load_nanoscope", "NanoscopeFile", "detect_nanoscope", "parse_header", "count_curves", "MAX_HEADER", "ADC_COUNTS"]
 
@@ -128,6 +128,18 @@ def _find(sections, key: str, section: str | None = None) -> str | None:
                 if k.lower() == key.lower():
                     return v
     return None
+
+
+def sample_poisson(sections) -> float | None:
+    """The header's ``\\Sample Poisson's Ratio`` (the sample's Poisson ratio NanoScope's own modulus
+    fits use), or None where it is missing or not a ratio in (-1, 0.5]."""
+    text = _find(sections, "Sample Poisson's Ratio")
+    if text is None or not re.search(_NUMBER, text):
+        return None
+    try:
+        return METADATA["poisson"].validate(float(re.search(_NUMBER, text).group(0)))
+    except ValueError:
+        return None
 
 
 def _sens(sections, name: str) -> tuple[float, str] | None:
@@ -420,6 +432,9 @@ class NanoscopeFile:
         tip = _find(sections, "Tip Radius", "Ciao scan list")  # [nm], as typed into NanoScope
         if tip is not None and re.search(_NUMBER, tip) and _number(tip, where, "Tip Radius", 0) > 0:
             meta["radius"] = _number(tip, where, "Tip Radius", 0) * 1e-9
+        nu = sample_poisson(sections)
+        if nu is not None:
+            meta["poisson"] = nu
         corr = _find(sections, "Deflection Sensitivity Correction")
         if corr is not None:
             meta["nanoscope_deflection_sensitivity_correction"] = _number(corr, where, "Deflection Sensitivity Correction")

@@ -69,6 +69,10 @@ def fit(request: Request, body: FitRequest) -> dict:
             raise
         except AfmforceError as exc:
             raise validate.FieldError(f"file_ids[{i}]", str(exc)) from None
+    if files:       # every curve of each upload (a map's too): the fit's cap, before a job starts
+        sessions = request.app.state.sessions
+        read = all(sessions.was_read(session, fid) for fid in body.file_ids)
+        validate.fit_curve_count([p for p, _ in files], None if read else request.app.state.settings.request_budget)
     if not files and len(velocities) < 2:
         raise validate.FieldError("velocities", "give >= 2 uploaded curves (file_ids) or >= 2 velocities "
                                                 "for virtual curves")

@@ -25,7 +25,7 @@ from ..errors import AfmforceError, ParameterError
 from .limits import CALIBRATION_BYTES, MAX_ITEMS, MAX_RUNS, MAX_SAMPLES
 
 __all__ = ["FieldError", "number", "flat_config", "build_config", "cycle_samples", "velocities", "sweep_spec",
-           "metadata", "calibration_file"]
+           "metadata", "calibration_file", "fit_curve_count"]
 
 #: Longest text accepted for one value (``"0.1 um/s"``).
 _TEXT = 64
@@ -172,6 +172,22 @@ def build_config(flat: Any, prefix: str = ""):
         raise _too_many(n, f"{prefix}sample_rate")
     cfg.validate()
     return cfg
+
+
+def fit_curve_count(paths: Iterable[Any], timeout: float | None = None) -> int:
+    """The curves a fit of the uploads ``paths`` takes (every curve of each file; a map's counted
+    from its header, a file whose count is not known cheaply as one), refused past the dynamic
+    fit's cap (:data:`afmforce.fit.core.MAX_CURVES`) as ``file_ids``. ``timeout`` [s] bounds the
+    detection of each file (None: the files were read once already)."""
+    from ..fit.core import check_curve_count
+    from ..sweep.files import plan_curves
+
+    n = len(plan_curves(list(paths), timeout=timeout))
+    try:
+        check_curve_count(n)
+    except ParameterError as exc:
+        raise FieldError("file_ids", f"file_ids: the uploads hold {n} curves; {exc}") from None
+    return n
 
 
 def velocities(values: Any, field: str = "velocities") -> list[float]:
