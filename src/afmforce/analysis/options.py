@@ -418,8 +418,9 @@ class IndentationOptions(StepOptions):
                       "afmforce.contact.INDENTATION_MODELS)")
     tip_radius: float | None = _q("tip_radius", None)
     half_angle: float | None = _q("half_angle", None)
-    poisson: float | None = _q("poisson", None, "Poisson ratio of the sample (None: the file's own, "
-                               "metadata `poisson`, e.g. NanoScope's Sample Poisson's Ratio; else 0.5)")
+    # None: the file's own (metadata `poisson`, e.g. NanoScope's Sample Poisson's Ratio), else 0.5
+    # (:meth:`sample_poisson`); the field keeps the shared quantity's declaration (range, help, messages)
+    poisson: float | None = _q("poisson", None)
     thickness: float | None = _opt(None, "length", "m", "sample (layer) thickness: the thin-layer model's h, "
                                    "the validity check of the others (None: a half space)", lo=0.0, hi=1e-2,
                                    lo_open=True)
