@@ -116,6 +116,22 @@ def check_raw_output(args: argparse.Namespace) -> None:
         check_writable(raw, force=bool(getattr(args, "force", False)))
 
 
+def check_instrument_args(args: argparse.Namespace) -> None:
+    """Read the instrument's TOML file and build the instrument before any simulation (a file that is
+    no text, or a parameter out of range, is refused before minutes of work, and before a compile).
+
+    Raises
+    ------
+    AfmforceError
+        As :func:`record_from_args`.
+    """
+    if not instrument_requested(args):
+        return
+    check_raw_output(args)
+    config = load_config(args.instrument_config) if getattr(args, "instrument_config", None) else None
+    build_instrument(getattr(args, "instrument", None), config, _overrides(args))
+
+
 def record_from_args(args: argparse.Namespace, trajectory) -> RawCurve | None:
     """Build the instrument from the options, record ``trajectory``, write ``--raw``.
 

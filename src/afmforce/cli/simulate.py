@@ -23,7 +23,7 @@ from ._validate import (add_field, check_beam, check_outputs, check_simulation_c
 from ._outcome import render
 from .common import print_json, print_table
 
-__all__ = ["register", "run", "ARGUMENT_GROUPS", "OUTPUT_FLAGS", "POST_HOOKS", "config_from_args"]
+__all__ = ["register", "run", "ARGUMENT_GROUPS", "OUTPUT_FLAGS", "POST_HOOKS", "PRE_HOOKS", "config_from_args"]
 
 
 def _dyn():
@@ -190,6 +190,8 @@ ARGUMENT_GROUPS: list[Callable[[argparse.ArgumentParser], None]] = [
 OUTPUT_FLAGS: list[str] = ["out", "plot"]
 #: Functions ``(args, trajectory) -> None`` run after the outputs are written.
 POST_HOOKS: list[Callable[[argparse.Namespace, object], None]] = []
+#: Checks of the hooks' own inputs, run before the simulation: ``hook(args)`` raises to refuse.
+PRE_HOOKS: list[Callable[[argparse.Namespace], None]] = []
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -249,6 +251,8 @@ def run(args: argparse.Namespace) -> int:
     if args.plot and Path(args.plot).suffix.lower() != ".png":
         raise ParameterError(f"cannot write {args.plot}: --plot takes a .png file")
     cfg = config_from_args(args)
+    for hook in PRE_HOOKS:   # their inputs checked before the simulation (and before any compile)
+        hook(args)
     bar, update = _progress_bar(args)
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always", DynamicsWarning)
@@ -319,8 +323,9 @@ def plot_trajectory(traj, path, force: bool = False):
 
 
 # Virtual instrument (issue 4; afmforce.cli._instrument_opts): --instrument, --seed, --raw, ...
-from ._instrument_opts import add_instrument_arguments, record_from_args  # noqa: E402
+from ._instrument_opts import add_instrument_arguments, check_instrument_args, record_from_args  # noqa: E402
 
 ARGUMENT_GROUPS.append(add_instrument_arguments)
 OUTPUT_FLAGS.append("raw")
+PRE_HOOKS.append(check_instrument_args)
 POST_HOOKS.append(record_from_args)
