@@ -301,7 +301,8 @@ def _negated_contact(given: RawCurve, order, opts, probe, channel: str, st: Stat
     slope = _clear_line(comp, cal.run, st.unit, md, +1.0)
     if slope is None:
         return None
-    return _analyze(flipped, order, opts, probe, channel, None, negated=_inverted_note(-slope, st.unit))
+    note = _inverted_note(-slope, st.unit)  # the probe's placeholder, replaced: the curve is analysed once
+    return dataclasses.replace(alt, warnings=tuple(note if w == probe_note else w for w in alt.warnings))
 
 
 def _memo_key(curve: RawCurve, channel: str, names, opts) -> tuple[tuple, tuple]:
