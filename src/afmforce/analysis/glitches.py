@@ -53,18 +53,29 @@ def find_glitches(s: np.ndarray) -> np.ndarray:
     cand = cand[(cand >= 2) & (cand <= s.size - 3)]
     out = []
     x = np.array([-2.0, -1.0, 1.0, 2.0])
+    d2l = d2.tolist()
     for i in cand.tolist():
+        y = s[[i - 2, i - 1, i + 1, i + 2]]
+        a = float(y.mean())
+        if not abs(s[i] - a) > GLITCH_SIGMAS * sigma:
+            continue                                    # sigma_i >= sigma below: no glitch, the cheap test first
         # the local noise: the second differences of the GLITCH_WINDOW samples on each side, the glitch's
         # own three left out (a steep, rough contact line is noisier than the baseline the global one sees)
-        near = np.concatenate([d2[max(0, i - 1 - GLITCH_WINDOW): i - 2], d2[i + 1: i + GLITCH_WINDOW]])
-        local = 1.4826 * float(np.median(np.abs(near - np.median(near)))) / math.sqrt(1.5) if near.size else 0.0
+        near = d2l[max(0, i - 1 - GLITCH_WINDOW): max(0, i - 2)] + d2l[i + 1: i + GLITCH_WINDOW]
+        local = 1.4826 * _median([abs(v - _median(near)) for v in near]) / math.sqrt(1.5) if near else 0.0
         sigma_i = max(sigma, local)
-        y = s[[i - 2, i - 1, i + 1, i + 2]]
         b = float(np.dot(x, y - y.mean())) / 10.0       # least-squares line through the four neighbours
-        a = float(y.mean())
         if np.max(np.abs(y - (a + b * x))) < GLITCH_QUIET_SIGMAS * sigma_i and abs(s[i] - a) > GLITCH_SIGMAS * sigma_i:
             out.append(i)
     return np.asarray(out, np.intp)
+
+
+def _median(v: list[float]) -> float:
+    """The median of a short list, as ``np.median`` gives it (the mean of the two middle values of an even
+    count), without numpy's per-call cost (~20 us; the candidates' windows hold ~18 values)."""
+    w = sorted(v)
+    n = len(w)
+    return w[n // 2] if n % 2 else (w[n // 2 - 1] + w[n // 2]) / 2.0
 
 
 def remove_glitches(s: np.ndarray) -> tuple[np.ndarray, str | None]:
