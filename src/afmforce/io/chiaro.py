@@ -1,4 +1,4 @@
-"""Optics11 Chiaro indenter text exports (read here: header lines, then tab-separated columns).
+"""Optics11 indenter text exports, Chiaro and Piuma (read here: header lines, then tab-separated columns).
 
 afmformats' reader of these files (0.18) needs header keys that only newer exports write
 (``Max load (µN)``, ``Piezo speed (µm/s)``: a V3.4 "Displacement" export has neither and fails
@@ -34,16 +34,22 @@ from ._meta import finalize_curve, missing_metadata, orient
 __all__ = ["detect_chiaro", "load_chiaro"]
 
 _DWELL_TOL = 0.005  #: a dwell sample lies within this fraction of the travel of the deepest z
+_TABLE = b"Time (s)\tLoad (uN)\tIndentation (nm)\tCantilever (nm)\tPiezo (nm)"  #: Optics11's table header
 
 
 def detect_chiaro(path: Path) -> bool:
-    """Optics11 Chiaro text export: a ``Device:<TAB>Chiaro`` line and a ``Time (s)<TAB>Load`` header."""
+    """Optics11 indenter text export (Chiaro, Piuma): the ``Time (s)<TAB>Load (uN)<TAB>Indentation (nm)``
+    table header and a ``k (N/m)`` header line.
+
+    Older exports (2020) and the Piuma's write no ``Device:<TAB>Chiaro`` line (a Piuma's says
+    ``Device:<TAB>Piuma``); the table of columns is the same in all of them.
+    """
     try:
         with open(path, "rb") as fh:
             head = fh.read(65536)
     except OSError:
         return False
-    return b"Device:\tChiaro" in head and b"Time (s)\tLoad" in head
+    return _TABLE in head and b"k (N/m)" in head
 
 
 def _text(raw: bytes) -> str:
@@ -165,7 +171,7 @@ def load_chiaro(path: Path, *, meta_override: Mapping[str, Any], callback: Calla
     piezo = table[:, _column(names, "Piezo (nm)", path)] * 1e-9
     cantilever = table[:, _column(names, "Cantilever (nm)", path)] * 1e-9
     k_file = _number(head, "k (N/m)")
-    meta: dict[str, Any] = {"instrument": head.get("Device", "Chiaro"), "format": "Optics11 Chiaro text export"}
+    meta: dict[str, Any] = {"instrument": head.get("Device", "Optics11 indenter"), "format": "Optics11 Chiaro text export"}
     if k_file is not None and k_file > 0:
         meta["spring_constant"] = k_file
     radius = _number(head, "Tip radius (um)", "Tip radius (\u00b5m)")
