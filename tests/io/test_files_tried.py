@@ -62,3 +62,26 @@ def test_real_optics11_exports_read_as_their_headers_say(name):
     assert c.metadata["radius"] == pytest.approx(head["R"], rel=1e-12)
     np.testing.assert_allclose(c.deflection_signal, table[:, 1] * 1e-6, rtol=0, atol=0)
     assert np.any(c.segment == 2)  # the displacement profile's hold at the deepest step is a dwell
+
+
+def test_igor_wave_without_the_asylum_note_is_refused_in_one_line(tmp_path):
+    """igor2's test waves (``win-double.ibw``, ``mac-zeroPointWave.ibw``: plain waves Igor wrote, no Asylum
+    note) were refused as "afmformats cannot read it (KeyError: 'ImagingMode')". The MIT Asylum curve with
+    its note blanked (same length, read back with igor2) is now refused naming what is missing."""
+    from igor2 import binarywave
+
+    from afmforce.errors import FileFormatError
+
+    src = DATA / "asylum-mfp3d_SiN-tip_air.ibw"
+    raw = src.read_bytes()
+    note = binarywave.load(str(src))["wave"]["note"]
+    at = raw.find(note)
+    assert at > 0 and b"SpringConstant" in note
+    path = tmp_path / "plain.ibw"
+    path.write_bytes(raw[:at] + b" " * len(note) + raw[at + len(note):])
+    assert binarywave.load(str(path))["wave"]["note"].strip() == b""
+    with pytest.raises(FileFormatError) as err:
+        load(path)
+    msg = str(err.value)
+    assert "\n" not in msg and "KeyError" not in msg
+    assert "ImagingMode, SpringConstant, InvOLS" in msg and "afmforce raw text" in msg

@@ -96,6 +96,7 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
                               "(an .ibw the force panel saved, one wave per curve, or the ARDF force map)")
     if _is_one_channel(path):
         return [load_channel_pair(path, meta_override=meta_override)]
+    _refuse_plain_wave(path)
     # the fast path builds what afmformats builds, from a numpy read of the wave (None: not a plain
     # version-5 wave, or a note afmformats would refuse: afmformats reads it, or says what is wrong)
     data = afmformats_igor(path, callback)
@@ -127,6 +128,28 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
             curve = dataclasses.replace(curve, metadata={**curve.metadata, "quality_factor": q})
         out.append(curve)
     return out
+
+
+#: keys of the note the Asylum software writes with every force curve (afmformats needs ImagingMode)
+_ASYLUM_NOTE_KEYS = ("ImagingMode", "SpringConstant", "InvOLS")
+
+
+def _refuse_plain_wave(path: Path) -> None:
+    """Refuse an Igor wave whose note has none of the Asylum force-curve keys (a wave Igor itself wrote,
+    e.g. igor2's test waves): afmformats would fail on it with ``KeyError: 'ImagingMode'``."""
+    try:
+        note = _ibw_note(path)
+    except Exception:  # an unreadable note: afmformats says what is wrong
+        return
+    note = note.decode("latin-1") if isinstance(note, bytes) else str(note)
+    lines = note.replace("\\r", "\r").replace("\n", "\r").split("\r")
+    keys = {line.split(":", 1)[0].strip() for line in lines if ":" in line}
+    if not keys & set(_ASYLUM_NOTE_KEYS):
+        raise FileFormatError(
+            f"{path}: an Igor binary wave without the note the Asylum Research software writes with a force "
+            f"curve (none of {', '.join(_ASYLUM_NOTE_KEYS)} in it): not a force curve afmforce can calibrate; "
+            "give the .ibw the Asylum force panel saved (or the ARDF force map), or write the curve as afmforce "
+            "raw text with its spring constant and sensitivity (docs/formats.md)")
 
 
 def _thermal_frequency(path: Path, key: str = "ThermalFrequency:") -> float | None:
