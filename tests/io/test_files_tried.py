@@ -85,3 +85,25 @@ def test_igor_wave_without_the_asylum_note_is_refused_in_one_line(tmp_path):
     msg = str(err.value)
     assert "\n" not in msg and "KeyError" not in msg
     assert "ImagingMode, SpringConstant, InvOLS" in msg and "afmforce raw text" in msg
+
+
+@pytest.mark.parametrize("name, words", [
+    ("sample_0.h5-jpk", "JPK HDF5 file (.h5-jpk"),
+    ("sample_0.asd", "high-speed AFM movie"),
+    ("sample_0_1.topostats", "TopoStats file"),
+    ("sample_0.top", "WSxM image (.top)"),
+])
+def test_image_families_of_afmreader_are_named_not_unknown(tmp_path, name, words):
+    """AFMReader 0.0.7's test images (sdist tests/resources, GPL-3.0: not kept) of these endings got
+    "unknown file type; supported endings: ..."; each is now named with what to give instead. The
+    content does not matter to the refusal by ending: HDF5's or the ASD's first bytes stand in."""
+    from afmforce.errors import FileFormatError
+    from afmforce.io import is_supported
+
+    path = tmp_path / name
+    path.write_bytes(b"\x89HDF\r\n\x1a\n" + b"\0" * 64)
+    with pytest.raises(FileFormatError) as err:
+        load(path)
+    msg = str(err.value)
+    assert "\n" not in msg and "unknown file type" not in msg and words in msg
+    assert not is_supported(path)

@@ -43,6 +43,16 @@ UNREAD: dict[str, tuple[str, str, str]] = {
              "give the force curves (.jpk-force, .jpk-force-map, .jpk-qi-data)"),
     ".jpk-qi-image": ("JPK QI image file", "it holds the maps computed from a QI measurement, not the curves",
                       "give the curves (.jpk-qi-data)"),
+    ".h5-jpk": ("JPK HDF5 file (.h5-jpk, JPK SPM software 8)",
+                "no public .h5-jpk force-curve file was found to test a reader against (the one found, "
+                "AFMReader's sample, holds images)",
+                "save the curves from the JPK software as .jpk-force, .jpk-force-map or .jpk-qi-data, or " + _EXPORT),
+    ".asd": ("high-speed AFM movie (.asd)", "it holds image frames, not force curves",
+             "give the force curves of the session"),
+    ".topostats": ("TopoStats file (.topostats)", "it holds images processed by TopoStats, not force curves",
+                   "give the instrument's force-curve files"),
+    ".top": ("WSxM image (.top)", "it is an image, not a force curve",
+             "give the force curves of the session (.curves)"),
 }
 
 #: Park Systems' private TIFF tags (XEI): the magic number and the header block
