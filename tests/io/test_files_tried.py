@@ -186,3 +186,26 @@ def test_real_nanoscope_v9_1_catalyst_modulus_agrees_with_nanite():
     r = analyze(c)
     assert r.contact_kind == "soft"
     assert r.youngs_modulus == pytest.approx(e_nanite, rel=0.03)
+
+
+def test_a_short_contact_with_a_time_base_is_not_called_timeless():
+    """The NanoScope 6.15 file (1024 samples at 776.4 Hz) ends its approach with ~20 samples in contact: the
+    oscillation verdict said "no time base" and the figure "no time base in the file". A run of 20 samples at
+    1 kHz: no peak, too few samples, its Nyquist frequency 500 Hz (0.5 / the step); none at all says no time base."""
+    from afmforce.analysis.oscillation import both_runs, find_peak
+
+    t = np.arange(20) * 1e-3
+    short = find_peak(t, np.sin(2 * np.pi * 100 * t), 1e-6, "approach")
+    assert not short.found and short.nyquist == pytest.approx(500.0, rel=1e-9)
+    origin, verdict, _ = both_runs(short, find_peak(t, np.cos(t), 1e-6, "retract"))
+    assert origin == "none" and "no time base" not in verdict and "too few samples" in verdict
+    timeless = find_peak(np.full(20, np.nan), np.zeros(20), 1e-6, "approach")
+    assert "no time base" in both_runs(timeless, timeless)[1]
+
+
+def test_real_nanoscope_v6_short_contact_is_not_called_timeless():
+    from afmforce.analysis.pipeline import analyze
+
+    (c,) = load(real_file("bruker-nanoscope_v6.15_MultiMode_hjkl.005"))
+    verdict = analyze(c).details["oscillation"].verdict
+    assert "no time base" not in verdict and "Nyquist 388.2 Hz" in verdict

@@ -108,8 +108,11 @@ def find_peak(t: np.ndarray, r: np.ndarray, velocity: float, run: str, *, min_cy
         Lowest frequency considered: ``min_cycles`` periods in the record [-].
     """
     n = r.size
-    if n < min_points or not np.all(np.isfinite(t)):
+    if not np.all(np.isfinite(t)):
         return _no_peak(run, velocity)
+    if n < min_points:  # a time base, too few samples in contact: say so (the Nyquist frequency), not "no time base"
+        step = float(np.median(np.diff(t))) if n > 1 else math.nan
+        return _no_peak(run, velocity, nyquist=0.5 / step if step > 0 else math.nan)
     if _compiled() and np.isfinite(r).all():
         t = np.ascontiguousarray(t, dtype=float)
         w, w_sum = _hann(n)
