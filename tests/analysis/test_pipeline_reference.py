@@ -98,6 +98,34 @@ def _before_detach(result, strip_only: bool = False):
     return result
 
 
+#: Since stored (branch corpus, public files tried): (1) a run with a time base but fewer than 32 samples in
+#: contact reports its Nyquist frequency and "too few samples", where the stored verdict said "no time base";
+#: (2) an Optics11 reader's interferometric deflection raises the kind step's least stiffness of a hard contact
+#: to 0.9 (the kind is unchanged on these curves; its reason quotes the threshold). Undone on today's result.
+_NO_TIME_BASE = "oscillation not assessed: no time base"
+
+
+def _before_short_runs(new, old):
+    """``new`` with the stored wording of (1) and (2) where ``old`` has it: every number is compared as before."""
+    if not isinstance(new, dict) or not isinstance(old, dict) or not isinstance(new.get("details"), dict):
+        return new
+    new = copy.deepcopy(new)
+    osc_new, osc_old = new["details"].get("oscillation"), (old.get("details") or {}).get("oscillation")
+    if isinstance(osc_new, dict) and isinstance(osc_old, dict):
+        if osc_old.get("verdict") == _NO_TIME_BASE and "too few samples" in str(osc_new.get("verdict")):
+            osc_new["verdict"] = new["oscillation_verdict"] = _NO_TIME_BASE
+        for run in ("approach", "retract"):
+            a, b = osc_new.get(run), osc_old.get(run)
+            if isinstance(a, dict) and isinstance(b, dict) and b.get("nyquist") is None and not a.get("found"):
+                a["nyquist"] = None
+                short = re.compile(run + r": no peak, too few samples \(Nyquist [^)]*\)")
+                osc_new["verdict"] = new["oscillation_verdict"] = short.sub(run + ": no time base", osc_new["verdict"])
+    for obj, key in ((new, "contact_kind_reason"), (new["details"].get("kind"), "reason")):
+        if isinstance(obj, dict) and isinstance(obj.get(key), str):
+            obj[key] = obj[key].replace("in contact (< 0.9)", "in contact (< 0.7)")
+    return new
+
+
 def _bug(result) -> bool:
     """The reference holds an exception that is no AfmforceError (e.g. a ZeroDivisionError)."""
     import afmforce.errors as E
@@ -129,5 +157,5 @@ def test_every_number_unchanged(today):
     for key, old in REFERENCE.items():
         if _bug(old):  # main raised a bare Python error here (a bug, not a refusal): fixing it is no regression
             continue
-        _compare(_before_detach(today[key]), _before_detach(old, strip_only=True), key, diffs)
+        _compare(_before_detach(_before_short_runs(today[key], old)), _before_detach(old, strip_only=True), key, diffs)
     assert not diffs, f"{len(diffs)} differences, first: " + "; ".join(diffs[:8])

@@ -50,9 +50,12 @@ def kind(st: State, o: KindOptions) -> State:
     stiff = (comp.approach.slope * cal.factor if cal.source == "metadata" and comp.approach.found else math.nan)
     contact_idx = app.index[app.contact & ~app.saturated]
     curv = curvature_ratio(st.z, st.deflection, contact_idx)
+    min_stiffness = o.min_stiffness
+    if st.metadata.get("deflection_interferometric") and min_stiffness == KindOptions.min_stiffness:
+        min_stiffness = INTERFEROMETRIC_MIN_STIFFNESS  # the reader's word: no InvOLS error to allow for
     res = classify_contact(jump_significance=sig, stiffness_ratio=stiff, curvature=curv, nsigma=nsigma,
-                           min_stiffness=o.min_stiffness, max_curvature=o.max_curvature)
-    if res.kind == "soft" and not (math.isfinite(stiff) and stiff < o.min_stiffness):  # curved, not shallow
+                           min_stiffness=min_stiffness, max_curvature=o.max_curvature)
+    if res.kind == "soft" and not (math.isfinite(stiff) and stiff < min_stiffness):  # curved, not shallow
         decay = _surface_force_before_line(st, noise, o.max_curvature)
         if decay is not None:
             res = ContactKind("hard", SURFACE_FORCE_CONTACT.format(curvature=curv, decay=decay * 1e9),
@@ -98,6 +101,12 @@ def kind(st: State, o: KindOptions) -> State:
         new = new.update("contact_point", cp, warn=warn)
     return new
 
+
+#: Least deflection per position of a hard contact where the deflection is measured interferometrically
+#: (Optics11 indenters, ``deflection_interferometric`` from the reader): no sensitivity (InvOLS) error widens it,
+#: so a straight line the deflection follows at 0.78 of the piezo is an indentation (a Hertz contact stiffer than
+#: the lever), not a rigid contact; the default ``min_stiffness`` (0.7) allows for an InvOLS off by ~30 %.
+INTERFEROMETRIC_MIN_STIFFNESS = 0.9
 
 #: A contact region curved only because a long-range repulsive surface force lifts the approach before a straight
 #: contact line (a double layer in water: the two lines' split falls within its last decay lengths).
