@@ -304,9 +304,10 @@ QUANTITIES: dict[str, FieldSpec] = {
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
     # probe calibration (issue 34; docs/calibration.md): thermal noise, Sader, InvOLS
     "temperature": _q("temperature", "K", "temperature of the lever and its medium", 1.0, 1000.0),
+    # the factors of the literature lie in 0.76-1.1 (Butt & Jaschke 1995: 0.817, 0.971; Hutter 2005:
+    # 0.764-1.09); (0, 2] let chi = 1e-30 print k = 5e-29 mN/m as a calibration
     "equipartition_correction": _q("dimensionless", "", "chi of k = chi kB T / <z^2> (0.817: optical "
-                                   "lever, static InvOLS; 1: true displacement, one mode)", 0.0, 2.0,
-                                   lo_open=True),
+                                   "lever, static InvOLS; 1: true displacement, one mode)", 0.5, 1.5),
     "lever_tilt": _q("angle", "rad", "tilt of the lever to the sample (k normal = k / cos^2)",
                      -math.radians(45), math.radians(45), display="deg"),
     "frequency_min": _q("frequency", "Hz", "lowest frequency fitted", 0.0, 1e8, display="kHz"),
