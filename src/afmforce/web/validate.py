@@ -321,7 +321,13 @@ def sweep_spec(grid: Any, ranges: Any, sets: Any, *, sample=None, n=None, seed=N
                 parse(item, dims)
             except ParameterError as exc:
                 raise FieldError(f"{key}[{i}]", str(exc).replace(f"`{key}`", f"{key}[{i}]")) from None
-    spec = build_spec(grid, ranges, sets, sample=sample, n=n, seed=seed, dimensions=dims)
+    try:
+        spec = build_spec(grid, ranges, sets, sample=sample, n=n, seed=seed, dimensions=dims)
+    except FieldError:
+        raise
+    except ParameterError as exc:     # nothing to sweep, a name twice: the request field it names
+        named = [k for k in exc.keys if k in ("grid", "ranges", "sets", "sample", "n", "seed")]
+        raise FieldError(named[0] if named else "grid", str(exc)) from None
     if spec.n_runs > MAX_RUNS:
         raise FieldError("n", f"the sweep has {spec.n_runs:,} runs; the web page runs at most {MAX_RUNS:,}")
     fixed = {}
