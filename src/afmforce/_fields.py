@@ -211,7 +211,10 @@ QUANTITIES: dict[str, FieldSpec] = {
     "k0": _q("stiffness", "N/m", "intrinsic spring constant k0", 1e-4, 1e3),
     "B": _q("rigidity", "N m^2", "flexural rigidity B = k0 L0^3/3", 1e-24, 1e-5),
     "L0": _q("length", "m", "length of the flexible beam", 1e-6, 2e-3),
-    "L1": _q("length", "m", "length of the rigid base", 0.0, 1e-3),
+    # the base carries the joint's rotation: the library needs it positive (cantilever.py), and one
+    # much shorter than a nanometre gives a rotational mode no step budget resolves (1e-30 m: an
+    # integer overflow in the integrator's budget; the web answered 500)
+    "L1": _q("length", "m", "length of the rigid base", 1e-9, 1e-3),
     "L2": _q("length", "m", "length of the rigid probe", 0.0, 1e-3),
     "theta0": _q("angle", "rad", "inclination of the beam", -math.radians(89), math.radians(89),
                  display="deg"),
@@ -237,7 +240,8 @@ QUANTITIES: dict[str, FieldSpec] = {
                      display="deg", **_POS),
     "poisson": _q("dimensionless", "", "Poisson ratio of the sample", -1.0, 0.5, lo_open=True),
     "hamaker": _q("energy", "J", "Hamaker constant A", 1e-22, 1e-17),
-    "z0": _q("length", "m", "soft-wall length z0", hi=1e-8, **_POS),
+    # a soft wall much thinner than an atom is no wall: from 1 pm (z0 = 1e-30 m overflowed the jump-in cubic)
+    "z0": _q("length", "m", "soft-wall length z0", 1e-12, 1e-8),
     "viscosity": _q("viscosity", "Pa s", "fluid viscosity (0: no drainage)", 0.0, 100.0),
     # liquids (issue 25; docs/liquid.md)
     "slip_length": _q("length", "m", "slip length b (Vinogradova drainage)", 0.0, 1e-6),
@@ -300,9 +304,10 @@ QUANTITIES: dict[str, FieldSpec] = {
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
     # probe calibration (issue 34; docs/calibration.md): thermal noise, Sader, InvOLS
     "temperature": _q("temperature", "K", "temperature of the lever and its medium", 1.0, 1000.0),
+    # the factors of the literature lie in 0.76-1.1 (Butt & Jaschke 1995: 0.817, 0.971; Hutter 2005:
+    # 0.764-1.09); (0, 2] let chi = 1e-30 print k = 5e-29 mN/m as a calibration
     "equipartition_correction": _q("dimensionless", "", "chi of k = chi kB T / <z^2> (0.817: optical "
-                                   "lever, static InvOLS; 1: true displacement, one mode)", 0.0, 2.0,
-                                   lo_open=True),
+                                   "lever, static InvOLS; 1: true displacement, one mode)", 0.5, 1.5),
     "lever_tilt": _q("angle", "rad", "tilt of the lever to the sample (k normal = k / cos^2)",
                      -math.radians(45), math.radians(45), display="deg"),
     "frequency_min": _q("frequency", "Hz", "lowest frequency fitted", 0.0, 1e8, display="kHz"),

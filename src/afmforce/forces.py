@@ -189,21 +189,22 @@ def static_jump_in_separation(
     k, r = np.broadcast_arrays(np.asarray(spring_constant, float), np.asarray(radius, float))
     if np.any(k <= 0) or np.any(r <= 0):
         raise ParameterError("spring_constant [N/m] and radius [m] must be positive")
-    c = 6.0 * k / (hamaker * r)  # cubic: z0^6 x^3 - x + c = 0
-    p = z0**6
-    # Depressed cubic x^3 + P x + Q = 0 with P = -1/p, Q = c/p. Three real roots
-    # iff 4P^3 + 27Q^2 < 0; the smallest positive is the trigonometric root k=1.
-    P = -1.0 / p
-    Q = c / p
-    disc = 4.0 * P**3 + 27.0 * Q**2
-    m = 2.0 * np.sqrt(-P / 3.0)
-    arg = np.clip(3.0 * Q / (P * m), -1.0, 1.0)
+    # In u = (z0/h)^3 = z0^3 x the cubic is u^3 - u + q = 0 with q = c z0^3: written so, no power of
+    # z0 over- or underflows (1/z0^6 overflowed a float for z0 below ~1e-26 m: OverflowError). Three
+    # real roots iff 4(-1)^3 + 27 q^2 < 0, i.e. q < 2/sqrt(27); the largest h is the smallest positive u.
+    c = 6.0 * k / (hamaker * r)
+    q = c * z0**3
+    disc = 27.0 * q**2 - 4.0
+    m = 2.0 / math.sqrt(3.0)                              # 2 sqrt(-P/3) with P = -1
+    arg = np.clip(-1.5 * math.sqrt(3.0) * q, -1.0, 1.0)   # 3Q/(P m) with Q = q
     phi = np.arccos(arg) / 3.0
-    # roots: m cos(phi - 2 pi j / 3); the smallest positive one is j = 2... pick min positive
     roots = np.stack([m * np.cos(phi - 2.0 * math.pi * j / 3.0) for j in range(3)])
-    roots = np.where(roots > 0, roots, np.inf)
-    x = roots.min(axis=0)
-    h = np.where(disc < 0, x ** (-1.0 / 3.0), np.nan)
+    # one negative root and two positive (sum 0, product -q < 0). The small positive one is a
+    # difference of numbers of order 1 (its relative error 1e-16/q: 1e-12 at the paper's values,
+    # all of it for a hard wall); from the product of the roots (Vieta) it is exact to rounding.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        u = -q / (roots.max(axis=0) * roots.min(axis=0))
+        h = np.where(disc < 0, z0 * u ** (-1.0 / 3.0), np.nan)
     return _out(h)
 
 

@@ -44,14 +44,18 @@ def print_json(obj: Any) -> None:
 
 
 def print_table(rows: list[tuple[str, Any, str]], title: str | None = None) -> None:
-    """Print ``(label, SI value, unit)`` rows as an aligned table with units."""
+    """Print ``(label, SI value, unit)`` rows as an aligned table with units. A value that is not a
+    number (None, NaN, infinite: a quantity the run does not define) is printed as ``-``, never as
+    ``nan`` beside a unit; a row that says why gives its reason as a text instead."""
+    import math
+
     if title:
         print(title)
     width = max((len(r[0]) for r in rows), default=0)
     for label, value, unit in rows:
         if isinstance(value, str):
             text = value
-        elif value is None:
+        elif value is None or not math.isfinite(float(value)):
             text = "-"
         else:
             text = format_quantity(float(value), unit)

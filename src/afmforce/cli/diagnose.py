@@ -21,6 +21,12 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
+#: Why a row is not defined (its value NaN): the static jump-in needs a spring softer than the
+#: steepest attraction, max Fs' = (A R/6)(2/3) 3^(-1/2) z0^-3 (afmforce.forces.static_jump_in_separation).
+_NONE = {"static jump-in separation": "none: the spring is stiffer than the steepest van der Waals "
+                                      "gradient, so the tip does not jump into contact"}
+
+
 def run(args: argparse.Namespace) -> int:
     d = diagnose(spring_constant=args.spring_constant, mass=args.mass, radius=args.radius,
                  velocity=args.velocity, resolution=args.resolution, separation=args.separation,
@@ -30,6 +36,8 @@ def run(args: argparse.Namespace) -> int:
         return 0
     values = d.to_dict()
     rows = [(readable(k), values[k], u) for k, u in Diagnosis.UNITS.items()]
+    rows = [(label, _NONE.get(label, value) if value is None or value != value else value, u)
+            for label, value, u in rows]     # NaN: not defined for this probe, said why
     print_table(rows, title="afmforce diagnose")
     first, *rest = d.verdict.split("; ")  # one clause a line: every line short, nothing left out
     print(f"  verdict: {first}" + "".join(f";\n           {c}" for c in rest))

@@ -282,7 +282,7 @@ def _print_summary(traj) -> None:
     rows = [
         ("model", traj.config.model, ""),
         ("spring constant k", f"{traj.spring_constant:.5g} N/m", ""),
-        ("calibration factor (eq 15)", f"{traj.calibration_factor * 1e9:.5g} nm/rad", ""),
+        ("calibration factor (eq 15)", _per_rad(traj.calibration_factor, traj), ""),
         ("jump-in", e.jump_in_note, ""),
         ("jump-in position z", e.jump_in_position, "m"),
         ("jump-in separation h", e.jump_in_separation, "m"),
@@ -291,13 +291,23 @@ def _print_summary(traj) -> None:
         ("min apparent deflection before contact", e.min_apparent_deflection, "m"),
         ("apparent-deflection spike", e.spike_height, "m"),
         ("compliance offset z_in - z_out", e.hysteresis_offset, "m"),
-        ("simulated calibration slope", f"{e.compliance_slope * 1e9:.5g} nm/rad", ""),
+        ("simulated calibration slope", _per_rad(e.compliance_slope, traj), ""),
         *_pull_off_rows(traj),
         ("solver", f"{s.status}: {s.steps} steps ({s.rejected} rejected), "
                    f"{s.rhs_evaluations} f-evals, {s.wall_time:.3g} s", ""),
         ("convergence check", s.check, ""),
     ]
     print_table(rows, title="afmforce simulate")
+
+
+def _per_rad(value: float, traj) -> str:
+    """A calibration factor [m/rad] in nm/rad; the spring model's lever has no angle (eq 15 is the
+    inclined beam's), and a run that never reached contact has no compliance line: said, not NaN."""
+    import math
+
+    if traj.config.model == "spring":
+        return "- (the spring model has no lever angle: eq 15 is the inclined beam's)"
+    return f"{value * 1e9:.5g} nm/rad" if math.isfinite(value) else "-"
 
 
 def _pull_off_rows(traj) -> list[tuple]:

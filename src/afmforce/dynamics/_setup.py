@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from .._fields import QUANTITIES
 from . import radau as R
 from .config import SimulationConfig
 from .drive import initial_state, segments
@@ -160,8 +161,8 @@ def _base(cfg: SimulationConfig) -> _Setup:
         s.term = (R.TERM_NONE, 0.0)
     s.f_max = f_max = (_beam_fmax(cfg.cantilever, cfg.m_joint, cfg.m_base)
                        if model == MODEL_BEAM else free_frequency_max(p, model))
-    s.budget = cfg.max_steps if cfg.max_steps is not None else max(
-        2_000_000, int(60.0 * f_max * t_total_max))
+    s.budget = cfg.max_steps if cfg.max_steps is not None else max(   # within max_steps' declared range
+        2_000_000, int(min(QUANTITIES["max_steps"].hi, 60.0 * f_max * t_total_max)))
     s.beam = model == MODEL_BEAM
     s.beta = float(cfg.calibration_factor)
     s.k = cfg.force_constant

@@ -258,7 +258,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
         from ..io import FORMATS
 
         if format not in FORMATS:
-            raise ParameterError(f"format {format}: unknown; choose one of {', '.join(FORMATS)}")
+            raise FieldError("format", f"format {format[:60]!r}: unknown; choose one of {', '.join(FORMATS)}")
     records, probe_record, override = parse_inputs(options, meta, probe)
     chosen = parse_steps(steps)
     t0 = time.perf_counter()

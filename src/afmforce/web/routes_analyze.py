@@ -67,12 +67,12 @@ async def analyze(request: Request,
             paths.append(sessions.path(session, fid))
         except ParameterError as exc:
             raise FieldError(f"file_id[{i}]", str(exc)) from None
-    for name in example:
+    for i, name in enumerate(example):
         if name not in DATASETS:
-            raise ParameterError(f"example {name}: unknown; choose one of {', '.join(DATASETS)}")
+            raise FieldError(f"example[{i}]", f"example {name[:60]!r}: unknown; choose one of {', '.join(DATASETS)}")
         paths.append((example_path(name), name))
     if not paths:
-        raise ParameterError("give a file (field 'file'), an uploaded file's id ('file_id') or an example")
+        raise FieldError("file", "give a file (field 'file'), an uploaded file's id ('file_id') or an example")
     guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
     work = run_in_threadpool(run_analysis, paths, option, meta, probe, steps=step or None, format=format,
                              arrays=arrays,

@@ -69,10 +69,11 @@ def fit(request: Request, body: FitRequest) -> dict:
             raise
         except AfmforceError as exc:
             raise validate.FieldError(f"file_ids[{i}]", str(exc)) from None
+    meta = validate.metadata(body.meta)
     if files:       # every curve of each upload (a map's too): the fit's cap, before a job starts
         sessions = request.app.state.sessions
         read = all(sessions.was_read(session, fid) for fid in body.file_ids)
-        validate.fit_curve_count([p for p, _ in files], None if read else request.app.state.settings.request_budget)
+        validate.fit_curve_count(files, None if read else request.app.state.settings.request_budget, meta)
     if not files and len(velocities) < 2:
         raise validate.FieldError("velocities", "give >= 2 uploaded curves (file_ids) or >= 2 velocities "
                                                 "for virtual curves")
@@ -91,7 +92,7 @@ def fit(request: Request, body: FitRequest) -> dict:
     params = body.model_dump()
     params.update(velocities=velocities, truth=truth)
     params["files"] = [(str(p), name) for p, name in files]
-    params["meta"] = validate.metadata(body.meta)
+    params["meta"] = meta
     request.app.state.sessions.touch(session)
     job = request.app.state.jobs.submit("fit", session, params,    # 413 storage_full past the totals
                                         reserve=fit_reserve(len(files) or len(velocities)))

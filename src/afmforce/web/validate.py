@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import math
 from itertools import product
+from pathlib import Path
 from typing import Any, Iterable
 
 from .._fields import FieldSpec
@@ -174,15 +175,29 @@ def build_config(flat: Any, prefix: str = ""):
     return cfg
 
 
-def fit_curve_count(paths: Iterable[Any], timeout: float | None = None) -> int:
-    """The curves a fit of the uploads ``paths`` takes (every curve of each file; a map's counted
-    from its header, a file whose count is not known cheaply as one), refused past the dynamic
-    fit's cap (:data:`afmforce.fit.core.MAX_CURVES`) as ``file_ids``. ``timeout`` [s] bounds the
-    detection of each file (None: the files were read once already)."""
+def fit_curve_count(files: Iterable[Any], timeout: float | None = None,
+                    meta: dict[str, Any] | None = None) -> int:
+    """The curves a fit of the uploads ``files`` (``[(stored path, name given)]``) takes: every curve
+    of each file, as the fit's job reads them (:func:`afmforce.io.load` with the fit's ``meta``).
+    A force map's are counted from its header (:func:`afmforce.sweep.files.plan_curves`); a file
+    whose count no header gives cheaply (a Nanosurf spectroscopy file of 10 curves, a WSxM file of
+    5) is read, bounded by ``timeout`` [s] as the first reading of an upload is (None: the file was
+    read once already). Refused past the dynamic fit's cap (:data:`afmforce.fit.core.MAX_CURVES`)
+    as ``file_ids``; a file that cannot be read (the job's fit would fail on it) as ``file_ids[i]``."""
     from ..fit.core import check_curve_count
+    from ..io import load
     from ..sweep.files import plan_curves
 
-    n = len(plan_curves(list(paths), timeout=timeout))
+    n = 0
+    for i, (path, name) in enumerate(files):
+        refs = plan_curves([path], timeout=timeout)
+        if len(refs) == 1 and refs[0].index is None:     # no cheap count: read it, as the job will
+            try:
+                refs = load(path, meta_override=meta or None, timeout=timeout)
+            except AfmforceError as exc:
+                text = str(exc).replace(str(path), name).replace(Path(path).name, name)
+                raise FieldError(f"file_ids[{i}]", f"file_ids[{i}]: {text}") from None
+        n += len(refs)
     try:
         check_curve_count(n)
     except ParameterError as exc:
@@ -306,7 +321,13 @@ def sweep_spec(grid: Any, ranges: Any, sets: Any, *, sample=None, n=None, seed=N
                 parse(item, dims)
             except ParameterError as exc:
                 raise FieldError(f"{key}[{i}]", str(exc).replace(f"`{key}`", f"{key}[{i}]")) from None
-    spec = build_spec(grid, ranges, sets, sample=sample, n=n, seed=seed, dimensions=dims)
+    try:
+        spec = build_spec(grid, ranges, sets, sample=sample, n=n, seed=seed, dimensions=dims)
+    except FieldError:
+        raise
+    except ParameterError as exc:     # nothing to sweep, a name twice: the request field it names
+        named = [k for k in exc.keys if k in ("grid", "ranges", "sets", "sample", "n", "seed")]
+        raise FieldError(named[0] if named else "grid", str(exc)) from None
     if spec.n_runs > MAX_RUNS:
         raise FieldError("n", f"the sweep has {spec.n_runs:,} runs; the web page runs at most {MAX_RUNS:,}")
     fixed = {}
