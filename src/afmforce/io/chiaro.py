@@ -174,7 +174,8 @@ def load_chiaro(path: Path, *, meta_override: Mapping[str, Any], callback: Calla
     piezo = table[:, _column(names, "Piezo (nm)", path)] * 1e-9
     cantilever = table[:, _column(names, "Cantilever (nm)", path)] * 1e-9
     k_file = _number(head, "k (N/m)")
-    meta: dict[str, Any] = {"instrument": head.get("Device", "Optics11 indenter"), "format": "Optics11 Chiaro text export"}
+    meta: dict[str, Any] = {"instrument": head.get("Device", "Optics11 indenter"),
+                            "format": "Optics11 Chiaro text export"}
     if k_file is not None and k_file > 0:
         meta["spring_constant"] = k_file
     radius = _number(head, "Tip radius (um)", "Tip radius (\u00b5m)")

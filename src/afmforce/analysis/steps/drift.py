@@ -41,7 +41,40 @@ def drift(st: State, o: DriftOptions) -> State:
     elif res.retract_line in _BORROWED:
         warn = ("the retract's free part is too noisy for a baseline line of its own (ringing, unbinding events): "
                 f"its own offset with {_BORROWED[res.retract_line]}")
+    climb = _baseline_climb(st, signal)
+    if climb is not None:
+        warn = [warn, climb]
     return st.update("drift", res, warn=warn, signal=signal)
+
+
+#: The drift line may climb over the approach after its free part by at most this fraction of the signal's own
+#: rise there: past it the "free" part is itself a slow contact (an indenter that starts on a soft sample).
+MAX_BASELINE_CLIMB = 0.5
+
+
+def _baseline_climb(st: State, signal) -> str | None:
+    """A warning when the baseline line, fitted before contact, takes away most of the approach's rise after it.
+
+    An Optics11 Piuma export of a 338 Pa sample (NanoPrepare's ``new.txt``) presses on it from its first
+    samples: the line fitted over the first 3.4 um rises with the contact and, carried on in time, removed
+    ~75 % of the 120 nN load; the contact point and the modulus then came out of a quarter of the force. The JPK
+    stress-relaxation cell curves (afmformats' ``cell1-0001``/``-0008``) press from the start of their extend too
+    (after a pause in contact): 54-56 %."""
+    app = st.approach
+    if app is None:
+        return None
+    free = app.index[app.zero_force]
+    if free.size < 2 or app.index.size < 2:
+        return None
+    end, last = int(free[-1]), int(app.index[-1])
+    line = st.signal - signal
+    climb, rise = float(line[last] - line[end]), float(st.signal[last] - st.signal[end])
+    if not (rise > 0 and climb > MAX_BASELINE_CLIMB * rise and climb > 10 * abs(st.noise)):
+        return None
+    return (f"the baseline line fitted before contact climbs by {climb / rise:.0%} of the signal's own rise over the "
+            "rest of the approach: its \"free\" part is likely a slow contact already (a tip that starts on a soft "
+            "sample), so the contact point, the force and the modulus are uncertain; record the approach from "
+            "further away")
 
 
 def _one_run(st: State, o: DriftOptions) -> State:
