@@ -15,6 +15,8 @@ import math
 
 import numpy as np
 
+from ._median import median
+
 __all__ = ["GLITCH_SIGMAS", "GLITCH_QUIET_SIGMAS", "GLITCH_WINDOW", "find_glitches", "remove_glitches"]
 
 #: A sample is a glitch when it lies this many noise sigmas off the line through its four neighbours [-]
@@ -28,11 +30,12 @@ GLITCH_QUIET_SIGMAS = 6.0
 GLITCH_WINDOW = 10
 
 
-def _noise(s: np.ndarray) -> float:
-    """Robust white-noise sigma of ``s`` from its second differences (blind to slopes and steps) [its unit];
-    a quantised signal quieter than its step: the step / sqrt 12."""
-    d2 = s[1:-1] - 0.5 * (s[:-2] + s[2:])             # variance 1.5 sigma^2 for white noise
-    sigma = 1.4826 * float(np.median(np.abs(d2 - np.median(d2)))) / math.sqrt(1.5)
+def _noise(s: np.ndarray, d2: np.ndarray | None = None) -> float:
+    """Robust white-noise sigma of ``s`` from its second differences ``d2`` (blind to slopes and steps; computed
+    here unless given) [its unit]; a quantised signal quieter than its step: the step / sqrt 12."""
+    if d2 is None:
+        d2 = s[1:-1] - 0.5 * (s[:-2] + s[2:])         # variance 1.5 sigma^2 for white noise
+    sigma = 1.4826 * median(np.abs(d2 - median(d2))) / math.sqrt(1.5)
     if sigma > 0.0:
         return sigma
     steps = np.abs(np.diff(s))
@@ -45,10 +48,10 @@ def find_glitches(s: np.ndarray) -> np.ndarray:
     s = np.asarray(s, float)
     if s.size < 5:
         return np.zeros(0, np.intp)
-    sigma = _noise(s)
+    d2 = s[1:-1] - 0.5 * (s[:-2] + s[2:])
+    sigma = _noise(s, d2)
     if not sigma > 0.0:
         return np.zeros(0, np.intp)
-    d2 = s[1:-1] - 0.5 * (s[:-2] + s[2:])
     cand = np.flatnonzero(np.abs(d2) > GLITCH_SIGMAS * sigma) + 1
     cand = cand[(cand >= 2) & (cand <= s.size - 3)]
     out = []
@@ -64,8 +67,10 @@ def find_glitches(s: np.ndarray) -> np.ndarray:
         near = d2l[max(0, i - 1 - GLITCH_WINDOW): max(0, i - 2)] + d2l[i + 1: i + GLITCH_WINDOW]
         local = 1.4826 * _median([abs(v - _median(near)) for v in near]) / math.sqrt(1.5) if near else 0.0
         sigma_i = max(sigma, local)
+        if not abs(s[i] - a) > GLITCH_SIGMAS * sigma_i:
+            continue                                    # off by the local noise too: the line's test after it
         b = float(np.dot(x, y - y.mean())) / 10.0       # least-squares line through the four neighbours
-        if np.max(np.abs(y - (a + b * x))) < GLITCH_QUIET_SIGMAS * sigma_i and abs(s[i] - a) > GLITCH_SIGMAS * sigma_i:
+        if np.max(np.abs(y - (a + b * x))) < GLITCH_QUIET_SIGMAS * sigma_i:
             out.append(i)
     return np.asarray(out, np.intp)
 
