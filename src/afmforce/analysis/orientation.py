@@ -30,6 +30,8 @@ import math
 import numpy as np
 
 from ..io.curve import RawCurve
+from ._median import median
+from ._numeric import ptp
 
 __all__ = ["orient", "contact_side", "CONTACT_SIDE_RATIO", "CONTACT_SIDE_SIGMAS", "MIN_BLOCK"]
 
@@ -86,7 +88,7 @@ def _noise(s: np.ndarray) -> float:
     d = np.diff(s)
     if d.size < 2:
         return 0.0
-    return 1.4826 * float(np.median(np.abs(d - np.median(d)))) / math.sqrt(2.0)
+    return 1.4826 * median(np.abs(d - median(d))) / math.sqrt(2.0)
 
 
 def contact_side(z: np.ndarray, s: np.ndarray) -> int:
@@ -127,7 +129,7 @@ def contact_side(z: np.ndarray, s: np.ndarray) -> int:
 def _trend(z: np.ndarray) -> float:
     """How a run's position moves from its start to its end (medians of its first and last tenth) [m]."""
     n = max(1, z.size // 10)
-    return float(np.median(z[-n:]) - np.median(z[:n]))
+    return float(median(z[-n:]) - median(z[:n]))
 
 
 def _reverse_runs(curve: RawCurve, which: tuple[int, ...], keep_time: bool) -> RawCurve:
@@ -160,8 +162,9 @@ def orient(curve: RawCurve, channel: str = "auto") -> tuple[RawCurve, tuple[str,
     # a run stored backwards in time (its time column running down): put back in time order
     if not out.metadata.get("time_is_sample_index", False):
         t = np.asarray(out.time, float)
+        # (a run whose first step does not fall is not backwards: the whole test skipped, the same answer)
         back = tuple(label for label, idx in ((0, app), (1, ret))
-                     if np.isfinite(t[idx]).all() and np.all(np.diff(t[idx]) < 0))
+                     if t[idx[1]] - t[idx[0]] < 0 and np.isfinite(t[idx]).all() and np.all(np.diff(t[idx]) < 0))
         if back:
             out = _reverse_runs(out, back, keep_time=False)
             notes.append(f"the {' and the '.join('approach' if b == 0 else 'retract' for b in back)} "
@@ -171,16 +174,19 @@ def orient(curve: RawCurve, channel: str = "auto") -> tuple[RawCurve, tuple[str,
         z = np.asarray(out.position(channel), float)
     except Exception:   # an absent channel: prepare() says so
         return out, tuple(notes)
-    if not (np.isfinite(z).all() and np.isfinite(np.asarray(out.deflection_signal, float)).all()):
+    s = np.asarray(out.deflection_signal, float)
+    # a finite sum says every sample is finite (one that overflows is checked sample by sample)
+    if not (math.isfinite(float(np.add.reduce(z)) + float(np.add.reduce(s)))
+            or (np.isfinite(z).all() and np.isfinite(s).all())):
         return out, tuple(notes)   # prepare() refuses non-finite samples
-    if np.ptp(z[app]) <= 0.0 or np.ptp(z[ret]) <= 0.0:
+    if ptp(z[app]) <= 0.0 or ptp(z[ret]) <= 0.0:
         nominal = np.asarray(out.piezo_nominal, float)
-        if not (np.isfinite(nominal).all() and np.ptp(nominal[app]) > 0.0 and np.ptp(nominal[ret]) > 0.0):
+        if not (np.isfinite(nominal).all() and ptp(nominal[app]) > 0.0 and ptp(nominal[ret]) > 0.0):
             return out, tuple(notes)
         z = nominal      # prepare() falls back to it the same way
     if _trend(z[app]) > 0.0 and _trend(z[ret]) < 0.0:
         return out, tuple(notes)     # the conventions' order (the readers' curves): nothing to read off the signal
-    side = contact_side(z, np.asarray(out.deflection_signal, float))
+    side = contact_side(z, s)
     if side == 0:
         return out, tuple(notes)
     zs = side * z            # growing towards the sample

@@ -18,6 +18,7 @@ from .._fields import QUANTITIES
 from ..errors import AnalysisError
 from ..io.curve import RawCurve
 from ._glue_kernel import COMPILED, robust_line_ab
+from ._median import median
 from ._numeric import ptp
 from .dynamic import run_velocity
 from .glitches import remove_glitches
@@ -282,14 +283,14 @@ def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> str
         return None
     a = s[approach]
     head = a[: max(5, n // 3)]
-    base = float(np.median(head))
-    tail = float(np.median(a[-max(3, n // 50):])) - base
-    start = float(np.median(s[retract[: max(3, retract.size // 50)]])) - base
+    base = median(head)
+    tail = median(a[-max(3, n // 50):]) - base
+    start = median(s[retract[: max(3, retract.size // 50)]]) - base
     peak = float(a.max()) - base
     if not (tail < 0.0 and start < 0.0 and peak < 0.5 * -tail):
         return None  # (the test below needs all three for any noise > 0: a normal curve pays no noise estimate)
     step = np.diff(head)
-    noise = 1.4826 * float(np.median(np.abs(step - np.median(step)))) / math.sqrt(2.0)
+    noise = 1.4826 * median(np.abs(step - median(step))) / math.sqrt(2.0)
     if not noise > 0.0:      # quieter than its digitisation (most steps equal): one quantum, the least step
         moved = np.abs(step[step != 0.0])
         if not moved.size:
@@ -336,7 +337,7 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
     trend = []
     for i in idx:
         n = max(1, i.size // 10)
-        trend.append(float(np.median(z[i[-n:]]) - np.median(z[i[:n]])))
+        trend.append(median(z[i[-n:]]) - median(z[i[:n]]))
     signs = {"approach": -1.0, "retract": 1.0}   # the position falls on the approach, rises on the retract
     if all(signs[w] * t > 0.0 for w, t in zip(words, trend)):
         moved = (" and ".join(f"{'falls' if w == 'approach' else 'rises'} during the {w}" for w in words))

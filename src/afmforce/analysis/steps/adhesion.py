@@ -10,6 +10,7 @@ import math
 
 import numpy as np
 
+from .._median import median
 from .._step_helpers import _kind, line_slope
 from ..options import AdhesionOptions
 from ..registry import AnalysisStep, ResultField
@@ -49,7 +50,7 @@ def attached_at_end(st: State) -> str | None:
     tail = ret.index[-max(5, ret.index.size // 10):]
     line, end = line_slope(z[comp], s[comp]), line_slope(z[tail], s[tail])
     zt, st_ = z[tail], s[tail]   # the tail's line at its last sample: the pull where the record stops
-    level = float(st_.mean() + end * (zt[-1] - zt.mean()) - np.median(s[base]))
+    level = float(st_.mean() + end * (zt[-1] - zt.mean()) - median(s[base]))
     if not (line != 0.0 and end / line >= ATTACHED_SLOPE_RATIO and level * math.copysign(1.0, line)
             < -ATTACHED_SIGMAS * st.noise):
         return None

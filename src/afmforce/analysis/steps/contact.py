@@ -13,6 +13,7 @@ from ...errors import AnalysisError
 from ..options import ContactOptions
 from ..regions import check_compliance, find_run_regions, run_indices, saturated_mask
 from ..registry import AnalysisStep
+from .._numeric import ptp
 from .._step_helpers import line_slope
 from ..state import ContactSummary, NoContact, State
 
@@ -49,16 +50,29 @@ NO_BASELINE_RATIO = 0.75
 NO_BASELINE_SIGMAS = 20.0
 
 
-def free_baseline_ratio(z: np.ndarray, signal: np.ndarray, run) -> tuple[float, float]:
-    """The slope of a run's zero-force region over its contact region's [-], and the baseline's climb over
-    its positions in noise sigmas [-] (NaN when either region has fewer than 3 samples)."""
+def _baseline_parts(z: np.ndarray, signal: np.ndarray, run) -> tuple:
+    """What :func:`free_baseline_ratio` and :func:`contact_rise` both read off a run: its positions and
+    signal, its zero-force samples' count, positions and slope (NaN under 3 samples); computed once when
+    the contact step runs both checks."""
     idx = run.index
     zz, ss = z[idx], signal[idx]
-    base, touch = run.zero_force, run.contact
-    if base.sum() < 3 or touch.sum() < 3:
+    base = run.zero_force
+    n_base = int(np.count_nonzero(base))
+    zb = zz[base]
+    sb = line_slope(zb, ss[base]) if n_base >= 3 else math.nan
+    return zz, ss, n_base, zb, sb
+
+
+def free_baseline_ratio(z: np.ndarray, signal: np.ndarray, run, parts: tuple | None = None) -> tuple[float, float]:
+    """The slope of a run's zero-force region over its contact region's [-], and the baseline's climb over
+    its positions in noise sigmas [-] (NaN when either region has fewer than 3 samples). ``parts``:
+    :func:`_baseline_parts` of the same arguments, when known."""
+    zz, ss, n_base, zb, sb = parts if parts is not None else _baseline_parts(z, signal, run)
+    touch = run.contact
+    if n_base < 3 or touch.sum() < 3:
         return math.nan, math.nan
-    sb, sc = line_slope(zz[base], ss[base]), line_slope(zz[touch], ss[touch])
-    climb = abs(sb) * float(np.ptp(zz[base])) / run.noise if run.noise > 0 else math.inf
+    sc = line_slope(zz[touch], ss[touch])
+    climb = abs(sb) * float(ptp(zb)) / run.noise if run.noise > 0 else math.inf
     return sb / sc if sc != 0 else math.nan, climb
 
 
@@ -85,11 +99,11 @@ def approach_end_rise(z: np.ndarray, signal: np.ndarray, run) -> float:
     return end / run.noise
 
 
-def _check_free_baseline(z: np.ndarray, signal: np.ndarray, run) -> None:
+def _check_free_baseline(z: np.ndarray, signal: np.ndarray, run, parts: tuple | None = None) -> None:
     """Refuse an approach with no free part: its "baseline" climbs like its contact line
     (:data:`NO_BASELINE_RATIO`, :data:`NO_BASELINE_SIGMAS`): the zero of force, and every force, adhesion,
     sensitivity and contact point measured from it, would be a number taken in contact."""
-    ratio, climb = free_baseline_ratio(z, signal, run)
+    ratio, climb = free_baseline_ratio(z, signal, run, parts)
     if ratio >= NO_BASELINE_RATIO and climb >= NO_BASELINE_SIGMAS:
         raise AnalysisError(
             f"the approach has no free baseline: its far part climbs with the position at {ratio:.2g} of the "
@@ -105,23 +119,24 @@ def _check_free_baseline(z: np.ndarray, signal: np.ndarray, run) -> None:
 CONTACT_RISE_SIGMAS = 5.0
 
 
-def contact_rise(z: np.ndarray, signal: np.ndarray, run) -> float:
+def contact_rise(z: np.ndarray, signal: np.ndarray, run, parts: tuple | None = None) -> float:
     """How far the approach's unclipped compliance region climbs above its zero-force line's slope over its
-    positions, in noise sigmas [-] (NaN when either region has fewer than 3 samples or no noise is known)."""
-    idx = run.index
-    zz, ss = z[idx], signal[idx]
-    base, top = run.zero_force, run.compliance & ~run.saturated
-    if base.sum() < 3 or top.sum() < 3 or not run.noise > 0:
+    positions, in noise sigmas [-] (NaN when either region has fewer than 3 samples or no noise is known).
+    ``parts``: :func:`_baseline_parts` of the same arguments, when known."""
+    zz, ss, n_base, _, sb = parts if parts is not None else _baseline_parts(z, signal, run)
+    top = run.compliance & ~run.saturated
+    if n_base < 3 or top.sum() < 3 or not run.noise > 0:
         return math.nan
-    sb, sc = line_slope(zz[base], ss[base]), line_slope(zz[top], ss[top])
-    return (sc - sb) * float(np.ptp(zz[top])) / run.noise
+    zt = zz[top]
+    sc = line_slope(zt, ss[top])
+    return (sc - sb) * float(ptp(zt)) / run.noise
 
 
-def _check_contact_reached(z: np.ndarray, signal: np.ndarray, run) -> None:
+def _check_contact_reached(z: np.ndarray, signal: np.ndarray, run, parts: tuple | None = None) -> None:
     """Say :class:`NoContact` (contact kind "none") when the approach's contact region does not climb
     (:data:`CONTACT_RISE_SIGMAS`): the approach stopped short of the surface, and the "compliance line" the
     regions found is the attraction's bend or the noise."""
-    rise = contact_rise(z, signal, run)
+    rise = contact_rise(z, signal, run, parts)
     if rise < CONTACT_RISE_SIGMAS and not approach_end_rise(z, signal, run) > CONTACT_RISE_SIGMAS:
         # (an approach whose last samples push the lever off its baseline's line touched, whatever its
         # contact region's slope says: NSFopen 1.1.18's FluidFM cell curve 1 ends 9 nN up at its trigger)
@@ -175,8 +190,9 @@ def contact(st: State, o: ContactOptions) -> State:
         if app is None:
             raise NoContact(str(exc).replace("no contact region found on the approach run", "no contact reached")
                             ) from None
-    _check_free_baseline(st.z, st.signal, app)
-    _check_contact_reached(st.z, st.signal, app)
+    parts = _baseline_parts(st.z, st.signal, app)  # the approach's baseline line, read once by both checks
+    _check_free_baseline(st.z, st.signal, app, parts)
+    _check_contact_reached(st.z, st.signal, app, parts)
     ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
     app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
     summary = contact_summary(app, ret, int(sat.sum()))
