@@ -236,7 +236,7 @@ def tether_curve(*, tethers: tuple[tuple[float, float, float], ...] = ((120e-9, 
     truth = dict(deflection=d, separation=h, position=z, sensitivity=sensitivity, spring_constant=k,
                  adhesion=-float(adhesion), pull_off_index=n0 + int(np.flatnonzero(on)[-1]) if on.any() else -1,
                  ruptures=tuple(rupt))
-    meta = dict(spring_constant=k, sample_rate=sample_rate, velocity=step * sample_rate,
+    meta = dict(spring_constant=k, sample_rate=sample_rate, velocity=step * sample_rate, temperature=temperature,
                 source_file="synthetic worm-like-chain tethers on a hard contact")
     t = np.arange(z.size) / sample_rate
     return RawCurve(time=t, piezo_nominal=z, piezo_measured=z.copy(), deflection_signal=volts, segment=seg,
