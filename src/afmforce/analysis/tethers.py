@@ -202,7 +202,7 @@ def fit_tethers(rs: list[TetherRupture], u: np.ndarray, x: np.ndarray, h: np.nda
     Parameters
     ----------
     rs : list of TetherRupture  the ruptures (:func:`ruptures`)
-    u : ndarray  the retract's deflection about its baseline [m]
+    u : ndarray  the retract's deflection from the curve's zero of force [m]
     x : ndarray  the retract's position [m]
     h : ndarray  the retract's separation [m]
     t : ndarray or None  the retract's times [s] (None: no time base, no loading rate)

@@ -9,10 +9,13 @@ or with the seven-term correction of Bouchiat et al. (Biophys. J. 76, 409 (1999)
 0.01 % of the exact chain): ``+ sum_{i=2..7} a_i (x/L)^i`` (:data:`BOUCHIAT`).
 
 :func:`fit_rise` fits ``L`` and ``p`` to the samples of one rise (extension: the tip--sample separation of a
-hard contact; force: the pull, > 0), by least squares: the persistence length enters linearly (``kT/p``)
-and is profiled out on a grid of ``L`` (no starting guess to give), the pair is then refined jointly
-(:func:`scipy.optimize.least_squares`) and its standard errors are those of the linearised fit with the
-residual variance (at least the baseline noise). A parameter the rise cannot determine is NaN with the
+hard contact; force: the pull, > 0), with a force offset (the zero of force under the rise: the drift
+line's error shifts it by about a pN, which, fixed at 0, put virtual tethers' L_c and l_p up to 3.8 standard
+errors off; the curve's zero counts as one more sample, so a rise without a slack part, a sawtooth's, cannot
+trade the offset freely against l_p), by least squares: ``kT/p`` and the offset enter linearly and are profiled out on a grid of
+``L`` (no starting guess to give), the three are then refined jointly (:func:`scipy.optimize.least_squares`)
+and the standard errors are those of the linearised fit with the residual variance (at least the
+baseline noise). A parameter the rise cannot determine is NaN with the
 reason (:attr:`WlcFit.reason`): too few samples, too short an extension relative to ``L``
 (the entropic regime determines only ``p L``), a parameter at the bound of its search range, or a
 standard error over :data:`MAX_RELATIVE_ERROR` of the value -- never a tight interval.
@@ -119,6 +122,8 @@ class WlcFit:
     reason : str  why L_c or l_p is undetermined ('' when both are determined)
     slope, slope_se : float  the fitted chain's stiffness dF/dx at the last sample given and its standard
         error [N/m] (NaN: undetermined)
+    force_offset, force_offset_se : float  the zero of force fitted with the chain (the pull measured is the
+        chain's plus this) and its standard error [N]
     """
 
     contour_length: float = _u("m")
@@ -133,9 +138,11 @@ class WlcFit:
     reason: str = ""
     slope: float = _u("N/m", math.nan)
     slope_se: float = _u("N/m", math.nan)
+    force_offset: float = _u("N", math.nan)
+    force_offset_se: float = _u("N", math.nan)
 
     def force(self, extension: np.ndarray) -> np.ndarray:
-        """The fitted chain's pull at ``extension`` [N] (NaN where undetermined or beyond L_c)."""
+        """The fitted pull at ``extension`` [N]: the chain's plus the offset (NaN where undetermined or beyond L_c)."""
         x = np.asarray(extension, float)
         if not (math.isfinite(self.contour_length) and math.isfinite(self.persistence_length)):
             return np.full(x.shape, math.nan)
@@ -143,7 +150,7 @@ class WlcFit:
         out = np.full(x.shape, math.nan)
         ok = r < 1.0
         out[ok] = KB * self.temperature / self.persistence_length * _shape(r[ok], self.model)
-        return out
+        return out + (self.force_offset if math.isfinite(self.force_offset) else 0.0)
 
 
 def _undetermined(reason: str, temperature: float, model: str, n: int, xmax: float = math.nan,
@@ -179,38 +186,41 @@ def fit_rise(x: np.ndarray, f: np.ndarray, temperature: float = DEFAULT_TEMPERAT
     def shape(L: float) -> np.ndarray:
         return _shape(x / L, model)
 
-    def profile(L: float) -> tuple[float, float]:   # best kT/p for this L (linear), and the residual sum
+    ones = np.ones_like(x)
+
+    def profile(L: float) -> tuple[float, float, float]:   # best kT/p and offset for this L (linear), the residuals
         g = shape(L)
-        a = float(g @ f / (g @ g))
-        return a, float(np.sum((f - a * g) ** 2))
+        (a, c), *_ = np.linalg.lstsq(np.column_stack([g, ones]), f, rcond=None)
+        return float(a), float(c), float(np.sum((f - a * g - c) ** 2))
 
     grid = xmax * np.exp(np.linspace(math.log(CONTOUR_RANGE[0]), math.log(CONTOUR_RANGE[1]), 240))
-    rss = [profile(L)[1] for L in grid]
+    rss = [profile(L)[2] for L in grid]
     i = int(np.argmin(rss))
     L0 = float(grid[i])
-    a0 = profile(L0)[0]
+    a0, c0, _ = profile(L0)
     p_lo, p_hi = PERSISTENCE_RANGE
     p0 = float(np.clip(kt / a0, p_lo * 1.01, p_hi / 1.01)) if a0 > 0 else p_hi / 1.01
-    lo = np.array([xmax * CONTOUR_RANGE[0] * 1e9, p_lo * 1e9])
-    hi = np.array([xmax * CONTOUR_RANGE[1] * 1e9, p_hi * 1e9])
+    big = 1e3 * (float(np.ptp(f)) + noise) * 1e12   # the offset's range [pN]: free
+    lo = np.array([xmax * CONTOUR_RANGE[0] * 1e9, p_lo * 1e9, -big])
+    hi = np.array([xmax * CONTOUR_RANGE[1] * 1e9, p_hi * 1e9, big])
 
-    def resid(q: np.ndarray) -> np.ndarray:   # q: L, p in nm
-        return (kt / (q[1] * 1e-9) * _shape(x / (q[0] * 1e-9), model) - f) * 1e12   # pN
+    def resid(q: np.ndarray) -> np.ndarray:   # q: L, p in nm, the offset in pN; the zero of force: one more sample
+        return np.append((kt / (q[1] * 1e-9) * _shape(x / (q[0] * 1e-9), model) - f) * 1e12 + q[2], q[2])   # pN
 
-    q0 = np.clip(np.array([L0 * 1e9, p0 * 1e9]), lo * (1 + 1e-9), hi * (1 - 1e-9))
+    q0 = np.clip(np.array([L0 * 1e9, p0 * 1e9, c0 * 1e12]), lo + 1e-9 * np.abs(lo), hi - 1e-9 * np.abs(hi))
     sol = least_squares(resid, q0, bounds=(lo, hi), x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12)
-    L, p = float(sol.x[0]) * 1e-9, float(sol.x[1]) * 1e-9
+    L, p, c = float(sol.x[0]) * 1e-9, float(sol.x[1]) * 1e-9, float(sol.x[2]) * 1e-12
     r = x / L
     g = _shape(r, model)
-    res = kt / p * g - f
+    res = kt / p * g + c - f
     rms = float(math.sqrt(np.mean(res ** 2)))
-    s2 = max(float(res @ res) / max(n - 2, 1), noise ** 2)
-    # Jacobian of the model in (L, p) [N/m]
-    jac = np.column_stack([kt / p * _dshape(r, model) * (-x / L ** 2), -kt / p ** 2 * g])
+    s2 = max(float(res @ res) / max(n - 3, 1), noise ** 2)
+    # Jacobian of the model in (L, p, offset) [N/m, N/m, 1]
+    jac = np.column_stack([kt / p * _dshape(r, model) * (-x / L ** 2), -kt / p ** 2 * g, ones])
     try:
-        cov = s2 * np.linalg.inv(jac.T @ jac)
+        cov = s2 * np.linalg.inv(jac.T @ jac + np.diag([0.0, 0.0, 1.0]))   # the zero's sample: a row (0, 0, 1)
     except np.linalg.LinAlgError:
-        cov = np.full((2, 2), math.inf)
+        cov = np.full((3, 3), math.inf)
     se = np.sqrt(np.clip(np.diag(cov), 0.0, None))
     ratio = xmax / L
     at_bound = [name for name, v, a, b in (("L_c", sol.x[0], lo[0], hi[0]), ("l_p", sol.x[1], lo[1], hi[1]))
@@ -228,7 +238,7 @@ def fit_rise(x: np.ndarray, f: np.ndarray, temperature: float = DEFAULT_TEMPERAT
     xe, re_ = float(x[-1]), float(x[-1]) / L
     slope = kt / p * _dshape(np.array(re_), model) / L
     d2 = float(_d2shape(re_, model))
-    grad = np.array([kt / p * (-d2 * xe / L ** 3 - float(_dshape(np.array(re_), model)) / L ** 2), -slope / p])
+    grad = np.array([kt / p * (-d2 * xe / L ** 3 - float(_dshape(np.array(re_), model)) / L ** 2), -slope / p, 0.0])
     slope_se = float(math.sqrt(max(float(grad @ cov @ grad), 0.0))) if np.all(np.isfinite(cov)) else math.inf
     slope = float(slope)
     if not slope_se <= MAX_RELATIVE_ERROR * abs(slope):
@@ -242,7 +252,7 @@ def fit_rise(x: np.ndarray, f: np.ndarray, temperature: float = DEFAULT_TEMPERAT
         reason = "the rise determines " + reason
     lc, lc_se = (math.nan, math.nan) if any(nm == "L_c" for nm, _ in loose) else (L, float(se[0]))
     lp, lp_se = (math.nan, math.nan) if any(nm == "l_p" for nm, _ in loose) else (p, float(se[1]))
-    return WlcFit(lc, lc_se, lp, lp_se, temperature, model, n, xmax, rms, reason, slope, slope_se)
+    return WlcFit(lc, lc_se, lp, lp_se, temperature, model, n, xmax, rms, reason, slope, slope_se, c, float(se[2]))
 
 
 def loading_rate(t: np.ndarray, f: np.ndarray, noise: float = 0.0) -> tuple[float, float, str]:
