@@ -53,8 +53,9 @@ MIN_POINTS = 10
 MIN_EXTENSION_RATIO = 0.5
 #: A parameter whose standard error exceeds this fraction of its value is undetermined [-].
 MAX_RELATIVE_ERROR = 1.0 / 3.0
-#: Search range of the persistence length [m]: from below a single bond to beyond double-stranded DNA's 50 nm.
-PERSISTENCE_RANGE = (0.02e-9, 200e-9)
+#: Search range of the persistence length [m]: from under a chemical bond (C-C: 0.154 nm; a chain's l_p is at
+#: least about one: polypeptides 0.3-0.4 nm, PEG 0.38 nm) to beyond double-stranded DNA's 50 nm.
+PERSISTENCE_RANGE = (0.1e-9, 200e-9)
 #: Search range of the contour length, in multiples of the largest extension fitted [-].
 CONTOUR_RANGE = (1.0 + 1e-4, 20.0)
 
@@ -225,6 +226,10 @@ def fit_rise(x: np.ndarray, f: np.ndarray, temperature: float = DEFAULT_TEMPERAT
     ratio = xmax / L
     at_bound = [name for name, v, a, b in (("L_c", sol.x[0], lo[0], hi[0]), ("l_p", sol.x[1], lo[1], hi[1]))
                 if v <= a * (1 + 1e-3) or v >= b * (1 - 1e-3)]
+    if at_bound == ["l_p"] and sol.x[1] <= lo[1] * (1 + 1e-3):
+        return _undetermined(
+            f"l_p falls to {p_lo * 1e9:g} nm, under a chemical bond's length: the rise is no single worm-like chain "
+            "(several in parallel, or no chain)", temperature, model, n, xmax, rms)
     if at_bound:
         return _undetermined(
             f"{' and '.join(at_bound)} at the bound of the search range (L_c up to {CONTOUR_RANGE[1]:g} x the "

@@ -183,8 +183,8 @@ def _mark_tethers(ax, result: AnalysisResult, tethers, h: np.ndarray, f: np.ndar
                 label=None if drawn else "worm-like-chain fits")
         drawn.append(fit.contour_length)
     if drawn:
-        ax.text(0.99, 0.02, "L_c " + ", ".join(f"{v * 1e9:.3g}" for v in drawn) + " nm", transform=ax.transAxes,
-                ha="right", va="bottom", fontsize="x-small", color="k")
+        ax.text(0.99, 0.98, "WLC fits: L_c " + ", ".join(f"{v * 1e9:.3g}" for v in drawn) + " nm", transform=ax.transAxes,
+                ha="right", va="top", fontsize="x-small", color="k")
 
 
 def plot_contact_region(result: AnalysisResult, ax=None, width: float = 0.25):

@@ -131,12 +131,13 @@ def tether_lines(ts) -> str:
         line = (f"tether {n} at {t.separation * 1e9:.4g} nm: rupture {t.force * 1e12:.4g} pN, loading rate "
                 f"{_pm(t.loading_rate, t.loading_rate_se, 1e9, 'nN/s')}")
         why = [t.loading_rate_reason] if t.loading_rate_reason else []
+        how = ""
         if f is not None:
             line += (f"; WLC L_c {_pm(f.contour_length, f.contour_length_se, 1e9, 'nm')}, l_p "
-                     f"{_pm(f.persistence_length, f.persistence_length_se, 1e9, 'nm')} ({f.model}, "
-                     f"{f.temperature:g} K, {f.points} samples)")
+                     f"{_pm(f.persistence_length, f.persistence_length_se, 1e9, 'nm')}")
             why = ([f.reason] if f.reason else []) + why
-        out.append(line + "".join(f"; {w}" for w in why))
+            how = f" ({f.model}, {f.temperature:g} K, {f.points} samples)"
+        out.append(line + "".join(f"; {w}" for w in why) + how)
     return " | ".join(out)
 
 
