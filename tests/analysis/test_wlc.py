@@ -214,3 +214,30 @@ def test_jpk_smfs_tethers_fit_as_an_independent_least_squares_does(capsys):
     for n, t in enumerate(ts, 1):
         assert f"tether {n} at {t.separation * 1e9:.4g} nm: rupture {t.force * 1e12:.4g} pN" in out
     assert f"L_c {ts[-1].wlc.contour_length * 1e9:.4g} +- " in out
+
+
+def test_the_pulls_own_slope_is_a_parabolas_derivative_at_the_rupture():
+    """The loading rate's fallback (no determined chain): the slope of a known parabola at its last sample,
+    within 3 standard errors, and undetermined when the pull does not rise above its noise."""
+    from afmforce.analysis.wlc import loading_rate
+
+    t = np.arange(40) / 2048.0
+    truth = 2e-10 + 3e-9 * t + 4e-6 * t ** 2
+    slopes, errors = [], []
+    for seed in range(20):
+        f = truth + 5 * PN * np.random.default_rng(seed).standard_normal(t.size)
+        rate, se, why = loading_rate(t, f, 5 * PN)
+        assert why == "" and abs(rate - (3e-9 + 8e-6 * t[-1])) < 3 * se
+        slopes.append(rate), errors.append(se)
+    assert 0.4 < np.std(slopes, ddof=1) / np.mean(errors) < 2.0
+    rate, se, why = loading_rate(t[:12], 2e-10 + 5 * PN * np.random.default_rng(1).standard_normal(12), 5 * PN)
+    assert math.isnan(rate) and math.isnan(se) and "does not rise significantly" in why
+
+
+def test_an_impossible_temperature_in_the_file_is_refused_by_name():
+    from afmforce.errors import ParameterError
+
+    curve = tether_curve(tethers=((120e-9, 0.4e-9, 100e-9),), end=-300e-9)
+    curve.metadata["temperature"] = -5.0
+    with pytest.raises(ParameterError, match="temperature"):
+        analyze(curve)
