@@ -125,6 +125,7 @@ class WlcFit:
         error [N/m] (NaN: undetermined)
     force_offset, force_offset_se : float  the zero of force fitted with the chain (the pull measured is the
         chain's plus this) and its standard error [N]
+    parallel : int  later chains, pulled in parallel, whose fitted forces were taken out of this rise [-]
     """
 
     contour_length: float = _u("m")
@@ -141,17 +142,35 @@ class WlcFit:
     slope_se: float = _u("N/m", math.nan)
     force_offset: float = _u("N", math.nan)
     force_offset_se: float = _u("N", math.nan)
+    parallel: int = _u("", 0)
 
-    def force(self, extension: np.ndarray) -> np.ndarray:
-        """The fitted pull at ``extension`` [N]: the chain's plus the offset (NaN where undetermined or beyond L_c)."""
+    @property
+    def determined(self) -> bool:
+        """Both L_c and l_p determined."""
+        return math.isfinite(self.contour_length) and math.isfinite(self.persistence_length)
+
+    def chain(self, extension: np.ndarray) -> np.ndarray:
+        """The fitted chain's own pull at ``extension`` [N] (no offset; NaN where undetermined or beyond L_c)."""
         x = np.asarray(extension, float)
-        if not (math.isfinite(self.contour_length) and math.isfinite(self.persistence_length)):
-            return np.full(x.shape, math.nan)
-        r = np.clip(x / self.contour_length, 0.0, None)
         out = np.full(x.shape, math.nan)
+        if not self.determined:
+            return out
+        r = np.clip(x / self.contour_length, 0.0, None)
         ok = r < 1.0
         out[ok] = KB * self.temperature / self.persistence_length * _shape(r[ok], self.model)
-        return out + (self.force_offset if math.isfinite(self.force_offset) else 0.0)
+        return out
+
+    def stiffness(self, extension: float) -> float:
+        """dF/dx of the fitted chain at ``extension`` [N/m] (NaN where undetermined or beyond L_c)."""
+        if not self.determined or not extension < self.contour_length:
+            return math.nan
+        r = np.array(max(extension, 0.0) / self.contour_length)
+        return float(KB * self.temperature / self.persistence_length * _dshape(r, self.model) / self.contour_length)
+
+    def force(self, extension: np.ndarray) -> np.ndarray:
+        """The fitted pull at ``extension`` [N]: the chain's plus the offset (NaN where undetermined or beyond
+        L_c; with ``parallel``, the later chains' forces come on top: :func:`~.tethers.fit_tethers`)."""
+        return self.chain(extension) + (self.force_offset if math.isfinite(self.force_offset) else 0.0)
 
 
 def _undetermined(reason: str, temperature: float, model: str, n: int, xmax: float = math.nan,

@@ -173,13 +173,16 @@ def _mark_tethers(ax, result: AnalysisResult, tethers, h: np.ndarray, f: np.ndar
     ax.plot(np.array(xs) * 1e9, np.array(ys) * 1e9, "X", color="C2", ms=8, mec="k", mew=0.5, zorder=5,
             label=f"{len(pts)} tether rupture{'s' if len(pts) > 1 else ''}")
     drawn = []
-    for t in tethers:
+    for m, t in enumerate(tethers):
         fit = t.wlc
-        if not forces or fit is None or not (0 <= t.fit_start < h.size) or not np.isfinite(fit.force(np.array([1e-9]))).all():
+        if not forces or fit is None or not (0 <= t.fit_start < h.size) or not fit.determined:
             continue
         a = max(float(h[t.fit_start]), 0.0)
         hh = np.linspace(a, t.separation, 200)
-        ax.plot(hh * 1e9, -fit.force(hh) * 1e9, "-", color="k", lw=1.1, zorder=4,
+        pull = fit.force(hh)
+        if fit.parallel:   # the later chains pulled with it (analysis.tethers.fit_tethers)
+            pull = pull + sum(q.wlc.chain(hh) for q in tethers[m + 1:] if q.wlc is not None and q.wlc.determined)
+        ax.plot(hh * 1e9, -pull * 1e9, "-", color="k", lw=1.1, zorder=4,
                 label=None if drawn else "worm-like-chain fits")
         drawn.append(fit.contour_length)
     if drawn:
