@@ -18,6 +18,9 @@ HAMAKER = 5e-19
 Z0 = 0.35e-9
 #: Viscosity of air [Pa s] (paper, after eq 1).
 ETA_AIR = 1.8e-5
+#: Temperature used when none is given or stored [K] (22 C, a laboratory): the thermal calibration's kT and
+#: the tethers' worm-like-chain fits (afmforce.calibration.thermal, afmforce.analysis.wlc).
+DEFAULT_TEMPERATURE = 295.0
 
 #: Fig 1: simple spring with a colloid probe (section 2.1).
 FIG1 = dict(mass=1e-8, spring_constant=0.21, radius=100e-9, velocities=(10e-6, 5e-6, 1e-6))

@@ -39,6 +39,9 @@ ADDED = {"barrier_force", "barrier_jump_distance", "through_barrier",
          "offset_bound", "slope_difference_bound",
          # the tethers of a hard contact (analysis.tethers): empty and 0 on these soft curves
          "tethers", "tether_force",
+         # their worm-like-chain fits (analysis.wlc): NaN and empty on these soft curves
+         "tether_contour_length", "tether_contour_length_se", "tether_persistence_length",
+         "tether_persistence_length_se", "tether_loading_rate", "tether_fits",
          # where the indentation's Poisson ratio came from (user, file, default): the ratio itself is compared
          "poisson_source"}
 

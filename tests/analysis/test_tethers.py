@@ -30,7 +30,9 @@ NOISE = 0.1e-9   # deflection noise [m]: 5 pN on the 0.05 N/m lever
 
 def test_wlc_force_is_marko_siggia():
     kt_p = KB * 298.15 / 0.4e-9
-    assert wlc_force(50e-9, 100e-9, 0.4e-9) == pytest.approx(kt_p * (1 / (4 * 0.25) - 0.25 + 0.5), rel=1e-12)
+    assert wlc_force(50e-9, 100e-9, 0.4e-9, 298.15) == pytest.approx(kt_p * (1 / (4 * 0.25) - 0.25 + 0.5), rel=1e-12)
+    # the default temperature is afmforce's one (295 K: the thermal calibration's too)
+    assert wlc_force(50e-9, 100e-9, 0.4e-9) == pytest.approx(kt_p * 295.0 / 298.15 * 1.25, rel=1e-12)
     assert wlc_force(0.0, 100e-9, 0.4e-9) == 0.0
     with pytest.raises(ParameterError, match="contour_length"):
         wlc_force(100e-9, 100e-9, 0.4e-9)
@@ -45,7 +47,7 @@ def _check_tethers(res, truth):
         assert t.separation == pytest.approx(r["separation"], abs=1 * NM)
         # the pull just before the rupture, from the closed form, within 3 % (the noise is 5 pN)
         assert t.force == pytest.approx(r["force"], rel=0.03)
-        assert t.force == pytest.approx(-float(np.sum([wlc_force(r["separation"], L, p) for L, p, x in TETHERS
+        assert t.force == pytest.approx(-float(np.sum([wlc_force(r["separation"], L, p, 298.15) for L, p, x in TETHERS
                                                         if x >= r["extension"]])), rel=0.03)
     assert res.tether_force == pytest.approx(min(r["force"] for r in truth["ruptures"]), rel=0.03)
     assert res.rupture_distance == pytest.approx(truth["ruptures"][-1]["separation"], abs=1 * NM)

@@ -343,6 +343,9 @@ class AdhesionOptions(StepOptions):
 
     step: ClassVar[str] = "adhesion"
     nsigma: float = _nsigma(5.0, "dip significance in multiples of the baseline noise")
+    wlc_model: str = _opt("marko-siggia", "choice", "", "worm-like chain fitted to each tether's rise: "
+                          "Marko-Siggia's interpolation, or with Bouchiat's 7-term correction",
+                          choices=("marko-siggia", "bouchiat"))
 
 
 @dataclass(frozen=True)

@@ -149,7 +149,7 @@ def tether_curve(*, tethers: tuple[tuple[float, float, float], ...] = ((120e-9, 
                  adhesion: float = 0.0, spring_constant: float = 0.05, sensitivity: float = 50e-9,
                  push: float = 50e-9, start: float = -300e-9, end: float = -450e-9, step: float = 0.25e-9,
                  sample_rate: float = 4000.0, noise: float = 0.0, temperature: float = 298.15,
-                 seed: int | None = 0) -> RawCurve:
+                 seed: int | None = 0, wlc_model: str = "marko-siggia") -> RawCurve:
     """A quasi-static curve on a hard (rigid) contact that pulls worm-like-chain tethers, with its truth.
 
     The approach is free (zero deflection) up to contact at z = 0, then on the compliance line
@@ -170,8 +170,9 @@ def tether_curve(*, tethers: tuple[tuple[float, float, float], ...] = ((120e-9, 
     step : float  position step per sample [m]
     sample_rate : float  [Hz]
     noise : float  white deflection noise [m]
-    temperature : float  [K]
+    temperature : float  [K] (written to the metadata: the analysis' worm-like-chain fits read it there)
     seed : int or None  noise seed
+    wlc_model : str  the chain's force law (:data:`~.wlc.WLC_MODELS`)
 
     Returns
     -------
@@ -191,7 +192,7 @@ def tether_curve(*, tethers: tuple[tuple[float, float, float], ...] = ((120e-9, 
     def pull(h: np.ndarray, first: int) -> np.ndarray:   # the tethers first.. attached: their summed force [N]
         f = np.zeros_like(h)
         for L, p, _ in tethers[first:]:
-            f = f + wlc_force(np.clip(h, 0.0, None), L, p, temperature)
+            f = f + wlc_force(np.clip(h, 0.0, None), L, p, temperature, wlc_model)
         return f
 
     z_app = np.arange(start, push, step)
@@ -236,7 +237,7 @@ def tether_curve(*, tethers: tuple[tuple[float, float, float], ...] = ((120e-9, 
     truth = dict(deflection=d, separation=h, position=z, sensitivity=sensitivity, spring_constant=k,
                  adhesion=-float(adhesion), pull_off_index=n0 + int(np.flatnonzero(on)[-1]) if on.any() else -1,
                  ruptures=tuple(rupt))
-    meta = dict(spring_constant=k, sample_rate=sample_rate, velocity=step * sample_rate,
+    meta = dict(spring_constant=k, sample_rate=sample_rate, velocity=step * sample_rate, temperature=temperature,
                 source_file="synthetic worm-like-chain tethers on a hard contact")
     t = np.arange(z.size) / sample_rate
     return RawCurve(time=t, piezo_nominal=z, piezo_measured=z.copy(), deflection_signal=volts, segment=seg,

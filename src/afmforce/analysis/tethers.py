@@ -8,28 +8,33 @@ every rupture counted (not only those after the deepest point). A monotone relax
 baseline (the detector's or the lever's response after a large snap-off) is no attachment: the last
 rupture there is the pull-off.
 
-:func:`wlc_force` is the closed-form worm-like chain (Marko & Siggia, Macromolecules 28, 8759 (1995))
-that :func:`afmforce.analysis.synthetic.tether_curve` builds its tethers with.
+:func:`fit_tethers` fits each rupture's rise with a worm-like chain (:mod:`.wlc`: contour and persistence
+lengths with standard errors, undetermined with a reason when the rise cannot fix them) and reads the loading
+rate at the rupture. :func:`wlc_force` (from :mod:`.wlc`) is the closed-form chain (Marko & Siggia,
+Macromolecules 28, 8759 (1995)) that :func:`afmforce.analysis.synthetic.tether_curve` builds its tethers with.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
 import numpy as np
 
-from ..errors import ParameterError
-from ..forces import KB
 from ._units import unit as _u
+from .wlc import MAX_RELATIVE_ERROR, WlcFit, fit_rise, loading_rate, wlc_force
 
-__all__ = ["TetherRupture", "wlc_force", "baseline_return", "renewed_pull", "running_median", "ruptures", "BACK_FRACTION"]
+__all__ = ["TetherRupture", "wlc_force", "baseline_return", "renewed_pull", "running_median", "ruptures", "fit_tethers",
+           "BACK_FRACTION", "LOADING_WINDOW"]
 
 #: The retract is back at its free baseline where its running median lies above this fraction of the
 #: significance threshold (``nsigma`` noise) below it ... [-]
 BACK_FRACTION = 0.5
 #: ... for this many running-median windows in a row [-].
 BACK_HOLD = 2
+#: The loading rate is read on the last ``max(running-median window, LOADING_WINDOW)`` attached samples [-].
+LOADING_WINDOW = 10
 
 
 @dataclass(frozen=True)
@@ -44,6 +49,15 @@ class TetherRupture:
     force : float  pull at the rupture, below the baseline [N] (< 0; deflection [m] when k is unknown)
     drop : float  height of the rupture step [N] (> 0; deflection [m] when k is unknown)
     tether : bool  after the retract came back to its free baseline (a tether, not the surface's adhesion)
+    wlc : WlcFit or None  the worm-like-chain fit of the rise before the rupture (:func:`fit_tethers`; None:
+        not fitted, ``loading_rate_reason`` says why)
+    loading_rate, loading_rate_se : float  slope of the pull against time at the rupture and its standard
+        error [N/s] (NaN: undetermined)
+    loading_rate_reason : str  why the loading rate is undetermined ('' when it is not)
+    loading_rate_method : str  ``"chain"``: the piezo speed times the lever and the fitted chain in series, v k s / (k + s)
+        (``s`` the chain's stiffness at the rupture); ``"force"``: the pull's own slope in time (a parabola), when the chain's stiffness is
+        undetermined ('' : none)
+    fit_start : int  first sample of the curve in the rise fitted [-] (-1: none)
     """
 
     index: int = _u("")
@@ -52,26 +66,12 @@ class TetherRupture:
     force: float = _u("N")
     drop: float = _u("N")
     tether: bool = _u("")
-
-
-def wlc_force(extension: np.ndarray | float, contour_length: float, persistence_length: float,
-              temperature: float = 298.15) -> np.ndarray:
-    """Worm-like-chain force, Marko--Siggia interpolation [N].
-
-    ``F = kT / p (1 / (4 (1 - x/L)^2) - 1/4 + x/L)`` for ``0 <= x < L``.
-
-    Parameters
-    ----------
-    extension : float or ndarray  end-to-end distance x [m]
-    contour_length : float  L [m]
-    persistence_length : float  p [m]
-    temperature : float  T [K]
-    """
-    r = np.clip(np.asarray(extension, float) / contour_length, 0.0, None)
-    if np.any(r >= 1.0):
-        raise ParameterError("extension reaches the contour_length: the worm-like chain's force diverges there; "
-                             "give extensions below the contour length")
-    return KB * temperature / persistence_length * (0.25 / (1.0 - r) ** 2 - 0.25 + r)
+    wlc: WlcFit | None = None
+    loading_rate: float = _u("N/s", math.nan)
+    loading_rate_se: float = _u("N/s", math.nan)
+    loading_rate_reason: str = ""
+    loading_rate_method: str = ""
+    fit_start: int = _u("", -1)
 
 
 def running_median(u: np.ndarray, w: int) -> np.ndarray:
@@ -181,3 +181,122 @@ def ruptures(u: np.ndarray, us: np.ndarray, x: np.ndarray, h: np.ndarray, idx: n
         out.append(TetherRupture(int(idx[r]), float(h[r]), float(-x[r]), min(pull, 0.0) * kk,
                                  float(rise[g]) * kk, r >= release))
     return out
+
+
+def fit_tethers(rs: list[TetherRupture], u: np.ndarray, x: np.ndarray, h: np.ndarray, t: np.ndarray | None,
+                idx: np.ndarray,
+                start: int, w: int, k: float, noise: float, temperature: float,
+                model: str = "marko-siggia") -> list[TetherRupture]:
+    """Each rupture with the worm-like-chain fit of its rise and its loading rate (:mod:`.wlc`).
+
+    The rise of a rupture is the retract from ``w`` samples after the previous rupture (the first: after
+    ``start``, the pull-off or the contact's end; the lever's response to a snap-off left out) to the sample
+    before its last attached one (that one may be caught mid-drop, as :func:`ruptures` reads the pull),
+    where the separation is positive; its extension is the tip--sample separation, its force the pull
+    ``-u k``. The loading rate, the slope of the pull against time at the rupture, is read on the last
+    ``max(w, LOADING_WINDOW)`` samples of the rise: the piezo's speed there times the lever and the fitted
+    chain in series (``v k s / (k + s)``, ``s`` = ``WlcFit.slope``), else the pull's own slope
+    (:func:`~.wlc.loading_rate`: a parabola, much noisier: on the SMFS curve its error is as large as the
+    rate). Tethers pulled in parallel add their forces, one molecule unfolding (a sawtooth) does not: the
+    rises are fitted from the last (which holds its chain alone) to the first, each alone and with the later
+    determined chains' forces taken out; the better fit (smaller residual) is kept (``WlcFit.parallel``: how
+    many were taken out), and the loading rate then counts their stiffness too. When the residuals cannot
+    tell the two apart (:data:`AMBIGUOUS_CHI2`), the difference of their L_c and l_p joins the errors.
+
+    Parameters
+    ----------
+    rs : list of TetherRupture  the ruptures (:func:`ruptures`)
+    u : ndarray  the retract's deflection from the curve's zero of force [m]
+    x : ndarray  the retract's position [m]
+    h : ndarray  the retract's separation [m]
+    t : ndarray or None  the retract's times [s] (None: no time base, no loading rate)
+    idx : ndarray  the retract's samples in the curve [-]
+    start : int  run sample where the tip left the surface [-]
+    w : int  running-median window [samples]
+    k : float  spring constant [N/m] (NaN: no fit, forces unknown)
+    noise : float  baseline noise [N]
+    temperature : float  [K]
+    model : str  :data:`~.wlc.WLC_MODELS`
+    """
+    if not math.isfinite(k):
+        return [dataclasses.replace(rup, loading_rate_reason="no force: the spring_constant is unknown") for rup in rs]
+    rises = []
+    prev = max(int(start), 0)
+    for rup in rs:
+        r = int(np.searchsorted(idx, rup.index))
+        seg = np.arange(min(prev + w + 1, r), r)
+        prev = r
+        rises.append(seg[h[seg] > 0.0])
+    fits: list[WlcFit | None] = [None] * len(rs)
+    for m in range(len(rs) - 1, -1, -1):   # the last first: its rise holds its chain alone
+        seg = rises[m]
+        f = -u[seg] * k
+        fit = fit_rise(h[seg], f, temperature, model, noise)
+        later = [q for q in fits[m + 1:] if q is not None and q.determined]
+        if later and seg.size:   # the later chains still attached, in parallel: taken out when that fits better
+            bg = np.sum([q.chain(h[seg]) for q in later], axis=0)
+            if np.all(np.isfinite(bg)):
+                alt = dataclasses.replace(fit_rise(h[seg], f - bg, temperature, model, noise), parallel=len(later))
+                best, other = (alt, fit) if alt.rms < fit.rms else (fit, alt)
+                fit = _ambiguous(best, other, noise)
+        fits[m] = fit
+    out = []
+    for m, rup in enumerate(rs):
+        seg, fit = rises[m], fits[m]
+        f = -u[seg] * k
+        tail = seg[-max(w, LOADING_WINDOW):]
+        extra = 0.0   # the stiffness of the later chains pulled with it
+        if fit.parallel and seg.size:
+            extra = float(sum(q.stiffness(float(h[seg[-1]])) for q in fits[m + 1:] if q is not None and q.determined))
+        if t is None:
+            rate, se, why, how = math.nan, math.nan, "no time base in the file", ""
+        else:
+            rate, se, why, how = _loading_rate(fit, t[tail], x[tail], f[f.size - tail.size:], k, noise, extra)
+        out.append(dataclasses.replace(rup, wlc=fit, loading_rate=rate, loading_rate_se=se, loading_rate_reason=why,
+                                       loading_rate_method=how, fit_start=int(idx[seg[0]]) if seg.size else -1))
+    return out
+
+
+#: Two fits of a rise (alone, or with the later chains taken out) whose residual sums differ by less than this
+#: many residual variances are told apart by nothing but the model: their difference joins the errors [-].
+AMBIGUOUS_CHI2 = 4.0
+
+
+def _ambiguous(best: WlcFit, other: WlcFit, noise: float) -> WlcFit:
+    """``best``, its L_c and l_p errors widened by their difference from ``other`` when the data cannot tell the
+    two fits apart (a later chain's small, smooth force is mimicked by a shorter l_p and an offset: two
+    parallel virtual tethers' first came out l_p 0.354 +- 0.011 nm alone, 0.399 with the second taken out,
+    with residuals equal to 0.06 %); an error over a third of its value leaves it undetermined."""
+    if not (best.determined and other.determined and best.points == other.points and best.points > 3):
+        return best
+    s2 = max(best.rms, noise) ** 2
+    if best.points * (other.rms ** 2 - best.rms ** 2) >= AMBIGUOUS_CHI2 * s2:
+        return best
+    L_se = math.hypot(best.contour_length_se, best.contour_length - other.contour_length)
+    p_se = math.hypot(best.persistence_length_se, best.persistence_length - other.persistence_length)
+    loose = [n for n, v, e in (("L_c", best.contour_length, L_se), ("l_p", best.persistence_length, p_se))
+             if e > MAX_RELATIVE_ERROR * v]
+    why = (f"the rise fits as well alone as with the later chains pulled in parallel taken out: "
+           f"{' and '.join(loose)} undetermined" if loose else "")
+    return dataclasses.replace(best, contour_length=math.nan if "L_c" in loose else best.contour_length,
+                               contour_length_se=math.nan if "L_c" in loose else L_se,
+                               persistence_length=math.nan if "l_p" in loose else best.persistence_length,
+                               persistence_length_se=math.nan if "l_p" in loose else p_se,
+                               reason="; ".join(w for w in (best.reason, why) if w))
+
+
+def _loading_rate(fit: WlcFit, t: np.ndarray, z: np.ndarray, f: np.ndarray, k: float,
+                  noise: float, extra: float = 0.0) -> tuple[float, float, str, str]:
+    """The loading rate at a rupture [N/s], its standard error, why undetermined, and how it was read: the
+    piezo's speed ``v`` (a line of the position ``z`` in time) times the lever and the chain in series,
+    ``k s / (k + s)`` with ``s`` the fitted chain's stiffness there (Evans's ``k_eff v``), else the pull's
+    own slope in time. ``extra``: the stiffness of the later chains pulled in parallel [N/m]."""
+    if math.isfinite(fit.slope) and t.size >= 3 and np.ptp(t) > 0:
+        tc = t - t.mean()
+        v = abs(float(tc @ (z - z.mean()) / (tc @ tc)))
+        s_, se_s = fit.slope + extra, fit.slope_se
+        if v > 0 and s_ > 0:
+            keff = k * s_ / (k + s_)
+            return v * keff, v * se_s * k ** 2 / (k + s_) ** 2, "", "chain"
+    rate, se, why = loading_rate(t, f, noise)
+    return rate, se, why, "force" if not why else ""

@@ -36,6 +36,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .._fields import QUANTITIES
+from ..constants import DEFAULT_TEMPERATURE  # declared once there (295 K): the tethers' WLC fits share it
 from ..errors import AnalysisError, ParameterError
 
 __all__ = ["BOLTZMANN", "DEFAULT_TEMPERATURE", "BUTT_JASCHKE", "sho_psd", "ThermalFit",
@@ -43,8 +44,6 @@ __all__ = ["BOLTZMANN", "DEFAULT_TEMPERATURE", "BUTT_JASCHKE", "sho_psd", "Therm
 
 #: Boltzmann constant [J/K] (exact, SI 2019).
 BOLTZMANN = 1.380649e-23
-#: Temperature used when none is given or stored [K] (22 C, a laboratory).
-DEFAULT_TEMPERATURE = 295.0
 #: A bin this many times above the fitted model is an electrical line, not thermal noise (the
 #: chance of a chi-square(2) bin reaching it is e^-20): masked and the fit redone.
 SPIKE = 20.0

@@ -25,6 +25,7 @@ from pathlib import Path
 from ..errors import OutputExistsError, ParameterError
 from ._validate import add_field, check_output, lazy_help
 from ._analyze_liquid import liquid_flags, print_liquid
+from ._analyze_tethers import print_tethers
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
 from ._outcome import render, reported
 from ._verdicts import MAX_LINE, clip as _clip, dynamic_label as _dynamic_label, plain as _plain, short_verdict
@@ -323,6 +324,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         if len(ok) <= BATCH_CURVES:
             _print_rows(ok, verbose=args.verbose, given="user" if args.sensitivity is not None else "file")
             print_liquid(ok)
+            print_tethers(ok, verbose=args.verbose)
         else:
             _print_stats(ok)
         origin = _oscillation_origin(ok)

@@ -149,12 +149,45 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
 
 
 def _mark_steps(ax, result: AnalysisResult, h: np.ndarray, f: np.ndarray) -> None:
-    """Unbinding steps of the adhesion step: a marker just after each (the force after the bond let go)."""
+    """Unbinding steps of the adhesion step: a marker just after each (the force after the bond let go); the
+    tethers' ruptures (hard contacts) apart: a cross at the pull before each, and each worm-like-chain fit."""
     ad = result.details.get("adhesion")
-    steps = [s.index for s in getattr(ad, "steps", ()) if 0 <= s.index < h.size and math.isfinite(h[s.index] * f[s.index])]
+    tethers = [t for t in getattr(ad, "tethers", ()) if t.tether]
+    rupt = {t.index for t in tethers}
+    steps = [s.index for s in getattr(ad, "steps", ()) if s.index not in rupt and 0 <= s.index < h.size
+             and math.isfinite(h[s.index] * f[s.index])]
     if steps:
         ax.plot(h[steps] * 1e9, f[steps] * 1e9, "s", mfc="none", color="C4", ms=7,
                 label=f"{len(steps)} unbinding step{'s' if len(steps) > 1 else ''}")
+    _mark_tethers(ax, result, tethers, h, f)
+
+
+def _mark_tethers(ax, result: AnalysisResult, tethers, h: np.ndarray, f: np.ndarray) -> None:
+    """Each tether's rupture (a cross at its separation and pull) and its worm-like-chain fit (a solid line over
+    the rise fitted; an undetermined fit is not drawn)."""
+    forces = math.isfinite(result.spring_constant) and np.isfinite(result.force).any()
+    pts = [(t.separation, t.force if forces else f[t.index]) for t in tethers if 0 <= t.index < h.size]
+    if not pts:
+        return
+    xs, ys = zip(*pts)
+    ax.plot(np.array(xs) * 1e9, np.array(ys) * 1e9, "X", color="C2", ms=8, mec="k", mew=0.5, zorder=5,
+            label=f"{len(pts)} tether rupture{'s' if len(pts) > 1 else ''}")
+    drawn = []
+    for m, t in enumerate(tethers):
+        fit = t.wlc
+        if not forces or fit is None or not (0 <= t.fit_start < h.size) or not fit.determined:
+            continue
+        a = max(float(h[t.fit_start]), 0.0)
+        hh = np.linspace(a, t.separation, 200)
+        pull = fit.force(hh)
+        if fit.parallel:   # the later chains pulled with it (analysis.tethers.fit_tethers)
+            pull = pull + sum(q.wlc.chain(hh) for q in tethers[m + 1:] if q.wlc is not None and q.wlc.determined)
+        ax.plot(hh * 1e9, -pull * 1e9, "-", color="k", lw=1.1, zorder=4,
+                label=None if drawn else "worm-like-chain fits")
+        drawn.append(fit.contour_length)
+    if drawn:
+        ax.text(0.99, 0.98, "WLC fits: L_c " + ", ".join(f"{v * 1e9:.3g}" for v in drawn) + " nm", transform=ax.transAxes,
+                ha="right", va="top", fontsize="x-small", color="k")
 
 
 def plot_contact_region(result: AnalysisResult, ax=None, width: float = 0.25):

@@ -41,6 +41,7 @@ def _columns() -> dict[str, str]:
         "map_height": "float", "deflection_unit": "str", "calibration_source": "str",
         **{name: "float" for name in _floats() + _POSITIONS + _OSC},
         "contact_kind": "str", "friction": "str", "dynamic": "bool", "verdict": "str", "warnings": "str",
+        "tether_fits": "str",   # every tether of a hard contact, one clause each (analysis.steps.adhesion)
         "error": "str", "error_type": "str",
     }
 
@@ -119,7 +120,8 @@ def summary_row(result, curve, *, file: str, index: int, name: str) -> dict[str,
         row[f"oscillation_{run}_frequency"] = float(peak.frequency) if found else math.nan
         row[f"oscillation_{run}_velocity"] = float(peak.velocity) if found else math.nan
     row.update(contact_kind=result.contact_kind, friction=result.friction, dynamic=bool(result.dynamic),
-               verdict=result.verdict, warnings=" | ".join(result.warnings))
+               verdict=result.verdict, warnings=" | ".join(result.warnings),
+               tether_fits=str(getattr(result, "tether_fits", "") or "") or None)
     return row
 
 

@@ -10,6 +10,8 @@ import math
 
 import numpy as np
 
+from ..._fields import check
+from ...constants import DEFAULT_TEMPERATURE
 from .._median import median
 from .._step_helpers import _kind, line_slope
 from ..options import AdhesionOptions
@@ -61,6 +63,14 @@ def attached_at_end(st: State) -> str | None:
             f"{bound}, the pull at the end of the record; record a longer retract")
 
 
+def tether_temperature(st: State) -> float:
+    """The temperature of the tethers' worm-like-chain fits [K]: the file's (``temperature`` in its metadata,
+    ``--meta temperature=...``), checked against its declared range, else
+    :data:`~afmforce.constants.DEFAULT_TEMPERATURE` (295 K)."""
+    t = st.metadata.get("temperature")
+    return DEFAULT_TEMPERATURE if t is None else float(check("temperature", float(t)))
+
+
 def adhesion_step(st: State, o: AdhesionOptions) -> State:
     """Adhesion for every contact kind: the retract's deepest dip below its own baseline (<= 0).
 
@@ -78,7 +88,9 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
     rigid = "kind" in st.details and _kind(st) == "hard"
     hard = po is not None and po.found and rigid  # the paper's pull-off jump ends the dip
     res = retract_adhesion(st.deflection, st.position, st.retract, st.spring_constant, nsigma=o.nsigma,
-                           pull_off=po.index if hard else -1, separation=st.separation, hard=rigid)
+                           pull_off=po.index if hard else -1, separation=st.separation, hard=rigid,
+                           time=st.time if st.time_known else None, temperature=tether_temperature(st),
+                           wlc_model=o.wlc_model)
     warn = None
     if (po is not None and po.found and math.isfinite(po.force) and po.force < 0 and res.found and math.isfinite(res.force)
             and abs(res.force) < 0.5 * abs(po.force)):
@@ -92,10 +104,42 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
 
 def _adhesion_fields(st: State) -> dict:
     a = st.details["adhesion"]
-    pulls = [t.force for t in a.tethers if t.tether]
+    ts = [t for t in a.tethers if t.tether]
+    top = min(ts, key=lambda t: t.force) if ts else None   # the tether of tether_force: its fit in the table
+    fit = top.wlc if top is not None and top.wlc is not None else None
+    nan = math.nan
     return dict(adhesion_force=a.force, adhesion_deflection=a.deflection, adhesion_distance=a.distance,
                 adhesion_noise=a.noise, rupture_distance=a.rupture_distance, unbinding_steps=len(a.steps),
-                tethers=len(pulls), tether_force=min(pulls) if pulls else math.nan, adhesion_verdict=a.verdict)
+                tethers=len(ts), tether_force=top.force if top else nan,
+                tether_contour_length=fit.contour_length if fit else nan,
+                tether_contour_length_se=fit.contour_length_se if fit else nan,
+                tether_persistence_length=fit.persistence_length if fit else nan,
+                tether_persistence_length_se=fit.persistence_length_se if fit else nan,
+                tether_loading_rate=top.loading_rate if top else nan,
+                tether_fits=tether_lines(ts), adhesion_verdict=a.verdict)
+
+
+def _pm(v: float, se: float, scale: float, unit: str) -> str:
+    return f"{v * scale:.4g} +- {se * scale:.2g} {unit}" if math.isfinite(v) else "undetermined"
+
+
+def tether_lines(ts) -> str:
+    """One clause per tether (its rupture, worm-like-chain fit and loading rate), joined by `` | ``: the table's
+    ``tether_fits`` column and the lines ``afmforce analyze`` prints under its table."""
+    out = []
+    for n, t in enumerate(ts, 1):
+        f = t.wlc
+        line = (f"tether {n} at {t.separation * 1e9:.4g} nm: rupture {t.force * 1e12:.4g} pN, loading rate "
+                f"{_pm(t.loading_rate, t.loading_rate_se, 1e9, 'nN/s')}")
+        why = [t.loading_rate_reason] if t.loading_rate_reason else []
+        how = ""
+        if f is not None:
+            line += (f"; WLC L_c {_pm(f.contour_length, f.contour_length_se, 1e9, 'nm')}, l_p "
+                     f"{_pm(f.persistence_length, f.persistence_length_se, 1e9, 'nm')}")
+            why = ([f.reason] if f.reason else []) + why
+            how = f" ({f.model}, {f.temperature:g} K, {f.points} samples)"
+        out.append(line + "".join(f"; {w}" for w in why) + how)
+    return " | ".join(out)
 
 
 ADHESION = AnalysisStep(
@@ -113,5 +157,15 @@ ADHESION = AnalysisStep(
                         map=True),
             ResultField("tether_force", "N", "largest tether pull at its rupture (hard contact)", column=True,
                         map=True),
+            ResultField("tether_contour_length", "m", "contour length L_c of that tether's worm-like-chain fit",
+                        column=True, map=True),
+            ResultField("tether_contour_length_se", "m", "its standard error", column=True),
+            ResultField("tether_persistence_length", "m", "persistence length l_p of that tether's fit",
+                        column=True, map=True),
+            ResultField("tether_persistence_length_se", "m", "its standard error", column=True),
+            ResultField("tether_loading_rate", "N/s", "loading rate at that tether's rupture", column=True,
+                        map=True),
+            ResultField("tether_fits", None, "every tether: rupture, worm-like-chain fit, loading rate",
+                        default=""),
             ResultField("adhesion_verdict", None, default="")),
     collect=_adhesion_fields)
