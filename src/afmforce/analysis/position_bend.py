@@ -87,12 +87,16 @@ def _quadratic(x: np.ndarray, y: np.ndarray, lo: float, hi: float) -> tuple[floa
 
 
 def _local_slopes(z: np.ndarray, s: np.ndarray) -> tuple[float, float]:
-    """The least and largest local slope ``ds/dz`` of a run's whole line (a quadratic's end slopes)."""
+    """The least and largest local slope ``ds/dz`` of a run's whole line: a quadratic's end slopes, each
+    widened by two of its standard errors (a straight line's noise bends its fit a little either way)."""
     lo, hi = float(z.min()), float(z.max())
-    b, c, *_ = _quadratic(z, s, lo, hi)
+    b, c, sb, sc, cbc = _quadratic(z, s, lo, hi)
     half = 0.5 * (hi - lo)
-    ends = ((b - 2 * c) / half, (b + 2 * c) / half)
-    return min(ends), max(ends)
+    ends = []
+    for sign in (-1.0, 1.0):
+        se = math.sqrt(max(sb**2 + 4 * sc**2 + sign * 4 * cbc, 0.0))
+        ends.append(((b + sign * 2 * c) - 2 * se, (b + sign * 2 * c) + 2 * se))
+    return min(e[0] for e in ends) / half, max(e[1] for e in ends) / half
 
 
 def _zero(z: np.ndarray, d: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
