@@ -154,3 +154,38 @@ def test_a_retract_showing_the_period_keeps_the_curve_as_recorded():
     faint, _ = approach_only(fa, zr, 0.5 * ALONE_RETRACT_FRACTION * amp * np.cos(2 * math.pi * zr / period) + noise,
                              None)
     assert faint is not None
+
+
+def _line_run(kind, start, z, s):
+    """A run whose every sample lies on its compliance line (a RunRegions over indices start..)."""
+    from afmforce.analysis.regions import RunRegions
+
+    n = z.size
+    yes, no = np.ones(n, bool), np.zeros(n, bool)
+    return RunRegions(kind=kind, index=np.arange(start, start + n), split=0, contact=yes, zero_force=no,
+                      compliance=yes, saturated=no, noise=0.0, has_compliance=True, note="", reason="")
+
+
+def test_gap_of_two_lines_is_their_offset_at_zero_load():
+    """Closed form: two straight lines of the same slope, the retract's ``delta`` further along z, are ``delta``
+    apart at zero load, with no bend; one line for both runs is no gap; a line that does not move gives none."""
+    from afmforce.analysis.position_bend import position_bend
+
+    rng = np.random.default_rng(5)
+    sens, delta, n = 50e-9, 0.8e-9, 400
+    z = np.linspace(-2e-9, 30e-9, n)
+    noise = lambda: 0.002 * rng.standard_normal(n)      # noqa: E731  (0.1 nm at 50 nm/V)
+    za, zr = z, z[::-1]
+    s = np.concatenate([za / sens + noise(), (zr - delta) / sens + noise()])
+    zz = np.concatenate([za, zr])
+    b = position_bend(zz, s, _line_run("approach", 0, za, s[:n]), _line_run("retract", n, zr, s[n:]))
+    assert b.gap == pytest.approx(delta, abs=3 * b.gap_se) and b.gap_se < 0.05e-9
+    assert abs(b.approach) < 0.01 and abs(b.retract) < 0.01 and b.detected
+    lo, hi = b.slopes
+    assert lo < 1 / sens < hi
+    s0 = np.concatenate([za / sens + noise(), zr / sens + noise()])
+    same = position_bend(zz, s0, _line_run("approach", 0, za, s0[:n]), _line_run("retract", n, zr, s0[n:]))
+    assert abs(same.gap) < 4 * same.gap_se and not same.detected
+    flat = np.full(n, 1e-9)
+    assert position_bend(np.concatenate([flat, zr]), s0, _line_run("approach", 0, flat, s0[:n]),
+                         _line_run("retract", n, zr, s0[n:])) is None

@@ -140,13 +140,16 @@ def position_bend(z: np.ndarray, s: np.ndarray, approach: RunRegions | None,
     if approach is None or retract is None or not (approach.has_compliance and retract.has_compliance):
         return None
     runs = [r.index[r.compliance & ~r.saturated] for r in (approach, retract)]
-    if min(i.size for i in runs) < MIN_BEND_SAMPLES:
+    if min(i.size for i in runs) < MIN_BEND_SAMPLES or not all(np.ptp(z[i]) > 0 and np.ptp(s[i]) > 0 for i in runs):
+        return None   # (a degenerate line: its positions or its signal do not move; the compliance step said so)
+    try:
+        gap, se = zero_gap(z, s, approach, retract)
+        if not (math.isfinite(gap) and math.isfinite(se)):
+            return None
+        ba, br = _bends(z, s, runs)
+        slopes = [_local_slopes(z[i], s[i]) for i in runs]
+    except np.linalg.LinAlgError:
         return None
-    gap, se = zero_gap(z, s, approach, retract)
-    if not (math.isfinite(gap) and math.isfinite(se)):
-        return None
-    ba, br = _bends(z, s, runs)
-    slopes = [_local_slopes(z[i], s[i]) for i in runs]
     return PositionBend(gap=gap, gap_se=se, approach=ba, retract=br,
                         slopes=(min(x[0] for x in slopes), max(x[1] for x in slopes)),
                         detected=bool(abs(gap) > GAP_SIGMAS * se and abs(gap) > MIN_GAP
