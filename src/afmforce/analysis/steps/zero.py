@@ -48,7 +48,7 @@ def zero(st: State, o: ZeroOptions) -> State:
                             "the inward line; the outward run's separations are approximate")
             # a nominal position that bends differently on the runs: the outward line misplaces the inward zero
             bend = position_bend(st.z, st.signal, st.approach, st.retract) if st.channel == "nominal" else None
-            if bend is not None and bend.detected and run == "retract":
+            if bend is not None and bend.detected:
                 run = "approach"
                 cal = st.details.get("calibration")
                 warn.append(bend_note(bend, st.unit, cal is not None and cal.source == "fit"))
