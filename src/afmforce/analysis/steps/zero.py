@@ -9,6 +9,7 @@ import math
 
 from .._step_helpers import _kind
 from ..options import ZeroOptions
+from ..position_bend import bend_note, position_bend
 from ..registry import AnalysisStep, ResultField
 from ..separation import ZeroResult, zero_of_separation
 from ..state import State
@@ -22,7 +23,8 @@ def zero(st: State, o: ZeroOptions) -> State:
     ``run="auto"``: the outward (retract) line as in the paper, unless the
     retract had no baseline of its own (drift step) or no compliance line, or
     the two lines' slopes differ by more than ``parallel_tolerance``, more than
-    friction makes (a creeping piezo on the nominal channel, a soft contact):
+    friction makes (a creeping piezo on the nominal channel, a soft contact), or
+    the position bends differently on the two runs (:mod:`..position_bend`):
     then the inward line, which carries the jump-in and the van der Waals
     attraction.
     """
@@ -44,6 +46,12 @@ def zero(st: State, o: ZeroOptions) -> State:
                 run = "approach"
                 warn.append(f"compliance lines not parallel (slope ratio {ratio:.3g}): zero of separation from "
                             "the inward line; the outward run's separations are approximate")
+            # a nominal position that bends differently on the runs: the outward line misplaces the inward zero
+            bend = position_bend(st.z, st.signal, st.approach, st.retract) if st.channel == "nominal" else None
+            if bend is not None and bend.detected:
+                run = "approach"
+                cal = st.details.get("calibration")
+                warn.append(bend_note(bend, st.unit, cal is not None and cal.source == "fit"))
     regions = st.retract if run == "retract" else st.approach
     if regions is None or not regions.has_compliance:  # that run's contact is clipped (or not recorded): the other
         regions = st.approach if run == "retract" else st.retract
