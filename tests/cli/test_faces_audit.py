@@ -105,3 +105,15 @@ def test_the_web_answers_422_naming_the_field(tmp_path):
             r = client.post("/api/simulate", json={field: 1e-30})
             assert r.status_code == 422, r.text
             assert r.json()["error"]["field"] == field
+
+
+def test_sader_in_an_inviscid_medium_is_one_line_without_numpy_s_warning(capsys):
+    """``calibrate sader --viscosity 0`` printed numpy's "divide by zero" RuntimeWarning (two lines of
+    source) above its refusal; the method needs a viscous medium and now says so first."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")        # as the command runs: warnings shown, not errors
+        err = _refused(capsys, ["calibrate", "sader", "--length", "200um", "--width", "30um",
+                                "--frequency", "20kHz", "--quality-factor", "50", "--viscosity", "0"])
+    assert "--viscosity 0" in err and "viscous" in err
