@@ -8,7 +8,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..errors import ParameterError
+from ..errors import ParameterError, SolverError
 from ..progress import Progress
 from .data import FitCurve, prepare_curves
 from .memory import check_fit_memory
@@ -74,6 +74,29 @@ def check_curve_count(n: int) -> None:
             "integrated for every curve at every step; a force map's curves would take hours): give a few "
             "curves at several speeds, and analyse a map's curves one by one with `afmforce analyze` (its vdw "
             "step fits each curve's A R)")
+
+
+def _refuse_failed_runs(prob, x, curves) -> None:
+    """Refuse a best point at which the model of a curve could not be integrated: its residual is
+    the search's penalty (:data:`~afmforce.fit.model.FAILED_RESIDUAL` a sample), its offset and drift
+    NaN, and every number the fit would print (chi2 504,000,000 on a 504-point sapphire curve, A at
+    its search bound, std. errors NaN) a failed run's, not a fit.
+
+    Raises
+    ------
+    SolverError
+    """
+    values, shifts = prob.unpack(x)
+    failed = [c.name for c, (_, coef) in zip(curves, prob.projections(values, shifts)[0])
+              if np.all(np.isnan(coef))]
+    if failed:
+        ev = prob.ev
+        raise SolverError(
+            f"the model could not be integrated at the fit's best parameters for {', '.join(failed[:3])}"
+            f"{' ...' if len(failed) > 3 else ''} ({ev.failures} trial runs failed; last: {ev.last_error}); "
+            "no fitted value is reported: the data are far from any run of the model (check the curves' "
+            "calibration, their spring constant against the model's lever, and the drive range), or "
+            "fix the parameter that drives the runs into failure")
 
 
 def check_speeds(free: Sequence[str], velocities: Sequence[float]) -> None:
@@ -430,6 +453,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             c2 = prob.chi2(x2)
             chi2, x, res = (c2, x2, res2) if c2 <= nf[0] else (nf[0], nf[1], res)
         report("nested models")
+    _refuse_failed_runs(prob, x, fc)
     redchi = chi2 / dof
     J = prob.jacobian(x)
     cov = _covariance(J, max(redchi, 1.0))
