@@ -117,3 +117,10 @@ def test_sader_in_an_inviscid_medium_is_one_line_without_numpy_s_warning(capsys)
         err = _refused(capsys, ["calibrate", "sader", "--length", "200um", "--width", "30um",
                                 "--frequency", "20kHz", "--quality-factor", "50", "--viscosity", "0"])
     assert "--viscosity 0" in err and "viscous" in err
+
+
+@pytest.mark.parametrize("host", ["999.1.1.1", "192.0.2.1"])
+def test_serve_on_an_address_this_machine_lacks_names_the_host(capsys, host, tmp_path):
+    """``serve --host 999.1.1.1`` (no such address) said "choose another --port"."""
+    err = _refused(capsys, ["serve", "--host", host, "--data", str(tmp_path / "d"), "--token", "t" * 16])
+    assert f"cannot listen on {host}:" in err and "--host" in err and "--port" not in err, err
