@@ -12,10 +12,30 @@ import tempfile
 from pathlib import Path
 from typing import Iterator
 
-from .errors import OutputExistsError, ParameterError
+from .errors import FileFormatError, OutputExistsError, ParameterError
 
-__all__ = ["pid_alive", "atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable", "display_path",
+__all__ = ["pid_alive", "read_settings", "atomic_path", "atomic_write_bytes", "atomic_write_text", "check_writable", "display_path",
            "LISTENERS"]
+
+def read_settings(path: str | os.PathLike, what: str) -> str:
+    """The UTF-8 text of a small settings file (``what``: "a TOML sweep file"), read whole but never
+    more than :data:`afmforce.limits.CONFIG_BYTES`: a larger file or a device that never ends
+    (``/dev/zero``) is refused before it fills the memory.
+
+    Raises
+    ------
+    FileFormatError
+        Larger than the cap. (``OSError`` and ``UnicodeDecodeError`` as reading raises them.)
+    """
+    from .limits import CONFIG_BYTES
+
+    with open(path, "rb") as fh:
+        data = fh.read(CONFIG_BYTES + 1)
+    if len(data) > CONFIG_BYTES:
+        raise FileFormatError(f"{display_path(path)}: more than {CONFIG_BYTES:,} bytes, not {what} (such a file "
+                              "holds a few kB); give the settings file itself")
+    return data.decode("utf-8")
+
 
 #: Callables ``f(path)`` told of every file written (in this process): the command line lists them.
 LISTENERS: list = []

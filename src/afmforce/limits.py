@@ -15,7 +15,7 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "SERVER_MAX_SAMPLES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
@@ -25,6 +25,10 @@ MAX_SAMPLES = 10_000_000
 #: samples of the longest cycle, 8 bytes each. A 1.5 MB JPK file whose deflection member unpacked
 #: to 800 MB of zeros (a zip bomb) took 6 GB and minutes before its channels were found to differ.
 MAX_MEMBER_BYTES = MAX_SAMPLES * 8
+#: The most bytes of a settings file read whole (a sweep or instrument TOML file, a calibration
+#: JSON): the largest written is a few kB; ``sweep --config /dev/zero`` filled the memory until the
+#: kernel killed the process (67 s, exit 137).
+CONFIG_BYTES = 1_000_000
 #: The most samples of one cycle a request to ``afmforce serve`` may simulate: a server shares its
 #: memory among its clients (about 90 MB of trajectory per request; issue 33). Declared here, beside
 #: :data:`MAX_SAMPLES`, so that every face reads its caps from one module.
@@ -116,6 +120,8 @@ def caps_markdown() -> str:
     """The docs table of the caps (docs/ranges.md holds it verbatim)."""
     rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
             ("bytes one member of a JPK archive unpacks to", MAX_MEMBER_BYTES, "the JPK readers"),
+            ("bytes of a settings file (sweep or instrument TOML, calibration JSON)", CONFIG_BYTES,
+             "sweep --config, simulate --instrument-config, --probe-calibration"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
             ("bytes one web session keeps stored (uploads, job results, sweep stores)", SERVER_SESSION_STORAGE,
              "afmforce serve (its setting `session_storage`)"),

@@ -105,3 +105,41 @@ def test_the_web_answers_422_naming_the_field(tmp_path):
             r = client.post("/api/simulate", json={field: 1e-30})
             assert r.status_code == 422, r.text
             assert r.json()["error"]["field"] == field
+
+
+def test_sader_in_an_inviscid_medium_is_one_line_without_numpy_s_warning(capsys):
+    """``calibrate sader --viscosity 0`` printed numpy's "divide by zero" RuntimeWarning (two lines of
+    source) above its refusal; the method needs a viscous medium and now says so first."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("default")        # as the command runs: warnings shown, not errors
+        err = _refused(capsys, ["calibrate", "sader", "--length", "200um", "--width", "30um",
+                                "--frequency", "20kHz", "--quality-factor", "50", "--viscosity", "0"])
+    assert "--viscosity 0" in err and "viscous" in err
+
+
+@pytest.mark.parametrize("host", ["999.1.1.1", "192.0.2.1"])
+def test_serve_on_an_address_this_machine_lacks_names_the_host(capsys, host, tmp_path):
+    """``serve --host 999.1.1.1`` (no such address) said "choose another --port"."""
+    err = _refused(capsys, ["serve", "--host", host, "--data", str(tmp_path / "d"), "--token", "t" * 16])
+    assert f"cannot listen on {host}:" in err and "--host" in err and "--port" not in err, err
+
+
+def test_a_file_past_its_reading_budget_is_not_called_unexpected(capsys, tmp_path, monkeypatch):
+    """``analyze FILE --file-timeout ...`` reported a file past its budget as "unexpected
+    FileTimeoutError: ..." (the class lives in ``io._guard``, not ``afmforce.errors``), the words of a
+    bug; it is the reader's budget, said as such (the CLI's failure line and the web's ``failed``)."""
+    from pathlib import Path
+
+    from afmforce.io._guard import FileTimeoutError
+    from afmforce.sweep.report import clean_error
+
+    assert clean_error("FileTimeoutError: reading took longer") == "reading took longer"
+    assert clean_error("KeyError: 'x'") == "unexpected KeyError: 'x'"        # a bug still says so
+    assert issubclass(FileTimeoutError, __import__("afmforce.errors").errors.AfmforceError)
+    monkeypatch.chdir(tmp_path)
+    curve = Path(__file__).parents[1] / "data" / "asylum-mfp3d_SiN-tip_air.ibw"
+    assert main(["analyze", str(curve), "--file-timeout", "1e-9"]) == 1
+    err = [e for e in capsys.readouterr().err.splitlines() if e.startswith("failed:")]
+    assert len(err) == 1 and "reading took longer than" in err[0] and "unexpected" not in err[0], err

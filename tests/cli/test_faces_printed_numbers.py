@@ -60,3 +60,12 @@ def test_the_literature_s_factors_are_taken(capsys):
     k = float(re.search(r"spring constant k\s+([0-9.]+) \+-", out).group(1))
     ref = float(re.search(r"the file's k\s+([0-9.]+) mN/m", out).group(1))
     assert 0.5 < k / ref < 1.5 and math.isfinite(k)
+
+
+def test_plan_prints_no_infinite_sigma(capsys):
+    """``plan`` printed ``inf kg/s`` as the slowest speed's sigma "with the slowest speed" (itself)."""
+    out = _run(capsys, ["plan", "--xi", "5e-3kg/s", "--noise", "0.01nm", "--speeds", "0.5um/s,2um/s",
+                        "--curves", "2"])
+    assert not NOT_A_NUMBER.search(out), out
+    rows = [line for line in out.splitlines() if line.startswith("| 5e-07 m/s | 1000 Hz")]
+    assert rows and "(the slowest itself)" in rows[0]

@@ -18,7 +18,7 @@ import math
 from pathlib import Path
 from typing import Any, Mapping
 
-from .._files import atomic_write_text
+from .._files import atomic_write_text, read_settings
 from .._json import to_jsonable
 from ..errors import FileFormatError
 
@@ -51,7 +51,7 @@ def read_calibration(path) -> dict[str, float]:
     """
     path = Path(path)
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_settings(path, "a calibration file")
     except (OSError, ValueError) as exc:
         raise FileFormatError(f"{path}: not a readable JSON calibration file ({exc})") from None
     return parse_calibration(text, str(path))

@@ -54,14 +54,14 @@ def fluid(medium: str | None, density: float | None = None,
     if medium is None:
         if density is None or viscosity is None:
             raise ParameterError("give the medium (air, water) or both its density and viscosity")
-        return _checked("density", density), _checked("viscosity", viscosity)
+        return _checked("density", density), _viscous(_checked("viscosity", viscosity))
     key = medium.lower()
     if key not in FLUIDS:
         raise ParameterError(f"medium {medium!r}: the Sader presets are {', '.join(FLUIDS)}; "
                              "give the density and viscosity of another fluid")
     rho, eta = FLUIDS[key]
     return (rho if density is None else _checked("density", density)), \
-        (eta if viscosity is None else _checked("viscosity", viscosity))
+        (eta if viscosity is None else _viscous(_checked("viscosity", viscosity)))
 
 
 def reynolds_number(frequency, width: float, density: float, viscosity: float):
@@ -139,6 +139,15 @@ def _checked(name: str, value) -> float:
     if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
         raise ParameterError(f"{name} = {value!r} must be a finite number")
     return float(QUANTITIES[name].check(float(value), name))
+
+
+def _viscous(eta: float) -> float:
+    """The medium's viscosity [Pa s], which the method needs positive: its hydrodynamic function is
+    the lever's viscous load (0 gave Re = inf and numpy's divide-by-zero warning before the refusal)."""
+    if eta <= 0.0:
+        raise ParameterError("`viscosity` 0: the Sader method weighs the lever by the viscous load of its "
+                             "medium, so it needs a viscous one; give the fluid's viscosity (air 1.8e-5 Pa s)")
+    return eta
 
 
 #: The shortest lever (length over width) eq (1) describes: Sader, Chon & Mulvaney (1999) take the

@@ -85,10 +85,17 @@ def run(args: argparse.Namespace) -> int:
     try:
         sock.bind((settings.host, settings.port))
     except OSError as exc:
+        import errno
+
         from ..errors import ParameterError
 
+        sock.close()
+        # an address this machine does not have (or a name that resolves to none) is the host's
+        # fault, not the port's: "choose another --port" sent users to the wrong flag
+        host = isinstance(exc, socket.gaierror) or exc.errno == errno.EADDRNOTAVAIL
         raise ParameterError(f"cannot listen on {settings.host}:{settings.port}: {exc.strerror}; "
-                             "choose another --port") from None
+                             + ("give an address of this machine as --host (127.0.0.1: this machine only)"
+                                if host else "choose another --port")) from None
     from dataclasses import replace
 
     settings = replace(settings, port=sock.getsockname()[1])

@@ -76,6 +76,24 @@ def check_curve_count(n: int) -> None:
             "step fits each curve's A R)")
 
 
+def _failed_runs(prob, x, curves) -> str | None:
+    """Say so when the model of a curve could not be integrated at the best point: its residual is
+    the search's penalty (:data:`~afmforce.fit.model.FAILED_RESIDUAL` a sample), its offset and drift
+    NaN, and the fit's numbers (chi2 504,000,000 on a 504-point sapphire curve, A at its search bound)
+    are of no run of the model. None when every curve's run succeeded."""
+    values, shifts = prob.unpack(x)
+    failed = [c.name for c, (_, coef) in zip(curves, prob.projections(values, shifts)[0])
+              if np.all(np.isnan(coef))]
+    if not failed:
+        return None
+    ev = prob.ev
+    return (f"the model could not be integrated at the fit's best parameters for {', '.join(failed[:3])}"
+            f"{' ...' if len(failed) > 3 else ''} ({ev.failures} trial runs failed; last: {ev.last_error}): "
+            "the values reported are of no run of the model, not a fit; the data are far from any run of "
+            "it (check the curves' calibration, their spring constant against the model's lever, and the "
+            "drive range)")
+
+
 def check_speeds(free: Sequence[str], velocities: Sequence[float]) -> None:
     """Refuse a speed-dependent free parameter (:data:`SPEED_DEPENDENT`) with curves at one
     driving speed (less than 1.2x apart): friction lowers the apparent attraction like a smaller
@@ -430,6 +448,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             c2 = prob.chi2(x2)
             chi2, x, res = (c2, x2, res2) if c2 <= nf[0] else (nf[0], nf[1], res)
         report("nested models")
+    failed_runs = _failed_runs(prob, x, fc)
     redchi = chi2 / dof
     J = prob.jacobian(x)
     cov = _covariance(J, max(redchi, 1.0))
@@ -438,7 +457,9 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
     warns = pre_warns + [c.metadata["velocity_from_ramp"] for c in fc
                          if c.metadata.get("velocity_from_ramp")]
     warns += preparation_warnings(fc, base)     # calibration notes, the files' k vs the model's
-    if ev.failures:
+    if failed_runs:
+        warns.append(failed_runs)
+    elif ev.failures:
         warns.append(f"{ev.failures} trial simulations failed during the fit (last: {ev.last_error})")
     adq = adequacy(prob, x, dof, chi2, fc)
     if not adq["adequate"]:

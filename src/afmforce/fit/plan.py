@@ -57,9 +57,13 @@ class Plan:
 
         L = [f"# Experiment plan (xi = {fq(self.xi, 'kg/s')}, noise {fq(self.noise, 'm')})", "",
              "| speed | sample rate | σ(xi) with the slowest speed | σ(xi) alone |", "|---|---|---|---|"]
+        def sigma(value, none):     # an infinite sigma is no number: the row says why
+            return fq(value, "kg/s") if math.isfinite(value) else none
+
         for c in self.candidates:
+            paired = "- (the slowest itself)" if c['speed'] == self.candidates[0]['speed'] else "undetermined"
             L.append(f"| {fq(c['speed'], 'm/s')} | {fq(c['sample_rate'], 'Hz')} | "
-                     f"{fq(c['sigma_xi_paired'], 'kg/s')} | {fq(c['sigma_xi_alone'], 'kg/s')} |")
+                     f"{sigma(c['sigma_xi_paired'], paired)} | {sigma(c['sigma_xi_alone'], 'undetermined')} |")
         b = self.best_design
         L += ["", f"**Best design of {len(b['speeds'])} curves**: speeds "
               + ", ".join(fq(v, "m/s") for v in b["speeds"])

@@ -201,7 +201,14 @@ class FitResult:
 
     def markdown(self) -> str:
         """A Markdown summary: parameters, verdict, model comparison, curves."""
-        from ..units import format_quantity as fq
+        from ..units import format_quantity
+
+        def fq(value, unit):     # a value that is no number (a failed run's offset, an undefined
+            # std. error) is printed as "-", never as "nan" beside a unit
+            return format_quantity(value, unit) if value is not None and math.isfinite(value) else "-"
+
+        def g(value, spec=".3g"):
+            return format(value, spec) if value is not None and math.isfinite(value) else "-"
 
         L = [f"# Dynamic fit ({self.model} model, {len(self.curves)} curves)", ""]
         L += [f"| parameter | value | std. error | {self.level:.0%} interval |", "|---|---|---|---|"]
@@ -221,10 +228,10 @@ class FitResult:
                   else []) + [""]
         if self.comparison is not None:
             c = self.comparison
-            L += [f"**{c.verdict}** (likelihood ratio {c.lr:.3g}, p = {c.p_value:.3g})", ""]
+            L += [f"**{c.verdict}** (likelihood ratio {g(c.lr)}, p = {g(c.p_value)})", ""]
             if c.slip_detected is not None:
-                L += [f"**{c.slip_verdict}** (likelihood ratio {c.slip_lr:.3g}, p = "
-                      f"{c.slip_p_value:.3g})", ""]
+                L += [f"**{c.slip_verdict}** (likelihood ratio {g(c.slip_lr)}, p = "
+                      f"{g(c.slip_p_value)})", ""]
             L += ["| model | chi2 | parameters | AIC | BIC |", "|---|---|---|---|---|"]
             for m in c.chi2:
                 L.append(f"| {m} | {c.chi2[m]:.1f} | {c.n_parameters[m]} | {c.aic[m]:.1f} | "

@@ -28,6 +28,7 @@ import tomllib
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+from .._files import read_settings
 from ..errors import FileFormatError, ParameterError
 from ..units import DIMENSIONS, parse_value
 from .instrument import COMPONENTS, Instrument
@@ -147,8 +148,7 @@ def load_config(path: str | os.PathLike) -> dict[str, Any]:
         Unknown tables or parameters, bad values.
     """
     try:
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
+        data = tomllib.loads(read_settings(path, "an instrument TOML file"))
     except IsADirectoryError:
         raise FileFormatError(f"instrument config {path} is a folder; give a .toml file") from None
     except OSError as exc:

@@ -20,11 +20,22 @@ from .summary import failures, summary_table
 __all__ = ["analysis_json", "clean_error", "oscillation_origin_of"]
 
 
+def _afmforce_errors() -> set[str]:
+    """The names of every :class:`~afmforce.errors.AfmforceError` subclass, those outside
+    :mod:`afmforce.errors` too (``io._guard.FileTimeoutError``, a reader's past its
+    ``--file-timeout``: it was shown as "unexpected FileTimeoutError")."""
+    names, todo = set(), [_errors.AfmforceError]
+    while todo:
+        cls = todo.pop()
+        names.add(cls.__name__)
+        todo.extend(cls.__subclasses__())
+    return names
+
+
 def clean_error(error: str) -> str:
     """``FileFormatError: msg`` -> ``msg``; other exception types are marked unexpected."""
     name, sep, rest = error.partition(": ")
-    cls = getattr(_errors, name, None)
-    if sep and isinstance(cls, type) and issubclass(cls, _errors.AfmforceError):
+    if sep and name in _afmforce_errors():
         return rest
     if sep and re.fullmatch(r"\w+(Error|Exception)", name):
         return f"unexpected {error}"

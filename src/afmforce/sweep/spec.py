@@ -28,7 +28,8 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..errors import ParameterError
+from .._files import read_settings
+from ..errors import FileFormatError, ParameterError
 from ..limits import MAX_RUNS, check_count
 from ..units import normalize_number_text, parse_value
 
@@ -296,7 +297,7 @@ def parse_setting(item: str, dimensions: Dimensions | None = None) -> tuple[str,
 def _from_toml(path: Path, dimensions: Dimensions | None) -> dict:
     """Read a sweep file: ``[sweep]`` options, ``[grid]``, ``[range]``, ``[set]`` tables."""
     try:
-        data = tomllib.loads(Path(path).read_text(encoding="utf-8"))
+        data = tomllib.loads(read_settings(path, "a TOML sweep file"))
     except FileNotFoundError:
         raise ParameterError(f"`config` {path}: no such file") from None
     except IsADirectoryError:
@@ -422,8 +423,8 @@ def chunk_size_from_config(config: str | Path | None) -> int | None:
     if not config:
         return None
     try:
-        table = tomllib.loads(Path(config).read_text(encoding="utf-8")).get("sweep", {})
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        table = tomllib.loads(read_settings(config, "a TOML sweep file")).get("sweep", {})
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError, FileFormatError):
         return None  # build_spec reports unreadable files
     value = _sweep_options(Path(config), table if isinstance(table, dict) else {}).get("chunk_size")
     if value is not None and value < 1:
