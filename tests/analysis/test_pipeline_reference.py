@@ -43,7 +43,9 @@ ADDED = {"barrier_force", "barrier_jump_distance", "through_barrier",
          "tether_contour_length", "tether_contour_length_se", "tether_persistence_length",
          "tether_persistence_length_se", "tether_loading_rate", "tether_fits",
          # where the indentation's Poisson ratio came from (user, file, default): the ratio itself is compared
-         "poisson_source"}
+         "poisson_source",
+         # the drift step's climb of its approach line (NaN unless its warning fires; the indentation then widens)
+         "baseline_climb"}
 
 
 def _compare(new, old, where: str, out: list[str]) -> None:

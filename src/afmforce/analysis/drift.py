@@ -81,6 +81,10 @@ class DriftResult:
         Baseline slope per unit position subtracted on the retract [unit/m] (``"position tilt"``
         only; 0 otherwise): the baseline there is ``offset_retract + slope_retract (t - t_r) +
         tilt_retract (z - z_r)`` from the retract's first free sample.
+    baseline_climb : float
+        The fraction of the approach signal's rise after its free part that the approach's drift line takes
+        away, when over the drift step's limit (its warning, ``MAX_BASELINE_CLIMB``) [-]; NaN otherwise. The
+        indentation step then also fits without the drift slope and widens the modulus's interval.
     """
 
     offset_approach: float = _u("{signal}")
@@ -93,6 +97,7 @@ class DriftResult:
     retract_settling: bool = False
     retract_line: str = "separate"
     tilt_retract: float = _u("{signal}/m", 0.0)
+    baseline_climb: float = _u("", math.nan)
 
 
 def _wls(X: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray:

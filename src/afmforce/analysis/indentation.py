@@ -12,7 +12,7 @@ curves without a spring constant or without the geometry the model needs.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -120,10 +120,64 @@ def indentation(st: State, o: IndentationOptions) -> State:
         return _skip(st, "indentation", impossible)
     res = _result(fit, u, o, geom, radius, st.spring_constant, nu, nu_source)
     warn = [f"indentation ({o.model}): {w}" for w in fit.warnings]
+    if o.run == "approach" and o.contact_point is None:
+        res, note = _baseline_systematic(st, res, idx, z, d, lambda uu, ff: fit_indentation(
+            uu, ff, o.model, {k: v for k, v in geom.items() if v is not None}, nu=nu, weight_width=o.weight_width,
+            contact_guess=guess, thickness=o.thickness,
+            max_indentation=o.max_indentation if o.max_indentation is not None else math.inf,
+            transition=o.transition, branch=o.run))
+        if note:
+            warn.append(note)
     if nu_source == "file" and nu != DEFAULT_POISSON:     # the user sees which ratio E is for
         warn.append(f"indentation: the sample's Poisson ratio {nu:g} is the file's (not {DEFAULT_POISSON:g}; E "
                     "scales as 1 - nu^2): give `poisson` to change it")
     return st.update("indentation", res, warn=warn)
+
+
+def _baseline_systematic(st: State, res: IndentationResult, idx: np.ndarray, z: np.ndarray, d: np.ndarray,
+                         refit) -> tuple[IndentationResult, str | None]:
+    """The modulus's interval widened to the fit without the drift slope, when the drift line climbs with the
+    contact (the drift step's ``baseline_climb``: its "free" part is likely a slow contact already).
+
+    The data cannot tell a drift line from a contact that starts before the run does: the line fitted before
+    contact and carried on in time (the fit ``res``) and a constant baseline (the slope put back: the fit
+    ``refit`` gives) are both read from the same samples. Neither is preferred, so the 95 % interval is widened
+    to cover both fits' intervals and the standard errors add half their difference in quadrature (a systematic
+    uncertainty, said in the warning); E stays the drift-corrected fit's. Where the fit without the slope has no
+    modulus, E is undetermined ([0, open]). On a curve whose drift line does not climb nothing changes.
+    """
+    dr = st.details.get("drift")
+    climb = getattr(dr, "baseline_climb", math.nan)
+    if not math.isfinite(climb) or st.approach is None or not math.isfinite(dr.slope_approach):
+        return res, None
+    t0 = st.time[st.approach.index[0]]
+    d2 = d + dr.slope_approach * (st.time[idx] - t0) * st.factor   # the deflection [m] the drift slope took away
+    k = st.spring_constant
+    what = (f"the drift line climbs by {climb:.0%} of the approach's rise after its free part (a slow contact "
+            "already?): the modulus depends on the baseline")
+    try:
+        alt = refit(z - d2, d2 * k)
+        bad = impossible_modulus(alt.youngs_modulus)
+    except (AnalysisError, ParameterError) as exc:
+        alt, bad = None, str(exc)
+    if alt is None or bad:
+        return replace(res, youngs_modulus_low=0.0, youngs_modulus_high=math.nan), (
+            f"indentation: {what}; without the drift slope (a constant baseline) no modulus fits ({bad}): E is "
+            "undetermined (interval [0, open]); record the approach from further away")
+    E, E2 = res.youngs_modulus, alt.youngs_modulus
+    z2 = alt.contact + alt.baseline / k
+    low, high = min(res.youngs_modulus_low, alt.youngs_modulus_low), max(res.youngs_modulus_high,
+                                                                        alt.youngs_modulus_high)
+    if math.isnan(res.youngs_modulus_high) or math.isnan(alt.youngs_modulus_high):
+        high = math.nan
+    new = replace(res, youngs_modulus_low=low, youngs_modulus_high=high,
+                  youngs_modulus_se=math.hypot(res.youngs_modulus_se, (E - E2) / 2),
+                  contact_point_se=math.hypot(res.contact_point_se, (res.contact_point - z2) / 2))
+    span = f"[{low:.4g}, {high:.4g}] Pa" if math.isfinite(high) else f"[{low:.4g} Pa, open]"
+    return new, (f"indentation: {what}: with the drift line E = {E:.4g} Pa, without its slope (a constant "
+                 f"baseline) E = {E2:.4g} Pa (contact point {(z2 - res.contact_point) * 1e9:+.4g} nm away); the "
+                 f"95 % interval {span} covers both fits (a systematic uncertainty of the baseline, its standard "
+                 "error adds half their difference); record the approach from further away")
 
 
 def _result(fit, u: np.ndarray, o: IndentationOptions, geom: dict, radius, k: float, nu: float,

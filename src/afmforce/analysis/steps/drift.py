@@ -6,6 +6,7 @@ Declared once by its record :data:`DRIFT` (:mod:`afmforce.analysis.registry`).
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 from ...errors import AnalysisError
 from ..drift import DriftResult, fit_baseline, remove_drift
@@ -43,7 +44,8 @@ def drift(st: State, o: DriftOptions) -> State:
                 f"its own offset with {_BORROWED[res.retract_line]}")
     climb = _baseline_climb(st, signal)
     if climb is not None:
-        warn = [warn, climb]
+        res = replace(res, baseline_climb=climb[0])
+        warn = [warn, climb[1]]
     return st.update("drift", res, warn=warn, signal=signal)
 
 
@@ -52,8 +54,10 @@ def drift(st: State, o: DriftOptions) -> State:
 MAX_BASELINE_CLIMB = 0.5
 
 
-def _baseline_climb(st: State, signal) -> str | None:
-    """A warning when the baseline line, fitted before contact, takes away most of the approach's rise after it.
+def _baseline_climb(st: State, signal) -> tuple[float, str] | None:
+    """The fraction climbed [-] and a warning when the baseline line, fitted before contact, takes away most of
+    the approach's rise after it (the indentation step then widens the modulus's interval: see
+    :func:`afmforce.analysis.indentation.indentation`).
 
     An Optics11 Piuma export of a 338 Pa sample (NanoPrepare's ``new.txt``) presses on it from its first
     samples: the line fitted over the first 3.4 um rises with the contact and, carried on in time, removed
@@ -71,10 +75,11 @@ def _baseline_climb(st: State, signal) -> str | None:
     climb, rise = float(line[last] - line[end]), float(st.signal[last] - st.signal[end])
     if not (rise > 0 and climb > MAX_BASELINE_CLIMB * rise and climb > 10 * abs(st.noise)):
         return None
-    return (f"the baseline line fitted before contact climbs by {climb / rise:.0%} of the signal's own rise over the "
-            "rest of the approach: its \"free\" part is likely a slow contact already (a tip that starts on a soft "
-            "sample), so the contact point, the force and the modulus are uncertain; record the approach from "
-            "further away")
+    return climb / rise, (
+        f"the baseline line fitted before contact climbs by {climb / rise:.0%} of the signal's own rise over the "
+        "rest of the approach: its \"free\" part is likely a slow contact already (a tip that starts on a soft "
+        "sample), so the contact point, the force and the modulus are uncertain; record the approach from "
+        "further away")
 
 
 def _one_run(st: State, o: DriftOptions) -> State:
