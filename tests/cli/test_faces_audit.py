@@ -88,6 +88,7 @@ def test_the_automatic_step_budget_stays_a_64_bit_integer(monkeypatch):
     from afmforce.dynamics import SimulationConfig, simulate
 
     monkeypatch.setattr(setup, "_beam_fmax", lambda *a: 1e40)
+    monkeypatch.setattr(setup, "_BASES", {})        # a setup cached by an earlier test of this process is not rebuilt
     cfg = SimulationConfig(velocity=10e-6, sample_rate=1e4)
     assert setup._setup(cfg).budget == int(QUANTITIES["max_steps"].hi)
     assert simulate(cfg).solver.status == "success"
