@@ -121,7 +121,7 @@ def caps_markdown() -> str:
     rows = [("samples of one simulated cycle", MAX_SAMPLES, "simulate, sweep, the records"),
             ("bytes one member of a JPK archive unpacks to", MAX_MEMBER_BYTES, "the JPK readers"),
             ("bytes of a settings file (sweep or instrument TOML, calibration JSON)", CONFIG_BYTES,
-             "sweep --config, simulate --instrument-config, --probe-calibration"),
+             "sweep and simulate (their settings files), the probe calibration record"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
             ("bytes one web session keeps stored (uploads, job results, sweep stores)", SERVER_SESSION_STORAGE,
              "afmforce serve (its setting `session_storage`)"),

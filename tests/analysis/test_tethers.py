@@ -137,10 +137,15 @@ def test_the_typical_presets_snap_off_relaxation_is_no_attachment(tmp_path):
     from afmforce.cli.main import main
     from afmforce.io import load
 
-    raw = tmp_path / "typ.txt"
-    assert main(["simulate", "--instrument", "typical", "--raw", str(raw)]) == 0
-    res = analyze(load(raw)[0])
-    po = res.details["jumps"].pull_off
-    assert res.contact_kind == "hard" and po.found and res.pull_off_force < -20e-9
-    assert res.rupture_distance == pytest.approx(float(res.separation[po.index]), abs=2 * NM)
-    assert abs(res.rupture_distance) < 3 * NM and res.unbinding_steps == 0 and res.tethers == 0
+    # fixed seeds: the preset's noise is random by default, and with it the two compliance lines' offset
+    # (the shift, -0.7 to -7.6 nm over eight random runs): the pull-off lies on the retract's line, so its
+    # separation is within that offset of zero (the test failed once with rupture -4.6 nm at shift ~ -6 nm)
+    for seed in ("1", "2", "3"):
+        raw = tmp_path / f"typ{seed}.txt"
+        assert main(["simulate", "--instrument", "typical", "--seed", seed, "--raw", str(raw)]) == 0
+        res = analyze(load(raw)[0])
+        po = res.details["jumps"].pull_off
+        assert res.contact_kind == "hard" and po.found and res.pull_off_force < -20e-9
+        assert res.rupture_distance == pytest.approx(float(res.separation[po.index]), abs=2 * NM)
+        assert abs(res.rupture_distance) < abs(res.shift) + 3 * NM, (seed, res.rupture_distance, res.shift)
+        assert res.unbinding_steps == 0 and res.tethers == 0

@@ -21,6 +21,7 @@ from scipy.optimize import brentq
 from afmforce._fields import QUANTITIES
 from afmforce.cli.main import main
 from afmforce.forces import static_jump_in_separation, vdw_force_gradient
+from test_cli_ranges import refused
 
 
 @pytest.mark.parametrize("z0", [1e-30, 1e-20, 1e-12, 0.165e-9, 1e-9, 3e-9])
@@ -48,13 +49,8 @@ def test_no_jump_for_a_spring_stiffer_than_the_steepest_attraction():
 
 
 def _refused(capsys, argv) -> str:
-    try:
-        code = main(argv)
-    except SystemExit as exc:       # argparse refuses while parsing
-        code = exc.code
-    err = capsys.readouterr().err.strip()
-    assert code == 2, err
-    assert len(err.splitlines()) == 1 and err.startswith("error: ") and "unexpected" not in err, err
+    err = refused(capsys, argv)               # exit 2, one line (test_cli_ranges' helper)
+    assert err.startswith("error: ") and "unexpected" not in err, err
     return err
 
 
