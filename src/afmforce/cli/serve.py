@@ -99,6 +99,9 @@ def run(args: argparse.Namespace) -> int:
     from dataclasses import replace
 
     settings = replace(settings, port=sock.getsockname()[1])
+    # listening before the URL is printed: a request sent at once (a browser, a script reading the first line)
+    # waits in the backlog until the server accepts it, not "connection refused" (uvicorn listens again: harmless)
+    sock.listen(2048)
     app = create_app(settings)
     print(f"afmforce serve: {settings.url()}", flush=True)
     if settings.token and not settings.loopback:
