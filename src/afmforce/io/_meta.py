@@ -8,6 +8,7 @@ from the file.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping
@@ -20,7 +21,7 @@ from .curve import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
 
 __all__ = ["MetaField", "METADATA", "check_meta_override", "finalize_curve", "segment_code",
            "missing_metadata", "require_metadata", "orient", "afmformats_override", "parse_meta_args",
-           "positive_entry"]
+           "positive_entry", "first_approach_only"]
 
 
 def _positive(value: Any) -> float:
@@ -243,8 +244,39 @@ def require_metadata(curve: RawCurve, keys=("spring_constant", "sensitivity"), p
         raise missing_metadata(path, missing)
 
 
+def first_approach_only(curve: RawCurve) -> RawCurve:
+    """The curve whose approach is its first extend run only (a step indentation's later extends: dwell).
+
+    A step (multi-) indentation extends, holds, extends again deeper, holds... before it retracts
+    (JPK segmented force settings: extend, pause, extend, pause, ..., retract). Its extend segments
+    together are no approach: the holds between them relax the force (drops of ~1 nN in afmToolkit's
+    ``force-save-JPK-multiIndent.txt``), so a contact point, a baseline or a Hertz fit over them fits
+    steps, not a contact. The first extend (from free to contact) is the approach; every later extend
+    is kept with the holds as a dwell (segment 2), and ``approach_steps`` (metadata) says so.
+    A curve with one extend run is returned unchanged.
+    """
+    seg = np.asarray(curve.segment)
+    app = seg == SEGMENT_APPROACH
+    starts = np.flatnonzero(app & ~np.r_[False, app[:-1]])
+    if starts.size <= 1:
+        return curve
+    first_end = int(starts[0] + np.argmin(app[starts[0]:]))   # a later run exists: a False lies between
+    later = app.copy()
+    later[:first_end] = False
+    new = seg.copy()
+    new[later] = SEGMENT_DWELL
+    z = np.asarray(curve.piezo_measured if curve.piezo_measured is not None else curve.piezo_nominal, float)
+    deeper = float(np.max(z[later]) - z[first_end - 1])
+    note = (f"step indentation: {starts.size} extend segments with holds between them; the first "
+            f"({first_end - int(starts[0])} samples, free to contact) is the approach, the {starts.size - 1} "
+            f"later ({int(later.sum())} samples, reaching {deeper * 1e9:.4g} nm deeper) are kept with the holds "
+            "as dwell and not analysed (the holds relax the force between them: no single loading curve)")
+    return dataclasses.replace(curve, segment=new, metadata={**curve.metadata, "approach_steps": note})
+
+
 def finalize_curve(curve: RawCurve, path: str) -> RawCurve:
-    """Check that a freshly read curve is usable: finite columns, monotonic time.
+    """Check that a freshly read curve is usable: finite columns, monotonic time; a step indentation's
+    approach is its first extend (:func:`first_approach_only`).
 
     Raises
     ------
@@ -280,4 +312,4 @@ def finalize_curve(curve: RawCurve, path: str) -> RawCurve:
             raise FileFormatError(f"{path}: metadata {key} [{field.unit}] {exc}, got {value!r}; "
                                   f"the file is damaged, give the right value (`{key}`)"
                                   ) from None
-    return curve
+    return first_approach_only(curve)
