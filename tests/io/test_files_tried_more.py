@@ -139,3 +139,33 @@ def test_real_jpk_multi_indent_export_approach_is_the_first_extend():
     np.testing.assert_array_equal(c.deflection_signal[c.segment == 0], first)
     assert c.metadata["spring_constant"] == blocks[0]["k"]
     assert "step indentation: 4 extend segments" in c.metadata["approach_steps"]
+
+
+# --- a cut-down JPK archive: fewer samples than its header states ----------------------------------------
+
+CUT = Path(__file__).resolve().parents[1] / "data" / "refused" / "jpkay_cut-down_retract-1000-of-78635.jpk-force"
+
+
+@pytest.mark.parametrize("fmt", [None, "jpk-zip"])
+def test_cut_down_jpk_archive_is_refused_naming_what_it_lacks(fmt):
+    """tku137/JPKay's test fixture ``tests/data/sample.jpk-force`` (MIT, kept in tests/data/refused): a JPK
+    archive cut down to one retract segment of 1000 samples (4000-byte channels) while its header states 78635
+    and lists four channels, two absent. It was refused as "data file ... capacitiveSensorHeight.dat is
+    missing", which says neither why nor what to give; a reader that took the 1000 samples would have divided
+    the header's 15.7 s duration by them (a 64 Hz time base for a 5 kHz curve). Now one line: how many samples
+    of how many (the header's, read with zipfile), and what to give instead."""
+    import zipfile
+
+    from afmforce.errors import FileFormatError
+
+    with zipfile.ZipFile(CUT) as arc:
+        (head,) = [n for n in arc.namelist() if n.endswith("segment-header.properties")]
+        stated = int(re.search(r"force-segment-header\.num-points=(\d+)", arc.read(head).decode()).group(1))
+        (dat,) = [n for n in arc.namelist() if n.endswith("vDeflection.dat")]
+        held = arc.getinfo(dat).file_size // 4
+    assert (held, stated) == (1000, 78635)
+    with pytest.raises(FileFormatError) as err:
+        load(CUT, format=fmt) if fmt else load(CUT)
+    msg = str(err.value)
+    assert "\n" not in msg
+    assert f"holds {held} of the {stated} samples" in msg and "as the JPK software saved it" in msg

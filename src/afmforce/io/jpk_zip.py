@@ -257,6 +257,10 @@ def _num(props: Mapping[str, str], key: str, where: str) -> float:
         raise FileFormatError(f"{where}: property {key!r} is not a number: {props[key]!r}") from None
 
 
+#: What a refusal of a damaged or cut-down JPK archive asks for instead.
+GIVE_SAVED = "give the file as the JPK software saved it (or its text export: Data Processing, Export -> Text)"
+
+
 def _decode(arc: zipfile.ZipFile, seg_dir: str, props: dict[str, str], name: str, where: str) -> np.ndarray:
     """Read a channel's stored values and apply its encoder (volts or the base unit).
 
@@ -279,7 +283,8 @@ def _decode(arc: zipfile.ZipFile, seg_dir: str, props: dict[str, str], name: str
     try:
         raw = arc.read(f"{seg_dir}/{fname}")
     except KeyError:
-        raise FileFormatError(f"{where}: data file {seg_dir}/{fname} is missing") from None
+        raise FileFormatError(f"{where}: data file {seg_dir}/{fname} is missing: the header lists channel {name} "
+                              f"but the archive does not hold it (an edited or cut-down copy); {GIVE_SAVED}") from None
     dt = np.dtype(dtype)
     if len(raw) % dt.itemsize:
         raise FileFormatError(f"{where}: {seg_dir}/{fname} is truncated ({len(raw)} bytes)")
@@ -471,6 +476,11 @@ def _read_archive(arc: zipfile.ZipFile, where: str, meta_override: dict, callbac
         volts = _decode(arc, seg_dir, pv, "vDeflection", where)
         meta.update(_calibration(pv))
         n = volts.size
+        stated = props.get("force-segment-header.num-points", "").strip()
+        if stated.isdigit() and int(stated) != n:   # a cut-down copy: its duration / n would be no sample rate
+            raise FileFormatError(f"{where}: segment {sid} ({style}) holds {n} of the {int(stated)} samples its "
+                                  f"header states (an edited or cut-down copy: its time base would be wrong); "
+                                  f"{GIVE_SAVED}")
         flagged = recording_flags(props, n)
         if flagged:
             meta["recording_flags"] = "; ".join(filter(None, (meta.get("recording_flags"),
