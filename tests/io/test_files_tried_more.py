@@ -97,14 +97,17 @@ def test_step_indentation_approach_is_its_first_extend(tmp_path):
     assert r.youngs_modulus_low <= E <= r.youngs_modulus_high
 
 
-def test_one_extend_curve_is_unchanged():
-    """A curve with one extend run (the usual extend, pause, retract) keeps its segments: no note."""
+@pytest.mark.parametrize("runs", [(0, 2, 1), (2, 0, 2, 1), (0, 1, 0, 1), (0, 2, 1, 2, 0, 1)])
+def test_one_extend_before_the_retract_is_unchanged(runs):
+    """A curve with one extend run before its retract (extend, pause, retract; a pause first) keeps its
+    segments, and so does a cyclic one (an extend after a retract starts a new cycle, no step): no note."""
     from afmforce.io._meta import first_approach_only
     from afmforce.io.curve import RawCurve
 
-    seg = np.r_[np.zeros(5), np.full(3, 2), np.ones(5)].astype(np.int8)
-    c = RawCurve(time=np.arange(13.0), piezo_nominal=np.r_[np.arange(5.0), np.full(3, 4.0), np.arange(4.0, -1, -1)],
-                 piezo_measured=None, deflection_signal=np.zeros(13), segment=seg, metadata={}, deflection_unit="V")
+    seg = np.repeat(np.array(runs, dtype=np.int8), 5)
+    z = np.cumsum(np.where(seg == 0, 1.0, np.where(seg == 1, -1.0, 0.0)))
+    c = RawCurve(time=np.arange(seg.size, dtype=float), piezo_nominal=z, piezo_measured=None,
+                 deflection_signal=np.zeros(seg.size), segment=seg, metadata={}, deflection_unit="V")
     assert first_approach_only(c) is c
 
 

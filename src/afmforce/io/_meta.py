@@ -252,11 +252,13 @@ def first_approach_only(curve: RawCurve) -> RawCurve:
     together are no approach: the holds between them relax the force (drops of ~1 nN in afmToolkit's
     ``force-save-JPK-multiIndent.txt``), so a contact point, a baseline or a Hertz fit over them fits
     steps, not a contact. The first extend (from free to contact) is the approach; every later extend
-    is kept with the holds as a dwell (segment 2), and ``approach_steps`` (metadata) says so.
-    A curve with one extend run is returned unchanged.
+    before the retract is kept with the holds as a dwell (segment 2), and ``approach_steps`` (metadata) says
+    so. A curve with one extend run before its retract is returned unchanged (extends after a retract: cycles).
     """
     seg = np.asarray(curve.segment)
+    ret = np.flatnonzero(seg == SEGMENT_RETRACT)
     app = seg == SEGMENT_APPROACH
+    app[ret[0] if ret.size else seg.size:] = False   # an extend after a retract is a new cycle: left as it is
     starts = np.flatnonzero(app & ~np.r_[False, app[:-1]])
     if starts.size <= 1:
         return curve
