@@ -287,7 +287,7 @@ def _decode(arc: zipfile.ZipFile, seg_dir: str, props: dict[str, str], name: str
                               f"but the archive does not hold it (an edited or cut-down copy); {GIVE_SAVED}") from None
     dt = np.dtype(dtype)
     if len(raw) % dt.itemsize:
-        raise FileFormatError(f"{where}: {seg_dir}/{fname} is truncated ({len(raw)} bytes)")
+        raise FileFormatError(f"{where}: {seg_dir}/{fname} is truncated ({len(raw)} bytes); {GIVE_SAVED}")
     values = np.frombuffer(raw, dtype=dt).astype(float)
     key = "data.encoder.scaling." if "data.encoder.scaling.multiplier" in props else "encoder.scaling."
     if key + "multiplier" not in props:
