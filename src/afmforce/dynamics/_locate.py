@@ -16,13 +16,9 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-from numba import njit
-
 from ._jit import fmax, fmin, piece
-from .models import (HQA, HQB, MODEL_SPRING, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_HDOT, O_THETA,
-                     O_Y2, O_Y2DOT, O_Z, TH_A, TH_B, drainage, observables, observe,
-                     static_force)
+from .models import (HQA, HQB, MODEL_SPRING, N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z,
+                     TH_A, TH_B, drainage, observe, static_force)
 
 # --- events array layout (float, NaN = not found) ---------------------------
 E_JUMP_T, E_JUMP_Z, E_JUMP_H = 0, 1, 2     # leaves the static branch (h < h_s)
@@ -348,77 +344,3 @@ def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, i_h, ytmp, o):
             if t > ev[E_LAST_OUT]:
                 ev[E_LAST_OUT] = t
             return
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kind, seg_t0,
-                   seg_z0, seg_v, beam, beta, tt, zd, code, obs, app, app_sep):
-    """Time, drive, segment code, observables and apparent deflection of the first ``n``
-    samples in one pass, written into the first ``n`` rows of ``tt, zd, code, obs, app,
-    app_sep``.
-
-    Row ``k`` of ``ybuf`` holds the state at ``t = k dt`` (``averaged``: its window
-    sums, with the covered time in the last column; the state is their ratio).
-    Samples ``seg_first[j]`` to ``seg_last[j] - 1`` belong to drive segment ``j``
-    (``z = seg_z0 + seg_v (t - seg_t0)``). The apparent deflection ``app`` is
-    ``beta * theta`` for the beam (``beam``), the deflection for the spring;
-    ``app_sep = app - z``. The output arrays come from the caller (allocated in the
-    thread that prepares the run: see :class:`~afmforce.dynamics.simulate._Run`).
-    Releases the GIL (``nogil``): in :func:`afmforce.dynamics.simulate_many` it
-    overlaps the other threads' integrations. Returns whether every state is finite.
-    """
-    ns = ybuf.shape[1] - 1 if averaged else ybuf.shape[1]
-    four = ns > 2
-    # one pass over the rows (issue 35: three passes read and wrote ~4 MB on Fig 5, more than
-    # the cache holds), a loop per drive segment (their sample ranges are in order and do not
-    # overlap, as simulate builds them; a row in none of them gets code 0 and no observables),
-    # the state as scalars (:func:`~afmforce.dynamics.models.observables`; issue 35.5, fifth
-    # pass: 0.34 -> 0.25 ms on Fig 5, bitwise the same). ``bad`` collects ``0 * state``: NaN
-    # from any non-finite state, else 0 (no branch in the loop).
-    bad = 0.0
-    nseg = seg_first.shape[0]
-    k0 = 0
-    for j in range(nseg + 1):
-        a = n if j == nseg else max(k0, min(seg_first[j], n))
-        for k in range(k0, a):                  # in no segment
-            tt[k] = k * dt
-            code[k] = 0
-            for i in range(ns):
-                bad += (ybuf[k, i] / ybuf[k, ns] if averaged else ybuf[k, i]) * 0.0
-            ak = beta * obs[k, O_THETA] if beam else obs[k, O_DEFL]
-            app[k] = ak
-            app_sep[k] = ak - zd[k]
-        if j == nseg:
-            break
-        b = max(a, min(seg_last[j], n))
-        kind = seg_kind[j]
-        t0 = seg_t0[j]
-        z0 = seg_z0[j]
-        v = seg_v[j]
-        for k in range(a, b):
-            t = k * dt
-            tt[k] = t
-            y0 = ybuf[k, 0]
-            y1 = ybuf[k, 1]
-            y2 = ybuf[k, 2] if four else 0.0
-            y3 = ybuf[k, 3] if four else 0.0
-            if averaged:
-                w = ybuf[k, ns]
-                y0 /= w
-                y1 /= w
-                if four:
-                    y2 /= w
-                    y3 /= w
-            bad += (y0 + y1 + y2 + y3) * 0.0
-            code[k] = kind
-            z = z0 + v * (t - t0)
-            zd[k] = z
-            r = observables(model, p, z, v, y0, y1, y2, y3)
-            ok = obs[k]
-            ok[O_H], ok[O_HDOT], ok[O_DEFL], ok[O_THETA], ok[O_FZ], ok[O_Y2], ok[O_Y2DOT], \
-                ok[O_FY], ok[O_Z] = r
-            ak = beta * r[O_THETA] if beam else r[O_DEFL]
-            app[k] = ak
-            app_sep[k] = ak - z
-        k0 = b
-    return bad == 0.0
