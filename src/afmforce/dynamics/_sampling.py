@@ -132,7 +132,9 @@ def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kin
         for k in range(k0, a):                  # in no segment (none expected)
             tt[k] = k * dt
             code[k] = 0
-            zd[k] = obs[k, 0] = app[k] = app_sep[k] = math.nan
+            zd[k] = app[k] = app_sep[k] = math.nan
+            for i in range(obs.shape[1]):
+                obs[k, i] = math.nan
         if a == n:
             break
         b = max(a, min(seg_last[j], n))
