@@ -49,9 +49,9 @@ def test_piece_with_python_wrapper_is_callable():
 
 
 def test_pieces_compute_what_their_python_source_does():
-    """observe (a piece without wrapper, with surface_force inside) through the compiled
-    observe_array equals the same functions run as Python (to rounding: numba's x**3
-    may round differently from Python's)."""
+    """observe (a piece without wrapper, with observables and surface_force inside) through
+    the compiled observe_array equals the same functions run as Python (to rounding: numba's
+    x**3 may round differently from Python's)."""
     rng = np.random.default_rng(3)
     for model, n in ((M.MODEL_SPRING, 2), (M.MODEL_BEAM, 4)):
         p = rng.uniform(0.5, 2.0, M.P_SIZE) * 1e-3
@@ -65,9 +65,11 @@ def test_pieces_compute_what_their_python_source_does():
         sf = M.surface_force.py_func
         static = M.static_force.py_func      # (issue 25: eq 2 + double layer; drainage with slip)
         static = types.FunctionType(static.__code__, dict(static.__globals__, surface_force=sf))
-        observe = types.FunctionType(src.__code__,
-                                     dict(src.__globals__, surface_force=sf, static_force=static,
-                                          drainage=M.drainage.py_func))
+        py = dict(src.__globals__, surface_force=sf, static_force=static,
+                  drainage=M.drainage.py_func)
+        # observe writes what the scalar piece observables computes (issue 35.5, fifth pass)
+        py["observables"] = types.FunctionType(M.observables.py_func.__code__, py)
+        observe = types.FunctionType(src.__code__, py)
         for i in range(5):
             observe(model, p, zd[i], vd[i], Y[i], want[i])
         np.testing.assert_allclose(got, want, rtol=1e-14, atol=0.0)

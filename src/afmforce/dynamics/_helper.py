@@ -5,7 +5,7 @@ seconds of code on one core. Part of it are functions the rest only calls, compi
 cached pieces (``piece(cached=True)``, :mod:`._jit`) or cached entry points (:func:`tasks`):
 the event location (``_locate._terminal_event``, ``_locate._events``), the error norms, the
 dense output and the sampling step of an accepted step, and the two passes after the
-integration (``_locate.sample_columns``, ``events.fit_compliance``). When this process is
+integration (``_sampling.sample_columns``, ``events.fit_compliance``). When this process is
 about to compile the integrator, :func:`start` launches ``python -m
 afmforce.dynamics._helper``, which compiles them into numba's cache, in the order the
 integrator needs them, and prints one line per task. The dispatcher of a task waits for that
@@ -79,7 +79,7 @@ def tasks() -> list[tuple[str, Dispatcher, tuple]]:
         (_L, "_terminal_event", (m, a1, f8, f8, f8, f8, f8, a1, a2, f8, a1, i8, f8, a1, a1, a1)),
         (_S, "sample_step", (f8, f8, f8, a1, a2, f8, f8, b1, i1, a2, a1)),
         (_L, "_events", (m, a1, i8, f8, f8, f8, f8, f8, a1, a2, a1, a1, a1, a1)),
-        (_L, "sample_columns", (m, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
+        (_S, "sample_columns", (m, a1, a2, i8, b1, f8, i1a, i1a, c1, a1a, a1a, a1a, b1, f8,
                                 a1, a1, c1, a2, a1, a1)),
         (_E, "fit_compliance", (a1, a1, a1a, c1, f8, f8, f8, f8)),
     ]

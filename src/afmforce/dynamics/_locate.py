@@ -16,9 +16,6 @@ from __future__ import annotations
 
 import math
 
-import numpy as np
-from numba import njit
-
 from ._jit import fmax, fmin, piece
 from .models import (HQA, HQB, MODEL_SPRING, N_OBS, O_DEFL, O_FZ, O_H, O_HDOT, O_THETA, O_Z,
                      TH_A, TH_B, drainage, observe, static_force)
@@ -347,51 +344,3 @@ def _last_out(model, p, t_a, z_a, v, t0, h, y_old, Q, ev, hc, i_h, ytmp, o):
             if t > ev[E_LAST_OUT]:
                 ev[E_LAST_OUT] = t
             return
-
-
-@njit(cache=True, error_model="numpy", nogil=True)
-def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kind, seg_t0,
-                   seg_z0, seg_v, beam, beta, tt, zd, code, obs, app, app_sep):
-    """Time, drive, segment code, observables and apparent deflection of the first ``n``
-    samples in one pass, written into the first ``n`` rows of ``tt, zd, code, obs, app,
-    app_sep``.
-
-    Row ``k`` of ``ybuf`` holds the state at ``t = k dt`` (``averaged``: its window
-    sums, with the covered time in the last column; the state is their ratio).
-    Samples ``seg_first[j]`` to ``seg_last[j] - 1`` belong to drive segment ``j``
-    (``z = seg_z0 + seg_v (t - seg_t0)``). The apparent deflection ``app`` is
-    ``beta * theta`` for the beam (``beam``), the deflection for the spring;
-    ``app_sep = app - z``. The output arrays come from the caller (allocated in the
-    thread that prepares the run: see :class:`~afmforce.dynamics.simulate._Run`).
-    Releases the GIL (``nogil``): in :func:`afmforce.dynamics.simulate_many` it
-    overlaps the other threads' integrations. Returns whether every state is finite.
-    """
-    ns = ybuf.shape[1] - 1 if averaged else ybuf.shape[1]
-    yk = np.empty(ns)
-    finite = True
-    # one pass over the rows (issue 35: three passes read and wrote ~4 MB on Fig 5, more than
-    # the cache holds); the segments' sample ranges are in order and do not overlap, as
-    # simulate builds them; a row in none of them gets code 0 and no observables
-    nseg = seg_first.shape[0]
-    j = 0
-    for k in range(n):
-        t = k * dt
-        tt[k] = t
-        for i in range(ns):
-            v = ybuf[k, i] / ybuf[k, ns] if averaged else ybuf[k, i]
-            yk[i] = v
-            if not math.isfinite(v):
-                finite = False
-        while j < nseg and k >= seg_last[j]:
-            j += 1
-        if j < nseg and k >= seg_first[j]:
-            code[k] = seg_kind[j]
-            z = seg_z0[j] + seg_v[j] * (t - seg_t0[j])
-            zd[k] = z
-            observe(model, p, z, seg_v[j], yk, obs[k])
-        else:
-            code[k] = 0
-        a = beta * obs[k, O_THETA] if beam else obs[k, O_DEFL]
-        app[k] = a
-        app_sep[k] = a - zd[k]
-    return finite

@@ -10,8 +10,11 @@ from __future__ import annotations
 
 import math
 
+from numba import njit
+
 from ._jit import fmax, fmin, piece
-from ._locate import _dense
+from .models import (O_DEFL, O_FY, O_FZ, O_H, O_HDOT, O_THETA, O_Y2, O_Y2DOT, O_Z,
+                     observables)
 
 
 @piece(inline=True)
@@ -65,18 +68,98 @@ def sample_step(t_old, t_new, h, y_old, Q, s_t0, s_dt, average, s_next, ybuf, yt
     if average:
         _accumulate_windows(t_old, t_new, h, y_old, Q, s_t0, s_dt, s_next, ybuf)
         return
+    # the polynomial's coefficients as scalars, loaded once a step (through the arrays, LLVM
+    # reloaded them after every store into ybuf: 0.19 ms of the Fig-5 cycle's 31,001 samples;
+    # issue 35.5, fifth pass); the arithmetic of ._locate._dense, bitwise
     n = y_old.shape[0]
+    four = n > 2
+    y0, y1 = y_old[0], y_old[1]
+    a0, b0, c0 = Q[0, 0], Q[0, 1], Q[0, 2]
+    a1, b1, c1 = Q[1, 0], Q[1, 1], Q[1, 2]
+    y2 = y_old[2] if four else 0.0
+    y3 = y_old[3] if four else 0.0
+    a2 = Q[2, 0] if four else 0.0
+    b2 = Q[2, 1] if four else 0.0
+    c2 = Q[2, 2] if four else 0.0
+    a3 = Q[3, 0] if four else 0.0
+    b3 = Q[3, 1] if four else 0.0
+    c3 = Q[3, 2] if four else 0.0
     k = s_next[0]
     while k < ybuf.shape[0]:
         ts = s_t0 + k * s_dt
         if ts > t_new:
             break
         if ts >= t_old:
-            _dense(y_old, Q, (ts - t_old) / h, ytmp)
-            for i in range(n):
-                ybuf[k, i] = ytmp[i]
+            s = (ts - t_old) / h
+            s2 = s * s
+            s3 = s2 * s
+            ybuf[k, 0] = y0 + a0 * s + b0 * s2 + c0 * s3
+            ybuf[k, 1] = y1 + a1 * s + b1 * s2 + c1 * s3
+            if four:
+                ybuf[k, 2] = y2 + a2 * s + b2 * s2 + c2 * s3
+                ybuf[k, 3] = y3 + a3 * s + b3 * s2 + c3 * s3
         else:                       # a grid time before the step (none expected): no value
             for i in range(n):
                 ybuf[k, i] = math.nan
         k += 1
     s_next[0] = k
+
+
+@njit(cache=True, error_model="numpy", nogil=True)
+def sample_columns(model, p, ybuf, n, averaged, dt, seg_first, seg_last, seg_kind, seg_t0,
+                   seg_z0, seg_v, beam, beta, tt, zd, code, obs, app, app_sep):
+    """Time, drive, segment code, observables and apparent deflection of the first ``n``
+    samples, written into the first ``n`` rows of ``tt, zd, code, obs, app, app_sep``.
+
+    Row ``k`` of ``ybuf`` holds the state at ``t = k dt`` (``averaged``: its window sums, with
+    the covered time in the last column; the state is their ratio). Samples ``seg_first[j]``
+    to ``seg_last[j] - 1`` belong to drive segment ``j`` (``z = seg_z0 + seg_v (t -
+    seg_t0)``). ``app`` is ``beta * theta`` for the beam (``beam``), the deflection for the
+    spring; ``app_sep = app - z``. The outputs come from the caller (allocated in the thread
+    that prepares the run, :class:`~afmforce.dynamics.simulate._Run`). ``nogil``: in
+    :func:`afmforce.dynamics.simulate_many` it overlaps the other threads' integrations.
+    Returns whether every state is finite."""
+    ns = ybuf.shape[1] - 1 if averaged else ybuf.shape[1]
+    four = ns > 2
+    # one pass over the rows (issue 35: three passes read and wrote ~4 MB on Fig 5), a loop per
+    # drive segment (sample ranges in order, not overlapping, as simulate builds them; a row in
+    # none gets code 0 and NaN), the state as scalars (issue 35.5, fifth pass: 0.34 -> 0.25 ms
+    # on Fig 5, bitwise the same). ``bad`` sums ``0 * state``: NaN if any state is not finite
+    bad = 0.0
+    k0 = 0
+    for j in range(seg_first.shape[0] + 1):
+        a = n if j == seg_first.shape[0] else max(k0, min(seg_first[j], n))
+        for k in range(k0, a):                  # in no segment (none expected)
+            tt[k] = k * dt
+            code[k] = 0
+            zd[k] = app[k] = app_sep[k] = math.nan
+            for i in range(obs.shape[1]):
+                obs[k, i] = math.nan
+        if a == n:
+            break
+        b = max(a, min(seg_last[j], n))
+        t0, z0, v = seg_t0[j], seg_z0[j], seg_v[j]
+        for k in range(a, b):
+            t = k * dt
+            tt[k] = t
+            y0, y1 = ybuf[k, 0], ybuf[k, 1]
+            y2 = ybuf[k, 2] if four else 0.0
+            y3 = ybuf[k, 3] if four else 0.0
+            if averaged:
+                w = ybuf[k, ns]
+                y0, y1 = y0 / w, y1 / w
+                if four:
+                    y2, y3 = y2 / w, y3 / w
+            bad += (y0 + y1 + y2 + y3) * 0.0
+            code[k] = seg_kind[j]
+            z = z0 + v * (t - t0)
+            zd[k] = z
+            r = observables(model, p, z, v, y0, y1, y2, y3)
+            ok = obs[k]
+            ok[O_H], ok[O_HDOT], ok[O_DEFL], ok[O_THETA], ok[O_FZ], ok[O_Y2], ok[O_Y2DOT], \
+                ok[O_FY], ok[O_Z] = r
+            ak = beta * r[O_THETA] if beam else r[O_DEFL]
+            app[k] = ak
+            app_sep[k] = ak - z
+        k0 = b
+    return bad == 0.0

@@ -16,7 +16,7 @@ from . import _helper
 from . import radau as R
 from .config import SimulationConfig
 from .drive import segments
-from ._locate import sample_columns
+from ._sampling import sample_columns
 from .events import Events, fit_compliance
 from .guard import lever_damping_check, risky, run_check
 from .models import MODEL_BEAM, N_OBS, O_DEFL, O_FY, O_FZ, O_H, O_THETA, O_Y2
