@@ -187,8 +187,10 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     from ..calibration.record import ANALYSIS_KEYS
     from .calibrate import fill_from_calibration
 
-    fill_from_calibration(args, ANALYSIS_KEYS)
+    from_file = fill_from_calibration(args, ANALYSIS_KEYS)
     args.records, args.probe = _options(args)  # unknown or out-of-range option: exit 2
+    if from_file:   # the warnings name a calibration file's value as its, not as one typed (ProbeCalibration.origin)
+        args.probe = args.probe.from_calibration_file(from_file)
     if args.format is not None and args.format not in FORMATS:
         raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")
     if args.out is not None:
