@@ -42,16 +42,48 @@ def calibration(st: State, o: CalibrationOptions) -> State:
             warn.append(f"calibration from the {used} run's compliance line (the only one)")
     if res.source == "metadata" and math.isfinite(res.factor_fit) and res.factor_fit > 0:
         ratio = res.factor_fit / res.factor
+        whose, owner = origin_words(st.probe, "sensitivity")
         if abs(ratio - 1) > 0.1:
-            whose, owner = origin_words(st.probe, "sensitivity")
             warn.append(f"{SLOPE_FACTOR} {ratio:.3g} x {whose} (a soft sample the tip "
                         "indents, a changed laser alignment, or a position channel that is not the tip-sample "
                         f"distance): {owner} is used; `calibration` fit uses the slope (and rescales a thermal "
                         "spring constant)")
+        elif st.channel == "nominal" and _piezo_gain_shows(comp, res, ratio):
+            warn.append(NOMINAL_GAIN.format(start=SLOPE_FACTOR, ratio=ratio, whose=whose, owner=owner,
+                                            scale=ratio ** 2))
     if not (math.isfinite(res.factor) and res.factor != 0):
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
     res = dataclasses.replace(res, requested=o.source)
     return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
+
+
+#: On the piezo's nominal position (no position sensor) the compliance slope's calibration is said when it
+#: differs from the file's or the user's by more than this fraction [-] (beyond 10 % it is said on any channel) ...
+NOMINAL_GAIN_TOLERANCE = 0.01
+#: ... and by more than this many standard errors of the slope [-].
+NOMINAL_GAIN_SIGMAS = 5.0
+#: The words: a piezo hysteresis loop that closes at the turn (the virtual AFM's ``Piezo(hysteresis=h)``, 1 um
+#: span, turning 190 nm after a rest) leaves both runs' lines straight and coincident, its local gain near the
+#: turn 1 / (1 - h) of the nominal one; the slope says 1.02, 1.05, 1.11 x the lever's sensitivity for h = 2, 5,
+#: 10 %, and with the file's sensitivity the separations scale by that factor and A R came out 1.07, 1.15,
+#: 1.33 x the truth (standard error 0.05-0.07), said nowhere below 10 %.
+NOMINAL_GAIN = ("{start} {ratio:.3g} x {whose}, on the piezo's nominal position (no position sensor): either the "
+                "piezo's gain near the turn differs from its nominal one by that factor (a hysteresis loop that "
+                "closes at the turn: both runs' lines stay straight and agree, so nothing else shows it) or the "
+                "sensitivity is off by it; {owner} is used, and then the separations are uncertain by that factor "
+                "and A R by about {scale:.3g} x (a systematic uncertainty its standard error leaves out; a "
+                "position sensor, or fringes of a known period, fix the length scale)")
+
+
+def _piezo_gain_shows(comp, res, ratio: float) -> bool:
+    """Whether the slope's calibration ``ratio`` x the one used is beyond :data:`NOMINAL_GAIN_TOLERANCE` and
+    :data:`NOMINAL_GAIN_SIGMAS` standard errors of the line it came from."""
+    if not abs(ratio - 1) > NOMINAL_GAIN_TOLERANCE:
+        return False
+    for line in (comp.approach, comp.retract):
+        if line.found and math.isclose(line.slope, res.compliance_slope, rel_tol=1e-12) and line.slope:
+            return abs(ratio - 1) > NOMINAL_GAIN_SIGMAS * abs(line.slope_se / line.slope)
+    return False
 
 
 def soft_slope_not_a_sensitivity(st: State) -> bool:
