@@ -73,6 +73,10 @@ def test_cli_sensitivity_and_calibration_file_are_named_by_their_origin(tmp_path
     assert "2 x the probe calibration file's" in w and "the calibration file's is used" in w
     w = _slope_warning(_cli_warnings(capsys, "--probe-calibration", str(cal), "--sensitivity", half))
     assert "the one you gave" in w             # typed over the file: the user's
+    for extra, tag in ((("--probe-calibration", str(cal)), "(calibration)"), (("--sensitivity", half), "(user)"),
+                       ((), "(file)")):
+        assert main(["analyze", str(PATH), *extra]) == 0          # the table's "sens. used" cell says whose
+        assert tag in capsys.readouterr().out.splitlines()[1]
 
 
 def test_a_soft_contacts_slope_is_not_reported_as_a_sensitivity():
