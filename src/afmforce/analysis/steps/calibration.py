@@ -89,7 +89,7 @@ def _piezo_gain_shows(comp, res, ratio: float) -> bool:
 def soft_slope_not_a_sensitivity(st: State) -> bool:
     """Whether the compliance slope's sensitivity is undetermined on this curve: a soft contact (step ``kind``)
     calibrated by the file's or the user's sensitivity. The tip indents the sample there, so the contact's slope
-    is the lever's bending and the sample's indentation together (9-18 x the lever's sensitivity on the virtual
+    is the lever's bending and the sample's indentation together (9-19 x the lever's sensitivity on the virtual
     AFM's 5 kPa Hertz contacts), not the lever's sensitivity: ``sensitivity_fit`` is reported NaN (the CLI's
     "sens. fit" column "-", the web's and the summary's the same field) and :data:`SOFT_SLOPE` says why."""
     k = st.details.get("kind")
