@@ -56,11 +56,29 @@ def test_an_approach_that_starts_in_contact_gets_an_interval_that_holds_the_trut
     assert math.isfinite(r.details["drift"].baseline_climb)
 
 
+INSIDE = "the fitted contact point lies inside the approach's free part the drift line was fitted on"
+
+
+@pytest.mark.parametrize("before", [-0.1, -0.15])
+def test_a_contact_just_inside_the_record_gets_an_interval_that_holds_the_truth(before):
+    """Contact 10 % (15 %) of the ramp inside the record: the drift step's free part reaches into the contact, its
+    line climbs 11 % of the rise (no climb warning) and E came out 4535 [4529, 4540] (4964 [4960, 4969]) Pa for
+    5 kPa: biased low with an interval of its noise alone. The fitted contact point lies inside that free part,
+    which the warning says; the interval reaches the constant baseline's fit and holds 5 kPa."""
+    r = analyze(_virtual(before))
+    assert not any(CLIMBS in w for w in r.warnings)
+    (w,) = [w for w in r.warnings if INSIDE in w]
+    assert "biased low" in w and WIDENED in w
+    assert r.youngs_modulus < 0.995 * E_TRUE           # the drift-corrected fit, unchanged: biased
+    assert _covers(r, E_TRUE)
+    assert r.youngs_modulus_high < 1.01 * E_TRUE       # honest, not open
+
+
 def test_a_free_baseline_keeps_its_statistical_interval():
     """Contact half a ramp inside the record: no climb, E within 0.5 % of the truth and its interval E +- t se
     (nothing widened, ``baseline_climb`` NaN)."""
     r = analyze(_virtual(-0.5))
-    assert not any(CLIMBS in w or WIDENED in w for w in r.warnings)
+    assert not any(CLIMBS in w or WIDENED in w or INSIDE in w for w in r.warnings)
     assert math.isnan(r.details["drift"].baseline_climb)
     assert r.youngs_modulus == pytest.approx(E_TRUE, rel=0.005)
     assert r.youngs_modulus_high - r.youngs_modulus_low < 0.01 * E_TRUE

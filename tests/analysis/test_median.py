@@ -50,3 +50,23 @@ def test_median_other_inputs_go_to_numpy():
     x = np.arange(12.0).reshape(3, 4)
     assert median(x) == float(np.median(x))                    # not 1-D
     assert median(np.array([1.0, 2.0], dtype=np.float32)) == float(np.median(np.array([1.0, 2.0], np.float32)))
+
+
+def test_glitches_local_noise_uses_the_one_median_and_gives_numpys_number():
+    """The glitch finder's local noise near the ends took its medians from a second helper (a sorted list):
+    one median now (``analysis._median.median``), and every candidate's local noise is np.median's robust sigma
+    of its window, bit for bit (the window as :data:`~afmforce.analysis.glitches._WINDOW` cuts it at the ends)."""
+    from afmforce.analysis import glitches as G
+
+    assert not hasattr(G, "_median")
+    rng = np.random.default_rng(5)
+    for trial in range(300):
+        n = int(rng.integers(8, 80))
+        d2 = rng.normal(size=n) if trial % 3 else rng.integers(-2, 3, size=n).astype(float) * 0.0
+        cand = np.arange(n)
+        got = G._local_noise(d2, cand)
+        for i in cand.tolist():
+            near = np.r_[d2[max(0, i - 1 - G.GLITCH_WINDOW): max(0, i - 2)], d2[i + 1: i + G.GLITCH_WINDOW]]
+            want = (1.4826 * float(np.median(np.abs(near - float(np.median(near))))) / math.sqrt(1.5)
+                    if near.size else 0.0)
+            assert _same(float(got[i]), want), (trial, i)

@@ -29,6 +29,8 @@ HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
 import make_pipeline_reference as M  # noqa: E402
 
+from afmforce.analysis.steps.calibration import SLOPE_FACTOR, SOFT_SLOPE  # noqa: E402
+
 REFERENCE = json.loads(gzip.decompress(M.OUT.read_bytes()))
 RTOL = 1e-9
 #: Keys declared after the reference was made (new quantities, no number of the old ones changed): they
@@ -108,8 +110,11 @@ def _before_detach(result, strip_only: bool = False):
 #: (2) an Optics11 reader's interferometric deflection raises the kind step's least stiffness of a hard contact
 #: to 0.9 (the kind is unchanged on these curves; its reason quotes the threshold); (3) the drift step warns when
 #: its baseline line climbs by more than half the approach's rise after it (the stress-relaxation cell presses
-#: from the start of its extend). Undone on today's result.
+#: from the start of its extend); (4) on a soft contact the summary's ``sensitivity_fit`` is NaN (the slope is
+#: not the lever's: ``steps.calibration.soft_slope``; ``details.calibration.sensitivity_fit`` keeps the slope's
+#: number and is compared) and its warning replaces the slope's factor. Undone on today's result.
 _NO_TIME_BASE = "oscillation not assessed: no time base"
+_SOFT_SLOPE = SOFT_SLOPE.split(":")[0]
 
 
 def _before_short_runs(new, old):
@@ -129,6 +134,13 @@ def _before_short_runs(new, old):
                 osc_new["verdict"] = new["oscillation_verdict"] = short.sub(run + ": no time base", osc_new["verdict"])
     if isinstance(new.get("warnings"), list):  # (3) the drift step's warning of a baseline that climbs with the contact
         new["warnings"] = [w for w in new["warnings"] if "the baseline line fitted before contact climbs" not in w]
+    if new.get("contact_kind") == "soft" and new.get("sensitivity_fit") is None:     # (4)
+        new["sensitivity_fit"] = (new["details"].get("calibration") or {}).get("sensitivity_fit")
+        if isinstance(new.get("warnings"), list):
+            new["warnings"] = [w for w in new["warnings"] if not w.startswith(_SOFT_SLOPE)]
+            was = [i for i, w in enumerate(old.get("warnings") or []) if w.startswith(SLOPE_FACTOR)]
+            for i in was if not any(w.startswith(SLOPE_FACTOR) for w in new["warnings"]) else ():
+                new["warnings"].insert(i, old["warnings"][i])
     for obj, key in ((new, "contact_kind_reason"), (new["details"].get("kind"), "reason")):
         if isinstance(obj, dict) and isinstance(obj.get(key), str):
             obj[key] = obj[key].replace("in contact (< 0.9)", "in contact (< 0.7)")

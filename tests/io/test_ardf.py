@@ -290,7 +290,8 @@ def test_analyze_as_a_user_types_it_equals_the_ibw_of_the_same_curve(tmp_path, c
         want = ibw[column][0]  # NaN where the analysis refuses it (the curve's indentation: negative, impossible)
         np.testing.assert_allclose(table[column], want, rtol=1e-4, err_msg=column, equal_nan=True)
         compared += bool(np.isfinite(want))
-    assert compared >= 6 and (table["contact_kind"] == ibw["contact_kind"][0]).all()
+    # (5: the soft contact's sensitivity_fit is NaN in both, its slope no sensitivity: steps.calibration.SOFT_SLOPE)
+    assert compared >= 5 and (table["contact_kind"] == ibw["contact_kind"][0]).all()
     assert list(tmp_path.glob("ardf/batch-*/map.ARDF.maps.h5"))        # the map outputs, as for a JPK map
 
 

@@ -82,7 +82,7 @@ def _local_noise(d2: np.ndarray, cand: np.ndarray) -> np.ndarray:
     """Each candidate's local noise: the robust sigma of the second differences ``d2`` of the
     :data:`GLITCH_WINDOW` samples on each side, the glitch's own three left out (a steep, rough contact line
     is noisier than the baseline the global one sees). Candidates with a whole window on both sides (an even
-    count, ``2 h``) at once: each row's two middle values by one partition, averaged as :func:`_median` does
+    count, ``2 h``) at once: each row's two middle values by one partition, averaged as :func:`~._median.median` does
     (the mean's sign of zero does not reach the absolute deviations); those near the ends one by one. (A NaN
     or infinite signal never gets here: its sigma is NaN.)"""
     out = np.empty(cand.size)
@@ -96,9 +96,10 @@ def _local_noise(d2: np.ndarray, cand: np.ndarray) -> np.ndarray:
         out[inner] = 1.4826 * ((part[:, h - 1] + part[:, h]) / 2.0) / math.sqrt(1.5)
     for k in np.flatnonzero(~inner).tolist():
         i = int(cand[k])
-        near = d2[max(0, i - 1 - GLITCH_WINDOW): max(0, i - 2)].tolist() + d2[i + 1: i + GLITCH_WINDOW].tolist()
-        mid = _median(near) if near else 0.0           # (once: the same for every value of the window)
-        out[k] = 1.4826 * _median([abs(v - mid) for v in near]) / math.sqrt(1.5) if near else 0.0
+        near = np.concatenate((d2[max(0, i - 1 - GLITCH_WINDOW): max(0, i - 2)],
+                               d2[i + 1: i + GLITCH_WINDOW])).astype(np.float64, copy=False)
+        mid = median(near) if near.size else 0.0       # (once: the same for every value of the window)
+        out[k] = 1.4826 * median(np.abs(near - mid)) / math.sqrt(1.5) if near.size else 0.0
     return out
 
 
@@ -108,14 +109,6 @@ _WINDOW = np.r_[np.arange(-1 - GLITCH_WINDOW, -2), np.arange(1, GLITCH_WINDOW)]
 assert _WINDOW.size % 2 == 0  # (the rows' medians above: the two middle values)
 #: The four neighbours of a candidate, relative to it.
 _NEIGHBOURS = np.array([-2, -1, 1, 2])
-
-
-def _median(v: list[float]) -> float:
-    """The median of a short list, as ``np.median`` gives it (the mean of the two middle values of an even
-    count), without numpy's per-call cost (~20 us; the candidates' windows hold ~18 values)."""
-    w = sorted(v)
-    n = len(w)
-    return w[n // 2] if n % 2 else (w[n // 2 - 1] + w[n // 2]) / 2.0
 
 
 def remove_glitches(s: np.ndarray) -> tuple[np.ndarray, str | None]:

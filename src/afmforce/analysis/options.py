@@ -167,6 +167,36 @@ class ProbeCalibration(_Validated):
         """The fields the user gave (name -> SI value)."""
         return {k: v for k, v in self.to_dict().items() if v is not None}
 
+    def origin(self, name: str) -> str:
+        """Where the value of ``name`` the analysis uses comes from: ``file`` (not given here: the file's own),
+        ``user`` (given: ``--sensitivity``, ``probe=ProbeCalibration(...)``) or ``calibration`` (a probe
+        calibration file's: ``--probe-calibration``, :meth:`from_calibration_file`); the warnings' words are
+        :data:`ORIGIN_WORDS`."""
+        if getattr(self, name) is None:
+            return "file"
+        return "calibration" if name in self.__dict__.get("_calibration_file", ()) else "user"
+
+    def from_calibration_file(self, names) -> "ProbeCalibration":
+        """This record with ``names`` marked as taken from a probe calibration file (:meth:`origin`)."""
+        out = dataclasses.replace(self)
+        object.__setattr__(out, "_calibration_file", frozenset(names))
+        return out
+
+
+#: How a warning names a calibration value by its origin (:meth:`ProbeCalibration.origin`): origin -> (the value,
+#: as in "2 x the file's", its owner, as in "the file's is used"); ``{name}`` is the value's option name.
+ORIGIN_WORDS: dict[str, tuple[str, str]] = {
+    "file": ("the file's", "the file's"),
+    "user": ("the one you gave (`{name}`)", "yours"),
+    "calibration": ("the probe calibration file's", "the calibration file's"),
+}
+
+
+def origin_words(probe: "ProbeCalibration", name: str) -> tuple[str, str]:
+    """:data:`ORIGIN_WORDS` of ``name``'s origin on ``probe``, the option named."""
+    value, owner = ORIGIN_WORDS[probe.origin(name)]
+    return value.format(name=name), owner.format(name=name)
+
 
 #: Step identifier -> its options class: every subclass of :class:`StepOptions` that names its
 #: ``step`` registers itself here when it is defined (the step's record points to it).

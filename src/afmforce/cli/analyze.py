@@ -187,8 +187,10 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     from ..calibration.record import ANALYSIS_KEYS
     from .calibrate import fill_from_calibration
 
-    fill_from_calibration(args, ANALYSIS_KEYS)
+    from_file = fill_from_calibration(args, ANALYSIS_KEYS)
     args.records, args.probe = _options(args)  # unknown or out-of-range option: exit 2
+    if from_file:   # the warnings name a calibration file's value as its, not as one typed (ProbeCalibration.origin)
+        args.probe = args.probe.from_calibration_file(from_file)
     if args.format is not None and args.format not in FORMATS:
         raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")
     if args.out is not None:
@@ -322,7 +324,7 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
         _print_json(result, len(refs))
     else:
         if len(ok) <= BATCH_CURVES:
-            _print_rows(ok, verbose=args.verbose, given="user" if args.sensitivity is not None else "file")
+            _print_rows(ok, verbose=args.verbose, given=args.probe.origin("sensitivity"))
             print_liquid(ok)
             print_tethers(ok, verbose=args.verbose)
         else:
@@ -430,7 +432,8 @@ def _fmt(v: float) -> str:
 
 def _calibration_tag(row, given: str = "file") -> str:
     """Which sensitivity the forces used, for the table's cell: `` (fit)`` (the compliance slope) or
-    `` (file)`` / `` (user)`` (the file's, --sensitivity); nothing without a number."""
+    `` (file)`` / `` (user)`` / `` (calibration)`` (the file's, --sensitivity, a --probe-calibration file's:
+    :meth:`~afmforce.analysis.options.ProbeCalibration.origin`); nothing without a number."""
     if not math.isfinite(float(row["sensitivity_used"])):
         return ""
     return " (fit)" if row["calibration_source"] == "fit" else f" ({given})"

@@ -17,6 +17,7 @@ from ..options import KindOptions
 from ..regions import SURFACE_MIN_NSIGMA, _surface_force_like
 from ..registry import AnalysisStep, ResultField
 from ..state import State
+from .calibration import soft_slope
 
 __all__ = ["kind", "KIND"]
 
@@ -98,7 +99,7 @@ def kind(st: State, o: KindOptions) -> State:
                                              position_high=max(cp.position_high, alt.position))
         if not cp.indentation > 0:  # the deflection rose more than the position travelled: no indentation
             warn = [warn, NEGATIVE_INDENTATION.format(rise=(cp.indentation * -1e9))]
-        new = new.update("contact_point", cp, warn=warn)
+        new = soft_slope(new.update("contact_point", cp, warn=warn))
     return new
 
 
