@@ -59,6 +59,9 @@ def test_version1_header_without_calibration_names_the_flags(tmp_path):
 
     c = load(write_park(tmp_path / "v1.tiff", points=1, version=1))[0]
     assert "spring_constant" not in c.metadata and "sensitivity" not in c.metadata
+    assert c.metadata["spring_constant_note"] == ("this Park TIFF's spectroscopy header stores no spring constant "
+                                                  "and no sensitivity (a version-1 header: no calibration fields): "
+                                                  "give `spring_constant` and `sensitivity`")
     with pytest.raises(MissingMetadataError, match="`spring_constant` and `sensitivity`"):
         require_metadata(c)
     c = load(tmp_path / "v1.tiff", meta_override={"spring_constant": 0.2, "sensitivity": 50e-9})[0]

@@ -231,6 +231,12 @@ def load_park(path: Path, *, meta_override: Mapping[str, Any] | None = None,
         if np.isfinite(speed) and speed > 0:
             base[key] = float(speed) * z_unit
     force_idx = _pick(channels, si, "N", ("force",)) if d_unit == "V" else None
+    lacking = [key for key in ("spring_constant", "sensitivity") if key not in base]
+    if lacking and d_unit != "N":
+        stored = "a version-1 header: no calibration fields" if "spring_constant" not in head else "zero"
+        base["spring_constant_note"] = (f"this Park TIFF's spectroscopy header stores no "
+                                        f"{' and no '.join(k.replace('_', ' ') for k in lacking)} ({stored}): give "
+                                        f"{' and '.join(f'`{k}`' for k in lacking)}")
     base.update(dict(meta_override or {}))
     base.update(source_file=where, reader="park-tiff", format="Park Systems spectroscopy TIFF")
     half = res // 2
