@@ -59,15 +59,25 @@ def test_known_unread_families_name_the_format_and_a_reader_to_export_to(tmp_pat
 
 
 def test_park_tiff_spectroscopy_and_image_are_told_apart(tmp_path):
-    msg = _refusal(_tiff(tmp_path / "ForceCurve_009.tiff", park_kind=2))
-    assert "Park Systems TIFF file (XEI, spectroscopy data)" in msg and "afmforce formats" in msg
-    msg = _refusal(_tiff(tmp_path / "topo.tif", park_kind=0))
-    assert "Park Systems TIFF file (XEI, image data)" in msg and "not a force curve" in msg
-    msg = _refusal(_tiff(tmp_path / "photo.tiff"))
+    """TIFF endings are claimed by the Park reader (tests/io/test_park_tiff.py): a Park image is refused
+    by it as an image, any other TIFF still as an image; each in one line, and a folder scan skips both
+(it takes a Park spectroscopy TIFF, whose damage is then said)."""
+    from afmforce.io import in_folder
+
+    def refusal(path, curves=False):
+        with pytest.raises(FileFormatError) as err:
+            load(path)
+        assert "\n" not in str(err.value) and in_folder(path) is curves
+        return str(err.value)
+
+    msg = refusal(_tiff(tmp_path / "ForceCurve_009.tiff", park_kind=2), curves=True)   # no spectroscopy tags
+    assert "Park Systems TIFF has no spectroscopy header (TIFF tag 50438); damaged" in msg and "park-tiff" in msg
+    assert "holds an image" in refusal(_tiff(tmp_path / "topo.tif", park_kind=0))
+    msg = refusal(_tiff(tmp_path / "photo.tiff"))
     assert "a TIFF image" in msg and "not a force curve" in msg
     broken = tmp_path / "broken.tiff"
     broken.write_bytes(b"II*\x00\xff\xff\xff\x7f")  # IFD beyond the end: still one line
-    assert "a TIFF image" in _refusal(broken)
+    assert "a TIFF image" in refusal(broken)
 
 
 def test_other_endings_keep_the_list_of_endings(tmp_path):

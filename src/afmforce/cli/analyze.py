@@ -147,13 +147,13 @@ def _map_quantities() -> str:
 
 
 def _inputs(names: list[str]) -> list[Path]:
-    from ..io import is_supported
+    from ..io import in_folder
 
     out: list[Path] = []
     for name in names:
         path = Path(name)
         if path.is_dir():
-            found = sorted(p for p in path.rglob("*") if p.is_file() and is_supported(p)
+            found = sorted(p for p in path.rglob("*") if p.is_file() and in_folder(p)
                            and SUFFIX not in p.name and not _BATCH_FOLDER.fullmatch(p.parent.name))
             out.extend(found)
         else:

@@ -31,7 +31,7 @@ from ._guard import FileTimeoutError, run_with_timeout
 from ._meta import METADATA, check_meta_override, parse_meta_args, require_metadata
 
 __all__ = ["ReaderFormat", "FORMATS", "register_format", "unregister_format", "load", "find_format", "formats_table", "METADATA", "refusal",
-           "supported_suffixes", "is_supported", "require_metadata", "formats_markdown", "check_meta_override",
+           "supported_suffixes", "is_supported", "in_folder", "require_metadata", "formats_markdown", "check_meta_override",
            "parse_meta_args", "run_with_timeout", "FileTimeoutError"]
 
 Loader = Callable[..., list]
@@ -187,6 +187,13 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  signature='"WSxM file copyright" header, an image, then FZ curve blocks (forward = approach, '
                            'backward = retract) of a Normal force channel (Amplitude/Phase curves: refused)',
                  supplies=("spring_constant", "sample_rate", "velocity")),
+    ReaderFormat("park-tiff", "Park Systems spectroscopy TIFF (XEI, SmartScan)", (".tiff", ".tif"),
+                 _lazy("park", "detect_park"), _lazy("park", "load_park"),
+                 via="afmforce", deflection="V (N or m as stored)",
+                 signature="TIFF with Park's private tags: magic 50432, header 50435 of type 2 (spectroscopy), "
+                           "spectroscopy header 50438 and data 50439 (approach and retract halves; images and line "
+                           "profiles: refused)",
+                 supplies=(*_CAL, "velocity", "sample_rate")),
 )}
 
 
@@ -246,6 +253,20 @@ def is_supported(path: str | Path) -> bool:
     return any(f.claims(Path(path).name) for f in FORMATS.values())
 
 
+#: ending -> ``holds_curves(path)``: files of an ending shared with images that a folder scan takes only
+#: when their content says curves (a Park TIFF of spectroscopy, not a topography image beside it).
+FOLDER_CHECKS: dict[str, Callable[[Path], bool]] = {
+    ".tiff": _lazy("park", "holds_curves"), ".tif": _lazy("park", "holds_curves")}
+
+
+def in_folder(path: str | Path) -> bool:
+    """Does a folder scan (``afmforce analyze FOLDER``) take this file: a reader claims its name and,
+    for an ending images share (:data:`FOLDER_CHECKS`), its content holds curves?"""
+    path = Path(path)
+    check = FOLDER_CHECKS.get(path.suffix.lower())
+    return is_supported(path) and (check is None or bool(check(path)))
+
+
 def find_format(path: str | Path) -> ReaderFormat:
     """The first registered format whose suffix and detector accept ``path``.
 
@@ -284,6 +305,11 @@ def _find_format(path: Path) -> ReaderFormat:
                 return fmt
         except Exception:  # a detector must never crash the search
             continue
+    from ._unread import unread_refusal
+
+    known = unread_refusal(path)   # a family afmforce knows but does not read (a TIFF image under .tiff)
+    if known:
+        raise FileFormatError(known)
     raise FileFormatError(
         f"{path}: content not recognised as any of: {', '.join(f.name for f in candidates)}; if it is one of "
         f"them, name its reader as `format` (one of {', '.join(f.identifier for f in candidates)}): its "

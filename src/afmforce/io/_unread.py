@@ -1,11 +1,12 @@
 """Force-curve families afmforce knows but does not read: one clear refusal each.
 
 A file whose ending no reader claims would otherwise get "unknown file type" and a list of
-endings; a user holding a Nanosurf ``.nhf``, an NT-MDT ``.mdt`` or a Park Systems ``.tiff``
-learns more from the format's name and what to do with it (export the curves to a format
-afmforce reads, or read the instrument's own file). :func:`unread_refusal` gives that line.
-These endings are not claimed (:func:`afmforce.io.is_supported` stays False), so a folder
-given to ``afmforce analyze`` skips them.
+endings; a user holding a Nanosurf ``.nhf`` or an NT-MDT ``.mdt`` learns more from the format's
+name and what to do with it (export the curves to a format afmforce reads, or read the instrument's
+own file). :func:`unread_refusal` gives that line. These endings are not claimed
+(:func:`afmforce.io.is_supported` stays False), so a folder given to ``afmforce analyze`` skips them.
+The TIFF endings are claimed by the Park reader (``park-tiff``); a TIFF it does not recognise (any
+other TIFF: an image) gets its line here too, through :func:`afmforce.io.find_format`.
 """
 
 from __future__ import annotations
@@ -104,8 +105,8 @@ def _tiff(path: Path) -> tuple[str, str, str]:
         if kind in ("image", "line profile"):
             return what, f"it holds {'an' if kind == 'image' else 'a'} {kind}, not a force curve", \
                 "give the spectroscopy file of the measurement"
-        return what, "no public Park force-curve file with a usable licence was found to test a reader against", \
-            _EXPORT
+        return what, "its Park magic number (TIFF tag 50432) is not Park's value 0x0E031301: damaged", \
+            "read the spectroscopy file as saved by the Park software (reader 'park-tiff')"
     return ("TIFF image", "it is an image, not a force curve", "give the force-curve file of the measurement")
 
 
