@@ -64,6 +64,12 @@ def kind(st: State, o: KindOptions) -> State:
     new = st.update("kind", res)
     if res.kind == "hard":
         new = _recalibrate_hard(new, cal, curv, o.max_curvature)
+        if cal.source == "fit" and not sig > nsigma and (not math.isfinite(curv) or curv > o.max_curvature):
+            why = (f"the contact curves (slope ratio late/early {curv:.3g}), read as a surface force before a straight "
+                   "line, which a soft sample the tip indents shows too" if math.isfinite(curv) else
+                   "too few samples in contact to see whether the contact curves")
+            new = new.update(warn=SLOPE_HARD_UNVERIFIED.format(
+                sens=cal.factor * 1e9, why=why))
     if res.kind == "soft":
         cp = CONTACT_POINT_METHODS[method](st.z, st.deflection, app.index, force_fraction=force_fraction,
                                            window=window)
@@ -102,6 +108,16 @@ def kind(st: State, o: KindOptions) -> State:
         new = soft_slope(new.update("contact_point", cp, warn=warn))
     return new
 
+
+#: Said where the compliance slope calibrates (no sensitivity in the file or given, or ``calibration`` fit) on a
+#: contact called hard without a jump-in or a straight line: the slope is the lever's sensitivity only on a hard
+#: contact, and nothing in the curve shows this one is (the virtual AFM's 2 kPa Hertz contact, 5 um sphere,
+#: 0.1 N/m lever, 50 nm/V, its sensitivity removed: "hard", 795 nm/V, every force 16 x too large, said nowhere).
+SLOPE_HARD_UNVERIFIED = (
+    "calibration unverified: the compliance slope calibrates ({sens:.4g} nm/V), which holds only on a hard "
+    "contact, and this one is called hard with no jump into contact and {why}: if the tip indents the sample, "
+    "the sensitivity and every force are overestimated (no modulus is given); give the lever's sensitivity "
+    "measured on a hard surface (`sensitivity`, --sensitivity)")
 
 #: Least deflection per position of a hard contact where the deflection is measured interferometrically
 #: (Optics11 indenters, ``deflection_interferometric`` from the reader): no sensitivity (InvOLS) error widens it,
