@@ -135,3 +135,27 @@ def test_fixed_baseline_fit_recovers_a_closed_form_hertz_curve():
     assert abs(fit.contact - c) < 2e-9 and fit.baseline == b
     off = fit_fixed_baseline(u, F, "hertz_paraboloid", {"radius": R}, b - 5e-11, nu=0.5)
     assert not off.youngs_modulus_low < E < off.youngs_modulus_high
+
+
+def test_fits_further_apart_than_the_declared_factor_leave_the_modulus_undetermined(monkeypatch):
+    """A steeper yield (6 nN within ~50 nm, a plateau to 810 nm): the held-baseline fit gives ~1.6 x the free
+    fit's E. Within the declared factor (2) the interval covers both; with the factor set to 1.2 the same curve
+    is reported undetermined ([0, open]) with the reason."""
+    import afmforce.analysis.indentation as ind
+
+    def law(d):
+        d = np.clip(np.asarray(d, dtype=float), 0.0, None)
+        return 6e-9 * -np.expm1(-d / 20e-9) + 6e-9 * (np.clip(d - 810e-9, 0.0, None) / 90e-9) ** 2
+
+    curve = _law_curve(SoftMapConfig(points=1000, ramp=1.2e-6), law, 900e-9, 1)
+    i = analyze(curve).details["indentation"]
+    e_free = i.youngs_modulus
+    note = next(w for w in analyze(curve).warnings if FIRES in w)
+    held = float(note.split("baseline held there E = ")[1].split(" Pa")[0])
+    ratio = max(held, e_free) / min(held, e_free)
+    assert 1.2 < ratio < ind.MAX_FIXED_BASELINE_FACTOR
+    assert math.isfinite(i.youngs_modulus_high)
+    monkeypatch.setattr(ind, "MAX_FIXED_BASELINE_FACTOR", 1.2)
+    r = analyze(curve)
+    assert r.youngs_modulus_low == 0.0 and math.isnan(r.youngs_modulus_high)
+    assert any(FIRES in w and "E is undetermined" in w for w in r.warnings)
