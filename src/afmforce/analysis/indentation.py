@@ -190,8 +190,8 @@ def _baseline_systematic(st: State, res: IndentationResult, idx: np.ndarray, z: 
 #: approach's free samples near the contact) from their measured level. On a curve the contact law describes,
 #: the fitted baseline is the mean of hundreds of free samples: 30 virtual Hertz curves (5 moduli and radii, 6
 #: seeds) stay within 0.24 sigma, the 44 nanite-reference fits and the 16 HeLa curves within 3.2 sigma, the
-#: PLSys Catalyst curves agreeing with nanite within 4.2 sigma (cr00043; curvature near the contact, not
-#: noise): 8 leaves twice that margin. A fit that needs its baseline further away (the PLSys Catalyst chromosome
+#: PLSys Catalyst curves agreeing with nanite within 4.2 (cr00043), the 100 Egel force-volume curves within 5.2
+#: (curvature near the contact, not noise): 8 leaves 1.5 x the largest. A fit that needs its baseline further away (the PLSys Catalyst chromosome
 #: curve cr00041: -1.98 nN, 143 sigma) bends the baseline to make a non-Hertzian contact look like the law.
 MAX_BASELINE_OFFSET_NSIGMA = 8.0
 
