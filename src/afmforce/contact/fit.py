@@ -34,7 +34,7 @@ from .adhesive_fit import fit_adhesive
 from .models import BILODEAU_FOUR_SIDED, BILODEAU_THREE_SIDED, shape_and_slope
 from .registry import indentation_model
 
-__all__ = ["IndentationFit", "fit_indentation", "validity", "model_force"]
+__all__ = ["IndentationFit", "FixedBaselineFit", "fit_indentation", "fit_fixed_baseline", "validity", "model_force"]
 
 @dataclass(frozen=True)
 class IndentationFit:
@@ -439,3 +439,117 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
         n_contact=int(in_contact.sum()), rms=float(np.sqrt(np.mean(resid ** 2))) if resid.size else math.nan,
         residuals=resid, fitted=idx[used], warnings=tuple(warn), work_of_adhesion_low=float(w_low),
         work_of_adhesion_high=float(w_high))
+
+
+@dataclass(frozen=True)
+class FixedBaselineFit:
+    """The fit of a law without adhesion with the force baseline held at a measured level (SI).
+
+    Attributes
+    ----------
+    youngs_modulus, youngs_modulus_se : float  E and its standard error [Pa]
+    youngs_modulus_low, youngs_modulus_high : float  95 % interval of E [Pa] ([0, NaN]: undetermined)
+    contact : float  contact point as a tip depth [m]
+    baseline : float  the force baseline held [N]
+    rms : float  root-mean-square residual [N]
+    """
+
+    youngs_modulus: float
+    youngs_modulus_se: float
+    youngs_modulus_low: float
+    youngs_modulus_high: float
+    contact: float
+    baseline: float
+    rms: float
+
+
+def fit_fixed_baseline(depth, force, model: str, geometry: dict, baseline: float, *, nu: float = 0.5,
+                       weight_width: float = 0.0, contact_guess: float | None = None) -> FixedBaselineFit:
+    """Fit E and the contact point of the law ``model`` (no adhesion) with the force baseline held at
+    ``baseline`` [N]: ``F(u) = E shape(u - c) + baseline``.
+
+    The check of the free fit's baseline (:func:`afmforce.analysis.indentation.indentation`, docs/contact.md):
+    for a given c, E is linear (closed form); c is scanned over the same grid as :func:`fit_indentation`'s
+    (plus ``contact_guess``), refined by a bounded 1-D minimisation between the best candidate's neighbours,
+    and the standard error of E comes from the (E, c) Jacobian. All samples given are fitted.
+
+    Parameters
+    ----------
+    depth, force : array_like  tip depth u [m] and force [N] of the samples to fit
+    model : str  a law without adhesion (key of :data:`~afmforce.contact.registry.INDENTATION_MODELS`)
+    geometry : dict  as :func:`fit_indentation`'s
+    baseline : float  the force before contact, held [N]
+    nu : float  Poisson ratio [-]
+    weight_width : float  as :func:`fit_indentation`'s [m]
+    contact_guess : float, optional  a contact point (tip depth [m]) the scan also looks around
+
+    Raises
+    ------
+    ParameterError
+        An adhesive law.
+    AnalysisError
+        Too few points, or no contact point gives a positive modulus.
+    """
+    from scipy.optimize import minimize_scalar
+
+    m = indentation_model(model)
+    if not m.linear:
+        raise ParameterError(f"a fixed baseline is supported for the laws without adhesion, not {m.name}")
+    u = np.asarray(depth, dtype=float)
+    F = np.asarray(force, dtype=float) - float(baseline)
+    ok = np.isfinite(u) & np.isfinite(F)
+    u, F = u[ok], F[ok]
+    if u.size < 8:
+        raise AnalysisError(f"only {u.size} points to fit the indentation model (at least 8 are needed)")
+    lo, hi = float(u.min()), float(u.max())
+    span = hi - lo
+    if not span > 0:
+        raise AnalysisError("the tip does not move: no indentation to fit")
+
+    def ssr_at(c: float) -> tuple[float, float]:
+        d = u - c
+        phi = shape_and_slope(model, d, geometry, nu)[0]
+        q2 = _weights(d, weight_width) ** 2
+        den = float((q2 * phi * phi).sum())
+        if not den > 0:
+            return math.inf, math.nan
+        E = float((q2 * phi * F).sum()) / den
+        if not E > 0:
+            return math.inf, math.nan
+        r = F - E * phi
+        return float((q2 * r * r).sum()), E
+
+    parts = [hi - span * _GEO, _EVEN * (span / 32) + lo]
+    if contact_guess is not None and math.isfinite(contact_guess):
+        parts.append(contact_guess + span * _AROUND)
+    cands = np.unique(np.concatenate(parts))
+    ss = np.array([ssr_at(float(c))[0] for c in cands])
+    i = int(np.argmin(ss))
+    if not math.isfinite(ss[i]):
+        raise AnalysisError("with the baseline held, no contact point gives a positive modulus")
+    a, b = float(cands[max(i - 1, 0)]), float(cands[min(i + 1, cands.size - 1)])
+    c = float(cands[i])
+    if b > a:
+        opt = minimize_scalar(lambda x: ssr_at(x)[0], bounds=(a, b), method="bounded",
+                              options={"xatol": 1e-6 * span})
+        if opt.fun <= ss[i]:
+            c = float(opt.x)
+    best, E = ssr_at(c)
+    d = u - c
+    phi, dphi = shape_and_slope(model, d, geometry, nu)
+    q = _weights(d, weight_width)
+    n = int((q > 0).sum())
+    dof = n - 2
+    s2 = best / dof if dof > 0 else math.nan
+    J = q[:, None] * np.column_stack((phi, -E * dphi))
+    try:
+        E_se = float(math.sqrt(max(_covariance(J, s2)[0, 0], 0.0)))
+    except np.linalg.LinAlgError:
+        E_se = math.nan
+    t = _t95(dof)
+    low, high = E - t * E_se, E + t * E_se
+    if not low > 0:
+        low, high = 0.0, math.nan
+    return FixedBaselineFit(youngs_modulus=E, youngs_modulus_se=E_se, youngs_modulus_low=float(low),
+                            youngs_modulus_high=float(high), contact=c, baseline=float(baseline),
+                            rms=math.sqrt(best / max(n, 1)))
