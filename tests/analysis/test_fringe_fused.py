@@ -38,7 +38,7 @@ def _orders_in_python(p, P0, period, o_first, o_last):
             if n_map >= 2:
                 q[2] = a3
             qs, cost, status = K.lm_fit(q, known, float(P0), float(period or 0.0), n_map, p.x, p.x2, p.x3,
-                                        float(p.zm), float(p.L), p.Q0, p.r_perp, MAX_NFEV, 1e-6, 1e-7)
+                                        float(p.zm), float(p.L), p.Q0, p.r_perp, MAX_NFEV, 1e-6, 1e-7, False)
             if best is None or cost < best[1]:
                 best = (qs, cost, status)
             if ref is not None and best[1] < ref:
@@ -77,8 +77,8 @@ def test_fit_orders_equals_the_per_order_loop(seed, n, a2, a3, amp, known, P0):
     for o_first, o_last in ((1, 3), (2, 2), (3, 3), (1, 1)):
         want = _orders_in_python(p, P0, period, o_first, o_last)
         got = K.fit_orders(o_first, o_last, known, P0, period, p.x, p.x2, p.x3, float(p.zm), float(p.L), p.Q0,
-                           p.r_perp, MAX_NFEV, 1e-6, 1e-7)
-        assert tuple(got) == tuple(want)  # the same floats, bit for bit
+                           p.r_perp, MAX_NFEV, 1e-6, 1e-7, False)
+        assert tuple(got[:6]) == tuple(want)  # the same floats, bit for bit (libm's cos and sin: fast False)
 
 
 SIZES = [1, 2, 7, 8, 9, 15, 16, 17, 127, 128, 129, 255, 256, 257, 300, 1000, 1344, 4000, 4099]

@@ -25,10 +25,10 @@ def test_trial_period_underflow_or_overflow_is_rejected_not_raised():
     res, J = np.empty(z.size), np.empty((z.size, 1))
     for q0 in (-800.0, 800.0):  # exp(-800) = 0, exp(800) = inf
         cost = vp_eval(np.array([q0]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp,
-                       res, J, False)
+                       res, J, False, False)
         assert cost == math.inf
     finite = vp_eval(np.array([0.0]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp,
-                     res, J, True)
+                     res, J, True, False)
     assert 0 < finite < 0.5 * np.sum(p.r_perp ** 2) * 0.2  # the true period explains most of the variance
 
 
@@ -38,10 +38,10 @@ def test_fit_from_a_far_start_ends_without_error():
     z, r, p = _run()
     for start in (-740.0, 700.0, 0.2):
         q, cost, status = lm_fit(np.array([start]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0,
-                                 p.r_perp, 200, 1e-6, 1e-7)
+                                 p.r_perp, 200, 1e-6, 1e-7, False)
         assert status in (0, 1) and (math.isinf(cost) or cost <= 0.5 * np.sum(p.r_perp ** 2))
     q, cost, _ = lm_fit(np.array([0.03]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp,
-                        200, 1e-10, 1e-12)
+                        200, 1e-10, 1e-12, False)
     assert 150e-9 * math.exp(q[0]) == pytest.approx(150e-9, rel=0.01)  # converges to the period
 
 
@@ -65,10 +65,10 @@ def test_the_first_runs_python_kernels_reject_an_overflowing_trial_step_too(tmp_
         "res, J = np.empty(z.size), np.empty((z.size, 1))\n"
         "for q0 in (-800.0, 800.0):\n"
         "    c = vp_eval(np.array([q0]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp,"
-        " res, J, False)\n"
+        " res, J, False, False)\n"
         "    assert c == math.inf, c\n"
         "q, cost, status = lm_fit(np.array([700.0]), False, 150e-9, 0.0, 0, p.x, p.x2, p.x3, p.zm, p.L, p.Q0,"
-        " p.r_perp, 50, 1e-6, 1e-7)\n"
+        " p.r_perp, 50, 1e-6, 1e-7, False)\n"
         "print('ok', status)\n")
     src = str(Path(__file__).resolve().parents[2] / "src")
     env = {**os.environ, "NUMBA_DISABLE_JIT": "1",

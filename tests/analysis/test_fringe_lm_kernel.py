@@ -55,7 +55,7 @@ def test_one_evaluation_equals_numpy(q):
     z, r, p = _chirped_run()
     q = np.array(q)
     res, J = np.empty(z.size), np.empty((z.size, q.size))
-    cost = vp_eval(q, False, P0, 0.0, q.size - 1, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp, res, J, True)
+    cost = vp_eval(q, False, P0, 0.0, q.size - 1, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp, res, J, True, False)
     res_np, cost_np, J_np = _numpy_vp(q, p)
     assert cost == pytest.approx(cost_np, rel=1e-10)
     assert np.max(np.abs(res - res_np)) <= 1e-10 * np.max(np.abs(res_np))
@@ -67,7 +67,7 @@ def test_known_period_evaluation_equals_numpy():
     z, r, p = _chirped_run()
     q = np.array([0.99, 0.03])
     res, J = np.empty(z.size), np.empty((z.size, 2))
-    cost = vp_eval(q, True, P0, 152e-9, 1, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp, res, J, True)
+    cost = vp_eval(q, True, P0, 152e-9, 1, p.x, p.x2, p.x3, p.zm, p.L, p.Q0, p.r_perp, res, J, True, False)
     res_np, cost_np, J_np = _numpy_vp(q, p, known=True, period=152e-9)
     assert cost == pytest.approx(cost_np, rel=1e-10)
     assert np.max(np.abs(J - J_np)) <= 1e-9 * np.max(np.abs(J_np))
@@ -78,7 +78,7 @@ def test_fit_reaches_scipy_least_squares_minimum():
     all six parameters (p, q, e0, e1 with the map) find the same period and a2."""
     z, r, p = _chirped_run(noise=0.0005)
     q, cost, status = lm_fit(np.array([0.0, 0.0]), False, P0, 0.0, 1, p.x, p.x2, p.x3, p.zm, p.L, p.Q0,
-                             p.r_perp, 200, 1e-14, 1e-14)
+                             p.r_perp, 200, 1e-14, 1e-14, False)
     assert status == 1
 
     def full(v):

@@ -21,7 +21,7 @@ from numba import config as _numba_config, njit
 from ._contact_kernel import pairwise_sum
 from ._numeric import solve_small as _solve_small
 
-__all__ = ["vp_eval", "lm_fit", "fit_orders", "finish_stats", "variance"]
+__all__ = ["vp_eval", "lm_fit", "fit_orders", "finish_stats", "variance", "sincos"]
 
 #: The kernels run as Python (``NUMBA_DISABLE_JIT``, the first run: ``cli/_firstrun.py``): the sums that
 #: numpy does in one call are then left to numpy (the same numbers).
@@ -115,8 +115,57 @@ def _unpack(q, known, P0, period, n_map):
     return P, c1, a2, a3
 
 
+#: :func:`sincos`'s constants: pi/2 in three parts (fdlibm's ``__rem_pio2``: the first holds 33 bits, so
+#: ``k * _PIO2_1`` is exact for the ``|k| <= 2^20`` reduced here), 2/pi, and fdlibm's minimax polynomials of
+#: sin and cos on [-pi/4, pi/4] (``__kernel_sin``, ``__kernel_cos``; their error < 1 ulp there).
+_PIO2_1 = 1.57079632673412561417e+00
+_PIO2_2 = 6.07710050630396597660e-11
+_PIO2_2T = 2.02226624879595063154e-21
+_INVPIO2 = 6.36619772367581382433e-01
+_S1, _S2, _S3, _S4, _S5, _S6 = (-1.66666666666666324348e-01, 8.33333333332248946124e-03, -1.98412698298579493134e-04,
+                                2.75573137070700676789e-06, -2.50507602534068634195e-08, 1.58969099521155010221e-10)
+_C1, _C2, _C3, _C4, _C5, _C6 = (4.16666666666666019037e-02, -1.38888888888741095749e-03, 2.48015872894767294178e-05,
+                                -2.75573143513906633035e-07, 2.08757232129817482790e-09, -1.13596475577881948265e-11)
+#: :func:`sincos` reduces ``|theta| * 2 / pi`` up to this itself; larger, infinite and NaN angles go to libm.
+_SINCOS_LIM = 1e6
+#: ``x + _ROUND - _ROUND`` is ``x`` rounded to the nearest integer (ties to even) for ``|x| < 2^51``.
+_ROUND = 6755399441055744.0
+
+
 @njit(cache=True)
-def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
+def sincos(th, c, s):
+    """``c[i] = cos(th[i])``, ``s[i] = sin(th[i])`` within ~1 ulp of libm's (1.1e-16 in absolute terms, tested
+    against ``math.cos``/``math.sin`` up to |theta| = 1e7): Cody-Waite reduction by pi/2 in three parts and
+    fdlibm's polynomials, written without branches so LLVM vectorises the loop (AVX2/AVX-512: ~2 ns a
+    sample where libm's scalar pair costs ~13 ns; the fringe fit's evaluations are mostly these). Angles
+    beyond ``_SINCOS_LIM * pi / 2``, infinite or NaN take libm's values in a second pass."""
+    n = th.size
+    for i in range(n):
+        t = th[i]
+        y = t * _INVPIO2
+        y = y if abs(y) <= _SINCOS_LIM else 0.0
+        kf = (y + _ROUND) - _ROUND
+        x = ((t - kf * _PIO2_1) - kf * _PIO2_2) - kf * _PIO2_2T
+        z = x * x
+        sx = x + (z * x) * (_S1 + z * (_S2 + z * (_S3 + z * (_S4 + z * (_S5 + z * _S6)))))
+        r = z * (_C1 + z * (_C2 + z * (_C3 + z * (_C4 + z * (_C5 + z * _C6)))))
+        hz = 0.5 * z
+        w = 1.0 - hz
+        cx = w + (((1.0 - w) - hz) + z * r)
+        q = np.int64(kf) & 3
+        a = cx if q & 1 else sx
+        b = sx if q & 1 else cx
+        s[i] = -a if q & 2 else a
+        c[i] = -b if (q + 1) & 2 else b
+    for i in range(n):
+        t = th[i]
+        if not abs(t * _INVPIO2) <= _SINCOS_LIM:
+            c[i] = math.cos(t)
+            s[i] = math.sin(t)
+
+
+@njit(cache=True)
+def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W, fast):
     """The model at ``q``: fills the workspace ``W`` (rows: residual, theta, map polynomial, cos, sin,
     projected cos, projected sin) and returns ``(half the SSR, p, q amplitudes, the inverse 2x2
     normal matrix i00, i01, i11, 2 pi / P, c1)``; half the SSR is +inf where no fit exists."""
@@ -136,10 +185,14 @@ def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W):
     for i in range(n):
         p = x[i] + a2 * x2[i] + a3 * x3[i]
         poly[i] = p
-        t = w * (zm + c1 * L * p)
-        th[i] = t
-        cr[i] = math.cos(t)
-        sr[i] = math.sin(t)
+        th[i] = w * (zm + c1 * L * p)
+    if fast:
+        sincos(th, cr, sr)  # vectorised: the evaluation's cost was mostly libm's cos and sin
+    else:
+        for i in range(n):
+            cr[i] = math.cos(th[i])
+            sr[i] = math.sin(th[i])
+    for i in range(n):
         cs[i] = cr[i]
         sn[i] = sr[i]
         g00 += Q0[i, 0] * cs[i]
@@ -211,10 +264,10 @@ def _vp_jac(known, L, x2, x3, Q0, W, c0, c1c, i00, i01, i11, w, c1, J):
 
 
 @njit(cache=True)
-def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_jac):
+def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_jac, fast):
     """Residual (into ``res``), Jacobian (into ``J`` when ``want_jac``); returns half the SSR."""
     W = np.empty((7, x.size))
-    cost, c0, c1c, i00, i01, i11, w, c1 = _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W)
+    cost, c0, c1c, i00, i01, i11, w, c1 = _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W, fast)
     if not cost < math.inf:
         return cost
     res[:] = W[0]
@@ -224,7 +277,7 @@ def vp_eval(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, res, J, want_
 
 
 @njit(cache=True)
-def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol):
+def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol, fast):
     """Levenberg-Marquardt on :func:`vp_eval`; returns ``(q, cost, status)`` (status 0: budget
     spent, 1: converged: an accepted step changed the cost by < ftol of it, or q by
     < xtol (xtol + |q|), or no descent is left).
@@ -237,7 +290,7 @@ def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, fto
     WS = np.empty((2, 7, n))
     cur = 0
     J = np.empty((n, m))
-    cost, c0, c1c, i00, i01, i11, w, c1 = _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, WS[cur])
+    cost, c0, c1c, i00, i01, i11, w, c1 = _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, WS[cur], fast)
     if not cost < math.inf:  # no fit at the start (see vp_eval)
         return q, cost, 1
     _vp_jac(known, L, x2, x3, Q0, WS[cur], c0, c1c, i00, i01, i11, w, c1, J)
@@ -262,7 +315,7 @@ def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, fto
                 continue
             qn = q + dq
             cn, c0, c1c, i00, i01, i11, w, c1 = _vp_core(qn, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp,
-                                                         WS[1 - cur])
+                                                         WS[1 - cur], fast)
             nfev += 1
             if cn <= cost:
                 small_f = cost - cn <= ftol * cost
@@ -287,20 +340,32 @@ def lm_fit(q0, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, fto
     return q, cost, 0
 
 
+#: :func:`fit_orders`' ``posed``: each order's fit spans at least this many periods [-].
+_WELL_POSED_CYCLES = 1.0
+
+
 @njit(cache=True)
-def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol):
+def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol, fast):
     """The map orders ``o_first..o_last`` fitted in turn by :func:`lm_fit` (what :func:`.fringes._fit_order`
     did per order, in one call: the same starts, the same numbers), the best by the Bayesian
     information criterion ``n ln(SSR/n) + (order + 3) ln n`` (the first of equals).
 
     Each order starts from the lower order's map when that converged (a warm start); the cubic from
     a3 = 0, and from a3 = +-0.05 only while its best cost does not improve on the lower order's.
-    Returns ``(P, c1, a2, a3, converged, rms residual)`` of the best order."""
+    Returns ``(P, c1, a2, a3, converged, rms residual)`` of the best order and ``posed``: every order's fit
+    converged with at least :data:`_WELL_POSED_CYCLES` periods over the range.
+
+    ``fast``: cos and sin by :func:`sincos` (within an ulp of libm's). A well-posed fit moves by rounding
+    when its cos and sin do (the same numbers to ~1e-13); a fit that wanders (no convergence, or off to a
+    period far beyond the range: cos and sin then nearly the baseline's line, its steps ill-conditioned)
+    amplifies an ulp into percent, so its caller fits again with ``fast`` False where ``posed`` is False
+    (:func:`.fringes._fit_map`): those numbers are libm's, as before."""
     n = x.size
     best_bic = math.inf
     bP, bc1, ba2, ba3, bconv, bres = math.nan, 1.0, 0.0, 0.0, False, math.nan
     have = False  # a lower order was fitted: its map, residual and convergence
     pP, pc1, pa2, pres, pconv = math.nan, 1.0, 0.0, math.nan, False
+    posed = True  # every order's fit converged over at least WELL_POSED_CYCLES periods
     for o in range(o_first, o_last + 1):
         n_map = max(0, min(o, 3) - 1)
         ref = 0.5 * n * (pres * pres) if have and math.isfinite(pres) else math.nan  # NaN: none
@@ -319,7 +384,7 @@ def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max
             q = q0.copy()
             if n_map >= 2:
                 q[2] = 0.0 if s == 0 else (0.05 if s == 1 else -0.05)
-            qs, cost, status = lm_fit(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol)
+            qs, cost, status = lm_fit(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, max_nfev, ftol, xtol, fast)
             if first or cost < bcost:
                 bq, bcost, bstatus = qs, cost, status
                 first = False
@@ -328,6 +393,9 @@ def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max
         P, c1, a2, a3 = _unpack(bq, known, P0, period, n_map)
         res = math.sqrt(2.0 * bcost / n)
         conv = bstatus > 0
+        posed = posed and conv and c1 * 2.0 * L >= _WELL_POSED_CYCLES * P
+        if fast and not posed:  # the caller fits again with libm's cos and sin: no use going on
+            return bP, bc1, ba2, ba3, bconv, bres, posed
         if math.isfinite(res):
             r2 = max(res, 1e-300)
             bic = n * math.log(r2 * r2) + (o + 3) * math.log(n)
@@ -338,7 +406,7 @@ def fit_orders(o_first, o_last, known, P0, period, x, x2, x3, zm, L, Q0, rp, max
             bP, bc1, ba2, ba3, bconv, bres = P, c1, a2, a3, conv, res
         have = True
         pP, pc1, pa2, pres, pconv = P, c1, a2, res, conv
-    return bP, bc1, ba2, ba3, bconv, bres
+    return bP, bc1, ba2, ba3, bconv, bres, posed
 
 
 @njit(cache=True)

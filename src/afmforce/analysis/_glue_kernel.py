@@ -14,12 +14,14 @@ than these loops run as Python.
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from numba import njit
 
 from ._numeric import BRACKET, _robust_line, middle_bracket  # noqa: F401 (re-exported: the adhesion kernel)
 
-__all__ = ["span_stats", "median_abs_step", "first_below", "robust_line_ab", "middle_bracket", "COMPILED", "BRACKET"]
+__all__ = ["span_stats", "median_abs_step", "first_below", "glitch_scan", "robust_line_ab", "middle_bracket", "COMPILED", "BRACKET"]
 
 
 @njit(cache=True, nogil=True)
@@ -60,6 +62,40 @@ def median_abs_step(z: np.ndarray, idx: np.ndarray) -> float:
     for i in range(idx.size - 1):
         d[i] = abs(z[idx[i + 1]] - z[idx[i]])
     return np.median(d)
+
+
+@njit(cache=True, nogil=True)
+def glitch_scan(s: np.ndarray, sigmas: float):
+    """:func:`~afmforce.analysis.glitches.find_glitches`' first pass in one call: the second differences
+    ``d2 = s[1:-1] - 0.5 (s[:-2] + s[2:])``, the robust noise ``1.4826 median(|d2 - median(d2)|) / sqrt(1.5)``
+    (the medians exact: order statistics, the middle pair's mean as numpy's) and whether any sample ``2 <= i <=
+    n - 3`` has ``|d2[i - 1]| > sigmas * sigma``. Returns ``(d2, sigma, any, ok)``; ``ok`` False (the caller
+    takes its numpy path) for fewer than 5 samples, a sample that is not finite, or ``sigma <= 0`` (a quantised
+    signal: the caller's own step rule)."""
+    n = s.size
+    if n < 5:
+        return np.empty(0), 0.0, False, False
+    for i in range(n):
+        if not np.isfinite(s[i]):
+            return np.empty(0), 0.0, False, False
+    m = n - 2
+    d2 = np.empty(m)
+    for i in range(m):
+        d2[i] = s[i + 1] - 0.5 * (s[i] + s[i + 2])
+    med = np.median(d2)
+    dev = np.empty(m)
+    for i in range(m):
+        dev[i] = abs(d2[i] - med)
+    sigma = 1.4826 * np.median(dev) / math.sqrt(1.5)
+    if not sigma > 0.0:
+        return d2, sigma, False, False
+    lim = sigmas * sigma
+    hit = False
+    for i in range(1, m - 1):  # sample i + 1 in 2 .. n - 3
+        if abs(d2[i]) > lim:
+            hit = True
+            break
+    return d2, sigma, hit, True
 
 
 @njit(cache=True, nogil=True)

@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from numba import njit
 
-from ._fringe_kernel import _prepare, _thin_indices, finish_stats, fit_orders, variance
+from ._fringe_kernel import _INTERPRETED, _prepare, _thin_indices, finish_stats, fit_orders, variance
 from ._numeric import lstsq_qr, polyfit, ptp
 from ._units import unit as _u
 from .options import FringesOptions as _Fr  # the defaults: declared once, in the step's record
@@ -154,6 +154,12 @@ MIN_FIT_POINTS = 200
 MAX_NFEV = 20
 #: Number of uniform position bins of the FFT periodogram.
 BINS = 2048
+#: The nonlinear fit evaluates cos and sin by the vectorised ``_fringe_kernel.sincos`` (an ulp from libm's,
+#: ~6x faster) when its starting period fits at least this many times in the range [-]; its result is kept
+#: only where the fit is well posed (every order converged over at least one period: then within ~1e-13 of
+#: libm's fit), else it is fitted again with libm (a fit that wanders amplifies an ulp into percent). On the
+#: 8 soft real files (issue 35) a start of 1.5-2.4 periods wandered on 5 of 6 runs, one of 8.6-302 on none of 3.
+FAST_CYCLES = 3.0
 
 
 def _periodogram(z: np.ndarray, r: np.ndarray) -> tuple[float, float]:
@@ -420,9 +426,14 @@ def _fit_map(z, r, t, period, order, p_start, var0=None) -> FringeRun:
     if var0 == 0 or not (P0 and math.isfinite(P0)):
         return FringeRun(False, nan, 0.0, 0.0, 1.0, 0.0, 0.0, zm, L, 0.0, 0.0, 0.0, nan)
     o_first, o_last = (1, 3) if order == "auto" else (int(order), int(order))
-    P, c1, a2, a3, converged, rms = fit_orders(o_first, o_last, bool(period), float(P0),
-                                               float(period) if period else 0.0, prep.x, prep.x2, prep.x3,
-                                               float(zm), float(L), prep.Q0, prep.r_perp, MAX_NFEV, 1e-6, 1e-7)
+    args = (o_first, o_last, bool(period), float(P0), float(period) if period else 0.0, prep.x, prep.x2, prep.x3,
+            float(zm), float(L), prep.Q0, prep.r_perp, MAX_NFEV, 1e-6, 1e-7)
+    # cos and sin vectorised (issue 35) where the fit is likely well posed; not as Python (the first run's
+    # NUMBA_DISABLE_JIT: the loop's dozen operations a sample cost more there than math.cos and math.sin)
+    fast = 2.0 * L >= FAST_CYCLES * P0 and not _INTERPRETED
+    P, c1, a2, a3, converged, rms, posed = fit_orders(*args, fast)
+    if fast and not posed:  # a wandering fit amplifies rounding: libm's cos and sin, the numbers as before
+        P, c1, a2, a3, converged, rms, _ = fit_orders(*args, False)
     return FringeRun(False, float(P), 0.0, 0.0, float(c1), float(a2), float(a3), float(zm), float(L), 0.0,
                      1.0 - rms**2 / var0, float(ptp(z)) / P if P > 0 else 0.0, rms, converged=bool(converged))
 

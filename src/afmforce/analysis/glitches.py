@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from ._glue_kernel import COMPILED, glitch_scan
 from ._median import median
 
 __all__ = ["GLITCH_SIGMAS", "GLITCH_QUIET_SIGMAS", "GLITCH_WINDOW", "find_glitches", "remove_glitches"]
@@ -48,8 +49,13 @@ def find_glitches(s: np.ndarray) -> np.ndarray:
     s = np.asarray(s, float)
     if s.size < 5:
         return np.zeros(0, np.intp)
-    d2 = s[1:-1] - 0.5 * (s[:-2] + s[2:])
-    sigma = _noise(s, d2)
+    if COMPILED and s.ndim == 1:  # the second differences, the noise and the threshold test in one call
+        d2, sigma, hit, ok = glitch_scan(np.ascontiguousarray(s), GLITCH_SIGMAS)
+        if ok and not hit:
+            return np.zeros(0, np.intp)  # (the usual case: no sample near the threshold)
+    if not (COMPILED and s.ndim == 1 and ok):
+        d2 = s[1:-1] - 0.5 * (s[:-2] + s[2:])
+        sigma = _noise(s, d2)
     if not sigma > 0.0:
         return np.zeros(0, np.intp)
     cand = np.flatnonzero(np.abs(d2) > GLITCH_SIGMAS * sigma) + 1
