@@ -368,6 +368,8 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
     for q in dict.fromkeys(quantities or [DEFAULT_MAP_QUANTITY]):
         for image in map_images(table, q):
             out[f"map {image.source} {q}"] = write_map_png(image, folder / f"{image.name}.{q}.png")
+            if image.note:          # an all-grey map: one line saying why
+                eprint(f"note: {image.name}: map of {q} empty: {image.note}")
             per_map.setdefault(image.source, []).append(image)
     from ..analysis.maps import write_map_hdf5
 

@@ -400,5 +400,5 @@ def _maps(table, rename) -> list[dict[str, Any]]:
             z = [[None if not np.isfinite(v) else float(v) for v in row] for row in image.values]
             out.append({"file": name, "quantity": q, "label": image.quantity.label, "unit": image.quantity.unit,
                         "z": z, "x_um": x, "y_um": y, "axes": "um" if x is not None else "index",
-                        "curves": names})
+                        "curves": names, "note": image.note})
     return out
