@@ -55,3 +55,21 @@ def test_the_cli_says_why_a_hard_maps_modulus_map_is_empty(tmp_path, capsys):
         assert np.isnan(h5["modulus"][()]).all() and "hard contacts" in h5["modulus"].attrs["note"]
         assert np.isfinite(h5["adhesion"][()]).all() and "note" not in h5["adhesion"].attrs
     assert len(list(out.rglob("*.modulus.png"))) == 1
+
+
+def test_without_map_quantity_every_default_quantity_some_curve_gave_is_mapped(tmp_path, capsys):
+    """Was: only the adhesion map (``--map-quantity`` needed for the modulus and topography a user
+    expects of a soft map, issue 35 item 6). Now each of ``DEFAULT_MAPS`` that some curve gave; on this
+    hard map the adhesion and A R, and no empty modulus image nor a note about it."""
+    from afmforce.analysis.maps import DEFAULT_MAPS, map_images
+    from afmforce.cli.main import main
+
+    out = tmp_path / "out"
+    assert main(["analyze", str(NID), "--out", str(out)]) == 0
+    assert "note:" not in capsys.readouterr().err
+    (folder,) = out.glob("batch-*")
+    table = pd.read_parquet(folder / "summary.parquet")
+    gave = {q for q in DEFAULT_MAPS if any(not im.note for im in map_images(table, q))}
+    assert {"adhesion", "hamaker_radius"} <= gave and "modulus" not in gave
+    drawn = {p.name[len(NID.name) + 1:-4] for p in folder.glob("*.png") if not p.name.endswith(".hist.png")}
+    assert drawn == gave

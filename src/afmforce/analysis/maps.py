@@ -92,6 +92,12 @@ def _quantities() -> dict[str, "MapQuantity"]:
 MAP_QUANTITIES: dict[str, MapQuantity] = LiveDict(_quantities)
 
 
+#: The quantities mapped when none is asked for (``afmforce analyze MAP --out``, the web's analyse view):
+#: each one some curve of the map gave (the CLI leaves out those no curve gave; asked for, they are
+#: drawn all "no value", with :attr:`MapImage.note`).
+DEFAULT_MAPS = ("adhesion", "modulus", "topography", "indentation", "jump_in_distance", "hamaker_radius")
+
+
 def map_quantity(name: str) -> MapQuantity:
     """The registered quantity ``name`` (ParameterError listing the choices otherwise)."""
     try:
