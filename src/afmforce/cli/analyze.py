@@ -65,9 +65,7 @@ def register(sub) -> None:
                    help="position channel (default: measured if recorded)")
     p.add_argument("--no-plot", action="store_true", help="with --out: skip the per-curve figures")
     lazy_help(p.add_argument("--map-quantity", action="append", default=[], metavar="Q",
-                             help="quantity drawn as a heat map per force map (repeatable; default: "
-                                  "those of adhesion, modulus, topography, indentation, jump_in_distance, "
-                                  "hamaker_radius that some curve gave): "), _map_quantities)
+                             help="quantity drawn as a heat map per force map (repeatable; "), _map_quantities)
     p.add_argument("--fast-map", action="store_true",
                    help="force maps at instrument speed: per pixel only the indentation fit (modulus, topography), "
                         "the adhesion and the DMT work of adhesion, about 1 ms a curve (docs/contact.md)")
@@ -143,9 +141,9 @@ def _steps() -> str:  # help text, computed when printed (the pipeline imports n
 
 
 def _map_quantities() -> str:
-    from ..analysis.maps import MAP_QUANTITIES
+    from ..analysis.maps import DEFAULT_MAPS, MAP_QUANTITIES
 
-    return ", ".join(MAP_QUANTITIES)
+    return f"default: those of {', '.join(DEFAULT_MAPS)} that some curve gave): " + ", ".join(MAP_QUANTITIES)
 
 
 def _inputs(names: list[str]) -> list[Path]:
