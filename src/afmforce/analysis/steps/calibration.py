@@ -38,10 +38,11 @@ def calibration(st: State, o: CalibrationOptions) -> State:
             warn.append(f"calibration from the {used} run's compliance line (the only one)")
     if res.source == "metadata" and math.isfinite(res.factor_fit) and res.factor_fit > 0:
         ratio = res.factor_fit / res.factor
-        if abs(ratio - 1) > 0.1:
-            warn.append(f"the compliance slope gives a calibration {ratio:.3g} x the file's (a soft sample the tip "
+        if abs(ratio - 1) > 0.1:     # whose sensitivity: the user's (--sensitivity, a calibration file) or the file's
+            whose = "the file's" if st.probe.sensitivity is None else "the given one"
+            warn.append(f"the compliance slope gives a calibration {ratio:.3g} x {whose} (a soft sample the tip "
                         "indents, a changed laser alignment, or a position channel that is not the tip-sample "
-                        "distance): the file's is used; `calibration` fit uses the slope (and rescales a thermal "
+                        f"distance): {whose} is used; `calibration` fit uses the slope (and rescales a thermal "
                         "spring constant)")
     if not (math.isfinite(res.factor) and res.factor != 0):
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
