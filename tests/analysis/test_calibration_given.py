@@ -32,3 +32,16 @@ def test_a_given_sensitivity_is_named_as_given():
     # the ratio is the slope's sensitivity over the one used: 11.04 nm/V is 6.34 x smaller than 70 nm/V
     ratio = float(text.split("calibration ")[1].split(" x")[0])
     assert ratio == float(f"{given.sensitivity_fit / 11.04e-9:.3g}")
+
+
+def test_a_given_sensitivity_rescales_a_curve_stored_in_newtons_as_its_reader_does():
+    """The reference: the reader's own rescaling (``meta_override``), which the CLI and the web use."""
+    s = 11.04e-9
+    via_probe = analyze(load(CURVE)[0], probe=ProbeCalibration(sensitivity=s))
+    via_reader = analyze(load(CURVE, meta_override={"sensitivity": s})[0], probe=ProbeCalibration(sensitivity=s))
+    assert via_probe.sensitivity_used == via_reader.sensitivity_used == s
+    for name in ("adhesion_force", "sensitivity_fit", "indentation"):
+        a, b = getattr(via_probe, name), getattr(via_reader, name)
+        assert abs(a - b) <= 1e-9 * abs(b), (name, a, b)
+    own = analyze(load(CURVE)[0])
+    assert abs(via_probe.adhesion_force / own.adhesion_force - s / own.sensitivity_used) < 1e-6
