@@ -210,7 +210,8 @@ def test_cli_batch_resume_outputs_and_exit_codes(map_file, serial_table, tmp_pat
     argv = ["analyze", str(map_file), str(broken), "--out", str(out), "--serial", "--chunk-size", "4",
             "--steps", "jumps", "--map-quantity", "adhesion", "--map-quantity", "sensitivity_fit"]
     code, text, err = _run(argv, capsys)
-    assert code == 1 and f"failed: {broken}" in err and err.count("\n") == 1  # one line for the one failed file
+    assert code == 1 and f"failed: {broken}" in err and err.count("\n") == 2  # one line for the one failed file
+    assert err.startswith("note: map.h5: map of adhesion empty: no curve gave it")  # and why a map asked for is empty
     assert "4 of 4 chunks run" in text
     (folder,) = out.glob("batch-*")
     assert not list(out.glob("*.afmforce.*"))  # a batch writes no per-curve files (unless --per-curve)
@@ -252,6 +253,8 @@ def test_cli_small_run_keeps_per_curve_outputs(map_file, tmp_path, capsys):
     assert code == 0 and "map.h5#13" in text and "chunks run" not in text  # in process, no store
     assert len(list(out.glob("map.h5_*.afmforce.json"))) == 14
     (folder,) = out.glob("batch-*")
-    assert {p.name for p in folder.iterdir()} == {"summary.parquet", "summary.csv", "map.h5.adhesion.png",
+    # the default maps some curve gave (analysis.maps.DEFAULT_MAPS): with --steps jumps, the jump-in distance
+    assert {p.name for p in folder.iterdir()} == {"summary.parquet", "summary.csv", "map.h5.jump_in_distance.png",
                                                   "map.h5.maps.h5",  # the image's numbers (issue 26)
-                                                  "map.h5.adhesion.hist.png", "map.h5.histograms.csv"}  # issue 35
+                                                  "map.h5.jump_in_distance.hist.png",
+                                                  "map.h5.histograms.csv"}  # issue 35

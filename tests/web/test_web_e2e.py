@@ -240,8 +240,8 @@ def test_every_map_quantity_is_drawn_with_titled_axes(page):
                     all: [...gd.querySelectorAll('text')].map(t => t.parentNode.getAttribute('class') + ':' + t.textContent)}; }""")
         assert titles["x"] == ["x [µm]"] and titles["y"] == ["y [µm]"], titles
         empty = page.evaluate("document.getElementById('an-plot-map').data[0].z.every(r => r.every(v => v === null))")
-        if empty:       # a quantity no curve of the 2x2 extract gives: said so on the plot
-            assert any("no curve of this map gives" in t for t in titles["all"]), " | ".join(titles["all"])
+        if empty:       # a quantity no curve of the 2x2 extract gives: said so on the plot, with why (the note)
+            assert any("no curve gave it" in t for t in titles["all"]), " | ".join(titles["all"])
             continue
         assert titles["bar"] and "[" in titles["bar"][0], " | ".join(titles["all"])
         labels.add(titles["bar"][0])

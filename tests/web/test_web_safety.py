@@ -279,6 +279,52 @@ def test_a_session_survives_a_reload_and_lists_its_uploads(make_client):
     assert c.delete(f"/api/files/{fid}").status_code == 200 and c.get("/api/files").json() == []
 
 
+def test_a_requests_budget_starts_after_the_servers_warm_up(make_client, monkeypatch):
+    """The race behind the reload test's failure under load: its first upload came while the server's
+    warm-up was compiling the kernels (cold cache), waited for numba's compile lock inside its own
+    60 s and came back 504 past_budget. Now the budget starts when the warm-up has ended: the
+    warm-up here ends only after the upload has been stored, and the analysis' deadline is taken
+    after that (an order of events, read on one clock; no wait is a verdict)."""
+    import threading
+
+    import afmforce.web.app as web_app
+    import afmforce.web.routes_analyze as routes
+    from afmforce.datasets import path
+
+    arrived, seen = threading.Event(), {}
+
+    def warm_up():              # the warm-up ends after the upload has reached the server
+        arrived.wait()
+        seen["warm_end"] = time.monotonic()
+        return []
+
+    def analysis(*args, deadline, budget, **kw):
+        seen["deadline"], seen["budget"] = deadline, budget
+        return run_analysis(*args, deadline=deadline, budget=budget, **kw)
+
+    run_analysis = routes.run_analysis
+    monkeypatch.setattr(web_app, "warm_up_steps", warm_up)
+    monkeypatch.setattr(routes, "run_analysis", analysis)
+    c = make_client()
+    sessions = c.app.state.sessions
+    save_all = sessions.save_all
+
+    def stored(*a, **k):
+        out = save_all(*a, **k)
+        arrived.set()
+        return out
+
+    monkeypatch.setattr(sessions, "save_all", stored)
+    src = path("asylum-air")
+    try:
+        r = c.post("/api/analyze", files={"file": (src.name, src.read_bytes())})
+    finally:
+        arrived.set()           # the warm-up thread never outlives the test
+    assert r.status_code == 200 and r.json()["results"][src.name]["pull_off_force"] < 0
+    assert seen["deadline"] >= seen["warm_end"] + seen["budget"]
+    assert c.get("/api/health").json()["warm"] is True
+
+
 def test_sessions_expire_after_their_ttl(make_client, tmp_path):
     from afmforce.datasets import path
 

@@ -51,6 +51,8 @@ class MapQuantity:
         SI unit of the mapped value.
     sign : float
         Factor applied to the column (-1: adhesion is minus the pull-off force).
+    needs : str
+        The curves that give it, where not every curve may (said when a map has no value).
     """
 
     identifier: str
@@ -58,6 +60,11 @@ class MapQuantity:
     label: str
     unit: str
     sign: float = 1.0
+    needs: str = ""
+
+
+#: What the indentation fit's quantities need (its step skips hard contacts: ``analysis.indentation``).
+_SOFT = "soft contacts: the indentation fit skips hard ones (the tip does not indent the sample)"
 
 
 def _quantities() -> dict[str, "MapQuantity"]:
@@ -66,12 +73,14 @@ def _quantities() -> dict[str, "MapQuantity"]:
         MapQuantity("jump_in_distance", "jump_in_separation", "jump-in distance (separation before the jump)", "m"),
         *(MapQuantity(f.name, f.name, f.label, f.unit or "") for f in result_fields().values() if f.mapped),
         MapQuantity("jump_in_deflection", "jump_in_deflection", "jump-in deflection", "m"),
-        MapQuantity("modulus", "youngs_modulus", "Young's modulus (indentation fit)", "Pa"),
-        MapQuantity("topography", "contact_point", "height: minus the piezo position at contact", "m", -1.0),
+        MapQuantity("modulus", "youngs_modulus", "Young's modulus (indentation fit)", "Pa", needs=_SOFT),
+        MapQuantity("topography", "contact_point", "height: minus the piezo position at contact", "m", -1.0,
+                    needs=_SOFT),
         # the fast map's further columns (afmforce.sweep.map_fast.PIXEL_COLUMNS)
-        MapQuantity("topography_se", "contact_point_se", "standard error of the contact point", "m"),
-        MapQuantity("max_indentation", "max_indentation", "deepest indentation (fit)", "m"),
-        MapQuantity("max_force", "max_force", "force at the deepest indentation, above the baseline", "N"),
+        MapQuantity("topography_se", "contact_point_se", "standard error of the contact point", "m", needs=_SOFT),
+        MapQuantity("max_indentation", "max_indentation", "deepest indentation (fit)", "m", needs=_SOFT),
+        MapQuantity("max_force", "max_force", "force at the deepest indentation, above the baseline", "N",
+                    needs=_SOFT),
         MapQuantity("adhesion_noise", "adhesion_noise", "baseline noise (force, rms)", "N"),
         MapQuantity("work_of_adhesion_se", "work_of_adhesion_se", "uncertainty of the work of adhesion", "J/m^2"),
     )}
@@ -81,6 +90,12 @@ def _quantities() -> dict[str, "MapQuantity"]:
 #: both in the printed summary and in the summary table: :mod:`.registry`) by its own name (kept up to
 #: date with the registered steps).
 MAP_QUANTITIES: dict[str, MapQuantity] = LiveDict(_quantities)
+
+
+#: The quantities mapped when none is asked for (``afmforce analyze MAP --out``, the web's analyse view):
+#: each one some curve of the map gave (the CLI leaves out those no curve gave; asked for, they are
+#: drawn all "no value", with :attr:`MapImage.note`).
+DEFAULT_MAPS = ("adhesion", "modulus", "topography", "indentation", "jump_in_distance", "hamaker_radius")
 
 
 def map_quantity(name: str) -> MapQuantity:
@@ -110,6 +125,10 @@ class MapImage:
         ``position_y``; NaN when the map does not record them (the axes show grid indices).
         When only the scanned area's size is known (``map_width``, ``map_height``), the
         grid is centred in it: ``x0 = dx / 2``, ``dx = width / nx``.
+    note : str
+        Why no pixel has a value (``""`` when some has): the curves' contact kinds and failures,
+        and which curves give the quantity (:attr:`MapQuantity.needs`). The image is then all
+        "no value", never zeros; the PNG, the CLI and the web page say this note.
     """
 
     source: str
@@ -120,6 +139,7 @@ class MapImage:
     y0: float = float("nan")
     dx: float = float("nan")
     dy: float = float("nan")
+    note: str = ""
 
     @property
     def has_positions(self) -> bool:
@@ -164,9 +184,24 @@ def map_images(table, quantity: str | MapQuantity) -> list[MapImage]:
                     for c in ("map_width", "map_height")]
             if all(math.isfinite(v) and v > 0 for v in size):
                 axes = [(s / n / 2, s / n) for s, n in zip(size, (nx, ny))]
+        note = "" if np.isfinite(values).any() else _empty_note(rows, q)
         out.append(MapImage(str(source), q, values, int(len(rows)), axes[0][0], axes[1][0], axes[0][1],
-                            axes[1][1]))
+                            axes[1][1], note))
     return out
+
+
+def _empty_note(rows, q: MapQuantity) -> str:
+    """Why none of a map's ``rows`` gave ``q``: their contact kinds and failures, what gives ``q``."""
+    import pandas as pd
+
+    failed = (rows["error"].notna() & (rows["error"].astype(str) != "")) if "error" in rows else \
+        pd.Series(False, index=rows.index)
+    parts = [f"{int(failed.sum())} failed"] if failed.any() else []
+    if "contact_kind" in rows:
+        kinds = rows.loc[~failed, "contact_kind"].fillna("unknown").astype(str).value_counts()
+        parts += [f"{n} {kind} contact{'s' if n > 1 else ''}" for kind, n in kinds.items()]
+    text = f"no curve gave it ({len(rows)} curves" + (": " + ", ".join(parts) if parts else "") + ")"
+    return text + (f"; it comes from {q.needs}" if q.needs else "")
 
 
 def _axis(rows, index: np.ndarray, column: str) -> tuple[float, float]:
@@ -211,6 +246,8 @@ def write_map_hdf5(images: list[MapImage], path, *, force: bool = True) -> Path:
         for image in images:
             d = h5.create_dataset(image.quantity.identifier, data=image.values, compression="gzip")
             d.attrs.update(unit=image.quantity.unit, label=image.quantity.label, column=image.quantity.column)
+            if image.note:              # all NaN: why (MapImage.note)
+                d.attrs["note"] = image.note
     return path
 
 

@@ -173,7 +173,25 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
                              "options=[...]")
     order = resolve_steps(steps)
     opts, probe = resolve_options(options, probe)
-    return _analyze(curve, order, opts, probe, channel, memo)
+    return _analyze(_given_sensitivity(curve, probe), order, opts, probe, channel, memo)
+
+
+def _given_sensitivity(curve: RawCurve, probe) -> RawCurve:
+    """A curve stored in newtons with the file's sensitivity, re-scaled to the user's (``probe.sensitivity``)
+    as its reader does with ``meta_override`` (the instrument's force is volts x sensitivity x k).
+
+    Was: ``analyze(curve, probe=ProbeCalibration(sensitivity=...))`` reported the given sensitivity as used
+    while the forces stayed those of the file's (jpk_cellhesion_spot3, 11.04 against 70 nm/V: adhesion
+    -0.419 nN either way, -0.066 nN through the reader; the slope's sensitivity 21.9 instead of 138.7 nm/V)."""
+    given = None if probe is None else probe.sensitivity
+    own = curve.metadata.get("sensitivity")
+    if given is None or curve.deflection_unit != "N" or not isinstance(own, (int, float)):
+        return curve
+    own, given = float(own), float(given)
+    if not (math.isfinite(own) and own > 0) or math.isclose(own, given, rel_tol=1e-12):
+        return curve
+    return dataclasses.replace(curve, deflection_signal=np.asarray(curve.deflection_signal) * (given / own),
+                               metadata={**curve.metadata, "sensitivity": given})
 
 
 def _analyze(curve: RawCurve, order: list[str], opts, probe, channel: str, memo: MutableMapping | None,

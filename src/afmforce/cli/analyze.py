@@ -34,7 +34,8 @@ from .common import add_quantity, chunk_progress_bar, eprint, progress_bar
 SUFFIX = ".afmforce"
 #: Runs with at least this many curves are batches: Dask, resumable store, summary statistics.
 BATCH_CURVES = 64
-#: Map image written when maps are analysed and no --map-quantity is given.
+#: Map image written when maps are analysed, no --map-quantity is given and no quantity of
+#: :data:`afmforce.analysis.maps.DEFAULT_MAPS` has a value (drawn all "no value", with its note).
 DEFAULT_MAP_QUANTITY = "adhesion"
 _MAX_LISTED = 20
 _BATCH_FOLDER = re.compile(r"batch-[0-9a-f]{12}")  # our summary tables are not inputs
@@ -64,8 +65,7 @@ def register(sub) -> None:
                    help="position channel (default: measured if recorded)")
     p.add_argument("--no-plot", action="store_true", help="with --out: skip the per-curve figures")
     lazy_help(p.add_argument("--map-quantity", action="append", default=[], metavar="Q",
-                             help="quantity drawn as a heat map per force map (repeatable; default "
-                                  f"{DEFAULT_MAP_QUANTITY}): "), _map_quantities)
+                             help="quantity drawn as a heat map per force map (repeatable; "), _map_quantities)
     p.add_argument("--fast-map", action="store_true",
                    help="force maps at instrument speed: per pixel only the indentation fit (modulus, topography), "
                         "the adhesion and the DMT work of adhesion, about 1 ms a curve (docs/contact.md)")
@@ -141,9 +141,9 @@ def _steps() -> str:  # help text, computed when printed (the pipeline imports n
 
 
 def _map_quantities() -> str:
-    from ..analysis.maps import MAP_QUANTITIES
+    from ..analysis.maps import DEFAULT_MAPS, MAP_QUANTITIES
 
-    return ", ".join(MAP_QUANTITIES)
+    return f"default: those of {', '.join(DEFAULT_MAPS)} that some curve gave): " + ", ".join(MAP_QUANTITIES)
 
 
 def _inputs(names: list[str]) -> list[Path]:
@@ -366,10 +366,22 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
     from ..analysis.maps import map_images
     from ..plotting import write_map_png
 
+    from ..analysis.maps import DEFAULT_MAPS
+
     out, per_map = {}, {}
-    for q in dict.fromkeys(quantities or [DEFAULT_MAP_QUANTITY]):
-        for image in map_images(table, q):
+    chosen: dict[str, list] = {}     # quantity -> its images
+    for q in dict.fromkeys(quantities or DEFAULT_MAPS):
+        images = map_images(table, q)
+        chosen[q] = images if quantities else [im for im in images if not im.note]
+    if not quantities:      # a map none of the defaults has a value for: its adhesion map, with its note
+        shown = {im.source for ims in chosen.values() for im in ims}
+        chosen[DEFAULT_MAP_QUANTITY] += [im for im in map_images(table, DEFAULT_MAP_QUANTITY)
+                                         if im.source not in shown]
+    for q, images in chosen.items():
+        for image in images:
             out[f"map {image.source} {q}"] = write_map_png(image, folder / f"{image.name}.{q}.png")
+            if image.note and quantities:      # an all-grey map asked for: one line saying why
+                eprint(f"note: {image.name}: map of {q} empty: {image.note}")
             per_map.setdefault(image.source, []).append(image)
     from ..analysis.maps import write_map_hdf5
 

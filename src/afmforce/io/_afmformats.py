@@ -30,6 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import logging
+import re
 import warnings
 import zipfile
 from pathlib import Path
@@ -66,16 +67,25 @@ def _afm_errors() -> tuple[type[BaseException], ...]:
     return (Exception, afe.AFMFileFormatError, afe.MissingMetaDataError, afm.MetaDataMissingError)
 
 
+#: afmformats' warning that it dropped a column holding a NaN (AFM Workshop reader, ``ws_single.py``)
+_DROPPED = re.compile(r"Removed incomplete column: (\S+) in ")
+
+
 def _load_data(path: Path, meta: Mapping[str, Any], callback) -> list:
     """Call ``afmformats.load_data``; turn its errors (some BaseException) into ours."""
     import afmformats
     from afmformats import errors as afe
 
     try:
-        with warnings.catch_warnings():  # numpy warns on empty or odd text; we raise instead
-            warnings.simplefilter("ignore")
-            return afmformats.load_data(path, meta_override=dict(meta), callback=callback)
-    except afe.MissingMetaDataError:
+        with warnings.catch_warnings(record=True) as said:  # numpy warns on empty or odd text; we raise instead
+            warnings.simplefilter("always")
+            data = afmformats.load_data(path, meta_override=dict(meta), callback=callback)
+        dropped = [m.group(1) for w in said if (m := _DROPPED.match(str(w.message)))]
+        if dropped:     # afmformats drops a column with a NaN cell; its reader then asks for it by name
+            raise FileFormatError(f"{path}: column {', '.join(dict.fromkeys(dropped))} has empty or non-numeric "
+                                  "cells (nan) inside the data; the file is damaged or padded: remove those rows")
+        return data
+    except (afe.MissingMetaDataError, FileFormatError):
         raise
     except _afm_errors() as exc:
         raise FileFormatError(f"{path}: afmformats cannot read it ({type(exc).__name__}: {_short(exc)})") from None

@@ -365,7 +365,12 @@ def load_jpk_zip(path: Path, *, meta_override: Mapping[str, Any] | None = None,
 
 
 def _map_position(gen: Mapping[str, str], index: int) -> dict[str, Any]:
-    """Grid cell and position [m] of curve ``index`` of a map (JPK grids run back and forth)."""
+    """Grid cell and position [m] of curve ``index`` of a map (JPK grids run back and forth).
+
+    The cell is that of the curve's own ``position-index`` (its point in the scan) where its header
+    gives one, else of ``index`` (its folder ``index/<index>/``): a map saved with some curves only
+    (afmformats' ``map2x2_extracted``: the four corners of a 10 x 10 grid in ``index/0..3``) has
+    folders numbered 0..n-1 whatever points they were measured at (they were drawn in a row)."""
     out: dict[str, Any] = {}
     for ours, key in (("position_x", "position.x"), ("position_y", "position.y")):
         for pre in ("force-scan-series.header.", "quantitative-imaging-series.header."):
@@ -374,6 +379,12 @@ def _map_position(gen: Mapping[str, str], index: int) -> dict[str, Any]:
                 break
             except (KeyError, ValueError):
                 continue
+    for pre in ("force-scan-series.header.", "quantitative-imaging-series.header."):
+        try:
+            index = int(gen[pre + "position-index"])
+            break
+        except (KeyError, ValueError):
+            continue
     for pre in ("force-scan-map.position-pattern.grid.", "quantitative-imaging-map.position-pattern.grid."):
         try:
             nx, ny = int(gen[pre + "ilength"]), int(gen[pre + "jlength"])

@@ -52,6 +52,11 @@ def plot_map(image: MapImage, ax=None):
     name = image.name if len(image.name) <= 48 else image.name[:22] + "..." + image.name[-23:]
     pitch = f", {image.dx * 1e6:.3g} x {image.dy * 1e6:.3g} µm pixels" if image.has_positions else ""
     ax.set_title(f"{name}\n{image.quantity.identifier}: {finite} of {nx * ny} points{pitch}", fontsize="small")
+    if image.note:      # all "no value": say why on the image (its colour bar's range means nothing)
+        import textwrap
+
+        ax.text(0.5, 0.5, "\n".join(textwrap.wrap(image.note, 40)), transform=ax.transAxes, ha="center",
+                va="center", fontsize="small", bbox={"facecolor": "white", "alpha": 0.9, "edgecolor": "grey"})
     return ax
 
 

@@ -383,10 +383,10 @@ _RAW: OrderedDict = OrderedDict()
 def _maps(table, rename) -> list[dict[str, Any]]:
     """The force maps' images (:func:`afmforce.analysis.maps.map_images`: axes in µm from the curves'
     stage positions, else the scanned area's size; grid indices when neither is known)."""
-    from ..analysis.maps import MAP_QUANTITIES, map_images
+    from ..analysis.maps import DEFAULT_MAPS, MAP_QUANTITIES, map_images
 
     out = []
-    for q in ("adhesion", "jump_in_distance", "hamaker_radius", "indentation"):
+    for q in DEFAULT_MAPS:
         for image in map_images(table, MAP_QUANTITIES[q]):
             rows = table[table["file"] == image.source]
             name = rename.get(Path(image.source).name, image.name)
@@ -400,5 +400,5 @@ def _maps(table, rename) -> list[dict[str, Any]]:
             z = [[None if not np.isfinite(v) else float(v) for v in row] for row in image.values]
             out.append({"file": name, "quantity": q, "label": image.quantity.label, "unit": image.quantity.unit,
                         "z": z, "x_um": x, "y_um": y, "axes": "um" if x is not None else "index",
-                        "curves": names})
+                        "curves": names, "note": image.note})
     return out

@@ -12,6 +12,7 @@ from starlette.concurrency import run_in_threadpool
 
 from ..errors import ParameterError
 from .analysis import run_analysis
+from .app import wait_until_warm
 from .limits import MAX_ITEMS, RESPONSE_POINTS
 from .replies import PastBudget
 from .validate import FieldError, calibration_file
@@ -54,7 +55,6 @@ async def analyze(request: Request,
                         ("step", step), ("meta", meta), ("probe", probe), ("curve", curve)):
         if len(items) > MAX_ITEMS:
             raise FieldError(name, f"{name}: at most {MAX_ITEMS} per request, got {len(items)}")
-    deadline = time.monotonic() + settings.request_budget
     if calibration is not None:     # as `afmforce analyze --probe-calibration`: the typed value wins
         given = {str(t).partition("=")[0].strip() for t in probe}
         values = calibration_file(await calibration.read(), calibration.filename or "calibration")
@@ -73,6 +73,8 @@ async def analyze(request: Request,
         paths.append((example_path(name), name))
     if not paths:
         raise FieldError("file", "give a file (field 'file'), an uploaded file's id ('file_id') or an example")
+    await run_in_threadpool(wait_until_warm, request.app)    # the budget starts after the warm-up
+    deadline = time.monotonic() + settings.request_budget
     guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
     work = run_in_threadpool(run_analysis, paths, option, meta, probe, steps=step or None, format=format,
                              arrays=arrays,

@@ -11,6 +11,7 @@ from fastapi.responses import JSONResponse, Response
 from .._json import to_jsonable
 from . import validate
 from .limits import RAW_SAMPLES, RESPONSE_POINTS
+from .app import wait_until_warm
 from .replies import PastBudget
 from .tasks import decimate
 
@@ -65,6 +66,7 @@ def simulate_endpoint(request: Request,
     unknown = [c for c in wanted if c not in COLUMNS]
     if unknown:
         raise validate.FieldError("columns", f"columns {unknown[:5]}: unknown; choose among {', '.join(COLUMNS)}")
+    wait_until_warm(request.app)        # the budget starts after the server's warm-up
     traj = run(cfg, request.app.state.settings.request_budget, check)
     idx = decimate(len(traj), max_points)
     out = to_jsonable({"summary": traj.summary(), "units": {c: COLUMNS[c] for c in wanted},
@@ -91,6 +93,7 @@ def raw_file(request: Request, config: dict[str, Any] = Body(default={}),
     if n > RAW_SAMPLES:     # the response's size cap: about 100 bytes a row
         raise validate.FieldError("sample_rate", f"the raw file would have about {n:.3g} rows, more than the "
                                   f"{RAW_SAMPLES:,} an export may carry; lower sample_rate or raise velocity")
+    wait_until_warm(request.app)
     traj = run(cfg, request.app.state.settings.request_budget)
     curve = get_preset(preset).record(traj, seed=seed)
     return Response(format_text(curve), media_type="text/plain",

@@ -503,7 +503,7 @@ function drawMaps(maps) {
   Plotly.react(div, [{ type: "heatmap", z, x: m.x_um || undefined, y: m.y_um || undefined, customdata: m.curves, colorbar: { title: { text: `${m.label} [${u || "-"}]`, side: "right" } },
     hovertemplate: `x = %{x} ${m.axes === "um" ? "µm" : ""}<br>y = %{y} ${m.axes === "um" ? "µm" : ""}<br>${m.quantity} = %{z:.4g} ${u}<br>%{customdata}<extra>click: open</extra>` }],
   { ...LAYOUT, title: { text: `${m.file}: ${m.label}` },
-    annotations: z.some((row) => row.some((v) => v !== null)) ? [] : [{ text: `no curve of this map gives a ${m.label}`, showarrow: false, xref: "paper", yref: "paper", x: 0.5, y: 0.5 }], xaxis: { title: { text: m.axes === "um" ? "x [µm]" : "x (column index)" }, scaleanchor: "y" }, yaxis: { title: { text: m.axes === "um" ? "y [µm]" : "y (row index)" } } }, CONFIG);
+    annotations: z.some((row) => row.some((v) => v !== null)) ? [] : [{ text: wrapText(m.note || `no curve of this map gives a ${m.label}`, 48).join("<br>"), showarrow: false, xref: "paper", yref: "paper", x: 0.5, y: 0.5 }], xaxis: { title: { text: m.axes === "um" ? "x [µm]" : "x (column index)" }, scaleanchor: "y" }, yaxis: { title: { text: m.axes === "um" ? "y [µm]" : "y (row index)" } } }, CONFIG);
   div.removeAllListeners && div.removeAllListeners("plotly_click");
   div.on("plotly_click", (ev) => { const n = ev.points[0].customdata; if (n && AN.payload.results[n]) { $("an-curve").value = n; drawCurve(); } });
 }
