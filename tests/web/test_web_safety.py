@@ -4,12 +4,15 @@ from __future__ import annotations
 
 import json
 import os
+import threading
 import time
 
 import pytest
 
 fastapi = pytest.importorskip("fastapi")
 psutil = pytest.importorskip("psutil")
+
+from afmforce.web import Settings, create_app  # noqa: E402
 
 
 def _raw(client, url, text):
@@ -391,3 +394,25 @@ def test_errors_of_fastapi_never_reach_the_client(client):
     assert err["field"] == "bogus"
     r = client.get("/api/jobs/nope")
     assert r.status_code == 404 and r.json()["error"]["type"] == "not_found"
+
+
+def test_an_app_whose_lifespan_never_ran_does_not_wait_for_a_warm_up(tmp_path):
+    """A ``TestClient`` used without ``with`` (or an ASGI server with its lifespan off) starts no warm-up:
+    an analysis must not wait for one (it waited forever: the whole suite hung in test_declared_ranges
+    after the warm-up wait was added). The request runs in a thread joined with a bound, so this test
+    cannot hang the suite itself."""
+    from fastapi.testclient import TestClient
+
+    from afmforce.datasets import path
+
+    app = create_app(Settings(data=tmp_path / "data", spare_job=False))
+    client = TestClient(app, base_url="http://127.0.0.1")      # no __enter__: the lifespan does not run
+    assert not app.state.warming.is_set() and not app.state.warm.is_set()
+    src = path("asylum-air")
+    answer = {}
+    t = threading.Thread(target=lambda: answer.setdefault(
+        "r", client.post("/api/analyze", files={"file": (src.name, src.read_bytes())})), daemon=True)
+    t.start()
+    t.join(300)
+    assert "r" in answer, "the analysis request waited for a warm-up that never started"
+    assert answer["r"].status_code == 200 and answer["r"].json()["files"]

@@ -44,6 +44,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
                 pass
 
     warm = threading.Event()
+    warming = threading.Event()     # set when the warm-up starts (the lifespan ran): only then is it waited for
 
     def warm_up():
         try:
@@ -53,6 +54,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app):
+        warming.set()
         threading.Thread(target=warm_up, daemon=True, name="afmforce-warm-up").start()
         jobs.load()          # sweeps left running by a previous server resume
         expire()
@@ -73,6 +75,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.sessions = sessions
     app.state.jobs = jobs
     app.state.warm = warm
+    app.state.warming = warming
     app.state.expire = expire
     replies.install(app)     # every refusal: 422 {"error": {"type", "message", "field"}}
     openapi.install(app)     # typed request and response models from the declarations
@@ -96,8 +99,18 @@ def wait_until_warm(app) -> None:
     the compile of the kernels at start is the server's cost, not the request's. Before, a request
     sent while the warm-up was still compiling (cold numba cache, busy machine) waited for numba's
     compile lock inside its own 60 s and came back 504 past_budget
-    (``test_a_session_survives_a_reload_and_lists_its_uploads`` failed so under load)."""
-    app.state.warm.wait()
+    (``test_a_session_survives_a_reload_and_lists_its_uploads`` failed so under load).
+
+    An app whose lifespan never ran (a ``TestClient`` used without ``with``, an ASGI server started with
+    its lifespan off) has no warm-up to wait for: the request goes on at once (it waited forever: the
+    suite hung in ``test_declared_ranges``). The wait is bounded by :data:`WARM_WAIT_MAX`."""
+    if app.state.warming.is_set():
+        app.state.warm.wait(WARM_WAIT_MAX)
+
+
+#: The longest a request waits for the server's warm-up [s] (a cold numba cache on a busy 2-core machine
+#: compiles for ~1-3 min); past it, the request goes on and compiles what it needs inside its own budget.
+WARM_WAIT_MAX = 600.0
 
 
 def warm_up_steps() -> list[str]:
