@@ -536,8 +536,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             e.interval, e.interval_method, e.stderr = (None, None), "undetermined", math.nan
             e.note = (f"{name}: no interval: the curves carry no noise, so no interval is a "
                       "confidence interval; the estimate is off by the model's systematic misfit "
-                      "(the `ideal` virtual AFM, seed 1 at 0.5, 2 and 8 um/s: A +11 %, xi -4 %, "
-                      "the file holding point samples, the model averaging them: `sampling`)")
+                      "(the `ideal` virtual AFM, seed 1 at 0.5, 2 and 8 um/s: A +11 %, xi -4 %)")
     for name, e in params.items():
         note = contain_value(name, e)
         e.note = "; ".join(t for t in (e.note, note) if t)
