@@ -290,10 +290,10 @@ def _append_retract(fc: FitCurve, curve: RawCurve, idx: np.ndarray, scale: float
     t0 = float(np.asarray(curve.time, float)[idx[0]])
     tr = np.asarray(curve.time, float)[ridx] - t0
     if fc.metadata.get("position_channel") == "measured":   # the same channel as the approach
-        from ..analysis import robust_line_thin
+        from .ramp import drive_line
 
         zm = np.asarray(curve.piezo_measured, float)[ridx]
-        a, b, *_ = robust_line_thin(tr - tr[0], zm)
+        a, b, _ = drive_line(tr, zm)   # the backlash's dead zone after the turn left out
         zr = a + b * (tr - tr[0])
     else:
         zr = np.asarray(curve.piezo_nominal, float)[ridx]

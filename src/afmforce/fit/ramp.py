@@ -59,6 +59,45 @@ def _ramp(curve: RawCurve, idx: np.ndarray) -> dict:
     return out
 
 
+def dead_zone(zm: np.ndarray) -> int:
+    """Samples at the start of a run in which a measured (sensor) position has not moved [-].
+
+    A position sensor with backlash (a play operator, e.g. the ``paper`` instrument's
+    :class:`afmforce.instrument.PositionDetector`; the Park scanner of the paper, Fig 8) stands
+    still after each reversal until the drive has taken up the play, then follows it at a
+    constant lag. These samples are no measure of the drive: a line through them is tilted (the
+    ``paper`` preset at 8 um/s: 6.90 um/s from the whole run, 8.00 without its first 15 nm).
+    The run's first samples within half a sensor step plus 4 noise rms of its first value are
+    the dead zone; 0 where it would leave fewer than a third of the run (or 10 samples).
+    """
+    zm = np.asarray(zm, float)
+    n = zm.size
+    if n < 30:
+        return 0
+    d = np.abs(np.diff(zm))
+    step = float(np.median(d[d > 0])) if np.any(d > 0) else 0.0
+    d2 = np.diff(zm, 2)
+    noise = float(np.median(np.abs(d2 - np.median(d2)))) * 1.4826 / math.sqrt(6.0)
+    tol = 0.5 * step + 4.0 * noise
+    moved = np.flatnonzero(np.abs(zm - zm[0]) > tol)
+    if moved.size == 0:
+        return 0
+    k = int(moved[0]) - 1          # the last sample still at rest is kept: the play's kink
+    return k if k > 0 and n - k >= max(10, n // 3) else 0
+
+
+def drive_line(t: np.ndarray, zm: np.ndarray) -> tuple[float, float, int]:
+    """Robust line ``a + b (t - t[0])`` [m], [m/s] through a run's measured positions, its
+    dead zone (:func:`dead_zone`) left out; returns ``(a, b, dead_zone_samples)``."""
+    from ..analysis import robust_line_thin
+
+    t = np.asarray(t, float)
+    zm = np.asarray(zm, float)
+    k = dead_zone(zm)
+    a, b, *_ = robust_line_thin(t[k:] - t[0], zm[k:])
+    return float(a), float(b), k
+
+
 def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, dict]:
     """The approach's piezo position [m] and how it was chosen.
 
@@ -72,7 +111,6 @@ def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, 
     (:func:`afmforce.analysis.dynamic.run_velocity`).
     """
     from ..analysis.dynamic import run_velocity
-    from ..analysis import robust_line_thin
     from ..analysis.state import prepare
 
     try:
@@ -83,10 +121,10 @@ def _position(curve: RawCurve, idx: np.ndarray, name: str) -> tuple[np.ndarray, 
         return np.asarray(curve.piezo_nominal, float)[idx], {"channel": "nominal"}
     t = np.asarray(curve.time, float)[idx]
     zm = np.asarray(curve.piezo_measured, float)[idx]
-    a, b, *_ = robust_line_thin(t - t[0], zm)
-    v = run_velocity(t, zm)
+    a, b, k0 = drive_line(t, zm)
+    v = abs(b) if k0 else run_velocity(t, zm)
     n = t.size
-    mid = slice(n // 10, n - n // 10)      # as _ramp: the middle 80 % of the run
+    mid = slice(max(n // 10, k0), n - n // 10)      # as _ramp: the middle 80 % of the run
     dev = float(np.max(np.abs(zm[mid] - (a + b * (t[mid] - t[0])))))
     travel = float(abs(zm[-1] - zm[0]))
     steps = np.abs(np.diff(zm))
