@@ -66,6 +66,18 @@ def test_the_intensity_factor_divides_the_deflection_its_sensitivity_calibrates(
     md = load(write_park(tmp_path / "off.tiff", points=1, intensity=0.8))[0].metadata
     assert md["park_force_ratio"] == pytest.approx(0.8, rel=1e-6)
     assert "20 % below" in md["spring_constant_note"] and "intensity factor 0.8" in md["spring_constant_note"]
+    # the note reaches the user: `afmforce analyze` lists it among the curve's warnings
+    import io
+    import json
+    from contextlib import redirect_stdout
+
+    from afmforce.cli.main import main
+
+    out = io.StringIO()
+    with redirect_stdout(out):
+        assert main(["analyze", str(tmp_path / "off.tiff"), "--json"]) == 0
+    (res,) = json.loads(out.getvalue())["results"].values()
+    assert any("20 % below" in w and "intensity factor 0.8" in w for w in res["warnings"])
     # a sensitivity the user gives is the one used, as given (the raw A-B volts' InvOLS)
     md = load(tmp_path / "if.tiff", meta_override={"sensitivity": 50e-9})[0].metadata
     assert md["sensitivity"] == 50e-9
