@@ -44,12 +44,15 @@ def _arrays(point: int):
     return [np.r_[pad(a), pad(r)].astype("<f4") for a, r in out], (v_app, v_ret, z_app, z_ret, t_app, t_ret)
 
 
-def write_park(path, *, points=2, kind=2, version=2, k=K, sens=SENS_V_PER_UM):
+def write_park(path, *, points=2, kind=2, version=2, k=K, sens=SENS_V_PER_UM, intensity=None):
     """A little-endian Park TIFF: a 1 x 1 palette preview, Park's magic (50432) and version (50433), the
     580-byte header (50435; first int32 = ``kind``), and for spectroscopy the header (50438: 2972 bytes,
-    version 2, or 936 bytes, version 1) and float32 data (50439)."""
+    version 2, or 936 bytes, version 1) and float32 data (50439); ``intensity``: the header's intensity
+    factor (float64 at byte 424; default zero: none)."""
     head = bytearray(580)
     struct.pack_into("<i", head, 0, kind)
+    if intensity is not None:
+        struct.pack_into("<d", head, 424, intensity)
     head[4:68] = _utf16("Topography", 32)
     struct.pack_into("<ii", head, 100, 1, 1)
     struct.pack_into("<i", head, 348, 2)

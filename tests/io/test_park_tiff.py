@@ -54,6 +54,35 @@ def test_force_channel_off_the_header_calibration_is_said(tmp_path):
     assert "8 % above" in md["spring_constant_note"]
 
 
+def test_the_intensity_factor_divides_the_deflection_its_sensitivity_calibrates(tmp_path):
+    """The image header's intensityFactor (A+B)/3 at byte 424: Park's Force channel is k x InvOLS x (A-B) / it.
+    A file written so (header k 0.8 x K, intensity 0.8, Force channel K / S x V) comes back with the InvOLS
+    1e-6 / (S x 0.8) and forces equal to its Force channel (no note); the same Force channel beside an
+    intensity factor the header's k does not carry is said, naming the factor."""
+    md = load(write_park(tmp_path / "if.tiff", points=1, k=K * 0.8, intensity=0.8))[0].metadata
+    assert md["park_intensity_factor"] == 0.8
+    assert md["sensitivity"] == pytest.approx(1e-6 / (SENS_V_PER_UM * 0.8), rel=1e-15)
+    assert md["park_force_ratio"] == pytest.approx(1.0, abs=1e-6) and "spring_constant_note" not in md
+    md = load(write_park(tmp_path / "off.tiff", points=1, intensity=0.8))[0].metadata
+    assert md["park_force_ratio"] == pytest.approx(0.8, rel=1e-6)
+    assert "20 % below" in md["spring_constant_note"] and "intensity factor 0.8" in md["spring_constant_note"]
+    # the note reaches the user: `afmforce analyze` lists it among the curve's warnings
+    import io
+    import json
+    from contextlib import redirect_stdout
+
+    from afmforce.cli.main import main
+
+    out = io.StringIO()
+    with redirect_stdout(out):
+        assert main(["analyze", str(tmp_path / "off.tiff"), "--json"]) == 0
+    (res,) = json.loads(out.getvalue())["results"].values()
+    assert any("20 % below" in w and "intensity factor 0.8" in w for w in res["warnings"])
+    # a sensitivity the user gives is the one used, as given (the raw A-B volts' InvOLS)
+    md = load(tmp_path / "if.tiff", meta_override={"sensitivity": 50e-9})[0].metadata
+    assert md["sensitivity"] == 50e-9
+
+
 def test_version1_header_without_calibration_names_the_flags(tmp_path):
     from afmforce.io import require_metadata
 
@@ -103,7 +132,7 @@ def test_real_park_force_curves_match_their_header_and_force_channel():
     assert [int(c.retract.sum()) for c in curves] == [47, 47, 43, 46, 45, 45, 47]
     for c in curves:
         md = c.metadata
-        assert md["spring_constant"] == 42.0 and md["sensitivity"] == pytest.approx(16.67e-9, rel=1e-9)
+        assert md["spring_constant"] == 42.0
         # the speed the header states against the ramp the samples trace: 6.25 nm per 313.34 ms step
         z, t = c.piezo_nominal[c.approach], c.time[c.approach]
         assert md["velocity"] == pytest.approx(2e-8, rel=1e-7)
@@ -113,10 +142,12 @@ def test_real_park_force_curves_match_their_header_and_force_channel():
         assert 0.25e-6 < np.ptp(z) < 0.30e-6
         d = c.deflection_signal[c.approach]
         assert 1.8 < d.max() - np.median(d[:10]) < 2.2
-        # Park's own Force channel is 1.0826 x k x InvOLS x V (the inverse of the image header's
-        # undocumented double 0.92370 at byte 424): said in a note, the header's k and InvOLS used
-        assert md["park_force_ratio"] == pytest.approx(1.0826050, rel=1e-6)
-        assert "8.26 % above" in md["spring_constant_note"]
+        # Park's own Force channel is 1.0826050 x k x (header's InvOLS) x V: the inverse of the image header's
+        # intensityFactor (A+B)/3 = 0.9236979 at byte 424, by which Park divides the A-B volts its sensitivity
+        # calibrates; the InvOLS used is the header's over it (16.67 -> 18.047 nm/V) and the forces are Park's
+        assert md["park_intensity_factor"] == pytest.approx(0.9236979, rel=1e-7)
+        assert md["sensitivity"] == pytest.approx(16.67e-9 / 0.9236979236205419, rel=1e-9)
+        assert md["park_force_ratio"] == pytest.approx(1.0, abs=1e-7) and "spring_constant_note" not in md
 
 
 def test_the_example_in_tests_data_is_the_builders_file(tmp_path):

@@ -169,17 +169,59 @@ class ProbeCalibration(_Validated):
 
     def origin(self, name: str) -> str:
         """Where the value of ``name`` the analysis uses comes from: ``file`` (not given here: the file's own),
-        ``user`` (given: ``--sensitivity``, ``probe=ProbeCalibration(...)``) or ``calibration`` (a probe
-        calibration file's: ``--probe-calibration``, :meth:`from_calibration_file`); the warnings' words are
-        :data:`ORIGIN_WORDS`."""
+        ``user`` (given: ``--sensitivity``, ``probe=ProbeCalibration(...)``), ``meta`` (typed as the file's
+        metadata: ``--meta sensitivity=...``, the web's ``meta``; :meth:`given_as_metadata`) or
+        ``calibration`` (a probe calibration file's: ``--probe-calibration``, the web's calibration upload;
+        :meth:`from_calibration_file`); the warnings' words are :data:`ORIGIN_WORDS`."""
+        marks = self.__dict__.get("_origins", {})
         if getattr(self, name) is None:
-            return "file"
-        return "calibration" if name in self.__dict__.get("_calibration_file", ()) else "user"
+            return "meta" if marks.get(name) == "meta" else "file"
+        return "calibration" if marks.get(name) == "calibration" else "user"
 
-    def from_calibration_file(self, names) -> "ProbeCalibration":
-        """This record with ``names`` marked as taken from a probe calibration file (:meth:`origin`)."""
+    def _marked(self, marks: Mapping[str, str], **extra: Any) -> "ProbeCalibration":
         out = dataclasses.replace(self)
-        object.__setattr__(out, "_calibration_file", frozenset(names))
+        for key in ("_origins", "_calibration_method", "_calibration_invols"):
+            if key in self.__dict__:
+                object.__setattr__(out, key, self.__dict__[key])
+        object.__setattr__(out, "_origins", {**self.__dict__.get("_origins", {}), **marks})
+        for key, value in extra.items():
+            object.__setattr__(out, key, value)
+        return out
+
+    def from_calibration_file(self, names, method: str | None = None,
+                              invols: float | None = None) -> "ProbeCalibration":
+        """This record with ``names`` marked as taken from a probe calibration file (:meth:`origin`) made by
+        ``method`` (its ``"method"``: ``thermal``, ``sader``, ...) with the InvOLS ``invols`` [m/V] its
+        spring constant rests on (a thermal one's: :attr:`calibration_invols`). The CLI's
+        ``--probe-calibration`` and the web's calibration upload both mark it here."""
+        return self._marked({n: "calibration" for n in names}, _calibration_method=method,
+                            _calibration_invols=invols)
+
+    def given_as_metadata(self, names) -> "ProbeCalibration":
+        """This record with ``names`` marked as typed by the user as the file's metadata (``--meta
+        sensitivity=...``, the web's ``meta``): still the file's in the analysis (a thermal k is rescaled
+        as the file's), but named as the user's in the warnings (:meth:`origin`)."""
+        return self._marked({n: "meta" for n in names if n in self.__dataclass_fields__})
+
+    @property
+    def calibration_method(self) -> str | None:
+        """The probe calibration file's method (``thermal``, ``sader``, ...; ``None``: no file)."""
+        return self.__dict__.get("_calibration_method")
+
+    @property
+    def calibration_invols(self) -> float | None:
+        """The InvOLS [m/V] the probe calibration file's spring constant rests on (a thermal k goes as
+        1/InvOLS^2, :data:`afmforce.calibration.record.INVOLS_METHODS`); ``None``: none recorded or none
+        it rests on (Sader's k)."""
+        return self.__dict__.get("_calibration_invols")
+
+    def origins(self) -> dict[str, Any]:
+        """The marks of :meth:`origin` other than the plain ``file``/``user`` ones, and the calibration
+        file's method and InvOLS: what, beside :meth:`given`, changes an analysis's words or its k
+        (part of the analysis's key)."""
+        out: dict[str, Any] = dict(sorted(self.__dict__.get("_origins", {}).items()))
+        if self.calibration_method is not None or self.calibration_invols is not None:
+            out["calibration_method"], out["calibration_invols"] = self.calibration_method, self.calibration_invols
         return out
 
 
@@ -188,6 +230,7 @@ class ProbeCalibration(_Validated):
 ORIGIN_WORDS: dict[str, tuple[str, str]] = {
     "file": ("the file's", "the file's"),
     "user": ("the one you gave (`{name}`)", "yours"),
+    "meta": ("the one you gave as metadata (meta {name})", "yours"),
     "calibration": ("the probe calibration file's", "the calibration file's"),
 }
 

@@ -22,13 +22,20 @@ from .._files import atomic_write_text, read_settings
 from .._json import to_jsonable
 from ..errors import FileFormatError
 
-__all__ = ["PROBE_KEYS", "ANALYSIS_KEYS", "write_calibration", "read_calibration", "parse_calibration"]
+__all__ = ["PROBE_KEYS", "ANALYSIS_KEYS", "INVOLS_METHODS", "write_calibration", "read_calibration",
+           "parse_calibration", "calibration_basis", "read_calibration_basis"]
 
 #: the probe values a calibration file hands on: name -> unit
 PROBE_KEYS = {"spring_constant": "N/m", "resonance_frequency": "Hz", "quality_factor": "",
               "sensitivity": "m/V"}
 #: the probe values ``afmforce analyze`` (and the web's analyse view) take from a calibration file
 ANALYSIS_KEYS = ("spring_constant", "sensitivity", "resonance_frequency")
+#: The calibration methods (a file's ``"method"``) whose spring constant rests on the InvOLS its spectrum was
+#: converted with: the thermal one, ``k = chi kB T / <z^2>`` with ``<z^2> = InvOLS^2 <V^2>``, so k goes as
+#: 1/InvOLS^2 and a refitted sensitivity (``afmforce analyze --calibration fit``) rescales it. Sader's k (the
+#: lever's plan view, f0 and Q in the fluid) and the virtual AFM's (a simulated probe's truth) rest on no
+#: InvOLS and are never rescaled; ``invols`` writes no spring constant.
+INVOLS_METHODS = ("thermal",)
 _VERSION = 1
 
 
@@ -79,3 +86,24 @@ def parse_calibration(text: str, source: str = "calibration") -> dict[str, float
                                       "calibrate again (afmforce calibrate)")
             out[key] = float(value)
     return out
+
+
+def calibration_basis(text: str) -> tuple[str | None, float | None]:
+    """``(method, invols)`` of a calibration file's text (read as :func:`parse_calibration` reads it):
+    its ``"method"`` and, for :data:`INVOLS_METHODS`, the InvOLS [m/V] its spring constant rests on (its
+    ``sensitivity``; ``None`` when it records none: a spectrum in m^2/Hz, converted by the instrument)."""
+    try:
+        obj = json.loads(text)
+    except ValueError:
+        return None, None
+    if not isinstance(obj, dict):
+        return None, None
+    method = obj.get("method") if isinstance(obj.get("method"), str) else None
+    invols = obj.get("sensitivity")
+    ok = isinstance(invols, (int, float)) and not isinstance(invols, bool) and math.isfinite(invols) and invols > 0
+    return method, (float(invols) if ok and method in INVOLS_METHODS else None)
+
+
+def read_calibration_basis(path) -> tuple[str | None, float | None]:
+    """:func:`calibration_basis` of the calibration file at ``path`` (read by :func:`read_calibration` first)."""
+    return calibration_basis(read_settings(Path(path), "a calibration file"))

@@ -190,7 +190,10 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     from_file = fill_from_calibration(args, ANALYSIS_KEYS)
     args.records, args.probe = _options(args)  # unknown or out-of-range option: exit 2
     if from_file:   # the warnings name a calibration file's value as its, not as one typed (ProbeCalibration.origin)
-        args.probe = args.probe.from_calibration_file(from_file)
+        from ..calibration.record import read_calibration_basis
+
+        method, invols = read_calibration_basis(args.probe_calibration)   # a thermal k rescales with a fit InvOLS
+        args.probe = args.probe.from_calibration_file(from_file, method=method, invols=invols)
     if args.format is not None and args.format not in FORMATS:
         raise ParameterError(f"--format {args.format}: unknown; choose one of {', '.join(FORMATS)}")
     if args.out is not None:
@@ -229,6 +232,7 @@ def run(args: argparse.Namespace) -> int:
     from ..io import parse_meta_args
 
     meta = parse_meta_args(args.meta)
+    args.probe = args.probe.given_as_metadata(k for k in meta if getattr(args.probe, k, None) is None)
     for key, value in (("spring_constant", args.spring_constant), ("sensitivity", args.sensitivity)):
         if value is None:
             continue
@@ -444,7 +448,8 @@ def _fmt(v: float) -> str:
 
 def _calibration_tag(row, given: str = "file") -> str:
     """Which sensitivity the forces used, for the table's cell: `` (fit)`` (the compliance slope) or
-    `` (file)`` / `` (user)`` / `` (calibration)`` (the file's, --sensitivity, a --probe-calibration file's:
+    `` (file)`` / `` (user)`` / `` (meta)`` / `` (calibration)`` (the file's, --sensitivity, --meta sensitivity=,
+    a --probe-calibration file's:
     :meth:`~afmforce.analysis.options.ProbeCalibration.origin`); nothing without a number."""
     if not math.isfinite(float(row["sensitivity_used"])):
         return ""

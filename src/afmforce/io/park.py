@@ -26,7 +26,12 @@ one before: dropped here). The deflection is the ``Vertical (A-B)`` channel in V
 channel in N, else a deflection in m); z is the driving channel (``Z Scan``, commanded), with the
 ``Z Detector`` as the measured position when it moves; time is the ``Time Stamp`` channel (else the
 ramp over the speed). ``spring_constant`` and ``sensitivity`` are the version-2 header's; a version-1
-header stores neither (give ``--spring-constant`` and ``--sensitivity``).
+header stores neither (give ``--spring-constant`` and ``--sensitivity``). The header's sensitivity
+calibrates the A-B deflection divided by the image header's ``intensityFactor`` (float64 at byte 424
+of tag 50435: the photodiode sum (A+B)/3, as Park's own reader, pspylib's ``TiffReader``, names the
+field): the InvOLS of the recorded A-B volts is the header's over that factor (``park_intensity_factor``;
+on ForceCurve_009.tiff 0.9236979: 16.670 -> 18.047 nm/V), which is what Park's own Force channel
+applies (k x InvOLS x (A-B) / 0.9236979 = 1.0826050 x k x InvOLS x (A-B) on all 7 spectra).
 
 A Park TIFF holding an image or a line profile is refused in one line. afmforce's own code, written
 from the layout described above (no code of those readers is used).
@@ -55,6 +60,9 @@ PARK_KINDS = {0: "image", 1: "line profile", 2: "spectroscopy"}
 _CHANNELS, _CHANNEL_BYTES = 8, 96
 _V1_BYTES, _V2_CAL_END, _V2_DTYPE_AT, _POINTS_AT = 936, 992, 1108, 1208
 _DTYPES = {0: "i2", 1: "i4", 2: "f4"}
+#: byte of the image header's (tag 50435) ``intensityFactor`` (float64, (A+B)/3 [-]; the field after
+#: ``ncmDrivePercent`` in Park's layout): the A-B deflection the header's sensitivity calibrates is divided by it
+_INTENSITY_AT = 424
 #: unit as Park writes it -> (SI unit, factor)
 _UNITS = {"v": ("V", 1.0), "mv": ("V", 1e-3), "uv": ("V", 1e-6),
           "m": ("m", 1.0), "mm": ("m", 1e-3), "um": ("m", 1e-6), "\u00b5m": ("m", 1e-6), "nm": ("m", 1e-9),
@@ -137,6 +145,16 @@ def _header(raw: bytes, end: str, where: str) -> dict[str, Any]:
     return out
 
 
+def _intensity_factor(fh, tags: dict, end: str, where: str, size: int) -> float | None:
+    """The image header's ``intensityFactor`` (float64 at byte :data:`_INTENSITY_AT`: the photodiode's sum
+    (A+B)/3 [-], as Park's own reader names it); ``None`` when absent, zero or not finite."""
+    raw = _block(fh, tags, _PARK_HEADER, where, "image header", size)
+    if len(raw) < _INTENSITY_AT + 8:
+        return None
+    value, = struct.unpack_from(end + "d", raw, _INTENSITY_AT)
+    return float(value) if np.isfinite(value) and value > 0 else None
+
+
 def _image_kind(fh, tags: dict, end: str, where: str, size: int) -> tuple[str, str]:
     raw = _block(fh, tags, _PARK_HEADER, where, "image header", size)
     if len(raw) < 4:
@@ -187,6 +205,7 @@ def load_park(path: Path, *, meta_override: Mapping[str, Any] | None = None,
             raise FileFormatError(f"{where}: this Park Systems TIFF holds {'an' if kind[0] in 'aeiou' else 'a'} "
                                   f"{kind} ({what}), not a force curve: give the spectroscopy (F-D) file of "
                                   "the measurement")
+        intensity = _intensity_factor(fh, tags, end, where, size)
         head = _header(_block(fh, tags, _SPEC_HEADER, where, "spectroscopy header", size), end, where)
         raw = _block(fh, tags, _SPEC_DATA, where, "spectroscopy data", size)
     channels, res, points = head["channels"], head["res"], head["points"]
@@ -227,6 +246,9 @@ def load_park(path: Path, *, meta_override: Mapping[str, Any] | None = None,
         base["spring_constant"] = float(k)
     if s is not None and np.isfinite(s) and s > 0:
         base["sensitivity"] = 1e-6 / float(s)          # V/um -> m/V
+        if intensity is not None and d_unit == "V":    # Park's sensitivity is of (A-B) / ((A+B)/3): as its Force
+            base["sensitivity"] /= intensity           # channel, k x InvOLS x (A-B) / intensity factor
+            base["park_intensity_factor"] = intensity
     for key, speed in (("velocity", head["fwd_speed"]), ("retract_velocity", head["bwd_speed"])):
         if np.isfinite(speed) and speed > 0:
             base[key] = float(speed) * z_unit
@@ -283,7 +305,8 @@ def load_park(path: Path, *, meta_override: Mapping[str, Any] | None = None,
                     f"the file's own {channels[force_idx]['name']} channel is {ratio:.4g} x spring constant x "
                     f"sensitivity x {channels[d_idx]['name']} (a factor its header does not name): Park's software "
                     f"shows forces {abs(ratio - 1) * 100:.3g} % {'above' if ratio > 1 else 'below'} these, which "
-                    "use the header's spring constant and sensitivity")
+                    "use the header's spring constant and sensitivity"
+                    + (f" over its intensity factor {intensity:.7g}" if "park_intensity_factor" in meta else ""))
         curve = RawCurve(time=time, piezo_nominal=sign * zn, piezo_measured=None if zm is None else sign * zm,
                          deflection_signal=defl, segment=seg, metadata=meta, deflection_unit=d_unit)
         out.append(finalize_curve(curve, where))

@@ -236,9 +236,10 @@ class CurveAnalysis:
         if not isinstance(opts, Mapping):  # records: {step: {option: value}} (SI), as the JSON shows them
             opts = {o.step: o.to_dict() for o in opts}
         probe = self.probe.given() if self.probe is not None else {}
+        origins = self.probe.origins() if self.probe is not None else {}   # the warnings' words, a thermal k
         return {"steps": self.steps, "options": opts, "probe": probe, "meta": self.meta_override,
                 "format": self.format, "channel": self.channel, "json": self.keep_json,
-                **({"json_arrays": True} if self.json_arrays else {})}
+                **({"json_arrays": True} if self.json_arrays else {}), **({"origins": origins} if origins else {})}
 
     def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
         """``(index in the file, RawCurve)`` of the item's curves."""

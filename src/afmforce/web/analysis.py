@@ -175,9 +175,13 @@ def _probe_fields() -> dict[str, Any]:
     return {f.name: spec_of(f) for f in dataclasses.fields(ProbeCalibration) if spec_of(f) is not None}
 
 
-def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[str]):
+def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[str],
+                 calibration: tuple | None = None):
     """``option`` (STEP.NAME=VALUE), ``meta`` (KEY=VALUE) and ``probe`` (NAME=VALUE) texts, values
-    with units, -> (step option records, probe record, metadata override). ParameterError when bad."""
+    with units, -> (step option records, probe record, metadata override). ParameterError when bad.
+    ``calibration``: ``(names, method, invols)`` of an uploaded probe calibration file, the ``probe``
+    names whose values are its (:meth:`~afmforce.analysis.options.ProbeCalibration.from_calibration_file`,
+    as ``--probe-calibration`` marks them); a ``meta`` probe value is marked as typed metadata."""
     from ..analysis.options import OPTIONS, ProbeCalibration
     from ..analysis.options_text import parse_option
     from ..analysis.pipeline import resolve_options
@@ -209,7 +213,13 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
         values[key] = number(value.strip(), fields[key], key, f"probe.{key}")
     probe_record = ProbeCalibration(**values)
     resolve_options(records, probe_record)
-    override = {**metadata(list(meta)), **{k: values[k] for k in ("spring_constant", "sensitivity") if k in values}}
+    typed = metadata(list(meta))
+    override = {**typed, **{k: values[k] for k in ("spring_constant", "sensitivity") if k in values}}
+    probe_record = probe_record.given_as_metadata(k for k in typed if k not in values)
+    if calibration is not None and calibration[0]:
+        names, method, invols = calibration
+        probe_record = probe_record.from_calibration_file([n for n in names if n in values], method=method,
+                                                          invols=invols)
     return records, probe_record, override
 
 
@@ -229,7 +239,7 @@ def parse_steps(steps: Sequence[str] | None) -> tuple[str, ...] | None:
     return out
 
 
-def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *,
+def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *, calibration=None,
                  steps: Sequence[str] | None = None, format: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
                  guard: bool = True, deadline: float | None = None,
@@ -249,6 +259,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     ``curves``: with ``arrays``, only these results (names as returned) get their arrays and raw
     signal, the first result when none of them is one (a page draws one curve of a map; the
     others are asked for when shown); empty: every result. ``arrays_for`` lists those sent.
+    ``calibration``: ``(names, method, invols)`` of a probe calibration file (:func:`parse_inputs`).
     """
     from ..sweep.files import analyze_files, plan_curves
     from ..sweep.report import analysis_json
@@ -259,7 +270,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
 
         if format not in FORMATS:
             raise FieldError("format", f"format {format[:60]!r}: unknown; choose one of {', '.join(FORMATS)}")
-    records, probe_record, override = parse_inputs(options, meta, probe)
+    records, probe_record, override = parse_inputs(options, meta, probe, calibration)
     chosen = parse_steps(steps)
     t0 = time.perf_counter()
     rename = {str(p): name for p, name in files}        # full stored paths first, then bare names

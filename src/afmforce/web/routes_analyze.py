@@ -36,6 +36,9 @@ async def analyze(request: Request,
                   calibration: Annotated[UploadFile | None, File(description="probe calibration file (afmforce "
                                                                     "calibrate --out): k, InvOLS, f0 where "
                                                                     "'probe' gives none")] = None,
+                  calibration_keys: Annotated[list[str], Form(description="with calibration: the probe values "
+                                                                          "to take from it (default: all it "
+                                                                          "holds that 'probe' does not give)")] = [],
                   format: Annotated[str | None, Form(description="reader instead of detection")] = None,
                   arrays: Annotated[bool, Form(description="add per-sample arrays, raw signals, maps")] = False,
                   max_points: Annotated[int, Form(ge=100, le=RESPONSE_POINTS)] = 4000,
@@ -52,13 +55,21 @@ async def analyze(request: Request,
     settings, sessions = request.app.state.settings, request.app.state.sessions
     session = request.state.session
     for name, items in (("file", file), ("file_id", file_id), ("example", example), ("option", option),
-                        ("step", step), ("meta", meta), ("probe", probe), ("curve", curve)):
+                        ("step", step), ("meta", meta), ("probe", probe), ("curve", curve),
+                        ("calibration_keys", calibration_keys)):
         if len(items) > MAX_ITEMS:
             raise FieldError(name, f"{name}: at most {MAX_ITEMS} per request, got {len(items)}")
+    from_file = None
     if calibration is not None:     # as `afmforce analyze --probe-calibration`: the typed value wins
+        from ..calibration.record import calibration_basis
+
         given = {str(t).partition("=")[0].strip() for t in probe}
-        values = calibration_file(await calibration.read(), calibration.filename or "calibration")
-        probe = list(probe) + [f"{k}={v!r}" for k, v in values.items() if k not in given]
+        data = await calibration.read()
+        values = calibration_file(data, calibration.filename or "calibration")
+        taken = {k: v for k, v in values.items() if k not in given and (not calibration_keys or k in calibration_keys)}
+        probe = list(probe) + [f"{k}={v!r}" for k, v in taken.items()]
+        # its values named as the calibration file's in the warnings, a thermal k rescaled with a refitted InvOLS
+        from_file = (tuple(taken), *calibration_basis(data.decode("utf-8")))
     uploads = [(up.filename or "upload", await up.read()) for up in file]
     stored = sessions.save_all(session, uploads)   # all or none; 413 storage_full past the totals
     paths = [sessions.path(session, s["id"]) for s in stored]
@@ -76,7 +87,8 @@ async def analyze(request: Request,
     await run_in_threadpool(wait_until_warm, request.app)    # the budget starts after the warm-up
     deadline = time.monotonic() + settings.request_budget
     guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
-    work = run_in_threadpool(run_analysis, paths, option, meta, probe, steps=step or None, format=format,
+    work = run_in_threadpool(run_analysis, paths, option, meta, probe, calibration=from_file, steps=step or None,
+                             format=format,
                              arrays=arrays,
                              max_points=max_points, budget=settings.request_budget, guard=guard,
                              deadline=deadline, curves=curve)

@@ -182,7 +182,7 @@ async function analyse(upload) {
   else AN.files.forEach((f) => fd.append("file_id", f.id));
   AN.examples.forEach((e) => fd.append("example", e));
   optionTexts().forEach((o) => fd.append("option", o));
-  probeTexts().forEach((o) => fd.append("probe", o));
+  probeForm(fd);
   fd.append("arrays", "true");
   plotRequest(fd);
   try {
@@ -222,7 +222,7 @@ async function loadCurveArrays(name) {   // a curve of a batch or map drawn for 
   AN.files.forEach((f) => fd.append("file_id", f.id));
   AN.examples.forEach((e) => fd.append("example", e));
   optionTexts().forEach((o) => fd.append("option", o));
-  probeTexts().forEach((o) => fd.append("probe", o));
+  probeForm(fd);
   fd.append("arrays", "true");
   plotRequest(fd, name);
   try {
@@ -509,13 +509,13 @@ function drawMaps(maps) {
 }
 // ---- calibration and probe: k, InvOLS, resonance frequency, radius (probe); model, tip, sample (indentation) ----
 const shownValue = (v, f) => (typeof v === "number" && isFinite(v) ? `${Number((v / f.factor).toPrecision(4))} ${f.shown}`.trim() : v === null || v === undefined ? "–" : String(v));
-function probeTexts() {
+function probeTexts(fromFile = null) {   // fromFile (a list): the untouched calibration file's names go there
   const out = [];
   for (const c of AN.probe || []) {
     const v = c.box.get();
     if (v === null || v === "") continue;
     const from = c.box.fromFile;   // a value from the calibration file, untouched: its SI value, exactly
-    if (from && c.box.querySelector("input.val").value === from.text) { out.push(`${c.f.name}=${from.value}`); continue; }
+    if (from && c.box.querySelector("input.val").value === from.text) { if (!fromFile) out.push(`${c.f.name}=${from.value}`); else fromFile.push(c.f.name); continue; }
     out.push(`${c.f.name}=${typeof v === "number" ? `${Number((v / c.f.factor).toPrecision(8))}${c.f.shown}` : v}`);
   }
   return out;
@@ -539,12 +539,18 @@ function buildCalibration() {
     box.append(c);
   }
 }
+function probeForm(fd) {   // the typed probe values, and the calibration file for its untouched ones (named as its in the warnings)
+  const fromFile = [];
+  probeTexts(AN.calfile ? fromFile : null).forEach((o) => fd.append("probe", o));
+  if (fromFile.length) { fd.append("calibration", AN.calfile); fromFile.forEach((n) => fd.append("calibration_keys", n)); }
+}
 async function loadCalibrationFile(file) {   // fills k, InvOLS, f0 from the file; "from calib.json" under each
   $("an-calfile-error").textContent = "";
   const fd = new FormData(); fd.append("file", file);
   let r;
   try { r = await api("api/calibration", { method: "POST", body: fd }); } catch (e) { $("an-calfile-error").textContent = e.message; return; }
   const names = Object.keys(r.values);
+  AN.calfile = file;
   if (!names.length) { $("an-calfile-error").textContent = `${r.source} holds no spring constant, sensitivity or resonance frequency`; return; }
   for (const c of AN.probe || []) {
     if (!(c.f.name in r.values)) continue;
