@@ -51,3 +51,44 @@ def wave_note(path) -> dict[str, str]:
         if sep and key not in out:
             out[key] = value.strip()
     return out
+
+
+def nanite_hertz_para(force, z, radius: float, spring_constant: float) -> float:
+    """nanite's Young's modulus [Pa] of one approach-retract curve given as arrays, the reference fit of the
+    real-file tests: its preprocessing (tip position, force offset, ``fit_line_polynomial`` contact point) and
+    a Hertz paraboloid (Poisson 0.5) on the approach. ``force`` [N] and ``z`` [m] (the piezo, towards the
+    sample positive) hold the approach, then the retract, of equal halves (the approach one sample shorter
+    when odd). Skips the test without nanite (the bench extra)."""
+    import warnings
+
+    import numpy as np
+
+    nanite = pytest.importorskip("nanite")
+    force, z = np.asarray(force, float), np.asarray(z, float)
+    half = force.size // 2
+    md = {"spring constant": spring_constant, "sensitivity": 1.0, "path": "x", "enum": 0,
+          "imaging mode": "force-distance", "duration": 1.0, "point count": force.size}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        idnt = nanite.Indentation(data={"force": force, "height (measured)": -z,
+                                        "segment": np.r_[np.zeros(half, bool), np.ones(force.size - half, bool)],
+                                        "time": np.arange(force.size) * 1e-3}, metadata=md)
+        idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
+                                 options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
+        p = idnt.get_initial_fit_parameters(model_key="hertz_para")
+        p["R"].set(value=radius)
+        p["nu"].set(value=0.5)
+        idnt.fit_model(model_key="hertz_para", params_initial=p, weight_cp=0, range_x=(0, 0),
+                       range_type="absolute", segment="approach")
+    return float(idnt.fit_properties["params_fitted"]["E"].value)
+
+
+def bruker_synthetic_header() -> tuple[float, float]:
+    """(InvOLS [m/V], k [N/m]) of ``tests/data/bruker-nanoscope_synthetic.txt`` from its header lines, by
+    regular expression (independent of afmforce's reader)."""
+    import re
+
+    text = (DATA / "bruker-nanoscope_synthetic.txt").read_text()
+    sens = float(re.search(r"\\@Sens\. DeflSens: V ([\d.]+) nm/V", text).group(1)) * 1e-9
+    k = float(re.search(r"\\Spring Constant: ([\d.]+)", text).group(1))
+    return sens, k

@@ -10,7 +10,6 @@ Z sensor, DeflSens 45 nm/V, k 0.21 N/m); a placeholder or stale InvOLS is given 
 
 from __future__ import annotations
 
-import re
 import warnings
 
 import pytest
@@ -18,17 +17,12 @@ import pytest
 from afmforce.analysis.options import CalibrationOptions
 from afmforce.analysis.pipeline import analyze
 from afmforce.io import load
-from realdata import DATA
+from realdata import DATA, bruker_synthetic_header
 
 PATH = DATA / "bruker-nanoscope_synthetic.txt"
 
 
-def _header() -> tuple[float, float]:
-    """(InvOLS [m/V], k [N/m]) from the export's quoted header lines, by regular expression."""
-    text = PATH.read_text()
-    sens = float(re.search(r"\\@Sens\. DeflSens: V ([\d.]+) nm/V", text).group(1)) * 1e-9
-    k = float(re.search(r"\\Spring Constant: ([\d.]+)", text).group(1))
-    return sens, k
+_header = bruker_synthetic_header   # (InvOLS [m/V], k [N/m]) from the header lines, by regular expression
 
 
 def _analyse(factor: float | None = None, source: str = "auto"):

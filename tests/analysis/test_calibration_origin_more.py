@@ -14,24 +14,18 @@ from __future__ import annotations
 
 import io
 import json
-import re
 from contextlib import redirect_stdout
 
 import pytest
 
 from afmforce.calibration.record import write_calibration
 from afmforce.cli.main import main
-from realdata import DATA
+from realdata import DATA, bruker_synthetic_header
 
 PATH = DATA / "bruker-nanoscope_synthetic.txt"
 
 
-def _header() -> tuple[float, float]:
-    """(InvOLS [m/V], k [N/m]) from the export's header lines."""
-    text = PATH.read_text()
-    sens = float(re.search(r"\\@Sens\. DeflSens: V ([\d.]+) nm/V", text).group(1)) * 1e-9
-    k = float(re.search(r"\\Spring Constant: ([\d.]+)", text).group(1))
-    return sens, k
+_header = bruker_synthetic_header   # (InvOLS [m/V], k [N/m]) from the header lines, by regular expression
 
 
 def _run(*flags: str) -> dict:

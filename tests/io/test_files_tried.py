@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from afmforce.io import find_format, load
-from realdata import DATA, real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
+from realdata import DATA, nanite_hertz_para, real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
 
 CHIARO_MIT = DATA / "chiaro-txt_AEBP1_Indentation_002_thinned.txt"
 
@@ -145,9 +145,7 @@ def test_real_nanoscope_v9_1_catalyst_modulus_agrees_with_nanite():
     Height Sensor channels, the header's tip radius 8 nm. nanite 4.2.3's Hertz paraboloid fit on the file
     parsed here without afmforce (int16 blocks x their V/LSB, DeflSens, ZsensSens, k; the approach stored
     turning point first) gives 11394 Pa; afmforce's default analysis gave 11337 Pa (0.5 %)."""
-    import warnings
-
-    nanite = pytest.importorskip("nanite")   # the bench extra: the reference fit
+    pytest.importorskip("nanite")   # the bench extra: the reference fit
 
     from afmforce.analysis.pipeline import analyze
 
@@ -165,22 +163,8 @@ def test_real_nanoscope_v9_1_catalyst_modulus_agrees_with_nanite():
     z = chans["ZSensor"] * _value(head, r"Sens\. ZsensSens: V ([\d.]+)") * 1e-9
     half = force.size // 2
     force, z = np.r_[force[:half][::-1], force[half:]], np.r_[z[:half][::-1], z[half:]]
-    seg = np.r_[np.zeros(half, bool), np.ones(force.size - half, bool)]
     radius = _value(head, r"\\Tip Radius: ([\d.]+)") * 1e-9
-    md = {"spring constant": k, "sensitivity": 1.0, "path": "x", "enum": 0, "imaging mode": "force-distance",
-          "duration": 1.0, "point count": force.size}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        idnt = nanite.Indentation(data={"force": force, "height (measured)": -z, "segment": seg,
-                                        "time": np.arange(force.size) * 1e-3}, metadata=md)
-        idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
-                                 options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
-        p = idnt.get_initial_fit_parameters(model_key="hertz_para")
-        p["R"].set(value=radius)
-        p["nu"].set(value=0.5)
-        idnt.fit_model(model_key="hertz_para", params_initial=p, weight_cp=0, range_x=(0, 0),
-                       range_type="absolute", segment="approach")
-    e_nanite = idnt.fit_properties["params_fitted"]["E"].value
+    e_nanite = nanite_hertz_para(force, z, radius, k)
     (c,) = load(path)
     assert c.metadata["radius"] == pytest.approx(radius, rel=1e-12)
     r = analyze(c)

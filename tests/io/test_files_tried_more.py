@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from afmforce.io import load
-from realdata import real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
+from realdata import nanite_hertz_para, real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
 
 # --- a step (multi-) indentation: extend, hold, extend, hold, ..., retract -------------------------------
 
@@ -197,9 +197,7 @@ def test_real_catalyst_chromosome_curves_agree_with_nanite(name):
     PeakForce QNM head in force mode, 4096 + 4096 samples, the header's 5 nm tip; no licence: not kept): k and
     DeflSens as the header states them (regex), and the default Hertz paraboloid modulus within 3 % of nanite
     4.2.3's on the file parsed here (129.5 vs 129.5, 195.0 vs 191.9, 261.7 vs 264.2 kPa; read as a user types it)."""
-    import warnings
-
-    nanite = pytest.importorskip("nanite")   # the bench extra: the reference fit
+    pytest.importorskip("nanite")   # the bench extra: the reference fit
 
     from afmforce.analysis.pipeline import analyze
 
@@ -212,21 +210,7 @@ def test_real_catalyst_chromosome_curves_agree_with_nanite(name):
     z = chans["ZSensor"] * float(re.search(r"Sens\. ZsensSens: V ([\d.]+)", head).group(1)) * 1e-9
     half = force.size // 2     # the approach stored turning point first
     force, z = np.r_[force[:half][::-1], force[half:]], np.r_[z[:half][::-1], z[half:]]
-    md = {"spring constant": k, "sensitivity": 1.0, "path": "x", "enum": 0, "imaging mode": "force-distance",
-          "duration": 1.0, "point count": force.size}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        idnt = nanite.Indentation(data={"force": force, "height (measured)": -z,
-                                        "segment": np.r_[np.zeros(half, bool), np.ones(force.size - half, bool)],
-                                        "time": np.arange(force.size) * 1e-3}, metadata=md)
-        idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
-                                 options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
-        p = idnt.get_initial_fit_parameters(model_key="hertz_para")
-        p["R"].set(value=radius)
-        p["nu"].set(value=0.5)
-        idnt.fit_model(model_key="hertz_para", params_initial=p, weight_cp=0, range_x=(0, 0),
-                       range_type="absolute", segment="approach")
-    e_nanite = idnt.fit_properties["params_fitted"]["E"].value
+    e_nanite = nanite_hertz_para(force, z, radius, k)
     (c,) = load(path)
     assert c.metadata["spring_constant"] == k
     assert c.metadata["sensitivity"] == pytest.approx(sens, rel=1e-12)
