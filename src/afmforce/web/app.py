@@ -15,7 +15,7 @@ from .jobs import JobManager
 from .sessions import Sessions
 from .settings import Settings
 
-__all__ = ["create_app", "warm_up_steps", "wait_until_warm"]
+__all__ = ["create_app", "warm_up_steps"]
 
 _LOG = logging.getLogger("afmforce.web")
 
@@ -90,27 +90,6 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(Guard, token=settings.token, max_body=settings.max_upload, loopback=settings.loopback,
                        allow_origins=settings.allow_origins, session_ttl=settings.session_ttl, seen=sessions.seen)
     return app
-
-
-def wait_until_warm(app) -> None:
-    """Block until the server's warm-up has ended (``app.state.warm``; failed steps included).
-
-    A request with a time budget (an analysis, a simulation) calls this before its budget starts:
-    the compile of the kernels at start is the server's cost, not the request's. Before, a request
-    sent while the warm-up was still compiling (cold numba cache, busy machine) waited for numba's
-    compile lock inside its own 60 s and came back 504 past_budget
-    (``test_a_session_survives_a_reload_and_lists_its_uploads`` failed so under load).
-
-    An app whose lifespan never ran (a ``TestClient`` used without ``with``, an ASGI server started with
-    its lifespan off) has no warm-up to wait for: the request goes on at once (it waited forever: the
-    suite hung in ``test_declared_ranges``). The wait is bounded by :data:`WARM_WAIT_MAX`."""
-    if app.state.warming.is_set():
-        app.state.warm.wait(WARM_WAIT_MAX)
-
-
-#: The longest a request waits for the server's warm-up [s] (a cold numba cache on a busy 2-core machine
-#: compiles for ~1-3 min); past it, the request goes on and compiles what it needs inside its own budget.
-WARM_WAIT_MAX = 600.0
 
 
 def warm_up_steps() -> list[str]:

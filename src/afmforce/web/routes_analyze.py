@@ -12,7 +12,7 @@ from starlette.concurrency import run_in_threadpool
 
 from ..errors import ParameterError
 from .analysis import run_analysis
-from .app import wait_until_warm
+from .warm import wait_until_warm
 from .limits import MAX_ITEMS, RESPONSE_POINTS
 from .replies import PastBudget
 from .validate import FieldError, calibration_file

@@ -11,7 +11,7 @@ from fastapi.responses import JSONResponse, Response
 from .._json import to_jsonable
 from . import validate
 from .limits import RAW_SAMPLES, RESPONSE_POINTS
-from .app import wait_until_warm
+from .warm import wait_until_warm
 from .replies import PastBudget
 from .tasks import decimate
 

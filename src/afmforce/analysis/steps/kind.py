@@ -117,7 +117,7 @@ SLOPE_HARD_UNVERIFIED = (
     "calibration unverified: the compliance slope calibrates ({sens:.4g} nm/V), which holds only on a hard "
     "contact, and this one is called hard with no jump into contact and {why}: if the tip indents the sample, "
     "the sensitivity and every force are overestimated (no modulus is given); give the lever's sensitivity "
-    "measured on a hard surface (`sensitivity`, --sensitivity)")
+    "measured on a hard surface (`sensitivity`)")
 
 #: Least deflection per position of a hard contact where the deflection is measured interferometrically
 #: (Optics11 indenters, ``deflection_interferometric`` from the reader): no sensitivity (InvOLS) error widens it,
