@@ -35,6 +35,7 @@ from .registry import AnalysisStep, ResultField, register_step
 from .result import AnalysisResult
 from .state import NoContact, State, _default_probe, prepare
 from .steps.contact import retract_dip
+from .._fields import QUANTITIES
 from ..errors import ParameterError
 from ..io.curve import RawCurve
 from ..io.deflection import signal_factor
@@ -190,6 +191,8 @@ def _given_sensitivity(curve: RawCurve, probe) -> RawCurve:
     own, given = float(own), float(given)
     if not (math.isfinite(own) and own > 0) or math.isclose(own, given, rel_tol=1e-12):
         return curve
+    if not QUANTITIES["sensitivity"].contains(own):   # no lever has the file's (a damaged header value): the
+        return curve      # stored forces cannot be traced back through it; they stay as stored, yours is used
     return dataclasses.replace(curve, deflection_signal=np.asarray(curve.deflection_signal) * (given / own),
                                metadata={**curve.metadata, "sensitivity": given})
 
