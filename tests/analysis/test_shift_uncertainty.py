@@ -102,3 +102,24 @@ def test_bound_grows_with_the_rate_spread():
         time, signal = t, s
     assert S._rate_spread(St, np.arange(t.size)) == pytest.approx(0.1, rel=0.05)
     assert math.isnan(S._rate_spread(St, np.arange(10)))
+
+
+def test_negative_rupture_never_silent_on_the_nanosurf_map():
+    """The real Nanosurf 10 x 10 map (Tap150Al on a hard sample): every negative rupture separation is warned
+    of, within its bound (curve 82: -0.29 nm, bound 1.22 nm) or beyond it (curve 60: -1.12 nm, bound 0.16 nm;
+    curve 0: -0.17 nm, bound 0.047 nm)."""
+    from realdata import real_file  # tests/ is on sys.path: tests/conftest.py
+
+    path = real_file("nanosurf-nid_spectroscopy-map_10x10_Tap150Al.nid")   # skips without it
+    curves = io.load(path)
+    seen = {}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        for i, c in enumerate(curves):
+            r = analyze(c)
+            if r.contact_kind == "hard" and r.rupture_distance < 0:
+                words = [w for w in r.warnings if "physically impossible" in w]
+                assert len(words) == 1, i
+                seen[i] = ("within" in words[0], r.rupture_distance, r.rupture_distance_drift)
+    assert seen[82][0] and -seen[82][1] <= seen[82][2]
+    assert not seen[60][0] and -seen[60][1] > seen[60][2]

@@ -103,6 +103,11 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
     return st.update("adhesion", res, warn=warn)
 
 
+#: A negative rupture separation within this many deflection noise sigmas (beside the drift bound) is the
+#: noise of the one sample it is read at [-].
+NEGATIVE_RUPTURE_SIGMAS = 3.0
+
+
 def rupture_drift(st: State) -> float:
     """The bound on a hard contact's rupture (pull-off) separation from the drift lines [m]: the shift's
     (``shift_drift``, :func:`afmforce.analysis.steps.shift.drift_position_error`): the retract's separation
@@ -120,10 +125,14 @@ def _negative_rupture(st: State, res, hard: bool) -> str | None:
     if not (hard and res.found and math.isfinite(r) and r < 0):
         return None
     b = rupture_drift(st)
-    if math.isfinite(b) and -r <= b:
+    # one sample's separation carries the deflection's noise: NEGATIVE_RUPTURE_SIGMAS of it, beside the bound
+    sigma = abs(st.noise * st.factor) if math.isfinite(st.factor) else math.nan
+    allowed = math.hypot(b, NEGATIVE_RUPTURE_SIGMAS * sigma) if math.isfinite(sigma) else b
+    if math.isfinite(allowed) and -r <= allowed:
         return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible), within the "
-                f"drift lines' bound of +-{b * 1e9:.3g} nm (rupture_distance_drift): the tip left at about "
-                "zero separation; the separation is not resolved better than that bound")
+                f"drift lines' bound of +-{b * 1e9:.3g} nm (rupture_distance_drift) and "
+                f"{NEGATIVE_RUPTURE_SIGMAS:g} deflection noise sigmas ({sigma * 1e9:.2g} nm): the tip left at about "
+                "zero separation; the separation is not resolved better than that")
     bound = f"the drift lines' bound +-{b * 1e9:.3g} nm" if math.isfinite(b) else "no drift bound assessed"
     return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible) and beyond "
             f"{bound}: the separation's zero or the retract's baseline is wrong on this curve")
