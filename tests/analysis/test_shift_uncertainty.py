@@ -88,20 +88,41 @@ def test_negative_rupture_is_explained(seed, tmp):
     assert any("physically impossible" in w and "within the drift lines' bound" in w for w in res.warnings)
 
 
-def test_bound_grows_with_the_rate_spread():
-    """drift_position_error against its closed form: two runs, each a free part of known rate spread, give
-    hypot(dr_a dt_a, dr_r dt_r) / slope."""
+def test_bound_against_its_closed_form():
+    """:func:`_rate_spread` and :func:`drift_position_error` against closed forms: a free part whose rate
+    changes from 0 to 0.1 V/s at its middle has a halves' spread of 0.1 V/s (its thirds': 0.075); two runs of
+    such free parts, their compliance lines dt_a = 0.5 s and dt_r = 1.5 s from them (medians), give
+    hypot(0.1 x 0.5, 0.1 x 1.5) / slope (the retract's spread over its second half: its own halves' 0.1 V/s
+    again when the change lies in the middle of that half)."""
+    from types import SimpleNamespace as NS
+
     from afmforce.analysis.steps import shift as S
 
     rng = np.random.default_rng(0)
-    t = np.linspace(0, 1, 400)
-    # a free part of two rates (0 then 0.1 V/s) in halves: the halves' spread is 0.1 V/s
-    s = np.where(t < 0.5, 0.0, 0.1 * (t - 0.5)) + 1e-6 * rng.standard_normal(t.size)
+    n = 400
+    t = np.linspace(0.0, 4.0, 4 * n)          # [s]
+    sig = 1e-7 * rng.standard_normal(t.size)  # [V]
+    # approach: free part 0-1 s (rate change at 0.5 s), line 1.25-1.75 s (median 1.5 s: dt = 1.0 s from 0.5 s)
+    fa = (t < 1.0)
+    sig[fa] += np.where(t[fa] < 0.5, 0.0, 0.1 * (t[fa] - 0.5))
+    # retract: free part 3-4 s; its second half 3.5-4 s changes rate at 3.75 s; line 2.0-2.5 s (median 2.25 s)
+    fr = (t >= 3.0)
+    sig[fr] += np.where(t[fr] < 3.75, 0.0, 0.1 * (t[fr] - 3.75))
+    app, ret = np.flatnonzero(t < 2.0), np.flatnonzero(t >= 2.0)
 
-    class St:  # the attributes _rate_spread reads
-        time, signal = t, s
-    assert S._rate_spread(St, np.arange(t.size)) == pytest.approx(0.1, rel=0.05)
-    assert math.isnan(S._rate_spread(St, np.arange(10)))
+    def run(index, free, line):
+        return NS(index=index, zero_force=free[index], saturated=np.zeros(index.size, bool), compliance=line[index])
+
+    st = NS(time=t, signal=sig, time_known=True,
+            approach=run(app, fa, (t >= 1.25) & (t < 1.75)), retract=run(ret, fr, (t >= 2.0) & (t < 2.5)))
+    assert S._rate_spread(st, np.flatnonzero(fa)) == pytest.approx(0.1, rel=0.05)
+    assert math.isnan(S._rate_spread(st, np.arange(10)))
+    slope = 2e7                                # [V/m]
+    comp = NS(approach=NS(slope=slope))
+    dt_a, dt_r = 1.5 - 0.5, 3.5 - 2.25        # medians: line - free part
+    want = math.hypot(0.1 * dt_a, 0.1 * dt_r) / slope
+    assert S.drift_position_error(st, comp) == pytest.approx(want, rel=0.06)
+    assert math.isnan(S.drift_position_error(NS(**{**vars(st), "time_known": False}), comp))
 
 
 def test_negative_rupture_never_silent_on_the_nanosurf_map():
