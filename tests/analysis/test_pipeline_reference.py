@@ -47,7 +47,9 @@ ADDED = {"barrier_force", "barrier_jump_distance", "through_barrier",
          # where the indentation's Poisson ratio came from (user, file, default): the ratio itself is compared
          "poisson_source",
          # the drift step's climb of its approach line (NaN unless its warning fires; the indentation then widens)
-         "baseline_climb"}
+         "baseline_climb",
+         # the drift lines' bound on the shift and on a hard contact's rupture (NaN on these soft curves)
+         "shift_drift", "rupture_distance_drift"}
 
 
 def _compare(new, old, where: str, out: list[str]) -> None:

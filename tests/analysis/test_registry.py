@@ -36,7 +36,8 @@ OLD_COLUMNS = {
     "work_of_adhesion_se", "position_x", "position_y", "drag_offset", "lever_drag", "surface_potential",
     "surface_potential_se", "debye_length", "debye_length_se", "dlvo_hamaker", "dlvo_hamaker_se",
     "barrier_force", "barrier_jump_distance",
-    "friction_offset_bound", "friction_force_bound", "viscous_friction_bound", "load_friction_bound"}
+    "friction_offset_bound", "friction_force_bound", "viscous_friction_bound", "load_friction_bound",
+    "shift_drift", "rupture_distance_drift"}
 
 
 def test_every_step_is_declared_once_with_its_options_and_fields():

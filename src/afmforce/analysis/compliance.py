@@ -254,12 +254,17 @@ class ShiftResult:
         Signal level where the lines are compared [signal unit].
     applied : bool
         Whether the inward run was moved.
+    shift_drift : float
+        Bound on the shift from the drift lines [m]: the range of drift rates the free parts allow,
+        extrapolated to the compliance lines (:func:`afmforce.analysis.steps.shift.drift_position_error`);
+        it adds to ``shift_se`` (the lines' noise alone); NaN when not assessed.
     """
 
     shift: float = _u("m")
     shift_se: float = _u("m")
     reference_signal: float = _u("{signal}")
     applied: bool
+    shift_drift: float = _u("m", math.nan)
 
 
 def compliance_shift(compliance: ComplianceResult, applied: bool = True) -> ShiftResult:

@@ -99,7 +99,43 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
                 f"force {po.force * 1e9:.3g} nN (from the drift-corrected zero): the retract's free part does not "
                 "return to the approach's baseline (still relaxing, drift, or an offset at the turn); "
                 "trust the pull-off only with a settled baseline")
+    warn = [warn, _negative_rupture(st, res, hard)]
     return st.update("adhesion", res, warn=warn)
+
+
+#: A negative rupture separation within this many deflection noise sigmas (beside the drift bound) is the
+#: noise of the one sample it is read at [-].
+NEGATIVE_RUPTURE_SIGMAS = 3.0
+
+
+def rupture_drift(st: State) -> float:
+    """The bound on a hard contact's rupture (pull-off) separation from the drift lines [m]: the shift's
+    (``shift_drift``, :func:`afmforce.analysis.steps.shift.drift_position_error`): the retract's separation
+    is read against the approach's compliance line through the shift, so a drift line that moves one moves
+    the other; NaN when the shift was not assessed."""
+    sh = st.details.get("shift")
+    return float(sh.shift_drift) if sh is not None else math.nan
+
+
+def _negative_rupture(st: State, res, hard: bool) -> str | None:
+    """A warning for a hard contact's rupture at a negative separation: physically the tip cannot leave the
+    surface inside its compliance line, so the number is the drift lines' error (within ``rupture_drift``)
+    or not a result (beyond it)."""
+    r = getattr(res, "rupture_distance", math.nan)
+    if not (hard and res.found and math.isfinite(r) and r < 0):
+        return None
+    b = rupture_drift(st)
+    # one sample's separation carries the deflection's noise: NEGATIVE_RUPTURE_SIGMAS of it, beside the bound
+    sigma = abs(st.noise * st.factor) if math.isfinite(st.factor) else math.nan
+    allowed = math.hypot(b, NEGATIVE_RUPTURE_SIGMAS * sigma) if math.isfinite(sigma) else b
+    if math.isfinite(allowed) and -r <= allowed:
+        return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible), within the "
+                f"drift lines' bound of +-{b * 1e9:.3g} nm (rupture_distance_drift) and "
+                f"{NEGATIVE_RUPTURE_SIGMAS:g} deflection noise sigmas ({sigma * 1e9:.2g} nm): the tip left at about "
+                "zero separation; the separation is not resolved better than that")
+    bound = f"the drift lines' bound +-{b * 1e9:.3g} nm" if math.isfinite(b) else "no drift bound assessed"
+    return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible) and beyond "
+            f"{bound}: the separation's zero or the retract's baseline is wrong on this curve")
 
 
 def _adhesion_fields(st: State) -> dict:
@@ -109,7 +145,9 @@ def _adhesion_fields(st: State) -> dict:
     fit = top.wlc if top is not None and top.wlc is not None else None
     nan = math.nan
     return dict(adhesion_force=a.force, adhesion_deflection=a.deflection, adhesion_distance=a.distance,
-                adhesion_noise=a.noise, rupture_distance=a.rupture_distance, unbinding_steps=len(a.steps),
+                adhesion_noise=a.noise, rupture_distance=a.rupture_distance,
+                rupture_distance_drift=rupture_drift(st) if a.found and "kind" in st.details and _kind(st) == "hard"
+                else nan, unbinding_steps=len(a.steps),
                 tethers=len(ts), tether_force=top.force if top else nan,
                 tether_contour_length=fit.contour_length if fit else nan,
                 tether_contour_length_se=fit.contour_length_se if fit else nan,
@@ -152,6 +190,8 @@ ADHESION = AnalysisStep(
             ResultField("adhesion_noise", "N", "baseline noise of the retract", column=True),
             ResultField("rupture_distance", "m", "last rupture from contact (hard contact: its separation)",
                         summary=True, column=True),
+            ResultField("rupture_distance_drift", "m", "its bound from the drift lines (hard contact: the shift's)",
+                        column=True),
             ResultField("unbinding_steps", "", "unbinding steps", default=0, column=True),
             ResultField("tethers", "", "tethers pulled after the tip left a hard surface", default=0, column=True,
                         map=True),
