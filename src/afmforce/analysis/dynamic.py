@@ -120,8 +120,9 @@ DEAD_ZONE_MIN_BIAS = 0.005
 def drive_start(t: np.ndarray, zm: np.ndarray) -> int:
     """First sample of a run's measured (sensor) position that measures the drive [-]: the end of its
     :func:`dead_zone` where leaving that out changes the run's speed by more than
-    :data:`DEAD_ZONE_MIN_BIAS`, else 0. The one rule of the analysis (:func:`run_velocity`) and the fit
-    (:func:`afmforce.fit.ramp.drive_line`)."""
+    :data:`DEAD_ZONE_MIN_BIAS`, else 0: the analysis's speed (:func:`run_velocity`). The fit's line
+    (:func:`afmforce.fit.ramp.drive_line`) leaves out every :func:`dead_zone` (it drives the model along
+    the line: its position matters too); the speeds differ by under that fraction."""
     t = np.asarray(t, float)
     zm = np.asarray(zm, float)
     k = dead_zone(zm)
