@@ -20,7 +20,7 @@ from ..io.curve import RawCurve
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._median import median
 from ._numeric import ptp
-from .dynamic import run_velocity
+from .dynamic import drive_start, run_velocity
 from .glitches import remove_glitches
 from .options import ContactOptions, ProbeCalibration
 from .regions import RunRegions, run_indices
@@ -97,11 +97,20 @@ class State:
 
     def velocity(self, index: np.ndarray) -> float:
         """Speed of the run ``index`` [m/s] (:func:`~.dynamic.run_velocity` of the current time and
-        position), computed once per curve for the same arrays."""
+        position; a measured channel's dead zone left out: :func:`~.dynamic.drive_start`), computed once per curve for the same arrays."""
         hit = self.cache.get(("velocity", id(index)))
         if hit is not None and hit[0] is index and hit[1] is self.time and hit[2] is self.z:
             return hit[3]
-        v = _velocity(self.time[index], self.z[index])
+        t, z = self.time[index], self.z[index]
+        if self.channel == "measured":
+            # the dead zone read off the recorded channel (the running average of ``smooth`` blurs its
+            # kink over half a window); where there is one, the speed is the fit's: the line through the
+            # recorded positions after it (:func:`afmforce.fit.ramp.drive_line`)
+            zm = np.asarray(self.curve.piezo_measured, float)[index]
+            k = drive_start(t, zm)
+            if k:
+                t, z = t[k:], zm[k:]
+        v = _velocity(t, z)
         self.cache[("velocity", id(index))] = (index, self.time, self.z, v)
         return v
 

@@ -13,6 +13,7 @@ import math
 
 import numpy as np
 
+from ..analysis.dynamic import dead_zone
 from ..errors import AnalysisError, FileFormatError, MissingMetadataError
 from ..io.curve import RawCurve
 
@@ -59,36 +60,13 @@ def _ramp(curve: RawCurve, idx: np.ndarray) -> dict:
     return out
 
 
-def dead_zone(zm: np.ndarray) -> int:
-    """Samples at the start of a run in which a measured (sensor) position has not moved [-].
-
-    A position sensor with backlash (a play operator, e.g. the ``paper`` instrument's
-    :class:`afmforce.instrument.PositionDetector`; the Park scanner of the paper, Fig 8) stands
-    still after each reversal until the drive has taken up the play, then follows it at a
-    constant lag. These samples are no measure of the drive: a line through them is tilted (the
-    ``paper`` preset at 8 um/s: 6.90 um/s from the whole run, 8.00 without its first 15 nm).
-    The run's first samples within half a sensor step plus 4 noise rms of its first value are
-    the dead zone; 0 where it would leave fewer than a third of the run (or 10 samples).
-    """
-    zm = np.asarray(zm, float)
-    n = zm.size
-    if n < 30:
-        return 0
-    d = np.abs(np.diff(zm))
-    step = float(np.median(d[d > 0])) if np.any(d > 0) else 0.0
-    d2 = np.diff(zm, 2)
-    noise = float(np.median(np.abs(d2 - np.median(d2)))) * 1.4826 / math.sqrt(6.0)
-    tol = 0.5 * step + 4.0 * noise
-    moved = np.flatnonzero(np.abs(zm - zm[0]) > tol)
-    if moved.size == 0:
-        return 0
-    k = int(moved[0]) - 1          # the last sample still at rest is kept: the play's kink
-    return k if k > 0 and n - k >= max(10, n // 3) else 0
-
-
 def drive_line(t: np.ndarray, zm: np.ndarray) -> tuple[float, float, int]:
     """Robust line ``a + b (t - t[0])`` [m], [m/s] through a run's measured positions, its
-    dead zone (:func:`dead_zone`) left out; returns ``(a, b, dead_zone_samples)``."""
+    dead zone (:func:`afmforce.analysis.dynamic.dead_zone`, the analysis's rule too) left out; returns
+    ``(a, b, dead_zone_samples)``. Every zone is left out here, also one that tilts the speed by under
+    :data:`~afmforce.analysis.dynamic.DEAD_ZONE_MIN_BIAS` (which the analysis's speed keeps): the model is
+    driven along this line, so its position matters, not only its slope (the ``paper`` preset's intervals at
+    seed 2 missed the true A R with those zones kept)."""
     from ..analysis import robust_line_thin
 
     t = np.asarray(t, float)

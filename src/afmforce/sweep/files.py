@@ -241,19 +241,39 @@ class CurveAnalysis:
                 "format": self.format, "channel": self.channel, "json": self.keep_json,
                 **({"json_arrays": True} if self.json_arrays else {}), **({"origins": origins} if origins else {})}
 
+    def _load_own(self, path, cached: bool = False) -> list:
+        """The file's curves with its own metadata where the user's probe gives the value (the CLI passes
+        ``--sensitivity`` to the readers too): a thermal k stored in the file rests on the file's InvOLS,
+        which the force step needs to rescale it (``calibration fit``); the analysis uses the probe's value
+        anyway. A file that cannot be read without it is read with the full ``meta_override``."""
+        from ..errors import MissingMetadataError
+        from ..io import load
+
+        given = self.probe.given() if self.probe is not None else {}
+        own = {k: v for k, v in self.meta_override.items() if not (k in given and given[k] == v)}
+        tries = (own, self.meta_override) if len(own) < len(self.meta_override) else (self.meta_override,)
+        for i, meta in enumerate(tries):
+            try:
+                if cached:
+                    return _load_cached(path, meta, self.format, self.file_timeout)
+                return load(path, meta_override=meta, format=self.format, timeout=self.file_timeout)
+            except MissingMetadataError:
+                if i == len(tries) - 1:
+                    raise
+        raise AssertionError("unreachable")  # pragma: no cover
+
     def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
         """``(index in the file, RawCurve)`` of the item's curves."""
-        from ..io import check_meta_override, load
+        from ..io import check_meta_override
         from ..io.map_curves import STREAMED_FORMATS
 
         path = ref.location
         if ref.index is None:
-            return list(enumerate(load(path, meta_override=self.meta_override, format=self.format,
-                                       timeout=self.file_timeout)))
+            return list(enumerate(self._load_own(path)))
         if ref.format in STREAMED_FORMATS:  # a force map: this curve alone, from the worker's open map
             reader = _map_reader(path, ref.format, check_meta_override(self.meta_override))
             return [(ref.index, reader.read(ref.index))]
-        curves = _load_cached(path, self.meta_override, self.format, self.file_timeout)
+        curves = self._load_own(path, cached=True)
         if not 0 <= ref.index < len(curves):
             raise FileFormatError(f"{path}: no curve {ref.index} (the file holds {len(curves)})")
         return [(ref.index, curves[ref.index])]

@@ -23,7 +23,8 @@ def force(st: State, o: ForceOptions) -> State:
     k and theta0 from the file when the user gives none. A thermal spring constant (the
     instruments' usual one, ``thermal_k``) is ``kB T / <d^2>`` with the deflection ``d`` in the
     file's sensitivity: when the sensitivity is refitted from the compliance slope the file's k
-    scales by (file's / fitted sensitivity)^2 (the deflections by fitted / file's, so forces by
+    scales by (file's / fitted sensitivity)^2 (the file's own, also where the user gave a
+    ``sensitivity``: :func:`_file_invols`) (the deflections by fitted / file's, so forces by
     file's / fitted), never by one factor alone. A probe calibration file's k (``--probe-calibration``)
     follows its ``method``: a thermal one scales by (the file's InvOLS / fitted)^2, Sader's does not
     (:func:`_calibration_file_k`).
@@ -35,11 +36,12 @@ def force(st: State, o: ForceOptions) -> State:
     slope_k = cal.spring_constant_from_slope if cal is not None else math.nan
     warn = []
     fitted = (cal is not None and cal.source == "fit" and math.isfinite(cal.sensitivity_fit) and cal.sensitivity_fit > 0)
-    if (o.thermal_k and p.spring_constant is None and k is not None and fitted and math.isfinite(cal.sensitivity)):
-        k_new = float(k) * (cal.sensitivity / cal.sensitivity_fit) ** 2
+    inv = _file_invols(md, cal)
+    if (o.thermal_k and p.spring_constant is None and k is not None and fitted and math.isfinite(inv)):
+        k_new = float(k) * (inv / cal.sensitivity_fit) ** 2
         whose = origin_words(p, "spring_constant")[0]
         warn.append(f"spring constant rescaled with the refitted sensitivity: {float(k):.4g} -> {k_new:.4g} N/m "
-                    f"(a thermal k goes as 1/InvOLS^2: {cal.sensitivity * 1e9:.4g} -> {cal.sensitivity_fit * 1e9:.4g} "
+                    f"(a thermal k goes as 1/InvOLS^2: {inv * 1e9:.4g} -> {cal.sensitivity_fit * 1e9:.4g} "
                     f"nm/V; the k: {whose}); give `spring_constant` if it did not come from a thermal tune "
                     "(or set `force.thermal_k` to false)")
         k = k_new
@@ -52,6 +54,19 @@ def force(st: State, o: ForceOptions) -> State:
         warn.append("spring constant taken from the compliance slope of the force signal (rigid contact assumed)")
     return st.update("force", conv, warn=warn, spring_constant=conv.spring_constant,
                      force=st.deflection * conv.spring_constant)
+
+
+def _file_invols(md, cal) -> float:
+    """The InvOLS [m/V] the file's thermal spring constant rests on: the file's own sensitivity (its metadata;
+    a user's ``sensitivity`` is the probe's, never the one the file's k was converted with), else the one the
+    calibration used; NaN without either."""
+    try:
+        inv = float(md.get("sensitivity"))
+    except (TypeError, ValueError):
+        inv = math.nan
+    if math.isfinite(inv) and inv > 0:
+        return inv
+    return float(cal.sensitivity) if cal is not None else math.nan
 
 
 def _calibration_file_k(k: float, p, cal, warn: list) -> float:
