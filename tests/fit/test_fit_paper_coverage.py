@@ -8,7 +8,7 @@ seeds 1 and 2 were called adequate (reduced chi-square 1.19, 1.07) with xi = 0.1
 that excluded the truth. The cause: the preset's position sensor has backlash (a play operator:
 it stands still after the turn until the drive has taken up the play, 15 nm at 8 um/s) and the
 fit took the robust line through the whole run as the drive, 6.90 um/s for 8 (2 um/s: 1.97).
-The fit now leaves that dead zone out (``afmforce.fit.ramp.dead_zone``).
+The fit now leaves that dead zone out (``afmforce.analysis.dynamic.dead_zone``, used by ``afmforce.fit.ramp.drive_line``).
 
 Also the ``ideal`` preset (noise-free curves): its noise estimate was 1e-15 m and the fit reported
 reduced chi-square 1e8, "the model does not describe the data"; now the noise is the model's
@@ -24,7 +24,8 @@ import pytest
 
 from afmforce.cli.main import main
 from afmforce.constants import FIG5
-from afmforce.fit.ramp import dead_zone, drive_line
+from afmforce.analysis.dynamic import dead_zone
+from afmforce.fit.ramp import drive_line
 
 SPEEDS = ("0.5um/s", "2um/s", "8um/s")
 

@@ -13,7 +13,6 @@ import math
 
 import numpy as np
 
-from ..analysis.dynamic import dead_zone
 from ..errors import AnalysisError, FileFormatError, MissingMetadataError
 from ..io.curve import RawCurve
 
@@ -67,7 +66,8 @@ def drive_line(t: np.ndarray, zm: np.ndarray) -> tuple[float, float, int]:
     :data:`~afmforce.analysis.dynamic.DEAD_ZONE_MIN_BIAS` (which the analysis's speed keeps): the model is
     driven along this line, so its position matters, not only its slope (the ``paper`` preset's intervals at
     seed 2 missed the true A R with those zones kept)."""
-    from ..analysis import robust_line_thin
+    from ..analysis import robust_line_thin   # here: registering `fit` loads no analysis (numba)
+    from ..analysis.dynamic import dead_zone
 
     t = np.asarray(t, float)
     zm = np.asarray(zm, float)
