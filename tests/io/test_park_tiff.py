@@ -15,7 +15,7 @@ from afmforce.errors import FileFormatError, MissingMetadataError
 from afmforce.io import find_format, in_folder, is_supported, load
 from afmforce.io.curve import SEGMENT_APPROACH, SEGMENT_RETRACT
 
-from tests.realdata import real_file
+from realdata import real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
 from _park_build import DT_US, K, N_APP, N_RET, SENS_V_PER_UM, SPEED_UM_S, _arrays, write_park  # noqa: E402 (tests/io on sys.path)
 
 REAL = "park-xe_nanoAFMr_ForceCurve_009.tiff"
@@ -152,6 +152,6 @@ def test_real_park_force_curves_match_their_header_and_force_channel():
 
 def test_the_example_in_tests_data_is_the_builders_file(tmp_path):
     """``tests/data/park-tiff_synthetic_2-spectra.tiff`` is ``make_park_example.py``'s output byte for byte."""
-    from tests.realdata import DATA
+    from realdata import DATA
 
     assert (DATA / "park-tiff_synthetic_2-spectra.tiff").read_bytes() == write_park(tmp_path / "x.tiff").read_bytes()
