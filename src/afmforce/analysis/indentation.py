@@ -20,6 +20,8 @@ from ..contact.fit import fit_fixed_baseline, fit_indentation, model_force
 from ..contact.registry import indentation_model
 from ..errors import AnalysisError, ParameterError
 from ..io.deflection import signal_factor
+from ._median import median
+from ._numeric import mad_sigma
 from ._step_helpers import _kind, _skip
 from ._units import unit as _u
 from .options import DEFAULT_POISSON, IndentationOptions, ProbeCalibration
@@ -262,8 +264,8 @@ def measured_baseline(st: State) -> tuple[float, float] | None:
     f = f[np.isfinite(f)]
     if f.size < 10:
         return None
-    level = float(np.median(f))
-    sigma = 1.4826 * float(np.median(np.abs(f - level)))
+    level = float(median(f))
+    sigma = float(mad_sigma(f))
     if not sigma > 0:
         sigma = float(np.std(f))
     return (level, sigma) if sigma > 0 else None
