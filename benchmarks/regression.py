@@ -24,6 +24,10 @@ differently: +-30 % at a load average of 12 on 2 cores, a few % when quiet), so 
 only when it is worse in each of ``--attempts`` measurements (default 3; the measuring stops at
 the first that passes): a real regression persists, noise does not. Run it on a quiet machine.
 ``--update`` writes the median of the attempts as the new baseline (at a release).
+Also printed, not gated: scipy Radau of the whole Fig-5 cycle over afmforce at Radau's rtol 1e-4,
+and **at equal accuracy** (``bench_equal_accuracy.py``: both against the exact ODE to ~1e-15 m,
+scipy Radau's CPU time interpolated on its work-precision line at afmforce's error, per
+observable; the smallest ratio counts; ``--equal-accuracy-rtols``, ``""`` to skip, ~15 s).
 Options: ``--baseline FILE``, ``--tolerance F``, ``--runs N``, ``--attempts N``, ``--json FILE``.
 """
 
@@ -132,6 +136,8 @@ def main(argv=None) -> int:
     ap.add_argument("--update", action="store_true",
                     help="write this measurement as the baseline (at a release)")
     ap.add_argument("--json", metavar="FILE")
+    ap.add_argument("--equal-accuracy-rtols", default="1e-3,1e-4,1e-5",
+                    help="scipy Radau rtols of the equal-accuracy ratio (not gated; '' skips it)")
     args = ap.parse_args(argv)
 
     base = None if args.update else gate.load_baseline(args.baseline)
@@ -169,8 +175,16 @@ def main(argv=None) -> int:
     print(f"  not gated: scipy Radau of the whole Fig-5 cycle {s['radau_cycle_cpu']:.3f} s CPU "
           f"({s['radau_cycle_wall']:.3f} s wall): afmforce {r['cpu']:.0f}x in CPU time, "
           f"{r['wall']:.0f}x in wall time (the load inflates the long solve's wall time)")
+    if args.equal_accuracy_rtols:
+        import bench_equal_accuracy as ea
+
+        la = os.getloadavg()[0]
+        m["equal_accuracy"] = ea.measure(tuple(float(x) for x in args.equal_accuracy_rtols.split(",")))
+        print("  not gated: " + ea.render(m["equal_accuracy"], (la, os.getloadavg()[0]))
+              .replace("\n", "\n  "))
     if args.json:
-        Path(args.json).write_text(json.dumps(dict(m, load_average=[load0, load1]), indent=1))
+        Path(args.json).write_text(json.dumps(dict(m, load_average=[load0, load1]), indent=1,
+                                              default=str))
     if args.update:
         data = dict(
             release="the tree of this measurement (update at each release: --update)",
