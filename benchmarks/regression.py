@@ -27,7 +27,8 @@ the first that passes): a real regression persists, noise does not. Run it on a 
 Also printed, not gated: scipy Radau of the whole Fig-5 cycle over afmforce at Radau's rtol 1e-4,
 and **at equal accuracy** (``bench_equal_accuracy.py``: both against the exact ODE to ~1e-15 m,
 scipy Radau's CPU time interpolated on its work-precision line at afmforce's error, per
-observable; the smallest ratio counts; ``--equal-accuracy-rtols``, ``""`` to skip, ~15 s).
+observable; the smallest ratio counts; ``--equal-accuracy-rtols``, default 1e-4,1e-5,1e-6: ~1-2 min
+of scipy at rtol 1e-6; ``""`` skips it).
 Options: ``--baseline FILE``, ``--tolerance F``, ``--runs N``, ``--attempts N``, ``--json FILE``.
 """
 
@@ -136,7 +137,7 @@ def main(argv=None) -> int:
     ap.add_argument("--update", action="store_true",
                     help="write this measurement as the baseline (at a release)")
     ap.add_argument("--json", metavar="FILE")
-    ap.add_argument("--equal-accuracy-rtols", default="1e-3,1e-4,1e-5",
+    ap.add_argument("--equal-accuracy-rtols", default="1e-4,1e-5,1e-6",
                     help="scipy Radau rtols of the equal-accuracy ratio (not gated; '' skips it)")
     args = ap.parse_args(argv)
 
