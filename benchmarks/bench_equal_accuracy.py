@@ -262,6 +262,20 @@ def measure(rtols=(1e-3, 1e-4, 1e-5, 1e-6), cap: float = 600.0, afm_runs: int = 
 
 
 def ratios(rows: list[dict], ref_check: dict, with_contact: bool = False) -> dict:
+    """:func:`ratios_of` afmforce's default (``rows[0]``), and under ``settings`` the headline
+    of every afmforce row (its own tolerance settings)."""
+    out = ratios_of(rows, ref_check, with_contact)
+    sc = [r for r in rows if r["solver"] == "scipy Radau"]
+    out["settings"] = []
+    for r in rows:
+        if r["solver"] == "afmforce":
+            h = ratios_of([r] + sc, ref_check, with_contact)["headline"]
+            out["settings"].append(dict(rtol=r["rtol"], atol=r["atol"], cpu=r["cpu"],
+                                        ratio=h["ratio"], observable=h["observable"]))
+    return out
+
+
+def ratios_of(rows: list[dict], ref_check: dict, with_contact: bool = False) -> dict:
     """Per observable: afmforce default's error, scipy Radau's CPU time there, the ratio.
 
     An error is resolved only above ten times the reference's own uncertainty (``ref_check``:
@@ -324,6 +338,11 @@ def render(res: dict, load) -> str:
         lines.append(f"  headline (the observable least in afmforce's favour, {h['observable']}): "
                      f"**{h['ratio']:.0f}x**; at Radau's fixed rtol 1e-4: "
                      + (f"{h['radau_1e4_cpu'] / h['afmforce_cpu']:.0f}x" if h["radau_1e4_cpu"] else "n/a"))
+    for st in rat.get("settings", [])[1:]:
+        if st["ratio"]:
+            lines.append(f"  afmforce at rtol {st['rtol']:.0e} / atol {st['atol']:.0e} "
+                         f"({st['cpu'] * 1e3:.3f} ms): {st['ratio']:.0f}x at equal accuracy "
+                         f"({st['observable']})")
     return "\n".join(lines)
 
 

@@ -55,7 +55,7 @@ def test_a_looser_run_that_costs_more_is_dominated():
 
 
 def _rows(ours_err, scipy):
-    rows = [dict(solver="afmforce", rtol=1e-4, cpu=1e-3, errors=ours_err)]
+    rows = [dict(solver="afmforce", rtol=1e-4, atol=1e-12, cpu=1e-3, errors=ours_err)]
     for rtol, cpu, err in scipy:
         rows.append(dict(solver="scipy Radau", rtol=rtol, cpu=cpu, errors=err))
     return rows
