@@ -22,11 +22,14 @@ same at rtol 1e-8). Observables of the Fig-5 cycle, each an absolute error:
 afmforce's events come from its own event location; scipy's from ``solve_ivp`` events and
 its dense output (h_s, the static instability's separation, taken from afmforce's static
 solution). Work: CPU time of this thread, best of repeats. Equal accuracy: for each
-observable, scipy Radau's CPU time is interpolated linearly on the log-log line between
-the two rtols whose errors bracket afmforce's default error (extrapolated from the last
-two when none is as accurate; "beyond" when afmforce is more accurate than every scipy
-run); the headline is the smallest of these ratios (the observable least in afmforce's
-favour), the largest error among them named.
+observable, scipy Radau's CPU time is read off its work-precision line (log-log, between the
+two runs whose errors bracket afmforce's; a looser run that costs more is dominated and left
+out; extrapolated from the last two when afmforce is more accurate than every run, the
+cheapest run when it is less accurate than every run). An error counts only above 10x the
+reference's own uncertainty (the reference against itself at rtol 1e-8); an observable on
+which no scipy run exceeds that says nothing and is left out. The headline is the smallest
+ratio (the observable least in afmforce's favour). ``--rerender FILE`` prints the ratios of
+a ``--json`` file again.
 """
 
 from __future__ import annotations
