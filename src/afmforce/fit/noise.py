@@ -96,7 +96,7 @@ def baseline_samples(prob, x) -> list[np.ndarray]:
     return out
 
 
-def estimate_pink(prob, x, drift: bool = True, region: str = "free") -> tuple[float, float]:
+def estimate_pink(prob, x, drift: bool = True) -> tuple[float, float]:
     """``(sigma_p^2 [m^2], significance)`` from the residuals of the white fit at ``x``.
 
     The residuals ``r = D b``, ``D = P - H`` (``b`` the data noise in units of each curve's
@@ -111,8 +111,8 @@ def estimate_pink(prob, x, drift: bool = True, region: str = "free") -> tuple[fl
     sigma_est^2) tr_S(D)``; solved jointly. ``D = I - U V'`` with ``U = [Q, J M]``,
     ``V = [Q, J]`` (``Q`` the orthonormal designs, ``M = (J'J)^-1``), so the diagonal of
     ``D G D`` needs only ``G V`` (Toeplitz products by FFT) and ``V' G V``: O(n) memory.
-    ``drift`` is unused (the evaluator's design holds it). ``region``: ``"free"`` the whole free
-    approach, ``"baseline"`` its part where the model is a line (:func:`baseline_samples`).
+    ``drift`` is unused (the evaluator's design holds it). A misfit leaves an excess here too:
+    :func:`baseline_pink` tells the two apart.
     """
     ev = prob.ev
     rs = prob.curve_residuals(x)
@@ -134,7 +134,6 @@ def estimate_pink(prob, x, drift: bool = True, region: str = "free") -> tuple[fl
     V = np.hstack([Qblk, J])
     GV = np.zeros_like(V)
     gdiag, c2w, sel = np.zeros(N), np.zeros(N), np.zeros(N, bool)
-    flat = baseline_samples(prob, x) if region == "baseline" else None
     for i, c in enumerate(ev.curves):
         s = slice(starts[i], starts[i + 1])
         idx = np.flatnonzero(c.mask)
@@ -142,7 +141,7 @@ def estimate_pink(prob, x, drift: bool = True, region: str = "free") -> tuple[fl
         GV[s] = _toeplitz_matvec(K, idx, V[s]) / c.sigma ** 2
         gdiag[s] = K[0] / c.sigma ** 2
         c2w[s] = (6.0 - 8.0 * K[1] + 2.0 * K[2]) / 6.0 / c.sigma ** 2
-        sel[s] = (idx < c.jump_index) if flat is None else flat[i]
+        sel[s] = idx < c.jump_index
     if sel.sum() < 10:
         return 0.0, 0.0
     W = V.T @ GV
