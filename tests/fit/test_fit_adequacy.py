@@ -188,3 +188,46 @@ def test_a_profile_open_on_both_sides_is_undetermined_not_a_tight_standard_error
     assert method == "undetermined" and math.isnan(se) and "undetermined" in text
     # a bounded profile keeps its standard error and method
     assert profiled_estimate("hamaker", 1e-20, None, "", 2e-21, "J")[:2] == ("profile", 2e-21)
+
+
+def _jump_curves(k=3, n=600, jump=400):
+    mask = np.ones(n, bool)
+    mask[jump - 2: jump + 30] = False          # the jump-in gap, as prepare_curve leaves it out
+    return [SimpleNamespace(name=f"curve {i + 1}", mask=mask, n=n, jump_index=jump, retract_start=None,
+                            noise_samples=300) for i in range(k)]
+
+
+def test_jump_windows_threshold_is_the_bonferroni_chi2_quantile():
+    from afmforce.fit.adequacy import JUMP_SAMPLES, jump_misfit
+
+    curves = _jump_curves()
+    m = int(curves[0].mask.sum())
+    r = [np.zeros(m) for _ in curves]
+    r[1][np.flatnonzero(np.flatnonzero(curves[1].mask) >= 400)[:JUMP_SAMPLES]] = 100.0
+    (w,) = jump_misfit(curves, r)
+    expect = chi2_dist.ppf(1 - 0.001 / 6, JUMP_SAMPLES) * (1 + 3 * math.sqrt(140 / 36 / 300))
+    assert w["curve"] == "curve 2" and w["where"] == "on landing in contact"
+    assert w["threshold"] == pytest.approx(expect, rel=1e-12) and w["n"] == JUMP_SAMPLES
+
+
+def test_jump_windows_catch_a_local_misfit_the_global_test_passes():
+    """Unit-variance residuals: the windows of 3 curves flag at most the 0.1 % they are built for
+    (expected 0.4 of 400 sets); a coherent 3-sigma offset over the 15 samples before one
+    curve's jump-in (what a missing repulsion leaves) is flagged (window chi-square ~150 against
+    ~70), while the global reduced chi-square (1.08 expected) stays under its threshold."""
+    from afmforce.fit.adequacy import jump_misfit
+
+    curves = _jump_curves()
+    m = int(curves[0].mask.sum())
+    rng = np.random.default_rng(11)
+    false = sum(bool(jump_misfit(curves, [rng.normal(0, 1, m) for _ in curves])) for _ in range(400))
+    assert false <= 3                        # expected 0.4 (0.1 % of 400)
+    hits = 0
+    for _ in range(20):
+        r = [rng.normal(0, 1, m) for _ in curves]
+        before = np.flatnonzero(np.flatnonzero(curves[0].mask) < 400)[-15:]
+        r[0][before] += 3.0
+        chi2_all = sum(float(x @ x) for x in r)
+        assert chi2_all / (3 * m) < redchi_threshold(3 * m, curves)
+        hits += bool(jump_misfit(curves, r))
+    assert hits >= 19

@@ -114,3 +114,27 @@ def test_point_fit_finds_the_truth(paper_files):
     # measured: xi = 0.0980 [0.0901, 0.1032] kg/s, A = 5.03e-19 [3.50, 6.34]e-19 J (CLI, profiles)
     assert abs(xi / FIG5["xi"] - 1) < 0.1, xi        # before: 0.00028 kg/s
     assert abs(a / FIG5["hamaker"] - 1) < 0.3, a     # before: 6.87e-19 J
+
+
+def test_scan_starts_align_the_jumps_too(paper_files):
+    """The fallback starts (``_starts``) are aligned as the ridge's are. With xi fixed there is no
+    A*R-xi valley to follow (``_ridge``, which aligned its starts): the scan's start is the
+    search's only one, and before the fix it kept the static shifts (the 8 um/s curve 23
+    samples off by the sensor's backlash), where a point-sampled local fit cannot move them.
+    Reference: the truth's shifts and a local fit from the truth."""
+    from afmforce.fit.search import _search
+
+    _, fc, shift = paper_files
+    base = base_config("beam").replace(sampling="point", xi=FIG5["xi"])
+    base = mass_from_files(lever_from_files(base, fc, "file"), fc, "file")
+    pr = Problem(Evaluator(fc, base, "dynamic", True, "periodic"), ("hamaker",))
+    s0 = np.array([c.guess["shift"] for c in fc])
+    dz = np.array([c.velocity / c.sample_rate for c in fc])
+    truth = {"hamaker": FIG5["hamaker"]}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        c_ref = pr.chi2(local_fit(pr, pr.pack(truth, shift), 12)[0])
+        chi2, x, *_ = _search(pr, truth, s0, 1, 12, 100)
+    _, s = pr.unpack(x)
+    assert np.all(np.abs(s - shift)[1:] <= 2 * dz[1:]), (s - shift) / dz
+    assert chi2 < c_ref + 2.0, (chi2, c_ref)

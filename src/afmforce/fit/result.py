@@ -221,8 +221,8 @@ class FitResult:
                      f"({e.interval_method}{', one-sided' if (e.interval[0] is None) != (e.interval[1] is None) else ''}) |")
         L.append("")
         if self.adequacy and not self.adequacy.get("adequate", True):
-            L += [f"**The model does not describe the data**: reduced chi-square "
-                  f"{self.redchi:.3g} > {self.adequacy['threshold']:.3g}.", ""]
+            L += ["**The model does not describe the data**: " + (self.adequacy.get("reason") or (
+                  f"reduced chi-square {self.redchi:.3g} > {self.adequacy['threshold']:.3g}")) + ".", ""]
             L += [f"- {w}" for w in self.adequacy.get("worst", [])]
             L += ([f"- what to check: {self.adequacy['advice']}"] if self.adequacy.get("advice")
                   else []) + [""]

@@ -4,7 +4,9 @@ Friction lowers the apparent attraction like a smaller A*R does, so the chi-squa
 joint fit has a long curved valley in (A*R, xi); a local fit from a scan point can stop
 on its wall (docs/fit.md, "Optimiser"). :func:`_search` follows the valley on a grid of
 fixed xi first (:func:`_ridge`), then starts local fits from its best points and, while
-the best looks stuck, from a scan of xi x A*R (:func:`_starts`).
+the best looks stuck (or without xi free, where there is no valley to follow), from a scan
+of xi x A*R (:func:`_starts`). Every start has its shifts aligned to the data's jump-ins
+(:func:`_align_jumps`) where that lowers its chi-square.
 """
 
 from __future__ import annotations
@@ -155,6 +157,8 @@ def _search(prob: Problem, guess: dict, shifts0, starts: int, max_nfev: int, dof
     for k, x0 in enumerate(todo):
         if k >= max(len(first), max(starts, 1)) and best[0] / dof < STUCK_REDCHI:
             break    # multi-start: the ridge's best points, more scan starts while they look stuck
+        if k >= len(first):   # a scan start: its shifts are the static guess, off by the sensor's
+            x0 = min((x0, _align_jumps(prob, x0)), key=prob.chi2)   # backlash (as the ridge's)
         x, res = local_fit(prob, x0, max_nfev)
         chi2 = prob.chi2(x)
         if best is None or chi2 < best[0]:
