@@ -355,8 +355,11 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
     ParameterError
         The model's geometry is missing.
     """
+    from ..io.given import apply_given
+
     o = options if options is not None else IndentationOptions()
     p = probe if probe is not None else ProbeCalibration()
+    curve = apply_given(curve, p)      # the user's calibration over the file's, as analyze does
     md = curve.metadata
     seg = np.asarray(curve.segment)
     idx = np.flatnonzero(seg == (0 if o.run == "approach" else 1))
