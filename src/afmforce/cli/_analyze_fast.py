@@ -49,8 +49,12 @@ def run_fast_map(args: argparse.Namespace, refs: list, write_maps, meta: dict | 
     maps = [r for r in refs if r.index is not None]
     if not maps:
         raise ParameterError("--fast-map analyses force maps (one curve per pixel); the inputs hold none")
+    others = sorted({r.step for r in args.records if r.step != "indentation"})
+    if others:     # never dropped silently (was: --calibration fit gave the file's calibration)
+        raise ParameterError(f"--fast-map runs the indentation fit only (the file's or your calibration); options "
+                             f"of {', '.join(others)} apply to the full analysis: drop --fast-map, or drop them")
     indentation = next((r for r in args.records if r.step == "indentation"), IndentationOptions())
-    analysis = PixelAnalysis(indentation, probe=args.probe, meta_override=dict(meta or {}))
+    analysis = PixelAnalysis(indentation, probe=args.probe, meta_override=dict(meta or {}), channel=args.channel)
     executor = "serial" if args.serial else None
     result = analyze_refs(maps, analysis, executor=executor, workers=args.workers, scheduler=args.scheduler,
                           store=args.out, chunk_size=args.chunk_size)

@@ -66,6 +66,8 @@ class PixelAnalysis:
     meta_override : dict
         Metadata typed as the files' (``--meta``; SI), given to the readers; the probe's spring constant
         and sensitivity are the user's, put over each curve as ``analyze`` does (:mod:`afmforce.io.given`).
+    channel : str
+        Position channel (``"auto"``: measured if recorded; ``"measured"``, ``"nominal"``), as ``analyze``'s.
     """
 
     indentation: IndentationOptions = field(default_factory=IndentationOptions)
@@ -73,6 +75,7 @@ class PixelAnalysis:
     probe: ProbeCalibration | None = None
     nsigma: float = 5.0
     meta_override: dict[str, Any] = field(default_factory=dict)
+    channel: str = "auto"
 
     def __post_init__(self) -> None:
         if self.adhesion_model not in ADHESION_MODELS:
@@ -99,14 +102,14 @@ class PixelAnalysis:
 
         p = self.probe if self.probe is not None else ProbeCalibration()
         curve = apply_given(curve, p)      # the user's calibration over the file's (afmforce.io.given)
-        fit = fast_modulus(curve, self.indentation, p)
+        fit = fast_modulus(curve, self.indentation, p, self.channel)
         md = curve.metadata
         k = float(p.value("spring_constant", md))
         seg = np.asarray(curve.segment)
         sig = np.asarray(curve.deflection_signal, dtype=float)
         sens = float(p.value("sensitivity", md) or math.nan)  # reported also for a force the reader calibrated
         scale = curve.force_factor(sens, k)                    # uses the sensitivity for volts only
-        z = curve.position()
+        z = curve.position(self.channel)
         force = sig * scale
         app, ret = seg == 0, seg == 1
         # the baseline's noise: the approach's free part, before the fitted contact (tip depth above it)
