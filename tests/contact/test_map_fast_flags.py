@@ -54,3 +54,20 @@ def test_options_of_steps_the_fast_path_does_not_run_are_refused(tmp_path, flags
     assert main(["analyze", str(path), "--fast-map", "--serial", "--radius", "5um", *flags]) == 2
     err = capsys.readouterr().err
     assert "--fast-map runs the indentation fit only" in err and "Traceback" not in err
+
+
+def test_the_fast_path_reads_the_metadata_typed_as_the_files(tmp_path):
+    """``--meta poisson=0.3`` reaches the readers as on every other face (was: --fast-map read the maps without
+    it, so the fit took the default 0.5): E scales by (1 - 0.3^2) / (1 - 0.5^2) against the default."""
+    import csv
+
+    path = write_soft_map(CFG, tmp_path / "soft.jpk-qi-data", format="jpk-qi")
+    rows = {}
+    for meta in ("0.3", None):
+        out = tmp_path / f"out{meta}"
+        assert main(["analyze", str(path), "--fast-map", "--serial", "--radius", "5um", "--out", str(out)]
+                    + (["--meta", f"poisson={meta}"] if meta else [])) == 0
+        (summary,) = out.rglob("summary.csv")
+        rows[meta] = {r["name"]: float(r["youngs_modulus"]) for r in csv.DictReader(summary.open())}
+    for name, e in rows[None].items():
+        assert rows["0.3"][name] == pytest.approx(e * (1 - 0.3 ** 2) / (1 - 0.5 ** 2), rel=1e-9)
