@@ -41,7 +41,9 @@ def test_the_given_calibration_scales_as_the_instrument_computed(unit, factor_fi
 def test_a_files_value_no_lever_has_is_not_rescaled_from():
     v = _volts()
     stored = dataclasses.replace(v, deflection_unit="N", metadata={**v.metadata, "sensitivity": 5.0})  # 5 m/V
-    assert apply_given(stored, ProbeCalibration(sensitivity=S_U)) is stored
+    out = apply_given(stored, ProbeCalibration(sensitivity=S_U))
+    assert out.deflection_signal is stored.deflection_signal and out.metadata["sensitivity"] == 5.0
+    assert "cannot rescale" in out.metadata["given_calibration_note"]
 
 
 def test_the_reader_gets_the_users_values_only_where_the_file_needs_them():
@@ -58,3 +60,23 @@ def test_the_reader_gets_the_users_values_only_where_the_file_needs_them():
         {"sample_rate": 1e3, "sensitivity": S_U, "spring_constant": K_U}
     assert seen[0] == {"sample_rate": 1e3}       # first the file's own (the typed sample rate kept)
     assert read_own(lambda meta: meta, {"sensitivity": 40e-9}, probe) == {"sensitivity": 40e-9}  # typed as the file's
+
+
+def test_a_given_sensitivity_that_cannot_rescale_the_stored_force_is_said():
+    """A force file without its InvOLS (tests/data/chiaro-txt_AEBP1_Indentation_002_thinned.txt): the forces stay
+    the file's, and the analysis says the given sensitivity was not applied (was: "yours is used", silently)."""
+    from pathlib import Path
+
+    from afmforce.analysis.pipeline import analyze
+    from afmforce.io import load
+    from afmforce.io.given import GIVEN_NOTE
+
+    c = load(Path(__file__).resolve().parents[1] / "data" / "chiaro-txt_AEBP1_Indentation_002_thinned.txt")[0]
+    assert c.deflection_unit == "N" and c.metadata.get("sensitivity") is None
+    out = apply_given(c, ProbeCalibration(sensitivity=S_U))
+    assert out.deflection_signal is c.deflection_signal and "cannot rescale" in out.metadata[GIVEN_NOTE]
+    res = analyze(c, probe=ProbeCalibration(sensitivity=S_U))
+    assert res.adhesion_force == analyze(c).adhesion_force
+    assert any("yours cannot rescale it" in w and "60 nm/V" in w for w in res.warnings)
+    no_k = dataclasses.replace(c, metadata={k: v for k, v in c.metadata.items() if k != "spring_constant"})
+    assert apply_given(no_k, ProbeCalibration(spring_constant=K_U)) is no_k   # a k turns the force into deflections

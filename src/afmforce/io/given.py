@@ -27,7 +27,7 @@ import numpy as np
 from .._fields import QUANTITIES
 from ..errors import MissingMetadataError
 
-__all__ = ["CALIBRATION_KEYS", "FILE_SENSITIVITY", "given_calibration", "reader_override", "read_own",
+__all__ = ["CALIBRATION_KEYS", "FILE_SENSITIVITY", "GIVEN_NOTE", "given_calibration", "reader_override", "read_own",
            "apply_given", "file_sensitivity"]
 
 #: The probe's values a reader would otherwise take as the file's (``meta_override``): spring constant
@@ -36,6 +36,9 @@ CALIBRATION_KEYS = ("spring_constant", "sensitivity")
 #: Metadata key of a curve rescaled to the user's sensitivity (:func:`apply_given`): the file's own
 #: InvOLS [m/V], the one its thermal spring constant rests on.
 FILE_SENSITIVITY = "file_sensitivity"
+#: Metadata key of the note :func:`apply_given` leaves where a given value cannot rescale the stored
+#: deflection (the analysis says it among its warnings).
+GIVEN_NOTE = "given_calibration_note"
 
 T = TypeVar("T")
 
@@ -83,9 +86,10 @@ def apply_given(curve: T, probe: Any) -> T:
     (``probe``) put over it, as its reader does with ``meta_override``: the instrument's deflection in
     metres (volts x the file's InvOLS) scales by given / file's InvOLS, its force in newtons (volts x InvOLS
     x k) by given / file's InvOLS and given / file's k, and the metadata then says the values used; the file's
-    InvOLS is kept under :data:`FILE_SENSITIVITY`. A curve in volts, or whose file holds no usable value
-    (none, or one no lever has: the analysis refuses it), is returned as it is: the probe's value is used
-    where the volts are converted.
+    InvOLS is kept under :data:`FILE_SENSITIVITY`. A curve in volts is returned as it is (the probe's value is
+    used where the volts are converted); one whose file holds no usable value (none, or one no lever has)
+    keeps its stored signal, and a given sensitivity that cannot rescale it is said (:data:`GIVEN_NOTE`,
+    among the analysis's warnings), never applied silently.
 
     Was: a curve stored in newtons kept the file's forces under ``ProbeCalibration(sensitivity=...)``
     (jpk_cellhesion_spot3, 11.04 against 70 nm/V: adhesion -0.419 nN either way, -0.066 nN through the
@@ -97,20 +101,27 @@ def apply_given(curve: T, probe: Any) -> T:
     if not given or unit not in ("m", "N"):
         return curve
     md = curve.metadata
-    factor, new = 1.0, {}
+    factor, new, stuck = 1.0, {}, []
     keys = ("sensitivity", "spring_constant") if unit == "N" else ("sensitivity",)
     for key in keys:
         own = _own(md, key)
+        if key == "sensitivity" and key in given and own is None and not md.get(GIVEN_NOTE):
+            stuck.append(key)    # (a k the file lacks still turns its force into deflections: used)
         if key not in given or own is None or math.isclose(own, given[key], rel_tol=1e-12):
             continue
         factor *= given[key] / own
         new[key] = given[key]
         if key == "sensitivity":
             new[FILE_SENSITIVITY] = md.get(FILE_SENSITIVITY, own)
+    if stuck:     # never silent: the forces stay the file's while the value is reported as used
+        what = {"N": "a force [N]", "m": "a deflection [m]"}[unit]
+        new[GIVEN_NOTE] = (f"the file stores {what} computed with a sensitivity (InvOLS) it does not record (or one "
+                           "no lever has): yours cannot rescale it, so the forces are the file's as stored (`sensitivity` "
+                           f"given: {given['sensitivity'] * 1e9:.4g} nm/V)")
     if not new:
         return curve
-    return dataclasses.replace(curve, deflection_signal=np.asarray(curve.deflection_signal) * factor,
-                               metadata={**md, **new})
+    signal = curve.deflection_signal if factor == 1.0 else np.asarray(curve.deflection_signal) * factor
+    return dataclasses.replace(curve, deflection_signal=signal, metadata={**md, **new})
 
 
 def file_sensitivity(metadata: Mapping[str, Any]) -> float:
