@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from typing import Any
 
 import numpy as np
 
@@ -28,7 +29,7 @@ from .options import DEFAULT_POISSON, IndentationOptions, ProbeCalibration
 from .plausibility import impossible_modulus
 from .state import State
 
-__all__ = ["IndentationResult", "indentation", "fast_modulus"]
+__all__ = ["IndentationResult", "indentation", "fast_modulus", "tip_geometry"]
 
 
 @dataclass(frozen=True)
@@ -92,8 +93,7 @@ def indentation(st: State, o: IndentationOptions) -> State:
     if st.force is None or not math.isfinite(st.spring_constant):
         return _skip(st, "indentation", "no spring constant (give `spring_constant`): no force to fit")
     m = indentation_model(o.model)
-    radius = o.tip_radius if o.tip_radius is not None else st.probe.value("radius", st.metadata)
-    geom = {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
+    radius, geom = tip_geometry(o, st.probe, st.metadata)
     missing = [g for g in m.geometry if geom.get(g) is None]
     if missing:
         keys = {"radius": "tip_radius", "half_angle": "half_angle", "thickness": "indentation.thickness"}
@@ -338,8 +338,16 @@ def _result(fit, u: np.ndarray, o: IndentationOptions, geom: dict, radius, k: fl
         warnings=fit.warnings)
 
 
+def tip_geometry(o: IndentationOptions, probe: ProbeCalibration, metadata) -> tuple[Any, dict[str, Any]]:
+    """The tip's radius [m] (``o.tip_radius``, else the probe's ``radius``, else the file's) and the model's
+    geometry (radius [m], half-angle [rad], layer thickness [m], bonded): one place for ``analyze``'s
+    indentation step and :func:`fast_modulus` (``--fast-map``)."""
+    radius = o.tip_radius if o.tip_radius is not None else probe.value("radius", metadata)
+    return radius, {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
+
+
 def fast_modulus(curve, options: IndentationOptions | None = None,
-                 probe: ProbeCalibration | None = None) -> IndentationResult:
+                 probe: ProbeCalibration | None = None, channel: str = "auto") -> IndentationResult:
     """The modulus of one curve without the pipeline's other steps (a QI pixel's fast path).
 
     What nanite's preprocessing and fit do: the deflection [m] and force [N] from the file's (or
@@ -348,15 +356,21 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
     or hard-contact check: :func:`~afmforce.analysis.pipeline.analyze` with the ``indentation``
     step does those (and gives the same modulus on a curve without drift).
 
+    ``channel``: the position channel (``"auto"``, ``"measured"``, ``"nominal"``), as ``analyze``'s.
+
     Raises
     ------
     AnalysisError
-        No approach (retract) samples, no spring constant or sensitivity, or the fit fails.
+        No approach (retract) samples, no spring constant or sensitivity, the channel asked for is not
+        recorded, or the fit fails.
     ParameterError
         The model's geometry is missing.
     """
+    from ..io.given import apply_given
+
     o = options if options is not None else IndentationOptions()
     p = probe if probe is not None else ProbeCalibration()
+    curve = apply_given(curve, p)      # the user's calibration over the file's, as analyze does
     md = curve.metadata
     seg = np.asarray(curve.segment)
     idx = np.flatnonzero(seg == (0 if o.run == "approach" else 1))
@@ -364,7 +378,7 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
         raise AnalysisError(f"the curve has {idx.size} {o.run} samples: nothing to fit")
     if o.run == "retract":
         idx = idx[::-1]
-    z = curve.position()[idx]
+    z = curve.position(channel)[idx]
     sig = np.asarray(curve.deflection_signal, dtype=float)[idx]
     k = p.value("spring_constant", md)
     if not k:
@@ -374,8 +388,7 @@ def fast_modulus(curve, options: IndentationOptions | None = None,
     if unit == "V" and not sens:
         raise AnalysisError("the deflection is in volts and no sensitivity is known (give `sensitivity`)")
     d = sig * signal_factor(unit, sens, k)  # the deflection [m]
-    radius = o.tip_radius if o.tip_radius is not None else p.value("radius", md)
-    geom = {"radius": radius, "half_angle": o.half_angle, "thickness": o.thickness, "bonded": bool(o.bonded)}
+    radius, geom = tip_geometry(o, p, md)
     u = z - d
     nu, nu_source = o.sample_poisson(md)
     fit = fit_indentation(u, d * float(k), o.model, {g: v for g, v in geom.items() if v is not None},

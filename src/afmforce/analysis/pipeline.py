@@ -35,7 +35,6 @@ from .registry import AnalysisStep, ResultField, register_step
 from .result import AnalysisResult
 from .state import NoContact, State, _default_probe, prepare
 from .steps.contact import retract_dip
-from .._fields import QUANTITIES
 from ..errors import ParameterError
 from ..io.curve import RawCurve
 from ..io.deflection import signal_factor
@@ -178,23 +177,11 @@ def analyze(curve: RawCurve, steps: Sequence[str] | None = None, options: Any = 
 
 
 def _given_sensitivity(curve: RawCurve, probe) -> RawCurve:
-    """A curve stored in newtons with the file's sensitivity, re-scaled to the user's (``probe.sensitivity``)
-    as its reader does with ``meta_override`` (the instrument's force is volts x sensitivity x k).
+    """The user's spring constant and sensitivity (``probe``) put over the curve as its reader does with
+    ``meta_override``: :func:`afmforce.io.given.apply_given`, the one function every face uses."""
+    from ..io.given import apply_given
 
-    Was: ``analyze(curve, probe=ProbeCalibration(sensitivity=...))`` reported the given sensitivity as used
-    while the forces stayed those of the file's (jpk_cellhesion_spot3, 11.04 against 70 nm/V: adhesion
-    -0.419 nN either way, -0.066 nN through the reader; the slope's sensitivity 21.9 instead of 138.7 nm/V)."""
-    given = None if probe is None else probe.sensitivity
-    own = curve.metadata.get("sensitivity")
-    if given is None or curve.deflection_unit != "N" or not isinstance(own, (int, float)):
-        return curve
-    own, given = float(own), float(given)
-    if not (math.isfinite(own) and own > 0) or math.isclose(own, given, rel_tol=1e-12):
-        return curve
-    if not QUANTITIES["sensitivity"].contains(own):   # no lever has the file's (a damaged header value): the
-        return curve      # stored forces cannot be traced back through it; they stay as stored, yours is used
-    return dataclasses.replace(curve, deflection_signal=np.asarray(curve.deflection_signal) * (given / own),
-                               metadata={**curve.metadata, "sensitivity": given})
+    return apply_given(curve, probe)
 
 
 def _analyze(curve: RawCurve, order: list[str], opts, probe, channel: str, memo: MutableMapping | None,

@@ -232,6 +232,8 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     k_note = curve.metadata.get("spring_constant_note")   # a header with several spring constants (the reader's)
     if k_note and probe.spring_constant is None:
         notes.append(str(k_note))
+    if curve.metadata.get("given_calibration_note"):   # afmforce.io.given.GIVEN_NOTE: a given value not applied
+        notes.append(str(curve.metadata["given_calibration_note"]))
     if curve.metadata.get("approach_steps"):  # a step indentation: its later extends are holds (io._meta)
         notes.append(str(curve.metadata["approach_steps"]))
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)

@@ -38,8 +38,9 @@ def summary_lines(table, quantities) -> list[str]:
     return lines
 
 
-def run_fast_map(args: argparse.Namespace, refs: list, write_maps) -> int:
-    """``write_maps(table, folder, quantities)``: analyze's map writer (images, HDF5, histograms)."""
+def run_fast_map(args: argparse.Namespace, refs: list, write_maps, meta: dict | None = None) -> int:
+    """``write_maps(table, folder, quantities)``: analyze's map writer (images, HDF5, histograms); ``meta``:
+    the metadata typed as the files' (``--meta``, SI; the probe's values are ``args.probe``'s)."""
     from .._files import atomic_path, atomic_write_text
     from ..sweep.map_fast import PixelAnalysis, analyze_refs
     from ..analysis.options import IndentationOptions
@@ -48,8 +49,12 @@ def run_fast_map(args: argparse.Namespace, refs: list, write_maps) -> int:
     maps = [r for r in refs if r.index is not None]
     if not maps:
         raise ParameterError("--fast-map analyses force maps (one curve per pixel); the inputs hold none")
+    others = sorted({r.step for r in args.records if r.step != "indentation"})
+    if others:     # never dropped silently (was: --calibration fit gave the file's calibration)
+        raise ParameterError(f"--fast-map runs the indentation fit only (the file's or your calibration); options "
+                             f"of {', '.join(others)} apply to the full analysis: drop --fast-map, or drop them")
     indentation = next((r for r in args.records if r.step == "indentation"), IndentationOptions())
-    analysis = PixelAnalysis(indentation, probe=args.probe)
+    analysis = PixelAnalysis(indentation, probe=args.probe, meta_override=dict(meta or {}), channel=args.channel)
     executor = "serial" if args.serial else None
     result = analyze_refs(maps, analysis, executor=executor, workers=args.workers, scheduler=args.scheduler,
                           store=args.out, chunk_size=args.chunk_size)

@@ -239,7 +239,7 @@ def run(args: argparse.Namespace) -> int:
         if key in meta and not math.isclose(meta[key], value, rel_tol=1e-9):      # which one was meant: never one of them silently
             raise ParameterError(f"--{key.replace('_', '-')} and --meta {key} give different values "
                                  f"({value:g} and {meta[key]:g} [SI]); give one")
-        meta[key] = value
+        meta.pop(key, None)     # the probe's (the user's): put over the file's by afmforce.io.given, never read as the file's
     _check_liquid_radius(args, meta)
     files = _inputs(args.files)
     if not files:
@@ -254,7 +254,7 @@ def run(args: argparse.Namespace) -> int:
     if args.fast_map:
         from ._analyze_fast import run_fast_map
 
-        return run_fast_map(args, refs, _write_maps)
+        return run_fast_map(args, refs, _write_maps, meta)
     n = len(refs)
     batch = n >= BATCH_CURVES or args.workers is not None or bool(args.scheduler) or args.chunk_size is not None
     local = args.serial or (args.workers is None and not args.scheduler and n < BATCH_CURVES)

@@ -242,37 +242,31 @@ class CurveAnalysis:
                 **({"json_arrays": True} if self.json_arrays else {}), **({"origins": origins} if origins else {})}
 
     def _load_own(self, path, cached: bool = False) -> list:
-        """The file's curves with its own metadata where the user's probe gives the value (the CLI passes
-        ``--sensitivity`` to the readers too): a thermal k stored in the file rests on the file's InvOLS,
-        which the force step needs to rescale it (``calibration fit``); the analysis uses the probe's value
-        anyway. A file that cannot be read without it is read with the full ``meta_override``."""
-        from ..errors import MissingMetadataError
+        """The file's curves read with its own calibration (:func:`afmforce.io.given.read_own`: the user's
+        spring constant and sensitivity are the probe's, put over each curve by the analysis,
+        :func:`afmforce.io.given.apply_given`); a file that cannot be read without them gets them."""
         from ..io import load
+        from ..io.given import read_own
 
-        given = self.probe.given() if self.probe is not None else {}
-        own = {k: v for k, v in self.meta_override.items() if not (k in given and given[k] == v)}
-        tries = (own, self.meta_override) if len(own) < len(self.meta_override) else (self.meta_override,)
-        for i, meta in enumerate(tries):
-            try:
-                if cached:
-                    return _load_cached(path, meta, self.format, self.file_timeout)
-                return load(path, meta_override=meta, format=self.format, timeout=self.file_timeout)
-            except MissingMetadataError:
-                if i == len(tries) - 1:
-                    raise
-        raise AssertionError("unreachable")  # pragma: no cover
+        if cached:
+            return read_own(lambda meta: _load_cached(path, meta, self.format, self.file_timeout),
+                            self.meta_override, self.probe)
+        return read_own(lambda meta: load(path, meta_override=meta, format=self.format, timeout=self.file_timeout),
+                        self.meta_override, self.probe)
 
     def load(self, ref: CurveRef) -> list[tuple[int, Any]]:
-        """``(index in the file, RawCurve)`` of the item's curves."""
+        """``(index in the file, RawCurve)`` of the item's curves, as read (the file's own calibration)."""
         from ..io import check_meta_override
+        from ..io.given import read_own
         from ..io.map_curves import STREAMED_FORMATS
 
         path = ref.location
         if ref.index is None:
             return list(enumerate(self._load_own(path)))
         if ref.format in STREAMED_FORMATS:  # a force map: this curve alone, from the worker's open map
-            reader = _map_reader(path, ref.format, check_meta_override(self.meta_override))
-            return [(ref.index, reader.read(ref.index))]
+            curve = read_own(lambda meta: _map_reader(path, ref.format, check_meta_override(meta)).read(ref.index),
+                             self.meta_override, self.probe)
+            return [(ref.index, curve)]
         curves = self._load_own(path, cached=True)
         if not 0 <= ref.index < len(curves):
             raise FileFormatError(f"{path}: no curve {ref.index} (the file holds {len(curves)})")

@@ -63,12 +63,19 @@ class PixelAnalysis:
         Spring constant [N/m], sensitivity [m/V], radius [m] given by the user (None: the file's).
     nsigma : float
         An adhesion under this many baseline-noise sigmas is reported as none (0) [-].
+    meta_override : dict
+        Metadata typed as the files' (``--meta``; SI), given to the readers; the probe's spring constant
+        and sensitivity are the user's, put over each curve as ``analyze`` does (:mod:`afmforce.io.given`).
+    channel : str
+        Position channel (``"auto"``: measured if recorded; ``"measured"``, ``"nominal"``), as ``analyze``'s.
     """
 
     indentation: IndentationOptions = field(default_factory=IndentationOptions)
     adhesion_model: str = "dmt"
     probe: ProbeCalibration | None = None
     nsigma: float = 5.0
+    meta_override: dict[str, Any] = field(default_factory=dict)
+    channel: str = "auto"
 
     def __post_init__(self) -> None:
         if self.adhesion_model not in ADHESION_MODELS:
@@ -82,7 +89,7 @@ class PixelAnalysis:
         from .files import CurveRef
 
         if isinstance(ref, CurveRef):
-            curve, file, index = _read(ref), ref.path, int(ref.index or 0)
+            curve, file, index = _read(ref, self.meta_override, self.probe), ref.path, int(ref.index or 0)
         else:
             curve, file, index = ref, str(ref.metadata.get("source_file", "")), -1
         return self.row(curve, file=file, index=index)
@@ -91,15 +98,18 @@ class PixelAnalysis:
         """The pixel's numbers (:data:`PIXEL_COLUMNS`) and its place in the map."""
         from .summary import _grid, _grid_size
 
-        fit = fast_modulus(curve, self.indentation, self.probe)
-        md = curve.metadata
+        from ..io.given import apply_given
+
         p = self.probe if self.probe is not None else ProbeCalibration()
+        curve = apply_given(curve, p)      # the user's calibration over the file's (afmforce.io.given)
+        fit = fast_modulus(curve, self.indentation, p, self.channel)
+        md = curve.metadata
         k = float(p.value("spring_constant", md))
         seg = np.asarray(curve.segment)
         sig = np.asarray(curve.deflection_signal, dtype=float)
         sens = float(p.value("sensitivity", md) or math.nan)  # reported also for a force the reader calibrated
         scale = curve.force_factor(sens, k)                    # uses the sensitivity for volts only
-        z = curve.position()
+        z = curve.position(self.channel)
         force = sig * scale
         app, ret = seg == 0, seg == 1
         # the baseline's noise: the approach's free part, before the fitted contact (tip depth above it)
@@ -137,17 +147,21 @@ class PixelAnalysis:
         return row
 
 
-def _read(ref):
-    """The curve of ``ref``: from the worker's open map (afmforce, JPK, NanoScope), else the file's curves (cached)."""
+def _read(ref, meta_override=None, probe=None):
+    """The curve of ``ref``, read with the file's own calibration (:func:`afmforce.io.given.read_own`): from
+    the worker's open map (afmforce, JPK, NanoScope), else the file's curves (cached)."""
     from . import files as F
+    from ..io import check_meta_override
+    from ..io.given import read_own
 
     if ref.index is None:
         raise AnalysisError(f"{ref.path}: not a force map (one curve per pixel expected)")
     from ..io.map_curves import STREAMED_FORMATS
 
     if ref.format in STREAMED_FORMATS:  # one curve from the worker's open map: memory flat in the map's size
-        return F._map_reader(ref.location, ref.format).read(ref.index)
-    return F._load_cached(ref.location, {}, ref.format)[ref.index]
+        return read_own(lambda meta: F._map_reader(ref.location, ref.format, check_meta_override(meta)).read(ref.index),
+                        meta_override, probe)
+    return read_own(lambda meta: F._load_cached(ref.location, meta, ref.format)[ref.index], meta_override, probe)
 
 
 def analyze_map(paths: Iterable[str | os.PathLike], analysis: PixelAnalysis | None = None, *,

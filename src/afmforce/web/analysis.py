@@ -37,10 +37,6 @@ _CACHE_BYTES = 128e6
 _ROWS: OrderedDict = OrderedDict()
 _ROWS_KEPT = 2048
 _LOCK = threading.Lock()
-#: Readers whose metadata override is only merged into the metadata (:mod:`afmforce.io.native`): a
-#: new spring constant or sensitivity for their curves is a new metadata record, not a new reading.
-_NATIVE = ("afmforce-raw", "afmforce-hdf5", "afmforce-map")
-_CALIBRATION = ("spring_constant", "sensitivity")
 
 
 class _Memo:
@@ -97,9 +93,8 @@ class CachedAnalysis(CurveAnalysis):
     stays in memory, and it sends the plots only what they draw.
 
     * A re-run does not parse the file again (a 10,000-row text file: 0.1-0.3 s), also after a
-      calibration change: the curves of afmforce's own formats are read once without the given
-      spring constant and sensitivity, which are then put into their metadata (as their reader
-      does); other formats are read again with the new values (their readers may rescale with them).
+      calibration change: the curves are read with the file's own calibration and the given spring
+      constant and sensitivity are put over them by the analysis (:mod:`afmforce.io.given`).
     * A curve analysed before with the same options, probe and metadata is not analysed again.
     * With :attr:`json_arrays`, the per-sample arrays are thinned to ``points`` samples per curve
       on the screen's terms (:func:`~.plotdata.result_arrays`) before they are written as JSON.
@@ -128,14 +123,11 @@ class CachedAnalysis(CurveAnalysis):
         return super().load(ref)
 
     def load(self, ref):
-        override = dict(self.meta_override)
-        given = {k: override.pop(k) for k in _CALIBRATION if k in override}
-        if given:      # read without the calibration; afmforce's formats take it as metadata only
-            pairs = self._read(ref, override)
-            if all(c.metadata.get("reader") in _NATIVE for _, c in pairs):
-                return [(i, dataclasses.replace(c, metadata={**c.metadata, **given})) for i, c in pairs]
-            override.update(given)
-        return self._read(ref, override)
+        from ..io.given import reader_override
+
+        # read with the file's own calibration, the probe's put over it by the analysis (afmforce.io.given):
+        # a new spring constant or sensitivity reads nothing again
+        return self._read(ref, reader_override(self.meta_override, self.probe))
 
     def analyze_curve(self, ref, index, curve, several):
         key = (self._file_key(ref, self.meta_override), index, several, self.channel,
@@ -214,7 +206,7 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
     probe_record = ProbeCalibration(**values)
     resolve_options(records, probe_record)
     typed = metadata(list(meta))
-    override = {**typed, **{k: values[k] for k in ("spring_constant", "sensitivity") if k in values}}
+    override = typed   # the probe's values are the user's, never the file's metadata (afmforce.io.given)
     probe_record = probe_record.given_as_metadata(k for k in typed if k not in values)
     if calibration is not None and calibration[0]:
         names, method, invols = calibration

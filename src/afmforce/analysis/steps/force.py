@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 
 from ...calibration.record import INVOLS_METHODS
+from ...io.given import file_sensitivity
 from ..options import ForceOptions, origin_words
 from ..registry import AnalysisStep, ResultField
 from ..separation import effective_spring_constant
@@ -57,14 +58,12 @@ def force(st: State, o: ForceOptions) -> State:
 
 
 def _file_invols(md, cal) -> float:
-    """The InvOLS [m/V] the file's thermal spring constant rests on: the file's own sensitivity (its metadata;
-    a user's ``sensitivity`` is the probe's, never the one the file's k was converted with), else the one the
+    """The InvOLS [m/V] the file's thermal spring constant rests on: the file's own sensitivity (its metadata,
+    kept under :data:`~afmforce.io.given.FILE_SENSITIVITY` where the user's was put over the curve: a user's
+    ``sensitivity`` is the probe's, never the one the file's k was converted with), else the one the
     calibration used; NaN without either."""
-    try:
-        inv = float(md.get("sensitivity"))
-    except (TypeError, ValueError):
-        inv = math.nan
-    if math.isfinite(inv) and inv > 0:
+    inv = file_sensitivity(md)
+    if math.isfinite(inv):
         return inv
     return float(cal.sensitivity) if cal is not None else math.nan
 
