@@ -97,10 +97,6 @@ def dead_zone(zm: np.ndarray) -> int:
     n = zm.size
     if n < 30:
         return 0
-    from ._core_kernel import COMPILED, dead_zone_kernel  # here: fit.ramp imports this module without numba
-
-    if COMPILED:  # the same number in one compiled pass
-        return int(dead_zone_kernel(np.ascontiguousarray(zm)))
     d = np.abs(np.diff(zm))
     step = float(np.median(d[d > 0])) if np.any(d > 0) else 0.0
     d2 = np.diff(zm, 2)
