@@ -74,7 +74,7 @@ def differences(a, b, rtol: float, where: str = ""):
             yield f"{where}: {bad} elements differ"
     elif isinstance(a, bool) or isinstance(b, bool) or isinstance(a, str) or isinstance(b, str) or a is None or b is None:
         if a != b or type(a) is not type(b):
-            yield f"{where}: {a!r} -> {b!r}"
+            yield f"{where}: {_short(a)} -> {_short(b)}"
     elif isinstance(a, (int, float)) and isinstance(b, (int, float)):
         x, y = float(a), float(b)
         if math.isnan(x) and math.isnan(y):
@@ -82,7 +82,12 @@ def differences(a, b, rtol: float, where: str = ""):
         if not (x == y or abs(x - y) <= rtol * max(abs(x), abs(y))):
             yield f"{where}: {x!r} -> {y!r} (rel {abs(x - y) / max(abs(x), abs(y)):.3g})"
     elif a != b:
-        yield f"{where}: {a!r} -> {b!r}"
+        yield f"{where}: {_short(a)} -> {_short(b)}"
+
+
+def _short(v, n: int = 300) -> str:
+    text = repr(v)
+    return text if len(text) <= n else text[:n] + f"... ({len(text)} characters)"
 
 
 def simulate(tree: Path, folder: Path) -> None:
@@ -110,7 +115,7 @@ def main() -> int:
     ap.add_argument("--real", type=Path, default=Path(os.environ.get("AFMFORCE_REAL_DATA", "/work/shared/data/real")))
     ap.add_argument("--sim", type=Path, default=Path(tempfile.gettempdir()) / "afmforce-equal-sim")
     ap.add_argument("--rtol", type=float, default=1e-9)
-    ap.add_argument("--keep", type=Path, help="folder for the two pickles (kept; a 'before' there is reused)")
+    ap.add_argument("--keep", type=Path, help="folder for the two pickles (kept)")
     ap.add_argument("--dump", type=Path, help=argparse.SUPPRESS)
     ap.add_argument("folders", nargs="*", type=Path, help=argparse.SUPPRESS)
     args = ap.parse_args()
@@ -127,15 +132,17 @@ def main() -> int:
         try:
             simulate(old, args.sim)
             folders = [args.real, args.sim]
-            if not before_pkl.exists():
-                run_dump(old, folders, before_pkl)
+            run_dump(old, folders, before_pkl)
         finally:
             subprocess.run(["git", "-C", str(ROOT), "worktree", "remove", "--force", str(old)], check=False)
     run_dump(ROOT, folders, after_pkl)
     before, after = pickle.loads(before_pkl.read_bytes()), pickle.loads(after_pkl.read_bytes())
     bad = 0
-    for key in sorted(set(before) | set(after)):
-        diffs = list(differences(before.get(key), after.get(key), args.rtol, key))
+    for key in sorted(set(before) ^ set(after)):   # the folder changed between the two dumps
+        bad += 1
+        print(f"{key}: only {'before' if key in before else 'after'} (files added or removed: run again)")
+    for key in sorted(set(before) & set(after)):
+        diffs = list(differences(before[key], after[key], args.rtol, key))
         bad += bool(diffs)
         for d in diffs[:10]:
             print(d)
