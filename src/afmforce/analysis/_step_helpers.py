@@ -23,8 +23,9 @@ def _kind(st: State) -> str:
 
 def _skip(st: State, step: str, why: str, detail=None) -> State:
     """Record that ``step`` does not apply to this curve, and why."""
-    new = st.update(skipped={**st.skipped, step: why})
-    return new.update(step, detail) if detail is not None else new
+    if detail is not None:  # one new state (each update copies the state's dict)
+        return st.update(step, detail, skipped={**st.skipped, step: why})
+    return st.update(skipped={**st.skipped, step: why})
 
 
 def _zero_deflection_position(st: State, run=None) -> float:

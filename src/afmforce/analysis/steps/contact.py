@@ -11,7 +11,7 @@ import numpy as np
 
 from ...errors import AnalysisError
 from ..options import ContactOptions
-from ..regions import check_compliance, find_run_regions, run_indices, saturated_mask
+from ..regions import check_compliance, find_run_regions, saturated_mask
 from ..registry import AnalysisStep
 from .._numeric import ptp
 from .._step_helpers import line_slope
@@ -167,14 +167,14 @@ def contact(st: State, o: ContactOptions) -> State:
     if st.missing_run:
         return _one_run(st, sat, kw)
     try:
-        app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach", **kw)
+        app = find_run_regions(st.z, st.signal, st.run_index(0), "approach", **kw)
     except AnalysisError as exc:
         if not str(exc).startswith("no contact region"):
             raise
         app = None
         try:  # a stiff lever barely deflects on the approach: the retract's adhesion shows the contact
-            find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", **kw)
-            app = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 0), "approach",
+            find_run_regions(st.z, st.signal, st.run_index(1), "retract", **kw)
+            app = find_run_regions(st.z, st.signal, st.run_index(0), "approach",
                                    min_contrast=5.0, **kw)
         except AnalysisError:
             pass
@@ -193,7 +193,7 @@ def contact(st: State, o: ContactOptions) -> State:
     parts = _baseline_parts(st.z, st.signal, app)  # the approach's baseline line, read once by both checks
     _check_free_baseline(st.z, st.signal, app, parts)
     _check_contact_reached(st.z, st.signal, app, parts)
-    ret = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, 1), "retract", noise=app.noise, **kw)
+    ret = find_run_regions(st.z, st.signal, st.run_index(1), "retract", noise=app.noise, **kw)
     app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
     summary = contact_summary(app, ret, int(sat.sum()))
     st.cache[REGIONS_KEY] = (kw, flat_ratio, max_slope_ratio)   # for the fringes step's second look
@@ -237,7 +237,7 @@ def _one_run(st: State, sat: np.ndarray, kw: dict) -> State:
     """The regions of a curve of one run (the other is None; its region sizes -1): the run's own noise."""
     which, word = (1, "retract") if st.missing_run == "approach" else (0, "approach")
     try:
-        run = find_run_regions(st.z, st.signal, run_indices(st.curve.segment, which), word, **kw)
+        run = find_run_regions(st.z, st.signal, st.run_index(which), word, **kw)
     except AnalysisError as exc:
         if not str(exc).startswith("no contact region"):
             raise
