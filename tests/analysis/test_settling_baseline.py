@@ -36,3 +36,12 @@ def test_a_settling_transient_is_named_not_taken_for_a_contact():
         analyze(_settling_curve())
     msg = str(err.value)
     assert "transient or a drift rather than a contact" in msg and "starts in contact" not in msg
+
+
+def test_real_jpk_2013_creep_curve_is_refused_as_a_transient():
+    from afmforce.io import load
+    from realdata import real_file
+
+    c = load(real_file("jpk-force_matfiz_2013.05.10-14.38.05_creep-settling.jpk-force"))[0]
+    with pytest.raises(AnalysisError, match="transient or a drift rather than a contact"):
+        analyze(c)

@@ -297,3 +297,30 @@ def test_v6_triggered_approach_fills_the_second_samps_line_number(tmp_path):
     path2 = tmp_path / "plain.021"
     _write(path2, app[:m], ret, version="0x06130001", bpp=2, samps=f"{m} {n}")
     assert np.bincount(load(path2)[0].segment).tolist() == [m, n]
+
+
+@pytest.mark.parametrize("name, recorded, k, sens", [
+    ("bruker-nanoscope_v6.13_PicoForce_matfiz_komorka00000.021", 896, 0.0212714, 58.29331),
+    ("bruker-nanoscope_v6.13_PicoForce_matfiz_kontrkulka00000.000", 948, 0.0337988, 55.97616)])
+def test_real_v6_picoforce_triggered_files_match_their_header(name, recorded, k, sens):
+    """The real NanoScope 6.13 PicoForce files (matfiz/afm-curve-procesing, no licence stated:
+    AFMFORCE_REAL_DATA): header 'Samps/line: 1024 <recorded>', Spring Constant, DeflSens; the
+    deflection channel's int16 at offset 40960 (approach stored from the turning point) x 0.0003051758
+    V/LSB; the Z sensor (offset 45056, x 0.0003051758 V/LSB x 1000 nm/V) steps the same distance per
+    sample on both runs, about Ramp size x Zsens / 1024."""
+    from realdata import real_file
+
+    path = real_file(name)
+    c = load(path)[0]
+    assert np.bincount(c.segment).tolist() == [recorded, 1024]
+    assert c.metadata["spring_constant"] == k and c.metadata["sensitivity"] == pytest.approx(sens * 1e-9)
+    raw = np.frombuffer(path.read_bytes(), "<i2", count=2048, offset=40960) * 0.0003051758
+    np.testing.assert_allclose(c.deflection_signal[c.approach], raw[:recorded][::-1], rtol=1e-6)
+    np.testing.assert_allclose(c.deflection_signal[c.retract], raw[1024:], rtol=1e-6)
+    zs = np.frombuffer(path.read_bytes(), "<i2", count=2048, offset=45056) * 0.0003051758 * 1e-6
+    za, zr = c.piezo_measured[c.approach], c.piezo_measured[c.retract]
+    assert za[-1] > za[0] and zr[-1] < zr[0]
+    np.testing.assert_allclose(np.abs(za[[0, -1]]), np.abs(zs[:recorded][[-1, 0]]), rtol=1e-9)
+    mid = lambda x: x[x.size // 4: 3 * x.size // 4]  # noqa: E731  (the retract's far end flattens)
+    step_a, step_r = np.mean(np.diff(mid(za))), -np.mean(np.diff(mid(zr)))
+    assert step_a == pytest.approx(step_r, rel=0.03)   # not 1024/896 = 1.14 apart: the same ramp per sample
