@@ -40,8 +40,10 @@ def test_real_v9_file_matches_its_header():
 
 
 def _write(path: Path, app: np.ndarray, ret: np.ndarray, *, version: str = "0x09200000", bpp: int = 4,
-           quoted: bool = False, eol: str = "\r\n", old_keys: bool = False, zsensor=None) -> None:
-    """A NanoScope force file: header sections and each channel's int data after the header."""
+           quoted: bool = False, eol: str = "\r\n", old_keys: bool = False, zsensor=None,
+           samps: str | None = None) -> None:
+    """A NanoScope force file: header sections and each channel's int data after the header
+    (``samps``: the ``Samps/line`` entry as written, else the two runs' lengths)."""
     n_app, n_ret = len(app), len(ret)
     sens_key = "Deflection" if old_keys else "DeflSens"
     channels = [("DeflectionError", sens_key, 0.000375, np.concatenate([app, ret]))]
@@ -51,6 +53,7 @@ def _write(path: Path, app: np.ndarray, ret: np.ndarray, *, version: str = "0x09
              "\\*Scanner list", "\\@Sens. Zsens: V 10.00000 nm/V", "\\*Ciao scan list",
              f"\\@Sens. {sens_key}: V 50.00000 {'nm/V' if old_keys else ''}", "\\@Sens. ZsensSens: V 900.0 nm/V",
              "\\*Ciao force list", "\\Scan rate: 0.25", "\\Forward vel.: 50", "\\Reverse vel.: 100",
+             f"\\Samps/line: {samps}" if samps else
              f"\\Samps/line: {n_app} {n_ret}" if not old_keys else f"\\Samps/line: {n_app}"]
     blocks = []
     for name, sens, vlsb, ints in channels:
@@ -262,3 +265,62 @@ def test_a_triggered_ramps_unrecorded_samples_are_dropped(tmp_path):
     for name in ("time", "piezo_nominal", "deflection_signal", "segment"):
         np.testing.assert_array_equal(getattr(cut, name), getattr(orig, name)[keep])
     assert cut.deflection_signal.min() > -12  # no -12.288 V sample left
+
+
+def test_v6_triggered_approach_fills_the_second_samps_line_number(tmp_path):
+    """NanoScope 6.13 (PicoForce, relative trigger): ``Samps/line: 1024 896`` over 2 x 1024 samples per
+    channel; the approach, stored from the turning point, recorded 896 and the rest of its slots hold
+    leftovers (-1 every other sample). Was refused: "channel length 4096 bytes is not a whole number of
+    curves of 1920 points ... damaged file" (matfiz/afm-curve-procesing's 16 PicoForce files). Written
+    here in that layout (200 slots, 170 recorded): the approach is its 170 samples in time order, the
+    retract its 200, the leftovers dropped, the Z sensor growing towards the sample on the approach."""
+    n, m = 200, 170
+    rng = np.random.default_rng(7)
+    app = rng.integers(-3000, 3000, n)
+    app[m + 1::2] = -1                              # the leftovers of the real files, to the last slot
+    ret = rng.integers(-3000, 3000, n)
+    zs = np.concatenate([-2857 - 34 * np.arange(n), -2853 - 34 * np.arange(n)])  # falls away from the turn
+    zs[m + 1:n:2] = -1
+    path = tmp_path / "komorka00000.021"
+    _write(path, app, ret, version="0x06130001", bpp=2, zsensor=zs, samps=f"{n} {m}")
+    c = load(path)[0]
+    assert np.bincount(c.segment).tolist() == [m, n] and c.metadata["unrecorded_samples"] == n - m
+    np.testing.assert_allclose(c.deflection_signal[c.approach], app[:m][::-1] * 0.000375, rtol=1e-12)
+    np.testing.assert_allclose(c.deflection_signal[c.retract], ret * 0.000375, rtol=1e-12)
+    za, zr = c.piezo_measured[c.approach], c.piezo_measured[c.retract]
+    assert za[-1] > za[0] and zr[-1] < zr[0]        # towards the sample, then away: not turned round
+    step = 34 * 0.0001 * 900e-9
+    np.testing.assert_allclose(np.diff(za), step, rtol=1e-9)
+    np.testing.assert_allclose(np.diff(zr), -step, rtol=1e-9)
+    np.testing.assert_allclose(np.diff(c.piezo_nominal[c.approach]), 100.0 * 10e-9 / n, rtol=1e-9)
+    # the same numbers with equal runs or a data length of their sum keep the plain layout
+    path2 = tmp_path / "plain.021"
+    _write(path2, app[:m], ret, version="0x06130001", bpp=2, samps=f"{m} {n}")
+    assert np.bincount(load(path2)[0].segment).tolist() == [m, n]
+
+
+@pytest.mark.parametrize("name, recorded, k, sens", [
+    ("bruker-nanoscope_v6.13_PicoForce_matfiz_komorka00000.021", 896, 0.0212714, 58.29331),
+    ("bruker-nanoscope_v6.13_PicoForce_matfiz_kontrkulka00000.000", 948, 0.0337988, 55.97616)])
+def test_real_v6_picoforce_triggered_files_match_their_header(name, recorded, k, sens):
+    """The real NanoScope 6.13 PicoForce files (matfiz/afm-curve-procesing, no licence stated:
+    AFMFORCE_REAL_DATA): header 'Samps/line: 1024 <recorded>', Spring Constant, DeflSens; the
+    deflection channel's int16 at offset 40960 (approach stored from the turning point) x 0.0003051758
+    V/LSB; the Z sensor (offset 45056, x 0.0003051758 V/LSB x 1000 nm/V) steps the same distance per
+    sample on both runs, about Ramp size x Zsens / 1024."""
+    from realdata import real_file
+
+    path = real_file(name)
+    c = load(path)[0]
+    assert np.bincount(c.segment).tolist() == [recorded, 1024]
+    assert c.metadata["spring_constant"] == k and c.metadata["sensitivity"] == pytest.approx(sens * 1e-9)
+    raw = np.frombuffer(path.read_bytes(), "<i2", count=2048, offset=40960) * 0.0003051758
+    np.testing.assert_allclose(c.deflection_signal[c.approach], raw[:recorded][::-1], rtol=1e-6)
+    np.testing.assert_allclose(c.deflection_signal[c.retract], raw[1024:], rtol=1e-6)
+    zs = np.frombuffer(path.read_bytes(), "<i2", count=2048, offset=45056) * 0.0003051758 * 1e-6
+    za, zr = c.piezo_measured[c.approach], c.piezo_measured[c.retract]
+    assert za[-1] > za[0] and zr[-1] < zr[0]
+    np.testing.assert_allclose(np.abs(za[[0, -1]]), np.abs(zs[:recorded][[-1, 0]]), rtol=1e-9)
+    mid = lambda x: x[x.size // 4: 3 * x.size // 4]  # noqa: E731  (the retract's far end flattens)
+    step_a, step_r = np.mean(np.diff(mid(za))), -np.mean(np.diff(mid(zr)))
+    assert step_a == pytest.approx(step_r, rel=0.03)   # not 1024/896 = 1.14 apart: the same ramp per sample

@@ -43,6 +43,11 @@ CONTACT_SIDE_SIGMAS = 20.0
 MIN_BLOCK = 5
 #: The fraction of the position's range at each end in which the slopes are compared [-].
 _WINDOW = 0.15
+#: A run's position step this many times its median step, among its first or last :data:`END_SAMPLES`
+#: steps, is no ramp: the scanner moving on after the run (or before it) [-].
+END_JUMP_STEPS = 50.0
+#: ... looked for among this many steps at each end of a run [samples].
+END_SAMPLES = 3
 
 
 def _blocks(segment: np.ndarray) -> list[tuple[int, int, int]]:
@@ -142,6 +147,40 @@ def _reverse_runs(curve: RawCurve, which: tuple[int, ...], keep_time: bool) -> R
     return _take(curve, index, keep_time=keep_time)
 
 
+def _end_jumps(curve: RawCurve, z: np.ndarray, notes: list[str]) -> np.ndarray | None:
+    """The samples to keep (None: all) of a curve without the samples at a run's end taken while the scanner jumped on (or before a run,
+    while it jumped to the start): a position step :data:`END_JUMP_STEPS` times the run's median step
+    among its first or last :data:`END_SAMPLES` steps; those samples and the ones beyond it are dropped,
+    with a warning (a ramp moves the position by about the same step every sample).
+
+    Was: a JPK 2014 retract (matfiz/afm-curve-procesing ``force-save-2014.02.20-15.54.10``, header flag
+    z-start-out-of-range) whose last 2 samples were taken as the head moved on, 0.17 and 6.5 um in 0.5 ms
+    (the ramp's steps ~1 nm) with the deflection at -8.5 nN: reported an adhesion of -7.1 nN off a curve
+    with none."""
+    seg = np.asarray(curve.segment)
+    drop = np.zeros(seg.size, dtype=bool)
+    for label, word in ((0, "approach"), (1, "retract")):
+        idx = np.flatnonzero(seg == label)
+        if idx.size < 4 * END_SAMPLES + 4 or np.any(np.diff(idx) != 1):
+            continue      # short runs, or runs split by other samples: left as they are
+        steps = np.abs(np.diff(z[idx]))
+        typical = float(median(steps))
+        if not typical > 0.0:
+            continue
+        big = steps > END_JUMP_STEPS * typical
+        tail = np.flatnonzero(big[-END_SAMPLES:])
+        head = np.flatnonzero(big[:END_SAMPLES])
+        for cut, part in ((idx[steps.size - END_SAMPLES + tail[0] + 1:] if tail.size else idx[:0], "last"),
+                          (idx[:head[-1] + 1] if head.size else idx[:0], "first")):
+            if cut.size:
+                drop[cut] = True
+                jump = float(np.max(steps[-END_SAMPLES:] if part == "last" else steps[:END_SAMPLES]))
+                notes.append(f"the {word}'s {part} {cut.size} sample{'s lie' if cut.size > 1 else ' lies'} past a position jump of {jump * 1e9:.4g} nm "
+                             f"({jump / typical:.0f} x the run's median step of {typical * 1e9:.3g} nm): taken while the "
+                             "scanner moved on, not on the ramp; dropped")
+    return ~drop if drop.any() else None
+
+
 def orient(curve: RawCurve, channel: str = "auto") -> tuple[RawCurve, tuple[str, ...]]:
     """The curve with one approach-retract cycle, each run in acquisition order and labelled as what it is.
 
@@ -184,6 +223,13 @@ def orient(curve: RawCurve, channel: str = "auto") -> tuple[RawCurve, tuple[str,
         if not (np.isfinite(nominal).all() and ptp(nominal[app]) > 0.0 and ptp(nominal[ret]) > 0.0):
             return out, tuple(notes)
         z = nominal      # prepare() falls back to it the same way
+    keep = _end_jumps(out, z, notes)
+    if keep is not None:
+        out, z, s = _take(out, np.flatnonzero(keep)), z[keep], s[keep]
+        seg = np.asarray(out.segment)
+        app, ret = np.flatnonzero(seg == 0), np.flatnonzero(seg == 1)
+        if app.size < 20 or ret.size < 20:
+            return out, tuple(notes)
     if _trend(z[app]) > 0.0 and _trend(z[ret]) < 0.0:
         return out, tuple(notes)     # the conventions' order (the readers' curves): nothing to read off the signal
     side = contact_side(z, s)

@@ -10,7 +10,8 @@ A NanoScope file (versions 5 to 9) is a text header followed by binary data::
     \*Ciao force list
     \Scan rate: 1.01725               ramps per second
     \Forward vel.: 462.282            [V/s] of the Z piezo (x Zsens = m/s)
-    \Samps/line: 1024 1024            points of the approach and the retract
+    \Samps/line: 1024 1024            points of the approach and the retract (v5/v6 with a trigger:
+                                      "1024 896", slots of each run, points the approach recorded)
     \*Ciao force image list           one per channel
     \Data offset: 80960               where the channel's numbers start [bytes]
     \Data length: 8192                [bytes], all curves of the channel
@@ -307,13 +308,36 @@ def _adc_shift(chunks, bpp: int, channel: str, where: str, vlsb: float | None = 
     return divisor
 
 
-def _recorded(counts: np.ndarray, n_app: int, n_ret: int) -> np.ndarray:
+def _triggered_approach(counts: list[int], defl: Mapping[str, str], n_curves: int, where: str) -> int | None:
+    r"""Samples the approach recorded in a v5/v6 file whose ``Samps/line`` gives two unequal numbers
+    (``\Samps/line: 1024 896``, NanoScope 6.13 PicoForce, relative trigger): each run has the first
+    number of slots in the data (the deflection channel's ``Data length`` fits two runs of it, not
+    the sum of the two numbers) and the approach, stopped at its trigger, filled only the second
+    number of them from the turning point (the rest hold leftovers: -1 every other sample). The
+    Z sensor of such files steps the same distance per sample on both runs (3.42-3.47 nm = Ramp size
+    x Zsens / 1024). None where the numbers are equal or the data length is the sum's."""
+    if len(counts) < 2 or not counts[1] < counts[0]:
+        return None
+    length = defl.get("Data length")
+    if length is None or not re.search(_NUMBER, length):
+        return None
+    length = int(_number(length, where, "Data length"))
+
+    def fits(per: int) -> bool:
+        return length % (per * n_curves) == 0 and length // (per * n_curves) in (2, 4)
+    return counts[1] if fits(2 * counts[0]) and not fits(counts[0] + counts[1]) else None
+
+
+def _recorded(counts: np.ndarray, n_app: int, n_ret: int, app_recorded: int | None = None) -> np.ndarray:
     """False for the samples a run did not record, in storage order: a ramp stopped at its trigger
     leaves the far end of its run (stored last, from the turning point) at the ADC's most negative
     count, -32768 (Bruker's v8.15 force volume example: 14-174 such samples before the approach's first
     real one, -12.288 V, then -0.45 V). Only that trailing run of each run is dropped; a -32768 inside a
-    run is a clipped sample and is kept."""
+    run is a clipped sample and is kept. ``app_recorded``: the approach's recorded samples where the
+    header says how many (v5/v6, :func:`_triggered_approach`); its slots after them are dropped."""
     keep = np.ones(counts.size, dtype=bool)
+    if app_recorded is not None:
+        keep[app_recorded:n_app] = False
     for start, stop in ((0, n_app), (n_app, n_app + n_ret)):
         run = counts[start:stop]
         filler = run == -ADC_COUNTS
@@ -394,6 +418,9 @@ class NanoscopeFile:
 
         grid = self._grid = _grid(sections, where)
         n_curves = grid[0] * grid[1] if grid is not None else 1
+        self._app_recorded = _triggered_approach(counts, defl, n_curves, where)
+        if self._app_recorded is not None:  # v5/v6: two runs of Samps/line slots, the approach cut short
+            n_app = n_ret = counts[0]
         n_hold = _hold_samples(sections, defl, n_app + n_ret, n_curves, where)
         per = n_app + n_ret + n_hold
 
@@ -506,13 +533,14 @@ class NanoscopeFile:
         counts = self._samples(off, bpp, i * per, per).astype(float) / div
         volts = counts * vlsb
         signal = in_time_order(volts)
-        keep = in_time_order(_recorded(counts, n_app, n_ret))
+        keep = in_time_order(_recorded(counts, n_app, n_ret, self._app_recorded))
         zm = None
         if self._zsen is not None:
             off, bpp, div, vlsb, sens = self._zsen
             zr = self._samples(off, bpp, i * per, per).astype(float) / div * vlsb * sens
             zm = in_time_order(zr)
-            if zm[n_app - 1] < zm[0]:
+            first = int(np.argmax(keep[:n_app]))  # the approach's first recorded sample (not a filler slot)
+            if zm[n_app - 1] < zm[first]:
                 zm = -zm
         meta = {**self._meta, "curve_index": i, **_grid_point(self._grid, i)} if self.n_curves > 1 \
             else dict(self._meta)

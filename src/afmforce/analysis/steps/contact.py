@@ -48,6 +48,10 @@ def retract_dip(signal: np.ndarray, idx: np.ndarray) -> tuple[float, float]:
 NO_BASELINE_RATIO = 0.75
 #: ... when it climbs by this many noise sigmas over the baseline's positions [-].
 NO_BASELINE_SIGMAS = 20.0
+#: A "baseline" climbing this many times as steeply as the contact is no contact line either: a transient
+#: or a drift (a JPK 2013 creep curve, matfiz/afm-curve-procesing ``force-save-2013.05.10-14.38.05``: the
+#: approach's first half rises 1.3 nN as it settles, its contact 0.2 nN; ratio 13), and is refused as one [-].
+STEEPER_THAN_CONTACT = 1.5
 
 
 def _baseline_parts(z: np.ndarray, signal: np.ndarray, run) -> tuple:
@@ -104,6 +108,12 @@ def _check_free_baseline(z: np.ndarray, signal: np.ndarray, run, parts: tuple | 
     (:data:`NO_BASELINE_RATIO`, :data:`NO_BASELINE_SIGMAS`): the zero of force, and every force, adhesion,
     sensitivity and contact point measured from it, would be a number taken in contact."""
     ratio, climb = free_baseline_ratio(z, signal, run, parts)
+    if ratio >= STEEPER_THAN_CONTACT and climb >= NO_BASELINE_SIGMAS:
+        raise AnalysisError(
+            f"the approach has no free baseline: its far part climbs {ratio:.2g} times as steeply as its "
+            f"contact ({climb:.3g} noise sigmas), a transient or a drift rather than a contact (the lever "
+            "settling after the ramp's start?), so the zero of force is undetermined; record the approach "
+            "from farther out or after the lever has settled")
     if ratio >= NO_BASELINE_RATIO and climb >= NO_BASELINE_SIGMAS:
         raise AnalysisError(
             f"the approach has no free baseline: its far part climbs with the position at {ratio:.2g} of the "
