@@ -58,6 +58,20 @@ def test_baseline_steps_finds_the_step_and_nothing_on_a_drifting_fringed_baselin
     assert sigma == pytest.approx(0.005, rel=0.15)
 
 
+def test_baseline_steps_leaves_a_slow_filtered_transition_and_rounding():
+    """A level change spread over ~12 samples and low-pass filtered (8-sample mean: the second differences, the
+    noise sigma, shrink) is no glitch; a 1e-16 "step" of a noise-free baseline is rounding, below the floor."""
+    rng = np.random.default_rng(1)
+    t = np.arange(600.0)
+    slow = 0.06 / (1 + np.exp(-(t - 250) / 3.0)) + 0.005 * rng.standard_normal(t.size)
+    assert baseline_steps(np.convolve(slow, np.ones(8) / 8, "valid")) == []
+    sharp = 0.06 * (t >= 250) + 0.005 * rng.standard_normal(t.size)    # the same step within 2 samples: found
+    assert len(baseline_steps(np.convolve(sharp, np.ones(2) / 2, "valid"))) == 1
+    flat = 1e-9 + 1e-16 * (t >= 250) + 1e-18 * rng.standard_normal(t.size)
+    assert len(baseline_steps(flat)) == 1                                   # 100 of its sigmas
+    assert baseline_steps(flat, floor=regions.BASELINE_STEP_MIN_FRACTION * 5e-9) == []
+
+
 def test_step_in_the_approach_baseline_leaves_zero_modulus_and_adhesion_at_the_truth():
     clean, stepped = _curves()
     ref, r = analyze(clean, options=OPTS), analyze(stepped, options=OPTS)

@@ -438,9 +438,16 @@ BASELINE_STEP_WINDOW = 20
 BASELINE_STEP_GAP = 2
 #: A baseline needs this many samples after its last step to be fitted there alone [-].
 MIN_AFTER_STEP = 30
+#: The jump itself: the medians of the 3 samples either side of the gap differ by at least this fraction of the
+#: step [-] (a glitch jumps within a sample or two; a low-pass filtered signal that wanders, the AFM Workshop
+#: 2018 export's, moves over 5-10 samples: its second differences, the noise sigma, are then tiny).
+BASELINE_STEP_ABRUPT = 0.7
+#: ... and the step is at least this fraction of the run's signal range [-] (a noise-free virtual curve's
+#: baseline "steps" by its floating-point rounding, 1e-16 m, hundreds of its sigmas).
+BASELINE_STEP_MIN_FRACTION = 1e-3
 
 
-def baseline_steps(s: np.ndarray) -> list[tuple[int, float, float]]:
+def baseline_steps(s: np.ndarray, floor: float = 0.0) -> list[tuple[int, float, float]]:
     """Level steps of a free baseline ``s`` (samples in time order): ``(i, height, sigma)`` per step, ``i`` the
     first sample of the jump (``s[i - 1]`` before it, ``s[i + BASELINE_STEP_GAP]`` after it), ``height`` the jump
     [signal unit] and ``sigma`` the baseline's white noise (:func:`~.glitches._noise`) [signal unit].
@@ -448,9 +455,10 @@ def baseline_steps(s: np.ndarray) -> list[tuple[int, float, float]]:
     At each boundary the :data:`BASELINE_STEP_WINDOW` samples before and after are fitted with one common slope
     and two offsets; the offsets' difference at the boundary is the step. It counts above
     :data:`BASELINE_STEP_SIGMAS` noise sigmas and :data:`BASELINE_STEP_SPREAD` times the statistic's robust
-    spread along the baseline (drift, fringes and slow wander change it smoothly, by far less); the largest
-    first, then the next beyond ``2 w + g`` samples of those found (a step inside one window tilts the common
-    slope: side lobes of the opposite sign there)."""
+    spread along the baseline (drift, fringes and slow wander change it smoothly, by far less), and ``floor``
+    [signal unit]; it must be abrupt (:data:`BASELINE_STEP_ABRUPT`). The largest first, then the next beyond
+    ``2 w + g`` samples of those looked at (a step inside one window tilts the common slope: side lobes of the
+    opposite sign there)."""
     from .glitches import _noise
 
     s = np.asarray(s, float)
@@ -470,14 +478,17 @@ def baseline_steps(s: np.ndarray) -> list[tuple[int, float, float]]:
     b = (sxy[left] + sxy[right]) / (2.0 * sxx)             # the common slope [unit/sample]
     d = (mean[right] - mean[left]) - b * (w + g)
     spread = float(mad_sigma(d))
-    lim = max(BASELINE_STEP_SIGMAS * sigma, BASELINE_STEP_SPREAD * spread)
+    lim = max(BASELINE_STEP_SIGMAS * sigma, BASELINE_STEP_SPREAD * spread, floor)
     mag = np.abs(d)
     out = []
     while True:   # the largest first; a step inside a window tilts its slope: side lobes within 2 w + g, cleared
         k = int(np.argmax(mag))
         if not mag[k] > lim:
             break
-        out.append((int(i[k]), float(d[k]), float(sigma)))
+        at = int(i[k])
+        jump = float(np.median(s[at + g: at + g + 3]) - np.median(s[at - 3: at]))
+        if jump * d[k] > 0 and abs(jump) >= BASELINE_STEP_ABRUPT * abs(d[k]):
+            out.append((at, float(d[k]), float(sigma)))
         mag[max(0, k - 2 * w - g): k + 2 * w + g + 1] = 0.0
     return sorted(out)
 
@@ -494,7 +505,7 @@ def without_baseline_step(s: np.ndarray, run: RunRegions, unit: str) -> tuple[Ru
     pos = np.flatnonzero(run.zero_force)
     if pos.size < 2 * BASELINE_STEP_WINDOW + BASELINE_STEP_GAP + 1 or np.any(np.diff(pos) != 1):
         return run, None       # (a region with holes, saturated samples: not scanned)
-    steps = baseline_steps(s[run.index[pos]])
+    steps = baseline_steps(s[run.index[pos]], BASELINE_STEP_MIN_FRACTION * float(ptp(s[run.index])))
     if not steps:
         return run, None
     k, height, sigma = steps[-1]
