@@ -101,6 +101,8 @@ def indentation(st: State, o: IndentationOptions) -> State:
             f"{g.replace('_', ' ')} (`{keys[g]}`)" for g in missing))
     regions = st.approach if o.run == "approach" else st.retract
     idx = regions.index[~regions.saturated]   # a clipped deflection is no force: its samples are left out
+    if regions.cut:   # a level step of the free baseline (a glitch): the samples before it are off the zero
+        idx = idx[idx >= regions.index[regions.cut]]
     if o.run == "retract":
         idx = idx[::-1]  # the retract read backwards: into the sample, as the fit expects
     z, d, f = st.z[idx], st.deflection[idx], st.force[idx]

@@ -34,7 +34,7 @@ from ._numeric import mad_sigma, polyfit, ptp, robust_line_thin, two_line_split
 from ._regions_kernel import OK, region_slope, run_index, run_regions_kernel, saturated_kernel
 
 __all__ = ["RunRegions", "find_run_regions", "saturated_mask", "run_indices", "check_compliance",
-           "contact_slopes"]
+           "contact_slopes", "baseline_steps", "without_baseline_step", "BASELINE_STEP_SIGMAS"]
 
 
 @dataclass(frozen=True)
@@ -62,6 +62,10 @@ class RunRegions:
     reason : str
         ``""``, ``"unsettled"`` (the free part is not flat: the cantilever was still
         relaxing) or ``"shallow"`` (much shallower than the other run's line).
+    cut : int
+        Position in the run of the first sample after a level step of its free baseline
+        (:func:`without_baseline_step`): the samples before it are off the zero of force by the step and
+        left out of the baseline and of the indentation fit [-]; 0 without a step.
     """
 
     kind: str
@@ -75,6 +79,7 @@ class RunRegions:
     has_compliance: bool = True
     note: str = ""
     reason: str = ""
+    cut: int = 0
 
 
 def run_indices(segment: np.ndarray, which: int) -> np.ndarray:
@@ -419,3 +424,101 @@ def check_compliance(z: np.ndarray, s: np.ndarray, approach: RunRegions, retract
         raise AnalysisError("no constant-compliance region on either run: " + runs["approach"].note
                             + "; " + runs["retract"].note)
     return runs["approach"], runs["retract"]
+
+
+#: A level step of the approach's free baseline (a jump of the deflection signal between two flat parts: a
+#: photodiode or laser glitch, not a force) counts when its height is this many white-noise sigmas of the
+#: baseline [-] ...
+BASELINE_STEP_SIGMAS = 8.0
+#: ... and this many times the spread of the same statistic along the baseline (slow wander, fringes) [-].
+BASELINE_STEP_SPREAD = 10.0
+#: Samples on each side of a candidate step whose levels (one common slope, two offsets) are compared [-] ...
+BASELINE_STEP_WINDOW = 20
+#: ... leaving this many samples between them for the jump itself [-].
+BASELINE_STEP_GAP = 2
+#: A baseline needs this many samples after its last step to be fitted there alone [-].
+MIN_AFTER_STEP = 30
+#: The jump itself: the medians of the 3 samples either side of the gap differ by at least this fraction of the
+#: step [-] (a glitch jumps within a sample or two; a low-pass filtered signal that wanders, the AFM Workshop
+#: 2018 export's, moves over 5-10 samples: its second differences, the noise sigma, are then tiny).
+BASELINE_STEP_ABRUPT = 0.7
+#: ... and the step is at least this fraction of the run's signal range [-] (a noise-free virtual curve's
+#: baseline "steps" by its floating-point rounding, 1e-16 m, hundreds of its sigmas).
+BASELINE_STEP_MIN_FRACTION = 1e-3
+
+
+def baseline_steps(s: np.ndarray, floor: float = 0.0) -> list[tuple[int, float, float]]:
+    """Level steps of a free baseline ``s`` (samples in time order): ``(i, height, sigma)`` per step, ``i`` the
+    first sample of the jump (``s[i - 1]`` before it, ``s[i + BASELINE_STEP_GAP]`` after it), ``height`` the jump
+    [signal unit] and ``sigma`` the baseline's white noise (:func:`~.glitches._noise`) [signal unit].
+
+    At each boundary the :data:`BASELINE_STEP_WINDOW` samples before and after are fitted with one common slope
+    and two offsets; the offsets' difference at the boundary is the step. It counts above
+    :data:`BASELINE_STEP_SIGMAS` noise sigmas and :data:`BASELINE_STEP_SPREAD` times the statistic's robust
+    spread along the baseline (drift, fringes and slow wander change it smoothly, by far less), and ``floor``
+    [signal unit]; it must be abrupt (:data:`BASELINE_STEP_ABRUPT`). The largest first, then the next beyond
+    ``2 w + g`` samples of those looked at (a step inside one window tilts the common slope: side lobes of the
+    opposite sign there)."""
+    from .glitches import _noise
+
+    s = np.asarray(s, float)
+    w, g = BASELINE_STEP_WINDOW, BASELINE_STEP_GAP
+    n = s.size
+    if n < 2 * w + g + 1:
+        return []
+    sigma = _noise(s)
+    if not sigma > 0.0:
+        return []
+    x = np.arange(w, dtype=float) - (w - 1) / 2.0          # centred positions in a window
+    sxx = float(np.sum(x * x))
+    mean = np.convolve(s, np.full(w, 1.0 / w), "valid")    # mean[j]: s[j:j + w]
+    sxy = np.convolve(s, x[::-1], "valid")                 # sum x s over s[j:j + w]
+    i = np.arange(w, n - w - g + 1)                          # boundaries: left s[i - w:i], right s[i + g:i + g + w]
+    left, right = i - w, i + g
+    b = (sxy[left] + sxy[right]) / (2.0 * sxx)             # the common slope [unit/sample]
+    d = (mean[right] - mean[left]) - b * (w + g)
+    spread = float(mad_sigma(d))
+    lim = max(BASELINE_STEP_SIGMAS * sigma, BASELINE_STEP_SPREAD * spread, floor)
+    mag = np.abs(d)
+    out = []
+    while True:   # the largest first; a step inside a window tilts its slope: side lobes within 2 w + g, cleared
+        k = int(np.argmax(mag))
+        if not mag[k] > lim:
+            break
+        at = int(i[k])
+        jump = float(np.median(s[at + g: at + g + 3]) - np.median(s[at - 3: at]))
+        if jump * d[k] > 0 and abs(jump) >= BASELINE_STEP_ABRUPT * abs(d[k]):
+            out.append((at, float(d[k]), float(sigma)))
+        mag[max(0, k - 2 * w - g): k + 2 * w + g + 1] = 0.0
+    return sorted(out)
+
+
+def without_baseline_step(s: np.ndarray, run: RunRegions, unit: str) -> tuple[RunRegions, str | None]:
+    """The approach run with its zero-force region cut to the samples after its free baseline's last level step
+    (:func:`baseline_steps`), nearest the contact, and a warning; unchanged (None) without a step.
+
+    A baseline with a step is not one line: a drift line fitted across it tilts to join the two levels and,
+    carried on to the contact, puts the zero of force off by a fraction of the step (the PicoForce file
+    ``kontrkulka00000.000``: a 0.06 V step 250 samples into a 634-sample baseline put the approach's zero
+    0.12 V, 0.23 nN, low at the contact). With fewer than :data:`MIN_AFTER_STEP` samples after the step the
+    region is kept and the warning says the zero is uncertain by the step's height."""
+    pos = np.flatnonzero(run.zero_force)
+    if pos.size < 2 * BASELINE_STEP_WINDOW + BASELINE_STEP_GAP + 1 or np.any(np.diff(pos) != 1):
+        return run, None       # (a region with holes, saturated samples: not scanned)
+    steps = baseline_steps(s[run.index[pos]], BASELINE_STEP_MIN_FRACTION * float(ptp(s[run.index])))
+    if not steps:
+        return run, None
+    k, height, sigma = steps[-1]
+    more = f" (the last of {len(steps)})" if len(steps) > 1 else ""
+    what = (f"the approach's free baseline steps by {height:.3g} {unit} ({abs(height) / sigma:.0f} noise sigmas) at "
+            f"sample {int(run.index[pos[k]])}{more}: a jump of the deflection signal off the surface (a glitch), "
+            "not a force")
+    after = pos[k + BASELINE_STEP_GAP:]
+    if after.size < MIN_AFTER_STEP:
+        return run, (f"{what}; too few baseline samples after it ({after.size}) for a line of their own: the zero "
+                     f"of force is uncertain by the step, {abs(height):.3g} {unit}")
+    zero_force = np.zeros_like(run.zero_force)
+    zero_force[after] = True
+    return dataclasses.replace(run, zero_force=zero_force, cut=int(after[0])), (
+        f"{what}; the zero of force, the drift line and an indentation fit use the {after.size} baseline samples "
+        f"after it (nearest the contact), the {pos.size - after.size} before it left out")

@@ -11,7 +11,7 @@ import numpy as np
 
 from ...errors import AnalysisError
 from ..options import ContactOptions
-from ..regions import check_compliance, find_run_regions, saturated_mask
+from ..regions import check_compliance, find_run_regions, saturated_mask, without_baseline_step
 from ..registry import AnalysisStep
 from .._numeric import ptp
 from .._step_helpers import line_slope
@@ -200,6 +200,7 @@ def contact(st: State, o: ContactOptions) -> State:
         if app is None:
             raise NoContact(str(exc).replace("no contact region found on the approach run", "no contact reached")
                             ) from None
+    app, stepped = without_baseline_step(st.signal, app, st.unit)  # a glitch's level step: the part after it
     parts = _baseline_parts(st.z, st.signal, app)  # the approach's baseline line, read once by both checks
     _check_free_baseline(st.z, st.signal, app, parts)
     _check_contact_reached(st.z, st.signal, app, parts)
@@ -207,7 +208,7 @@ def contact(st: State, o: ContactOptions) -> State:
     app, ret = check_compliance(st.z, st.signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
     summary = contact_summary(app, ret, int(sat.sum()))
     st.cache[REGIONS_KEY] = (kw, flat_ratio, max_slope_ratio)   # for the fringes step's second look
-    warn = []
+    warn = [stepped] if stepped else []
     if sat.any():
         warn.append(f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits")
     warn += [r.note for r in (app, ret) if r.note]
@@ -237,6 +238,7 @@ def regions_again(st: State, z: np.ndarray, signal: np.ndarray):
     kw, flat_ratio, max_slope_ratio = spec
     try:
         app = find_run_regions(z, signal, st.approach.index, "approach", **kw)
+        app = without_baseline_step(signal, app, st.unit)[0]   # (the contact step said it)
         ret = find_run_regions(z, signal, st.retract.index, "retract", noise=app.noise, **kw)
         return check_compliance(z, signal, app, ret, flat_ratio=flat_ratio, max_slope_ratio=max_slope_ratio)
     except AnalysisError:
@@ -252,12 +254,16 @@ def _one_run(st: State, sat: np.ndarray, kw: dict) -> State:
         if not str(exc).startswith("no contact region"):
             raise
         raise NoContact(str(exc)) from None
+    stepped = None
+    if word == "approach":
+        run, stepped = without_baseline_step(st.signal, run, st.unit)
     split = int(run.index[min(run.split, run.index.size - 1)])
     own = (split, int(run.zero_force.sum()), int(run.compliance.sum()))
     app, ret = (own, (-1, -1, -1)) if word == "approach" else ((-1, -1, -1), own)
     summary = ContactSummary(app[0], ret[0], app[1], ret[1], app[2], ret[2], int(sat.sum()))
     warn = [f"{int(sat.sum())} saturated samples (photodiode clipped) left out of the fits"] if sat.any() else []
     warn += [run.note] if run.note else []
+    warn += [stepped] if stepped else []
     return st.update("contact", summary, warn=warn, noise=run.noise, **{word: run})
 
 
