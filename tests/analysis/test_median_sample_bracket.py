@@ -47,3 +47,19 @@ def test_sample_bracket_gives_the_exact_middle():
         lo_v, hi_v = _sample_bracket(a, half)
         misses += not middle_bracket(a, half, even, lo_v, hi_v, np.empty(n))[2]
     assert misses > 0          # the fallback (a selection over all) ran too: the adversarial draws
+
+
+def test_given_bracket_narrow_then_wide_gives_the_exact_middle():
+    """A bracket given (a later IRLS iteration's, about the previous median): its middle fifth first
+    (:data:`~afmforce.analysis._numeric.NARROW`), then all of it, then a sample's, then every value."""
+    rng = np.random.default_rng(353)
+    for _ in range(1500):
+        n = int(rng.integers(3, 3000))
+        a = rng.normal(size=n) if rng.random() < 0.8 else np.round(rng.normal(size=n), 1)
+        half, even = n // 2, n % 2 == 0
+        s = np.sort(a)
+        want = (s[half - 1] if even else s[half], s[half])
+        centre = want[1] + rng.normal() * 10.0 ** rng.uniform(-3, 0.5)   # near it, off it, far off
+        width = 10.0 ** rng.uniform(-3, 0.5)
+        got = _median_pair(a, half, even, centre - width, centre + width, np.empty(n), True)
+        assert got == want

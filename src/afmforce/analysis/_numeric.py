@@ -219,6 +219,10 @@ def _median_pair(a, half, even, lo_v, hi_v, buf, fast):
     if not fast:
         return _middle_pair(a)
     if lo_v < hi_v:
+        c, h = 0.5 * (lo_v + hi_v), 0.5 * (hi_v - lo_v) * NARROW
+        lo, hi, ok = middle_bracket(a, half, even, c - h, c + h, buf)  # an IRLS that has settled: few values
+        if ok:
+            return lo, hi
         lo, hi, ok = middle_bracket(a, half, even, lo_v, hi_v, buf)
         if ok:
             return lo, hi
@@ -230,6 +234,9 @@ def _median_pair(a, half, even, lo_v, hi_v, buf, fast):
     buf[:] = a
     return _middle(buf, half, even)
 
+
+#: :func:`_median_pair` looks first within this fraction of the bracket it is given, about its middle [-].
+NARROW = 0.2
 
 #: :func:`_median_pair` without a bracket of its own takes one from an evenly spaced sample of ~128 of at least
 #: this many values (a branchy selection over all of them mispredicts about every other comparison).
