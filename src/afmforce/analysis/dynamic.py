@@ -123,13 +123,21 @@ def drive_start(t: np.ndarray, zm: np.ndarray) -> int:
     :data:`DEAD_ZONE_MIN_BIAS`, else 0: the analysis's speed (:func:`run_velocity`). The fit's line
     (:func:`afmforce.fit.ramp.drive_line`) leaves out every :func:`dead_zone` (it drives the model along
     the line: its position matters too); the speeds differ by under that fraction."""
+    return drive_start_slopes(t, zm)[0]
+
+
+def drive_start_slopes(t: np.ndarray, zm: np.ndarray, dead: int | None = None) -> tuple[int, float, float]:
+    """:func:`drive_start` and the two speeds it compared [m/s]: the robust slope of the whole run and of the
+    run after its :func:`dead_zone` (``dead``: that zone when the caller has it), both NaN where there is no
+    dead zone (then not computed). The speed of the run from the returned start is the slope of that part
+    (:meth:`~.state.State.velocity` takes it instead of fitting that line a third time)."""
     t = np.asarray(t, float)
     zm = np.asarray(zm, float)
-    k = dead_zone(zm)
+    k = dead_zone(zm) if dead is None else dead
     if not k:
-        return 0
+        return 0, math.nan, math.nan
     whole, rest = _slope(t, zm), _slope(t[k:], zm[k:])
-    return k if abs(rest - whole) > DEAD_ZONE_MIN_BIAS * abs(rest) else 0
+    return (k if abs(rest - whole) > DEAD_ZONE_MIN_BIAS * abs(rest) else 0), whole, rest
 
 
 def _slope(t: np.ndarray, z: np.ndarray) -> float:

@@ -20,7 +20,8 @@ from ..io.curve import RawCurve
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._median import median
 from ._numeric import ptp
-from .dynamic import drive_start, run_velocity
+from ._speed_kernel import dead_zone as _dead_zone
+from .dynamic import drive_start_slopes, run_velocity
 from .glitches import remove_glitches
 from .options import ContactOptions, ProbeCalibration
 from .regions import RunRegions, run_indices
@@ -102,15 +103,22 @@ class State:
         if hit is not None and hit[0] is index and hit[1] is self.time and hit[2] is self.z:
             return hit[3]
         t, z = self.time[index], self.z[index]
+        v = None
         if self.channel == "measured":
             # the dead zone read off the recorded channel (the running average of ``smooth`` blurs its
             # kink over half a window); where there is one, the speed is the fit's: the line through the
             # recorded positions after it (:func:`afmforce.fit.ramp.drive_line`)
             zm = np.asarray(self.curve.piezo_measured, float)[index]
-            k = drive_start(t, zm)
+            dead = _dead_zone(zm) if COMPILED and zm.dtype == np.float64 else -1
+            k, whole, rest = drive_start_slopes(t, zm, None if dead < 0 else dead)
+            # the speed is the slope drive_start fitted to the same samples where it fitted one (the same
+            # robust line, so the same number: one fit of the run instead of three)
             if k:
-                t, z = t[k:], zm[k:]
-        v = _velocity(t, z)
+                v = abs(rest)
+            elif not math.isnan(whole) and np.array_equal(z, zm):
+                v = abs(whole)
+        if v is None:
+            v = _velocity(t, z)
         self.cache[("velocity", id(index))] = (index, self.time, self.z, v)
         return v
 
