@@ -148,3 +148,19 @@ def test_a_batch_goes_past_bad_files_and_names_each(tmp_path, capsys):
     assert "empty.csv: empty file" in err and "junk.spm" in err and "2 of 3 file(s) failed" in err
     assert "good.ibw" in out                                       # the good file was analysed
     assert {p.name: _digest(p) for p in tmp_path.iterdir()} == before
+
+
+@pytest.mark.parametrize("starts", [7, 100_000_000])
+def test_fit_starts_have_one_cap_on_every_face(capsys, starts):
+    from afmforce.fit.core import check_starts
+    from afmforce.limits import MAX_STARTS
+
+    assert MAX_STARTS == 6
+    line = _one_line_error(capsys, ["fit", "--example", "speeds", "--starts", str(starts)], status=(2,))
+    assert line == f"error: --starts: {starts:,} local fits is more than the {MAX_STARTS} one request may ask for"
+    with pytest.raises(ParameterError, match="`starts`"):
+        check_starts(starts)
+    check_starts(MAX_STARTS)
+    for bad in (0, -1, 1.5, True):
+        with pytest.raises(ParameterError, match="at least 1"):
+            check_starts(bad)

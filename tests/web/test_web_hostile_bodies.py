@@ -39,3 +39,11 @@ def test_an_empty_probe_value_is_said_empty(client):
     assert r.status_code == 422
     assert r.json()["error"] == {"type": "invalid_value", "field": "probe.radius",
                                  "message": "probe.radius expects a length, got an empty value; give one (e.g. 200nm)"}
+
+
+def test_fit_starts_cap_is_the_library_cap(client):
+    from afmforce.limits import MAX_STARTS
+
+    r = client.post("/api/fit", json={"velocities": ["1um/s", "5um/s"], "starts": MAX_STARTS + 1})
+    assert r.status_code == 422 and r.json()["error"]["field"] == "starts"
+    assert f"less than or equal to {MAX_STARTS}" in r.json()["error"]["message"]
