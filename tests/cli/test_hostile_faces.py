@@ -164,3 +164,11 @@ def test_fit_starts_have_one_cap_on_every_face(capsys, starts):
     for bad in (0, -1, 1.5, True):
         with pytest.raises(ParameterError, match="at least 1"):
             check_starts(bad)
+
+
+def test_a_drive_in_the_wrong_order_is_said_in_the_units_typed(capsys):
+    line = _one_line_error(capsys, ["simulate", "--start", "5um"], status=(2,))
+    assert line == ("error: --turn (20 nm) must lie above --start (5 um): the approach moves the substrate up "
+                    "(z increasing)")
+    line = _one_line_error(capsys, ["simulate", "--end", "50nm"], status=(2,))
+    assert line.startswith("error: --end (50 nm) must lie below --turn (20 nm)")

@@ -47,3 +47,38 @@ def test_fit_starts_cap_is_the_library_cap(client):
     r = client.post("/api/fit", json={"velocities": ["1um/s", "5um/s"], "starts": MAX_STARTS + 1})
     assert r.status_code == 422 and r.json()["error"]["field"] == "starts"
     assert f"less than or equal to {MAX_STARTS}" in r.json()["error"]["message"]
+
+
+_FRESH = """
+import sys, tempfile, threading
+import afmforce.web.app as web_app
+from fastapi.testclient import TestClient
+MODULES = ("afmforce.units", "afmforce.dynamics", "afmforce.dynamics.trajectory", "afmforce.io",
+           "afmforce.analysis.pipeline")
+seen, done = {}, threading.Event()
+def spy():          # the warm-up thread's first act (no compile here: only the order is tested)
+    seen.update({m: m in sys.modules for m in MODULES})
+    done.set()
+    return []
+web_app.warm_up_steps = spy
+app = web_app.create_app(web_app.Settings(data=tempfile.mkdtemp(), spare_job=False))
+with TestClient(app, base_url="http://127.0.0.1") as c:
+    done.wait(60)
+    r = c.post("/api/simulate", json={"start": "5um"})
+print(r.status_code, sorted(m for m, ok in seen.items() if not ok) if seen else "no warm-up")
+"""
+
+
+def test_the_library_is_imported_before_the_warm_up_thread_and_the_first_request():
+    """A request sent at start imported afmforce.dynamics while the warm-up thread did: a half-initialised
+    module, 500 (KeyError 'afmforce.dynamics') in 1 run of 2. Checked in a fresh interpreter (imports are
+    per process): the modules the warm-up and the requests import are loaded before its thread starts."""
+    import os
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    src = str(Path(__file__).parents[2] / "src")
+    env = {**os.environ, "PYTHONPATH": src + os.pathsep + os.environ.get("PYTHONPATH", "")}
+    out = subprocess.run([sys.executable, "-c", _FRESH], capture_output=True, text=True, env=env, timeout=600)
+    assert out.stdout.strip().splitlines()[-1] == "422 []", out.stdout + out.stderr[-2000:]
