@@ -137,7 +137,7 @@ def caps_markdown() -> str:
             ("candidate speeds of a design", MAX_SPEEDS, "plan"),
             ("designs weighed (curves among speeds, repeats allowed)", MAX_DESIGNS, "plan"),
             ("samples of all candidate curves of a design", MAX_PLAN_SAMPLES, "plan"),
-            ("local fits started by one dynamic fit", MAX_STARTS, "fit --starts, the web's fit, fit_dynamic")]
+            ("local fits started by one dynamic fit", MAX_STARTS, "fit, the web's fit, fit_dynamic")]
     lines = ["| what | at most | where |", "|---|---|---|"]
     lines += [f"| {what} | {cap:,} | {where} |" for what, cap, where in rows]
     return "\n".join(lines)
