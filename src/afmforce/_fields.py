@@ -72,8 +72,8 @@ def show(value: float | None, unit: str, display: str = "") -> str:
     if isinstance(value, int) and not isinstance(value, bool) and not unit:
         return str(value)
     v = float(value)
-    if display and display in DISPLAY_UNITS:
-        return f"{_num(v / DISPLAY_UNITS[display])} {display}"
+    if display and display in DISPLAY_UNITS and math.isfinite(v / DISPLAY_UNITS[display]) == math.isfinite(v):
+        return f"{_num(v / DISPLAY_UNITS[display])} {display}"     # (1e308 m/s is no "inf um/s": SI below)
     if unit in _AUTO and v != 0 and math.isfinite(v):
         return _auto(v, unit)
     return f"{_num(v)} {unit}".rstrip()

@@ -16,7 +16,7 @@ import math
 from .errors import ParameterError
 
 __all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
-           "MAX_DESIGNS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
+           "MAX_DESIGNS", "MAX_STARTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
 #: (Fig 9 at 1 nm/s, 4.3e6 samples) fits; a real force curve has at most ~1e6.
@@ -52,6 +52,11 @@ MAX_SPEEDS = 40
 MAX_DESIGNS = 1_000_000
 #: The most samples of all candidate curves of one design together (``plan``; each is simulated).
 MAX_PLAN_SAMPLES = 20_000_000
+
+#: The most local fits one dynamic fit starts from the best points of its scan (``fit --starts``,
+#: the web's ``starts``, ``fit_dynamic(starts=)``): the scan keeps a few best points, so more starts only
+#: re-fit the same ones (the command line took 100,000,000 and ran, the web refused 7).
+MAX_STARTS = 6
 
 #: Bytes per sample of a trajectory (its eleven float64 columns), for the message.
 _BYTES_PER_SAMPLE = 88
@@ -131,7 +136,8 @@ def caps_markdown() -> str:
             ("curves in a design", MAX_DESIGN_CURVES, "plan"),
             ("candidate speeds of a design", MAX_SPEEDS, "plan"),
             ("designs weighed (curves among speeds, repeats allowed)", MAX_DESIGNS, "plan"),
-            ("samples of all candidate curves of a design", MAX_PLAN_SAMPLES, "plan")]
+            ("samples of all candidate curves of a design", MAX_PLAN_SAMPLES, "plan"),
+            ("local fits started by one dynamic fit", MAX_STARTS, "fit, the web's fit, fit_dynamic")]
     lines = ["| what | at most | where |", "|---|---|---|"]
     lines += [f"| {what} | {cap:,} | {where} |" for what, cap, where in rows]
     return "\n".join(lines)

@@ -120,6 +120,9 @@ def parse_quantity(text: str | float | int, dimension: str, name: str = "value")
             value = float(s)
         else:
             match = _LEADING_NUMBER.match(s)
+            if match is None and not s:     # "" or "  ": said as empty, never "got  (not a number)"
+                raise UnitError(f"{name} expects {word}, got an empty value; give one (e.g. "
+                                f"{_EXAMPLE.get(dimension, '1.5')})")
             if match is None:
                 why = ("not a finite number" if s.lower().lstrip("+-") in ("nan", "inf", "infinity")
                        else "a unit without a number" if s and _UNIT.match(s) else "not a number")

@@ -2,7 +2,8 @@
 
 * **afmforce spectrum** (``.txt``/``.csv``): ``#`` header lines ``key: value [unit]`` (first
   line ``# afmforce thermal spectrum 1``), then a header row ``frequency [Hz],psd [m^2/Hz]``
-  (or ``[V^2/Hz]``) and comma-separated rows. Written atomically (:func:`write_spectrum`).
+  (or ``[V^2/Hz]``) and comma-separated rows; ``# rows: N`` (written by :func:`write_spectrum`; optional on
+  reading) lets a truncated copy be refused. Written atomically (:func:`write_spectrum`).
 * **Plain text**: two numeric columns, frequency (in Hz) and the spectrum, with the unit stated in
   a header line (``m^2/Hz``, ``V^2/Hz``, or an amplitude ``m/sqrt(Hz)``, ``V/sqrt(Hz)``, squared
   here) or given by the caller.
@@ -111,6 +112,7 @@ def write_spectrum(path, spectrum: ThermalSpectrum, force: bool = True) -> Path:
         lines.append(f"# vendor.{key}: {value!r}".replace("'", ""))
     if spectrum.source:
         lines.append(f"# source: {spectrum.source}")
+    lines.append(f"# rows: {len(spectrum.frequency)}")     # a truncated copy is refused on reading
     lines.append(f"frequency [Hz],psd [{spectrum.unit}]")
     body = "\n".join(f"{f!r},{p!r}" for f, p in zip(spectrum.frequency.tolist(), spectrum.psd.tolist()))
     return atomic_write_text(path, "\n".join(lines) + "\n" + body + "\n", force=force)
@@ -146,6 +148,10 @@ def _read_own(path: Path, text: str) -> ThermalSpectrum:
         rows.append((f, p))
     if not rows:
         raise FileFormatError(f"{path}: no spectrum rows")
+    declared = head.get("rows")
+    if declared is not None and declared.strip() != str(len(rows)):
+        raise FileFormatError(f"{path}: the header declares {declared.strip()[:20]} rows, the file holds "
+                              f"{len(rows)}: it is truncated or damaged; write or copy it again")
     data = np.array(rows)
 
     def num(key):
@@ -251,7 +257,13 @@ def _read_tnd(path: Path, text: str) -> ThermalSpectrum:
         raise FileFormatError(f"{path}: not a JPK thermal noise data file (no '# thermal noise data' "
                               "header or no rows)")
     names = re.findall(r"'([^']*)'", head.get("Channels", ""))
-    data = np.array([r for r in rows if len(r) == len(rows[0])])
+    width = len(rows[0])
+    short = next((i for i, r in enumerate(rows) if len(r) != width), None)
+    if short is not None:   # a ragged row: never a spectrum silently cut where the file was cut
+        where = "its last row" if short == len(rows) - 1 else f"data row {short + 1} of {len(rows)}"
+        raise FileFormatError(f"{path}: {where} holds {len(rows[short])} of the {width} columns of the "
+                              "others: the file is truncated or damaged; export the spectrum again")
+    data = np.array(rows)
     if data.shape[1] < 2:
         raise FileFormatError(f"{path}: the rows hold one column; expected frequency and spectrum")
     col = names.index("average") if "average" in names and names.index("average") < data.shape[1] else 1

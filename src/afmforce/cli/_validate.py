@@ -356,6 +356,8 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
 
 #: Integer options of any command (dest -> smallest valid value), checked by :func:`check_common`.
 COUNTS = {"workers": 1, "chunk_size": 1, "starts": 1, "curves": 2, "n": 1, "seed": 0}
+#: Integer options with a cap of :mod:`afmforce.limits` (dest -> (name of the cap there, what is counted)).
+CAPPED_COUNTS = {"starts": ("MAX_STARTS", "local fits")}
 
 
 def check_common(args: argparse.Namespace) -> None:
@@ -365,6 +367,12 @@ def check_common(args: argparse.Namespace) -> None:
         value = getattr(args, dest, None)
         if isinstance(value, int) and not isinstance(value, bool) and value < lo:
             raise ParameterError(f"{_flag(dest)} must be at least {lo}, got {value}")
+    for dest, (cap, what) in CAPPED_COUNTS.items():
+        value = getattr(args, dest, None)
+        if isinstance(value, int) and not isinstance(value, bool):
+            from .. import limits
+
+            limits.check_count(_flag(dest), value, getattr(limits, cap), what)
     if isinstance(getattr(args, "workers", None), int):
         from ..sweep.executors import check_workers
 

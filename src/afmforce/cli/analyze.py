@@ -29,7 +29,7 @@ from ._analyze_tethers import print_tethers
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
 from ._outcome import render, reported
 from ._verdicts import MAX_LINE, clip as _clip, dynamic_label as _dynamic_label, plain as _plain, short_verdict
-from .common import add_quantity, chunk_progress_bar, eprint, progress_bar
+from .common import add_quantity, chunk_progress_bar, eprint, progress_bar, refuse_missing
 
 SUFFIX = ".afmforce"
 #: Runs with at least this many curves are batches: Dask, resumable store, summary statistics.
@@ -176,9 +176,7 @@ def _check(args: argparse.Namespace) -> list[str] | None:
     args.files = list(args.files) + [str(example_path(n)) for n in args.example]
     if not args.files:
         raise ParameterError("give force-curve files or folders, or --example NAME (--example list shows them)")
-    missing = [f for f in args.files if not Path(f).exists()]
-    if missing:  # before any work: no output folder for a typo
-        raise ParameterError(f"no such file or folder: {', '.join(missing)}")
+    refuse_missing(args.files)  # before any work: no output folder for a typo
     steps = None if args.steps is None else [s.strip() for s in args.steps.split(",") if s.strip()]
     if steps == []:
         raise ParameterError(f"--steps {args.steps!r}: no step named; give comma-separated steps (e.g. "
@@ -347,7 +345,8 @@ def _report(args, result, refs, folder: Path | None, batch: bool) -> int:
             print(f"summary in {folder}/: " + ", ".join(p.name for p in written.values()))
     for record in records[:_MAX_LISTED if batch else None]:  # one line per failed file or curve
         name, error = record["source"], " ".join(render(_clean(record["error"])).split())
-        named = error.split(": ", 1)[0].endswith(name.split("#")[0])  # the message starts with the path
+        # the message starts with the path (or names it first: "<path> is truncated: ..."): not twice
+        named = Path(name.split("#")[0]).name in error.split(": ", 1)[0]
         eprint(f"failed: {error}" if named else f"failed: {name}: {error}")
         if RunState.debug and record["traceback"]:  # --debug: where it failed, in a batch too
             eprint(record["traceback"].rstrip())

@@ -144,3 +144,30 @@ def busy(desc: str, *, after: float = 2.0):
         stop.set()
         thread.join()
         bar.close()
+
+
+def refuse_missing(paths: list[str]) -> None:
+    """Refuse input paths that do not exist, before any work: one line naming each, a dangling
+    symbolic link or a link loop said as such (``Path.exists`` is False for both, and "no such file"
+    for a name the user sees listed is wrong).
+
+    Raises
+    ------
+    ParameterError
+        When any of ``paths`` does not lead to a file or folder.
+    """
+    import os
+
+    from ..errors import ParameterError
+
+    missing = [p for p in paths if not os.path.exists(p)]
+    if not missing:
+        return
+    links = [p for p in missing if os.path.islink(p)]
+    plain = [p for p in missing if p not in links]
+    parts = []
+    if plain:
+        parts.append(f"no such file or folder: {', '.join(plain)}")
+    if links:
+        parts.append(f"a symbolic link that leads to no file (dangling, or a loop of links): {', '.join(links)}")
+    raise ParameterError("; ".join(parts))

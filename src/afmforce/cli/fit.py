@@ -15,7 +15,8 @@ from .._files import atomic_write_text
 from ..errors import AfmforceError, ParameterError
 from ._outcome import RunState, render
 from ._validate import add_field, check_folder_outputs, check_outputs
-from .common import busy, eprint, print_json
+from ..limits import MAX_STARTS
+from .common import busy, eprint, print_json, refuse_missing
 
 __all__ = ["register", "run", "model_config", "add_model_flags"]
 
@@ -103,7 +104,7 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--level", type=float, default=0.95,
                    help="confidence level of intervals and friction test (default 0.95)")
     g.add_argument("--starts", type=int, default=2,
-                   help="local fits from the best points of a scan in xi (default 2)")
+                   help=f"local fits from the best points of a scan in xi (default 2; at most {MAX_STARTS})")
     g.add_argument("--no-compare", action="store_true",
                    help="skip the model comparison (static / no friction / friction)")
     g.add_argument("--no-profile", action="store_true",
@@ -188,9 +189,7 @@ def run(args: argparse.Namespace) -> int:
         args.curves = list(args.curves) + [str(p) for p in fit_example(args.example)]
     if not args.curves:
         raise ParameterError("give force-curve files at several speeds, or --example speeds")
-    missing = [c for c in args.curves if not Path(c).exists()]
-    if missing:
-        raise ParameterError(f"no such file or folder: {', '.join(missing)}")
+    refuse_missing(args.curves)  # before any work: no output folder for a typo
     from .analyze import _inputs  # folders as `analyze` reads them: every curve file in them
 
     named = {str(Path(c)) for c in args.curves if not Path(c).is_dir()}

@@ -26,7 +26,7 @@ from dataclasses import dataclass, make_dataclass
 from functools import lru_cache
 from typing import ClassVar
 
-from .._fields import check_beam
+from .._fields import check_beam, show
 from ..cantilever import InclinedCantilever
 from ..constants import FIG1, FIG5
 from ..errors import ParameterError
@@ -404,11 +404,11 @@ class Drive(Part):
             raise ParameterError("give at most one of turn_force [N] or turn_deflection [m]")
         if self.turn <= self.start:
             raise ParameterError(
-                f"turn ({self.turn:.4g} m) must lie above start ({self.start:.4g} m): "
+                f"`turn` ({show(self.turn, 'm')}) must lie above `start` ({show(self.start, 'm')}): "
                 "the approach moves the substrate up (z increasing)")
         if self.end >= self.turn:
             raise ParameterError(
-                f"end ({self.end:.4g} m) must lie below turn ({self.turn:.4g} m): "
+                f"`end` ({show(self.end, 'm')}) must lie below `turn` ({show(self.turn, 'm')}): "
                 "the retract moves the substrate down")
 
     @property

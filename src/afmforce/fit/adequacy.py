@@ -83,8 +83,8 @@ ADVICE = {
     "the retract's contact line": "the misfit is on the retract's contact line: backlash or creep "
                                   "at the turn; fit the approaches alone (without `retract`)",
     "the jump-in": "the misfit sits at the jump-in, where the model's surface force acts: a force "
-                   "the model lacks (a double layer, hydration, a meniscus: `afmforce simulate` "
-                   "--help lists the laws) or a wrong fixed parameter of it (z0, the radius, the "
+                   "the model lacks (a double layer, hydration, a meniscus: the help of "
+                   "afmforce simulate lists the laws) or a wrong fixed parameter of it (z0, the radius, the "
                    "lever); fit that law's parameters (`free`) or fix the right values",
 }
 

@@ -9,6 +9,7 @@ from typing import Mapping, Sequence
 import numpy as np
 
 from ..errors import ParameterError
+from ..limits import MAX_STARTS, check_count
 from ..progress import Progress
 from .data import FitCurve, prepare_curves
 from .memory import check_fit_memory
@@ -262,6 +263,19 @@ def slip_wald_unreliable(e, curves, level: float) -> str:
     return ""
 
 
+def check_starts(starts: int) -> None:
+    """Refuse a number of local fits outside ``[1, MAX_STARTS]`` (:data:`afmforce.limits.MAX_STARTS`).
+
+    Raises
+    ------
+    ParameterError
+        Naming `` `starts` ``.
+    """
+    if isinstance(starts, bool) or not isinstance(starts, (int, np.integer)) or starts < 1:
+        raise ParameterError(f"`starts` must be a whole number of local fits, at least 1, got {starts!r}")
+    check_count("`starts`", starts, MAX_STARTS, "local fits")
+
+
 def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker", "xi"),
                 fixed: Mapping[str, float] | None = None, *, names: Sequence[str] | None = None,
                 velocities: Sequence[float] | None = None,
@@ -375,6 +389,7 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
         Bad parameters, a speed-dependent parameter with all curves at one
         speed, uncalibrated or inconsistent curves, a curve without contact.
     """
+    check_starts(starts)
     t0 = time.perf_counter()
     check_value("jump_window", jump_window)        # the declared ranges (afmforce._fields.QUANTITIES)
     check_value("fringe_period", fringe_period)

@@ -425,7 +425,7 @@ def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
 
 def _unexpected(exc: BaseException) -> str:
     """What a reader found unexpected, in words (never the bare upstream text)."""
-    text = " ".join(str(exc).split())
+    text = " ".join(str(exc).split()).replace("`", "'")   # upstream `names` are no afmforce keys (errors.QUANTITY_KEY)
     text = text if len(text) <= 160 else text[:160] + "..."
     if isinstance(exc, KeyError):
         return f"the file lacks the entry {text} that the reader looks up"

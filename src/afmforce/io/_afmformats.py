@@ -52,9 +52,17 @@ for _name in ("afmformats", "igor2"):
     logging.getLogger(_name).propagate = False
 
 
+#: Advice of a library under afmformats that names its own arguments (numpy's "use `usecols` to
+#: select a subset"): cut from the message; each face renders a `` `key` `` as its own flag or field
+#: (:data:`afmforce.errors.QUANTITY_KEY`), so the command line said "use --usecols", a flag afmforce has not.
+_FOREIGN_ADVICE = re.compile(r";?\s*use `usecols` to select a subset and avoid this error")
+
+
 def _short(exc: BaseException, limit: int = 200) -> str:
-    """The exception's text, cut to ``limit`` characters (some embed whole byte buffers)."""
-    text = str(exc)
+    """The exception's text, cut to ``limit`` characters (some embed whole byte buffers), without
+    advice naming another library's arguments (:data:`_FOREIGN_ADVICE`) and with its other
+    backquotes made plain quotes (never rendered as an afmforce flag)."""
+    text = _FOREIGN_ADVICE.sub("", str(exc)).replace("`", "'")
     return text if len(text) <= limit else text[:limit] + "..."
 
 

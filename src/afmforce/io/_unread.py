@@ -94,6 +94,15 @@ def _park_kind(path: Path, end: str, tags: dict) -> str:
     return {0: "image", 1: "line profile", 2: "spectroscopy"}.get(kind, "")
 
 
+def _is_tiff(path: Path) -> bool:
+    """Whether the file starts with a TIFF signature (``II*\\0`` or ``MM\\0*``)."""
+    try:
+        with open(path, "rb") as fh:
+            return fh.read(4) in (b"II*\x00", b"MM\x00*")
+    except OSError:
+        return False
+
+
 def _tiff(path: Path) -> tuple[str, str, str]:
     try:
         end, tags = _tiff_tags(path)
@@ -135,6 +144,8 @@ def unread_refusal(path: str | Path) -> str | None:
     suffix = next((s for s in sorted(UNREAD, key=len, reverse=True) if name.endswith(s)), None)
     if suffix is None:
         return None
+    if suffix in (".tiff", ".tif") and not _is_tiff(path):
+        return None     # not a TIFF at all (no signature): never named "a TIFF image"
     what, why, todo = _tiff(path) if suffix in (".tiff", ".tif") else UNREAD[suffix]
     if suffix == ".uff":
         source = _uff_source(path)

@@ -54,6 +54,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
 
     @asynccontextmanager
     async def lifespan(app):
+        import_library()     # before any thread: never two threads importing one package (see there)
         warming.set()
         threading.Thread(target=warm_up, daemon=True, name="afmforce-warm-up").start()
         jobs.load()          # sweeps left running by a previous server resume
@@ -90,6 +91,27 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.add_middleware(Guard, token=settings.token, max_body=settings.max_upload, loopback=settings.loopback,
                        allow_origins=settings.allow_origins, session_ttl=settings.session_ttl, seen=sessions.seen)
     return app
+
+
+#: The modules the warm-up thread and the first requests import, imported by the lifespan before either
+#: runs. A request imported ``afmforce.dynamics`` while the warm-up thread was importing it too: Python's
+#: per-module import locks then hand one thread the other's half-initialised module (``ImportError:
+#: cannot import name 'SolverStats' from partially initialized module``, then ``KeyError:
+#: 'afmforce.dynamics'``: a 500 for ``POST /api/simulate`` sent at start, 1 run in 2 on this machine).
+LIBRARY_MODULES = ("afmforce.units", "afmforce.dynamics", "afmforce.dynamics.trajectory", "afmforce.io",
+                   "afmforce.analysis.pipeline", "afmforce.fit", "afmforce.sweep", "afmforce.web.schema")
+
+
+def import_library() -> None:
+    """Import :data:`LIBRARY_MODULES` in this thread (no compile: ~1-2 s the first time in a process,
+    nothing after). One that fails is left to the warm-up and the request that needs it to report."""
+    import importlib
+
+    for name in LIBRARY_MODULES:
+        try:
+            importlib.import_module(name)
+        except Exception:       # noqa: BLE001 -- the warm-up step or the request says what is wrong
+            pass
 
 
 def warm_up_steps() -> list[str]:

@@ -91,6 +91,12 @@ def install(app) -> None:
         msg = first.get("msg", "invalid request")
         if first.get("type") == "json_invalid":
             field, msg = None, "the body is not valid JSON"
+        elif "Expected UploadFile" in msg:   # a part without a file name: pydantic's words name its classes
+            msg = ("a form value, not a file: send each file as a multipart/form-data file part with its "
+                   "file name")
+        elif isinstance(first.get("input"), (bytes, bytearray)) and first.get("type") in (
+                "dict_type", "model_attributes_type"):  # a form or text body where JSON is read
+            field, msg = None, "the body must be a JSON object, sent with content-type application/json"
         elif "input" in first and first.get("type") != "missing":
             msg = f"{msg}, got {_shown(first['input'])}"
         return JSONResponse(error_body("invalid_request", f"{field}: {msg}" if field else msg, field),

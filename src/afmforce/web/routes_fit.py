@@ -10,6 +10,7 @@ from pydantic import BaseModel, ConfigDict, Field
 from ..errors import AfmforceError
 from . import validate
 from .jobs import fit_reserve
+from ..limits import MAX_STARTS
 from .limits import MAX_CURVES, MAX_ITEMS
 from .schema import fit_defaults
 
@@ -34,7 +35,7 @@ class FitRequest(BaseModel):
     seed: int = Field(default=0, ge=0, le=2**32 - 1, strict=True)
     free: list[str] = Field(default=_DEFAULTS["free"], max_length=16, description="global parameters to fit")
     meta: list[str] = Field(default=[], max_length=MAX_ITEMS, description="KEY=VALUE metadata for uploaded curves")
-    starts: int = Field(default=_DEFAULTS["starts"], ge=1, le=6, strict=True,
+    starts: int = Field(default=_DEFAULTS["starts"], ge=1, le=MAX_STARTS, strict=True,
                         description="local fits from the best points of the search")
     profile: bool = Field(default=_DEFAULTS["profile"], strict=True, description="profile-likelihood intervals")
     compare: bool = Field(default=_DEFAULTS["compare"], strict=True,
