@@ -53,12 +53,13 @@ def wave_note(path) -> dict[str, str]:
     return out
 
 
-def nanite_hertz_para(force, z, radius: float, spring_constant: float) -> float:
+def nanite_hertz_para(force, z, radius: float, spring_constant: float, segment=None, time=None) -> float:
     """nanite's Young's modulus [Pa] of one approach-retract curve given as arrays, the reference fit of the
     real-file tests: its preprocessing (tip position, force offset, ``fit_line_polynomial`` contact point) and
     a Hertz paraboloid (Poisson 0.5) on the approach. ``force`` [N] and ``z`` [m] (the piezo, towards the
     sample positive) hold the approach, then the retract, of equal halves (the approach one sample shorter
-    when odd). Skips the test without nanite (the bench extra)."""
+    when odd), unless ``segment`` (False/0 on the approach) and ``time`` [s] are given. Skips the test without
+    nanite (the bench extra)."""
     import warnings
 
     import numpy as np
@@ -66,13 +67,20 @@ def nanite_hertz_para(force, z, radius: float, spring_constant: float) -> float:
     nanite = pytest.importorskip("nanite")
     force, z = np.asarray(force, float), np.asarray(z, float)
     half = force.size // 2
+    if segment is None:
+        segment = np.r_[np.zeros(half, bool), np.ones(force.size - half, bool)]
+    if time is None:
+        time, duration = np.arange(force.size) * 1e-3, 1.0
+    else:
+        time = np.asarray(time, float) - float(time[0])
+        duration = float(time[-1])
     md = {"spring constant": spring_constant, "sensitivity": 1.0, "path": "x", "enum": 0,
-          "imaging mode": "force-distance", "duration": 1.0, "point count": force.size}
+          "imaging mode": "force-distance", "duration": duration, "point count": force.size}
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
         idnt = nanite.Indentation(data={"force": force, "height (measured)": -z,
-                                        "segment": np.r_[np.zeros(half, bool), np.ones(force.size - half, bool)],
-                                        "time": np.arange(force.size) * 1e-3}, metadata=md)
+                                        "segment": np.asarray(segment).astype(bool), "time": time},
+                                       metadata=md)
         idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
                                  options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
         p = idnt.get_initial_fit_parameters(model_key="hertz_para")

@@ -23,7 +23,7 @@ from afmforce.analysis.pipeline import analyze
 from afmforce.analysis.regions import baseline_steps
 from afmforce.instrument.soft_map import SoftMapConfig, soft_curve
 from afmforce.io import load
-from realdata import real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
+from realdata import nanite_hertz_para, real_file  # noqa: E402  (tests/ is on sys.path: tests/conftest.py)
 
 CFG = SoftMapConfig(points=1000, ramp=3e-6, noise=0.1e-9, radius=1e-6, spring_constant=0.03, setpoint=0.5e-9,
                     velocity=4e-6)
@@ -109,7 +109,7 @@ def test_real_picoforce_baseline_step_zero_and_modulus():
     deflection: -3.71 -> -3.65 V). Before, the drift line fitted across it put the approach's zero of force 0.12 V
     (0.23 nN) low at the contact and E (1 um tip) 7.4 kPa [4.8, 10.0]; nanite 4.2.3 on the file as it is fits its
     contact point 6.4 um away, outside the 2.6 um of data (E 15 Pa); on the step taken out, 5.67 kPa."""
-    nanite = pytest.importorskip("nanite")
+    pytest.importorskip("nanite")
     (c,) = load(real_file(KONTRKULKA))
     r = analyze(c, options=[IndentationOptions(tip_radius=1e-6)])
     (note,) = [w for w in r.warnings if "free baseline steps by" in w]
@@ -127,29 +127,9 @@ def test_real_picoforce_baseline_step_zero_and_modulus():
     # nanite on the curve with the step taken out (the samples before it raised by the levels' difference)
     fixed = s.copy()
     fixed[app[:253]] += jump
-    e_ref = _nanite_hertz(nanite, fixed * sens * k, np.asarray(c.piezo_measured, float), np.asarray(c.segment),
-                          np.asarray(c.time, float), k, 1e-6)
+    e_ref = nanite_hertz_para(fixed * sens * k, np.asarray(c.piezo_measured, float), 1e-6, k,
+                              segment=np.asarray(c.segment), time=np.asarray(c.time, float))
     assert e_ref == pytest.approx(5.67e3, rel=0.05)
     assert r.youngs_modulus == pytest.approx(e_ref, rel=0.08)
     assert r.youngs_modulus_low <= e_ref <= r.youngs_modulus_high
 
-
-def _nanite_hertz(nanite, force, z, segment, time, k, radius) -> float:
-    """nanite's Hertz paraboloid E [Pa] (Poisson 0.5) on the approach: tip position, force offset,
-    ``fit_line_polynomial`` contact point (the preprocessing of ``tests/realdata.py``'s reference fit)."""
-    import warnings
-
-    md = {"spring constant": k, "sensitivity": 1.0, "path": "x", "enum": 0, "imaging mode": "force-distance",
-          "duration": float(time[-1] - time[0]), "point count": force.size}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        idnt = nanite.Indentation(data={"force": force, "height (measured)": -z, "segment": segment.astype(bool),
-                                        "time": time - time[0]}, metadata=md)
-        idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
-                                 options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
-        p = idnt.get_initial_fit_parameters(model_key="hertz_para")
-        p["R"].set(value=radius)
-        p["nu"].set(value=0.5)
-        idnt.fit_model(model_key="hertz_para", params_initial=p, weight_cp=0, range_x=(0, 0),
-                       range_type="absolute", segment="approach")
-    return float(idnt.fit_properties["params_fitted"]["E"].value)
