@@ -155,3 +155,22 @@ def test_ideal_fit_does_not_turn_on_the_last_ulp(tmp_path, ideal_files, seed):
     a0, xi0 = _truth()
     assert abs(r["parameters"]["hamaker"]["value"] / a0 - 1) < 0.01, r["parameters"]["hamaker"]
     assert abs(r["parameters"]["xi"]["value"] / xi0 - 1) < 0.01, r["parameters"]["xi"]
+
+
+def test_jump_approach_samples():
+    """The samples a noise-free fit leaves out: the steep run before the jump-in (dy/dz > 1,
+    from the closed form of a saddle-node, y ~ -sqrt(z_j - z)), and no more than 1 nm of a
+    hard contact (slope 1.2) where a jump index was misplaced."""
+    from types import SimpleNamespace
+
+    from afmforce.fit.core import JUMP_APPROACH_RANGE, _jump_approach
+
+    z = np.arange(0, 20e-9, 0.05e-9)
+    zj = z[300] + 0.025e-9                          # the jump-in between samples 300 and 301
+    y = np.where(z < zj, -np.sqrt(1e-9 * np.clip(zj - z, 0, None)), -5e-9)
+    got = _jump_approach(SimpleNamespace(position=z, deflection=y, jump_index=301))
+    slope = np.abs(np.gradient(y[:301], z[:301]))   # 0.5 sqrt(1e-9 / (zj - z)) > 1 within 0.25 nm
+    assert got.tolist() == list(range(296, 301)) and np.all(slope[296:301] > 1) and slope[295] <= 1
+    contact = SimpleNamespace(position=z, deflection=1.2 * z, jump_index=300)
+    n = _jump_approach(contact).size
+    assert 0 < n and n * 0.05e-9 <= JUMP_APPROACH_RANGE + 0.05e-9

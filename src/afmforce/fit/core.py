@@ -214,6 +214,10 @@ def mass_from_files(base, curves: list[FitCurve], mass: str = "file"):
 #: amplified more than twofold (a saddle-node: the ``ideal`` preset's truth misfits there by
 #: 25-150 integration tolerances, 5 samples at 0.5 um/s, 1 at 2 um/s).
 JUMP_APPROACH_SLOPE = 1.0
+#: Piezo travel before the jump-in within which :data:`JUMP_APPROACH_SLOPE` may leave samples
+#: out [m] (the steep run spans 0.25 nm on the ``ideal`` preset; a jump index misplaced into a
+#: hard contact, slope ~1, loses no more than this).
+JUMP_APPROACH_RANGE = 1e-9
 
 
 def _jump_approach(c) -> np.ndarray:
@@ -226,7 +230,8 @@ def _jump_approach(c) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
         s = np.abs(np.gradient(y, z))
     k = j - 1
-    while k > 0 and (not np.isfinite(s[k]) or s[k] > JUMP_APPROACH_SLOPE):
+    while k > 0 and (not np.isfinite(s[k]) or s[k] > JUMP_APPROACH_SLOPE) \
+            and abs(z[j - 1] - z[k]) < JUMP_APPROACH_RANGE:
         k -= 1
     return np.arange(k + 1, j)
 
