@@ -96,5 +96,81 @@ def test_ideal_preset_noise_free(tmp_path):
     assert all(c["sigma"] >= 1e-12 for c in r["curves"])
     assert any("no noise in the data" in w for w in r["warnings"])
     assert r["redchi"] < r["adequacy"]["threshold"]
+    a0, xi0 = _truth()     # the truth, to the model's own error (before: A +11 %, xi -4 %)
+    assert abs(r["parameters"]["hamaker"]["value"] / a0 - 1) < 0.01, r["parameters"]["hamaker"]
+    assert abs(r["parameters"]["xi"]["value"] / xi0 - 1) < 0.01, r["parameters"]["xi"]
     for e in r["parameters"].values():       # no tight interval on noise-free data
         assert e["interval_method"] == "undetermined" and e["interval"] == [None, None]
+
+
+def _perturbed(src, dst, seed: int, rel: float = 1e-12) -> None:
+    """``src`` (an afmforce raw file) with its deflection column moved by a random relative
+    ``rel`` (the last bits a change of the forward model moves: forward5's ``sample_step``
+    moved them by 3e-23 m)."""
+    rng = np.random.default_rng(seed)
+    lines = src.read_text().splitlines()
+    head = next(i for i, s in enumerate(lines) if not s.startswith("#"))
+    col = lines[head].split("\t").index("deflection_signal [m]")
+    out = lines[: head + 1]
+    for s in lines[head + 1:]:
+        if s.startswith("#"):          # the trailer
+            out.append(s)
+            continue
+        f = s.split("\t")
+        y = float(f[col])
+        f[col] = repr(y * (1 + rel * rng.standard_normal()))
+        out.append("\t".join(f))
+    dst.write_text("\n".join(out) + "\n")
+
+
+@pytest.fixture(scope="module")
+def ideal_files(tmp_path_factory):
+    d = tmp_path_factory.mktemp("ideal")
+    files = []
+    for v in SPEEDS:
+        f = d / f"ideal_{v.replace('/', '_')}.txt"
+        assert main(["simulate", "--instrument", "ideal", "--seed", "1", "--velocity", v,
+                     "--raw", str(f), "--no-progress"]) == 0
+        files.append(f)
+    return files
+
+
+@pytest.mark.parametrize("seed", [1, 2, 3])
+def test_ideal_fit_does_not_turn_on_the_last_ulp(tmp_path, ideal_files, seed):
+    """Noise-free curves moved by 1e-12 relative (far below the 1 pm floor) fit back to the
+    truth. Before: the optimum turned on the last ulp (reduced chi-square 0.96 before
+    forward5's 3e-23 m change of ``sample_step``, 47 after), because the approach's last
+    samples before the jump-in (the model's error amplified there, 25-150 pm at the truth)
+    dominated the chi-square; the truth itself had reduced chi-square 28."""
+    files = []
+    for f in ideal_files:
+        g = tmp_path / f.name
+        _perturbed(f, g, seed)
+        assert g.read_text() != f.read_text()
+        files.append(str(g))
+    out = tmp_path / "fit.json"
+    main(["fit", *files, "--out", str(out)])
+    r = json.loads(out.read_text())
+    assert r["adequacy"]["adequate"] and r["redchi"] < r["adequacy"]["threshold"], r["redchi"]
+    a0, xi0 = _truth()
+    assert abs(r["parameters"]["hamaker"]["value"] / a0 - 1) < 0.01, r["parameters"]["hamaker"]
+    assert abs(r["parameters"]["xi"]["value"] / xi0 - 1) < 0.01, r["parameters"]["xi"]
+
+
+def test_jump_approach_samples():
+    """The samples a noise-free fit leaves out: the steep run before the jump-in (dy/dz > 1,
+    from the closed form of a saddle-node, y ~ -sqrt(z_j - z)), and no more than 1 nm of a
+    hard contact (slope 1.2) where a jump index was misplaced."""
+    from types import SimpleNamespace
+
+    from afmforce.fit.core import JUMP_APPROACH_RANGE, _jump_approach
+
+    z = np.arange(0, 20e-9, 0.05e-9)
+    zj = z[300] + 0.025e-9                          # the jump-in between samples 300 and 301
+    y = np.where(z < zj, -np.sqrt(1e-9 * np.clip(zj - z, 0, None)), -5e-9)
+    got = _jump_approach(SimpleNamespace(position=z, deflection=y, jump_index=301))
+    slope = np.abs(np.gradient(y[:301], z[:301]))   # 0.5 sqrt(1e-9 / (zj - z)) > 1 within 0.25 nm
+    assert got.tolist() == list(range(296, 301)) and np.all(slope[296:301] > 1) and slope[295] <= 1
+    contact = SimpleNamespace(position=z, deflection=1.2 * z, jump_index=300)
+    n = _jump_approach(contact).size
+    assert 0 < n and n * 0.05e-9 <= JUMP_APPROACH_RANGE + 0.05e-9
