@@ -5,6 +5,7 @@ gives a reader the user's values only where the file cannot be read without them
 from __future__ import annotations
 
 import dataclasses
+import math
 
 import numpy as np
 import pytest
@@ -78,5 +79,8 @@ def test_a_given_sensitivity_that_cannot_rescale_the_stored_force_is_said():
     res = analyze(c, probe=ProbeCalibration(sensitivity=S_U))
     assert res.adhesion_force == analyze(c).adhesion_force
     assert any("yours cannot rescale it" in w and "60 nm/V" in w for w in res.warnings)
+    # not reported as the forces' sensitivity either (was "sens. used 60 (user)"): the file's, which it has none of
+    assert math.isnan(res.sensitivity_used)
+    assert not any("yours is used" in w for w in res.warnings)
     no_k = dataclasses.replace(c, metadata={k: v for k, v in c.metadata.items() if k != "spring_constant"})
     assert apply_given(no_k, ProbeCalibration(spring_constant=K_U)) is no_k   # a k turns the force into deflections

@@ -242,6 +242,7 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
         notes.append(str(k_note))
     if curve.metadata.get("given_calibration_note"):   # afmforce.io.given.GIVEN_NOTE: a given value not applied
         notes.append(str(curve.metadata["given_calibration_note"]))
+        probe = _without_sensitivity(probe)   # not reported as used ("sens. used" 30 (user) before): the file's
     if curve.metadata.get("approach_steps"):  # a step indentation: its later extends are holds (io._meta)
         notes.append(str(curve.metadata["approach_steps"]))
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
@@ -369,6 +370,17 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
 
 
 _PROBE: list[ProbeCalibration] = []
+
+
+def _without_sensitivity(probe: ProbeCalibration) -> ProbeCalibration:
+    """``probe`` without its sensitivity (its other values and their origins kept): a given sensitivity that could
+    not rescale the curve's stored force (:data:`afmforce.io.given.GIVEN_NOTE`) is not the forces' and is not
+    reported as the one used."""
+    if probe.sensitivity is None:
+        return probe
+    out = probe._marked({})
+    object.__setattr__(out, "sensitivity", None)
+    return out
 
 
 def _default_probe() -> ProbeCalibration:
