@@ -242,7 +242,8 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
         notes.append(str(k_note))
     if curve.metadata.get("given_calibration_note"):   # afmforce.io.given.GIVEN_NOTE: a given value not applied
         notes.append(str(curve.metadata["given_calibration_note"]))
-        probe = _without_sensitivity(probe)   # not reported as used ("sens. used" 30 (user) before): the file's
+        if curve.metadata.get("sensitivity") is None:   # none of its own: the forces' sensitivity is unknown
+            probe = _without_sensitivity(probe)   # not reported as used ("sens. used" 30 (user) before)
     if curve.metadata.get("approach_steps"):  # a step indentation: its later extends are holds (io._meta)
         notes.append(str(curve.metadata["approach_steps"]))
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
@@ -374,8 +375,9 @@ _PROBE: list[ProbeCalibration] = []
 
 def _without_sensitivity(probe: ProbeCalibration) -> ProbeCalibration:
     """``probe`` without its sensitivity (its other values and their origins kept): a given sensitivity that could
-    not rescale the curve's stored force (:data:`afmforce.io.given.GIVEN_NOTE`) is not the forces' and is not
-    reported as the one used."""
+    not rescale the stored force of a curve that records none (:data:`afmforce.io.given.GIVEN_NOTE`) is not the
+    forces' and is not reported as the one used. (Over a damaged file value, one no lever has, the user's stays:
+    the analysis refuses the file's, see tests/analysis/test_hostile_curves.py.)"""
     if probe.sensitivity is None:
         return probe
     out = probe._marked({})
