@@ -188,6 +188,15 @@ class ProbeCalibration(_Validated):
             object.__setattr__(out, key, value)
         return out
 
+    def without(self, *names: str) -> "ProbeCalibration":
+        """This record with ``names`` not given (the file's then; the other values and their origins kept): a
+        given sensitivity that could not rescale the stored force of a curve recording none is not reported
+        as the one used (:func:`afmforce.analysis.state.prepare`; tests/io/test_given_calibration.py)."""
+        out = self._marked({})
+        for name in names:
+            object.__setattr__(out, name, None)
+        return out
+
     def from_calibration_file(self, names, method: str | None = None,
                               invols: float | None = None) -> "ProbeCalibration":
         """This record with ``names`` marked as taken from a probe calibration file (:meth:`origin`) made by

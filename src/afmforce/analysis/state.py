@@ -17,6 +17,7 @@ import numpy as np
 from .._fields import QUANTITIES
 from ..errors import AnalysisError
 from ..io.curve import RawCurve
+from ..io.given import GIVEN_NOTE
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._median import median
 from ._numeric import ptp
@@ -240,10 +241,10 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     k_note = curve.metadata.get("spring_constant_note")   # a header with several spring constants (the reader's)
     if k_note and probe.spring_constant is None:
         notes.append(str(k_note))
-    if curve.metadata.get("given_calibration_note"):   # afmforce.io.given.GIVEN_NOTE: a given value not applied
-        notes.append(str(curve.metadata["given_calibration_note"]))
-        if curve.metadata.get("sensitivity") is None:   # none of its own: the forces' sensitivity is unknown
-            probe = _without_sensitivity(probe)   # not reported as used ("sens. used" 30 (user) before)
+    if curve.metadata.get(GIVEN_NOTE):   # a given value not applied (afmforce.io.given)
+        notes.append(str(curve.metadata[GIVEN_NOTE]))
+        if curve.metadata.get("sensitivity") is None:   # none of its own: the forces' sensitivity is unknown, and
+            probe = probe.without("sensitivity")      # the given one is not reported as used ("30 (user)" before)
     if curve.metadata.get("approach_steps"):  # a step indentation: its later extends are holds (io._meta)
         notes.append(str(curve.metadata["approach_steps"]))
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
@@ -371,18 +372,6 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
 
 
 _PROBE: list[ProbeCalibration] = []
-
-
-def _without_sensitivity(probe: ProbeCalibration) -> ProbeCalibration:
-    """``probe`` without its sensitivity (its other values and their origins kept): a given sensitivity that could
-    not rescale the stored force of a curve that records none (:data:`afmforce.io.given.GIVEN_NOTE`) is not the
-    forces' and is not reported as the one used. (Over a damaged file value, one no lever has, the user's stays:
-    the analysis refuses the file's, see tests/analysis/test_hostile_curves.py.)"""
-    if probe.sensitivity is None:
-        return probe
-    out = probe._marked({})
-    object.__setattr__(out, "sensitivity", None)
-    return out
 
 
 def _default_probe() -> ProbeCalibration:
