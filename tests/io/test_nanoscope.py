@@ -126,7 +126,7 @@ def test_damaged_files_are_named(tmp_path):
     data = path.read_bytes()
     cut = tmp_path / "cut.spm"
     cut.write_bytes(data[:-10])
-    with pytest.raises(FileFormatError, match="cut.spm.*outside the file"):
+    with pytest.raises(FileFormatError, match="cut.spm.*truncated"):
         load(cut)
     nohead = tmp_path / "nohead.spm"
     nohead.write_bytes(data[: data.find(b"\\*File list end")])

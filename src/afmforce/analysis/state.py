@@ -247,6 +247,8 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
             probe = probe.without("sensitivity")      # the given one is not reported as used ("30 (user)" before)
     if curve.metadata.get("approach_steps"):  # a step indentation: its later extends are holds (io._meta)
         notes.append(str(curve.metadata["approach_steps"]))
+    if curve.metadata.get("file_truncated"):  # a force volume read up to where its file ends (io.nanoscope)
+        notes.append(str(curve.metadata["file_truncated"]))
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
     if processed:
         notes.insert(0, f"read as a processed export: {processed}")

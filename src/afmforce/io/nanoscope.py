@@ -51,6 +51,7 @@ from __future__ import annotations
 
 import math
 import re
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, Mapping
 
@@ -232,12 +233,14 @@ def _grid(sections, where: str) -> tuple[int, int, float] | None:
 
 
 def count_curves(path: Path) -> int | None:
-    """Curves in a NanoScope force volume, from its header alone (None: a single-curve file)."""
+    """Curves in a NanoScope force volume, from its header and its size alone (None: a single-curve file):
+    those the file holds whole (a volume cut short, or a channel holding fewer than its grid, counts its
+    complete curves as :class:`NanoscopeFile` reads them)."""
     path = Path(path)
     with open(path, "rb") as fh:
         head = fh.read(MAX_HEADER + 64)
-    grid = _grid(parse_header(head, str(path)), str(path))
-    return None if grid is None else grid[0] * grid[1]
+    lay = _layout(parse_header(head, str(path)), path.stat().st_size, str(path))
+    return None if lay.grid is None else lay.whole
 
 
 def _grid_point(grid, i: int) -> dict[str, Any]:
@@ -260,6 +263,15 @@ def _sample_width(length: int, per: int, n_curves: int, entries: Mapping[str, st
     said_bpp = int(_number(said, where, "Bytes/pixel")) if said is not None else None
     if length % (per * n_curves) == 0 and length // (per * n_curves) in (2, 4):
         return length // (per * n_curves)
+    if n_curves > 1:  # a force volume whose channel holds fewer curves than its grid: a width giving more is wrong
+        fits = [bpp for bpp in (2, 4) if length % (per * bpp) == 0 and length // (per * bpp) <= n_curves]
+        if len(fits) == 1:
+            return fits[0]
+        raise FileFormatError(
+            f"{where}: channel length {length} bytes is not the force volume's {n_curves} curves of {per} points"
+            + (f", and {length // (per * 2)} curves of 2-byte or {length // (per * 4)} of 4-byte samples both "
+               "fit in it: the sample width, hence the curves, cannot be told; damaged file" if fits else
+               " in 2- or 4-byte samples, nor fewer of them; damaged file"))
     for bpp in (said_bpp, 4, 2):  # curves of unknown number: the header's width first
         if bpp in (2, 4) and length % (per * bpp) == 0:
             return bpp
@@ -381,6 +393,91 @@ def _hold_samples(sections, defl: Mapping[str, str], per: int, n_curves: int, wh
     return hold if fits[0] and not fits[1] else 0
 
 
+def _truncation(rows: int, whole: int, volume: bool, size: int, where: str) -> str | None:
+    """The one line that says a force volume's file ends before its last curve (``rows`` stated by the
+    header, ``whole`` complete in the file): its complete curves are read, the rest are not (a cut
+    curve's missing samples are never made up). None for a whole file; a single-curve file cut short,
+    or a volume without one complete curve, is refused."""
+    if whole == rows:
+        return None
+    if not volume or whole == 0:
+        what = "its curve's data" if rows == 1 else f"the data of its first curve (of {rows})"
+        raise FileFormatError(f"{where}: the file ({size} bytes) ends inside {what}; truncated: no complete curve "
+                              "to read")
+    return (f"the file ({size} bytes) ends inside curve {whole} of the force volume's {rows} (counted from 0): "
+            f"truncated; curves 0-{whole - 1} read, curves {whole}-{rows - 1} not read")
+
+
+@dataclass(frozen=True)
+class _Layout:
+    """Where a NanoScope force file's curves lie: the runs' samples, the channels read and how many
+    curves the file holds whole (see :func:`_layout`)."""
+
+    grid: tuple[int, int, float] | None
+    app_recorded: int | None
+    n_app: int
+    n_ret: int
+    n_hold: int
+    per: int
+    defl: dict
+    zsen: dict | None
+    d_place: tuple
+    z_place: tuple | None
+    whole: int
+    truncated: str | None
+
+
+def _layout(sections, size: int, where: str) -> _Layout:
+    """The layout of the curves from the header and the file's ``size`` [bytes] (no sample read): the
+    complete curves (``whole``; a force volume cut short keeps those, :func:`_truncation`)."""
+    chans = _channels(sections)
+    if not chans:
+        raise FileFormatError(f"{where}: no '\\*Ciao force image list' (no curve data) in the header")
+    _refuse_ramp_script(sections, where)
+    samps = _find(sections, "Samps/line", "Ciao force list") or _find(sections, "Samps/line", "Ciao force image list")
+    counts = [int(float(v)) for v in re.findall(_NUMBER, samps or "")]
+    if not counts or min(counts) < 2 or max(counts) > 10**7:
+        raise FileFormatError(f"{where}: NanoScope header 'Samps/line' missing or invalid ({samps!r})")
+    n_app, n_ret = (counts[0], counts[1]) if len(counts) >= 2 else (counts[0], counts[0])
+    defl = next((c for c in chans if "defl" in _channel_name(c).lower()), chans[0])
+    zsen = next((c for c in chans if _channel_name(c).lower() in ("zsensor", "height sensor", "heightsensor")), None)
+
+    grid = _grid(sections, where)
+    n_curves = grid[0] * grid[1] if grid is not None else 1
+    app_recorded = _triggered_approach(counts, defl, n_curves, where)
+    if app_recorded is not None:  # v5/v6: two runs of Samps/line slots, the approach cut short
+        n_app = n_ret = counts[0]
+    n_hold = _hold_samples(sections, defl, n_app + n_ret, n_curves, where)
+    per = n_app + n_ret + n_hold
+
+    def place(entries) -> tuple[int, int, int, int, float, float]:
+        """(offset, bytes per sample, curves the header states, complete curves in the file, V/LSB,
+        sensitivity) of a channel."""
+        offset = int(_number(entries.get("Data offset"), where, "Data offset"))
+        length = int(_number(entries.get("Data length"), where, "Data length"))
+        if length <= 0 or offset < 0 or offset >= size:
+            raise FileFormatError(f"{where}: channel data ({length} bytes at {offset}) lies outside the file "
+                                  f"({size} bytes); truncated or damaged")
+        bpp = _sample_width(length, per, n_curves, entries, where)
+        rows = length // (bpp * per)
+        vlsb, sens, _ = _channel_scale(entries, sections, where)
+        return offset, bpp, rows, min(rows, (size - offset) // (bpp * per)), vlsb, sens
+
+    d_place = place(defl)
+    rows, whole = d_place[2], d_place[3]
+    z_place = place(zsen) if zsen is not None else None
+    if z_place is not None and z_place[2] == rows:  # the Z sensor's curves are the deflection's
+        whole = min(whole, z_place[3])
+    truncated = _truncation(rows, whole, grid is not None, size, where)
+    if grid is not None and rows < n_curves:  # the header's own data length holds fewer curves than the grid
+        truncated = "; ".join(filter(None, [
+            f"the deflection channel's data length holds {rows} of the {grid[0]} x {grid[1]} grid's {n_curves} "
+            f"curves (a capture stopped early?): grid points {rows}-{n_curves - 1} have no curve", truncated]))
+    z_ok = z_place is not None and z_place[2] == rows
+    return _Layout(grid, app_recorded, n_app, n_ret, n_hold, per, defl, zsen if z_ok else None, d_place,
+                   z_place if z_ok else None, whole, truncated)
+
+
 class NanoscopeFile:
     """An open NanoScope force file whose curves are read one at a time (:meth:`curve`): a force
     volume of any size in the memory of one curve (the header is parsed once, each curve's samples
@@ -404,49 +501,24 @@ class NanoscopeFile:
     def _open(self, head: bytes, size: int, meta_override) -> None:
         where = self.where
         sections = parse_header(head, where)
-        chans = _channels(sections)
-        if not chans:
-            raise FileFormatError(f"{where}: no '\\*Ciao force image list' (no curve data) in the header")
-        _refuse_ramp_script(sections, where)
-        samps = _find(sections, "Samps/line", "Ciao force list") or _find(sections, "Samps/line", "Ciao force image list")
-        counts = [int(float(v)) for v in re.findall(_NUMBER, samps or "")]
-        if not counts or min(counts) < 2 or max(counts) > 10**7:
-            raise FileFormatError(f"{where}: NanoScope header 'Samps/line' missing or invalid ({samps!r})")
-        n_app, n_ret = (counts[0], counts[1]) if len(counts) >= 2 else (counts[0], counts[0])
-        defl = next((c for c in chans if "defl" in _channel_name(c).lower()), chans[0])
-        zsen = next((c for c in chans if _channel_name(c).lower() in ("zsensor", "height sensor", "heightsensor")), None)
-
-        grid = self._grid = _grid(sections, where)
-        n_curves = grid[0] * grid[1] if grid is not None else 1
-        self._app_recorded = _triggered_approach(counts, defl, n_curves, where)
-        if self._app_recorded is not None:  # v5/v6: two runs of Samps/line slots, the approach cut short
-            n_app = n_ret = counts[0]
-        n_hold = _hold_samples(sections, defl, n_app + n_ret, n_curves, where)
-        per = n_app + n_ret + n_hold
-
-        def place(entries) -> tuple[int, int, int, float, float]:
-            """(offset, bytes per sample, curves, V/LSB, sensitivity) of a channel, its ADC shift checked."""
-            offset = int(_number(entries.get("Data offset"), where, "Data offset"))
-            length = int(_number(entries.get("Data length"), where, "Data length"))
-            if length <= 0 or offset < 0 or offset + length > size:
-                raise FileFormatError(f"{where}: channel data ({length} bytes at {offset}) lies outside the file "
-                                      f"({size} bytes); truncated or damaged")
-            bpp = _sample_width(length, per, n_curves, entries, where)
-            rows = length // (bpp * per)
-            vlsb, sens, _ = _channel_scale(entries, sections, where)
-            return offset, bpp, rows, vlsb, sens
-
-        d_off, d_bpp, rows, d_vlsb, _ = place(defl)
-        self._defl = (d_off, d_bpp, self._divisor(d_off, d_bpp, rows * per, _channel_name(defl), d_vlsb), d_vlsb)
+        lay = _layout(sections, size, where)
+        self._grid = lay.grid
+        self._app_recorded = lay.app_recorded
+        n_app, n_ret, n_hold, per, defl, zsen, whole, truncated = (lay.n_app, lay.n_ret, lay.n_hold, lay.per,
+                                                                   lay.defl, lay.zsen, lay.whole, lay.truncated)
+        d_off, d_bpp, _, _, d_vlsb, _ = lay.d_place
+        z_place = lay.z_place
+        self._defl = (d_off, d_bpp, self._divisor(d_off, d_bpp, whole * per, _channel_name(defl), d_vlsb), d_vlsb)
         self._zsen = None
-        if zsen is not None:
-            z_off, z_bpp, z_rows, z_vlsb, z_sens = place(zsen)
-            if z_rows == rows:
-                self._zsen = (z_off, z_bpp, self._divisor(z_off, z_bpp, rows * per, _channel_name(zsen), z_vlsb),
-                              z_vlsb, z_sens)
-        self.n_curves, self._n = rows, (n_app, n_ret, n_hold)
+        if z_place is not None:
+            z_off, z_bpp, _, _, z_vlsb, z_sens = z_place
+            self._zsen = (z_off, z_bpp, self._divisor(z_off, z_bpp, whole * per, _channel_name(zsen), z_vlsb),
+                          z_vlsb, z_sens)
+        self.n_curves, self._n = whole, (n_app, n_ret, n_hold)
         meta: dict[str, Any] = {"instrument": _find(sections, "Microscope") or "Bruker NanoScope",
                                 "nanoscope_version": _find(sections, "Version") or ""}
+        if truncated:
+            meta["file_truncated"] = truncated
         k = _find([("", defl)], "Spring Constant") or _find(sections, "Spring Constant")  # the deflection's list
         if k is not None:  # as stated: finalize_curve refuses an impossible one (<= 0), as every reader does
             meta["spring_constant"] = _number(k, where, "Spring Constant")
