@@ -44,11 +44,38 @@ def _arrays(point: int):
     return [np.r_[pad(a), pad(r)].astype("<f4") for a, r in out], (v_app, v_ret, z_app, z_ret, t_app, t_ret)
 
 
-def write_park(path, *, points=2, kind=2, version=2, k=K, sens=SENS_V_PER_UM, intensity=None):
+#: Park's data type codes (spectroscopy header, int32 at byte 1108) -> numpy type
+DTYPES = {"i2": 0, "i4": 1, "f4": 2}
+
+
+def stored(values, gain: float, offset: float, dtype: str) -> np.ndarray:
+    """What the file holds for ``values`` (in the channel's unit) with the channel's gain and offset: the
+    numbers whose ``number x gain + offset`` are the values, rounded to integers for int16/int32."""
+    x = (np.asarray(values, float) - offset) / gain
+    return (np.rint(x) if dtype != "f4" else x).astype("<" + dtype)
+
+
+def grid_xy(p: int, volume) -> tuple[float, float]:
+    """Position [um] of spectrum ``p`` of a ``volume`` (nx, ny, width, height, serpentine): row by row from
+    the grid's origin (every other row backwards when serpentine), edge to edge over width x height."""
+    nx, ny, width, height, serpentine = volume
+    iy, ix = divmod(p, nx)
+    if serpentine and iy % 2:
+        ix = nx - 1 - ix
+    return 0.5 + ix * width / max(nx - 1, 1), -1.0 + iy * height / max(ny - 1, 1)
+
+
+def write_park(path, *, points=2, kind=2, version=2, k=K, sens=SENS_V_PER_UM, intensity=None, dtype="f4",
+               gains=(1.0, 1.0, 1.0, 1.0), offsets=(0.0, 0.0, 0.0, 0.0), volume=None):
     """A little-endian Park TIFF: a 1 x 1 palette preview, Park's magic (50432) and version (50433), the
     580-byte header (50435; first int32 = ``kind``), and for spectroscopy the header (50438: 2972 bytes,
-    version 2, or 936 bytes, version 1) and float32 data (50439); ``intensity``: the header's intensity
-    factor (float64 at byte 424; default zero: none)."""
+    version 2, or 936 bytes, version 1) and data (50439); ``intensity``: the header's intensity
+    factor (float64 at byte 424; default zero: none). ``dtype``: ``"f4"``, ``"i2"`` or ``"i4"`` (written as
+    :func:`stored` with each channel's ``gains`` and ``offsets``, in the channel's unit); ``volume``: (nx,
+    ny, width [um], height [um], serpentine) of a force map of nx x ny = ``points`` spectra (volume flag at
+    byte 804, points per x at 936, grid size at 944), each point's position :func:`grid_xy`."""
+    if volume is not None:
+        assert volume[0] * volume[1] == points
     head = bytearray(580)
     struct.pack_into("<i", head, 0, kind)
     if intensity is not None:
@@ -60,15 +87,22 @@ def write_park(path, *, points=2, kind=2, version=2, k=K, sens=SENS_V_PER_UM, in
     for i, (name, unit, is_x, is_y) in enumerate(CHANNELS):
         o = 96 * i
         spec[o:o + 64], spec[o + 64:o + 80] = _utf16(name, 32), _utf16(unit, 8)
-        struct.pack_into("<dii", spec, o + 80, 1.0, is_x, is_y)
+        struct.pack_into("<dii", spec, o + 80, gains[i], is_x, is_y)
+        struct.pack_into("<d", spec, 808 + 8 * i, offsets[i])
     struct.pack_into("<5i", spec, 768, len(CHANNELS), 1, RES, points, 2)
     struct.pack_into("<4f", spec, 788, 1.0, 1.0, SPEED_UM_S, SPEED_UM_S)
+    if volume is not None:
+        struct.pack_into("<i", spec, 804, 1)
     if version == 2:
+        if volume is not None:
+            struct.pack_into("<ii4d", spec, 936, volume[0], 0, volume[2], volume[3], 0.0, 0.0)
         struct.pack_into("<dd", spec, 976, k, sens)
-        struct.pack_into("<i", spec, 1108, 2)
+        struct.pack_into("<i", spec, 1108, DTYPES[dtype])
         for p in range(points):
-            struct.pack_into("<3f", spec, 1208 + 12 * p, 1.0 + p, 2.0, 0.0)
-    data = b"".join(a.tobytes() for p in range(points) for a in _arrays(p)[0]) if kind == 2 else b""
+            xy = grid_xy(p, volume) if volume is not None else (1.0 + p, 2.0)
+            struct.pack_into("<3f", spec, 1208 + 12 * p, *xy, 0.0)
+    data = b"".join(stored(a, g, o, dtype).tobytes() for p in range(points)
+                    for a, g, o in zip(_arrays(p)[0], gains, offsets)) if kind == 2 else b""
     blocks = [(50435, 7, bytes(head))] + ([(50438, 7, bytes(spec)), (50439, 1, data)] if kind == 2 else [])
     inline = [(256, 4, 1, 1), (257, 4, 1, 1), (50432, 4, 1, 0x0E031301), (50433, 4, 1, 0x01000000 + version)]
     n = len(inline) + len(blocks)

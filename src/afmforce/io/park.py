@@ -14,7 +14,8 @@ nanoAFMr bears it out):
   (points), index of the driving channel (the z ramp);
 * 788: float32 forward period, backward period, forward speed, backward speed [driving unit/s];
   804: int32 volume image; 808: float64 offset of each channel; 872: int32 log scale, 904: square;
-* version 2 (936 on): int32 points per x, int32 has a reference image, float64 x/y size and offset
+* 804: int32 volume image (a force map: its curves get map_x, map_y, map_nx, map_ny);
+* version 2 (936 on): int32 points per x (0: a square grid), int32 has a reference image, float64 x/y size and offset
   of the grid, 976: float64 **spring constant [N/m]**, 984: float64 **sensitivity [V/um]**
   (its inverse is the InvOLS), 992: float32 force limit [V], ... 1108: int32 data type (0 int16,
   1 int32, 2 float32), 1112: 24 reserved int32, 1208: (x, y, t) float32 of each point [um].
@@ -58,7 +59,7 @@ _VERSION, _SPEC_HEADER, _SPEC_DATA = 50433, 50438, 50439
 #: the header's first int32 -> what the file holds
 PARK_KINDS = {0: "image", 1: "line profile", 2: "spectroscopy"}
 _CHANNELS, _CHANNEL_BYTES = 8, 96
-_V1_BYTES, _V2_CAL_END, _V2_DTYPE_AT, _POINTS_AT = 936, 992, 1108, 1208
+_V1_BYTES, _V2_CAL_END, _V2_DTYPE_AT, _POINTS_AT, _VOLUME_AT = 936, 992, 1108, 1208, 804
 _DTYPES = {0: "i2", 1: "i4", 2: "f4"}
 #: byte of the image header's (tag 50435) ``intensityFactor`` (float64, (A+B)/3 [-]; the field after
 #: ``ncmDrivePercent`` in Park's layout): the A-B deflection the header's sensitivity calibrates is divided by it
@@ -134,9 +135,13 @@ def _header(raw: bytes, end: str, where: str) -> dict[str, Any]:
     offsets = struct.unpack_from(end + "8d", raw, 808)
     for ch, off in zip(channels, offsets):
         ch["offset"] = off
+    volume, = struct.unpack_from(end + "i", raw, _VOLUME_AT)
     out = {"channels": channels[:max(0, min(count, _CHANNELS))], "count": count, "res": res, "points": points,
-           "driving": driving, "fwd_speed": fwd_speed, "bwd_speed": bwd_speed, "dtype": 2}
+           "driving": driving, "fwd_speed": fwd_speed, "bwd_speed": bwd_speed, "dtype": None,
+           "volume": bool(volume)}
     if len(raw) >= _V2_CAL_END:
+        per_x, _, width, height = struct.unpack_from(end + "ii2d", raw, _V1_BYTES)
+        out["grid"] = (per_x, width, height)  # points per x (0: a square grid), grid size [um]
         out["spring_constant"], out["sensitivity_v_per_um"] = struct.unpack_from(end + "dd", raw, 976)
     if len(raw) >= _V2_DTYPE_AT + 4:
         out["dtype"], = struct.unpack_from(end + "i", raw, _V2_DTYPE_AT)
@@ -185,6 +190,39 @@ def _pick(channels: list[dict], units: list[str], want: str, words: tuple[str, .
     return hits[0] if hits else None
 
 
+def _map_cells(head: dict[str, Any], where: str) -> list[dict[str, Any]] | None:
+    """The grid cell of every spectrum of a volume image (a force map: the header's volume flag), then (last)
+    the grid's ``map_nx``, ``map_ny`` and its size ``map_width``, ``map_height`` [m]; None for spectra at
+    free points. The grid has ``points per x`` columns (0: a square of sqrt(points)); each spectrum's cell
+    is found from its position in the point table (rows in either direction), else row by row."""
+    if not head.get("volume"):
+        return None
+    per_x, width, height = head.get("grid", (0, 0.0, 0.0))
+    points = head["points"]
+    nx = per_x if per_x > 0 else int(round(points ** 0.5))
+    if nx < 1 or points % nx or (per_x <= 0 and nx * nx != points):
+        raise FileFormatError(f"{where}: a Park force map (volume image) of {points} spectra with {per_x} points per x: "
+                              "not a grid; damaged header")
+    ny = points // nx
+    index = [divmod(p, nx)[::-1] for p in range(points)]  # (ix, iy) row by row
+    xy = np.array(head["xy"], float) if "xy" in head else None
+    if xy is not None and len(xy) == points:
+        found = []
+        for axis, n in ((0, nx), (1, ny)):
+            c = xy[:, axis]
+            step = (c.max() - c.min()) / (n - 1) if n > 1 else 0.0
+            k = np.rint((c - c.min()) / step).astype(int) if step > 0 else np.zeros(points, int)
+            found.append(k)
+        pairs = set(zip(found[0].tolist(), found[1].tolist()))
+        if len(pairs) == points and all(0 <= a < nx and 0 <= b < ny for a, b in pairs):
+            index = list(zip(found[0].tolist(), found[1].tolist()))
+    cells: list[dict[str, Any]] = [{"map_x": int(ix), "map_y": int(iy)} for ix, iy in index]
+    grid: dict[str, Any] = {"map_nx": nx, "map_ny": ny}
+    if np.isfinite(width) and np.isfinite(height) and width > 0 and height > 0:
+        grid.update(map_width=float(width) * 1e-6, map_height=float(height) * 1e-6)
+    return cells + [grid]
+
+
 def load_park(path: Path, *, meta_override: Mapping[str, Any] | None = None,
               callback: Callable | None = None) -> list[RawCurve]:
     """Read every force curve of a Park Systems spectroscopy TIFF (see the module docstring).
@@ -212,11 +250,14 @@ def load_park(path: Path, *, meta_override: Mapping[str, Any] | None = None,
     if not channels or res < 4 or res % 2 or points < 1:
         raise FileFormatError(f"{where}: the Park spectroscopy header gives {head['count']} channels, {res} samples "
                               f"per spectrum and {points} spectra; damaged")
+    samples = len(channels) * res * points
+    if head["dtype"] is None:  # a version-1 header, written before the data type field: the width says
+        head["dtype"] = 0 if len(raw) == 2 * samples else 2   # int16 (2 bytes a sample), else float32
     dtype = _DTYPES.get(head["dtype"])
     if dtype is None:
         raise FileFormatError(f"{where}: the Park spectroscopy data type {head['dtype']} is none of 0 (int16), "
                               "1 (int32), 2 (float32)")
-    need = len(channels) * res * points * int(dtype[1:])
+    need = samples * int(dtype[1:])
     if len(raw) != need:
         raise FileFormatError(f"{where}: the Park spectroscopy data hold {len(raw)} bytes, the header's "
                               f"{points} spectra x {len(channels)} channels x {res} samples need {need}; damaged")
@@ -261,6 +302,9 @@ def load_park(path: Path, *, meta_override: Mapping[str, Any] | None = None,
                                         f"{' and '.join(f'`{k}`' for k in lacking)}")
     base.update(dict(meta_override or {}))
     base.update(source_file=where, reader="park-tiff", format="Park Systems spectroscopy TIFF")
+    cells = _map_cells(head, where)
+    if cells is not None:
+        base.update(cells.pop())
     half = res // 2
     out = []
     for p in range(points):
@@ -290,6 +334,8 @@ def load_park(path: Path, *, meta_override: Mapping[str, Any] | None = None,
             meta["curve_index"] = p
         if "xy" in head:
             meta["position_x"], meta["position_y"] = (float(c) * 1e-6 for c in head["xy"][p])
+        if cells is not None:
+            meta.update(cells[p])
         zn = cols[z_idx]
         zm = cols[zm_idx] if zm_idx is not None and np.ptp(cols[zm_idx]) > 0 else None
         app = np.flatnonzero(seg == SEGMENT_APPROACH)
