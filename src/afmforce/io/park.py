@@ -13,8 +13,7 @@ nanoAFMr bears it out):
 * 768: int32 number of channels, averages, samples per spectrum (``res``), number of spectra
   (points), index of the driving channel (the z ramp);
 * 788: float32 forward period, backward period, forward speed, backward speed [driving unit/s];
-  804: int32 volume image; 808: float64 offset of each channel; 872: int32 log scale, 904: square;
-* 804: int32 volume image (a force map: its curves get map_x, map_y, map_nx, map_ny);
+  804: int32 volume image (a force map: its curves get their grid cells); 808: float64 offset of each channel; 872: int32 log scale, 904: square;
 * version 2 (936 on): int32 points per x (0: a square grid), int32 has a reference image, float64 x/y size and offset
   of the grid, 976: float64 **spring constant [N/m]**, 984: float64 **sensitivity [V/um]**
   (its inverse is the InvOLS), 992: float32 force limit [V], ... 1108: int32 data type (0 int16,
