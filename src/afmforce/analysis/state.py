@@ -249,6 +249,8 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
         notes.append(str(curve.metadata["approach_steps"]))
     if curve.metadata.get("file_truncated"):  # a force volume read up to where its file ends (io.nanoscope)
         notes.append(str(curve.metadata["file_truncated"]))
+    if use_measured and curve.metadata.get("position_note"):  # a sensor far off the nominal ramp (io.nanoscope)
+        notes.append(str(curve.metadata["position_note"]))
     processed = curve.metadata.get("processed")  # a vendor's processed export (force vs separation)
     if processed:
         notes.insert(0, f"read as a processed export: {processed}")
