@@ -90,6 +90,21 @@ def test_spectra_at_free_points_carry_no_grid(tmp_path):
     assert not any(key.startswith("map_") for key in md)
 
 
+def test_a_volume_whose_points_make_no_grid_keeps_positions_only(tmp_path):
+    """6 spectra said to hold 4 points per x: no grid (no cells made up), each spectrum's position kept."""
+    import struct
+
+    path = write_park(tmp_path / "map.tiff", points=6, volume=(3, 2, 6.0, 4.0, False))
+    data = bytearray(path.read_bytes())
+    at = data.index("Vertical (A-B)".encode("utf-16-le"))   # the spectroscopy header's start
+    assert struct.unpack_from("<i", data, at + 936)[0] == 3
+    struct.pack_into("<i", data, at + 936, 4)
+    path.write_bytes(bytes(data))
+    curves = load(path)
+    assert len(curves) == 6 and not any(k.startswith("map_") for k in curves[0].metadata)
+    assert curves[5].metadata["position_x"] == pytest.approx(grid_xy(5, (3, 2, 6.0, 4.0, False))[0] * 1e-6)
+
+
 def test_the_channels_are_those_written():
     assert [c[:2] for c in CHANNELS] == [("Vertical (A-B)", "V"), ("Force", "nN"), ("Z Scan", "um"),
                                          ("Time Stamp", "usec")]

@@ -192,7 +192,7 @@ def _pick(channels: list[dict], units: list[str], want: str, words: tuple[str, .
 def _map_cells(head: dict[str, Any], where: str) -> list[dict[str, Any]] | None:
     """The grid cell of every spectrum of a volume image (a force map: the header's volume flag), then (last)
     the grid's ``map_nx``, ``map_ny`` and its size ``map_width``, ``map_height`` [m]; None for spectra at
-    free points. The grid has ``points per x`` columns (0: a square of sqrt(points)); each spectrum's cell
+    free points, or points that make no grid. The grid has ``points per x`` columns (0: a square of sqrt(points)); each spectrum's cell
     is found from its position in the point table (rows in either direction), else row by row."""
     if not head.get("volume"):
         return None
@@ -200,8 +200,7 @@ def _map_cells(head: dict[str, Any], where: str) -> list[dict[str, Any]] | None:
     points = head["points"]
     nx = per_x if per_x > 0 else int(round(points ** 0.5))
     if nx < 1 or points % nx or (per_x <= 0 and nx * nx != points):
-        raise FileFormatError(f"{where}: a Park force map (volume image) of {points} spectra with {per_x} points per x: "
-                              "not a grid; damaged header")
+        return None  # not a grid (a damaged header): the spectra keep their positions, no cells are made up
     ny = points // nx
     index = [divmod(p, nx)[::-1] for p in range(points)]  # (ix, iy) row by row
     xy = np.array(head["xy"], float) if "xy" in head else None
