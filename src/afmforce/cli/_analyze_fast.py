@@ -16,6 +16,8 @@ from ..errors import ParameterError
 
 #: Quantities mapped when no --map-quantity is given.
 FAST_MAP_QUANTITIES = ("modulus", "topography", "adhesion", "work_of_adhesion")
+#: Distinct warnings printed (each with its number of curves); the summary table holds every curve's.
+MAX_WARNINGS = 5
 
 
 def summary_lines(table, quantities) -> list[str]:
@@ -35,6 +37,25 @@ def summary_lines(table, quantities) -> list[str]:
         if v.size:
             lines.append(f"  {name} ({q.label}): median {float(sorted(v)[v.size // 2]):.4g} {unit}, "
                          f"from {v.min():.4g} to {v.max():.4g} {unit}")
+    return lines
+
+
+def warning_lines(table) -> list[str]:
+    """Each distinct warning of the analysed pixels (the ``warnings`` column, the full analysis's: joined by
+    `` | ``), with the number of pixels it was given for, clipped to one terminal line each."""
+    from ._outcome import render
+    from ._verdicts import MAX_LINE, clip, plain
+
+    counts: dict[str, int] = {}
+    for cell in table.get("warnings", ()):
+        for w in (cell if isinstance(cell, str) else "").split(" | "):
+            if w:
+                counts[w] = counts.get(w, 0) + 1
+    lines = [f"  warning ({n} of {len(table)} curves): " + clip(plain(render(w)), MAX_LINE - 30)
+             for w, n in list(counts.items())[:MAX_WARNINGS]]
+    if len(counts) > MAX_WARNINGS:
+        lines.append(f"  ... and {len(counts) - MAX_WARNINGS} other warning(s): the column `warnings` of the summary "
+                     "table (--out) holds each curve's")
     return lines
 
 
@@ -64,6 +85,8 @@ def run_fast_map(args: argparse.Namespace, refs: list, write_maps, meta: dict | 
           f"({result.chunks_run} chunks run on {result.executor} in {result.wall_time:.1f} s, "
           f"{result.chunks_skipped} already stored)")
     for line in summary_lines(ok, FAST_MAP_QUANTITIES):
+        print(line)
+    for line in warning_lines(ok):
         print(line)
     if result.store is not None:
         folder = result.store.root
