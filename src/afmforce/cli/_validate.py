@@ -26,7 +26,7 @@ from .._fields import QUANTITIES, FieldSpec
 from ..limits import CONFIRM_RUNS, MAX_SAMPLES, check_samples, simulation_samples  # noqa: F401  (re-export)
 from ..errors import OutputExistsError, ParameterError, UnitError
 
-__all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "check_outputs", "check_folder_outputs", "refuse_ignored", "confirm_size",
+__all__ = ["HelpFormatter", "add_field", "add_choice", "field_type", "check_output", "check_outputs", "check_folder_outputs", "refuse_ignored", "confirm_size",
            "lazy_help", "given", "quantity_list", "check_common", "refuse_empty_values", "COUNTS"]
 
 
@@ -98,6 +98,16 @@ def add_field(group, name: str, *, flag: str | None = None, dest: str | None = N
     action = group.add_argument(flag, dest=dest or name, type=field_type(spec, dest or name, flag),
                                 default=default, metavar="VALUE", help=text, **kw)
     return lazy_help(action, tail)
+
+
+def add_choice(group, name: str, *, flag: str | None = None) -> argparse.Action:
+    """Add ``--flag WORD`` for the setting ``name`` of :data:`afmforce._fields.ANALYSIS_CHOICES`: its
+    choices, default and help as declared there (the web's field reads the same declaration)."""
+    from .._fields import ANALYSIS_CHOICES
+
+    spec = ANALYSIS_CHOICES[name]
+    return group.add_argument(flag or "--" + name.replace("_", "-"), dest=name, choices=spec.choices,
+                              default=spec.default, help=f"{spec.help} (default {spec.default})")
 
 
 def given(args: argparse.Namespace, dest: str) -> bool:
