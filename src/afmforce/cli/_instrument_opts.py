@@ -22,7 +22,7 @@ import argparse
 from typing import Any
 
 from .._files import check_writable
-from ..errors import AfmforceError
+from ..errors import AfmforceError, ParameterError
 from ..instrument.config import PARAMETERS, Parameter, build_instrument, load_config, parse_parameter
 from ..instrument.presets import PRESETS
 from ..io.curve import RawCurve
@@ -129,7 +129,28 @@ def check_instrument_args(args: argparse.Namespace) -> None:
         return
     check_raw_output(args)
     config = load_config(args.instrument_config) if getattr(args, "instrument_config", None) else None
-    build_instrument(getattr(args, "instrument", None), config, _overrides(args))
+    preset = getattr(args, "instrument", None)
+    try:
+        build_instrument(preset, config, _overrides(args))
+    except ParameterError as exc:
+        raise ParameterError(f"{_culprit(args, preset, config)}{exc}") from None
+
+
+def _culprit(args: argparse.Namespace, preset: str | None, config: dict | None) -> str:
+    """Where the value an instrument component refused was written: ``<file>: [noise] white = inf: `` for a
+    key of the instrument TOML file, ``--noise-white: `` for a flag; "" when no single one is (a combination)."""
+    for key, value in ((config or {}).get("parameters") or {}).items():
+        try:
+            build_instrument(preset, {"parameters": {key: value}})
+        except ParameterError:
+            table, name = key.split(".", 1)
+            return f"`instrument_config` {args.instrument_config}: [{table}] {name} = {value!r}: "
+    for key, value in _overrides(args).items():
+        try:
+            build_instrument(preset, None, {key: value})
+        except ParameterError:
+            return f"{PARAMETERS[key].flag} {value!r}: "
+    return ""
 
 
 def record_from_args(args: argparse.Namespace, trajectory) -> RawCurve | None:

@@ -336,15 +336,20 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
 
     confirm_size(spec.n_runs, CONFIRM_RUNS, yes=yes, what="this sweep")
     values: dict[str, list] = {}
+    origins = getattr(spec, "origins", {})   # a settings file's entries: named as written there (file, table, key)
+
+    def where(flag: str, name: str) -> str:
+        return origins.get(name) or f"{flag} {name}"
+
     for axis in spec.grid:
-        values.setdefault(axis.name, []).extend((v, f"--grid {axis.name}") for v in axis.values)
+        values.setdefault(axis.name, []).extend((v, where("--grid", axis.name)) for v in axis.values)
     for r in spec.ranges:
         if not r.lo < r.hi:
-            raise ParameterError(f"--range {r.name}={r.lo:g}:{r.hi:g} [SI]: the low end must lie below the high "
-                                 "end (NAME=LO:HI)")
-        values.setdefault(r.name, []).extend(((r.lo, f"--range {r.name}"), (r.hi, f"--range {r.name}")))
+            raise ParameterError(f"{where('--range', r.name)}={r.lo:g}:{r.hi:g} [SI]: the low end must lie below "
+                                 "the high end (NAME=LO:HI)")
+        values.setdefault(r.name, []).extend(((r.lo, where("--range", r.name)), (r.hi, where("--range", r.name))))
     for name, value in spec.fixed:
-        values.setdefault(name, []).append((value, f"--set {name}"))
+        values.setdefault(name, []).append((value, where("--set", name)))
     for name, entries in values.items():
         for value, where in entries:
             if name in _registries():
