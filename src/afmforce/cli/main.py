@@ -81,7 +81,7 @@ def _unrecognized_hint(tokens: list[str]) -> str:
         flag = tok.split("=", 1)[0]
         key = flag[2:].replace("-", "_")
         if "--meta" in options:
-            from ..io._meta import METADATA
+            from ..io import METADATA
 
             if key in METADATA:
                 return f" (this command takes file metadata as --meta {key}=VALUE)"
