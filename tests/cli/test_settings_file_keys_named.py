@@ -130,3 +130,15 @@ def test_the_cli_names_the_calibration_file_not_the_probe_field(tmp_path, capsys
     assert main(["analyze", str(example("asylum-air")), "--probe-calibration", str(cal)]) == 2
     err = capsys.readouterr().err
     assert f"{cal}: spring_constant -1 N/m is out of range" in err and "probe." not in err
+
+
+def test_a_list_key_refused_is_named_not_its_partner(tmp_path):
+    """``creep_times = [nan]`` beside a valid ``creep_amplitudes``: the message names creep_times (was: the
+    partner, refused alone for its length)."""
+    from afmforce.cli._instrument_opts import check_instrument_args
+
+    path = tmp_path / "instrument.toml"
+    path.write_text("[piezo]\ncreep_amplitudes = [0.01]\ncreep_times = [nan]\n")
+    args = argparse.Namespace(instrument=None, instrument_config=str(path), raw=None, force=False)
+    with pytest.raises(AfmforceError, match=r"\[piezo\] creep_times = \(nan,\): piezo creep_times must be"):
+        check_instrument_args(args)

@@ -133,23 +133,31 @@ def check_instrument_args(args: argparse.Namespace) -> None:
     try:
         build_instrument(preset, config, _overrides(args))
     except ParameterError as exc:
-        raise ParameterError(f"{_culprit(args, preset, config)}{exc}") from None
+        raise ParameterError(f"{_culprit(args, preset, config, str(exc))}{exc}") from None
 
 
-def _culprit(args: argparse.Namespace, preset: str | None, config: dict | None) -> str:
+def _culprit(args: argparse.Namespace, preset: str | None, config: dict | None, message: str) -> str:
     """Where the value an instrument component refused was written: ``<file>: [noise] white = inf: `` for a
-    key of the instrument TOML file, ``--noise-white: `` for a flag; "" when no single one is (a combination)."""
-    for key, value in ((config or {}).get("parameters") or {}).items():
-        try:
-            build_instrument(preset, {"parameters": {key: value}})
-        except ParameterError:
-            table, name = key.split(".", 1)
-            return f"`instrument_config` {args.instrument_config}: [{table}] {name} = {value!r}: "
-    for key, value in _overrides(args).items():
-        try:
-            build_instrument(preset, None, {key: value})
-        except ParameterError:
-            return f"{PARAMETERS[key].flag} {value!r}: "
+    key of the instrument TOML file, ``--noise-white -1.0: `` for a flag; "" when no single one is. The key the
+    component's ``message`` names (``piezo creep_times must be ...``) first, else the one refused alone."""
+    from_file = ((config or {}).get("parameters") or {}).items()
+    typed = _overrides(args).items()
+
+    def label(key, value, flag: bool) -> str:
+        table, name = key.split(".", 1)
+        return (f"{PARAMETERS[key].flag} {value!r}: " if flag else
+                f"`instrument_config` {args.instrument_config}: [{table}] {name} = {value!r}: ")
+
+    for flag, items in ((True, typed), (False, from_file)):      # a flag wins over the file's value
+        for key, value in items:
+            if message.startswith(key.replace(".", " ") + " "):
+                return label(key, value, flag)
+    for flag, items in ((False, from_file), (True, typed)):
+        for key, value in items:
+            try:
+                build_instrument(preset, None if flag else {"parameters": {key: value}}, {key: value} if flag else None)
+            except ParameterError:
+                return label(key, value, flag)
     return ""
 
 
