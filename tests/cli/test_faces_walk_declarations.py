@@ -62,6 +62,8 @@ def test_every_quantity_flag_shows_its_declared_range_and_the_docs_list_it(comma
     help_text = (action.help or "") + (action.lazy_help() if getattr(action, "lazy_help", None) else "")
     if spec.bounded:
         assert f"range {spec.range_text()}" in help_text, (command, action.option_strings, help_text)
+    if spec.unit:                                   # the SI unit a plain number is read in
+        assert f"[{spec.unit}]" in help_text, (command, action.option_strings, help_text)
     name = _quantity(spec)
     assert name is not None, f"{command} {action.option_strings[-1]}: a range declared outside QUANTITIES"
     row = re.search(rf"^\| `{re.escape(name)}` \| .* \| (.*) \|$", DOCS, re.M)
@@ -85,6 +87,7 @@ def test_a_web_control_of_the_same_quantity_has_the_flags_range(web_fields, comm
     for f in web_fields.get(_quantity(spec) or "", []):
         if f.get("range") is not None and f.get("unit") == spec.unit:
             assert f["range"] == spec.range_text(), (command, action.option_strings[-1], f)
+            assert f["unit"] == spec.unit and f["factor"] > 0
             assert (f["lo"], f["hi"]) == (spec.lo, spec.hi)
 
 

@@ -61,3 +61,10 @@ def test_a_fast_map_whose_pixels_all_fail_alike_says_it_once(capsys, tmp_path, m
     assert len(failed) == 1, err
     assert f"{path} (16 curves)" in failed[0] and "--tip-radius" in failed[0] and "`" not in failed[0]
     assert err[-1] == "16 of 16 curves failed"
+
+
+def test_an_unknown_flag_with_a_negative_value_is_echoed_as_typed(capsys):
+    with pytest.raises(SystemExit) as exc:
+        main(["statics", "--spring-constant", "-1"])
+    err = capsys.readouterr().err.strip()
+    assert exc.value.code == 2 and err.startswith("error: unrecognized arguments: --spring-constant -1"), err

@@ -65,7 +65,9 @@ class _Parser(argparse.ArgumentParser):
             else:
                 message = f"{flag}: {rest}"
         if message.startswith("unrecognized arguments: "):
-            message += _unrecognized_hint(message[len("unrecognized arguments: "):].split())
+            tokens = message[len("unrecognized arguments: "):].split()
+            message = "unrecognized arguments: " + " ".join(_JOINED.get(t, t) for t in tokens)   # as typed
+            message += _unrecognized_hint(tokens)
         self.exit(_outcome.fail("UsageError", _outcome.one_line(message), EXIT_USAGE))
 
 
@@ -156,6 +158,8 @@ def _command_of(argv: list[str]) -> str:
 
 
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)")
+#: ``--flag=-1`` (joined by :func:`_join_negative_values`) -> ``--flag -1`` as the user typed it (messages).
+_JOINED: dict[str, str] = {}
 
 
 def _join_negative_values(argv: list[str]) -> list[str]:
@@ -170,6 +174,7 @@ def _join_negative_values(argv: list[str]) -> list[str]:
         if (tok.startswith("--") and "=" not in tok and i + 1 < len(argv)
                 and _NEGATIVE_VALUE.match(argv[i + 1])):
             out.append(f"{tok}={argv[i + 1]}")
+            _JOINED[out[-1]] = f"{tok} {argv[i + 1]}"
             i += 2
             continue
         out.append(tok)
