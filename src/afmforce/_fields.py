@@ -25,7 +25,7 @@ from typing import Any, Mapping
 
 from .errors import ParameterError
 
-__all__ = ["FieldSpec", "meta", "qfield", "spec_of", "QUANTITIES", "check", "check_beam", "show",
+__all__ = ["FieldSpec", "ChoiceSpec", "ANALYSIS_CHOICES", "meta", "qfield", "spec_of", "QUANTITIES", "check", "check_beam", "show",
            "ranges_markdown", "DISPLAY_UNITS"]
 
 #: Display unit -> its size in SI (the only conversions the help and messages need).
@@ -329,6 +329,44 @@ QUANTITIES: dict[str, FieldSpec] = {
     "gap_deflection": _q("length", "m", "deflection where the load-friction gap is taken", hi=1e-6, **_POS),
     "compliance_separation": _q("length", "m", "separation given to the compliance line (paper: z0; 0 also "
                                 "common)", 0.0, 1e-8),
+}
+
+
+@dataclass(frozen=True)
+class ChoiceSpec:
+    """A setting that is a word of a fixed list, not a quantity: its choices, default and help.
+
+    One declaration gives the command line's flag (``--channel {auto,measured,nominal}``), the web's
+    form field and schema entry, and the docs.
+
+    Attributes
+    ----------
+    help : str
+        One line: what the setting chooses.
+    choices : tuple of str
+        The words it takes.
+    default : str
+        The word used when none is given (one of ``choices``).
+    """
+
+    help: str
+    choices: tuple[str, ...]
+    default: str
+
+    def check(self, value, where: str) -> str:
+        """Return ``value`` or raise :class:`ParameterError` naming ``where`` and the choices."""
+        if not isinstance(value, str) or value not in self.choices:
+            raise ParameterError(f"{where} {str(value)[:60]!r}: unknown; choose one of {', '.join(self.choices)}")
+        return value
+
+
+#: Settings of ``analyze`` that are words, not quantities: name -> :class:`ChoiceSpec`. The command line
+#: (``afmforce analyze --channel``), the web (``POST /api/analyze`` field ``channel``, the analyse view's
+#: control, ``GET /api/schema`` ``analysis_settings``) and :data:`afmforce.io.curve.POSITION_CHANNELS` read them here.
+ANALYSIS_CHOICES: dict[str, ChoiceSpec] = {
+    "channel": ChoiceSpec("position channel: auto (the measured position when recorded, else the nominal), "
+                          "measured (the scanner's position detector) or nominal (the piezo's commanded "
+                          "position)", ("auto", "measured", "nominal"), "auto"),
 }
 
 

@@ -29,7 +29,7 @@ from .options import DEFAULT_POISSON, IndentationOptions, ProbeCalibration
 from .plausibility import impossible_modulus
 from .state import State
 
-__all__ = ["IndentationResult", "indentation", "fast_modulus", "tip_geometry"]
+__all__ = ["IndentationResult", "indentation", "fast_modulus", "tip_geometry", "fit_warnings", "poisson_warnings"]
 
 
 @dataclass(frozen=True)
@@ -123,7 +123,7 @@ def indentation(st: State, o: IndentationOptions) -> State:
     if impossible:
         return _skip(st, "indentation", impossible)
     res = _result(fit, u, o, geom, radius, st.spring_constant, nu, nu_source)
-    warn = [f"indentation ({o.model}): {w}" for w in fit.warnings]
+    warn = fit_warnings(o, fit)
     if o.run == "approach" and o.contact_point is None:
         inside = _free_part_in_contact(st, res, o, {k: v for k, v in geom.items() if v is not None}, nu)
         res, note = _baseline_systematic(st, res, idx, z, d, lambda uu, ff: fit_indentation(
@@ -139,10 +139,22 @@ def indentation(st: State, o: IndentationOptions) -> State:
             weight_width=o.weight_width, contact_guess=fit.contact))
         if note:
             warn.append(note)
-    if nu_source == "file" and nu != DEFAULT_POISSON:     # the user sees which ratio E is for
-        warn.append(f"indentation: the sample's Poisson ratio {nu:g} is the file's (not {DEFAULT_POISSON:g}; E "
-                    "scales as 1 - nu^2): give `poisson` to change it")
+    warn += poisson_warnings(nu, nu_source)
     return st.update("indentation", res, warn=warn)
+
+
+def fit_warnings(o: IndentationOptions, fit) -> list[str]:
+    """The indentation fit's own warnings as the per-curve table words them (``indentation (model): ...``):
+    one wording for ``analyze`` and the fast map (``--fast-map``'s ``warnings`` column)."""
+    return [f"indentation ({o.model}): {w}" for w in fit.warnings]
+
+
+def poisson_warnings(nu: float, nu_source: str) -> list[str]:
+    """The note that E is for the file's Poisson ratio ``nu`` [-] (none when it is the default or the user's)."""
+    if nu_source == "file" and nu != DEFAULT_POISSON:     # the user sees which ratio E is for
+        return [f"indentation: the sample's Poisson ratio {nu:g} is the file's (not {DEFAULT_POISSON:g}; E "
+                "scales as 1 - nu^2): give `poisson` to change it"]
+    return []
 
 
 #: The drift line's "free" part holds the fitted contact when the model's force on its samples past the fitted

@@ -28,7 +28,7 @@ from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
            "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "K_UNDETERMINED", "SURFACE_ENERGY_MAX", "unphysical_surface_energy", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
-           "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers"]
+           "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers", "spring_constant_warnings"]
 
 #: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
 #: the verdict repeats every such reason, each naming the suspect input.
@@ -90,19 +90,26 @@ def _spring_constant(st: State) -> list[str]:
     k = st.spring_constant
     if conv is None or not math.isfinite(k):
         return []
-    out = []
-    lo, hi = SPRING_CONSTANT_RANGE
     inferred = getattr(conv, "method", "") == "compliance slope"
-    if not lo <= k <= hi:
-        src = ("inferred from the compliance slope of the force signal (a rigid contact assumed; on a soft "
-               "sample the slope is the contact's, not the lever's)" if inferred else "of the file or the user")
-        out.append(f"spring constant {k:.3g} N/m {src} is outside the range of cantilevers made "
-                   f"({lo:g}..{hi:g} N/m): give `spring_constant`")
+    out = spring_constant_warnings(k, inferred)
     header = float(st.metadata.get("spring_constant", math.nan) or math.nan)
     if inferred and math.isfinite(header) and header > 0 and not 1 / 3 <= k / header <= 3:
         out.append(f"spring constant {k:.3g} N/m inferred from the compliance slope is {k / header:.3g} x the "
                    f"file's {header:.3g} N/m")
     return out
+
+
+def spring_constant_warnings(k: float, inferred: bool = False) -> list[str]:
+    """The warning for a spring constant ``k`` [N/m] outside :data:`SPRING_CONSTANT_RANGE` (none inside it);
+    ``inferred``: ``k`` came from a compliance slope, not from the file or the user. One wording for
+    ``analyze`` and the fast map (``--fast-map``'s ``warnings`` column)."""
+    lo, hi = SPRING_CONSTANT_RANGE
+    if not math.isfinite(k) or lo <= k <= hi:
+        return []
+    src = ("inferred from the compliance slope of the force signal (a rigid contact assumed; on a soft "
+           "sample the slope is the contact's, not the lever's)" if inferred else "of the file or the user")
+    return [f"spring constant {k:.3g} N/m {src} is outside the range of cantilevers made "
+            f"({lo:g}..{hi:g} N/m): give `spring_constant`"]
 
 
 def _sensitivity(st: State) -> list[str]:

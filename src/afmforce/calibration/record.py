@@ -20,6 +20,7 @@ from typing import Any, Mapping
 
 from .._files import atomic_write_text, read_settings
 from .._json import to_jsonable
+from .._fields import QUANTITIES
 from ..errors import FileFormatError
 
 __all__ = ["PROBE_KEYS", "ANALYSIS_KEYS", "INVOLS_METHODS", "write_calibration", "read_calibration",
@@ -80,11 +81,15 @@ def parse_calibration(text: str, source: str = "calibration") -> dict[str, float
         if undetermined and key == "sensitivity":
             continue
         value = obj.get(key)
-        if isinstance(value, (int, float)) and not isinstance(value, bool):
-            if not abs(value) < 1e308:      # NaN, Infinity, 1e999, a 400-digit integer: a damaged file
-                raise FileFormatError(f"{source}: {key} is {str(value)[:20]}, not a finite number; "
-                                      "calibrate again (afmforce calibrate)")
-            out[key] = float(value)
+        if value is None:
+            continue
+        if not isinstance(value, (int, float)) or isinstance(value, bool):   # "abc", true, [1]: never dropped silently
+            raise FileFormatError(f"{source}: {key} is {str(value)[:20]!r}, not a number [{PROBE_KEYS[key] or '-'}]; "
+                                  "calibrate again (afmforce calibrate)")
+        if not abs(value) < 1e308:      # NaN, Infinity, 1e999, a 400-digit integer: a damaged file
+            raise FileFormatError(f"{source}: {key} is {str(value)[:20]}, not a finite number; "
+                                  "calibrate again (afmforce calibrate)")
+        out[key] = QUANTITIES[key].check(float(value), key, f"{source}: {key}")   # its declared range, named here
     return out
 
 

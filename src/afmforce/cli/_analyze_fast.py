@@ -16,6 +16,8 @@ from ..errors import ParameterError
 
 #: Quantities mapped when no --map-quantity is given.
 FAST_MAP_QUANTITIES = ("modulus", "topography", "adhesion", "work_of_adhesion")
+#: Distinct warnings printed (each with its number of curves); the summary table holds every curve's.
+MAX_WARNINGS = 5
 
 
 def summary_lines(table, quantities) -> list[str]:
@@ -30,11 +32,49 @@ def summary_lines(table, quantities) -> list[str]:
         if q.column not in table:
             continue
         factor, unit = MAP_DISPLAY_UNITS.get(q.unit, (1.0, q.unit))
-        v = table[q.column].to_numpy(float) * (q.sign * factor)
+        v = table[q.column].to_numpy(float) * (q.sign * factor) + 0.0     # + 0.0: no "-0" printed
         v = v[[math.isfinite(x) for x in v]]
         if v.size:
             lines.append(f"  {name} ({q.label}): median {float(sorted(v)[v.size // 2]):.4g} {unit}, "
                          f"from {v.min():.4g} to {v.max():.4g} {unit}")
+    return lines
+
+
+def warning_lines(table) -> list[str]:
+    """Each distinct warning of the analysed pixels (the ``warnings`` column, the full analysis's: joined by
+    `` | ``), with the number of pixels it was given for, clipped to one terminal line each."""
+    from ._outcome import render
+    from ._verdicts import MAX_LINE, clip, plain
+
+    counts: dict[str, int] = {}
+    for cell in table.get("warnings", ()):
+        for w in (cell if isinstance(cell, str) else "").split(" | "):
+            if w:
+                counts[w] = counts.get(w, 0) + 1
+    lines = [f"  warning ({n} of {len(table)} curves): " + clip(plain(render(w)), MAX_LINE - 30)
+             for w, n in list(counts.items())[:MAX_WARNINGS]]
+    if len(counts) > MAX_WARNINGS:
+        lines.append(f"  ... and {len(counts) - MAX_WARNINGS} other warning(s): the column `warnings` of the summary "
+                     "table (--out) holds each curve's")
+    return lines
+
+
+def failure_lines(failed, limit: int = 20) -> list[str]:
+    """One line per distinct error of the failed pixels, naming the map and how many of its curves
+    (a map whose 16,384 pixels all lack the tip radius: one line, not 16,384), in the flags' words."""
+    from ._outcome import render
+
+    groups: dict[tuple[str, str], list[str]] = {}
+    for _, row in failed.iterrows():
+        source = str(row["source"])
+        file, _, curve = source.rpartition("#") if "#" in source else (source, "", "")
+        groups.setdefault((file, " ".join(render(str(row["error"])).split())), []).append(curve)
+    lines = []
+    for (file, error), curves in list(groups.items())[:limit]:
+        which = f"#{curves[0]}" if len(curves) == 1 else f"{len(curves)} curves"
+        lines.append(f"failed: {file} ({which}): {error}")
+    if len(groups) > limit:
+        lines.append(f"  ... and {len(groups) - limit} other error(s)")
     return lines
 
 
@@ -65,6 +105,8 @@ def run_fast_map(args: argparse.Namespace, refs: list, write_maps, meta: dict | 
           f"{result.chunks_skipped} already stored)")
     for line in summary_lines(ok, FAST_MAP_QUANTITIES):
         print(line)
+    for line in warning_lines(ok):
+        print(line)
     if result.store is not None:
         folder = result.store.root
         with atomic_path(folder / "summary.parquet") as tmp:
@@ -73,8 +115,8 @@ def run_fast_map(args: argparse.Namespace, refs: list, write_maps, meta: dict | 
         written = write_maps(table, folder, args.map_quantity or list(FAST_MAP_QUANTITIES))
         print(f"summary in {folder}/: summary.parquet, summary.csv, " + ", ".join(p.name for p in written.values()))
     failed = table[table["error"].notna()]
-    for _, row in failed.head(20).iterrows():
-        eprint(f"failed: {row['source']}: {row['error']}")
+    for line in failure_lines(failed):
+        eprint(line)
     if len(failed):
         eprint(f"{len(failed)} of {len(table)} curves failed")
     return 1 if len(failed) else 0

@@ -22,7 +22,7 @@ import argparse
 from typing import Any
 
 from .._files import check_writable
-from ..errors import AfmforceError
+from ..errors import AfmforceError, ParameterError
 from ..instrument.config import PARAMETERS, Parameter, build_instrument, load_config, parse_parameter
 from ..instrument.presets import PRESETS
 from ..io.curve import RawCurve
@@ -129,7 +129,36 @@ def check_instrument_args(args: argparse.Namespace) -> None:
         return
     check_raw_output(args)
     config = load_config(args.instrument_config) if getattr(args, "instrument_config", None) else None
-    build_instrument(getattr(args, "instrument", None), config, _overrides(args))
+    preset = getattr(args, "instrument", None)
+    try:
+        build_instrument(preset, config, _overrides(args))
+    except ParameterError as exc:
+        raise ParameterError(f"{_culprit(args, preset, config, str(exc))}{exc}") from None
+
+
+def _culprit(args: argparse.Namespace, preset: str | None, config: dict | None, message: str) -> str:
+    """Where the value an instrument component refused was written: ``<file>: [noise] white = inf: `` for a
+    key of the instrument TOML file, ``--noise-white -1.0: `` for a flag; "" when no single one is. The key the
+    component's ``message`` names (``piezo creep_times must be ...``) first, else the one refused alone."""
+    from_file = ((config or {}).get("parameters") or {}).items()
+    typed = _overrides(args).items()
+
+    def label(key, value, flag: bool) -> str:
+        table, name = key.split(".", 1)
+        return (f"{PARAMETERS[key].flag} {value!r}: " if flag else
+                f"`instrument_config` {args.instrument_config}: [{table}] {name} = {value!r}: ")
+
+    for flag, items in ((True, typed), (False, from_file)):      # a flag wins over the file's value
+        for key, value in items:
+            if message.startswith(key.replace(".", " ") + " "):
+                return label(key, value, flag)
+    for flag, items in ((False, from_file), (True, typed)):
+        for key, value in items:
+            try:
+                build_instrument(preset, None if flag else {"parameters": {key: value}}, {key: value} if flag else None)
+            except ParameterError:
+                return label(key, value, flag)
+    return ""
 
 
 def record_from_args(args: argparse.Namespace, trajectory) -> RawCurve | None:

@@ -26,7 +26,7 @@ from .._fields import QUANTITIES, FieldSpec
 from ..limits import CONFIRM_RUNS, MAX_SAMPLES, check_samples, simulation_samples  # noqa: F401  (re-export)
 from ..errors import OutputExistsError, ParameterError, UnitError
 
-__all__ = ["HelpFormatter", "add_field", "field_type", "check_output", "check_outputs", "check_folder_outputs", "refuse_ignored", "confirm_size",
+__all__ = ["HelpFormatter", "add_field", "add_choice", "field_type", "check_output", "check_outputs", "check_folder_outputs", "refuse_ignored", "confirm_size",
            "lazy_help", "given", "quantity_list", "check_common", "refuse_empty_values", "COUNTS"]
 
 
@@ -98,6 +98,16 @@ def add_field(group, name: str, *, flag: str | None = None, dest: str | None = N
     action = group.add_argument(flag, dest=dest or name, type=field_type(spec, dest or name, flag),
                                 default=default, metavar="VALUE", help=text, **kw)
     return lazy_help(action, tail)
+
+
+def add_choice(group, name: str, *, flag: str | None = None) -> argparse.Action:
+    """Add ``--flag WORD`` for the setting ``name`` of :data:`afmforce._fields.ANALYSIS_CHOICES`: its
+    choices, default and help as declared there (the web's field reads the same declaration)."""
+    from .._fields import ANALYSIS_CHOICES
+
+    spec = ANALYSIS_CHOICES[name]
+    return group.add_argument(flag or "--" + name.replace("_", "-"), dest=name, choices=spec.choices,
+                              default=spec.default, help=f"{spec.help} (default {spec.default})")
 
 
 def given(args: argparse.Namespace, dest: str) -> bool:
@@ -326,15 +336,20 @@ def check_simulation_sweep(spec, *, yes: bool) -> None:
 
     confirm_size(spec.n_runs, CONFIRM_RUNS, yes=yes, what="this sweep")
     values: dict[str, list] = {}
+    origins = getattr(spec, "origins", {})   # a settings file's entries: named as written there (file, table, key)
+
+    def where(flag: str, name: str) -> str:
+        return origins.get(name) or f"{flag} {name}"
+
     for axis in spec.grid:
-        values.setdefault(axis.name, []).extend((v, f"--grid {axis.name}") for v in axis.values)
+        values.setdefault(axis.name, []).extend((v, where("--grid", axis.name)) for v in axis.values)
     for r in spec.ranges:
         if not r.lo < r.hi:
-            raise ParameterError(f"--range {r.name}={r.lo:g}:{r.hi:g} [SI]: the low end must lie below the high "
-                                 "end (NAME=LO:HI)")
-        values.setdefault(r.name, []).extend(((r.lo, f"--range {r.name}"), (r.hi, f"--range {r.name}")))
+            raise ParameterError(f"{where('--range', r.name)}={r.lo:g}:{r.hi:g} [SI]: the low end must lie below "
+                                 "the high end (NAME=LO:HI)")
+        values.setdefault(r.name, []).extend(((r.lo, where("--range", r.name)), (r.hi, where("--range", r.name))))
     for name, value in spec.fixed:
-        values.setdefault(name, []).append((value, f"--set {name}"))
+        values.setdefault(name, []).append((value, where("--set", name)))
     for name, entries in values.items():
         for value, where in entries:
             if name in _registries():

@@ -23,7 +23,7 @@ import re
 from pathlib import Path
 
 from ..errors import OutputExistsError, ParameterError
-from ._validate import add_field, check_output, lazy_help
+from ._validate import add_choice, add_field, check_output, lazy_help
 from ._analyze_liquid import liquid_flags, print_liquid
 from ._analyze_tethers import print_tethers
 from ._analyze_options import default as _default, option_names as _option_names, step_options as _options
@@ -60,9 +60,7 @@ def register(sub) -> None:
                              help="analysis steps to run (their requirements are added): "), _steps)
     p.add_argument("--format", default=None, metavar="ID", help="reader to use instead of detection "
                    "(see docs/analysis.md), e.g. jpk-zip for raw volts")
-    from ..io.curve import POSITION_CHANNELS
-    p.add_argument("--channel", choices=POSITION_CHANNELS, default=POSITION_CHANNELS[0],
-                   help="position channel (default: measured if recorded)")
+    add_choice(p, "channel")
     p.add_argument("--no-plot", action="store_true", help="with --out: skip the per-curve figures")
     lazy_help(p.add_argument("--map-quantity", action="append", default=[], metavar="Q",
                              help="quantity drawn as a heat map per force map (repeatable; "), _map_quantities)

@@ -17,7 +17,7 @@ import dataclasses
 import math
 
 from ..errors import AnalysisError, ParameterError
-from ..constants import SADER_FLUIDS as FLUIDS
+from ..constants import DEFAULT_TEMPERATURE, SADER_FLUIDS as FLUIDS
 from ._validate import add_field, check_outputs
 from ._outcome import render
 from .common import eprint, print_json, print_table
@@ -106,7 +106,7 @@ def register(sub) -> None:
     add_field(v, "quality_factor", default=50.0, help="quality factor (beam: both modes unless "
               "--quality-factor-2)")
     add_field(v, "quality_factor_2", help="quality factor of the beam's second mode")
-    add_field(v, "temperature", default=295.0)
+    add_field(v, "temperature", default=DEFAULT_TEMPERATURE)     # the one lab temperature of calibrate (constants)
     v.add_argument("--averages", type=int, default=64, help="periodograms averaged (default 64)")
     v.add_argument("--white", type=float, default=1e-27, metavar="M2_PER_HZ",
                    help="white detector floor [m^2/Hz] (default 1e-27)")

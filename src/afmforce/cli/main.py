@@ -64,7 +64,35 @@ class _Parser(argparse.ArgumentParser):
                 message = rest
             else:
                 message = f"{flag}: {rest}"
+        if message.startswith("unrecognized arguments: "):
+            tokens = message[len("unrecognized arguments: "):].split()
+            message = "unrecognized arguments: " + " ".join(_JOINED.get(t, t) for t in tokens)   # as typed
+            message += _unrecognized_hint(tokens)
         self.exit(_outcome.fail("UsageError", _outcome.one_line(message), EXIT_USAGE))
+
+
+def _unrecognized_hint(tokens: list[str]) -> str:
+    """What a flag the command lacks is called there: a file's metadata (``analyze --velocity 0``: the
+    command takes ``--meta velocity=VALUE``), or the command's nearest flag (``--tip-raduis``)."""
+    import difflib
+
+    options = sorted(o for o in (_outcome.RunState.options or ()) if o.startswith("--"))
+    for tok in tokens:
+        if not tok.startswith("--"):
+            continue
+        flag = tok.split("=", 1)[0]
+        key = flag[2:].replace("-", "_")
+        if "--meta" in options:
+            from ..io import METADATA
+
+            if key in METADATA:
+                return f" (this command takes file metadata as --meta {key}=VALUE)"
+        if flag in options:      # a flag of another method (calibrate thermal's, not calibrate invols')
+            return f" ({flag} is an option of another method of this command: each method's --help lists its own)"
+        near = difflib.get_close_matches(flag, options, n=1, cutoff=0.75)
+        if near:
+            return f" (did you mean {near[0]}?)"
+    return ""
 
 
 def build_parser(command: str | None = None) -> argparse.ArgumentParser:
@@ -130,6 +158,8 @@ def _command_of(argv: list[str]) -> str:
 
 
 _NEGATIVE_VALUE = re.compile(r"^-(\d|\.\d)")
+#: ``--flag=-1`` (joined by :func:`_join_negative_values`) -> ``--flag -1`` as the user typed it (messages).
+_JOINED: dict[str, str] = {}
 
 
 def _join_negative_values(argv: list[str]) -> list[str]:
@@ -144,6 +174,7 @@ def _join_negative_values(argv: list[str]) -> list[str]:
         if (tok.startswith("--") and "=" not in tok and i + 1 < len(argv)
                 and _NEGATIVE_VALUE.match(argv[i + 1])):
             out.append(f"{tok}={argv[i + 1]}")
+            _JOINED[out[-1]] = f"{tok} {argv[i + 1]}"
             i += 2
             continue
         out.append(tok)

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import AnalysisError, FileFormatError
 from .deflection import signal_factor
+from .._fields import ANALYSIS_CHOICES
 
 __all__ = ["RawCurve", "SEGMENT_APPROACH", "SEGMENT_RETRACT", "SEGMENT_DWELL", "DEFLECTION_UNITS",
            "POSITION_CHANNELS"]
@@ -37,7 +38,7 @@ SEGMENT_RETRACT = 1
 SEGMENT_DWELL = 2
 DEFLECTION_UNITS = ("V", "m", "N")
 #: The position channels one may ask for: ``auto`` is the measured one when recorded, else the nominal.
-POSITION_CHANNELS = ("auto", "measured", "nominal")
+POSITION_CHANNELS = ANALYSIS_CHOICES["channel"].choices     # declared once with its help (afmforce._fields)
 
 
 @dataclass(frozen=True)

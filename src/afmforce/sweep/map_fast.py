@@ -47,6 +47,8 @@ PIXEL_COLUMNS: dict[str, str] = {
     "adhesion_force": "N", "adhesion_noise": "N", "work_of_adhesion": "J/m^2", "work_of_adhesion_se": "J/m^2",
     "spring_constant": "N/m", "sensitivity": "m/V", "tip_radius": "m", "position_x": "m", "position_y": "m",
 }
+#: Each pixel's row also holds ``warnings``: the full analysis's column (:data:`afmforce.sweep.summary.SUMMARY_COLUMNS`),
+#: its warnings joined by `` | `` (empty: none).
 
 
 @dataclass(frozen=True)
@@ -143,8 +145,19 @@ class PixelAnalysis:
             adhesion_force=adhesion, adhesion_noise=noise,
             work_of_adhesion=-adhesion * factor, work_of_adhesion_se=noise * factor,
             spring_constant=k, sensitivity=sens, tip_radius=radius,
-            adhesion_model=self.adhesion_model, indentation_model=fit.model)
+            adhesion_model=self.adhesion_model, indentation_model=fit.model,
+            warnings=" | ".join(pixel_warnings(self.indentation, fit, k)))
         return row
+
+
+def pixel_warnings(options: IndentationOptions, fit, k: float) -> list[str]:
+    """A pixel's warnings, worded as the full analysis words them (its per-curve table's ``warnings``
+    column, joined by `` | ``): the indentation fit's, the file's Poisson ratio, a spring constant [N/m]
+    outside the cantilevers made."""
+    from ..analysis.indentation import fit_warnings, poisson_warnings
+    from ..analysis.plausibility import spring_constant_warnings
+
+    return spring_constant_warnings(k) + fit_warnings(options, fit) + poisson_warnings(fit.poisson, fit.poisson_source)
 
 
 def _read(ref, meta_override=None, probe=None):

@@ -144,6 +144,9 @@ class SweepSpec:
         Seed of the sampler.
     fixed : tuple of (name, value)
         Settings shared by every run.
+    origins : mapping
+        Parameter -> where its values were written, when a settings file gave them (``\`config\` sweep.toml:
+        [grid] velocity``), for the messages of later checks; not part of the runs (nor of the fingerprint).
     """
 
     grid: tuple[GridAxis, ...] = ()
@@ -152,6 +155,7 @@ class SweepSpec:
     n: int = 0
     seed: int = 0
     fixed: tuple[tuple[str, Any], ...] = field(default=())
+    origins: Mapping[str, str] = field(default_factory=dict, compare=False, repr=False)
 
     def __post_init__(self) -> None:
         names = [a.name for a in self.grid] + [r.name for r in self.ranges] + [k for k, _ in self.fixed]
@@ -222,17 +226,22 @@ class SweepSpec:
         return hashlib.sha256(text.encode()).hexdigest()
 
 
-def _value(name: str, text: Any, dimensions: Dimensions | None, where: str):
-    """Parse one value of parameter ``name`` into SI (or keep text)."""
-    if dimensions is not None and name not in dimensions:
+def _value(name: str, text: Any, dimensions: Dimensions | None, where: str, key: str | None = None):
+    """Parse one value of parameter ``key`` (default ``name``) into SI (or keep text); ``name`` is how the
+    messages call it (``velocity.lo``: a bound of a settings file's inline table)."""
+    key = key or name
+    if dimensions is not None and key not in dimensions:
         known = ", ".join(sorted(dimensions))
-        raise ParameterError(f"{where}: unknown parameter {name!r}; known parameters: {known}")
-    dim = dimensions.get(name, "dimensionless") if dimensions is not None else None
+        raise ParameterError(f"{where}: unknown parameter {key!r}; known parameters: {known}")
+    dim = dimensions.get(key, "dimensionless") if dimensions is not None else None
     if dimensions is not None and dim is None:
         return str(text)  # a text parameter such as model
     if isinstance(text, bool):
         return text
     if isinstance(text, (int, float)):
+        if not math.isfinite(float(text)):     # a TOML 1e400, inf or nan: named where it was written
+            raise ParameterError(f"{where} {name} = {text!r} is not a finite number (a TOML number beyond "
+                                 "1.8e308, inf or nan); give a value in the parameter's range")
         return float(text)
     if dim is None:  # generic use without a dimension table: a plain number or text
         try:
@@ -278,13 +287,17 @@ def parse_grid(item: str, dimensions: Dimensions | None = None) -> GridAxis:
 def parse_range(item: str, dimensions: Dimensions | None = None) -> SampledRange:
     """Parse ``name=lo:hi[:log]`` into a :class:`SampledRange`."""
     name, rest = _split(item, "`ranges`")
+    return _range_from_text(name, rest, dimensions, "`ranges`")
+
+
+def _range_from_text(name: str, rest: str, dimensions: Dimensions | None, flag: str) -> SampledRange:
     parts = [p.strip() for p in rest.split(":")]
     log = parts[-1].lower() in ("log", "lin") and parts.pop().lower() == "log"
     if len(parts) != 2:
-        raise ParameterError(f"`ranges` expects name=lo:hi[:log], got {item!r}")
-    lo, hi = (_value(name, p, dimensions, "`ranges`") for p in parts)
+        raise ParameterError(f"{flag} expects name=lo:hi[:log], got {name}={rest}")
+    lo, hi = (_value(name, p, dimensions, flag) for p in parts)
     if isinstance(lo, str) or isinstance(hi, str):
-        raise ParameterError(f"`ranges` {name}: needs numeric bounds")
+        raise ParameterError(f"{flag} {name}: needs numeric bounds")
     return SampledRange(name, lo, hi, log)
 
 
@@ -317,23 +330,26 @@ def _from_toml(path: Path, dimensions: Dimensions | None) -> dict:
         if not isinstance(data.get(table, {}), dict):
             raise ParameterError(f"`config` {path}: {table} must be a table ([{table}]), got {data[table]!r}")
     out: dict[str, Any] = _sweep_options(path, data.get("sweep", {}))
+    at = f"`config` {path}:"      # every message names the file and the key written there
     grid = []
     for name, v in data.get("grid", {}).items():
         if isinstance(v, list):
-            grid.append(GridAxis(name, tuple(_value(name, x, dimensions, "[grid]") for x in v)))
+            grid.append(GridAxis(name, tuple(_value(name, x, dimensions, f"{at} [grid]") for x in v)))
         elif isinstance(v, dict):
             lo, hi, n, log = _bounds(path, "grid", name, v, dimensions)
             grid.append(GridAxis.spaced(name, lo, hi, n, log))
         else:
-            grid.append(_grid_from_text(name, str(v), dimensions, "[grid]"))
+            grid.append(_grid_from_text(name, str(v), dimensions, f"{at} [grid]"))
     ranges = []
     for name, v in data.get("range", {}).items():
         if isinstance(v, dict):
             lo, hi, _, log = _bounds(path, "range", name, v, dimensions)
             ranges.append(SampledRange(name, lo, hi, log))
         else:
-            ranges.append(parse_range(f"{name}={v}", dimensions))
-    fixed = [(k, _value(k, v, dimensions, "[set]")) for k, v in data.get("set", {}).items()]
+            ranges.append(_range_from_text(name, str(v), dimensions, f"{at} [range]"))
+    fixed = [(k, _value(k, v, dimensions, f"{at} [set]")) for k, v in data.get("set", {}).items()]
+    out["origins"] = {name: f"{at} [{table}] {name}" for table in ("grid", "range", "set")
+                      for name in data.get(table, {})}
     out.update(grid=grid, ranges=ranges, fixed=fixed)
     return out
 
@@ -366,7 +382,7 @@ def _bounds(path: Path, table: str, name: str, v: dict, dimensions: Dimensions |
     if set(v) - keys or not {"lo", "hi"} <= set(v):
         raise ParameterError(f"`config` {path}: [{table}] {name} must be a table {form}, got keys "
                              f"{sorted(v)}")
-    lo, hi = (_value(name, v[k], dimensions, f"[{table}]") for k in ("lo", "hi"))
+    lo, hi = (_value(f"{name}.{k}", v[k], dimensions, f"`config` {path}: [{table}]", key=name) for k in ("lo", "hi"))
     if isinstance(lo, str) or isinstance(hi, str):
         raise ParameterError(f"`config` {path}: [{table}] {name}: lo and hi must be numbers")
     n, log = v.get("n", 1), v.get("log", False)
@@ -399,12 +415,14 @@ def build_spec(
     Flags given here add to the file's entries and replace those of the same name.
     """
     base: dict[str, Any] = _from_toml(config, dimensions) if config else {}
-    unknown = set(base) - {"grid", "ranges", "fixed", "sample", "n", "seed", "chunk_size"}
+    unknown = set(base) - {"grid", "ranges", "fixed", "sample", "n", "seed", "chunk_size", "origins"}
     if unknown:
         raise ParameterError(f"`config` {config}: unknown [sweep] option(s) {sorted(unknown)}")
     axes = _merge(base.get("grid", []), [parse_grid(g, dimensions) for g in grid], lambda a: a.name)
     rngs = _merge(base.get("ranges", []), [parse_range(r, dimensions) for r in ranges], lambda r: r.name)
     fixed = _merge(base.get("fixed", []), [parse_setting(s, dimensions) for s in sets], lambda f: f[0])
+    typed = {_split(t, "")[0] for t in (*grid, *ranges, *sets)}     # a flag's entry replaces the file's
+    origins = {k: v for k, v in base.get("origins", {}).items() if k not in typed}
     sample = sample if sample is not None else base.get("sample")
     if rngs and sample is None:
         sample = "lhs"
@@ -415,6 +433,7 @@ def build_spec(
         n=int(n if n is not None else base.get("n", 0)),
         seed=int(seed if seed is not None else base.get("seed", 0)),
         fixed=tuple(fixed),
+        origins=origins,
     )
 
 

@@ -25,7 +25,7 @@ from .tasks import decimate
 from .validate import FieldError, metadata, number
 from ..sweep.files import CurveAnalysis
 
-__all__ = ["parse_inputs", "parse_steps", "run_analysis", "CachedAnalysis"]
+__all__ = ["parse_inputs", "parse_choice", "parse_steps", "run_analysis", "CachedAnalysis"]
 
 #: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)],
 #: at most :data:`_CURVES_KEPT` entries and :data:`_CACHE_BYTES` bytes (each cache here).
@@ -215,6 +215,20 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
     return records, probe_record, override
 
 
+def parse_choice(name: str, value: str | None) -> str:
+    """A word setting of :data:`afmforce._fields.ANALYSIS_CHOICES` (None: its default), or FieldError ``name``
+    naming the choices."""
+    from .._fields import ANALYSIS_CHOICES
+
+    spec = ANALYSIS_CHOICES[name]
+    if value is None:
+        return spec.default
+    try:
+        return spec.check(value, name)
+    except ParameterError as exc:
+        raise FieldError(name, str(exc)) from None
+
+
 def parse_steps(steps: Sequence[str] | None) -> tuple[str, ...] | None:
     """The steps asked for (None: all), checked against the registry (FieldError ``step[i]`` naming the
     unknown one and the choices)."""
@@ -232,7 +246,7 @@ def parse_steps(steps: Sequence[str] | None) -> tuple[str, ...] | None:
 
 
 def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *, calibration=None,
-                 steps: Sequence[str] | None = None, format: str | None = None,
+                 steps: Sequence[str] | None = None, format: str | None = None, channel: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
                  guard: bool = True, deadline: float | None = None,
                  curves: Sequence[str] = ()) -> dict[str, Any]:
@@ -252,6 +266,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     signal, the first result when none of them is one (a page draws one curve of a map; the
     others are asked for when shown); empty: every result. ``arrays_for`` lists those sent.
     ``calibration``: ``(names, method, invols)`` of a probe calibration file (:func:`parse_inputs`).
+    ``channel``: the position channel, as ``--channel`` (:data:`afmforce._fields.ANALYSIS_CHOICES`;
+    None: its default).
     """
     from ..sweep.files import analyze_files, plan_curves
     from ..sweep.report import analysis_json
@@ -262,6 +278,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
 
         if format not in FORMATS:
             raise FieldError("format", f"format {format[:60]!r}: unknown; choose one of {', '.join(FORMATS)}")
+    channel = parse_choice("channel", channel)
     records, probe_record, override = parse_inputs(options, meta, probe, calibration)
     chosen = parse_steps(steps)
     t0 = time.perf_counter()
@@ -273,7 +290,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     if arrays and not curves:     # the response's size cap
         max_points = max(10, min(max_points, ANALYSIS_POINTS // max(1, len(refs))))
     analysis = CachedAnalysis(steps=chosen, options=records, probe=probe_record, meta_override=override,
-                             format=format, keep_json=True, json_arrays=arrays, file_timeout=timeout,
+                             format=format, channel=channel, keep_json=True, json_arrays=arrays, file_timeout=timeout,
                              points=max_points if arrays else None, memo=_MEMO)
 
     def on_curve(_progress) -> None:

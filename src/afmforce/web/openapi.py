@@ -176,6 +176,11 @@ def build(app) -> dict[str, Any]:
         for item, target in (("probe", "ProbeCalibration"), ("option", "AnalysisOptions")):
             if item in body:
                 body[item]["x-names"] = {"$ref": f"#/components/schemas/{target}"}
+        from .._fields import ANALYSIS_CHOICES
+
+        for item, choice in ANALYSIS_CHOICES.items():    # the words --channel takes, from one declaration
+            if item in body:
+                body[item].update(enum=list(choice.choices), default=choice.default)
     fit = schemas.get("FitRequest", {}).get("properties", {})
     if "truth" in fit:
         fit["truth"] = {"$ref": "#/components/schemas/SimulationConfig",

@@ -10,6 +10,7 @@ from fastapi import APIRouter, File, Form, Request, UploadFile
 from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
+from .._fields import ANALYSIS_CHOICES
 from ..errors import ParameterError
 from .analysis import run_analysis
 from .warm import wait_until_warm
@@ -40,6 +41,8 @@ async def analyze(request: Request,
                                                                           "to take from it (default: all it "
                                                                           "holds that 'probe' does not give)")] = [],
                   format: Annotated[str | None, Form(description="reader instead of detection")] = None,
+                  channel: Annotated[str, Form(description=ANALYSIS_CHOICES["channel"].help + ", as --channel")
+                                     ] = ANALYSIS_CHOICES["channel"].default,
                   arrays: Annotated[bool, Form(description="add per-sample arrays, raw signals, maps")] = False,
                   max_points: Annotated[int, Form(ge=100, le=RESPONSE_POINTS)] = 4000,
                   curve: Annotated[list[str], Form(description="with arrays: the curves whose arrays and raw "
@@ -88,7 +91,7 @@ async def analyze(request: Request,
     deadline = time.monotonic() + settings.request_budget
     guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
     work = run_in_threadpool(run_analysis, paths, option, meta, probe, calibration=from_file, steps=step or None,
-                             format=format,
+                             format=format, channel=channel,
                              arrays=arrays,
                              max_points=max_points, budget=settings.request_budget, guard=guard,
                              deadline=deadline, curves=curve)

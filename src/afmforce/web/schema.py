@@ -15,7 +15,7 @@ from typing import Any
 
 from .._fields import DISPLAY_UNITS, FieldSpec
 
-__all__ = ["simulation_fields", "analysis_steps", "analysis_options", "calibration_fields", "fit_parameters",
+__all__ = ["simulation_fields", "analysis_steps", "analysis_options", "analysis_settings", "calibration_fields", "fit_parameters",
            "fit_defaults", "examples", "schema"]
 
 #: SI unit -> the unit a control shows when its spec names none.
@@ -140,6 +140,15 @@ def calibration_fields() -> list[dict[str, Any]]:
     return out
 
 
+def analysis_settings() -> list[dict[str, Any]]:
+    """The analysis's word settings (:data:`afmforce._fields.ANALYSIS_CHOICES`: the position channel ...),
+    each a choice control sent as its own form field (``channel``), as ``afmforce analyze --channel``."""
+    from .._fields import ANALYSIS_CHOICES
+
+    return [dict(field_json(name, None, c.default, choices=c.choices, help=c.help), via="field")
+            for name, c in ANALYSIS_CHOICES.items()]
+
+
 def fit_parameters() -> list[dict[str, Any]]:
     """The fit's global parameters (``free`` choices)."""
     from ..fit import PARAMETERS
@@ -173,6 +182,6 @@ def schema() -> dict[str, Any]:
     from ..instrument.presets import PRESETS
 
     return {"simulation": simulation_fields(), "analysis": analysis_options(), "steps": analysis_steps(),
-            "calibration": calibration_fields(),
+            "calibration": calibration_fields(), "analysis_settings": analysis_settings(),
             "fit": fit_parameters(), "fit_defaults": fit_defaults(), "examples": examples(),
             "instrument_presets": list(PRESETS)}

@@ -250,7 +250,7 @@ def calibration_file(data: bytes, name: str, field: str = "calibration") -> dict
 
     from .._fields import spec_of
     from ..analysis.options import ProbeCalibration
-    from ..calibration.record import ANALYSIS_KEYS, parse_calibration
+    from ..calibration.record import ANALYSIS_KEYS, PROBE_KEYS, parse_calibration
 
     if len(data) > CALIBRATION_BYTES:
         raise FieldError(field, f"{name}: {len(data):,} bytes is not a calibration file (afmforce calibrate "
@@ -260,8 +260,9 @@ def calibration_file(data: bytes, name: str, field: str = "calibration") -> dict
     except UnicodeDecodeError:
         raise FieldError(field, f"{name}: not a calibration file (not UTF-8 text; afmforce calibrate ... "
                                 "--out FILE writes one)") from None
-    except AfmforceError as exc:
-        raise FieldError(field, str(exc)) from None
+    except AfmforceError as exc:     # a value out of its range (named "<file>: <key> ..."): the key's field
+        key = next((k for k in PROBE_KEYS if str(exc).startswith(f"{name}: {k} ") and "out of range" in str(exc)), None)
+        raise FieldError(f"{field}.{key}" if key else field, str(exc)) from None
     specs = {f.name: spec_of(f) for f in dataclasses.fields(ProbeCalibration)}
     return {k: number(values[k], specs[k], k, f"{field}.{k}") for k in ANALYSIS_KEYS if k in values}
 

@@ -183,6 +183,7 @@ async function analyse(upload) {
   AN.examples.forEach((e) => fd.append("example", e));
   optionTexts().forEach((o) => fd.append("option", o));
   probeForm(fd);
+  settingsForm(fd);
   fd.append("arrays", "true");
   plotRequest(fd);
   try {
@@ -223,6 +224,7 @@ async function loadCurveArrays(name) {   // a curve of a batch or map drawn for 
   AN.examples.forEach((e) => fd.append("example", e));
   optionTexts().forEach((o) => fd.append("option", o));
   probeForm(fd);
+  settingsForm(fd);
   fd.append("arrays", "true");
   plotRequest(fd, name);
   try {
@@ -268,7 +270,9 @@ function saveAnalyse() {   // what to reopen after a reload: the uploads shown, 
     }
     const probe = {};
     for (const c of AN.probe || []) { const input = c.box.querySelector("input.val"); if (input && input.value.trim()) probe[c.f.name] = input.value; }
-    localStorage.setItem(SAVED, JSON.stringify({ files: AN.files.map((f) => f.id), examples: AN.examples, options, probe, curve: $("an-curve").value }));
+    const settings = {};
+    for (const c of AN.settings || []) { const v = c.box.get(); if (v !== null && v !== c.f.default) settings[c.f.name] = v; }
+    localStorage.setItem(SAVED, JSON.stringify({ files: AN.files.map((f) => f.id), examples: AN.examples, options, probe, settings, curve: $("an-curve").value }));
   } catch { /* storage off: nothing restored */ }
 }
 async function listUploads() {
@@ -300,6 +304,9 @@ async function restoreAnalyse() {
     const input = document.querySelector(`[data-option="${CSS.escape(key)}"] input.val, [data-option="${CSS.escape(key)}"] select, [data-option="${CSS.escape(key)}"] input[type=checkbox]`);
     if (!input) continue;
     if (input.type === "checkbox") input.checked = !!v; else input.value = v;
+  }
+  for (const [name, v] of Object.entries(saved.settings || {})) {
+    const input = document.querySelector(`[data-setting="${CSS.escape(name)}"] select`); if (input) input.value = v;
   }
   for (const [name, v] of Object.entries(saved.probe || {})) {
     const input = document.querySelector(`[data-probe="${CSS.escape(name)}"] input.val`); if (input) input.value = v;
@@ -584,6 +591,14 @@ function fmtPa(v) {
   for (const [f, u] of [[1e9, "GPa"], [1e6, "MPa"], [1e3, "kPa"], [1, "Pa"]]) if (Math.abs(v) >= f) return `${(v / f).toPrecision(4)} ${u}`;
   return `${v.toPrecision(4)} Pa`;
 }
+function buildSettings() {   // the analysis's word settings (channel): GET /api/schema analysis_settings, as afmforce analyze --channel
+  const box = $("an-settings"); box.replaceChildren(); AN.settings = [];
+  for (const f of SCHEMA.analysis_settings || []) {
+    const c = control(f, () => { if (AN.files.length || AN.examples.length) analyse(false); });
+    c.dataset.setting = f.name; box.append(c); AN.settings.push({ f, box: c });
+  }
+}
+function settingsForm(fd) { for (const c of AN.settings || []) { const v = c.box.get(); if (v !== null && v !== c.f.default) fd.append(c.f.name, v); } }
 function buildOptions() {
   const box = $("an-options"); box.replaceChildren(); AN.controls = [];
   for (const [step, fields] of Object.entries(SCHEMA.analysis)) {
@@ -816,7 +831,7 @@ $("an-calfile").addEventListener("change", (e) => { if (e.target.files[0]) loadC
   try {
     Object.assign(SCHEMA, await api("api/schema"));
     SCHEMA.examples.forEach((e) => $("an-example").append(el("option", { value: e.name, text: `${e.name}: ${e.description}` })));
-    buildOptions(); buildCalibration(); buildFitCalibration(); buildSim();
+    buildOptions(); buildSettings(); buildCalibration(); buildFitCalibration(); buildSim();
     SCHEMA.fit.forEach((p) => $("fit-free").append(el("label", {}, Object.assign(el("input", { type: "checkbox", value: p.name }), { checked: SCHEMA.fit_defaults.free.includes(p.name) }), ` ${p.name} [${p.unit}]`)));
     $("fit-profile").checked = SCHEMA.fit_defaults.profile; $("fit-compare").checked = SCHEMA.fit_defaults.compare;   // afmforce fit's
     await restoreAnalyse().catch((e) => { $("an-error").textContent = e.message; });

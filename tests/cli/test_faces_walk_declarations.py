@@ -1,0 +1,130 @@
+"""Every declared option reads the same on every face (faces sweep, 2026-11-29): the tests walk the
+declarations, so an option added to one of them cannot drift on another.
+
+* each command-line flag of a quantity (every command, sub-commands included): its ``--help`` shows the
+  declared range, the quantity is one of :data:`afmforce._fields.QUANTITIES` and docs/ranges.md lists it
+  with the same range;
+* each web control of the same name (``GET /api/schema``: the simulation, the step options, the probe):
+  the same range as the flag;
+* each settings-file key: a sweep TOML's parameters are the simulation's flat names (the web's simulation
+  controls, ``sweep --list-parameters``); an instrument TOML's ``[component] key`` has its flag
+  ``--component-key``; a calibration JSON's probe keys are quantities with the same unit.
+
+Was: ``calibrate virtual --temperature`` defaulted to a literal 295.0 (now the constant every calibration
+reads), and ``analyze --channel`` had no web face (tests/web/test_web_channel_field.py)."""
+
+from __future__ import annotations
+
+import argparse
+import re
+from pathlib import Path
+
+import pytest
+
+from afmforce._fields import QUANTITIES
+from afmforce.cli.main import build_parser
+
+DOCS = (Path(__file__).parents[2] / "docs" / "ranges.md").read_text()
+
+
+def _flags():
+    """(command, action, spec) for every flag whose type carries a FieldSpec, in every (sub-)command."""
+    out = []
+
+    def walk(name, parser):
+        for a in parser._actions:
+            if isinstance(a, argparse._SubParsersAction):
+                for sub, sp in a.choices.items():
+                    walk(f"{name} {sub}".strip(), sp)
+            spec = getattr(a.type, "spec", None)
+            if spec is not None:
+                out.append((name, a, spec))
+
+    walk("", build_parser())
+    return out
+
+
+FLAGS = _flags()
+
+
+def _quantity(spec) -> str | None:
+    return next((k for k, s in QUANTITIES.items() if s == spec), None)
+
+
+def test_the_walk_sees_the_flags():
+    commands = {c.split()[0] for c, _, _ in FLAGS}
+    assert {"analyze", "simulate", "fit", "statics", "diagnose", "calibrate", "plan"} <= commands
+    assert len(FLAGS) > 100
+
+
+@pytest.mark.parametrize("command,action,spec", FLAGS, ids=[f"{c} {a.option_strings[-1]}" for c, a, _ in FLAGS])
+def test_every_quantity_flag_shows_its_declared_range_and_the_docs_list_it(command, action, spec):
+    help_text = (action.help or "") + (action.lazy_help() if getattr(action, "lazy_help", None) else "")
+    if spec.bounded:
+        assert f"range {spec.range_text()}" in help_text, (command, action.option_strings, help_text)
+    if spec.unit:                                   # the SI unit a plain number is read in
+        assert f"[{spec.unit}]" in help_text, (command, action.option_strings, help_text)
+    name = _quantity(spec)
+    assert name is not None, f"{command} {action.option_strings[-1]}: a range declared outside QUANTITIES"
+    row = re.search(rf"^\| `{re.escape(name)}` \| .* \| (.*) \|$", DOCS, re.M)
+    assert row and row.group(1) == spec.range_text(), (name, row and row.group(0))
+
+
+@pytest.fixture(scope="module")
+def web_fields():
+    pytest.importorskip("fastapi")
+    from afmforce.web.schema import schema
+
+    s = schema()
+    out: dict[str, list] = {}
+    for f in s["simulation"] + s["calibration"] + [f for fs in s["analysis"].values() for f in fs]:
+        out.setdefault(f["name"], []).append(f)
+    return out
+
+
+@pytest.mark.parametrize("command,action,spec", FLAGS, ids=[f"{c} {a.option_strings[-1]}" for c, a, _ in FLAGS])
+def test_a_web_control_of_the_same_quantity_has_the_flags_range(web_fields, command, action, spec):
+    for f in web_fields.get(_quantity(spec) or "", []):
+        if f.get("range") is not None and f.get("unit") == spec.unit:
+            assert f["range"] == spec.range_text(), (command, action.option_strings[-1], f)
+            assert f["unit"] == spec.unit and f["factor"] > 0
+            assert (f["lo"], f["hi"]) == (spec.lo, spec.hi)
+
+
+def test_sweep_file_keys_are_the_simulations_names_on_every_face(web_fields, capsys):
+    from afmforce.cli.main import main
+    from afmforce.dynamics.config import FLAT
+    from afmforce.sweep.simulation import simulation_dimensions
+    from afmforce.web.schema import simulation_fields
+
+    keys = set(simulation_dimensions())
+    assert keys == set(FLAT) == {f["name"] for f in simulation_fields()}
+    assert main(["sweep", "--list-parameters"]) == 0
+    listed = {line.split()[0] for line in capsys.readouterr().out.splitlines()[1:] if line.strip()}
+    assert listed == keys
+
+
+def test_instrument_file_keys_have_their_flags():
+    from afmforce.instrument.config import PARAMETERS
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    flags = set(sub.choices["simulate"]._option_string_actions)
+    for key, p in PARAMETERS.items():
+        assert p.flag == "--" + key.replace(".", "-").replace("_", "-") and p.flag in flags, key
+
+
+def test_calibration_file_keys_are_quantities_with_their_units():
+    from afmforce.calibration.record import ANALYSIS_KEYS, PROBE_KEYS
+
+    for key, unit in PROBE_KEYS.items():
+        assert QUANTITIES[key].unit == unit, key
+    assert set(ANALYSIS_KEYS) <= set(PROBE_KEYS)
+
+
+def test_calibrate_reads_one_default_temperature():
+    from afmforce.constants import DEFAULT_TEMPERATURE
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    calibrate = next(a for a in sub.choices["calibrate"]._actions if isinstance(a, argparse._SubParsersAction))
+    virtual = calibrate.choices["virtual"]._option_string_actions["--temperature"]
+    assert virtual.default == DEFAULT_TEMPERATURE
