@@ -21,7 +21,7 @@ from numba import njit
 
 from ._numeric import BRACKET, _robust_line, middle_bracket  # noqa: F401 (re-exported: the adhesion kernel)
 
-__all__ = ["span_stats", "median_abs_step", "first_below", "glitch_scan", "robust_line_ab", "middle_bracket", "COMPILED", "BRACKET"]
+__all__ = ["span_stats", "median_abs_step", "first_below", "glitch_scan", "orient_scan", "robust_line_ab", "middle_bracket", "COMPILED", "BRACKET"]
 
 
 @njit(cache=True, nogil=True)
@@ -117,6 +117,131 @@ def robust_line_ab(x: np.ndarray, y: np.ndarray, n_iter: int = 6, tuning: float 
     if not ok:
         return np.nan, np.nan, np.nan, False
     return a, b, mad, True
+
+
+@njit(cache=True, nogil=True)
+def orient_scan(seg, t, z, s, check_time: bool, min_block: int, min_run: int, end_samples: int, jump_steps: float):
+    """Whether :func:`~afmforce.analysis.orientation.orient` leaves a curve as it is, without a note, at its
+    conventions' test (the readers' curves), and what :func:`~afmforce.analysis.state.prepare` reads off it,
+    in one pass over the samples instead of some thirty numpy calls (issue 35 item 2).
+
+    ``seg`` the segment labels, ``t`` the times (read only with ``check_time``), ``z`` the position of the
+    channel the analysis reads, ``s`` the deflection signal. Returns ``(plain, a0, a1, r0, r1, span_a,
+    span_r, sign_ok)``. ``plain`` True says, for every curve it is True on, what ``orient`` finds by its own
+    steps: one block of each run label among the blocks of ``min_block`` samples or more (one cycle), the
+    approach (label 0, samples ``a0 .. a1 - 1``) and the retract (label 1, ``r0 .. r1 - 1``) each one
+    contiguous block of ``min_run`` samples or more, no run whose time falls at its start (a backwards run
+    needs that), every position and signal sample finite, both runs' position spans (``span_a``, ``span_r``:
+    ``ptp``, exact) above zero, no position step among a run's first or last ``end_samples`` steps above
+    ``jump_steps`` times the run's median step (shown without the median: at least the median's share of the
+    steps are ``jump_steps`` times as large as the largest end step, so the median is too; rounding is
+    monotone), and the position rising over the approach and falling over the retract by the medians of each
+    run's first and last tenth (shown without the medians: every sample of the later tenth beyond every
+    sample of the earlier one). False says only that the scan could not show it (the caller runs ``orient``).
+    ``sign_ok`` True says :func:`~afmforce.analysis.state._check_sign` finds nothing on ``s``: its tail (the
+    median of the approach's last ``max(3, n // 50)`` samples) or the retract's start (the median of its first
+    ``max(3, m // 50)``) is not below the baseline (the median of the approach's first ``max(5, n // 3)``),
+    every sample of it being at least as large as every baseline sample."""
+    n = seg.size
+    bad = (False, 0, 0, 0, 0, 0.0, 0.0, False)
+    if t.size != n or z.size != n or s.size != n or n == 0:
+        return bad
+    blocks0 = 0
+    blocks1 = 0
+    count0 = 0
+    count1 = 0
+    a0 = -1
+    a1 = -1
+    r0 = -1
+    r1 = -1
+    start = 0
+    for i in range(1, n + 1):
+        if i == n or seg[i] != seg[i - 1]:
+            lab = seg[start]
+            if lab == 0:
+                count0 += i - start
+                if a0 < 0:
+                    a0 = start
+                a1 = i
+                if i - start >= min_block:
+                    blocks0 += 1
+            elif lab == 1:
+                count1 += i - start
+                if r0 < 0:
+                    r0 = start
+                r1 = i
+                if i - start >= min_block:
+                    blocks1 += 1
+            start = i
+    if blocks0 > 1 or blocks1 > 1 or count0 < min_run or count1 < min_run:
+        return bad
+    if a1 - a0 != count0 or r1 - r0 != count1:  # a run split by other labels: orient's own path
+        return bad
+    if check_time and (t[a0 + 1] - t[a0] < 0.0 or t[r0 + 1] - t[r0] < 0.0):
+        return bad
+    for i in range(n):
+        if not (np.isfinite(z[i]) and np.isfinite(s[i])):
+            return bad
+    spans = np.empty(2)
+    for part in range(2):
+        lo, hi = (a0, a1) if part == 0 else (r0, r1)
+        zmin = z[lo]
+        zmax = z[lo]
+        for i in range(lo + 1, hi):
+            v = z[i]
+            if v < zmin:
+                zmin = v
+            if v > zmax:
+                zmax = v
+        spans[part] = zmax - zmin
+        if not spans[part] > 0.0:
+            return bad
+        m = hi - lo
+        if m >= 4 * end_samples + 4:  # orient's end jumps: the runs it looks at
+            big = 0.0
+            for j in range(end_samples):
+                big = max(big, abs(z[lo + j + 1] - z[lo + j]), abs(z[hi - 1 - j] - z[hi - 2 - j]))
+            if big > 0.0:
+                steps = m - 1
+                count = 0
+                for i in range(lo, hi - 1):
+                    if jump_steps * abs(z[i + 1] - z[i]) >= big:
+                        count += 1
+                h = steps // 2
+                if count < (steps - h if steps % 2 else steps - h + 1):
+                    return bad
+        k = max(1, m // 10)
+        first_lo = z[lo]
+        first_hi = z[lo]
+        for i in range(lo, lo + k):
+            first_lo = min(first_lo, z[i])
+            first_hi = max(first_hi, z[i])
+        last_lo = z[hi - 1]
+        last_hi = z[hi - 1]
+        for i in range(hi - k, hi):
+            last_lo = min(last_lo, z[i])
+            last_hi = max(last_hi, z[i])
+        if part == 0 and not last_lo > first_hi:  # the approach rises
+            return bad
+        if part == 1 and not last_hi < first_lo:  # the retract falls
+            return bad
+    na = a1 - a0
+    head = max(5, na // 3)
+    base_hi = s[a0]
+    for i in range(a0, a0 + min(head, na)):
+        base_hi = max(base_hi, s[i])
+    tail = max(3, na // 50)
+    low = s[a1 - 1]
+    for i in range(max(a1 - tail, a0), a1):
+        low = min(low, s[i])
+    sign_ok = low >= base_hi
+    if not sign_ok:
+        k2 = min(max(3, (r1 - r0) // 50), r1 - r0)
+        low = s[r0]
+        for i in range(r0, r0 + k2):
+            low = min(low, s[i])
+        sign_ok = low >= base_hi
+    return True, a0, a1, r0, r1, spans[0], spans[1], sign_ok
 
 
 #: The kernels run compiled (False under ``NUMBA_DISABLE_JIT``, where they are plain Python).

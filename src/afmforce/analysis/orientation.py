@@ -30,10 +30,11 @@ import math
 import numpy as np
 
 from ..io.curve import RawCurve
+from ._glue_kernel import COMPILED, orient_scan
 from ._median import median
 from ._numeric import ptp
 
-__all__ = ["orient", "contact_side", "CONTACT_SIDE_RATIO", "CONTACT_SIDE_SIGMAS", "MIN_BLOCK"]
+__all__ = ["orient", "plain_scan", "contact_side", "CONTACT_SIDE_RATIO", "CONTACT_SIDE_SIGMAS", "MIN_BLOCK"]
 
 #: The steeper end's slope must exceed the flatter end's this many times to name the contact end [-].
 CONTACT_SIDE_RATIO = 4.0
@@ -181,6 +182,31 @@ def _end_jumps(curve: RawCurve, z: np.ndarray, notes: list[str]) -> np.ndarray |
     return ~drop if drop.any() else None
 
 
+#: Fewest samples of each run :func:`orient` reads the order of (a shorter run is left as it is).
+MIN_ORIENT_RUN = 20
+
+
+def plain_scan(curve: RawCurve, channel: str = "auto") -> tuple | None:
+    """:func:`~._glue_kernel.orient_scan` of ``curve`` (its result when it shows that :func:`orient` leaves the
+    curve as it is, without a note: the readers' curves), or None (not shown, or numba's JIT off: the caller
+    runs :func:`orient`'s own steps). The same decision as those steps, for every curve it is given on; what it
+    reads off the curve (the runs' sample ranges and position spans, the sign check's screen) serves
+    :func:`~afmforce.analysis.state.prepare`."""
+    if not COMPILED:
+        return None
+    seg, t, s = curve.segment, curve.time, curve.deflection_signal
+    try:
+        z = curve.position(channel)
+    except Exception:   # an absent channel: prepare() says so
+        return None
+    for a, dtype in ((seg, np.int8), (t, np.float64), (z, np.float64), (s, np.float64)):
+        if not (isinstance(a, np.ndarray) and a.ndim == 1 and a.dtype == dtype):
+            return None
+    out = orient_scan(seg, t, z, s, not curve.metadata.get("time_is_sample_index", False), MIN_BLOCK,
+                      MIN_ORIENT_RUN, END_SAMPLES, END_JUMP_STEPS)
+    return out if out[0] else None
+
+
 def orient(curve: RawCurve, channel: str = "auto") -> tuple[RawCurve, tuple[str, ...]]:
     """The curve with one approach-retract cycle, each run in acquisition order and labelled as what it is.
 
@@ -192,11 +218,13 @@ def orient(curve: RawCurve, channel: str = "auto") -> tuple[RawCurve, tuple[str,
     curve : RawCurve
     channel : str  the position channel the analysis reads (``"auto"``, ``"measured"``, ``"nominal"``)
     """
+    if plain_scan(curve, channel) is not None:   # the readers' curves: nothing to change, shown in one pass
+        return curve, ()
     notes: list[str] = []
     out = _first_cycle(curve, notes)
     seg = np.asarray(out.segment)
     app, ret = np.flatnonzero(seg == 0), np.flatnonzero(seg == 1)
-    if app.size < 20 or ret.size < 20:
+    if app.size < MIN_ORIENT_RUN or ret.size < MIN_ORIENT_RUN:
         return out, tuple(notes)
     # a run stored backwards in time (its time column running down): put back in time order
     if not out.metadata.get("time_is_sample_index", False):
@@ -228,7 +256,7 @@ def orient(curve: RawCurve, channel: str = "auto") -> tuple[RawCurve, tuple[str,
         out, z, s = _take(out, np.flatnonzero(keep)), z[keep], s[keep]
         seg = np.asarray(out.segment)
         app, ret = np.flatnonzero(seg == 0), np.flatnonzero(seg == 1)
-        if app.size < 20 or ret.size < 20:
+        if app.size < MIN_ORIENT_RUN or ret.size < MIN_ORIENT_RUN:
             return out, tuple(notes)
     if _trend(z[app]) > 0.0 and _trend(z[ret]) < 0.0:
         return out, tuple(notes)     # the conventions' order (the readers' curves): nothing to read off the signal

@@ -28,7 +28,7 @@ from . import options as O
 from . import registry
 from .contact_point import CONTACT_POINT_METHODS
 from .options_text import show_default
-from .orientation import orient
+from .orientation import orient, plain_scan
 from .plausibility import (beyond_detector, impossible_reasons, impossible_steps, plausibility_warnings,
                            slope_not_the_levers)
 from .registry import AnalysisStep, ResultField, register_step
@@ -190,8 +190,10 @@ def _analyze(curve: RawCurve, order: list[str], opts, probe, channel: str, memo:
     signal was negated because its compliance line fell (:func:`inverted_sign`), analysed once more."""
     known = registry.steps()
     given = curve
-    curve, reordered = orient(curve, channel)   # one cycle, each run in acquisition order, labelled right
-    st = prepare(curve, channel, probe)
+    scan = plain_scan(curve, channel)   # the readers' curves: shown in one pass to need no change
+    # one cycle, each run in acquisition order, labelled right
+    curve, reordered = (curve, ()) if scan is not None else orient(curve, channel)
+    st = prepare(curve, channel, probe, scan=scan)
     if reordered or negated:
         st = st.update(warnings=((negated,) if negated else ()) + reordered + st.warnings)
     misread = beyond_detector(curve)

@@ -183,7 +183,8 @@ def _velocity(t: np.ndarray, z: np.ndarray) -> float:
 _FIELDS = frozenset(f.name for f in dataclasses.fields(State))
 
 
-def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | None = None) -> State:
+def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | None = None, *,
+            scan: tuple | None = None) -> State:
     """Check the curve and choose the position channel.
 
     Parameters
@@ -192,6 +193,9 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
         ``"auto"`` (measured if recorded, else nominal), ``"measured"`` or ``"nominal"``.
     probe : ProbeCalibration, optional
         The user's probe record (None: everything from the file).
+    scan : tuple, optional
+        :func:`~.orientation.plain_scan` ``(curve, channel)`` where it is not None (the pipeline's): the position
+        spans, its direction and the sign check's screen read from it, the same answers as computed here.
 
     Raises
     ------
@@ -234,8 +238,11 @@ def prepare(curve: RawCurve, channel: str = "auto", probe: ProbeCalibration | No
     if glitches:   # the steps that read the recorded signal read the repaired one too
         notes.append(glitches)
         curve = dataclasses.replace(curve, deflection_signal=s)
-    z, use_measured = _moving_position(curve, z, use_measured, channel, runs, notes)
-    inverted = _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
+    z, use_measured = _moving_position(curve, z, use_measured, channel, runs, notes,
+                                       None if scan is None else (scan[5], scan[6]))
+    # the scan's screen read the recorded signal: a repaired one is checked here
+    inverted = None if scan is not None and scan[7] and not glitches else \
+        _check_sign(s, runs[("run", 0)][1], runs[("run", 1)][1])
     if inverted:
         notes.append(inverted)
     k_note = curve.metadata.get("spring_constant_note")   # a header with several spring constants (the reader's)
@@ -335,8 +342,11 @@ def _check_sign(s: np.ndarray, approach: np.ndarray, retract: np.ndarray) -> str
 
 
 def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel: str, runs: dict,
-                     notes: list[str]) -> tuple[np.ndarray, bool]:
+                     notes: list[str], plain: tuple[float, float] | None = None) -> tuple[np.ndarray, bool]:
     """The position ``z`` checked to move in both runs, towards the sample on the approach.
+
+    ``plain``: the runs' position spans of a curve :func:`~.orientation.plain_scan` showed to move in both
+    runs, towards the sample on the approach (the trends are then not computed again: the same answer).
 
     A measured channel that stands still (a position sensor switched off or not connected) gives way
     to the nominal one when the channel was not chosen; a position that does not move, or spans more
@@ -346,6 +356,10 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
     present = [(runs[("run", which)][1], word) for which, word in ((0, "approach"), (1, "retract"))
                if runs[("run", which)][1].size]   # a curve of one run: that run's checks only
     idx, words = [i for i, _ in present], tuple(w for _, w in present)
+    if plain is not None and len(idx) == 2:
+        if max(plain) > MAX_POSITION_SPAN:
+            _too_far(use_measured, max(plain))
+        return z, use_measured
     spans = [float(ptp(z[i])) if i.size else 0.0 for i in idx]
     if min(spans) <= 0.0 and use_measured and channel == "auto":
         nominal = np.array(curve.piezo_nominal, dtype=float)
@@ -359,9 +373,7 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
             raise AnalysisError(f"the {name} position does not move during the {word}: no force curve comes from "
                                 "it; check the file's position channel (`channel`)")
     if max(spans) > MAX_POSITION_SPAN:
-        raise AnalysisError(f"the {name} position spans {max(spans):.3g} m, beyond any AFM scanner's travel "
-                            f"({MAX_POSITION_SPAN * 1e3:g} mm; long-range heads move 0.1 mm): the file is read with a wrong position scale "
-                            "(a column in nm taken for metres?) or is damaged")
+        _too_far(use_measured, max(spans))
     trend = []
     for i in idx:
         n = max(1, i.size // 10)
@@ -373,6 +385,14 @@ def _moving_position(curve: RawCurve, z: np.ndarray, use_measured: bool, channel
                      "towards the sample")
         return -z, use_measured
     return z, use_measured
+
+
+def _too_far(use_measured: bool, span: float) -> None:
+    """Refuse a position that spans more than :data:`MAX_POSITION_SPAN` [m]."""
+    name = "measured (sensor)" if use_measured else "nominal (piezo)"
+    raise AnalysisError(f"the {name} position spans {span:.3g} m, beyond any AFM scanner's travel "
+                        f"({MAX_POSITION_SPAN * 1e3:g} mm; long-range heads move 0.1 mm): the file is read with a wrong position scale "
+                        "(a column in nm taken for metres?) or is damaged")
 
 
 _PROBE: list[ProbeCalibration] = []

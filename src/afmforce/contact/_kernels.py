@@ -10,7 +10,7 @@ import math
 import numpy as np
 from numba import njit
 
-__all__ = ["ramp_weight", "scan_power_law", "search_power_law", "scan_dmt"]
+__all__ = ["ramp_weight", "scan_power_law", "search_power_law", "scan_dmt", "power_law_terms", "COMPILED"]
 
 
 @njit(cache=True)
@@ -252,3 +252,44 @@ def scan_dmt(u, F, cands, k, g, width):  # pragma: no cover - compiled
             B[j] = bb + f0
             ssr[j] = max(r, 0.0)
     return E, W, B, ssr
+
+
+@njit(cache=True)
+def power_law_terms(u, F, E, c, b, k, p, width, jacobian):  # pragma: no cover - compiled
+    """The shape ``phi``, the weighted residuals ``r = q (F - E phi - b)`` of the power law ``phi = k d^p`` (``p`` 1.5: ``k d
+    sqrt(d)``, slope ``1.5 k sqrt(d)``; else ``k d d``, slope ``2 k d``; ``d = max(u - c, 0)``) and, with
+    ``jacobian``, ``J = q [phi, -E dphi, 1]`` (n x 3), the weights ``q`` those of ``fit._weights(u - c, width)``:
+    the modulus fit's Gauss-Newton terms in one pass, each sample's operations those of the numpy expressions in
+    :func:`afmforce.contact.fit._linear_fit` (``models.shape_and_slope``) in their order, so the same numbers.
+    Returns ``(r, J, phi)`` (``J`` empty without ``jacobian``)."""
+    n = u.size
+    r = np.empty(n)
+    shape = np.empty(n)
+    J = np.empty((n if jacobian else 0, 3))
+    ne = -E
+    for i in range(n):
+        d = u[i] - c
+        dd = d if (d >= 0.0 or d != d) else 0.0     # np.maximum(d, 0.0)
+        if p == 1.5:
+            sq = math.sqrt(dd)
+            phi = k * dd * sq
+            dphi = 1.5 * k * sq
+        else:
+            phi = k * dd * dd
+            dphi = 2 * k * dd
+        if width <= 0:
+            q = 1.0
+        else:
+            a = abs(d) / width
+            q = a if (a <= 1.0 or a != a) else 1.0  # np.minimum(a, 1.0)
+        shape[i] = phi
+        r[i] = q * (F[i] - E * phi - b)
+        if jacobian:
+            J[i, 0] = q * phi
+            J[i, 1] = q * (ne * dphi)
+            J[i, 2] = q * 1.0
+    return r, J, shape
+
+
+#: The kernels run compiled (False under ``NUMBA_DISABLE_JIT``: the callers keep their numpy path there).
+COMPILED = hasattr(power_law_terms, "py_func")

@@ -31,7 +31,7 @@ from ..errors import AnalysisError, ParameterError
 from .adhesive import adhesive_force
 from ._weights import t95 as _t95, weights as _weights
 from .adhesive_fit import fit_adhesive
-from .models import BILODEAU_FOUR_SIDED, BILODEAU_THREE_SIDED, shape_and_slope
+from .models import BILODEAU_FOUR_SIDED, BILODEAU_THREE_SIDED, _check_nu, shape_and_slope
 from .registry import indentation_model
 
 __all__ = ["IndentationFit", "FixedBaselineFit", "fit_indentation", "fit_fixed_baseline", "validity", "model_force"]
@@ -169,12 +169,16 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
         c, E0, b0, best = c0, float(E[i]), float(b[i]), ssr[i]
     # Gauss-Newton on (E, c, b): the weights at the current c
     p = np.array([E0, c, b0])
+    power = _power_terms(key, geom, nu, u, F)
     for _ in range(2):  # the scan has the contact point to ~1e-4 of a grid step: a polish
-        d = u - p[1]
-        phi, dphi = shape_and_slope(key, d, geom, nu)
-        q = _weights(d, width)
-        r = q * (F - p[0] * phi - p[2])
-        J = q[:, None] * np.column_stack((phi, -p[0] * dphi, np.ones_like(phi)))
+        if power is not None:  # compiled, the same numbers
+            r, J, _ = power(p, width, True)
+        else:
+            d = u - p[1]
+            phi, dphi = shape_and_slope(key, d, geom, nu)
+            q = _weights(d, width)
+            r = q * (F - p[0] * phi - p[2])
+            J = q[:, None] * np.column_stack((phi, -p[0] * dphi, np.ones_like(phi)))
         try:
             dp = _normal_solve(J, r)
         except np.linalg.LinAlgError:
@@ -182,8 +186,11 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
         trial = p + dp
         if trial[0] <= 0:
             break
-        dt = u - trial[1]
-        rt = _weights(dt, width) * (F - trial[0] * shape_and_slope(key, dt, geom, nu)[0] - trial[2])
+        if power is not None:
+            rt = power(trial, width, False)[0]
+        else:
+            dt = u - trial[1]
+            rt = _weights(dt, width) * (F - trial[0] * shape_and_slope(key, dt, geom, nu)[0] - trial[2])
         s = float(rt @ rt)
         if s > best:
             break
@@ -191,6 +198,26 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
         if abs(dp[1]) < 1e-6 * span and abs(dp[0]) < 1e-9 * abs(p[0]):
             break
     return p
+
+
+def _power_terms(key, geom, nu, u, F):
+    """``terms(p, width, jacobian) -> (r, J, phi)`` of the power law ``key`` on the samples ``u, F`` by the compiled
+    :func:`._kernels.power_law_terms` (the numbers of the numpy expressions it replaces); None where the law is
+    no power law, the samples are not contiguous float64 or numba's JIT is off (the numpy path)."""
+    from ._kernels import COMPILED, power_law_terms
+
+    if key not in _POWER or not COMPILED:
+        return None
+    if not all(isinstance(a, np.ndarray) and a.dtype == np.float64 and a.ndim == 1 and a.flags.c_contiguous
+               for a in (u, F)):
+        return None
+    c = _check_nu(nu)    # shape_and_slope's check (a Poisson ratio out of range is refused there too)
+    kf, pw = _POWER[key]
+    k = kf(geom, c)
+
+    def terms(p, width, jacobian):  # (r, J, phi)
+        return power_law_terms(u, F, float(p[0]), float(p[1]), float(p[2]), k, pw, float(width), jacobian)
+    return terms
 
 
 def _normal_solve(J: np.ndarray, r: np.ndarray) -> np.ndarray:
@@ -384,10 +411,14 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
     elif m.linear:
         E, c, b = _linear_fit(u, F, model, geom, nu, weight_width, contact_guess)
         d = u - c
-        phi, dphi = shape_and_slope(model, d, geom, nu)
         q = _weights(d, weight_width)
-        r = q * (F - E * phi - b)
-        J = q[:, None] * np.column_stack((phi, -E * dphi, np.ones_like(phi)))
+        power = _power_terms(model, geom, nu, u, F)
+        if power is not None:  # compiled, the same numbers
+            r, J, phi = power((E, c, b), weight_width, True)
+        else:
+            phi, dphi = shape_and_slope(model, d, geom, nu)
+            r = q * (F - E * phi - b)
+            J = q[:, None] * np.column_stack((phi, -E * dphi, np.ones_like(phi)))
         names = 3
     else:
         a = fit_adhesive(u, F, model, geom["radius"], nu, transition, branch, weight_width)
