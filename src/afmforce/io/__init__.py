@@ -169,7 +169,7 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                            "then VSET/VNAM/VDAT per curve",
                  supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency")),
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
-                 _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_workshop"),
+                 _lazy("_afmformats", "detect_workshop"), _lazy("_afmformats", "load_workshop"),
                  via="afmformats", deflection="N (V for T-B(V) files)",
                  signature='first line "Force-Distance Curve", then Z-Sense and Force or T-B(V) columns',
                  requires=_CAL),

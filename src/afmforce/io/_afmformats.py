@@ -290,6 +290,10 @@ def load_workshop(path: Path, *, meta_override: Mapping[str, Any], callback: Cal
     A file in volts needs the spring constant and the sensitivity from the user
     (afmformats will not read it otherwise); its deflection is returned in volts.
     """
+    if not detect_workshop(path):
+        first = _first_line(path)[:60]
+        raise FileFormatError(f"{path}: not an AFM Workshop CSV export: its first line is "
+                              f"{first!r} where AFM Workshop writes {WORKSHOP_FIRST_LINE!r}")
     with open(path, "rb") as fh:
         head = fh.read(4096).decode("latin-1")
     volts = "T-B(V)" in head and "Force(" not in head
@@ -395,6 +399,31 @@ def detect_ntmdt(path: Path) -> bool:
                    for ln in rows[:-1] or rows)
     except ValueError:
         return False
+
+
+#: The first line AFM Workshop writes in its force-curve CSV export (single curves and the members
+#: of a mapping archive); afmformats' own recipe claims every ``.csv`` by its ending alone.
+WORKSHOP_FIRST_LINE = "Force-Distance Curve"
+
+
+def _first_line(path: Path, size: int = 512) -> str:
+    """The file's first non-blank line (BOM, quotes and surrounding blanks removed); '' if unreadable."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(size).decode("latin-1")
+    except OSError:
+        return ""
+    for line in head.lstrip("\ufeff\xef\xbb\xbf").splitlines():
+        if line.strip():
+            return line.strip().strip('"').strip()
+    return ""
+
+
+def detect_workshop(path: Path) -> bool:
+    """AFM Workshop CSV export: ``.csv`` whose first line is :data:`WORKSHOP_FIRST_LINE` (afmformats'
+    recipe, which claims any ``.csv``, read a processed export of another program as an AFM Workshop
+    file and failed with its own parser's error)."""
+    return Path(path).suffix.lower() == ".csv" and _first_line(path).startswith(WORKSHOP_FIRST_LINE)
 
 
 def detect_afmformats(path: Path) -> bool:

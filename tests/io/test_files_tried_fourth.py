@@ -1,0 +1,52 @@
+"""Public files of the fourth round (tests/data/README.md, "Files tried"): what they showed wrong.
+
+A SoftMech export (CellMechLab/softmech ``tools/h1000_curve.csv``, MIT, kept unchanged as
+``tests/data/refused/softmech_h1000_average-curve.csv``: an averaged F-z curve with columns ``Z(m),F_avg(N),
+F_std(N)``) was taken for an AFM Workshop CSV export, because afmformats' recipe claims every ``.csv`` by its
+ending, and refused with afmformats' parser error ("Could not parse metadata correctly"). The AFM Workshop
+reader now asks for the first line its files have (``Force-Distance Curve``, afmformats' own docstring and
+every AFM Workshop file in tests/data), and says so when named with ``--format``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from afmforce.errors import FileFormatError
+from afmforce.io import find_format, load
+
+DATA = Path(__file__).resolve().parents[1] / "data"
+SOFTMECH = DATA / "refused" / "softmech_h1000_average-curve.csv"
+
+
+def _softmech_header(path: Path) -> Path:
+    """SoftMech's other export (its ``tools/test.csv``): '#' header lines, then tab-separated numbers."""
+    rows = [f"{i * 1e-9:.6e}\t{i * 1e-12:.6e}\t{1e-12:.6e}" for i in range(50)]
+    path.write_text("#SoftMech export data\n#Average F-d curve\n#Direction:V\n#Elastic constant [N/m]: 0.032\n"
+                    "#Columns: Indentation <F> SigmaF\n#\n#DATA\n" + "\n".join(rows) + "\n")
+    return path
+
+
+@pytest.mark.parametrize("make", [lambda tmp: SOFTMECH, lambda tmp: _softmech_header(tmp / "softmech.csv")],
+                         ids=["softmech-real", "softmech-header"])
+def test_a_csv_of_another_program_is_not_taken_for_afm_workshop(tmp_path, make):
+    path = make(tmp_path)
+    assert path.read_text(encoding="latin-1").splitlines()[0] != "Force-Distance Curve"
+    with pytest.raises(FileFormatError) as err:
+        find_format(path)
+    msg = str(err.value)
+    assert "content not recognised" in msg and "afmformats" not in msg and "\n" not in msg
+    with pytest.raises(FileFormatError) as err:
+        load(path, format="afm-workshop-csv")
+    msg = str(err.value)
+    first = path.read_text(encoding="latin-1").splitlines()[0]
+    assert "not an AFM Workshop CSV export" in msg and repr(first) in msg and "afmformats" not in msg
+
+
+def test_every_afm_workshop_file_here_is_still_detected():
+    files = [p for p in DATA.rglob("*.csv") if p.read_bytes().lstrip().startswith(b"Force-Distance Curve")]
+    assert len(files) >= 7
+    for path in files:
+        assert find_format(path).identifier == "afm-workshop-csv", path
