@@ -50,3 +50,38 @@ def test_every_afm_workshop_file_here_is_still_detected():
     assert len(files) >= 7
     for path in files:
         assert find_format(path).identifier == "afm-workshop-csv", path
+
+
+# --- an Igor wave of another program holding an image ----------------------------------------------------
+
+#: Omicron MATRIX's Igor export of an STM current image (pycroscopy/SciFiDatasets, MIT, unchanged): a 256 x 58
+#: wave whose note begins "SPM Image" and names MATRIX V4.3.5; it was refused as "this Asylum .ibw holds an image".
+MATRIX_IBW = DATA / "refused" / "omicron-matrix_stm-image_ScV6Sn6_I-backward.ibw"
+
+
+def test_an_igor_image_of_another_program_is_not_called_asylum():
+    from igor2 import binarywave
+
+    wave = binarywave.load(str(MATRIX_IBW))["wave"]
+    assert wave["wData"].shape == (256, 58)
+    note = wave["note"].decode("latin-1")
+    assert "MATRIX version" in note and not any(f"{k}:" in note for k in ("ImagingMode", "SpringConstant", "InvOLS"))
+    with pytest.raises(FileFormatError) as err:
+        load(MATRIX_IBW)
+    msg = str(err.value)
+    assert "Asylum .ibw" not in msg and "Igor binary wave (its note is not the Asylum software's" in msg
+    assert "256 x 58 pixels, 1 channel" in msg and "\n" not in msg
+
+
+def test_an_asylum_image_is_still_called_asylum(tmp_path):
+    """The PFM images of SciFiDatasets carry the Asylum note: ``tests/io/test_refused_images.py`` reshapes the
+    Asylum curve's wave (its note kept) into an image; the same here, on the line's wording."""
+    import struct
+
+    raw = bytearray((DATA / "asylum-mfp3d_SiN-tip_air.ibw").read_bytes())
+    raw[64 + 68:64 + 84] = struct.pack("<4i", 96, 63, 1, 0)
+    path = tmp_path / "image.ibw"
+    path.write_bytes(bytes(raw))
+    with pytest.raises(FileFormatError) as err:
+        load(path)
+    assert "this Asylum .ibw holds an image (96 x 63 pixels" in str(err.value)
