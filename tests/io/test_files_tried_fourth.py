@@ -85,3 +85,27 @@ def test_an_asylum_image_is_still_called_asylum(tmp_path):
     with pytest.raises(FileFormatError) as err:
         load(path)
     assert "this Asylum .ibw holds an image (96 x 63 pixels" in str(err.value)
+
+
+# --- families met this round that no reader claims: named, not "unknown file type" -----------------------
+
+@pytest.mark.parametrize("name, content, words", [
+    ("pp_cell_01.016.mat", b"MATLAB 5.0 MAT-file, Platform: MACI64" + b"\0" * 100, "MATLAB data file"),
+    ("grid.3ds", b'Grid dim="30 x 30"\r\nSweep Signal="Bias (V)"\r\n', "Nanonis grid spectroscopy"),
+    ("image.sxm", b":NANONIS_VERSION:\n2\n", "Nanonis image"),
+    ("chip.gsf", b"Gwyddion Simple Field 1.0\nXRes = 300\n", "Gwyddion Simple Field"),
+    ("film.axz", b"\x1f\x8b\x08\x00" + b"\0" * 32, "Anasys"),
+])
+def test_families_of_this_round_are_refused_by_name(tmp_path, name, content, words):
+    """jpsferreira/AFM_curve_analysis' and jhaydak3/AFM_ML's `.mat` curves, SciFiDatasets' Nanonis `.3ds`,
+    Gwyddion `.gsf` and Anasys `.axz` got "unknown file type; supported endings: ..." (the signatures here
+    are those files' first bytes)."""
+    from afmforce.io import is_supported
+
+    path = tmp_path / name
+    path.write_bytes(content)
+    with pytest.raises(FileFormatError) as err:
+        load(path)
+    msg = str(err.value)
+    assert words in msg and "unknown file type" not in msg and "\n" not in msg
+    assert not is_supported(path)

@@ -56,6 +56,18 @@ UNREAD: dict[str, tuple[str, str, str]] = {
                    "give the instrument's force-curve files"),
     ".top": ("WSxM image (.top)", "it is an image, not a force curve",
              "give the force curves of the session (.curves)"),
+    ".mat": ("MATLAB data file (.mat)", "it holds what a MATLAB program saved, without a force file's layout "
+             "or calibration", "read the instrument's own file of the curves, or " + _EXPORT),
+    ".3ds": ("Nanonis grid spectroscopy file (.3ds)", "it holds STM/nc-AFM sweeps (bias or z) of a Nanonis "
+             "controller, not the deflection-versus-z ramps of a force curve",
+             "export contact-mode force curves in a format `afmforce formats` lists, or as afmforce raw text "
+             "(docs/formats.md)"),
+    ".sxm": ("Nanonis image (.sxm)", "it is an image, not a force curve",
+             "give the force curves of the session"),
+    ".gsf": ("Gwyddion Simple Field (.gsf)", "it is an image (one height field), not a force curve",
+             "give the force curves of the session"),
+    ".axz": ("Anasys (Bruker nanoIR) file (.axz, gzipped XML)", "it holds images and IR spectra, not force "
+             "curves afmforce can calibrate", "read the instrument's own file of the curves, or " + _EXPORT),
 }
 
 #: Park Systems' private TIFF tags (XEI): the magic number and the header block
