@@ -109,3 +109,27 @@ def test_families_of_this_round_are_refused_by_name(tmp_path, name, content, wor
     msg = str(err.value)
     assert words in msg and "unknown file type" not in msg and "\n" not in msg
     assert not is_supported(path)
+
+
+# --- a Git LFS pointer in place of the file --------------------------------------------------------------
+
+#: bicarlsen/jpk_reader's ``data/qi_data/qi_data-sm.jpk-qi-data`` (commit e9486d4, MIT) as a clone without Git
+#: LFS holds it: 130 bytes of pointer text (PyFMlab_DyNaMo's QI file and gnezd/ARDF_read's map are stored so too).
+POINTER = (b"version https://git-lfs.github.com/spec/v1\n"
+           b"oid sha256:90852b6e5a4652961a429a6e01ac8463e3d419443d2bf1e0412fa2b0aae504fa\nsize 73741\n")
+
+
+@pytest.mark.parametrize("name, fmt", [("qi-data-sm.jpk-qi-data", None), ("ForceMap001.ARDF", None),
+                                       ("curve.ibw", None), ("fv_00001.spm", "bruker-nanoscope"),
+                                       ("spectroscopy.nid", None), ("notes.dat", None)])
+def test_a_git_lfs_pointer_says_the_file_was_not_downloaded(tmp_path, name, fmt):
+    """Before: "content not recognised as any of: JPK force curve ...; name its reader as --format" (and for
+    the .ibw "not an Igor binary wave (version field 30309)"), which sends the user after the wrong cause."""
+    assert len(POINTER) == 130
+    path = tmp_path / name
+    path.write_bytes(POINTER)
+    with pytest.raises(FileFormatError) as err:
+        load(path, format=fmt)
+    msg = str(err.value)
+    assert "Git LFS pointer" in msg and "73,741-byte file" in msg and "git lfs pull" in msg and "\n" not in msg
+    assert "content not recognised" not in msg

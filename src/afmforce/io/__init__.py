@@ -292,6 +292,11 @@ def _find_format_id(path: Path) -> str:
 def _find_format(path: Path) -> ReaderFormat:
     if path.stat().st_size == 0:
         raise FileFormatError(f"{path}: empty file (0 bytes)")
+    from ._unread import lfs_pointer_refusal
+
+    pointer = lfs_pointer_refusal(path)
+    if pointer:
+        raise FileFormatError(pointer)
     candidates = [f for f in FORMATS.values() if f.claims(path.name)]
     if not candidates:
         from ._unread import unread_refusal
@@ -401,6 +406,11 @@ def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
             raise ParameterError(f"unknown format {format!r}; choose one of {', '.join(FORMATS)}")
         if not path.is_file():
             raise FileFormatError(_not_a_file(path))
+        from ._unread import lfs_pointer_refusal
+
+        pointer = lfs_pointer_refusal(path)
+        if pointer:
+            raise FileFormatError(pointer)
         fmt = FORMATS[format]
     else:
         fmt = find_format(path)

@@ -145,6 +145,31 @@ def _uff_source(path: Path) -> str:
     return ""
 
 
+#: The first line of a Git LFS pointer: what a clone without Git LFS holds in place of a large file
+#: (public repositories of AFM data keep their .jpk-qi-data, .ARDF and .spm maps so).
+LFS_POINTER = b"version https://git-lfs.github.com/spec/"
+
+
+def lfs_pointer_refusal(path: str | Path) -> str | None:
+    """The one-line refusal of a Git LFS pointer file (any ending), or None: the file the pointer stands for
+    was not downloaded, so no reader can recognise it (they said "content not recognised ... name its reader")."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(1024)
+    except OSError:
+        return None
+    if not head.startswith(LFS_POINTER):
+        return None
+    fields = dict(line.split(" ", 1) for line in head.decode("latin-1").splitlines() if " " in line)
+    size = fields.get("size", "").strip()
+    oid = fields.get("oid", "").strip()
+    stands = f"the {int(size):,}-byte file" if size.isdigit() else "a file"
+    return (f"{path}: a Git LFS pointer ({len(head)} bytes) standing for {stands}"
+            f"{' (' + oid[:19] + '...)' if oid else ''}, not the data: the repository was cloned or "
+            "downloaded without Git LFS; fetch the file itself (`git lfs pull` in the clone) and give that")
+
+
 def unread_refusal(path: str | Path) -> str | None:
     """The one-line refusal of a file of a family afmforce does not read, or None.
 
