@@ -4,8 +4,8 @@ A SoftMech export (CellMechLab/softmech ``tools/h1000_curve.csv``, MIT, kept unc
 ``tests/data/refused/softmech_h1000_average-curve.csv``: an averaged F-z curve with columns ``Z(m),F_avg(N),
 F_std(N)``) was taken for an AFM Workshop CSV export, because afmformats' recipe claims every ``.csv`` by its
 ending, and refused with afmformats' parser error ("Could not parse metadata correctly"). The AFM Workshop
-reader now asks for the first line its files have (``Force-Distance Curve``, afmformats' own docstring and
-every AFM Workshop file in tests/data), and says so when named with ``--format``.
+reader now asks for the line its files begin with (``Force-Distance Curve``, afmformats' own docstring and
+every AFM Workshop file in tests/data) before the column line, and says so when named with ``--format``.
 """
 
 from __future__ import annotations

@@ -292,8 +292,8 @@ def load_workshop(path: Path, *, meta_override: Mapping[str, Any], callback: Cal
     """
     if not detect_workshop(path):
         first = _first_line(path)[:60]
-        raise FileFormatError(f"{path}: not an AFM Workshop CSV export: its first line is "
-                              f"{first!r} where AFM Workshop writes {WORKSHOP_FIRST_LINE!r}")
+        raise FileFormatError(f"{path}: not an AFM Workshop CSV export: its header has no "
+                              f"{WORKSHOP_FIRST_LINE!r} line (AFM Workshop's first line); its first line is {first!r}")
     with open(path, "rb") as fh:
         head = fh.read(4096).decode("latin-1")
     volts = "T-B(V)" in head and "Force(" not in head
@@ -420,10 +420,23 @@ def _first_line(path: Path, size: int = 512) -> str:
 
 
 def detect_workshop(path: Path) -> bool:
-    """AFM Workshop CSV export: ``.csv`` whose first line is :data:`WORKSHOP_FIRST_LINE` (afmformats'
-    recipe, which claims any ``.csv``, read a processed export of another program as an AFM Workshop
-    file and failed with its own parser's error)."""
-    return Path(path).suffix.lower() == ".csv" and _first_line(path).startswith(WORKSHOP_FIRST_LINE)
+    """AFM Workshop CSV export: a ``.csv`` whose header, before its column line (the first with three commas),
+    holds :data:`WORKSHOP_FIRST_LINE` (its first line in every AFM Workshop file seen; afmformats' loader asks
+    for it on any header line). afmformats' recipe claims any ``.csv``: it read a processed export of another
+    program as an AFM Workshop file and failed with its own parser's error."""
+    if Path(path).suffix.lower() != ".csv":
+        return False
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(4096).decode("latin-1")
+    except OSError:
+        return False
+    for line in head.splitlines():
+        if WORKSHOP_FIRST_LINE in line:
+            return True
+        if line.count(",") >= 3:
+            return False
+    return False
 
 
 def detect_afmformats(path: Path) -> bool:
