@@ -171,7 +171,7 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
                  _lazy("_afmformats", "detect_workshop"), _lazy("_afmformats", "load_workshop"),
                  via="afmformats", deflection="N (V for T-B(V) files)",
-                 signature='a "Force-Distance Curve" header line (its first), then Z-Sense and Force or T-B(V) columns',
+                 signature='first line "Force-Distance Curve", then Z-Sense and Force or T-B(V) columns',
                  requires=_CAL),
     ReaderFormat("ntmdt-txt", "NT-MDT Nova text export", (".txt",),
                  _lazy("_afmformats", "detect_ntmdt"), _lazy("_afmformats", "load_ntmdt"),
