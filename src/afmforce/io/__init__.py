@@ -169,7 +169,7 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                            "then VSET/VNAM/VDAT per curve",
                  supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency")),
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
-                 _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_workshop"),
+                 _lazy("_afmformats", "detect_workshop"), _lazy("_afmformats", "load_workshop"),
                  via="afmformats", deflection="N (V for T-B(V) files)",
                  signature='first line "Force-Distance Curve", then Z-Sense and Force or T-B(V) columns',
                  requires=_CAL),
@@ -292,6 +292,11 @@ def _find_format_id(path: Path) -> str:
 def _find_format(path: Path) -> ReaderFormat:
     if path.stat().st_size == 0:
         raise FileFormatError(f"{path}: empty file (0 bytes)")
+    from ._unread import lfs_pointer_refusal
+
+    pointer = lfs_pointer_refusal(path)
+    if pointer:
+        raise FileFormatError(pointer)
     candidates = [f for f in FORMATS.values() if f.claims(path.name)]
     if not candidates:
         from ._unread import unread_refusal
@@ -401,6 +406,11 @@ def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
             raise ParameterError(f"unknown format {format!r}; choose one of {', '.join(FORMATS)}")
         if not path.is_file():
             raise FileFormatError(_not_a_file(path))
+        from ._unread import lfs_pointer_refusal
+
+        pointer = lfs_pointer_refusal(path)
+        if pointer:
+            raise FileFormatError(pointer)
         fmt = FORMATS[format]
     else:
         fmt = find_format(path)

@@ -290,6 +290,10 @@ def load_workshop(path: Path, *, meta_override: Mapping[str, Any], callback: Cal
     A file in volts needs the spring constant and the sensitivity from the user
     (afmformats will not read it otherwise); its deflection is returned in volts.
     """
+    if not detect_workshop(path):
+        first = _first_line(path)[:60]
+        raise FileFormatError(f"{path}: not an AFM Workshop CSV export: its header has no "
+                              f"{WORKSHOP_FIRST_LINE!r} line (AFM Workshop's first line); its first line is {first!r}")
     with open(path, "rb") as fh:
         head = fh.read(4096).decode("latin-1")
     volts = "T-B(V)" in head and "Force(" not in head
@@ -395,6 +399,44 @@ def detect_ntmdt(path: Path) -> bool:
                    for ln in rows[:-1] or rows)
     except ValueError:
         return False
+
+
+#: The first line AFM Workshop writes in its force-curve CSV export (single curves and the members
+#: of a mapping archive); afmformats' own recipe claims every ``.csv`` by its ending alone.
+WORKSHOP_FIRST_LINE = "Force-Distance Curve"
+
+
+def _first_line(path: Path, size: int = 512) -> str:
+    """The file's first non-blank line (BOM, quotes and surrounding blanks removed); '' if unreadable."""
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(size).decode("latin-1")
+    except OSError:
+        return ""
+    for line in head.lstrip("\ufeff\xef\xbb\xbf").splitlines():
+        if line.strip():
+            return line.strip().strip('"').strip()
+    return ""
+
+
+def detect_workshop(path: Path) -> bool:
+    """AFM Workshop CSV export: a ``.csv`` whose header, before its column line (the first with three commas),
+    holds :data:`WORKSHOP_FIRST_LINE` (its first line in every AFM Workshop file seen; afmformats' loader asks
+    for it on any header line). afmformats' recipe claims any ``.csv``: it read a processed export of another
+    program as an AFM Workshop file and failed with its own parser's error."""
+    if Path(path).suffix.lower() != ".csv":
+        return False
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(4096).decode("latin-1")
+    except OSError:
+        return False
+    for line in head.splitlines():
+        if WORKSHOP_FIRST_LINE in line:
+            return True
+        if line.count(",") >= 3:
+            return False
+    return False
 
 
 def detect_afmformats(path: Path) -> bool:

@@ -19,7 +19,9 @@ _EXPORT = "export the curves in a format `afmforce formats` lists, or as afmforc
 #: ending -> (format, why afmforce does not read it, what to do)
 UNREAD: dict[str, tuple[str, str, str]] = {
     ".nhf": ("Nanosurf NHF file (HDF5, Nanosurf Studio / DriveAFM)",
-             "no public NHF force-curve file of a usable size and licence was found to test a reader against",
+             "no reader for it yet; the public NHF files found hold images or WaveMode NMA maps, e.g. nanosurf-apps "
+             "2.0.7's example: per pixel one averaged 20 kHz off-resonance period of 150 deflection samples, "
+             "no measured z per sample",
              "save the curves as .nid from the Nanosurf software (read by 'nanosurf-nid'), or " + _EXPORT),
     ".mdt": ("NT-MDT MDT binary file (Nova)",
              "no public MDT force-curve file with a usable licence was found to test a reader against",
@@ -54,6 +56,18 @@ UNREAD: dict[str, tuple[str, str, str]] = {
                    "give the instrument's force-curve files"),
     ".top": ("WSxM image (.top)", "it is an image, not a force curve",
              "give the force curves of the session (.curves)"),
+    ".mat": ("MATLAB data file (.mat)", "it holds what a MATLAB program saved, without a force file's layout "
+             "or calibration", "read the instrument's own file of the curves, or " + _EXPORT),
+    ".3ds": ("Nanonis grid spectroscopy file (.3ds)", "it holds STM/nc-AFM sweeps (bias or z) of a Nanonis "
+             "controller, not the deflection-versus-z ramps of a force curve",
+             "export contact-mode force curves in a format `afmforce formats` lists, or as afmforce raw text "
+             "(docs/formats.md)"),
+    ".sxm": ("Nanonis image (.sxm)", "it is an image, not a force curve",
+             "give the force curves of the session"),
+    ".gsf": ("Gwyddion Simple Field (.gsf)", "it is an image (one height field), not a force curve",
+             "give the force curves of the session"),
+    ".axz": ("Anasys (Bruker nanoIR) file (.axz, gzipped XML)", "it holds images and IR spectra, not force "
+             "curves afmforce can calibrate", "read the instrument's own file of the curves, or " + _EXPORT),
 }
 
 #: Park Systems' private TIFF tags (XEI): the magic number and the header block
@@ -129,6 +143,31 @@ def _uff_source(path: Path) -> str:
     except OSError:
         pass
     return ""
+
+
+#: The first line of a Git LFS pointer: what a clone without Git LFS holds in place of a large file
+#: (public repositories of AFM data keep their .jpk-qi-data, .ARDF and .spm maps so).
+LFS_POINTER = b"version https://git-lfs.github.com/spec/"
+
+
+def lfs_pointer_refusal(path: str | Path) -> str | None:
+    """The one-line refusal of a Git LFS pointer file (any ending), or None: the file the pointer stands for
+    was not downloaded, so no reader can recognise it (they said "content not recognised ... name its reader")."""
+    path = Path(path)
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(1024)
+    except OSError:
+        return None
+    if not head.startswith(LFS_POINTER):
+        return None
+    fields = dict(line.split(" ", 1) for line in head.decode("latin-1").splitlines() if " " in line)
+    size = fields.get("size", "").strip()
+    oid = fields.get("oid", "").strip()
+    stands = f"the {int(size):,}-byte file" if size.isdigit() else "a file"
+    return (f"{path}: a Git LFS pointer ({len(head)} bytes) standing for {stands}"
+            f"{' (' + oid[:19] + '...)' if oid else ''}, not the data: the repository was cloned or "
+            "downloaded without Git LFS; fetch the file itself (`git lfs pull` in the clone) and give that")
 
 
 def unread_refusal(path: str | Path) -> str | None:

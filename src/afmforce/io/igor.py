@@ -92,7 +92,11 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
     check_ibw_header(path)
     image = _image_wave(path)
     if image:
-        raise FileFormatError(f"{path}: this Asylum .ibw holds {image}, not a force curve; give the force curves "
+        keys = _note_keys(path)
+        asylum = keys is None or bool(keys & set(_ASYLUM_NOTE_KEYS))
+        whose = ("this Asylum .ibw" if asylum else "this Igor binary wave (its note is not the Asylum "
+                 f"software's: none of {', '.join(_ASYLUM_NOTE_KEYS)})")
+        raise FileFormatError(f"{path}: {whose} holds {image}, not a force curve; give the force curves "
                               "(an .ibw the force panel saved, one wave per curve, or the ARDF force map)")
     if _is_one_channel(path):
         return [load_channel_pair(path, meta_override=meta_override)]
@@ -134,17 +138,22 @@ def load_ibw(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
 _ASYLUM_NOTE_KEYS = ("ImagingMode", "SpringConstant", "InvOLS")
 
 
-def _refuse_plain_wave(path: Path) -> None:
-    """Refuse an Igor wave whose note has none of the Asylum force-curve keys (a wave Igor itself wrote,
-    e.g. igor2's test waves): afmformats would fail on it with ``KeyError: 'ImagingMode'``."""
+def _note_keys(path: Path) -> set[str] | None:
+    """The keys (``Key:`` lines) of the wave note; None where the note cannot be read."""
     try:
         note = _ibw_note(path)
     except Exception:  # an unreadable note: afmformats says what is wrong
-        return
+        return None
     note = note.decode("latin-1") if isinstance(note, bytes) else str(note)
     lines = note.replace("\\r", "\r").replace("\n", "\r").split("\r")
-    keys = {line.split(":", 1)[0].strip() for line in lines if ":" in line}
-    if not keys & set(_ASYLUM_NOTE_KEYS):
+    return {line.split(":", 1)[0].strip() for line in lines if ":" in line}
+
+
+def _refuse_plain_wave(path: Path) -> None:
+    """Refuse an Igor wave whose note has none of the Asylum force-curve keys (a wave Igor itself wrote,
+    e.g. igor2's test waves): afmformats would fail on it with ``KeyError: 'ImagingMode'``."""
+    keys = _note_keys(path)
+    if keys is not None and not keys & set(_ASYLUM_NOTE_KEYS):
         raise FileFormatError(
             f"{path}: an Igor binary wave without the note the Asylum Research software writes with a force "
             f"curve (none of {', '.join(_ASYLUM_NOTE_KEYS)} in it): not a force curve afmforce can calibrate; "
