@@ -145,7 +145,7 @@ def _adhesion_fields(st: State) -> dict:
     fit = top.wlc if top is not None and top.wlc is not None else None
     nan = math.nan
     return dict(adhesion_force=a.force, adhesion_deflection=a.deflection, adhesion_distance=a.distance,
-                adhesion_noise=a.noise, adhesion_significance=a.significance,
+                adhesion_noise=a.noise, adhesion_significance=a.dip_sigmas,
                 adhesion_baseline_spread=a.baseline_spread, rupture_distance=a.rupture_distance,
                 adhesion_return_distance=a.return_distance,
                 rupture_distance_drift=rupture_drift(st) if a.found and "kind" in st.details and _kind(st) == "hard"
