@@ -27,7 +27,7 @@ from afmforce.sweep.summary import SUMMARY_COLUMNS, SUMMARY_UNITS
 #: registry's ``column`` fields must give the same columns.
 OLD_COLUMNS = {
     "sensitivity_used", "sensitivity", "sensitivity_fit", "spring_constant", "adhesion_force", "adhesion_distance",
-    "adhesion_noise", "rupture_distance", "unbinding_steps", "tethers", "tether_force", "tether_contour_length", "tether_contour_length_se",
+    "adhesion_noise", "adhesion_significance", "adhesion_baseline_spread", "adhesion_return_distance", "rupture_distance", "unbinding_steps", "tethers", "tether_force", "tether_contour_length", "tether_contour_length_se",
     "tether_persistence_length", "tether_persistence_length_se", "tether_loading_rate", "indentation", "force_gradient", "resonance_frequency",
     "shift", "contact_separation", "jump_in_separation", "jump_in_force", "jump_in_deflection", "pull_off_force",
     "pull_off_position", "jump_out_distance", "surface_energy", "radius", "hamaker_radius", "hamaker_radius_se",

@@ -156,7 +156,10 @@ def test_jpk_qi_cell_curves_adhesion_from_where_the_retract_leaves_contact():
         expected = h[int(np.argmin(u))] - h[int(np.argmax(u < 0))]
         res = analyze(curve)
         assert res.adhesion_distance == pytest.approx(expected, abs=2 * NM)
-        assert res.rupture_distance >= res.adhesion_distance > 0
+        # (a retract that comes back gradually, with no step, has no rupture: its return lies beyond the dip)
+        last = res.rupture_distance if np.isfinite(res.rupture_distance) else res.adhesion_return_distance
+        assert np.isfinite(res.rupture_distance) or "gradually" in res.adhesion_verdict
+        assert last >= res.adhesion_distance > 0
 
 
 NANITE = "AFM-analysis/nanite tests/data (GPL-3.0: not redistributed here; put them in AFMFORCE_REAL_DATA)"

@@ -108,6 +108,10 @@ class AnalysisResult:
     adhesion_deflection : float  the same as a deflection [m]
     adhesion_distance : float  its distance from the contact point [m]
     adhesion_noise : float  baseline noise of the retract [N]
+    adhesion_significance : float  the deepest retract dip in baseline noise sigmas, also under the threshold [-]
+    adhesion_baseline_spread : float  the baseline model's systematic on ``adhesion_force`` (+-) [N]
+    adhesion_return_distance : float  soft contact: where the retract comes back to its baseline for good [m]
+        (``rupture_distance`` only when that return is a step; a gradual return is no rupture)
     rupture_distance : float
         Distance from contact of the last rupture [m]; on a hard contact its tip--sample separation
         (the pull-off's, about 0, when no tether holds the tip).

@@ -145,7 +145,9 @@ def _adhesion_fields(st: State) -> dict:
     fit = top.wlc if top is not None and top.wlc is not None else None
     nan = math.nan
     return dict(adhesion_force=a.force, adhesion_deflection=a.deflection, adhesion_distance=a.distance,
-                adhesion_noise=a.noise, rupture_distance=a.rupture_distance,
+                adhesion_noise=a.noise, adhesion_significance=a.dip_sigmas,
+                adhesion_baseline_spread=a.baseline_spread, rupture_distance=a.rupture_distance,
+                adhesion_return_distance=a.return_distance,
                 rupture_distance_drift=rupture_drift(st) if a.found and "kind" in st.details and _kind(st) == "hard"
                 else nan, unbinding_steps=len(a.steps),
                 tethers=len(ts), tether_force=top.force if top else nan,
@@ -188,8 +190,14 @@ ADHESION = AnalysisStep(
             ResultField("adhesion_deflection", "m", "adhesion as a deflection"),
             ResultField("adhesion_distance", "m", "adhesion position from contact", summary=True, column=True),
             ResultField("adhesion_noise", "N", "baseline noise of the retract", column=True),
+            ResultField("adhesion_significance", "", "deepest retract dip in baseline noise sigmas (also under "
+                        "the threshold)", column=True),
+            ResultField("adhesion_baseline_spread", "N", "the baseline model's systematic on the adhesion (+-)",
+                        column=True),
             ResultField("rupture_distance", "m", "last rupture from contact (hard contact: its separation)",
                         summary=True, column=True),
+            ResultField("adhesion_return_distance", "m", "soft contact: where the retract comes back to its "
+                        "baseline for good, from contact", column=True),
             ResultField("rupture_distance_drift", "m", "its bound from the drift lines (hard contact: the shift's)",
                         column=True),
             ResultField("unbinding_steps", "", "unbinding steps", default=0, column=True),
