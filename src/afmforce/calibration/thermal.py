@@ -183,7 +183,7 @@ def _guess(f: np.ndarray, p: np.ndarray, f_range) -> tuple[float, float]:
     log_level = np.log(level)
     peaks, props = find_peaks(log_level, prominence=0.0)   # an edge (a 1/f rise) is no peak
     if peaks.size == 0:
-        raise AnalysisError("no resonance peak in the thermal spectrum; give the frequency window (f_range)")
+        raise AnalysisError("no resonance peak in the thermal spectrum; give the frequency window (f_range; --frequency-min/--frequency-max)")
     # the highest of the peaks standing at least 2x above their surroundings (a noise blip on a
     # 1/f rise is not one); none such: the most prominent
     clear = props["prominences"] >= math.log(2.0)
@@ -231,7 +231,7 @@ def _fit_in(f, p, window, f0, q, pink):
     if not window[0] < math.exp(th[0]) < window[1]:
         raise AnalysisError(f"the fitted resonance {math.exp(th[0]):.4g} Hz lies outside the window "
                             f"[{window[0]:.4g}, {window[1]:.4g}] Hz: no resonance found; "
-                            "give the frequency window (f_range)")
+                            "give the frequency window (f_range; --frequency-min/--frequency-max)")
     return th, m, sel, masked
 
 
@@ -366,6 +366,7 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
             systematic = np.maximum(systematic, d2)
     area = math.pi * math.exp(ln_area) / 2.0
     k = spring_constant_from_area(area, T, correction)
+    _require_possible_k(k, area, T, correction)
     window_se = k * math.sqrt(systematic[2])
     var_lnk += systematic[2]
     cov[0, 0] += systematic[0]
@@ -380,6 +381,26 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
         tilt=float(tilt), f_min=float(fs[0]), f_max=float(fs[-1]), n_bins=int(fs.size), masked=masked,
         spring_constant_se_window=window_se,
         averages=float(averages), reduced_deviance=dev * averages)
+
+
+def _require_possible_k(k: float, area: float, temperature: float, correction: float) -> None:
+    """Raise AnalysisError when the spring constant ``k`` [N/m] lies outside the range any lever can
+    have (``QUANTITIES["spring_constant"]``, declared once: 0.1 mN/m .. 1000 N/m).
+
+    Equipartition turns the peak's area ``<z^2>`` [m^2] into k, so a spectrum whose unit or InvOLS is
+    wrong gives a k off by the square of the error: a spectrum in V^2/Hz read as m^2/Hz (an InvOLS of
+    ~50 nm/V missing) gave 1.6e-11 N/m, one scaled by 1e-8 gave 1.6e7 N/m, both printed as results
+    with a 2 % error. Such a number is not a spring constant; the message says what to check.
+    """
+    spec = QUANTITIES["spring_constant"]
+    if spec.contains(k):
+        return
+    lo, hi = (math.sqrt(correction * BOLTZMANN * temperature / kk) for kk in (spec.hi, spec.lo))
+    raise AnalysisError(
+        f"the thermal peak's area <z^2> = {area:.3g} m^2 (rms {math.sqrt(area):.3g} m) gives k = {k:.3g} N/m, "
+        f"outside the range any lever has ({spec.range_text()}: a thermal rms of {lo:.2g} to {hi:.2g} m): "
+        "not a spring constant; the spectrum's unit or InvOLS is wrong (a spectrum in V^2/Hz read as "
+        "m^2/Hz, an InvOLS off by a unit prefix) -- check the file's unit (--psd-unit) and InvOLS (--invols)")
 
 
 def _require_resonance(fs, ps, m, averages: float, n_all: int, pink: bool, f_top: float) -> None:
@@ -418,7 +439,7 @@ def _require_resonance(fs, ps, m, averages: float, n_all: int, pink: bool, f_top
             f"{need:.3g} needed): the lever's peak is buried in the detector noise or lies above the "
             f"spectrum's highest frequency ({f_top:.4g} Hz); the spring constant is not "
             "determined -- record a spectrum that shows the resonance (a higher sampling rate, more "
-            "averages), or give the frequency window (f_range) around it")
+            "averages), or give the frequency window (f_range; --frequency-min/--frequency-max) around it")
 
 
 def _model_at(f, th):
