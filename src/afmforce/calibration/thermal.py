@@ -183,7 +183,8 @@ def _guess(f: np.ndarray, p: np.ndarray, f_range) -> tuple[float, float]:
     log_level = np.log(level)
     peaks, props = find_peaks(log_level, prominence=0.0)   # an edge (a 1/f rise) is no peak
     if peaks.size == 0:
-        raise AnalysisError("no resonance peak in the thermal spectrum; give the frequency window (f_range; --frequency-min/--frequency-max)")
+        raise AnalysisError("no resonance peak in the thermal spectrum; give the frequency window "
+                            "(f_range; --frequency-min/--frequency-max)")
     # the highest of the peaks standing at least 2x above their surroundings (a noise blip on a
     # 1/f rise is not one); none such: the most prominent
     clear = props["prominences"] >= math.log(2.0)
