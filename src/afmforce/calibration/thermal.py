@@ -183,7 +183,8 @@ def _guess(f: np.ndarray, p: np.ndarray, f_range) -> tuple[float, float]:
     log_level = np.log(level)
     peaks, props = find_peaks(log_level, prominence=0.0)   # an edge (a 1/f rise) is no peak
     if peaks.size == 0:
-        raise AnalysisError("no resonance peak in the thermal spectrum; give the frequency window (f_range)")
+        raise AnalysisError("no resonance peak in the thermal spectrum; give the frequency window "
+                            "(f_range; --frequency-min/--frequency-max)")
     # the highest of the peaks standing at least 2x above their surroundings (a noise blip on a
     # 1/f rise is not one); none such: the most prominent
     clear = props["prominences"] >= math.log(2.0)
@@ -231,7 +232,7 @@ def _fit_in(f, p, window, f0, q, pink):
     if not window[0] < math.exp(th[0]) < window[1]:
         raise AnalysisError(f"the fitted resonance {math.exp(th[0]):.4g} Hz lies outside the window "
                             f"[{window[0]:.4g}, {window[1]:.4g}] Hz: no resonance found; "
-                            "give the frequency window (f_range)")
+                            "give the frequency window (f_range; --frequency-min/--frequency-max)")
     return th, m, sel, masked
 
 
@@ -292,7 +293,8 @@ def _fit(f, p, f0, q, pink: bool):
 
 def fit_thermal(frequency, psd, *, temperature: float | None = None,
                 correction: float = BUTT_JASCHKE, tilt: float = 0.0,
-                f_range: tuple[float, float] | None = None, pink: bool = False) -> ThermalFit:
+                f_range: tuple[float, float] | None = None, pink: bool = False,
+                averages: int | None = None) -> ThermalFit:
     """Fit eq (1) with a white (and optionally 1/f) floor around the first mode; eq (2) for k.
 
     Parameters
@@ -312,6 +314,10 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
         -85 % / +150 % of f0) each side, chosen from a first fit.
     pink : bool
         Fit a ``B/f`` term as well.
+    averages : int, optional
+        Periodograms averaged, as the file states them: the fit's scatter must not exceed what
+        they allow by more than :data:`AVERAGES_SLACK` (and the statistics), else the oscillator
+        does not describe the spectrum (:func:`_require_described`).
 
     Returns
     -------
@@ -322,6 +328,7 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
     AnalysisError
         Too few bins, no resonance in the window, or a fit that does not converge to a peak.
     """
+    averages_in = averages
     f = np.asarray(frequency, dtype=float)
     p = np.asarray(psd, dtype=float)
     if f.shape != p.shape or f.ndim != 1:
@@ -346,6 +353,7 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
     fs, ps = f[sel], p[sel]
     cov, averages, dev = _covariance(fs, ps, th, m)
     _require_resonance(fs, ps, m, averages, f.size, pink, float(f[-1]))
+    _require_described(averages, averages_stated=averages_in, n_bins=int(fs.size))
     ln_area, var_lnk = _lnk(th, cov)
     # the window's influence (a lever whose resonance is not exactly a harmonic oscillator, e.g.
     # in a liquid): refits in windows half and 1.5 times as wide; their differences beyond what
@@ -366,6 +374,7 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
             systematic = np.maximum(systematic, d2)
     area = math.pi * math.exp(ln_area) / 2.0
     k = spring_constant_from_area(area, T, correction)
+    _require_possible_k(k, area, T, correction)
     window_se = k * math.sqrt(systematic[2])
     var_lnk += systematic[2]
     cov[0, 0] += systematic[0]
@@ -380,6 +389,56 @@ def fit_thermal(frequency, psd, *, temperature: float | None = None,
         tilt=float(tilt), f_min=float(fs[0]), f_max=float(fs[-1]), n_bins=int(fs.size), masked=masked,
         spring_constant_se_window=window_se,
         averages=float(averages), reduced_deviance=dev * averages)
+
+
+#: The scatter of a spectrum about its fit may exceed what its stated averages allow by this factor
+#: before it is a misfit: Welch's overlapped Hann segments are ~5-10 % less independent than their count.
+AVERAGES_SLACK = 1.2
+
+
+def _require_described(averages_fit: float, *, averages_stated: int | None, n_bins: int) -> None:
+    """Raise AnalysisError when the spectrum scatters about its fit far more than its stated averages
+    allow: the oscillator does not describe it (a clipped or distorted peak, a second mode or lines in
+    the window), and its area, hence k, is not the lever's.
+
+    The fit reads the averages from the scatter of ``P / M`` (``averages_fit``); a misfit inflates the
+    scatter and would be taken for fewer averages. With the file's count ``averages_stated`` the
+    ratio ``stated / fitted`` of a described spectrum is 1 within the relative spread of a variance
+    over ``n_bins`` bins (``sqrt((2 + 6/N) / n_bins)``, the kurtosis of a chi-square(2N)/2N bin being
+    3 + 6/N); above ``AVERAGES_SLACK`` and 4 such spreads it is refused. A peak clipped at 1/250 of its height (virtual 0.2 mN/m lever, 64 averages stated) read
+    43 averages and gave k = 2.66 +- 0.05 mN/m, 12x the truth, as a result.
+    """
+    if not averages_stated or not (averages_fit > 0) or not math.isfinite(averages_fit):
+        return
+    ratio = averages_stated / averages_fit
+    spread = math.sqrt((2.0 + 6.0 / averages_stated) / max(n_bins, 1))   # gamma(N)'s kurtosis 3 + 6/N
+    if ratio > AVERAGES_SLACK and ratio - 1.0 > 4.0 * spread:
+        raise AnalysisError(
+            f"the spectrum scatters about the fitted oscillator as {averages_fit:.3g} averaged periodograms "
+            f"would, but the file states {averages_stated} ({ratio:.2f}x the variance): the oscillator does "
+            "not describe it (a clipped or distorted peak, a second mode or electrical lines in the window), "
+            "so its area is not the lever's and no k is given -- look at the spectrum (--plot) and record it "
+            "again, or fit a clean window (--frequency-min/--frequency-max)")
+
+
+def _require_possible_k(k: float, area: float, temperature: float, correction: float) -> None:
+    """Raise AnalysisError when the spring constant ``k`` [N/m] lies outside the range any lever can
+    have (``QUANTITIES["spring_constant"]``, declared once: 0.1 mN/m .. 1000 N/m).
+
+    Equipartition turns the peak's area ``<z^2>`` [m^2] into k, so a spectrum whose unit or InvOLS is
+    wrong gives a k off by the square of the error: a spectrum in V^2/Hz read as m^2/Hz (an InvOLS of
+    ~50 nm/V missing) gave 1.6e-11 N/m, one scaled by 1e-8 gave 1.6e7 N/m, both printed as results
+    with a 2 % error. Such a number is not a spring constant; the message says what to check.
+    """
+    spec = QUANTITIES["spring_constant"]
+    if spec.contains(k):
+        return
+    lo, hi = (math.sqrt(correction * BOLTZMANN * temperature / kk) for kk in (spec.hi, spec.lo))
+    raise AnalysisError(
+        f"the thermal peak's area <z^2> = {area:.3g} m^2 (rms {math.sqrt(area):.3g} m) gives k = {k:.3g} N/m, "
+        f"outside the range any lever has ({spec.range_text()}: a thermal rms of {lo:.2g} to {hi:.2g} m): "
+        "not a spring constant; the spectrum's unit or InvOLS is wrong (a spectrum in V^2/Hz read as "
+        "m^2/Hz, an InvOLS off by a unit prefix) -- check the file's unit (--psd-unit) and InvOLS (--invols)")
 
 
 def _require_resonance(fs, ps, m, averages: float, n_all: int, pink: bool, f_top: float) -> None:
@@ -418,7 +477,7 @@ def _require_resonance(fs, ps, m, averages: float, n_all: int, pink: bool, f_top
             f"{need:.3g} needed): the lever's peak is buried in the detector noise or lies above the "
             f"spectrum's highest frequency ({f_top:.4g} Hz); the spring constant is not "
             "determined -- record a spectrum that shows the resonance (a higher sampling rate, more "
-            "averages), or give the frequency window (f_range) around it")
+            "averages), or give the frequency window (f_range; --frequency-min/--frequency-max) around it")
 
 
 def _model_at(f, th):

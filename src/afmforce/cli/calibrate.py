@@ -199,7 +199,7 @@ def run_thermal(args: argparse.Namespace) -> int:
         f_range = sp.window
         sources["window"] = "file"
     fit = fit_thermal(sp.frequency, sp.displacement_psd(sensitivity), temperature=temperature,
-                      correction=correction, tilt=tilt, f_range=f_range, pink=args.pink)
+                      correction=correction, tilt=tilt, f_range=f_range, pink=args.pink, averages=sp.averages)
     if args.plot:
         from ..plotting.calibration import write_thermal_png
 

@@ -179,6 +179,39 @@ def lever_from_files(base, curves: list[FitCurve], lever: str = "file"):
     return base.replace(k0=base.cantilever.k0 * k_file / base.force_constant)
 
 
+#: A lever's spring constant fitted in situ (``spring_constant``, ``k0`` free) beyond this factor of
+#: the files' is no result: a calibrated k is good to 10-20 %, a nominal one to about x2, so a k the
+#: drainage puts 5x away is the model's misfit (radius, viscosity, a force it lacks) or a wrong file.
+K_FILE_FACTOR = 5.0
+
+
+def lever_off_files(params: Mapping, base, curves: list[FitCurve]) -> str | None:
+    """Why a fitted in-situ spring constant is no result (None when it is one, or none is fitted).
+
+    The fitted lever's spring constant [N/m]: ``spring_constant`` itself (spring model) or the
+    beam's eq-13 constant scaled by the fitted ``k0`` (``force_constant * k0_fit / k0``); compared
+    with the curves' (:func:`files_spring_constant`) against :data:`K_FILE_FACTOR`.
+    """
+    k_file = files_spring_constant(curves)
+    if k_file is None:
+        return None
+    if "spring_constant" in params:
+        name, k_fit = "spring_constant", float(params["spring_constant"].value)
+    elif "k0" in params:
+        name = "k0"
+        k_fit = float(base.force_constant) * float(params["k0"].value) / float(base.cantilever.k0)
+    else:
+        return None
+    ratio = k_fit / k_file
+    if 1.0 / K_FILE_FACTOR <= ratio <= K_FILE_FACTOR:
+        return None
+    return (f"{name}: not a result: the lever's spring constant fitted in situ, {k_fit:.4g} N/m, is "
+            f"{ratio:.3g} x the files' {k_file:.4g} N/m (beyond x{K_FILE_FACTOR:g}: no lever's "
+            "calibration is that far off); the drainage force the model ascribes to k is another "
+            "force, radius or viscosity, or the files' calibration is wrong: check them (`afmforce "
+            "calibrate thermal`) before reading k, A*R or the slip length")
+
+
 def files_resonance(curves: list[FitCurve]) -> float | None:
     """The curves' lever resonance [Hz]: their files' (a thermal tune's ``resonance_frequency``),
     median over the curves; None where no file gives one."""
@@ -596,6 +629,11 @@ def fit_dynamic(curves: Sequence, model="beam", free: Sequence[str] = ("hamaker"
             e.note = (f"{name}: no interval: the curves carry no noise, so no interval is a "
                       "confidence interval; the estimate is off by the model's own error (the "
                       "`ideal` virtual AFM, seed 1 at 0.5, 2 and 8 um/s: A +0.2 %, xi -0.1 %)")
+    off = lever_off_files(params, base, fc)
+    if off:               # a lever 5x from its calibration: no number, the reason instead
+        e = params["spring_constant" if "spring_constant" in params else "k0"]
+        e.interval, e.interval_method, e.stderr = (None, None), "undetermined", math.nan
+        e.note = off
     for name, e in params.items():
         note = contain_value(name, e)
         e.note = "; ".join(t for t in (e.note, note) if t)
