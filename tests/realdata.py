@@ -91,6 +91,62 @@ def nanite_hertz_para(force, z, radius: float, spring_constant: float, segment=N
     return float(idnt.fit_properties["params_fitted"]["E"].value)
 
 
+def nanite_fit(force, z, model_key: str, spring_constant: float, *, radius: float | None = None,
+               alpha_deg: float | None = None, nu: float = 0.5, segment=None, time=None,
+               contact_point: float | None = None, modulus: float | None = None) -> dict:
+    """nanite's fit of the indentation model ``model_key`` (``hertz_para``, ``sneddon_spher_approx``,
+    ``hertz_cone``, ``hertz_pyr3s``) on one approach-retract curve given as arrays, with its preprocessing as
+    :func:`nanite_hertz_para` (tip position, force offset, ``fit_line_polynomial`` contact point).
+
+    ``radius`` [m] for the sphere laws, ``alpha_deg`` [deg] (half cone angle, or a pyramid's face angle, as
+    nanite takes it) for the others; ``contact_point`` [m] (nanite's tip position, negative into the sample)
+    and ``modulus`` [Pa] seed the fit instead of nanite's own initial guesses. Returns ``E`` [Pa], ``contact_point`` [m],
+    ``baseline`` [N], ``ssr`` (its sum of squared residuals [N^2]), and the approach nanite fitted: ``tip`` [m] (nanite's tip position; afmforce's tip depth
+    is minus it) and ``force`` [N]. Skips the test without nanite."""
+    import warnings
+
+    import numpy as np
+
+    nanite = pytest.importorskip("nanite")
+    force, z = np.asarray(force, float), np.asarray(z, float)
+    half = force.size // 2
+    if segment is None:
+        segment = np.r_[np.zeros(half, bool), np.ones(force.size - half, bool)]
+    if time is None:
+        time, duration = np.arange(force.size) * 1e-3, 1.0
+    else:
+        time = np.asarray(time, float) - float(time[0])
+        duration = float(time[-1])
+    md = {"spring constant": spring_constant, "sensitivity": 1.0, "path": "x", "enum": 0,
+          "imaging mode": "force-distance", "duration": duration, "point count": force.size}
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        idnt = nanite.Indentation(data={"force": force, "height (measured)": -z,
+                                        "segment": np.asarray(segment).astype(bool), "time": time},
+                                  metadata=md)
+        idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
+                                 options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
+        p = idnt.get_initial_fit_parameters(model_key=model_key)
+        if "R" in p:
+            p["R"].set(value=radius)
+        if "alpha" in p:
+            p["alpha"].set(value=alpha_deg)
+        p["nu"].set(value=nu)
+        if contact_point is not None:
+            p["contact_point"].set(value=contact_point)
+        if modulus is not None:
+            p["E"].set(value=modulus)
+        idnt.fit_model(model_key=model_key, params_initial=p, weight_cp=0, range_x=(0, 0),
+                       range_type="absolute", segment="approach")
+    pf = idnt.fit_properties["params_fitted"]
+    app = ~np.asarray(idnt.data["segment"]).astype(bool)
+    tip, f = np.asarray(idnt.data["tip position"])[app], np.asarray(idnt.data["force"])[app]
+    fn = nanite.model.models_available[model_key].model
+    ssr = float(np.sum((fn(pf, tip) - f) ** 2))
+    return {"E": float(pf["E"].value), "contact_point": float(pf["contact_point"].value),
+            "baseline": float(pf["baseline"].value), "ssr": ssr, "tip": tip, "force": f}
+
+
 def bruker_synthetic_header() -> tuple[float, float]:
     """(InvOLS [m/V], k [N/m]) of ``tests/data/bruker-nanoscope_synthetic.txt`` from its header lines, by
     regular expression (independent of afmforce's reader)."""

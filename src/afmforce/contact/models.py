@@ -69,40 +69,73 @@ def hertz_paraboloid(delta: ArrayLike, E: float, radius: float, nu: float = 0.5)
     return _out(4.0 / 3.0 * E * _check_nu(nu) * math.sqrt(radius) * d ** 1.5)
 
 
+#: Below this a/R the exact sphere's force is its power series (the closed form cancels: its bracket is
+#: 8/3 (a/R)^3 R^2 out of terms of order 2 (a/R) R^2, 1e-8 relative lost at a = 1e-4 R).
+_SPHERE_SERIES_BELOW = 0.5
+#: sum_k 8k/(4k^2-1) x^(2k+1), k = 1..: the bracket (1+x^2) 2 atanh(x) - 2x; 30 terms: 0.5^60 ~ 1e-18
+_SPHERE_SERIES = np.array([8.0 * k / (4.0 * k * k - 1.0) for k in range(1, 31)])
+
+
+def _sphere_atanh(delta: np.ndarray, radius: float) -> np.ndarray:
+    """y = atanh(a/R) [-] of a rigid sphere at indentation ``delta`` [m]: the root of ``y tanh(y) = delta/R``
+    (Sneddon's ``delta = a/2 ln((R+a)/(R-a))`` with a = R tanh(y)), which stays finite and well conditioned
+    as a -> R (deep indentations, delta >> R: y -> delta/R), unlike a itself. Newton's method, safeguarded by
+    the bracket max(t, sqrt(t)) < y <= (t + sqrt(t^2 + 4t))/2 (t = delta/R; tanh y >= y/(1+y))."""
+    t = np.asarray(delta, dtype=float) / float(radius)
+    lo = np.maximum(t, np.sqrt(t))
+    hi = 0.5 * (t + np.sqrt(t * t + 4.0 * t))
+    y = 0.5 * (lo + hi)
+    for _ in range(100):
+        th = np.tanh(y)
+        h = y * th - t
+        hp = th + y * (1.0 - th * th)
+        lo = np.where(h < 0, y, lo)
+        hi = np.where(h > 0, y, hi)
+        ok = hp > 0
+        new = y - np.where(ok, h / np.where(ok, hp, 1.0), 0.0)
+        bad = ~((new > lo) & (new < hi))
+        new = np.where(bad, 0.5 * (lo + hi), new)
+        done = np.abs(new - y) <= 1e-15 * np.maximum(y, 1e-300)
+        y = new
+        if np.all(done | (t <= 0)):
+            break
+    return np.where(t > 0, y, 0.0)
+
+
 def sphere_contact_radius(delta: ArrayLike, radius: float) -> np.ndarray:
     """Contact radius a [m] of a rigid sphere (radius R [m]) at indentation ``delta`` [m] (Sneddon 1965):
-    the root of ``delta = a/2 ln((R+a)/(R-a))``, by Newton's method from the Hertz value (converges
-    from above: the function is increasing and convex in a)."""
-    d = _depth(delta)
-    r = float(radius)
-    a = np.minimum(np.sqrt(r * d), r * (1 - 1e-12))
-    for _ in range(60):
-        lg = np.log((r + a) / (r - a))
-        f = 0.5 * a * lg - d
-        fp = 0.5 * lg + a * r / (r * r - a * a)
-        step = np.where(a > 0, f / np.where(fp > 0, fp, 1.0), 0.0)
-        a = np.clip(a - step, 0.0, r * (1 - 1e-15))
-        if np.all(np.abs(step) <= 1e-13 * r):
-            break
-    return a
+    the root of ``delta = a/2 ln((R+a)/(R-a))``, as ``R tanh(y)`` with y from :func:`_sphere_atanh` (relative
+    error ~1e-15 at any depth; a -> R as delta >> R)."""
+    return float(radius) * np.tanh(_sphere_atanh(_depth(delta), radius))
+
+
+def _sphere_bracket(y: np.ndarray) -> np.ndarray:
+    """``(1 + x^2) 2y - 2x`` with x = tanh(y) [-]: Sneddon's ``[(a^2 + R^2) ln((R+a)/(R-a)) - 2aR] / R^2``,
+    by its power series in x where the closed form cancels (x < 0.5), else closed (ln((R+a)/(R-a)) = 2y)."""
+    x = np.tanh(y)
+    x2 = x * x
+    ser = np.zeros_like(x)
+    for c in _SPHERE_SERIES[::-1]:
+        ser = ser * x2 + c
+    return np.where(x < _SPHERE_SERIES_BELOW, ser * x2 * x, (1.0 + x2) * 2.0 * y - 2.0 * x)
 
 
 def sneddon_sphere(delta: ArrayLike, E: float, radius: float, nu: float = 0.5):
     """Rigid sphere of radius R, exact (Sneddon 1965, eqs 6.13 and 6.15).
 
     ``F = E/(2(1-nu^2)) [(a^2 + R^2) ln((R+a)/(R-a)) - 2 a R]`` with the contact
-    radius ``a`` from ``delta = a/2 ln((R+a)/(R-a))`` (:func:`sphere_contact_radius`).
-    Tends to :func:`hertz_paraboloid` for ``delta << R`` (nanite's ``sneddon_spher_approx`` is
-    its power series).
+    radius ``a`` from ``delta = a/2 ln((R+a)/(R-a))`` (:func:`sphere_contact_radius`); evaluated in
+    y = atanh(a/R), by the bracket's power series for a < R/2 (no cancellation at shallow depths) and
+    accurate at any depth (delta >> R: F -> E/(1-nu^2) R (2 delta - R)). Tends to :func:`hertz_paraboloid`
+    for ``delta << R`` (nanite's ``sneddon_spher_approx`` is its power series).
 
     Returns
     -------
     numeric  force [N]
     """
-    a = sphere_contact_radius(delta, radius)
     r = float(radius)
-    lg = np.log((r + a) / (r - a))
-    return _out(0.5 * E * _check_nu(nu) * ((a * a + r * r) * lg - 2 * a * r))
+    y = _sphere_atanh(_depth(delta), r)
+    return _out(0.5 * E * _check_nu(nu) * r * r * _sphere_bracket(y))
 
 
 def hertz_cone(delta: ArrayLike, E: float, half_angle: float, nu: float = 0.5):
@@ -187,10 +220,9 @@ def shape_and_slope(key: str, delta: np.ndarray, geometry: dict, nu: float) -> t
             f = f * g
         return f, fp
     if key == "sneddon_sphere":
-        r = geometry["radius"]
-        a = sphere_contact_radius(d, r)
-        lg = np.log((r + a) / (r - a))
-        return 0.5 * c * ((a * a + r * r) * lg - 2 * a * r), 2.0 * c * a  # dF/d delta = 2 E* a
+        r = float(geometry["radius"])
+        y = _sphere_atanh(d, r)
+        return 0.5 * c * r * r * _sphere_bracket(y), 2.0 * c * r * np.tanh(y)  # dF/d delta = 2 E* a
     pref = {"hertz_cone": 2.0 / math.pi, "bilodeau_pyramid3": BILODEAU_THREE_SIDED,
             "bilodeau_pyramid4": BILODEAU_FOUR_SIDED}.get(key)
     if pref is None:
