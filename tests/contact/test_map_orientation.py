@@ -1,0 +1,154 @@
+"""Force maps' orientation and grid, end to end: a field that varies along x only must come back
+along x, at the recorded positions, in the summary table, the HDF5 and the PNG (read back colour by
+colour); positions that fall as the index grows keep their place; positions that form no grid are
+drawn as points at those positions, never forced into a grid."""
+
+from __future__ import annotations
+
+import dataclasses
+import warnings
+
+import h5py
+import matplotlib as mpl
+import numpy as np
+import pandas as pd
+import pytest
+from PIL import Image
+
+from afmforce.analysis.maps import EXTENT_KEY, map_images, map_points, write_map_hdf5
+from afmforce.cli.main import main
+from afmforce.instrument.soft_map import SoftMapConfig, soft_curve
+from afmforce.plotting import write_map_png
+
+NX, NY, STEP = 4, 3, 1e-6
+CFG = SoftMapConfig(nx=NX, ny=NY, step=STEP, seed=5)
+
+
+def _modulus(x: int) -> float:
+    return 2e3 * 2.0 ** x          # along x only: 2, 4, 8, 16 kPa
+
+
+def _png_cells(path, ny: int, nx: int) -> np.ndarray:
+    """The colour at each heat-map cell's centre, ``[row from the bottom, column from the left]``."""
+    png = Image.open(path)
+    left, top, right, bottom = map(float, png.text[EXTENT_KEY].split())
+    rgb = np.asarray(png.convert("RGB"), dtype=float) / 255
+    return np.array([[rgb[int(bottom - (j + 0.5) * (bottom - top) / ny), int(left + (i + 0.5) * (right - left) / nx)]
+                      for i in range(nx)] for j in range(ny)])
+
+
+def _colour_value(rgb: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """Values of viridis colours (the nearest of 256 entries) between ``lo`` and ``hi``."""
+    lut = mpl.colormaps["viridis"](np.linspace(0, 1, 256))[:, :3]
+    k = np.argmin(((rgb[..., None, :] - lut) ** 2).sum(-1), axis=-1)
+    return lo + (hi - lo) * k / 255
+
+
+# --- the images from a table whose positions fall as the index grows --------------------------------
+def _table(sign_x: float = 1.0, sign_y: float = 1.0, positions=None) -> pd.DataFrame:
+    rows = []
+    for y in range(NY):
+        for x in range(NX):
+            px, py = (5e-6 + sign_x * x * STEP, 7e-6 + sign_y * y * STEP) if positions is None else positions(x, y)
+            rows.append({"file": "m.jpk-qi-data", "curve": y * NX + x, "map_x": x, "map_y": y, "map_nx": NX,
+                         "map_ny": NY, "position_x": px, "position_y": py, "youngs_modulus": _modulus(x),
+                         "error": None})
+    return pd.DataFrame(rows)
+
+
+@pytest.mark.parametrize("sign_x, sign_y", [(1, 1), (-1, 1), (1, -1), (-1, -1)])
+def test_falling_positions_keep_their_place_in_hdf5_and_png(sign_x, sign_y, tmp_path):
+    table = _table(sign_x, sign_y)
+    (image,) = map_images(table, "modulus")
+    assert image.has_positions and image.dx == pytest.approx(sign_x * STEP) and image.dy == pytest.approx(sign_y * STEP)
+    h5path = write_map_hdf5([image], tmp_path / "m.maps.h5")
+    with h5py.File(h5path, "r") as h5:
+        values, xs, ys = h5["modulus"][()], h5["x"][()], h5["y"][()]
+    for _, r in table.iterrows():        # the HDF5's value at the curve's recorded position is the curve's
+        i = int(np.argmin(np.abs(xs - r["position_x"])))
+        j = int(np.argmin(np.abs(ys - r["position_y"])))
+        assert abs(xs[i] - r["position_x"]) < 1e-12 and abs(ys[j] - r["position_y"]) < 1e-12
+        assert values[j, i] == r["youngs_modulus"]
+    cells = _colour_value(_png_cells(write_map_png(image, tmp_path / "m.png"), NY, NX), 2.0, 16.0)  # kPa
+    expected_left_to_right = np.array([_modulus(x) / 1e3 for x in range(NX)])[:: int(sign_x)]
+    for j in range(NY):                  # x increasing to the right: the modulus follows the positions
+        np.testing.assert_allclose(cells[j], expected_left_to_right, atol=0.1)
+
+
+def test_a_field_along_x_stays_along_x_in_the_png(tmp_path):
+    (image,) = map_images(_table(), "modulus")
+    cells = _colour_value(_png_cells(write_map_png(image, tmp_path / "m.png"), NY, NX), 2.0, 16.0)
+    assert np.ptp(cells, axis=0).max() < 0.1             # constant up each column
+    assert np.all(np.diff(cells, axis=1) > 1.0)          # rising to the right
+
+
+# --- positions that make no grid ---------------------------------------------------------------------
+def _rotated(x, y):
+    c, s = np.cos(np.radians(30)), np.sin(np.radians(30))
+    return x * STEP * c - y * STEP * s, x * STEP * s + y * STEP * c
+
+
+@pytest.mark.parametrize("positions", [_rotated, lambda x, y: (np.sin(3.7 * (x + 5 * y)) * 1e-5, (x * y % 5) * 1e-6)],
+                         ids=["rotated-grid", "free-points"])
+def test_positions_off_the_grid_are_points_not_an_image(positions, tmp_path):
+    table = _table(positions=positions)
+    assert map_images(table, "modulus") == []
+    (points,) = map_points(table, "modulus")
+    assert points.x.size == NX * NY and "grid" in points.why
+    np.testing.assert_array_equal(points.x, table["position_x"].to_numpy())
+    np.testing.assert_array_equal(points.values, table["youngs_modulus"].to_numpy())
+
+
+def test_a_grid_is_not_points():
+    assert map_points(_table(), "modulus") == []
+    table = _table()
+    table["position_x"] = table["position_x"] + 0.1 * STEP * np.sin(np.arange(len(table)))   # stage jitter: a grid
+    assert len(map_images(table, "modulus")) == 1 and map_points(table, "modulus") == []
+
+
+def test_curves_with_positions_and_no_indices_are_points():
+    table = _table(positions=_rotated).drop(columns=["map_x", "map_y", "map_nx", "map_ny"])
+    (points,) = map_points(table, "modulus")
+    assert points.why == "the file records positions, no grid"
+    failed = _table(positions=_rotated)
+    failed.loc[3, "youngs_modulus"] = np.nan
+    failed.loc[3, "error"] = "FitError: no contact"
+    (points,) = map_points(failed, "modulus")
+    assert np.isnan(points.values[3]) and np.isfinite(np.delete(points.values, 3)).all()
+
+
+# --- end to end: a JPK QI map written with a modulus gradient along x ------------------------------------
+@pytest.fixture(scope="module")
+def gradient_map(tmp_path_factory):
+    from afmforce.io.writers import write_jpk_qi
+
+    def curves():
+        for y in range(NY):
+            for x in range(NX):
+                c = soft_curve(CFG, _modulus(x), 0.2e-6, 10e-6, seed=y * NX + x)
+                md = {**c.metadata, "map_x": x, "map_y": y, "position_x": x * STEP, "position_y": y * STEP}
+                yield dataclasses.replace(c, metadata=md)
+
+    path = tmp_path_factory.mktemp("grad") / "grad.jpk-qi-data"
+    return write_jpk_qi(curves(), path, shape=(NY, NX), step=STEP, instrument="virtual QI")
+
+
+def test_cli_fast_map_keeps_the_gradient_along_x(gradient_map, tmp_path, capsys):
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        code = main(["analyze", str(gradient_map), "--fast-map", "--tip-radius", "5um", "--poisson", "0.5",
+                     "--serial", "--out", str(tmp_path)])
+    assert code == 0, capsys.readouterr().err
+    (folder,) = tmp_path.glob("batch-*")
+    csv = pd.read_csv(folder / "summary.csv")
+    e = csv["youngs_modulus"].to_numpy()
+    np.testing.assert_allclose(e, [_modulus(x) for x in csv["map_x"]], rtol=0.03)
+    np.testing.assert_allclose(csv["position_x"], csv["map_x"] * STEP, atol=1e-12)
+    with h5py.File(folder / f"{gradient_map.name}.maps.h5", "r") as h5:
+        modulus, xs, ys = h5["modulus"][()], h5["x"][()], h5["y"][()]
+    np.testing.assert_allclose(xs, np.arange(NX) * STEP, atol=1e-12)
+    np.testing.assert_allclose(ys, np.arange(NY) * STEP, atol=1e-12)
+    np.testing.assert_allclose(modulus, [[_modulus(x) for x in range(NX)]] * NY, rtol=0.03)
+    cells = _colour_value(_png_cells(folder / f"{gradient_map.name}.modulus.png", NY, NX),
+                          np.nanmin(modulus) / 1e3, np.nanmax(modulus) / 1e3)
+    np.testing.assert_allclose(cells, modulus / 1e3, atol=0.2)
