@@ -117,7 +117,10 @@ def test_curves_with_positions_and_no_indices_are_points():
     assert np.isnan(points.values[3]) and np.isfinite(np.delete(points.values, 3)).all()
 
 
-# --- end to end: a JPK QI map written with a modulus gradient along x ------------------------------------
+# --- end to end: a JPK QI map written with a modulus gradient along x, one pixel without contact ----------
+BROKEN = (2, 1)          # (x, y): a flat curve (no contact): refused, its pixel blank, the reason in the table
+
+
 @pytest.fixture(scope="module")
 def gradient_map(tmp_path_factory):
     from afmforce.io.writers import write_jpk_qi
@@ -126,6 +129,8 @@ def gradient_map(tmp_path_factory):
         for y in range(NY):
             for x in range(NX):
                 c = soft_curve(CFG, _modulus(x), 0.2e-6, 10e-6, seed=y * NX + x)
+                if (x, y) == BROKEN:
+                    c = dataclasses.replace(c, deflection_signal=np.zeros_like(c.deflection_signal))
                 md = {**c.metadata, "map_x": x, "map_y": y, "position_x": x * STEP, "position_y": y * STEP}
                 yield dataclasses.replace(c, metadata=md)
 
@@ -133,22 +138,67 @@ def gradient_map(tmp_path_factory):
     return write_jpk_qi(curves(), path, shape=(NY, NX), step=STEP, instrument="virtual QI")
 
 
-def test_cli_fast_map_keeps_the_gradient_along_x(gradient_map, tmp_path, capsys):
+def _expected():
+    e = np.array([[_modulus(x) for x in range(NX)]] * NY)
+    e[BROKEN[1], BROKEN[0]] = np.nan
+    return e
+
+
+def _run(argv, capsys):
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        code = main(["analyze", str(gradient_map), "--fast-map", "--tip-radius", "5um", "--poisson", "0.5",
-                     "--serial", "--out", str(tmp_path)])
-    assert code == 0, capsys.readouterr().err
-    (folder,) = tmp_path.glob("batch-*")
+        code = main(argv)
+    return code, capsys.readouterr()
+
+
+def _check_outputs(folder, name, csv_modulus_rtol):
     csv = pd.read_csv(folder / "summary.csv")
-    e = csv["youngs_modulus"].to_numpy()
-    np.testing.assert_allclose(e, [_modulus(x) for x in csv["map_x"]], rtol=0.03)
-    np.testing.assert_allclose(csv["position_x"], csv["map_x"] * STEP, atol=1e-12)
-    with h5py.File(folder / f"{gradient_map.name}.maps.h5", "r") as h5:
+    csv.columns = [c.split(" [")[0] for c in csv.columns]     # the full analysis's CSV names carry the unit
+    broken = csv[(csv["map_x"] == BROKEN[0]) & (csv["map_y"] == BROKEN[1])]
+    assert len(broken) == 1 and broken["error"].iloc[0].startswith("AnalysisError: ")   # the reason, at its place
+    assert broken["position_x"].iloc[0] == pytest.approx(BROKEN[0] * STEP, abs=1e-12)
+    assert np.isnan(broken["youngs_modulus"].iloc[0])                        # no made-up value
+    good = csv[csv["error"].isna()]
+    assert len(good) == NX * NY - 1
+    np.testing.assert_allclose(good["youngs_modulus"], [_modulus(x) for x in good["map_x"]], rtol=csv_modulus_rtol)
+    np.testing.assert_allclose(good["position_x"], good["map_x"] * STEP, atol=1e-12)
+    with h5py.File(folder / f"{name}.maps.h5", "r") as h5:
         modulus, xs, ys = h5["modulus"][()], h5["x"][()], h5["y"][()]
     np.testing.assert_allclose(xs, np.arange(NX) * STEP, atol=1e-12)
     np.testing.assert_allclose(ys, np.arange(NY) * STEP, atol=1e-12)
-    np.testing.assert_allclose(modulus, [[_modulus(x) for x in range(NX)]] * NY, rtol=0.03)
-    cells = _colour_value(_png_cells(folder / f"{gradient_map.name}.modulus.png", NY, NX),
-                          np.nanmin(modulus) / 1e3, np.nanmax(modulus) / 1e3)
-    np.testing.assert_allclose(cells, modulus / 1e3, atol=0.2)
+    np.testing.assert_allclose(modulus, _expected(), rtol=csv_modulus_rtol)        # NaN where broken
+    rgb = _png_cells(folder / f"{name}.modulus.png", NY, NX)
+    np.testing.assert_allclose(rgb[BROKEN[1], BROKEN[0]], mpl.colors.to_rgb("lightgrey"), atol=0.01)
+    cells = _colour_value(rgb, np.nanmin(modulus) / 1e3, np.nanmax(modulus) / 1e3)
+    ok = np.isfinite(modulus)
+    np.testing.assert_allclose(cells[ok], modulus[ok] / 1e3, atol=0.2)
+    return csv
+
+
+def test_cli_fast_map_keeps_the_gradient_along_x_and_blanks_the_refused_pixel(gradient_map, tmp_path, capsys):
+    code, out = _run(["analyze", str(gradient_map), "--fast-map", "--tip-radius", "5um", "--poisson", "0.5",
+                      "--serial", "--out", str(tmp_path)], capsys)
+    assert code == 1 and "1 of 12 curves failed" in out.err
+    (folder,) = tmp_path.glob("batch-*")
+    _check_outputs(folder, gradient_map.name, 0.03)
+
+
+def test_cli_map_equals_the_single_curve_analysis(gradient_map, tmp_path, capsys):
+    from afmforce.analysis.options import IndentationOptions
+    from afmforce.analysis.pipeline import analyze
+    from afmforce.io import load
+
+    code, out = _run(["analyze", str(gradient_map), "--tip-radius", "5um", "--poisson", "0.5", "--serial",
+                      "--map-quantity", "modulus", "--out", str(tmp_path)], capsys)
+    assert code == 1, out.err
+    (folder,) = tmp_path.glob("batch-*")
+    csv = _check_outputs(folder, gradient_map.name, 0.05)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        curves = load(gradient_map)
+        for i in (1, 7):                   # two pixels, analysed alone: the map's numbers, to rounding
+            one = analyze(curves[i], options=[IndentationOptions(tip_radius=5e-6, poisson=0.5)])
+            row = csv[csv["curve"] == i].iloc[0]
+            assert (row["map_x"], row["map_y"]) == (curves[i].metadata["map_x"], curves[i].metadata["map_y"])
+            assert row["youngs_modulus"] == pytest.approx(one.youngs_modulus, rel=1e-12)
+            assert row["contact_point"] == pytest.approx(one.contact_point, rel=1e-12)
