@@ -202,3 +202,29 @@ def test_cli_map_equals_the_single_curve_analysis(gradient_map, tmp_path, capsys
             assert (row["map_x"], row["map_y"]) == (curves[i].metadata["map_x"], curves[i].metadata["map_y"])
             assert row["youngs_modulus"] == pytest.approx(one.youngs_modulus, rel=1e-12)
             assert row["contact_point"] == pytest.approx(one.contact_point, rel=1e-12)
+
+
+def test_cli_maps_park_spectra_at_free_points_as_points(tmp_path, capsys):
+    """Park spectra at chosen points (no volume grid): the CLI draws them at their recorded positions."""
+    import sys
+    from pathlib import Path
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "io"))
+    from _park_build import write_park
+
+    path = write_park(tmp_path / "free.tiff", points=5)         # spectra at x = 1..5 um, y = 2 um
+    code, out = _run(["analyze", str(path), "--serial", "--map-quantity", "adhesion", "--out", str(tmp_path / "o")],
+                     capsys)
+    assert code == 0, out.err
+    assert "free.tiff: mapped as points at the recorded positions: the file records positions, no grid" in out.err
+    (folder,) = (tmp_path / "o").glob("batch-*")
+    assert (folder / "free.tiff.adhesion.png").is_file() and (folder / "free.tiff.adhesion.hist.png").is_file()
+    with h5py.File(folder / "free.tiff.maps.h5", "r") as h5:
+        assert h5.attrs["layout"] == "points"
+        np.testing.assert_allclose(h5["x"][()], (1.0 + np.arange(5)) * 1e-6, rtol=1e-6)
+        np.testing.assert_allclose(h5["y"][()], 2e-6, rtol=1e-6)
+        np.testing.assert_array_equal(h5["curve"][()], np.arange(5))
+        adhesion = h5["adhesion"][()]
+    csv = pd.read_csv(folder / "summary.csv")
+    csv.columns = [c.split(" [")[0] for c in csv.columns]
+    np.testing.assert_array_equal(adhesion, -csv.sort_values("curve")["adhesion_force"].to_numpy())
