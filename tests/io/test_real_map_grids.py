@@ -55,6 +55,7 @@ def test_nanosurf_map_grid_is_its_map_table():
     nx, ny, x0, x1, y0, y1 = int(nx), int(ny), float(x0), float(x1), float(y0), float(y1)
     table = _table(path)
     (image,) = map_images(table, "modulus")
+    # the first curve at (x min, y min): the reader's reading of Map0 (xmin;xmax;ymin;ymax), kept here
     assert image.shape == (ny, nx) == (10, 10)
     assert (image.x0, image.y0) == pytest.approx((x0, y0), abs=1e-12)
     assert (image.dx, image.dy) == pytest.approx(((x1 - x0) / (nx - 1), (y1 - y0) / (ny - 1)), rel=1e-9)
