@@ -238,3 +238,14 @@ def test_the_printed_median_is_the_histograms_median():
     table = pd.DataFrame({"youngs_modulus": [1e3, 2e3, 4e3, 8e3]})
     (line,) = summary_lines(table, ["modulus"])
     assert "median 3 kPa" in line and "from 1 to 8 kPa" in line
+
+
+def test_a_map_is_an_image_or_points_never_both():
+    """Rows of a gridded map without a cell (a curve the reader could not place) do not turn the map into
+    points beside its image: the CLI would write both to one file name."""
+    table = _table()
+    table.loc[[2, 5], ["map_x", "map_y"]] = -1
+    assert len(map_images(table, "modulus")) == 1 and map_points(table, "modulus") == []
+    rotated = _table(positions=_rotated)
+    rotated.loc[[2, 5], ["map_x", "map_y"]] = -1
+    assert map_images(rotated, "modulus") == [] and len(map_points(rotated, "modulus")) == 1

@@ -294,12 +294,10 @@ def map_points(table, quantity: str | MapQuantity) -> list[MapPoints]:
         iy = pd.to_numeric(rows["map_y"], errors="coerce").fillna(-1).to_numpy(int) if "map_y" in rows \
             else np.full(len(rows), -1)
         gridded = (ix >= 0) & (iy >= 0)
-        if gridded.all():
-            if _grid_fit(rows, ix, iy) is not None:
+        if gridded.any():
+            if _grid_fit(rows[gridded], ix[gridded], iy[gridded]) is not None:
                 continue                                    # a grid: map_images draws it
             why = "the recorded positions do not lie on the grid of the curves' indices (rotated or free points)"
-        elif gridded.any():
-            why = "some curves have grid indices, others none"
         else:
             why = "the file records positions, no grid"
         col = pd.to_numeric(rows[q.column], errors="coerce") if q.column in rows else pd.Series(np.nan, rows.index)
