@@ -25,7 +25,12 @@ from ..errors import ParameterError
 from .registry import LiveDict, result_fields
 
 __all__ = ["MapQuantity", "MAP_QUANTITIES", "map_quantity", "MapImage", "map_images", "write_map_hdf5", "EXTENT_KEY",
-           "map_histogram"]
+           "map_histogram", "MapPoints", "map_points", "write_points_hdf5", "GRID_TOLERANCE"]
+
+#: How far the curves' recorded positions may lie from the grid their indices give, as a fraction of the
+#: grid step [-]: further (a rotated grid, free points, indices made up row by row), the map is no grid in
+#: micrometres, and is drawn as the positions it records (:func:`map_points`), never forced into one.
+GRID_TOLERANCE = 0.25
 
 #: PNG text key holding the heat map's pixel box in the image: "left top right bottom".
 EXTENT_KEY = "afmforce.map_extent"
@@ -122,7 +127,9 @@ class MapImage:
         Curves of this map in the table [-].
     x0, y0, dx, dy : float
         Position of grid point (0, 0) and the grid steps [m], from the curves' ``position_x``,
-        ``position_y``; NaN when the map does not record them (the axes show grid indices).
+        ``position_y``; NaN when the map does not record them (the axes show grid indices). A step
+        is negative where the positions fall as the index grows (column ``x`` lies at ``x0 + x dx``
+        whatever the sign: the image is drawn with its axes increasing, the HDF5 keeps the positions).
         When only the scanned area's size is known (``map_width``, ``map_height``), the
         grid is centred in it: ``x0 = dx / 2``, ``dx = width / nx``.
     note : str
@@ -144,7 +151,7 @@ class MapImage:
     @property
     def has_positions(self) -> bool:
         """The grid's positions are known (axes in um)."""
-        return bool(np.isfinite([self.x0, self.y0, self.dx, self.dy]).all() and self.dx > 0 and self.dy > 0)
+        return bool(np.isfinite([self.x0, self.y0, self.dx, self.dy]).all() and self.dx != 0 and self.dy != 0)
 
     @property
     def shape(self) -> tuple[int, int]:
@@ -159,7 +166,8 @@ class MapImage:
 
 def map_images(table, quantity: str | MapQuantity) -> list[MapImage]:
     """One :class:`MapImage` per map file in a batch summary table (rows without
-    grid indices are skipped; failed rows give NaN pixels)."""
+    grid indices are skipped; failed rows give NaN pixels). A file whose recorded positions
+    do not lie on the grid of its indices (:data:`GRID_TOLERANCE`) gives no image: :func:`map_points`."""
     import pandas as pd
 
     q = quantity if isinstance(quantity, MapQuantity) else map_quantity(quantity)
@@ -176,9 +184,12 @@ def map_images(table, quantity: str | MapQuantity) -> list[MapImage]:
         col = pd.to_numeric(rows[q.column], errors="coerce") if q.column in rows else pd.Series(np.nan, rows.index)
         x = rows["map_x"].to_numpy(int)
         y = rows["map_y"].to_numpy(int)
+        fit = _grid_fit(rows, x, y)
+        if fit is None:             # positions off the grid: drawn as points (map_points)
+            continue
         ok = (x >= 0) & (x < nx) & (y >= 0) & (y < ny)
         values[y[ok], x[ok]] = q.sign * col.to_numpy(float)[ok]
-        axes = [_axis(rows, i, pos) for i, pos in ((x, "position_x"), (y, "position_y"))]
+        axes = fit
         if not all(np.isfinite(a).all() for a in axes):        # no positions: the scanned area's size
             size = [float(pd.to_numeric(rows[c], errors="coerce").median()) if c in rows else math.nan
                     for c in ("map_width", "map_height")]
@@ -188,6 +199,140 @@ def map_images(table, quantity: str | MapQuantity) -> list[MapImage]:
         out.append(MapImage(str(source), q, values, int(len(rows)), axes[0][0], axes[1][0], axes[0][1],
                             axes[1][1], note))
     return out
+
+
+def _positions(rows) -> tuple[np.ndarray, np.ndarray]:
+    """The rows' ``position_x``, ``position_y`` [m] (NaN where not recorded)."""
+    import pandas as pd
+
+    return tuple(pd.to_numeric(rows[c], errors="coerce").to_numpy(float) if c in rows
+                 else np.full(len(rows), np.nan) for c in ("position_x", "position_y"))
+
+
+def _grid_fit(rows, ix: np.ndarray, iy: np.ndarray):
+    """``[(x0, dx), (y0, dy)]`` [m] of the grid the rows' positions give (signed steps; NaN: not
+    recorded, or one column or row only), or None when the positions lie off the grid of the
+    indices: a rotated grid (each position moving with both indices), points off their cells by more
+    than :data:`GRID_TOLERANCE` of a step, or two grid cells at one place."""
+    px, py = _positions(rows)
+    ok = np.isfinite(px) & np.isfinite(py)
+    nan = [(math.nan, math.nan), (math.nan, math.nan)]
+    if ok.sum() < 2 or (np.ptp(px[ok]) == 0 and np.ptp(py[ok]) == 0):
+        return nan                            # no positions, or one place for all: the axes show indices
+    i, j = ix[ok].astype(float), iy[ok].astype(float)
+    many = (np.unique(i).size >= 2, np.unique(j).size >= 2)
+    if not any(many):
+        return nan
+    names = ["origin"] + [n for n, m in zip(("i", "j"), many) if m]
+    a = np.column_stack([np.ones_like(i)] + [v for v, m in zip((i, j), many) if m])
+    cx = dict(zip(names, np.linalg.lstsq(a, px[ok], rcond=None)[0]))
+    cy = dict(zip(names, np.linalg.lstsq(a, py[ok], rcond=None)[0]))
+    dx, dy = cx.get("i", math.nan), cy.get("j", math.nan)       # signed steps
+    cross = (cx.get("j", 0.0), cy.get("i", 0.0))                 # x moving with the row: a rotated grid
+    step = min(abs(s) for s in (dx, dy) if math.isfinite(s))
+    if not step > 0:
+        return None                           # the positions do not move with the index: no grid
+    off = np.hypot(px[ok] - a @ [cx[n] for n in names], py[ok] - a @ [cy[n] for n in names])
+    if max(abs(c) for c in cross) > GRID_TOLERANCE * step or off.max() > GRID_TOLERANCE * step:
+        return None
+    return [(float(cx["origin"]), float(dx)), (float(cy["origin"]), float(dy))]
+
+
+@dataclass(frozen=True)
+class MapPoints:
+    """A map's values at the places its curves record, where they form no grid (free points, a rotated
+    grid, positions off the cells of their indices): drawn as points, never forced into a grid.
+
+    Attributes
+    ----------
+    source : str
+    quantity : MapQuantity
+    x, y : ndarray, shape (n,)
+        Recorded positions [m] (``position_x``, ``position_y``).
+    values : ndarray, shape (n,)
+        The quantity in SI; NaN where the curve's analysis failed or found nothing.
+    curves : ndarray, shape (n,)
+        The curves' indices in the file [-] (-1 when unknown).
+    why : str
+        Why no grid (said on the figure and in the HDF5).
+    note : str
+        As :attr:`MapImage.note`: why no point has a value (``""`` when some has).
+    """
+
+    source: str
+    quantity: MapQuantity
+    x: np.ndarray
+    y: np.ndarray
+    values: np.ndarray
+    curves: np.ndarray
+    why: str
+    note: str = ""
+
+    @property
+    def name(self) -> str:
+        """File name of the map."""
+        return Path(self.source).name
+
+
+def map_points(table, quantity: str | MapQuantity) -> list[MapPoints]:
+    """One :class:`MapPoints` per file of two or more curves whose recorded positions make no grid
+    (no grid indices, or indices whose grid the positions do not follow: :func:`map_images` gives
+    no image of those)."""
+    import pandas as pd
+
+    q = quantity if isinstance(quantity, MapQuantity) else map_quantity(quantity)
+    if table is None or len(table) == 0 or "file" not in table.columns:
+        return []
+    out = []
+    for source, rows in table.groupby("file", sort=True):
+        px, py = _positions(rows)
+        ok = np.isfinite(px) & np.isfinite(py)
+        if ok.sum() < 2 or (np.ptp(px[ok]) == 0 and np.ptp(py[ok]) == 0):
+            continue
+        ix = pd.to_numeric(rows["map_x"], errors="coerce").fillna(-1).to_numpy(int) if "map_x" in rows \
+            else np.full(len(rows), -1)
+        iy = pd.to_numeric(rows["map_y"], errors="coerce").fillna(-1).to_numpy(int) if "map_y" in rows \
+            else np.full(len(rows), -1)
+        gridded = (ix >= 0) & (iy >= 0)
+        if gridded.any():
+            if _grid_fit(rows[gridded], ix[gridded], iy[gridded]) is not None:
+                continue                                    # a grid: map_images draws it
+            why = "the recorded positions do not lie on the grid of the curves' indices (rotated or free points)"
+        else:
+            why = "the file records positions, no grid"
+        col = pd.to_numeric(rows[q.column], errors="coerce") if q.column in rows else pd.Series(np.nan, rows.index)
+        values = q.sign * col.to_numpy(float)[ok]
+        curves = pd.to_numeric(rows["curve"], errors="coerce").fillna(-1).to_numpy(int)[ok] if "curve" in rows \
+            else np.full(int(ok.sum()), -1)
+        note = "" if np.isfinite(values).any() else _empty_note(rows, q)
+        out.append(MapPoints(str(source), q, px[ok], py[ok], values, curves, why, note))
+    return out
+
+
+def write_points_hdf5(points: list[MapPoints], path, *, force: bool = True) -> Path:
+    """The numbers of one file's :class:`MapPoints` in one HDF5 file, atomically: ``x``, ``y``
+    (positions [m]) and ``curve`` per point, and one dataset per quantity (``values[i]`` at
+    ``(x[i], y[i])``, SI; attributes ``unit``, ``label``, ``column``). Root attributes: ``format`` =
+    ``afmforce-map-points``, ``layout`` = ``points``, ``why`` (no grid)."""
+    import h5py
+
+    from .._files import atomic_path
+
+    if not points:
+        raise ParameterError("no map points to write")
+    first = points[0]
+    path = Path(path)
+    with atomic_path(path, force) as tmp, h5py.File(tmp, "w") as h5:
+        h5.attrs.update(format="afmforce-map-points", layout="points", source=first.source, why=first.why)
+        for name, data in (("x", first.x), ("y", first.y)):
+            h5.create_dataset(name, data=data).attrs["unit"] = "m"
+        h5.create_dataset("curve", data=first.curves)
+        for p in points:
+            d = h5.create_dataset(p.quantity.identifier, data=p.values)
+            d.attrs.update(unit=p.quantity.unit, label=p.quantity.label, column=p.quantity.column)
+            if p.note:
+                d.attrs["note"] = p.note
+    return path
 
 
 def _empty_note(rows, q: MapQuantity) -> str:
@@ -202,20 +347,6 @@ def _empty_note(rows, q: MapQuantity) -> str:
         parts += [f"{n} {kind} contact{'s' if n > 1 else ''}" for kind, n in kinds.items()]
     text = f"no curve gave it ({len(rows)} curves" + (": " + ", ".join(parts) if parts else "") + ")"
     return text + (f"; it comes from {q.needs}" if q.needs else "")
-
-
-def _axis(rows, index: np.ndarray, column: str) -> tuple[float, float]:
-    """(position of index 0, step) [m] of one grid axis from the rows' positions (NaN: unknown)."""
-    import pandas as pd
-
-    if column not in rows:
-        return math.nan, math.nan
-    pos = pd.to_numeric(rows[column], errors="coerce").to_numpy(float)
-    ok = np.isfinite(pos)
-    if ok.sum() < 2 or np.unique(index[ok]).size < 2:
-        return math.nan, math.nan
-    step, origin = np.polyfit(index[ok].astype(float), pos[ok], 1)
-    return float(origin), float(abs(step))
 
 
 def write_map_hdf5(images: list[MapImage], path, *, force: bool = True) -> Path:

@@ -24,6 +24,8 @@ def summary_lines(table, quantities) -> list[str]:
     """One printed line per mapped quantity: its registered label, sign and display unit
     (:data:`afmforce.analysis.maps.MAP_QUANTITIES`, the same as the map images': adhesion is the
     depth of the retract dip, positive), the median and the range over the analysed pixels."""
+    import numpy as np
+
     from ..analysis.maps import MAP_DISPLAY_UNITS, map_quantity
 
     lines = []
@@ -35,7 +37,7 @@ def summary_lines(table, quantities) -> list[str]:
         v = table[q.column].to_numpy(float) * (q.sign * factor) + 0.0     # + 0.0: no "-0" printed
         v = v[[math.isfinite(x) for x in v]]
         if v.size:
-            lines.append(f"  {name} ({q.label}): median {float(sorted(v)[v.size // 2]):.4g} {unit}, "
+            lines.append(f"  {name} ({q.label}): median {float(np.median(v)):.4g} {unit}, "
                          f"from {v.min():.4g} to {v.max():.4g} {unit}")
     return lines
 

@@ -392,6 +392,28 @@ def _write_maps(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
         out[f"map {source} numbers"] = write_map_hdf5(images, folder / f"{images[0].name}.maps.h5")
         for path in write_map_histograms(images, folder / images[0].name):
             out[f"map {source} {path.name}"] = path
+    out.update(_write_map_points(table, folder, quantities))
+    return out
+
+
+def _write_map_points(table, folder: Path, quantities: list[str]) -> dict[str, Path]:
+    """The maps whose recorded positions make no grid (``analysis.maps.map_points``): a PNG of points
+    in um per quantity, ``<map>.maps.h5`` with the positions, the histograms; never forced into a grid."""
+    from ..analysis.maps import DEFAULT_MAPS, map_points, write_points_hdf5
+    from ..plotting.maps import write_map_histograms, write_map_points_png
+
+    out, per_map = {}, {}
+    for q in dict.fromkeys(quantities or DEFAULT_MAPS):
+        for points in map_points(table, q):
+            if points.note and not quantities:
+                continue
+            out[f"map {points.source} {q}"] = write_map_points_png(points, folder / f"{points.name}.{q}.png")
+            per_map.setdefault(points.source, []).append(points)
+    for source, sets in per_map.items():
+        eprint(f"note: {sets[0].name}: mapped as points at the recorded positions: {sets[0].why}")
+        out[f"map {source} numbers"] = write_points_hdf5(sets, folder / f"{sets[0].name}.maps.h5")
+        for path in write_map_histograms(sets, folder / sets[0].name):
+            out[f"map {source} {path.name}"] = path
     return out
 
 

@@ -12,9 +12,10 @@ from typing import Any
 import numpy as np
 
 from .._files import atomic_path, atomic_write_text
-from ..analysis.maps import EXTENT_KEY, MAP_DISPLAY_UNITS, MapImage, map_histogram
+from ..analysis.maps import EXTENT_KEY, MAP_DISPLAY_UNITS, MapImage, MapPoints, map_histogram
 
-__all__ = ["plot_map", "write_map_png", "plot_map_histogram", "write_map_histograms"]
+__all__ = ["plot_map", "write_map_png", "plot_map_histogram", "write_map_histograms", "plot_map_points",
+           "write_map_points_png"]
 
 
 def _display(unit: str) -> tuple[float, str]:
@@ -36,13 +37,18 @@ def plot_map(image: MapImage, ax=None):
         ax = Figure(figsize=(6, 5), layout="constrained").add_subplot()
     factor, shown = _display(image.quantity.unit)
     ny, nx = image.shape
-    values = np.ma.masked_invalid(image.values * factor)
+    shown_values = image.values
     cmap = mpl.colormaps["viridis"].with_extremes(bad="lightgrey")
     if image.has_positions:  # axes in um: cells centred on the curves' positions
         x0, y0, dx, dy = (v * 1e6 for v in (image.x0, image.y0, image.dx, image.dy))
+        if dx < 0:   # positions falling with the column index: drawn from the last column, x increasing
+            shown_values, x0, dx = shown_values[:, ::-1], x0 + (nx - 1) * dx, -dx
+        if dy < 0:
+            shown_values, y0, dy = shown_values[::-1], y0 + (ny - 1) * dy, -dy
         extent = (x0 - dx / 2, x0 + (nx - 0.5) * dx, y0 - dy / 2, y0 + (ny - 0.5) * dy)
     else:
         extent = (-0.5, nx - 0.5, -0.5, ny - 0.5)
+    values = np.ma.masked_invalid(shown_values * factor)
     im = ax.imshow(values, origin="lower", interpolation="nearest", cmap=cmap, aspect="equal", extent=extent)
     label = image.quantity.label + (f" [{shown}]" if shown else "")
     ax.figure.colorbar(im, ax=ax, label=label, shrink=0.9)
@@ -50,7 +56,7 @@ def plot_map(image: MapImage, ax=None):
     ax.set_ylabel("y [µm]" if image.has_positions else "y (row index)")
     finite = int(np.isfinite(image.values).sum())
     name = image.name if len(image.name) <= 48 else image.name[:22] + "..." + image.name[-23:]
-    pitch = f", {image.dx * 1e6:.3g} x {image.dy * 1e6:.3g} µm pixels" if image.has_positions else ""
+    pitch = f", {abs(image.dx) * 1e6:.3g} x {abs(image.dy) * 1e6:.3g} µm pixels" if image.has_positions else ""
     ax.set_title(f"{name}\n{image.quantity.identifier}: {finite} of {nx * ny} points{pitch}", fontsize="small")
     if image.note:      # all "no value": say why on the image (its colour bar's range means nothing)
         import textwrap
@@ -81,6 +87,49 @@ def write_map_png(image: MapImage, path: str | os.PathLike, *, dpi: int = 100, f
     path = Path(path)
     with atomic_path(path, force) as tmp:
         fig.savefig(tmp, dpi=dpi, format="png", metadata=meta)
+    return path
+
+
+def plot_map_points(points: MapPoints, ax=None):
+    """The values of a map whose positions make no grid (:class:`~afmforce.analysis.maps.MapPoints`),
+    each a dot at its recorded position (axes in µm, x to the right, y upwards; open grey circles:
+    no value), with a colour bar in the display unit and why it is no grid. Returns the Axes."""
+    import matplotlib as mpl
+
+    if ax is None:
+        from matplotlib.figure import Figure
+
+        ax = Figure(figsize=(6, 5), layout="constrained").add_subplot()
+    factor, shown = _display(points.quantity.unit)
+    x, y = points.x * 1e6, points.y * 1e6
+    good = np.isfinite(points.values)
+    if (~good).any():
+        ax.scatter(x[~good], y[~good], s=40, facecolors="none", edgecolors="grey", label="no value")
+    sc = ax.scatter(x[good], y[good], c=points.values[good] * factor, s=40, cmap=mpl.colormaps["viridis"])
+    label = points.quantity.label + (f" [{shown}]" if shown else "")
+    ax.figure.colorbar(sc, ax=ax, label=label, shrink=0.9)
+    ax.set_aspect("equal", adjustable="datalim")
+    ax.set_xlabel("x [µm]")
+    ax.set_ylabel("y [µm]")
+    name = points.name if len(points.name) <= 48 else points.name[:22] + "..." + points.name[-23:]
+    ax.set_title(f"{name}\n{points.quantity.identifier}: {int(good.sum())} of {good.size} points at their "
+                 f"recorded positions (no grid)", fontsize="small")
+    if points.note:
+        import textwrap
+
+        ax.text(0.5, 0.5, "\n".join(textwrap.wrap(points.note, 40)), transform=ax.transAxes, ha="center",
+                va="center", fontsize="small", bbox={"facecolor": "white", "alpha": 0.9, "edgecolor": "grey"})
+    return ax
+
+
+def write_map_points_png(points: MapPoints, path: str | os.PathLike, *, dpi: int = 100,
+                         force: bool = True) -> Path:
+    """Write :func:`plot_map_points` of ``points`` as PNG, atomically."""
+    fig = plot_map_points(points).figure
+    path = Path(path)
+    with atomic_path(path, force) as tmp:
+        fig.savefig(tmp, dpi=dpi, format="png", metadata={"Title": f"{points.name}: {points.quantity.label}",
+                                                          "Software": "afmforce", "Description": points.why})
     return path
 
 

@@ -27,7 +27,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
 from .._files import atomic_path, atomic_write_text, display_path
-from ..errors import FileFormatError, OutputExistsError
+from ..errors import AfmforceError, FileFormatError, OutputExistsError
 from .batch import error_record, run_batch
 from .results import BatchResult
 from .summary import SUMMARY_COLUMNS, SUMMARY_UNITS, failures, summary_row, summary_table, write_summary
@@ -278,8 +278,19 @@ class CurveAnalysis:
         base = Path(ref.path).name
         rows = []
         for index, curve in pairs:
-            if len(pairs) == 1:  # the item is this curve: its failure is the item's (the batch records it)
+            if len(pairs) == 1 and ref.index is None:  # the item is this file's one curve: its failure is the item's
                 rows.append(self.analyze_curve(ref, index, curve, several))
+                continue
+            if len(pairs) == 1:   # a map's curve: refused, it keeps its place (a blank pixel, the reason beside it)
+                try:
+                    rows.append(self.analyze_curve(ref, index, curve, several))
+                except AfmforceError as exc:
+                    if isinstance(exc, OutputExistsError):
+                        raise
+                    from .map_fast import _place
+
+                    rows.append({**_place(curve.metadata, display_path(ref.path), int(index)),
+                                 "name": f"{display_path(base)}#{index}", **error_record(exc)})
                 continue
             try:  # one of a file's many curves: its failure is its own row, the others are kept
                 rows.append(self.analyze_curve(ref, index, curve, several))
