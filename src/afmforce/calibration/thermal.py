@@ -184,7 +184,7 @@ def _guess(f: np.ndarray, p: np.ndarray, f_range) -> tuple[float, float]:
     peaks, props = find_peaks(log_level, prominence=0.0)   # an edge (a 1/f rise) is no peak
     if peaks.size == 0:
         raise AnalysisError("no resonance peak in the thermal spectrum; give the frequency window "
-                            "(f_range; --frequency-min/--frequency-max)")
+                            "(`frequency_min`/`frequency_max`)")
     # the highest of the peaks standing at least 2x above their surroundings (a noise blip on a
     # 1/f rise is not one); none such: the most prominent
     clear = props["prominences"] >= math.log(2.0)
@@ -232,7 +232,7 @@ def _fit_in(f, p, window, f0, q, pink):
     if not window[0] < math.exp(th[0]) < window[1]:
         raise AnalysisError(f"the fitted resonance {math.exp(th[0]):.4g} Hz lies outside the window "
                             f"[{window[0]:.4g}, {window[1]:.4g}] Hz: no resonance found; "
-                            "give the frequency window (f_range; --frequency-min/--frequency-max)")
+                            "give the frequency window (`frequency_min`/`frequency_max`)")
     return th, m, sel, masked
 
 
@@ -417,8 +417,8 @@ def _require_described(averages_fit: float, *, averages_stated: int | None, n_bi
             f"the spectrum scatters about the fitted oscillator as {averages_fit:.3g} averaged periodograms "
             f"would, but the file states {averages_stated} ({ratio:.2f}x the variance): the oscillator does "
             "not describe it (a clipped or distorted peak, a second mode or electrical lines in the window), "
-            "so its area is not the lever's and no k is given -- look at the spectrum (--plot) and record it "
-            "again, or fit a clean window (--frequency-min/--frequency-max)")
+            "so its area is not the lever's and no k is given -- look at the spectrum (`plot`) and record it "
+            "again, or fit a clean window (`frequency_min`/`frequency_max`)")
 
 
 def _require_possible_k(k: float, area: float, temperature: float, correction: float) -> None:
@@ -438,7 +438,7 @@ def _require_possible_k(k: float, area: float, temperature: float, correction: f
         f"the thermal peak's area <z^2> = {area:.3g} m^2 (rms {math.sqrt(area):.3g} m) gives k = {k:.3g} N/m, "
         f"outside the range any lever has ({spec.range_text()}: a thermal rms of {lo:.2g} to {hi:.2g} m): "
         "not a spring constant; the spectrum's unit or InvOLS is wrong (a spectrum in V^2/Hz read as "
-        "m^2/Hz, an InvOLS off by a unit prefix) -- check the file's unit (--psd-unit) and InvOLS (--invols)")
+        "m^2/Hz, an InvOLS off by a unit prefix) -- check the file's unit (`psd_unit`) and InvOLS (`sensitivity`)")
 
 
 def _require_resonance(fs, ps, m, averages: float, n_all: int, pink: bool, f_top: float) -> None:
@@ -477,7 +477,7 @@ def _require_resonance(fs, ps, m, averages: float, n_all: int, pink: bool, f_top
             f"{need:.3g} needed): the lever's peak is buried in the detector noise or lies above the "
             f"spectrum's highest frequency ({f_top:.4g} Hz); the spring constant is not "
             "determined -- record a spectrum that shows the resonance (a higher sampling rate, more "
-            "averages), or give the frequency window (f_range; --frequency-min/--frequency-max) around it")
+            "averages), or give the frequency window (`frequency_min`/`frequency_max`) around it")
 
 
 def _model_at(f, th):

@@ -147,6 +147,9 @@ def run_thermal(args: argparse.Namespace) -> int:
     _check_out(args, ("--plot", args.plot))
     from ..calibration import BUTT_JASCHKE, DEFAULT_TEMPERATURE, fit_thermal, read_spectrum
     from ..calibration.thermal import ThermalFit
+    from ._outcome import RunState
+
+    RunState.flags.update(sensitivity="--invols")   # this command's flag for the InvOLS (the library's `sensitivity`)
 
     if (args.file is None) == (args.example is None):
         raise ParameterError("give a thermal spectrum FILE or --example NAME (virtual-air, jpk-water)")
