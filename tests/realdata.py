@@ -60,35 +60,8 @@ def nanite_hertz_para(force, z, radius: float, spring_constant: float, segment=N
     sample positive) hold the approach, then the retract, of equal halves (the approach one sample shorter
     when odd), unless ``segment`` (False/0 on the approach) and ``time`` [s] are given. Skips the test without
     nanite (the bench extra)."""
-    import warnings
-
-    import numpy as np
-
-    nanite = pytest.importorskip("nanite")
-    force, z = np.asarray(force, float), np.asarray(z, float)
-    half = force.size // 2
-    if segment is None:
-        segment = np.r_[np.zeros(half, bool), np.ones(force.size - half, bool)]
-    if time is None:
-        time, duration = np.arange(force.size) * 1e-3, 1.0
-    else:
-        time = np.asarray(time, float) - float(time[0])
-        duration = float(time[-1])
-    md = {"spring constant": spring_constant, "sensitivity": 1.0, "path": "x", "enum": 0,
-          "imaging mode": "force-distance", "duration": duration, "point count": force.size}
-    with warnings.catch_warnings():
-        warnings.simplefilter("ignore")
-        idnt = nanite.Indentation(data={"force": force, "height (measured)": -z,
-                                        "segment": np.asarray(segment).astype(bool), "time": time},
-                                       metadata=md)
-        idnt.apply_preprocessing(["compute_tip_position", "correct_force_offset", "correct_tip_offset"],
-                                 options={"correct_tip_offset": {"method": "fit_line_polynomial"}})
-        p = idnt.get_initial_fit_parameters(model_key="hertz_para")
-        p["R"].set(value=radius)
-        p["nu"].set(value=0.5)
-        idnt.fit_model(model_key="hertz_para", params_initial=p, weight_cp=0, range_x=(0, 0),
-                       range_type="absolute", segment="approach")
-    return float(idnt.fit_properties["params_fitted"]["E"].value)
+    return nanite_fit(force, z, "hertz_para", spring_constant, radius=radius, nu=0.5, segment=segment,
+                      time=time)["E"]
 
 
 def nanite_fit(force, z, model_key: str, spring_constant: float, *, radius: float | None = None,
