@@ -133,8 +133,9 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
                 label=f"adhesion {ad.force * 1e9:.3g} nN" if math.isfinite(ad.force) else
                 f"adhesion {ad.deflection * 1e9:.3g} nm")
     _mark_steps(ax, result, h, f)
-    if ad is not None and math.isfinite(getattr(ad, "rupture_distance", math.nan)) and lo < ad.rupture_distance < hi:
-        ax.axvline(ad.rupture_distance * 1e9, color="C4", ls=":", lw=1,
+    at = _rupture_separation(result, h)
+    if math.isfinite(at) and lo < at < hi:
+        ax.axvline(at * 1e9, color="C4", ls=":", lw=1,
                    label=f"last rupture {ad.rupture_distance * 1e9:.4g} nm")
     ji = result.details["jumps"].jump_in if "jumps" in result.details else None
     if ji is not None and ji.found and math.isfinite(ji.force_before):
@@ -146,6 +147,28 @@ def plot_force_separation(result: AnalysisResult, ax=None, max_separation: float
     ax.set_ylabel(ylabel)
     ax.legend(fontsize="small")
     return ax
+
+
+def _rupture_separation(result: AnalysisResult, h: np.ndarray) -> float:
+    """Where the last rupture lies on the separation axis [m] (NaN: none).
+
+    A soft contact's ``rupture_distance`` counts along the retract's travel from where it leaves its contact,
+    not as a separation (kontrkulka: 123 nm of travel, the step at h = 85 nm; drawn at h = 123 nm the line
+    stood on the flat baseline): the last unbinding step's own sample where it is one, else the adhesion
+    dip's separation plus the travel between them less the dip's deflection (the lever relaxed at a
+    rupture). A hard contact's is a separation already."""
+    ad = result.details.get("adhesion")
+    r = getattr(ad, "rupture_distance", math.nan)
+    if ad is None or not math.isfinite(r):
+        return math.nan
+    if result.contact_kind == "hard":
+        return r
+    for s in getattr(ad, "steps", ()):
+        if abs(s.distance - r) <= 1e-12 * max(abs(r), 1e-9) and 0 <= s.index < h.size and math.isfinite(h[s.index]):
+            return float(h[s.index])
+    if not (0 <= ad.index < h.size and math.isfinite(h[ad.index]) and math.isfinite(ad.distance)):
+        return math.nan
+    return float(h[ad.index] + (r - ad.distance) - (ad.deflection if math.isfinite(ad.deflection) else 0.0))
 
 
 def _mark_steps(ax, result: AnalysisResult, h: np.ndarray, f: np.ndarray) -> None:
