@@ -23,6 +23,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+from .constants import DEFAULT_TEMPERATURE
 from .errors import ParameterError
 
 __all__ = ["FieldSpec", "ChoiceSpec", "ANALYSIS_CHOICES", "ANALYZE_CLI_ONLY", "meta", "qfield", "spec_of", "QUANTITIES", "check", "check_beam", "show",
@@ -303,7 +304,9 @@ QUANTITIES: dict[str, FieldSpec] = {
     "slip_target": _q("length", "m", "95 % half-width wanted of the slip length", hi=1e-6, display="nm", **_POS),
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
     # probe calibration (issue 34; docs/calibration.md): thermal noise, Sader, InvOLS
-    "temperature": _q("temperature", "K", "temperature of the lever and its medium", 1.0, 1000.0),
+    # one default room temperature for every kT (afmforce.constants.DEFAULT_TEMPERATURE: why 295 K)
+    "temperature": _q("temperature", "K", f"temperature of the lever and its medium (default: the room, "
+                      f"{DEFAULT_TEMPERATURE:g} K)", 1.0, 1000.0),
     # the factors of the literature lie in 0.76-1.1 (Butt & Jaschke 1995: 0.817, 0.971; Hutter 2005:
     # 0.764-1.09); (0, 2] let chi = 1e-30 print k = 5e-29 mN/m as a calibration
     "equipartition_correction": _q("dimensionless", "", "chi of k = chi kB T / <z^2> (0.817: optical "

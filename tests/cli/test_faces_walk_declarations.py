@@ -201,3 +201,52 @@ def test_every_probe_field_is_a_flag_and_a_control_of_one_declaration():
         assert f.metadata["spec"] == spec and dests[f.name] == spec, f.name
         assert web[f.name]["range"] == spec.range_text() and web[f.name]["unit"] == spec.unit, f.name
     assert web["theta0"]["shown"] == "deg" and {web[n]["shown"] for n in ("L0", "L1", "L2")} == {"um"}
+
+
+# ---- one room temperature: every kT default, every face ----------------------------------------------------
+#: Literal temperature defaults that are not the room's, with the reason (module path -> function).
+NOT_THE_ROOM = {
+    ("analysis/synthetic.py", "tether_curve"): "a synthetic file's own recorded temperature (its metadata), off the "
+                                               "room's so that the tests see the file's value read, not the default",
+}
+
+
+def test_every_temperature_default_in_the_source_is_a_declared_name():
+    """No function of afmforce defaults a ``temperature`` to a number of its own: the room
+    (``DEFAULT_TEMPERATURE``) or the tabulated water data's 25 C (``STANDARD_TEMPERATURE``), by name."""
+    import ast
+
+    root = Path(__file__).parents[2] / "src" / "afmforce"
+    found = []
+    for path in sorted(root.rglob("*.py")):
+        tree = ast.parse(path.read_text(), str(path))
+        for node in ast.walk(tree):
+            if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                continue
+            args = node.args.args + node.args.kwonlyargs
+            defaults = [None] * (len(node.args.args) - len(node.args.defaults)) + node.args.defaults + \
+                node.args.kw_defaults
+            for a, d in zip(args, defaults):
+                if a.arg == "temperature" and isinstance(d, ast.Constant) and d.value is not None:
+                    found.append((str(path.relative_to(root)), node.name, d.value))
+    assert {(p, f) for p, f, _ in found} == set(NOT_THE_ROOM), found
+
+
+def test_every_face_reads_the_one_room_temperature(web_fields):
+    from afmforce.constants import DEFAULT_TEMPERATURE, PAPER_ROOM_TEMPERATURE
+    from afmforce.surface_laws import LAWS
+
+    assert abs(DEFAULT_TEMPERATURE - PAPER_ROOM_TEMPERATURE) < 1.0        # the paper's lab: 22.7 C (section 3)
+    room = f"{DEFAULT_TEMPERATURE:g} K"
+    temperature_flags = [(c, a) for c, a, _ in FLAGS if a.dest == "temperature"]
+    assert {c for c, _ in temperature_flags} >= {"simulate", "fit", "plan", "calibrate thermal", "calibrate virtual"}
+    for command, action in temperature_flags:      # the flag's default is the room, or it says so
+        assert action.default == DEFAULT_TEMPERATURE or room in action.help, (command, action.help)
+    for law in LAWS.values():                       # the simulation's laws (capillary, steric)
+        for p in law.parameters:
+            if p.name == "temperature":
+                assert p.default == DEFAULT_TEMPERATURE, law.name
+    (web,) = [f for f in web_fields["temperature"] if f.get("part") == "surface"]
+    assert web["default"] == DEFAULT_TEMPERATURE and room in web["help"]
+    row = re.search(r"^\| `temperature` \| (.*) \| K \| .* \|$", DOCS, re.M)
+    assert row and room in row.group(1)
