@@ -23,7 +23,7 @@ import math
 from dataclasses import dataclass
 from typing import Any, Mapping
 
-from .constants import DEFAULT_TEMPERATURE
+from .constants import DEFAULT_TEMPERATURE, PAPER_ROOM_TEMPERATURE
 from .errors import ParameterError
 
 __all__ = ["FieldSpec", "ChoiceSpec", "ANALYSIS_CHOICES", "ANALYZE_CLI_ONLY", "meta", "qfield", "spec_of", "QUANTITIES", "check", "check_beam", "show",
@@ -305,8 +305,7 @@ QUANTITIES: dict[str, FieldSpec] = {
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
     # probe calibration (issue 34; docs/calibration.md): thermal noise, Sader, InvOLS
     # one default room temperature for every kT (afmforce.constants.DEFAULT_TEMPERATURE: why 295 K)
-    "temperature": _q("temperature", "K", f"temperature of the lever and its medium (default: the room, "
-                      f"{DEFAULT_TEMPERATURE:g} K)", 1.0, 1000.0),
+    "temperature": _q("temperature", "K", "temperature of the lever and its medium", 1.0, 1000.0),
     # the factors of the literature lie in 0.76-1.1 (Butt & Jaschke 1995: 0.817, 0.971; Hutter 2005:
     # 0.764-1.09); (0, 2] let chi = 1e-30 print k = 5e-29 mN/m as a calibration
     "equipartition_correction": _q("dimensionless", "", "chi of k = chi kB T / <z^2> (0.817: optical "
@@ -432,4 +431,8 @@ def ranges_markdown() -> str:
     lines = ["| name | meaning | SI unit | valid range |", "|---|---|---|---|"]
     for name, s in QUANTITIES.items():
         lines.append(f"| `{name}` | {s.help} | {s.unit or '-'} | {s.range_text()} |")
+    lines += ["", f"The room temperature, the default of every `temperature` not given or stored in a file (the "
+              f"thermal calibration, the tethers' chain fits, the capillary and steric laws): "
+              f"{QUANTITIES['temperature'].show(DEFAULT_TEMPERATURE)} (`afmforce.constants.DEFAULT_TEMPERATURE`; "
+              f"the paper's measurements: {PAPER_ROOM_TEMPERATURE - 273.15:.1f} C)."]
     return "\n".join(lines)

@@ -11,6 +11,7 @@ and eq 14 (``k = k0 / cos^2 theta0``) for the spring constant the analysis used.
 
 from __future__ import annotations
 
+import functools
 import io
 import json
 import math
@@ -30,6 +31,7 @@ REAL = "asylum-mfp3d_SiN-tip_air.ibw"
 GEOMETRY = ("theta0", "L0", "L1", "L2")
 
 
+@functools.lru_cache(maxsize=None)       # one run per flag set: the API and the page compare with the same
 def _cli(path, *flags) -> dict:
     out = io.StringIO()
     with redirect_stdout(out):
