@@ -211,12 +211,12 @@ QUANTITIES: dict[str, FieldSpec] = {
     # probe: cantilever (Fig 2) and simple spring (eq 1)
     "k0": _q("stiffness", "N/m", "intrinsic spring constant k0", 1e-4, 1e3),
     "B": _q("rigidity", "N m^2", "flexural rigidity B = k0 L0^3/3", 1e-24, 1e-5),
-    "L0": _q("length", "m", "length of the flexible beam", 1e-6, 2e-3, display="um"),
+    "L0": _q("length", "m", "length of the flexible beam", 1e-6, 2e-3),
     # the base carries the joint's rotation: the library needs it positive (cantilever.py), and one
     # much shorter than a nanometre gives a rotational mode no step budget resolves (1e-30 m: an
     # integer overflow in the integrator's budget; the web answered 500)
-    "L1": _q("length", "m", "length of the rigid base", 1e-9, 1e-3, display="um"),
-    "L2": _q("length", "m", "length of the rigid probe", 0.0, 1e-3, display="um"),
+    "L1": _q("length", "m", "length of the rigid base", 1e-9, 1e-3),
+    "L2": _q("length", "m", "length of the rigid probe", 0.0, 1e-3),
     "theta0": _q("angle", "rad", "inclination of the beam", -math.radians(89), math.radians(89),
                  display="deg"),
     "m_joint": _q("mass", "kg", "point mass at the beam-base joint", hi=1e-5, display="ng", **_POS),
@@ -372,12 +372,13 @@ ANALYSIS_CHOICES: dict[str, ChoiceSpec] = {
 }
 
 
-#: Quantity flags of ``afmforce analyze`` that have no control in the web's analyse view, each with the
-#: reason. Every other quantity flag of ``analyze`` is a web control of the same name and range (a probe
-#: field, a step's option): tests/cli/test_faces_walk_declarations.py walks the parser against this set.
+#: Quantity options of ``afmforce analyze``, by their destination (``file_timeout``), that have no control in
+#: the web's analyse view, each with the reason. Every other quantity option of ``analyze`` is a web control
+#: of the same name and range (a probe field, a step's option): tests/cli/test_faces_walk_declarations.py
+#: walks the parser against this set.
 ANALYZE_CLI_ONLY: dict[str, str] = {
-    "--file-timeout": "a budget of the command's own batch run (reading one file); the web bounds its requests "
-                      "by its own limits (afmforce.web.limits: upload size, curves, analysis time)",
+    "file_timeout": "a budget of the command's own batch run (reading one file); the web bounds its requests "
+                    "by its own limits (afmforce.web.limits: upload size, curves, analysis time)",
 }
 
 

@@ -168,8 +168,8 @@ def test_the_analyze_walk_sees_the_probe_geometry():
 def test_every_analyze_quantity_flag_has_a_web_control_or_a_reason(web_fields, flag, action, spec):
     from afmforce._fields import ANALYZE_CLI_ONLY
 
-    if flag in ANALYZE_CLI_ONLY:
-        assert len(ANALYZE_CLI_ONLY[flag]) > 20, flag          # a reason, not a placeholder
+    if action.dest in ANALYZE_CLI_ONLY:
+        assert len(ANALYZE_CLI_ONLY[action.dest]) > 20, flag          # a reason, not a placeholder
         assert _web_control(action.dest) is None, f"{flag} has a web control: drop it from ANALYZE_CLI_ONLY"
         return
     control = _web_control(action.dest)
@@ -183,12 +183,12 @@ def test_every_analyze_quantity_flag_has_a_web_control_or_a_reason(web_fields, f
 def test_the_cli_only_set_names_only_analyze_flags():
     from afmforce._fields import ANALYZE_CLI_ONLY
 
-    assert set(ANALYZE_CLI_ONLY) <= {f for f, _, _ in ANALYZE_FLAGS}
+    assert set(ANALYZE_CLI_ONLY) <= {a.dest for _, a, _ in ANALYZE_FLAGS}
 
 
 def test_every_probe_field_is_a_flag_and_a_control_of_one_declaration():
     """The API's ``probe=`` (ProbeCalibration) has a flag and a web control for each field, with the declared
-    quantity's unit, range and shown unit (theta0 in deg, the beam's lengths in um)."""
+    quantity's unit, range and shown unit (theta0 in deg, the beam's lengths in um as on the simulation view)."""
     import dataclasses
 
     from afmforce.analysis.options import ProbeCalibration

@@ -138,11 +138,15 @@ def calibration_fields() -> list[dict[str, Any]]:
     from ..analysis.options import ProbeCalibration
 
     probe = {f.name: f for f in dataclasses.fields(ProbeCalibration)}
+    simulated = {f["name"]: f for f in simulation_fields()}
     out = []
     for via, key, shows in _calibration_rows():
         if via == "probe":
             f = probe[key]
             d = field_json(key, f.metadata["spec"], None)
+            same = simulated.get(key)       # shown in the unit of the simulation's control (the beam in um)
+            if same is not None and same["unit"] == d["unit"]:
+                d.update(shown=same["shown"], factor=same["factor"])
         else:
             step, name = key.split(".")
             d = dict(next(o for o in analysis_options()[step] if o["name"] == name))
