@@ -64,11 +64,12 @@ def thermal_examples() -> list[Path]:
 
     from afmforce.calibration import write_spectrum
     from afmforce.dynamics.parts import SpringProbe
+    from afmforce.constants import DEFAULT_TEMPERATURE
     from afmforce.dynamics.thermal import thermal_spectrum
 
     k, f0, q = (THERMAL_PROBE[n] for n in ("spring_constant", "resonance_frequency", "quality_factor"))
     probe = SpringProbe(spring_constant=k, mass=k / (2 * math.pi * f0) ** 2, quality_factor=q)
-    spectrum = thermal_spectrum(probe, temperature=295.0, averages=64, white=1e-27, seed=34, medium="air")
+    spectrum = thermal_spectrum(probe, temperature=DEFAULT_TEMPERATURE, averages=64, white=1e-27, seed=34, medium="air")
     out = [write_spectrum(OUT / "thermal-virtual-air.psd", spectrum)]
     src = Path(__file__).resolve().parents[1] / "tests" / "data" / "jpk-tnd_PFQNM-water_thermal-noise_0-80kHz.tnd"
     shutil.copyfile(src, OUT / "thermal-jpk-water.tnd")

@@ -23,9 +23,10 @@ import math
 from dataclasses import dataclass
 from typing import Any, Mapping
 
+from .constants import DEFAULT_TEMPERATURE, PAPER_ROOM_TEMPERATURE
 from .errors import ParameterError
 
-__all__ = ["FieldSpec", "ChoiceSpec", "ANALYSIS_CHOICES", "meta", "qfield", "spec_of", "QUANTITIES", "check", "check_beam", "show",
+__all__ = ["FieldSpec", "ChoiceSpec", "ANALYSIS_CHOICES", "ANALYZE_CLI_ONLY", "meta", "qfield", "spec_of", "QUANTITIES", "check", "check_beam", "show",
            "ranges_markdown", "DISPLAY_UNITS"]
 
 #: Display unit -> its size in SI (the only conversions the help and messages need).
@@ -303,6 +304,7 @@ QUANTITIES: dict[str, FieldSpec] = {
     "slip_target": _q("length", "m", "95 % half-width wanted of the slip length", hi=1e-6, display="nm", **_POS),
     "max_steps": _q("integer", "", "solver step budget", 1, 1e9),
     # probe calibration (issue 34; docs/calibration.md): thermal noise, Sader, InvOLS
+    # one default room temperature for every kT (afmforce.constants.DEFAULT_TEMPERATURE: why 295 K)
     "temperature": _q("temperature", "K", "temperature of the lever and its medium", 1.0, 1000.0),
     # the factors of the literature lie in 0.76-1.1 (Butt & Jaschke 1995: 0.817, 0.971; Hutter 2005:
     # 0.764-1.09); (0, 2] let chi = 1e-30 print k = 5e-29 mN/m as a calibration
@@ -370,6 +372,16 @@ ANALYSIS_CHOICES: dict[str, ChoiceSpec] = {
 }
 
 
+#: Quantity options of ``afmforce analyze``, by their destination (``file_timeout``), that have no control in
+#: the web's analyse view, each with the reason. Every other quantity option of ``analyze`` is a web control
+#: of the same name and range (a probe field, a step's option): tests/cli/test_faces_walk_declarations.py
+#: walks the parser against this set.
+ANALYZE_CLI_ONLY: dict[str, str] = {
+    "file_timeout": "a budget of the command's own batch run (reading one file); the web bounds its requests "
+                    "by its own limits (afmforce.web.limits: upload size, curves, analysis time)",
+}
+
+
 def qfield(name: str, default: Any = dataclasses.MISSING) -> Any:
     """A dataclass field carrying the metadata of :data:`QUANTITIES` ``[name]``."""
     return dataclasses.field(default=default, metadata=_meta_of(QUANTITIES[name]))
@@ -420,4 +432,8 @@ def ranges_markdown() -> str:
     lines = ["| name | meaning | SI unit | valid range |", "|---|---|---|---|"]
     for name, s in QUANTITIES.items():
         lines.append(f"| `{name}` | {s.help} | {s.unit or '-'} | {s.range_text()} |")
+    lines += ["", f"The room temperature, the default of every `temperature` not given or stored in a file (the "
+              f"thermal calibration, the tethers' chain fits, the capillary and steric laws): "
+              f"{QUANTITIES['temperature'].show(DEFAULT_TEMPERATURE)} (`afmforce.constants.DEFAULT_TEMPERATURE`; "
+              f"the paper's measurements: {PAPER_ROOM_TEMPERATURE - 273.15:.1f} C)."]
     return "\n".join(lines)

@@ -18,9 +18,22 @@ HAMAKER = 5e-19
 Z0 = 0.35e-9
 #: Viscosity of air [Pa s] (paper, after eq 1).
 ETA_AIR = 1.8e-5
-#: Temperature used when none is given or stored [K] (22 C, a laboratory): the thermal calibration's kT and
-#: the tethers' worm-like-chain fits (afmforce.calibration.thermal, afmforce.analysis.wlc).
+#: The room temperature [K] (22 C, a laboratory), the one default of every kT when none is given or stored:
+#: the thermal calibration (afmforce.calibration.thermal, ``calibrate --temperature``), the tethers'
+#: worm-like-chain fits (afmforce.analysis.wlc), the simulation's capillary and steric laws
+#: (``simulate/fit/plan --temperature``, the web's simulation control). Why 295 K: the paper's own
+#: measurements were "in air ... at room temperature (22.7 C)" (section 3; 295.85 K), within 1 K of it, and it
+#: is what every calibration has reported since issue 34 (298.15 K would move each thermal k by 1.1 %). No
+#: law the paper reproduces takes a temperature (eqs 1-28: inertia, van der Waals, friction), so no paper
+#: number depends on it. Tabulated material data keep the temperature they were measured at
+#: (:data:`STANDARD_TEMPERATURE`).
 DEFAULT_TEMPERATURE = 295.0
+#: The paper's room temperature [K] (section 3: 22.7 C), for reference: its figures take no temperature.
+PAPER_ROOM_TEMPERATURE = 273.15 + 22.7
+#: 25 C [K]: the temperature of tabulated water data (relative permittivity 78.5, surface tension 0.072 N/m,
+#: molar volume 18.07 cm^3/mol), with which :func:`afmforce.forces.debye_length`'s default goes (the Debye
+#: length depends on eps T, nearly constant in water from 20 to 30 C).
+STANDARD_TEMPERATURE = 298.15
 
 #: Fig 1: simple spring with a colloid probe (section 2.1).
 FIG1 = dict(mass=1e-8, spring_constant=0.21, radius=100e-9, velocities=(10e-6, 5e-6, 1e-6))

@@ -14,7 +14,7 @@ import math
 import numpy as np
 from numpy.typing import ArrayLike
 
-from .constants import ETA_AIR, HAMAKER, Z0
+from .constants import ETA_AIR, HAMAKER, STANDARD_TEMPERATURE, Z0
 from .errors import ParameterError
 
 __all__ = [
@@ -254,7 +254,7 @@ def paper_radius(radius: ArrayLike, geometry: str = "sphere-sphere"):
     return _out(2.0 * np.asarray(effective_radius(radius, geometry)))
 
 
-def debye_length(ionic_strength: ArrayLike, permittivity: float = 78.5, temperature: float = 298.15):
+def debye_length(ionic_strength: ArrayLike, permittivity: float = 78.5, temperature: float = STANDARD_TEMPERATURE):
     """Debye length ``1/kappa = sqrt(eps eps0 kB T / (2 NA e^2 I))`` [m].
 
     Parameters

@@ -20,10 +20,11 @@ def test_calibration_fields_come_from_the_declarations(client):
     from afmforce.contact import INDENTATION_MODELS
 
     cal = {f["key"]: f for f in client.get("/api/schema").json()["calibration"]}
-    assert list(cal) == ["spring_constant", "sensitivity", "resonance_frequency", "radius", "indentation.model",
+    assert list(cal) == ["spring_constant", "sensitivity", "resonance_frequency", "radius", "theta0", "L0", "L1",
+                         "L2", "indentation.model",
                          "indentation.tip_radius", "indentation.half_angle", "indentation.poisson"]
     probe = {f.name: f.metadata["spec"] for f in dataclasses.fields(ProbeCalibration)}
-    for key in ("spring_constant", "sensitivity", "resonance_frequency", "radius"):
+    for key in probe:       # every field of the probe record (the API's probe=), the lever's geometry too
         assert cal[key]["via"] == "probe" and cal[key]["range"] == probe[key].range_text()
     assert cal["sensitivity"]["shown"] == "nm/V" and cal["sensitivity"]["factor"] == pytest.approx(1e-9)
     model = cal["indentation.model"]

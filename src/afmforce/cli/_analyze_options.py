@@ -6,7 +6,7 @@ import argparse
 
 from ..errors import ParameterError
 
-__all__ = ["default", "option_names", "step_options"]
+__all__ = ["default", "option_names", "step_options", "OPTION_FLAGS"]
 
 
 def default(step: str, name: str):
@@ -27,7 +27,7 @@ def option_names() -> str:
 
 
 #: Dedicated flags that set a step option: dest -> (step, option).
-_OPTION_FLAGS = {"contact_separation": ("zero", "contact_separation"), "calibration": ("calibration", "source"),
+OPTION_FLAGS = {"contact_separation": ("zero", "contact_separation"), "calibration": ("calibration", "source"),
                  "indentation_model": ("indentation", "model"), "tip_radius": ("indentation", "tip_radius"),
                  "half_angle": ("indentation", "half_angle"), "poisson": ("indentation", "poisson"),
                  "medium": ("liquid", "medium"), "permittivity": ("liquid", "permittivity"),
@@ -51,7 +51,7 @@ def step_options(args: argparse.Namespace) -> tuple:
         if name in given.setdefault(step, {}):
             raise ParameterError(f"--option {step}.{name} given twice")
         given[step][name] = value
-    for dest, (step, name) in _OPTION_FLAGS.items():
+    for dest, (step, name) in OPTION_FLAGS.items():
         value = getattr(args, dest)
         if value is None:
             continue
@@ -61,7 +61,7 @@ def step_options(args: argparse.Namespace) -> tuple:
         given.setdefault(step, {})[name] = value
     records = tuple(OPTIONS[step](**values) for step, values in given.items())
     check_beam(args.L0, args.L1, args.L2)   # as the record does, naming the flags
-    probe = ProbeCalibration(**{k: getattr(args, k) for k in ("radius", "spring_constant", "theta0", "sensitivity",
-                                                              "resonance_frequency", "L0", "L1", "L2")})
+    import dataclasses      # every field of the probe record is a flag of the same name (as the web's probe controls)
+    probe = ProbeCalibration(**{f.name: getattr(args, f.name) for f in dataclasses.fields(ProbeCalibration)})
     resolve_options(records, probe)  # what only the registries know (a contact point method's name)
     return records, probe

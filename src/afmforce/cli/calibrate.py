@@ -48,7 +48,7 @@ def register(sub) -> None:
                    "(frequency in Hz, spectrum)")
     t.add_argument("--example", default=None, metavar="NAME",
                    help="a shipped spectrum instead of FILE: virtual-air (simulated), jpk-water (real)")
-    add_field(t, "temperature", help="temperature (default: the file's, else 295 K)")
+    add_field(t, "temperature", help=f"temperature (default: the file's, else the room, {DEFAULT_TEMPERATURE:g} K)")
     add_field(t, "sensitivity", flag="--invols", help="InvOLS for a spectrum in V^2/Hz (default: the file's)")
     add_field(t, "equipartition_correction", flag="--correction",
               help="chi of k = chi kB T/<z^2> (default: the file's, else 0.817, Butt & Jaschke)")
@@ -180,7 +180,8 @@ def run_thermal(args: argparse.Namespace) -> int:
         sources[name] = f"default ({what})"
         return default
 
-    temperature = pick("temperature", args.temperature, sp.temperature, DEFAULT_TEMPERATURE, "295 K")
+    temperature = pick("temperature", args.temperature, sp.temperature, DEFAULT_TEMPERATURE,
+                       f"{DEFAULT_TEMPERATURE:g} K, the room")
     correction = pick("correction", args.equipartition_correction, sp.correction, BUTT_JASCHKE,
                       "0.817, Butt & Jaschke: optical lever, static InvOLS")
     tilt = pick("tilt", args.lever_tilt, sp.tilt, 0.0, "no tilt")

@@ -23,13 +23,14 @@ import math
 
 import numpy as np
 
+from ..constants import DEFAULT_TEMPERATURE  # the one room temperature (295 K)
 from ._record import LawParameter, SurfaceLaw
 
 #: Molar volume of liquid water at 25 C [m^3/mol]; the molar gas constant [J/(mol K)] (exact).
 V_WATER, R_GAS = 18.07e-6, 8.314462618
 
 
-def kelvin_radius(relative_humidity, surface_tension: float = 0.072, temperature: float = 298.15):
+def kelvin_radius(relative_humidity, surface_tension: float = 0.072, temperature: float = DEFAULT_TEMPERATURE):
     """Kelvin radius ``r_K = gamma V_m / (R_g T |ln RH|)`` of a water meniscus [m]."""
     rh = np.asarray(relative_humidity, dtype=float)
     return surface_tension * V_WATER / (R_GAS * temperature * np.abs(np.log(rh)))
@@ -37,7 +38,7 @@ def kelvin_radius(relative_humidity, surface_tension: float = 0.072, temperature
 
 def capillary_force(h, radius_eff: float, relative_humidity: float, surface_tension: float = 0.072,
                     contact_angle: float = 0.0, contact_angle_2: float = 0.0,
-                    temperature: float = 298.15):
+                    temperature: float = DEFAULT_TEMPERATURE):
     """Capillary force of an equilibrium water meniscus, sphere-flat (Derjaguin radius) [N].
 
     Negative (attractive) below ``d_c = r_K (cos theta1 + cos theta2)``, zero beyond.
@@ -102,7 +103,7 @@ LAW = SurfaceLaw(
                 LawParameter("surface_tension", 0.072),
                 LawParameter("contact_angle", 0.0, fit=(0.5, 0.01, 1e-4)),
                 LawParameter("contact_angle_2", 0.0),
-                LawParameter("temperature", 298.15)),
+                LawParameter("temperature", DEFAULT_TEMPERATURE)),
     force=_force,
     active=_active,
     pack=_pack,

@@ -19,11 +19,12 @@ import math
 import numpy as np
 
 from ..forces import KB
+from ..constants import DEFAULT_TEMPERATURE  # the one room temperature (295 K)
 from ._record import LawParameter, SurfaceLaw
 
 
 def brush_force(h, radius_eff: float, brush_length: float, brush_spacing: float,
-                temperature: float = 298.15):
+                temperature: float = DEFAULT_TEMPERATURE):
     """Alexander-de Gennes brush force ``50 kT R L0 s^-3 exp(-2 pi h/L0)`` [N] (repulsive).
 
     Parameters
@@ -66,7 +67,7 @@ LAW = SurfaceLaw(
     title="polymer brushes, Alexander-de Gennes (exponential form of Butt et al. 1999)",
     parameters=(LawParameter("brush_length", 0.0, fit=(1e-8, 0.01, 1e-11)),
                 LawParameter("brush_spacing", 5e-9, fit=(5e-9, 0.01, 1e-12)),
-                LawParameter("temperature", 298.15)),
+                LawParameter("temperature", DEFAULT_TEMPERATURE)),
     force=_force,
     active=lambda v: v["brush_length"] > 0.0,
     pack=_pack,

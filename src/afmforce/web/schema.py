@@ -108,30 +108,45 @@ def contact_model_field(spec: FieldSpec | None, default: Any) -> dict[str, Any]:
     return d
 
 
-#: The probe's calibration the analyse view shows first: ProbeCalibration fields (sent as ``probe``),
-#: then the indentation step's geometry and sample (sent as options). Result keys: the values the
-#: analysis used, shown beside each field.
-CALIBRATION = (("probe", "spring_constant", ("spring_constant",)),
-               ("probe", "sensitivity", ("sensitivity", "sensitivity_used")),
-               ("probe", "resonance_frequency", ("resonance_frequency",)), ("probe", "radius", ()),
-               ("option", "indentation.model", ("indentation_model",)), ("option", "indentation.tip_radius", ()),
-               ("option", "indentation.half_angle", ()), ("option", "indentation.poisson", ()))
+#: The probe's controls the analyse view shows first: every :class:`~afmforce.analysis.options.ProbeCalibration`
+#: field (sent as ``probe``, as ``afmforce analyze --spring-constant ... --theta0 ... --L0``), in this order
+#: and then any other field the record declares; then the indentation step's geometry and sample (sent as
+#: options). ``PROBE_SHOWS``: the result keys of the values the analysis used, shown beside a field.
+PROBE_FIRST = ("spring_constant", "sensitivity", "resonance_frequency", "radius", "theta0", "L0", "L1", "L2")
+PROBE_SHOWS = {"spring_constant": ("spring_constant",), "sensitivity": ("sensitivity", "sensitivity_used"),
+               "resonance_frequency": ("resonance_frequency",)}
+OPTIONS_SHOWN = (("indentation.model", ("indentation_model",)), ("indentation.tip_radius", ()),
+                 ("indentation.half_angle", ()), ("indentation.poisson", ()))
+
+
+def _calibration_rows() -> tuple[tuple[str, str, tuple[str, ...]], ...]:
+    from ..analysis.options import ProbeCalibration
+
+    names = [f.name for f in dataclasses.fields(ProbeCalibration) if f.metadata.get("spec") is not None]
+    ordered = [n for n in PROBE_FIRST if n in names] + [n for n in names if n not in PROBE_FIRST]
+    return tuple(("probe", n, PROBE_SHOWS.get(n, ())) for n in ordered) + \
+        tuple(("option", key, shows) for key, shows in OPTIONS_SHOWN)
 
 
 @lru_cache(maxsize=1)
 def calibration_fields() -> list[dict[str, Any]]:
     """The calibration and probe controls of the analyse view: spring constant k, sensitivity
-    (InvOLS, nm/V), resonance frequency, sphere radius (:class:`~afmforce.analysis.options.ProbeCalibration`,
-    ``via: probe``), the indentation model, tip radius, half angle and Poisson ratio (options of the
-    ``indentation`` step, ``via: option``). ``shows``: result keys of the values the analysis used."""
+    (InvOLS, nm/V), resonance frequency, sphere radius, the inclined cantilever's inclination theta0 and
+    lengths L0, L1, L2 (every :class:`~afmforce.analysis.options.ProbeCalibration` field, ``via: probe``),
+    the indentation model, tip radius, half angle and Poisson ratio (options of the ``indentation`` step,
+    ``via: option``). ``shows``: result keys of the values the analysis used."""
     from ..analysis.options import ProbeCalibration
 
     probe = {f.name: f for f in dataclasses.fields(ProbeCalibration)}
+    simulated = {f["name"]: f for f in simulation_fields()}
     out = []
-    for via, key, shows in CALIBRATION:
+    for via, key, shows in _calibration_rows():
         if via == "probe":
             f = probe[key]
             d = field_json(key, f.metadata["spec"], None)
+            same = simulated.get(key)       # shown in the unit of the simulation's control (the beam in um)
+            if same is not None and same["unit"] == d["unit"]:
+                d.update(shown=same["shown"], factor=same["factor"])
         else:
             step, name = key.split(".")
             d = dict(next(o for o in analysis_options()[step] if o["name"] == name))

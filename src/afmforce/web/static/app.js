@@ -541,7 +541,7 @@ function buildCalibration() {
       c.dataset.probe = f.name; AN.probe.push({ f, box: c });
     }
     c.dataset.shows = f.shows.join(",");
-    c.querySelector(".name").textContent = { spring_constant: "spring constant k", sensitivity: "sensitivity (InvOLS)", resonance_frequency: "resonance frequency", radius: "sphere radius R (vdW, adhesion)", "indentation.model": "indentation model", "indentation.tip_radius": "tip radius", "indentation.half_angle": "tip half angle", "indentation.poisson": "Poisson ratio of the sample" }[f.key] || f.name;
+    c.querySelector(".name").textContent = { spring_constant: "spring constant k", sensitivity: "sensitivity (InvOLS)", resonance_frequency: "resonance frequency", radius: "sphere radius R (vdW, adhesion)", theta0: "inclination θ0 (k tilt-corrected, eq 13/14)", L0: "beam length L0", L1: "rigid base L1", L2: "rigid probe L2", "indentation.model": "indentation model", "indentation.tip_radius": "tip radius", "indentation.half_angle": "tip half angle", "indentation.poisson": "Poisson ratio of the sample" }[f.key] || f.name;
     c.append(el("div", { class: "used muted" }));
     box.append(c);
   }
