@@ -151,6 +151,9 @@ def landing_samples(z: np.ndarray, y: np.ndarray, m0: int, sigma: float, fs: flo
 RISE_NSIGMA = 4.0
 #: At most this many samples before the jump-in are taken to its rise (:func:`rise_samples`).
 RISE_MAX = 20
+#: The noise :func:`rise_samples` assumes at least [m]: the model's default absolute tolerance
+#: (``SimulationConfig.atol``); noise-free curves (the plan's, ``afmforce.fit.plan``) bend by more.
+RISE_SIGMA_FLOOR = 1e-12
 
 
 def rise_samples(y: np.ndarray, first: int, sigma: float) -> int:
@@ -166,7 +169,7 @@ def rise_samples(y: np.ndarray, first: int, sigma: float) -> int:
     to 0.4 % and moved it 2-8 %. The smooth attraction before it (steps larger than the noise on
     a quiet detector, bends within it) stays in the fit.
     """
-    lim = RISE_NSIGMA * math.sqrt(6.0) * sigma
+    lim = RISE_NSIGMA * math.sqrt(6.0) * max(sigma, RISE_SIGMA_FLOOR)
     k = int(first)
     while k - 3 >= 0 and first - k < RISE_MAX and abs(y[k - 1] - 2 * y[k - 2] + y[k - 3]) > lim:
         k -= 1
