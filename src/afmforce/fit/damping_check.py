@@ -61,7 +61,8 @@ def damping_check(prob: Problem, x: np.ndarray, nested: dict, level: float, s2: 
             "no_friction") is None:
         return None
     ev = Evaluator(prob.ev.curves, base.replace(quality_factor=CHECK_QUALITY_FACTOR),
-                   prob.ev.kind, prob.ev.drift, prob.ev.fringes, prob.ev.fringe_period)
+                   prob.ev.kind, prob.ev.drift, prob.ev.fringes, prob.ev.fringe_period,
+                   prob.ev.curvature)
     ev.threads = prob.ev.threads
     full = Problem(ev, prob.free, prob.fixed)
     xf, _ = local_fit(full, np.asarray(x, float), max_nfev)

@@ -143,6 +143,9 @@ class FitResult:
     #: interference fringes in the baseline: ``mode`` used, ``period`` [m], ``amplitude`` and
     #: ``amplitude_stderr`` [m] of the shared periodic fringes (issue 23; fit.model.Evaluator)
     fringes: dict = field(default_factory=dict)
+    #: the photodiode's curved response ``d + q d^2``: ``curvature`` q [1/m] and
+    #: ``curvature_stderr`` (None: not fitted; fit.model.Evaluator ``curvature``)
+    photodiode: dict = field(default_factory=dict)
     _problem: object = field(default=None, repr=False, compare=False)
     _x: object = field(default=None, repr=False, compare=False)
 
@@ -195,6 +198,7 @@ class FitResult:
             "config": self.config,
             "adequacy": dict(self.adequacy),
             "fringes": dict(self.fringes),
+            "photodiode": dict(self.photodiode),
             "verdict": None if self.comparison is None else self.comparison.verdict,
         }
         return d

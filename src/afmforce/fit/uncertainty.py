@@ -208,7 +208,7 @@ def fit_nested(prob: Problem, x: np.ndarray, curves, base, drift: bool, max_nfev
     if free_s:   # static: no inertia, drainage or friction; only the speed-independent parameters
         ev_s = Evaluator(curves, base.replace(**{k: v for k, v in values.items()
                                                  if k not in SPEED_DEPENDENT}), "static", drift,
-                         prob.ev.fringes, prob.ev.fringe_period)
+                         prob.ev.fringes, prob.ev.fringe_period, prob.ev.curvature)
         ps = Problem(ev_s, free_s)
         xs, _ = local_fit(ps, ps.pack(values, shifts), max_nfev)
         out["static"] = (ps.chi2(xs), len(xs) + n_lin)

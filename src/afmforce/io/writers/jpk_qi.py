@@ -24,6 +24,7 @@ steps; the curve's ``piezo_measured`` when it has one). Curve ``i`` is grid cell
 
 from __future__ import annotations
 
+import math
 import os
 import time as _time
 import zipfile
@@ -70,10 +71,33 @@ def _encode(values: np.ndarray, step: float, where: str) -> bytes:
     return ints.astype(">i4").tobytes()
 
 
-def _settings(prefix: str, n: tuple[int, int], durations: tuple[float, float], ramp: float) -> dict[str, Any]:
+def _ramps(curve: RawCurve, r, durations: tuple[float, float]) -> tuple[float, float]:
+    """The extend's and the retract's ramp lengths ``z-start - z-end`` [m]: a reader takes a run's
+    speed as its ramp over its duration, so the ramp is the speed simulated (the curve's
+    ``velocity``, ``retract_velocity``; the approach's where the retract has none) times the
+    duration; a curve without speeds: the run's own, ``ptp(z) (n / (n - 1))`` (its travel over
+    its sample-to-sample time). Before, both runs carried the approach's travel: the retract's
+    speed read back 4x too low on the default drive (60 nm in, 250 nm out)."""
+    md = curve.metadata or {}
+    out = []
+    for j, key in enumerate(("velocity", "retract_velocity")):
+        v = md.get(key, md.get("velocity") if j else None)
+        try:
+            v = float(v) if v is not None else math.nan
+        except (TypeError, ValueError):
+            v = math.nan
+        z = r.z[j]
+        out.append(v * durations[j] if math.isfinite(v) and v > 0
+                   else float(np.ptp(z)) * z.size / max(z.size - 1, 1))
+    return out[0], out[1]
+
+
+def _settings(prefix: str, n: tuple[int, int], durations: tuple[float, float],
+              ramp: tuple[float, float]) -> dict[str, Any]:
     out: dict[str, Any] = {}
-    for run, style, kind, npts, dur in (("extend", "extend", "z-extend-force", n[0], durations[0]),
-                                        ("retract", "retract", "z-retract-height", n[1], durations[1])):
+    for run, style, kind, npts, dur, ramp in (
+            ("extend", "extend", "z-extend-force", n[0], durations[0], ramp[0]),
+            ("retract", "retract", "z-retract-height", n[1], durations[1], ramp[1])):
         p = f"{prefix}{run}."
         out.update({p + "type": kind, p + "identifier.type": "standard", p + "identifier.name": f"{run}-spm",
                     p + "style": style, p + "duration": dur, p + "num-points": npts, p + "z-start": ramp,
@@ -86,11 +110,12 @@ def _stamp(t: float) -> str:
     return _time.strftime("%Y-%m-%d %H:%M:%S", _time.gmtime(t)) + f".{int(t % 1 * 1000):03d} +0000"
 
 
-def _shared(k: float, sens: float, n: tuple[int, int], durations: tuple[float, float], ramp: float,
-            approach: str) -> dict:
+def _shared(k: float, sens: float, n: tuple[int, int], durations: tuple[float, float],
+            ramps: tuple[float, float], approach: str) -> dict:
     out: dict[str, Any] = {"force-segment-header-infos.count": 2, "lcd-infos.count": 3}
-    for j, (run, kind, npts, dur) in enumerate((("extend", "z-extend-force", n[0], durations[0]),
-                                                ("retract", "z-retract-height", n[1], durations[1]))):
+    for j, (run, kind, npts, dur, ramp) in enumerate((
+            ("extend", "z-extend-force", n[0], durations[0], ramps[0]),
+            ("retract", "z-retract-height", n[1], durations[1], ramps[1]))):
         p = f"force-segment-header-info.{j}."
         out.update({p + "type": "spm-force-segment-header", p + "approach-id": approach, p + "name.type": "standard",
                     p + "name.name": f"{run}-spm", p + "settings.type": "combined", p + "settings.style": run,
@@ -178,7 +203,7 @@ def write_jpk_qi(curves: Iterable[RawCurve], path: str | os.PathLike, *, shape: 
                 k, sens = calibration(curve, {"spring_constant": spring_constant, "sensitivity": sensitivity},
                                       where)
                 durations = (duration(r.time[0]), duration(r.time[1]))
-                ramp = float(np.ptp(r.z[0]))
+                ramp = _ramps(curve, r, durations)
                 head = n
                 gen = {"jpk-data-file": "spm-quantitative-image-data-file", "file-format-version": "2.0",
                        "type": "quantitative-imaging-map", "quantitative-imaging-map.indexes.type": "range",
