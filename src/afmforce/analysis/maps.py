@@ -235,7 +235,16 @@ def _grid_fit(rows, ix: np.ndarray, iy: np.ndarray):
     off = np.hypot(px[ok] - a @ [cx[n] for n in names], py[ok] - a @ [cy[n] for n in names])
     if max(abs(c) for c in cross) > GRID_TOLERANCE * step or off.max() > GRID_TOLERANCE * step:
         return None
-    return [(float(cx["origin"]), float(dx)), (float(cy["origin"]), float(dy))]
+    # on the grid: each axis from its own index alone (a column's place is the line through every row's
+    # positions of it, as the image draws it: no cross term, which the check above found within tolerance)
+    axes = []
+    for v, idx, m in ((px[ok], i, many[0]), (py[ok], j, many[1])):
+        if not m:
+            axes.append((math.nan, math.nan))
+            continue
+        o, d = np.linalg.lstsq(np.column_stack((np.ones_like(idx), idx)), v, rcond=None)[0]
+        axes.append((float(o), float(d)))
+    return axes
 
 
 @dataclass(frozen=True)

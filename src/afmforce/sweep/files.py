@@ -287,9 +287,9 @@ class CurveAnalysis:
                 except AfmforceError as exc:
                     if isinstance(exc, OutputExistsError):
                         raise
-                    from .map_fast import _place
+                    from .summary import pixel_place
 
-                    rows.append({**_place(curve.metadata, display_path(ref.path), int(index)),
+                    rows.append({**pixel_place(curve.metadata, display_path(ref.path), int(index)),
                                  "name": f"{display_path(base)}#{index}", **error_record(exc)})
                 continue
             try:  # one of a file's many curves: its failure is its own row, the others are kept

@@ -31,6 +31,7 @@ from typing import Any, Iterable
 
 import numpy as np
 
+from .summary import pixel_place
 from ..analysis.indentation import fast_modulus
 from ..analysis.options import IndentationOptions, ProbeCalibration
 from ..errors import AfmforceError, AnalysisError, ParameterError
@@ -99,7 +100,7 @@ class PixelAnalysis:
         except AfmforceError as exc:    # refused (no contact, bad calibration...): the pixel keeps its place
             from .batch import error_record
 
-            return {**_place(curve.metadata, file, index), **error_record(exc)}
+            return {**pixel_place(curve.metadata, file, index), **error_record(exc)}
 
     def row(self, curve, *, file: str = "", index: int = -1) -> dict[str, Any]:
         """The pixel's numbers (:data:`PIXEL_COLUMNS`) and its place in the map (raises what the fit
@@ -132,7 +133,7 @@ class PixelAnalysis:
             adhesion = min(dip, 0.0)
         radius = fit.tip_radius
         factor = ADHESION_MODELS[self.adhesion_model] / radius if radius > 0 else math.nan
-        row: dict[str, Any] = _place(md, file, index)
+        row: dict[str, Any] = pixel_place(md, file, index)
         row.update(
             youngs_modulus=fit.youngs_modulus, youngs_modulus_se=fit.youngs_modulus_se,
             youngs_modulus_low=fit.youngs_modulus_low, youngs_modulus_high=fit.youngs_modulus_high,
@@ -144,23 +145,6 @@ class PixelAnalysis:
             adhesion_model=self.adhesion_model, indentation_model=fit.model,
             warnings=" | ".join(pixel_warnings(self.indentation, fit, k)))
         return row
-
-
-def _place(md, file: str, index: int) -> dict[str, Any]:
-    """A pixel's place: its name, file, curve, grid cell and size, position [m] (NaN: not recorded)."""
-    from .summary import _grid, _grid_size
-
-    mx, my, nx, ny = _grid(md)
-    width, height = _grid_size(md) if mx >= 0 else (math.nan, math.nan)
-    place: dict[str, Any] = {"name": f"{os.path.basename(file)}#{index}", "file": file, "curve": index,
-                             "map_x": mx, "map_y": my, "map_nx": nx, "map_ny": ny, "map_width": width,
-                             "map_height": height}
-    for axis in ("position_x", "position_y"):
-        try:
-            place[axis] = float(md.get(axis, math.nan))
-        except (TypeError, ValueError):
-            place[axis] = math.nan
-    return place
 
 
 def pixel_warnings(options: IndentationOptions, fit, k: float) -> list[str]:

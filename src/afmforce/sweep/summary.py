@@ -243,3 +243,18 @@ def failure_records(result: BatchResult) -> list[dict[str, str]]:
 def failures(result: BatchResult) -> list[tuple[str, str]]:
     """``(item name, error)`` of every item that failed (see :func:`failure_records`)."""
     return [(r["source"], r["error"]) for r in failure_records(result)]
+
+
+def pixel_place(md, file: str, index: int) -> dict[str, Any]:
+    """A pixel's place: its name, file, curve, grid cell and size, position [m] (NaN: not recorded)."""
+    mx, my, nx, ny = _grid(md)
+    width, height = _grid_size(md) if mx >= 0 else (math.nan, math.nan)
+    place: dict[str, Any] = {"name": f"{os.path.basename(file)}#{index}", "file": file, "curve": index,
+                             "map_x": mx, "map_y": my, "map_nx": nx, "map_ny": ny, "map_width": width,
+                             "map_height": height}
+    for axis in ("position_x", "position_y"):
+        try:
+            place[axis] = float(md.get(axis, math.nan))
+        except (TypeError, ValueError):
+            place[axis] = math.nan
+    return place
