@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import os
+import shutil
 import socket
 import threading
 import time
+from pathlib import Path
 
 import pytest
 
@@ -90,3 +92,35 @@ def worker_processes() -> int:
 def workers():
     """``workers() -> int``: the worker processes alive under this test process now."""
     return worker_processes
+
+
+#: Debian's headless Chromium of the page tests
+CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+
+
+@pytest.fixture(scope="module")
+def page(live_server, tmp_path_factory):
+    """A headless Chromium page on the live server, ready (``body[data-ready='1']``), its script errors in
+    ``page.errors``. Skipped without playwright or chromium (failed where ``AFMFORCE_REQUIRE_E2E=1``)."""
+    try:
+        from playwright.sync_api import sync_playwright
+    except ImportError:
+        why = "playwright is not installed"
+    else:
+        why = None if Path(CHROMIUM).exists() else "Debian's chromium is not installed"
+    if why:
+        if os.environ.get("AFMFORCE_REQUIRE_E2E") == "1":
+            pytest.fail(why)
+        pytest.skip(why)
+    with sync_playwright() as p:
+        ctx = p.chromium.launch_persistent_context(
+            str(tmp_path_factory.mktemp("chromium-profile")), executable_path=CHROMIUM, headless=True,
+            args=["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
+                  "--disable-component-update", "--disable-sync"], viewport={"width": 1400, "height": 900})
+        pg = ctx.new_page()
+        pg.errors = []
+        pg.on("pageerror", lambda e: pg.errors.append(str(e)))
+        pg.goto(live_server)
+        pg.wait_for_selector("body[data-ready='1']", timeout=30_000)
+        yield pg
+        ctx.close()

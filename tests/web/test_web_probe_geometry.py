@@ -15,10 +15,7 @@ import functools
 import io
 import json
 import math
-import os
-import shutil
 from contextlib import redirect_stdout
-from pathlib import Path
 
 import pytest
 
@@ -96,33 +93,7 @@ def test_out_of_range_geometry_is_refused_naming_the_field(client, real, text, n
 
 
 # ---- the page: the controls are listed and their values sent --------------------------------------------
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-
-
-@pytest.fixture(scope="module")
-def page(live_server, tmp_path_factory):
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        why = "playwright is not installed"
-    else:
-        why = None if Path(CHROMIUM).exists() else "Debian's chromium is not installed"
-    if why:
-        if os.environ.get("AFMFORCE_REQUIRE_E2E") == "1":
-            pytest.fail(why)
-        pytest.skip(why)
-    with sync_playwright() as p:
-        ctx = p.chromium.launch_persistent_context(
-            str(tmp_path_factory.mktemp("chromium-probe")), executable_path=CHROMIUM, headless=True,
-            args=["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-                  "--disable-component-update", "--disable-sync"], viewport={"width": 1400, "height": 900})
-        pg = ctx.new_page()
-        pg.errors = []
-        pg.on("pageerror", lambda e: pg.errors.append(str(e)))
-        pg.goto(live_server)
-        pg.wait_for_selector("body[data-ready='1']", timeout=30_000)
-        yield pg
-        ctx.close()
+# the `page` fixture: tests/web/conftest.py (headless Chromium on the live server)
 
 
 def test_the_page_sends_theta0_and_shows_the_clis_answer(page, real):
