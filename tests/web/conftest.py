@@ -94,29 +94,38 @@ def workers():
     return worker_processes
 
 
-#: Debian's headless Chromium of the page tests
+#: Debian's headless Chromium of the page tests (tests/web/test_web_e2e.py and the control tests), its flags
 CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
+CHROMIUM_ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+                 "--disable-background-networking", "--disable-component-update", "--disable-sync"]
+
+
+def _browser_missing() -> str | None:
+    try:
+        import playwright.sync_api  # noqa: F401
+    except ImportError:
+        return "playwright is not installed (pip install playwright)"
+    if not Path(CHROMIUM).exists():
+        return "Debian's chromium is not installed (apt-get install -y chromium)"
+    return None
 
 
 @pytest.fixture(scope="module")
 def page(live_server, tmp_path_factory):
     """A headless Chromium page on the live server, ready (``body[data-ready='1']``), its script errors in
-    ``page.errors``. Skipped without playwright or chromium (failed where ``AFMFORCE_REQUIRE_E2E=1``)."""
-    try:
-        from playwright.sync_api import sync_playwright
-    except ImportError:
-        why = "playwright is not installed"
-    else:
-        why = None if Path(CHROMIUM).exists() else "Debian's chromium is not installed"
+    ``page.errors``. Skipped without playwright or chromium (failed where ``AFMFORCE_REQUIRE_E2E=1``, as
+    ``.ci/run`` sets it)."""
+    why = _browser_missing()
     if why:
         if os.environ.get("AFMFORCE_REQUIRE_E2E") == "1":
             pytest.fail(why)
         pytest.skip(why)
+    from playwright.sync_api import sync_playwright
+
     with sync_playwright() as p:
-        ctx = p.chromium.launch_persistent_context(
-            str(tmp_path_factory.mktemp("chromium-profile")), executable_path=CHROMIUM, headless=True,
-            args=["--headless", "--no-sandbox", "--disable-gpu", "--no-first-run", "--disable-background-networking",
-                  "--disable-component-update", "--disable-sync"], viewport={"width": 1400, "height": 900})
+        ctx = p.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
+                                                   executable_path=CHROMIUM, args=CHROMIUM_ARGS, headless=True,
+                                                   viewport={"width": 1400, "height": 900})
         pg = ctx.new_page()
         pg.errors = []
         pg.on("pageerror", lambda e: pg.errors.append(str(e)))

@@ -11,48 +11,13 @@ from __future__ import annotations
 import io
 import json
 import os
-import shutil
 import time
 from contextlib import redirect_stdout
 from pathlib import Path
 
 import pytest
 
-CHROMIUM = shutil.which("chromium") or "/usr/bin/chromium"
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync"]
-
-
-def _missing() -> str | None:
-    try:
-        import playwright.sync_api  # noqa: F401
-    except ImportError:
-        return "playwright is not installed (pip install playwright)"
-    if not Path(CHROMIUM).exists():
-        return "Debian's chromium is not installed (apt-get install -y chromium)"
-    return None
-
-
-@pytest.fixture(scope="module")
-def page(live_server, tmp_path_factory):
-    why = _missing()
-    if why:
-        if os.environ.get("AFMFORCE_REQUIRE_E2E") == "1":
-            pytest.fail(why)
-        pytest.skip(why)
-    from playwright.sync_api import sync_playwright
-
-    with sync_playwright() as p:
-        ctx = p.chromium.launch_persistent_context(str(tmp_path_factory.mktemp("chromium-profile")),
-                                                   executable_path=CHROMIUM, args=ARGS, headless=True,
-                                                   viewport={"width": 1400, "height": 900})
-        pg = ctx.new_page()
-        pg.errors = []
-        pg.on("pageerror", lambda e: pg.errors.append(str(e)))
-        pg.goto(live_server)
-        pg.wait_for_selector("body[data-ready='1']", timeout=30_000)
-        yield pg
-        ctx.close()
+# the `page` fixture (headless Chromium on the live server): tests/web/conftest.py
 
 
 def _shot(page, name: str) -> None:
