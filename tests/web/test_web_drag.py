@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from test_web_e2e import page  # noqa: F401  (the module's browser page on a live server)
+# the `page` fixture (headless Chromium on a live server): tests/web/conftest.py
 
 DATA = Path(__file__).resolve().parents[1] / "data"
 
