@@ -12,7 +12,7 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -184,8 +184,8 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
             step, name, value = parse_option(text, where="option")
         except ParameterError as exc:
             raise FieldError(f"option.{str(text).partition('=')[0].strip()[:60]}", str(exc)) from None
-        if name in given.setdefault(step, {}):
-            raise ParameterError(f"option {step}.{name} given twice")
+        if name in given.setdefault(step, {}):      # which one was meant: never the last silently
+            raise FieldError(f"option.{step}.{name}", f"option {step}.{name} given twice")   # the CLI's words
         given[step][name] = value
     records = []
     for step, values in given.items():     # the record's own checks (a model of the registry, ...)
@@ -249,7 +249,7 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
                  steps: Sequence[str] | None = None, format: str | None = None, channel: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
                  guard: bool = True, deadline: float | None = None,
-                 curves: Sequence[str] = ()) -> dict[str, Any]:
+                 curves: Sequence[str] = (), stop: Callable[[], bool] | None = None) -> dict[str, Any]:
     """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``; ``steps``: the
     analysis steps to run (their requirements added; None: all).
 
@@ -260,7 +260,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     failed; the reader runs in a forked child, :mod:`afmforce.io._guard`); files read before
     without failing are read here directly (``guard=False``). Past ``deadline`` (``time.monotonic``)
     the analysis stops after the curve it is on (:class:`~.replies.PastBudget`): a request that
-    timed out does not keep computing. With ``arrays``, the curves together carry at most
+    timed out does not keep computing; so it does once ``stop()`` is true (its client left,
+    :func:`~.compute.compute`). With ``arrays``, the curves together carry at most
     :data:`~.limits.ANALYSIS_POINTS` samples (``max_points`` is lowered for many curves).
     ``curves``: with ``arrays``, only these results (names as returned) get their arrays and raw
     signal, the first result when none of them is one (a page draws one curve of a map; the
@@ -296,6 +297,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     def on_curve(_progress) -> None:
         if deadline is not None and time.monotonic() > deadline:
             raise PastBudget(f"cancelled: the analysis ran past its budget of {budget:g} s")
+        if stop is not None and stop():
+            raise PastBudget("cancelled: the request ended before the analysis (its client left)")
 
     # chunks of up to 32 curves: each chunk is a table (a curve a chunk cost 1-2 s of pandas for a
     # 16 x 16 map); the budget is checked between chunks (a chunk: well under a second)

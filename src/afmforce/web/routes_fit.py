@@ -58,7 +58,13 @@ def fit(request: Request, body: FitRequest) -> dict:
         if name in truth:
             raise validate.FieldError(f"truth.{name}", f"truth.{name}: each virtual curve's {name} is set by "
                                       "velocities (sample rate: 2 samples per nm of travel); drop it from truth")
-    validate.build_config(truth, "truth.")     # names, ranges and their combination
+    cfg = validate.build_config(truth, "truth.")     # names, ranges and their combination
+    from ..fit.params import check_free
+
+    try:     # as `afmforce fit` before loading: a combination the model cannot fit, before a process starts
+        check_free(body.free, cfg.model, cfg.friction.law if cfg.model == "beam" else None)
+    except AfmforceError as exc:
+        raise validate.FieldError("free", str(exc)) from None
     twice = sorted({fid for fid in body.file_ids if body.file_ids.count(fid) > 1})
     if twice:       # one measurement twice counts as two (fit.data: the same samples are refused)
         raise validate.FieldError("file_ids", f"file_ids: {twice[0]} is listed twice; give each upload once")
