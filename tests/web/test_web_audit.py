@@ -272,3 +272,49 @@ def test_the_web_answers_what_the_cli_prints(make_client, tmp_path, family):
     assert len(folders) == 1 and next(iter(folders))[0] == "sessions", written      # one session's folder
     assert sum(p.stat().st_size for p in (tmp_path / "data").rglob("*") if p.is_file()
                and p.name not in ("index.json", "last-used")) == session["stored"] == src.stat().st_size
+
+
+# -- a force map declaring a million curves --------------------------------------------------------------
+def _forged_ardf(path: Path, nx: int, ny: int) -> Path:
+    """An ARDF map of one real curve whose every line pointer names its one line: ``nx`` x ``ny`` declared
+    curves in ~70 kB (tests/io/_ardf_build.py writes the real curve's records)."""
+    import importlib.util
+    import struct
+
+    spec = importlib.util.spec_from_file_location("_ardf_build", Path(__file__).parents[1] / "io" / "_ardf_build.py")
+    build = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(build)
+    data, note = build.source_curve()
+    cols = {c: data[:, j].astype(float) for j, c in enumerate(("Raw", "Defl", "ZSnsr"))}
+    build.write_ardf(path, [(0, 0, cols)], nx=nx, ny=ny, note=note, ends=(224, 1232, 1260))
+    raw = bytearray(path.read_bytes())
+    at = raw.index(b"VTOC") - 8
+    first = struct.unpack("<Q", raw[at + 64:at + 72])[0]       # line 0's pointer, given to every line
+    for j in range(struct.unpack("<I", raw[at + 24:at + 28])[0]):
+        raw[at + 32 + 40 * j + 32:at + 32 + 40 * j + 40] = struct.pack("<Q", first)
+    path.write_bytes(bytes(raw))
+    return path
+
+
+def test_a_map_declaring_a_million_curves_is_refused_before_any_is_read(make_client, tmp_path, monkeypatch):
+    """Before: a work item per declared curve (999,001, ~150 MB), then the analysis ran its whole budget
+    and answered 504 past_budget; now 422 naming the file, from the header's count, nothing analysed."""
+    from afmforce.io.ardf import count_curves
+    from afmforce.web import analysis
+    from afmforce.web.limits import ANALYSIS_CURVES
+
+    src = _forged_ardf(tmp_path / "forged.ARDF", 1000, 1000)
+    assert count_curves(src) == 999_001 > ANALYSIS_CURVES and src.stat().st_size < 100_000
+    calls = []
+    real = analysis.CachedAnalysis.__call__
+    monkeypatch.setattr(analysis.CachedAnalysis, "__call__", lambda self, ref: calls.append(ref) or real(self, ref))
+    client = make_client(request_budget=5.0)
+    err = _error(client.post("/api/analyze", data={"example": "asylum-air"},
+                             files={"file": ("forged.ARDF", src.read_bytes())}))
+    assert err["field"] == "file[0]" and "999,001 curves" in err["message"] and "afmforce analyze" in err["message"]
+    fid = client.get("/api/files").json()[0]["id"]
+    err = _error(client.post("/api/analyze", data={"example": "asylum-air", "file_id": fid}))
+    assert err["field"] == "file_id[0]"
+    err = _error(client.post("/api/fit", json={"file_ids": [fid]}))
+    assert err["field"] == "file_ids" and "999001 curves" in err["message"]
+    assert calls == []

@@ -18,7 +18,7 @@ import numpy as np
 
 from .._fields import spec_of
 from ..errors import ParameterError
-from .limits import ANALYSIS_POINTS
+from .limits import ANALYSIS_CURVES, ANALYSIS_POINTS
 from .replies import PastBudget
 from .plotdata import raw_arrays
 from .tasks import decimate
@@ -249,7 +249,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
                  steps: Sequence[str] | None = None, format: str | None = None, channel: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
                  guard: bool = True, deadline: float | None = None,
-                 curves: Sequence[str] = (), stop: Callable[[], bool] | None = None) -> dict[str, Any]:
+                 curves: Sequence[str] = (), stop: Callable[[], bool] | None = None,
+                 fields: Sequence[str] | None = None) -> dict[str, Any]:
     """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``; ``steps``: the
     analysis steps to run (their requirements added; None: all).
 
@@ -267,10 +268,12 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     signal, the first result when none of them is one (a page draws one curve of a map; the
     others are asked for when shown); empty: every result. ``arrays_for`` lists those sent.
     ``calibration``: ``(names, method, invols)`` of a probe calibration file (:func:`parse_inputs`).
-    ``channel``: the position channel, as ``--channel`` (:data:`afmforce._fields.ANALYSIS_CHOICES`;
+    ``fields``: how the request names each file (``file[0]``, ``file_id[1]``, ``example[0]``): files
+    holding more than :data:`~.limits.ANALYSIS_CURVES` curves together are refused naming it (FieldError,
+    before any curve is read). ``channel``: the position channel, as ``--channel`` (:data:`afmforce._fields.ANALYSIS_CHOICES`;
     None: its default).
     """
-    from ..sweep.files import analyze_files, plan_curves
+    from ..sweep.files import TooManyCurves, analyze_files, plan_curves
     from ..sweep.report import analysis_json
     from ..sweep.summary import summary_table
 
@@ -287,7 +290,16 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     rename.update({Path(p).name: name for p, name in files})
     rename.update(_channel_prefixes(files))
     timeout = budget if guard else None
-    refs = plan_curves([p for p, _ in files], format, timeout=timeout)
+    try:        # a map's curves counted from its header: never a work item per declared curve past the cap
+        refs = plan_curves([p for p, _ in files], format, timeout=timeout, max_curves=ANALYSIS_CURVES)
+    except TooManyCurves as exc:
+        where = [str(p) for p, _ in files].index(exc.path)
+        field = fields[where] if fields is not None and where < len(fields) else "file"
+        raise FieldError(field, f"{field} {files[where][1][:80]!r}: {exc.declared:,} curves"
+                         + (f" ({exc.total:,} with the files before it)" if exc.total > exc.declared else "")
+                         + f", more than the {ANALYSIS_CURVES:,} one request analyses (afmforce.limits."
+                         "SERVER_MAX_CURVES); analyse it with `afmforce analyze` (it streams a map of any "
+                         "size), or send fewer files") from None
     if arrays and not curves:     # the response's size cap
         max_points = max(10, min(max_points, ANALYSIS_POINTS // max(1, len(refs))))
     analysis = CachedAnalysis(steps=chosen, options=records, probe=probe_record, meta_override=override,

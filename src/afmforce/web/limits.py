@@ -9,7 +9,7 @@ before anything is computed.
 
 from __future__ import annotations
 
-__all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
+__all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "ANALYSIS_CURVES", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
            "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL", "SESSION_STORAGE", "SERVER_STORAGE", "MAX_JOBS", "MAX_SESSION_JOBS",
            "MAX_COMPUTING", "MAX_WAITING",
            "JOB_RECORD_BYTES", "FIT_RESULT_BYTES_PER_CURVE", "SWEEP_BYTES_PER_VALUE"]
@@ -20,6 +20,9 @@ from ..limits import SERVER_MAX_SAMPLES as MAX_SAMPLES  # noqa: E402
 RESPONSE_POINTS = 20_000
 #: Per-sample values (all curves together) one analysis response may carry with ``arrays``.
 ANALYSIS_POINTS = 2_000_000
+#: Curves one analysis request takes, its files together: the library's cap for a server
+#: (``afmforce.limits``), counted from the maps' headers before any curve is read.
+from ..limits import SERVER_MAX_CURVES as ANALYSIS_CURVES  # noqa: E402
 #: Samples of a raw file exported by the virtual AFM (about 100 bytes a row: 25 MB).
 RAW_SAMPLES = 250_000
 #: Runs one sweep may have (grid points times samples); ``afmforce sweep`` runs more.

@@ -85,15 +85,18 @@ async def analyze(request: Request,
     uploads = [(up.filename or "upload", await up.read()) for up in file]
     stored = sessions.save_all(session, uploads)   # all or none; 413 storage_full past the totals
     paths = [sessions.path(session, s["id"]) for s in stored]
+    fields = [f"file[{i}]" for i in range(len(stored))]     # how the request names each file
     for i, fid in enumerate(file_id):
         try:
             paths.append(sessions.path(session, fid))
         except ParameterError as exc:
             raise FieldError(f"file_id[{i}]", str(exc)) from None
+        fields.append(f"file_id[{i}]")
     for i, name in enumerate(example):
         if name not in DATASETS:
             raise FieldError(f"example[{i}]", f"example {name[:60]!r}: unknown; choose one of {', '.join(DATASETS)}")
         paths.append((example_path(name), name))
+        fields.append(f"example[{i}]")
     if not paths:
         raise FieldError("file", "give a file (field 'file'), an uploaded file's id ('file_id') or an example")
     await run_in_threadpool(wait_until_warm, request.app)    # the budget starts after the warm-up
@@ -103,7 +106,8 @@ async def analyze(request: Request,
         return run_analysis(paths, option, meta, probe, calibration=from_file, steps=step or None,
                             format=format, channel=channel, arrays=arrays, max_points=max_points,
                             budget=settings.request_budget, guard=guard,
-                            deadline=time.monotonic() + settings.request_budget, curves=curve, stop=stop.is_set)
+                            deadline=time.monotonic() + settings.request_budget, curves=curve, stop=stop.is_set,
+                            fields=fields)
 
     payload = await compute(request, work, settings.request_budget, "analysis")   # a slot of MAX_COMPUTING
     payload["files"] = stored + [{"id": fid, "name": sessions.path(session, fid)[1]} for fid in file_id]

@@ -184,13 +184,17 @@ def fit_curve_count(files: Iterable[Any], timeout: float | None = None,
     5) is read, bounded by ``timeout`` [s] as the first reading of an upload is (None: the file was
     read once already). Refused past the dynamic fit's cap (:data:`afmforce.fit.core.MAX_CURVES`)
     as ``file_ids``; a file that cannot be read (the job's fit would fail on it) as ``file_ids[i]``."""
-    from ..fit.core import check_curve_count
+    from ..fit.core import MAX_CURVES, check_curve_count
     from ..io import load
-    from ..sweep.files import plan_curves
+    from ..sweep.files import TooManyCurves, plan_curves
 
     n = 0
     for i, (path, name) in enumerate(files):
-        refs = plan_curves([path], timeout=timeout)
+        try:        # a map's header count past the cap: refused before a work item per declared curve is made
+            refs = plan_curves([path], timeout=timeout, max_curves=MAX_CURVES - n)
+        except TooManyCurves as exc:
+            n += exc.declared
+            break
         if len(refs) == 1 and refs[0].index is None:     # no cheap count: read it, as the job will
             try:
                 refs = load(path, meta_override=meta or None, timeout=timeout)
