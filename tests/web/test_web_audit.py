@@ -318,3 +318,15 @@ def test_a_map_declaring_a_million_curves_is_refused_before_any_is_read(make_cli
     err = _error(client.post("/api/fit", json={"file_ids": [fid]}))
     assert err["field"] == "file_ids" and "999001 curves" in err["message"]
     assert calls == []
+
+
+def test_a_fit_never_ignores_velocities_or_meta(client, workers):
+    """Before: ``file_ids`` with ``velocities`` fitted the uploads and dropped the speeds silently, and ``meta``
+    with virtual curves was dropped (202 both)."""
+    before = workers()
+    fid = client.post("/api/analyze", files={"file": ("x.txt", b"1 2\n")}).json()["files"][0]["id"]
+    err = _error(client.post("/api/fit", json={"file_ids": [fid], "velocities": [1e-6, 4e-6]}))
+    assert err["field"] == "velocities" and "one or the other" in err["message"]
+    err = _error(client.post("/api/fit", json={"velocities": [1e-6, 4e-6], "meta": ["spring_constant=0.1N/m"]}))
+    assert err["field"] == "meta" and "file_ids" in err["message"]
+    assert client.get("/api/jobs").json() == [] and workers() == before

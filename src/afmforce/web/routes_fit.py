@@ -52,6 +52,12 @@ def fit(request: Request, body: FitRequest) -> dict:
     if unknown or not body.free:
         raise validate.FieldError("free", f"free parameters {unknown[:5] or '[]'}: choose among "
                                           f"{', '.join(PARAMETERS)}")
+    if body.file_ids and body.velocities:      # never one of them ignored silently
+        raise validate.FieldError("velocities", "velocities are the speeds of virtual curves; with file_ids the "
+                                                "uploaded curves are fitted at their own speeds: give one or the other")
+    if body.meta and not body.file_ids:
+        raise validate.FieldError("meta", "meta overrides the metadata of uploaded curves (file_ids); virtual curves "
+                                          "take their values from truth: drop meta, or give file_ids")
     velocities = validate.velocities(body.velocities)
     truth = validate.flat_config(body.truth, "truth.")
     for name in ("velocity", "sample_rate"):     # each virtual curve's own (fit.virtual_curves)
