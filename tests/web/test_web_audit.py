@@ -330,3 +330,18 @@ def test_a_fit_never_ignores_velocities_or_meta(client, workers):
     err = _error(client.post("/api/fit", json={"velocities": [1e-6, 4e-6], "meta": ["spring_constant=0.1N/m"]}))
     assert err["field"] == "meta" and "file_ids" in err["message"]
     assert client.get("/api/jobs").json() == [] and workers() == before
+
+
+@pytest.mark.parametrize("form", [{"option": "vdw.max_separation=abc"}, {"meta": "sensitivity=1e400"},
+                                  {"probe": "radius=-1nm"}, {"step": "nope"}, {"format": "../x"},
+                                  {"channel": "sideways"}])
+def test_a_refused_analysis_stores_no_upload(make_client, tmp_path, form):
+    """Before: the upload was stored first (counted against the session's storage, its id never sent back),
+    then the typo refused: each retry of a 200 MB file left 200 MB on the server's disk."""
+    from afmforce.datasets import path
+
+    client = make_client(data=tmp_path / "data")
+    src = path("asylum-air")
+    _error(client.post("/api/analyze", files={"file": (src.name, src.read_bytes())}, data=form))
+    assert client.get("/api/files").json() == [] and client.get("/api/session").json()["stored"] == 0
+    assert not [p for p in (tmp_path / "data").rglob("*") if p.is_file()]

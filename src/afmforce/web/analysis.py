@@ -25,7 +25,7 @@ from .tasks import decimate
 from .validate import FieldError, metadata, number
 from ..sweep.files import CurveAnalysis
 
-__all__ = ["parse_inputs", "parse_choice", "parse_steps", "run_analysis", "CachedAnalysis"]
+__all__ = ["parse_inputs", "parse_choice", "parse_steps", "check_inputs", "run_analysis", "CachedAnalysis"]
 
 #: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)],
 #: at most :data:`_CURVES_KEPT` entries and :data:`_CACHE_BYTES` bytes (each cache here).
@@ -245,6 +245,19 @@ def parse_steps(steps: Sequence[str] | None) -> tuple[str, ...] | None:
     return out
 
 
+def check_inputs(options=(), meta=(), probe=(), *, calibration=None, steps: Sequence[str] | None = None,
+                 format: str | None = None, channel: str | None = None):
+    """Every value of an analysis request but its files, checked (FieldError naming the field):
+    ``(channel, parse_inputs(...), parse_steps(steps))``. The route checks them before it stores
+    an upload: a request refused for a typed option leaves nothing on the server's disk."""
+    if format is not None:
+        from ..io import FORMATS
+
+        if format not in FORMATS:
+            raise FieldError("format", f"format {format[:60]!r}: unknown; choose one of {', '.join(FORMATS)}")
+    return parse_choice("channel", channel), parse_inputs(options, meta, probe, calibration), parse_steps(steps)
+
+
 def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *, calibration=None,
                  steps: Sequence[str] | None = None, format: str | None = None, channel: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
@@ -277,14 +290,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     from ..sweep.report import analysis_json
     from ..sweep.summary import summary_table
 
-    if format is not None:
-        from ..io import FORMATS
-
-        if format not in FORMATS:
-            raise FieldError("format", f"format {format[:60]!r}: unknown; choose one of {', '.join(FORMATS)}")
-    channel = parse_choice("channel", channel)
-    records, probe_record, override = parse_inputs(options, meta, probe, calibration)
-    chosen = parse_steps(steps)
+    channel, (records, probe_record, override), chosen = check_inputs(options, meta, probe, calibration=calibration,
+                                                                       steps=steps, format=format, channel=channel)
     t0 = time.perf_counter()
     rename = {str(p): name for p, name in files}        # full stored paths first, then bare names
     rename.update({Path(p).name: name for p, name in files})

@@ -11,7 +11,7 @@ from starlette.concurrency import run_in_threadpool
 
 from .._fields import ANALYSIS_CHOICES
 from ..errors import ParameterError
-from .analysis import run_analysis
+from .analysis import check_inputs, run_analysis
 from .warm import wait_until_warm
 from .limits import MAX_ITEMS, RESPONSE_POINTS
 from .compute import compute
@@ -82,6 +82,9 @@ async def analyze(request: Request,
         probe = list(probe) + [f"{k}={v!r}" for k, v in taken.items()]
         # its values named as the calibration file's in the warnings, a thermal k rescaled with a refitted InvOLS
         from_file = (tuple(taken), *calibration_basis(data.decode("utf-8")))
+    # every typed value checked before an upload is stored: a request refused for a typo leaves no file
+    await run_in_threadpool(check_inputs, option, meta, probe, calibration=from_file, steps=step or None,
+                            format=format, channel=channel)
     uploads = [(up.filename or "upload", await up.read()) for up in file]
     stored = sessions.save_all(session, uploads)   # all or none; 413 storage_full past the totals
     paths = [sessions.path(session, s["id"]) for s in stored]
