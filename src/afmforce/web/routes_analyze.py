@@ -85,8 +85,10 @@ async def analyze(request: Request,
     # every typed value checked before an upload is stored: a request refused for a typo leaves no file
     await run_in_threadpool(check_inputs, option, meta, probe, calibration=from_file, steps=step or None,
                             format=format, channel=channel)
-    uploads = [(up.filename or "upload", await up.read()) for up in file]
-    stored = sessions.save_all(session, uploads)   # all or none; 413 storage_full past the totals
+    # copied from the request's spooled parts to the session's folder, never read whole into memory (each
+    # upload of 200 MB held 200 MB of the server's memory until its analysis ended, however many came at once)
+    uploads = [(up.filename or "upload", up.file) for up in file]
+    stored = await run_in_threadpool(sessions.save_all, session, uploads)   # all or none; 413 storage_full past the totals
     paths = [sessions.path(session, s["id"]) for s in stored]
     fields = [f"file[{i}]" for i in range(len(stored))]     # how the request names each file
     for i, fid in enumerate(file_id):
