@@ -368,3 +368,24 @@ def test_an_upload_is_copied_to_disk_never_read_whole_into_memory(client, monkey
     assert r.status_code == 200 and r.json()["files"][0]["size"] == src.stat().st_size
     assert r.json()["results"][src.name]["pull_off_force"] < 0
     assert [name for name, _ in reads if name == src.name] == []
+
+
+@pytest.mark.parametrize("url, extra", [("/api/calibration", {}), ("/api/analyze", {"example": "asylum-air"})])
+def test_a_huge_calibration_file_is_refused_without_reading_it_whole(client, monkeypatch, url, extra):
+    """Before: a 5 MB "calibration" file was read whole into memory, then refused for its size."""
+    from starlette.datastructures import UploadFile
+
+    from afmforce.web.limits import CALIBRATION_BYTES
+
+    sizes = []
+    real = UploadFile.read
+
+    async def read(self, size=-1):
+        sizes.append(size)
+        return await real(self, size)
+
+    monkeypatch.setattr(UploadFile, "read", read)
+    part = "file" if url == "/api/calibration" else "calibration"
+    err = _error(client.post(url, data=extra, files={part: ("c.json", b" " * 5_000_000)}))
+    assert err["field"] == "calibration" and "5,000,000 bytes is not a calibration file" in err["message"]
+    assert sizes == [CALIBRATION_BYTES + 1]

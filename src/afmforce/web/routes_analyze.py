@@ -13,7 +13,7 @@ from .._fields import ANALYSIS_CHOICES
 from ..errors import ParameterError
 from .analysis import check_inputs, run_analysis
 from .warm import wait_until_warm
-from .limits import MAX_ITEMS, RESPONSE_POINTS
+from .limits import CALIBRATION_BYTES, MAX_ITEMS, RESPONSE_POINTS
 from .compute import compute
 from .validate import FieldError, calibration_file
 
@@ -76,8 +76,8 @@ async def analyze(request: Request,
         from ..calibration.record import calibration_basis
 
         given = {str(t).partition("=")[0].strip() for t in probe}
-        data = await calibration.read()
-        values = calibration_file(data, calibration.filename or "calibration")
+        data = await calibration.read(CALIBRATION_BYTES + 1)     # a bigger one is refused: never read whole
+        values = calibration_file(data, calibration.filename or "calibration", size=calibration.size)
         taken = {k: v for k, v in values.items() if k not in given and (not calibration_keys or k in calibration_keys)}
         probe = list(probe) + [f"{k}={v!r}" for k, v in taken.items()]
         # its values named as the calibration file's in the warnings, a thermal k rescaled with a refitted InvOLS
@@ -127,7 +127,7 @@ async def calibration(file: Annotated[UploadFile, File(description="the JSON of 
     with ``values`` the spring constant, sensitivity (InvOLS) and resonance frequency it holds,
     each checked as its field; 422 naming ``calibration`` for a file that is not one."""
     name = file.filename or "calibration"
-    return {"source": name, "values": calibration_file(await file.read(), name)}
+    return {"source": name, "values": calibration_file(await file.read(CALIBRATION_BYTES + 1), name, size=file.size)}
 
 
 @router.get("/api/files")

@@ -245,11 +245,12 @@ def metadata(items: Any, field: str = "meta") -> dict[str, Any]:
     return out
 
 
-def calibration_file(data: bytes, name: str, field: str = "calibration") -> dict[str, float]:
+def calibration_file(data: bytes, name: str, field: str = "calibration", size: int | None = None) -> dict[str, float]:
     """The probe values [SI] the analysis takes from an uploaded calibration file (the JSON of
     ``afmforce calibrate ... --out``, read by :func:`afmforce.calibration.record.parse_calibration`,
     the values of :data:`~afmforce.calibration.record.ANALYSIS_KEYS` it holds), each checked
-    against its declared range as the probe field (``calibration.spring_constant``)."""
+    against its declared range as the probe field (``calibration.spring_constant``). ``size``: the
+    upload's bytes when ``data`` holds only its first :data:`~.limits.CALIBRATION_BYTES` + 1 [bytes]."""
     import dataclasses
 
     from .._fields import spec_of
@@ -257,7 +258,7 @@ def calibration_file(data: bytes, name: str, field: str = "calibration") -> dict
     from ..calibration.record import ANALYSIS_KEYS, PROBE_KEYS, parse_calibration
 
     if len(data) > CALIBRATION_BYTES:
-        raise FieldError(field, f"{name}: {len(data):,} bytes is not a calibration file (afmforce calibrate "
+        raise FieldError(field, f"{name}: {max(len(data), size or 0):,} bytes is not a calibration file (afmforce calibrate "
                                 f"--out writes about 1 kB; at most {CALIBRATION_BYTES:,} accepted)")
     try:
         values = parse_calibration(data.decode("utf-8"), name)
