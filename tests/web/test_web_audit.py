@@ -389,3 +389,11 @@ def test_a_huge_calibration_file_is_refused_without_reading_it_whole(client, mon
     err = _error(client.post(url, data=extra, files={part: ("c.json", b" " * 5_000_000)}))
     assert err["field"] == "calibration" and "5,000,000 bytes is not a calibration file" in err["message"]
     assert sizes == [CALIBRATION_BYTES + 1]
+
+
+@pytest.mark.parametrize("host", ["[::1", "[zz]", "[127.0.0.1"])
+def test_a_malformed_host_header_is_refused_not_a_500(client, host):
+    """Before: ``Host: [::1`` (curl -H 'Host: [::1' ...) answered 500 internal, a traceback in the log
+    (``urlsplit`` raised ValueError in the security layer)."""
+    err = _error(client.get("/api/health", headers={"host": host}), 403)
+    assert err["type"] == "forbidden" and "Host header is malformed" in err["message"]
