@@ -55,9 +55,6 @@ def fit(request: Request, body: FitRequest) -> dict:
     if body.file_ids and body.velocities:      # never one of them ignored silently
         raise validate.FieldError("velocities", "velocities are the speeds of virtual curves; with file_ids the "
                                                 "uploaded curves are fitted at their own speeds: give one or the other")
-    if body.meta and not body.file_ids:
-        raise validate.FieldError("meta", "meta overrides the metadata of uploaded curves (file_ids); virtual curves "
-                                          "take their values from truth: drop meta, or give file_ids")
     velocities = validate.velocities(body.velocities)
     truth = validate.flat_config(body.truth, "truth.")
     for name in ("velocity", "sample_rate"):     # each virtual curve's own (fit.virtual_curves)
@@ -82,7 +79,10 @@ def fit(request: Request, body: FitRequest) -> dict:
             raise
         except AfmforceError as exc:
             raise validate.FieldError(f"file_ids[{i}]", str(exc)) from None
-    meta = validate.metadata(body.meta)
+    meta = validate.metadata(body.meta)      # each item named when refused, then: dropped silently? never
+    if meta and not files:
+        raise validate.FieldError("meta", "meta overrides the metadata of uploaded curves (file_ids); virtual curves "
+                                          "take their values from truth: drop meta, or give file_ids")
     if files:       # every curve of each upload (a map's too): the fit's cap, before a job starts
         sessions = request.app.state.sessions
         read = all(sessions.was_read(session, fid) for fid in body.file_ids)
