@@ -15,7 +15,7 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_MAX_CURVES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "MAX_STARTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
@@ -33,6 +33,11 @@ CONFIG_BYTES = 1_000_000
 #: memory among its clients (about 90 MB of trajectory per request; issue 33). Declared here, beside
 #: :data:`MAX_SAMPLES`, so that every face reads its caps from one module.
 SERVER_MAX_SAMPLES = 1_000_000
+#: The most curves one analysis request to ``afmforce serve`` takes, all its files together (a 256 x 256
+#: map, the largest grid of a JPK QI map; a real map's count is read from its header before any curve
+#: is read): an ARDF file of 68 kB whose 1,000 line pointers all named its one line declared 999,001
+#: curves, and the server made a work item for each and analysed for its whole budget (504).
+SERVER_MAX_CURVES = 65_536
 #: The most bytes one session of ``afmforce serve`` may keep stored: its uploads, its jobs' records
 #: with their results and its sweeps' stores (ten uploads of the largest size a request may carry,
 #: 200 MB). One more upload or job is refused (413) until the session deletes files or jobs or
@@ -128,6 +133,7 @@ def caps_markdown() -> str:
             ("bytes of a settings file (sweep or instrument TOML, calibration JSON)", CONFIG_BYTES,
              "sweep and simulate (their settings files), the probe calibration record"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
+            ("curves one web analysis request takes (all its files)", SERVER_MAX_CURVES, "afmforce serve"),
             ("bytes one web session keeps stored (uploads, job results, sweep stores)", SERVER_SESSION_STORAGE,
              "afmforce serve (its setting `session_storage`)"),
             ("bytes all web sessions keep stored together", SERVER_STORAGE, "afmforce serve (its setting `server_storage`)"),

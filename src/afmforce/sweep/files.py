@@ -27,12 +27,12 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Mapping
 
 from .._files import atomic_path, atomic_write_text, display_path
-from ..errors import AfmforceError, FileFormatError, OutputExistsError
+from ..errors import AfmforceError, FileFormatError, OutputExistsError, ParameterError
 from .batch import error_record, run_batch
 from .results import BatchResult
 from .summary import SUMMARY_COLUMNS, SUMMARY_UNITS, failures, summary_row, summary_table, write_summary
 
-__all__ = ["CurveRef", "CurveAnalysis", "plan_curves", "analyze_files", "analysis_key", "summary_row",
+__all__ = ["CurveRef", "CurveAnalysis", "plan_curves", "TooManyCurves", "analyze_files", "analysis_key", "summary_row",
            "summary_table", "write_summary", "failures", "SUMMARY_COLUMNS", "SUMMARY_UNITS", "OUTPUT_SUFFIX"]
 
 #: Per-curve output files: ``<name><OUTPUT_SUFFIX>.{json,csv,png}``.
@@ -105,13 +105,24 @@ def _plan_one(path: Path, format: str | None) -> tuple[str, int | None]:
     return fmt.identifier, _count_curves(path, fmt)
 
 
+class TooManyCurves(ParameterError):
+    """The files hold more curves than the caller takes (``max_curves``); ``path`` is the file that passed
+    it, ``declared`` its curves, ``total`` the curves of the files up to it."""
+
+    def __init__(self, message: str, path: str, declared: int, total: int):
+        super().__init__(message)
+        self.path, self.declared, self.total = path, declared, total
+
+
 def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None,
-                timeout: float | None = None, on_file: Callable[[], None] | None = None) -> list[CurveRef]:
+                timeout: float | None = None, on_file: Callable[[], None] | None = None,
+                max_curves: int | None = None) -> list[CurveRef]:
     """Work items for ``paths``: one per curve of a force map, one per other file.
 
     Never raises for a bad file: it becomes one item, whose analysis reports the error.
     ``timeout`` [s] bounds the detection of each file (see :func:`afmforce.io.load`);
-    ``on_file()`` is called after each file (a progress bar).
+    ``on_file()`` is called after each file (a progress bar). ``max_curves``: the most items taken,
+    counted from the maps' headers before any item is made (:class:`TooManyCurves` past it).
     """
     from ..io import run_with_timeout
 
@@ -123,6 +134,10 @@ def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None,
             ident, n = run_with_timeout(_plan_one, path, format, timeout=timeout, path=str(path))
         except Exception:  # unreadable, unknown, damaged, too slow: analysed (and reported) as a whole file
             pass
+        if max_curves is not None and len(refs) + (n or 1) > max_curves:
+            raise TooManyCurves(f"{path}: {n or 1:,} curves (read from its header)"
+                                + (f", {len(refs) + (n or 1):,} with the files before it" if refs else "")
+                                + f", more than the {max_curves:,} taken", str(path), n or 1, len(refs) + (n or 1))
         if n:
             refs.extend(CurveRef(str(path), i, ident) for i in range(n))
         else:

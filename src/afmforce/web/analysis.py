@@ -12,20 +12,20 @@ import time
 from collections import OrderedDict
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from .._fields import spec_of
 from ..errors import ParameterError
-from .limits import ANALYSIS_POINTS
+from .limits import ANALYSIS_CURVES, ANALYSIS_POINTS
 from .replies import PastBudget
 from .plotdata import raw_arrays
 from .tasks import decimate
 from .validate import FieldError, metadata, number
 from ..sweep.files import CurveAnalysis
 
-__all__ = ["parse_inputs", "parse_choice", "parse_steps", "run_analysis", "CachedAnalysis"]
+__all__ = ["parse_inputs", "parse_choice", "parse_steps", "check_inputs", "run_analysis", "CachedAnalysis"]
 
 #: Curves read lately: (path, size, mtime, curve index, metadata, format) -> [(index, RawCurve)],
 #: at most :data:`_CURVES_KEPT` entries and :data:`_CACHE_BYTES` bytes (each cache here).
@@ -184,8 +184,8 @@ def parse_inputs(options: Sequence[str], meta: Sequence[str], probe: Sequence[st
             step, name, value = parse_option(text, where="option")
         except ParameterError as exc:
             raise FieldError(f"option.{str(text).partition('=')[0].strip()[:60]}", str(exc)) from None
-        if name in given.setdefault(step, {}):
-            raise ParameterError(f"option {step}.{name} given twice")
+        if name in given.setdefault(step, {}):      # which one was meant: never the last silently
+            raise FieldError(f"option.{step}.{name}", f"option {step}.{name} given twice")   # the CLI's words
         given[step][name] = value
     records = []
     for step, values in given.items():     # the record's own checks (a model of the registry, ...)
@@ -245,11 +245,25 @@ def parse_steps(steps: Sequence[str] | None) -> tuple[str, ...] | None:
     return out
 
 
+def check_inputs(options=(), meta=(), probe=(), *, calibration=None, steps: Sequence[str] | None = None,
+                 format: str | None = None, channel: str | None = None):
+    """Every value of an analysis request but its files, checked (FieldError naming the field):
+    ``(channel, parse_inputs(...), parse_steps(steps))``. The route checks them before it stores
+    an upload: a request refused for a typed option leaves nothing on the server's disk."""
+    if format is not None:
+        from ..io import FORMATS
+
+        if format not in FORMATS:
+            raise FieldError("format", f"format {format[:60]!r}: unknown; choose one of {', '.join(FORMATS)}")
+    return parse_choice("channel", channel), parse_inputs(options, meta, probe, calibration), parse_steps(steps)
+
+
 def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(), *, calibration=None,
                  steps: Sequence[str] | None = None, format: str | None = None, channel: str | None = None,
                  arrays: bool = False, max_points: int = 4000, budget: float = 60.0,
                  guard: bool = True, deadline: float | None = None,
-                 curves: Sequence[str] = ()) -> dict[str, Any]:
+                 curves: Sequence[str] = (), stop: Callable[[], bool] | None = None,
+                 fields: Sequence[str] | None = None) -> dict[str, Any]:
     """Analyse stored files; ``files`` are ``(path on disk, name the user gave)``; ``steps``: the
     analysis steps to run (their requirements added; None: all).
 
@@ -260,33 +274,39 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     failed; the reader runs in a forked child, :mod:`afmforce.io._guard`); files read before
     without failing are read here directly (``guard=False``). Past ``deadline`` (``time.monotonic``)
     the analysis stops after the curve it is on (:class:`~.replies.PastBudget`): a request that
-    timed out does not keep computing. With ``arrays``, the curves together carry at most
+    timed out does not keep computing; so it does once ``stop()`` is true (its client left,
+    :func:`~.compute.compute`). With ``arrays``, the curves together carry at most
     :data:`~.limits.ANALYSIS_POINTS` samples (``max_points`` is lowered for many curves).
     ``curves``: with ``arrays``, only these results (names as returned) get their arrays and raw
     signal, the first result when none of them is one (a page draws one curve of a map; the
     others are asked for when shown); empty: every result. ``arrays_for`` lists those sent.
     ``calibration``: ``(names, method, invols)`` of a probe calibration file (:func:`parse_inputs`).
-    ``channel``: the position channel, as ``--channel`` (:data:`afmforce._fields.ANALYSIS_CHOICES`;
+    ``fields``: how the request names each file (``file[0]``, ``file_id[1]``, ``example[0]``): files
+    holding more than :data:`~.limits.ANALYSIS_CURVES` curves together are refused naming it (FieldError,
+    before any curve is read). ``channel``: the position channel, as ``--channel`` (:data:`afmforce._fields.ANALYSIS_CHOICES`;
     None: its default).
     """
-    from ..sweep.files import analyze_files, plan_curves
+    from ..sweep.files import TooManyCurves, analyze_files, plan_curves
     from ..sweep.report import analysis_json
     from ..sweep.summary import summary_table
 
-    if format is not None:
-        from ..io import FORMATS
-
-        if format not in FORMATS:
-            raise FieldError("format", f"format {format[:60]!r}: unknown; choose one of {', '.join(FORMATS)}")
-    channel = parse_choice("channel", channel)
-    records, probe_record, override = parse_inputs(options, meta, probe, calibration)
-    chosen = parse_steps(steps)
+    channel, (records, probe_record, override), chosen = check_inputs(options, meta, probe, calibration=calibration,
+                                                                       steps=steps, format=format, channel=channel)
     t0 = time.perf_counter()
     rename = {str(p): name for p, name in files}        # full stored paths first, then bare names
     rename.update({Path(p).name: name for p, name in files})
     rename.update(_channel_prefixes(files))
     timeout = budget if guard else None
-    refs = plan_curves([p for p, _ in files], format, timeout=timeout)
+    try:        # a map's curves counted from its header: never a work item per declared curve past the cap
+        refs = plan_curves([p for p, _ in files], format, timeout=timeout, max_curves=ANALYSIS_CURVES)
+    except TooManyCurves as exc:
+        where = [str(p) for p, _ in files].index(exc.path)
+        field = fields[where] if fields is not None and where < len(fields) else "file"
+        raise FieldError(field, f"{field} {files[where][1][:80]!r}: {exc.declared:,} curves"
+                         + (f" ({exc.total:,} with the files before it)" if exc.total > exc.declared else "")
+                         + f", more than the {ANALYSIS_CURVES:,} one request analyses (afmforce.limits."
+                         "SERVER_MAX_CURVES); analyse it with `afmforce analyze` (it streams a map of any "
+                         "size), or send fewer files") from None
     if arrays and not curves:     # the response's size cap
         max_points = max(10, min(max_points, ANALYSIS_POINTS // max(1, len(refs))))
     analysis = CachedAnalysis(steps=chosen, options=records, probe=probe_record, meta_override=override,
@@ -296,6 +316,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
     def on_curve(_progress) -> None:
         if deadline is not None and time.monotonic() > deadline:
             raise PastBudget(f"cancelled: the analysis ran past its budget of {budget:g} s")
+        if stop is not None and stop():
+            raise PastBudget("cancelled: the request ended before the analysis (its client left)")
 
     # chunks of up to 32 curves: each chunk is a table (a curve a chunk cost 1-2 s of pandas for a
     # 16 x 16 map); the budget is checked between chunks (a chunk: well under a second)

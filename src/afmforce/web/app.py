@@ -10,6 +10,7 @@ from fastapi import FastAPI
 
 from .. import __version__
 from . import openapi, replies
+from .compute import Gate
 from .guard import Guard
 from .jobs import JobManager
 from .sessions import Sessions
@@ -75,6 +76,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.sessions = sessions
     app.state.jobs = jobs
+    app.state.gate = Gate()      # analyses and simulations computing at once (afmforce.web.limits)
     app.state.warm = warm
     app.state.warming = warming
     app.state.expire = expire

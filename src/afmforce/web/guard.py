@@ -95,7 +95,10 @@ class Guard:
         """Why a request comes from elsewhere (another site's page, a sandboxed frame, a rebound
         DNS name), or None."""
         host = headers.get(b"host", b"").decode("latin-1")
-        name = (urlsplit(f"//{host}").hostname or "") if host else ""
+        try:
+            name = (urlsplit(f"//{host}").hostname or "") if host else ""
+        except ValueError:      # "[::1", "[zz]": urlsplit raised, and the request answered 500
+            return f"host {host[:100]!r} is not a host name (the request's Host header is malformed)"
         if self.loopback and host and name not in _LOOPBACK_NAMES:
             return f"host {host!r} is not this loopback server"
         origin = headers.get(b"origin", b"").decode("latin-1").strip()

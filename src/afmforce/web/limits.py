@@ -2,15 +2,16 @@
 
 Time is bounded by the settings (``--budget``, the job budget); these bound memory: how many
 samples a simulation may have, how many values a response may carry, how many runs a sweep may
-have, how long the lists of a request may be and how many bytes of uploads a session and the
+have, how many requests compute at once, how long the lists of a request may be and how many bytes of uploads a session and the
 server keep stored (the disk). A request over a limit gets 422 naming the field
 before anything is computed.
 """
 
 from __future__ import annotations
 
-__all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
+__all__ = ["MAX_SAMPLES", "RESPONSE_POINTS", "ANALYSIS_POINTS", "ANALYSIS_CURVES", "RAW_SAMPLES", "MAX_RUNS", "MAX_ITEMS",
            "MAX_CURVES", "CALIBRATION_BYTES", "SESSION_TTL", "SESSION_STORAGE", "SERVER_STORAGE", "MAX_JOBS", "MAX_SESSION_JOBS",
+           "MAX_COMPUTING", "MAX_WAITING",
            "JOB_RECORD_BYTES", "FIT_RESULT_BYTES_PER_CURVE", "SWEEP_BYTES_PER_VALUE"]
 
 #: Samples one simulated cycle may have: the library's cap for a server (``afmforce.limits``).
@@ -19,6 +20,9 @@ from ..limits import SERVER_MAX_SAMPLES as MAX_SAMPLES  # noqa: E402
 RESPONSE_POINTS = 20_000
 #: Per-sample values (all curves together) one analysis response may carry with ``arrays``.
 ANALYSIS_POINTS = 2_000_000
+#: Curves one analysis request takes, its files together: the library's cap for a server
+#: (``afmforce.limits``), counted from the maps' headers before any curve is read.
+from ..limits import SERVER_MAX_CURVES as ANALYSIS_CURVES  # noqa: E402
 #: Samples of a raw file exported by the virtual AFM (about 100 bytes a row: 25 MB).
 RAW_SAMPLES = 250_000
 #: Runs one sweep may have (grid points times samples); ``afmforce sweep`` runs more.
@@ -32,6 +36,11 @@ MAX_CURVES = 8
 MAX_JOBS = 4
 #: Fits and sweeps one session may have running at once.
 MAX_SESSION_JOBS = 2
+#: Analyses, simulations and raw exports computing at once on the server (each holds up to about 100 MB
+#: of trajectory, or its uploads and their curves): the others wait for a slot (:mod:`.compute`).
+MAX_COMPUTING = 4
+#: Requests waiting for a slot to compute; one more is refused (429 ``busy``) until one ends.
+MAX_WAITING = 64
 #: Bytes of an uploaded probe calibration file (``afmforce calibrate --out`` writes about 1 kB).
 CALIBRATION_BYTES = 65_536
 #: Default bytes one session may keep stored (``--session-storage``): uploads, sweep stores and job

@@ -56,6 +56,23 @@ def _shown(value: Any) -> str:
     return text if len(text) <= 40 else text[:37] + "..."
 
 
+#: FastAPI's reply to a body its JSON reader raised on (not a JSONDecodeError: 400, this detail).
+_UNPARSED = "There was an error parsing the body"
+
+
+def _unparsed(cause: BaseException | None) -> str:
+    """Why a JSON body could not be read, in the client's terms: nested too deeply (a RecursionError of
+    the parser: ``[[[[...`` 100,000 deep) or a number of more digits than Python converts (4,300)."""
+    if isinstance(cause, RecursionError):
+        why = "it is nested too deeply"
+    elif isinstance(cause, ValueError) and "digits" in str(cause):
+        why = "it holds an integer of more than 4,300 digits"
+    else:
+        why = f"{type(cause).__name__ if cause is not None else 'unreadable'}"
+    return (f"the body could not be read as JSON ({why}); send a JSON object of the request's fields "
+            "(numbers as SI values or texts with units), with content-type application/json")
+
+
 class PastBudget(AfmforceError):
     """A request ran past its time budget and was cancelled, its computation included (504)."""
 
@@ -104,6 +121,8 @@ def install(app) -> None:
 
     @app.exception_handler(HTTPException)
     async def _http(request, exc: HTTPException):
+        if exc.status_code == 400 and exc.detail == _UNPARSED:     # FastAPI's words, whatever the cause
+            return JSONResponse(error_body("invalid_request", _unparsed(exc.__cause__)), status_code=422)
         return JSONResponse(error_body(_STATUS_TYPES.get(exc.status_code, "error"), str(exc.detail)),
                             status_code=exc.status_code, headers=getattr(exc, "headers", None))
 
@@ -118,6 +137,16 @@ def install(app) -> None:
     @app.exception_handler(TooManyJobs)
     async def _busy(request, exc: TooManyJobs):
         return JSONResponse(error_body("too_many_jobs", str(exc)), status_code=429, headers={"retry-after": "10"})
+
+    from .compute import Busy, ClientGone
+
+    @app.exception_handler(Busy)
+    async def _computing(request, exc: Busy):   # every slot to compute taken, and the queue full
+        return JSONResponse(error_body("busy", str(exc)), status_code=429, headers={"retry-after": "5"})
+
+    @app.exception_handler(ClientGone)
+    async def _gone(request, exc: ClientGone):    # nobody reads it (nginx's "client closed request")
+        return JSONResponse(error_body("client_gone", str(exc)), status_code=499)
 
     @app.exception_handler(JobStartError)
     async def _job(request, exc: JobStartError):

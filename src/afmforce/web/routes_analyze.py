@@ -2,20 +2,19 @@
 
 from __future__ import annotations
 
-import asyncio
 import time
 from typing import Annotated
 
-from fastapi import APIRouter, File, Form, Request, UploadFile
+from fastapi import APIRouter, File, Form, HTTPException, Request, UploadFile
 from fastapi.responses import JSONResponse
 from starlette.concurrency import run_in_threadpool
 
 from .._fields import ANALYSIS_CHOICES
 from ..errors import ParameterError
-from .analysis import run_analysis
+from .analysis import check_inputs, run_analysis
 from .warm import wait_until_warm
-from .limits import MAX_ITEMS, RESPONSE_POINTS
-from .replies import PastBudget
+from .limits import CALIBRATION_BYTES, MAX_ITEMS, RESPONSE_POINTS
+from .compute import compute
 from .validate import FieldError, calibration_file
 
 router = APIRouter(tags=["analyse"])
@@ -63,42 +62,59 @@ async def analyze(request: Request,
         if len(items) > MAX_ITEMS:
             raise FieldError(name, f"{name}: at most {MAX_ITEMS} per request, got {len(items)}")
     from_file = None
+    if calibration_keys:      # never ignored silently: a key the file cannot give, or no file to take it from
+        from ..calibration.record import ANALYSIS_KEYS
+
+        if calibration is None:
+            raise FieldError("calibration_keys", "calibration_keys names the values to take from a calibration "
+                                                 "file: send the file as 'calibration' too, or drop calibration_keys")
+        for i, key in enumerate(calibration_keys):
+            if key not in ANALYSIS_KEYS:
+                raise FieldError(f"calibration_keys[{i}]", f"calibration_keys[{i}] {key[:40]!r}: not a value a "
+                                 f"calibration file gives the analysis; choose among {', '.join(ANALYSIS_KEYS)}")
     if calibration is not None:     # as `afmforce analyze --probe-calibration`: the typed value wins
         from ..calibration.record import calibration_basis
 
         given = {str(t).partition("=")[0].strip() for t in probe}
-        data = await calibration.read()
-        values = calibration_file(data, calibration.filename or "calibration")
+        data = await calibration.read(CALIBRATION_BYTES + 1)     # a bigger one is refused: never read whole
+        values = calibration_file(data, calibration.filename or "calibration", size=calibration.size)
         taken = {k: v for k, v in values.items() if k not in given and (not calibration_keys or k in calibration_keys)}
         probe = list(probe) + [f"{k}={v!r}" for k, v in taken.items()]
         # its values named as the calibration file's in the warnings, a thermal k rescaled with a refitted InvOLS
         from_file = (tuple(taken), *calibration_basis(data.decode("utf-8")))
-    uploads = [(up.filename or "upload", await up.read()) for up in file]
-    stored = sessions.save_all(session, uploads)   # all or none; 413 storage_full past the totals
+    # every typed value checked before an upload is stored: a request refused for a typo leaves no file
+    await run_in_threadpool(check_inputs, option, meta, probe, calibration=from_file, steps=step or None,
+                            format=format, channel=channel)
+    # copied from the request's spooled parts to the session's folder, never read whole into memory (each
+    # upload of 200 MB held 200 MB of the server's memory until its analysis ended, however many came at once)
+    uploads = [(up.filename or "upload", up.file) for up in file]
+    stored = await run_in_threadpool(sessions.save_all, session, uploads)   # all or none; 413 storage_full past the totals
     paths = [sessions.path(session, s["id"]) for s in stored]
+    fields = [f"file[{i}]" for i in range(len(stored))]     # how the request names each file
     for i, fid in enumerate(file_id):
         try:
             paths.append(sessions.path(session, fid))
         except ParameterError as exc:
             raise FieldError(f"file_id[{i}]", str(exc)) from None
+        fields.append(f"file_id[{i}]")
     for i, name in enumerate(example):
         if name not in DATASETS:
             raise FieldError(f"example[{i}]", f"example {name[:60]!r}: unknown; choose one of {', '.join(DATASETS)}")
         paths.append((example_path(name), name))
+        fields.append(f"example[{i}]")
     if not paths:
         raise FieldError("file", "give a file (field 'file'), an uploaded file's id ('file_id') or an example")
     await run_in_threadpool(wait_until_warm, request.app)    # the budget starts after the warm-up
-    deadline = time.monotonic() + settings.request_budget
     guard = bool(stored) or not all(sessions.was_read(session, fid) for fid in file_id)
-    work = run_in_threadpool(run_analysis, paths, option, meta, probe, calibration=from_file, steps=step or None,
-                             format=format, channel=channel,
-                             arrays=arrays,
-                             max_points=max_points, budget=settings.request_budget, guard=guard,
-                             deadline=deadline, curves=curve)
-    try:      # the thread stops by itself after the curve it is on (run_analysis's deadline)
-        payload = await asyncio.wait_for(work, timeout=settings.request_budget)
-    except asyncio.TimeoutError:
-        raise PastBudget(f"cancelled: the analysis ran past its budget of {settings.request_budget:g} s") from None
+
+    def work(stop):      # stops after the curve it is on: past its deadline, or its client gone (stop)
+        return run_analysis(paths, option, meta, probe, calibration=from_file, steps=step or None,
+                            format=format, channel=channel, arrays=arrays, max_points=max_points,
+                            budget=settings.request_budget, guard=guard,
+                            deadline=time.monotonic() + settings.request_budget, curves=curve, stop=stop.is_set,
+                            fields=fields)
+
+    payload = await compute(request, work, settings.request_budget, "analysis")   # a slot of MAX_COMPUTING
     payload["files"] = stored + [{"id": fid, "name": sessions.path(session, fid)[1]} for fid in file_id]
     bad = {f["file"] for f in payload["failed"]}
     sessions.mark_read(session, [f["id"] for f in payload["files"] if f["name"] not in bad])
@@ -111,7 +127,7 @@ async def calibration(file: Annotated[UploadFile, File(description="the JSON of 
     with ``values`` the spring constant, sensitivity (InvOLS) and resonance frequency it holds,
     each checked as its field; 422 naming ``calibration`` for a file that is not one."""
     name = file.filename or "calibration"
-    return {"source": name, "values": calibration_file(await file.read(), name)}
+    return {"source": name, "values": calibration_file(await file.read(CALIBRATION_BYTES + 1), name, size=file.size)}
 
 
 @router.get("/api/files")
@@ -122,6 +138,9 @@ def files(request: Request) -> list[dict]:
 
 @router.delete("/api/files/{file_id}")
 def delete_file(request: Request, file_id: str) -> dict:
-    """Remove one of this session's uploads."""
-    request.app.state.sessions.remove(request.state.session, file_id)
+    """Remove one of this session's uploads (404: no upload of this session has that id)."""
+    try:
+        request.app.state.sessions.remove(request.state.session, file_id)
+    except ParameterError as exc:       # as a job of no session's: not found, whatever the id looks like
+        raise HTTPException(404, str(exc)) from None
     return {"id": file_id, "deleted": True}

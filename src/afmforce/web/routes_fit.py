@@ -52,13 +52,22 @@ def fit(request: Request, body: FitRequest) -> dict:
     if unknown or not body.free:
         raise validate.FieldError("free", f"free parameters {unknown[:5] or '[]'}: choose among "
                                           f"{', '.join(PARAMETERS)}")
+    if body.file_ids and body.velocities:      # never one of them ignored silently
+        raise validate.FieldError("velocities", "velocities are the speeds of virtual curves; with file_ids the "
+                                                "uploaded curves are fitted at their own speeds: give one or the other")
     velocities = validate.velocities(body.velocities)
     truth = validate.flat_config(body.truth, "truth.")
     for name in ("velocity", "sample_rate"):     # each virtual curve's own (fit.virtual_curves)
         if name in truth:
             raise validate.FieldError(f"truth.{name}", f"truth.{name}: each virtual curve's {name} is set by "
                                       "velocities (sample rate: 2 samples per nm of travel); drop it from truth")
-    validate.build_config(truth, "truth.")     # names, ranges and their combination
+    cfg = validate.build_config(truth, "truth.")     # names, ranges and their combination
+    from ..fit.params import check_free
+
+    try:     # as `afmforce fit` before loading: a combination the model cannot fit, before a process starts
+        check_free(body.free, cfg.model, cfg.friction.law if cfg.model == "beam" else None)
+    except AfmforceError as exc:
+        raise validate.FieldError("free", str(exc)) from None
     twice = sorted({fid for fid in body.file_ids if body.file_ids.count(fid) > 1})
     if twice:       # one measurement twice counts as two (fit.data: the same samples are refused)
         raise validate.FieldError("file_ids", f"file_ids: {twice[0]} is listed twice; give each upload once")
@@ -70,7 +79,10 @@ def fit(request: Request, body: FitRequest) -> dict:
             raise
         except AfmforceError as exc:
             raise validate.FieldError(f"file_ids[{i}]", str(exc)) from None
-    meta = validate.metadata(body.meta)
+    meta = validate.metadata(body.meta)      # each item named when refused, then: dropped silently? never
+    if meta and not files:
+        raise validate.FieldError("meta", "meta overrides the metadata of uploaded curves (file_ids); virtual curves "
+                                          "take their values from truth: drop meta, or give file_ids")
     if files:       # every curve of each upload (a map's too): the fit's cap, before a job starts
         sessions = request.app.state.sessions
         read = all(sessions.was_read(session, fid) for fid in body.file_ids)

@@ -56,6 +56,26 @@ def _bytes(n: float) -> str:
     return next((f"{n / f:.3g} {u}" for f, u in ((1e12, "TB"), (1e9, "GB"), (1e6, "MB")) if n >= f),
                 f"{n:,.0f} bytes")
 
+def _size(data) -> int:
+    """Bytes of an upload: ``bytes``, or a binary file (the request's spooled part: never read whole into memory)."""
+    if isinstance(data, (bytes, bytearray, memoryview)):
+        return len(data)
+    data.seek(0, os.SEEK_END)
+    n = data.tell()
+    data.seek(0)
+    return n
+
+
+def _write(path: Path, data) -> None:
+    """Store an upload (``bytes`` or a binary file, copied 1 MB at a time)."""
+    if isinstance(data, (bytes, bytearray, memoryview)):
+        path.write_bytes(data)
+        return
+    data.seek(0)
+    with open(path, "wb") as out:
+        shutil.copyfileobj(data, out, 1 << 20)
+
+
 _SUFFIX = re.compile(r"^\.[A-Za-z0-9][A-Za-z0-9-]{0,19}$")
 _ID = re.compile(r"^[0-9a-f]{32}$")
 
@@ -267,10 +287,10 @@ class Sessions:
         Raises :class:`StorageFull` past the session's or the server's total (nothing is written)."""
         return self.save_all(session, [(name, data)])[0]
 
-    def save_all(self, session: str, uploads: list[tuple[str, bytes]]) -> list[dict[str, Any]]:
-        """Store the uploads of one request, all or none: :class:`StorageFull` (nothing written) when
-        together they would take the session or the server past its total; else :meth:`save`'s
-        answer for each."""
+    def save_all(self, session: str, uploads: list[tuple[str, Any]]) -> list[dict[str, Any]]:
+        """Store the uploads of one request (``[(name, bytes or a binary file)]``), all or none:
+        :class:`StorageFull` (nothing written) when together they would take the session or the server
+        past its total; else :meth:`save`'s answer for each."""
         planned = []
         for name, data in uploads:
             file_id = secrets.token_hex(16)
@@ -278,19 +298,20 @@ class Sessions:
             planned.append((file_id, name, data, paired, paired or f"{file_id}{safe_suffix(name)}"))
         answers = []
         with self._lock:
-            self._check_room(session, [(stored, len(data)) for _, _, data, _, stored in planned])
+            self._check_room(session, [(stored, _size(data)) for _, _, data, _, stored in planned])
             if not planned:
                 return answers
             folder = self.folder(session)
             index = self._index(session)
             for file_id, name, data, paired, stored in planned:
                 shown = re.split(r"[\\/]", name or "")[-1][:200] or "upload"
-                (folder / stored).write_bytes(data)
+                size = _size(data)
+                _write(folder / stored, data)
                 if paired:       # the same wave name uploaded again replaces the earlier upload
                     index = {k: v for k, v in index.items() if v.get("stored") != paired}
-                index[file_id] = {"name": shown, "suffix": safe_suffix(name), "size": len(data),
+                index[file_id] = {"name": shown, "suffix": safe_suffix(name), "size": size,
                                   "uploaded": time.time(), **({"stored": paired} if paired else {})}
-                answers.append({"id": file_id, "name": shown, "size": len(data)})
+                answers.append({"id": file_id, "name": shown, "size": size})
             atomic_write_text(folder / "index.json", json.dumps(index), force=True)
         return answers
 

@@ -184,13 +184,17 @@ def fit_curve_count(files: Iterable[Any], timeout: float | None = None,
     5) is read, bounded by ``timeout`` [s] as the first reading of an upload is (None: the file was
     read once already). Refused past the dynamic fit's cap (:data:`afmforce.fit.core.MAX_CURVES`)
     as ``file_ids``; a file that cannot be read (the job's fit would fail on it) as ``file_ids[i]``."""
-    from ..fit.core import check_curve_count
+    from ..fit.core import MAX_CURVES, check_curve_count
     from ..io import load
-    from ..sweep.files import plan_curves
+    from ..sweep.files import TooManyCurves, plan_curves
 
     n = 0
     for i, (path, name) in enumerate(files):
-        refs = plan_curves([path], timeout=timeout)
+        try:        # a map's header count past the cap: refused before a work item per declared curve is made
+            refs = plan_curves([path], timeout=timeout, max_curves=MAX_CURVES - n)
+        except TooManyCurves as exc:
+            n += exc.declared
+            break
         if len(refs) == 1 and refs[0].index is None:     # no cheap count: read it, as the job will
             try:
                 refs = load(path, meta_override=meta or None, timeout=timeout)
@@ -241,11 +245,12 @@ def metadata(items: Any, field: str = "meta") -> dict[str, Any]:
     return out
 
 
-def calibration_file(data: bytes, name: str, field: str = "calibration") -> dict[str, float]:
+def calibration_file(data: bytes, name: str, field: str = "calibration", size: int | None = None) -> dict[str, float]:
     """The probe values [SI] the analysis takes from an uploaded calibration file (the JSON of
     ``afmforce calibrate ... --out``, read by :func:`afmforce.calibration.record.parse_calibration`,
     the values of :data:`~afmforce.calibration.record.ANALYSIS_KEYS` it holds), each checked
-    against its declared range as the probe field (``calibration.spring_constant``)."""
+    against its declared range as the probe field (``calibration.spring_constant``). ``size``: the
+    upload's bytes when ``data`` holds only its first :data:`~.limits.CALIBRATION_BYTES` + 1 [bytes]."""
     import dataclasses
 
     from .._fields import spec_of
@@ -253,7 +258,7 @@ def calibration_file(data: bytes, name: str, field: str = "calibration") -> dict
     from ..calibration.record import ANALYSIS_KEYS, PROBE_KEYS, parse_calibration
 
     if len(data) > CALIBRATION_BYTES:
-        raise FieldError(field, f"{name}: {len(data):,} bytes is not a calibration file (afmforce calibrate "
+        raise FieldError(field, f"{name}: {max(len(data), size or 0):,} bytes is not a calibration file (afmforce calibrate "
                                 f"--out writes about 1 kB; at most {CALIBRATION_BYTES:,} accepted)")
     try:
         values = parse_calibration(data.decode("utf-8"), name)
