@@ -32,7 +32,7 @@ from ._meta import METADATA, check_meta_override, parse_meta_args, require_metad
 
 __all__ = ["ReaderFormat", "FORMATS", "register_format", "unregister_format", "load", "find_format", "formats_table", "METADATA", "refusal",
            "supported_suffixes", "is_supported", "in_folder", "require_metadata", "formats_markdown", "check_meta_override",
-           "parse_meta_args", "run_with_timeout", "FileTimeoutError"]
+           "parse_meta_args", "run_with_timeout", "FileTimeoutError", "damage"]
 
 Loader = Callable[..., list]
 
@@ -315,6 +315,11 @@ def _find_format(path: Path) -> ReaderFormat:
     known = unread_refusal(path)   # a family afmforce knows but does not read (a TIFF image under .tiff)
     if known:
         raise FileFormatError(known)
+    from ._unread import damaged_refusal
+
+    cut = damaged_refusal(path)    # starts like a family afmforce reads: cut short or damaged
+    if cut:
+        raise FileFormatError(cut)
     raise FileFormatError(
         f"{path}: content not recognised as any of: {', '.join(f.name for f in candidates)}; if it is one of "
         f"them, name its reader as `format` (one of {', '.join(f.identifier for f in candidates)}): its "
@@ -425,12 +430,38 @@ def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
     except MemoryError:
         raise FileFormatError(f"{path}: too large or damaged (out of memory while reading)") from None
     except BaseException as exc:  # third-party parsers raise anything (afmformats: BaseException subclasses)
-        raise FileFormatError(refusal(path, fmt, exc, chosen=format is not None)) from None
+        raise FileFormatError(damage(path, exc) or refusal(path, fmt, exc, chosen=format is not None)) from None
     if not curves:
         raise FileFormatError(f"{path}: no force curve in the file")
     for curve in curves:
         require_metadata(curve, tuple(require), str(path))
     return curves
+
+
+def damage(path: str | Path, exc: BaseException) -> str | None:
+    """What a reader's exception says of damaged bytes, in words with what to do; None when it is no
+    sign of damage (then :func:`refusal` says which reader stopped on what).
+
+    A zip member whose checksum fails or whose compressed stream breaks (``zipfile.BadZipFile``,
+    ``zlib.error``: a JPK archive corrupted or cut in transfer), an HDF5 dataset h5py cannot decode
+    (``OSError`` raised in h5py), an arithmetic error on a header value (``ZeroDivisionError``,
+    ``OverflowError``: a damaged number).
+    """
+    import zipfile
+    import zlib
+
+    text = " ".join(str(exc).split()).replace("`", "'")[:160] or "no detail"
+    again = "a corrupted or cut copy (download, full disk): copy the file again from the instrument's computer"
+    if isinstance(exc, (zipfile.BadZipFile, zlib.error)) or (isinstance(exc, EOFError) and "compressed" in text):
+        return f"{path}: damaged zip archive ({text}): a member's bytes fail their checksum or do not decompress; {again}"
+    if isinstance(exc, OSError) and (type(exc).__module__ or "").startswith("h5py") or \
+            isinstance(exc, OSError) and ("synchronously" in text or "HDF5" in text):
+        return f"{path}: damaged HDF5 file ({text}): h5py cannot decode its data; {again}"
+    if isinstance(exc, (ZeroDivisionError, OverflowError, FloatingPointError)):
+        return (f"{path}: a number in the file's header is damaged ({type(exc).__name__}: {text}: a zero, "
+                f"infinite or huge value where a size, rate or scale belongs); {again}, or give the value as "
+                "`meta_override`")
+    return None
 
 
 def _unexpected(exc: BaseException) -> str:
