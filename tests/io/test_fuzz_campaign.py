@@ -162,3 +162,16 @@ def test_seeded_campaign_mutations_of_small_files(src, tmp_path):
         if problem:
             bad.append(f"{kind} {detail}: {problem}")
     assert not bad, bad
+
+
+@pytest.mark.parametrize("src", [TAB, BRUKER, DATA / "chiaro-txt_AEBP1_Indentation_002_thinned.txt"],
+                         ids=lambda p: p.suffix)
+def test_a_text_table_cut_inside_its_last_number_is_refused(src, tmp_path):
+    data = src.read_bytes().rstrip(b"\r\n")
+    whole = tmp_path / ("whole" + src.suffix)
+    whole.write_bytes(data)                       # complete, without the final line break: read as before
+    assert sum(map(len, load(whole))) == sum(map(len, load(src)))
+    cut = tmp_path / ("cut" + src.suffix)
+    cut.write_bytes(data[:-3])                    # the last value loses its last digits (1.2345e-09 -> 1.2345e-)
+    with pytest.raises(FileFormatError, match="ends inside its last line.*copy it again"):
+        load(cut)
