@@ -471,6 +471,55 @@ def summary(result: dict) -> str:
     return "\n".join(lines)
 
 
+def cli_sample(count: int, good: Path) -> list[str]:
+    """``afmforce analyze`` on ``count`` mutated files (one per reader where possible), each alone and all in
+    one folder with ``good``: every failure one line naming its file, no traceback, non-zero exit; the
+    batch writes ``good``'s results. Returns the problems found (empty: as promised)."""
+    rng = random.Random(11)
+    picked: dict[str, tuple] = {}
+    for f in corpus_files():
+        if f.stat().st_size > 300_000:
+            continue
+        for case in mutations(f, seed=sum(f.name.encode())):
+            if case[0] in ("truncate", "field", "zip", "header") and rng.random() < 0.05:
+                picked.setdefault(f.suffix.lower(), (f.name, *case))
+    cases = list(picked.values())[:count]
+    work = Path(tempfile.mkdtemp(prefix="afmforce-fuzz-cli-"))
+    folder = work / "batch"
+    folder.mkdir()
+    shutil.copy(good, folder / good.name)
+    env = dict(os.environ, PYTHONPATH=os.environ.get("AFMFORCE_FUZZ_SRC") or str(ROOT / "src"))
+    problems = []
+    refused = 0
+
+    def analyze(target: Path, out: Path) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "afmforce.cli.main", "analyze", str(target), "--out", str(out)],
+                              capture_output=True, text=True, env=env, timeout=600)
+
+    for i, (name, kind, detail, blob, ending) in enumerate(cases):
+        target = folder / f"m{i}_{Path(name).stem[:20]}{ending}"
+        target.write_bytes(blob)
+        run = analyze(target, work / f"out{i}")
+        failed = [ln for ln in run.stderr.splitlines() if ln.startswith("failed:")]
+        if "Traceback" in run.stderr:
+            problems.append(f"{name} {detail}: traceback")
+        if run.returncode == 0 and not failed:
+            continue                 # the mutation left a readable file
+        refused += 1
+        if run.returncode == 0 or len(failed) != 1 or target.name not in failed[0]:
+            problems.append(f"{name} {detail}: exit {run.returncode}, {len(failed)} failure line(s): "
+                            f"{run.stderr[-300:]!r}")
+    run = analyze(folder, work / "batch-out")
+    if "Traceback" in run.stderr:
+        problems.append("batch: traceback")
+    if not list((work / "batch-out").glob(f"{good.name}.afmforce.*")):
+        problems.append(f"batch: no result for the good file {good.name} ({run.stderr[-300:]!r})")
+    print(f"CLI: {len(cases)} mutated files ({refused} refused alone) and a batch of them with {good.name}: "
+          f"{len(problems)} problem(s)")
+    shutil.rmtree(work, ignore_errors=True)
+    return problems
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     ap.add_argument("--worker", action="store_true", help=argparse.SUPPRESS)
@@ -479,9 +528,15 @@ def main() -> None:
     ap.add_argument("--limit", type=int, default=0, help="run about this many cases (an even sample)")
     ap.add_argument("--only", default="", help="regular expression of the file names to mutate")
     ap.add_argument("--summary", default="", help="print the summary of an earlier --out JSON and stop")
+    ap.add_argument("--cli", type=int, default=0, help="run `afmforce analyze` on this many mutated files (alone "
+                    "and in a folder with a good file) and stop")
     args = ap.parse_args()
     if args.worker:
         worker()
+        return
+    if args.cli:
+        problems = cli_sample(args.cli, DATA / "jpk_cellhesion_spot3.jpk-force")
+        print("\n".join(problems) or "CLI: every failure one line naming its file, the batch went on")
         return
     if args.summary:
         print(summary(json.loads(Path(args.summary).read_text())))
