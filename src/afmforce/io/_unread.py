@@ -194,18 +194,18 @@ def unread_refusal(path: str | Path) -> str | None:
     return f"{path}: {article} {what}, a format afmforce does not read ({why}): {todo}"
 
 
-#: file start -> (the family it opens, the endings its readers claim): a damaged or cut file of a known
-#: family, or one under another family's ending (:func:`damaged_refusal`)
+#: file start -> (the family it opens, the identifiers of its readers in ``FORMATS``, whose endings it should
+#: bear): a damaged or cut file of a known family, or one under another family's ending (:func:`damaged_refusal`)
 MAGIC: dict[bytes, tuple[str, tuple[str, ...]]] = {
-    b"PK\x03\x04": ("a zip archive (JPK force file)", (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series")),
-    b"\x89HDF\r\n\x1a\n": ("an HDF5 file", (".h5", ".hdf5", ".hdf")),
-    b"\\*Force file list": ("a Bruker NanoScope force file", (".spm", ".pfc", ".000-.999")),
-    b"ARDF": ("an Asylum ARDF file", (".ardf",)),
-    b"[DataSet]": ("a Nanosurf .nid file", (".nid",)),
-    b"WSxM file copyright": ("a WSxM file", (".curves",)),
-    b"II*\x00": ("a TIFF file", (".tiff", ".tif")),
-    b"MM\x00*": ("a TIFF file", (".tiff", ".tif")),
-    b"\x05\x00": ("an Igor binary wave", (".ibw",)),
+    b"PK\x03\x04": ("a zip archive (JPK force file)", ("jpk-force",)),
+    b"\x89HDF\r\n\x1a\n": ("an HDF5 file", ("afmforce-hdf5", "afmformats-hdf5")),
+    b"\\*Force file list": ("a Bruker NanoScope force file", ("bruker-nanoscope",)),
+    b"ARDF": ("an Asylum ARDF file", ("asylum-ardf",)),
+    b"[DataSet]": ("a Nanosurf .nid file", ("nanosurf-nid",)),
+    b"WSxM file copyright": ("a WSxM file", ("wsxm-curves",)),
+    b"II*\x00": ("a TIFF file", ("park-tiff",)),
+    b"MM\x00*": ("a TIFF file", ("park-tiff",)),
+    b"\x05\x00": ("an Igor binary wave", ("asylum-ibw",)),
 }
 _AGAIN = "a truncated download or copy, or a disk that filled up: copy the file again from the instrument's computer"
 
@@ -214,8 +214,6 @@ def damaged_refusal(path: str | Path) -> str | None:
     """The line for a file that starts like a family afmforce reads (:data:`MAGIC`) but that no reader
     recognises: under another family's ending (a renamed file), cut short (a zip without its central
     directory at the end) or damaged; None for a file of no known family."""
-    import re
-
     path = Path(path)
     try:
         size = path.stat().st_size
@@ -228,9 +226,13 @@ def damaged_refusal(path: str | Path) -> str | None:
     found = next((v for magic, v in MAGIC.items() if head.startswith(magic)), None)
     if found is None:
         return None
-    family, endings = found
-    name = path.name.lower()
-    if not any(name.endswith(e) for e in endings) and not (".000-.999" in endings and re.search(r"\.\d{3}$", name)):
+    from . import FORMATS
+
+    family, readers = found
+    readers = [FORMATS[r] for r in readers if r in FORMATS]
+    endings = list(dict.fromkeys([e for f in readers for e in f.suffixes]
+                                 + [".000-.999" for f in readers if f.pattern]))
+    if readers and not any(f.claims(path.name) for f in readers):
         return (f"{path}: its first bytes are those of {family}, not of a file of the ending "
                 f"'{path.suffix}': renamed? give it its own ending ({', '.join(endings)})")
     if head.startswith(b"PK\x03\x04"):
