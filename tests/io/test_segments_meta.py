@@ -305,5 +305,8 @@ def test_chiaro_truncated_row_is_named(tmp_path):
     path = tmp_path / "cut.txt"
     table = _chiaro(path, b"\xb5")
     path.write_bytes(path.read_bytes()[:-20])
+    with pytest.raises(FileFormatError, match="ends inside its last line"):   # io.cut_mid_line, for every text table
+        load(path)
+    path.write_bytes(path.read_bytes() + b"\n")     # the cut row with its line break: the reader's own check
     with pytest.raises(FileFormatError, match=f"row {table.shape[0]} of the Chiaro table has fewer"):
         load(path)

@@ -32,7 +32,7 @@ from ._meta import METADATA, check_meta_override, parse_meta_args, require_metad
 
 __all__ = ["ReaderFormat", "FORMATS", "register_format", "unregister_format", "load", "find_format", "formats_table", "METADATA", "refusal",
            "supported_suffixes", "is_supported", "in_folder", "require_metadata", "formats_markdown", "check_meta_override",
-           "parse_meta_args", "run_with_timeout", "FileTimeoutError"]
+           "parse_meta_args", "run_with_timeout", "FileTimeoutError", "damage", "cut_mid_line"]
 
 Loader = Callable[..., list]
 
@@ -63,6 +63,8 @@ class ReaderFormat:
         Regular expression for endings that are not fixed (``\\.\\d{3}$``: numbered files).
     requires : tuple of str
         Metadata the user must give because the file lacks it.
+    text : bool
+        The file is a table of text lines: one cut inside its last row is refused (:func:`cut_mid_line`).
     deflection : str
         Unit of the deflection signal the reader returns.
     """
@@ -78,6 +80,7 @@ class ReaderFormat:
     pattern: str = ""
     signature: str = ""
     supplies: tuple[str, ...] = field(default=())
+    text: bool = False
 
     def claims(self, name: str) -> bool:
         """Does the file name (any case) end in one of this format's endings?"""
@@ -104,7 +107,7 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("afmforce-raw", "afmforce raw text", (".txt", ".tsv", ".raw"), native.detect_raw_text,
                  native.load_rawfile, via="afmforce", deflection="V, m or N",
                  signature='"# format: afmforce-raw" header (or "#" lines and a deflection_signal column)',
-                 supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency", "theta0")),
+                 text=True, supplies=(*_CAL, "velocity", "sample_rate", "resonance_frequency", "theta0")),
     ReaderFormat("afmforce-hdf5", "afmforce raw HDF5", (".h5", ".hdf5", ".hdf"), native.detect_raw_hdf5,
                  native.load_rawfile, via="afmforce", deflection="V, m or N",
                  signature='HDF5, root attribute format = "afmforce-raw"',
@@ -120,7 +123,7 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("afmformats-tab", "afmformats tab-separated export", (".tab",),
                  _lazy("_afmformats", "detect_afmformats"), _lazy("_afmformats", "load_export"),
                  via="afmformats", signature='first line "# afmformats <version>", JSON metadata block',
-                 supplies=(*_CAL, "velocity", "sample_rate")),
+                 text=True, supplies=(*_CAL, "velocity", "sample_rate")),
     ReaderFormat("bruker-nanoscope", "Bruker NanoScope binary force file (v5-v9)", (".spm", ".pfc"),
                  _lazy("nanoscope", "detect_nanoscope"), _lazy("nanoscope", "load_nanoscope"),
                  via="afmforce", deflection="V", pattern=r"\.\d{3}$",
@@ -133,12 +136,12 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
                  signature='\\* or \\? header lines (or "\\..." quoted: NanoScope Analysis), then tab- or comma-'
                            'separated <Name>_<unit>_<Ex or Rt> columns (or processed Force and Separation only: force '
                            'in N); or one plotted run: a unit row (nm nN), position and force',
-                 supplies=(*_CAL, "velocity", "sample_rate")),
+                 text=True, supplies=(*_CAL, "velocity", "sample_rate")),
     ReaderFormat("jpk-txt", "JPK Data Processing text export", (".txt", ".out", ".tsv"),
                  _lazy("jpk_text", "detect_jpk_text"), _lazy("jpk_text", "load_jpk_text"),
                  via="afmforce", deflection="N, m or V (as exported)",
                  signature="'# segment:' blocks with '# columns:' and '# units:' lines (JPK DP Export -> Text)",
-                 supplies=(*_CAL, "sample_rate")),
+                 text=True, supplies=(*_CAL, "sample_rate")),
     ReaderFormat("jpk-force", "JPK force curve / force map / QI data (calibrated)",
                  (".jpk-force", ".jpk-force-map", ".jpk-qi-data", ".jpk-qi-series"),
                  _lazy("jpk_zip", "detect_jpk"), _lazy("_afmformats", "load_jpk"),
@@ -171,15 +174,15 @@ FORMATS: dict[str, ReaderFormat] = {f.identifier: f for f in (
     ReaderFormat("afm-workshop-csv", "AFM Workshop CSV export", (".csv",),
                  _lazy("_afmformats", "detect_workshop"), _lazy("_afmformats", "load_workshop"),
                  via="afmformats", deflection="N (V for T-B(V) files)",
-                 signature='first line "Force-Distance Curve", then Z-Sense and Force or T-B(V) columns',
+                 text=True, signature='first line "Force-Distance Curve", then Z-Sense and Force or T-B(V) columns',
                  requires=_CAL),
     ReaderFormat("ntmdt-txt", "NT-MDT Nova text export", (".txt",),
                  _lazy("_afmformats", "detect_ntmdt"), _lazy("_afmformats", "load_ntmdt"),
                  via="afmformats", requires=_CAL, deflection="V",
-                 signature="three tab-separated numeric columns (decimal commas)"),
+                 text=True, signature="three tab-separated numeric columns (decimal commas)"),
     ReaderFormat("chiaro-txt", "Optics11 Chiaro or Piuma indenter text export", (".txt",),
                  _lazy("chiaro", "detect_chiaro"), _lazy("chiaro", "load_chiaro"),
-                 via="afmforce", supplies=("spring_constant", "velocity", "radius"),
+                 via="afmforce", text=True, supplies=("spring_constant", "velocity", "radius"),
                  signature="k (N/m) header line, Time (s)/Load (uN)/Indentation/Cantilever/Piezo columns"),
     ReaderFormat("wsxm-curves", "WSxM (Nanotec) force curves", (".curves",),
                  _lazy("wsxm", "detect_wsxm_curves"), _lazy("wsxm", "load_wsxm_curves"),
@@ -315,6 +318,11 @@ def _find_format(path: Path) -> ReaderFormat:
     known = unread_refusal(path)   # a family afmforce knows but does not read (a TIFF image under .tiff)
     if known:
         raise FileFormatError(known)
+    from ._unread import damaged_refusal
+
+    cut = damaged_refusal(path)    # starts like a family afmforce reads: cut short or damaged
+    if cut:
+        raise FileFormatError(cut)
     raise FileFormatError(
         f"{path}: content not recognised as any of: {', '.join(f.name for f in candidates)}; if it is one of "
         f"them, name its reader as `format` (one of {', '.join(f.identifier for f in candidates)}): its "
@@ -414,6 +422,10 @@ def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
         fmt = FORMATS[format]
     else:
         fmt = find_format(path)
+    if fmt.text:
+        cut = cut_mid_line(path)
+        if cut:
+            raise FileFormatError(cut)
     try:
         curves = fmt.loader(path, meta_override=meta, callback=callback)
     except FileFormatError as exc:
@@ -425,12 +437,62 @@ def _load(path, *, meta_override, callback, format, require) -> list[RawCurve]:
     except MemoryError:
         raise FileFormatError(f"{path}: too large or damaged (out of memory while reading)") from None
     except BaseException as exc:  # third-party parsers raise anything (afmformats: BaseException subclasses)
-        raise FileFormatError(refusal(path, fmt, exc, chosen=format is not None)) from None
+        raise FileFormatError(damage(path, exc) or refusal(path, fmt, exc, chosen=format is not None)) from None
     if not curves:
         raise FileFormatError(f"{path}: no force curve in the file")
     for curve in curves:
         require_metadata(curve, tuple(require), str(path))
     return curves
+
+
+def cut_mid_line(path: str | Path) -> str | None:
+    """Why a text table ends inside its last row, or None: the file lacks the line break after its last
+    line, and that line has fewer fields than the row before it, or a shorter last field (``1.2345e-0``
+    of a cut ``1.2345e-09``: a value 10^9 times too large, read as it stands). A complete file without
+    the final line break (same fields, same width) passes."""
+    path = Path(path)
+    size = path.stat().st_size
+    with open(path, "rb") as fh:
+        fh.seek(max(0, size - 8192))
+        tail = fh.read()
+    if not tail or tail[-1:] in (b"\n", b"\r"):
+        return None
+    lines = [ln for ln in re.split(rb"[\r\n]+", tail) if ln.strip()]
+    if len(lines) < 2:
+        return None
+    last, prev = (re.split(rb"[\s,;]+", ln.strip()) for ln in lines[-2:][::-1])
+    if len(last) == len(prev) and len(last[-1]) >= len(prev[-1]):
+        return None
+    shown = lines[-1].strip()[-40:].decode("latin-1")
+    return (f"{path}: the file ends inside its last line ('...{shown}': no line break, and fewer or shorter "
+            "fields than the row before): cut short, a truncated download or a full disk; copy it again (if the "
+            "file is complete, end its last line with a line break)")
+
+
+def damage(path: str | Path, exc: BaseException) -> str | None:
+    """What a reader's exception says of damaged bytes, in words with what to do; None when it is no
+    sign of damage (then :func:`refusal` says which reader stopped on what).
+
+    A zip member whose checksum fails or whose compressed stream breaks (``zipfile.BadZipFile``,
+    ``zlib.error``: a JPK archive corrupted or cut in transfer), an HDF5 dataset h5py cannot decode
+    (``OSError`` raised in h5py), an arithmetic error on a header value (``ZeroDivisionError``,
+    ``OverflowError``: a damaged number).
+    """
+    import zipfile
+    import zlib
+
+    text = " ".join(str(exc).split()).replace("`", "'")[:160] or "no detail"
+    again = "a corrupted or cut copy (download, full disk): copy the file again from the instrument's computer"
+    if isinstance(exc, (zipfile.BadZipFile, zlib.error)) or (isinstance(exc, EOFError) and "compressed" in text):
+        return f"{path}: damaged zip archive ({text}): a member's bytes fail their checksum or do not decompress; {again}"
+    if isinstance(exc, OSError) and (type(exc).__module__ or "").startswith("h5py") or \
+            isinstance(exc, OSError) and ("synchronously" in text or "HDF5" in text):
+        return f"{path}: damaged HDF5 file ({text}): h5py cannot decode its data; {again}"
+    if isinstance(exc, (ZeroDivisionError, OverflowError, FloatingPointError)):
+        return (f"{path}: a number in the file's header is damaged ({type(exc).__name__}: {text}: a zero, "
+                f"infinite or huge value where a size, rate or scale belongs); {again}, or give the value as "
+                "`meta_override`")
+    return None
 
 
 def _unexpected(exc: BaseException) -> str:

@@ -38,7 +38,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
-from ..errors import FileFormatError, MissingMetadataError
+from ..errors import AfmforceError, FileFormatError, MissingMetadataError
 from .curve import RawCurve
 from ._jpk_fast import load_jpk_data
 from ._meta import AFMFORMATS_KEYS, afmformats_override, finalize_curve, missing_metadata, orient, segment_code
@@ -207,11 +207,12 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
     with arc:
         check_member_sizes(arc, str(path))      # before either reader unpacks a member
         single = any(n.startswith("segments/") for n in arc.namelist())
+        ours: FileFormatError | None = None
         if single:  # one curve: decode it directly
             try:
                 return [_jpk_force(load_jpk_zip(path, meta_override=meta_override, callback=callback)[0])]
-            except FileFormatError:
-                pass  # a variant our decoder does not know: afmformats may
+            except FileFormatError as exc:
+                ours = exc  # a variant our decoder does not know: afmformats may
         try:
             curves = load_afmformats(path, meta_override=meta_override, callback=callback, reader="jpk-force",
                                      styles=lambda dd: segment_styles(arc, dd.metadata.get("enum"), str(path)))
@@ -226,6 +227,16 @@ def load_jpk(path: Path, *, meta_override: Mapping[str, Any], callback: Callable
                 return [_jpk_force(c) for c in load_jpk_zip(path, meta_override=meta_override, callback=callback)]
             except FileFormatError as ours:
                 raise FileFormatError(f"{ours}; afmformats' reader: {str(exc).split(': ', 1)[-1]}") from None
+        except (AfmforceError, KeyboardInterrupt, SystemExit, GeneratorExit):
+            raise
+        except BaseException:   # afmformats' errors derive from BaseException
+            # afmformats stopped on its own error (a damaged header: ReadJPKError 'Could not find property',
+            # a failed CRC): our decoder's reason names the damage ("damaged JPK archive ...")
+            if ours is not None:
+                raise ours from None
+            if single:
+                raise
+            return [_jpk_force(c) for c in load_jpk_zip(path, meta_override=meta_override, callback=callback)]
 
 
 def _header_rate(curve: RawCurve, arc: zipfile.ZipFile, meta_override: Mapping[str, Any]) -> RawCurve:

@@ -314,4 +314,9 @@ def finalize_curve(curve: RawCurve, path: str) -> RawCurve:
             raise FileFormatError(f"{path}: metadata {key} [{field.unit}] {exc}, got {value!r}; "
                                   f"the file is damaged, give the right value (`{key}`)"
                                   ) from None
+        spec = QUANTITIES.get(key)   # the quantity's declared valid range: k = 2^31-1 N/m is no result
+        if spec is not None and spec.bounded and not isinstance(value, (str, bool)) and not spec.contains(value):
+            raise FileFormatError(f"{path}: metadata {key} = {spec.show(value)} is out of range: no instrument "
+                                  f"gives it ({key} must lie in {spec.range_text()}); the file's header is "
+                                  f"damaged or mis-scaled, give the right value (`{key}`)")
     return first_approach_only(curve)

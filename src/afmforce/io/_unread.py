@@ -33,8 +33,8 @@ UNREAD: dict[str, tuple[str, str, str]] = {
              "save the curves from WSxM as a .curves series (read by 'wsxm-curves'), or " + _EXPORT),
     ".stp": ("WSxM image (.stp)", "it is an image, not a force curve",
              "give the force curves of the session (.curves)"),
-    ".tiff": ("TIFF file", "", ""),
-    ".tif": ("TIFF file", "", ""),
+    ".tiff": ("a TIFF file", "", ""),
+    ".tif": ("a TIFF file", "", ""),
     ".uff": ("PyFMReader UFF text file (a re-saved curve)",
              "it has no time column, and one made from a Bruker file keeps the approach in that file's order "
              "(turning point first) and gives the ramp rate as its sampling rate",
@@ -192,3 +192,72 @@ def unread_refusal(path: str | Path) -> str | None:
             todo += f" ({source})"
     article = "an" if what[:1] in "AEIOU" or what.startswith("NT-") else "a"
     return f"{path}: {article} {what}, a format afmforce does not read ({why}): {todo}"
+
+
+#: file start -> (the family it opens, the identifiers of its readers in ``FORMATS``, whose endings it should
+#: bear): a damaged or cut file of a known family, or one under another family's ending (:func:`damaged_refusal`)
+MAGIC: dict[bytes, tuple[str, tuple[str, ...]]] = {
+    b"PK\x03\x04": ("a zip archive (JPK force file)", ("jpk-force",)),
+    b"\x89HDF\r\n\x1a\n": ("an HDF5 file", ("afmforce-hdf5", "afmformats-hdf5")),
+    b"\\*Force file list": ("a Bruker NanoScope force file", ("bruker-nanoscope",)),
+    b"ARDF": ("an Asylum ARDF file", ("asylum-ardf",)),
+    b"[DataSet]": ("a Nanosurf .nid file", ("nanosurf-nid",)),
+    b"WSxM file copyright": ("a WSxM file", ("wsxm-curves",)),
+    b"II*\x00": ("a TIFF file", ("park-tiff",)),
+    b"MM\x00*": ("a TIFF file", ("park-tiff",)),
+    b"\x05\x00": ("an Igor binary wave", ("asylum-ibw",)),
+}
+_AGAIN = "a truncated download or copy, or a disk that filled up: copy the file again from the instrument's computer"
+
+
+def damaged_refusal(path: str | Path) -> str | None:
+    """The line for a file that starts like a family afmforce reads (:data:`MAGIC`) but that no reader
+    recognises: under another family's ending (a renamed file), cut short (a zip without its central
+    directory at the end) or damaged; None for a file of no known family."""
+    path = Path(path)
+    try:
+        size = path.stat().st_size
+        with open(path, "rb") as fh:
+            head = fh.read(64)
+            fh.seek(max(0, size - 65558))   # a zip's end record (22 bytes + a comment of at most 64 KiB)
+            tail = fh.read()
+    except OSError:
+        return None
+    found = next((v for magic, v in MAGIC.items() if head.startswith(magic)), None)
+    if found is None:
+        return None
+    from . import FORMATS
+
+    family, readers = found
+    readers = [FORMATS[r] for r in readers if r in FORMATS]
+    endings = list(dict.fromkeys([e for f in readers for e in f.suffixes]
+                                 + [".000-.999" for f in readers if f.pattern]))
+    if readers and not any(f.claims(path.name) for f in readers):
+        return (f"{path}: its first bytes are those of {family}, not of a file of the ending "
+                f"'{path.suffix}': renamed? give it its own ending ({', '.join(endings)})")
+    if head.startswith(b"PK\x03\x04"):
+        if b"PK\x05\x06" not in tail:
+            return (f"{path}: {family} cut short: its table of contents at the end is missing ({size} bytes); "
+                    + _AGAIN)
+        import zipfile
+
+        try:
+            with zipfile.ZipFile(path) as arc:
+                bad = arc.testzip()
+        except Exception as exc:  # noqa: BLE001  any failure of the archive is its damage
+            bad = f"{type(exc).__name__}: {str(exc)[:120]}"
+        return None if bad is None else (f"{path}: damaged {family[2:]}: {bad} fails its checksum or does not "
+                                         "decompress; " + _AGAIN)
+    if head.startswith(b"\x89HDF"):
+        try:
+            import h5py
+
+            with h5py.File(path, "r"):
+                return None    # a whole HDF5 file of another program: not damaged, only not recognised
+        except ImportError:
+            return None
+        except Exception:  # noqa: BLE001  h5py cannot open it: cut or damaged
+            pass
+    return (f"{path}: starts as {family}, but the rest of its content is not recognised ({size} bytes): cut short "
+            f"or damaged ({_AGAIN}), or a variant afmforce does not read (name its reader as `format` to see "
+            "what it finds wrong)")

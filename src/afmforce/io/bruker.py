@@ -55,6 +55,7 @@ from typing import Any, Callable, Mapping
 
 import numpy as np
 
+from .._fields import QUANTITIES
 from ..errors import FileFormatError
 from .curve import RawCurve
 from ._afmformats import orient
@@ -378,8 +379,17 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
             meta["sample_rate"] = 1.0 / step
     else:
         rate = _header_value(header, "Scan rate")  # ramps (extend + retract) per second
-        if rate and rate > 0:
-            dt = 1.0 / (rate * n * (2 if len(parts) == 1 else 1))  # one run: half a ramp
+        given = (meta_override or {}).get("sample_rate")
+        if given or (rate and rate > 0):
+            rate_hz = rate * n * (2 if len(parts) == 1 else 1) if rate and rate > 0 else float(given)  # one run:
+            if not QUANTITIES["sample_rate"].contains(rate_hz):   # half a ramp; a damaged \Scan rate (1e308: dt = 0)
+                if not given:
+                    raise FileFormatError(
+                        f"{where}: the header's \\Scan rate {rate!r} Hz over {n} samples gives a sample rate of "
+                        f"{rate_hz:g} Hz, outside {QUANTITIES['sample_rate'].range_text()}; the header is damaged, "
+                        "give the right `sample_rate`")
+                rate_hz = float(given)
+            dt = 1.0 / rate_hz
             time = dt * np.arange(n)
             meta["sample_rate"] = 1.0 / dt
         else:
