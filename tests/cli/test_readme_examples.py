@@ -1,4 +1,6 @@
-"""Every ``afmforce ...`` line of the README's bash blocks runs as written (issue 24).
+"""Every ``afmforce ...`` line of the README's bash blocks runs as written (issue 24), and every
+command the docs show (docs/*.md: bash blocks and inline `afmforce ...` spans) names a real command
+and only flags it has, and parses as written (a renamed flag fails here, not in a user's shell).
 
 The lines run in order in one empty folder (a later line may read what an earlier one wrote:
 ``simulate --raw run.txt`` then ``analyze run.txt``), in this process. Commands that take
@@ -63,3 +65,75 @@ def test_every_readme_command_runs_as_written(tmp_path, monkeypatch, capsys):
         assert code == 0, (argv, err)
         assert "Traceback" not in err and "error:" not in err, (argv, err)
         assert out.strip(), argv
+
+
+DOC_PAGES = [README, *sorted((README.parent / "docs").glob("*.md"))]
+
+
+def doc_command_lines() -> list[tuple[str, str, bool]]:
+    """``(page, line, whole)`` of every ``afmforce`` command the docs show: each line of a ```bash
+    block, continuation lines joined (``whole``: a command to type as it stands, unless it holds a
+    placeholder, ``...`` or ``[--optional]``), and each inline `afmforce ...` span (a fragment)."""
+    out = []
+    for page in DOC_PAGES:
+        text = page.read_text(encoding="utf-8")
+        for block in re.findall(r"```bash\n(.*?)```", text, flags=re.S):
+            for ln in block.replace("\\\n", " ").splitlines():
+                if ln.strip().startswith("afmforce "):
+                    out.append((page.name, ln.strip(), True))
+        for span in re.findall(r"`(afmforce [^`]*)`", text):
+            out.append((page.name, span, False))
+    return out
+
+
+def _options(command: str) -> tuple[set[str], dict[str, set[str]]]:
+    """The option strings of ``command`` and of each of its sub-commands (``calibrate thermal``)."""
+    import argparse
+
+    parser = build_parser(command)
+    sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices[command]
+    own, subs = set(), {}
+    for action in sub._actions:
+        own |= set(action.option_strings)
+        if isinstance(action, argparse._SubParsersAction):
+            subs = {name: {o for a in p._actions for o in a.option_strings} for name, p in action.choices.items()}
+    return own, subs
+
+
+def test_every_documented_command_names_a_command_and_its_flags():
+    from afmforce.cli.main import COMMANDS
+
+    lines = doc_command_lines()
+    assert len(lines) > 150 and {page for page, _, _ in lines} >= {"README.md", "analysis.md", "fit.md"}
+    options = {}
+    bad = []
+    for page, line, _ in lines:
+        argv = shlex.split(line.replace("\\|", "|"), comments=True)[1:]
+        if not argv or argv[0].startswith("-"):              # `afmforce --debug COMMAND`, `--version`
+            continue
+        for command in argv[0].rstrip(":").split("/"):       # `afmforce simulate/fit/plan --medium water`
+            if command not in COMMANDS:
+                bad.append(f"{page}: `{line}`: no command {command!r}")
+                continue
+            own, subs = options.setdefault(command, _options(command))
+            allowed = own.union(*(subs[a] for a in argv[1:] if a in subs))
+            bad += [f"{page}: `{line}`: {command} has no {a.split('=')[0]}" for a in argv[1:]
+                    if a.startswith("--") and a.split("=")[0] not in allowed]
+    assert not bad, "\n".join(bad)
+
+
+def test_every_documented_command_line_parses_as_written(capsys):
+    from afmforce.cli.main import _join_negative_values
+
+    bad = []
+    for page, line, whole in doc_command_lines():
+        if not whole or "..." in line or " [" in line:
+            continue
+        argv = _join_negative_values(shlex.split(line, comments=True)[1:])
+        try:
+            build_parser(argv[0]).parse_args(argv)
+        except SystemExit as stop:
+            if stop.code:                                    # `--help` exits 0
+                bad.append(f"{page}: `{line}`: {capsys.readouterr().err.strip()}")
+    capsys.readouterr()
+    assert not bad, "\n".join(bad)
