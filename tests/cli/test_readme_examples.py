@@ -64,6 +64,8 @@ def test_every_readme_command_runs_as_written(tmp_path, monkeypatch, capsys):
         out, err = capsys.readouterr()
         assert code == 0, (argv, err)
         assert "Traceback" not in err and "error:" not in err, (argv, err)
+        # a README example that warns (a simulation still in contact at its end: no pull-off) is one to fix
+        assert "warning:" not in err, (argv, err)
         assert out.strip(), argv
 
 
@@ -136,4 +138,58 @@ def test_every_documented_command_line_parses_as_written(capsys):
             if stop.code:                                    # `--help` exits 0
                 bad.append(f"{page}: `{line}`: {capsys.readouterr().err.strip()}")
     capsys.readouterr()
+    assert not bad, "\n".join(bad)
+
+
+#: Documented commands that warn on purpose: the page explains the warning (page: the command's start).
+WARN_ON_PURPOSE = {
+    # the Fig 1 spring's pull-off hangs on damping the model lacks (docs/dynamics.md, "Damping the model lacks")
+    ("dynamics.md", "afmforce simulate --model spring --mass 10ug --spring-constant 0.21N/m"),
+}
+
+
+#: A user's file a documented command reads, as the shipped file that stands for it.
+STAND_INS = {"spectrum.tnd": ("thermal", "jpk-water")}
+
+
+def _self_contained(line: str) -> bool:
+    """A documented command that reads no user file but STAND_INS: the simulation, statics, diagnosis,
+    the calibration of shipped or virtual spectra (and the files earlier lines of its page wrote:
+    `calibrate thermal spectrum.tnd --out calib.json`, then `--probe-calibration calib.json`)."""
+    argv = shlex.split(line, comments=True)[1:]
+    if argv[0] in ("simulate", "statics", "diagnose"):
+        return not {"--config", "--instrument-config"} & set(argv)
+    if argv[0] == "calibrate":
+        return (argv[1] in ("sader", "virtual") or "--example" in argv
+                or argv[1:3] in (["thermal", "beam.psd"], ["thermal", "spectrum.tnd"]))
+    return argv[:2] == ["sweep", "--list-parameters"]
+
+
+@pytest.mark.slow
+def test_documented_commands_that_read_no_user_file_run_as_written_without_a_warning(tmp_path, monkeypatch, capsys):
+    """Each page's self-contained commands, in order in one empty folder, as a user types them: exit 0,
+    no error and no warning on stderr (a documented simulation that ends still in contact, 'no pull-off;
+    lower end', is an example to fix), unless the page explains the warning (WARN_ON_PURPOSE)."""
+    monkeypatch.chdir(tmp_path)
+    ran, bad = [], []
+    for page, line, whole in doc_command_lines():
+        if page == "README.md" or not whole or "..." in line or " [" in line or not _self_contained(line):
+            continue
+        if "--help" in line.split():
+            continue
+        folder = tmp_path / page
+        if not folder.is_dir():
+            from afmforce import datasets
+
+            folder.mkdir()
+            for name, (kind, what) in STAND_INS.items():
+                (folder / name).symlink_to(datasets.thermal_example(what) if kind == "thermal" else what)
+        monkeypatch.chdir(folder)
+        code = main(shlex.split(line, comments=True)[1:])
+        err = capsys.readouterr().err
+        ran.append(line)
+        on_purpose = any(page == p and line.startswith(s) for p, s in WARN_ON_PURPOSE)
+        if code != 0 or "error:" in err or ("warning:" in err and not on_purpose):
+            bad.append(f"{page}: `{line}` -> exit {code}: {err.strip()[-300:]}")
+    assert len(ran) >= 10, ran
     assert not bad, "\n".join(bad)
