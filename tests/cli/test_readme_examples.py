@@ -193,3 +193,36 @@ def test_documented_commands_that_read_no_user_file_run_as_written_without_a_war
             bad.append(f"{page}: `{line}` -> exit {code}: {err.strip()[-300:]}")
     assert len(ran) >= 10, ran
     assert not bad, "\n".join(bad)
+
+
+def test_documented_synopses_show_the_parsers_defaults():
+    """A synopsis (`afmforce serve [--port 8765] [--session-ttl 24h] ...`, docs/web.md) shows each option's
+    default: the one its parser declares (or, for a default computed at run time, the one its --help
+    states from the declaration: afmforce.limits' storage bounds)."""
+    import argparse
+
+    checked = 0
+    for page in DOC_PAGES:
+        for block in re.findall(r"```bash\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S):
+            synopsis = re.match(r"afmforce (\w+) \[", block)
+            if not synopsis:
+                continue
+            command = synopsis.group(1)
+            parser = build_parser(command)
+            sub = next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices[command]
+            actions = {o: a for a in sub._actions for o in a.option_strings}
+            for flag, shown in re.findall(r"\[(--[\w-]+) ([^\]\s]+)", block):
+                if re.fullmatch(r"[A-Z_]+", shown):      # a placeholder: DIR, T
+                    continue
+                action = actions[flag]
+                if isinstance(action, argparse._AppendAction):   # repeatable: the value is an example
+                    continue
+                default = action.default
+                if default is None:
+                    stated = re.search(r"\(default ([^;)\s]+)", action.help % {"default": None})
+                    default = stated.group(1) if stated else None
+                same = (str(default) == shown or (isinstance(default, (int, float))
+                                                  and float(shown) == pytest.approx(default)))
+                assert same, f"{page.name}: {flag} {shown} shown, the parser's default is {default!r}"
+                checked += 1
+    assert checked >= 7
