@@ -226,3 +226,21 @@ def test_documented_synopses_show_the_parsers_defaults():
                 assert same, f"{page.name}: {flag} {shown} shown, the parser's default is {default!r}"
                 checked += 1
     assert checked >= 7
+
+
+@pytest.mark.slow
+def test_fit_md_states_what_its_example_fit_gives(tmp_path, monkeypatch, capsys):
+    """docs/fit.md's first command, `afmforce fit --example speeds --free hamaker,xi`, gives the xi its
+    comment states (it said 0.011 +- 0.0005 kg/s; the fit gives 0.0104 +- 0.0006) and no warning (it
+    warned that 1 of 2717 trial runs of the search had failed: nothing a user could act on)."""
+    import json
+
+    monkeypatch.chdir(tmp_path)
+    line = next(ln for page, ln, whole in doc_command_lines()
+                if page == "fit.md" and whole and ln.startswith("afmforce fit --example speeds"))
+    value, se = map(float, re.search(r"xi = ([\d.]+) \+- ([\d.]+) kg/s", line).groups())
+    assert main([*shlex.split(line, comments=True)[1:], "--no-profile", "--json"]) == 0   # the same fit
+    cap = capsys.readouterr()
+    xi = json.loads(cap.out)["parameters"]["xi"]
+    assert abs(xi["value"] - value) <= 1e-4 and abs(xi["stderr"] - se) <= 1e-4, xi
+    assert "warning:" not in cap.err, cap.err
