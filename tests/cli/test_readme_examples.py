@@ -244,3 +244,22 @@ def test_fit_md_states_what_its_example_fit_gives(tmp_path, monkeypatch, capsys)
     xi = json.loads(cap.out)["parameters"]["xi"]
     assert abs(xi["value"] - value) <= 1e-4 and abs(xi["stderr"] - se) <= 1e-4, xi
     assert "warning:" not in cap.err, cap.err
+
+
+def test_documented_console_sessions_print_what_they_show(tmp_path, monkeypatch, capsys):
+    """A ``$ afmforce ...`` line of a docs block and the lines after it (docs/ranges.md's refused radius)
+    are the command and its output, as typed in an empty folder (values are checked before any file is read)."""
+    monkeypatch.chdir(tmp_path)
+    sessions = []
+    for page in DOC_PAGES:
+        for block in re.findall(r"```[a-z]*\n(.*?)```", page.read_text(encoding="utf-8"), flags=re.S):
+            for cmd, shown in re.findall(r"^\$ (afmforce [^\n]*)\n((?:(?!\$ )[^\n]*\n)*)", block, flags=re.M):
+                sessions.append((page.name, cmd, shown.strip()))
+    assert sessions
+    for page, cmd, shown in sessions:
+        try:
+            main(shlex.split(cmd)[1:])
+        except SystemExit:                                   # a usage error, as the shell sees it
+            pass
+        cap = capsys.readouterr()
+        assert (cap.out + cap.err).strip() == shown, (page, cmd)
