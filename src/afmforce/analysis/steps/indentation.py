@@ -34,7 +34,7 @@ INDENTATION = AnalysisStep(
             ResultField("contact_point", "m", "contact point (indentation fit; piezo position)", summary=True,
                         column=True),
             ResultField("work_of_adhesion", "J/m^2",
-                        "work of adhesion (JKR, DMT or Maugis fit; --fast-map: DMT from the adhesion)",
+                        "work of adhesion (JKR, DMT or Maugis fit; a fast map: DMT from the adhesion)",
                         summary=True, column=True),
             ResultField("work_of_adhesion_se", "J/m^2", "standard error of the work of adhesion", column=True)),
     collect=_indentation_fields)
