@@ -64,3 +64,22 @@ def test_surface_laws_table_matches_the_records():
     assert block.rstrip("\n") == laws_markdown(), "docs/dynamics.md laws table is stale"
     for name in LAWS:
         assert f"| `{name}` |" in block
+
+
+@pytest.mark.parametrize("doc", ["README.md", "docs/formats.md"])
+def test_the_corpus_size_the_docs_state_is_the_corpus(doc):
+    """The README said 48 files from 15 families while the corpus (tests/data/corpus/corpus.json, its
+    declaration: one entry per file) held 54 and docs/formats.md said 16 families."""
+    import json
+    import re
+
+    corpus = DOCS.parent / "tests" / "data" / "corpus"
+    table = json.loads((corpus / "corpus.json").read_text())
+    files = {p.name for p in corpus.iterdir()} - {"README.md", "LICENSES", "corpus.json", "make_corpus_table.py"}
+    assert set(table) == files
+    text = re.sub(r"\s+", " ", (DOCS.parent / doc).read_text(encoding="utf-8"))
+    stated = re.search(r"(\d+) public (?:force-curve )?files.*? from (\d+) (?:instrument )?families", text)
+    assert stated, f"{doc} no longer states the corpus's size"
+    assert int(stated.group(1)) == len(table), f"{doc} states {stated.group(1)} corpus files; it holds {len(table)}"
+    families = re.search(r"from (\d+) families", re.sub(r"\s+", " ", (DOCS / "formats.md").read_text()))
+    assert stated.group(2) == families.group(1)      # README and docs/formats.md say the same

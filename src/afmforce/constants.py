@@ -28,6 +28,9 @@ ETA_AIR = 1.8e-5
 #: number depends on it. Tabulated material data keep the temperature they were measured at
 #: (:data:`STANDARD_TEMPERATURE`).
 DEFAULT_TEMPERATURE = 295.0
+#: The driving speeds ``afmforce plan`` (:func:`afmforce.fit.plan.plan_experiment`) weighs when none are
+#: given [m/s]: the paper's range, 0.2-20 um/s.
+PLAN_SPEEDS = (0.2e-6, 0.5e-6, 1e-6, 2e-6, 5e-6, 10e-6, 20e-6)
 #: The paper's room temperature [K] (section 3: 22.7 C), for reference: its figures take no temperature.
 PAPER_ROOM_TEMPERATURE = 273.15 + 22.7
 #: 25 C [K]: the temperature of tabulated water data (relative permittivity 78.5, surface tension 0.072 N/m,

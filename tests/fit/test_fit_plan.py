@@ -52,3 +52,32 @@ def test_plan_cli_json(capsys):
     d = json.loads(capsys.readouterr().out)
     assert d["best_design"]["speeds"] == pytest.approx([0.5e-6, 5e-6])
     assert d["best_design"]["sigma_xi"] > 0
+
+
+def test_docs_fit_md_states_what_its_plan_command_gives(capsys):
+    """docs/fit.md's numbers for its own `afmforce plan --xi 5e-3kg/s --speeds 0.2um/s,...,10um/s --noise
+    0.01nm` are what that command gives (they had drifted: 1.2e-4 kg/s stated, 1.8e-4 given)."""
+    import json
+    import re
+    import shlex
+    from pathlib import Path
+
+    text = (Path(__file__).resolve().parents[2] / "docs" / "fit.md").read_text(encoding="utf-8")
+    line = next(ln for ln in text.splitlines() if ln.startswith("afmforce plan --xi 5e-3kg/s --speeds"))
+    assert main([*shlex.split(line, comments=True)[1:], "--json"]) == 0
+    plan = json.loads(capsys.readouterr().out)
+
+    def e(x: float) -> str:   # 1.8e−4, as the page writes it
+        mantissa, exponent = f"{x:.1e}".split("e")
+        return f"{mantissa}e\u2212{int(exponent[1:])}"
+
+    alone = sorted(c["sigma_xi_alone"] for c in plan["candidates"])
+    paired = {round(c["speed"] * 1e6, 3): c["sigma_xi_paired"] for c in plan["candidates"]}
+    best = plan["best_design"]
+    said = re.sub(r"\s+", " ", text)
+    assert f"σ(ξ) {alone[0] * 1e3:.1f}–{e(alone[-1])} kg/s" in said
+    lo, hi = sorted((paired[2.0], paired[5.0]))
+    assert f"paired with a slow one {lo * 1e4:.1f}–{e(hi)};" in said
+    assert sorted(round(v * 1e6, 3) for v in best["speeds"]) == [0.2, 0.2, 5.0, 5.0]
+    assert "two slow (0.2 µm/s) and two fast (5 µm/s) curves" in said
+    assert f"σ(ξ) = {e(best['sigma_xi'])} kg/s" in said

@@ -444,21 +444,36 @@ def _oscillation_origin(ok):
     return oscillation_origin_of(ok)
 
 
-_COLUMNS = (  # column, header, scale
-    ("spring_constant", "k [N/m]", 1.0),
-    ("sensitivity_used", "sens. used [nm/V]", 1e9),  # the forces' (file/user or fit: the cell says which)
-    ("sensitivity_fit", "sens. fit [nm/V]", 1e9),
-    ("adhesion_force", "adhesion F [nN]", 1e9),  # a force: negative (a pull); maps show its depth, positive
-    ("rupture_distance", "rupture [nm]", 1e9),
-    ("indentation", "indent. [nm]", 1e9),
-    ("youngs_modulus", "E [kPa]", 1e-3),
-    ("shift", "shift [nm]", 1e9),
-    ("jump_in_separation", "jump-in h [nm]", 1e9),
-    ("jump_in_force", "jump-in F [nN]", 1e9),
-    ("pull_off_force", "pull-off F [nN]", 1e9),
-    ("hamaker_radius", "A R [1e-27 J m]", 1e27),
-    ("oscillation_frequency", "osc. [Hz]", 1.0),
+#: The table's columns: (summary column, label, the prefix its declared SI unit is shown with); the
+#: unit itself is the column's declared one (afmforce.sweep.summary.SUMMARY_UNITS), see :func:`_columns`.
+_SHOWN = (
+    ("spring_constant", "k", ""),
+    ("sensitivity_used", "sens. used", "n"),  # the forces' (file/user or fit: the cell says which)
+    ("sensitivity_fit", "sens. fit", "n"),
+    ("adhesion_force", "adhesion F", "n"),  # a force: negative (a pull); maps show its depth, positive
+    ("rupture_distance", "rupture", "n"),
+    ("indentation", "indent.", "n"),
+    ("youngs_modulus", "E", "k"),
+    ("shift", "shift", "n"),
+    ("jump_in_separation", "jump-in h", "n"),
+    ("jump_in_force", "jump-in F", "n"),
+    ("pull_off_force", "pull-off F", "n"),
+    ("hamaker_radius", "A R", "1e-27 "),
+    ("oscillation_frequency", "osc.", ""),
+    ("work_of_adhesion", "w", "m"),   # --indentation-model jkr|dmt|maugis: shown when some curve has it
 )
+#: A prefix's factor from SI to the shown unit.
+_PREFIX = {"": 1.0, "n": 1e9, "m": 1e3, "k": 1e-3, "1e-27 ": 1e27}
+
+
+def _columns() -> tuple[tuple[str, str, float], ...]:
+    """(column, header with its unit, factor from SI) of the table, from the declared units."""
+    from ..sweep.summary import SUMMARY_UNITS
+
+    return tuple((c, f"{label} [{prefix}{SUMMARY_UNITS[c]}]", _PREFIX[prefix]) for c, label, prefix in _SHOWN)
+
+
+_ASKED_COLUMNS = frozenset({"work_of_adhesion"})
 
 
 def _fmt(v: float) -> str:
@@ -479,11 +494,13 @@ def _print_rows(ok, verbose: bool = False, given: str = "file") -> None:
     """One line per curve (small runs), then one short verdict line per curve (``verbose``: in full)."""
     if not len(ok):
         return
-    heads = ["file", "contact"] + [h for _, h, _ in _COLUMNS] + ["friction", "dynamic"]
+    columns = [(c, h, s) for c, h, s in _columns() if c not in _ASKED_COLUMNS
+               or (c in ok and any(math.isfinite(float(v)) for v in ok[c] if v is not None))]
+    heads = ["file", "contact"] + [h for _, h, _ in columns] + ["friction", "dynamic"]
     rows = []
     for _, r in ok.iterrows():
         vals = [_fmt(float(r[c]) * s) + (_calibration_tag(r, given) if c == "sensitivity_used" else "")
-                for c, _, s in _COLUMNS]
+                for c, _, s in columns]
         rows.append([r["name"], r["contact_kind"] or "-"] + vals
                     + [r["friction"] or "-", _dynamic_label(r)])
     widths = [max(len(h), *(len(row[i]) for row in rows)) for i, h in enumerate(heads)]
@@ -514,7 +531,9 @@ def _print_stats(ok) -> None:
 
     print(f"{len(ok)} curves analysed; {int(ok['dynamic'].fillna(False).sum())} flagged dynamic")
     print(f"  {'quantity':<16}  {'min':>10}  {'median':>10}  {'max':>10}  {'found':>7}")
-    for col, head, scale in _COLUMNS:
+    for col, head, scale in _columns():
+        if col not in ok:
+            continue
         v = ok[col].to_numpy(float) * scale
         v = v[np.isfinite(v)]
         if len(v):

@@ -107,10 +107,10 @@ def register(sub) -> None:
               "--quality-factor-2)")
     add_field(v, "quality_factor_2", help="quality factor of the beam's second mode")
     add_field(v, "temperature", default=DEFAULT_TEMPERATURE)     # the one lab temperature of calibrate (constants)
-    v.add_argument("--averages", type=int, default=64, help="periodograms averaged (default 64)")
+    v.add_argument("--averages", type=int, default=64, help="periodograms averaged (default %(default)s)")
     v.add_argument("--white", type=float, default=1e-27, metavar="M2_PER_HZ",
-                   help="white detector floor [m^2/Hz] (default 1e-27)")
-    v.add_argument("--seed", type=int, default=0, help="random seed (default 0)")
+                   help="white detector floor [m^2/Hz] (default %(default)g)")
+    v.add_argument("--seed", type=int, default=0, help="random seed (default %(default)s)")
     v.add_argument("--spectrum", metavar="FILE.psd", required=True, help="the spectrum file to write")
     _common(v)
     v.set_defaults(func=run_virtual)

@@ -102,9 +102,9 @@ def register(subparsers) -> argparse.ArgumentParser:
     g.add_argument("--no-retract", action="store_false", dest="retract",
                    help="fit the approach runs only")
     g.add_argument("--level", type=float, default=0.95,
-                   help="confidence level of intervals and friction test (default 0.95)")
+                   help="confidence level of intervals and friction test (default %(default)g)")
     g.add_argument("--starts", type=int, default=2,
-                   help=f"local fits from the best points of a scan in xi (default 2; at most {MAX_STARTS})")
+                   help=f"local fits from the best points of a scan in xi (default %(default)s; at most {MAX_STARTS})")
     g.add_argument("--no-compare", action="store_true",
                    help="skip the model comparison (static / no friction / friction)")
     g.add_argument("--no-profile", action="store_true",

@@ -8,11 +8,19 @@ from __future__ import annotations
 import argparse
 
 from .._files import atomic_write_text
+from ..constants import PLAN_SPEEDS
 from ..limits import MAX_DESIGN_CURVES
 from ._validate import add_field, check_outputs
 from .common import busy, print_json, quantity
 
 __all__ = ["register", "run"]
+
+
+def _simulation_default(name: str) -> float:
+    """The simulation's default of ``name`` [SI] (the plan's curves start from it), for the help."""
+    from ..dynamics import SimulationConfig
+
+    return getattr(SimulationConfig(), name)
 
 
 def register(subparsers) -> argparse.ArgumentParser:
@@ -27,18 +35,19 @@ def register(subparsers) -> argparse.ArgumentParser:
                     "the fastest speed at which the static analysis stays within --force-error.")
     g = p.add_argument_group("design")
     g.add_argument("--speeds", type=_list("velocity", "--speeds"),
-                   default=[0.2e-6, 0.5e-6, 1e-6, 2e-6, 5e-6, 10e-6, 20e-6], metavar="V1,V2,..",
-                   help="candidate driving speeds (default 0.2,0.5,1,2,5,10,20 um/s)")
+                   default=list(PLAN_SPEEDS), metavar="V1,V2,..",
+                   help=f"candidate driving speeds (default {','.join(f'{v * 1e6:g}' for v in PLAN_SPEEDS)} um/s)")
     g.add_argument("--sample-rates", type=_list("frequency", "--sample-rates"), default=None,
                    metavar="F1,F2,..", help="sample rate of each candidate speed "
                                             "(default: --points-per-nm x speed)")
     g.add_argument("--points-per-nm", type=quantity("dimensionless", "--points-per-nm", positive=True), default=2.0,
-                   help="samples per nm of drive travel when no rates are given (default 2)")
+                   help="samples per nm of drive travel when no rates are given (default %(default)g)")
     add_field(g, "deflection_noise", flag="--noise", default=0.05e-9)
-    g.add_argument("--curves", type=int, default=4, help=f"curves in a design (default 4; at most {MAX_DESIGN_CURVES})")
+    g.add_argument("--curves", type=int, default=4,
+                   help=f"curves in a design (default %(default)s; at most {MAX_DESIGN_CURVES})")
     add_field(g, "force_error", help="allowed error of the static pull-in force (default 10 %% of it)")
-    add_field(g, "start", help="start of each approach (default -40 nm)")
-    add_field(g, "turn", help="turn of each approach (default +20 nm)")
+    add_field(g, "start", help="start of each approach", default_from=lambda: _simulation_default("start"))
+    add_field(g, "turn", help="turn of each approach", default_from=lambda: _simulation_default("turn"))
     add_field(g, "slip_target", help="plan the slip length instead: the 95 %% half-width wanted (issue 25; "
                                      "with --slip-length, --medium, --geometry ...; docs/liquid.md)")
     add_model_flags(p)
@@ -52,8 +61,7 @@ def register(subparsers) -> argparse.ArgumentParser:
 
 def _given(args) -> set:
     """Flags typed on the command line (a non-default --speeds)."""
-    default = [0.2e-6, 0.5e-6, 1e-6, 2e-6, 5e-6, 10e-6, 20e-6]
-    return {"--speeds"} if list(args.speeds) != default else set()
+    return {"--speeds"} if list(args.speeds) != list(PLAN_SPEEDS) else set()
 
 
 def run(args: argparse.Namespace) -> int:
@@ -62,8 +70,8 @@ def run(args: argparse.Namespace) -> int:
     from .fit import model_config
 
     check_outputs([("--report", args.report)], force=args.force)
-    drive = {"start": -40e-9 if args.start is None else args.start,
-             "turn": 20e-9 if args.turn is None else args.turn}
+    drive = {name: _simulation_default(name) if getattr(args, name) is None else getattr(args, name)
+             for name in ("start", "turn")}
     args.start = args.turn = None
     cfg = model_config(args).replace(**drive)
     with busy("afmforce plan"):

@@ -14,23 +14,23 @@ from pathlib import Path
 def register(sub) -> None:
     p = sub.add_parser("serve", help="a local web application: analyse, simulate, fit and sweep in the browser",
                        description=__doc__.split("\n\n")[1].replace("\n", " "))
-    p.add_argument("--host", default="127.0.0.1", help="address to bind (default 127.0.0.1; any other "
+    p.add_argument("--host", default="127.0.0.1", help="address to bind (default %(default)s; any other "
                    "address requires a token)")
-    p.add_argument("--port", type=int, default=8765, help="TCP port (default 8765; 0: any free port)")
+    p.add_argument("--port", type=int, default=8765, help="TCP port (default %(default)s; 0: any free port)")
     p.add_argument("--token", default=None, help="token every request must carry (default: none on "
                    "loopback, generated and printed otherwise)")
-    p.add_argument("--max-upload", default="200MB", metavar="SIZE", help="largest upload (default 200MB); "
+    p.add_argument("--max-upload", default="200MB", metavar="SIZE", help="largest upload (default %(default)s); "
                    "larger ones get HTTP 413")
     p.add_argument("--data", type=Path, default=None, metavar="DIR", help="folder for uploads, jobs and sweeps "
                    "(default ~/.afmforce/serve); sweeps left running resume from it")
     p.add_argument("--budget", type=float, default=60.0, metavar="SECONDS",
-                   help="time budget of one analysis or simulation request (default 60 s)")
+                   help="time budget of one analysis or simulation request (default %(default)g s)")
     p.add_argument("--allow-origin", action="append", default=[], metavar="ORIGIN",
                    help="an origin (https://lab.example.org) besides the server's own whose pages may send "
                         "requests (repeatable); every other origin, 'null' included, gets HTTP 403")
     p.add_argument("--session-ttl", default="24h", metavar="TIME",
                    help="a browser session's uploads and jobs are removed this long after its last use "
-                        "(default 24h; units: s, min, h, d)")
+                        "(default %(default)s; units: s, min, h, d)")
     from ..limits import SERVER_SESSION_STORAGE, SERVER_STORAGE
 
     p.add_argument("--session-storage", default=None, metavar="SIZE",

@@ -24,6 +24,7 @@ from typing import Sequence
 
 import numpy as np
 
+from ..constants import PLAN_SPEEDS
 from ..errors import ParameterError
 from .core import base_config
 from .data import prepare_curves
@@ -222,7 +223,7 @@ def fall_note(base, scan: list[dict]) -> str | None:
 
 
 def plan_experiment(model="beam", *, xi: float | None = None, noise: float = 0.05e-9,
-                    speeds: Sequence[float] = (0.2e-6, 0.5e-6, 1e-6, 2e-6, 5e-6, 10e-6, 20e-6),
+                    speeds: Sequence[float] = PLAN_SPEEDS,
                     sample_rates: Sequence[float] | None = None, points_per_nm: float = 2.0,
                     n_curves: int = 4, force_error: float | None = None, **fields) -> Plan:
     """Which speeds and sample rates determine xi best; the fastest static-safe speed.

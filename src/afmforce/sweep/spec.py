@@ -145,7 +145,7 @@ class SweepSpec:
     fixed : tuple of (name, value)
         Settings shared by every run.
     origins : mapping
-        Parameter -> where its values were written, when a settings file gave them (``\`config\` sweep.toml:
+        Parameter -> where its values were written, when a settings file gave them (``--config sweep.toml:
         [grid] velocity``), for the messages of later checks; not part of the runs (nor of the fingerprint).
     """
 

@@ -33,7 +33,8 @@ INDENTATION = AnalysisStep(
             ResultField("youngs_modulus_high", "Pa", "Young's modulus, 95 % interval high", column=True),
             ResultField("contact_point", "m", "contact point (indentation fit; piezo position)", summary=True,
                         column=True),
-            ResultField("work_of_adhesion", "J/m^2", "work of adhesion (JKR, DMT, Maugis fit)", summary=True,
-                        column=True),
+            ResultField("work_of_adhesion", "J/m^2",
+                        "work of adhesion (JKR, DMT or Maugis fit; a fast map: DMT from the adhesion)",
+                        summary=True, column=True),
             ResultField("work_of_adhesion_se", "J/m^2", "standard error of the work of adhesion", column=True)),
     collect=_indentation_fields)
