@@ -174,6 +174,8 @@ def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W, fast):
     if not (P > 0.0 and P < math.inf):  # exp(q) under- or overflowed: a trial step far off, rejected
         return math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, c1
     w = 2.0 * math.pi / P
+    if not w < math.inf:  # a subnormal P (log(P/P0) near -700): every phase is infinite, no fit exists
+        return math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, c1
     res = W[0]
     th = W[1]
     poly = W[2]
@@ -186,6 +188,9 @@ def _vp_core(q, known, P0, period, n_map, x, x2, x3, zm, L, Q0, rp, W, fast):
         p = x[i] + a2 * x2[i] + a3 * x3[i]
         poly[i] = p
         th[i] = w * (zm + c1 * L * p)
+        if not abs(th[i]) < math.inf:  # a trial step far off (c1 or the map's terms overflow): the first
+            # run's Python kernels raised "math domain error" from math.cos(inf); rejected as no fit
+            return math.inf, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, c1
     if fast:
         sincos(th, cr, sr)  # vectorised: the evaluation's cost was mostly libm's cos and sin
     else:

@@ -224,6 +224,9 @@ def impossible_steps(st: State) -> dict[str, str]:
     inferred = _inferred_spring_constant(st)
     if inferred:
         return {step: inferred for step in ("force", *FORCE_STEPS) if step in st.details or step in st.skipped}
+    negative = _negative_indentation(st)
+    if negative:
+        return {"indentation": negative}
     cal, kind = st.details.get("calibration"), st.details.get("kind")
     if cal is None or st.unit != "V" or (kind is not None and kind.kind != "hard") or \
             getattr(cal, "requested", "") == "fit":  # the user asked for the slope's calibration, not the file's
@@ -240,6 +243,26 @@ def impossible_steps(st: State) -> dict[str, str]:
            f"{float(given) * 1e9:.4g} nm/V (more than {MAX_CALIBRATION_RATIO:g} x off): the file's sensitivity is "
            "stale or mistyped, or the file is read with a wrong scale; suspect input: sensitivity")
     return {step: why for step in FORCE_STEPS if step in st.details or step in st.skipped}
+
+
+def _negative_indentation(st: State) -> str | None:
+    """Why a soft contact gives no modulus (None: it may): its deflection rises more than its position travels
+    after the contact point (the kind step's ``NEGATIVE_INDENTATION``: no indentation is reported), so the
+    deflection is overestimated and the fitted modulus rests on indentations no sample allows.
+
+    Found on an Asylum MFP-3D SMFS curve of 2025 (YY-Zhang1999/Gen_SMFS ``data/raw/Imagef1_0000.ibw``, InvOLS
+    179.86 nm/V where the straight part of the contact gives 1.63 x less): with a 20 nm paraboloid it gave
+    E = 55.35 kPa beside the warnings that the indentation is impossible and not reported."""
+    kind, cp = st.details.get("kind"), st.details.get("contact_point")
+    if kind is None or kind.kind != "soft" or cp is None or not ("indentation" in st.details
+                                                              or "indentation" in st.skipped):
+        return None
+    depth = getattr(cp, "indentation", math.nan)
+    if not (math.isfinite(depth) and depth <= 0):
+        return None
+    return (f"{IMPOSSIBLE}: after the contact point the deflection rises {-depth * 1e9:.3g} nm more than the "
+            "position travels (a negative indentation): the deflection is overestimated, no modulus is a result; "
+            "suspect input: sensitivity (an uncalibrated or stale InvOLS; calibrate on a hard surface)")
 
 
 def _inferred_spring_constant(st: State) -> str | None:

@@ -13,6 +13,7 @@ sensitivity rescales the force here (force = k x volts x InvOLS).
 from __future__ import annotations
 
 import dataclasses
+import math
 import struct
 from pathlib import Path
 from typing import Any, Callable, Mapping
@@ -315,7 +316,12 @@ def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCur
     time = np.arange(signal.size) / rate if rate else np.arange(signal.size, dtype=float)
     if not rate:
         meta["time_is_sample_index"] = True
-    seg = _segments_from_note(note.get("Indexes", ""), z, note.get("Direction", ""))
+    keep = _recorded(signal, z)
+    filled = z if keep is None else np.interp(np.arange(z.size), np.flatnonzero(keep), z[keep])
+    seg = _segments_from_note(note.get("Indexes", ""), filled, note.get("Direction", ""))
+    if keep is not None:  # the padding of a map's curve (its Indexes count it): no data, dropped and said
+        meta["unrecorded_samples"] = int((~keep).sum())
+        time, z, signal, seg = time[keep], z[keep], signal[keep], seg[keep]
     zn, _, sign = orient(z, None, seg)
     meta.update(source_file=where, reader="asylum-ibw", format="Asylum Igor binary waves (one per channel)",
                 position_sign=sign, position_channel=pos_ch)
@@ -324,12 +330,68 @@ def load_channel_pair(path: Path, *, meta_override: Mapping[str, Any]) -> RawCur
     return finalize_curve(curve, where)
 
 
+def _recorded(signal: np.ndarray, z: np.ndarray) -> np.ndarray | None:
+    """The samples to keep of a per-channel curve whose waves start or end with NaN in both channels (None:
+    every sample is finite, or NaN lies inside the data: then the curve is refused as damaged, by
+    :func:`finalize_curve`). Asylum force-map curves saved one wave per channel carry such padding (BAMresearch/
+    SOFA ``test_data/fdc_without_image``: 2-173 NaN samples at the start of both ``Defl`` and ``ZSnsr`` on every
+    curve), which afmforce refused ("column piezo_nominal has 173 non-finite values ...: remove those rows",
+    of a binary file)."""
+    ok = np.isfinite(signal) & np.isfinite(z)
+    if ok.all() or not ok.any():
+        return None
+    first, last = int(np.argmax(ok)), int(ok.size - 1 - np.argmax(ok[::-1]))
+    if not ok[first:last + 1].all() or last - first + 1 < 4:
+        return None
+    if not (np.all(~np.isfinite(signal[:first])) and np.all(~np.isfinite(signal[last + 1:]))
+            and np.all(~np.isfinite(z[:first])) and np.all(~np.isfinite(z[last + 1:]))):
+        return None  # one channel recorded where the other did not: not padding
+    return ok
+
+
+#: A segment between a note's ``Indexes`` whose position moves less than this fraction of the largest
+#: segment's motion is a dwell [-] (a dwell's piezo holds; an approach or retract sweeps the ramp).
+DWELL_MOTION = 0.1
+
+
+def _segments_by_motion(idx: list[int], z: np.ndarray) -> np.ndarray | None:
+    """Codes of the three segments of four ``Indexes`` (no ``Direction``) from the position ``z`` itself:
+    the one that barely moves (under :data:`DWELL_MOTION` of the largest motion) is the dwell, the first
+    moving one the approach, the other (moving the opposite way) the retract. None where the motion does
+    not tell (not exactly one still segment between two opposite sweeps): the caller's default then.
+
+    Asylum's force-map waves saved one per channel (BAMresearch/SOFA ``test_data``: ``Indexes:0,2487,5015,
+    5214`` and no ``Direction``) sweep out, back, then dwell away from the surface; a dwell at the surface
+    lies between the sweeps: the order is the data's, not a guess."""
+    n = len(z)
+    bounds = list(zip(idx[:-1], idx[1:-1] + [n]))  # the last index is the last sample: its segment ends at n
+    motion = []
+    for a, b in bounds:
+        part = np.asarray(z[a:b], dtype=float)
+        part = part[np.isfinite(part)]
+        motion.append(float(part[-1] - part[0]) if part.size >= 2 else math.nan)
+    if not all(math.isfinite(m) for m in motion):
+        return None
+    big = max(abs(m) for m in motion)
+    still = [abs(m) < DWELL_MOTION * big for m in motion]
+    sweeps = [m for m, s in zip(motion, still) if not s]
+    if big <= 0 or still.count(True) != 1 or len(sweeps) != 2 or sweeps[0] * sweeps[1] >= 0:
+        return None
+    seg = np.empty(n, dtype=np.int8)
+    first = True
+    for (a, b), s in zip(bounds, still):
+        seg[a:b] = 2 if s else 0 if first else 1
+        first = first and s
+    return seg
+
+
 def _segments_from_note(indexes: str, z: np.ndarray, direction: str = "") -> np.ndarray:
     """Segment codes from the note: ``Indexes`` are the ends of the segments (``0,a,b,...,end``),
     ``Direction`` what the piezo does in each (``NaN,1,-1,0``: a leading NaN, then 1 extend,
     -1 retract, 0 dwell). ARDF force maps write extend, retract, then a dwell at the end; without
-    ``Direction`` three indexes are approach and retract, four approach, dwell and retract
-    (a dwell at the surface). Without usable indexes the curve turns at the extreme of z."""
+    ``Direction`` three indexes are approach and retract; four are told apart by the motion of z
+    (:func:`_segments_by_motion`), else approach, dwell and retract (a dwell at the surface). Without
+    usable indexes the curve turns at the extreme of z."""
     n = len(z)
     try:
         idx = [int(float(v)) for v in indexes.split(",") if v.strip()]
@@ -350,6 +412,9 @@ def _segments_from_note(indexes: str, z: np.ndarray, direction: str = "") -> np.
     if len(idx) == 3 and 0 < idx[1] < n - 1:
         return np.where(np.arange(n) < idx[1], 0, 1).astype(np.int8)
     if len(idx) == 4 and 0 < idx[1] < idx[2] < n - 1:
+        moved = _segments_by_motion(idx, z)
+        if moved is not None:
+            return moved
         return np.select([np.arange(n) < idx[1], np.arange(n) < idx[2]], [0, 2], 1).astype(np.int8)
     turn = int(np.argmax(z)) if z[n // 2] > z[0] else int(np.argmin(z))
     return np.where(np.arange(n) < turn, 0, 1).astype(np.int8)

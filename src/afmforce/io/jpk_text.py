@@ -32,13 +32,16 @@ __all__ = ["detect_jpk_text", "load_jpk_text"]
 
 _MEASURED = ("capacitiveSensorHeight", "measuredHeight", "strainGaugeHeight")
 _UNITS = {"N": "N", "m": "m", "V": "V"}
+#: ``# direction:`` of the older JPK exports (SPM 3/4, 2011: ``map-data-...-0000.out``, one block per direction
+#: and no ``# segment:`` line) -> the segment word of the later ones
+_DIRECTIONS = {"trace": "extend", "retrace": "retract"}
 
 
 def detect_jpk_text(path: Path) -> bool:
     """A JPK DP text export: ``# segment:`` and ``# columns:`` header lines near the top."""
     with open(path, "rb") as fh:
         head = fh.read(65536).decode("latin-1", errors="replace")
-    return "\n# segment:" in head and "\n# columns:" in head and (
+    return ("\n# segment:" in head or "\n# direction:" in head) and "\n# columns:" in head and (
         head.startswith("# TEXT EXPORT") or "# springConstant:" in head or "# units:" in head)
 
 
@@ -61,12 +64,15 @@ def _blocks(text: str, where: str) -> list[dict[str, Any]]:
             if in_rows:  # a header after rows: the block ended
                 close()
                 rows.clear()
-                header = {k: v for k, v in header.items() if k not in ("segment", "segmentIndex", "columns")}
+                header = {k: v for k, v in header.items()
+                          if k not in ("segment", "segmentIndex", "columns", "direction")}
                 in_rows = False
             body = s[1:].strip()
             if ":" in body:
                 key, value = body.split(":", 1)
                 header[key.strip()] = value.strip()
+                if key.strip() == "direction":  # JPK SPM 3/4 exports (2011): trace and retrace, no segment line
+                    header["segment"] = _DIRECTIONS.get(value.strip().lower(), value.strip())
             continue
         in_rows = True
         rows.append(s)
@@ -112,6 +118,10 @@ def _curve(blocks: list[dict[str, Any]], where: str, meta_override: Mapping[str,
     for b in blocks:
         h = b["header"]
         tab = _table(b, where)
+        clock = tab.get("seriesTime", tab.get("time"))
+        if clock is not None and clock.size > 1 and np.all(np.diff(clock) < 0):
+            # the rows run back in time (the SPM 3/4 exports' retrace: from its far end to the turning point)
+            tab = {k: v[::-1] for k, v in tab.items()}
         names = h.get("columns", "").split()
         units = dict(zip(names, h.get("units", "").split()))
         if "vDeflection" not in tab:

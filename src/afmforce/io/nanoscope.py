@@ -30,8 +30,11 @@ range whose low bits carry nothing (v9 force volumes: every value a multiple of 
 or one less for negatives) are those 16-bit numbers shifted, and are shifted back; a
 signal still beyond the ADC's range is refused rather than read 256 x too large.
 
-A force volume (``\Start context: FVOL``) holds ``Samps/line x Lines`` curves of
-the ``\*Ciao scan list`` (one grid point each, row by row from the first line);
+A force volume (``\Start context: FVOL``) holds ``Samps/line x Number of lines`` curves
+of its own images (the ``\*Ciao image list`` after the force data, one value per curve), else
+``Samps/line x Lines`` of the ``\*Ciao scan list`` (the topography image's, which may be finer:
+64 x 64 pixels over 16 x 16 curves in a NanoScope 8.15 file); one grid point each, row by row from
+the first line;
 each curve carries its grid indices (``map_x``, ``map_y``, ``map_nx``, ``map_ny``)
 and its position (``position_x``, ``position_y`` [m]: the grid point's centre in
 the ``Scan Size`` square). The spring constant is the deflection channel's (other
@@ -229,7 +232,24 @@ def _grid(sections, where: str) -> tuple[int, int, float] | None:
     if size is not None and re.search(_NUMBER, size):
         unit = size.strip().split()[-1] if len(size.split()) > 1 else "nm"
         width = _number(size, where, "Scan Size", 0) * _UNITS.get(unit, 1e-9)
-    return int(_number(nx, where, "Samps/line")), int(_number(ny, where, "Lines")), width
+    nx, ny = int(_number(nx, where, "Samps/line")), int(_number(ny, where, "Lines"))
+    return (*(_volume_image_grid(sections, where) or (nx, ny)), width)
+
+
+def _volume_image_grid(sections, where: str) -> tuple[int, int] | None:
+    r"""``(nx, ny)`` of a force volume's own images: the ``\*Ciao image list`` sections after its force data
+    (one value per curve, e.g. the Deflection Error or Height at each grid point), or None where it has none.
+    The scan list's ``Samps/line`` x ``Lines`` is the topography image's, which may be finer than the grid of
+    curves (NanoScope 8.15, JSotres/FSAS ``Test.003``: a 64 x 64 height image, 16 x 16 curves)."""
+    after = False
+    for name, entries in sections:
+        if name.lower() == "ciao force image list":
+            after = True
+        elif after and name.lower() == "ciao image list":
+            nx, ny = _find([("", entries)], "Samps/line"), _find([("", entries)], "Number of lines")
+            if nx is not None and ny is not None and re.search(_NUMBER, nx) and re.search(_NUMBER, ny):
+                return int(_number(nx, where, "Samps/line")), int(_number(ny, where, "Number of lines"))
+    return None
 
 
 def count_curves(path: Path) -> int | None:

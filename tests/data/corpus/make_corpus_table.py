@@ -30,6 +30,7 @@ COMMITS = {
     "bicarlsen/jpk_reader": "e9486d42bf89a8b36a8d2ef4c6e3bbd885571352",
     "HoseynAAmiri/pyrtz2": "016ef73e7ccc88305f3186f7a8f2e9931b9e8560",
     "CellMechLab/softmech": "d94b9dc40d11032b11596fd116c2e24703b6474d",
+    "JSotres/FSAS-ForceSpectroscopyAnalysisSoftware-MatLab": "a319f85ffa43993f313c3e301a26a7a0798cc030",
 }
 
 #: file -> (family, repository, path in it (zip member after ":"), licence)
@@ -58,6 +59,7 @@ SOURCES = {
     "bruker-nanoscope_v8.15_Bruker-example_Force.spm": ("Bruker NanoScope binary (Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/Force.spm", "Apache-2.0"),
     "bruker-nanoscope_v9.30_Bruker-example_ForceHold.spm": ("Bruker NanoScope binary (force hold: extend, 0.1 s hold, retract; Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/ForceHold.spm", "Apache-2.0"),
     "bruker-nanoscope_v9.40_Bruker-example_ForceHoldSweep.spm": ("Bruker NanoScope binary (force hold with amplitude and phase channels; Bruker's own example)", "PyPI nanoscope 1.2.300", "nanoscope/Example Nanoscope Files/ForceHoldSweep.spm", "Apache-2.0"),
+    "bruker-nanoscope_v8.15_MultiMode_FSAS_mica-air_Test.000": ("Bruker NanoScope binary (MultiMode, mica in air; its DeflSens 1.38 x the contact slope's)", "JSotres/FSAS-ForceSpectroscopyAnalysisSoftware-MatLab", "SampleFiles/Test.000", "BSD 2-Clause"),
     "bruker-nanoscope_v8.15_sapphire_TAP525.001": ("Bruker NanoScope binary", "pycroscopy/SciFiDatasets", "data/microscopy/spm/afm/BrukerReader_ForceCurve_Sapphire_TAP525.001", "MIT"),
     "bruker-nanoscope_v9.2_Egel4_00025.spm": ("Bruker NanoScope binary", "DyNaMo-INSERM/PyFMlab_DyNaMo", "PyFMReader_DyNaMo/tests/testfiles/20200904_Egel4-Z1.0_00025.spm", "MIT"),
     "chiaro-txt_V3.4.1_displacement-hold.txt": ("Optics11 Chiaro text (V3.4.1, displacement profile with a 1 s hold)", "CellMechLab/softmech", "optics11_new_new.txt", "MIT"),
@@ -447,6 +449,7 @@ def readme(table: dict) -> str:
         "Licences: MIT (afmformats (c) 2019 Paul Mueller; SciFiDatasets (c) 2021 pycroscopy; PyFMlab_DyNaMo",
         "(c) 2023 Javier Lopez Alonso; ForceMetric (c) 2018 Jacob Kienast; jpkfile (c) 2016 Ilyas Kuhlemann;",
         "pyrtz2 (c) 2024 Hoseyn Amiri; softmech (c) 2021 Massimo Vassalli; jpk_reader (c) 2025 Brian Carlsen, MIT or Apache-2.0 at the user's choice: MIT taken),",
+        "BSD 2-Clause (FSAS (c) 2019 Javier Sotres, Malmoe University),",
         "and Apache-2.0 (Fodis, N. Galvanetto et al., Biophys. J. 114, 1264 (2018); the NanoScope Python Toolbox",
         "(c) 2021 Bruker Inc., PyPI `nanoscope` 1.2.300, whose wheel's SHA-1 stands for the commit),",
         "http://www.apache.org/licenses/LICENSE-2.0; files unchanged). The full licence texts are in",

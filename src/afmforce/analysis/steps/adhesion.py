@@ -134,8 +134,29 @@ def _negative_rupture(st: State, res, hard: bool) -> str | None:
                 f"{NEGATIVE_RUPTURE_SIGMAS:g} deflection noise sigmas ({sigma * 1e9:.2g} nm): the tip left at about "
                 "zero separation; the separation is not resolved better than that")
     bound = f"the drift lines' bound +-{b * 1e9:.3g} nm" if math.isfinite(b) else "no drift bound assessed"
+    steep = _retract_contact_rate(st)
+    if steep is not None:  # the sensitivity, not the zero: in contact the separation itself runs backwards
+        return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible) and beyond "
+                f"{bound}: on the retract's contact line the deflection moves {steep:.3g} x the position with the "
+                "sensitivity used, so the separation runs backwards in contact and the rupture's is no distance; "
+                "suspect input: sensitivity (`calibration` fit uses the compliance slope)")
     return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible) and beyond "
             f"{bound}: the separation's zero or the retract's baseline is wrong on this curve")
+
+
+def _retract_contact_rate(st: State) -> float | None:
+    """The retract's compliance line as deflection per position with the sensitivity used, where it runs
+    backwards (above :data:`~afmforce.analysis.plausibility.MAX_CONTACT_SLOPE`); None otherwise. JSotres/FSAS'
+    NanoScope 8.15 force volume (DeflSens 41.14 nm/V, its contact lines 1.35-1.38 x the ramp): 132 of 256
+    ruptures at -0.02 to -9.9 nm, blamed on "the separation's zero or the retract's baseline"."""
+    from ..plausibility import MAX_CONTACT_SLOPE
+
+    comp = st.details.get("compliance")
+    line = getattr(comp, "retract", None)
+    if line is None or not getattr(line, "found", False) or not math.isfinite(st.factor):
+        return None
+    rate = line.slope * st.factor
+    return float(rate) if math.isfinite(rate) and rate > MAX_CONTACT_SLOPE else None
 
 
 def _adhesion_fields(st: State) -> dict:
