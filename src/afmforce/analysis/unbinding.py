@@ -33,6 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ._adhesion_kernel import adhesion_core, baseline_spread_core
+from ._median import median
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import mad_sigma, robust_line_thin
 from .regions import RunRegions
@@ -343,7 +344,7 @@ def _abrupt_return(u: np.ndarray, back: int, w: int, thr: float) -> bool:
     lo, hi = max(back - m, 0), min(back + m, u.size)
     if back - lo < 2 or hi - back < 2:
         return True   # at an end of the record: nothing to tell a step from
-    return float(np.median(u[back:hi]) - np.median(u[lo:back])) > BACK_FRACTION * thr
+    return float(median(u[back:hi]) - median(u[lo:back])) > BACK_FRACTION * thr   # np.median's numbers
 
 
 def baseline_spread(x: np.ndarray, y: np.ndarray, free: np.ndarray, a: float, b: float, xm: float, j: int,
