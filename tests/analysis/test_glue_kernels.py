@@ -9,6 +9,8 @@ numpy's ``ptp``, ``isfinite``, ``median`` and ``flatnonzero`` for the small kern
 
 from __future__ import annotations
 
+import dataclasses
+
 import json
 import warnings
 from pathlib import Path
@@ -178,7 +180,12 @@ def test_retract_adhesion_equals_numpy_on_the_real_files():
         for nsigma in (o.nsigma, 2.0):
             args = (st.deflection, st.position, st.retract, st.spring_constant)
             fast = unbinding.retract_adhesion(*args, nsigma=nsigma)
-            assert repr(fast) == repr(_numpy_adhesion(*args, nsigma=nsigma))
+            ref = _numpy_adhesion(*args, nsigma=nsigma)
+            # the baseline systematic's two small fits sum their normal equations in order where numpy's BLAS
+            # has an order of its own (baseline_spread_core): equal to rounding; every other number bit for bit
+            assert fast.baseline_spread == pytest.approx(ref.baseline_spread, rel=1e-12, nan_ok=True)
+            assert repr(dataclasses.replace(fast, baseline_spread=0.0)) == repr(
+                dataclasses.replace(ref, baseline_spread=0.0))
             found += fast.found
     assert found >= 3
 

@@ -16,11 +16,12 @@ import math
 import numpy as np
 from numba import njit
 
+from ._contact_kernel import pairwise_sum
 from ._glue_kernel import BRACKET, middle_bracket
-from ._numeric import mad_sigma
+from ._numeric import _middle, mad_sigma, solve_small
 from ._oscillation_kernel import _running_median_nearest
 
-__all__ = ["adhesion_core", "running_median_nearest"]
+__all__ = ["adhesion_core", "running_median_nearest", "baseline_spread_core"]
 
 
 @njit(cache=True, nogil=True)
@@ -146,3 +147,113 @@ def adhesion_core(x: np.ndarray, y: np.ndarray, free: np.ndarray, saturated: np.
         height[ns] = rise[g]
         ns += 1
     return True, sigma, j, depth, found, last, at[:ns].copy(), height[:ns].copy()
+
+
+@njit(cache=True, nogil=True)
+def _poly_at(s, y, deg, at):
+    """:func:`~.unbinding._lstsq_at`: the least-squares polynomial of degree ``deg`` (1 or 2) through
+    ``(s, y)``, its normal equations in ``s`` less its mean (numpy's pairwise mean), read at ``at`` (NaN
+    when singular). The inner products are summed in order (numpy's BLAS sums them in an order of its
+    own) and the 3 x 3 system solved by :func:`~._numeric.solve_small` (LAPACK's LU in numpy): the same
+    numbers to rounding."""
+    n = s.size
+    sm = pairwise_sum(s, np.int64(0), n) / n
+    p = deg + 1
+    A = np.zeros((p, p))
+    r = np.zeros(p)
+    a01 = a11 = a12 = a22 = r0 = r1 = r2 = 0.0
+    for i in range(n):
+        t = s[i] - sm
+        t2 = t * t
+        yi = y[i]
+        a01 += t
+        a11 += t2
+        r0 += yi
+        r1 += t * yi
+        if deg == 2:
+            a12 += t * t2
+            a22 += t2 * t2
+            r2 += t2 * yi
+    A[0, 0] = float(n)
+    A[0, 1] = A[1, 0] = a01
+    A[1, 1] = a11
+    r[0] = r0
+    r[1] = r1
+    if deg == 2:
+        A[0, 2] = A[2, 0] = a11
+        A[1, 2] = A[2, 1] = a12
+        A[2, 2] = a22
+        r[2] = r2
+    coef = solve_small(A, r)
+    d = at - sm
+    out = coef[0] + coef[1] * d
+    if deg == 2:
+        out += coef[2] * (d * d)
+    return out
+
+
+@njit(cache=True, nogil=True)
+def baseline_spread_core(x, y, free, a, b, xm, j, thr):
+    """:func:`~.unbinding.baseline_spread` in one call: ``(spread, ok)``; ``ok`` False where a sample is
+    not finite (the caller's numpy code then decides). The selections (the free samples within ``thr`` of
+    the line, the far half by the median) are numpy's exactly; the two fits equal numpy's to rounding
+    (:func:`_poly_at`)."""
+    n = x.size
+    xf = np.empty(n)
+    yf = np.empty(n)
+    m = 0
+    for i in range(n):
+        if free[i]:
+            xi = x[i]
+            yi = y[i]
+            if not (np.isfinite(xi) and np.isfinite(yi)):
+                return np.nan, False
+            if abs(yi - (a + b * (xi - xm))) <= thr:
+                xf[m] = xi
+                yf[m] = yi
+                m += 1
+    xj = x[j]
+    if not (np.isfinite(xj) and np.isfinite(a) and np.isfinite(b) and np.isfinite(xm)):
+        return np.nan, False
+    if m < 10:
+        return np.nan, True
+    xf = xf[:m]
+    yf = yf[:m]
+    c = pairwise_sum(xf, np.int64(0), m) / m
+    lo = xf[0]
+    hi = xf[0]
+    for i in range(m):
+        lo = min(lo, xf[i])
+        hi = max(hi, xf[i])
+    span = hi - lo
+    if span == 0.0:
+        span = 1.0
+    s = np.empty(m)
+    for i in range(m):
+        s[i] = (xf[i] - c) / span
+    sj = (xj - c) / span
+    line = a + b * (xj - xm)
+    out = np.nan
+    quad = _poly_at(s, yf, np.int64(2), sj)
+    if np.isfinite(quad):
+        out = abs(quad - line)
+    buf = xf.copy()
+    half = m // 2
+    even = m % 2 == 0
+    lo_m, hi_m = _middle(buf, half, even)
+    med = (lo_m + hi_m) / 2 if even else hi_m
+    sf = np.empty(m)
+    yh = np.empty(m)
+    k = 0
+    near = xj > c
+    for i in range(m):
+        if (xf[i] <= med) if near else (xf[i] >= med):
+            sf[k] = s[i]
+            yh[k] = yf[i]
+            k += 1
+    if k >= 5:
+        lin = _poly_at(sf[:k], yh[:k], np.int64(1), sj)
+        if np.isfinite(lin):
+            d = abs(lin - line)
+            out = d if not out >= d else out
+    return out, True

@@ -58,37 +58,51 @@ def two_line_split(x: np.ndarray, y: np.ndarray, min_points: int) -> int:
         sy = max(sy, abs(y[i] - my))
     sx = sx if sx > 0 else 1.0
     sy = sy if sy > 0 else 1.0
-    c = np.zeros((n + 1, 5))  # cumulative sums of x, y, xx, xy, yy
+    # cumulative sums of x, y, xx, xy, yy (one array each: the split's loop below reads them unit-stride)
+    c0 = np.empty(n + 1)
+    c1 = np.empty(n + 1)
+    c2 = np.empty(n + 1)
+    c3 = np.empty(n + 1)
+    c4 = np.empty(n + 1)
+    c0[0] = c1[0] = c2[0] = c3[0] = c4[0] = 0.0
     for i in range(n):
         u = (x[i] - mx) / sx
         v = (y[i] - my) / sy
-        c[i + 1, 0] = c[i, 0] + u
-        c[i + 1, 1] = c[i, 1] + v
-        c[i + 1, 2] = c[i, 2] + u * u
-        c[i + 1, 3] = c[i, 3] + u * v
-        c[i + 1, 4] = c[i, 4] + v * v
+        c0[i + 1] = c0[i] + u
+        c1[i + 1] = c1[i] + v
+        c2[i + 1] = c2[i] + u * u
+        c3[i + 1] = c3[i] + u * v
+        c4[i + 1] = c4[i] + v * v
+    # every split's summed squared residuals first (no dependence between splits: its divisions vectorise),
+    # then the first smallest; the same operations on each split as one loop doing both
+    lo = min_points
+    hi = n - min_points + 1
+    sse = np.empty(max(hi - lo, 0))
+    t0, t1, t2, t3, t4 = c0[n], c1[n], c2[n], c3[n], c4[n]
+    for k in range(lo, hi):
+        m = k
+        s0, s1, s2, s3, s4 = c0[k], c1[k], c2[k], c3[k], c4[k]
+        sxx = s2 - s0 * s0 / m
+        sxy = s3 - s0 * s1 / m
+        syy = s4 - s1 * s1 / m
+        r = syy - (sxy * sxy / sxx if sxx > 1e-300 else 0.0)
+        e = max(r, 0.0)
+        m = n - k
+        s0 = t0 - s0
+        s1 = t1 - s1
+        s2 = t2 - s2
+        s3 = t3 - s3
+        s4 = t4 - s4
+        sxx = s2 - s0 * s0 / m
+        sxy = s3 - s0 * s1 / m
+        syy = s4 - s1 * s1 / m
+        r = syy - (sxy * sxy / sxx if sxx > 1e-300 else 0.0)
+        sse[k - lo] = e + max(r, 0.0)
     best = np.inf
     kbest = -1
-    for k in range(min_points, n - min_points + 1):
-        sse = 0.0
-        for part in range(2):
-            if part == 0:
-                m = k
-                s0, s1, s2, s3, s4 = c[k, 0], c[k, 1], c[k, 2], c[k, 3], c[k, 4]
-            else:
-                m = n - k
-                s0 = c[n, 0] - c[k, 0]
-                s1 = c[n, 1] - c[k, 1]
-                s2 = c[n, 2] - c[k, 2]
-                s3 = c[n, 3] - c[k, 3]
-                s4 = c[n, 4] - c[k, 4]
-            sxx = s2 - s0 * s0 / m
-            sxy = s3 - s0 * s1 / m
-            syy = s4 - s1 * s1 / m
-            r = syy - (sxy * sxy / sxx if sxx > 1e-300 else 0.0)
-            sse += max(r, 0.0)
-        if sse < best:
-            best = sse
+    for k in range(lo, hi):
+        if sse[k - lo] < best:
+            best = sse[k - lo]
             kbest = k
     return kbest
 

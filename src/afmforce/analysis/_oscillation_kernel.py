@@ -64,16 +64,66 @@ def median_step(t, index):
     return np.median(d)
 
 
+#: :func:`_running_median_nearest` keeps a window of at most this many samples sorted (O(width) a sample,
+#: without the Fenwick tree's sort of the whole record: 94 -> 7 us for the adhesion's 5-sample window on
+#: 1,700 samples, 49 -> 30 us for the periodogram's 101 bins on 1,000).
+SMALL_WINDOW = 128
+
+
+@njit(cache=True)
+def _running_median_small(p, width, start, out):
+    """:func:`_running_median_nearest` of finite ``p`` into ``out``: the window's samples kept sorted, the
+    sample that leaves found by value (any equal sample is the same number) and the one that enters
+    inserted in place; the median is the middle of the window."""
+    m = p.size
+    h = width // 2
+    win = np.empty(width)
+    for j in range(width):  # the first window, sorted by insertion (its ends repeated)
+        v = p[min(max(start + j - h, 0), m - 1)]
+        k = j
+        while k > 0 and win[k - 1] > v:
+            win[k] = win[k - 1]
+            k -= 1
+        win[k] = v
+    out[0] = win[h]
+    for c in range(start + 1, m):
+        old = p[min(max(c - 1 - h, 0), m - 1)]
+        new = p[min(c + h, m - 1)]
+        k = 0
+        while win[k] != old:
+            k += 1
+        if new >= old:
+            while k + 1 < width and win[k + 1] < new:
+                win[k] = win[k + 1]
+                k += 1
+        else:
+            while k > 0 and win[k - 1] > new:
+                win[k] = win[k - 1]
+                k -= 1
+        win[k] = new
+        out[c - start] = win[h]
+    return out
+
+
 @njit(cache=True)
 def _running_median_nearest(p, width, start=0):
     """``scipy.ndimage.median_filter(p, size=width, mode="nearest")[start:]`` for odd ``width``: the
     window's samples counted by rank in a Fenwick tree, the median found as the middle rank (the
-    median is one of the samples: the same number), O(log n) per sample whatever the width."""
+    median is one of the samples: the same number), O(log n) per sample whatever the width; a window of
+    at most :data:`SMALL_WINDOW` finite samples is kept sorted instead (:func:`_running_median_small`)."""
     m = p.size
     h = width // 2
     out = np.empty(max(m - start, 0))
     if start >= m:
         return out
+    if 1 <= width <= SMALL_WINDOW:
+        finite = True
+        for i in range(max(start - h, 0), m):
+            if not np.isfinite(p[i]):
+                finite = False
+                break
+        if finite:
+            return _running_median_small(p, width, start, out)
     s0 = max(start - h, 0)  # every sample the windows touch lies in p[s0:]
     q = p[s0:]
     nq = q.size

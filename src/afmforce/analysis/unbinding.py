@@ -32,7 +32,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ._adhesion_kernel import adhesion_core
+from ._adhesion_kernel import adhesion_core, baseline_spread_core
+from ._median import median
 from ._glue_kernel import COMPILED, robust_line_ab
 from ._numeric import mad_sigma, robust_line_thin
 from .regions import RunRegions
@@ -343,7 +344,7 @@ def _abrupt_return(u: np.ndarray, back: int, w: int, thr: float) -> bool:
     lo, hi = max(back - m, 0), min(back + m, u.size)
     if back - lo < 2 or hi - back < 2:
         return True   # at an end of the record: nothing to tell a step from
-    return float(np.median(u[back:hi]) - np.median(u[lo:back])) > BACK_FRACTION * thr
+    return float(median(u[back:hi]) - median(u[lo:back])) > BACK_FRACTION * thr   # np.median's numbers
 
 
 def baseline_spread(x: np.ndarray, y: np.ndarray, free: np.ndarray, a: float, b: float, xm: float, j: int,
@@ -366,6 +367,10 @@ def baseline_spread(x: np.ndarray, y: np.ndarray, free: np.ndarray, a: float, b:
     j : int  the dip's run sample
     thr : float  the significance threshold [m]
     """
+    if COMPILED and x.dtype == y.dtype == np.float64 and free.dtype == np.bool_ and x.size == y.size == free.size:
+        out, ok = baseline_spread_core(x, y, free, float(a), float(b), float(xm), int(j), float(thr))
+        if ok:   # (one compiled call: its fits equal numpy's to rounding; issue 35)
+            return float(out)
     xf, yf = x[free], y[free]
     keep = np.abs(yf - (a + b * (xf - xm))) <= thr
     xf, yf = xf[keep], yf[keep]
