@@ -214,6 +214,10 @@ def _results(scan: bool) -> dict:
         # Pa, tests/contact/test_nanite_realfits.py); two steps, no halving, is the polish as stored
         mp.setattr("afmforce.contact.fit._GN_MAX_STEPS", 2)
         mp.setattr("afmforce.contact.fit._GN_HALVINGS", 1)
+        # ... and said nothing when it stopped short (since 2026-11-29: a warning and an open interval)
+        import afmforce.contact.fit as fit_module
+        polish = fit_module._linear_fit
+        mp.setattr(fit_module, "_linear_fit", lambda *a: (polish(*a)[0], True))
         if not scan:
             mp.setattr("afmforce.analysis.steps.contact.without_baseline_step", lambda s, run, unit: (run, None))
         return dict(M.results())

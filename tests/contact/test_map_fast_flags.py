@@ -68,6 +68,6 @@ def test_the_fast_path_reads_the_metadata_typed_as_the_files(tmp_path):
         assert main(["analyze", str(path), "--fast-map", "--serial", "--radius", "5um", "--out", str(out)]
                     + (["--meta", f"poisson={meta}"] if meta else [])) == 0
         (summary,) = out.rglob("summary.csv")
-        rows[meta] = {r["name"]: float(r["youngs_modulus"]) for r in csv.DictReader(summary.open())}
+        rows[meta] = {r["name"]: float(r["youngs_modulus [Pa]"]) for r in csv.DictReader(summary.open())}
     for name, e in rows[None].items():
         assert rows["0.3"][name] == pytest.approx(e * (1 - 0.3 ** 2) / (1 - 0.5 ** 2), rel=1e-9)

@@ -16,6 +16,7 @@ import pytest
 from afmforce.analysis.options import IndentationOptions
 from afmforce.instrument.soft_map import SoftMapConfig, soft_map_fields, write_soft_map
 from afmforce.sweep.map_fast import PixelAnalysis, analyze_map
+from afmforce.sweep.summary import read_summary_csv
 
 CFG = SoftMapConfig(nx=4, ny=4, seed=11)
 ANALYSIS = PixelAnalysis(IndentationOptions(tip_radius=CFG.radius, poisson=CFG.poisson))
@@ -114,7 +115,7 @@ def test_cli_writes_the_maps_of_a_vendor_file(vendor, tmp_path, capsys):
     for q in ("modulus", "topography", "adhesion", "work_of_adhesion"):
         assert f"{path.name}.{q}.png" in names and f"{path.name}.{q}.hist.png" in names
     assert {f"{path.name}.maps.h5", f"{path.name}.histograms.csv", "summary.parquet", "summary.csv"} <= names
-    csv = pd.read_csv(folder / "summary.csv").sort_values(["map_y", "map_x"])
+    csv = read_summary_csv(folder / "summary.csv").sort_values(["map_y", "map_x"])   # names with units, read bare
     assert np.allclose(csv["youngs_modulus"], table["youngs_modulus"], rtol=1e-12)
     with h5py.File(folder / f"{path.name}.maps.h5", "r") as h5:
         modulus, x, y = h5["modulus"][()], h5["x"][()], h5["y"][()]

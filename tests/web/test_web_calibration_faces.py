@@ -33,6 +33,7 @@ from afmforce.cli.main import main
 from afmforce.instrument.soft_map import SoftMapConfig, write_soft_map
 from afmforce.io import load
 from afmforce.sweep.map_fast import PixelAnalysis
+from afmforce.sweep.summary import read_summary_csv
 
 pytest.importorskip("fastapi")
 DATA = Path(__file__).resolve().parents[1] / "data"
@@ -135,7 +136,7 @@ def test_fast_map_applies_the_given_calibration_as_analyze_does(files, tmp_path,
     assert main(["analyze", str(soft), "--fast-map", "--serial", "--out", str(out), "--radius", f"{CFG.radius:g}m",
                  *_flags(soft.name, k, False)]) == 0
     (summary,) = out.rglob("summary.csv")
-    rows = {r["name"]: r for r in csv.DictReader(summary.open())}
+    rows = {r["name"]: r for r in read_summary_csv(summary).to_dict("records")}   # bare names (the CSV's carry units)
     curves = load(soft)
     for i, c in enumerate(curves):
         own = PixelAnalysis(probe=ProbeCalibration(radius=CFG.radius)).row(c)

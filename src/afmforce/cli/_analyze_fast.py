@@ -96,8 +96,8 @@ def failure_lines(failed, limit: int = 20) -> list[str]:
 def run_fast_map(args: argparse.Namespace, refs: list, write_maps, meta: dict | None = None) -> int:
     """``write_maps(table, folder, quantities)``: analyze's map writer (images, HDF5, histograms); ``meta``:
     the metadata typed as the files' (``--meta``, SI; the probe's values are ``args.probe``'s)."""
-    from .._files import atomic_path, atomic_write_text
     from ..sweep.map_fast import PixelAnalysis, analyze_refs
+    from ..sweep.summary import write_table
     from ..analysis.options import IndentationOptions
     from .common import eprint
 
@@ -124,9 +124,7 @@ def run_fast_map(args: argparse.Namespace, refs: list, write_maps, meta: dict | 
         print(line)
     if result.store is not None:
         folder = result.store.root
-        with atomic_path(folder / "summary.parquet") as tmp:
-            table.to_parquet(tmp)
-        atomic_write_text(folder / "summary.csv", table.to_csv(index=False))
+        write_table(table, folder)   # column names with their units, as analyze's (sweep.summary.column_label)
         written = write_maps(table, folder, args.map_quantity or list(FAST_MAP_QUANTITIES))
         print(f"summary in {folder}/: summary.parquet, summary.csv, " + ", ".join(p.name for p in written.values()))
     failed = table[table["error"].notna()]

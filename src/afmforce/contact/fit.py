@@ -131,8 +131,9 @@ _AROUND = np.linspace(-0.02, 0.02, 9)
 _EVEN = np.arange(1.0, 32.0)  # np.linspace(lo, hi, 33)[1:-1] is _EVEN * ((hi - lo) / 32) + lo
 
 
-#: Gauss-Newton steps of :func:`_linear_fit` at most (each while the sum of squares falls, past two only while
-#: the contact point lies within the samples; most fits converge in one or two).
+#: Gauss-Newton steps of :func:`_linear_fit` at most (each while the sum of squares falls; most fits converge in
+#: one or two, a contact point far before the first sample in ~10). A fit that uses them all without converging
+#: says so in its warnings (never a silent non-converged number).
 _GN_MAX_STEPS = 50
 #: Halvings of a Gauss-Newton step that does not lower the sum of squares, before the polish stops.
 _GN_HALVINGS = 8
@@ -180,14 +181,12 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
     # the scan has the contact point to ~1e-4 of a grid step: a polish, continued while the sum of squares
     # falls until the step is below 1e-6 of the travel: the scan's first rounds on every stride-th sample can
     # bracket another point than all samples' optimum (the JPK map curve 1: 12,030 samples, stride 6, 103.5 nm
-    # against 106.7 nm; two steps stopped at 106.34 nm, E 6679 Pa, nanite 6710 Pa). Past two steps only while
-    # the contact point lies within the samples: before the first one (the whole record in contact) the least
-    # squares runs off with the baseline on non-Hertzian contacts (cr00041: 143 -> 395 noise sigmas), which the
-    # indentation step's baseline checks judge from the two-step fit (optics11-piuma test2 stays 2 steps short
-    # of nanite's optimum: paraboloid 340 against 338 Pa)
-    for it in range(_GN_MAX_STEPS):
-        if it >= 2 and not lo <= p[1] <= hi:
-            break   # a contact point before the first sample: extrapolated, left to the step's baseline checks
+    # against 106.7 nm; two steps stopped at 106.34 nm, E 6679 Pa, nanite 6710 Pa). Also where the contact point
+    # leaves the samples (the whole record in contact: optics11-piuma test2, cone 1637 Pa as nanite's, where
+    # stopping two steps after leaving gave 3301 Pa): the caller warns that it is extrapolated
+    # (:func:`_fit_samples`), and the indentation step's baseline checks judge the converged fit
+    converged = False
+    for _it in range(_GN_MAX_STEPS):
         if power is not None:  # compiled, the same numbers
             r, J, _ = power(p, width, True)
         else:
@@ -199,6 +198,7 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
         try:
             dp = _normal_solve(J, r)
         except np.linalg.LinAlgError:
+            converged = True  # singular at p: no descent direction to take
             break
         for _h in range(_GN_HALVINGS):  # a step that overshoots (the law's curvature jumps at each sample
             trial = p + dp               # passed) is halved: the nsfopen curve stopped 0.5 nm off, 0.8 % in E
@@ -214,11 +214,13 @@ def _linear_fit(u, F, key, geom, nu, width, guess):
                 break
             dp = 0.5 * dp
         if s > best:
+            converged = True  # no step along the Gauss-Newton direction lowers the sum of squares: its minimum
             break
         p, best = trial, s
         if abs(dp[1]) < 1e-6 * span and abs(dp[0]) < 1e-9 * abs(p[0]):
+            converged = True
             break
-    return p
+    return p, converged
 
 
 def _power_terms(key, geom, nu, u, F):
@@ -255,6 +257,14 @@ def _covariance(J: np.ndarray, s2: float) -> np.ndarray:
     n = np.sqrt(np.diag(A))
     n[n == 0] = 1.0
     return np.linalg.inv(A / np.outer(n, n)) / np.outer(n, n) * s2
+
+
+def extrapolated_contact_note(before: float, travel: float) -> str:
+    """The warning of a fitted contact point ``before`` [m] ahead of the first sample of a run whose tip travels
+    ``travel`` [m]: the whole record is in contact and the contact point is extrapolated."""
+    return (f"the contact point lies {before * 1e9:.4g} nm ({before / travel:.2g} x the travel) before the first "
+            "sample: the curve starts in contact, the contact point is extrapolated beyond the data and the "
+            "modulus rests on the law's shape there (uncertain); record the approach from further away")
 
 
 def validity(key: str, geometry: dict, max_indentation: float, thickness: float | None = None,
@@ -413,6 +423,7 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
     their indices into the arrays the caller gave; ``fixed``: the contact point, held (linear laws)."""
     m = indentation_model(model)
     w = w_se = w_low = w_high = math.nan
+    converged = True
     if fixed is not None:  # E and b alone: linear least squares at the given contact point
         c = float(fixed)
         d = u - c
@@ -430,7 +441,7 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
         r = q * (F - E * phi - b)
         names = 2
     elif m.linear:
-        E, c, b = _linear_fit(u, F, model, geom, nu, weight_width, contact_guess)
+        (E, c, b), converged = _linear_fit(u, F, model, geom, nu, weight_width, contact_guess)
         d = u - c
         q = _weights(d, weight_width)
         power = _power_terms(model, geom, nu, u, F)
@@ -463,7 +474,7 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
         E_se, w_se, c_se = float(se_a[0]), float(se_a[1]), float(se_a[2])
     t = _t95(dof)
     E_low, E_high = (E - t * E_se, E + t * E_se) if m.linear else (a.E_low, a.E_high)
-    undetermined = m.linear and not (E_low > 0)
+    undetermined = m.linear and (not (E_low > 0) or not converged)
     if undetermined:
         # E > 0: an interval reaching 0 says the data do not bound E (a few points of indentation, the
         # contact point trades against E): [0, open], not a negative end nor a finite upper one (the
@@ -474,7 +485,14 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
     fmodel = E * phi if m.linear else a.model  # model_force(model, d, E, ...): E times the shape at d
     resid = (F - fmodel - b)[used]
     warn = list(validity(model, geom, dmax, thickness, int(in_contact.sum())))
-    if undetermined:
+    first = float(u.min())
+    if fixed is None and m.linear and c < first:
+        warn.append(extrapolated_contact_note(first - c, float(u.max()) - first))
+    if not converged:
+        warn.append(f"the fit did not converge in {_GN_MAX_STEPS} Gauss-Newton steps (the contact point still "
+                    f"moving): E = {E:.4g} Pa is no least-squares optimum, its interval is left open "
+                    "(undetermined); fit a smaller range (indentation.max_indentation) or another law")
+    elif undetermined:
         warn.append(f"the modulus is undetermined: its 95 % interval reaches 0 (standard error "
                     f"{E_se / E:.0%} of the value, {int(in_contact.sum())} points in contact); the data do "
                     "not bound it: indent deeper or fit more of the curve")

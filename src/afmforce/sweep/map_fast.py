@@ -32,6 +32,7 @@ from typing import Any, Iterable
 import numpy as np
 
 from .summary import pixel_place
+from ..analysis.registry import LiveDict
 from ..analysis.indentation import fast_modulus
 from ..analysis.options import IndentationOptions, ProbeCalibration
 from ..errors import AfmforceError, AnalysisError, ParameterError
@@ -41,13 +42,21 @@ __all__ = ["PixelAnalysis", "ADHESION_MODELS", "PIXEL_COLUMNS", "analyze_map", "
 #: Work of adhesion from the adhesion force F_ad and the tip radius R: model -> w / (F_ad / R).
 ADHESION_MODELS: dict[str, float] = {"dmt": 1.0 / (2.0 * math.pi), "jkr": 2.0 / (3.0 * math.pi)}
 
-#: The numbers of each pixel's row, with their SI units.
-PIXEL_COLUMNS: dict[str, str] = {
-    "youngs_modulus": "Pa", "youngs_modulus_se": "Pa", "youngs_modulus_low": "Pa", "youngs_modulus_high": "Pa",
-    "contact_point": "m", "contact_point_se": "m", "max_indentation": "m", "max_force": "N",
-    "adhesion_force": "N", "adhesion_noise": "N", "work_of_adhesion": "J/m^2", "work_of_adhesion_se": "J/m^2",
-    "spring_constant": "N/m", "sensitivity": "m/V", "tip_radius": "m", "position_x": "m", "position_y": "m",
-}
+_PIXEL_NAMES = ("youngs_modulus", "youngs_modulus_se", "youngs_modulus_low", "youngs_modulus_high", "contact_point",
+                "contact_point_se", "max_indentation", "max_force", "adhesion_force", "adhesion_noise",
+                "work_of_adhesion", "work_of_adhesion_se", "spring_constant", "sensitivity", "tip_radius",
+                "position_x", "position_y")
+
+
+def _pixel_columns() -> dict[str, str]:
+    from .summary import column_unit
+
+    return {name: column_unit(name) for name in _PIXEL_NAMES}
+
+
+#: The numbers of each pixel's row, with their SI units: the full summary's (:func:`afmforce.sweep.summary.column_unit`,
+#: declared once: the analysis steps' records, the indentation result's fields).
+PIXEL_COLUMNS: dict[str, str] = LiveDict(_pixel_columns)
 #: Each pixel's row also holds ``warnings``: the full analysis's column (:data:`afmforce.sweep.summary.SUMMARY_COLUMNS`),
 #: its warnings joined by `` | `` (empty: none).
 

@@ -19,7 +19,7 @@ from .._files import atomic_path
 from .results import BatchResult
 
 __all__ = ["SUMMARY_COLUMNS", "SUMMARY_UNITS", "ERROR_COLUMNS", "summary_row", "summary_table", "write_summary",
-           "failures", "failure_records"]
+           "failures", "failure_records", "column_unit", "column_label", "write_table", "read_summary_csv"]
 
 #: Where a map's curve was recorded [m] (the curve's metadata; NaN: not given).
 _POSITIONS = ("position_x", "position_y")
@@ -159,8 +159,71 @@ def summary_table(result: BatchResult, *, with_json: bool = False):
     return _normalise(pd.concat(frames, ignore_index=True), extra)
 
 
+def column_unit(name: str) -> str | None:
+    """SI unit of a summary column (None: a count, a string or a ratio): the analysis result's
+    (:data:`SUMMARY_UNITS`, from the steps' records), else the indentation result's field (the fast map's
+    further columns, :data:`afmforce.sweep.map_fast.PIXEL_COLUMNS`): each quantity's unit declared once."""
+    unit = SUMMARY_UNITS.get(name)
+    if unit:
+        return unit
+    import dataclasses
+
+    from ..analysis.indentation import IndentationResult
+
+    for f in dataclasses.fields(IndentationResult):
+        if f.name == name:
+            return f.metadata.get("unit") or None
+    return None
+
+
+def column_label(name: str) -> str:
+    """The name of a column in ``summary.csv``: ``youngs_modulus [Pa]`` (with its unit, :func:`column_unit`),
+    or the bare name where it has none. Both faces' tables (``analyze`` and ``analyze --fast-map``) use it."""
+    unit = column_unit(name)
+    return f"{name} [{unit}]" if unit else name
+
+
+def read_summary_csv(path: str | os.PathLike):
+    """A ``summary.csv`` as a pandas DataFrame with the bare column names (``youngs_modulus``), the units in
+    ``frame.attrs["units"]`` (name -> unit, from the header's ``[unit]``)."""
+    import pandas as pd
+
+    frame = pd.read_csv(path)
+    units, names = {}, []
+    for label in frame.columns:
+        name, _, rest = str(label).partition(" [")
+        names.append(name)
+        if rest.endswith("]"):
+            units[name] = rest[:-1]
+    frame.columns = names
+    frame.attrs["units"] = units
+    return frame
+
+
+def write_table(frame, folder: str | os.PathLike) -> dict[str, Path]:
+    """Write a whole table (``analyze --fast-map``'s rows) as ``summary.parquet`` (units in the schema metadata
+    key ``afmforce.units``) and ``summary.csv`` (units in the header: :func:`column_label`), as
+    :func:`write_summary` writes a batch's. Returns the paths by kind."""
+    import pyarrow as pa
+    import pyarrow.parquet as pq
+
+    from .._files import atomic_write_text
+
+    folder = Path(folder)
+    paths = {"parquet": folder / "summary.parquet", "csv": folder / "summary.csv"}
+    units = {c: u for c in frame.columns if (u := column_unit(str(c)))}
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    meta = dict(table.schema.metadata or {})
+    meta[b"afmforce.units"] = json.dumps(units).encode()
+    with atomic_path(paths["parquet"]) as tmp:
+        pq.write_table(table.replace_schema_metadata(meta), tmp)
+    labelled = frame.rename(columns={c: column_label(str(c)) for c in frame.columns})
+    atomic_write_text(paths["csv"], labelled.to_csv(index=False))
+    return paths
+
+
 def _csv_header() -> list[str]:
-    return [f"{c} [{SUMMARY_UNITS[c]}]" if SUMMARY_UNITS.get(c) else c for c in SUMMARY_COLUMNS]
+    return [column_label(c) for c in SUMMARY_COLUMNS]
 
 
 def write_summary(result: BatchResult, folder: str | os.PathLike) -> dict[str, Path]:

@@ -351,7 +351,9 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
         direct = replace(analysis, file_timeout=None)   # read once already, in this call
         payload["raw"] = _raw_signals(refs, direct, rename, max_points, set(wanted))
         payload["arrays_for"] = wanted
-        maps = any(r.index is not None for r in refs)
+        # a map file read curve by curve (refs with an index), or one read whole whose curves record positions
+        # off any grid (a Park file's spectra at free points: map_points), as the CLI maps them
+        maps = any(r.index is not None for r in refs) or table["file"].duplicated().any()
         payload["maps"] = _maps(table, rename) if maps else []
     payload["wall_time"] = time.perf_counter() - t0
     payload["max_points"] = max_points if arrays else None
@@ -424,8 +426,11 @@ _RAW: OrderedDict = OrderedDict()
 
 def _maps(table, rename) -> list[dict[str, Any]]:
     """The force maps' images (:func:`afmforce.analysis.maps.map_images`: axes in µm from the curves'
-    stage positions, else the scanned area's size; grid indices when neither is known)."""
-    from ..analysis.maps import DEFAULT_MAPS, MAP_QUANTITIES, map_images
+    stage positions, else the scanned area's size; grid indices when neither is known; ``layout`` ``grid``)
+    and the maps whose positions form no grid (:func:`~afmforce.analysis.maps.map_points`, ``layout``
+    ``points``: ``x_um``, ``y_um``, ``z`` and ``curves`` one entry per curve, ``why`` no grid), drawn as a
+    scatter at the recorded positions as the CLI's PNG."""
+    from ..analysis.maps import DEFAULT_MAPS, MAP_QUANTITIES, map_images, map_points
 
     out = []
     for q in DEFAULT_MAPS:
@@ -441,6 +446,13 @@ def _maps(table, rename) -> list[dict[str, Any]]:
             y = [(image.y0 + j * image.dy) * 1e6 for j in range(ny)] if image.has_positions else None
             z = [[None if not np.isfinite(v) else float(v) for v in row] for row in image.values]
             out.append({"file": name, "quantity": q, "label": image.quantity.label, "unit": image.quantity.unit,
-                        "z": z, "x_um": x, "y_um": y, "axes": "um" if x is not None else "index",
+                        "layout": "grid", "z": z, "x_um": x, "y_um": y, "axes": "um" if x is not None else "index",
                         "curves": names, "note": image.note})
+        for pts in map_points(table, MAP_QUANTITIES[q]):
+            name = rename.get(Path(pts.source).name, Path(pts.source).name)
+            out.append({"file": name, "quantity": q, "label": pts.quantity.label, "unit": pts.quantity.unit,
+                        "layout": "points", "z": [float(v) if np.isfinite(v) else None for v in pts.values],
+                        "x_um": [float(v) * 1e6 for v in pts.x], "y_um": [float(v) * 1e6 for v in pts.y],
+                        "axes": "um", "curves": [f"{name}#{int(c)}" if c >= 0 else None for c in pts.curves],
+                        "note": pts.note, "why": pts.why})
     return out

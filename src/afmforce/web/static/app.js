@@ -506,11 +506,27 @@ function drawMaps(maps) {
   sel.value = keep && Number(keep) < maps.length ? keep : "0";
   sel.onchange = () => drawMaps(maps);
   const m = maps[Number(sel.value)], f = m.unit === "N" ? 1e9 : m.unit === "m" ? 1e9 : 1, u = m.unit === "N" ? "nN" : m.unit === "m" ? "nm" : m.unit;
+  if (m.layout === "points") return drawMapPoints(div, m, f, u);
   const z = m.z.map((row) => row.map((v) => (v === null ? null : v * f)));
   Plotly.react(div, [{ type: "heatmap", z, x: m.x_um || undefined, y: m.y_um || undefined, customdata: m.curves, colorbar: { title: { text: `${m.label} [${u || "-"}]`, side: "right" } },
     hovertemplate: `x = %{x} ${m.axes === "um" ? "µm" : ""}<br>y = %{y} ${m.axes === "um" ? "µm" : ""}<br>${m.quantity} = %{z:.4g} ${u}<br>%{customdata}<extra>click: open</extra>` }],
   { ...LAYOUT, title: { text: `${m.file}: ${m.label}` },
     annotations: z.some((row) => row.some((v) => v !== null)) ? [] : [{ text: wrapText(m.note || `no curve of this map gives a ${m.label}`, 48).join("<br>"), showarrow: false, xref: "paper", yref: "paper", x: 0.5, y: 0.5 }], xaxis: { title: { text: m.axes === "um" ? "x [µm]" : "x (column index)" }, scaleanchor: "y" }, yaxis: { title: { text: m.axes === "um" ? "y [µm]" : "y (row index)" } } }, CONFIG);
+  div.removeAllListeners && div.removeAllListeners("plotly_click");
+  div.on("plotly_click", (ev) => { const n = ev.points[0].customdata; if (n && AN.payload.results[n]) { $("an-curve").value = n; drawCurve(); } });
+}
+function drawMapPoints(div, m, f, u) {   // a map whose positions form no grid: a scatter at them (the CLI's PNG)
+  const z = m.z.map((v) => (v === null ? null : v * f)), ok = z.map((v) => v !== null);
+  const pick = (arr, keep) => arr.filter((_, i) => ok[i] === keep);
+  const traces = [{ type: "scatter", mode: "markers", x: pick(m.x_um, true), y: pick(m.y_um, true), customdata: pick(m.curves, true),
+    marker: { size: 12, color: pick(z, true), colorscale: "Viridis", showscale: true, colorbar: { title: { text: `${m.label} [${u || "-"}]`, side: "right" } } },
+    name: m.label, hovertemplate: `x = %{x:.3f} µm<br>y = %{y:.3f} µm<br>${m.quantity} = %{marker.color:.4g} ${u}<br>%{customdata}<extra>click: open</extra>` }];
+  if (ok.some((x) => !x)) traces.push({ type: "scatter", mode: "markers", x: pick(m.x_um, false), y: pick(m.y_um, false), customdata: pick(m.curves, false),
+    marker: { size: 12, color: "#bbb", symbol: "x" }, name: "no value", hovertemplate: "x = %{x:.3f} µm<br>y = %{y:.3f} µm<br>no value<br>%{customdata}<extra>click: open</extra>" });
+  const notes = [{ text: wrapText(`points at the recorded positions: ${m.why || "no grid"}`, 60).join("<br>"), showarrow: false, xref: "paper", yref: "paper", x: 0, y: 1.08, xanchor: "left" }];
+  if (!ok.some((x) => x)) notes.push({ text: wrapText(m.note || `no curve of this map gives a ${m.label}`, 48).join("<br>"), showarrow: false, xref: "paper", yref: "paper", x: 0.5, y: 0.5 });
+  Plotly.react(div, traces, { ...LAYOUT, title: { text: `${m.file}: ${m.label}` }, showlegend: false, annotations: notes,
+    xaxis: { title: { text: "x [µm]" }, scaleanchor: "y" }, yaxis: { title: { text: "y [µm]" } } }, CONFIG);
   div.removeAllListeners && div.removeAllListeners("plotly_click");
   div.on("plotly_click", (ev) => { const n = ev.points[0].customdata; if (n && AN.payload.results[n]) { $("an-curve").value = n; drawCurve(); } });
 }
