@@ -15,7 +15,7 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_MAX_CURVES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_MAX_CURVES", "BATCH_MAX_CURVES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "MAX_STARTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
@@ -38,6 +38,12 @@ SERVER_MAX_SAMPLES = 1_000_000
 #: is read): an ARDF file of 68 kB whose 1,000 line pointers all named its one line declared 999,001
 #: curves, and the server made a work item for each and analysed for its whole budget (504).
 SERVER_MAX_CURVES = 65_536
+#: The most curves ``afmforce analyze`` (and :func:`afmforce.sweep.files.plan_curves`, ``analyze_files``)
+#: takes from its files together unless told more (``--max-curves``, ``max_curves=``): sixteen 256 x 256
+#: maps. A map's count is read from its header (each reader bounds it by the bytes the file holds)
+#: before any work item is made; a 68 kB ARDF file whose 1,000 line pointers named its one line made
+#: 999,001 items and analysed on (killed after 90 s, 365 MB).
+BATCH_MAX_CURVES = 1_048_576
 #: The most bytes one session of ``afmforce serve`` may keep stored: its uploads, its jobs' records
 #: with their results and its sweeps' stores (ten uploads of the largest size a request may carry,
 #: 200 MB). One more upload or job is refused (413) until the session deletes files or jobs or
@@ -134,6 +140,8 @@ def caps_markdown() -> str:
              "sweep and simulate (their settings files), the probe calibration record"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
             ("curves one web analysis request takes (all its files)", SERVER_MAX_CURVES, "afmforce serve"),
+            ("curves one analysis of files takes (all its files), unless raised", BATCH_MAX_CURVES,
+             "analyze (`--max-curves`), plan_curves, analyze_files (`max_curves=`)"),
             ("bytes one web session keeps stored (uploads, job results, sweep stores)", SERVER_SESSION_STORAGE,
              "afmforce serve (its setting `session_storage`)"),
             ("bytes all web sessions keep stored together", SERVER_STORAGE, "afmforce serve (its setting `server_storage`)"),
