@@ -15,7 +15,7 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_MAX_CURVES", "BATCH_MAX_CURVES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_MAX_CURVES", "BATCH_MAX_CURVES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "SERVER_MAX_UPLOAD", "SERVER_BODIES_IN_FLIGHT", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "MAX_STARTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
@@ -51,6 +51,14 @@ BATCH_MAX_CURVES = 1_048_576
 SERVER_SESSION_STORAGE = 2_000_000_000
 #: The most bytes ``afmforce serve`` keeps stored for all its sessions together (uploads, job results, sweep stores).
 SERVER_STORAGE = 20_000_000_000
+#: The most bytes of one request's body to ``afmforce serve`` (its setting ``max_upload``, ``--max-upload``):
+#: refused 413 from its ``Content-Length`` before it is read, or as a chunked body grows past it.
+SERVER_MAX_UPLOAD = 200_000_000
+#: The most bytes of request bodies ``afmforce serve`` receives at once, all sessions together (five
+#: uploads of the largest size): Starlette spools each to its temporary folder before any route runs,
+#: so these bytes are on disk before a session's storage counts them; past it a request is 429 ``busy``.
+#: A session's bodies in flight count against its storage with what it keeps (413 ``storage_full``).
+SERVER_BODIES_IN_FLIGHT = 5 * SERVER_MAX_UPLOAD
 #: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
 CONFIRM_RUNS = 100_000
 #: The most runs of one sweep, even with a yes (its parameter table is built before any run).
@@ -142,6 +150,9 @@ def caps_markdown() -> str:
             ("curves one web analysis request takes (all its files)", SERVER_MAX_CURVES, "afmforce serve"),
             ("curves one analysis of files takes (all its files), unless raised", BATCH_MAX_CURVES,
              "analyze (`--max-curves`), plan_curves, analyze_files (`max_curves=`)"),
+            ("bytes of one web request's body", SERVER_MAX_UPLOAD, "afmforce serve (its setting `max_upload`)"),
+            ("bytes of request bodies the web receives at once (all sessions)", SERVER_BODIES_IN_FLIGHT,
+             "afmforce serve"),
             ("bytes one web session keeps stored (uploads, job results, sweep stores)", SERVER_SESSION_STORAGE,
              "afmforce serve (its setting `session_storage`)"),
             ("bytes all web sessions keep stored together", SERVER_STORAGE, "afmforce serve (its setting `server_storage`)"),
