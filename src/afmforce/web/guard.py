@@ -43,6 +43,9 @@ _SAFE = ("GET", "HEAD", "OPTIONS")
 _TYPES = {401: "unauthorized", 403: "forbidden", 413: "too_large", 429: "busy"}
 #: A chunked body's share of the bodies in flight is checked against the storage each time it grows this much [bytes].
 _STEP = 8_000_000
+#: Bytes of a request body not counted as stored: a multipart body's boundaries and part headers (a
+#: 900-byte upload is a body of ~1,100 bytes) [bytes].
+_FRAMING = 65_536
 
 
 def normal_origin(text: str) -> str | None:
@@ -103,15 +106,20 @@ class Guard:
     max_flight : int
         Bytes of request bodies received at once, all sessions together (:data:`afmforce.limits.
         SERVER_BODIES_IN_FLIGHT`).
+    framing : int
+        Bytes of each body not counted (a multipart body's boundaries and part headers around the
+        files the session will store) [bytes].
     """
 
     def __init__(self, app, token: str | None, max_body: int, loopback: bool = True, allow_origins=(),
-                 session_ttl: float = 24 * 3600.0, seen=None, room=None, max_flight: int | None = None):
+                 session_ttl: float = 24 * 3600.0, seen=None, room=None, max_flight: int | None = None,
+                 framing: int = _FRAMING):
         from ..limits import SERVER_BODIES_IN_FLIGHT
 
         self.app, self.token, self.max_body, self.loopback = app, token, max_body, loopback
         self.seen, self.room = seen, room
         self.max_flight = SERVER_BODIES_IN_FLIGHT if max_flight is None else max_flight
+        self.framing = framing
         self._flight: dict[str, int] = {}   # bytes of bodies being received, per session (one event loop)
         self._flight_total = 0
         self.allow_origins = frozenset(o for o in (normal_origin(a) for a in allow_origins) if o)
@@ -214,8 +222,8 @@ class Guard:
             return None
 
         announced = int(length) if length is not None and length.isdigit() else 0
-        if announced:
-            why = admit(announced)
+        if announced > self.framing:
+            why = admit(announced - self.framing)
             if why:
                 return await _reply_type(send, *why)
 
@@ -229,8 +237,8 @@ class Guard:
                 if seen > self.max_body:
                     too_large = True
                     raise _TooLarge()
-                if seen > reserved:       # a body longer than announced, or chunked: its share grows
-                    refusal = admit(seen - reserved)
+                if seen - self.framing > reserved:    # a body longer than announced, or chunked: it grows
+                    refusal = admit(seen - self.framing - reserved)
                     if refusal:
                         too_large = True
                         raise _TooLarge()
