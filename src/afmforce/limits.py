@@ -149,7 +149,7 @@ def caps_markdown() -> str:
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
             ("curves one web analysis request takes (all its files)", SERVER_MAX_CURVES, "afmforce serve"),
             ("curves one analysis of files takes (all its files), unless raised", BATCH_MAX_CURVES,
-             "analyze (`--max-curves`), plan_curves, analyze_files (`max_curves=`)"),
+             "analyze, plan_curves, analyze_files (their `max_curves`)"),
             ("bytes of one web request's body", SERVER_MAX_UPLOAD, "afmforce serve (its setting `max_upload`)"),
             ("bytes of request bodies the web receives at once (all sessions)", SERVER_BODIES_IN_FLIGHT,
              "afmforce serve"),
