@@ -15,7 +15,7 @@ import math
 
 from .errors import ParameterError
 
-__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_MAX_CURVES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
+__all__ = ["MAX_SAMPLES", "MAX_MEMBER_BYTES", "CONFIG_BYTES", "SERVER_MAX_SAMPLES", "SERVER_MAX_CURVES", "BATCH_MAX_CURVES", "SERVER_SESSION_STORAGE", "SERVER_STORAGE", "SERVER_MAX_UPLOAD", "SERVER_BODIES_IN_FLIGHT", "CONFIRM_RUNS", "MAX_RUNS", "MAX_DESIGN_CURVES", "MAX_SPEEDS", "MAX_PLAN_SAMPLES",
            "MAX_DESIGNS", "MAX_STARTS", "simulation_samples", "check_samples", "check_count", "check_design", "caps_markdown"]
 
 #: The most samples one simulated cycle may have (records, CLI, sweeps): the paper's slowest run
@@ -38,6 +38,12 @@ SERVER_MAX_SAMPLES = 1_000_000
 #: is read): an ARDF file of 68 kB whose 1,000 line pointers all named its one line declared 999,001
 #: curves, and the server made a work item for each and analysed for its whole budget (504).
 SERVER_MAX_CURVES = 65_536
+#: The most curves ``afmforce analyze`` (and :func:`afmforce.sweep.files.plan_curves`, ``analyze_files``)
+#: takes from its files together unless told more (``--max-curves``, ``max_curves=``): sixteen 256 x 256
+#: maps. A map's count is read from its header (each reader bounds it by the bytes the file holds)
+#: before any work item is made; a 68 kB ARDF file whose 1,000 line pointers named its one line made
+#: 999,001 items and analysed on (killed after 90 s, 365 MB).
+BATCH_MAX_CURVES = 1_048_576
 #: The most bytes one session of ``afmforce serve`` may keep stored: its uploads, its jobs' records
 #: with their results and its sweeps' stores (ten uploads of the largest size a request may carry,
 #: 200 MB). One more upload or job is refused (413) until the session deletes files or jobs or
@@ -45,6 +51,14 @@ SERVER_MAX_CURVES = 65_536
 SERVER_SESSION_STORAGE = 2_000_000_000
 #: The most bytes ``afmforce serve`` keeps stored for all its sessions together (uploads, job results, sweep stores).
 SERVER_STORAGE = 20_000_000_000
+#: The most bytes of one request's body to ``afmforce serve`` (its setting ``max_upload``, ``--max-upload``):
+#: refused 413 from its ``Content-Length`` before it is read, or as a chunked body grows past it.
+SERVER_MAX_UPLOAD = 200_000_000
+#: The most bytes of request bodies ``afmforce serve`` receives at once, all sessions together (five
+#: uploads of the largest size): Starlette spools each to its temporary folder before any route runs,
+#: so these bytes are on disk before a session's storage counts them; past it a request is 429 ``busy``.
+#: A session's bodies in flight count against its storage with what it keeps (413 ``storage_full``).
+SERVER_BODIES_IN_FLIGHT = 5 * SERVER_MAX_UPLOAD
 #: Sweeps (and precomputed grids) of more runs than this need an explicit yes (``--yes``).
 CONFIRM_RUNS = 100_000
 #: The most runs of one sweep, even with a yes (its parameter table is built before any run).
@@ -134,6 +148,11 @@ def caps_markdown() -> str:
              "sweep and simulate (their settings files), the probe calibration record"),
             ("samples of one cycle a web request simulates", SERVER_MAX_SAMPLES, "afmforce serve"),
             ("curves one web analysis request takes (all its files)", SERVER_MAX_CURVES, "afmforce serve"),
+            ("curves one analysis of files takes (all its files), unless raised", BATCH_MAX_CURVES,
+             "analyze, plan_curves, analyze_files (their `max_curves`)"),
+            ("bytes of one web request's body", SERVER_MAX_UPLOAD, "afmforce serve (its setting `max_upload`)"),
+            ("bytes of request bodies the web receives at once (all sessions)", SERVER_BODIES_IN_FLIGHT,
+             "afmforce serve"),
             ("bytes one web session keeps stored (uploads, job results, sweep stores)", SERVER_SESSION_STORAGE,
              "afmforce serve (its setting `session_storage`)"),
             ("bytes all web sessions keep stored together", SERVER_STORAGE, "afmforce serve (its setting `server_storage`)"),

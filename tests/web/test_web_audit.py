@@ -298,25 +298,39 @@ def _forged_ardf(path: Path, nx: int, ny: int) -> Path:
 
 def test_a_map_declaring_a_million_curves_is_refused_before_any_is_read(make_client, tmp_path, monkeypatch):
     """Before: a work item per declared curve (999,001, ~150 MB), then the analysis ran its whole budget
-    and answered 504 past_budget; now 422 naming the file, from the header's count, nothing analysed."""
+    and answered 504 past_budget. Now the reader refuses the line table that repeats its one line (branch
+    mapcap), so the file is one damaged item named in the answer; and a map whose header declares more
+    curves than a request takes (the caps lowered to 3 here, the 2 x 2 map's 4 curves) is 422 naming the
+    file, from the header's count, nothing analysed."""
+    from afmforce.errors import FileFormatError
     from afmforce.io.ardf import count_curves
+    from afmforce.fit import core as fit_core
     from afmforce.web import analysis
-    from afmforce.web.limits import ANALYSIS_CURVES
 
     src = _forged_ardf(tmp_path / "forged.ARDF", 1000, 1000)
-    assert count_curves(src) == 999_001 > ANALYSIS_CURVES and src.stat().st_size < 100_000
+    assert src.stat().st_size < 100_000
+    with pytest.raises(FileFormatError, match="line table names byte .* for recorded lines 0 and 1"):
+        count_curves(src)
     calls = []
     real = analysis.CachedAnalysis.__call__
     monkeypatch.setattr(analysis.CachedAnalysis, "__call__", lambda self, ref: calls.append(ref) or real(self, ref))
     client = make_client(request_budget=5.0)
+    r = client.post("/api/analyze", data={"example": "asylum-air"}, files={"file": ("forged.ARDF", src.read_bytes())})
+    assert "line table names byte" in r.text and len(calls) == 2, r.text[:300]   # the example and the file, once
+
+    honest = DATA / "asylum-ardf_mfp3d-curve_2x2.ARDF"
+    assert count_curves(honest) == 4
+    monkeypatch.setattr(analysis, "ANALYSIS_CURVES", 3)
+    monkeypatch.setattr(fit_core, "MAX_CURVES", 3)
+    calls.clear()
     err = _error(client.post("/api/analyze", data={"example": "asylum-air"},
-                             files={"file": ("forged.ARDF", src.read_bytes())}))
-    assert err["field"] == "file[0]" and "999,001 curves" in err["message"] and "afmforce analyze" in err["message"]
-    fid = client.get("/api/files").json()[0]["id"]
+                             files={"file": ("map.ARDF", honest.read_bytes())}))
+    assert err["field"] == "file[0]" and "4 curves" in err["message"] and "afmforce analyze" in err["message"]
+    fid = client.get("/api/files").json()[-1]["id"]
     err = _error(client.post("/api/analyze", data={"example": "asylum-air", "file_id": fid}))
     assert err["field"] == "file_id[0]"
     err = _error(client.post("/api/fit", json={"file_ids": [fid]}))
-    assert err["field"] == "file_ids" and "999001 curves" in err["message"]
+    assert err["field"] == "file_ids" and "4 curves" in err["message"]
     assert calls == []
 
 

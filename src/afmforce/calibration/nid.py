@@ -183,6 +183,8 @@ def read_nid(path: str | Path) -> NidFile:
             raise FileFormatError(f"{path}: the header lists block {name!r} but has no [{name}] section; damaged")
         points = _integer(h, "Points", where, name, 0, 10**8)
         lines = _integer(h, "Lines", where, name, 0, 10**8)
+        if lines and not points:  # rows of no bytes: a count the data cannot bound (issue: declared counts)
+            raise FileFormatError(f"{path}: block {name} declares {lines} lines of 0 points; damaged header")
         bits = _integer(h, "SaveBits", where, name, 8, 64)
         if bits not in (8, 16, 32, 64) or h.get("SaveMode", "Binary").lower() != "binary":
             raise FileFormatError(f"{path}: block {name} saved as {h.get('SaveMode')!r}, {bits} bits; afmforce "

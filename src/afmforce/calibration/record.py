@@ -65,11 +65,35 @@ def read_calibration(path) -> dict[str, float]:
     return parse_calibration(text, str(path))
 
 
+class _DuplicateKey(ValueError):
+    pass
+
+
+def _unique_keys(pairs: list) -> dict:
+    """A JSON object's pairs as a dict; a key given twice raises (json took the last one silently)."""
+    out: dict = {}
+    for key, value in pairs:
+        if key in out:
+            raise _DuplicateKey(key)
+        out[key] = value
+    return out
+
+
+def _load_object(text: str, source: str):
+    """``json.loads`` refusing a key given twice in one object (which one was meant cannot be told)."""
+    try:
+        return json.loads(text, object_pairs_hook=_unique_keys)
+    except _DuplicateKey as exc:
+        raise FileFormatError(f"{source}: the key {str(exc.args[0])[:40]!r} is given twice; a calibration file "
+                              "gives each value once (afmforce calibrate writes one)") from None
+
+
 def parse_calibration(text: str, source: str = "calibration") -> dict[str, float]:
     """:func:`read_calibration` of a file's text (an upload); ``source`` names it in errors.
-    A probe value that is not finite (NaN, Infinity: never written by afmforce) is refused."""
+    A probe value that is not finite (NaN, Infinity: never written by afmforce) is refused, and so is a
+    key given twice (json would take the last)."""
     try:
-        obj = json.loads(text)
+        obj = _load_object(text, source)
     except ValueError as exc:
         raise FileFormatError(f"{source}: not a readable JSON calibration file ({exc})") from None
     if not isinstance(obj, dict) or "afmforce_calibration" not in obj:
@@ -98,8 +122,8 @@ def calibration_basis(text: str) -> tuple[str | None, float | None]:
     its ``"method"`` and, for :data:`INVOLS_METHODS`, the InvOLS [m/V] its spring constant rests on (its
     ``sensitivity``; ``None`` when it records none: a spectrum in m^2/Hz, converted by the instrument)."""
     try:
-        obj = json.loads(text)
-    except ValueError:
+        obj = _load_object(text, "calibration")
+    except (ValueError, FileFormatError):
         return None, None
     if not isinstance(obj, dict):
         return None, None

@@ -23,6 +23,7 @@ import re
 from pathlib import Path
 
 from ..errors import OutputExistsError, ParameterError
+from ..limits import BATCH_MAX_CURVES
 from ._validate import add_choice, add_field, check_output, lazy_help
 from ._analyze_liquid import liquid_flags, print_liquid
 from ._analyze_tethers import print_tethers
@@ -77,6 +78,9 @@ def register(sub) -> None:
     r.add_argument("--serial", action="store_true", help="run in this process, one curve after the other")
     add_quantity(r, "--file-timeout", "time", 300.0, "time budget for reading one file; a file past it "
                  "is reported and skipped", "s")
+    r.add_argument("--max-curves", type=int, default=BATCH_MAX_CURVES, metavar="N",
+                   help=f"the most curves taken from all the files together, counted from the maps' headers before "
+                        f"any is read (default {BATCH_MAX_CURVES:,}: sixteen 256 x 256 maps)")
     r.add_argument("--chunk-size", type=int, default=None, metavar="N",
                    help="curves per chunk (default: about 64 chunks, at most 256 curves each); "
                         "makes the run a resumable batch")
@@ -221,7 +225,7 @@ def run(args: argparse.Namespace) -> int:
         for name, d in DATASETS.items():
             print(f"{name:<14} {d.description}")
         return 0
-    from ..sweep.files import CurveAnalysis, analysis_key, analyze_files, plan_curves
+    from ..sweep.files import CurveAnalysis, TooManyCurves, analysis_key, analyze_files, plan_curves
     from ..sweep.chunks import default_chunk_size
 
     steps = _check(args)
@@ -240,11 +244,16 @@ def run(args: argparse.Namespace) -> int:
     files = _inputs(args.files)
     if not files:
         raise ParameterError("no force-curve files found in the given folders")
+    if not args.max_curves > 0:
+        raise ParameterError(f"--max-curves must be positive, got {args.max_curves}")
     if not args.file_timeout > 0:
         raise ParameterError(f"--file-timeout must be positive, got {args.file_timeout} s")
     bar, _ = progress_bar("detect", len(files), unit="file", min_total=8, leave=False, counted=True)
     try:
-        refs = plan_curves(files, args.format, timeout=args.file_timeout, on_file=lambda: bar.update())
+        refs = plan_curves(files, args.format, timeout=args.file_timeout, on_file=lambda: bar.update(),
+                           max_curves=args.max_curves)
+    except TooManyCurves as exc:
+        raise ParameterError(f"{exc}; analyse the files in parts, or raise --max-curves") from None
     finally:
         bar.close()
     if args.fast_map:

@@ -10,6 +10,8 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..limits import SERVER_MAX_UPLOAD
+
 
 def register(sub) -> None:
     p = sub.add_parser("serve", help="a local web application: analyse, simulate, fit and sweep in the browser",
@@ -19,8 +21,8 @@ def register(sub) -> None:
     p.add_argument("--port", type=int, default=8765, help="TCP port (default %(default)s; 0: any free port)")
     p.add_argument("--token", default=None, help="token every request must carry (default: none on "
                    "loopback, generated and printed otherwise)")
-    p.add_argument("--max-upload", default="200MB", metavar="SIZE", help="largest upload (default %(default)s); "
-                   "larger ones get HTTP 413")
+    p.add_argument("--max-upload", default=f"{SERVER_MAX_UPLOAD // 1_000_000}MB", metavar="SIZE",
+                   help="largest upload (default %(default)s); larger ones get HTTP 413")
     p.add_argument("--data", type=Path, default=None, metavar="DIR", help="folder for uploads, jobs and sweeps "
                    "(default ~/.afmforce/serve); sweeps left running resume from it")
     p.add_argument("--budget", type=float, default=60.0, metavar="SECONDS",

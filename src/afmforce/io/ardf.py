@@ -223,9 +223,45 @@ class ArdfFile:
                                   "was stopped before its first line)")
         if self._lines.size > lines:
             raise FileFormatError(f"{where}: {self._lines.size} lines recorded in a map of {lines} lines; damaged")
+        self._check_lines(len(channels))
         self._cache: tuple[int, np.ndarray] | None = None
         last = self._line_offsets(self._lines.size - 1)  # the last line may be partial (a stopped map)
         self.n_curves = int((self._lines.size - 1) * self.nx + last.size)
+
+    def _check_lines(self, n_channels: int) -> None:
+        """Refuse a line table whose lines cannot hold the curves it declares, before any is counted:
+        each recorded line but the last (a stopped map's may be partial) holds ``nx`` curves of at least
+        a VSET and one VDAT header per channel each, so its pointer must leave that many bytes before the
+        next line's pointer (in the file, in any order: a map scanned downward) or the end of the file.
+        A pointer repeated (a 68 kB file whose 1,000 pointers named its one line declared 999,001 curves)
+        or pointing into another line (at a curve of the same map line) is refused here, naming the lines;
+        reads a 48-byte VSET per line."""
+        where, starts = self.where, self._lines.tolist()
+        first: dict[int, int] = {}
+        for j, p in enumerate(starts):
+            if p in first:
+                raise FileFormatError(f"{where}: the ARDF line table names byte {p} for recorded lines {first[p]} "
+                                      f"and {j}; a line is stored once: the file is damaged")
+            first[p] = j
+        named: dict[int, int] = {}
+        for j, p in enumerate(starts):  # each names a curve of its own line (a pointer into another is refused)
+            self._record(p, "VSET")
+            line = _VSET.unpack(self._bytes(p + 16, 32, "VSET record"))[1]
+            if line in named:
+                raise FileFormatError(f"{where}: recorded lines {named[line]} and {j} of the ARDF line table both "
+                                      f"start at a curve of map line {line} (bytes {starts[named[line]]} and {p}): "
+                                      "overlapping lines; the line table is damaged")
+            named[line] = j
+        least = _VSET.size + 16 + n_channels * (_VDAT.size + 16)  # the smallest curve a line can hold [bytes]
+        ends = dict(zip(sorted(starts), sorted(starts)[1:] + [self._size]))
+        for j, p in enumerate(starts):
+            need = (self.nx if j < len(starts) - 1 else 1) * least
+            if p + need > ends[p]:
+                room = max(ends[p] - p, 0) // least
+                to = "the end of the file" if ends[p] == self._size else f"the next line at byte {ends[p]}"
+                raise FileFormatError(f"{where}: recorded line {j} of the ARDF force map starts at byte {p} and "
+                                      f"leaves room for at most {room} of its {self.nx if j < len(starts) - 1 else 1}"
+                                      f" curves before {to}; the line table is damaged")
 
     def _metadata(self, meta_override: dict) -> dict[str, Any]:
         where, note = self.where, self.note

@@ -12,7 +12,9 @@ import contextlib
 import itertools
 import logging
 import re
+import shutil
 import signal
+import tempfile
 import threading
 import traceback
 import warnings
@@ -125,7 +127,8 @@ class DaskExecutor:
     Without ``scheduler`` or ``client`` a :class:`distributed.LocalCluster` of
     ``workers`` single-threaded processes (default: one per available core) is
     started on the loopback interface when first needed and closed by
-    :meth:`close`. ``scheduler="tcp://host:port"`` connects to a running
+    :meth:`close`; its workers' scratch space is a folder of its own in the temporary
+    folder (``TMPDIR``), removed by :meth:`close`. ``scheduler="tcp://host:port"`` connects to a running
     cluster instead; ``client`` uses an existing :class:`distributed.Client`
     (which is left open).
 
@@ -146,6 +149,7 @@ class DaskExecutor:
         self._client = client
         self._own_client = client is None
         self._cluster = None
+        self._scratch: str | None = None
         self._window = window
         self._warmup = warmup
 
@@ -168,14 +172,24 @@ class DaskExecutor:
 
                 # no dashboard, so no statistical profiler either: it samples the
                 # task thread every 10 ms and slows short compiled runs measurably
-                with dask.config.set({"distributed.worker.profile.enabled": False}), _workers_ignore_sigint(), \
+                # the scratch of the scheduler (made here) and the workers in a folder of its own, removed by
+                # close(): dask's default, <tmp>/dask-scratch-space, outlived every sweep
+                self._scratch = tempfile.mkdtemp(prefix="afmforce-dask-")
+                with dask.config.set({"distributed.worker.profile.enabled": False,
+                                      "temporary-directory": self._scratch}), _workers_ignore_sigint(), \
                         warnings.catch_warnings():
                     # another cluster on this machine holds the HTTP port: dask takes another one itself
                     warnings.filterwarnings("ignore", message="Port .* is already in use")
-                    self._cluster = LocalCluster(
-                        n_workers=self.workers or available_cores(), threads_per_worker=1, processes=True,
-                        host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR,
-                    )
+                    try:
+                        self._cluster = LocalCluster(
+                            n_workers=self.workers or available_cores(), threads_per_worker=1, processes=True,
+                            host="127.0.0.1", dashboard_address=None, silence_logs=logging.ERROR,
+                            local_directory=self._scratch,
+                        )
+                    except BaseException:
+                        shutil.rmtree(self._scratch, ignore_errors=True)
+                        self._scratch = None
+                        raise
                 self._client = Client(self._cluster)
         return self._client
 
@@ -271,6 +285,9 @@ class DaskExecutor:
                     shut(self._cluster)
                     self._cluster = None
         finally:
+            if self._scratch is not None:
+                shutil.rmtree(self._scratch, ignore_errors=True)
+                self._scratch = None
             for lg, level in zip(loggers, levels):
                 lg.setLevel(level)
 

@@ -28,6 +28,7 @@ from typing import Any, Callable, Iterable, Mapping
 
 from .._files import atomic_path, atomic_write_text, display_path
 from ..errors import AfmforceError, FileFormatError, OutputExistsError, ParameterError
+from ..limits import BATCH_MAX_CURVES
 from .batch import error_record, run_batch
 from .results import BatchResult
 from .summary import SUMMARY_COLUMNS, SUMMARY_UNITS, failures, summary_row, summary_table, write_summary
@@ -116,13 +117,14 @@ class TooManyCurves(ParameterError):
 
 def plan_curves(paths: Iterable[str | os.PathLike], format: str | None = None,
                 timeout: float | None = None, on_file: Callable[[], None] | None = None,
-                max_curves: int | None = None) -> list[CurveRef]:
+                max_curves: int | None = BATCH_MAX_CURVES) -> list[CurveRef]:
     """Work items for ``paths``: one per curve of a force map, one per other file.
 
     Never raises for a bad file: it becomes one item, whose analysis reports the error.
     ``timeout`` [s] bounds the detection of each file (see :func:`afmforce.io.load`);
     ``on_file()`` is called after each file (a progress bar). ``max_curves``: the most items taken,
-    counted from the maps' headers before any item is made (:class:`TooManyCurves` past it).
+    counted from the maps' headers before any item is made (:class:`TooManyCurves` past it; default
+    :data:`afmforce.limits.BATCH_MAX_CURVES`, None: no cap).
     """
     from ..io import run_with_timeout
 
@@ -473,8 +475,9 @@ def choose_executor(refs: list[CurveRef], analysis: CurveAnalysis, workers: int 
 
 def analyze_files(items: Iterable, analysis: CurveAnalysis | None = None, *, chunk_size: int | None = None,
                   executor=None, workers: int | None = None, scheduler: str | None = None, store=None,
-                  progress: Callable | None = None) -> BatchResult:
-    """Analyse files (paths, planned with :func:`plan_curves`) or :class:`CurveRef` items in chunks.
+                  progress: Callable | None = None, max_curves: int | None = BATCH_MAX_CURVES) -> BatchResult:
+    """Analyse files (paths, planned with :func:`plan_curves`, at most ``max_curves`` curves) or
+    :class:`CurveRef` items in chunks.
 
     Arguments as in :func:`~afmforce.sweep.run_batch` (default executor: a local
     Dask cluster; ``"serial"`` runs here). With ``store`` (a parent folder) the
@@ -483,7 +486,7 @@ def analyze_files(items: Iterable, analysis: CurveAnalysis | None = None, *, chu
     """
     analysis = analysis or CurveAnalysis()
     items = list(items)
-    refs = items if all(isinstance(i, CurveRef) for i in items) else plan_curves(items, analysis.format)
+    refs = items if all(isinstance(i, CurveRef) for i in items) else plan_curves(items, analysis.format, max_curves=max_curves)
     key = analysis_key(refs, analysis) if store is not None else None
     try:
         return run_batch(refs, analysis, chunk_size=chunk_size, executor=executor, workers=workers,

@@ -305,8 +305,8 @@ def run_analysis(files: Sequence[tuple[Path, str]], options=(), meta=(), probe=(
         raise FieldError(field, f"{field} {files[where][1][:80]!r}: {exc.declared:,} curves"
                          + (f" ({exc.total:,} with the files before it)" if exc.total > exc.declared else "")
                          + f", more than the {ANALYSIS_CURVES:,} one request analyses (afmforce.limits."
-                         "SERVER_MAX_CURVES); analyse it with `afmforce analyze` (it streams a map of any "
-                         "size), or send fewer files") from None
+                         "SERVER_MAX_CURVES); analyse it with `afmforce analyze` (it streams a map curve by "
+                         "curve), or send fewer files") from None
     if arrays and not curves:     # the response's size cap
         max_points = max(10, min(max_points, ANALYSIS_POINTS // max(1, len(refs))))
     analysis = CachedAnalysis(steps=chosen, options=records, probe=probe_record, meta_override=override,

@@ -13,7 +13,7 @@ from . import openapi, replies
 from .compute import Gate
 from .guard import Guard
 from .jobs import JobManager
-from .sessions import Sessions
+from .sessions import Sessions, session_key
 from .settings import Settings
 
 __all__ = ["create_app", "warm_up_steps"]
@@ -91,7 +91,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.add_middleware(CORSMiddleware, allow_origins=list(settings.allow_origins), allow_methods=["*"],
                            allow_headers=["content-type", "authorization"], allow_credentials=True)
     app.add_middleware(Guard, token=settings.token, max_body=settings.max_upload, loopback=settings.loopback,
-                       allow_origins=settings.allow_origins, session_ttl=settings.session_ttl, seen=sessions.seen)
+                       allow_origins=settings.allow_origins, session_ttl=settings.session_ttl, seen=sessions.seen,
+                       room=lambda sid, adding: sessions.room_refusal(session_key(sid), adding, "uploads being received"))
     return app
 
 

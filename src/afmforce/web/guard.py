@@ -9,6 +9,11 @@
   nothing until the session stores something (:mod:`.sessions`).
 * A request body larger than the limit gets 413 (from ``Content-Length`` before it
   is read, and while it is read when the length is not announced: a chunked upload).
+  The bytes of the bodies being received (Starlette spools an upload to its temporary folder
+  before any route runs) count against the session's storage with what it keeps stored: a body
+  that would pass it is refused 413 ``storage_full`` before it is read (or, chunked, as it
+  grows past it), and past :data:`afmforce.limits.SERVER_BODIES_IN_FLIGHT` received at once
+  for all sessions a request waits for none: 429 ``busy``.
 * Requests sent by another web site are refused (403): a browser's ``Origin`` must be this
   server's own or one given with ``--allow-origin``; ``Origin: null`` (a sandboxed frame, a
   file, a redirect across sites) is refused, and a write without ``Origin`` whose
@@ -35,7 +40,12 @@ TOKEN_COOKIE = "afmforce_token"
 _SESSION = re.compile(r"^[A-Za-z0-9_-]{32,64}$")
 _LOOPBACK_NAMES = ("127.0.0.1", "localhost", "::1")
 _SAFE = ("GET", "HEAD", "OPTIONS")
-_TYPES = {401: "unauthorized", 403: "forbidden", 413: "too_large"}
+_TYPES = {401: "unauthorized", 403: "forbidden", 413: "too_large", 429: "busy"}
+#: A chunked body's share of the bodies in flight is checked against the storage each time it grows this much [bytes].
+_STEP = 8_000_000
+#: Bytes of a request body not counted as stored: a multipart body's boundaries and part headers (a
+#: 900-byte upload is a body of ~1,100 bytes) [bytes].
+_FRAMING = 65_536
 
 
 def normal_origin(text: str) -> str | None:
@@ -55,6 +65,13 @@ def normal_origin(text: str) -> str | None:
 
 class _TooLarge(Exception):
     pass
+
+
+async def _reply_type(send, status: int, kind: str, message: str) -> None:
+    body = error_bytes(kind, message)
+    await send({"type": "http.response.start", "status": status,
+                "headers": [(b"content-type", b"application/json"), (b"content-length", str(len(body)).encode())]})
+    await send({"type": "http.response.body", "body": body})
 
 
 async def _reply(send, status: int, message: str) -> None:
@@ -82,12 +99,29 @@ class Guard:
         Lifetime of the session cookie [s].
     seen : callable, optional
         ``seen(session)`` for every accepted request of a known session (renews its lifetime).
+    room : callable, optional
+        ``room(session, adding)``: why ``adding`` more bytes would pass the session's or the server's
+        storage, or None (:meth:`afmforce.web.sessions.Sessions.room_refusal`); the session's bodies
+        in flight are added to each request's.
+    max_flight : int
+        Bytes of request bodies received at once, all sessions together (:data:`afmforce.limits.
+        SERVER_BODIES_IN_FLIGHT`).
+    framing : int
+        Bytes of each body not counted (a multipart body's boundaries and part headers around the
+        files the session will store) [bytes].
     """
 
     def __init__(self, app, token: str | None, max_body: int, loopback: bool = True, allow_origins=(),
-                 session_ttl: float = 24 * 3600.0, seen=None):
+                 session_ttl: float = 24 * 3600.0, seen=None, room=None, max_flight: int | None = None,
+                 framing: int = _FRAMING):
+        from ..limits import SERVER_BODIES_IN_FLIGHT
+
         self.app, self.token, self.max_body, self.loopback = app, token, max_body, loopback
-        self.seen = seen
+        self.seen, self.room = seen, room
+        self.max_flight = SERVER_BODIES_IN_FLIGHT if max_flight is None else max_flight
+        self.framing = framing
+        self._flight: dict[str, int] = {}   # bytes of bodies being received, per session (one event loop)
+        self._flight_total = 0
         self.allow_origins = frozenset(o for o in (normal_origin(a) for a in allow_origins) if o)
         self.max_age = max(1, int(session_ttl))
 
@@ -160,9 +194,41 @@ class Guard:
         seen = 0
         too_large = False
         too_large_text = f"upload too large: more than {self.max_body:,} bytes (afmforce serve --max-upload)"
+        refusal: tuple[int, str, str] | None = None     # (status, type, message) of a body refused as it grew
+        reserved = 0
+
+        checked = -_STEP
+
+        def admit(more: int) -> tuple[int, str, str] | None:
+            """Reserve ``more`` bytes of this request's body in flight, or why not (checked when the body
+            started, and then each :data:`_STEP` bytes: the session's room is a walk of its folder)."""
+            nonlocal reserved, checked
+            if reserved + more - checked < _STEP:
+                reserved += more
+                self._flight[sid] = self._flight.get(sid, 0) + more
+                self._flight_total += more
+                return None
+            checked = reserved + more
+            if self._flight_total + more > self.max_flight:
+                return (429, "busy", f"the server is receiving {self._flight_total:,} bytes of uploads; "
+                                     f"{more:,} more would pass the {self.max_flight:,} it receives at once "
+                                     "(afmforce.limits.SERVER_BODIES_IN_FLIGHT): try again in a moment")
+            why = self.room(sid, self._flight.get(sid, 0) + more) if self.room is not None else None
+            if why:
+                return (413, "storage_full", why)
+            reserved += more
+            self._flight[sid] = self._flight.get(sid, 0) + more
+            self._flight_total += more
+            return None
+
+        announced = int(length) if length is not None and length.isdigit() else 0
+        if announced > self.framing:
+            why = admit(announced - self.framing)
+            if why:
+                return await _reply_type(send, *why)
 
         async def limited():
-            nonlocal seen, too_large
+            nonlocal seen, too_large, refusal
             if too_large:      # the app asks again after the refusal: the body has ended for it
                 return {"type": "http.disconnect"}
             message = await receive()
@@ -171,6 +237,11 @@ class Guard:
                 if seen > self.max_body:
                     too_large = True
                     raise _TooLarge()
+                if seen - self.framing > reserved:    # a body longer than announced, or chunked: it grows
+                    refusal = admit(seen - self.framing - reserved)
+                    if refusal:
+                        too_large = True
+                        raise _TooLarge()
             return message
 
         started = False
@@ -182,7 +253,7 @@ class Guard:
                 # makes of the interrupted body (FastAPI: 400), the client is told 413
                 if message["type"] == "http.response.start" and not started:
                     started = True
-                    await _reply(send, 413, too_large_text)
+                    await (_reply_type(send, *refusal) if refusal else _reply(send, 413, too_large_text))
                 return
             if message["type"] == "http.response.start":
                 started = True
@@ -201,4 +272,12 @@ class Guard:
         except _TooLarge:
             if not started:
                 started = True
-                await _reply(send, 413, too_large_text)
+                await (_reply_type(send, *refusal) if refusal else _reply(send, 413, too_large_text))
+        finally:     # the body's bytes are the route's now (stored, counted as the session's) or gone
+            if reserved:
+                left = self._flight.get(sid, 0) - reserved
+                if left > 0:
+                    self._flight[sid] = left
+                else:
+                    self._flight.pop(sid, None)
+                self._flight_total -= reserved

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 from ..errors import ParameterError
+from ..limits import SERVER_MAX_UPLOAD
 from .limits import SERVER_STORAGE, SESSION_STORAGE, SESSION_TTL
 
 __all__ = ["Settings", "parse_size", "is_loopback"]
@@ -83,7 +84,7 @@ class Settings:
     host: str = "127.0.0.1"
     port: int = 8765
     token: str | None = None
-    max_upload: int = 200_000_000
+    max_upload: int = SERVER_MAX_UPLOAD
     data: Path = field(default_factory=lambda: Path.home() / ".afmforce" / "serve")
     request_budget: float = 60.0
     job_budget: float = 3600.0
