@@ -182,7 +182,8 @@ def lever_from_files(base, curves: list[FitCurve], lever: str = "file"):
 def lever_warnings(curves: list[FitCurve], base, lever: str = "file") -> list[str]:
     """Say which spring constant the model's lever took where a file gives none (the walk of
     2026-11-29: curves in volts with their sensitivity but no spring constant were fitted with the
-    beam's default 0.139 N/m in silence; simulated with 0.277 N/m, A = 2.76e-19 J [2.34, 3.18]e-19 and xi = 0.049 [0.043, 0.054] kg/s for 5e-19 J and 0.1 kg/s, "adequate").
+    beam's default 0.139 N/m in silence; simulated with 0.277 N/m, A = 2.76e-19 J [2.34, 3.18]e-19
+    and xi = 0.049 [0.043, 0.054] kg/s for 5e-19 J and 0.1 kg/s, "adequate").
 
     ``lever="model"`` (the user gave the lever): nothing to say. Otherwise, with no curve's spring
     constant the model's default lever is named (A*R and friction scale with k); with some
