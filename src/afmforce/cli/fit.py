@@ -146,10 +146,16 @@ def _load(paths, meta=None, found=frozenset()):
     can read is skipped, ``(path, message)``, as ``afmforce analyze`` goes on past a bad file of a
     batch; a file named is read or the error is the command's."""
     from ..errors import FileFormatError, MissingMetadataError
+    from ..fit.core import MAX_CURVES, check_curve_count
     from ..io import load
+    from ..sweep.files import TooManyCurves, plan_curves
 
     curves, names, skipped = [], [], []
     for path in paths:
+        try:   # a force map's curves counted from its header before it is read: a 64 x 64 map was
+            plan_curves([path], max_curves=MAX_CURVES - len(curves))   # read whole (1 GB) to be refused
+        except TooManyCurves as exc:
+            check_curve_count(exc.total)
         try:
             got = load(path, meta_override=meta or None)
         except MissingMetadataError as exc:
@@ -168,6 +174,7 @@ def _load(paths, meta=None, found=frozenset()):
             continue
         name = Path(path).name
         curves += list(got)
+        check_curve_count(len(curves))   # files whose header gives no count: refused once read past the cap
         names += [name] if len(got) == 1 else [f"{name}#{i + 1}" for i in range(len(got))]
     if skipped and not curves:
         raise FileFormatError(f"no file could be read: {skipped[0][1]}"

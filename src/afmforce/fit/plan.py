@@ -97,6 +97,27 @@ def check_plan_size(base, speeds: Sequence[float], sample_rates: Sequence[float]
     check_design(len(speeds), n_curves, samples)
 
 
+def _prepare_planned(raws, speeds: Sequence[float], drive: dict):
+    """The fit's preparation of the plan's model curves; a model curve that never reaches the
+    surface is the design's (a speed too fast for the drive: friction and inertia delay the
+    jump-in past the turn), said in the plan's words, not as a measured file's missing contact."""
+    from ..errors import AnalysisError
+
+    names = [f"speed {i + 1}" for i in range(len(raws))]
+    try:
+        return prepare_curves(raws, names)
+    except AnalysisError as exc:
+        name, _, rest = str(exc).partition(": ")
+        if name not in names or not rest.startswith("no contact reached"):
+            raise
+        v = speeds[names.index(name)]
+        raise ParameterError(
+            f"at {v * 1e6:.4g} um/s the model's approach from {drive['start'] * 1e9:.4g} nm to "
+            f"{drive['turn'] * 1e9:.4g} nm ends before the tip reaches the surface (the lever lags "
+            "the piezo: friction, drainage and inertia delay the jump-in at this speed), so the plan "
+            "has no curve to assess there: give a later turn (`turn`) or slower speeds") from None
+
+
 def curve_information(base, speeds: Sequence[float], sample_rates: Sequence[float],
                       noise: float, free=("hamaker", "xi")) -> list[np.ndarray]:
     """Fisher information on ``free`` [SI] of one noiseless curve per speed (nuisances profiled)."""
@@ -108,7 +129,7 @@ def curve_information(base, speeds: Sequence[float], sample_rates: Sequence[floa
     raws = virtual_curves(list(speeds), sample_rates=list(sample_rates), noise=0.0, drift_rms=0.0,
                           zero_offsets=[0.0] * len(speeds), baseline_offsets=[0.0] * len(speeds),
                           **model_fields, **drive)
-    fcs = prepare_curves(raws)
+    fcs = _prepare_planned(raws, speeds, drive)
     for c in fcs:
         c.sigma = noise
     prob = Problem(Evaluator(fcs, base, "dynamic", True), tuple(free))
