@@ -108,7 +108,7 @@ def curve_information(base, speeds: Sequence[float], sample_rates: Sequence[floa
     raws = virtual_curves(list(speeds), sample_rates=list(sample_rates), noise=0.0, drift_rms=0.0,
                           zero_offsets=[0.0] * len(speeds), baseline_offsets=[0.0] * len(speeds),
                           **model_fields, **drive)
-    fcs = prepare_curves(raws)
+    fcs = prepare_curves(raws, soft="warn")   # the model's own rigid curves: a weak attraction is no soft sample
     for c in fcs:
         c.sigma = noise
     prob = Problem(Evaluator(fcs, base, "dynamic", True), tuple(free))
