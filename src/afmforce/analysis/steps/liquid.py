@@ -218,7 +218,10 @@ def liquid(st: State, o: LiquidOptions) -> State:
     # the approach's static force: the velocity force (lever drag and Reynolds drainage) taken off; the
     # retract jumps out from contact, so near the surface only the approach has the double layer
     ha, fa = h[ia], force[ia] - va * (drag_estimate + beta0 / np.maximum(h[ia], 1e-10))
-    jump = int(np.argmin(np.diff(ha)))  # the jump into contact (or the steepest step towards it)
+    # contact: the first sample inside min_separation (a lever the drainage damps creeps in without a jump,
+    # and the steepest step was then a noise step far out: the fit had nothing left, "no double layer")
+    inside = np.flatnonzero(ha < o.min_separation)
+    jump = int(inside[0]) if inside.size else int(np.argmin(np.diff(ha)))
     why = _no_double_layer(ha[:jump], fa[:jump], noise * math.sqrt(2.0), o, h_far)
     if isinstance(why, str):
         return _skip(st.update(warn=warn) if warn else st, "liquid", why, LiquidResult(**common))
