@@ -30,7 +30,11 @@ import numpy as np
 from ..errors import AnalysisError
 
 __all__ = ["ComplianceCalibration", "quadratic_compliance", "DragBaselines", "drag_baselines",
-           "split_drainage", "velocity_force_fit", "VelocityForceFit", "VELOCITY_FIT_MIN_POINTS", "DLVOFit", "fit_dlvo", "calibrate_liquid_curve"]
+           "split_drainage", "velocity_force_fit", "VelocityForceFit", "VELOCITY_FIT_MIN_POINTS", "DLVOFit", "fit_dlvo", "calibrate_liquid_curve",
+           "retract_free_mask", "FAR_MIN_POINTS"]
+
+#: Fewest free samples a run must have in the far region for its baseline [-].
+FAR_MIN_POINTS = 20
 
 
 @dataclass(frozen=True)
@@ -369,7 +373,15 @@ def fit_dlvo(h, force, radius: float, *, sigma: float, geometry: str = "sphere-f
         low, high = (None if e is None else float(e * scale[i]) for e in (low, high))
         interval[n] = (low, high)
         shown = f"[{'-' if low is None else f'{low:.3g}'}, {'-' if high is None else f'{high:.3g}'}]"
-        if better is not None or low is None or high is None:
+        at = [b for b in (lo[i], hi[i]) if abs(float(res.x[i]) - b) <= 1e-6 * max(abs(b), 1e-3)]
+        if at:   # a value the fit pushed to the edge of its range is no estimate (not 0.0 as a number)
+            other = high if at[0] == lo[i] else low
+            side = "at most" if at[0] == lo[i] else "at least"
+            why.append(f"{n} undetermined: the fit runs to the {'lower' if at[0] == lo[i] else 'upper'} bound of its "
+                       f"range ({at[0] * scale[i]:.3g})" + ("" if other is None else
+                                                             f"; 95 % profile: {side} {other:.3g}"))
+            values[n], stderr[n] = math.nan, math.nan
+        elif better is not None or low is None or high is None:
             why.append(f"{n} undetermined: " + (f"a better fit lies at {better * scale[i]:.3g}" if better is not None
                                                   else f"its 95 % profile interval {shown} is open"))
             values[n], stderr[n] = math.nan, math.nan
@@ -402,11 +414,57 @@ def _correlation_time(r) -> float:
     return float(min(max(1.0 + 2.0 * float(np.sum(rho[1:m + 1])), 1.0), n))
 
 
+def retract_free_mask(piezo_app, signal_app, piezo_ret, signal_ret, far: float) -> np.ndarray:
+    """The retract's samples after the pull-off (free lever) [bool, one per retract sample].
+
+    In contact the signal follows the piezo with the compliance slope (the approach's final
+    ``dV/dz``), and a clipped photodiode (:func:`~afmforce.analysis.regions.saturated_mask`) says
+    nothing about the lever: the pull-off is after the last retract sample (time order) whose local
+    slope exceeds half the compliance slope or whose signal is clipped, and a window of samples more
+    (the jump and the relaxation after it). All False when the lever never pulls off. Raises
+    :class:`~afmforce.errors.AnalysisError`, saying what happened, when fewer than
+    :data:`FAR_MIN_POINTS` free retract samples lie in the far region (piezo below ``far`` [m]).
+    """
+    from .regions import saturated_mask
+
+    za, va = np.asarray(piezo_app, float), np.asarray(signal_app, float)
+    zr, vr = np.asarray(piezo_ret, float), np.asarray(signal_ret, float)
+    w = max(3, za.size // 100)
+    tail = slice(max(0, za.size - max(4 * w, za.size // 20)), za.size)
+    comp = np.polyfit(za[tail], va[tail], 1)[0] if za[tail].size >= 3 else math.nan   # [V/m] in contact
+    n = zr.size
+    contact = np.zeros(n, bool)
+    if math.isfinite(comp) and comp > 0 and n > w:
+        dz, dv = zr[w:] - zr[:-w], vr[w:] - vr[:-w]
+        slope = np.where(dz != 0, dv / np.where(dz != 0, dz, 1.0), np.inf)
+        steep = np.abs(slope) > 0.5 * comp
+        contact[:-w] |= steep
+        contact[w:] |= steep
+    clipped = saturated_mask(np.ascontiguousarray(np.concatenate([va, vr])))[za.size:]
+    contact |= clipped
+    free = np.ones(n, bool)
+    last = np.flatnonzero(contact)
+    if last.size:
+        free[:min(n, int(last[-1]) + 1 + w)] = False
+    nfar = int((free & (zr < far)).sum())
+    if nfar < FAR_MIN_POINTS:
+        what = "the photodiode clipped" if clipped.any() else "the deflection following the piezo"
+        if not free.any():
+            raise AnalysisError(f"the retract never pulls off: in contact ({what}) down to its end at z = "
+                                f"{zr[-1] * 1e9:.4g} nm, so the retract has no free far baseline; retract further "
+                                "(a larger `end`) or lower the adhesion")
+        zp = float(zr[int(last[-1])])
+        raise AnalysisError(f"the retract pulls off at z = {zp * 1e9:.4g} nm, inside the far region (below "
+                            f"{far * 1e9:.4g} nm), leaving {nfar} free samples there (fewer than {FAR_MIN_POINTS}) "
+                            "for its far baseline: retract further (a larger `end`)")
+    return free
+
+
 def calibrate_liquid_curve(curve, far: float | None = None):
     """A raw curve in volts -> the same curve with the deflection in metres (for ``afmforce fit``).
 
     The zero-deflection signal is the mean of the approach and retract far-field lines at the
-    far region's middle (the lever drag cancels), ``far`` [m] the upper end of the far region
+    far region's middle (the lever drag cancels; the retract's after its pull-off, :func:`retract_free_mask`), ``far`` [m] the upper end of the far region
     in piezo position (default: the first 30 % of the approach travel); the deflection is the
     quadratic compliance calibration (:func:`quadratic_compliance`). The calibration is in
     ``metadata["liquid_calibration"]``. The piezo position read by the position sensor is
@@ -423,7 +481,9 @@ def calibrate_liquid_curve(curve, far: float | None = None):
                             "(>= 20 samples each)")
     if far is None:
         far = z[a].min() + 0.3 * (z[a].max() - z[a].min())
-    ma, mr = a & (z < far), r & (z < far)
+    free = np.zeros(z.size, bool)
+    free[r] = retract_free_mask(z[a], v[a], z[r], v[r], far)   # only the lever off the surface is a baseline
+    ma, mr = a & (z < far), free & (z < far)
     if ma.sum() < 5 or mr.sum() < 5:
         raise AnalysisError("calibrate_liquid_curve: fewer than 5 samples of a run in the far region")
     mid = 0.5 * (max(z[ma].min(), z[mr].min()) + far)

@@ -44,5 +44,6 @@ def print_liquid(ok) -> None:
         if math.isfinite(float(r["surface_potential"])):
             line += (f"; DLVO psi {fmt(r['surface_potential'] * 1e3)} +- {fmt(r['surface_potential_se'] * 1e3)} mV, "
                      f"Debye length {fmt(r['debye_length'] * 1e9)} +- {fmt(r['debye_length_se'] * 1e9)} nm, "
-                     f"A {fmt(r['dlvo_hamaker'])} +- {fmt(r['dlvo_hamaker_se'])} J")
+                     + (f"A {fmt(r['dlvo_hamaker'])} +- {fmt(r['dlvo_hamaker_se'])} J"
+                        if math.isfinite(float(r["dlvo_hamaker"])) else "A undetermined (see the warning)"))
         print(line)

@@ -105,7 +105,7 @@ def _prepare_planned(raws, speeds: Sequence[float], drive: dict):
 
     names = [f"speed {i + 1}" for i in range(len(raws))]
     try:
-        return prepare_curves(raws, names)
+        return prepare_curves(raws, names, soft="warn")   # the model's own rigid curves: a weak attraction is no soft sample
     except AnalysisError as exc:
         name, _, rest = str(exc).partition(": ")
         if name not in names or not rest.startswith("no contact reached"):
