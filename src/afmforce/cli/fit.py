@@ -185,6 +185,7 @@ def _load(paths, meta=None, found=frozenset()):
 def run(args: argparse.Namespace) -> int:
     """Run the command; returns the exit status."""
     from ..fit import fit_dynamic
+    from ..fit.core import LEVER_FIELDS, MASS_FIELDS, lever_sources
 
     # the files' calibration is given with --meta here: --spring-constant is the model's lever
     RunState.flags.update(spring_constant="--meta spring_constant=VALUE", sensitivity="--meta sensitivity=VALUE")
@@ -239,12 +240,9 @@ def run(args: argparse.Namespace) -> int:
                           retract=args.retract, noise=args.noise_model,
                           fringes=args.fringes, fringe_period=args.fringe_period,
                           calibration=args.calibration,
-                          # the model's lever is the files' unless a flag gives one (issue 34)
-                          lever="model" if any(getattr(args, n, None) is not None for n in
-                                               ("spring_constant", "k0", "B")) else "file",
-                          # and its mass the files' resonance's unless a flag gives one
-                          mass="model" if any(getattr(args, n, None) is not None for n in
-                                              ("mass", "m_joint", "m_base")) else "file")
+                          # the model's lever and mass are the files' unless a flag gives one (issue 34)
+                          **lever_sources(n for n in LEVER_FIELDS + MASS_FIELDS
+                                          if getattr(args, n, None) is not None))
     d = res.to_dict()
     # how each curve was calibrated (the analysis's calibration: the file's, or the compliance slope)
     d["calibration"] = {c.name: c.metadata.get("calibration") for c in res._problem.ev.curves}

@@ -251,6 +251,22 @@ def files_resonance(curves: list[FitCurve]) -> float | None:
     return float(np.median(fs)) if fs else None
 
 
+#: The model fields that, when the user gives one, make the model's lever (``LEVER_FIELDS``) or its
+#: mass (``MASS_FIELDS``) win over the files' calibration and resonance (issue 34): one declaration
+#: for the CLI's ``fit`` and the web's fit (:func:`lever_sources`).
+LEVER_FIELDS = ("spring_constant", "k0", "B")
+MASS_FIELDS = ("mass", "m_joint", "m_base")
+
+
+def lever_sources(given) -> dict[str, str]:
+    """``fit_dynamic``'s ``lever`` and ``mass`` arguments for the model fields the user gave
+    (names in ``given``): ``"model"`` where one of :data:`LEVER_FIELDS` / :data:`MASS_FIELDS` is
+    given, else ``"file"``."""
+    given = set(given)
+    return {"lever": "model" if given & set(LEVER_FIELDS) else "file",
+            "mass": "model" if given & set(MASS_FIELDS) else "file"}
+
+
 def mass_from_files(base, curves: list[FitCurve], mass: str = "file"):
     """The model's lever mass set so that its first free resonance is the files' (issue 34:
     defaults right as typed; the model's default lever rings at 4-6 kHz for the beam, 0.7 kHz for

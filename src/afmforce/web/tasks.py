@@ -37,6 +37,7 @@ def fit_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
     recorded at ``velocities`` [m/s] from the ``truth`` configuration (flat names, SI)."""
     from ..dynamics import SimulationConfig
     from ..fit import fit_dynamic, virtual_curves
+    from ..fit.core import lever_sources
     from ..io import load
 
     truth = dict(params.get("truth") or {})
@@ -59,8 +60,8 @@ def fit_task(params: dict[str, Any], progress: Callable) -> dict[str, Any]:
                           **({"starts": int(params["starts"])} if "starts" in params else {}),
                           profile=None if params.get("profile", True) else (),
                           compare=bool(params.get("compare", True)), progress=progress,
-                          # the files' lever unless the form gives one, as `afmforce fit` (issue 34)
-                          lever="model" if any(n in truth for n in ("spring_constant", "k0", "B")) else "file")
+                          # the files' lever and mass unless the form gives one, as `afmforce fit` (issue 34)
+                          **lever_sources(truth))
     out = res.to_dict()
     out["markdown"] = res.markdown()
     out["verdict"] = _verdict(res)
