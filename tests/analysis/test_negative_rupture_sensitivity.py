@@ -4,10 +4,12 @@ run at 1.35-1.38 x the ramp (the deflection outruns the position: the file's sen
 slope's, 29.8 nm/V), so the separation runs backwards in contact and 132 of the 256 ruptures came out at
 -0.02 to -9.9 nm, the warning blaming "the separation's zero or the retract's baseline". Curve 15 (the
 trimmed file's second, tests/data/make_nanoscope_fv_image_grid_trimmed.py) ruptures at -3.8 nm, beyond
-the drift lines' bound of 0.18 nm; the warning now names the contact line's rate and the sensitivity."""
+the drift lines' bound of 0.18 nm; the warning now names the contact line's rate and the sensitivity, and
+the number is withheld (NaN: a rupture inside the compliance line beyond its uncertainty is no distance)."""
 
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import numpy as np
@@ -28,8 +30,11 @@ def test_negative_rupture_on_a_backwards_contact_line_names_the_sensitivity():
     rate = abs(np.polyfit(z[top], ret[top], 1)[0])
     assert 1.3 < rate < 1.45
     r = analyze(c)
-    assert r.contact_kind == "hard" and r.rupture_distance < -1e-9
-    why = [w for w in r.warnings if w.startswith(f"rupture at {r.rupture_distance * 1e9:.3g} nm")]
+    assert r.contact_kind == "hard" and math.isnan(r.rupture_distance)   # was -3.8 nm, reported
+    assert r.rupture_distance_drift < 1e-9 and r.adhesion_force < 0       # the bound and the adhesion stay
+    why = [w for w in r.warnings if w.startswith("rupture at -") and "physically impossible" in w]
     assert len(why) == 1
+    assert -float(why[0].split()[2]) * 1e-9 > r.rupture_distance_drift  # the number beyond its bound, in words
+    assert "not reported (rupture_distance NaN)" in why[0]
     assert "on the retract's contact line the deflection moves" in why[0] and "suspect input: sensitivity" in why[0]
     assert "the separation's zero or the retract's baseline" not in why[0]

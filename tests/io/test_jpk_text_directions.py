@@ -58,3 +58,38 @@ def test_trace_and_retrace_blocks_read_as_approach_and_retract_in_time_order(tmp
     assert md["sample_rate"] == pytest.approx(1 / dt, rel=1e-6)
     # the height is the calibrated slot: nominal x heightMultiplier (here the measured column's values)
     assert np.ptp(c.piezo_nominal[c.approach]) == pytest.approx(2e-6, rel=1e-6)
+    assert "position_note" not in md   # the strain gauge spans the nominal x heightMultiplier: nothing to say
+
+
+@pytest.mark.parametrize("scale, said", ((1.0, False), (1.05, False), (1.5, True)))
+def test_a_strain_gauge_far_off_the_nominal_height_is_said(tmp_path, scale, said):
+    """The 2011 map curves' strain gauge spans 1.53 x the nominal height x heightMultiplier over the trace
+    (11.28 vs 7.53 um on ``-0000.out``) and afmforce said nothing; beyond the tolerance the Bruker reader
+    declares for its Z sensor (``SENSOR_RAMP_TOLERANCE``, 10 %) the reader now says it (``position_note``,
+    among the analysis's warnings when the measured height is the position used). The file is written here
+    with the strain gauge ``scale`` x the calibrated height, a constant ratio."""
+    from afmforce.io._meta import SENSOR_RAMP_TOLERANCE
+
+    n, dt = 200, 4.8828125e-4
+    h = np.linspace(14e-6, 12e-6, n)
+    f = np.clip(12.5e-6 - h, 0, None) * 0.02 + 1e-11 * np.random.default_rng(0).standard_normal(n)
+    t = (np.arange(2 * n) + 0.5) * dt
+
+    def rows(h, f, t):
+        return "".join(f"{scale * a:.8E} {b:.8E} {scale * a:.8E} {a / 0.62561:.8E} -0.05 {c:.8E} {c:.8E}\n"
+                       for a, b, c in zip(h, f, t))
+
+    path = tmp_path / "map-data-2011.04.19-13.41.43-0001.out"
+    path.write_text(HEAD.format(direction="trace") + rows(h, f, t[:n]) + "\n"
+                    + HEAD.format(direction="retrace") + rows(h[::-1], f[::-1] * 0.9, t[n:]))
+    (c,) = load(path)
+    ratio = np.ptp(c.piezo_measured[c.approach]) / np.ptp(c.piezo_nominal[c.approach])
+    assert ratio == pytest.approx(scale, rel=1e-6)   # independently: the two spans written
+    assert (abs(ratio - 1) > SENSOR_RAMP_TOLERANCE) == said
+    note = c.metadata.get("position_note")
+    assert (note is not None) == said
+    if said:
+        assert note.startswith("the measured height (strainGaugeHeight) travels 1.5 x the nominal ramp (2000 nm = "
+                               "height x heightMultiplier)") and "a constant ratio" in note
+        from afmforce.analysis.pipeline import analyze
+        assert note in analyze(c).warnings   # the measured height is the position used: the analysis says it

@@ -21,7 +21,7 @@ from .curve import SEGMENT_APPROACH, SEGMENT_DWELL, SEGMENT_RETRACT, RawCurve
 
 __all__ = ["MetaField", "METADATA", "check_meta_override", "finalize_curve", "segment_code",
            "missing_metadata", "require_metadata", "orient", "afmformats_override", "parse_meta_args",
-           "positive_entry", "first_approach_only"]
+           "positive_entry", "first_approach_only", "SENSOR_RAMP_TOLERANCE", "sensor_note"]
 
 
 def _positive(value: Any) -> float:
@@ -320,3 +320,33 @@ def finalize_curve(curve: RawCurve, path: str) -> RawCurve:
                                   f"gives it ({key} must lie in {spec.range_text()}); the file's header is "
                                   f"damaged or mis-scaled, give the right value (`{key}`)")
     return first_approach_only(curve)
+
+
+#: How far [fraction] a measured position's span over the approach (a Z sensor's, a strain gauge's) may differ
+#: from the nominal ramp's unsaid (readers' ``position_note``: Bruker NanoScope, JPK text exports)
+SENSOR_RAMP_TOLERANCE = 0.10
+
+
+def sensor_note(zm: np.ndarray, zn: np.ndarray, seg: np.ndarray, *, sensor: str, nominal: str, used: str,
+                scales: str) -> str | None:
+    """The reader's ``position_note``: what the analysis says when the measured position (``zm`` [m]) spans
+    the approach more than :data:`SENSOR_RAMP_TOLERANCE` off the nominal ramp (``zn`` [m]): the modulus
+    depends on which is taken (about as the ratio^1.5). Its steps against the ramp's over the first and the
+    last fifth of the approach tell a scale (equal) from an open-loop piezo's motion (unequal); None within
+    the tolerance. ``sensor``, ``nominal``, ``used`` and ``scales`` are the reader's words for the sensor, the
+    nominal ramp's product, the position used and the two scales that disagree."""
+    app = np.flatnonzero(seg == SEGMENT_APPROACH)
+    if app.size < 10 or not np.ptp(zn[app]) > 0 or not np.all(np.isfinite(zm[app])):
+        return None
+    ratio = float(np.ptp(zm[app]) / np.ptp(zn[app]))
+    if abs(ratio - 1.0) <= SENSOR_RAMP_TOLERANCE:
+        return None
+    fifth = app.size // 5
+    first, last = (abs(float(np.polyfit(zn[part], zm[part], 1)[0])) for part in (app[:fifth], app[-fifth:]))
+    steps = (f"its steps are {first:.3g} x the ramp's over the approach's first fifth and {last:.3g} x over its "
+             "last " + ("(the sensor records a motion the ramp does not: an open-loop piezo's hysteresis and creep)"
+                        if abs(last - first) > 0.05 * min(first, last) else
+                        f"(a constant ratio: {scales}, the file cannot tell which is right)"))
+    return (f"{sensor} travels {ratio:.3g} x the nominal ramp ({np.ptp(zn[app]) * 1e9:.4g} nm = {nominal}) over the "
+            f"approach; {steps}; {used} is the position used: a modulus on the nominal ramp would be about "
+            f"{last ** 1.5:.2g} x as large (the last steps' ratio^1.5; `channel nominal` gives it)")

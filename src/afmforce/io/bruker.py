@@ -168,15 +168,19 @@ def _parse(text: str, where: str):
     lines = text.splitlines()
     header: dict[str, str] = {}
     sections: list[dict[str, str]] = [{}]
+    title, samples = "", []   # the section's title; the force lists' \Samps/line values (the rows stated)
     i = 0
     while i < len(lines) and (lines[i].startswith("\\") or not lines[i].strip()):
         line = lines[i][1:]
         if line.startswith(("*", "?")):  # "\?Force file list" opens older NanoScope Analysis exports
             sections.append({})
+            title = line[1:].strip().lower()
         elif ":" in line:
             key, value = line.split(":", 1)
             key = key.strip().lstrip("@").strip()
             header[key] = value.strip()
+            if key.lower().startswith("samps/line") and "force" in title:
+                samples.append(value)
             entry = re.match(r"^@?((?:\d+:)?[^:]*):\s*(.*)$", line)  # \@4:Image Data: ... -> "4:Image Data"
             if entry is not None:
                 sections[-1].setdefault(entry.group(1).strip(), entry.group(2).strip())
@@ -206,7 +210,24 @@ def _parse(text: str, where: str):
             raise FileFormatError(f"{where}: line {j} is not numeric: {line[:60]!r}") from None
     if len(rows) < 2:
         raise FileFormatError(f"{where}: fewer than two data rows")
+    stated = _stated_rows(samples)
+    if stated is not None and len(rows) < stated:
+        raise FileFormatError(f"{where}: cut short: {len(rows)} of {stated} rows (the header's \\Samps/line: "
+                              f"{stated} samples per run): a truncated download or a full disk; copy or export it "
+                              "again")
     return header, names, np.array(rows, dtype=float)
+
+
+def _stated_rows(values: list[str]) -> int | None:
+    r"""The data rows the force lists' ``\Samps/line`` state (``512 512``: extend and retract, and
+    ``\Samps/line, retrace``), when every number given is one and the same (then each run's column holds
+    that many rows); None when none is given or they differ (``6656 6633``: afmToolkit's ``file4`` exports
+    6633 rows: which run's count is the table's is not said)."""
+    nums = {float(n) for v in values for n in _NUMBER.findall(v)}
+    if len(nums) != 1:
+        return None
+    n = nums.pop()
+    return int(n) if n == int(n) and n >= 2 else None
 
 
 def _deflection_list_value(sections: list[dict[str, str]], key: str) -> str | None:

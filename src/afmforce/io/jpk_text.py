@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import FileFormatError
 from .curve import RawCurve
-from ._meta import finalize_curve, orient, positive_entry, segment_code
+from ._meta import finalize_curve, orient, positive_entry, segment_code, sensor_note
 
 __all__ = ["detect_jpk_text", "load_jpk_text"]
 
@@ -115,6 +115,7 @@ def _curve(blocks: list[dict[str, Any]], where: str, meta_override: Mapping[str,
     unit = None
     meta: dict[str, Any] = {}
     t_end = 0.0
+    sensor = nominal = None   # the measured height's column, the nominal's words (the note on the two)
     for b in blocks:
         h = b["header"]
         tab = _table(b, where)
@@ -135,7 +136,8 @@ def _curve(blocks: list[dict[str, Any]], where: str, meta_override: Mapping[str,
         unit = u
         n = tab["vDeflection"].size
         height = tab.get("height")
-        measured = next((tab[c] for c in _MEASURED if c in tab), None)
+        sensor = next((c for c in _MEASURED if c in tab), None)
+        measured = tab[sensor] if sensor is not None else None
         if height is None and measured is None:
             raise FileFormatError(f"{where}: segment {h.get('segment')} has no height column "
                                   f"(columns: {' '.join(names)}); export height or measured height")
@@ -143,6 +145,9 @@ def _curve(blocks: list[dict[str, Any]], where: str, meta_override: Mapping[str,
         if height is not None and slots.get("height") == "nominal" and positive_entry(h, "heightMultiplier"):
             # the archive's default height is the calibrated slot: nominal x heightMultiplier + heightOffset
             height = height * float(h["heightMultiplier"]) + float(h.get("heightOffset", "0") or 0)
+            nominal = "height x heightMultiplier"
+        elif height is not None:
+            nominal = "height"
         if height is None:
             height, measured = measured, None
         if "seriesTime" in tab:
@@ -181,6 +186,11 @@ def _curve(blocks: list[dict[str, Any]], where: str, meta_override: Mapping[str,
         time = np.concatenate(cols_t)
     zm = None if any(m is None for m in cols_zm) else np.concatenate(cols_zm)
     zn, zm, sign = orient(np.concatenate(cols_zn), zm, seg)
+    note = None if zm is None or sensor is None or nominal is None else \
+        sensor_note(zm, zn, seg, sensor=f"the measured height ({sensor})", nominal=nominal,
+                    used=f"the measured height ({sensor})", scales=f"the {sensor}'s calibration and the height's disagree")
+    if note:   # a measured height far off the nominal (a 2011 strain gauge: 1.53 x height x heightMultiplier)
+        meta["position_note"] = note
     meta["segment_types"] = types
     meta.update(meta_override)
     meta.update(source_file=where, reader="jpk-txt", format="JPK Data Processing text export", position_sign=sign)

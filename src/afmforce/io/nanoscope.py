@@ -62,7 +62,7 @@ import numpy as np
 
 from ..errors import FileFormatError
 from .curve import RawCurve
-from ._meta import METADATA, finalize_curve
+from ._meta import METADATA, finalize_curve, sensor_note
 
 __all__ = ["load_nanoscope", "NanoscopeFile", "detect_nanoscope", "parse_header", "count_curves", "MAX_HEADER", "ADC_COUNTS"]
 
@@ -413,33 +413,14 @@ def _hold_samples(sections, defl: Mapping[str, str], per: int, n_curves: int, wh
     return hold if fits[0] and not fits[1] else 0
 
 
-#: How far [fraction] the Z sensor's span over the approach may differ from the nominal ramp's unsaid
-SENSOR_RAMP_TOLERANCE = 0.10
-
-
 def _sensor_note(zm: np.ndarray, zn: np.ndarray, seg: np.ndarray) -> str | None:
     """What the analysis says when the Z sensor (``zm`` [m], the measured position: counts x V/LSB x
-    ZsensSens, Bruker's scale) spans the approach more than :data:`SENSOR_RAMP_TOLERANCE` off the nominal
-    ramp (``zn``: Ramp size x Zsens): the modulus depends on which is taken (about as the ratio^1.5). Its
-    steps against the ramp's over the first and the last fifth of the approach tell a scale (equal) from
-    an open-loop piezo's motion (a BioScope Catalyst's: 1.12-1.19 x, then 1.23-1.42 x); None within it."""
-    app = np.flatnonzero(seg == 0)
-    if app.size < 10 or not np.ptp(zn[app]) > 0:
-        return None
-    ratio = float(np.ptp(zm[app]) / np.ptp(zn[app]))
-    if abs(ratio - 1.0) <= SENSOR_RAMP_TOLERANCE:
-        return None
-    fifth = app.size // 5
-    first, last = (abs(float(np.polyfit(zn[part], zm[part], 1)[0])) for part in (app[:fifth], app[-fifth:]))
-    steps = (f"its steps are {first:.3g} x the ramp's over the approach's first fifth and {last:.3g} x over its "
-             "last " + ("(the sensor records a motion the ramp does not: an open-loop piezo's hysteresis and creep)"
-                        if abs(last - first) > 0.05 * min(first, last) else
-                        "(a constant ratio: the sensor's ZsensSens and the ramp's Zsens disagree, the file cannot "
-                        "tell which is right)"))
-    return (f"the Z sensor travels {ratio:.3g} x the nominal ramp ({np.ptp(zn[app]) * 1e9:.4g} nm = Ramp size x "
-            f"Zsens) over the approach; {steps}; the sensor (counts x V/LSB x ZsensSens) is the position used: "
-            f"a modulus on the nominal ramp would be about {last ** 1.5:.2g} x as large (the last steps' ratio^1.5; "
-            "`channel nominal` gives it)")
+    ZsensSens, Bruker's scale) spans the approach more than :data:`~afmforce.io._meta.SENSOR_RAMP_TOLERANCE`
+    off the nominal ramp (``zn``: Ramp size x Zsens): :func:`~afmforce.io._meta.sensor_note` (a BioScope
+    Catalyst's open-loop piezo: 1.12-1.19 x, then 1.23-1.42 x); None within it."""
+    return sensor_note(zm, zn, seg, sensor="the Z sensor", nominal="Ramp size x Zsens",
+                       used="the sensor (counts x V/LSB x ZsensSens)",
+                       scales="the sensor's ZsensSens and the ramp's Zsens disagree")
 
 
 def _truncation(rows: int, whole: int, volume: bool, size: int, where: str) -> str | None:

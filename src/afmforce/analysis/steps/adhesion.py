@@ -6,6 +6,7 @@ Declared once by its record :data:`ADHESION` (:mod:`afmforce.analysis.registry`)
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -99,8 +100,10 @@ def adhesion_step(st: State, o: AdhesionOptions) -> State:
                 f"force {po.force * 1e9:.3g} nN (from the drift-corrected zero): the retract's free part does not "
                 "return to the approach's baseline (still relaxing, drift, or an offset at the turn); "
                 "trust the pull-off only with a settled baseline")
-    warn = [warn, _negative_rupture(st, res, hard)]
-    return st.update("adhesion", res, warn=warn)
+    negative, withhold = _negative_rupture(st, res, hard)
+    if withhold:   # beyond its uncertainty a rupture inside the compliance line is no distance: not reported
+        res = dataclasses.replace(res, rupture_distance=math.nan)
+    return st.update("adhesion", res, warn=[warn, negative])
 
 
 #: A negative rupture separation within this many deflection noise sigmas (beside the drift bound) is the
@@ -117,13 +120,16 @@ def rupture_drift(st: State) -> float:
     return float(sh.shift_drift) if sh is not None else math.nan
 
 
-def _negative_rupture(st: State, res, hard: bool) -> str | None:
-    """A warning for a hard contact's rupture at a negative separation: physically the tip cannot leave the
-    surface inside its compliance line, so the number is the drift lines' error (within ``rupture_drift``)
-    or not a result (beyond it)."""
+def _negative_rupture(st: State, res, hard: bool) -> tuple[str | None, bool]:
+    """A warning for a hard contact's rupture at a negative separation, and whether to withhold the number:
+    physically the tip cannot leave the surface inside its compliance line, so the number is the drift
+    lines' error (within ``rupture_drift`` and :data:`NEGATIVE_RUPTURE_SIGMAS` noise: reported, with the
+    warning) or not a result (beyond them: withheld, ``rupture_distance`` NaN, the warning says why).
+    JSotres/FSAS' NanoScope 8.15 force volume reported 132 of its 256 ruptures at -0.02 to -9.9 nm beside a
+    warning; beyond the bound they are now NaN."""
     r = getattr(res, "rupture_distance", math.nan)
     if not (hard and res.found and math.isfinite(r) and r < 0):
-        return None
+        return None, False
     b = rupture_drift(st)
     # one sample's separation carries the deflection's noise: NEGATIVE_RUPTURE_SIGMAS of it, beside the bound
     sigma = abs(st.noise * st.factor) if math.isfinite(st.factor) else math.nan
@@ -132,16 +138,16 @@ def _negative_rupture(st: State, res, hard: bool) -> str | None:
         return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible), within the "
                 f"drift lines' bound of +-{b * 1e9:.3g} nm (rupture_distance_drift) and "
                 f"{NEGATIVE_RUPTURE_SIGMAS:g} deflection noise sigmas ({sigma * 1e9:.2g} nm): the tip left at about "
-                "zero separation; the separation is not resolved better than that")
+                "zero separation; the separation is not resolved better than that"), False
     bound = f"the drift lines' bound +-{b * 1e9:.3g} nm" if math.isfinite(b) else "no drift bound assessed"
+    head = (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible) and beyond "
+            f"{bound}: not reported (rupture_distance NaN): ")
     steep = _retract_contact_rate(st)
     if steep is not None:  # the sensitivity, not the zero: in contact the separation itself runs backwards
-        return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible) and beyond "
-                f"{bound}: on the retract's contact line the deflection moves {steep:.3g} x the position with the "
+        return (head + f"on the retract's contact line the deflection moves {steep:.3g} x the position with the "
                 "sensitivity used, so the separation runs backwards in contact and the rupture's is no distance; "
-                "suspect input: sensitivity (`calibration` fit uses the compliance slope)")
-    return (f"rupture at {r * 1e9:.3g} nm, inside the compliance line (physically impossible) and beyond "
-            f"{bound}: the separation's zero or the retract's baseline is wrong on this curve")
+                "suspect input: sensitivity (`calibration` fit uses the compliance slope)"), True
+    return head + "the separation's zero or the retract's baseline is wrong on this curve", True
 
 
 def _retract_contact_rate(st: State) -> float | None:
