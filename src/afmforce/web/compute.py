@@ -20,22 +20,13 @@ from typing import Any, Callable
 
 from starlette.concurrency import run_in_threadpool
 
-from ..errors import AfmforceError
 from .limits import MAX_COMPUTING, MAX_WAITING
-from .replies import PastBudget
+from .replies import Busy, ClientGone, PastBudget   # the replies' exceptions, raised here
 
 __all__ = ["Gate", "Busy", "ClientGone", "compute"]
 
 #: How often a waiting request looks for a free slot, and a computing one for its client [s].
 _POLL = 0.1
-
-
-class Busy(AfmforceError):
-    """The server computes and queues as many requests as it may (429)."""
-
-
-class ClientGone(AfmforceError):
-    """The client left before its computation ended (nobody reads the reply)."""
 
 
 class Gate:

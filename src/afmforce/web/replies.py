@@ -77,6 +77,14 @@ class PastBudget(AfmforceError):
     """A request ran past its time budget and was cancelled, its computation included (504)."""
 
 
+class Busy(AfmforceError):
+    """The server computes and queues as many requests as it may (429; raised by :mod:`.compute`)."""
+
+
+class ClientGone(AfmforceError):
+    """The client left before its computation ended (nobody reads the reply; raised by :mod:`.compute`)."""
+
+
 class TooManyJobs(AfmforceError):
     """A fit or sweep asked for while the server (or the session) runs as many as it may (429)."""
 
@@ -137,8 +145,6 @@ def install(app) -> None:
     @app.exception_handler(TooManyJobs)
     async def _busy(request, exc: TooManyJobs):
         return JSONResponse(error_body("too_many_jobs", str(exc)), status_code=429, headers={"retry-after": "10"})
-
-    from .compute import Busy, ClientGone
 
     @app.exception_handler(Busy)
     async def _computing(request, exc: Busy):   # every slot to compute taken, and the queue full
