@@ -258,6 +258,10 @@ class ShiftResult:
         Bound on the shift from the drift lines [m]: the range of drift rates the free parts allow,
         extrapolated to the compliance lines (:func:`afmforce.analysis.steps.shift.drift_position_error`);
         it adds to ``shift_se`` (the lines' noise alone); NaN when not assessed.
+    determined : bool
+        False when ``shift_drift`` exceeds both the shift and the resolution it is read to
+        (:func:`afmforce.analysis.plausibility.undetermined`): the result's ``shift`` is then NaN (undetermined)
+        and ``shift`` here is the lines' offset alone, within +- ``shift_drift`` of the truth.
     """
 
     shift: float = _u("m")
@@ -265,6 +269,7 @@ class ShiftResult:
     reference_signal: float = _u("{signal}")
     applied: bool
     shift_drift: float = _u("m", math.nan)
+    determined: bool = True
 
 
 def compliance_shift(compliance: ComplianceResult, applied: bool = True) -> ShiftResult:

@@ -13,6 +13,7 @@ import numpy as np
 from .. import compliance as cc
 from ...errors import AnalysisError
 from .._numeric import robust_line
+from ..plausibility import UNDETERMINED, undetermined
 from .._step_helpers import _kind, _skip
 from ..options import ShiftOptions
 from ..registry import AnalysisStep, ResultField
@@ -93,7 +94,14 @@ def shift(st: State, o: ShiftOptions) -> State:
             f"inward/outward shift (hysteresis) not measured: the {missing} run has no unclipped "
             "constant-compliance line; the runs are not overlaid"))
     warn = None
-    if res.shift_drift > max(SHIFT_DRIFT_WARN, 3.0 * res.shift_se):
+    if undetermined(res.shift, res.shift_drift, max(SHIFT_DRIFT_WARN, 3.0 * res.shift_se)):
+        res = replace(res, determined=False)
+        warn = (f"inward/outward shift {UNDETERMINED}: the compliance lines are {res.shift * 1e9:.3g} nm apart, but the "
+                f"drift lines extrapolated from the free parts to the compliance lines allow +-{res.shift_drift * 1e9:.3g} nm "
+                f"(shift_drift), more than the shift itself: the interval [{(res.shift - res.shift_drift) * 1e9:.3g}, "
+                f"{(res.shift + res.shift_drift) * 1e9:.3g}] nm holds both signs; record a longer, settled free part "
+                "(or a slower drift) to measure it")
+    elif res.shift_drift > max(SHIFT_DRIFT_WARN, 3.0 * res.shift_se):
         warn = (f"inward/outward shift {res.shift * 1e9:.3g} nm is known only to +-{res.shift_drift * 1e9:.3g} nm "
                 "(shift_drift): the drift lines extrapolated from the free parts to the compliance lines allow that "
                 "range of rates; its standard error (+-{:.2g} nm) is the lines' noise alone".format(res.shift_se * 1e9))
@@ -106,7 +114,8 @@ def shift(st: State, o: ShiftOptions) -> State:
 
 SHIFT = AnalysisStep("shift", "Inward/outward shift overlaying the compliance lines", shift, ShiftOptions,
                      requires=("kind",), reference="section 3.2, Fig 9; Fig 7C",
-                     fields=(ResultField("shift", "m", "inward shift", summary=True, column=True),
+                     fields=(ResultField("shift", "m", "inward shift", summary=True, column=True, bound="shift_drift"),
                              ResultField("shift_drift", "m", "the shift's bound from the drift lines", column=True)),
-                     collect=lambda st: {"shift": st.details["shift"].shift,
+                     collect=lambda st: {"shift": st.details["shift"].shift if st.details["shift"].determined
+                                                  else math.nan,
                                          "shift_drift": st.details["shift"].shift_drift})
