@@ -170,6 +170,10 @@ class CalibrationResult:
     unit : str
     requested : str
         The source asked for (``calibration.source``: ``"auto"``, ``"fit"`` or ``"metadata"``).
+    determined : bool
+        False when the slope calibrates although its line does not determine an InvOLS
+        (:func:`afmforce.analysis.invols.line_notes`, the rule of ``afmforce calibrate invols``) and no other
+        sensitivity is known: every separation and force rests on an undetermined InvOLS.
     """
 
     factor: float = _u("m/{signal}")
@@ -183,6 +187,7 @@ class CalibrationResult:
     spring_constant_from_slope: float = _u("N/m")
     unit: str
     requested: str = "auto"
+    determined: bool = True
 
 
 def _metadata_factor(unit: str, metadata: Mapping[str, Any]) -> float:
