@@ -27,7 +27,7 @@ from ._numeric import ptp
 from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
-           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "K_UNDETERMINED", "UNDETERMINED", "undetermined", "SURFACE_ENERGY_MAX", "unphysical_surface_energy", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
+           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "K_UNDETERMINED", "UNDETERMINED", "undetermined", "interval_undetermined", "SURFACE_ENERGY_MAX", "unphysical_surface_energy", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
            "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers", "spring_constant_warnings"]
 
 #: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
@@ -333,6 +333,13 @@ def undetermined(value: float, bound: float, resolution: float = 0.0) -> bool:
         True: report the value as undetermined (with its interval), not as a result.
     """
     return math.isfinite(value) and math.isfinite(bound) and bound > max(abs(value), resolution)
+
+
+def interval_undetermined(low: float, high: float) -> bool:
+    """Whether a 95 % interval ``[low, high]`` is the undetermined one, ``[0, open]`` (``high`` NaN): how a fitted
+    modulus the data do not bound, or a law used beyond its range, is reported (``youngs_modulus_low`` 0,
+    ``youngs_modulus_high`` NaN; :func:`afmforce.contact.fit.fit_indentation`)."""
+    return low == 0.0 and not math.isfinite(high)
 
 
 def impossible_modulus(modulus: float) -> str | None:

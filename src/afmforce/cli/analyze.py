@@ -482,11 +482,15 @@ def _fmt(v: float) -> str:
 
 def _cell(row, column: str, scale: float) -> str:
     """A number of the table; ``undetermined (+-B)`` where the analysis left it undetermined: NaN with its
-    declared bound (:attr:`~afmforce.analysis.registry.ResultField.bound`) finite."""
-    from ..analysis.plausibility import UNDETERMINED
+    declared bound (:attr:`~afmforce.analysis.registry.ResultField.bound`) finite; a modulus whose interval is
+    ``[0, open]`` (:func:`~afmforce.analysis.plausibility.interval_undetermined`): ``undetermined [0, open]``."""
+    from ..analysis.plausibility import UNDETERMINED, interval_undetermined
     from ..analysis.registry import result_fields
 
     v = row[column]
+    if column == "youngs_modulus" and v is not None and math.isfinite(float(v)) and "youngs_modulus_low" in row \
+            and interval_undetermined(float(row["youngs_modulus_low"]), float(row["youngs_modulus_high"])):
+        return f"{UNDETERMINED} [0, open]"
     f = result_fields().get(column)
     b = row.get(f.bound) if f is not None and f.bound else None
     if (v is None or not math.isfinite(float(v))) and b is not None and math.isfinite(float(b)):
