@@ -482,7 +482,10 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
     fmodel = E * phi if m.linear else a.model  # model_force(model, d, E, ...): E times the shape at d
     resid = (F - fmodel - b)[used]
     warn = list(validity(model, geom, dmax, thickness, int(in_contact.sum())))
-    invalid = out_of_range(model, geom, dmax, thickness)
+    # the adhesive sphere laws (JKR, DMT, Maugis) assume a contact radius small against R: beyond their range
+    # the law is not the curve's; a paraboloid is exact for a paraboloidal tip at any depth (only a sphere's
+    # approximation, as nanite fits it): its range stays a warning
+    invalid = out_of_range(model, geom, dmax, thickness) if m.adhesive else ()
     if invalid and not undetermined:
         # the law does not describe the curve over the fitted indentation: its covariance's interval is the
         # noise's alone about the law's best match, a precision the model does not have: E undetermined
