@@ -53,7 +53,10 @@ ADDED = {"barrier_force", "barrier_jump_distance", "through_barrier",
          # the adhesion's dip in sigmas, its baseline model's systematic and the return to the baseline
          # (branch adhesion2; the rupture it changed is undone in _before_adhesion2)
          "adhesion_significance", "adhesion_baseline_spread", "adhesion_return_distance", "dip_sigmas",
-         "dip_force", "baseline_spread", "return_distance"}
+         "dip_force", "baseline_spread", "return_distance",
+         # whether the shift and a slope's InvOLS are determined (plausibility.undetermined, invols.line_notes):
+         # true on these soft curves, none of which the slope calibrates
+         "determined"}
 
 
 def _compare(new, old, where: str, out: list[str]) -> None:

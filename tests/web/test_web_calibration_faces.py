@@ -156,12 +156,21 @@ def test_a_thermal_k_rescales_with_the_files_invols_on_every_face(files, client)
     """calibration fit: k = k_file (InvOLS_file / fitted)^2, the same with or without the user's sensitivity."""
     folder, soft, single = files
     batch = _cli(str(folder), "--serial", "--chunk-size", "1", *_flags(SINGLE.name, False, True))
+    seen = set()
     for path in (soft, single):
         c = load(path)[0]
         s_f, k_f = c.metadata["sensitivity"], c.metadata["spring_constant"]
         own = _python(path, None, True)
         py = _python(path, _probe(path.name, False), True)
         for name, row in py.items():
+            if any("fit refused" in w for w in row["warnings"]):
+                # lines that do not determine an InvOLS (afmforce.analysis.invols.line_notes, the rule of
+                # calibrate invols; the CellHesion curve's approach and retract differ): the fit is refused, the
+                # file's InvOLS and k kept
+                assert row["spring_constant"] == pytest.approx(k_f, rel=1e-9)
+                seen.add("refused")
+                continue
+            seen.add("rescaled")
             fitted = row["sensitivity_fit"]
             assert row["spring_constant"] == pytest.approx(k_f * (s_f / fitted) ** 2, rel=1e-9)
             assert row["spring_constant"] == pytest.approx(own[name]["spring_constant"], rel=1e-9)
@@ -171,3 +180,4 @@ def test_a_thermal_k_rescales_with_the_files_invols_on_every_face(files, client)
         _same(_web(client, path, path.name, False, True), py, f"web {path.name}")
         if path == single:
             _same({n: batch[n] for n in py}, py, "folder batch")
+    assert seen == {"refused", "rescaled"}, seen    # both cases ran

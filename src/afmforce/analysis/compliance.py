@@ -170,6 +170,10 @@ class CalibrationResult:
     unit : str
     requested : str
         The source asked for (``calibration.source``: ``"auto"``, ``"fit"`` or ``"metadata"``).
+    determined : bool
+        False when the slope calibrates although its line does not determine an InvOLS
+        (:func:`afmforce.analysis.invols.line_notes`, the rule of ``afmforce calibrate invols``) and no other
+        sensitivity is known: every separation and force rests on an undetermined InvOLS.
     """
 
     factor: float = _u("m/{signal}")
@@ -183,6 +187,7 @@ class CalibrationResult:
     spring_constant_from_slope: float = _u("N/m")
     unit: str
     requested: str = "auto"
+    determined: bool = True
 
 
 def _metadata_factor(unit: str, metadata: Mapping[str, Any]) -> float:
@@ -258,6 +263,10 @@ class ShiftResult:
         Bound on the shift from the drift lines [m]: the range of drift rates the free parts allow,
         extrapolated to the compliance lines (:func:`afmforce.analysis.steps.shift.drift_position_error`);
         it adds to ``shift_se`` (the lines' noise alone); NaN when not assessed.
+    determined : bool
+        False when ``shift_drift`` exceeds both the shift and the resolution it is read to
+        (:func:`afmforce.analysis.plausibility.undetermined`): the result's ``shift`` is then NaN (undetermined)
+        and ``shift`` here is the lines' offset alone, within +- ``shift_drift`` of the truth.
     """
 
     shift: float = _u("m")
@@ -265,6 +274,7 @@ class ShiftResult:
     reference_signal: float = _u("{signal}")
     applied: bool
     shift_drift: float = _u("m", math.nan)
+    determined: bool = True
 
 
 def compliance_shift(compliance: ComplianceResult, applied: bool = True) -> ShiftResult:

@@ -18,12 +18,48 @@ from ..errors import AnalysisError
 from ._units import unit as _u
 from .options import CalibrationOptions
 
-__all__ = ["InvolsResult", "measure_invols", "MIN_POINTS", "MAX_RUN_MISMATCH"]
+__all__ = ["InvolsResult", "measure_invols", "line_notes", "MIN_POINTS", "MAX_RUN_MISMATCH"]
 
 #: fewest samples in the compliance line for a determined InvOLS
 MIN_POINTS = 10
 #: largest relative difference of the approach and retract InvOLS for a determined one
 MAX_RUN_MISMATCH = 0.10
+
+
+def line_notes(comp, run: str, scale: float = 1.0) -> list[str]:
+    """Why the compliance line of ``run`` does not determine an InvOLS (empty: it does).
+
+    The one rule of ``afmforce calibrate invols`` (:func:`measure_invols`, which adds a soft contact's note) and
+    of ``afmforce analyze`` where the slope would calibrate (step ``calibration``): fewer than
+    :data:`MIN_POINTS` samples in the line, or approach and retract lines more than :data:`MAX_RUN_MISMATCH`
+    apart.
+
+    Parameters
+    ----------
+    comp : ComplianceResult
+        The compliance lines (:mod:`.compliance`).
+    run : str
+        ``approach``, ``retract`` or ``both`` (both lines' samples counted).
+    scale : float
+        Metres of deflection per signal unit times the signal per metre of a unit slope: ``scale / slope`` is the
+        InvOLS [m/V] (1 for a signal in volts).
+    """
+    lines = {"approach": comp.approach, "retract": comp.retract}
+    notes = []
+    for name in (("approach", "retract") if run == "both" else (run,)):
+        line = lines[name]
+        if line.found and line.n_points < MIN_POINTS:
+            notes.append(f"only {line.n_points} samples in the {name} compliance line (need {MIN_POINTS}): "
+                         "record the calibration curve slower or further into contact")
+    inv = {k: scale / v.slope if v.found and v.slope != 0 else math.nan for k, v in lines.items()}
+    both = [v for v in inv.values() if math.isfinite(v)]
+    if len(both) == 2:
+        mismatch = abs(both[0] - both[1]) / min(abs(both[0]), abs(both[1]))
+        if mismatch > MAX_RUN_MISMATCH:
+            notes.append(f"approach and retract lines give {inv['approach'] * 1e9:.4g} and "
+                         f"{inv['retract'] * 1e9:.4g} nm/V ({mismatch:.0%} apart): the contact is not a "
+                         "constant-compliance line (a curved or sliding contact)")
+    return notes
 
 
 @dataclass(frozen=True)
@@ -88,16 +124,7 @@ def measure_invols(curve, *, run: str = "approach", channel: str = "auto") -> In
     if kind.contact_kind == "soft":  # the slope is the lever and the sample in series: not the lever's
         notes.append(f"the contact is soft ({kind.contact_kind_reason}): the slope is the sample's and the "
                      "lever's in series, not the lever's; calibrate on a hard, clean surface")
-    if line.n_points < MIN_POINTS:
-        notes.append(f"only {line.n_points} samples in the {run} compliance line (need {MIN_POINTS}): "
-                     "record the calibration curve slower or further into contact")
-    both = [v for v in inv.values() if math.isfinite(v)]
-    if len(both) == 2:
-        mismatch = abs(both[0] - both[1]) / min(abs(both[0]), abs(both[1]))
-        if mismatch > MAX_RUN_MISMATCH:
-            notes.append(f"approach and retract lines give {inv['approach'] * 1e9:.4g} and "
-                         f"{inv['retract'] * 1e9:.4g} nm/V ({mismatch:.0%} apart): the contact is not a "
-                         "constant-compliance line (a curved or sliding contact)")
+    notes += line_notes(comp, run, scale)
     determined = not notes
     file_s = float(curve.metadata.get("sensitivity") or math.nan)
     verdict = ("determined: " + f"{line.n_points} samples, both runs agree" if determined

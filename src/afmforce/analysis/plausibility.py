@@ -27,7 +27,7 @@ from ._numeric import ptp
 from .state import State
 
 __all__ = ["plausibility_warnings", "hamaker_warning", "HAMAKER_RANGE", "SPRING_CONSTANT_RANGE",
-           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "K_UNDETERMINED", "SURFACE_ENERGY_MAX", "unphysical_surface_energy", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
+           "MIN_COMPLIANCE_SAMPLES", "IMPOSSIBLE", "K_UNDETERMINED", "UNDETERMINED", "undetermined", "interval_undetermined", "SURFACE_ENERGY_MAX", "unphysical_surface_energy", "MODULUS_RANGE", "impossible_modulus", "DETECTOR_RANGE", "MAX_CALIBRATION_RATIO", "FORCE_STEPS",
            "beyond_detector", "impossible_steps", "impossible_reasons", "slope_not_the_levers", "spring_constant_warnings"]
 
 #: How the reason of a step whose number would be physically impossible starts (``not_applicable``);
@@ -36,6 +36,8 @@ IMPOSSIBLE = "physically impossible"
 #: How the reason starts when a force signal's spring constant cannot be inferred (its contact slope is
 #: softer than any lever: no hard contact); a refusal like :data:`IMPOSSIBLE`'s, repeated in the verdict.
 K_UNDETERMINED = "spring constant undetermined"
+#: How a number the data cannot determine is reported in a verdict, a warning, a table cell (:func:`undetermined`).
+UNDETERMINED = "undetermined"
 #: The widest photodiode ADC of the instruments read [V]: a 16-bit NanoScope channel at 0.375 mV/LSB
 #: (+-12.3 V; JPK and Asylum digitise +-10 V). A reader may give its own as metadata ``adc_range`` [V].
 DETECTOR_RANGE = 2**15 * 0.000375
@@ -329,6 +331,38 @@ def unphysical_surface_energy(gamma: float, radius: float) -> str | None:
             f"beyond any solid's (at most {SURFACE_ENERGY_MAX:g} J/m^2): the pull-off is not the JKR/DMT "
             "adhesion of that radius (a capillary meniscus in air, a blunter probe than the radius given, "
             "electrostatics); give the probe's real radius, or read the adhesion force itself")
+
+
+def undetermined(value: float, bound: float, resolution: float = 0.0) -> bool:
+    """Whether a measured ``value`` whose systematic bound (a half-width, same unit) is ``bound`` is undetermined.
+
+    The one rule of every face (the analysis steps, the command-line table, the JSON and CSV, the web page): a
+    value is undetermined when its interval ``value +- bound`` is wider than the value itself *and* than the
+    ``resolution`` the quantity is read to (the interval then holds zero and both signs, and its width is not a
+    small error on a small number). An unassessed bound (NaN) leaves the value as it is.
+
+    Parameters
+    ----------
+    value : float
+        The measured number [its unit].
+    bound : float
+        Its bound (half-width of its interval) [the same unit]; NaN: not assessed.
+    resolution : float
+        A bound up to this is a small error, never undetermined [the same unit].
+
+    Returns
+    -------
+    bool
+        True: report the value as undetermined (with its interval), not as a result.
+    """
+    return math.isfinite(value) and math.isfinite(bound) and bound > max(abs(value), resolution)
+
+
+def interval_undetermined(low: float, high: float) -> bool:
+    """Whether a 95 % interval ``[low, high]`` is the undetermined one, ``[0, open]`` (``high`` NaN): how a fitted
+    modulus the data do not bound, or a law used beyond its range, is reported (``youngs_modulus_low`` 0,
+    ``youngs_modulus_high`` NaN; :func:`afmforce.contact.fit.fit_indentation`)."""
+    return low == 0.0 and not math.isfinite(high)
 
 
 def impossible_modulus(modulus: float) -> str | None:

@@ -62,6 +62,10 @@ class ResultField:
         summary table's columns); None: when both ``summary`` and ``column``.
     compute : callable, optional
         ``compute(result) -> value`` for a field computed from other fields (not stored).
+    bound : str, optional
+        The field holding this one's bound (a half-width, same unit): this field NaN with that one finite
+        means the data left it undetermined (:func:`afmforce.analysis.plausibility.undetermined`); the
+        table's cell says so with the bound.
     """
 
     name: str
@@ -72,6 +76,7 @@ class ResultField:
     column: bool = False
     map: bool | None = None
     compute: Callable[[Any], Any] | None = field(default=None, compare=False)
+    bound: str | None = None
 
 
     @property

@@ -489,6 +489,24 @@ def _fmt(v: float) -> str:
     return "-" if v is None or not math.isfinite(v) else f"{v:.4g}"
 
 
+def _cell(row, column: str, scale: float) -> str:
+    """A number of the table; ``undetermined (+-B)`` where the analysis left it undetermined: NaN with its
+    declared bound (:attr:`~afmforce.analysis.registry.ResultField.bound`) finite; a modulus whose interval is
+    ``[0, open]`` (:func:`~afmforce.analysis.plausibility.interval_undetermined`): ``undetermined [0, open]``."""
+    from ..analysis.plausibility import UNDETERMINED, interval_undetermined
+    from ..analysis.registry import result_fields
+
+    v = row[column]
+    if column == "youngs_modulus" and v is not None and math.isfinite(float(v)) and "youngs_modulus_low" in row \
+            and interval_undetermined(float(row["youngs_modulus_low"]), float(row["youngs_modulus_high"])):
+        return f"{UNDETERMINED} [0, open]"
+    f = result_fields().get(column)
+    b = row.get(f.bound) if f is not None and f.bound else None
+    if (v is None or not math.isfinite(float(v))) and b is not None and math.isfinite(float(b)):
+        return f"{UNDETERMINED} (+-{float(b) * scale:.3g})"
+    return _fmt(float(v) * scale)
+
+
 def _calibration_tag(row, given: str = "file") -> str:
     """Which sensitivity the forces used, for the table's cell: `` (fit)`` (the compliance slope) or
     `` (file)`` / `` (user)`` / `` (meta)`` / `` (calibration)`` (the file's, --sensitivity, --meta sensitivity=,
@@ -508,7 +526,7 @@ def _print_rows(ok, verbose: bool = False, given: str = "file") -> None:
     heads = ["file", "contact"] + [h for _, h, _ in columns] + ["friction", "dynamic"]
     rows = []
     for _, r in ok.iterrows():
-        vals = [_fmt(float(r[c]) * s) + (_calibration_tag(r, given) if c == "sensitivity_used" else "")
+        vals = [_cell(r, c, s) + (_calibration_tag(r, given) if c == "sensitivity_used" else "")
                 for c, _, s in columns]
         rows.append([r["name"], r["contact_kind"] or "-"] + vals
                     + [r["friction"] or "-", _dynamic_label(r)])

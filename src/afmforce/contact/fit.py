@@ -275,6 +275,16 @@ def validity(key: str, geometry: dict, max_indentation: float, thickness: float 
     sample's ``thickness`` [m] (half-space laws; for ``hertz_thin_layer``: chi = sqrt(R delta)/h < 1),
     and the number of points in contact.
     """
+    out = list(out_of_range(key, geometry, max_indentation, thickness))
+    if n_contact < 10:
+        out.append(f"only {n_contact} points in contact: the modulus is poorly determined")
+    return tuple(out)
+
+
+def out_of_range(key: str, geometry: dict, max_indentation: float, thickness: float | None = None) -> tuple[str, ...]:
+    """Where the law ``key`` is used outside the range it holds in, in words (empty: within it): the part of
+    :func:`validity` that says the law does not describe the fitted indentation. A fit beyond it has a modulus
+    that is the law's best match, not the sample's, and no interval (:func:`fit_indentation`)."""
     m = indentation_model(key)
     out = []
     R = geometry.get("radius")
@@ -293,8 +303,6 @@ def validity(key: str, geometry: dict, max_indentation: float, thickness: float 
         elif d > 0.1 * h:
             out.append(f"indentation {d * 1e9:.4g} nm is more than a tenth of the sample thickness "
                        f"({h * 1e9:.4g} nm): the substrate stiffens the response (use hertz_thin_layer)")
-    if n_contact < 10:
-        out.append(f"only {n_contact} points in contact: the modulus is poorly determined")
     return tuple(out)
 
 
@@ -488,17 +496,33 @@ def _fit_samples(u, F, idx, model, geom, nu, weight_width, thickness, transition
     first = float(u.min())
     if fixed is None and m.linear and c < first:
         warn.append(extrapolated_contact_note(first - c, float(u.max()) - first))
+    # the adhesive sphere laws (JKR, DMT, Maugis) assume a contact radius small against R: beyond their range
+    # the law is not the curve's; a paraboloid is exact for a paraboloidal tip at any depth (only a sphere's
+    # approximation, as nanite fits it): its range stays a warning
+    invalid = out_of_range(model, geom, dmax, thickness) if m.adhesive else ()
     if not converged:
         warn.append(f"the fit did not converge in {_GN_MAX_STEPS} Gauss-Newton steps (the contact point still "
                     f"moving): E = {E:.4g} Pa is no least-squares optimum, its interval is left open "
                     "(undetermined); fit a smaller range (indentation.max_indentation) or another law")
+    elif invalid and not undetermined:
+        # the law does not describe the curve over the fitted indentation: its covariance's interval is the
+        # noise's alone about the law's best match, a precision the model does not have: E undetermined
+        # ([0, open]), as where the data do not bound it (docs/contact.md, "A law beyond its range")
+        warn.append(f"the modulus is undetermined: the {m.name} law does not hold over the fitted indentation "
+                    f"(above), so its 95 % interval [{E_low:.3g}, {E_high:.3g}] Pa would be the noise's alone about "
+                    f"the law's best match ({E:.3g} Pa), not the sample's modulus; fit within the law's range "
+                    "(indentation.max_indentation) or choose a law that holds there")
+        E_low, E_high = 0.0, math.nan
+        if m.adhesive:
+            w_low, w_high = 0.0, math.nan
+        undetermined = True
     elif undetermined:
         warn.append(f"the modulus is undetermined: its 95 % interval reaches 0 (standard error "
                     f"{E_se / E:.0%} of the value, {int(in_contact.sum())} points in contact); the data do "
                     "not bound it: indent deeper or fit more of the curve")
     elif math.isfinite(E_se) and E_se > 0.5 * E:
         warn.append(f"the modulus is poorly determined: standard error {E_se / E:.0%} of the value")
-    if m.adhesive and w_low == 0.0:
+    if m.adhesive and w_low == 0.0 and not invalid:
         bound = "no upper bound" if math.isnan(w_high) else f"95 % upper bound {w_high:.3g} J/m^2"
         warn.append(f"the work of adhesion is not distinguishable from 0 ({bound})")
     return IndentationFit(

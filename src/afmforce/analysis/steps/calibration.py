@@ -36,6 +36,9 @@ def calibration(st: State, o: CalibrationOptions) -> State:
     md = st.metadata if st.probe.sensitivity is None else {**st.metadata, "sensitivity": st.probe.sensitivity}
     res = cc.calibrate(comp, md, source=o.source, run=run)
     warn = []
+    if res.source == "fit":
+        res, why = _undetermined_slope(comp, md, res, run, st)
+        warn += why
     if not (comp.approach.found and comp.retract.found):
         used = "approach" if comp.approach.found else "retract"
         if run != used:
@@ -55,6 +58,33 @@ def calibration(st: State, o: CalibrationOptions) -> State:
         raise AnalysisError("no usable calibration factor (compliance slope zero or undefined)")
     res = dataclasses.replace(res, requested=o.source)
     return st.update("calibration", res, warn=warn, factor=res.factor, deflection=st.signal * res.factor)
+
+
+#: How the warning starts when the slope would calibrate but does not determine an InvOLS.
+INVOLS_UNDETERMINED = "InvOLS from the compliance slope undetermined"
+
+
+def _undetermined_slope(comp, md, res, run: str, st: State):
+    """The calibration when the slope would calibrate: refused for the file's or user's sensitivity where its
+    line does not determine an InvOLS (:func:`afmforce.analysis.invols.line_notes`, the rule of ``afmforce
+    calibrate invols``), or kept and marked undetermined (``determined`` False) where none is known."""
+    from ..invols import line_notes
+
+    used = run if comp.approach.found and comp.retract.found else ("approach" if comp.approach.found else "retract")
+    scale = res.sensitivity_fit * res.compliance_slope
+    notes = line_notes(comp, used, scale if math.isfinite(scale) and scale > 0 else 1.0)
+    if not notes:
+        return res, []
+    what = (f"{INVOLS_UNDETERMINED} ({res.sensitivity_fit * 1e9:.4g} nm/V, the rule of `afmforce calibrate invols`): "
+            + "; ".join(notes))
+    if math.isfinite(res.factor_given) and res.factor_given > 0:
+        owner = origin_words(st.probe, "sensitivity")[1]
+        kept = cc.calibrate(comp, md, source="metadata", run=run)
+        given = (f" ({res.sensitivity * 1e9:.4g} nm/V)" if math.isfinite(res.sensitivity) else "")
+        return kept, [f"{what}: `calibration` fit refused, {owner}{given} is used"]
+    return dataclasses.replace(res, determined=False), [
+        f"{what}: it is used, as the curve has no other (no sensitivity in the file), so every separation and force "
+        "rests on an undetermined InvOLS; give the lever's sensitivity measured on a hard surface (`sensitivity`)"]
 
 
 #: On the piezo's nominal position (no position sensor) the compliance slope's calibration is said when it

@@ -366,6 +366,8 @@ function drawCurve() {
   drawIndentation(res);
   const rows = [["contact", res.contact_kind_reason && String(res.contact_kind_reason).startsWith(res.contact_kind) ? res.contact_kind_reason : `${res.contact_kind}: ${res.contact_kind_reason}`], ["adhesion", res.adhesion_verdict || "–"],
     ["jump-in", `${fmt(res.jump_in_separation, "m")}, ${fmt(res.jump_in_force, "N")}`], ["pull-off", fmt(res.pull_off_force, "N")],
+    // null with its bound given: the analysis left it undetermined (afmforce.analysis.plausibility.undetermined)
+    ["inward shift", res.shift === null && res.shift_drift !== null && res.shift_drift !== undefined ? `undetermined (±${fmt(res.shift_drift, "m")}: the drift lines' bound exceeds the shift)` : fmt(res.shift, "m") + (res.shift_drift !== null && res.shift_drift !== undefined ? ` (±${fmt(res.shift_drift, "m")})` : "")],
     ["A R", `${fmt(res.hamaker_radius, "")} J m`], ["oscillation", res.oscillation_verdict || "–"], ["friction", res.friction_verdict && String(res.friction_verdict).startsWith(res.friction) ? res.friction_verdict : `${res.friction}: ${res.friction_verdict}`],
     ["diagnosis", res.verdict || "–"]];
   if (res.youngs_modulus !== null && res.youngs_modulus !== undefined)
