@@ -210,12 +210,16 @@ def _parse(text: str, where: str):
             raise FileFormatError(f"{where}: line {j} is not numeric: {line[:60]!r}") from None
     if len(rows) < 2:
         raise FileFormatError(f"{where}: fewer than two data rows")
-    stated = _stated_rows(samples)
-    if stated is not None and len(rows) < stated:
-        raise FileFormatError(f"{where}: cut short: {len(rows)} of {stated} rows (the header's \\Samps/line: "
+    return header, names, np.array(rows, dtype=float), _stated_rows(samples)
+
+
+def _check_rows(where: str, data: np.ndarray, stated: int | None) -> None:
+    """Refuse a table with fewer rows than the header's ``\\Samps/line`` states (:func:`_stated_rows`):
+    checked after the columns, so a file lacking a column is told that first."""
+    if stated is not None and len(data) < stated:
+        raise FileFormatError(f"{where}: cut short: {len(data)} of {stated} rows (the header's \\Samps/line: "
                               f"{stated} samples per run): a truncated download or a full disk; copy or export it "
                               "again")
-    return header, names, np.array(rows, dtype=float)
 
 
 def _stated_rows(values: list[str]) -> int | None:
@@ -357,7 +361,7 @@ def _calibration(header: dict[str, str]) -> dict[str, float]:
 
 def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
     """One force-curve block."""
-    header, names, data = _parse(text, where)
+    header, names, data, stated = _parse(text, where)
     table = {}
     for k, name in enumerate(names):
         parsed = parse_column_name(name)
@@ -366,6 +370,7 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
             table.setdefault((canonical_base(base), unit, run), data[:, k])  # a duplicate: the first wins
     present = tuple(r for r in ("Ex", "Rt") if any(key[2] == r and key[0] == "Defl" for key in table))
     if not present and any(key[0] == "Force" for key in table):
+        _check_rows(where, data, stated)
         return _force_separation(table, header, where, source, meta_override)
     if not present:
         raise FileFormatError(f"{where}: no deflection column (Defl_V_Ex, Defl_nm_Rt, Defl_pN_Ex, ...), and no "
@@ -387,6 +392,7 @@ def _curve(text: str, where: str, source: str, meta_override) -> RawCurve:
         if any(v is not None and len(v) != n for v in cols.values()):
             raise FileFormatError(f"{where}: columns of run {run} have different lengths")
         runs[run] = cols
+    _check_rows(where, data, stated)
     parts, seg = _in_time_order(runs)
     meta: dict[str, Any] = _calibration(header)
     n = len(seg)
